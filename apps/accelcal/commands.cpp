@@ -1,0 +1,288 @@
+#include "commands.hpp"
+
+#include <charconv>
+#include <cmath>
+#include <cstdio>
+#include <iostream>
+#include <stdexcept>
+
+#include "accelcal/calibration_file.hpp"
+#include "accelcal/engineering.hpp"
+#include "accelcal/error.hpp"
+#include "accelcal/gravity.hpp"
+#include "output.hpp"
+
+namespace accelcal::cli {
+
+namespace {
+
+template <typename T>
+T ParseEnum(std::optional<T> value, const std::string& text, const char* option,
+            const char* allowed) {
+  if (!value) throw UsageError(std::string(option) + ": '" + text + "' is not one of " + allowed);
+  return *value;
+}
+
+struct LoadedInput {
+  InputData data;
+  std::vector<Position> positions;
+  std::optional<StaticDetectionResult> detection;
+};
+
+ReadOptions MakeReadOptions(const InputArgs& in) {
+  ReadOptions options;
+  options.kind = ParseEnum(InputKindFromString(in.input_kind), in.input_kind, "--input-kind",
+                           "auto, raw, positions");
+  options.columns = in.columns;
+  options.rate_hz = in.rate_hz;
+  return options;
+}
+
+LoadedInput LoadInput(const InputArgs& in) {
+  if (auto why = in.detection.Validate()) throw UsageError(*why);
+  LoadedInput loaded;
+  loaded.data = ReadInput(in.path, MakeReadOptions(in));
+  if (loaded.data.kind == InputKind::kPositions) {
+    loaded.positions = loaded.data.positions;
+    return loaded;
+  }
+  loaded.detection = DetectStaticIntervals(loaded.data.raw, in.detection);
+  if (loaded.detection->intervals.empty()) {
+    throw DataError(in.path + ": no static interval found (threshold " +
+                    Format("%.3g", loaded.detection->threshold) +
+                    " raw^2; try --threshold-factor or --min-static)");
+  }
+  loaded.positions = PositionsFromIntervals(loaded.detection->intervals);
+  return loaded;
+}
+
+struct Gravity {
+  double in_unit;  // gravity magnitude in the output unit
+  double ms2;      // the same in m/s²
+  ForceUnit unit;
+  std::string origin;
+};
+
+Gravity ResolveGravity(const GravityArgs& args) {
+  Gravity g;
+  g.unit = ParseEnum(ForceUnitFromString(args.units), args.units, "--units", "m/s2, g");
+  if (args.gravity_ms2 && args.latitude_deg) {
+    throw UsageError("--gravity and --latitude exclude each other");
+  }
+  if (args.gravity_ms2) {
+    if (!(*args.gravity_ms2 > 0) || !std::isfinite(*args.gravity_ms2)) {
+      throw UsageError("--gravity must be a positive number of m/s2");
+    }
+    g.ms2 = *args.gravity_ms2;
+    g.origin = "given";
+  } else if (args.latitude_deg) {
+    if (!(std::abs(*args.latitude_deg) <= 90)) throw UsageError("--latitude must lie in [-90, 90]");
+    g.ms2 = NormalGravityWgs84_ms2(*args.latitude_deg, args.height_m);
+    g.origin = Format("WGS-84 normal gravity at %.6g deg, %.6g m", *args.latitude_deg, args.height_m);
+  } else {
+    g.ms2 = kStandardGravity_ms2;
+    g.origin = "standard gravity (default)";
+  }
+  g.in_unit = g.unit == ForceUnit::kMetersPerSecond2 ? g.ms2 : g.ms2 / kStandardGravity_ms2;
+  return g;
+}
+
+std::string Vec(const Vec3& v, const char* fmt = "%14.8g") {
+  return Format(fmt, v(0)) + Format(fmt, v(1)) + Format(fmt, v(2));
+}
+
+void PrintInput(const LoadedInput& in, const std::string& path) {
+  if (in.data.kind == InputKind::kPositions) {
+    std::printf("input     %s: %zu positions (%s)\n", path.c_str(), in.positions.size(),
+                in.data.kind_reason.c_str());
+    return;
+  }
+  const StaticDetectionResult& d = *in.detection;
+  std::printf("input     %s: raw log, %zu samples at %.6g Hz (%s)\n", path.c_str(),
+              in.data.raw.samples.size(), d.rate_hz, in.data.kind_reason.c_str());
+  std::printf("detection %zu static intervals (window %zu samples, threshold %.4g raw^2 = %.3g x "
+              "noise reference)\n",
+              d.intervals.size(), d.window_samples, d.threshold,
+              d.noise_reference > 0 ? d.threshold / d.noise_reference : 0.0);
+}
+
+void PrintCalibration(const CalibrationResult& r, const std::vector<Position>& positions,
+                      const Gravity& g, const std::string& raw_unit) {
+  const char* u = g.unit == ForceUnit::kMetersPerSecond2 ? "m/s2" : "g";
+  const bool have_std = r.covariance.size() > 0;
+  const auto& slots = ParameterSlots(r.model);
+  std::printf("\nmodel     %s, p = K f + b + k2 * f^2, gravity %.9g %s (%s)\n",
+              std::string(ToString(r.model)).c_str(), g.in_unit, u, g.origin.c_str());
+  std::printf("\nparameters (K in %s per %s, b in %s, k2 in %s per %s^2; +- 1 sigma from residuals)\n",
+              raw_unit.c_str(), u, raw_unit.c_str(), raw_unit.c_str(), u);
+  const Eigen::VectorXd theta = Pack(r.params, r.model);
+  for (std::size_t i = 0; i < slots.size(); ++i) {
+    const auto idx = static_cast<Eigen::Index>(i);
+    if (have_std) {
+      std::printf("  %-5s %18.10g +- %.3g\n", std::string(slots[i].name).c_str(), theta(idx),
+                  std::sqrt(r.covariance(idx, idx)));
+    } else {
+      std::printf("  %-5s %18.10g\n", std::string(slots[i].name).c_str(), theta(idx));
+    }
+  }
+  const EngineeringParameters e = ToEngineering(r.params, r.gravity);
+  const double ug = 1e6 / r.gravity;
+  std::printf("\nengineering (paper 000 Table 3 conventions)\n");
+  std::printf("  scale factor     %s  %s/%s\n", Vec(e.scale_factor).c_str(), raw_unit.c_str(), u);
+  std::printf("  misalignment     tau_yx %.6g  tau_zx %.6g  tau_zy %.6g rad\n", e.tau_yx, e.tau_zx,
+              e.tau_zy);
+  std::printf("                   tau_yx %.4f  tau_zx %.4f  tau_zy %.4f arcsec\n",
+              e.tau_yx * kArcsecPerRad, e.tau_zx * kArcsecPerRad, e.tau_zy * kArcsecPerRad);
+  std::printf("  bias             %s  %s  (%s ug)\n", Vec(e.bias_force).c_str(), u,
+              Vec(e.bias_force * ug, "%.6g ").c_str());
+  if (r.model == ModelKind::kQuadratic) {
+    std::printf("  squared coeff.   %s  g/g^2\n", Vec(e.k2_g_per_g2).c_str());
+  }
+  const std::vector<Vec3> means = Means(positions);
+  const std::vector<double> errors = GravityNormErrors(r.params, means, r.gravity);
+  std::printf("\npositions (|f|-g in %s, residual p - mu in %s)\n", u, raw_unit.c_str());
+  std::printf("  %3s %8s %42s %12s %36s\n", "#", "samples", "mean", "|f|-g", "residual");
+  for (std::size_t k = 0; k < positions.size(); ++k) {
+    std::printf("  %3zu %8zu %s %12.4g %s\n", k + 1, positions[k].samples,
+                Vec(positions[k].mean).c_str(), errors[k], Vec(r.residuals[k], "%12.4g").c_str());
+  }
+  const std::optional<double> before = GravityNormRmsUncalibrated(means, r.gravity);
+  std::printf("\nrms |f|-g  before: %s   after: %.6g %s\n",
+              before ? Format("%.6g %s", *before, u).c_str()
+                     : Format("n/a (raw readings are not in %s)", u).c_str(),
+              Rms(errors), u);
+  std::printf("solver    %s\n", r.summary.BriefReport().c_str());
+  if (!r.summary.initialization_note.empty()) {
+    std::printf("note      %s\n", r.summary.initialization_note.c_str());
+  }
+}
+
+std::string FormatNumber(double v) {
+  char buf[32];
+  const auto res = std::to_chars(buf, buf + sizeof buf, v);
+  return std::string(buf, res.ptr);
+}
+
+}  // namespace
+
+int RunCalibrate(const CalibrateArgs& args) {
+  CalibrationOptions options;
+  options.model = ParseEnum(ModelKindFromString(args.model), args.model, "--model", "linear, quadratic");
+  options.method = ParseEnum(SolverMethodFromString(args.method), args.method, "--method", "two-step, joint");
+  options.initialization = ParseEnum(InitializationFromString(args.init), args.init, "--init",
+                                     "auto, ellipsoid, normalized-readings");
+  const Gravity g = ResolveGravity(args.gravity);
+  options.gravity = g.in_unit;
+  if (args.max_iterations > 0) {
+    options.two_step.max_sweeps = args.max_iterations;
+    options.joint.max_iterations = args.max_iterations;
+  }
+  const LoadedInput in = LoadInput(args.input);
+  const CalibrationResult result = Calibrate(Means(in.positions), options);
+  if (!result.summary.converged()) {
+    std::fprintf(stderr, "accelcal: %s: the solver did not converge: %s; nothing written\n",
+                 args.input.path.c_str(), result.summary.termination_message.c_str());
+    return kExitNotConverged;
+  }
+  CalibrationFileInfo info;
+  info.unit = g.unit;
+  info.raw_unit = args.raw_units;
+  info.source = args.input.path;
+  info.positions = in.positions;
+  const std::string json = CalibrationToJson(result, info);
+  if (!args.output.empty()) WriteFileAtomically(args.output, json);
+  if (args.json) {
+    WriteFileAtomically("-", json);
+  } else {
+    PrintInput(in, args.input.path);
+    PrintCalibration(result, in.positions, g, args.raw_units);
+    if (!args.output.empty()) std::printf("wrote     %s\n", args.output.c_str());
+  }
+  return kExitOk;
+}
+
+int RunDetect(const DetectArgs& args) {
+  InputArgs in = args.input;
+  ReadOptions read = MakeReadOptions(in);
+  read.kind = InputKind::kRaw;
+  if (auto why = in.detection.Validate()) throw UsageError(*why);
+  const InputData data = ReadInput(in.path, read);
+  const StaticDetectionResult d = DetectStaticIntervals(data.raw, in.detection);
+  std::string out;
+  if (args.json) {
+    out += "{\n  \"source\": \"" + in.path + "\",\n";
+    out += Format("  \"samples\": %zu,\n  \"rate_hz\": %s,\n  \"window_samples\": %zu,\n",
+                  data.raw.samples.size(), FormatNumber(d.rate_hz).c_str(), d.window_samples);
+    out += "  \"noise_reference\": " + FormatNumber(d.noise_reference) +
+           ",\n  \"threshold\": " + FormatNumber(d.threshold) + ",\n  \"intervals\": [";
+    for (std::size_t i = 0; i < d.intervals.size(); ++i) {
+      const StaticInterval& s = d.intervals[i];
+      out += i ? ",\n    " : "\n    ";
+      out += Format("{\"begin\": %zu, \"end\": %zu, \"samples\": %zu, ", s.begin, s.end, s.count());
+      out += "\"t_begin\": " + FormatNumber(s.t_begin_s) + ", \"t_end\": " + FormatNumber(s.t_end_s);
+      out += ", \"mean\": [" + FormatNumber(s.mean(0)) + ", " + FormatNumber(s.mean(1)) + ", " +
+             FormatNumber(s.mean(2)) + "], \"std\": [" + FormatNumber(s.std(0)) + ", " +
+             FormatNumber(s.std(1)) + ", " + FormatNumber(s.std(2)) + "]}";
+    }
+    out += d.intervals.empty() ? "]\n}\n" : "\n  ]\n}\n";
+  } else {
+    out += Format("%s: %zu samples at %.6g Hz; window %zu samples; threshold %.4g raw^2 "
+                  "(noise reference %.4g)\n",
+                  in.path.c_str(), data.raw.samples.size(), d.rate_hz, d.window_samples,
+                  d.threshold, d.noise_reference);
+    out += Format("%3s %9s %9s %11s %11s %8s %40s %33s\n", "#", "begin", "end", "t_begin",
+                  "t_end", "samples", "mean", "std");
+    for (std::size_t i = 0; i < d.intervals.size(); ++i) {
+      const StaticInterval& s = d.intervals[i];
+      out += Format("%3zu %9zu %9zu %11.4f %11.4f %8zu %s %s\n", i + 1, s.begin, s.end,
+                    s.t_begin_s, s.t_end_s, s.count(), Vec(s.mean, "%13.7g ").c_str(),
+                    Vec(s.std, "%10.4g ").c_str());
+    }
+    out += Format("%zu static intervals\n", d.intervals.size());
+  }
+  WriteFileAtomically("-", out);
+  return d.intervals.empty() ? kExitBadInput : kExitOk;
+}
+
+int RunApply(const ApplyArgs& args) {
+  const LoadedCalibration cal =
+      ParseCalibrationJson(ReadFileToString(args.calibration), args.calibration);
+  ForceUnit unit = cal.unit;
+  if (args.units) unit = ParseEnum(ForceUnitFromString(*args.units), *args.units, "--units", "m/s2, g");
+  double factor = 1.0;  // calibration unit -> output unit
+  if (cal.unit == ForceUnit::kMetersPerSecond2 && unit == ForceUnit::kStandardGravity) {
+    factor = 1.0 / kStandardGravity_ms2;
+  } else if (cal.unit == ForceUnit::kStandardGravity && unit == ForceUnit::kMetersPerSecond2) {
+    factor = kStandardGravity_ms2;
+  }
+  ReadOptions read = MakeReadOptions(args.input);
+  read.kind = InputKind::kRaw;
+  const InputData data = ReadInput(args.input.path, read);
+  const RawLog& log = data.raw;
+  const bool has_time = !log.time_s.empty();
+  std::string out;
+  out.reserve(log.samples.size() * 64);
+  out += "# accelcal apply " + args.calibration + ": specific force in " +
+         std::string(ToString(unit)) + "\n";
+  out += has_time ? "time,x,y,z\n" : "x,y,z\n";
+  char buf[32];
+  for (std::size_t i = 0; i < log.samples.size(); ++i) {
+    const std::optional<Vec3> f = SpecificForce(cal.params, log.samples[i]);
+    if (!f) {
+      throw InputError(args.input.path, log.line[i],
+                       "the reading lies outside the range the quadratic model can invert");
+    }
+    if (has_time) {
+      out.append(buf, std::to_chars(buf, buf + sizeof buf, log.time_s[i]).ptr);
+      out.push_back(',');
+    }
+    for (int a = 0; a < 3; ++a) {
+      out.append(buf, std::to_chars(buf, buf + sizeof buf, (*f)(a) * factor).ptr);
+      out.push_back(a < 2 ? ',' : '\n');
+    }
+  }
+  WriteFileAtomically(args.output.empty() ? "-" : args.output, out);
+  return kExitOk;
+}
+
+}  // namespace accelcal::cli

@@ -1,0 +1,79 @@
+#pragma once
+// The subcommands of the accelcal tool: argument structs filled by main.cpp, handlers that call
+// the library and do the I/O.
+
+#include <optional>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "accelcal/calibrate.hpp"
+#include "accelcal/log_reader.hpp"
+#include "accelcal/static_detection.hpp"
+
+namespace accelcal::cli {
+
+/// Process exit statuses.
+enum ExitCode : int {
+  kExitOk = 0,
+  kExitInternal = 1,      ///< a bug: an unexpected exception
+  kExitUsage = 2,         ///< bad command line
+  kExitBadInput = 3,      ///< unreadable, malformed or insufficient input data
+  kExitNotConverged = 4,  ///< the solver did not converge: nothing written
+  kExitOutput = 5,        ///< the output file could not be written
+};
+
+/// A usage problem found after parsing (bad enum value, conflicting options).
+struct UsageError : std::runtime_error {
+  using std::runtime_error::runtime_error;
+};
+
+/// Error writing an output file.
+struct OutputError : std::runtime_error {
+  using std::runtime_error::runtime_error;
+};
+
+struct InputArgs {
+  std::string path;
+  std::string input_kind = "auto";
+  std::vector<std::string> columns;
+  std::optional<double> rate_hz;
+  StaticDetectionOptions detection;
+};
+
+struct GravityArgs {
+  std::optional<double> gravity_ms2;
+  std::optional<double> latitude_deg;
+  double height_m = 0;
+  std::string units = "m/s2";
+};
+
+struct CalibrateArgs {
+  InputArgs input;
+  GravityArgs gravity;
+  std::string model = "linear";
+  std::string method = "joint";
+  std::string init = "auto";
+  std::string raw_units = "raw";
+  std::string output;
+  bool json = false;
+  int max_iterations = 0;  // 0: the solver's default
+};
+
+struct DetectArgs {
+  InputArgs input;
+  bool json = false;
+};
+
+struct ApplyArgs {
+  std::string calibration;
+  InputArgs input;
+  std::string output;               // empty: stdout
+  std::optional<std::string> units;  // convert to this unit
+};
+
+int RunCalibrate(const CalibrateArgs& args);
+int RunDetect(const DetectArgs& args);
+int RunApply(const ApplyArgs& args);
+
+}  // namespace accelcal::cli

@@ -1,0 +1,131 @@
+// accelcal: command-line front end. Parses arguments, calls the library, maps errors to exit codes.
+#include <cstdio>
+#include <exception>
+
+#include <CLI/CLI.hpp>
+
+#include "accelcal/error.hpp"
+#include "commands.hpp"
+
+namespace {
+
+using namespace accelcal::cli;
+
+void AddInputOptions(CLI::App* cmd, InputArgs* in, bool with_kind) {
+  if (with_kind) {
+    cmd->add_option("--input-kind", in->input_kind,
+                    "raw (samples), positions (one averaged reading per row) or auto")
+        ->capture_default_str();
+  }
+  cmd->add_option("--columns", in->columns,
+                  "x,y,z or time,x,y,z: 1-based column numbers or header names")
+      ->delimiter(',');
+  cmd->add_option("--rate", in->rate_hz, "sample rate [Hz] for logs without a time column");
+}
+
+void AddDetectionOptions(CLI::App* cmd, InputArgs* in) {
+  auto& d = in->detection;
+  cmd->add_option("--window", d.window_s, "static detection: variance window [s]")
+      ->capture_default_str();
+  cmd->add_option("--min-static", d.min_duration_s, "static detection: shortest interval [s]")
+      ->capture_default_str();
+  cmd->add_option("--threshold-factor", d.threshold_factor,
+                  "static detection: threshold as a multiple of the noise reference")
+      ->capture_default_str();
+  cmd->add_option("--init-rest", d.init_rest_s,
+                  "static detection: take the noise reference from the first S seconds (0: "
+                  "from the quietest windows)")
+      ->capture_default_str();
+}
+
+void AddGravityOptions(CLI::App* cmd, GravityArgs* g) {
+  auto* gravity = cmd->add_option("--gravity", g->gravity_ms2,
+                                  "local gravity magnitude [m/s2] (default 9.80665)");
+  auto* latitude = cmd->add_option("--latitude", g->latitude_deg,
+                                   "geodetic latitude [deg]: gravity from the WGS-84 formula");
+  gravity->excludes(latitude);
+  cmd->add_option("--height", g->height_m, "height above the ellipsoid [m], with --latitude")
+      ->needs(latitude);
+  cmd->add_option("--units", g->units, "unit of the calibrated specific force: m/s2 or g")
+      ->capture_default_str();
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App app{
+      "accelcal: calibration of triaxial accelerometers from static multi-position recordings"};
+  app.require_subcommand(1);
+  app.set_version_flag("--version", "accelcal 0.1.0");
+
+  CalibrateArgs cal;
+  CLI::App* calibrate = app.add_subcommand(
+      "calibrate", "estimate K, b (and k2) from a raw log or a positions file");
+  calibrate->add_option("INPUT", cal.input.path, "raw log or positions file")->required();
+  AddInputOptions(calibrate, &cal.input, true);
+  AddDetectionOptions(calibrate, &cal.input);
+  AddGravityOptions(calibrate, &cal.gravity);
+  calibrate->add_option("--model", cal.model, "linear or quadratic")->capture_default_str();
+  calibrate->add_option("--method", cal.method, "joint or two-step")->capture_default_str();
+  calibrate->add_option("--init", cal.init, "auto, ellipsoid or normalized-readings")
+      ->capture_default_str();
+  calibrate->add_option("--raw-units", cal.raw_units, "label of the raw unit (e.g. counts)")
+      ->capture_default_str();
+  calibrate->add_option("--max-iterations", cal.max_iterations,
+                        "iteration cap of the solver (0: its default)");
+  calibrate->add_option("-o,--output", cal.output, "write the calibration file (JSON) here");
+  calibrate->add_flag("--json", cal.json, "print the calibration file to stdout instead of the summary");
+
+  DetectArgs det;
+  CLI::App* detect = app.add_subcommand("detect", "list the static intervals of a raw log");
+  detect->add_option("LOG", det.input.path, "raw log")->required();
+  AddInputOptions(detect, &det.input, false);
+  AddDetectionOptions(detect, &det.input);
+  detect->add_flag("--json", det.json, "machine-readable output");
+
+  ApplyArgs apply;
+  CLI::App* apply_cmd =
+      app.add_subcommand("apply", "write the calibrated specific force of every sample of a log");
+  apply_cmd->add_option("CAL", apply.calibration, "calibration file (JSON)")->required();
+  apply_cmd->add_option("LOG", apply.input.path, "raw log")->required();
+  AddInputOptions(apply_cmd, &apply.input, false);
+  apply_cmd->add_option("-o,--output", apply.output, "output file (default: stdout)");
+  apply_cmd->add_option("--units", apply.units, "output unit m/s2 or g (default: the calibration's)");
+
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::CallForHelp& e) {
+    return app.exit(e);
+  } catch (const CLI::CallForAllHelp& e) {
+    return app.exit(e);
+  } catch (const CLI::CallForVersion& e) {
+    return app.exit(e);
+  } catch (const CLI::ParseError& e) {
+    app.exit(e);
+    return kExitUsage;
+  }
+
+  try {
+    if (*calibrate) return RunCalibrate(cal);
+    if (*detect) return RunDetect(det);
+    if (*apply_cmd) return RunApply(apply);
+  } catch (const UsageError& e) {
+    std::fprintf(stderr, "accelcal: usage: %s\n", e.what());
+    return kExitUsage;
+  } catch (const accelcal::InputError& e) {
+    std::fprintf(stderr, "accelcal: %s\n", e.what());
+    return kExitBadInput;
+  } catch (const accelcal::DataError& e) {
+    std::fprintf(stderr, "accelcal: %s: %s\n",
+                 (*calibrate ? cal.input.path : *detect ? det.input.path : apply.input.path).c_str(),
+                 e.what());
+    return kExitBadInput;
+  } catch (const OutputError& e) {
+    std::fprintf(stderr, "accelcal: %s\n", e.what());
+    return kExitOutput;
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "accelcal: internal error: %s\n", e.what());
+    return kExitInternal;
+  }
+  return kExitUsage;
+}

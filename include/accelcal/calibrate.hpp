@@ -1,0 +1,140 @@
+#pragma once
+/// @file calibrate.hpp
+/// Orientation-free calibration from static positions: maximum likelihood for the model of
+/// model.hpp with unknown unit gravity directions (paper 000 eq. (13)):
+///
+///     min over θ, c_1..c_m with |c_k| = 1 of  J = Σ_k ‖p_k − μ(θ, g c_k)‖²
+///
+/// Two solvers reach the same optimum:
+///   - kTwoStep: paper 000 §3.1, alternating the linear least squares for θ given the directions
+///     (eq. (15)) with a constrained Newton/KKT step per position (eq. (18)-(24), Hessian of eq. (25)
+///     corrected per ERRATA.md). Converges linearly.
+///   - kJoint: Levenberg-Marquardt over θ and all directions at once, each direction updated in its
+///     2-D tangent plane, the per-position 2x2 blocks eliminated by the Schur complement.
+/// Both start from an algebraic ellipsoid fit (paper 001 §3.3) or, where that fails, from the
+/// normalised readings (paper 000 eq. (26)).
+
+#include <optional>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "accelcal/gravity.hpp"
+#include "accelcal/model.hpp"
+
+namespace accelcal {
+
+enum class SolverMethod {
+  kTwoStep,  ///< "two-step": paper 000 alternating least squares / per-position KKT Newton
+  kJoint,    ///< "joint": Levenberg-Marquardt with Schur complement
+};
+std::string_view ToString(SolverMethod method);
+std::optional<SolverMethod> SolverMethodFromString(std::string_view text);
+
+enum class Initialization {
+  kAuto,                ///< ellipsoid fit, falling back to normalised readings if it fails
+  kEllipsoidFit,        ///< ellipsoid fit only (DataError when the fit is not an ellipsoid)
+  kNormalizedReadings,  ///< paper 000 eq. (26): c_k = p_k / |p_k|
+};
+std::string_view ToString(Initialization init);
+std::optional<Initialization> InitializationFromString(std::string_view text);
+
+/// Why a solver stopped. The criteria, with Δ measured in the parameter metric ‖·‖_s (each
+/// parameter change converted to the change of the prediction it causes, in raw units, divided by
+/// the signal amplitude |K_ii|·g of its axis; max-norm):
+enum class TerminationType {
+  kParameterTolerance,  ///< two-step: ‖Δθ_n‖_s·ρ/(1−ρ) ≤ parameter_tolerance, ρ = ‖Δθ_n‖_s/‖Δθ_{n−1}‖_s
+                        ///< (the remaining error of a linearly converging sequence);
+                        ///< joint: ‖Δθ‖_s ≤ parameter_tolerance and every |Δc_k| ≤ parameter_tolerance
+  kFunctionTolerance,   ///< |J_{n−1} − J_n| ≤ function_tolerance · J_n
+  kZeroResidual,        ///< J ≤ (64 ε · signal)² · 3m: the data are fitted to round-off
+  kMaxIterations,       ///< iteration cap reached before any criterion: not converged
+  kNoProgress,          ///< joint: no step reduced the cost even with maximal damping: not converged
+};
+std::string_view ToString(TerminationType type);
+
+struct CalibrationOptions {
+  ModelKind model = ModelKind::kLinear;
+  /// kJoint is the default: measured 20-100x faster than kTwoStep to the same optimum
+  /// (BENCHMARKS.md).
+  SolverMethod method = SolverMethod::kJoint;
+  Initialization initialization = Initialization::kAuto;
+  /// Gravity magnitude in the specific-force unit of the result (9.80665 for m/s², 1 for g).
+  double gravity = kStandardGravity_ms2;
+
+  struct TwoStep {
+    int max_sweeps = 20000;               ///< cap on alternations
+    double parameter_tolerance = 1e-14;   ///< see TerminationType
+    double function_tolerance = 1e-16;    ///< see TerminationType
+    int max_newton_iterations = 50;       ///< per-position KKT Newton cap (eq. (21))
+  } two_step;
+
+  struct Joint {
+    int max_iterations = 100;
+    double parameter_tolerance = 1e-14;
+    double function_tolerance = 1e-16;
+    double initial_damping = 1e-9;        ///< λ, relative to the diagonal of the normal matrix
+  } joint;
+
+  /// An error message when an option is out of range, else std::nullopt.
+  std::optional<std::string> Validate() const;
+};
+
+/// How the solve went (Ceres-style).
+struct Summary {
+  SolverMethod method = SolverMethod::kJoint;
+  Initialization initialization = Initialization::kAuto;  ///< what was actually used
+  std::string initialization_note;  ///< e.g. why the ellipsoid fit was not used
+  int iterations = 0;               ///< sweeps (two-step) or accepted LM steps (joint)
+  TerminationType termination = TerminationType::kMaxIterations;
+  std::string termination_message;  ///< the criterion met, as a formula with its numbers
+  double initial_cost = 0;          ///< J at the initial estimate [raw²]
+  double final_cost = 0;            ///< J at the solution [raw²]
+  double time_s = 0;                ///< wall time of the solve (initialisation included)
+
+  bool converged() const {
+    return termination != TerminationType::kMaxIterations &&
+           termination != TerminationType::kNoProgress;
+  }
+  std::string BriefReport() const;
+};
+
+/// Result of a calibration.
+struct CalibrationResult {
+  ModelKind model = ModelKind::kLinear;
+  double gravity = kStandardGravity_ms2;  ///< in the specific-force unit
+  ModelParameters params;
+  std::vector<Vec3> directions;  ///< estimated unit gravity directions c_k (body frame)
+  std::vector<Vec3> residuals;   ///< p_k − μ(θ, g c_k) [raw]
+  /// Covariance of the flat parameters (model.hpp order) from the Fisher information of the joint
+  /// model with directions eliminated, σ² estimated from the residuals: σ̂² = J / (3m − P − 2m).
+  /// Empty when there are no residual degrees of freedom (m = P/... exactly determined).
+  Eigen::MatrixXd covariance;
+  double residual_sigma = 0;  ///< σ̂ [raw], 0 when there are no degrees of freedom
+  int degrees_of_freedom = 0; ///< m − P
+  Summary summary;
+};
+
+/// Calibrates from averaged raw readings (one per position). Throws DataError when the data cannot
+/// determine the model (too few positions, coplanar or otherwise unobservable geometry, non-finite
+/// readings) and std::invalid_argument for invalid options. Non-convergence is reported in
+/// result.summary (converged() == false), never as a usable result.
+CalibrationResult Calibrate(const std::vector<Vec3>& readings, const CalibrationOptions& options);
+
+/// |f_k| − g for each reading under `params` (NaN where the model cannot be inverted).
+std::vector<double> GravityNormErrors(const ModelParameters& params,
+                                      const std::vector<Vec3>& readings, double gravity);
+/// RMS of |p_k| − g with the raw readings taken as specific force (no calibration), or
+/// std::nullopt when the readings are evidently not in the specific-force unit (median |p_k| more
+/// than 20 % away from g, e.g. raw counts).
+std::optional<double> GravityNormRmsUncalibrated(const std::vector<Vec3>& readings, double gravity);
+/// Root mean square of a list of values (NaN for an empty list).
+double Rms(const std::vector<double>& values);
+
+/// Minimum number of positions for a model: the number of parameters (9 or 12), since each
+/// position adds 3 equations and 2 unknown direction angles.
+constexpr int MinimumPositions(ModelKind kind) { return NumParameters(kind); }
+
+}  // namespace accelcal

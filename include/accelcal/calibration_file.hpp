@@ -1,0 +1,38 @@
+#pragma once
+/// @file calibration_file.hpp
+/// The calibration file: JSON, `format` "accelcal-calibration", `version` 1. Keys are documented
+/// in docs/calibration-file.md. Writing is deterministic (same result → same bytes).
+
+#include <string>
+#include <vector>
+
+#include "accelcal/calibrate.hpp"
+#include "accelcal/gravity.hpp"
+#include "accelcal/positions.hpp"
+
+namespace accelcal {
+
+/// What the file needs besides the CalibrationResult.
+struct CalibrationFileInfo {
+  ForceUnit unit = ForceUnit::kMetersPerSecond2;
+  std::string raw_unit = "raw";  ///< label of the raw unit, e.g. "counts"
+  std::string source;            ///< input file name
+  std::vector<Position> positions;  ///< the positions that were fitted, same order as the result
+};
+
+/// Serialises a calibration as the JSON document (2-space indented, trailing newline).
+std::string CalibrationToJson(const CalibrationResult& result, const CalibrationFileInfo& info);
+
+/// What applying a calibration needs, read back from a file.
+struct LoadedCalibration {
+  ModelKind model = ModelKind::kLinear;
+  ModelParameters params;
+  double gravity = 0;
+  ForceUnit unit = ForceUnit::kMetersPerSecond2;
+};
+
+/// Parses a calibration file's text; throws InputError naming `source` for anything missing,
+/// mistyped or inconsistent (unknown format/version, K not lower-triangular, non-finite numbers).
+LoadedCalibration ParseCalibrationJson(const std::string& text, const std::string& source);
+
+}  // namespace accelcal

@@ -1,0 +1,73 @@
+#pragma once
+/// @file log_reader.hpp
+/// Reading accelerometer recordings from delimited text.
+///
+/// Accepted text: one record per line; fields separated by commas, tabs or runs of spaces (one kind
+/// per file); `#` starts a comment to the end of the line; blank lines are skipped; the first
+/// non-comment line may be a header of column names. Two kinds of file:
+///   - raw logs: one sample per line, columns `time, x, y, z` (time in seconds; the imu_tk ASCII
+///     format `t x y z` is of this kind) or `x, y, z` with the rate given separately;
+///   - positions files: one averaged reading per line, `x, y, z`, optionally followed by the sample
+///     count `n` and the per-axis standard deviations `sx, sy, sz`.
+/// Every error names the file, the 1-based line and the reason (InputError).
+
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "accelcal/positions.hpp"
+#include "accelcal/types.hpp"
+
+namespace accelcal {
+
+/// What a file holds.
+enum class InputKind {
+  kAuto,       ///< decide from the header and the row count (see ReadOptions)
+  kRaw,        ///< raw samples
+  kPositions,  ///< one averaged reading per row
+};
+std::string_view ToString(InputKind kind);
+std::optional<InputKind> InputKindFromString(std::string_view text);
+
+struct ReadOptions {
+  InputKind kind = InputKind::kAuto;
+  /// Column selection for wider logs: 3 entries (x, y, z) or 4 (time, x, y, z), each a 1-based
+  /// column number or a header name. Empty: 4 columns are time,x,y,z and 3 are x,y,z.
+  std::vector<std::string> columns;
+  /// Sample rate [Hz] for logs without a time column (overrides the rate implied by timestamps).
+  std::optional<double> rate_hz;
+  /// kAuto: a file with at most this many data rows and no time column is a positions file; a
+  /// header naming a time column (t, time, timestamp) makes it raw, one naming n/samples/count
+  /// or std columns makes it a positions file.
+  std::size_t max_rows_of_positions_file = 200;
+};
+
+/// A raw recording: samples in raw units, with optional timestamps.
+struct RawLog {
+  std::string source;              ///< file name, for messages
+  std::vector<double> time_s;      ///< empty when the file has no time column
+  std::vector<Vec3> samples;       ///< raw readings
+  std::vector<std::uint32_t> line; ///< 1-based source line of each sample
+  /// Sample rate [Hz]: ReadOptions::rate_hz, else (t_last − t_first)/(n − 1) from timestamps
+  /// (robust to coarse timestamp resolution), else unset.
+  std::optional<double> rate_hz;
+};
+
+/// What was read: either a raw log or a table of positions.
+struct InputData {
+  InputKind kind = InputKind::kRaw;  ///< never kAuto
+  std::string kind_reason;           ///< why this kind was chosen (auto-detection), for messages
+  RawLog raw;                        ///< when kind == kRaw
+  std::vector<Position> positions;   ///< when kind == kPositions
+};
+
+/// Parses text already in memory; `source` names it in errors.
+InputData ParseInput(std::string_view text, const std::string& source, const ReadOptions& options);
+/// Reads and parses a file. Throws InputError (unreadable path, parse error).
+InputData ReadInput(const std::string& path, const ReadOptions& options);
+/// Reads a whole file into a string. Throws InputError when it cannot be read.
+std::string ReadFileToString(const std::string& path);
+
+}  // namespace accelcal

@@ -1,0 +1,152 @@
+#pragma once
+/// @file model.hpp
+/// The accelerometer error model, written once.
+///
+/// Paper 000 (Yang et al. 2012) eq. (3) and (7):
+///
+///     p = K f + b + k2 ∘ f² + v
+///
+///   p   raw output of the three axes                          [raw units, e.g. counts]
+///   f   specific force in the body frame b                    [specific-force unit: m/s² or g]
+///   K   lower-triangular 3x3 (K = k_a T_b^a of eq. (2)):       [raw per specific-force unit]
+///       body x = sensor x axis, body y in the sensor x-y plane, body z completes a right-handed frame
+///   b   bias                                                   [raw]
+///   k2  squared (second-order) coefficients, one per axis      [raw per (specific-force unit)²]
+///       zero in the linear model
+///   ∘   element-wise product; f² = f ∘ f
+///
+/// All-zero k2 and b with K = I make the model the identity.
+///
+/// Flat parameter order (paper 000 eq. (8)), grouped by output axis so that the linear least-squares
+/// step of the two-step method (eq. (15)) splits into three independent problems:
+///
+///     quadratic (12): K_xx b_x k2_x | K_yx K_yy b_y k2_y | K_zx K_zy K_zz b_z k2_z
+///     linear     (9): K_xx b_x      | K_yx K_yy b_y      | K_zx K_zy K_zz b_z
+///
+/// In a static position f = g c with |c| = 1 and g the local gravity magnitude (eq. (6)).
+
+#include <array>
+#include <optional>
+#include <string_view>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "accelcal/types.hpp"
+
+namespace accelcal {
+
+/// Which error model is fitted.
+enum class ModelKind {
+  kLinear,     ///< k2 = 0: 9 parameters.
+  kQuadratic,  ///< 12 parameters.
+};
+
+std::string_view ToString(ModelKind kind);
+/// Parses "linear" or "quadratic"; std::nullopt for anything else.
+std::optional<ModelKind> ModelKindFromString(std::string_view text);
+
+/// Number of free parameters of the model (9 or 12).
+constexpr int NumParameters(ModelKind kind) { return kind == ModelKind::kLinear ? 9 : 12; }
+
+/// Maximum number of parameters of any model; flat vectors are padded to this size in kernels.
+constexpr int kMaxParameters = 12;
+
+/// Which member of ModelParameters a flat parameter is.
+enum class ParameterGroup { kK, kBias, kK2 };
+
+/// One entry of the flat parameter vector: group, row (output axis) and column (for K).
+struct ParameterSlot {
+  ParameterGroup group;
+  int row;
+  int col;
+  std::string_view name;  ///< e.g. "K_yx", "b_z", "k2_x".
+};
+
+/// The slots of the flat parameter vector in order (eq. (8)); size NumParameters(kind).
+const std::vector<ParameterSlot>& ParameterSlots(ModelKind kind);
+
+/// Parameters of p = K f + b + k2 ∘ f². Units as in the file comment.
+template <typename Scalar>
+struct ModelParametersT {
+  Mat33T<Scalar> K = Mat33T<Scalar>::Identity();  ///< raw per specific-force unit, lower-triangular
+  Vec3T<Scalar> bias = Vec3T<Scalar>::Zero();      ///< raw
+  Vec3T<Scalar> k2 = Vec3T<Scalar>::Zero();        ///< raw per (specific-force unit)²
+
+  template <typename Other>
+  ModelParametersT<Other> cast() const {
+    return {K.template cast<Other>(), bias.template cast<Other>(), k2.template cast<Other>()};
+  }
+};
+using ModelParameters = ModelParametersT<double>;
+
+/// Flat vector (eq. (8) order) from parameters; k2 is dropped for the linear model.
+Eigen::VectorXd Pack(const ModelParameters& params, ModelKind kind);
+/// Parameters from a flat vector of size NumParameters(kind); k2 = 0 for the linear model.
+ModelParameters Unpack(const Eigen::VectorXd& theta, ModelKind kind);
+
+/// Forward model μ(f) = K f + b + k2 ∘ f² (eq. (11) without noise). Optionally returns
+/// J_p_f = ∂p/∂f = K + 2 diag(k2 ∘ f).
+template <typename Scalar>
+Vec3T<Scalar> PredictRaw(const ModelParametersT<Scalar>& params, const Vec3T<Scalar>& f,
+                         Mat33T<Scalar>* J_p_f = nullptr) {
+  const Vec3T<Scalar> f2 = f.cwiseProduct(f);
+  if (J_p_f != nullptr) {
+    *J_p_f = params.K;
+    J_p_f->diagonal() += Scalar(2) * params.k2.cwiseProduct(f);
+  }
+  return params.K.template triangularView<Eigen::Lower>() * f + params.bias +
+         params.k2.cwiseProduct(f2);
+}
+
+/// Jacobian of the forward model with respect to the 12 flat parameters (quadratic order, eq. (15)
+/// rows): row x = [f_x 1 f_x² | 0 ...], row y = [0 0 0 | f_x f_y 1 f_y² | 0 ...], row z likewise.
+/// For the linear model drop columns 2, 6 and 11.
+template <typename Scalar>
+Eigen::Matrix<Scalar, 3, kMaxParameters> JacobianWrtParameters(const Vec3T<Scalar>& f) {
+  Eigen::Matrix<Scalar, 3, kMaxParameters> J = Eigen::Matrix<Scalar, 3, kMaxParameters>::Zero();
+  J(0, 0) = f.x();
+  J(0, 1) = Scalar(1);
+  J(0, 2) = f.x() * f.x();
+  J(1, 3) = f.x();
+  J(1, 4) = f.y();
+  J(1, 5) = Scalar(1);
+  J(1, 6) = f.y() * f.y();
+  J(2, 7) = f.x();
+  J(2, 8) = f.y();
+  J(2, 9) = f.z();
+  J(2, 10) = Scalar(1);
+  J(2, 11) = f.z() * f.z();
+  return J;
+}
+
+/// Column indices of the quadratic (12-parameter) layout used by a model kind.
+const std::vector<int>& ActiveColumns(ModelKind kind);
+
+/// Exact inverse of the forward model: the specific force f with PredictRaw(params, f) = p.
+///
+/// K is lower-triangular and k2 diagonal, so row i reads K_ii f_i + k2_i f_i² = r_i with r_i known
+/// once f_0..f_{i-1} are: a scalar quadratic solved in closed form, taking the root that tends to
+/// the linear solution r_i / K_ii as k2_i → 0 (written 2 r / (K + sqrt(K² + 4 k2 r)) to avoid
+/// cancellation). Returns std::nullopt when p lies outside the range the model can produce
+/// (negative discriminant) or when K has a zero diagonal.
+template <typename Scalar>
+std::optional<Vec3T<Scalar>> SpecificForce(const ModelParametersT<Scalar>& params,
+                                           const Vec3T<Scalar>& p) {
+  using std::sqrt;
+  Vec3T<Scalar> f;
+  for (int i = 0; i < 3; ++i) {
+    Scalar r = p(i) - params.bias(i);
+    for (int j = 0; j < i; ++j) r -= params.K(i, j) * f(j);
+    const Scalar a = params.K(i, i);
+    if (a == Scalar(0)) return std::nullopt;
+    const Scalar disc = a * a + Scalar(4) * params.k2(i) * r;
+    if (!(disc >= Scalar(0))) return std::nullopt;
+    const Scalar root = sqrt(disc);
+    const Scalar denom = a >= Scalar(0) ? a + root : a - root;
+    f(i) = Scalar(2) * r / denom;
+  }
+  return f;
+}
+
+}  // namespace accelcal

@@ -1,0 +1,36 @@
+#pragma once
+/// @file simulate.hpp
+/// Simulation of static multi-position recordings (part of the library so that tests, benchmarks
+/// and users share it; deterministic for a given seed).
+
+#include <cstdint>
+#include <vector>
+
+#include "accelcal/model.hpp"
+
+namespace accelcal {
+
+/// Unit direction of specific force for pitch θ and roll φ (paper 000 eq. (6), (30)):
+/// c = (sin θ, cos θ cos φ, −cos θ sin φ).
+Vec3 DirectionFromAngles(double theta_rad, double phi_rad);
+
+/// Paper 000 Table 2: the 18 optimal positions (θ, φ); '*' entries taken as φ = 0.
+std::vector<Vec3> Yang18Directions();
+
+/// Paper 000 Table 3 truth in raw pulses with f in m/s² and g = 9.8 (ERRATA.md conventions):
+/// k_a = (4800, 4900, 5000) pulse/(m/s²); τ_yx = sin 0.01°, (τ_zx, τ_zy) = sin 0.02°·(cos 30°, sin 30°),
+/// unit rows; biases (0.01, 0.02, 0.03) m/s²; squared coefficients (1, 2, 3)e-5 g/g².
+ModelParameters Yang2012Truth();
+inline constexpr double kYang2012Gravity_ms2 = 9.8;
+/// Per-axis noise of one averaged position in Table 4 (ERRATA): 10 µg/√Hz·√100 Hz / √6000 [m/s²].
+inline constexpr double kYang2012PositionSigma_ms2 = 10e-6 * 10.0 / 77.45966692414834 * 9.8;
+
+/// Averaged readings p_k = μ(g c_k) + v_k, v_k ~ N(0, diag(sigma_raw²)), deterministic in seed.
+std::vector<Vec3> SimulatePositions(const ModelParameters& truth, double gravity,
+                                    const std::vector<Vec3>& directions, const Vec3& sigma_raw,
+                                    std::uint64_t seed);
+
+/// Random unit directions, uniform on the sphere, deterministic in seed.
+std::vector<Vec3> RandomDirections(int count, std::uint64_t seed);
+
+}  // namespace accelcal

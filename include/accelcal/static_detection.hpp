@@ -1,0 +1,47 @@
+#pragma once
+/// @file static_detection.hpp
+/// Automatic detection of static intervals in a raw log.
+///
+/// For every sample i the variance of each axis over a centred window of w samples is computed;
+/// the score s_i is the sum of the three variances [raw²]. The noise reference s_ref is either the
+/// same sum over an initial rest period (imu_tk's approach, `init_rest_s` > 0) or, by default, a low
+/// quantile of all window scores (quiet windows exist in any usable recording). A sample is
+/// static when s_i ≤ threshold_factor · s_ref; runs of static window centres at least
+/// `min_duration_s` long become intervals. Using the window centres trims half a window at each end
+/// of a still period, so the samples kept are those whose whole neighbourhood was still.
+
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "accelcal/log_reader.hpp"
+#include "accelcal/positions.hpp"
+
+namespace accelcal {
+
+struct StaticDetectionOptions {
+  double window_s = 0.5;          ///< variance window length [s]
+  double min_duration_s = 1.0;    ///< shortest interval kept [s]
+  double threshold_factor = 10.0; ///< threshold = factor × noise reference
+  /// > 0: the noise reference is the variance of the first init_rest_s seconds (the sensor must be
+  /// still then). 0: the reference is the `reference_quantile` quantile of the window scores.
+  double init_rest_s = 0.0;
+  double reference_quantile = 0.05;
+  /// An error message when an option is out of range, else std::nullopt.
+  std::optional<std::string> Validate() const;
+};
+
+struct StaticDetectionResult {
+  std::vector<StaticInterval> intervals;
+  double rate_hz = 0;              ///< rate used
+  std::size_t window_samples = 0;  ///< window length used
+  double noise_reference = 0;      ///< s_ref [raw²]
+  double threshold = 0;            ///< [raw²]
+};
+
+/// Throws DataError when the log is too short, has no rate (no time column and no rate given) or
+/// the options are invalid. Returns an empty interval list when nothing is still.
+StaticDetectionResult DetectStaticIntervals(const RawLog& log,
+                                            const StaticDetectionOptions& options);
+
+}  // namespace accelcal

@@ -1,0 +1,20 @@
+#!/usr/bin/env bash
+# Installs the Debian 12 packages accelcal builds and tests with, if any is missing.
+# Run as root (or with sudo). Nothing is downloaded except Debian packages.
+set -euo pipefail
+packages=(
+  build-essential cmake
+  libeigen3-dev libcli11-dev nlohmann-json3-dev libfast-float-dev
+  libgtest-dev libgmock-dev libbenchmark-dev
+  clang-format
+)
+missing=()
+for p in "${packages[@]}"; do
+  dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
+done
+if ((${#missing[@]})); then
+  echo "installing: ${missing[*]}"
+  export DEBIAN_FRONTEND=noninteractive
+  apt-get update -qq
+  apt-get install -y -qq --no-install-recommends "${missing[@]}"
+fi

@@ -1,0 +1,244 @@
+#include "accelcal/calibrate.hpp"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <stdexcept>
+
+#include <Eigen/Cholesky>
+#include <Eigen/SVD>
+
+#include "accelcal/ellipsoid_fit.hpp"
+#include "accelcal/error.hpp"
+#include "solver_common.hpp"
+
+namespace accelcal {
+
+std::string_view ToString(SolverMethod method) {
+  return method == SolverMethod::kTwoStep ? "two-step" : "joint";
+}
+std::optional<SolverMethod> SolverMethodFromString(std::string_view text) {
+  if (text == "two-step") return SolverMethod::kTwoStep;
+  if (text == "joint") return SolverMethod::kJoint;
+  return std::nullopt;
+}
+
+std::string_view ToString(Initialization init) {
+  switch (init) {
+    case Initialization::kAuto:
+      return "auto";
+    case Initialization::kEllipsoidFit:
+      return "ellipsoid";
+    case Initialization::kNormalizedReadings:
+      break;
+  }
+  return "normalized-readings";
+}
+std::optional<Initialization> InitializationFromString(std::string_view text) {
+  if (text == "auto") return Initialization::kAuto;
+  if (text == "ellipsoid") return Initialization::kEllipsoidFit;
+  if (text == "normalized-readings") return Initialization::kNormalizedReadings;
+  return std::nullopt;
+}
+
+std::string_view ToString(TerminationType type) {
+  switch (type) {
+    case TerminationType::kParameterTolerance:
+      return "parameter_tolerance";
+    case TerminationType::kFunctionTolerance:
+      return "function_tolerance";
+    case TerminationType::kZeroResidual:
+      return "zero_residual";
+    case TerminationType::kMaxIterations:
+      return "max_iterations";
+    case TerminationType::kNoProgress:
+      break;
+  }
+  return "no_progress";
+}
+
+std::optional<std::string> CalibrationOptions::Validate() const {
+  if (!(gravity > 0) || !std::isfinite(gravity)) return "gravity must be a positive number";
+  if (two_step.max_sweeps < 1) return "two_step.max_sweeps must be at least 1";
+  if (two_step.max_newton_iterations < 1) return "two_step.max_newton_iterations must be >= 1";
+  if (!(two_step.parameter_tolerance >= 0) || !(two_step.function_tolerance >= 0)) {
+    return "two-step tolerances must be non-negative";
+  }
+  if (joint.max_iterations < 1) return "joint.max_iterations must be at least 1";
+  if (!(joint.parameter_tolerance >= 0) || !(joint.function_tolerance >= 0)) {
+    return "joint tolerances must be non-negative";
+  }
+  if (!(joint.initial_damping > 0)) return "joint.initial_damping must be positive";
+  return std::nullopt;
+}
+
+std::string Summary::BriefReport() const {
+  char buf[512];
+  std::snprintf(buf, sizeof buf,
+                "%s solver, init %s: %s after %d iterations (%s); J %.6e -> %.6e; %.1f us",
+                std::string(ToString(method)).c_str(),
+                std::string(ToString(initialization)).c_str(),
+                converged() ? "converged" : "NOT CONVERGED", iterations,
+                termination_message.c_str(), initial_cost, final_cost, time_s * 1e6);
+  return buf;
+}
+
+std::vector<double> GravityNormErrors(const ModelParameters& params,
+                                      const std::vector<Vec3>& readings, double gravity) {
+  std::vector<double> errors;
+  errors.reserve(readings.size());
+  for (const Vec3& p : readings) {
+    const std::optional<Vec3> f = SpecificForce(params, p);
+    errors.push_back(f ? f->norm() - gravity : std::nan(""));
+  }
+  return errors;
+}
+
+std::optional<double> GravityNormRmsUncalibrated(const std::vector<Vec3>& readings,
+                                                 double gravity) {
+  if (readings.empty()) return std::nullopt;
+  std::vector<double> norms;
+  for (const Vec3& p : readings) norms.push_back(p.norm());
+  std::vector<double> sorted = norms;
+  std::nth_element(sorted.begin(), sorted.begin() + static_cast<std::ptrdiff_t>(sorted.size() / 2),
+                   sorted.end());
+  const double median = sorted[sorted.size() / 2];
+  if (std::abs(median - gravity) > 0.2 * gravity) return std::nullopt;
+  for (double& v : norms) v -= gravity;
+  return Rms(norms);
+}
+
+double Rms(const std::vector<double>& values) {
+  if (values.empty()) return std::nan("");
+  double sum = 0;
+  for (double v : values) sum += v * v;
+  return std::sqrt(sum / static_cast<double>(values.size()));
+}
+
+namespace {
+
+using internal::Problem;
+
+void CheckData(const std::vector<Vec3>& readings, ModelKind model) {
+  const int m = static_cast<int>(readings.size());
+  for (int k = 0; k < m; ++k) {
+    if (!readings[k].allFinite()) {
+      throw DataError("position " + std::to_string(k + 1) + " has a non-finite reading");
+    }
+  }
+  if (m < MinimumPositions(model)) {
+    throw DataError("the " + std::string(ToString(model)) + " model needs at least " +
+                    std::to_string(MinimumPositions(model)) + " positions, got " +
+                    std::to_string(m));
+  }
+  // Directions on one great circle put the readings on one plane (exactly for the linear model):
+  // the axis normal to it is then not observable.
+  Vec3 mean = Vec3::Zero();
+  for (const Vec3& p : readings) mean += p;
+  mean /= m;
+  Eigen::MatrixXd centred(m, 3);
+  for (int k = 0; k < m; ++k) centred.row(k) = (readings[k] - mean).transpose();
+  const Vec3 sv = Eigen::JacobiSVD<Eigen::MatrixXd>(centred).singularValues();
+  if (!(sv(2) > 1e-3 * sv(0))) {
+    char buf[256];
+    std::snprintf(buf, sizeof buf,
+                  "all %d positions lie in one plane (spread ratio %.2g): the sensor must be "
+                  "turned about more than one axis",
+                  m, sv(0) > 0 ? sv(2) / sv(0) : 0.0);
+    throw DataError(buf);
+  }
+}
+
+struct Start {
+  ModelParameters params;
+  std::vector<Vec3> dirs;
+  Initialization used;
+  std::string note;
+};
+
+Start Initialise(const Problem& problem, Initialization requested) {
+  Start start;
+  if (requested != Initialization::kNormalizedReadings) {
+    const EllipsoidFitResult fit = FitEllipsoid(problem.readings, problem.gravity);
+    if (fit.ok) {
+      start.params = fit.params;
+      start.dirs = internal::DirectionsFromParams(problem, fit.params);
+      start.used = Initialization::kEllipsoidFit;
+      return start;
+    }
+    if (requested == Initialization::kEllipsoidFit) {
+      throw DataError("ellipsoid-fit initialisation failed: " + fit.failure);
+    }
+    start.note = "ellipsoid fit failed (" + fit.failure + "); used normalised readings";
+  }
+  // Paper 000 eq. (26): directions are the normalised raw readings, then eq. (15) for θ.
+  start.dirs.reserve(problem.readings.size());
+  for (const Vec3& p : problem.readings) start.dirs.push_back(p.normalized());
+  start.params = internal::SolveParametersGivenDirections(problem, start.dirs);
+  start.used = Initialization::kNormalizedReadings;
+  return start;
+}
+
+}  // namespace
+
+CalibrationResult Calibrate(const std::vector<Vec3>& readings, const CalibrationOptions& options) {
+  if (auto why = options.Validate()) throw std::invalid_argument(*why);
+  const auto t0 = std::chrono::steady_clock::now();
+  CheckData(readings, options.model);
+  const Problem problem{readings, options.gravity, options.model};
+
+  Start start = Initialise(problem, options.initialization);
+  internal::SolverOutput out =
+      options.method == SolverMethod::kTwoStep
+          ? internal::SolveTwoStep(problem, start.params, std::move(start.dirs), options)
+          : internal::SolveJoint(problem, start.params, std::move(start.dirs), options);
+  out.summary.initialization = start.used;
+  out.summary.initialization_note = start.note;
+
+  // Observability at the solution: a (near) singular reduced information matrix means some
+  // parameter is not determined by these positions, whatever the solver returned.
+  const internal::Information info = internal::ComputeInformation(problem, out.params, out.dirs);
+  if (!(info.rcond > 1e-10)) {
+    char buf[256];
+    std::snprintf(buf, sizeof buf,
+                  "the positions do not determine the %s model: parameter %s is not observable "
+                  "(information condition %.2g); add positions with other orientations",
+                  std::string(ToString(options.model)).c_str(),
+                  std::string(ParameterSlots(ModelKind::kQuadratic)[info.weakest].name).c_str(),
+                  info.rcond);
+    throw DataError(buf);
+  }
+
+  CalibrationResult result;
+  result.model = options.model;
+  result.gravity = options.gravity;
+  result.params = out.params;
+  result.directions = out.dirs;
+  result.residuals.reserve(readings.size());
+  for (std::size_t k = 0; k < readings.size(); ++k) {
+    result.residuals.push_back(readings[k] -
+                               PredictRaw(out.params, Vec3(options.gravity * out.dirs[k])));
+  }
+  const int P = NumParameters(options.model);
+  result.degrees_of_freedom = static_cast<int>(readings.size()) - P;
+  if (result.degrees_of_freedom > 0) {
+    const double sigma2 = out.summary.final_cost / result.degrees_of_freedom;
+    result.residual_sigma = std::sqrt(sigma2);
+    // Invert with Jacobi scaling: the parameters' units differ by orders of magnitude.
+    const internal::Vec12 s = info.reduced.diagonal().cwiseSqrt().cwiseInverse();
+    const internal::Mat12 scaled = s.asDiagonal() * info.reduced * s.asDiagonal();
+    const internal::Mat12 inverse =
+        s.asDiagonal() * scaled.ldlt().solve(internal::Mat12::Identity()) * s.asDiagonal();
+    const std::vector<int>& cols = ActiveColumns(options.model);
+    result.covariance.resize(P, P);
+    for (int i = 0; i < P; ++i) {
+      for (int j = 0; j < P; ++j) result.covariance(i, j) = sigma2 * inverse(cols[i], cols[j]);
+    }
+  }
+  result.summary = out.summary;
+  result.summary.time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  return result;
+}
+
+}  // namespace accelcal

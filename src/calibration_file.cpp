@@ -1,0 +1,210 @@
+#include "accelcal/calibration_file.hpp"
+
+#include <cmath>
+
+#include <nlohmann/json.hpp>
+
+#include "accelcal/engineering.hpp"
+#include "accelcal/error.hpp"
+
+namespace accelcal {
+
+namespace {
+
+using nlohmann::ordered_json;
+
+ordered_json ToJson(const Vec3& v) { return ordered_json::array({v(0), v(1), v(2)}); }
+
+ordered_json ToJson(const Mat33& m) {
+  ordered_json rows = ordered_json::array();
+  for (int i = 0; i < 3; ++i) rows.push_back(ordered_json::array({m(i, 0), m(i, 1), m(i, 2)}));
+  return rows;
+}
+
+ordered_json Nullable(const std::optional<double>& v) {
+  return v && std::isfinite(*v) ? ordered_json(*v) : ordered_json(nullptr);
+}
+
+constexpr const char* kEquation =
+    "p = K f + b + k2 * f^2 (element-wise square); p raw, f specific force in the body frame "
+    "(x = sensor x, y in the sensor x-y plane), K lower-triangular";
+
+}  // namespace
+
+std::string CalibrationToJson(const CalibrationResult& result, const CalibrationFileInfo& info) {
+  const std::vector<Vec3> means = Means(info.positions);
+  ordered_json doc;
+  doc["format"] = "accelcal-calibration";
+  doc["version"] = 1;
+  doc["model"] = std::string(ToString(result.model));
+  doc["gravity"] = result.gravity;
+  doc["units"] = {{"raw", info.raw_unit}, {"specific_force", std::string(ToString(info.unit))}};
+  doc["equation"] = kEquation;
+  doc["K"] = ToJson(result.params.K);
+  doc["bias"] = ToJson(result.params.bias);
+  doc["k2"] = ToJson(result.params.k2);
+
+  const auto& slots = ParameterSlots(result.model);
+  ordered_json order = ordered_json::array();
+  for (const auto& s : slots) order.push_back(std::string(s.name));
+  doc["parameter_order"] = order;
+  if (result.covariance.size() > 0) {
+    ordered_json cov = ordered_json::array();
+    for (Eigen::Index i = 0; i < result.covariance.rows(); ++i) {
+      ordered_json row = ordered_json::array();
+      for (Eigen::Index j = 0; j < result.covariance.cols(); ++j) row.push_back(result.covariance(i, j));
+      cov.push_back(row);
+    }
+    ModelParameters std_params;
+    std_params.K.setZero();
+    for (std::size_t i = 0; i < slots.size(); ++i) {
+      const double sd = std::sqrt(std::max(0.0, result.covariance(static_cast<Eigen::Index>(i),
+                                                                  static_cast<Eigen::Index>(i))));
+      switch (slots[i].group) {
+        case ParameterGroup::kK:
+          std_params.K(slots[i].row, slots[i].col) = sd;
+          break;
+        case ParameterGroup::kBias:
+          std_params.bias(slots[i].row) = sd;
+          break;
+        case ParameterGroup::kK2:
+          std_params.k2(slots[i].row) = sd;
+          break;
+      }
+    }
+    doc["std"] = {{"K", ToJson(std_params.K)},
+                  {"bias", ToJson(std_params.bias)},
+                  {"k2", ToJson(std_params.k2)}};
+    doc["covariance"] = cov;
+  } else {
+    doc["std"] = nullptr;
+    doc["covariance"] = nullptr;
+  }
+  doc["noise"] = {{"source", "residuals"},
+                  {"sigma_raw", result.degrees_of_freedom > 0 ? ordered_json(result.residual_sigma)
+                                                              : ordered_json(nullptr)},
+                  {"degrees_of_freedom", result.degrees_of_freedom}};
+
+  const EngineeringParameters eng = ToEngineering(result.params, result.gravity);
+  const Vec3 tau(eng.tau_yx, eng.tau_zx, eng.tau_zy);
+  doc["engineering"] = {
+      {"scale_factor", ToJson(eng.scale_factor)},
+      {"misalignment_rad", {{"tau_yx", tau(0)}, {"tau_zx", tau(1)}, {"tau_zy", tau(2)}}},
+      {"misalignment_arcsec",
+       {{"tau_yx", tau(0) * kArcsecPerRad},
+        {"tau_zx", tau(1) * kArcsecPerRad},
+        {"tau_zy", tau(2) * kArcsecPerRad}}},
+      {"bias_specific_force", ToJson(eng.bias_force)},
+      {"k2_g_per_g2", ToJson(eng.k2_g_per_g2)}};
+
+  const std::vector<double> errors = GravityNormErrors(result.params, means, result.gravity);
+  ordered_json positions = ordered_json::array();
+  for (std::size_t k = 0; k < info.positions.size(); ++k) {
+    const Position& p = info.positions[k];
+    ordered_json entry;
+    entry["mean"] = ToJson(p.mean);
+    entry["samples"] = p.samples;
+    if (p.std) entry["std"] = ToJson(*p.std);
+    if (p.interval) {
+      entry["interval"] = {{"begin", p.interval->begin},
+                           {"end", p.interval->end},
+                           {"t_begin", p.interval->t_begin_s},
+                           {"t_end", p.interval->t_end_s}};
+    }
+    entry["direction"] = ToJson(result.directions[k]);
+    entry["residual"] = ToJson(result.residuals[k]);
+    entry["gravity_norm_error"] = Nullable(errors[k]);
+    positions.push_back(entry);
+  }
+  doc["positions"] = positions;
+  doc["gravity_norm_rms_before"] = Nullable(GravityNormRmsUncalibrated(means, result.gravity));
+  doc["gravity_norm_rms_after"] = Nullable(Rms(errors));
+  const Summary& s = result.summary;
+  doc["solver"] = {{"method", std::string(ToString(s.method))},
+                   {"initialization", std::string(ToString(s.initialization))},
+                   {"initialization_note", s.initialization_note},
+                   {"iterations", s.iterations},
+                   {"converged", s.converged()},
+                   {"termination", std::string(ToString(s.termination))},
+                   {"termination_message", s.termination_message},
+                   {"initial_cost", s.initial_cost},
+                   {"cost", s.final_cost}};
+  doc["source"] = info.source;
+  return doc.dump(2) + "\n";
+}
+
+namespace {
+
+double Number(const ordered_json& j, const std::string& what, const std::string& source) {
+  if (!j.is_number()) throw InputError(source, 0, what + " must be a number");
+  const double v = j.get<double>();
+  if (!std::isfinite(v)) throw InputError(source, 0, what + " is not finite");
+  return v;
+}
+
+Vec3 Vector3(const ordered_json& doc, const char* key, const std::string& source) {
+  if (!doc.contains(key) || !doc[key].is_array() || doc[key].size() != 3) {
+    throw InputError(source, 0, std::string("'") + key + "' must be an array of 3 numbers");
+  }
+  Vec3 v;
+  for (int i = 0; i < 3; ++i) v(i) = Number(doc[key][i], std::string(key) + "[" + std::to_string(i) + "]", source);
+  return v;
+}
+
+}  // namespace
+
+LoadedCalibration ParseCalibrationJson(const std::string& text, const std::string& source) {
+  ordered_json doc;
+  try {
+    doc = ordered_json::parse(text);
+  } catch (const nlohmann::json::parse_error& e) {
+    throw InputError(source, 0, std::string("not valid JSON: ") + e.what());
+  }
+  if (!doc.is_object() || doc.value("format", "") != "accelcal-calibration") {
+    throw InputError(source, 0, "not an accelcal calibration file (\"format\" is not \"accelcal-calibration\")");
+  }
+  if (!doc.contains("version") || !doc["version"].is_number_integer() || doc["version"] != 1) {
+    throw InputError(source, 0, "unsupported calibration file version (expected 1)");
+  }
+  LoadedCalibration cal;
+  const std::optional<ModelKind> model =
+      doc.contains("model") && doc["model"].is_string()
+          ? ModelKindFromString(doc["model"].get<std::string>())
+          : std::nullopt;
+  if (!model) throw InputError(source, 0, "'model' must be \"linear\" or \"quadratic\"");
+  cal.model = *model;
+  if (!doc.contains("gravity")) throw InputError(source, 0, "'gravity' is missing");
+  cal.gravity = Number(doc["gravity"], "'gravity'", source);
+  if (!(cal.gravity > 0)) throw InputError(source, 0, "'gravity' must be positive");
+  const std::optional<ForceUnit> unit =
+      doc.contains("units") && doc["units"].is_object() && doc["units"].contains("specific_force") &&
+              doc["units"]["specific_force"].is_string()
+          ? ForceUnitFromString(doc["units"]["specific_force"].get<std::string>())
+          : std::nullopt;
+  if (!unit) throw InputError(source, 0, "'units.specific_force' must be \"m/s2\" or \"g\"");
+  cal.unit = *unit;
+  if (!doc.contains("K") || !doc["K"].is_array() || doc["K"].size() != 3) {
+    throw InputError(source, 0, "'K' must be a 3x3 array");
+  }
+  for (int i = 0; i < 3; ++i) {
+    const auto& row = doc["K"][i];
+    if (!row.is_array() || row.size() != 3) throw InputError(source, 0, "'K' must be a 3x3 array");
+    for (int j = 0; j < 3; ++j) {
+      cal.params.K(i, j) = Number(row[j], "K[" + std::to_string(i) + "][" + std::to_string(j) + "]", source);
+    }
+  }
+  if (cal.params.K(0, 1) != 0 || cal.params.K(0, 2) != 0 || cal.params.K(1, 2) != 0) {
+    throw InputError(source, 0, "'K' must be lower-triangular");
+  }
+  if (cal.params.K(0, 0) == 0 || cal.params.K(1, 1) == 0 || cal.params.K(2, 2) == 0) {
+    throw InputError(source, 0, "'K' has a zero diagonal entry");
+  }
+  cal.params.bias = Vector3(doc, "bias", source);
+  cal.params.k2 = Vector3(doc, "k2", source);
+  if (cal.model == ModelKind::kLinear && !cal.params.k2.isZero(0)) {
+    throw InputError(source, 0, "a linear model must have k2 = [0, 0, 0]");
+  }
+  return cal;
+}
+
+}  // namespace accelcal

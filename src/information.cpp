@@ -1,0 +1,199 @@
+// Shared pieces of the solvers: cost, metrics, tangent spaces, normal equations, information.
+#include <cmath>
+#include <limits>
+
+#include <Eigen/Cholesky>
+#include <Eigen/LU>
+#include <Eigen/Eigenvalues>
+#include <Eigen/QR>
+
+#include "solver_common.hpp"
+
+namespace accelcal::internal {
+
+Vec12 FreeMask(ModelKind model) {
+  Vec12 mask = Vec12::Ones();
+  if (model == ModelKind::kLinear) mask(2) = mask(6) = mask(11) = 0.0;
+  return mask;
+}
+
+Vec12 ToVec12(const ModelParameters& p) {
+  Vec12 t;
+  t << p.K(0, 0), p.bias(0), p.k2(0), p.K(1, 0), p.K(1, 1), p.bias(1), p.k2(1), p.K(2, 0),
+      p.K(2, 1), p.K(2, 2), p.bias(2), p.k2(2);
+  return t;
+}
+
+ModelParameters FromVec12(const Vec12& t) {
+  ModelParameters p;
+  p.K << t(0), 0, 0, t(3), t(4), 0, t(7), t(8), t(9);
+  p.bias << t(1), t(5), t(10);
+  p.k2 << t(2), t(6), t(11);
+  return p;
+}
+
+double Cost(const Problem& problem, const ModelParameters& params, const std::vector<Vec3>& dirs) {
+  double cost = 0;
+  for (int k = 0; k < problem.positions(); ++k) {
+    cost += (problem.readings[k] - PredictRaw(params, Vec3(problem.gravity * dirs[k]))).squaredNorm();
+  }
+  return cost;
+}
+
+Vec12 ParameterScales(const Problem& problem, const ModelParameters& params) {
+  const double g = problem.gravity;
+  Vec12 s;
+  const double ax = 1.0 / (std::abs(params.K(0, 0)) * g);
+  const double ay = 1.0 / (std::abs(params.K(1, 1)) * g);
+  const double az = 1.0 / (std::abs(params.K(2, 2)) * g);
+  s << g * ax, ax, g * g * ax, g * ay, g * ay, ay, g * g * ay, g * az, g * az, g * az, az,
+      g * g * az;
+  return s;
+}
+
+double ScaledNorm(const Vec12& delta, const Vec12& scales) {
+  return delta.cwiseAbs().cwiseProduct(scales).maxCoeff();
+}
+
+double ZeroResidualCost(const Problem& problem, const ModelParameters& params) {
+  double signal = 0;
+  for (int i = 0; i < 3; ++i) {
+    signal = std::max(signal, std::abs(params.K(i, i)) * problem.gravity + std::abs(params.bias(i)));
+  }
+  const double unit = 64.0 * std::numeric_limits<double>::epsilon() * signal;
+  return unit * unit * 3.0 * problem.positions();
+}
+
+Mat32 TangentBasis(const Vec3& c) {
+  // Start from the coordinate axis least aligned with c so the cross products are well conditioned.
+  Eigen::Index axis = 0;
+  c.cwiseAbs().minCoeff(&axis);
+  const Vec3 e = Vec3::Unit(axis);
+  Mat32 basis;
+  basis.col(0) = c.cross(e).normalized();
+  basis.col(1) = c.cross(basis.col(0)).normalized();
+  return basis;
+}
+
+Vec3 Retract(const Vec3& c, const Mat32& basis, const Eigen::Vector2d& delta) {
+  return (c + basis * delta).normalized();
+}
+
+void BuildNormalEquations(const Problem& problem, const ModelParameters& params,
+                          const std::vector<Vec3>& dirs, NormalEquations* ne) {
+  const int m = problem.positions();
+  const double g = problem.gravity;
+  ne->A.setZero();
+  ne->g_theta.setZero();
+  ne->B.resize(m);
+  ne->D.resize(m);
+  ne->g_c.resize(m);
+  ne->tangent.resize(m);
+  ne->cost = 0;
+  for (int k = 0; k < m; ++k) {
+    const Vec3 f = g * dirs[k];
+    Mat33 J_p_f;
+    const Vec3 r = PredictRaw(params, f, &J_p_f) - problem.readings[k];
+    const Mat3x12 J_theta = JacobianWrtParameters(f);
+    ne->tangent[k] = TangentBasis(dirs[k]);
+    const Mat32 J_c = g * J_p_f * ne->tangent[k];
+    ne->A.noalias() += J_theta.transpose() * J_theta;
+    ne->g_theta.noalias() += J_theta.transpose() * r;
+    ne->B[k].noalias() = J_theta.transpose() * J_c;
+    ne->D[k].noalias() = J_c.transpose() * J_c;
+    ne->g_c[k].noalias() = J_c.transpose() * r;
+    ne->cost += r.squaredNorm();
+  }
+}
+
+Mat12 ReducedMatrix(const NormalEquations& ne, double lambda, const Vec12& mask) {
+  Mat12 S = ne.A;
+  S.diagonal() += lambda * ne.A.diagonal();
+  for (std::size_t k = 0; k < ne.B.size(); ++k) {
+    Eigen::Matrix2d D = ne.D[k];
+    D.diagonal() += lambda * ne.D[k].diagonal();
+    S.noalias() -= ne.B[k] * D.inverse() * ne.B[k].transpose();
+  }
+  for (int j = 0; j < kMaxParameters; ++j) {
+    if (mask(j) == 0.0) {
+      S.row(j).setZero();
+      S.col(j).setZero();
+      S(j, j) = 1.0;
+    }
+  }
+  return S;
+}
+
+Information ComputeInformation(const Problem& problem, const ModelParameters& params,
+                               const std::vector<Vec3>& dirs) {
+  NormalEquations ne;
+  BuildNormalEquations(problem, params, dirs, &ne);
+  Information info;
+  const Vec12 mask = FreeMask(problem.model);
+  info.reduced = ReducedMatrix(ne, 0.0, mask);
+  // Jacobi scaling makes the eigenvalue ratio independent of the parameters' units. The scale
+  // uses A's diagonal: a parameter that the directions absorb completely has S_jj ≈ 0.
+  Vec12 scale;
+  for (int j = 0; j < kMaxParameters; ++j) {
+    scale(j) = ne.A(j, j) > 0 ? 1.0 / std::sqrt(ne.A(j, j)) : 1.0;
+  }
+  const Mat12 scaled = scale.asDiagonal() * info.reduced * scale.asDiagonal();
+  Eigen::SelfAdjointEigenSolver<Mat12> eig(scaled);
+  const Vec12 ev = eig.eigenvalues();
+  double lo = std::numeric_limits<double>::infinity(), hi = 0;
+  int lo_index = 0;
+  for (int i = 0; i < kMaxParameters; ++i) {
+    // Eigenvectors of the fixed (identity) block are unit vectors on masked entries: skip them.
+    const Vec12 v = eig.eigenvectors().col(i);
+    if (v.cwiseProduct(mask).norm() < 0.5) continue;
+    if (ev(i) < lo) {
+      lo = ev(i);
+      lo_index = i;
+    }
+    hi = std::max(hi, ev(i));
+  }
+  info.rcond = hi > 0 ? std::max(lo, 0.0) / hi : 0.0;
+  eig.eigenvectors().col(lo_index).cwiseProduct(mask).cwiseAbs().maxCoeff(&info.weakest);
+  return info;
+}
+
+std::vector<Vec3> DirectionsFromParams(const Problem& problem, const ModelParameters& params) {
+  std::vector<Vec3> dirs;
+  dirs.reserve(problem.readings.size());
+  for (const Vec3& p : problem.readings) {
+    std::optional<Vec3> f = SpecificForce(params, p);
+    Vec3 d = f ? *f : Vec3(p - params.bias);
+    if (!(d.norm() > 0) || !d.allFinite()) d = Vec3::UnitZ();
+    dirs.push_back(d.normalized());
+  }
+  return dirs;
+}
+
+ModelParameters SolveParametersGivenDirections(const Problem& problem,
+                                               const std::vector<Vec3>& dirs) {
+  const int m = problem.positions();
+  const bool quadratic = problem.model == ModelKind::kQuadratic;
+  const double g = problem.gravity;
+  ModelParameters params;
+  params.K.setZero();
+  for (int axis = 0; axis < 3; ++axis) {
+    // Row of eq. (15) for this axis: [g c_1 .. g c_axis, 1, (g c_axis)²].
+    const int cols = axis + 2 + (quadratic ? 1 : 0);
+    Eigen::MatrixXd F(m, cols);
+    Eigen::VectorXd y(m);
+    for (int k = 0; k < m; ++k) {
+      const Vec3 f = g * dirs[k];
+      for (int j = 0; j <= axis; ++j) F(k, j) = f(j);
+      F(k, axis + 1) = 1.0;
+      if (quadratic) F(k, axis + 2) = f(axis) * f(axis);
+      y(k) = problem.readings[k](axis);
+    }
+    const Eigen::VectorXd x = F.householderQr().solve(y);
+    for (int j = 0; j <= axis; ++j) params.K(axis, j) = x(j);
+    params.bias(axis) = x(axis + 1);
+    if (quadratic) params.k2(axis) = x(axis + 2);
+  }
+  return params;
+}
+
+}  // namespace accelcal::internal

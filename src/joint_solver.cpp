@@ -1,0 +1,153 @@
+// Joint Levenberg-Marquardt over the parameters and all gravity directions, with the per-position
+// 2x2 tangent blocks eliminated by the Schur complement.
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <limits>
+
+#include <Eigen/Cholesky>
+#include <Eigen/LU>
+
+#include "solver_common.hpp"
+
+namespace accelcal::internal {
+
+namespace {
+
+struct Step {
+  Vec12 theta;
+  std::vector<Eigen::Vector2d> dirs;
+  double predicted_reduction = 0;  ///< J − ‖r + J δ‖² of the Gauss-Newton model
+};
+
+// Solves the damped normal equations (A_λ B; Bᵀ D_λ)(δθ; δc) = −(g_θ; g_c) by eliminating δc.
+Step SolveDamped(const NormalEquations& ne, double lambda, const Vec12& mask) {
+  const std::size_t m = ne.B.size();
+  const Mat12 S = ReducedMatrix(ne, lambda, mask);
+  Vec12 rhs = -ne.g_theta;
+  std::vector<Eigen::Matrix2d> D_inv(m);
+  for (std::size_t k = 0; k < m; ++k) {
+    Eigen::Matrix2d D = ne.D[k];
+    D.diagonal() += lambda * ne.D[k].diagonal();
+    D_inv[k] = D.inverse();
+    rhs.noalias() += ne.B[k] * (D_inv[k] * ne.g_c[k]);
+  }
+  rhs = rhs.cwiseProduct(mask);
+  // Jacobi scaling before the factorisation: the parameters differ by orders of magnitude.
+  const Vec12 scale = S.diagonal().cwiseAbs().cwiseSqrt().cwiseInverse();
+  const Mat12 S_scaled = scale.asDiagonal() * S * scale.asDiagonal();
+  Step step;
+  step.theta = scale.cwiseProduct(S_scaled.ldlt().solve(scale.cwiseProduct(rhs)));
+  step.theta = step.theta.cwiseProduct(mask);
+  step.dirs.resize(m);
+  double quadratic = step.theta.dot(ne.A * step.theta);
+  double linear = ne.g_theta.dot(step.theta);
+  for (std::size_t k = 0; k < m; ++k) {
+    step.dirs[k] = -D_inv[k] * (ne.g_c[k] + ne.B[k].transpose() * step.theta);
+    quadratic += 2.0 * step.theta.dot(ne.B[k] * step.dirs[k]) + step.dirs[k].dot(ne.D[k] * step.dirs[k]);
+    linear += ne.g_c[k].dot(step.dirs[k]);
+  }
+  step.predicted_reduction = -(2.0 * linear + quadratic);
+  return step;
+}
+
+}  // namespace
+
+SolverOutput SolveJoint(const Problem& problem, const ModelParameters& init_params,
+                        std::vector<Vec3> dirs, const CalibrationOptions& options) {
+  const auto start = std::chrono::steady_clock::now();
+  const auto& opt = options.joint;
+  const Vec12 mask = FreeMask(problem.model);
+  SolverOutput out;
+  out.summary.method = SolverMethod::kJoint;
+
+  Vec12 theta = ToVec12(init_params).cwiseProduct(mask);
+  NormalEquations ne;
+  BuildNormalEquations(problem, FromVec12(theta), dirs, &ne);
+  out.summary.initial_cost = ne.cost;
+  const double zero_cost = ZeroResidualCost(problem, init_params);
+
+  double lambda = opt.initial_damping;
+  double nu = 2.0;
+  char message[256];
+  out.summary.termination = TerminationType::kMaxIterations;
+  std::snprintf(message, sizeof message, "reached max_iterations = %d", opt.max_iterations);
+  out.summary.termination_message = message;
+  std::vector<Vec3> trial_dirs(dirs.size());
+  int evaluations = 0;
+
+  while (out.summary.iterations < opt.max_iterations) {
+    if (ne.cost <= zero_cost) {
+      out.summary.termination = TerminationType::kZeroResidual;
+      std::snprintf(message, sizeof message, "J = %.3e <= zero-residual level %.3e", ne.cost,
+                    zero_cost);
+      out.summary.termination_message = message;
+      break;
+    }
+    const Step step = SolveDamped(ne, lambda, mask);
+    const ModelParameters current = FromVec12(theta);
+    const double theta_step = ScaledNorm(step.theta, ParameterScales(problem, current));
+    double dir_step = 0;
+    for (const auto& d : step.dirs) dir_step = std::max(dir_step, d.lpNorm<Eigen::Infinity>());
+    // A step this small changes nothing that matters: the current point is the solution.
+    if (theta_step <= opt.parameter_tolerance && dir_step <= opt.parameter_tolerance) {
+      out.summary.termination = TerminationType::kParameterTolerance;
+      std::snprintf(message, sizeof message,
+                    "|dtheta|_s = %.3e and max |dc| = %.3e <= %.1e", theta_step, dir_step,
+                    opt.parameter_tolerance);
+      out.summary.termination_message = message;
+      break;
+    }
+    const Vec12 trial_theta = theta + step.theta;
+    for (std::size_t k = 0; k < dirs.size(); ++k) {
+      trial_dirs[k] = Retract(dirs[k], ne.tangent[k], step.dirs[k]);
+    }
+    const ModelParameters trial = FromVec12(trial_theta);
+    const double trial_cost = Cost(problem, trial, trial_dirs);
+    ++evaluations;
+    const double actual = ne.cost - trial_cost;
+    if (std::abs(actual) <= opt.function_tolerance * ne.cost) {
+      if (actual > 0) {
+        theta = trial_theta;
+        dirs.swap(trial_dirs);
+        ++out.summary.iterations;
+        BuildNormalEquations(problem, FromVec12(theta), dirs, &ne);
+      }
+      out.summary.termination = TerminationType::kFunctionTolerance;
+      std::snprintf(message, sizeof message, "|dJ| / J = %.3e <= %.1e",
+                    std::abs(actual) / ne.cost, opt.function_tolerance);
+      out.summary.termination_message = message;
+      break;
+    }
+    if (actual > 0 && std::isfinite(trial_cost)) {
+      // Nielsen's damping update.
+      const double rho = step.predicted_reduction > 0 ? actual / step.predicted_reduction : 1.0;
+      lambda *= std::max(1.0 / 3.0, 1.0 - std::pow(2.0 * rho - 1.0, 3));
+      lambda = std::max(lambda, 1e-16);
+      nu = 2.0;
+      theta = trial_theta;
+      dirs.swap(trial_dirs);
+      ++out.summary.iterations;
+      BuildNormalEquations(problem, FromVec12(theta), dirs, &ne);
+    } else {
+      lambda *= nu;
+      nu *= 2.0;
+      if (lambda > 1e16) {
+        out.summary.termination = TerminationType::kNoProgress;
+        std::snprintf(message, sizeof message,
+                      "no step reduced J = %.6e with damping up to 1e16 (%d evaluations)", ne.cost,
+                      evaluations);
+        out.summary.termination_message = message;
+        break;
+      }
+    }
+  }
+  out.params = FromVec12(theta);
+  out.dirs = std::move(dirs);
+  out.summary.final_cost = ne.cost;
+  out.summary.time_s =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  return out;
+}
+
+}  // namespace accelcal::internal

@@ -1,0 +1,81 @@
+#include "accelcal/model.hpp"
+
+#include "accelcal/error.hpp"
+
+namespace accelcal {
+
+std::string_view ToString(ModelKind kind) {
+  return kind == ModelKind::kLinear ? "linear" : "quadratic";
+}
+
+std::optional<ModelKind> ModelKindFromString(std::string_view text) {
+  if (text == "linear") return ModelKind::kLinear;
+  if (text == "quadratic") return ModelKind::kQuadratic;
+  return std::nullopt;
+}
+
+const std::vector<ParameterSlot>& ParameterSlots(ModelKind kind) {
+  using G = ParameterGroup;
+  static const std::vector<ParameterSlot> quadratic = {
+      {G::kK, 0, 0, "K_xx"}, {G::kBias, 0, 0, "b_x"}, {G::kK2, 0, 0, "k2_x"},
+      {G::kK, 1, 0, "K_yx"}, {G::kK, 1, 1, "K_yy"},   {G::kBias, 1, 0, "b_y"},
+      {G::kK2, 1, 0, "k2_y"}, {G::kK, 2, 0, "K_zx"},  {G::kK, 2, 1, "K_zy"},
+      {G::kK, 2, 2, "K_zz"}, {G::kBias, 2, 0, "b_z"}, {G::kK2, 2, 0, "k2_z"}};
+  static const std::vector<ParameterSlot> linear = [] {
+    std::vector<ParameterSlot> slots;
+    for (const ParameterSlot& s : quadratic) {
+      if (s.group != G::kK2) slots.push_back(s);
+    }
+    return slots;
+  }();
+  return kind == ModelKind::kLinear ? linear : quadratic;
+}
+
+const std::vector<int>& ActiveColumns(ModelKind kind) {
+  static const std::vector<int> quadratic = {0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11};
+  static const std::vector<int> linear = {0, 1, 3, 4, 5, 7, 8, 9, 10};
+  return kind == ModelKind::kLinear ? linear : quadratic;
+}
+
+namespace {
+double& SlotRef(ModelParameters& p, const ParameterSlot& s) {
+  switch (s.group) {
+    case ParameterGroup::kK:
+      return p.K(s.row, s.col);
+    case ParameterGroup::kBias:
+      return p.bias(s.row);
+    case ParameterGroup::kK2:
+      break;
+  }
+  return p.k2(s.row);
+}
+}  // namespace
+
+Eigen::VectorXd Pack(const ModelParameters& params, ModelKind kind) {
+  const auto& slots = ParameterSlots(kind);
+  Eigen::VectorXd theta(static_cast<Eigen::Index>(slots.size()));
+  ModelParameters copy = params;
+  for (std::size_t i = 0; i < slots.size(); ++i) {
+    theta(static_cast<Eigen::Index>(i)) = SlotRef(copy, slots[i]);
+  }
+  return theta;
+}
+
+ModelParameters Unpack(const Eigen::VectorXd& theta, ModelKind kind) {
+  const auto& slots = ParameterSlots(kind);
+  ModelParameters params;
+  params.K.setZero();
+  for (std::size_t i = 0; i < slots.size(); ++i) {
+    SlotRef(params, slots[i]) = theta(static_cast<Eigen::Index>(i));
+  }
+  return params;
+}
+
+InputError::InputError(std::string file, std::size_t line, std::string reason)
+    : std::runtime_error(file + (line > 0 ? ":" + std::to_string(line) : std::string()) + ": " +
+                         reason),
+      file_(std::move(file)),
+      line_(line),
+      reason_(std::move(reason)) {}
+
+}  // namespace accelcal

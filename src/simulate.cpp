@@ -1,0 +1,73 @@
+#include "accelcal/simulate.hpp"
+
+#include <cmath>
+#include <random>
+
+#include "accelcal/engineering.hpp"
+
+namespace accelcal {
+
+namespace {
+constexpr double kPi = 3.14159265358979323846;
+constexpr double kDeg = kPi / 180.0;
+}  // namespace
+
+Vec3 DirectionFromAngles(double theta_rad, double phi_rad) {
+  return {std::sin(theta_rad), std::cos(theta_rad) * std::cos(phi_rad),
+          -std::cos(theta_rad) * std::sin(phi_rad)};
+}
+
+std::vector<Vec3> Yang18Directions() {
+  const double h = kPi / 2, q = kPi / 4;
+  const double table[18][2] = {
+      {h, 0},  {-h, 0},      // k_axx, k2_x, p0_x
+      {0, 0},  {0, kPi},     // k_ayy, k2_y, p0_y
+      {0, h},  {0, -h},      // k_azz, k2_z, p0_z
+      {q, 0},  {-q, 0},      {q, kPi},      {-q, kPi},       // k_ayx
+      {q, h},  {q, -h},      {-q, h},       {-q, -h},        // k_azx
+      {0, q},  {0, -q},      {0, 3 * q},    {0, -3 * q}};    // k_azy
+  std::vector<Vec3> dirs;
+  for (const auto& row : table) dirs.push_back(DirectionFromAngles(row[0], row[1]));
+  return dirs;
+}
+
+ModelParameters Yang2012Truth() {
+  EngineeringParameters eng;
+  eng.scale_factor = Vec3(4800, 4900, 5000);
+  eng.tau_yx = std::sin(0.01 * kDeg);
+  eng.tau_yy = std::sqrt(1 - eng.tau_yx * eng.tau_yx);
+  eng.tau_zx = std::sin(0.02 * kDeg) * std::cos(30 * kDeg);
+  eng.tau_zy = std::sin(0.02 * kDeg) * std::sin(30 * kDeg);
+  eng.tau_zz = std::sqrt(1 - eng.tau_zx * eng.tau_zx - eng.tau_zy * eng.tau_zy);
+  eng.bias_force = Vec3(0.01, 0.02, 0.03);
+  eng.k2_g_per_g2 = Vec3(1e-5, 2e-5, 3e-5);
+  return FromEngineering(eng, kYang2012Gravity_ms2);
+}
+
+std::vector<Vec3> SimulatePositions(const ModelParameters& truth, double gravity,
+                                    const std::vector<Vec3>& directions, const Vec3& sigma_raw,
+                                    std::uint64_t seed) {
+  std::mt19937_64 rng(seed);
+  std::normal_distribution<double> normal(0.0, 1.0);
+  std::vector<Vec3> readings;
+  readings.reserve(directions.size());
+  for (const Vec3& c : directions) {
+    Vec3 p = PredictRaw(truth, Vec3(gravity * c.normalized()));
+    for (int i = 0; i < 3; ++i) p(i) += sigma_raw(i) * normal(rng);
+    readings.push_back(p);
+  }
+  return readings;
+}
+
+std::vector<Vec3> RandomDirections(int count, std::uint64_t seed) {
+  std::mt19937_64 rng(seed);
+  std::normal_distribution<double> normal(0.0, 1.0);
+  std::vector<Vec3> dirs;
+  for (int k = 0; k < count; ++k) {
+    Vec3 v(normal(rng), normal(rng), normal(rng));
+    dirs.push_back(v.normalized());
+  }
+  return dirs;
+}
+
+}  // namespace accelcal

@@ -1,0 +1,109 @@
+#pragma once
+// Internal pieces shared by the two solvers. Everything works in the 12-parameter (quadratic)
+// layout of model.hpp; for the linear model the k2 entries are held at zero by a mask, so all
+// matrices have fixed size and the hot loops allocate nothing.
+
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "accelcal/calibrate.hpp"
+#include "accelcal/model.hpp"
+
+namespace accelcal::internal {
+
+using Vec12 = Eigen::Matrix<double, kMaxParameters, 1>;
+using Mat12 = Eigen::Matrix<double, kMaxParameters, kMaxParameters>;
+using Mat3x12 = Eigen::Matrix<double, 3, kMaxParameters>;
+using Mat12x2 = Eigen::Matrix<double, kMaxParameters, 2>;
+using Mat32 = Eigen::Matrix<double, 3, 2>;
+
+/// The data and fixed settings of one calibration problem.
+struct Problem {
+  const std::vector<Vec3>& readings;  ///< p_k [raw]
+  double gravity;                     ///< g in the specific-force unit
+  ModelKind model;
+  int positions() const { return static_cast<int>(readings.size()); }
+};
+
+/// 1 for free parameters, 0 for the k2 entries of the linear model.
+Vec12 FreeMask(ModelKind model);
+Vec12 ToVec12(const ModelParameters& params);
+ModelParameters FromVec12(const Vec12& theta);
+
+/// J = Σ_k ‖p_k − μ(θ, g c_k)‖² (paper 000 eq. (13)).
+double Cost(const Problem& problem, const ModelParameters& params, const std::vector<Vec3>& dirs);
+
+/// Multiplying a parameter change by its scale gives the change of the prediction it causes on a
+/// unit-gravity input, relative to the axis' signal amplitude |K_ii|·g. See TerminationType.
+Vec12 ParameterScales(const Problem& problem, const ModelParameters& params);
+/// max_j |Δθ_j| s_j
+double ScaledNorm(const Vec12& delta, const Vec12& scales);
+
+/// Cost below which the data are fitted to round-off (TerminationType::kZeroResidual).
+double ZeroResidualCost(const Problem& problem, const ModelParameters& params);
+
+/// Orthonormal basis of the plane tangent to the unit sphere at c (columns ⟂ c).
+Mat32 TangentBasis(const Vec3& c);
+/// normalize(c + B δ): the retraction used by the joint solver.
+Vec3 Retract(const Vec3& c, const Mat32& basis, const Eigen::Vector2d& delta);
+
+/// Gauss-Newton normal equations of the joint problem in the variables (θ, δ_1..δ_m), δ_k the
+/// tangent coordinates of c_k: A = Σ J_θᵀJ_θ, B_k = J_θᵀ J_c, D_k = J_cᵀ J_c, g = Jᵀ r.
+struct NormalEquations {
+  Mat12 A;
+  Vec12 g_theta;
+  std::vector<Mat12x2> B;
+  std::vector<Eigen::Matrix2d> D;
+  std::vector<Eigen::Vector2d> g_c;
+  std::vector<Mat32> tangent;
+  double cost = 0;
+};
+void BuildNormalEquations(const Problem& problem, const ModelParameters& params,
+                          const std::vector<Vec3>& dirs, NormalEquations* ne);
+
+/// Schur complement S = A_λ − Σ B_k D_kλ⁻¹ B_kᵀ with Marquardt damping X_λ = X + λ diag(X), the
+/// fixed parameters' rows and columns replaced by the identity.
+Mat12 ReducedMatrix(const NormalEquations& ne, double lambda, const Vec12& mask);
+
+/// The reduced information matrix at a point, its inverse on the free parameters and the checks
+/// that the free parameters are determined (observability).
+struct Information {
+  Mat12 reduced;          ///< S at λ = 0 (fixed parameters: identity rows)
+  double rcond = 0;       ///< smallest / largest eigenvalue of the Jacobi-scaled free block
+  int weakest = -1;       ///< 12-layout index dominating the weakest eigenvector
+};
+Information ComputeInformation(const Problem& problem, const ModelParameters& params,
+                               const std::vector<Vec3>& dirs);
+
+/// Unit directions of the readings under params: normalize(f(p_k)), falling back to p_k − b.
+std::vector<Vec3> DirectionsFromParams(const Problem& problem, const ModelParameters& params);
+
+/// Linear least squares for θ given the directions (paper 000 eq. (14)-(15)): three independent
+/// per-axis problems.
+ModelParameters SolveParametersGivenDirections(const Problem& problem,
+                                               const std::vector<Vec3>& dirs);
+
+/// Result of a solver run, before the common post-processing in Calibrate().
+struct SolverOutput {
+  ModelParameters params;
+  std::vector<Vec3> dirs;
+  Summary summary;
+};
+
+SolverOutput SolveTwoStep(const Problem& problem, const ModelParameters& init_params,
+                          std::vector<Vec3> init_dirs, const CalibrationOptions& options);
+SolverOutput SolveJoint(const Problem& problem, const ModelParameters& init_params,
+                        std::vector<Vec3> init_dirs, const CalibrationOptions& options);
+
+/// Per-position constrained Newton (paper 000 eq. (18)-(24), Hessian per ERRATA.md): minimises
+/// ‖p − μ(g c)‖² on |c| = 1 starting from c0. Exposed for tests.
+Vec3 KktDirection(const ModelParameters& params, double gravity, const Vec3& p, const Vec3& c0,
+                  int max_iterations);
+
+/// Gradient (eq. (24) with u = 0) and Hessian (corrected eq. (25) without the 2u I term) of
+/// f(c) = ‖p − μ(g c)‖². Exposed for the finite-difference tests.
+void DirectionCostDerivatives(const ModelParameters& params, double gravity, const Vec3& p,
+                              const Vec3& c, Vec3* gradient, Mat33* hessian);
+
+}  // namespace accelcal::internal

@@ -1,0 +1,127 @@
+#include "accelcal/static_detection.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+#include "accelcal/error.hpp"
+
+namespace accelcal {
+
+std::optional<std::string> StaticDetectionOptions::Validate() const {
+  if (!(window_s > 0)) return "the detection window must be positive";
+  if (!(min_duration_s >= 0)) return "the minimum static duration must be >= 0";
+  if (!(threshold_factor > 0)) return "the threshold factor must be positive";
+  if (!(init_rest_s >= 0)) return "the initial rest period must be >= 0";
+  if (!(reference_quantile > 0 && reference_quantile < 1)) {
+    return "the reference quantile must lie in (0, 1)";
+  }
+  return std::nullopt;
+}
+
+namespace {
+
+// Per-axis mean and sample standard deviation of samples [begin, end), two-pass for accuracy.
+void MeanAndStd(const std::vector<Vec3>& s, std::size_t begin, std::size_t end, Vec3* mean,
+                Vec3* std) {
+  Vec3 sum = Vec3::Zero();
+  for (std::size_t i = begin; i < end; ++i) sum += s[i];
+  const double n = static_cast<double>(end - begin);
+  *mean = sum / n;
+  Vec3 sq = Vec3::Zero();
+  for (std::size_t i = begin; i < end; ++i) sq += (s[i] - *mean).cwiseAbs2();
+  *std = n > 1 ? Vec3((sq / (n - 1)).cwiseSqrt()) : Vec3::Zero();
+}
+
+}  // namespace
+
+StaticDetectionResult DetectStaticIntervals(const RawLog& log,
+                                            const StaticDetectionOptions& options) {
+  if (auto why = options.Validate()) throw DataError(*why);
+  if (!log.rate_hz) {
+    throw DataError(log.source + ": the log has no time column: give the sample rate (--rate HZ)");
+  }
+  StaticDetectionResult result;
+  result.rate_hz = *log.rate_hz;
+  const std::size_t n = log.samples.size();
+  const std::size_t w =
+      std::max<std::size_t>(3, static_cast<std::size_t>(std::lround(options.window_s * result.rate_hz)) | 1);
+  result.window_samples = w;
+  if (n < w + 1) {
+    throw DataError(log.source + ": " + std::to_string(n) + " samples are fewer than one detection window (" +
+                    std::to_string(w) + ")");
+  }
+  const std::size_t h = w / 2;
+
+  // Sliding sums of the samples and their squares, shifted by the first sample to avoid
+  // cancellation with raw counts far from zero.
+  const Vec3 shift = log.samples.front();
+  std::vector<double> score(n, 0.0);
+  Vec3 sum = Vec3::Zero(), sum2 = Vec3::Zero();
+  for (std::size_t i = 0; i < w; ++i) {
+    const Vec3 d = log.samples[i] - shift;
+    sum += d;
+    sum2 += d.cwiseAbs2();
+  }
+  const double wn = static_cast<double>(w);
+  for (std::size_t c = h;; ++c) {
+    const Vec3 var = (sum2 - sum.cwiseAbs2() / wn) / (wn - 1);
+    score[c] = var.cwiseMax(0.0).sum();
+    if (c + h + 1 >= n) break;
+    const Vec3 out = log.samples[c - h] - shift;
+    const Vec3 in = log.samples[c + h + 1] - shift;
+    sum += in - out;
+    sum2 += in.cwiseAbs2() - out.cwiseAbs2();
+  }
+  const std::size_t first = h, last = n - h - 1;  // centres with a full window
+
+  // Noise reference.
+  if (options.init_rest_s > 0) {
+    const std::size_t m = static_cast<std::size_t>(options.init_rest_s * result.rate_hz);
+    if (m < 2 || m > n) throw DataError(log.source + ": the initial rest period is longer than the log");
+    Vec3 mean, std;
+    MeanAndStd(log.samples, 0, m, &mean, &std);
+    result.noise_reference = std.cwiseAbs2().sum();
+  } else {
+    std::vector<double> sorted(score.begin() + static_cast<std::ptrdiff_t>(first),
+                               score.begin() + static_cast<std::ptrdiff_t>(last) + 1);
+    const std::size_t q = static_cast<std::size_t>(options.reference_quantile * static_cast<double>(sorted.size() - 1));
+    std::nth_element(sorted.begin(), sorted.begin() + static_cast<std::ptrdiff_t>(q), sorted.end());
+    result.noise_reference = sorted[q];
+  }
+  // Quantised sensors can be perfectly still (zero variance): keep a floor so that the threshold
+  // does not reject every window but the most perfectly silent ones.
+  double floor_value = 0;
+  for (int a = 0; a < 3; ++a) floor_value += 1.0 / 12.0 * 1e-12 * std::pow(std::abs(shift(a)) + 1.0, 2);
+  result.threshold = options.threshold_factor * std::max(result.noise_reference, floor_value);
+
+  const std::size_t min_len =
+      std::max<std::size_t>(2, static_cast<std::size_t>(std::ceil(options.min_duration_s * result.rate_hz)));
+  std::size_t run_start = 0;
+  bool in_run = false;
+  for (std::size_t c = first; c <= last + 1; ++c) {
+    const bool still = c <= last && score[c] <= result.threshold;
+    if (still && !in_run) {
+      run_start = c;
+      in_run = true;
+    } else if (!still && in_run) {
+      in_run = false;
+      if (c - run_start >= min_len) {
+        StaticInterval interval;
+        interval.begin = run_start;
+        interval.end = c;
+        MeanAndStd(log.samples, interval.begin, interval.end, &interval.mean, &interval.std);
+        if (!log.time_s.empty()) {
+          interval.t_begin_s = log.time_s[interval.begin];
+          interval.t_end_s = log.time_s[interval.end - 1];
+        } else {
+          interval.t_begin_s = static_cast<double>(interval.begin) / result.rate_hz;
+          interval.t_end_s = static_cast<double>(interval.end - 1) / result.rate_hz;
+        }
+        result.intervals.push_back(interval);
+      }
+    }
+  }
+  return result;
+}
+
+}  // namespace accelcal

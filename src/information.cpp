@@ -60,7 +60,7 @@ double ZeroResidualCost(const Problem& problem, const ModelParameters& params) {
   for (int i = 0; i < 3; ++i) {
     signal = std::max(signal, std::abs(params.K(i, i)) * problem.gravity + std::abs(params.bias(i)));
   }
-  const double unit = 64.0 * std::numeric_limits<double>::epsilon() * signal;
+  const double unit = 8.0 * std::numeric_limits<double>::epsilon() * signal;
   return unit * unit * 3.0 * problem.positions();
 }
 

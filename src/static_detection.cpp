@@ -12,6 +12,7 @@ std::optional<std::string> StaticDetectionOptions::Validate() const {
   if (!(min_duration_s >= 0)) return "the minimum static duration must be >= 0";
   if (!(threshold_factor > 0)) return "the threshold factor must be positive";
   if (!(init_rest_s >= 0)) return "the initial rest period must be >= 0";
+  if (!(max_noise_ratio >= 1)) return "the maximum noise ratio must be >= 1";
   if (!(reference_quantile > 0 && reference_quantile < 1)) {
     return "the reference quantile must lie in (0, 1)";
   }
@@ -53,24 +54,36 @@ StaticDetectionResult DetectStaticIntervals(const RawLog& log,
   const std::size_t h = w / 2;
 
   // Sliding sums of the samples and their squares, shifted by the first sample to avoid
-  // cancellation with raw counts far from zero.
+  // cancellation with raw counts far from zero, and of the successive differences.
   const Vec3 shift = log.samples.front();
   std::vector<double> score(n, 0.0);
-  Vec3 sum = Vec3::Zero(), sum2 = Vec3::Zero();
+  std::vector<char> white(n, 0);
+  Vec3 sum = Vec3::Zero(), sum2 = Vec3::Zero(), dsum = Vec3::Zero(), dsum2 = Vec3::Zero();
   for (std::size_t i = 0; i < w; ++i) {
     const Vec3 d = log.samples[i] - shift;
     sum += d;
     sum2 += d.cwiseAbs2();
+    if (i > 0) {
+      const Vec3 diff = log.samples[i] - log.samples[i - 1];
+      dsum += diff;
+      dsum2 += diff.cwiseAbs2();
+    }
   }
   const double wn = static_cast<double>(w);
   for (std::size_t c = h;; ++c) {
     const Vec3 var = (sum2 - sum.cwiseAbs2() / wn) / (wn - 1);
+    const Vec3 dvar = (dsum2 - dsum.cwiseAbs2() / (wn - 1)) / (wn - 2);
     score[c] = var.cwiseMax(0.0).sum();
+    white[c] = score[c] <= options.max_noise_ratio * 0.5 * dvar.cwiseMax(0.0).sum();
     if (c + h + 1 >= n) break;
     const Vec3 out = log.samples[c - h] - shift;
     const Vec3 in = log.samples[c + h + 1] - shift;
     sum += in - out;
     sum2 += in.cwiseAbs2() - out.cwiseAbs2();
+    const Vec3 dout = log.samples[c - h + 1] - log.samples[c - h];
+    const Vec3 din = log.samples[c + h + 1] - log.samples[c + h];
+    dsum += din - dout;
+    dsum2 += din.cwiseAbs2() - dout.cwiseAbs2();
   }
   const std::size_t first = h, last = n - h - 1;  // centres with a full window
 
@@ -99,7 +112,7 @@ StaticDetectionResult DetectStaticIntervals(const RawLog& log,
   std::size_t run_start = 0;
   bool in_run = false;
   for (std::size_t c = first; c <= last + 1; ++c) {
-    const bool still = c <= last && score[c] <= result.threshold;
+    const bool still = c <= last && score[c] <= result.threshold && white[c];
     if (still && !in_run) {
       run_start = c;
       in_run = true;

@@ -49,7 +49,7 @@ enum class TerminationType {
                         ///< (the remaining error of a linearly converging sequence);
                         ///< joint: ‖Δθ‖_s ≤ parameter_tolerance and every |Δc_k| ≤ parameter_tolerance
   kFunctionTolerance,   ///< |J_{n−1} − J_n| ≤ function_tolerance · J_n
-  kZeroResidual,        ///< J ≤ (64 ε · signal)² · 3m: the data are fitted to round-off
+  kZeroResidual,        ///< J ≤ (8 ε · signal)² · 3m: the data are fitted to round-off
   kMaxIterations,       ///< iteration cap reached before any criterion: not converged
   kNoProgress,          ///< joint: no step reduced the cost even with maximal damping: not converged
 };

@@ -6,7 +6,10 @@
 /// the score s_i is the sum of the three variances [raw²]. The noise reference s_ref is either the
 /// same sum over an initial rest period (imu_tk's approach, `init_rest_s` > 0) or, by default, a low
 /// quantile of all window scores (quiet windows exist in any usable recording). A sample is
-/// static when s_i ≤ threshold_factor · s_ref; runs of static window centres at least
+/// static when s_i ≤ threshold_factor · s_ref and its window looks like white noise around a
+/// constant: s_i ≤ max_noise_ratio · d_i / 2, with d_i the same sum for the successive differences
+/// (for white noise s ≈ d/2; slow motion makes s far larger, so a log with no still period yields
+/// no interval even though its quietest windows set the reference). Runs of static window centres at least
 /// `min_duration_s` long become intervals. Using the window centres trims half a window at each end
 /// of a still period, so the samples kept are those whose whole neighbourhood was still.
 
@@ -27,6 +30,10 @@ struct StaticDetectionOptions {
   /// still then). 0: the reference is the `reference_quantile` quantile of the window scores.
   double init_rest_s = 0.0;
   double reference_quantile = 0.05;
+  /// Largest accepted ratio of window variance to half the variance of successive differences.
+  /// Measured on real still periods: 1.0-2.4 (Xsens MTi, 100 Hz), 2.7-10 (T265, 200 Hz, whose
+  /// samples repeat); smooth motion gives hundreds.
+  double max_noise_ratio = 20.0;
   /// An error message when an option is out of range, else std::nullopt.
   std::optional<std::string> Validate() const;
 };

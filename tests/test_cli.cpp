@@ -1,0 +1,237 @@
+// The accelcal command as a user runs it: outputs, exit statuses and messages for bad input, and
+// that a failure never leaves a partial output file.
+#include <sys/wait.h>
+
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+
+#include <nlohmann/json.hpp>
+#include <gtest/gtest.h>
+
+#include "accelcal/simulate.hpp"
+
+namespace accelcal {
+namespace {
+
+namespace fs = std::filesystem;
+const std::string kCli = ACCELCAL_CLI;
+const std::string kData = ACCELCAL_DATA_DIR;
+
+struct CliRun {
+  int status;
+  std::string out;  // stdout
+  std::string err;  // stderr
+};
+
+std::string Slurp(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  std::stringstream ss;
+  ss << in.rdbuf();
+  return ss.str();
+}
+
+class Cli : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    dir_ = fs::path(::testing::TempDir()) /
+           ("accelcal_cli_" + std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()));
+    fs::remove_all(dir_);
+    fs::create_directories(dir_);
+  }
+  std::string Path(const std::string& name) const { return (dir_ / name).string(); }
+  std::string Write(const std::string& name, const std::string& text) const {
+    std::ofstream(Path(name), std::ios::binary) << text;
+    return Path(name);
+  }
+  CliRun Exec(const std::string& args) const {
+    const std::string err = Path("stderr.txt");
+    const std::string cmd = kCli + " " + args + " 2>" + err;
+    CliRun r;
+    FILE* pipe = popen(cmd.c_str(), "r");
+    char buf[4096];
+    std::size_t n;
+    while ((n = fread(buf, 1, sizeof buf, pipe)) > 0) r.out.append(buf, n);
+    const int status = pclose(pipe);
+    r.status = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+    r.err = Slurp(err);
+    return r;
+  }
+  fs::path dir_;
+};
+
+std::string PositionsCsv(int count) {
+  const std::vector<Vec3> readings =
+      SimulatePositions(Yang2012Truth(), 9.8, RandomDirections(count, 1), Vec3(0.05, 0.05, 0.05), 2);
+  std::string s = "x,y,z\n";
+  char line[128];
+  for (const Vec3& p : readings) {
+    std::snprintf(line, sizeof line, "%.17g,%.17g,%.17g\n", p(0), p(1), p(2));
+    s += line;
+  }
+  return s;
+}
+
+TEST_F(Cli, CalibratesTheXsensRecording) {
+  const CliRun r = Exec("calibrate " + kData + "/imutk-xsens-mti/xsens_acc.mat --gravity 9.81744 -o " +
+                     Path("cal.json"));
+  ASSERT_EQ(r.status, 0) << r.err;
+  EXPECT_NE(r.out.find("38 static intervals"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("rms |f|-g"), std::string::npos);
+  const nlohmann::json doc = nlohmann::json::parse(Slurp(Path("cal.json")));
+  EXPECT_LE(doc["gravity_norm_rms_after"].get<double>(), 0.0012);
+  EXPECT_EQ(doc["positions"].size(), 38u);
+  EXPECT_EQ(doc["positions"][0]["interval"]["begin"].get<int>() > 0, true);
+
+  // --json prints exactly the file; a second run gives the same bytes (determinism).
+  const CliRun j = Exec("calibrate " + kData + "/imutk-xsens-mti/xsens_acc.mat --gravity 9.81744 --json");
+  ASSERT_EQ(j.status, 0);
+  EXPECT_EQ(j.out, Slurp(Path("cal.json")));
+
+  // apply: the corrected log has |f| ≈ g while still.
+  const CliRun a = Exec("apply " + Path("cal.json") + " " + kData +
+                     "/imutk-xsens-mti/xsens_acc.mat -o " + Path("corrected.csv"));
+  ASSERT_EQ(a.status, 0) << a.err;
+  std::ifstream in(Path("corrected.csv"));
+  std::string line;
+  std::getline(in, line);
+  EXPECT_EQ(line.rfind("# accelcal apply", 0), 0u);
+  std::getline(in, line);
+  EXPECT_EQ(line, "time,x,y,z");
+  double t, x, y, z;
+  char c;
+  double sum = 0;
+  int n = 0;
+  while (n < 5000 && (in >> t >> c >> x >> c >> y >> c >> z)) {
+    sum += std::sqrt(x * x + y * y + z * z);
+    ++n;
+  }
+  EXPECT_EQ(n, 5000);  // the first 50 s are still
+  EXPECT_NEAR(sum / n, 9.81744, 0.003);
+}
+
+TEST_F(Cli, PositionsFileInG) {
+  const CliRun r = Exec("calibrate " + kData + "/ctu-innalabs-ahrs-m3/measured_accelerations_24pos.csv --units g --json");
+  ASSERT_EQ(r.status, 0) << r.err;
+  const nlohmann::json doc = nlohmann::json::parse(r.out);
+  EXPECT_EQ(doc["units"]["specific_force"], "g");
+  EXPECT_EQ(doc["gravity"], 1.0);
+  EXPECT_LT(doc["gravity_norm_rms_after"].get<double>(), doc["gravity_norm_rms_before"].get<double>());
+}
+
+TEST_F(Cli, LatitudeGivesWgs84Gravity) {
+  const std::string in = Write("pos.csv", PositionsCsv(20));
+  const CliRun r = Exec("calibrate " + in + " --latitude 45 --json");
+  ASSERT_EQ(r.status, 0) << r.err;
+  // Somigliana's formula in its original form (a γe cos²φ + b γp sin²φ) / √(a² cos²φ + b² sin²φ),
+  // independent of the derived constants the library uses.
+  const double a = 6378137.0, b = 6356752.3142, ge = 9.7803253359, gp = 9.8321849378;
+  const double expected = (a * ge * 0.5 + b * gp * 0.5) / std::sqrt(a * a * 0.5 + b * b * 0.5);
+  EXPECT_NEAR(nlohmann::json::parse(r.out)["gravity"].get<double>(), expected, 1e-9);
+}
+
+TEST_F(Cli, Detect) {
+  const CliRun r = Exec("detect " + kData + "/imutk-xsens-mti/xsens_acc.mat --json");
+  ASSERT_EQ(r.status, 0) << r.err;
+  const nlohmann::json doc = nlohmann::json::parse(r.out);
+  EXPECT_EQ(doc["intervals"].size(), 38u);
+  EXPECT_EQ(doc["intervals"][0]["mean"].size(), 3u);
+  const CliRun t = Exec("detect " + kData + "/imutk-xsens-mti/xsens_acc.mat");
+  EXPECT_NE(t.out.find("38 static intervals"), std::string::npos);
+}
+
+struct BadCase {
+  const char* name;
+  std::string content;  // file content; empty name = nonexistent file
+  std::string args;
+  int status;
+  std::string message;  // expected stderr, with FILE replaced by the input path
+};
+
+TEST_F(Cli, BadInputGivesOneClearMessageAndNoOutput) {
+  std::string moving = "t,x,y,z\n";
+  for (int i = 0; i < 2000; ++i) {
+    moving += std::to_string(i * 0.01) + "," + std::to_string(1000 * std::sin(i * 0.05)) + "," +
+              std::to_string(1000 * std::cos(i * 0.07)) + ",9.8\n";
+  }
+  std::string plane = "x,y,z\n";
+  for (int k = 0; k < 16; ++k) {
+    plane += std::to_string(9.8 * std::cos(0.4 * k)) + ",0.01," + std::to_string(9.8 * std::sin(0.4 * k)) + "\n";
+  }
+  const std::vector<BadCase> cases = {
+      {"empty.csv", "", "", 3, "accelcal: FILE: no data (the file is empty or all comments)\n"},
+      {"text.csv", "x,y,z\n1,2,3\n1,two,3\n", "", 3, "accelcal: FILE:3: column 2: 'two' is not a number\n"},
+      {"nan.csv", "1,2,3\n1,NaN,3\n", "", 3, "accelcal: FILE:2: column 2: 'NaN' is not a finite number\n"},
+      {"inf.csv", "1,2,3\n1,2,-inf\n", "", 3, "accelcal: FILE:2: column 3: '-inf' is not a finite number\n"},
+      {"cols.csv", "1,2,3\n1,2\n", "", 3, "accelcal: FILE:2: expected 3 columns, found 2\n"},
+      {"few.csv", PositionsCsv(6), "", 3, "accelcal: FILE: the linear model needs at least 9 positions, got 6\n"},
+      {"fewq.csv", PositionsCsv(11), "--model quadratic", 3,
+       "accelcal: FILE: the quadratic model needs at least 12 positions, got 11\n"},
+      {"moving.csv", moving, "--input-kind raw", 3, "PREFIX accelcal: FILE: FILE: no static interval found"},
+      {"plane.csv", plane, "", 3, "PREFIX accelcal: FILE: all 16 positions lie in one plane"},
+      {"", "", "", 3, "accelcal: FILE: cannot open: No such file or directory\n"},
+  };
+  for (const BadCase& c : cases) {
+    const std::string input = c.name[0] ? Write(c.name, c.content) : Path("missing.csv");
+    const std::string out = Path("out.json");
+    const CliRun r = Exec("calibrate " + input + " " + c.args + " -o " + out);
+    EXPECT_EQ(r.status, c.status) << input << "\n" << r.err;
+    std::string expected = c.message;
+    for (std::size_t pos; (pos = expected.find("FILE")) != std::string::npos;) expected.replace(pos, 4, input);
+    if (expected.rfind("PREFIX ", 0) == 0) {
+      EXPECT_EQ(r.err.rfind(expected.substr(7), 0), 0u) << r.err;
+    } else {
+      EXPECT_EQ(r.err, expected);
+    }
+    EXPECT_FALSE(fs::exists(out)) << "partial output for " << input;
+    EXPECT_TRUE(r.out.empty()) << r.out;
+  }
+}
+
+TEST_F(Cli, FailureKeepsAnExistingOutputFileUntouched) {
+  const std::string out = Write("cal.json", "previous contents\n");
+  const std::string in = Write("bad.csv", "1,2,3\n1,x,3\n");
+  EXPECT_EQ(Exec("calibrate " + in + " -o " + out).status, 3);
+  EXPECT_EQ(Slurp(out), "previous contents\n");
+  // No temporary file is left behind either.
+  int files = 0;
+  for (const auto& entry : fs::directory_iterator(dir_)) files += entry.is_regular_file();
+  EXPECT_EQ(files, 3);  // cal.json, bad.csv, stderr.txt
+}
+
+TEST_F(Cli, UsageErrorsExitWithStatus2) {
+  const std::string in = Write("pos.csv", PositionsCsv(20));
+  EXPECT_EQ(Exec("").status, 2);
+  EXPECT_EQ(Exec("calibrate").status, 2);
+  EXPECT_EQ(Exec("calibrate " + in + " --no-such-option").status, 2);
+  CliRun r = Exec("calibrate " + in + " --model cubic");
+  EXPECT_EQ(r.status, 2);
+  EXPECT_EQ(r.err, "accelcal: usage: --model: 'cubic' is not one of linear, quadratic\n");
+  r = Exec("calibrate " + in + " --gravity 9.8 --latitude 45");
+  EXPECT_EQ(r.status, 2);
+  r = Exec("calibrate " + in + " --units furlongs");
+  EXPECT_EQ(r.err, "accelcal: usage: --units: 'furlongs' is not one of m/s2, g\n");
+  EXPECT_EQ(Exec("--help").status, 0);
+}
+
+TEST_F(Cli, NonConvergenceWritesNothing) {
+  const std::string in = Write("pos.csv", PositionsCsv(20));
+  const CliRun r = Exec("calibrate " + in + " --method two-step --max-iterations 2 -o " + Path("c.json"));
+  EXPECT_EQ(r.status, 4);
+  EXPECT_NE(r.err.find("did not converge"), std::string::npos) << r.err;
+  EXPECT_FALSE(fs::exists(Path("c.json")));
+}
+
+TEST_F(Cli, ApplyRejectsABadCalibrationFile) {
+  const std::string cal = Write("cal.json", "{\"format\": \"something-else\"}");
+  const std::string log = Write("log.csv", "0,1,2,3\n0.01,1,2,3\n");
+  const CliRun r = Exec("apply " + cal + " " + log);
+  EXPECT_EQ(r.status, 3);
+  EXPECT_EQ(r.err, "accelcal: " + cal +
+                       ": not an accelcal calibration file (\"format\" is not \"accelcal-calibration\")\n");
+}
+
+}  // namespace
+}  // namespace accelcal

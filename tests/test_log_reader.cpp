@@ -1,0 +1,134 @@
+// Reading raw logs and positions files, and the messages for malformed ones.
+#include <gtest/gtest.h>
+
+#include "accelcal/error.hpp"
+#include "accelcal/log_reader.hpp"
+
+namespace accelcal {
+namespace {
+
+InputData Parse(const std::string& text, ReadOptions options = {}) {
+  return ParseInput(text, "test.csv", options);
+}
+
+std::string ErrorOf(const std::string& text, ReadOptions options = {}) {
+  try {
+    Parse(text, options);
+  } catch (const InputError& e) {
+    return e.what();
+  }
+  return "no error";
+}
+
+std::string ManyRows(int n, const char* sep, bool with_time) {
+  std::string s;
+  for (int i = 0; i < n; ++i) {
+    if (with_time) s += std::to_string(0.01 * i) + sep;
+    s += std::to_string(i) + sep + "2.5" + sep + "-3e-1\n";
+  }
+  return s;
+}
+
+TEST(LogReader, ImuTkAsciiWithTime) {
+  const InputData d = Parse("   2.98e-02   3.3108e+04   3.3329e+04   3.6429e+04\n"
+                            "   3.98e-02   3.3096e+04   3.3336e+04   3.6437e+04\n",
+                            ReadOptions{InputKind::kRaw, {}, std::nullopt, 200});
+  ASSERT_EQ(d.kind, InputKind::kRaw);
+  ASSERT_EQ(d.raw.samples.size(), 2u);
+  EXPECT_EQ(d.raw.samples[1], Vec3(33096, 33336, 36437));
+  EXPECT_DOUBLE_EQ(d.raw.time_s[0], 0.0298);
+  EXPECT_NEAR(*d.raw.rate_hz, 100.0, 1e-9);
+  EXPECT_EQ(d.raw.line[1], 2u);
+}
+
+TEST(LogReader, CommaTabAndSpaceDelimitersWithHeaderAndComments) {
+  for (const char* sep : {",", "\t", "  ", ", "}) {
+    const std::string text = "# recorded by hand\n\ntime" + std::string(sep) + "ax" + sep + "ay" +
+                             sep + "az\n" + ManyRows(300, sep, true);
+    const InputData d = Parse(text);
+    ASSERT_EQ(d.kind, InputKind::kRaw) << "sep '" << sep << "'";
+    ASSERT_EQ(d.raw.samples.size(), 300u);
+    EXPECT_EQ(d.raw.samples[299], Vec3(299, 2.5, -0.3));
+    EXPECT_EQ(d.raw.line[0], 4u);
+  }
+}
+
+TEST(LogReader, ThreeColumnsNeedARateForDetectionButParse) {
+  const InputData d = Parse(ManyRows(300, ",", false));
+  EXPECT_EQ(d.kind, InputKind::kRaw);
+  EXPECT_FALSE(d.raw.rate_hz.has_value());
+  ReadOptions o;
+  o.rate_hz = 50;
+  EXPECT_EQ(*Parse(ManyRows(300, ",", false), o).raw.rate_hz, 50);
+}
+
+TEST(LogReader, ColumnSelectionByNumberAndName) {
+  std::string text = "part,samples,acc_x,acc_y,acc_z,gyr_x\n";
+  for (int i = 0; i < 300; ++i) text += "x_p," + std::to_string(i) + ",1,2,3,9\n";
+  ReadOptions o;
+  o.columns = {"acc_x", "acc_y", "acc_z"};
+  o.rate_hz = 204.8;
+  InputData d = Parse(text, o);
+  EXPECT_EQ(d.raw.samples[5], Vec3(1, 2, 3));
+  o.columns = {"2", "3", "4", "5"};
+  d = Parse(text, o);
+  EXPECT_EQ(d.raw.samples[5], Vec3(1, 2, 3));
+  EXPECT_EQ(d.raw.time_s[5], 5);
+  o.columns = {"acc_q", "acc_y", "acc_z"};
+  EXPECT_EQ(ErrorOf(text, o), "test.csv: --columns entry 'acc_q' names no column");
+  o.columns = {"9", "2", "3"};
+  EXPECT_EQ(ErrorOf(text, o),
+            "test.csv: --columns entry '9' is not a column number between 1 and 6");
+}
+
+TEST(LogReader, PositionsFilesAutoDetected) {
+  const InputData d = Parse("ax_g,ay_g,az_g\n0.1,0.2,0.97\n-0.9,0.1,0.3\n");
+  ASSERT_EQ(d.kind, InputKind::kPositions);
+  ASSERT_EQ(d.positions.size(), 2u);
+  EXPECT_EQ(d.positions[1].mean, Vec3(-0.9, 0.1, 0.3));
+  EXPECT_EQ(d.positions[1].samples, 1u);
+
+  const InputData e = Parse("1,2,3,100,0.1,0.2,0.3\n4,5,6,200,0.4,0.5,0.6\n");
+  ASSERT_EQ(e.positions.size(), 2u);
+  EXPECT_EQ(e.positions[1].samples, 200u);
+  EXPECT_EQ(*e.positions[1].std, Vec3(0.4, 0.5, 0.6));
+
+  // The derived-means layout: names find the columns, extra ones are ignored.
+  const InputData f = Parse("start_idx0,end_idx0_excl,n_samples,ax,ay,az\n50,5192,5142,1,2,3\n");
+  EXPECT_EQ(f.positions[0].samples, 5142u);
+  EXPECT_EQ(f.positions[0].mean, Vec3(1, 2, 3));
+}
+
+TEST(LogReader, ErrorsNameFileLineAndReason) {
+  EXPECT_EQ(ErrorOf(""), "test.csv: no data (the file is empty or all comments)");
+  EXPECT_EQ(ErrorOf("# only\n\n"), "test.csv: no data (the file is empty or all comments)");
+  EXPECT_EQ(ErrorOf("x,y,z\n"), "test.csv:1: a header but no data rows");
+  EXPECT_EQ(ErrorOf("1,2,3\n4,abc,6\n"), "test.csv:2: column 2: 'abc' is not a number");
+  EXPECT_EQ(ErrorOf("1,2,3\n4,nan,6\n"), "test.csv:2: column 2: 'nan' is not a finite number");
+  EXPECT_EQ(ErrorOf("1,2,3\n4,5,inf\n"), "test.csv:2: column 3: 'inf' is not a finite number");
+  EXPECT_EQ(ErrorOf("1,2,3\n# c\n4,5\n"), "test.csv:3: expected 3 columns, found 2");
+  EXPECT_EQ(ErrorOf("1 2 3\n4,5 6\n"),
+            "test.csv:2: mixed delimiters: a comma in a whitespace-separated file");
+  EXPECT_EQ(ErrorOf("1,2,3,4,5\n"),
+            "test.csv:1: 5 columns: a positions file has x,y,z [,n [,sx,sy,sz]]");
+  ReadOptions raw;
+  raw.kind = InputKind::kRaw;
+  EXPECT_EQ(ErrorOf("1,2,3,4,5\n", raw),
+            "test.csv:1: 5 columns: use --columns to choose time,x,y,z or x,y,z");
+  EXPECT_EQ(ErrorOf("0,1,2,3\n1,1,2,3\n0.5,1,2,3\n", raw),
+            "test.csv:3: time goes backwards (0.5 after 1)");
+  EXPECT_EQ(ErrorOf("1,2,3,4\n1,2,3,4\n", raw), "test.csv: the timestamps do not advance");
+  EXPECT_EQ(ErrorOf("1,2,3,0\n"), "test.csv:1: the sample count must be a whole number >= 1");
+}
+
+TEST(LogReader, UnreadablePath) {
+  try {
+    ReadInput("/nonexistent/dir/log.csv", {});
+    FAIL();
+  } catch (const InputError& e) {
+    EXPECT_EQ(std::string(e.what()), "/nonexistent/dir/log.csv: cannot open: No such file or directory");
+  }
+}
+
+}  // namespace
+}  // namespace accelcal

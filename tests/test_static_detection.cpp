@@ -1,0 +1,93 @@
+// Static-interval detection on synthetic logs with known intervals, and on the Xsens recording.
+#include <random>
+
+#include <gtest/gtest.h>
+
+#include "accelcal/error.hpp"
+#include "accelcal/static_detection.hpp"
+
+namespace accelcal {
+namespace {
+
+// 100 Hz log: still periods of the given lengths separated by 2-second rotations.
+RawLog SyntheticLog(const std::vector<double>& still_s, std::vector<std::pair<std::size_t, std::size_t>>* truth) {
+  std::mt19937_64 rng(1);
+  std::normal_distribution<double> noise(0.0, 2.0);
+  RawLog log;
+  log.source = "synthetic";
+  log.rate_hz = 100.0;
+  Vec3 level(33000, 33000, 37000);
+  for (std::size_t k = 0; k < still_s.size(); ++k) {
+    const std::size_t n = static_cast<std::size_t>(still_s[k] * 100);
+    truth->push_back({log.samples.size(), log.samples.size() + n});
+    for (std::size_t i = 0; i < n; ++i) {
+      log.samples.push_back(level + Vec3(noise(rng), noise(rng), noise(rng)));
+    }
+    const Vec3 next = level + Vec3(3000.0 * std::sin(static_cast<double>(k) + 1.0), -2500.0 * std::cos(static_cast<double>(k)), 1000.0);
+    for (int i = 0; i < 200; ++i) {  // smooth move with a wobble
+      const double s = i / 200.0;
+      log.samples.push_back(level + (next - level) * s +
+                            Vec3(300 * std::sin(30 * s), 200 * std::cos(25 * s), 100));
+    }
+    level = next;
+  }
+  for (std::size_t i = 0; i < log.samples.size(); ++i) log.time_s.push_back(static_cast<double>(i) / 100.0);
+  return log;
+}
+
+TEST(StaticDetection, FindsEveryStillPeriod) {
+  std::vector<std::pair<std::size_t, std::size_t>> truth;
+  const RawLog log = SyntheticLog({20, 5, 3, 8, 1.8, 4}, &truth);
+  const StaticDetectionResult r = DetectStaticIntervals(log, {});
+  ASSERT_EQ(r.intervals.size(), truth.size());
+  for (std::size_t k = 0; k < truth.size(); ++k) {
+    // Window centres: half a window (25 samples) is trimmed at each end, never more than a window.
+    EXPECT_GE(r.intervals[k].begin, truth[k].first);
+    EXPECT_LE(r.intervals[k].begin, truth[k].first + 51);
+    EXPECT_LE(r.intervals[k].end, truth[k].second);
+    EXPECT_GE(r.intervals[k].end + 51, truth[k].second);
+    EXPECT_NEAR(r.intervals[k].std(0), 2.0, 0.5);
+  }
+}
+
+TEST(StaticDetection, ShortStillPeriodsAreDropped) {
+  std::vector<std::pair<std::size_t, std::size_t>> truth;
+  const RawLog log = SyntheticLog({10, 0.9, 5}, &truth);
+  StaticDetectionOptions o;
+  o.min_duration_s = 1.0;
+  EXPECT_EQ(DetectStaticIntervals(log, o).intervals.size(), 2u);
+}
+
+TEST(StaticDetection, InitialRestReference) {
+  std::vector<std::pair<std::size_t, std::size_t>> truth;
+  const RawLog log = SyntheticLog({20, 5, 3}, &truth);
+  StaticDetectionOptions o;
+  o.init_rest_s = 15;
+  const StaticDetectionResult r = DetectStaticIntervals(log, o);
+  EXPECT_EQ(r.intervals.size(), 3u);
+  EXPECT_NEAR(r.noise_reference, 3 * 4.0, 1.0);  // three axes of variance 2²
+}
+
+TEST(StaticDetection, NeedsARate) {
+  RawLog log;
+  log.source = "log.csv";
+  log.samples.assign(1000, Vec3::Zero());
+  try {
+    DetectStaticIntervals(log, {});
+    FAIL();
+  } catch (const DataError& e) {
+    EXPECT_EQ(std::string(e.what()),
+              "log.csv: the log has no time column: give the sample rate (--rate HZ)");
+  }
+}
+
+TEST(StaticDetection, RejectsInvalidOptions) {
+  RawLog log;
+  log.rate_hz = 100;
+  StaticDetectionOptions o;
+  o.window_s = 0;
+  EXPECT_THROW(DetectStaticIntervals(log, o), DataError);
+}
+
+}  // namespace
+}  // namespace accelcal

@@ -75,12 +75,11 @@ std::optional<std::string> CalibrationOptions::Validate() const {
 
 std::string Summary::BriefReport() const {
   char buf[512];
-  std::snprintf(buf, sizeof buf,
-                "%s solver, init %s: %s after %d iterations (%s); J %.6e -> %.6e; %.1f us",
-                std::string(ToString(method)).c_str(),
-                std::string(ToString(initialization)).c_str(),
-                converged() ? "converged" : "NOT CONVERGED", iterations,
-                termination_message.c_str(), initial_cost, final_cost, time_s * 1e6);
+  std::snprintf(
+      buf, sizeof buf, "%s solver, init %s: %s after %d iterations (%s); J %.6e -> %.6e; %.1f us",
+      std::string(ToString(method)).c_str(), std::string(ToString(initialization)).c_str(),
+      converged() ? "converged" : "NOT CONVERGED", iterations, termination_message.c_str(),
+      initial_cost, final_cost, time_s * 1e6);
   return buf;
 }
 
@@ -237,7 +236,8 @@ CalibrationResult Calibrate(const std::vector<Vec3>& readings, const Calibration
     }
   }
   result.summary = out.summary;
-  result.summary.time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  result.summary.time_s =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   return result;
 }
 

@@ -52,14 +52,15 @@ std::string CalibrationToJson(const CalibrationResult& result, const Calibration
     ordered_json cov = ordered_json::array();
     for (Eigen::Index i = 0; i < result.covariance.rows(); ++i) {
       ordered_json row = ordered_json::array();
-      for (Eigen::Index j = 0; j < result.covariance.cols(); ++j) row.push_back(result.covariance(i, j));
+      for (Eigen::Index j = 0; j < result.covariance.cols(); ++j)
+        row.push_back(result.covariance(i, j));
       cov.push_back(row);
     }
     ModelParameters std_params;
     std_params.K.setZero();
     for (std::size_t i = 0; i < slots.size(); ++i) {
-      const double sd = std::sqrt(std::max(0.0, result.covariance(static_cast<Eigen::Index>(i),
-                                                                  static_cast<Eigen::Index>(i))));
+      const double sd = std::sqrt(std::max(
+          0.0, result.covariance(static_cast<Eigen::Index>(i), static_cast<Eigen::Index>(i))));
       switch (slots[i].group) {
         case ParameterGroup::kK:
           std_params.K(slots[i].row, slots[i].col) = sd;
@@ -147,7 +148,8 @@ Vec3 Vector3(const ordered_json& doc, const char* key, const std::string& source
     throw InputError(source, 0, std::string("'") + key + "' must be an array of 3 numbers");
   }
   Vec3 v;
-  for (int i = 0; i < 3; ++i) v(i) = Number(doc[key][i], std::string(key) + "[" + std::to_string(i) + "]", source);
+  for (int i = 0; i < 3; ++i)
+    v(i) = Number(doc[key][i], std::string(key) + "[" + std::to_string(i) + "]", source);
   return v;
 }
 
@@ -161,24 +163,24 @@ LoadedCalibration ParseCalibrationJson(const std::string& text, const std::strin
     throw InputError(source, 0, std::string("not valid JSON: ") + e.what());
   }
   if (!doc.is_object() || doc.value("format", "") != "accelcal-calibration") {
-    throw InputError(source, 0, "not an accelcal calibration file (\"format\" is not \"accelcal-calibration\")");
+    throw InputError(
+        source, 0, "not an accelcal calibration file (\"format\" is not \"accelcal-calibration\")");
   }
   if (!doc.contains("version") || !doc["version"].is_number_integer() || doc["version"] != 1) {
     throw InputError(source, 0, "unsupported calibration file version (expected 1)");
   }
   LoadedCalibration cal;
-  const std::optional<ModelKind> model =
-      doc.contains("model") && doc["model"].is_string()
-          ? ModelKindFromString(doc["model"].get<std::string>())
-          : std::nullopt;
+  const std::optional<ModelKind> model = doc.contains("model") && doc["model"].is_string()
+                                             ? ModelKindFromString(doc["model"].get<std::string>())
+                                             : std::nullopt;
   if (!model) throw InputError(source, 0, "'model' must be \"linear\" or \"quadratic\"");
   cal.model = *model;
   if (!doc.contains("gravity")) throw InputError(source, 0, "'gravity' is missing");
   cal.gravity = Number(doc["gravity"], "'gravity'", source);
   if (!(cal.gravity > 0)) throw InputError(source, 0, "'gravity' must be positive");
   const std::optional<ForceUnit> unit =
-      doc.contains("units") && doc["units"].is_object() && doc["units"].contains("specific_force") &&
-              doc["units"]["specific_force"].is_string()
+      doc.contains("units") && doc["units"].is_object() &&
+              doc["units"].contains("specific_force") && doc["units"]["specific_force"].is_string()
           ? ForceUnitFromString(doc["units"]["specific_force"].get<std::string>())
           : std::nullopt;
   if (!unit) throw InputError(source, 0, "'units.specific_force' must be \"m/s2\" or \"g\"");
@@ -190,7 +192,8 @@ LoadedCalibration ParseCalibrationJson(const std::string& text, const std::strin
     const auto& row = doc["K"][i];
     if (!row.is_array() || row.size() != 3) throw InputError(source, 0, "'K' must be a 3x3 array");
     for (int j = 0; j < 3; ++j) {
-      cal.params.K(i, j) = Number(row[j], "K[" + std::to_string(i) + "][" + std::to_string(j) + "]", source);
+      cal.params.K(i, j) =
+          Number(row[j], "K[" + std::to_string(i) + "][" + std::to_string(j) + "]", source);
     }
   }
   if (cal.params.K(0, 1) != 0 || cal.params.K(0, 2) != 0 || cal.params.K(1, 2) != 0) {

@@ -52,8 +52,8 @@ EllipsoidFitResult FitEllipsoid(const std::vector<Vec3>& readings, double gravit
   if (!(ev(0) > 1e-9 * ev(2))) {
     char buf[160];
     std::snprintf(buf, sizeof buf,
-                  "the fitted quadric is not an ellipsoid (eigenvalues %.3g, %.3g, %.3g)",
-                  ev(0), ev(1), ev(2));
+                  "the fitted quadric is not an ellipsoid (eigenvalues %.3g, %.3g, %.3g)", ev(0),
+                  ev(1), ev(2));
     result.failure = buf;
     return result;
   }

@@ -3,8 +3,8 @@
 #include <limits>
 
 #include <Eigen/Cholesky>
-#include <Eigen/LU>
 #include <Eigen/Eigenvalues>
+#include <Eigen/LU>
 #include <Eigen/QR>
 
 #include "solver_common.hpp"
@@ -35,7 +35,8 @@ ModelParameters FromVec12(const Vec12& t) {
 double Cost(const Problem& problem, const ModelParameters& params, const std::vector<Vec3>& dirs) {
   double cost = 0;
   for (int k = 0; k < problem.positions(); ++k) {
-    cost += (problem.readings[k] - PredictRaw(params, Vec3(problem.gravity * dirs[k]))).squaredNorm();
+    cost +=
+        (problem.readings[k] - PredictRaw(params, Vec3(problem.gravity * dirs[k]))).squaredNorm();
   }
   return cost;
 }
@@ -58,7 +59,8 @@ double ScaledNorm(const Vec12& delta, const Vec12& scales) {
 double ZeroResidualCost(const Problem& problem, const ModelParameters& params) {
   double signal = 0;
   for (int i = 0; i < 3; ++i) {
-    signal = std::max(signal, std::abs(params.K(i, i)) * problem.gravity + std::abs(params.bias(i)));
+    signal =
+        std::max(signal, std::abs(params.K(i, i)) * problem.gravity + std::abs(params.bias(i)));
   }
   const double unit = 8.0 * std::numeric_limits<double>::epsilon() * signal;
   return unit * unit * 3.0 * problem.positions();

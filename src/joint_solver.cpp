@@ -44,7 +44,8 @@ Step SolveDamped(const NormalEquations& ne, double lambda, const Vec12& mask) {
   double linear = ne.g_theta.dot(step.theta);
   for (std::size_t k = 0; k < m; ++k) {
     step.dirs[k] = -D_inv[k] * (ne.g_c[k] + ne.B[k].transpose() * step.theta);
-    quadratic += 2.0 * step.theta.dot(ne.B[k] * step.dirs[k]) + step.dirs[k].dot(ne.D[k] * step.dirs[k]);
+    quadratic +=
+        2.0 * step.theta.dot(ne.B[k] * step.dirs[k]) + step.dirs[k].dot(ne.D[k] * step.dirs[k]);
     linear += ne.g_c[k].dot(step.dirs[k]);
   }
   step.predicted_reduction = -(2.0 * linear + quadratic);
@@ -92,9 +93,8 @@ SolverOutput SolveJoint(const Problem& problem, const ModelParameters& init_para
     // A step this small changes nothing that matters: the current point is the solution.
     if (theta_step <= opt.parameter_tolerance && dir_step <= opt.parameter_tolerance) {
       out.summary.termination = TerminationType::kParameterTolerance;
-      std::snprintf(message, sizeof message,
-                    "|dtheta|_s = %.3e and max |dc| = %.3e <= %.1e", theta_step, dir_step,
-                    opt.parameter_tolerance);
+      std::snprintf(message, sizeof message, "|dtheta|_s = %.3e and max |dc| = %.3e <= %.1e",
+                    theta_step, dir_step, opt.parameter_tolerance);
       out.summary.termination_message = message;
       break;
     }
@@ -114,8 +114,8 @@ SolverOutput SolveJoint(const Problem& problem, const ModelParameters& init_para
         BuildNormalEquations(problem, FromVec12(theta), dirs, &ne);
       }
       out.summary.termination = TerminationType::kFunctionTolerance;
-      std::snprintf(message, sizeof message, "|dJ| / J = %.3e <= %.1e",
-                    std::abs(actual) / ne.cost, opt.function_tolerance);
+      std::snprintf(message, sizeof message, "|dJ| / J = %.3e <= %.1e", std::abs(actual) / ne.cost,
+                    opt.function_tolerance);
       out.summary.termination_message = message;
       break;
     }

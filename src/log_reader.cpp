@@ -33,7 +33,8 @@ std::optional<InputKind> InputKindFromString(std::string_view text) {
 }
 
 std::string ReadFileToString(const std::string& path) {
-  std::unique_ptr<std::FILE, int (*)(std::FILE*)> file(std::fopen(path.c_str(), "rb"), &std::fclose);
+  std::unique_ptr<std::FILE, int (*)(std::FILE*)> file(std::fopen(path.c_str(), "rb"),
+                                                       &std::fclose);
   if (!file) throw InputError(path, 0, std::string("cannot open: ") + std::strerror(errno));
   std::string data;
   char buffer[1 << 16];
@@ -99,9 +100,8 @@ std::size_t Split(std::string_view s, Delimiter delim, std::string_view* fields,
     std::size_t start = 0;
     while (true) {
       const std::size_t comma = s.find(',', start);
-      const std::string_view field =
-          Trim(s.substr(start, comma == std::string_view::npos ? std::string_view::npos
-                                                              : comma - start));
+      const std::string_view field = Trim(s.substr(
+          start, comma == std::string_view::npos ? std::string_view::npos : comma - start));
       if (count < max) fields[count] = field;
       ++count;
       if (comma == std::string_view::npos) break;
@@ -201,7 +201,8 @@ InputData ParseInput(std::string_view text, const std::string& source, const Rea
   }
   LineReader reader(text);
   Line first;
-  if (!reader.Next(&first)) throw InputError(source, 0, "no data (the file is empty or all comments)");
+  if (!reader.Next(&first))
+    throw InputError(source, 0, "no data (the file is empty or all comments)");
   const Delimiter delim =
       first.text.find(',') != std::string_view::npos ? Delimiter::kComma : Delimiter::kWhitespace;
 
@@ -242,8 +243,8 @@ InputData ParseInput(std::string_view text, const std::string& source, const Rea
     data.kind_reason = "auto: the header names a time column";
   } else if (rows <= options.max_rows_of_positions_file) {
     data.kind = InputKind::kPositions;
-    data.kind_reason = "auto: " + std::to_string(rows) + " rows <= " +
-                       std::to_string(options.max_rows_of_positions_file) +
+    data.kind_reason = "auto: " + std::to_string(rows) +
+                       " rows <= " + std::to_string(options.max_rows_of_positions_file) +
                        " is a positions file (--input-kind raw to override)";
   } else {
     data.kind = InputKind::kRaw;
@@ -303,10 +304,12 @@ InputData ParseInput(std::string_view text, const std::string& source, const Rea
     const std::size_t n = Split(line.text, delim, fields, kMaxFields);
     if (n != ncols) {
       if (delim == Delimiter::kWhitespace && line.text.find(',') != std::string_view::npos) {
-        throw InputError(source, line.number, "mixed delimiters: a comma in a whitespace-separated file");
+        throw InputError(source, line.number,
+                         "mixed delimiters: a comma in a whitespace-separated file");
       }
-      throw InputError(source, line.number,
-                       "expected " + std::to_string(ncols) + " columns, found " + std::to_string(n));
+      throw InputError(
+          source, line.number,
+          "expected " + std::to_string(ncols) + " columns, found " + std::to_string(n));
     }
     for (int r = 0; r < kRoles; ++r) {
       const int c = layout.column[r];

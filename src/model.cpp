@@ -17,10 +17,10 @@ std::optional<ModelKind> ModelKindFromString(std::string_view text) {
 const std::vector<ParameterSlot>& ParameterSlots(ModelKind kind) {
   using G = ParameterGroup;
   static const std::vector<ParameterSlot> quadratic = {
-      {G::kK, 0, 0, "K_xx"}, {G::kBias, 0, 0, "b_x"}, {G::kK2, 0, 0, "k2_x"},
-      {G::kK, 1, 0, "K_yx"}, {G::kK, 1, 1, "K_yy"},   {G::kBias, 1, 0, "b_y"},
-      {G::kK2, 1, 0, "k2_y"}, {G::kK, 2, 0, "K_zx"},  {G::kK, 2, 1, "K_zy"},
-      {G::kK, 2, 2, "K_zz"}, {G::kBias, 2, 0, "b_z"}, {G::kK2, 2, 0, "k2_z"}};
+      {G::kK, 0, 0, "K_xx"},  {G::kBias, 0, 0, "b_x"}, {G::kK2, 0, 0, "k2_x"},
+      {G::kK, 1, 0, "K_yx"},  {G::kK, 1, 1, "K_yy"},   {G::kBias, 1, 0, "b_y"},
+      {G::kK2, 1, 0, "k2_y"}, {G::kK, 2, 0, "K_zx"},   {G::kK, 2, 1, "K_zy"},
+      {G::kK, 2, 2, "K_zz"},  {G::kBias, 2, 0, "b_z"}, {G::kK2, 2, 0, "k2_z"}};
   static const std::vector<ParameterSlot> linear = [] {
     std::vector<ParameterSlot> slots;
     for (const ParameterSlot& s : quadratic) {

@@ -19,13 +19,12 @@ Vec3 DirectionFromAngles(double theta_rad, double phi_rad) {
 
 std::vector<Vec3> Yang18Directions() {
   const double h = kPi / 2, q = kPi / 4;
-  const double table[18][2] = {
-      {h, 0},  {-h, 0},      // k_axx, k2_x, p0_x
-      {0, 0},  {0, kPi},     // k_ayy, k2_y, p0_y
-      {0, h},  {0, -h},      // k_azz, k2_z, p0_z
-      {q, 0},  {-q, 0},      {q, kPi},      {-q, kPi},       // k_ayx
-      {q, h},  {q, -h},      {-q, h},       {-q, -h},        // k_azx
-      {0, q},  {0, -q},      {0, 3 * q},    {0, -3 * q}};    // k_azy
+  const double table[18][2] = {{h, 0}, {-h, 0},                             // k_axx, k2_x, p0_x
+                               {0, 0}, {0, kPi},                            // k_ayy, k2_y, p0_y
+                               {0, h}, {0, -h},                             // k_azz, k2_z, p0_z
+                               {q, 0}, {-q, 0},  {q, kPi},   {-q, kPi},     // k_ayx
+                               {q, h}, {q, -h},  {-q, h},    {-q, -h},      // k_azx
+                               {0, q}, {0, -q},  {0, 3 * q}, {0, -3 * q}};  // k_azy
   std::vector<Vec3> dirs;
   for (const auto& row : table) dirs.push_back(DirectionFromAngles(row[0], row[1]));
   return dirs;

@@ -69,9 +69,9 @@ Mat12 ReducedMatrix(const NormalEquations& ne, double lambda, const Vec12& mask)
 /// The reduced information matrix at a point, its inverse on the free parameters and the checks
 /// that the free parameters are determined (observability).
 struct Information {
-  Mat12 reduced;          ///< S at λ = 0 (fixed parameters: identity rows)
-  double rcond = 0;       ///< smallest / largest eigenvalue of the Jacobi-scaled free block
-  int weakest = -1;       ///< 12-layout index dominating the weakest eigenvector
+  Mat12 reduced;     ///< S at λ = 0 (fixed parameters: identity rows)
+  double rcond = 0;  ///< smallest / largest eigenvalue of the Jacobi-scaled free block
+  int weakest = -1;  ///< 12-layout index dominating the weakest eigenvector
 };
 Information ComputeInformation(const Problem& problem, const ModelParameters& params,
                                const std::vector<Vec3>& dirs);

@@ -44,12 +44,12 @@ StaticDetectionResult DetectStaticIntervals(const RawLog& log,
   StaticDetectionResult result;
   result.rate_hz = *log.rate_hz;
   const std::size_t n = log.samples.size();
-  const std::size_t w =
-      std::max<std::size_t>(3, static_cast<std::size_t>(std::lround(options.window_s * result.rate_hz)) | 1);
+  const std::size_t w = std::max<std::size_t>(
+      3, static_cast<std::size_t>(std::lround(options.window_s * result.rate_hz)) | 1);
   result.window_samples = w;
   if (n < w + 1) {
-    throw DataError(log.source + ": " + std::to_string(n) + " samples are fewer than one detection window (" +
-                    std::to_string(w) + ")");
+    throw DataError(log.source + ": " + std::to_string(n) +
+                    " samples are fewer than one detection window (" + std::to_string(w) + ")");
   }
   const std::size_t h = w / 2;
 
@@ -90,25 +90,28 @@ StaticDetectionResult DetectStaticIntervals(const RawLog& log,
   // Noise reference.
   if (options.init_rest_s > 0) {
     const std::size_t m = static_cast<std::size_t>(options.init_rest_s * result.rate_hz);
-    if (m < 2 || m > n) throw DataError(log.source + ": the initial rest period is longer than the log");
+    if (m < 2 || m > n)
+      throw DataError(log.source + ": the initial rest period is longer than the log");
     Vec3 mean, std;
     MeanAndStd(log.samples, 0, m, &mean, &std);
     result.noise_reference = std.cwiseAbs2().sum();
   } else {
     std::vector<double> sorted(score.begin() + static_cast<std::ptrdiff_t>(first),
                                score.begin() + static_cast<std::ptrdiff_t>(last) + 1);
-    const std::size_t q = static_cast<std::size_t>(options.reference_quantile * static_cast<double>(sorted.size() - 1));
+    const std::size_t q = static_cast<std::size_t>(options.reference_quantile *
+                                                   static_cast<double>(sorted.size() - 1));
     std::nth_element(sorted.begin(), sorted.begin() + static_cast<std::ptrdiff_t>(q), sorted.end());
     result.noise_reference = sorted[q];
   }
   // Quantised sensors can be perfectly still (zero variance): keep a floor so that the threshold
   // does not reject every window but the most perfectly silent ones.
   double floor_value = 0;
-  for (int a = 0; a < 3; ++a) floor_value += 1.0 / 12.0 * 1e-12 * std::pow(std::abs(shift(a)) + 1.0, 2);
+  for (int a = 0; a < 3; ++a)
+    floor_value += 1.0 / 12.0 * 1e-12 * std::pow(std::abs(shift(a)) + 1.0, 2);
   result.threshold = options.threshold_factor * std::max(result.noise_reference, floor_value);
 
-  const std::size_t min_len =
-      std::max<std::size_t>(2, static_cast<std::size_t>(std::ceil(options.min_duration_s * result.rate_hz)));
+  const std::size_t min_len = std::max<std::size_t>(
+      2, static_cast<std::size_t>(std::ceil(options.min_duration_s * result.rate_hz)));
   std::size_t run_start = 0;
   bool in_run = false;
   for (std::size_t c = first; c <= last + 1; ++c) {

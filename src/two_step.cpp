@@ -74,13 +74,12 @@ SolverOutput SolveTwoStep(const Problem& problem, const ModelParameters& init_pa
 
   for (int sweep = 1; sweep <= opt.max_sweeps; ++sweep) {
     const ModelParameters next = SolveParametersGivenDirections(problem, dirs);  // step 1
-    for (int k = 0; k < problem.positions(); ++k) {                               // step 2
+    for (int k = 0; k < problem.positions(); ++k) {                              // step 2
       dirs[k] = KktDirection(next, problem.gravity, problem.readings[k], dirs[k],
                              opt.max_newton_iterations);
     }
     const double next_cost = Cost(problem, next, dirs);
-    const double step =
-        ScaledNorm(ToVec12(next) - ToVec12(params), ParameterScales(problem, next));
+    const double step = ScaledNorm(ToVec12(next) - ToVec12(params), ParameterScales(problem, next));
     const double rho = step / previous_step;
     params = next;
     const double cost_change = std::abs(cost - next_cost);

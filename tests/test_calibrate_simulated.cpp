@@ -62,18 +62,17 @@ TEST_P(NoiseFreeTable3, RecoversEveryParameter) {
   }
 }
 
-INSTANTIATE_TEST_SUITE_P(
-    AllModelsAndMethods, NoiseFreeTable3,
-    ::testing::Values(Case{ModelKind::kLinear, SolverMethod::kTwoStep},
-                      Case{ModelKind::kLinear, SolverMethod::kJoint},
-                      Case{ModelKind::kQuadratic, SolverMethod::kTwoStep},
-                      Case{ModelKind::kQuadratic, SolverMethod::kJoint}),
-    [](const ::testing::TestParamInfo<Case>& param_info) {
-      std::string name = std::string(ToString(param_info.param.model)) + "_" +
-                         std::string(ToString(param_info.param.method));
-      name.erase(std::remove(name.begin(), name.end(), '-'), name.end());
-      return name;
-    });
+INSTANTIATE_TEST_SUITE_P(AllModelsAndMethods, NoiseFreeTable3,
+                         ::testing::Values(Case{ModelKind::kLinear, SolverMethod::kTwoStep},
+                                           Case{ModelKind::kLinear, SolverMethod::kJoint},
+                                           Case{ModelKind::kQuadratic, SolverMethod::kTwoStep},
+                                           Case{ModelKind::kQuadratic, SolverMethod::kJoint}),
+                         [](const ::testing::TestParamInfo<Case>& param_info) {
+                           std::string name = std::string(ToString(param_info.param.model)) + "_" +
+                                              std::string(ToString(param_info.param.method));
+                           name.erase(std::remove(name.begin(), name.end(), '-'), name.end());
+                           return name;
+                         });
 
 class NoisyTable3 : public ::testing::TestWithParam<ModelKind> {};
 
@@ -113,7 +112,8 @@ TEST(Calibrate, ResidualSigmaEstimatesTheSimulatedNoise) {
   ModelParameters truth = Truth(ModelKind::kLinear);
   const std::vector<Vec3> dirs = RandomDirections(40, 5);
   const std::vector<Vec3> readings = SimulatePositions(truth, kG, dirs, Vec3(0.5, 0.5, 0.5), 6);
-  const CalibrationResult r = Calibrate(readings, Options(ModelKind::kLinear, SolverMethod::kJoint));
+  const CalibrationResult r =
+      Calibrate(readings, Options(ModelKind::kLinear, SolverMethod::kJoint));
   EXPECT_EQ(r.degrees_of_freedom, 31);
   EXPECT_NEAR(r.residual_sigma, 0.5, 3 * 0.13 * 0.5);
 }
@@ -199,8 +199,9 @@ TEST(Calibrate, RefusesTooFewPositions) {
   const ModelParameters truth = Truth(ModelKind::kQuadratic);
   std::vector<Vec3> dirs = Yang18Directions();
   dirs.resize(8);
-  EXPECT_EQ(DataErrorMessage(SimulatePositions(truth, kG, dirs, Vec3::Zero(), 1), ModelKind::kLinear),
-            "the linear model needs at least 9 positions, got 8");
+  EXPECT_EQ(
+      DataErrorMessage(SimulatePositions(truth, kG, dirs, Vec3::Zero(), 1), ModelKind::kLinear),
+      "the linear model needs at least 9 positions, got 8");
   dirs = Yang18Directions();
   dirs.resize(11);
   EXPECT_EQ(
@@ -213,8 +214,9 @@ TEST(Calibrate, RefusesPositionsInOnePlane) {
   for (int k = 0; k < 16; ++k) dirs.push_back(Vec3(std::cos(0.4 * k), 0.0, std::sin(0.4 * k)));
   const std::vector<Vec3> readings =
       SimulatePositions(Truth(ModelKind::kLinear), kG, dirs, Vec3(0.06, 0.06, 0.06), 2);
-  EXPECT_NE(DataErrorMessage(readings, ModelKind::kLinear).find("all 16 positions lie in one plane"),
-            std::string::npos);
+  EXPECT_NE(
+      DataErrorMessage(readings, ModelKind::kLinear).find("all 16 positions lie in one plane"),
+      std::string::npos);
 }
 
 TEST(Calibrate, RefusesUnobservableGeometry) {

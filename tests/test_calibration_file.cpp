@@ -1,6 +1,6 @@
 // The calibration file: required keys, round trip, determinism, and refusal of malformed files.
-#include <nlohmann/json.hpp>
 #include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
 
 #include "accelcal/calibration_file.hpp"
 #include "accelcal/error.hpp"
@@ -92,8 +92,9 @@ TEST(CalibrationFile, RefusesMalformedFiles) {
   EXPECT_EQ(LoadError("{").rfind("cal.json: not valid JSON", 0), 0u);
   nlohmann::json j = good;
   j["format"] = "other";
-  EXPECT_EQ(LoadError(j.dump()),
-            "cal.json: not an accelcal calibration file (\"format\" is not \"accelcal-calibration\")");
+  EXPECT_EQ(
+      LoadError(j.dump()),
+      "cal.json: not an accelcal calibration file (\"format\" is not \"accelcal-calibration\")");
   j = good;
   j["version"] = 2;
   EXPECT_EQ(LoadError(j.dump()), "cal.json: unsupported calibration file version (expected 1)");

@@ -8,8 +8,8 @@
 #include <fstream>
 #include <sstream>
 
-#include <nlohmann/json.hpp>
 #include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
 
 #include "accelcal/simulate.hpp"
 
@@ -37,7 +37,8 @@ class Cli : public ::testing::Test {
  protected:
   void SetUp() override {
     dir_ = fs::path(::testing::TempDir()) /
-           ("accelcal_cli_" + std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()));
+           ("accelcal_cli_" +
+            std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()));
     fs::remove_all(dir_);
     fs::create_directories(dir_);
   }
@@ -63,8 +64,8 @@ class Cli : public ::testing::Test {
 };
 
 std::string PositionsCsv(int count) {
-  const std::vector<Vec3> readings =
-      SimulatePositions(Yang2012Truth(), 9.8, RandomDirections(count, 1), Vec3(0.05, 0.05, 0.05), 2);
+  const std::vector<Vec3> readings = SimulatePositions(
+      Yang2012Truth(), 9.8, RandomDirections(count, 1), Vec3(0.05, 0.05, 0.05), 2);
   std::string s = "x,y,z\n";
   char line[128];
   for (const Vec3& p : readings) {
@@ -75,8 +76,8 @@ std::string PositionsCsv(int count) {
 }
 
 TEST_F(Cli, CalibratesTheXsensRecording) {
-  const CliRun r = Exec("calibrate " + kData + "/imutk-xsens-mti/xsens_acc.mat --gravity 9.81744 -o " +
-                     Path("cal.json"));
+  const CliRun r = Exec("calibrate " + kData +
+                        "/imutk-xsens-mti/xsens_acc.mat --gravity 9.81744 -o " + Path("cal.json"));
   ASSERT_EQ(r.status, 0) << r.err;
   EXPECT_NE(r.out.find("38 static intervals"), std::string::npos) << r.out;
   EXPECT_NE(r.out.find("rms |f|-g"), std::string::npos);
@@ -86,13 +87,14 @@ TEST_F(Cli, CalibratesTheXsensRecording) {
   EXPECT_EQ(doc["positions"][0]["interval"]["begin"].get<int>() > 0, true);
 
   // --json prints exactly the file; a second run gives the same bytes (determinism).
-  const CliRun j = Exec("calibrate " + kData + "/imutk-xsens-mti/xsens_acc.mat --gravity 9.81744 --json");
+  const CliRun j =
+      Exec("calibrate " + kData + "/imutk-xsens-mti/xsens_acc.mat --gravity 9.81744 --json");
   ASSERT_EQ(j.status, 0);
   EXPECT_EQ(j.out, Slurp(Path("cal.json")));
 
   // apply: the corrected log has |f| ≈ g while still.
   const CliRun a = Exec("apply " + Path("cal.json") + " " + kData +
-                     "/imutk-xsens-mti/xsens_acc.mat -o " + Path("corrected.csv"));
+                        "/imutk-xsens-mti/xsens_acc.mat -o " + Path("corrected.csv"));
   ASSERT_EQ(a.status, 0) << a.err;
   std::ifstream in(Path("corrected.csv"));
   std::string line;
@@ -113,12 +115,14 @@ TEST_F(Cli, CalibratesTheXsensRecording) {
 }
 
 TEST_F(Cli, PositionsFileInG) {
-  const CliRun r = Exec("calibrate " + kData + "/ctu-innalabs-ahrs-m3/measured_accelerations_24pos.csv --units g --json");
+  const CliRun r = Exec("calibrate " + kData +
+                        "/ctu-innalabs-ahrs-m3/measured_accelerations_24pos.csv --units g --json");
   ASSERT_EQ(r.status, 0) << r.err;
   const nlohmann::json doc = nlohmann::json::parse(r.out);
   EXPECT_EQ(doc["units"]["specific_force"], "g");
   EXPECT_EQ(doc["gravity"], 1.0);
-  EXPECT_LT(doc["gravity_norm_rms_after"].get<double>(), doc["gravity_norm_rms_before"].get<double>());
+  EXPECT_LT(doc["gravity_norm_rms_after"].get<double>(),
+            doc["gravity_norm_rms_before"].get<double>());
 }
 
 TEST_F(Cli, LatitudeGivesWgs84Gravity) {
@@ -158,18 +162,24 @@ TEST_F(Cli, BadInputGivesOneClearMessageAndNoOutput) {
   }
   std::string plane = "x,y,z\n";
   for (int k = 0; k < 16; ++k) {
-    plane += std::to_string(9.8 * std::cos(0.4 * k)) + ",0.01," + std::to_string(9.8 * std::sin(0.4 * k)) + "\n";
+    plane += std::to_string(9.8 * std::cos(0.4 * k)) + ",0.01," +
+             std::to_string(9.8 * std::sin(0.4 * k)) + "\n";
   }
   const std::vector<BadCase> cases = {
       {"empty.csv", "", "", 3, "accelcal: FILE: no data (the file is empty or all comments)\n"},
-      {"text.csv", "x,y,z\n1,2,3\n1,two,3\n", "", 3, "accelcal: FILE:3: column 2: 'two' is not a number\n"},
-      {"nan.csv", "1,2,3\n1,NaN,3\n", "", 3, "accelcal: FILE:2: column 2: 'NaN' is not a finite number\n"},
-      {"inf.csv", "1,2,3\n1,2,-inf\n", "", 3, "accelcal: FILE:2: column 3: '-inf' is not a finite number\n"},
+      {"text.csv", "x,y,z\n1,2,3\n1,two,3\n", "", 3,
+       "accelcal: FILE:3: column 2: 'two' is not a number\n"},
+      {"nan.csv", "1,2,3\n1,NaN,3\n", "", 3,
+       "accelcal: FILE:2: column 2: 'NaN' is not a finite number\n"},
+      {"inf.csv", "1,2,3\n1,2,-inf\n", "", 3,
+       "accelcal: FILE:2: column 3: '-inf' is not a finite number\n"},
       {"cols.csv", "1,2,3\n1,2\n", "", 3, "accelcal: FILE:2: expected 3 columns, found 2\n"},
-      {"few.csv", PositionsCsv(6), "", 3, "accelcal: FILE: the linear model needs at least 9 positions, got 6\n"},
+      {"few.csv", PositionsCsv(6), "", 3,
+       "accelcal: FILE: the linear model needs at least 9 positions, got 6\n"},
       {"fewq.csv", PositionsCsv(11), "--model quadratic", 3,
        "accelcal: FILE: the quadratic model needs at least 12 positions, got 11\n"},
-      {"moving.csv", moving, "--input-kind raw", 3, "PREFIX accelcal: FILE: FILE: no static interval found"},
+      {"moving.csv", moving, "--input-kind raw", 3,
+       "PREFIX accelcal: FILE: FILE: no static interval found"},
       {"plane.csv", plane, "", 3, "PREFIX accelcal: FILE: all 16 positions lie in one plane"},
       {"", "", "", 3, "accelcal: FILE: cannot open: No such file or directory\n"},
   };
@@ -179,7 +189,8 @@ TEST_F(Cli, BadInputGivesOneClearMessageAndNoOutput) {
     const CliRun r = Exec("calibrate " + input + " " + c.args + " -o " + out);
     EXPECT_EQ(r.status, c.status) << input << "\n" << r.err;
     std::string expected = c.message;
-    for (std::size_t pos; (pos = expected.find("FILE")) != std::string::npos;) expected.replace(pos, 4, input);
+    for (std::size_t pos; (pos = expected.find("FILE")) != std::string::npos;)
+      expected.replace(pos, 4, input);
     if (expected.rfind("PREFIX ", 0) == 0) {
       EXPECT_EQ(r.err.rfind(expected.substr(7), 0), 0u) << r.err;
     } else {
@@ -218,7 +229,8 @@ TEST_F(Cli, UsageErrorsExitWithStatus2) {
 
 TEST_F(Cli, NonConvergenceWritesNothing) {
   const std::string in = Write("pos.csv", PositionsCsv(20));
-  const CliRun r = Exec("calibrate " + in + " --method two-step --max-iterations 2 -o " + Path("c.json"));
+  const CliRun r =
+      Exec("calibrate " + in + " --method two-step --max-iterations 2 -o " + Path("c.json"));
   EXPECT_EQ(r.status, 4);
   EXPECT_NE(r.err.find("did not converge"), std::string::npos) << r.err;
   EXPECT_FALSE(fs::exists(Path("c.json")));
@@ -229,8 +241,10 @@ TEST_F(Cli, ApplyRejectsABadCalibrationFile) {
   const std::string log = Write("log.csv", "0,1,2,3\n0.01,1,2,3\n");
   const CliRun r = Exec("apply " + cal + " " + log);
   EXPECT_EQ(r.status, 3);
-  EXPECT_EQ(r.err, "accelcal: " + cal +
-                       ": not an accelcal calibration file (\"format\" is not \"accelcal-calibration\")\n");
+  EXPECT_EQ(
+      r.err,
+      "accelcal: " + cal +
+          ": not an accelcal calibration file (\"format\" is not \"accelcal-calibration\")\n");
 }
 
 }  // namespace

@@ -2,8 +2,8 @@
 // eq. (24), corrected eq. (25)) and the joint normal equations with their Schur complement.
 #include <cmath>
 
-#include <Eigen/Dense>
 #include <gtest/gtest.h>
+#include <Eigen/Dense>
 
 #include "accelcal/simulate.hpp"
 #include "solver_common.hpp"
@@ -24,7 +24,8 @@ ModelParameters StrongQuadratic() {
 TEST(Derivatives, DirectionCostGradientAndHessian) {
   const ModelParameters params = StrongQuadratic();
   const double g = 9.8;
-  const Vec3 p = PredictRaw(params, Vec3(g * Vec3(0.3, -0.5, 0.8).normalized())) + Vec3(40, -25, 60);
+  const Vec3 p =
+      PredictRaw(params, Vec3(g * Vec3(0.3, -0.5, 0.8).normalized())) + Vec3(40, -25, 60);
   auto cost = [&](const Eigen::VectorXd& c) -> Eigen::VectorXd {
     Eigen::VectorXd out(1);
     out(0) = (PredictRaw(params, Vec3(g * Vec3(c))) - p).squaredNorm();
@@ -131,7 +132,8 @@ TEST(Derivatives, JointNormalEquationsAndSchurComplement) {
   const Eigen::MatrixXd Hcc = H.bottomRightCorner(2 * m, 2 * m);
   const Eigen::MatrixXd Htc = H.topRightCorner(12, 2 * m);
   const Eigen::MatrixXd dense = H.topLeftCorner<12, 12>() - Htc * Hcc.inverse() * Htc.transpose();
-  const internal::Mat12 reduced = internal::ReducedMatrix(ne, 0.0, internal::FreeMask(ModelKind::kQuadratic));
+  const internal::Mat12 reduced =
+      internal::ReducedMatrix(ne, 0.0, internal::FreeMask(ModelKind::kQuadratic));
   EXPECT_LT((reduced - dense).norm(), 1e-9 * dense.norm());
 }
 

@@ -30,9 +30,10 @@ std::string ManyRows(int n, const char* sep, bool with_time) {
 }
 
 TEST(LogReader, ImuTkAsciiWithTime) {
-  const InputData d = Parse("   2.98e-02   3.3108e+04   3.3329e+04   3.6429e+04\n"
-                            "   3.98e-02   3.3096e+04   3.3336e+04   3.6437e+04\n",
-                            ReadOptions{InputKind::kRaw, {}, std::nullopt, 200});
+  const InputData d = Parse(
+      "   2.98e-02   3.3108e+04   3.3329e+04   3.6429e+04\n"
+      "   3.98e-02   3.3096e+04   3.3336e+04   3.6437e+04\n",
+      ReadOptions{InputKind::kRaw, {}, std::nullopt, 200});
   ASSERT_EQ(d.kind, InputKind::kRaw);
   ASSERT_EQ(d.raw.samples.size(), 2u);
   EXPECT_EQ(d.raw.samples[1], Vec3(33096, 33336, 36437));
@@ -126,7 +127,8 @@ TEST(LogReader, UnreadablePath) {
     ReadInput("/nonexistent/dir/log.csv", {});
     FAIL();
   } catch (const InputError& e) {
-    EXPECT_EQ(std::string(e.what()), "/nonexistent/dir/log.csv: cannot open: No such file or directory");
+    EXPECT_EQ(std::string(e.what()),
+              "/nonexistent/dir/log.csv: cannot open: No such file or directory");
   }
 }
 

@@ -2,8 +2,8 @@
 #include <cmath>
 #include <fstream>
 
-#include <Eigen/Dense>
 #include <gtest/gtest.h>
+#include <Eigen/Dense>
 
 #include "accelcal/calibrate.hpp"
 #include "accelcal/log_reader.hpp"
@@ -39,7 +39,8 @@ double ImuTkRms(const Mat33& T, const Vec3& K, const Vec3& b, const std::vector<
 }
 
 TEST(RealData, XsensDetectionFindsTheStaticIntervals) {
-  const std::vector<Position> detected = DetectedPositions(kData + "/imutk-xsens-mti/xsens_acc.mat");
+  const std::vector<Position> detected =
+      DetectedPositions(kData + "/imutk-xsens-mti/xsens_acc.mat");
   const InputData ref = ReadInput(kData + "/imutk-xsens-mti/derived_static_means.csv", {});
   ASSERT_EQ(ref.positions.size(), 38u);
   ASSERT_EQ(detected.size(), 38u);
@@ -52,7 +53,8 @@ TEST(RealData, XsensDetectionFindsTheStaticIntervals) {
 
 TEST(RealData, XsensMatchesImuTk) {
   const double g = 9.81744;
-  const std::vector<Vec3> means = Means(DetectedPositions(kData + "/imutk-xsens-mti/xsens_acc.mat"));
+  const std::vector<Vec3> means =
+      Means(DetectedPositions(kData + "/imutk-xsens-mti/xsens_acc.mat"));
   for (SolverMethod method : {SolverMethod::kJoint, SolverMethod::kTwoStep}) {
     const CalibrationResult r = CalibrateMeans(means, g, method);
     EXPECT_LE(Rms(GravityNormErrors(r.params, means, g)), 0.0012);
@@ -98,7 +100,8 @@ TEST(RealData, CtuSetsWithinFivePercentOfHassanBao) {
   const struct {
     const char* file;
     double published_rms;
-  } sets[] = {{"measured_accelerations_24pos.csv", 0.00043}, {"measured_accelerations_49pos.csv", 0.00093}};
+  } sets[] = {{"measured_accelerations_24pos.csv", 0.00043},
+              {"measured_accelerations_49pos.csv", 0.00093}};
   for (const auto& set : sets) {
     const InputData d = ReadInput(kData + "/ctu-innalabs-ahrs-m3/" + set.file, {});
     ASSERT_EQ(d.kind, InputKind::kPositions);

@@ -10,7 +10,8 @@ namespace accelcal {
 namespace {
 
 // 100 Hz log: still periods of the given lengths separated by 2-second rotations.
-RawLog SyntheticLog(const std::vector<double>& still_s, std::vector<std::pair<std::size_t, std::size_t>>* truth) {
+RawLog SyntheticLog(const std::vector<double>& still_s,
+                    std::vector<std::pair<std::size_t, std::size_t>>* truth) {
   std::mt19937_64 rng(1);
   std::normal_distribution<double> noise(0.0, 2.0);
   RawLog log;
@@ -23,7 +24,8 @@ RawLog SyntheticLog(const std::vector<double>& still_s, std::vector<std::pair<st
     for (std::size_t i = 0; i < n; ++i) {
       log.samples.push_back(level + Vec3(noise(rng), noise(rng), noise(rng)));
     }
-    const Vec3 next = level + Vec3(3000.0 * std::sin(static_cast<double>(k) + 1.0), -2500.0 * std::cos(static_cast<double>(k)), 1000.0);
+    const Vec3 next = level + Vec3(3000.0 * std::sin(static_cast<double>(k) + 1.0),
+                                   -2500.0 * std::cos(static_cast<double>(k)), 1000.0);
     for (int i = 0; i < 200; ++i) {  // smooth move with a wobble
       const double s = i / 200.0;
       log.samples.push_back(level + (next - level) * s +
@@ -31,7 +33,8 @@ RawLog SyntheticLog(const std::vector<double>& still_s, std::vector<std::pair<st
     }
     level = next;
   }
-  for (std::size_t i = 0; i < log.samples.size(); ++i) log.time_s.push_back(static_cast<double>(i) / 100.0);
+  for (std::size_t i = 0; i < log.samples.size(); ++i)
+    log.time_s.push_back(static_cast<double>(i) / 100.0);
   return log;
 }
 

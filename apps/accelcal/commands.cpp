@@ -78,7 +78,8 @@ Gravity ResolveGravity(const GravityArgs& args) {
   } else if (args.latitude_deg) {
     if (!(std::abs(*args.latitude_deg) <= 90)) throw UsageError("--latitude must lie in [-90, 90]");
     g.ms2 = NormalGravityWgs84_ms2(*args.latitude_deg, args.height_m);
-    g.origin = Format("WGS-84 normal gravity at %.6g deg, %.6g m", *args.latitude_deg, args.height_m);
+    g.origin =
+        Format("WGS-84 normal gravity at %.6g deg, %.6g m", *args.latitude_deg, args.height_m);
   } else {
     g.ms2 = kStandardGravity_ms2;
     g.origin = "standard gravity (default)";
@@ -100,10 +101,11 @@ void PrintInput(const LoadedInput& in, const std::string& path) {
   const StaticDetectionResult& d = *in.detection;
   std::printf("input     %s: raw log, %zu samples at %.6g Hz (%s)\n", path.c_str(),
               in.data.raw.samples.size(), d.rate_hz, in.data.kind_reason.c_str());
-  std::printf("detection %zu static intervals (window %zu samples, threshold %.4g raw^2 = %.3g x "
-              "noise reference)\n",
-              d.intervals.size(), d.window_samples, d.threshold,
-              d.noise_reference > 0 ? d.threshold / d.noise_reference : 0.0);
+  std::printf(
+      "detection %zu static intervals (window %zu samples, threshold %.4g raw^2 = %.3g x "
+      "noise reference)\n",
+      d.intervals.size(), d.window_samples, d.threshold,
+      d.noise_reference > 0 ? d.threshold / d.noise_reference : 0.0);
 }
 
 void PrintCalibration(const CalibrationResult& r, const std::vector<Position>& positions,
@@ -113,8 +115,9 @@ void PrintCalibration(const CalibrationResult& r, const std::vector<Position>& p
   const auto& slots = ParameterSlots(r.model);
   std::printf("\nmodel     %s, p = K f + b + k2 * f^2, gravity %.9g %s (%s)\n",
               std::string(ToString(r.model)).c_str(), g.in_unit, u, g.origin.c_str());
-  std::printf("\nparameters (K in %s per %s, b in %s, k2 in %s per %s^2; +- 1 sigma from residuals)\n",
-              raw_unit.c_str(), u, raw_unit.c_str(), raw_unit.c_str(), u);
+  std::printf(
+      "\nparameters (K in %s per %s, b in %s, k2 in %s per %s^2; +- 1 sigma from residuals)\n",
+      raw_unit.c_str(), u, raw_unit.c_str(), raw_unit.c_str(), u);
   const Eigen::VectorXd theta = Pack(r.params, r.model);
   for (std::size_t i = 0; i < slots.size(); ++i) {
     const auto idx = static_cast<Eigen::Index>(i);
@@ -167,8 +170,10 @@ std::string FormatNumber(double v) {
 
 int RunCalibrate(const CalibrateArgs& args) {
   CalibrationOptions options;
-  options.model = ParseEnum(ModelKindFromString(args.model), args.model, "--model", "linear, quadratic");
-  options.method = ParseEnum(SolverMethodFromString(args.method), args.method, "--method", "two-step, joint");
+  options.model =
+      ParseEnum(ModelKindFromString(args.model), args.model, "--model", "linear, quadratic");
+  options.method =
+      ParseEnum(SolverMethodFromString(args.method), args.method, "--method", "two-step, joint");
   options.initialization = ParseEnum(InitializationFromString(args.init), args.init, "--init",
                                      "auto, ellipsoid, normalized-readings");
   const Gravity g = ResolveGravity(args.gravity);
@@ -219,23 +224,25 @@ int RunDetect(const DetectArgs& args) {
       const StaticInterval& s = d.intervals[i];
       out += i ? ",\n    " : "\n    ";
       out += Format("{\"begin\": %zu, \"end\": %zu, \"samples\": %zu, ", s.begin, s.end, s.count());
-      out += "\"t_begin\": " + FormatNumber(s.t_begin_s) + ", \"t_end\": " + FormatNumber(s.t_end_s);
+      out +=
+          "\"t_begin\": " + FormatNumber(s.t_begin_s) + ", \"t_end\": " + FormatNumber(s.t_end_s);
       out += ", \"mean\": [" + FormatNumber(s.mean(0)) + ", " + FormatNumber(s.mean(1)) + ", " +
              FormatNumber(s.mean(2)) + "], \"std\": [" + FormatNumber(s.std(0)) + ", " +
              FormatNumber(s.std(1)) + ", " + FormatNumber(s.std(2)) + "]}";
     }
     out += d.intervals.empty() ? "]\n}\n" : "\n  ]\n}\n";
   } else {
-    out += Format("%s: %zu samples at %.6g Hz; window %zu samples; threshold %.4g raw^2 "
-                  "(noise reference %.4g)\n",
-                  in.path.c_str(), data.raw.samples.size(), d.rate_hz, d.window_samples,
-                  d.threshold, d.noise_reference);
-    out += Format("%3s %9s %9s %11s %11s %8s %40s %33s\n", "#", "begin", "end", "t_begin",
-                  "t_end", "samples", "mean", "std");
+    out += Format(
+        "%s: %zu samples at %.6g Hz; window %zu samples; threshold %.4g raw^2 "
+        "(noise reference %.4g)\n",
+        in.path.c_str(), data.raw.samples.size(), d.rate_hz, d.window_samples, d.threshold,
+        d.noise_reference);
+    out += Format("%3s %9s %9s %11s %11s %8s %40s %33s\n", "#", "begin", "end", "t_begin", "t_end",
+                  "samples", "mean", "std");
     for (std::size_t i = 0; i < d.intervals.size(); ++i) {
       const StaticInterval& s = d.intervals[i];
-      out += Format("%3zu %9zu %9zu %11.4f %11.4f %8zu %s %s\n", i + 1, s.begin, s.end,
-                    s.t_begin_s, s.t_end_s, s.count(), Vec(s.mean, "%13.7g ").c_str(),
+      out += Format("%3zu %9zu %9zu %11.4f %11.4f %8zu %s %s\n", i + 1, s.begin, s.end, s.t_begin_s,
+                    s.t_end_s, s.count(), Vec(s.mean, "%13.7g ").c_str(),
                     Vec(s.std, "%10.4g ").c_str());
     }
     out += Format("%zu static intervals\n", d.intervals.size());
@@ -248,7 +255,8 @@ int RunApply(const ApplyArgs& args) {
   const LoadedCalibration cal =
       ParseCalibrationJson(ReadFileToString(args.calibration), args.calibration);
   ForceUnit unit = cal.unit;
-  if (args.units) unit = ParseEnum(ForceUnitFromString(*args.units), *args.units, "--units", "m/s2, g");
+  if (args.units)
+    unit = ParseEnum(ForceUnitFromString(*args.units), *args.units, "--units", "m/s2, g");
   double factor = 1.0;  // calibration unit -> output unit
   if (cal.unit == ForceUnit::kMetersPerSecond2 && unit == ForceUnit::kStandardGravity) {
     factor = 1.0 / kStandardGravity_ms2;
@@ -277,7 +285,7 @@ int RunApply(const ApplyArgs& args) {
       out.push_back(',');
     }
     for (int a = 0; a < 3; ++a) {
-      out.append(buf, std::to_chars(buf, buf + sizeof buf, (*f)(a) * factor).ptr);
+      out.append(buf, std::to_chars(buf, buf + sizeof buf, (*f)(a)*factor).ptr);
       out.push_back(a < 2 ? ',' : '\n');
     }
   }

@@ -68,7 +68,7 @@ struct DetectArgs {
 struct ApplyArgs {
   std::string calibration;
   InputArgs input;
-  std::string output;               // empty: stdout
+  std::string output;                // empty: stdout
   std::optional<std::string> units;  // convert to this unit
 };
 

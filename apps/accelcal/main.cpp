@@ -59,8 +59,8 @@ int main(int argc, char** argv) {
   app.set_version_flag("--version", "accelcal 0.1.0");
 
   CalibrateArgs cal;
-  CLI::App* calibrate = app.add_subcommand(
-      "calibrate", "estimate K, b (and k2) from a raw log or a positions file");
+  CLI::App* calibrate =
+      app.add_subcommand("calibrate", "estimate K, b (and k2) from a raw log or a positions file");
   calibrate->add_option("INPUT", cal.input.path, "raw log or positions file")->required();
   AddInputOptions(calibrate, &cal.input, true);
   AddDetectionOptions(calibrate, &cal.input);
@@ -74,7 +74,8 @@ int main(int argc, char** argv) {
   calibrate->add_option("--max-iterations", cal.max_iterations,
                         "iteration cap of the solver (0: its default)");
   calibrate->add_option("-o,--output", cal.output, "write the calibration file (JSON) here");
-  calibrate->add_flag("--json", cal.json, "print the calibration file to stdout instead of the summary");
+  calibrate->add_flag("--json", cal.json,
+                      "print the calibration file to stdout instead of the summary");
 
   DetectArgs det;
   CLI::App* detect = app.add_subcommand("detect", "list the static intervals of a raw log");
@@ -90,7 +91,8 @@ int main(int argc, char** argv) {
   apply_cmd->add_option("LOG", apply.input.path, "raw log")->required();
   AddInputOptions(apply_cmd, &apply.input, false);
   apply_cmd->add_option("-o,--output", apply.output, "output file (default: stdout)");
-  apply_cmd->add_option("--units", apply.units, "output unit m/s2 or g (default: the calibration's)");
+  apply_cmd->add_option("--units", apply.units,
+                        "output unit m/s2 or g (default: the calibration's)");
 
   try {
     app.parse(argc, argv);
@@ -117,7 +119,10 @@ int main(int argc, char** argv) {
     return kExitBadInput;
   } catch (const accelcal::DataError& e) {
     std::fprintf(stderr, "accelcal: %s: %s\n",
-                 (*calibrate ? cal.input.path : *detect ? det.input.path : apply.input.path).c_str(),
+                 (*calibrate ? cal.input.path
+                  : *detect  ? det.input.path
+                             : apply.input.path)
+                     .c_str(),
                  e.what());
     return kExitBadInput;
   } catch (const OutputError& e) {

@@ -7,8 +7,8 @@
 ///
 /// Two solvers reach the same optimum:
 ///   - kTwoStep: paper 000 §3.1, alternating the linear least squares for θ given the directions
-///     (eq. (15)) with a constrained Newton/KKT step per position (eq. (18)-(24), Hessian of eq. (25)
-///     corrected per ERRATA.md). Converges linearly.
+///     (eq. (15)) with a constrained Newton/KKT step per position (eq. (18)-(24), Hessian of eq.
+///     (25) corrected per ERRATA.md). Converges linearly.
 ///   - kJoint: Levenberg-Marquardt over θ and all directions at once, each direction updated in its
 ///     2-D tangent plane, the per-position 2x2 blocks eliminated by the Schur complement.
 /// Both start from an algebraic ellipsoid fit (paper 001 §3.3) or, where that fails, from the
@@ -45,13 +45,14 @@ std::optional<Initialization> InitializationFromString(std::string_view text);
 /// parameter change converted to the change of the prediction it causes, in raw units, divided by
 /// the signal amplitude |K_ii|·g of its axis; max-norm):
 enum class TerminationType {
-  kParameterTolerance,  ///< two-step: ‖Δθ_n‖_s·ρ/(1−ρ) ≤ parameter_tolerance, ρ = ‖Δθ_n‖_s/‖Δθ_{n−1}‖_s
-                        ///< (the remaining error of a linearly converging sequence);
-                        ///< joint: ‖Δθ‖_s ≤ parameter_tolerance and every |Δc_k| ≤ parameter_tolerance
-  kFunctionTolerance,   ///< |J_{n−1} − J_n| ≤ function_tolerance · J_n
-  kZeroResidual,        ///< J ≤ (8 ε · signal)² · 3m: the data are fitted to round-off
-  kMaxIterations,       ///< iteration cap reached before any criterion: not converged
-  kNoProgress,          ///< joint: no step reduced the cost even with maximal damping: not converged
+  kParameterTolerance,  ///< two-step: ‖Δθ_n‖_s·ρ/(1−ρ) ≤ parameter_tolerance, ρ =
+                        ///< ‖Δθ_n‖_s/‖Δθ_{n−1}‖_s (the remaining error of a linearly converging
+                        ///< sequence); joint: ‖Δθ‖_s ≤ parameter_tolerance and every |Δc_k| ≤
+                        ///< parameter_tolerance
+  kFunctionTolerance,  ///< |J_{n−1} − J_n| ≤ function_tolerance · J_n
+  kZeroResidual,       ///< J ≤ (8 ε · signal)² · 3m: the data are fitted to round-off
+  kMaxIterations,      ///< iteration cap reached before any criterion: not converged
+  kNoProgress,         ///< joint: no step reduced the cost even with maximal damping: not converged
 };
 std::string_view ToString(TerminationType type);
 
@@ -65,17 +66,17 @@ struct CalibrationOptions {
   double gravity = kStandardGravity_ms2;
 
   struct TwoStep {
-    int max_sweeps = 20000;               ///< cap on alternations
-    double parameter_tolerance = 1e-14;   ///< see TerminationType
-    double function_tolerance = 1e-16;    ///< see TerminationType
-    int max_newton_iterations = 50;       ///< per-position KKT Newton cap (eq. (21))
+    int max_sweeps = 20000;              ///< cap on alternations
+    double parameter_tolerance = 1e-14;  ///< see TerminationType
+    double function_tolerance = 1e-16;   ///< see TerminationType
+    int max_newton_iterations = 50;      ///< per-position KKT Newton cap (eq. (21))
   } two_step;
 
   struct Joint {
     int max_iterations = 100;
     double parameter_tolerance = 1e-14;
     double function_tolerance = 1e-16;
-    double initial_damping = 1e-9;        ///< λ, relative to the diagonal of the normal matrix
+    double initial_damping = 1e-9;  ///< λ, relative to the diagonal of the normal matrix
   } joint;
 
   /// An error message when an option is out of range, else std::nullopt.
@@ -112,8 +113,8 @@ struct CalibrationResult {
   /// model with directions eliminated, σ² estimated from the residuals: σ̂² = J / (3m − P − 2m).
   /// Empty when there are no residual degrees of freedom (m = P/... exactly determined).
   Eigen::MatrixXd covariance;
-  double residual_sigma = 0;  ///< σ̂ [raw], 0 when there are no degrees of freedom
-  int degrees_of_freedom = 0; ///< m − P
+  double residual_sigma = 0;   ///< σ̂ [raw], 0 when there are no degrees of freedom
+  int degrees_of_freedom = 0;  ///< m − P
   Summary summary;
 };
 

@@ -15,8 +15,8 @@ namespace accelcal {
 /// What the file needs besides the CalibrationResult.
 struct CalibrationFileInfo {
   ForceUnit unit = ForceUnit::kMetersPerSecond2;
-  std::string raw_unit = "raw";  ///< label of the raw unit, e.g. "counts"
-  std::string source;            ///< input file name
+  std::string raw_unit = "raw";     ///< label of the raw unit, e.g. "counts"
+  std::string source;               ///< input file name
   std::vector<Position> positions;  ///< the positions that were fitted, same order as the result
 };
 

@@ -16,9 +16,9 @@
 namespace accelcal {
 
 struct EllipsoidFitResult {
-  ModelParameters params;   ///< K (lower-triangular, positive diagonal) and b; k2 = 0
-  bool ok = false;          ///< false: the quadric is not an ellipsoid (or too few readings)
-  std::string failure;      ///< why, when !ok
+  ModelParameters params;  ///< K (lower-triangular, positive diagonal) and b; k2 = 0
+  bool ok = false;         ///< false: the quadric is not an ellipsoid (or too few readings)
+  std::string failure;     ///< why, when !ok
 };
 
 /// Needs at least 9 readings; gravity is the magnitude in the specific-force unit.

@@ -46,10 +46,10 @@ struct ReadOptions {
 
 /// A raw recording: samples in raw units, with optional timestamps.
 struct RawLog {
-  std::string source;              ///< file name, for messages
-  std::vector<double> time_s;      ///< empty when the file has no time column
-  std::vector<Vec3> samples;       ///< raw readings
-  std::vector<std::uint32_t> line; ///< 1-based source line of each sample
+  std::string source;               ///< file name, for messages
+  std::vector<double> time_s;       ///< empty when the file has no time column
+  std::vector<Vec3> samples;        ///< raw readings
+  std::vector<std::uint32_t> line;  ///< 1-based source line of each sample
   /// Sample rate [Hz]: ReadOptions::rate_hz, else (t_last − t_first)/(n − 1) from timestamps
   /// (robust to coarse timestamp resolution), else unset.
   std::optional<double> rate_hz;

@@ -9,7 +9,8 @@
 ///   p   raw output of the three axes                          [raw units, e.g. counts]
 ///   f   specific force in the body frame b                    [specific-force unit: m/s² or g]
 ///   K   lower-triangular 3x3 (K = k_a T_b^a of eq. (2)):       [raw per specific-force unit]
-///       body x = sensor x axis, body y in the sensor x-y plane, body z completes a right-handed frame
+///       body x = sensor x axis, body y in the sensor x-y plane, body z completes a right-handed
+///       frame
 ///   b   bias                                                   [raw]
 ///   k2  squared (second-order) coefficients, one per axis      [raw per (specific-force unit)²]
 ///       zero in the linear model
@@ -17,8 +18,8 @@
 ///
 /// All-zero k2 and b with K = I make the model the identity.
 ///
-/// Flat parameter order (paper 000 eq. (8)), grouped by output axis so that the linear least-squares
-/// step of the two-step method (eq. (15)) splits into three independent problems:
+/// Flat parameter order (paper 000 eq. (8)), grouped by output axis so that the linear
+/// least-squares step of the two-step method (eq. (15)) splits into three independent problems:
 ///
 ///     quadratic (12): K_xx b_x k2_x | K_yx K_yy b_y k2_y | K_zx K_zy K_zz b_z k2_z
 ///     linear     (9): K_xx b_x      | K_yx K_yy b_y      | K_zx K_zy K_zz b_z
@@ -70,8 +71,8 @@ const std::vector<ParameterSlot>& ParameterSlots(ModelKind kind);
 template <typename Scalar>
 struct ModelParametersT {
   Mat33T<Scalar> K = Mat33T<Scalar>::Identity();  ///< raw per specific-force unit, lower-triangular
-  Vec3T<Scalar> bias = Vec3T<Scalar>::Zero();      ///< raw
-  Vec3T<Scalar> k2 = Vec3T<Scalar>::Zero();        ///< raw per (specific-force unit)²
+  Vec3T<Scalar> bias = Vec3T<Scalar>::Zero();     ///< raw
+  Vec3T<Scalar> k2 = Vec3T<Scalar>::Zero();       ///< raw per (specific-force unit)²
 
   template <typename Other>
   ModelParametersT<Other> cast() const {

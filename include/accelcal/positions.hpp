@@ -12,10 +12,10 @@ namespace accelcal {
 
 /// A contiguous run of samples during which the sensor was still.
 struct StaticInterval {
-  std::size_t begin = 0;  ///< first sample index (0-based)
-  std::size_t end = 0;    ///< one past the last sample
-  double t_begin_s = 0;   ///< time of the first sample [s]
-  double t_end_s = 0;     ///< time of the last sample [s]
+  std::size_t begin = 0;     ///< first sample index (0-based)
+  std::size_t end = 0;       ///< one past the last sample
+  double t_begin_s = 0;      ///< time of the first sample [s]
+  double t_end_s = 0;        ///< time of the last sample [s]
   Vec3 mean = Vec3::Zero();  ///< raw
   Vec3 std = Vec3::Zero();   ///< per-axis sample standard deviation, raw
   std::size_t count() const { return end - begin; }
@@ -23,9 +23,9 @@ struct StaticInterval {
 
 /// One static position: the averaged raw reading.
 struct Position {
-  Vec3 mean = Vec3::Zero();          ///< averaged raw reading
-  std::size_t samples = 1;           ///< number of samples averaged (1 when unknown)
-  std::optional<Vec3> std;           ///< per-axis sample standard deviation, raw, when known
+  Vec3 mean = Vec3::Zero();                ///< averaged raw reading
+  std::size_t samples = 1;                 ///< number of samples averaged (1 when unknown)
+  std::optional<Vec3> std;                 ///< per-axis sample standard deviation, raw, when known
   std::optional<StaticInterval> interval;  ///< where it came from, for positions from a raw log
 };
 

@@ -18,8 +18,8 @@ Vec3 DirectionFromAngles(double theta_rad, double phi_rad);
 std::vector<Vec3> Yang18Directions();
 
 /// Paper 000 Table 3 truth in raw pulses with f in m/s² and g = 9.8 (ERRATA.md conventions):
-/// k_a = (4800, 4900, 5000) pulse/(m/s²); τ_yx = sin 0.01°, (τ_zx, τ_zy) = sin 0.02°·(cos 30°, sin 30°),
-/// unit rows; biases (0.01, 0.02, 0.03) m/s²; squared coefficients (1, 2, 3)e-5 g/g².
+/// k_a = (4800, 4900, 5000) pulse/(m/s²); τ_yx = sin 0.01°, (τ_zx, τ_zy) = sin 0.02°·(cos 30°, sin
+/// 30°), unit rows; biases (0.01, 0.02, 0.03) m/s²; squared coefficients (1, 2, 3)e-5 g/g².
 ModelParameters Yang2012Truth();
 inline constexpr double kYang2012Gravity_ms2 = 9.8;
 /// Per-axis noise of one averaged position in Table 4 (ERRATA): 10 µg/√Hz·√100 Hz / √6000 [m/s²].

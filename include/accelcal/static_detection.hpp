@@ -4,14 +4,14 @@
 ///
 /// For every sample i the variance of each axis over a centred window of w samples is computed;
 /// the score s_i is the sum of the three variances [raw²]. The noise reference s_ref is either the
-/// same sum over an initial rest period (imu_tk's approach, `init_rest_s` > 0) or, by default, a low
-/// quantile of all window scores (quiet windows exist in any usable recording). A sample is
+/// same sum over an initial rest period (imu_tk's approach, `init_rest_s` > 0) or, by default, a
+/// low quantile of all window scores (quiet windows exist in any usable recording). A sample is
 /// static when s_i ≤ threshold_factor · s_ref and its window looks like white noise around a
 /// constant: s_i ≤ max_noise_ratio · d_i / 2, with d_i the same sum for the successive differences
 /// (for white noise s ≈ d/2; slow motion makes s far larger, so a log with no still period yields
-/// no interval even though its quietest windows set the reference). Runs of static window centres at least
-/// `min_duration_s` long become intervals. Using the window centres trims half a window at each end
-/// of a still period, so the samples kept are those whose whole neighbourhood was still.
+/// no interval even though its quietest windows set the reference). Runs of static window centres
+/// at least `min_duration_s` long become intervals. Using the window centres trims half a window at
+/// each end of a still period, so the samples kept are those whose whole neighbourhood was still.
 
 #include <optional>
 #include <string>
@@ -23,9 +23,9 @@
 namespace accelcal {
 
 struct StaticDetectionOptions {
-  double window_s = 0.5;          ///< variance window length [s]
-  double min_duration_s = 1.0;    ///< shortest interval kept [s]
-  double threshold_factor = 10.0; ///< threshold = factor × noise reference
+  double window_s = 0.5;           ///< variance window length [s]
+  double min_duration_s = 1.0;     ///< shortest interval kept [s]
+  double threshold_factor = 10.0;  ///< threshold = factor × noise reference
   /// > 0: the noise reference is the variance of the first init_rest_s seconds (the sensor must be
   /// still then). 0: the reference is the `reference_quantile` quantile of the window scores.
   double init_rest_s = 0.0;

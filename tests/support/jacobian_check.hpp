@@ -5,8 +5,8 @@
 #include <functional>
 #include <sstream>
 
-#include <Eigen/Core>
 #include <gtest/gtest.h>
+#include <Eigen/Core>
 
 namespace accelcal::testing {
 
@@ -27,18 +27,18 @@ inline Eigen::MatrixXd NumericalJacobian(
 }
 
 /// Compares an analytic Jacobian with central differences. Entry (i, j) passes when
-/// |J − J_fd| ≤ tolerance · (|J_ij| + max |J|): central differences have a truncation error of order
-/// h² and a round-off error of order ε·|f|/h, both small relative to the largest entry for
-/// h ≈ 1e-6 (optimal for double with smooth f), so 1e-6 leaves a wide but meaningful margin.
+/// |J − J_fd| ≤ tolerance · (|J_ij| + max |J|): central differences have a truncation error of
+/// order h² and a round-off error of order ε·|f|/h, both small relative to the largest entry for h
+/// ≈ 1e-6 (optimal for double with smooth f), so 1e-6 leaves a wide but meaningful margin.
 inline ::testing::AssertionResult JacobianMatches(
     const std::function<Eigen::VectorXd(const Eigen::VectorXd&)>& f, const Eigen::VectorXd& x,
     const Eigen::MatrixXd& analytic, double tolerance = 1e-6, double relative_step = 1e-6) {
   if (!analytic.allFinite()) return ::testing::AssertionFailure() << "analytic Jacobian not finite";
   const Eigen::MatrixXd numeric = NumericalJacobian(f, x, relative_step);
   if (numeric.rows() != analytic.rows() || numeric.cols() != analytic.cols()) {
-    return ::testing::AssertionFailure() << "size mismatch: analytic " << analytic.rows() << "x"
-                                         << analytic.cols() << ", numeric " << numeric.rows()
-                                         << "x" << numeric.cols();
+    return ::testing::AssertionFailure()
+           << "size mismatch: analytic " << analytic.rows() << "x" << analytic.cols()
+           << ", numeric " << numeric.rows() << "x" << numeric.cols();
   }
   const double scale = analytic.cwiseAbs().maxCoeff();
   for (Eigen::Index i = 0; i < analytic.rows(); ++i) {

@@ -7,7 +7,7 @@
 #include <stdexcept>
 
 #include <Eigen/Cholesky>
-#include <Eigen/SVD>
+#include <Eigen/Eigenvalues>
 
 #include "accelcal/ellipsoid_fit.hpp"
 #include "accelcal/error.hpp"
@@ -136,15 +136,19 @@ void CheckData(const std::vector<Vec3>& readings, ModelKind model) {
   Vec3 mean = Vec3::Zero();
   for (const Vec3& p : readings) mean += p;
   mean /= m;
-  Eigen::MatrixXd centred(m, 3);
-  for (int k = 0; k < m; ++k) centred.row(k) = (readings[k] - mean).transpose();
-  const Vec3 sv = Eigen::JacobiSVD<Eigen::MatrixXd>(centred).singularValues();
-  if (!(sv(2) > 1e-3 * sv(0))) {
+  Mat33 scatter = Mat33::Zero();
+  for (const Vec3& p : readings) scatter += (p - mean) * (p - mean).transpose();
+  // Singular values of the centred readings, ascending.
+  const Vec3 sv = Eigen::SelfAdjointEigenSolver<Mat33>(scatter, Eigen::EigenvaluesOnly)
+                      .eigenvalues()
+                      .cwiseMax(0.0)
+                      .cwiseSqrt();
+  if (!(sv(0) > 1e-3 * sv(2))) {
     char buf[256];
     std::snprintf(buf, sizeof buf,
                   "all %d positions lie in one plane (spread ratio %.2g): the sensor must be "
                   "turned about more than one axis",
-                  m, sv(0) > 0 ? sv(2) / sv(0) : 0.0);
+                  m, sv(2) > 0 ? sv(0) / sv(2) : 0.0);
     throw DataError(buf);
   }
 }
@@ -198,11 +202,11 @@ CalibrationResult Calibrate(const std::vector<Vec3>& readings, const Calibration
   // Observability at the solution: a (near) singular reduced information matrix means some
   // parameter is not determined by these positions, whatever the solver returned.
   const internal::Information info = internal::ComputeInformation(problem, out.params, out.dirs);
-  if (!(info.rcond > 1e-10)) {
+  if (!(info.rcond >= internal::kMinInformationRcond)) {
     char buf[256];
     std::snprintf(buf, sizeof buf,
                   "the positions do not determine the %s model: parameter %s is not observable "
-                  "(information condition %.2g); add positions with other orientations",
+                  "(reciprocal condition %.2g); add positions with other orientations",
                   std::string(ToString(options.model)).c_str(),
                   std::string(ParameterSlots(ModelKind::kQuadratic)[info.weakest].name).c_str(),
                   info.rcond);
@@ -224,11 +228,7 @@ CalibrationResult Calibrate(const std::vector<Vec3>& readings, const Calibration
   if (result.degrees_of_freedom > 0) {
     const double sigma2 = out.summary.final_cost / result.degrees_of_freedom;
     result.residual_sigma = std::sqrt(sigma2);
-    // Invert with Jacobi scaling: the parameters' units differ by orders of magnitude.
-    const internal::Vec12 s = info.reduced.diagonal().cwiseSqrt().cwiseInverse();
-    const internal::Mat12 scaled = s.asDiagonal() * info.reduced * s.asDiagonal();
-    const internal::Mat12 inverse =
-        s.asDiagonal() * scaled.ldlt().solve(internal::Mat12::Identity()) * s.asDiagonal();
+    const internal::Mat12 inverse = info.Inverse();
     const std::vector<int>& cols = ActiveColumns(options.model);
     result.covariance.resize(P, P);
     for (int i = 0; i < P; ++i) {

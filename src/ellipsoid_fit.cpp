@@ -5,7 +5,6 @@
 
 #include <Eigen/Cholesky>
 #include <Eigen/Eigenvalues>
-#include <Eigen/SVD>
 
 namespace accelcal {
 
@@ -27,16 +26,23 @@ EllipsoidFitResult FitEllipsoid(const std::vector<Vec3>& readings, double gravit
     result.failure = "all readings are identical";
     return result;
   }
-  Eigen::MatrixXd design(m, 10);
+  // Total least squares: the quadric coefficients are the unit vector v minimising ‖D v‖, the
+  // eigenvector of DᵀD with the smallest eigenvalue (paper 001 eq. (17)-(18) fixes one coefficient
+  // instead; this is invariant to the choice). In the centred, scaled coordinates DᵀD is well
+  // enough conditioned for an initial estimate, and a 10x10 scatter matrix is far cheaper than an
+  // SVD of the m x 10 design matrix.
+  using Vec10 = Eigen::Matrix<double, 10, 1>;
+  Eigen::Matrix<double, 10, 10> scatter = Eigen::Matrix<double, 10, 10>::Zero();
   for (int k = 0; k < m; ++k) {
     const Vec3 q = (readings[k] - mean) / scale;
-    design.row(k) << q.x() * q.x(), q.y() * q.y(), q.z() * q.z(), 2 * q.x() * q.y(),
-        2 * q.x() * q.z(), 2 * q.y() * q.z(), 2 * q.x(), 2 * q.y(), 2 * q.z(), 1.0;
+    Vec10 row;
+    row << q.x() * q.x(), q.y() * q.y(), q.z() * q.z(), 2 * q.x() * q.y(), 2 * q.x() * q.z(),
+        2 * q.y() * q.z(), 2 * q.x(), 2 * q.y(), 2 * q.z(), 1.0;
+    scatter.selfadjointView<Eigen::Lower>().rankUpdate(row);
   }
-  // Total least squares: the quadric coefficients are the right singular vector of the smallest
-  // singular value (paper 001 eq. (17)-(18) fixes one coefficient instead; this is invariant).
-  Eigen::JacobiSVD<Eigen::MatrixXd> svd(design, Eigen::ComputeFullV);
-  const Eigen::VectorXd v = svd.matrixV().col(9);
+  Eigen::SelfAdjointEigenSolver<Eigen::Matrix<double, 10, 10>> scatter_eig(
+      scatter.selfadjointView<Eigen::Lower>());
+  const Vec10 v = scatter_eig.eigenvectors().col(0);
   Mat33 Q;
   Q << v(0), v(3), v(4), v(3), v(1), v(5), v(4), v(5), v(2);
   Vec3 L(v(6), v(7), v(8));

@@ -92,16 +92,29 @@ void BuildNormalEquations(const Problem& problem, const ModelParameters& params,
   ne->g_c.resize(m);
   ne->tangent.resize(m);
   ne->cost = 0;
+  // J_θ (eq. (15) rows) is block-sparse: output axis i depends only on the parameters of its own
+  // group (3, 4 and 5 of them, starting at 0, 3 and 7), with coefficients v_i. So A is block
+  // diagonal, A_ii += v_i v_iᵀ, and the rows of B_k in group i are v_i ⊗ (row i of J_c).
+  constexpr int kStart[3] = {0, 3, 7};
   for (int k = 0; k < m; ++k) {
     const Vec3 f = g * dirs[k];
     Mat33 J_p_f;
     const Vec3 r = PredictRaw(params, f, &J_p_f) - problem.readings[k];
-    const Mat3x12 J_theta = JacobianWrtParameters(f);
     ne->tangent[k] = TangentBasis(dirs[k]);
     const Mat32 J_c = g * J_p_f * ne->tangent[k];
-    ne->A.noalias() += J_theta.transpose() * J_theta;
-    ne->g_theta.noalias() += J_theta.transpose() * r;
-    ne->B[k].noalias() = J_theta.transpose() * J_c;
+    const Eigen::Vector3d vx(f(0), 1.0, f(0) * f(0));
+    const Eigen::Vector4d vy(f(0), f(1), 1.0, f(1) * f(1));
+    Eigen::Matrix<double, 5, 1> vz;
+    vz << f(0), f(1), f(2), 1.0, f(2) * f(2);
+    ne->A.block<3, 3>(kStart[0], kStart[0]).noalias() += vx * vx.transpose();
+    ne->A.block<4, 4>(kStart[1], kStart[1]).noalias() += vy * vy.transpose();
+    ne->A.block<5, 5>(kStart[2], kStart[2]).noalias() += vz * vz.transpose();
+    ne->g_theta.segment<3>(kStart[0]) += r(0) * vx;
+    ne->g_theta.segment<4>(kStart[1]) += r(1) * vy;
+    ne->g_theta.segment<5>(kStart[2]) += r(2) * vz;
+    ne->B[k].block<3, 2>(kStart[0], 0).noalias() = vx * J_c.row(0);
+    ne->B[k].block<4, 2>(kStart[1], 0).noalias() = vy * J_c.row(1);
+    ne->B[k].block<5, 2>(kStart[2], 0).noalias() = vz * J_c.row(2);
     ne->D[k].noalias() = J_c.transpose() * J_c;
     ne->g_c[k].noalias() = J_c.transpose() * r;
     ne->cost += r.squaredNorm();
@@ -114,7 +127,8 @@ Mat12 ReducedMatrix(const NormalEquations& ne, double lambda, const Vec12& mask)
   for (std::size_t k = 0; k < ne.B.size(); ++k) {
     Eigen::Matrix2d D = ne.D[k];
     D.diagonal() += lambda * ne.D[k].diagonal();
-    S.noalias() -= ne.B[k] * D.inverse() * ne.B[k].transpose();
+    const Mat12x2 BD = ne.B[k] * D.inverse();
+    S.noalias() -= BD.lazyProduct(ne.B[k].transpose());
   }
   for (int j = 0; j < kMaxParameters; ++j) {
     if (mask(j) == 0.0) {
@@ -133,30 +147,36 @@ Information ComputeInformation(const Problem& problem, const ModelParameters& pa
   Information info;
   const Vec12 mask = FreeMask(problem.model);
   info.reduced = ReducedMatrix(ne, 0.0, mask);
-  // Jacobi scaling makes the eigenvalue ratio independent of the parameters' units. The scale
-  // uses A's diagonal: a parameter that the directions absorb completely has S_jj ≈ 0.
-  Vec12 scale;
+  // Jacobi scaling with A's diagonal makes the condition independent of the parameters' units; a
+  // parameter that the directions absorb completely then has a scaled diagonal near 0.
   for (int j = 0; j < kMaxParameters; ++j) {
-    scale(j) = ne.A(j, j) > 0 ? 1.0 / std::sqrt(ne.A(j, j)) : 1.0;
+    info.scale(j) = mask(j) != 0.0 && ne.A(j, j) > 0 ? 1.0 / std::sqrt(ne.A(j, j)) : 1.0;
   }
-  const Mat12 scaled = scale.asDiagonal() * info.reduced * scale.asDiagonal();
-  Eigen::SelfAdjointEigenSolver<Mat12> eig(scaled);
-  const Vec12 ev = eig.eigenvalues();
-  double lo = std::numeric_limits<double>::infinity(), hi = 0;
-  int lo_index = 0;
-  for (int i = 0; i < kMaxParameters; ++i) {
-    // Eigenvectors of the fixed (identity) block are unit vectors on masked entries: skip them.
-    const Vec12 v = eig.eigenvectors().col(i);
-    if (v.cwiseProduct(mask).norm() < 0.5) continue;
-    if (ev(i) < lo) {
-      lo = ev(i);
-      lo_index = i;
+  const Mat12 scaled = info.scale.asDiagonal() * info.reduced * info.scale.asDiagonal();
+  info.factor.compute(scaled);
+  const bool positive = info.factor.info() == Eigen::Success && info.factor.isPositive() &&
+                        (info.factor.vectorD().array() > 0).all();
+  info.rcond = positive ? info.factor.rcond() : 0.0;
+  if (info.rcond < kMinInformationRcond) {
+    // Rare path: name the parameter that dominates the weakest direction of the information.
+    Eigen::SelfAdjointEigenSolver<Mat12> eig(scaled);
+    double lo = std::numeric_limits<double>::infinity();
+    int lo_index = 0;
+    for (int i = 0; i < kMaxParameters; ++i) {
+      // Eigenvectors of the fixed (identity) block live on masked entries: skip them.
+      if (eig.eigenvectors().col(i).cwiseProduct(mask).norm() < 0.5) continue;
+      if (eig.eigenvalues()(i) < lo) {
+        lo = eig.eigenvalues()(i);
+        lo_index = i;
+      }
     }
-    hi = std::max(hi, ev(i));
+    eig.eigenvectors().col(lo_index).cwiseProduct(mask).cwiseAbs().maxCoeff(&info.weakest);
   }
-  info.rcond = hi > 0 ? std::max(lo, 0.0) / hi : 0.0;
-  eig.eigenvectors().col(lo_index).cwiseProduct(mask).cwiseAbs().maxCoeff(&info.weakest);
   return info;
+}
+
+Mat12 Information::Inverse() const {
+  return scale.asDiagonal() * factor.solve(Mat12::Identity()) * scale.asDiagonal();
 }
 
 std::vector<Vec3> DirectionsFromParams(const Problem& problem, const ModelParameters& params) {

@@ -5,6 +5,7 @@
 
 #include <vector>
 
+#include <Eigen/Cholesky>
 #include <Eigen/Core>
 
 #include "accelcal/calibrate.hpp"
@@ -66,13 +67,18 @@ void BuildNormalEquations(const Problem& problem, const ModelParameters& params,
 /// fixed parameters' rows and columns replaced by the identity.
 Mat12 ReducedMatrix(const NormalEquations& ne, double lambda, const Vec12& mask);
 
-/// The reduced information matrix at a point, its inverse on the free parameters and the checks
-/// that the free parameters are determined (observability).
+/// The reduced information matrix at a point, factorised once for the observability check and
+/// the covariance.
 struct Information {
-  Mat12 reduced;     ///< S at λ = 0 (fixed parameters: identity rows)
-  double rcond = 0;  ///< smallest / largest eigenvalue of the Jacobi-scaled free block
-  int weakest = -1;  ///< 12-layout index dominating the weakest eigenvector
+  Mat12 reduced;              ///< S at λ = 0 (fixed parameters: identity rows)
+  Vec12 scale;                ///< Jacobi scaling 1/√A_jj
+  Eigen::LDLT<Mat12> factor;  ///< of diag(scale) S diag(scale)
+  double rcond = 0;           ///< reciprocal condition estimate of the scaled free block
+  int weakest = -1;       ///< 12-layout index of the least determined parameter (if rcond small)
+  Mat12 Inverse() const;  ///< S⁻¹ (the fixed parameters' block is the identity)
 };
+/// rcond below this: some parameter is not determined by the positions.
+inline constexpr double kMinInformationRcond = 1e-10;
 Information ComputeInformation(const Problem& problem, const ModelParameters& params,
                                const std::vector<Vec3>& dirs);
 

@@ -87,17 +87,22 @@ Eigen::VectorXd Pack(const ModelParameters& params, ModelKind kind);
 ModelParameters Unpack(const Eigen::VectorXd& theta, ModelKind kind);
 
 /// Forward model μ(f) = K f + b + k2 ∘ f² (eq. (11) without noise). Optionally returns
-/// J_p_f = ∂p/∂f = K + 2 diag(k2 ∘ f).
+/// J_p_f = ∂p/∂f = K + 2 diag(k2 ∘ f). Only the lower triangle of K is read.
 template <typename Scalar>
 Vec3T<Scalar> PredictRaw(const ModelParametersT<Scalar>& params, const Vec3T<Scalar>& f,
                          Mat33T<Scalar>* J_p_f = nullptr) {
-  const Vec3T<Scalar> f2 = f.cwiseProduct(f);
+  // Written out: only the lower triangle of K is read, and the 3x3 products stay inline.
+  const Mat33T<Scalar>& K = params.K;
+  const Vec3T<Scalar>& k2 = params.k2;
   if (J_p_f != nullptr) {
-    *J_p_f = params.K;
-    J_p_f->diagonal() += Scalar(2) * params.k2.cwiseProduct(f);
+    *J_p_f << K(0, 0) + Scalar(2) * k2(0) * f(0), Scalar(0), Scalar(0),  //
+        K(1, 0), K(1, 1) + Scalar(2) * k2(1) * f(1), Scalar(0),          //
+        K(2, 0), K(2, 1), K(2, 2) + Scalar(2) * k2(2) * f(2);
   }
-  return params.K.template triangularView<Eigen::Lower>() * f + params.bias +
-         params.k2.cwiseProduct(f2);
+  return Vec3T<Scalar>(
+      K(0, 0) * f(0) + params.bias(0) + k2(0) * f(0) * f(0),
+      K(1, 0) * f(0) + K(1, 1) * f(1) + params.bias(1) + k2(1) * f(1) * f(1),
+      K(2, 0) * f(0) + K(2, 1) * f(1) + K(2, 2) * f(2) + params.bias(2) + k2(2) * f(2) * f(2));
 }
 
 /// Jacobian of the forward model with respect to the 12 flat parameters (quadratic order, eq. (15)

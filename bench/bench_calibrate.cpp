@@ -1,0 +1,44 @@
+// Solver speed on paper 000's Table-3 problem (18 positions, Table-4 noise).
+#include <benchmark/benchmark.h>
+
+#include "accelcal/calibrate.hpp"
+#include "accelcal/simulate.hpp"
+
+namespace accelcal {
+namespace {
+
+std::vector<Vec3> Table3Readings(ModelKind model) {
+  ModelParameters truth = Yang2012Truth();
+  if (model == ModelKind::kLinear) truth.k2.setZero();
+  Vec3 sigma;
+  for (int i = 0; i < 3; ++i) sigma(i) = truth.K.row(i).norm() * kYang2012PositionSigma_ms2;
+  return SimulatePositions(truth, kYang2012Gravity_ms2, Yang18Directions(), sigma, 42);
+}
+
+void BM_Calibrate(benchmark::State& state, ModelKind model, SolverMethod method) {
+  const std::vector<Vec3> readings = Table3Readings(model);
+  CalibrationOptions options;
+  options.model = model;
+  options.method = method;
+  options.gravity = kYang2012Gravity_ms2;
+  int iterations = 0;
+  for (auto _ : state) {
+    const CalibrationResult r = Calibrate(readings, options);
+    iterations = r.summary.iterations;
+    benchmark::DoNotOptimize(r.params.K(0, 0));
+  }
+  state.counters["solver_iterations"] = iterations;
+}
+
+BENCHMARK_CAPTURE(BM_Calibrate, joint_quadratic_18, ModelKind::kQuadratic, SolverMethod::kJoint)
+    ->Unit(benchmark::kMicrosecond);
+BENCHMARK_CAPTURE(BM_Calibrate, joint_linear_18, ModelKind::kLinear, SolverMethod::kJoint)
+    ->Unit(benchmark::kMicrosecond);
+BENCHMARK_CAPTURE(BM_Calibrate, two_step_quadratic_18, ModelKind::kQuadratic,
+                  SolverMethod::kTwoStep)
+    ->Unit(benchmark::kMicrosecond);
+BENCHMARK_CAPTURE(BM_Calibrate, two_step_linear_18, ModelKind::kLinear, SolverMethod::kTwoStep)
+    ->Unit(benchmark::kMicrosecond);
+
+}  // namespace
+}  // namespace accelcal

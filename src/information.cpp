@@ -5,7 +5,6 @@
 #include <Eigen/Cholesky>
 #include <Eigen/Eigenvalues>
 #include <Eigen/LU>
-#include <Eigen/QR>
 
 #include "solver_common.hpp"
 
@@ -191,29 +190,57 @@ std::vector<Vec3> DirectionsFromParams(const Problem& problem, const ModelParame
   return dirs;
 }
 
+namespace {
+
+// Solves one axis' least-squares problem (eq. (15) rows v_kᵀ x = y_k) from its normal equations,
+// Jacobi-scaled: the columns (g c, 1, (g c)²) differ in size by g², which the scaling absorbs.
+template <int N>
+Eigen::Matrix<double, N, 1> SolveAxis(const Eigen::Matrix<double, N, N>& normal,
+                                      const Eigen::Matrix<double, N, 1>& rhs) {
+  const Eigen::Matrix<double, N, 1> s = normal.diagonal().cwiseSqrt().cwiseInverse();
+  const Eigen::Matrix<double, N, N> scaled = s.asDiagonal() * normal * s.asDiagonal();
+  return s.cwiseProduct(scaled.ldlt().solve(s.cwiseProduct(rhs)));
+}
+
+// Fixed-size per-axis accumulation: axis `Axis` of the model with (`Quadratic`) squared term.
+template <int Axis, bool Quadratic>
+void FitAxis(const Problem& problem, const std::vector<Vec3>& dirs, ModelParameters* params) {
+  constexpr int N = Axis + 2 + (Quadratic ? 1 : 0);
+  Eigen::Matrix<double, N, N> normal = Eigen::Matrix<double, N, N>::Zero();
+  Eigen::Matrix<double, N, 1> rhs = Eigen::Matrix<double, N, 1>::Zero();
+  for (int k = 0; k < problem.positions(); ++k) {
+    const Vec3 f = problem.gravity * dirs[k];
+    Eigen::Matrix<double, N, 1> v;
+    for (int j = 0; j <= Axis; ++j) v(j) = f(j);
+    v(Axis + 1) = 1.0;
+    if constexpr (Quadratic) v(Axis + 2) = f(Axis) * f(Axis);
+    normal.noalias() += v * v.transpose();
+    rhs += problem.readings[k](Axis) * v;
+  }
+  const Eigen::Matrix<double, N, 1> x = SolveAxis<N>(normal, rhs);
+  for (int j = 0; j <= Axis; ++j) params->K(Axis, j) = x(j);
+  params->bias(Axis) = x(Axis + 1);
+  if constexpr (Quadratic) params->k2(Axis) = x(Axis + 2);
+}
+
+template <bool Quadratic>
+void FitAllAxes(const Problem& problem, const std::vector<Vec3>& dirs, ModelParameters* params) {
+  FitAxis<0, Quadratic>(problem, dirs, params);
+  FitAxis<1, Quadratic>(problem, dirs, params);
+  FitAxis<2, Quadratic>(problem, dirs, params);
+}
+
+}  // namespace
+
 ModelParameters SolveParametersGivenDirections(const Problem& problem,
                                                const std::vector<Vec3>& dirs) {
-  const int m = problem.positions();
-  const bool quadratic = problem.model == ModelKind::kQuadratic;
-  const double g = problem.gravity;
+  // Row of eq. (15) for axis i: [g c_1 .. g c_i, 1, (g c_i)²]: three independent problems.
   ModelParameters params;
   params.K.setZero();
-  for (int axis = 0; axis < 3; ++axis) {
-    // Row of eq. (15) for this axis: [g c_1 .. g c_axis, 1, (g c_axis)²].
-    const int cols = axis + 2 + (quadratic ? 1 : 0);
-    Eigen::MatrixXd F(m, cols);
-    Eigen::VectorXd y(m);
-    for (int k = 0; k < m; ++k) {
-      const Vec3 f = g * dirs[k];
-      for (int j = 0; j <= axis; ++j) F(k, j) = f(j);
-      F(k, axis + 1) = 1.0;
-      if (quadratic) F(k, axis + 2) = f(axis) * f(axis);
-      y(k) = problem.readings[k](axis);
-    }
-    const Eigen::VectorXd x = F.householderQr().solve(y);
-    for (int j = 0; j <= axis; ++j) params.K(axis, j) = x(j);
-    params.bias(axis) = x(axis + 1);
-    if (quadratic) params.k2(axis) = x(axis + 2);
+  if (problem.model == ModelKind::kQuadratic) {
+    FitAllAxes<true>(problem, dirs, &params);
+  } else {
+    FitAllAxes<false>(problem, dirs, &params);
   }
   return params;
 }

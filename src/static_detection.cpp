@@ -39,7 +39,7 @@ StaticDetectionResult DetectStaticIntervals(const RawLog& log,
                                             const StaticDetectionOptions& options) {
   if (auto why = options.Validate()) throw DataError(*why);
   if (!log.rate_hz) {
-    throw DataError(log.source + ": the log has no time column: give the sample rate (--rate HZ)");
+    throw DataError("the log has no time column: give the sample rate (--rate HZ)");
   }
   StaticDetectionResult result;
   result.rate_hz = *log.rate_hz;
@@ -48,8 +48,8 @@ StaticDetectionResult DetectStaticIntervals(const RawLog& log,
       3, static_cast<std::size_t>(std::lround(options.window_s * result.rate_hz)) | 1);
   result.window_samples = w;
   if (n < w + 1) {
-    throw DataError(log.source + ": " + std::to_string(n) +
-                    " samples are fewer than one detection window (" + std::to_string(w) + ")");
+    throw DataError(std::to_string(n) + " samples are fewer than one detection window (" +
+                    std::to_string(w) + ")");
   }
   const std::size_t h = w / 2;
 
@@ -90,8 +90,7 @@ StaticDetectionResult DetectStaticIntervals(const RawLog& log,
   // Noise reference.
   if (options.init_rest_s > 0) {
     const std::size_t m = static_cast<std::size_t>(options.init_rest_s * result.rate_hz);
-    if (m < 2 || m > n)
-      throw DataError(log.source + ": the initial rest period is longer than the log");
+    if (m < 2 || m > n) throw DataError("the initial rest period is longer than the log");
     Vec3 mean, std;
     MeanAndStd(log.samples, 0, m, &mean, &std);
     result.noise_reference = std.cwiseAbs2().sum();

@@ -179,8 +179,16 @@ TEST_F(Cli, BadInputGivesOneClearMessageAndNoOutput) {
       {"fewq.csv", PositionsCsv(11), "--model quadratic", 3,
        "accelcal: FILE: the quadratic model needs at least 12 positions, got 11\n"},
       {"moving.csv", moving, "--input-kind raw", 3,
-       "PREFIX accelcal: FILE: FILE: no static interval found"},
+       "PREFIX accelcal: FILE: no static interval found"},
       {"plane.csv", plane, "", 3, "PREFIX accelcal: FILE: all 16 positions lie in one plane"},
+      {"norate.csv",
+       std::string(300, '\n') +
+           [] {
+             std::string r;
+             for (int i = 0; i < 300; ++i) r += "1,2,3\n";
+             return r;
+           }(),
+       "", 3, "accelcal: FILE: the log has no time column: give the sample rate (--rate HZ)\n"},
       {"", "", "", 3, "accelcal: FILE: cannot open: No such file or directory\n"},
   };
   for (const BadCase& c : cases) {

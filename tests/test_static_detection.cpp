@@ -80,7 +80,7 @@ TEST(StaticDetection, NeedsARate) {
     FAIL();
   } catch (const DataError& e) {
     EXPECT_EQ(std::string(e.what()),
-              "log.csv: the log has no time column: give the sample rate (--rate HZ)");
+              "the log has no time column: give the sample rate (--rate HZ)");
   }
 }
 

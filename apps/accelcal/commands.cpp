@@ -50,7 +50,7 @@ LoadedInput LoadInput(const InputArgs& in) {
   }
   loaded.detection = DetectStaticIntervals(loaded.data.raw, in.detection);
   if (loaded.detection->intervals.empty()) {
-    throw DataError(in.path + ": no static interval found (threshold " +
+    throw DataError("no static interval found (threshold " +
                     Format("%.3g", loaded.detection->threshold) +
                     " raw^2; try --threshold-factor or --min-static)");
   }
@@ -215,6 +215,10 @@ int RunDetect(const DetectArgs& args) {
   if (auto why = in.detection.Validate()) throw UsageError(*why);
   const InputData data = ReadInput(in.path, read);
   const StaticDetectionResult d = DetectStaticIntervals(data.raw, in.detection);
+  if (d.intervals.empty()) {
+    throw DataError("no static interval found (threshold " + Format("%.3g", d.threshold) +
+                    " raw^2; try --threshold-factor or --min-static)");
+  }
   std::string out;
   if (args.json) {
     out += "{\n  \"source\": \"" + in.path + "\",\n";
@@ -250,7 +254,7 @@ int RunDetect(const DetectArgs& args) {
     out += Format("%zu static intervals\n", d.intervals.size());
   }
   WriteFileAtomically("-", out);
-  return d.intervals.empty() ? kExitBadInput : kExitOk;
+  return kExitOk;
 }
 
 int RunApply(const ApplyArgs& args) {

@@ -1,18 +1,15 @@
 #!/usr/bin/env bash
-# Whole-process timing of `accelcal calibrate` on the bundled Xsens recording (parse, detect,
-# calibrate, write): best and median wall time of N runs.
+# Whole-process timing of `accelcal calibrate` on the bundled Xsens recording (read, parse, detect,
+# calibrate, write the JSON file), with hyperfine (no shell in between), plus the instruction count
+# from callgrind, which does not depend on the machine's load.
 set -euo pipefail
 cd "$(dirname "$0")/.."
-runs=${1:-30}
 exe=build/accelcal
 out=$(mktemp -d)
 trap 'rm -rf "$out"' EXIT
-times=()
-for ((i = 0; i < runs; i++)); do
-  t0=$(date +%s%N)
-  "$exe" calibrate data/imutk-xsens-mti/xsens_acc.mat --gravity 9.81744 -o "$out/cal.json" >/dev/null
-  t1=$(date +%s%N)
-  times+=($(((t1 - t0) / 1000)))
-done
-sorted=($(printf '%s\n' "${times[@]}" | sort -n))
-echo "accelcal calibrate xsens_acc.mat (3.3 MB, 51175 samples): best ${sorted[0]} us, median ${sorted[$((runs / 2))]} us over $runs runs"
+cmd="$exe calibrate data/imutk-xsens-mti/xsens_acc.mat --gravity 9.81744 -o $out/cal.json"
+hyperfine -N --warmup 5 --runs "${1:-50}" "$cmd" "$exe --version"
+if command -v valgrind >/dev/null; then
+  valgrind --tool=callgrind --callgrind-out-file="$out/cg" $cmd --threads 1 >/dev/null 2>"$out/log"
+  grep -o "Collected : [0-9]*" "$out/log" | sed 's/Collected :/instructions (--threads 1):/'
+fi

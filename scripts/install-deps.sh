@@ -6,7 +6,7 @@ packages=(
   build-essential cmake
   libeigen3-dev libcli11-dev nlohmann-json3-dev libfast-float-dev
   libgtest-dev libgmock-dev libbenchmark-dev
-  clang-format
+  clang-format hyperfine valgrind
 )
 missing=()
 for p in "${packages[@]}"; do

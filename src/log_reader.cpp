@@ -150,39 +150,32 @@ std::size_t Split(std::string_view s, Delimiter delim, std::string_view* fields,
 constexpr double kPow10[] = {1e0,  1e1,  1e2,  1e3,  1e4,  1e5,  1e6,  1e7,  1e8,  1e9,  1e10, 1e11,
                              1e12, 1e13, 1e14, 1e15, 1e16, 1e17, 1e18, 1e19, 1e20, 1e21, 1e22};
 
-// Parses the whole of [first, last) as a number. Fast path (Clinger): at most 15 significant
-// digits and a decimal exponent within ±22 give an exactly representable mantissa and power of ten,
-// so one multiplication or division rounds correctly, bit-identical to fast_float. Everything else
-// (long mantissas, large exponents, nan/inf spellings) goes to fast_float.
-bool ParseNumber(const char* first, const char* last, double* value) {
-  const char* p = first;
-  if (p != last && *p == '+') ++p;
-  const char* start = p;
+// Parses a decimal number at the start of [p, last) on the fast path (Clinger): at most 15
+// significant digits and a decimal exponent within ±22 make the mantissa and the power of ten
+// exact, so one multiplication or division rounds correctly, bit-identical to fast_float. Returns
+// the position after the number, or nullptr when the text is not such a number (long mantissas,
+// large exponents, nan/inf spellings, no digits): the caller then uses fast_float on the whole
+// field.
+const char* ParseShortDecimal(const char* p, const char* last, double* value) {
   bool negative = false;
-  if (p != last && *p == '-') {
-    negative = true;
-    ++p;
-  }
+  if (p != last && (*p == '+' || *p == '-')) negative = *p++ == '-';
   std::uint64_t mantissa = 0;
   int digits = 0, exponent = 0;
-  bool any_digit = false;
-  while (p != last && *p == '0') {  // leading zeros do not count as significant
-    ++p;
-    any_digit = true;
-  }
+  const char* digits_begin = p;
+  while (p != last && *p == '0') ++p;  // leading zeros are not significant
   while (p != last && static_cast<unsigned>(*p - '0') < 10) {
     mantissa = mantissa * 10 + static_cast<unsigned>(*p - '0');
     ++digits;
     ++p;
-    any_digit = true;
   }
+  bool any_digit = p != digits_begin;
   if (p != last && *p == '.') {
     ++p;
+    const char* fraction_begin = p;
     if (mantissa == 0) {
       while (p != last && *p == '0') {
         ++p;
         --exponent;
-        any_digit = true;
       }
     }
     while (p != last && static_cast<unsigned>(*p - '0') < 10) {
@@ -190,30 +183,38 @@ bool ParseNumber(const char* first, const char* last, double* value) {
       ++digits;
       --exponent;
       ++p;
-      any_digit = true;
     }
+    any_digit = any_digit || p != fraction_begin;
   }
-  bool fast = any_digit && digits <= 15;
-  if (fast && p != last && (*p == 'e' || *p == 'E')) {
+  if (!any_digit || digits > 15) return nullptr;
+  if (p != last && (*p == 'e' || *p == 'E')) {
     ++p;
     bool exp_negative = false;
     if (p != last && (*p == '+' || *p == '-')) exp_negative = *p++ == '-';
     int e = 0;
-    const char* exp_start = p;
+    const char* exp_begin = p;
     while (p != last && static_cast<unsigned>(*p - '0') < 10 && e < 10000) {
       e = e * 10 + (*p - '0');
       ++p;
     }
-    fast = p != exp_start;
+    if (p == exp_begin) return nullptr;
     exponent += exp_negative ? -e : e;
   }
-  if (fast && p == last && exponent >= -22 && exponent <= 22) {
-    double v = static_cast<double>(mantissa);
-    v = exponent < 0 ? v / kPow10[-exponent] : v * kPow10[exponent];
-    *value = negative ? -v : v;
-    return true;
+  if (exponent < -22 || exponent > 22) return nullptr;
+  double v = static_cast<double>(mantissa);
+  v = exponent < 0 ? v / kPow10[-exponent] : v * kPow10[exponent];
+  *value = negative ? -v : v;
+  return p;
+}
+
+// Parses the whole of [first, last) as a number.
+bool ParseNumber(const char* first, const char* last, double* value) {
+  if (ParseShortDecimal(first, last, value) == last) return true;
+  if (first != last && *first == '+') {  // fast_float takes no '+'; nor may a second sign follow
+    ++first;
+    if (first != last && (*first == '+' || *first == '-')) return false;
   }
-  const auto result = fast_float::from_chars(start, last, *value);
+  const auto result = fast_float::from_chars(first, last, *value);
   return result.ec == std::errc() && result.ptr == last;
 }
 
@@ -379,35 +380,34 @@ struct RowParser {
     const char* const end = p + line.text.size();
     std::size_t column = 0;
     while (true) {
-      // One field: [field_begin, field_end), then p at the next field or the end.
+      // One field: [field_begin, field_end), then p at the delimiter after it or the end.
       const char* field_begin = p;
-      const char* field_end;
       if (delim == Delimiter::kComma) {
-        while (p != end && *p != ',') ++p;
-        field_end = p;
-        while (field_begin != field_end && IsBlank(*field_begin)) ++field_begin;
-        while (field_end != field_begin && IsBlank(field_end[-1])) --field_end;
-      } else {
-        while (p != end && !IsBlank(*p)) ++p;
-        field_end = p;
+        while (field_begin != end && IsBlank(*field_begin)) ++field_begin;
       }
-      if (column < ncols && role_of_column[column] >= 0) {
-        const int r = role_of_column[column];
-        if (!ParseNumber(field_begin, field_end, &values[r])) {
-          if (delim == Delimiter::kWhitespace &&
-              std::find(field_begin, field_end, ',') != field_end) {
-            throw InputError(source, line.number,
-                             "mixed delimiters: a comma in a whitespace-separated file");
-          }
-          throw InputError(source, line.number,
-                           "column " + std::to_string(column + 1) + ": '" +
-                               std::string(field_begin, field_end) + "' is not a number");
+      const int r = column < ncols ? role_of_column[column] : -1;
+      // Fast path: parse straight from the field's start and check that the field ends there.
+      const char* q = r >= 0 ? ParseShortDecimal(field_begin, end, &values[r]) : nullptr;
+      if (q != nullptr && delim == Delimiter::kComma) {
+        while (q != end && IsBlank(*q)) ++q;
+        if (q != end && *q != ',') q = nullptr;
+      } else if (q != nullptr && q != end && !IsBlank(*q)) {
+        q = nullptr;
+      }
+      if (q != nullptr) {
+        p = q;
+      } else {
+        p = field_begin;
+        const char* field_end;
+        if (delim == Delimiter::kComma) {
+          while (p != end && *p != ',') ++p;
+          field_end = p;
+          while (field_end != field_begin && IsBlank(field_end[-1])) --field_end;
+        } else {
+          while (p != end && !IsBlank(*p)) ++p;
+          field_end = p;
         }
-        if (!std::isfinite(values[r])) {
-          throw InputError(source, line.number,
-                           "column " + std::to_string(column + 1) + ": '" +
-                               std::string(field_begin, field_end) + "' is not a finite number");
-        }
+        if (r >= 0) ParseField(line, column, field_begin, field_end, &values[r]);
       }
       ++column;
       if (p == end) break;
@@ -426,6 +426,25 @@ struct RowParser {
       throw InputError(
           source, line.number,
           "expected " + std::to_string(ncols) + " columns, found " + std::to_string(column));
+    }
+  }
+
+  // The slow path for one field: fast_float, and the error messages.
+  void ParseField(const Line& line, std::size_t column, const char* field_begin,
+                  const char* field_end, double* value) const {
+    if (!ParseNumber(field_begin, field_end, value)) {
+      if (delim == Delimiter::kWhitespace && std::find(field_begin, field_end, ',') != field_end) {
+        throw InputError(source, line.number,
+                         "mixed delimiters: a comma in a whitespace-separated file");
+      }
+      throw InputError(source, line.number,
+                       "column " + std::to_string(column + 1) + ": '" +
+                           std::string(field_begin, field_end) + "' is not a number");
+    }
+    if (!std::isfinite(*value)) {
+      throw InputError(source, line.number,
+                       "column " + std::to_string(column + 1) + ": '" +
+                           std::string(field_begin, field_end) + "' is not a finite number");
     }
   }
 

@@ -1,4 +1,10 @@
 // Reading raw logs and positions files, and the messages for malformed ones.
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <random>
+
 #include <gtest/gtest.h>
 
 #include "accelcal/error.hpp"
@@ -175,6 +181,42 @@ TEST(LogReader, TimeGoingBackwardsAcrossTheThreadBoundaryIsCaught) {
   two.threads = 2;
   EXPECT_EQ(ErrorOf(text, two), ErrorOf(text, one));
   EXPECT_NE(ErrorOf(text, one).find("time goes backwards"), std::string::npos);
+}
+
+TEST(LogReader, NumbersAreCorrectlyRounded) {
+  // Every spelling a logger produces must give the correctly rounded double (glibc's strtod is), on
+  // the fast path and on the fast_float fallback alike.
+  std::mt19937_64 rng(11);
+  std::uniform_real_distribution<double> mant(-1.0, 1.0);
+  std::uniform_int_distribution<int> expo(-30, 30), prec(1, 19);
+  const char* formats[] = {"%.*g", "%.*e", "%.*f", "%+.*E"};
+  std::string text;
+  std::vector<double> expected;
+  for (int i = 0; i < 3000; ++i) {
+    const double v = mant(rng) * std::pow(10.0, expo(rng));
+    char buf[3][96];
+    for (int a = 0; a < 3; ++a) {
+      std::snprintf(buf[a], sizeof buf[a], formats[(i + a) % 4], prec(rng), v * (a + 1));
+      expected.push_back(std::strtod(buf[a], nullptr));
+    }
+    text += std::string(buf[0]) + "," + buf[1] + "," + buf[2] + "\n";
+  }
+  text += "007,-0.000,+1.\n.5,-.25e1,1E+2\n";
+  for (double v : {7.0, -0.0, 1.0, 0.5, -2.5, 100.0}) expected.push_back(v);
+  ReadOptions o;
+  o.kind = InputKind::kRaw;
+  o.rate_hz = 1;
+  const InputData d = Parse(text, o);
+  ASSERT_EQ(d.raw.samples.size() * 3, expected.size());
+  for (std::size_t i = 0; i < expected.size(); ++i) {
+    const double got = d.raw.samples[i / 3](static_cast<Eigen::Index>(i % 3));
+    EXPECT_EQ(std::memcmp(&got, &expected[i], sizeof got), 0)
+        << "value " << i << ": " << got << " vs " << expected[i];
+  }
+  EXPECT_EQ(ErrorOf("1,2,3\n1,+-2,3\n"), "test.csv:2: column 2: '+-2' is not a number");
+  EXPECT_EQ(ErrorOf("1,2,3\n1,2 5,3\n"), "test.csv:2: column 2: '2 5' is not a number");
+  EXPECT_EQ(ErrorOf("1,2,3\n1,1e,3\n"), "test.csv:2: column 2: '1e' is not a number");
+  EXPECT_EQ(ErrorOf("1,2,3\n1,0x10,3\n"), "test.csv:2: column 2: '0x10' is not a number");
 }
 
 TEST(LogReader, UnreadablePath) {

@@ -76,13 +76,17 @@ TEST(Model, JacobianWrtParametersMatchesFiniteDifferences) {
 TEST(Model, InverseRoundTripIsExact) {
   std::mt19937_64 rng(7);
   std::uniform_real_distribution<double> u(-20.0, 20.0);
-  const ModelParameters p = Device();
+  // Also a device with reversed axes (negative diagonal), which takes the other root branch.
+  ModelParameters reversed = Device();
+  reversed.K.diagonal() << -414.4, -412.1, 414.5;
   double worst = 0;
-  for (int i = 0; i < 10000; ++i) {
-    const Vec3 f(u(rng), u(rng), u(rng));
-    const std::optional<Vec3> back = SpecificForce(p, PredictRaw(p, f));
-    ASSERT_TRUE(back.has_value());
-    worst = std::max(worst, (*back - f).norm() / f.norm());
+  for (const ModelParameters& p : {Device(), reversed}) {
+    for (int i = 0; i < 10000; ++i) {
+      const Vec3 f(u(rng), u(rng), u(rng));
+      const std::optional<Vec3> back = SpecificForce(p, PredictRaw(p, f));
+      ASSERT_TRUE(back.has_value());
+      worst = std::max(worst, (*back - f).norm() / f.norm());
+    }
   }
   // The closed-form per-row solution is exact up to round-off (issue: ≤ 1e-12 relative).
   EXPECT_LE(worst, 1e-12);

@@ -9,18 +9,15 @@ namespace {
 
 const std::string kXsens = std::string(ACCELCAL_DATA_DIR) + "/imutk-xsens-mti/xsens_acc.mat";
 
-// Arg: threads (1 or 2). Wall time, since the two-thread parse spends CPU on both cores.
 void BM_ParseXsens(benchmark::State& state) {
   const std::string text = ReadFileToString(kXsens);
-  ReadOptions options;
-  options.threads = static_cast<int>(state.range(0));
   for (auto _ : state) {
-    const InputData d = ParseInput(text, kXsens, options);
+    const InputData d = ParseInput(text, kXsens, {});
     benchmark::DoNotOptimize(d.raw.samples.data());
   }
   state.SetBytesProcessed(static_cast<int64_t>(state.iterations() * text.size()));
 }
-BENCHMARK(BM_ParseXsens)->Arg(1)->Arg(2)->UseRealTime()->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_ParseXsens)->Unit(benchmark::kMillisecond);
 
 void BM_DetectXsens(benchmark::State& state) {
   const InputData d = ReadInput(kXsens, {});

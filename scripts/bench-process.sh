@@ -10,6 +10,6 @@ trap 'rm -rf "$out"' EXIT
 cmd="$exe calibrate data/imutk-xsens-mti/xsens_acc.mat --gravity 9.81744 -o $out/cal.json"
 hyperfine -N --warmup 5 --runs "${1:-50}" "$cmd" "$exe --version"
 if command -v valgrind >/dev/null; then
-  valgrind --tool=callgrind --callgrind-out-file="$out/cg" $cmd --threads 1 >/dev/null 2>"$out/log"
-  grep -o "Collected : [0-9]*" "$out/log" | sed 's/Collected :/instructions (--threads 1):/'
+  valgrind --tool=callgrind --callgrind-out-file="$out/cg" $cmd >/dev/null 2>"$out/log"
+  grep -o "Collected : [0-9]*" "$out/log" | sed 's/Collected :/instructions:/'
 fi

@@ -10,9 +10,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstring>
-#include <exception>
 #include <memory>
-#include <thread>
 
 #include <fast_float/fast_float.h>
 
@@ -163,11 +161,12 @@ const char* ParseShortDecimal(const char* p, const char* last, double* value) {
   int digits = 0, exponent = 0;
   const char* digits_begin = p;
   while (p != last && *p == '0') ++p;  // leading zeros are not significant
+  const char* significant_begin = p;
   while (p != last && static_cast<unsigned>(*p - '0') < 10) {
     mantissa = mantissa * 10 + static_cast<unsigned>(*p - '0');
-    ++digits;
     ++p;
   }
+  digits = static_cast<int>(p - significant_begin);  // counted once, outside the hot loop
   bool any_digit = p != digits_begin;
   if (p != last && *p == '.') {
     ++p;
@@ -178,12 +177,14 @@ const char* ParseShortDecimal(const char* p, const char* last, double* value) {
         --exponent;
       }
     }
+    const char* fraction_digits_begin = p;
     while (p != last && static_cast<unsigned>(*p - '0') < 10) {
       mantissa = mantissa * 10 + static_cast<unsigned>(*p - '0');
-      ++digits;
-      --exponent;
       ++p;
     }
+    const int fraction_digits = static_cast<int>(p - fraction_digits_begin);
+    digits += fraction_digits;
+    exponent -= fraction_digits;
     any_digit = any_digit || p != fraction_begin;
   }
   if (!any_digit || digits > 15) return nullptr;
@@ -288,39 +289,10 @@ int ResolveColumn(const std::string& spec, const std::vector<std::string>& heade
                        (header.empty() ? std::string(" (the file has no header)") : std::string()));
 }
 
-// Rows parsed from one stretch of a file.
-struct Rows {
-  std::vector<double> time_s;
-  std::vector<Vec3> samples;
-  std::vector<std::uint32_t> line;
-  std::vector<Position> positions;
-  std::exception_ptr error;  // the first error in this stretch, if any
-};
-
 std::string TimeBackwards(double now, double before) {
   char buf[128];
   std::snprintf(buf, sizeof buf, "time goes backwards (%.9g after %.9g)", now, before);
   return buf;
-}
-
-// Concatenates the chunks' samples into the log, in order.
-void MoveRows(std::vector<Rows>* chunks, RawLog* log) {
-  if (chunks->size() == 1) {
-    log->time_s = std::move((*chunks)[0].time_s);
-    log->samples = std::move((*chunks)[0].samples);
-    log->line = std::move((*chunks)[0].line);
-    return;
-  }
-  std::size_t n = 0, nt = 0;
-  for (const Rows& c : *chunks) n += c.samples.size(), nt += c.time_s.size();
-  log->time_s.reserve(nt);
-  log->samples.reserve(n);
-  log->line.reserve(n);
-  for (Rows& c : *chunks) {
-    log->time_s.insert(log->time_s.end(), c.time_s.begin(), c.time_s.end());
-    log->samples.insert(log->samples.end(), c.samples.begin(), c.samples.end());
-    log->line.insert(log->line.end(), c.line.begin(), c.line.end());
-  }
 }
 
 // Parses data rows: each row is scanned once, left to right, reading only the selected columns.
@@ -332,26 +304,18 @@ struct RowParser {
   bool raw;
 
   void Parse(std::string_view text, std::uint32_t lines_before, std::size_t expected_rows,
-             Rows* rows) const {
-    try {
-      ParseOrThrow(text, lines_before, expected_rows, rows);
-    } catch (...) {
-      rows->error = std::current_exception();
-    }
-  }
-
-  void ParseOrThrow(std::string_view text, std::uint32_t lines_before, std::size_t expected_rows,
-                    Rows* rows) const {
+             InputData* data) const {
     int role_of_column[kMaxFields];
     std::fill(role_of_column, role_of_column + ncols, -1);
     for (int r = 0; r < kRoles; ++r) {
       if (layout.column[r] >= 0) role_of_column[layout.column[r]] = r;
     }
     const bool has_time = layout.column[kTime] >= 0;
+    RawLog& log = data->raw;
     if (raw) {
-      rows->samples.reserve(expected_rows);
-      rows->line.reserve(expected_rows);
-      if (has_time) rows->time_s.reserve(expected_rows);
+      log.samples.reserve(expected_rows);
+      log.line.reserve(expected_rows);
+      if (has_time) log.time_s.reserve(expected_rows);
     }
     LineReader reader(text, lines_before);
     Line line;
@@ -361,16 +325,15 @@ struct RowParser {
       const Vec3 xyz(values[kX], values[kY], values[kZ]);
       if (raw) {
         if (has_time) {
-          if (!rows->time_s.empty() && values[kTime] < rows->time_s.back()) {
-            throw InputError(source, line.number,
-                             TimeBackwards(values[kTime], rows->time_s.back()));
+          if (!log.time_s.empty() && values[kTime] < log.time_s.back()) {
+            throw InputError(source, line.number, TimeBackwards(values[kTime], log.time_s.back()));
           }
-          rows->time_s.push_back(values[kTime]);
+          log.time_s.push_back(values[kTime]);
         }
-        rows->samples.push_back(xyz);
-        rows->line.push_back(line.number);
+        log.samples.push_back(xyz);
+        log.line.push_back(line.number);
       } else {
-        rows->positions.push_back(MakePosition(xyz, values, line.number));
+        data->positions.push_back(MakePosition(xyz, values, line.number));
       }
     }
   }
@@ -564,8 +527,7 @@ InputData ParseInput(std::string_view text, const std::string& source, const Rea
                          (raw ? ": use --columns to choose time,x,y,z or x,y,z"
                               : ": a positions file has x,y,z [,n [,sx,sy,sz]]"));
   }
-  // Parse every data row. Large raw logs are split at a line boundary and parsed on two threads;
-  // the result and the first error reported are the same as for a single pass.
+  // Parse every data row.
   LineReader rows_reader(text);
   Line skipped;
   rows_reader.Next(&skipped);  // the header or the first data row
@@ -573,35 +535,9 @@ InputData ParseInput(std::string_view text, const std::string& source, const Rea
       has_header ? rows_reader.rest()
                  : text.substr(static_cast<std::size_t>(first.text.data() - text.data()));
   const std::uint32_t lines_before = has_header ? rows_reader.lines_read() : first.number - 1;
+  if (raw) data.raw.source = source;
   const RowParser parser{source, delim, ncols, layout, raw};
-  constexpr std::size_t kParallelBytes = 1 << 20;
-  std::vector<Rows> chunks(raw && options.threads > 1 && body.size() >= kParallelBytes ? 2 : 1);
-  if (chunks.size() == 1) {
-    parser.Parse(body, lines_before, expected_rows, &chunks[0]);
-  } else {
-    const std::size_t cut = body.find('\n', body.size() / 2) + 1;  // body has many lines here
-    const std::string_view head = body.substr(0, cut), tail = body.substr(cut);
-    const auto head_lines = static_cast<std::uint32_t>(std::count(head.begin(), head.end(), '\n'));
-    std::thread worker(
-        [&] { parser.Parse(tail, lines_before + head_lines, expected_rows / 2 + 1, &chunks[1]); });
-    parser.Parse(head, lines_before, expected_rows / 2 + 1, &chunks[0]);
-    worker.join();
-  }
-  for (std::size_t c = 0; c < chunks.size(); ++c) {
-    // The boundary comes before anything else in chunk c, so it is checked first.
-    if (c > 0 && !chunks[c].time_s.empty() && !chunks[c - 1].time_s.empty() &&
-        chunks[c].time_s.front() < chunks[c - 1].time_s.back()) {
-      throw InputError(source, chunks[c].line.front(),
-                       TimeBackwards(chunks[c].time_s.front(), chunks[c - 1].time_s.back()));
-    }
-    if (chunks[c].error) std::rethrow_exception(chunks[c].error);
-  }
-  if (raw) {
-    data.raw.source = source;
-    MoveRows(&chunks, &data.raw);
-  } else {
-    data.positions = std::move(chunks[0].positions);
-  }
+  parser.Parse(body, lines_before, expected_rows, &data);
   if (raw) {
     if (options.rate_hz) {
       data.raw.rate_hz = options.rate_hz;

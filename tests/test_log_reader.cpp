@@ -128,61 +128,6 @@ TEST(LogReader, ErrorsNameFileLineAndReason) {
   EXPECT_EQ(ErrorOf("1,2,3,0\n"), "test.csv:1: the sample count must be a whole number >= 1");
 }
 
-// A raw log above the 1 MiB threshold, with comment lines sprinkled in to shift line numbers.
-std::string BigLog(int rows) {
-  std::string s = "t x y z\n";
-  for (int i = 0; i < rows; ++i) {
-    if (i % 1000 == 7) s += "# comment\n";
-    s += std::to_string(0.01 * i) + " " + std::to_string(33000 + i % 17) + ".25 -1.5e-3 " +
-         std::to_string(i) + "\n";
-  }
-  return s;
-}
-
-TEST(LogReader, TwoThreadsGiveTheSameResultAsOne) {
-  const std::string text = BigLog(60000);
-  ASSERT_GT(text.size(), 1u << 20);
-  ReadOptions one, two;
-  one.threads = 1;
-  two.threads = 2;
-  const InputData a = Parse(text, one), b = Parse(text, two);
-  ASSERT_EQ(a.raw.samples.size(), 60000u);
-  EXPECT_EQ(a.raw.samples, b.raw.samples);
-  EXPECT_EQ(a.raw.time_s, b.raw.time_s);
-  EXPECT_EQ(a.raw.line, b.raw.line);
-  EXPECT_EQ(b.raw.line.back(), 60000u + 1 + 60);  // header + 60 comment lines
-}
-
-TEST(LogReader, TwoThreadsReportTheFirstError) {
-  std::string text = BigLog(60000);
-  // Errors near the start and near the end: both thread counts must report the first one.
-  const std::size_t late = text.rfind("\n", text.size() - 100) + 1;
-  text.replace(late, 4, "oops");
-  ReadOptions one, two;
-  one.threads = 1;
-  two.threads = 2;
-  const std::string late_error = ErrorOf(text, one);
-  EXPECT_EQ(ErrorOf(text, two), late_error);
-  EXPECT_NE(late_error.find("'oops"), std::string::npos) << late_error;
-  const std::size_t early = text.find("\n", 5000) + 1;
-  text.replace(early, 4, "nope");
-  EXPECT_NE(ErrorOf(text, two).find("'nope"), std::string::npos);
-  EXPECT_EQ(ErrorOf(text, two), ErrorOf(text, one));
-}
-
-TEST(LogReader, TimeGoingBackwardsAcrossTheThreadBoundaryIsCaught) {
-  std::string text = "t x y z\n";
-  for (int i = 0; i < 60000; ++i) {
-    const double t = i < 30000 ? 0.01 * i : 0.01 * (i - 30000);  // restarts in the middle
-    text += std::to_string(t) + " 1 2 " + std::to_string(i) + "\n";
-  }
-  ReadOptions one, two;
-  one.threads = 1;
-  two.threads = 2;
-  EXPECT_EQ(ErrorOf(text, two), ErrorOf(text, one));
-  EXPECT_NE(ErrorOf(text, one).find("time goes backwards"), std::string::npos);
-}
-
 TEST(LogReader, NumbersAreCorrectlyRounded) {
   // Every spelling a logger produces must give the correctly rounded double (glibc's strtod is), on
   // the fast path and on the fast_float fallback alike.

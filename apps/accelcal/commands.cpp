@@ -35,8 +35,6 @@ ReadOptions MakeReadOptions(const InputArgs& in) {
                            "auto, raw, positions");
   options.columns = in.columns;
   options.rate_hz = in.rate_hz;
-  if (in.threads < 1 || in.threads > 2) throw UsageError("--threads must be 1 or 2");
-  options.threads = in.threads;
   return options;
 }
 

@@ -38,7 +38,6 @@ struct InputArgs {
   std::string input_kind = "auto";
   std::vector<std::string> columns;
   std::optional<double> rate_hz;
-  int threads = 2;
   StaticDetectionOptions detection;
 };
 

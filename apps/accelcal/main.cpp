@@ -21,8 +21,6 @@ void AddInputOptions(CLI::App* cmd, InputArgs* in, bool with_kind) {
                   "x,y,z or time,x,y,z: 1-based column numbers or header names")
       ->delimiter(',');
   cmd->add_option("--rate", in->rate_hz, "sample rate [Hz] for logs without a time column");
-  cmd->add_option("--threads", in->threads, "threads for parsing large logs (1 or 2)")
-      ->capture_default_str();
 }
 
 void AddDetectionOptions(CLI::App* cmd, InputArgs* in) {

@@ -58,7 +58,7 @@ std::string_view ToString(TerminationType type);
 
 struct CalibrationOptions {
   ModelKind model = ModelKind::kLinear;
-  /// kJoint is the default: measured 20-100x faster than kTwoStep to the same optimum
+  /// kJoint is the default: measured 70x faster than kTwoStep to the same optimum
   /// (BENCHMARKS.md).
   SolverMethod method = SolverMethod::kJoint;
   Initialization initialization = Initialization::kAuto;
@@ -111,7 +111,7 @@ struct CalibrationResult {
   std::vector<Vec3> residuals;   ///< p_k − μ(θ, g c_k) [raw]
   /// Covariance of the flat parameters (model.hpp order) from the Fisher information of the joint
   /// model with directions eliminated, σ² estimated from the residuals: σ̂² = J / (3m − P − 2m).
-  /// Empty when there are no residual degrees of freedom (m = P/... exactly determined).
+  /// Empty when there are no residual degrees of freedom (m = P: exactly determined).
   Eigen::MatrixXd covariance;
   double residual_sigma = 0;   ///< σ̂ [raw], 0 when there are no degrees of freedom
   int degrees_of_freedom = 0;  ///< m − P

@@ -42,9 +42,6 @@ struct ReadOptions {
   /// header naming a time column (t, time, timestamp) makes it raw, one naming n/samples/count
   /// or std columns makes it a positions file.
   std::size_t max_rows_of_positions_file = 200;
-  /// Raw logs of 1 MiB or more are parsed in this many pieces on as many threads (1 or 2); the
-  /// result, and the first error reported, do not depend on it.
-  int threads = 2;
 };
 
 /// A raw recording: samples in raw units, with optional timestamps.

@@ -16,11 +16,23 @@
 namespace accelcal {
 
 std::string_view ToString(SolverMethod method) {
-  return method == SolverMethod::kTwoStep ? "two-step" : "joint";
+  switch (method) {
+    case SolverMethod::kTwoStep:
+      return "two-step";
+    case SolverMethod::kJoint:
+      return "joint";
+    case SolverMethod::kModulus:
+      return "modulus";
+    case SolverMethod::kModulusNorm:
+      break;
+  }
+  return "modulus-norm";
 }
 std::optional<SolverMethod> SolverMethodFromString(std::string_view text) {
-  if (text == "two-step") return SolverMethod::kTwoStep;
-  if (text == "joint") return SolverMethod::kJoint;
+  for (SolverMethod m : {SolverMethod::kTwoStep, SolverMethod::kJoint, SolverMethod::kModulus,
+                         SolverMethod::kModulusNorm}) {
+    if (text == ToString(m)) return m;
+  }
   return std::nullopt;
 }
 
@@ -70,6 +82,14 @@ std::optional<std::string> CalibrationOptions::Validate() const {
     return "joint tolerances must be non-negative";
   }
   if (!(joint.initial_damping > 0)) return "joint.initial_damping must be positive";
+  if (modulus.max_iterations < 1) return "modulus.max_iterations must be at least 1";
+  if (!(modulus.parameter_tolerance >= 0) || !(modulus.function_tolerance >= 0)) {
+    return "modulus tolerances must be non-negative";
+  }
+  if ((method == SolverMethod::kModulus || method == SolverMethod::kModulusNorm) &&
+      model != ModelKind::kLinear) {
+    return "the " + std::string(ToString(method)) + " method fits the linear model only";
+  }
   return std::nullopt;
 }
 
@@ -192,10 +212,19 @@ CalibrationResult Calibrate(const std::vector<Vec3>& readings, const Calibration
   const Problem problem{readings, options.gravity, options.model};
 
   Start start = Initialise(problem, options.initialization);
-  internal::SolverOutput out =
-      options.method == SolverMethod::kTwoStep
-          ? internal::SolveTwoStep(problem, start.params, std::move(start.dirs), options)
-          : internal::SolveJoint(problem, start.params, std::move(start.dirs), options);
+  internal::SolverOutput out;
+  switch (options.method) {
+    case SolverMethod::kTwoStep:
+      out = internal::SolveTwoStep(problem, start.params, std::move(start.dirs), options);
+      break;
+    case SolverMethod::kJoint:
+      out = internal::SolveJoint(problem, start.params, std::move(start.dirs), options);
+      break;
+    case SolverMethod::kModulus:
+    case SolverMethod::kModulusNorm:
+      out = internal::SolveModulus(problem, start.params, options);
+      break;
+  }
   out.summary.initialization = start.used;
   out.summary.initialization_note = start.note;
 
@@ -225,7 +254,7 @@ CalibrationResult Calibrate(const std::vector<Vec3>& readings, const Calibration
   }
   const int P = NumParameters(options.model);
   result.degrees_of_freedom = static_cast<int>(readings.size()) - P;
-  if (result.degrees_of_freedom > 0) {
+  if (result.degrees_of_freedom > 0 && IsMaximumLikelihood(options.method)) {
     const double sigma2 = out.summary.final_cost / result.degrees_of_freedom;
     result.residual_sigma = std::sqrt(sigma2);
     const internal::Mat12 inverse = info.Inverse();

@@ -40,6 +40,18 @@ double Cost(const Problem& problem, const ModelParameters& params, const std::ve
   return cost;
 }
 
+double CostChange(const Problem& problem, const ModelParameters& params_a,
+                  const std::vector<Vec3>& dirs_a, const ModelParameters& params_b,
+                  const std::vector<Vec3>& dirs_b) {
+  double change = 0;
+  for (int k = 0; k < problem.positions(); ++k) {
+    const Vec3 mu_a = PredictRaw(params_a, Vec3(problem.gravity * dirs_a[k]));
+    const Vec3 mu_b = PredictRaw(params_b, Vec3(problem.gravity * dirs_b[k]));
+    change += (mu_b - mu_a).dot(mu_b + mu_a - 2.0 * problem.readings[k]);
+  }
+  return change;
+}
+
 Vec12 ParameterScales(const Problem& problem, const ModelParameters& params) {
   const double g = problem.gravity;
   Vec12 s;

@@ -14,6 +14,11 @@ namespace accelcal::internal {
 
 namespace {
 
+// The damping below which a step is close enough to the Gauss-Newton step to judge convergence.
+constexpr double kMaxConvergedDamping = 1e-6;
+// Relative cost changes below this are not resolved by evaluating J (sums of many squares).
+constexpr double kCostResolution = 1e-13;
+
 struct Step {
   Vec12 theta;
   std::vector<Eigen::Vector2d> dirs;
@@ -76,6 +81,7 @@ SolverOutput SolveJoint(const Problem& problem, const ModelParameters& init_para
   out.summary.termination_message = message;
   std::vector<Vec3> trial_dirs(dirs.size());
   int evaluations = 0;
+  int reset_at = -1;  // the iteration at which the damping was last reset
 
   while (out.summary.iterations < opt.max_iterations) {
     if (ne.cost <= zero_cost) {
@@ -90,7 +96,20 @@ SolverOutput SolveJoint(const Problem& problem, const ModelParameters& init_para
     const double theta_step = ScaledNorm(step.theta, ParameterScales(problem, current));
     double dir_step = 0;
     for (const auto& d : step.dirs) dir_step = std::max(dir_step, d.lpNorm<Eigen::Infinity>());
-    // A step this small changes nothing that matters: the current point is the solution.
+    // A small step under heavy damping says only that λ is large: retry closer to Gauss-Newton.
+    // (Measured on the paper 001 problem, σ = 0.1 g: steps of 3e-19 with λ grown by rejections,
+    // while the gradient was still 7e-9.)
+    // Once per accepted iteration: if even the near-Gauss-Newton step is rejected, the damping
+    // grows again and the solve ends below as no progress.
+    if (theta_step <= opt.parameter_tolerance && dir_step <= opt.parameter_tolerance &&
+        lambda > kMaxConvergedDamping && reset_at != out.summary.iterations) {
+      reset_at = out.summary.iterations;
+      lambda = std::min(opt.initial_damping, kMaxConvergedDamping);
+      nu = 2.0;
+      continue;
+    }
+    // A (nearly) Gauss-Newton step this small changes nothing that matters: the current point
+    // is the solution.
     if (theta_step <= opt.parameter_tolerance && dir_step <= opt.parameter_tolerance) {
       out.summary.termination = TerminationType::kParameterTolerance;
       std::snprintf(message, sizeof message, "|dtheta|_s = %.3e and max |dc| = %.3e <= %.1e",
@@ -103,10 +122,25 @@ SolverOutput SolveJoint(const Problem& problem, const ModelParameters& init_para
       trial_dirs[k] = Retract(dirs[k], ne.tangent[k], step.dirs[k]);
     }
     const ModelParameters trial = FromVec12(trial_theta);
-    const double trial_cost = Cost(problem, trial, trial_dirs);
+    // When the model predicts a change the cost cannot resolve (J carries 16 digits; near the
+    // optimum of a large-residual problem a 1e-9 step changes it in the 18th), comparing costs
+    // only measures round-off. A nearly Gauss-Newton step is then taken on trust: Gauss-Newton
+    // contracts towards the optimum and the parameter criterion ends the solve.
+    if (step.predicted_reduction <= kCostResolution * ne.cost) {
+      if (lambda > kMaxConvergedDamping) {
+        lambda = kMaxConvergedDamping;
+        continue;
+      }
+      theta = trial_theta;
+      dirs.swap(trial_dirs);
+      ++out.summary.iterations;
+      BuildNormalEquations(problem, FromVec12(theta), dirs, &ne);
+      continue;
+    }
+    const double actual = -CostChange(problem, current, dirs, trial, trial_dirs);
+    const double trial_cost = ne.cost - actual;
     ++evaluations;
-    const double actual = ne.cost - trial_cost;
-    if (std::abs(actual) <= opt.function_tolerance * ne.cost) {
+    if (opt.function_tolerance > 0 && std::abs(actual) <= opt.function_tolerance * ne.cost) {
       if (actual > 0) {
         theta = trial_theta;
         dirs.swap(trial_dirs);

@@ -58,6 +58,41 @@ std::vector<Vec3> SimulatePositions(const ModelParameters& truth, double gravity
   return readings;
 }
 
+Mat33 SunXu2020Ta() {
+  Mat33 T;
+  T << 1.1500, 0.0602, -0.0401, 0, 1.0985, 0.0575, 0, 0, 1.0978;
+  return T;
+}
+
+Vec3 SunXu2020Ba() { return {0.1, 0.15, 0.2}; }
+
+std::vector<Vec3> SunXu2020Directions(int count, std::uint64_t seed) {
+  std::mt19937_64 rng(seed);
+  std::normal_distribution<double> normal(0.0, 1.0);
+  std::vector<Vec3> dirs;
+  for (int k = 0; k < count; ++k) {
+    const double pitch = 120.0 * kDeg * normal(rng);
+    const double roll = 120.0 * kDeg * normal(rng);
+    normal(rng);  // heading: drawn to keep the paper's three angles, does not move gravity
+    dirs.emplace_back(std::sin(pitch), -std::sin(roll) * std::cos(pitch),
+                      -std::cos(roll) * std::cos(pitch));
+  }
+  return dirs;
+}
+
+std::vector<Vec3> SimulateLinearPositions(const Mat33& M, const Vec3& b,
+                                          const std::vector<Vec3>& directions, double sigma,
+                                          std::uint64_t seed) {
+  std::mt19937_64 rng(seed);
+  std::normal_distribution<double> normal(0.0, 1.0);
+  std::vector<Vec3> readings;
+  readings.reserve(directions.size());
+  for (const Vec3& c : directions) {
+    readings.push_back(M * c + b + sigma * Vec3(normal(rng), normal(rng), normal(rng)));
+  }
+  return readings;
+}
+
 std::vector<Vec3> RandomDirections(int count, std::uint64_t seed) {
   std::mt19937_64 rng(seed);
   std::normal_distribution<double> normal(0.0, 1.0);

@@ -35,6 +35,13 @@ ModelParameters FromVec12(const Vec12& theta);
 /// J = Σ_k ‖p_k − μ(θ, g c_k)‖² (paper 000 eq. (13)).
 double Cost(const Problem& problem, const ModelParameters& params, const std::vector<Vec3>& dirs);
 
+/// J(b) − J(a) computed from the change of each residual, Σ (r_b − r_a)ᵀ(r_b + r_a): accurate
+/// to the digits of the change itself, where the difference of two costs loses them all once the
+/// change falls below J·1e-16 (large residuals near the optimum).
+double CostChange(const Problem& problem, const ModelParameters& params_a,
+                  const std::vector<Vec3>& dirs_a, const ModelParameters& params_b,
+                  const std::vector<Vec3>& dirs_b);
+
 /// Multiplying a parameter change by its scale gives the change of the prediction it causes on a
 /// unit-gravity input, relative to the axis' signal amplitude |K_ii|·g. See TerminationType.
 Vec12 ParameterScales(const Problem& problem, const ModelParameters& params);
@@ -101,6 +108,17 @@ SolverOutput SolveTwoStep(const Problem& problem, const ModelParameters& init_pa
                           std::vector<Vec3> init_dirs, const CalibrationOptions& options);
 SolverOutput SolveJoint(const Problem& problem, const ModelParameters& init_params,
                         std::vector<Vec3> init_dirs, const CalibrationOptions& options);
+
+/// The modulus methods (options.method kModulus or kModulusNorm), linear model: Levenberg-Marquardt
+/// on the 9 parameters, directions set to the normalised corrected readings.
+SolverOutput SolveModulus(const Problem& problem, const ModelParameters& init_params,
+                          const CalibrationOptions& options);
+
+/// Residuals e_k of the modulus methods for the linear flat parameters θ (9): e_k = |f_k|²/g² − 1
+/// (squared) or |f_k|/g − 1, f_k = K⁻¹(p_k − b); optionally their Jacobian (m x 9). Exposed for the
+/// finite-difference tests.
+Eigen::VectorXd ModulusResiduals(const Problem& problem, const Eigen::VectorXd& theta, bool squared,
+                                 Eigen::MatrixXd* jacobian);
 
 /// Per-position constrained Newton (paper 000 eq. (18)-(24), Hessian per ERRATA.md): minimises
 /// ‖p − μ(g c)‖² on |c| = 1 starting from c0. Exposed for tests.

@@ -172,8 +172,8 @@ int RunCalibrate(const CalibrateArgs& args) {
   CalibrationOptions options;
   options.model =
       ParseEnum(ModelKindFromString(args.model), args.model, "--model", "linear, quadratic");
-  options.method =
-      ParseEnum(SolverMethodFromString(args.method), args.method, "--method", "two-step, joint");
+  options.method = ParseEnum(SolverMethodFromString(args.method), args.method, "--method",
+                             "joint, two-step, modulus, modulus-norm");
   options.initialization = ParseEnum(InitializationFromString(args.init), args.init, "--init",
                                      "auto, ellipsoid, normalized-readings");
   const Gravity g = ResolveGravity(args.gravity);
@@ -181,7 +181,9 @@ int RunCalibrate(const CalibrateArgs& args) {
   if (args.max_iterations > 0) {
     options.two_step.max_sweeps = args.max_iterations;
     options.joint.max_iterations = args.max_iterations;
+    options.modulus.max_iterations = args.max_iterations;
   }
+  if (auto why = options.Validate()) throw UsageError(*why);
   const LoadedInput in = LoadInput(args.input);
   const CalibrationResult result = Calibrate(Means(in.positions), options);
   if (!result.summary.converged()) {

@@ -30,6 +30,24 @@ std::vector<Vec3> SimulatePositions(const ModelParameters& truth, double gravity
                                     const std::vector<Vec3>& directions, const Vec3& sigma_raw,
                                     std::uint64_t seed);
 
+/// Paper 001 eq. (19): T_a (upper-triangular, the z-first frame of frame.hpp) in raw units per g.
+Mat33 SunXu2020Ta();
+/// Paper 001 eq. (19): b_a [g].
+Vec3 SunXu2020Ba();
+inline constexpr double kSunXu2020Sigma_g = 0.1;  ///< §4.1 noise, per axis [g]
+
+/// Paper 001 §4.1 attitudes: pitch, roll and heading of (120°, 120°, 80°) each multiplied by a
+/// standard-normal factor (ERRATA.md: uniform factors leave the problem nearly unobservable).
+/// Returns the unit specific-force direction in the body frame, c = (sin θ, −sin φ cos θ,
+/// −cos φ cos θ) (heading does not move gravity).
+std::vector<Vec3> SunXu2020Directions(int count, std::uint64_t seed);
+
+/// Readings p_k = M c_k + b + n_k, n_k ~ N(0, sigma² I), for any 3x3 M (paper 001 eq. (4) with
+/// |c_k| = 1); deterministic in seed.
+std::vector<Vec3> SimulateLinearPositions(const Mat33& M, const Vec3& b,
+                                          const std::vector<Vec3>& directions, double sigma,
+                                          std::uint64_t seed);
+
 /// Random unit directions, uniform on the sphere, deterministic in seed.
 std::vector<Vec3> RandomDirections(int count, std::uint64_t seed);
 

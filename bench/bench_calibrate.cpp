@@ -40,5 +40,26 @@ BENCHMARK_CAPTURE(BM_Calibrate, two_step_quadratic_18, ModelKind::kQuadratic,
 BENCHMARK_CAPTURE(BM_Calibrate, two_step_linear_18, ModelKind::kLinear, SolverMethod::kTwoStep)
     ->Unit(benchmark::kMicrosecond);
 
+// Paper 001 §4.1: 300 positions, σ = 0.1 g, linear model.
+void BM_SunXu300(benchmark::State& state, SolverMethod method) {
+  const std::vector<Vec3> readings = SimulateLinearPositions(
+      SunXu2020Ta(), SunXu2020Ba(), SunXu2020Directions(300, 1), kSunXu2020Sigma_g, 1001);
+  CalibrationOptions options;
+  options.method = method;
+  options.gravity = 1.0;
+  int iterations = 0;
+  for (auto _ : state) {
+    const CalibrationResult r = Calibrate(readings, options);
+    iterations = r.summary.iterations;
+    benchmark::DoNotOptimize(r.params.K(0, 0));
+  }
+  state.counters["solver_iterations"] = iterations;
+}
+
+BENCHMARK_CAPTURE(BM_SunXu300, newton_lagrange, SolverMethod::kNewtonLagrange)
+    ->Unit(benchmark::kMicrosecond);
+BENCHMARK_CAPTURE(BM_SunXu300, joint, SolverMethod::kJoint)->Unit(benchmark::kMicrosecond);
+BENCHMARK_CAPTURE(BM_SunXu300, modulus, SolverMethod::kModulus)->Unit(benchmark::kMicrosecond);
+
 }  // namespace
 }  // namespace accelcal

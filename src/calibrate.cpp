@@ -24,13 +24,15 @@ std::string_view ToString(SolverMethod method) {
     case SolverMethod::kModulus:
       return "modulus";
     case SolverMethod::kModulusNorm:
+      return "modulus-norm";
+    case SolverMethod::kNewtonLagrange:
       break;
   }
-  return "modulus-norm";
+  return "newton-lagrange";
 }
 std::optional<SolverMethod> SolverMethodFromString(std::string_view text) {
   for (SolverMethod m : {SolverMethod::kTwoStep, SolverMethod::kJoint, SolverMethod::kModulus,
-                         SolverMethod::kModulusNorm}) {
+                         SolverMethod::kModulusNorm, SolverMethod::kNewtonLagrange}) {
     if (text == ToString(m)) return m;
   }
   return std::nullopt;
@@ -86,7 +88,12 @@ std::optional<std::string> CalibrationOptions::Validate() const {
   if (!(modulus.parameter_tolerance >= 0) || !(modulus.function_tolerance >= 0)) {
     return "modulus tolerances must be non-negative";
   }
-  if ((method == SolverMethod::kModulus || method == SolverMethod::kModulusNorm) &&
+  if (newton_lagrange.max_iterations < 1) return "newton_lagrange.max_iterations must be >= 1";
+  if (!(newton_lagrange.parameter_tolerance >= 0)) {
+    return "newton_lagrange.parameter_tolerance must be non-negative";
+  }
+  if ((method == SolverMethod::kModulus || method == SolverMethod::kModulusNorm ||
+       method == SolverMethod::kNewtonLagrange) &&
       model != ModelKind::kLinear) {
     return "the " + std::string(ToString(method)) + " method fits the linear model only";
   }
@@ -223,6 +230,9 @@ CalibrationResult Calibrate(const std::vector<Vec3>& readings, const Calibration
     case SolverMethod::kModulus:
     case SolverMethod::kModulusNorm:
       out = internal::SolveModulus(problem, start.params, options);
+      break;
+    case SolverMethod::kNewtonLagrange:
+      out = internal::SolveNewtonLagrange(problem, start.params, std::move(start.dirs), options);
       break;
   }
   out.summary.initialization = start.used;

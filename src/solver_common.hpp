@@ -120,6 +120,27 @@ SolverOutput SolveModulus(const Problem& problem, const ModelParameters& init_pa
 Eigen::VectorXd ModulusResiduals(const Problem& problem, const Eigen::VectorXd& theta, bool squared,
                                  Eigen::MatrixXd* jacobian);
 
+/// Paper 001 eq. (12): L = Σ_k ‖p_k − μ(θ, g c_k)‖² + λ_k (‖c_k‖² − 1) for the linear model,
+/// θ the 9 linear flat parameters, z_k = (c_k, λ_k). Gradient and Hessian in blocks (eq. (14)-(15)
+/// in the x-first gauge): the θθ block, and per position the θz coupling and the 4x4 zz block.
+using Vec9 = Eigen::Matrix<double, 9, 1>;
+struct LagrangianBlocks {
+  double value = 0;  ///< L
+  double cost = 0;   ///< J = Σ ‖r_k‖²
+  Vec9 g_theta;
+  Eigen::Matrix<double, 9, 9> H_theta;
+  std::vector<Eigen::Vector4d> g_z;
+  std::vector<Eigen::Matrix<double, 9, 4>> H_theta_z;
+  std::vector<Eigen::Matrix4d> H_z;
+};
+void LagrangianDerivatives(const Problem& problem, const Vec9& theta, const std::vector<Vec3>& c,
+                           const std::vector<double>& lambda, LagrangianBlocks* blocks);
+
+/// Paper 001 §3.2: Newton's method on the Lagrangian (linear model), the per-position 4x4 blocks
+/// eliminated by the Schur complement.
+SolverOutput SolveNewtonLagrange(const Problem& problem, const ModelParameters& init_params,
+                                 std::vector<Vec3> init_dirs, const CalibrationOptions& options);
+
 /// Per-position constrained Newton (paper 000 eq. (18)-(24), Hessian per ERRATA.md): minimises
 /// ‖p − μ(g c)‖² on |c| = 1 starting from c0. Exposed for tests.
 Vec3 KktDirection(const ModelParameters& params, double gravity, const Vec3& p, const Vec3& c0,

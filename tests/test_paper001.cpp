@@ -1,4 +1,5 @@
 // Paper 001 (Sun & Xu 2020): body-frame conventions, the modulus baseline and the §4.1 simulation.
+#include <algorithm>
 #include <cmath>
 
 #include <gtest/gtest.h>
@@ -112,6 +113,105 @@ TEST(SunXu2020, MaximumLikelihoodBeatsTheModulusMethod) {
   EXPECT_LT(e_ml, e_modulus);
   EXPECT_NEAR(e_ml, 0.85, 0.1);
   EXPECT_NEAR(e_modulus, 1.2, 0.15);
+}
+
+// The full Lagrangian as a function of x = (θ (9), c_1, λ_1, ..., c_m, λ_m), for the checks below.
+struct Lagrangian {
+  const internal::Problem& problem;
+  int m;
+  void Split(const Eigen::VectorXd& x, internal::Vec9* theta, std::vector<Vec3>* c,
+             std::vector<double>* lambda) const {
+    *theta = x.head<9>();
+    c->resize(m);
+    lambda->resize(m);
+    for (int k = 0; k < m; ++k) {
+      (*c)[k] = x.segment<3>(9 + 4 * k);
+      (*lambda)[k] = x(9 + 4 * k + 3);
+    }
+  }
+  internal::LagrangianBlocks Blocks(const Eigen::VectorXd& x) const {
+    internal::Vec9 theta;
+    std::vector<Vec3> c;
+    std::vector<double> lambda;
+    Split(x, &theta, &c, &lambda);
+    internal::LagrangianBlocks b;
+    internal::LagrangianDerivatives(problem, theta, c, lambda, &b);
+    return b;
+  }
+  Eigen::VectorXd Gradient(const Eigen::VectorXd& x) const {
+    const internal::LagrangianBlocks b = Blocks(x);
+    Eigen::VectorXd g(9 + 4 * m);
+    g.head<9>() = b.g_theta;
+    for (int k = 0; k < m; ++k) g.segment<4>(9 + 4 * k) = b.g_z[k];
+    return g;
+  }
+  Eigen::MatrixXd Hessian(const Eigen::VectorXd& x) const {
+    const internal::LagrangianBlocks b = Blocks(x);
+    Eigen::MatrixXd H = Eigen::MatrixXd::Zero(9 + 4 * m, 9 + 4 * m);
+    H.topLeftCorner<9, 9>() = b.H_theta;
+    for (int k = 0; k < m; ++k) {
+      H.block<9, 4>(0, 9 + 4 * k) = b.H_theta_z[k];
+      H.block<4, 9>(9 + 4 * k, 0) = b.H_theta_z[k].transpose();
+      H.block<4, 4>(9 + 4 * k, 9 + 4 * k) = b.H_z[k];
+    }
+    return H;
+  }
+};
+
+TEST(NewtonLagrange, DerivativesOfEquation15MatchFiniteDifferences) {
+  const std::vector<Vec3> readings = SimulateLinearPositions(
+      SunXu2020Ta().transpose(), SunXu2020Ba(), SunXu2020Directions(5, 3), 0.05, 4);
+  const internal::Problem problem{readings, 1.0, ModelKind::kLinear};
+  const Lagrangian L{problem, 5};
+  Eigen::VectorXd x(9 + 4 * 5);
+  ModelParameters p;
+  p.K << 1.1, 0, 0, 0.05, 0.95, 0, -0.03, 0.04, 1.05;
+  p.bias << 0.1, -0.2, 0.05;
+  x.head<9>() = Pack(p, ModelKind::kLinear);
+  const std::vector<Vec3> dirs = SunXu2020Directions(5, 9);
+  for (int k = 0; k < 5; ++k) {
+    x.segment<3>(9 + 4 * k) = 1.05 * dirs[k];  // off the constraint, so every term is exercised
+    x(9 + 4 * k + 3) = 0.3 * (k - 2);
+  }
+  auto value = [&](const Eigen::VectorXd& y) -> Eigen::VectorXd {
+    Eigen::VectorXd v(1);
+    v(0) = L.Blocks(y).value;
+    return v;
+  };
+  EXPECT_TRUE(testing::JacobianMatches(value, x, L.Gradient(x).transpose()));
+  auto gradient = [&](const Eigen::VectorXd& y) { return L.Gradient(y); };
+  EXPECT_TRUE(testing::JacobianMatches(gradient, x, L.Hessian(x)));
+}
+
+TEST(NewtonLagrange, SameOptimumAsTheOtherSolversInAFewIterations) {
+  const Mat33 T = SunXu2020Ta();
+  const Vec3 b = SunXu2020Ba();
+  int worst_iterations = 0;
+  for (int seed = 1; seed <= 50; ++seed) {
+    const std::vector<Vec3> readings = SimulateLinearPositions(T, b, SunXu2020Directions(300, seed),
+                                                               kSunXu2020Sigma_g, 1000 + seed);
+    CalibrationOptions o;
+    o.gravity = 1.0;
+    const CalibrationResult joint = Calibrate(readings, o);
+    o.method = SolverMethod::kNewtonLagrange;
+    const CalibrationResult newton = Calibrate(readings, o);
+    ASSERT_TRUE(newton.summary.converged()) << newton.summary.BriefReport();
+    worst_iterations = std::max(worst_iterations, newton.summary.iterations);
+    const Eigen::VectorXd a = Pack(joint.params, ModelKind::kLinear);
+    const Eigen::VectorXd n = Pack(newton.params, ModelKind::kLinear);
+    EXPECT_LE((a - n).cwiseAbs().maxCoeff(), 1e-8 * a.cwiseAbs().maxCoeff()) << "seed " << seed;
+    EXPECT_EQ(newton.covariance.rows(), 9);
+  }
+  // Quadratic convergence from the ellipsoid start (the issue asks for at most 8).
+  EXPECT_LE(worst_iterations, 8);
+}
+
+TEST(NewtonLagrange, FitsTheLinearModelOnly) {
+  CalibrationOptions o;
+  o.method = SolverMethod::kNewtonLagrange;
+  o.model = ModelKind::kQuadratic;
+  ASSERT_TRUE(o.Validate().has_value());
+  EXPECT_EQ(*o.Validate(), "the newton-lagrange method fits the linear model only");
 }
 
 TEST(SunXu2020, JointSolutionIsStationary) {

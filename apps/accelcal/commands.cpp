@@ -173,7 +173,7 @@ int RunCalibrate(const CalibrateArgs& args) {
   options.model =
       ParseEnum(ModelKindFromString(args.model), args.model, "--model", "linear, quadratic");
   options.method = ParseEnum(SolverMethodFromString(args.method), args.method, "--method",
-                             "joint, two-step, modulus, modulus-norm");
+                             "joint, two-step, newton-lagrange, modulus, modulus-norm");
   options.initialization = ParseEnum(InitializationFromString(args.init), args.init, "--init",
                                      "auto, ellipsoid, normalized-readings");
   const Gravity g = ResolveGravity(args.gravity);
@@ -182,6 +182,7 @@ int RunCalibrate(const CalibrateArgs& args) {
     options.two_step.max_sweeps = args.max_iterations;
     options.joint.max_iterations = args.max_iterations;
     options.modulus.max_iterations = args.max_iterations;
+    options.newton_lagrange.max_iterations = args.max_iterations;
   }
   if (auto why = options.Validate()) throw UsageError(*why);
   const LoadedInput in = LoadInput(args.input);

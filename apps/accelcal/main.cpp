@@ -66,7 +66,9 @@ int main(int argc, char** argv) {
   AddDetectionOptions(calibrate, &cal.input);
   AddGravityOptions(calibrate, &cal.gravity);
   calibrate->add_option("--model", cal.model, "linear or quadratic")->capture_default_str();
-  calibrate->add_option("--method", cal.method, "joint, two-step, modulus or modulus-norm")
+  calibrate
+      ->add_option("--method", cal.method,
+                   "joint, two-step, newton-lagrange, modulus or modulus-norm")
       ->capture_default_str();
   calibrate->add_option("--init", cal.init, "auto, ellipsoid or normalized-readings")
       ->capture_default_str();

@@ -27,15 +27,17 @@
 namespace accelcal {
 
 enum class SolverMethod {
-  kTwoStep,      ///< "two-step": paper 000 alternating least squares / per-position KKT Newton
-  kJoint,        ///< "joint": Levenberg-Marquardt with Schur complement
-  kModulus,      ///< "modulus": min Σ (|f_k|²/g² − 1)², paper 001's least-squares baseline
-  kModulusNorm,  ///< "modulus-norm": min Σ (|f_k|/g − 1)², the variant on the norm
+  kTwoStep,         ///< "two-step": paper 000 alternating least squares / per-position KKT Newton
+  kJoint,           ///< "joint": Levenberg-Marquardt with Schur complement
+  kModulus,         ///< "modulus": min Σ (|f_k|²/g² − 1)², paper 001's least-squares baseline
+  kModulusNorm,     ///< "modulus-norm": min Σ (|f_k|/g − 1)², the variant on the norm
+  kNewtonLagrange,  ///< "newton-lagrange": paper 001 §3.2, Newton on the Lagrangian, linear model
 };
 /// Whether a method estimates by maximum likelihood (and so carries a covariance). The modulus
 /// methods do not: their residual (|f|² − g²) has a noise-dependent mean (paper 001 eq. (11)).
 constexpr bool IsMaximumLikelihood(SolverMethod method) {
-  return method == SolverMethod::kTwoStep || method == SolverMethod::kJoint;
+  return method == SolverMethod::kTwoStep || method == SolverMethod::kJoint ||
+         method == SolverMethod::kNewtonLagrange;
 }
 std::string_view ToString(SolverMethod method);
 std::optional<SolverMethod> SolverMethodFromString(std::string_view text);
@@ -98,6 +100,13 @@ struct CalibrationOptions {
     double parameter_tolerance = 1e-14;
     double function_tolerance = 1e-16;
   } modulus;
+
+  /// Paper 001's Newton iteration (no line search, as in the paper): stops when the step is below
+  /// the tolerance in the metric of TerminationType; a diverging start ends as kNoProgress.
+  struct NewtonLagrange {
+    int max_iterations = 50;
+    double parameter_tolerance = 1e-14;
+  } newton_lagrange;
 
   /// An error message when an option is out of range, else std::nullopt.
   std::optional<std::string> Validate() const;

@@ -1,0 +1,140 @@
+// Paper 001 (Sun & Xu 2020) §3.2: Newton iteration on the Lagrangian of the ML problem.
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+
+#include <Eigen/Cholesky>
+#include <Eigen/LU>
+
+#include "solver_common.hpp"
+
+namespace accelcal::internal {
+
+namespace {
+
+// Columns of the 12-parameter Jacobian used by the linear model (model.hpp, ActiveColumns).
+constexpr int kLinearColumns[9] = {0, 1, 3, 4, 5, 7, 8, 9, 10};
+
+Eigen::Matrix<double, 3, 9> LinearJacobian(const Vec3& f) {
+  const Mat3x12 full = JacobianWrtParameters(f);
+  Eigen::Matrix<double, 3, 9> J;
+  for (int j = 0; j < 9; ++j) J.col(j) = full.col(kLinearColumns[j]);
+  return J;
+}
+
+}  // namespace
+
+void LagrangianDerivatives(const Problem& problem, const Vec9& theta, const std::vector<Vec3>& c,
+                           const std::vector<double>& lambda, LagrangianBlocks* b) {
+  const ModelParameters params = Unpack(theta, ModelKind::kLinear);
+  const double g = problem.gravity;
+  const int m = problem.positions();
+  const std::vector<ParameterSlot>& slots = ParameterSlots(ModelKind::kLinear);
+  b->value = b->cost = 0;
+  b->g_theta.setZero();
+  b->H_theta.setZero();
+  b->g_z.resize(m);
+  b->H_theta_z.resize(m);
+  b->H_z.resize(m);
+  const Mat33 gK = g * params.K.triangularView<Eigen::Lower>().toDenseMatrix();
+  for (int k = 0; k < m; ++k) {
+    const Vec3 r = PredictRaw(params, Vec3(g * c[k])) - problem.readings[k];  // μ − p
+    const Eigen::Matrix<double, 3, 9> J = LinearJacobian(Vec3(g * c[k]));
+    const double h = c[k].squaredNorm() - 1.0;
+    b->cost += r.squaredNorm();
+    b->value += r.squaredNorm() + lambda[k] * h;
+    // Eq. (15): ∇_θ = 2 Σ J_θᵀ r, H_θθ = 2 Σ J_θᵀ J_θ (μ is linear in θ).
+    b->g_theta.noalias() += 2.0 * J.transpose() * r;
+    b->H_theta.noalias() += 2.0 * J.transpose() * J;
+    // ∇_c = 2 g Kᵀ r + 2 λ c, ∇_λ = ‖c‖² − 1.
+    b->g_z[k].head<3>() = 2.0 * gK.transpose() * r + 2.0 * lambda[k] * c[k];
+    b->g_z[k](3) = h;
+    // H_cc = 2 g² KᵀK + 2 λ I, H_cλ = 2 c, H_λλ = 0.
+    b->H_z[k].topLeftCorner<3, 3>() =
+        2.0 * gK.transpose() * gK + 2.0 * lambda[k] * Mat33::Identity();
+    b->H_z[k].topRightCorner<3, 1>() = 2.0 * c[k];
+    b->H_z[k].bottomLeftCorner<1, 3>() = 2.0 * c[k].transpose();
+    b->H_z[k](3, 3) = 0.0;
+    // H_θc = 2 J_θᵀ (g K) + the derivative of J_θ itself: ∂μ_i/∂K_ij = g c_j, so
+    // ∂(2 r_i g c_j)/∂c_l picks up 2 g r_i δ_jl. H_θλ = 0.
+    b->H_theta_z[k].setZero();
+    b->H_theta_z[k].leftCols<3>() = 2.0 * J.transpose() * gK;
+    for (int s = 0; s < 9; ++s) {
+      if (slots[s].group == ParameterGroup::kK)
+        b->H_theta_z[k](s, slots[s].col) += 2.0 * g * r(slots[s].row);
+    }
+  }
+}
+
+SolverOutput SolveNewtonLagrange(const Problem& problem, const ModelParameters& init_params,
+                                 std::vector<Vec3> dirs, const CalibrationOptions& options) {
+  const auto start = std::chrono::steady_clock::now();
+  const auto& opt = options.newton_lagrange;
+  const int m = problem.positions();
+  SolverOutput out;
+  out.summary.method = SolverMethod::kNewtonLagrange;
+  Vec9 theta = Pack(init_params, ModelKind::kLinear);
+  // Multipliers from ∇_c L = 0 at the start: λ_k = −g c_kᵀ Kᵀ r_k for |c_k| = 1.
+  std::vector<double> lambda(m);
+  for (int k = 0; k < m; ++k) {
+    const Vec3 r = PredictRaw(init_params, Vec3(problem.gravity * dirs[k])) - problem.readings[k];
+    lambda[k] = -problem.gravity * dirs[k].dot(init_params.K.transpose() * r);
+  }
+  LagrangianBlocks b;
+  LagrangianDerivatives(problem, theta, dirs, lambda, &b);
+  out.summary.initial_cost = b.cost;
+  char message[256];
+  out.summary.termination = TerminationType::kMaxIterations;
+  std::snprintf(message, sizeof message, "reached max_iterations = %d", opt.max_iterations);
+  out.summary.termination_message = message;
+  std::vector<Eigen::Matrix4d> M_inv(m);
+
+  for (int it = 0; it < opt.max_iterations; ++it) {
+    // Newton step (eq. (13)) by block elimination: S Δθ = −(g_θ − Σ C_k M_k⁻¹ g_zk).
+    Eigen::Matrix<double, 9, 9> S = b.H_theta;
+    Vec9 rhs = -b.g_theta;
+    for (int k = 0; k < m; ++k) {
+      M_inv[k] = b.H_z[k].inverse();
+      const Eigen::Matrix<double, 9, 4> CM = b.H_theta_z[k] * M_inv[k];
+      S.noalias() -= CM * b.H_theta_z[k].transpose();
+      rhs.noalias() += CM * b.g_z[k];
+    }
+    const Vec9 scale = S.diagonal().cwiseAbs().cwiseSqrt().cwiseInverse();
+    const Eigen::Matrix<double, 9, 9> scaled = scale.asDiagonal() * S * scale.asDiagonal();
+    const Vec9 d_theta = scale.cwiseProduct(scaled.partialPivLu().solve(scale.cwiseProduct(rhs)));
+    double d_dir = 0;
+    for (int k = 0; k < m; ++k) {
+      const Eigen::Vector4d dz = -M_inv[k] * (b.g_z[k] + b.H_theta_z[k].transpose() * d_theta);
+      dirs[k] += dz.head<3>();
+      lambda[k] += dz(3);
+      d_dir = std::max(d_dir, dz.head<3>().lpNorm<Eigen::Infinity>());
+    }
+    theta += d_theta;
+    ++out.summary.iterations;
+    const ModelParameters current = Unpack(theta, ModelKind::kLinear);
+    const double d_theta_s =
+        ScaledNorm(ToVec12(Unpack(d_theta, ModelKind::kLinear)), ParameterScales(problem, current));
+    if (!std::isfinite(d_theta_s) || !std::isfinite(d_dir)) {
+      out.summary.termination = TerminationType::kNoProgress;
+      out.summary.termination_message = "Newton diverged (non-finite step)";
+      break;
+    }
+    LagrangianDerivatives(problem, theta, dirs, lambda, &b);
+    if (d_theta_s <= opt.parameter_tolerance && d_dir <= opt.parameter_tolerance) {
+      out.summary.termination = TerminationType::kParameterTolerance;
+      std::snprintf(message, sizeof message, "|dtheta|_s = %.3e and max |dc| = %.3e <= %.1e",
+                    d_theta_s, d_dir, opt.parameter_tolerance);
+      out.summary.termination_message = message;
+      break;
+    }
+  }
+  out.params = Unpack(theta, ModelKind::kLinear);
+  for (Vec3& c : dirs) c.normalize();  // |c| = 1 holds to round-off at convergence
+  out.dirs = std::move(dirs);
+  out.summary.final_cost = Cost(problem, out.params, out.dirs);
+  out.summary.time_s =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  return out;
+}
+
+}  // namespace accelcal::internal

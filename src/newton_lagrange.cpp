@@ -10,20 +10,6 @@
 
 namespace accelcal::internal {
 
-namespace {
-
-// Columns of the 12-parameter Jacobian used by the linear model (model.hpp, ActiveColumns).
-constexpr int kLinearColumns[9] = {0, 1, 3, 4, 5, 7, 8, 9, 10};
-
-Eigen::Matrix<double, 3, 9> LinearJacobian(const Vec3& f) {
-  const Mat3x12 full = JacobianWrtParameters(f);
-  Eigen::Matrix<double, 3, 9> J;
-  for (int j = 0; j < 9; ++j) J.col(j) = full.col(kLinearColumns[j]);
-  return J;
-}
-
-}  // namespace
-
 void LagrangianDerivatives(const Problem& problem, const Vec9& theta, const std::vector<Vec3>& c,
                            const std::vector<double>& lambda, LagrangianBlocks* b) {
   const ModelParameters params = Unpack(theta, ModelKind::kLinear);
@@ -37,31 +23,44 @@ void LagrangianDerivatives(const Problem& problem, const Vec9& theta, const std:
   b->H_theta_z.resize(m);
   b->H_z.resize(m);
   const Mat33 gK = g * params.K.triangularView<Eigen::Lower>().toDenseMatrix();
+  const Mat33 KtK2 = 2.0 * gK.transpose() * gK;
+  // J_θ (eq. (15) rows, linear model) is block-sparse: output axis i depends only on its own
+  // parameters (2, 3 and 4 of them, starting at 0, 2 and 5) with coefficients v_i, so J_θᵀJ_θ is
+  // block diagonal and the rows of J_θᵀ X in group i are v_i ⊗ (row i of X).
+  constexpr int kStart[3] = {0, 2, 5};
   for (int k = 0; k < m; ++k) {
-    const Vec3 r = PredictRaw(params, Vec3(g * c[k])) - problem.readings[k];  // μ − p
-    const Eigen::Matrix<double, 3, 9> J = LinearJacobian(Vec3(g * c[k]));
+    const Vec3 f = g * c[k];
+    const Vec3 r = PredictRaw(params, f) - problem.readings[k];  // μ − p
+    const Eigen::Vector2d vx(f(0), 1.0);
+    const Eigen::Vector3d vy(f(0), f(1), 1.0);
+    const Eigen::Vector4d vz(f(0), f(1), f(2), 1.0);
     const double h = c[k].squaredNorm() - 1.0;
     b->cost += r.squaredNorm();
     b->value += r.squaredNorm() + lambda[k] * h;
     // Eq. (15): ∇_θ = 2 Σ J_θᵀ r, H_θθ = 2 Σ J_θᵀ J_θ (μ is linear in θ).
-    b->g_theta.noalias() += 2.0 * J.transpose() * r;
-    b->H_theta.noalias() += 2.0 * J.transpose() * J;
+    b->g_theta.segment<2>(kStart[0]) += 2.0 * r(0) * vx;
+    b->g_theta.segment<3>(kStart[1]) += 2.0 * r(1) * vy;
+    b->g_theta.segment<4>(kStart[2]) += 2.0 * r(2) * vz;
+    b->H_theta.block<2, 2>(kStart[0], kStart[0]).noalias() += 2.0 * vx * vx.transpose();
+    b->H_theta.block<3, 3>(kStart[1], kStart[1]).noalias() += 2.0 * vy * vy.transpose();
+    b->H_theta.block<4, 4>(kStart[2], kStart[2]).noalias() += 2.0 * vz * vz.transpose();
     // ∇_c = 2 g Kᵀ r + 2 λ c, ∇_λ = ‖c‖² − 1.
     b->g_z[k].head<3>() = 2.0 * gK.transpose() * r + 2.0 * lambda[k] * c[k];
     b->g_z[k](3) = h;
     // H_cc = 2 g² KᵀK + 2 λ I, H_cλ = 2 c, H_λλ = 0.
-    b->H_z[k].topLeftCorner<3, 3>() =
-        2.0 * gK.transpose() * gK + 2.0 * lambda[k] * Mat33::Identity();
+    b->H_z[k].topLeftCorner<3, 3>() = KtK2 + 2.0 * lambda[k] * Mat33::Identity();
     b->H_z[k].topRightCorner<3, 1>() = 2.0 * c[k];
     b->H_z[k].bottomLeftCorner<1, 3>() = 2.0 * c[k].transpose();
     b->H_z[k](3, 3) = 0.0;
     // H_θc = 2 J_θᵀ (g K) + the derivative of J_θ itself: ∂μ_i/∂K_ij = g c_j, so
-    // ∂(2 r_i g c_j)/∂c_l picks up 2 g r_i δ_jl. H_θλ = 0.
-    b->H_theta_z[k].setZero();
-    b->H_theta_z[k].leftCols<3>() = 2.0 * J.transpose() * gK;
+    // ∂(2 r_i g c_j)/∂c_l adds 2 g r_i δ_jl. H_θλ = 0.
+    Eigen::Matrix<double, 9, 4>& C = b->H_theta_z[k];
+    C.col(3).setZero();
+    C.block<2, 3>(kStart[0], 0).noalias() = 2.0 * vx * gK.row(0);
+    C.block<3, 3>(kStart[1], 0).noalias() = 2.0 * vy * gK.row(1);
+    C.block<4, 3>(kStart[2], 0).noalias() = 2.0 * vz * gK.row(2);
     for (int s = 0; s < 9; ++s) {
-      if (slots[s].group == ParameterGroup::kK)
-        b->H_theta_z[k](s, slots[s].col) += 2.0 * g * r(slots[s].row);
+      if (slots[s].group == ParameterGroup::kK) C(s, slots[s].col) += 2.0 * g * r(slots[s].row);
     }
   }
 }
@@ -95,8 +94,10 @@ SolverOutput SolveNewtonLagrange(const Problem& problem, const ModelParameters& 
     Vec9 rhs = -b.g_theta;
     for (int k = 0; k < m; ++k) {
       M_inv[k] = b.H_z[k].inverse();
-      const Eigen::Matrix<double, 9, 4> CM = b.H_theta_z[k] * M_inv[k];
-      S.noalias() -= CM * b.H_theta_z[k].transpose();
+      // The coupling's λ column is zero (H_θλ = 0): only its first three columns take part.
+      const auto C = b.H_theta_z[k].leftCols<3>();
+      const Eigen::Matrix<double, 9, 4> CM = C.lazyProduct(M_inv[k].topRows<3>());
+      S.noalias() -= CM.leftCols<3>().lazyProduct(C.transpose());
       rhs.noalias() += CM * b.g_z[k];
     }
     const Vec9 scale = S.diagonal().cwiseAbs().cwiseSqrt().cwiseInverse();

@@ -166,6 +166,28 @@ TEST_F(Cli, LatitudeGivesWgs84Gravity) {
   EXPECT_NEAR(nlohmann::json::parse(r.out)["gravity"].get<double>(), expected, 1e-9);
 }
 
+TEST_F(Cli, CompareTabulatesEveryMethod) {
+  const std::string in = kData + "/ctu-innalabs-ahrs-m3/measured_accelerations_24pos.csv";
+  const CliRun j = Exec("compare " + in + " --units g --json");
+  ASSERT_EQ(j.status, 0) << j.err;
+  const nlohmann::json doc = nlohmann::json::parse(j.out);
+  ASSERT_EQ(doc["methods"].size(), 5u);
+  EXPECT_EQ(doc["positions"], 24);
+  EXPECT_EQ(doc["methods"][1]["method"], "two-step");
+  EXPECT_EQ(doc["methods"][1]["leave_one_out_from"], "joint");
+  for (const auto& m : doc["methods"]) {
+    EXPECT_TRUE(m["leave_one_out_rms"].is_number()) << m;
+    EXPECT_EQ(m["parameters"].size(), 9u);
+  }
+  EXPECT_EQ(Exec("compare " + in + " --units g --json").out, j.out);  // reproducible bytes
+  const CliRun t = Exec("compare " + in + " --units g --methods joint,modulus");
+  ASSERT_EQ(t.status, 0) << t.err;
+  EXPECT_NE(t.out.find("held-out rms"), std::string::npos);
+  const CliRun bad = Exec("compare " + in + " --model quadratic --methods newton-lagrange");
+  EXPECT_EQ(bad.status, 2);
+  EXPECT_EQ(bad.err, "accelcal: usage: the newton-lagrange method fits the linear model only\n");
+}
+
 TEST_F(Cli, Detect) {
   const CliRun r = Exec("detect " + kData + "/imutk-xsens-mti/xsens_acc.mat --json");
   ASSERT_EQ(r.status, 0) << r.err;

@@ -60,6 +60,16 @@ struct CalibrateArgs {
   int max_iterations = 0;  // 0: the solver's default
 };
 
+struct CompareArgs {
+  InputArgs input;
+  GravityArgs gravity;
+  std::string model = "linear";
+  std::vector<std::string> methods;  // empty: all that fit the model
+  std::string init = "auto";
+  bool leave_one_out = true;
+  bool json = false;
+};
+
 struct DetectArgs {
   InputArgs input;
   bool json = false;
@@ -74,6 +84,7 @@ struct ApplyArgs {
 
 int RunCalibrate(const CalibrateArgs& args);
 int RunDetect(const DetectArgs& args);
+int RunCompare(const CompareArgs& args);
 int RunApply(const ApplyArgs& args);
 
 }  // namespace accelcal::cli

@@ -80,6 +80,21 @@ int main(int argc, char** argv) {
   calibrate->add_flag("--json", cal.json,
                       "print the calibration file to stdout instead of the summary");
 
+  CompareArgs cmp;
+  CLI::App* compare = app.add_subcommand(
+      "compare", "run several calibration methods on the same data and tabulate them");
+  compare->add_option("INPUT", cmp.input.path, "raw log or positions file")->required();
+  AddInputOptions(compare, &cmp.input, true);
+  AddDetectionOptions(compare, &cmp.input);
+  AddGravityOptions(compare, &cmp.gravity);
+  compare->add_option("--model", cmp.model, "linear or quadratic")->capture_default_str();
+  compare->add_option("--methods", cmp.methods, "comma-separated (default: all for the model)")
+      ->delimiter(',');
+  compare->add_option("--init", cmp.init, "auto, ellipsoid or normalized-readings")
+      ->capture_default_str();
+  compare->add_flag("!--no-held-out", cmp.leave_one_out, "skip the leave-one-position-out fits");
+  compare->add_flag("--json", cmp.json, "machine-readable output");
+
   DetectArgs det;
   CLI::App* detect = app.add_subcommand("detect", "list the static intervals of a raw log");
   detect->add_option("LOG", det.input.path, "raw log")->required();
@@ -113,6 +128,7 @@ int main(int argc, char** argv) {
   try {
     if (*calibrate) return RunCalibrate(cal);
     if (*detect) return RunDetect(det);
+    if (*compare) return RunCompare(cmp);
     if (*apply_cmd) return RunApply(apply);
   } catch (const UsageError& e) {
     std::fprintf(stderr, "accelcal: usage: %s\n", e.what());

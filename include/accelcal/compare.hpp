@@ -1,0 +1,49 @@
+#pragma once
+/// @file compare.hpp
+/// Several calibration methods on the same positions, with the figures users compare them by.
+
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "accelcal/calibrate.hpp"
+
+namespace accelcal {
+
+struct CompareOptions {
+  /// Methods to run, in order. Empty: every method that fits `base.model`.
+  std::vector<SolverMethod> methods;
+  /// Model, gravity, initialisation and solver settings shared by all methods (`method` ignored).
+  CalibrationOptions base;
+  /// Refit without each position in turn to predict it (m extra fits per method).
+  bool leave_one_out = true;
+};
+
+/// One method's outcome. When the method cannot run on the data (too few positions, unobservable
+/// geometry, no convergence), `error` says why and the figures are absent.
+struct MethodComparison {
+  SolverMethod method = SolverMethod::kJoint;
+  std::optional<std::string> error;
+  CalibrationResult result;
+  /// Paper 001 Table 2: mean and standard deviation of |f_k|²/g² (the "modular square").
+  double modular_square_mean = 0, modular_square_std = 0;
+  double gravity_norm_rms = 0;  ///< RMS of |f_k| − g over the fitted positions
+  /// RMS of |f_k| − g with position k predicted by a fit without it; absent when not requested or
+  /// when a fit without some position failed (then `leave_one_out_error` says which).
+  std::optional<double> leave_one_out_rms;
+  std::optional<std::string> leave_one_out_error;
+  /// The held-out figures measure the estimator, not the solver: maximum-likelihood solvers whose
+  /// full fit agrees with an earlier one to 1e-8 relative (the same optimum) take its held-out
+  /// figures instead of refitting m times; this names that method.
+  std::optional<SolverMethod> leave_one_out_from;
+};
+
+/// Every method that fits `model`, the default order of the comparison.
+std::vector<SolverMethod> MethodsFor(ModelKind model);
+
+/// Runs the methods. Throws std::invalid_argument for invalid options (including a method that
+/// does not fit the model); data problems are reported per method, never thrown.
+std::vector<MethodComparison> CompareMethods(const std::vector<Vec3>& readings,
+                                             const CompareOptions& options);
+
+}  // namespace accelcal

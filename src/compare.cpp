@@ -1,0 +1,121 @@
+#include "accelcal/compare.hpp"
+
+#include <cmath>
+#include <stdexcept>
+
+#include "accelcal/error.hpp"
+
+namespace accelcal {
+
+std::vector<SolverMethod> MethodsFor(ModelKind model) {
+  if (model == ModelKind::kQuadratic) return {SolverMethod::kJoint, SolverMethod::kTwoStep};
+  return {SolverMethod::kJoint, SolverMethod::kTwoStep, SolverMethod::kNewtonLagrange,
+          SolverMethod::kModulus, SolverMethod::kModulusNorm};
+}
+
+namespace {
+
+// A converged fit, or the reason there is none.
+std::optional<std::string> Fit(const std::vector<Vec3>& readings, const CalibrationOptions& options,
+                               CalibrationResult* result) {
+  try {
+    *result = Calibrate(readings, options);
+  } catch (const DataError& e) {
+    return std::string(e.what());
+  }
+  if (!result->summary.converged()) {
+    return "did not converge: " + result->summary.termination_message;
+  }
+  return std::nullopt;
+}
+
+void LeaveOneOut(const std::vector<Vec3>& readings, const CalibrationOptions& options,
+                 MethodComparison* out) {
+  std::vector<double> errors;
+  std::vector<Vec3> subset(readings.size() - 1);
+  for (std::size_t k = 0; k < readings.size(); ++k) {
+    std::size_t j = 0;
+    for (std::size_t i = 0; i < readings.size(); ++i) {
+      if (i != k) subset[j++] = readings[i];
+    }
+    CalibrationResult fit;
+    if (auto why = Fit(subset, options, &fit)) {
+      out->leave_one_out_error = "without position " + std::to_string(k + 1) + ": " + *why;
+      return;
+    }
+    const double e = GravityNormErrors(fit.params, {readings[k]}, options.gravity)[0];
+    if (!std::isfinite(e)) {
+      out->leave_one_out_error =
+          "position " + std::to_string(k + 1) + " lies outside the range of the fit without it";
+      return;
+    }
+    errors.push_back(e);
+  }
+  out->leave_one_out_rms = Rms(errors);
+}
+
+// An earlier maximum-likelihood result at the same optimum as `c` (parameters equal to 1e-8 of
+// the largest), whose held-out figures it can share, or nullptr.
+const MethodComparison* SameMaximumLikelihoodOptimum(const std::vector<MethodComparison>& done,
+                                                     const MethodComparison& c) {
+  if (!IsMaximumLikelihood(c.method)) return nullptr;
+  const Eigen::VectorXd theta = Pack(c.result.params, c.result.model);
+  for (const MethodComparison& d : done) {
+    if (d.error || !IsMaximumLikelihood(d.method) || d.leave_one_out_from) continue;
+    const Eigen::VectorXd other = Pack(d.result.params, d.result.model);
+    if ((theta - other).cwiseAbs().maxCoeff() <= 1e-8 * theta.cwiseAbs().maxCoeff()) return &d;
+  }
+  return nullptr;
+}
+
+}  // namespace
+
+std::vector<MethodComparison> CompareMethods(const std::vector<Vec3>& readings,
+                                             const CompareOptions& options) {
+  const std::vector<SolverMethod> methods =
+      options.methods.empty() ? MethodsFor(options.base.model) : options.methods;
+  std::vector<MethodComparison> out;
+  for (SolverMethod method : methods) {
+    CalibrationOptions o = options.base;
+    o.method = method;
+    if (auto why = o.Validate()) throw std::invalid_argument(*why);
+    MethodComparison c;
+    c.method = method;
+    c.error = Fit(readings, o, &c.result);
+    std::vector<double> errors;
+    if (!c.error) {
+      errors = GravityNormErrors(c.result.params, readings, o.gravity);
+      for (std::size_t k = 0; k < errors.size() && !c.error; ++k) {
+        if (!std::isfinite(errors[k])) {
+          c.error = "position " + std::to_string(k + 1) + " lies outside the range of the fit";
+        }
+      }
+    }
+    if (!c.error) {
+      c.gravity_norm_rms = Rms(errors);
+      double sum = 0, sum2 = 0;
+      for (double e : errors) {
+        const double q = std::pow((e + o.gravity) / o.gravity, 2);  // |f|²/g²
+        sum += q;
+        sum2 += q * q;
+      }
+      const double n = static_cast<double>(errors.size());
+      c.modular_square_mean = sum / n;
+      c.modular_square_std = std::sqrt(std::max(0.0, (sum2 - sum * sum / n) / (n - 1)));
+      if (options.leave_one_out) {
+        const MethodComparison* same = SameMaximumLikelihoodOptimum(out, c);
+        if (same != nullptr) {
+          c.leave_one_out_rms = same->leave_one_out_rms;
+          c.leave_one_out_error = same->leave_one_out_error;
+          c.leave_one_out_from = same->method;
+        } else {
+          LeaveOneOut(readings, o, &c);
+        }
+      }
+    }
+    out.push_back(std::move(c));
+  }
+  return out;
+}
+
+}  // namespace accelcal

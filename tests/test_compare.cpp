@@ -1,0 +1,113 @@
+// Method comparison: figures, held-out fits, per-method failures, and the real recordings.
+#include <cmath>
+
+#include <gtest/gtest.h>
+
+#include "accelcal/compare.hpp"
+#include "accelcal/log_reader.hpp"
+#include "accelcal/simulate.hpp"
+#include "accelcal/static_detection.hpp"
+
+namespace accelcal {
+namespace {
+
+const std::string kData = ACCELCAL_DATA_DIR;
+
+std::vector<Vec3> SunXuReadings(int count) {
+  return SimulateLinearPositions(SunXu2020Ta(), SunXu2020Ba(), SunXu2020Directions(count, 3), 0.01,
+                                 4);
+}
+
+TEST(Compare, RunsEveryLinearMethodAndSharesHeldOutFiguresOfOneEstimator) {
+  const std::vector<Vec3> readings = SunXuReadings(30);
+  CompareOptions o;
+  o.base.gravity = 1.0;
+  const std::vector<MethodComparison> rows = CompareMethods(readings, o);
+  ASSERT_EQ(rows.size(), 5u);
+  EXPECT_EQ(rows[0].method, SolverMethod::kJoint);
+  for (const MethodComparison& r : rows) {
+    ASSERT_FALSE(r.error.has_value()) << ToString(r.method) << ": " << *r.error;
+    ASSERT_TRUE(r.leave_one_out_rms.has_value()) << ToString(r.method);
+    EXPECT_GT(*r.leave_one_out_rms, r.gravity_norm_rms);  // predicting is harder than fitting
+    EXPECT_NEAR(r.modular_square_mean, 1.0, 1e-3);
+  }
+  EXPECT_EQ(rows[1].leave_one_out_from, SolverMethod::kJoint);  // two-step
+  EXPECT_EQ(rows[2].leave_one_out_from, SolverMethod::kJoint);  // newton-lagrange
+  EXPECT_FALSE(rows[3].leave_one_out_from.has_value());         // modulus: its own estimator
+}
+
+TEST(Compare, HeldOutErrorIsTheFitWithoutEachPosition) {
+  const std::vector<Vec3> readings = SunXuReadings(15);
+  CompareOptions o;
+  o.base.gravity = 1.0;
+  o.methods = {SolverMethod::kModulus};
+  const MethodComparison row = CompareMethods(readings, o)[0];
+  std::vector<double> errors;
+  for (std::size_t k = 0; k < readings.size(); ++k) {
+    std::vector<Vec3> subset = readings;
+    subset.erase(subset.begin() + static_cast<std::ptrdiff_t>(k));
+    CalibrationOptions c = o.base;
+    c.method = SolverMethod::kModulus;
+    errors.push_back(GravityNormErrors(Calibrate(subset, c).params, {readings[k]}, 1.0)[0]);
+  }
+  ASSERT_TRUE(row.leave_one_out_rms.has_value());
+  EXPECT_DOUBLE_EQ(*row.leave_one_out_rms, Rms(errors));
+}
+
+TEST(Compare, FailuresAreReportedPerMethod) {
+  // Nine positions: every method fits, but no fit without a position is possible.
+  std::vector<Vec3> readings = SunXuReadings(9);
+  CompareOptions o;
+  o.base.gravity = 1.0;
+  for (const MethodComparison& r : CompareMethods(readings, o)) {
+    EXPECT_FALSE(r.error.has_value());
+    EXPECT_FALSE(r.leave_one_out_rms.has_value());
+    ASSERT_TRUE(r.leave_one_out_error.has_value());
+    EXPECT_EQ(*r.leave_one_out_error,
+              "without position 1: the linear model needs at least 9 positions, got 8");
+  }
+  readings.resize(8);
+  for (const MethodComparison& r : CompareMethods(readings, o)) {
+    ASSERT_TRUE(r.error.has_value());
+    EXPECT_EQ(*r.error, "the linear model needs at least 9 positions, got 8");
+  }
+  o.base.model = ModelKind::kQuadratic;
+  EXPECT_EQ(MethodsFor(ModelKind::kQuadratic).size(), 2u);
+  o.methods = {SolverMethod::kModulus};
+  EXPECT_THROW(CompareMethods(SunXuReadings(20), o), std::invalid_argument);
+}
+
+// Issue 3: on real recordings the maximum-likelihood methods predict held-out positions best, or
+// within 2 % of the best.
+TEST(Compare, MaximumLikelihoodPredictsBestOnRealRecordings) {
+  struct Set {
+    std::string file;
+    double gravity;
+  };
+  const Set sets[] = {{"/imutk-xsens-mti/xsens_acc.mat", 9.81744},
+                      {"/imutk-t265/t265_acc.mat", 9.8016},
+                      {"/ctu-innalabs-ahrs-m3/measured_accelerations_24pos.csv", 1.0},
+                      {"/ctu-innalabs-ahrs-m3/measured_accelerations_49pos.csv", 1.0}};
+  for (const Set& set : sets) {
+    const InputData d = ReadInput(kData + set.file, {});
+    const std::vector<Vec3> means =
+        d.kind == InputKind::kRaw
+            ? Means(PositionsFromIntervals(DetectStaticIntervals(d.raw, {}).intervals))
+            : Means(d.positions);
+    CompareOptions o;
+    o.base.gravity = set.gravity;
+    o.methods = {SolverMethod::kJoint, SolverMethod::kNewtonLagrange, SolverMethod::kModulus,
+                 SolverMethod::kModulusNorm};
+    const std::vector<MethodComparison> rows = CompareMethods(means, o);
+    double best = INFINITY, ml = INFINITY;
+    for (const MethodComparison& r : rows) {
+      ASSERT_TRUE(r.leave_one_out_rms.has_value()) << set.file << " " << ToString(r.method);
+      best = std::min(best, *r.leave_one_out_rms);
+      if (IsMaximumLikelihood(r.method)) ml = std::min(ml, *r.leave_one_out_rms);
+    }
+    EXPECT_LE(ml, 1.02 * best) << set.file;
+  }
+}
+
+}  // namespace
+}  // namespace accelcal

@@ -26,13 +26,16 @@ std::string_view ToString(SolverMethod method) {
     case SolverMethod::kModulusNorm:
       return "modulus-norm";
     case SolverMethod::kNewtonLagrange:
+      return "newton-lagrange";
+    case SolverMethod::kEllipsoid:
       break;
   }
-  return "newton-lagrange";
+  return "ellipsoid";
 }
 std::optional<SolverMethod> SolverMethodFromString(std::string_view text) {
-  for (SolverMethod m : {SolverMethod::kTwoStep, SolverMethod::kJoint, SolverMethod::kModulus,
-                         SolverMethod::kModulusNorm, SolverMethod::kNewtonLagrange}) {
+  for (SolverMethod m :
+       {SolverMethod::kTwoStep, SolverMethod::kJoint, SolverMethod::kModulus,
+        SolverMethod::kModulusNorm, SolverMethod::kNewtonLagrange, SolverMethod::kEllipsoid}) {
     if (text == ToString(m)) return m;
   }
   return std::nullopt;
@@ -66,6 +69,8 @@ std::string_view ToString(TerminationType type) {
       return "zero_residual";
     case TerminationType::kMaxIterations:
       return "max_iterations";
+    case TerminationType::kClosedForm:
+      return "closed_form";
     case TerminationType::kNoProgress:
       break;
   }
@@ -92,8 +97,11 @@ std::optional<std::string> CalibrationOptions::Validate() const {
   if (!(newton_lagrange.parameter_tolerance >= 0)) {
     return "newton_lagrange.parameter_tolerance must be non-negative";
   }
+  if (method == SolverMethod::kEllipsoid && initialization == Initialization::kNormalizedReadings) {
+    return "the ellipsoid method is the ellipsoid fit: it takes no other initialisation";
+  }
   if ((method == SolverMethod::kModulus || method == SolverMethod::kModulusNorm ||
-       method == SolverMethod::kNewtonLagrange) &&
+       method == SolverMethod::kNewtonLagrange || method == SolverMethod::kEllipsoid) &&
       model != ModelKind::kLinear) {
     return "the " + std::string(ToString(method)) + " method fits the linear model only";
   }
@@ -233,6 +241,18 @@ CalibrationResult Calibrate(const std::vector<Vec3>& readings, const Calibration
       break;
     case SolverMethod::kNewtonLagrange:
       out = internal::SolveNewtonLagrange(problem, start.params, std::move(start.dirs), options);
+      break;
+    case SolverMethod::kEllipsoid:
+      if (start.used != Initialization::kEllipsoidFit) {
+        throw DataError("the ellipsoid method cannot run: " + start.note);
+      }
+      out.params = start.params;
+      out.dirs = std::move(start.dirs);
+      out.summary.method = SolverMethod::kEllipsoid;
+      out.summary.termination = TerminationType::kClosedForm;
+      out.summary.termination_message = "algebraic fit (paper 001 eq. (16)-(18))";
+      out.summary.initial_cost = out.summary.final_cost =
+          internal::Cost(problem, out.params, out.dirs);
       break;
   }
   out.summary.initialization = start.used;

@@ -9,8 +9,8 @@ namespace accelcal {
 
 std::vector<SolverMethod> MethodsFor(ModelKind model) {
   if (model == ModelKind::kQuadratic) return {SolverMethod::kJoint, SolverMethod::kTwoStep};
-  return {SolverMethod::kJoint, SolverMethod::kTwoStep, SolverMethod::kNewtonLagrange,
-          SolverMethod::kModulus, SolverMethod::kModulusNorm};
+  return {SolverMethod::kJoint,   SolverMethod::kTwoStep,     SolverMethod::kNewtonLagrange,
+          SolverMethod::kModulus, SolverMethod::kModulusNorm, SolverMethod::kEllipsoid};
 }
 
 namespace {

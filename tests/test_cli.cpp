@@ -171,7 +171,7 @@ TEST_F(Cli, CompareTabulatesEveryMethod) {
   const CliRun j = Exec("compare " + in + " --units g --json");
   ASSERT_EQ(j.status, 0) << j.err;
   const nlohmann::json doc = nlohmann::json::parse(j.out);
-  ASSERT_EQ(doc["methods"].size(), 5u);
+  ASSERT_EQ(doc["methods"].size(), 6u);
   EXPECT_EQ(doc["positions"], 24);
   EXPECT_EQ(doc["methods"][1]["method"], "two-step");
   EXPECT_EQ(doc["methods"][1]["leave_one_out_from"], "joint");

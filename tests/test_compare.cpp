@@ -23,13 +23,13 @@ TEST(Compare, RunsEveryLinearMethodAndSharesHeldOutFiguresOfOneEstimator) {
   CompareOptions o;
   o.base.gravity = 1.0;
   const std::vector<MethodComparison> rows = CompareMethods(readings, o);
-  ASSERT_EQ(rows.size(), 5u);
+  ASSERT_EQ(rows.size(), 6u);
   EXPECT_EQ(rows[0].method, SolverMethod::kJoint);
   for (const MethodComparison& r : rows) {
     ASSERT_FALSE(r.error.has_value()) << ToString(r.method) << ": " << *r.error;
     ASSERT_TRUE(r.leave_one_out_rms.has_value()) << ToString(r.method);
     EXPECT_GT(*r.leave_one_out_rms, r.gravity_norm_rms);  // predicting is harder than fitting
-    EXPECT_NEAR(r.modular_square_mean, 1.0, 1e-3);
+    EXPECT_NEAR(r.modular_square_mean, 1.0, 2e-3);
   }
   EXPECT_EQ(rows[1].leave_one_out_from, SolverMethod::kJoint);  // two-step
   EXPECT_EQ(rows[2].leave_one_out_from, SolverMethod::kJoint);  // newton-lagrange

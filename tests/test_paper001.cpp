@@ -6,6 +6,7 @@
 #include <Eigen/Dense>
 
 #include "accelcal/calibrate.hpp"
+#include "accelcal/error.hpp"
 #include "accelcal/frame.hpp"
 #include "accelcal/simulate.hpp"
 #include "solver_common.hpp"
@@ -65,6 +66,38 @@ TEST(Modulus, RecoversANoiseFreeLinearDevice) {
     EXPECT_LT((r.params.bias - truth.bias).norm(), 1e-9 * truth.bias.norm()) << ToString(method);
     EXPECT_EQ(r.covariance.size(), 0) << "not a maximum-likelihood method: no covariance";
   }
+}
+
+TEST(EllipsoidMethod, IsTheAlgebraicFitItself) {
+  ModelParameters truth = Yang2012Truth();
+  truth.k2.setZero();
+  const std::vector<Vec3> readings =
+      SimulatePositions(truth, 9.8, RandomDirections(12, 2), Vec3::Zero(), 1);
+  CalibrationOptions o;
+  o.method = SolverMethod::kEllipsoid;
+  o.gravity = 9.8;
+  const CalibrationResult r = Calibrate(readings, o);
+  EXPECT_EQ(r.summary.termination, TerminationType::kClosedForm);
+  EXPECT_TRUE(r.summary.converged());
+  EXPECT_EQ(r.summary.iterations, 0);
+  EXPECT_LT((r.params.K - truth.K).norm(), 1e-7 * truth.K.norm());
+  EXPECT_EQ(r.covariance.size(), 0);
+  // Readings on no ellipsoid (a strongly quadratic device): the method refuses, naming why.
+  ModelParameters bent;
+  bent.k2 << 0.8, -0.4, 0.56;
+  const std::vector<Vec3> curved =
+      SimulatePositions(bent, 1.0, RandomDirections(20, 5), Vec3::Zero(), 1);
+  o.gravity = 1.0;
+  try {
+    Calibrate(curved, o);
+    FAIL() << "no error";
+  } catch (const DataError& e) {
+    EXPECT_EQ(
+        std::string(e.what()).rfind("the ellipsoid method cannot run: ellipsoid fit failed", 0), 0u)
+        << e.what();
+  }
+  o.initialization = Initialization::kNormalizedReadings;
+  EXPECT_TRUE(o.Validate().has_value());
 }
 
 TEST(Modulus, FitsTheLinearModelOnly) {

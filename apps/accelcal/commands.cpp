@@ -174,7 +174,7 @@ int RunCalibrate(const CalibrateArgs& args) {
   options.model =
       ParseEnum(ModelKindFromString(args.model), args.model, "--model", "linear, quadratic");
   options.method = ParseEnum(SolverMethodFromString(args.method), args.method, "--method",
-                             "joint, two-step, newton-lagrange, modulus, modulus-norm");
+                             "joint, two-step, newton-lagrange, modulus, modulus-norm, ellipsoid");
   options.initialization = ParseEnum(InitializationFromString(args.init), args.init, "--init",
                                      "auto, ellipsoid, normalized-readings");
   const Gravity g = ResolveGravity(args.gravity);
@@ -220,8 +220,9 @@ int RunCompare(const CompareArgs& args) {
   options.base.gravity = g.in_unit;
   options.leave_one_out = args.leave_one_out;
   for (const std::string& name : args.methods) {
-    options.methods.push_back(ParseEnum(SolverMethodFromString(name), name, "--methods",
-                                        "joint, two-step, newton-lagrange, modulus, modulus-norm"));
+    options.methods.push_back(
+        ParseEnum(SolverMethodFromString(name), name, "--methods",
+                  "joint, two-step, newton-lagrange, modulus, modulus-norm, ellipsoid"));
   }
   for (SolverMethod m : options.methods) {
     CalibrationOptions o = options.base;

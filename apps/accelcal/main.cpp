@@ -68,7 +68,7 @@ int main(int argc, char** argv) {
   calibrate->add_option("--model", cal.model, "linear or quadratic")->capture_default_str();
   calibrate
       ->add_option("--method", cal.method,
-                   "joint, two-step, newton-lagrange, modulus or modulus-norm")
+                   "joint, two-step, newton-lagrange, modulus, modulus-norm or ellipsoid")
       ->capture_default_str();
   calibrate->add_option("--init", cal.init, "auto, ellipsoid or normalized-readings")
       ->capture_default_str();

@@ -32,6 +32,7 @@ enum class SolverMethod {
   kModulus,         ///< "modulus": min Σ (|f_k|²/g² − 1)², paper 001's least-squares baseline
   kModulusNorm,     ///< "modulus-norm": min Σ (|f_k|/g − 1)², the variant on the norm
   kNewtonLagrange,  ///< "newton-lagrange": paper 001 §3.2, Newton on the Lagrangian, linear model
+  kEllipsoid,  ///< "ellipsoid": paper 001 §3.3, the algebraic ellipsoid fit itself, linear model
 };
 /// Whether a method estimates by maximum likelihood (and so carries a covariance). The modulus
 /// methods do not: their residual (|f|² − g²) has a noise-dependent mean (paper 001 eq. (11)).
@@ -61,7 +62,9 @@ enum class TerminationType {
   kFunctionTolerance,  ///< |J_{n−1} − J_n| ≤ function_tolerance · J_n
   kZeroResidual,       ///< J ≤ (8 ε · signal)² · 3m: the data are fitted to round-off
   kMaxIterations,      ///< iteration cap reached before any criterion: not converged
-  kNoProgress,         ///< joint: no step reduced the cost even with maximal damping: not converged
+  kClosedForm,         ///< ellipsoid: a direct solution, no iteration
+  kNoProgress,         ///< joint, modulus, newton-lagrange: no step reduced the cost even with
+                       ///< maximal damping, or Newton diverged: not converged
 };
 std::string_view ToString(TerminationType type);
 

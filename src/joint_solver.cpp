@@ -73,8 +73,7 @@ SolverOutput SolveJoint(const Problem& problem, const ModelParameters& init_para
   out.summary.initial_cost = ne.cost;
   const double zero_cost = ZeroResidualCost(problem, init_params);
 
-  double lambda = opt.initial_damping;
-  double nu = 2.0;
+  Damping damping(opt.initial_damping);
   char message[256];
   out.summary.termination = TerminationType::kMaxIterations;
   std::snprintf(message, sizeof message, "reached max_iterations = %d", opt.max_iterations);
@@ -91,7 +90,7 @@ SolverOutput SolveJoint(const Problem& problem, const ModelParameters& init_para
       out.summary.termination_message = message;
       break;
     }
-    const Step step = SolveDamped(ne, lambda, mask);
+    const Step step = SolveDamped(ne, damping.lambda(), mask);
     const ModelParameters current = FromVec12(theta);
     const double theta_step = ScaledNorm(step.theta, ParameterScales(problem, current));
     double dir_step = 0;
@@ -102,10 +101,9 @@ SolverOutput SolveJoint(const Problem& problem, const ModelParameters& init_para
     // Once per accepted iteration: if even the near-Gauss-Newton step is rejected, the damping
     // grows again and the solve ends below as no progress.
     if (theta_step <= opt.parameter_tolerance && dir_step <= opt.parameter_tolerance &&
-        lambda > kMaxConvergedDamping && reset_at != out.summary.iterations) {
+        damping.lambda() > kMaxConvergedDamping && reset_at != out.summary.iterations) {
       reset_at = out.summary.iterations;
-      lambda = std::min(opt.initial_damping, kMaxConvergedDamping);
-      nu = 2.0;
+      damping.Set(std::min(opt.initial_damping, kMaxConvergedDamping));
       continue;
     }
     // A (nearly) Gauss-Newton step this small changes nothing that matters: the current point
@@ -127,8 +125,8 @@ SolverOutput SolveJoint(const Problem& problem, const ModelParameters& init_para
     // only measures round-off. A nearly Gauss-Newton step is then taken on trust: Gauss-Newton
     // contracts towards the optimum and the parameter criterion ends the solve.
     if (step.predicted_reduction <= kCostResolution * ne.cost) {
-      if (lambda > kMaxConvergedDamping) {
-        lambda = kMaxConvergedDamping;
+      if (damping.lambda() > kMaxConvergedDamping) {
+        damping.Set(kMaxConvergedDamping);
         continue;
       }
       theta = trial_theta;
@@ -154,19 +152,13 @@ SolverOutput SolveJoint(const Problem& problem, const ModelParameters& init_para
       break;
     }
     if (actual > 0 && std::isfinite(trial_cost)) {
-      // Nielsen's damping update.
-      const double rho = step.predicted_reduction > 0 ? actual / step.predicted_reduction : 1.0;
-      lambda *= std::max(1.0 / 3.0, 1.0 - std::pow(2.0 * rho - 1.0, 3));
-      lambda = std::max(lambda, 1e-16);
-      nu = 2.0;
+      damping.Accept(step.predicted_reduction > 0 ? actual / step.predicted_reduction : 1.0);
       theta = trial_theta;
       dirs.swap(trial_dirs);
       ++out.summary.iterations;
       BuildNormalEquations(problem, FromVec12(theta), dirs, &ne);
     } else {
-      lambda *= nu;
-      nu *= 2.0;
-      if (lambda > 1e16) {
+      if (!damping.Reject()) {
         out.summary.termination = TerminationType::kNoProgress;
         std::snprintf(message, sizeof message,
                       "no step reduced J = %.6e with damping up to 1e16 (%d evaluations)", ne.cost,

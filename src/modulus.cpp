@@ -49,7 +49,7 @@ SolverOutput SolveModulus(const Problem& problem, const ModelParameters& init_pa
   Eigen::VectorXd e = ModulusResiduals(problem, theta, squared, &J);
   double cost = e.squaredNorm();
   out.summary.initial_cost = cost;
-  double lambda = 1e-9, nu = 2.0;
+  Damping damping(1e-9);
   char message[256];
   out.summary.termination = TerminationType::kMaxIterations;
   std::snprintf(message, sizeof message, "reached max_iterations = %d", opt.max_iterations);
@@ -59,7 +59,7 @@ SolverOutput SolveModulus(const Problem& problem, const ModelParameters& init_pa
     const Eigen::MatrixXd A = J.transpose() * J;
     const Eigen::VectorXd gradient = J.transpose() * e;
     Eigen::MatrixXd damped = A;
-    damped.diagonal() += lambda * A.diagonal();
+    damped.diagonal() += damping.lambda() * A.diagonal();
     const Eigen::VectorXd s = A.diagonal().cwiseSqrt().cwiseInverse();
     const Eigen::MatrixXd scaled = s.asDiagonal() * damped * s.asDiagonal();
     const Eigen::VectorXd step = -s.cwiseProduct(scaled.ldlt().solve(s.cwiseProduct(gradient)));
@@ -91,15 +91,11 @@ SolverOutput SolveModulus(const Problem& problem, const ModelParameters& init_pa
     }
     if (std::isfinite(trial_cost) && actual > 0) {
       const double predicted = -(2.0 * gradient.dot(step) + step.dot(A * step));
-      const double rho = predicted > 0 ? actual / predicted : 1.0;
-      lambda = std::max(1e-16, lambda * std::max(1.0 / 3.0, 1.0 - std::pow(2.0 * rho - 1.0, 3)));
-      nu = 2.0;
+      damping.Accept(predicted > 0 ? actual / predicted : 1.0);
       theta = trial, e = trial_e, J = trial_J, cost = trial_cost;
       ++out.summary.iterations;
     } else {
-      lambda *= nu;
-      nu *= 2.0;
-      if (lambda > 1e16) {
+      if (!damping.Reject()) {
         out.summary.termination = TerminationType::kNoProgress;
         std::snprintf(message, sizeof message,
                       "no step reduced the cost %.6e with damping up to 1e16", cost);

@@ -3,6 +3,8 @@
 // layout of model.hpp; for the linear model the k2 entries are held at zero by a mask, so all
 // matrices have fixed size and the hot loops allocate nothing.
 
+#include <algorithm>
+#include <cmath>
 #include <vector>
 
 #include <Eigen/Cholesky>
@@ -96,6 +98,30 @@ std::vector<Vec3> DirectionsFromParams(const Problem& problem, const ModelParame
 /// per-axis problems.
 ModelParameters SolveParametersGivenDirections(const Problem& problem,
                                                const std::vector<Vec3>& dirs);
+
+/// Levenberg-Marquardt damping λ (relative to the normal matrix' diagonal) with Nielsen's update,
+/// shared by the joint and modulus solvers.
+class Damping {
+ public:
+  explicit Damping(double initial) : lambda_(initial) {}
+  double lambda() const { return lambda_; }
+  void Set(double lambda) { lambda_ = lambda, nu_ = 2.0; }
+  /// After an accepted step with gain ratio ρ = actual / predicted reduction.
+  void Accept(double rho) {
+    lambda_ = std::max(1e-16, lambda_ * std::max(1.0 / 3.0, 1.0 - std::pow(2.0 * rho - 1.0, 3)));
+    nu_ = 2.0;
+  }
+  /// After a rejected step; false once the damping exceeds 1e16 (no step reduces the cost).
+  bool Reject() {
+    lambda_ *= nu_;
+    nu_ *= 2.0;
+    return lambda_ <= 1e16;
+  }
+
+ private:
+  double lambda_;
+  double nu_ = 2.0;
+};
 
 /// Result of a solver run, before the common post-processing in Calibrate().
 struct SolverOutput {

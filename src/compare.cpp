@@ -4,8 +4,19 @@
 #include <stdexcept>
 
 #include "accelcal/error.hpp"
+#include "accelcal/frame.hpp"
 
 namespace accelcal {
+
+ParameterErrors SunXuErrors(const ModelParameters& reference, const ModelParameters& estimate) {
+  const Mat33 T = ChangeFrame(reference.K, Frame::kZFirst).K;
+  const Mat33 Tc = ChangeFrame(estimate.K, Frame::kZFirst).K;
+  double sum = 0;
+  for (int i = 0; i < 3; ++i) {
+    for (int j = i; j < 3; ++j) sum += (T(i, j) - Tc(i, j)) * (T(i, j) - Tc(i, j));
+  }
+  return {std::sqrt(sum) / 6.0 * 100.0, (reference.bias - estimate.bias).norm() / 3.0 * 100.0};
+}
 
 std::vector<SolverMethod> MethodsFor(ModelKind model) {
   if (model == ModelKind::kQuadratic) return {SolverMethod::kJoint, SolverMethod::kTwoStep};
@@ -102,6 +113,7 @@ std::vector<MethodComparison> CompareMethods(const std::vector<Vec3>& readings,
       const double n = static_cast<double>(errors.size());
       c.modular_square_mean = sum / n;
       c.modular_square_std = std::sqrt(std::max(0.0, (sum2 - sum * sum / n) / (n - 1)));
+      if (options.reference) c.against_reference = SunXuErrors(*options.reference, c.result.params);
       if (options.leave_one_out) {
         const MethodComparison* same = SameMaximumLikelihoodOptimum(out, c);
         if (same != nullptr) {

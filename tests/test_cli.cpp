@@ -183,6 +183,15 @@ TEST_F(Cli, CompareTabulatesEveryMethod) {
   const CliRun t = Exec("compare " + in + " --units g --methods joint,modulus");
   ASSERT_EQ(t.status, 0) << t.err;
   EXPECT_NE(t.out.find("held-out rms"), std::string::npos);
+  // Against its own joint calibration, the joint method's errors vanish.
+  ASSERT_EQ(Exec("calibrate " + in + " --units g -o " + Path("ref.json")).status, 0);
+  const CliRun r =
+      Exec("compare " + in + " --units g --no-held-out --json --reference " + Path("ref.json"));
+  ASSERT_EQ(r.status, 0) << r.err;
+  const nlohmann::json ref = nlohmann::json::parse(r.out);
+  EXPECT_LT(ref["methods"][0]["e_T_percent"].get<double>(), 1e-12);
+  EXPECT_LT(ref["methods"][0]["e_b_percent"].get<double>(), 1e-12);
+  EXPECT_TRUE(ref["methods"][0]["leave_one_out_rms"].is_null());
   const CliRun bad = Exec("compare " + in + " --model quadratic --methods newton-lagrange");
   EXPECT_EQ(bad.status, 2);
   EXPECT_EQ(bad.err, "accelcal: usage: the newton-lagrange method fits the linear model only\n");

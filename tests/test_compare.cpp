@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include "accelcal/compare.hpp"
+#include "accelcal/frame.hpp"
 #include "accelcal/log_reader.hpp"
 #include "accelcal/simulate.hpp"
 #include "accelcal/static_detection.hpp"
@@ -75,6 +76,39 @@ TEST(Compare, FailuresAreReportedPerMethod) {
   EXPECT_EQ(MethodsFor(ModelKind::kQuadratic).size(), 2u);
   o.methods = {SolverMethod::kModulus};
   EXPECT_THROW(CompareMethods(SunXuReadings(20), o), std::invalid_argument);
+}
+
+TEST(Compare, SunXuErrorsFollowEquation20) {
+  // Both already upper-triangular (z-first) with positive diagonals, so no frame change happens.
+  ModelParameters reference, estimate;
+  reference.K = SunXu2020Ta();
+  reference.bias = SunXu2020Ba();
+  estimate.K = reference.K;
+  estimate.K(0, 1) += 0.003;
+  estimate.K(2, 2) -= 0.004;
+  estimate.bias = reference.bias + Vec3(0.0, 0.006, -0.008);
+  const ParameterErrors e = SunXuErrors(reference, estimate);
+  EXPECT_NEAR(e.e_T_percent, 0.005 / 6 * 100, 1e-12);
+  EXPECT_NEAR(e.e_b_percent, 0.010 / 3 * 100, 1e-12);
+  // Frame-independent: the same map expressed x-first gives the same figures.
+  estimate.K = ChangeFrame(estimate.K, Frame::kXFirst).K;
+  EXPECT_NEAR(SunXuErrors(reference, estimate).e_T_percent, 0.005 / 6 * 100, 1e-9);
+}
+
+TEST(Compare, ReferenceAddsErrorsToEveryMethod) {
+  const std::vector<Vec3> readings = SunXuReadings(30);
+  CompareOptions o;
+  o.base.gravity = 1.0;
+  o.leave_one_out = false;
+  ModelParameters truth;
+  truth.K = SunXu2020Ta();
+  truth.bias = SunXu2020Ba();
+  o.reference = truth;
+  for (const MethodComparison& r : CompareMethods(readings, o)) {
+    ASSERT_TRUE(r.against_reference.has_value()) << ToString(r.method);
+    EXPECT_LT(r.against_reference->e_T_percent, 0.5) << ToString(r.method);  // σ = 0.01 g
+    EXPECT_FALSE(r.leave_one_out_rms.has_value());
+  }
 }
 
 // Issue 3: on real recordings the maximum-likelihood methods predict held-out positions best, or

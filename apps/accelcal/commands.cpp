@@ -219,6 +219,10 @@ int RunCompare(const CompareArgs& args) {
   const Gravity g = ResolveGravity(args.gravity);
   options.base.gravity = g.in_unit;
   options.leave_one_out = args.leave_one_out;
+  if (!args.reference.empty()) {
+    options.reference =
+        ParseCalibrationJson(ReadFileToString(args.reference), args.reference).params;
+  }
   for (const std::string& name : args.methods) {
     options.methods.push_back(
         ParseEnum(SolverMethodFromString(name), name, "--methods",
@@ -275,6 +279,10 @@ int RunCompare(const CompareArgs& args) {
       if (r.leave_one_out_from) {
         out += ", \"leave_one_out_from\": \"" + std::string(ToString(*r.leave_one_out_from)) + "\"";
       }
+      if (r.against_reference) {
+        out += ", \"e_T_percent\": " + number(r.against_reference->e_T_percent) +
+               ", \"e_b_percent\": " + number(r.against_reference->e_b_percent);
+      }
       out += ", \"iterations\": " + std::to_string(r.result.summary.iterations) + "}";
     }
     out += rows.empty() ? "]\n}\n" : "\n  ]\n}\n";
@@ -307,6 +315,14 @@ int RunCompare(const CompareArgs& args) {
       if (!r.leave_one_out_rms) return Format("%17s", "n/a");
       return Format(r.leave_one_out_from ? "%16.4e*" : "%17.4e", *r.leave_one_out_rms);
     });
+    if (options.reference) {
+      row("e_T [%]", [](const MethodComparison& r) {
+        return Format("%17.4f", r.against_reference->e_T_percent);
+      });
+      row("e_b [%]", [](const MethodComparison& r) {
+        return Format("%17.4f", r.against_reference->e_b_percent);
+      });
+    }
     row("iterations",
         [](const MethodComparison& r) { return Format("%17d", r.result.summary.iterations); });
     row("time [us]",

@@ -67,6 +67,7 @@ struct CompareArgs {
   std::vector<std::string> methods;  // empty: all that fit the model
   std::string init = "auto";
   bool leave_one_out = true;
+  std::string reference;  // calibration file: adds paper 001's e_T, e_b
   bool json = false;
 };
 

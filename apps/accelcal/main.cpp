@@ -93,6 +93,8 @@ int main(int argc, char** argv) {
   compare->add_option("--init", cmp.init, "auto, ellipsoid or normalized-readings")
       ->capture_default_str();
   compare->add_flag("!--no-held-out", cmp.leave_one_out, "skip the leave-one-position-out fits");
+  compare->add_option("--reference", cmp.reference,
+                      "a known calibration (JSON): adds paper 001's e_T and e_b per method");
   compare->add_flag("--json", cmp.json, "machine-readable output");
 
   DetectArgs det;

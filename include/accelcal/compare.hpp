@@ -17,7 +17,19 @@ struct CompareOptions {
   CalibrationOptions base;
   /// Refit without each position in turn to predict it (m extra fits per method).
   bool leave_one_out = true;
+  /// A known calibration (e.g. a simulation's truth): each method then gets paper 001's e_T, e_b.
+  std::optional<ModelParameters> reference;
 };
+
+/// Paper 001 eq. (20): e_T = ‖vec(T − T_c)‖ / 6 · 100 %, over the six entries of the
+/// upper-triangular (z-first) form of both matrices, and e_b = ‖b − b_c‖ / 3 · 100 %. Absolute
+/// differences, as in the paper, so the figures read as percent only for calibrations in
+/// g-normalised units (K ≈ I).
+struct ParameterErrors {
+  double e_T_percent = 0;
+  double e_b_percent = 0;
+};
+ParameterErrors SunXuErrors(const ModelParameters& reference, const ModelParameters& estimate);
 
 /// One method's outcome. When the method cannot run on the data (too few positions, unobservable
 /// geometry, no convergence), `error` says why and the figures are absent.
@@ -36,6 +48,7 @@ struct MethodComparison {
   /// full fit agrees with an earlier one to 1e-8 relative (the same optimum) take its held-out
   /// figures instead of refitting m times; this names that method.
   std::optional<SolverMethod> leave_one_out_from;
+  std::optional<ParameterErrors> against_reference;  ///< when CompareOptions::reference is set
 };
 
 /// Every method that fits `model`, the default order of the comparison.

@@ -80,9 +80,17 @@ SolverOutput SolveJoint(const Problem& problem, const ModelParameters& init_para
   out.summary.termination_message = message;
   std::vector<Vec3> trial_dirs(dirs.size());
   int evaluations = 0;
-  int reset_at = -1;  // the iteration at which the damping was last reset
+  int reset_at = -1;        // the iteration at which the damping was last reset (small step)
+  int trust_reset_at = -1;  // likewise, for a step below the cost's resolution
 
+  int passes = 0;  // loop passes, accepted or not: a backstop against cycling without progress
   while (out.summary.iterations < opt.max_iterations) {
+    if (++passes > 100 * opt.max_iterations) {
+      out.summary.termination = TerminationType::kNoProgress;
+      out.summary.termination_message =
+          "no progress after " + std::to_string(passes - 1) + " trial steps (damping cycled)";
+      break;
+    }
     if (ne.cost <= zero_cost) {
       out.summary.termination = TerminationType::kZeroResidual;
       std::snprintf(message, sizeof message, "J = %.3e <= zero-residual level %.3e", ne.cost,
@@ -126,6 +134,17 @@ SolverOutput SolveJoint(const Problem& problem, const ModelParameters& init_para
     // contracts towards the optimum and the parameter criterion ends the solve.
     if (step.predicted_reduction <= kCostResolution * ne.cost) {
       if (damping.lambda() > kMaxConvergedDamping) {
+        if (trust_reset_at == out.summary.iterations) {
+          // The nearly Gauss-Newton step was already tried from here and measurably raised J;
+          // the damped steps change it by less than it can show: J is minimal to its resolution.
+          out.summary.termination = TerminationType::kFunctionTolerance;
+          std::snprintf(message, sizeof message,
+                        "predicted |dJ| = %.3e below the resolution %.0e J of the cost",
+                        step.predicted_reduction, kCostResolution);
+          out.summary.termination_message = message;
+          break;
+        }
+        trust_reset_at = out.summary.iterations;
         damping.Set(kMaxConvergedDamping);
         continue;
       }

@@ -143,5 +143,21 @@ TEST(Compare, MaximumLikelihoodPredictsBestOnRealRecordings) {
   }
 }
 
+TEST(Compare, QuadraticHeldOutFitsFinishOnXsens) {
+  // Regression: a held-out quadratic fit cycled forever between resetting the damping for a
+  // step below the cost's resolution and rejecting the Gauss-Newton step.
+  const InputData d = ReadInput(kData + "/imutk-xsens-mti/xsens_acc.mat", {});
+  const std::vector<Vec3> means =
+      Means(PositionsFromIntervals(DetectStaticIntervals(d.raw, {}).intervals));
+  CompareOptions o;
+  o.base.gravity = 9.81744;
+  o.base.model = ModelKind::kQuadratic;
+  o.methods = {SolverMethod::kJoint};
+  const MethodComparison row = CompareMethods(means, o)[0];
+  ASSERT_TRUE(row.leave_one_out_rms.has_value())
+      << row.leave_one_out_error.value_or(row.error.value_or(""));
+  EXPECT_GT(*row.leave_one_out_rms, row.gravity_norm_rms);
+}
+
 }  // namespace
 }  // namespace accelcal

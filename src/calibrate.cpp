@@ -188,6 +188,18 @@ void CheckData(const std::vector<Vec3>& readings, ModelKind model) {
   }
 }
 
+void ThrowIfUnobservable(const internal::Information& info, ModelKind model) {
+  if (info.rcond >= internal::kMinInformationRcond) return;
+  char buf[256];
+  std::snprintf(buf, sizeof buf,
+                "the positions do not determine the %s model: parameter %s is not observable "
+                "(reciprocal condition %.2g); add positions with other orientations",
+                std::string(ToString(model)).c_str(),
+                std::string(ParameterSlots(ModelKind::kQuadratic)[info.weakest].name).c_str(),
+                info.rcond);
+  throw DataError(buf);
+}
+
 struct Start {
   ModelParameters params;
   std::vector<Vec3> dirs;
@@ -261,15 +273,17 @@ CalibrationResult Calibrate(const std::vector<Vec3>& readings, const Calibration
   // Observability at the solution: a (near) singular reduced information matrix means some
   // parameter is not determined by these positions, whatever the solver returned.
   const internal::Information info = internal::ComputeInformation(problem, out.params, out.dirs);
-  if (!(info.rcond >= internal::kMinInformationRcond)) {
-    char buf[256];
+  ThrowIfUnobservable(info, options.model);
+  // A solver that did not converge on poorly conditioned data is usually wandering along a
+  // valley of nearly equal fits: say which parameter the positions barely determine.
+  if (!out.summary.converged() && info.rcond < internal::kPoorInformationRcond) {
+    char buf[200];
     std::snprintf(buf, sizeof buf,
-                  "the positions do not determine the %s model: parameter %s is not observable "
-                  "(reciprocal condition %.2g); add positions with other orientations",
-                  std::string(ToString(options.model)).c_str(),
+                  "; the positions barely determine parameter %s (reciprocal condition %.2g): add "
+                  "positions with other orientations",
                   std::string(ParameterSlots(ModelKind::kQuadratic)[info.weakest].name).c_str(),
                   info.rcond);
-    throw DataError(buf);
+    out.summary.termination_message += buf;
   }
 
   CalibrationResult result;

@@ -168,7 +168,7 @@ Information ComputeInformation(const Problem& problem, const ModelParameters& pa
   const bool positive = info.factor.info() == Eigen::Success && info.factor.isPositive() &&
                         (info.factor.vectorD().array() > 0).all();
   info.rcond = positive ? info.factor.rcond() : 0.0;
-  if (info.rcond < kMinInformationRcond) {
+  if (info.rcond < kPoorInformationRcond) {
     // Rare path: name the parameter that dominates the weakest direction of the information.
     Eigen::SelfAdjointEigenSolver<Mat12> eig(scaled);
     double lo = std::numeric_limits<double>::infinity();

@@ -305,6 +305,19 @@ TEST_F(Cli, NonConvergenceWritesNothing) {
   EXPECT_FALSE(fs::exists(Path("c.json")));
 }
 
+TEST_F(Cli, AxisAlignedPositionsAreNamedAsTheReason) {
+  // Six axis-aligned orientations (three repeated): gravity's magnitude cannot separate the
+  // misalignments from the orientations, the solver wanders, and the message says why.
+  const CliRun r =
+      Exec("calibrate " + kData +
+           "/imucal-ferraris/derived_static_means_example_session.csv --gravity 9.81 -o " +
+           Path("c.json"));
+  EXPECT_EQ(r.status, 4);
+  EXPECT_NE(r.err.find("did not converge"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("the positions barely determine parameter"), std::string::npos) << r.err;
+  EXPECT_FALSE(fs::exists(Path("c.json")));
+}
+
 TEST_F(Cli, ApplyRejectsABadCalibrationFile) {
   const std::string cal = Write("cal.json", "{\"format\": \"something-else\"}");
   const std::string log = Write("log.csv", "0,1,2,3\n0.01,1,2,3\n");

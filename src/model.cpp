@@ -1,7 +1,4 @@
 #include "accelcal/model.hpp"
-
-#include "accelcal/error.hpp"
-
 namespace accelcal {
 
 std::string_view ToString(ModelKind kind) {
@@ -70,12 +67,5 @@ ModelParameters Unpack(const Eigen::VectorXd& theta, ModelKind kind) {
   }
   return params;
 }
-
-InputError::InputError(std::string file, std::size_t line, std::string reason)
-    : std::runtime_error(file + (line > 0 ? ":" + std::to_string(line) : std::string()) + ": " +
-                         reason),
-      file_(std::move(file)),
-      line_(line),
-      reason_(std::move(reason)) {}
 
 }  // namespace accelcal

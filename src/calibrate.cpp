@@ -204,6 +204,7 @@ struct Start {
   ModelParameters params;
   std::vector<Vec3> dirs;
   Initialization used;
+  EllipsoidFitKind fit_kind = EllipsoidFitKind::kAlgebraic;
   std::string note;
 };
 
@@ -215,6 +216,11 @@ Start Initialise(const Problem& problem, Initialization requested) {
       start.params = fit.params;
       start.dirs = internal::DirectionsFromParams(problem, fit.params);
       start.used = Initialization::kEllipsoidFit;
+      start.fit_kind = fit.kind;
+      if (fit.kind == EllipsoidFitKind::kConstrained) {
+        start.note = "algebraic ellipsoid fit rejected (" + fit.failure +
+                     "); started from the constrained fit of Li & Griffiths (2004)";
+      }
       return start;
     }
     if (requested == Initialization::kEllipsoidFit) {
@@ -262,7 +268,11 @@ CalibrationResult Calibrate(const std::vector<Vec3>& readings, const Calibration
       out.dirs = std::move(start.dirs);
       out.summary.method = SolverMethod::kEllipsoid;
       out.summary.termination = TerminationType::kClosedForm;
-      out.summary.termination_message = "algebraic fit (paper 001 eq. (16)-(18))";
+      out.summary.termination_message =
+          start.fit_kind == EllipsoidFitKind::kAlgebraic
+              ? "algebraic fit (paper 001 eq. (16)-(18))"
+              : "ellipsoid-specific fit (Li & Griffiths 2004): the algebraic quadric of paper "
+                "001 eq. (16)-(18) is no ellipsoid";
       out.summary.initial_cost = out.summary.final_cost =
           internal::Cost(problem, out.params, out.dirs);
       break;

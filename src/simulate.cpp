@@ -1,5 +1,6 @@
 #include "accelcal/simulate.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <random>
 
@@ -100,6 +101,21 @@ std::vector<Vec3> RandomDirections(int count, std::uint64_t seed) {
   for (int k = 0; k < count; ++k) {
     Vec3 v(normal(rng), normal(rng), normal(rng));
     dirs.push_back(v.normalized());
+  }
+  return dirs;
+}
+
+std::vector<Vec3> RandomDirectionsInCap(int count, double half_angle_rad, std::uint64_t seed) {
+  std::mt19937_64 rng(seed);
+  std::uniform_real_distribution<double> uniform(0.0, 1.0);
+  // Archimedes: z uniform on [cos α, 1] and the azimuth uniform give a uniform density on the cap.
+  const double z_min = std::cos(half_angle_rad);
+  std::vector<Vec3> dirs;
+  for (int k = 0; k < count; ++k) {
+    const double z = z_min + (1.0 - z_min) * uniform(rng);
+    const double azimuth = 2.0 * kPi * uniform(rng);
+    const double r = std::sqrt(std::max(0.0, 1.0 - z * z));
+    dirs.emplace_back(r * std::cos(azimuth), r * std::sin(azimuth), z);
   }
   return dirs;
 }

@@ -6,7 +6,6 @@
 #include <gtest/gtest.h>
 
 #include "accelcal/calibrate.hpp"
-#include "accelcal/ellipsoid_fit.hpp"
 #include "accelcal/error.hpp"
 #include "accelcal/simulate.hpp"
 
@@ -154,36 +153,6 @@ TEST(Calibrate, EllipsoidInitialisationIsNeededForRawCounts) {
   } catch (const DataError&) {
   }
   EXPECT_FALSE(good);
-}
-
-TEST(Calibrate, FallsBackToNormalizedReadingsWhenTheFitIsNotAnEllipsoid) {
-  // A strongly quadratic device (g units): the readings lie on no ellipsoid, the algebraic fit
-  // returns a hyperboloid, and the paper's initial directions still lead to the optimum.
-  ModelParameters truth;
-  truth.k2 << 0.8, -0.4, 0.56;
-  const std::vector<Vec3> dirs = RandomDirections(20, 5);
-  const std::vector<Vec3> readings = SimulatePositions(truth, 1.0, dirs, Vec3::Zero(), 1);
-  ASSERT_FALSE(FitEllipsoid(readings, 1.0).ok);
-  CalibrationOptions o = Options(ModelKind::kQuadratic, SolverMethod::kJoint);
-  o.gravity = 1.0;
-  const CalibrationResult r = Calibrate(readings, o);
-  EXPECT_EQ(r.summary.initialization, Initialization::kNormalizedReadings);
-  EXPECT_NE(r.summary.initialization_note.find("ellipsoid fit failed"), std::string::npos);
-  EXPECT_LT((r.params.k2 - truth.k2).norm(), 1e-9);
-  o.initialization = Initialization::kEllipsoidFit;
-  EXPECT_THROW(Calibrate(readings, o), DataError);
-}
-
-TEST(EllipsoidFit, RecoversALinearDeviceExactly) {
-  ModelParameters truth;
-  truth.K << 414.4, 0, 0, 1.5, 412.1, 0, 3.8, 8.8, 414.5;
-  truth.bias << 33124, 33275, 32364;
-  const std::vector<Vec3> readings =
-      SimulatePositions(truth, 9.8, RandomDirections(12, 2), Vec3::Zero(), 1);
-  const EllipsoidFitResult fit = FitEllipsoid(readings, 9.8);
-  ASSERT_TRUE(fit.ok) << fit.failure;
-  EXPECT_LT((fit.params.K - truth.K).norm(), 1e-7 * truth.K.norm());
-  EXPECT_LT((fit.params.bias - truth.bias).norm(), 1e-7 * truth.bias.norm());
 }
 
 std::string DataErrorMessage(const std::vector<Vec3>& readings, ModelKind model) {

@@ -11,8 +11,9 @@
 ///     (25) corrected per ERRATA.md). Converges linearly.
 ///   - kJoint: Levenberg-Marquardt over θ and all directions at once, each direction updated in its
 ///     2-D tangent plane, the per-position 2x2 blocks eliminated by the Schur complement.
-/// Both start from an algebraic ellipsoid fit (paper 001 §3.3) or, where that fails, from the
-/// normalised readings (paper 000 eq. (26)).
+/// Every method starts from an ellipsoid fit (paper 001 §3.3; when the algebraic quadric is no
+/// ellipsoid, the constrained fit of Li & Griffiths 2004, see ellipsoid_fit.hpp) or, where both
+/// fail, from the normalised readings (paper 000 eq. (26)).
 
 #include <optional>
 #include <string>
@@ -45,7 +46,7 @@ std::optional<SolverMethod> SolverMethodFromString(std::string_view text);
 
 enum class Initialization {
   kAuto,                ///< ellipsoid fit, falling back to normalised readings if it fails
-  kEllipsoidFit,        ///< ellipsoid fit only (DataError when the fit is not an ellipsoid)
+  kEllipsoidFit,        ///< ellipsoid fit only (DataError when neither fit gives an ellipsoid)
   kNormalizedReadings,  ///< paper 000 eq. (26): c_k = p_k / |p_k|
 };
 std::string_view ToString(Initialization init);

@@ -51,4 +51,8 @@ std::vector<Vec3> SimulateLinearPositions(const Mat33& M, const Vec3& b,
 /// Random unit directions, uniform on the sphere, deterministic in seed.
 std::vector<Vec3> RandomDirections(int count, std::uint64_t seed);
 
+/// Random unit directions, uniform on the cap of half-angle `half_angle_rad` about +z (a poorly
+/// spread recording, e.g. a device only tilted on a desk), deterministic in seed.
+std::vector<Vec3> RandomDirectionsInCap(int count, double half_angle_rad, std::uint64_t seed);
+
 }  // namespace accelcal

@@ -2,6 +2,7 @@
 #include <benchmark/benchmark.h>
 
 #include "accelcal/calibrate.hpp"
+#include "accelcal/ellipsoid_fit.hpp"
 #include "accelcal/simulate.hpp"
 
 namespace accelcal {
@@ -60,6 +61,25 @@ BENCHMARK_CAPTURE(BM_SunXu300, newton_lagrange, SolverMethod::kNewtonLagrange)
     ->Unit(benchmark::kMicrosecond);
 BENCHMARK_CAPTURE(BM_SunXu300, joint, SolverMethod::kJoint)->Unit(benchmark::kMicrosecond);
 BENCHMARK_CAPTURE(BM_SunXu300, modulus, SolverMethod::kModulus)->Unit(benchmark::kMicrosecond);
+BENCHMARK_CAPTURE(BM_SunXu300, ellipsoid, SolverMethod::kEllipsoid)->Unit(benchmark::kMicrosecond);
+
+// The ellipsoid method on the 18 positions of Table 3 (linear device): the whole Calibrate() call,
+// with the data checks and the observability check at the solution.
+BENCHMARK_CAPTURE(BM_Calibrate, ellipsoid_linear_18, ModelKind::kLinear, SolverMethod::kEllipsoid)
+    ->Unit(benchmark::kMicrosecond);
+
+// The fits alone, algebraic and constrained (Li & Griffiths), on 18 positions.
+void BM_FitEllipsoid(benchmark::State& state, bool constrained) {
+  const std::vector<Vec3> readings = Table3Readings(ModelKind::kLinear);
+  for (auto _ : state) {
+    const EllipsoidFitResult fit = constrained
+                                       ? FitEllipsoidConstrained(readings, kYang2012Gravity_ms2)
+                                       : FitEllipsoid(readings, kYang2012Gravity_ms2);
+    benchmark::DoNotOptimize(fit.params.K(0, 0));
+  }
+}
+BENCHMARK_CAPTURE(BM_FitEllipsoid, algebraic_18, false)->Unit(benchmark::kMicrosecond);
+BENCHMARK_CAPTURE(BM_FitEllipsoid, constrained_18, true)->Unit(benchmark::kMicrosecond);
 
 }  // namespace
 }  // namespace accelcal

@@ -129,9 +129,9 @@ std::optional<std::string> Scatter(const std::vector<Vec3>& readings, Mat10* sca
   // and a 10x10 scatter matrix is far cheaper than an SVD of the m x 10 design matrix.
   scatter->setZero();
   for (const Vec3& p : readings) {
-    scatter->selfadjointView<Eigen::Lower>().rankUpdate(DesignRow((p - *mean) / *scale));
+    const Vec10 row = DesignRow((p - *mean) / *scale);
+    scatter->noalias() += row * row.transpose();  // fixed size: faster than a rankUpdate
   }
-  scatter->triangularView<Eigen::StrictlyUpper>() = scatter->transpose();
   return std::nullopt;
 }
 

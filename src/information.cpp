@@ -84,7 +84,7 @@ Mat32 TangentBasis(const Vec3& c) {
   const Vec3 e = Vec3::Unit(axis);
   Mat32 basis;
   basis.col(0) = c.cross(e).normalized();
-  basis.col(1) = c.cross(basis.col(0)).normalized();
+  basis.col(1) = c.cross(basis.col(0));  // unit: c is a unit vector ⟂ col(0)
   return basis;
 }
 
@@ -98,49 +98,74 @@ void BuildNormalEquations(const Problem& problem, const ModelParameters& params,
   const double g = problem.gravity;
   ne->A.setZero();
   ne->g_theta.setZero();
-  ne->B.resize(m);
+  ne->f.resize(m);
+  ne->J_c.resize(m);
   ne->D.resize(m);
   ne->g_c.resize(m);
   ne->tangent.resize(m);
   ne->cost = 0;
-  // J_θ (eq. (15) rows) is block-sparse: output axis i depends only on the parameters of its own
-  // group (3, 4 and 5 of them, starting at 0, 3 and 7), with coefficients v_i. So A is block
-  // diagonal, A_ii += v_i v_iᵀ, and the rows of B_k in group i are v_i ⊗ (row i of J_c).
-  constexpr int kStart[3] = {0, 3, 7};
+  // A is block diagonal, A_ii += v_i v_iᵀ, with the regressors v_i of axis i.
   for (int k = 0; k < m; ++k) {
     const Vec3 f = g * dirs[k];
     Mat33 J_p_f;
     const Vec3 r = PredictRaw(params, f, &J_p_f) - problem.readings[k];
     ne->tangent[k] = TangentBasis(dirs[k]);
     const Mat32 J_c = g * J_p_f * ne->tangent[k];
-    const Eigen::Vector3d vx(f(0), 1.0, f(0) * f(0));
-    const Eigen::Vector4d vy(f(0), f(1), 1.0, f(1) * f(1));
-    Eigen::Matrix<double, 5, 1> vz;
-    vz << f(0), f(1), f(2), 1.0, f(2) * f(2);
-    ne->A.block<3, 3>(kStart[0], kStart[0]).noalias() += vx * vx.transpose();
-    ne->A.block<4, 4>(kStart[1], kStart[1]).noalias() += vy * vy.transpose();
-    ne->A.block<5, 5>(kStart[2], kStart[2]).noalias() += vz * vz.transpose();
-    ne->g_theta.segment<3>(kStart[0]) += r(0) * vx;
-    ne->g_theta.segment<4>(kStart[1]) += r(1) * vy;
-    ne->g_theta.segment<5>(kStart[2]) += r(2) * vz;
-    ne->B[k].block<3, 2>(kStart[0], 0).noalias() = vx * J_c.row(0);
-    ne->B[k].block<4, 2>(kStart[1], 0).noalias() = vy * J_c.row(1);
-    ne->B[k].block<5, 2>(kStart[2], 0).noalias() = vz * J_c.row(2);
+    const Regressors v(f);
+    ne->A.block<3, 3>(kGroupStart[0], kGroupStart[0]).noalias() += v.x * v.x.transpose();
+    ne->A.block<4, 4>(kGroupStart[1], kGroupStart[1]).noalias() += v.y * v.y.transpose();
+    ne->A.block<5, 5>(kGroupStart[2], kGroupStart[2]).noalias() += v.z * v.z.transpose();
+    ne->g_theta.segment<3>(kGroupStart[0]) += r(0) * v.x;
+    ne->g_theta.segment<4>(kGroupStart[1]) += r(1) * v.y;
+    ne->g_theta.segment<5>(kGroupStart[2]) += r(2) * v.z;
+    ne->f[k] = f;
+    ne->J_c[k] = J_c;
     ne->D[k].noalias() = J_c.transpose() * J_c;
     ne->g_c[k].noalias() = J_c.transpose() * r;
     ne->cost += r.squaredNorm();
   }
 }
 
+Vec12 BTimes(const NormalEquations& ne, std::size_t k, const Eigen::Vector2d& d) {
+  const Regressors v(ne.f[k]);
+  const Vec3 w = ne.J_c[k] * d;
+  Vec12 out;
+  out << w(0) * v.x, w(1) * v.y, w(2) * v.z;
+  return out;
+}
+
+Eigen::Vector2d BTransposeTimes(const NormalEquations& ne, std::size_t k, const Vec12& t) {
+  const Regressors v(ne.f[k]);
+  const Vec3 u(v.x.dot(t.segment<3>(kGroupStart[0])), v.y.dot(t.segment<4>(kGroupStart[1])),
+               v.z.dot(t.segment<5>(kGroupStart[2])));
+  return ne.J_c[k].transpose() * u;
+}
+
+Mat12x2 B(const NormalEquations& ne, std::size_t k) {
+  Mat12x2 out;
+  out.col(0) = BTimes(ne, k, Eigen::Vector2d(1.0, 0.0));
+  out.col(1) = BTimes(ne, k, Eigen::Vector2d(0.0, 1.0));
+  return out;
+}
+
 Mat12 ReducedMatrix(const NormalEquations& ne, double lambda, const Vec12& mask) {
   Mat12 S = ne.A;
   S.diagonal() += lambda * ne.A.diagonal();
-  for (std::size_t k = 0; k < ne.B.size(); ++k) {
+  // B_k D⁻¹ B_kᵀ has the blocks W_ij v_i v_jᵀ with W = J_c D⁻¹ J_cᵀ (3x3): a quarter of the
+  // work of the dense 12x2 product. Only the lower blocks are accumulated.
+  for (std::size_t k = 0; k < ne.f.size(); ++k) {
     Eigen::Matrix2d D = ne.D[k];
     D.diagonal() += lambda * ne.D[k].diagonal();
-    const Mat12x2 BD = ne.B[k] * D.inverse();
-    S.noalias() -= BD.lazyProduct(ne.B[k].transpose());
+    const Mat33 W = ne.J_c[k] * D.inverse() * ne.J_c[k].transpose();
+    const Regressors v(ne.f[k]);
+    S.block<3, 3>(0, 0).noalias() -= W(0, 0) * v.x * v.x.transpose();
+    S.block<4, 3>(3, 0).noalias() -= W(1, 0) * v.y * v.x.transpose();
+    S.block<4, 4>(3, 3).noalias() -= W(1, 1) * v.y * v.y.transpose();
+    S.block<5, 3>(7, 0).noalias() -= W(2, 0) * v.z * v.x.transpose();
+    S.block<5, 4>(7, 3).noalias() -= W(2, 1) * v.z * v.y.transpose();
+    S.block<5, 5>(7, 7).noalias() -= W(2, 2) * v.z * v.z.transpose();
   }
+  S.triangularView<Eigen::StrictlyUpper>() = S.transpose();
   for (int j = 0; j < kMaxParameters; ++j) {
     if (mask(j) == 0.0) {
       S.row(j).setZero();

@@ -27,7 +27,7 @@ struct Step {
 
 // Solves the damped normal equations (A_λ B; Bᵀ D_λ)(δθ; δc) = −(g_θ; g_c) by eliminating δc.
 Step SolveDamped(const NormalEquations& ne, double lambda, const Vec12& mask) {
-  const std::size_t m = ne.B.size();
+  const std::size_t m = ne.f.size();
   const Mat12 S = ReducedMatrix(ne, lambda, mask);
   Vec12 rhs = -ne.g_theta;
   std::vector<Eigen::Matrix2d> D_inv(m);
@@ -35,7 +35,7 @@ Step SolveDamped(const NormalEquations& ne, double lambda, const Vec12& mask) {
     Eigen::Matrix2d D = ne.D[k];
     D.diagonal() += lambda * ne.D[k].diagonal();
     D_inv[k] = D.inverse();
-    rhs.noalias() += ne.B[k] * (D_inv[k] * ne.g_c[k]);
+    rhs += BTimes(ne, k, D_inv[k] * ne.g_c[k]);
   }
   rhs = rhs.cwiseProduct(mask);
   // Jacobi scaling before the factorisation: the parameters differ by orders of magnitude.
@@ -48,9 +48,9 @@ Step SolveDamped(const NormalEquations& ne, double lambda, const Vec12& mask) {
   double quadratic = step.theta.dot(ne.A * step.theta);
   double linear = ne.g_theta.dot(step.theta);
   for (std::size_t k = 0; k < m; ++k) {
-    step.dirs[k] = -D_inv[k] * (ne.g_c[k] + ne.B[k].transpose() * step.theta);
-    quadratic +=
-        2.0 * step.theta.dot(ne.B[k] * step.dirs[k]) + step.dirs[k].dot(ne.D[k] * step.dirs[k]);
+    const Eigen::Vector2d Bt_theta = BTransposeTimes(ne, k, step.theta);
+    step.dirs[k] = -D_inv[k] * (ne.g_c[k] + Bt_theta);
+    quadratic += 2.0 * Bt_theta.dot(step.dirs[k]) + step.dirs[k].dot(ne.D[k] * step.dirs[k]);
     linear += ne.g_c[k].dot(step.dirs[k]);
   }
   step.predicted_reduction = -(2.0 * linear + quadratic);

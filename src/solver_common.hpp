@@ -53,17 +53,21 @@ double ScaledNorm(const Vec12& delta, const Vec12& scales);
 /// Cost below which the data are fitted to round-off (TerminationType::kZeroResidual).
 double ZeroResidualCost(const Problem& problem, const ModelParameters& params);
 
-/// Orthonormal basis of the plane tangent to the unit sphere at c (columns ⟂ c).
+/// Orthonormal basis of the plane tangent to the unit sphere at the unit vector c (columns ⟂ c).
 Mat32 TangentBasis(const Vec3& c);
 /// normalize(c + B δ): the retraction used by the joint solver.
 Vec3 Retract(const Vec3& c, const Mat32& basis, const Eigen::Vector2d& delta);
 
 /// Gauss-Newton normal equations of the joint problem in the variables (θ, δ_1..δ_m), δ_k the
 /// tangent coordinates of c_k: A = Σ J_θᵀJ_θ, B_k = J_θᵀ J_c, D_k = J_cᵀ J_c, g = Jᵀ r.
+/// J_θ is block-sparse (output axis i depends only on its own parameter group, with the regressors
+/// v_i(f) of Regressors()), so B_k is kept implicit as J_c and f: its rows in group i are
+/// v_i ⊗ (row i of J_c). BTimes / BTransposeTimes / B apply it.
 struct NormalEquations {
   Mat12 A;
   Vec12 g_theta;
-  std::vector<Mat12x2> B;
+  std::vector<Vec3> f;     ///< g c_k, the specific force of each position
+  std::vector<Mat32> J_c;  ///< ∂μ/∂δ_k
   std::vector<Eigen::Matrix2d> D;
   std::vector<Eigen::Vector2d> g_c;
   std::vector<Mat32> tangent;
@@ -71,6 +75,24 @@ struct NormalEquations {
 };
 void BuildNormalEquations(const Problem& problem, const ModelParameters& params,
                           const std::vector<Vec3>& dirs, NormalEquations* ne);
+
+/// Where each output axis' parameter group starts in the 12-parameter layout (3, 4, 5 entries).
+inline constexpr int kGroupStart[3] = {0, 3, 7};
+/// ∂μ_i/∂θ restricted to group i: (f_x, 1, f_x²), (f_x, f_y, 1, f_y²), (f_x, f_y, f_z, 1, f_z²).
+struct Regressors {
+  explicit Regressors(const Vec3& f) : x(f(0), 1.0, f(0) * f(0)), y(f(0), f(1), 1.0, f(1) * f(1)) {
+    z << f(0), f(1), f(2), 1.0, f(2) * f(2);
+  }
+  Eigen::Vector3d x;
+  Eigen::Vector4d y;
+  Eigen::Matrix<double, 5, 1> z;
+};
+/// B_k d
+Vec12 BTimes(const NormalEquations& ne, std::size_t k, const Eigen::Vector2d& d);
+/// B_kᵀ t
+Eigen::Vector2d BTransposeTimes(const NormalEquations& ne, std::size_t k, const Vec12& t);
+/// B_k itself (tests)
+Mat12x2 B(const NormalEquations& ne, std::size_t k);
 
 /// Schur complement S = A_λ − Σ B_k D_kλ⁻¹ B_kᵀ with Marquardt damping X_λ = X + λ diag(X), the
 /// fixed parameters' rows and columns replaced by the identity.

@@ -122,7 +122,7 @@ TEST(Derivatives, JointNormalEquationsAndSchurComplement) {
   EXPECT_LT((H.topLeftCorner<12, 12>() - ne.A).norm(), 1e-12 * H.norm());
   EXPECT_LT((grad.head<12>() - ne.g_theta).norm(), 1e-12 * grad.norm());
   for (int k = 0; k < m; ++k) {
-    EXPECT_LT((H.block<12, 2>(0, 12 + 2 * k) - ne.B[k]).norm(), 1e-12 * H.norm());
+    EXPECT_LT((H.block<12, 2>(0, 12 + 2 * k) - internal::B(ne, k)).norm(), 1e-12 * H.norm());
     EXPECT_LT((H.block<2, 2>(12 + 2 * k, 12 + 2 * k) - ne.D[k]).norm(), 1e-12 * H.norm());
     EXPECT_LT((grad.segment<2>(12 + 2 * k) - ne.g_c[k]).norm(), 1e-12 * grad.norm());
   }

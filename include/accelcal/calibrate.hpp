@@ -59,7 +59,10 @@ enum class TerminationType {
   kParameterTolerance,  ///< two-step: ‖Δθ_n‖_s·ρ/(1−ρ) ≤ parameter_tolerance, ρ =
                         ///< ‖Δθ_n‖_s/‖Δθ_{n−1}‖_s (the remaining error of a linearly converging
                         ///< sequence); joint: ‖Δθ‖_s ≤ parameter_tolerance and every |Δc_k| ≤
-                        ///< parameter_tolerance
+                        ///< parameter_tolerance; newton-lagrange: δ_n = max(‖Δθ‖_s, max|Δc_k|)
+                        ///< ≤ parameter_tolerance, or, once δ_{n−1} < 1e-3, the predicted next
+                        ///< step 10 κ δ_n² ≤ parameter_tolerance with κ the largest observed
+                        ///< δ_j / δ_{j−1}² (quadratic convergence)
   kFunctionTolerance,  ///< |J_{n−1} − J_n| ≤ function_tolerance · J_n
   kZeroResidual,       ///< J ≤ (8 ε · signal)² · 3m: the data are fitted to round-off
   kMaxIterations,      ///< iteration cap reached before any criterion: not converged
@@ -105,8 +108,9 @@ struct CalibrationOptions {
     double function_tolerance = 1e-16;
   } modulus;
 
-  /// Paper 001's Newton iteration (no line search, as in the paper): stops when the step is below
-  /// the tolerance in the metric of TerminationType; a diverging start ends as kNoProgress.
+  /// Paper 001's Newton iteration (no line search, as in the paper): stops when the step, or the
+  /// next step predicted from quadratic convergence, is below the tolerance in the metric of
+  /// TerminationType; a diverging start ends as kNoProgress.
   struct NewtonLagrange {
     int max_iterations = 50;
     double parameter_tolerance = 1e-14;

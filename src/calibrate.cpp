@@ -11,6 +11,7 @@
 
 #include "accelcal/ellipsoid_fit.hpp"
 #include "accelcal/error.hpp"
+#include "accelcal/frame.hpp"
 #include "solver_common.hpp"
 
 namespace accelcal {
@@ -188,14 +189,19 @@ void CheckData(const std::vector<Vec3>& readings, ModelKind model) {
   }
 }
 
-void ThrowIfUnobservable(const internal::Information& info, ModelKind model) {
+// Name of a 12-layout slot in the frame the user asked for.
+std::string SlotName(int index, Frame frame) {
+  return std::string(
+      ParameterSlots(ModelKind::kQuadratic, frame)[static_cast<std::size_t>(index)].name);
+}
+
+void ThrowIfUnobservable(const internal::Information& info, ModelKind model, Frame frame) {
   if (info.rcond >= internal::kMinInformationRcond) return;
   char buf[256];
   std::snprintf(buf, sizeof buf,
                 "the positions do not determine the %s model: parameter %s is not observable "
                 "(reciprocal condition %.2g); add positions with other orientations",
-                std::string(ToString(model)).c_str(),
-                std::string(ParameterSlots(ModelKind::kQuadratic)[info.weakest].name).c_str(),
+                std::string(ToString(model)).c_str(), SlotName(info.weakest, frame).c_str(),
                 info.rcond);
   throw DataError(buf);
 }
@@ -238,8 +244,12 @@ Start Initialise(const Problem& problem, Initialization requested) {
 
 }  // namespace
 
-CalibrationResult Calibrate(const std::vector<Vec3>& readings, const CalibrationOptions& options) {
-  if (auto why = options.Validate()) throw std::invalid_argument(*why);
+namespace {
+
+// The fit in the x-first gauge; `frame` only names parameters in messages (the z-first fit runs
+// here on mirrored readings).
+CalibrationResult CalibrateXFirst(const std::vector<Vec3>& readings,
+                                  const CalibrationOptions& options, Frame frame) {
   const auto t0 = std::chrono::steady_clock::now();
   CheckData(readings, options.model);
   const Problem problem{readings, options.gravity, options.model};
@@ -283,7 +293,7 @@ CalibrationResult Calibrate(const std::vector<Vec3>& readings, const Calibration
   // Observability at the solution: a (near) singular reduced information matrix means some
   // parameter is not determined by these positions, whatever the solver returned.
   const internal::Information info = internal::ComputeInformation(problem, out.params, out.dirs);
-  ThrowIfUnobservable(info, options.model);
+  ThrowIfUnobservable(info, options.model, frame);
   // A solver that did not converge on poorly conditioned data is usually wandering along a
   // valley of nearly equal fits: say which parameter the positions barely determine.
   if (!out.summary.converged() && info.rcond < internal::kPoorInformationRcond) {
@@ -291,8 +301,7 @@ CalibrationResult Calibrate(const std::vector<Vec3>& readings, const Calibration
     std::snprintf(buf, sizeof buf,
                   "; the positions barely determine parameter %s (reciprocal condition %.2g): add "
                   "positions with other orientations",
-                  std::string(ParameterSlots(ModelKind::kQuadratic)[info.weakest].name).c_str(),
-                  info.rcond);
+                  SlotName(info.weakest, frame).c_str(), info.rcond);
     out.summary.termination_message += buf;
   }
 
@@ -321,6 +330,27 @@ CalibrationResult Calibrate(const std::vector<Vec3>& readings, const Calibration
   result.summary = out.summary;
   result.summary.time_s =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  return result;
+}
+
+}  // namespace
+
+CalibrationResult Calibrate(const std::vector<Vec3>& readings, const CalibrationOptions& options) {
+  if (auto why = options.Validate()) throw std::invalid_argument(*why);
+  if (options.frame == Frame::kXFirst) return CalibrateXFirst(readings, options, Frame::kXFirst);
+  // z-first: the x-first fit of the mirrored readings P p, mapped back (frame.hpp).
+  std::vector<Vec3> mirrored;
+  mirrored.reserve(readings.size());
+  for (const Vec3& p : readings) mirrored.push_back(MirrorAxes(p));
+  CalibrationResult result = CalibrateXFirst(mirrored, options, Frame::kZFirst);
+  result.frame = Frame::kZFirst;
+  result.params = MirrorAxes(result.params);
+  for (Vec3& c : result.directions) c = MirrorAxes(c);
+  for (Vec3& r : result.residuals) r = MirrorAxes(r);
+  if (result.covariance.size() > 0) {
+    const Eigen::VectorXd d = MirrorSigns(options.model);
+    result.covariance = d.asDiagonal() * result.covariance * d.asDiagonal();
+  }
   return result;
 }
 

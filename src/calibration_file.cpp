@@ -6,6 +6,7 @@
 
 #include "accelcal/engineering.hpp"
 #include "accelcal/error.hpp"
+#include "accelcal/frame.hpp"
 
 namespace accelcal {
 
@@ -25,9 +26,13 @@ ordered_json Nullable(const std::optional<double>& v) {
   return v && std::isfinite(*v) ? ordered_json(*v) : ordered_json(nullptr);
 }
 
-constexpr const char* kEquation =
-    "p = K f + b + k2 * f^2 (element-wise square); p raw, f specific force in the body frame "
-    "(x = sensor x, y in the sensor x-y plane), K lower-triangular";
+std::string Equation(Frame frame) {
+  const std::string common =
+      "p = K f + b + k2 * f^2 (element-wise square); p raw, f specific force in the body frame ";
+  return frame == Frame::kXFirst
+             ? common + "(x = sensor x, y in the sensor x-y plane), K lower-triangular"
+             : common + "(z = sensor z, y in the sensor y-z plane), K upper-triangular";
+}
 
 }  // namespace
 
@@ -39,12 +44,13 @@ std::string CalibrationToJson(const CalibrationResult& result, const Calibration
   doc["model"] = std::string(ToString(result.model));
   doc["gravity"] = result.gravity;
   doc["units"] = {{"raw", info.raw_unit}, {"specific_force", std::string(ToString(info.unit))}};
-  doc["equation"] = kEquation;
+  doc["frame"] = std::string(ToString(result.frame));
+  doc["equation"] = Equation(result.frame);
   doc["K"] = ToJson(result.params.K);
   doc["bias"] = ToJson(result.params.bias);
   doc["k2"] = ToJson(result.params.k2);
 
-  const auto& slots = ParameterSlots(result.model);
+  const auto& slots = ParameterSlots(result.model, result.frame);
   ordered_json order = ordered_json::array();
   for (const auto& s : slots) order.push_back(std::string(s.name));
   doc["parameter_order"] = order;
@@ -87,16 +93,17 @@ std::string CalibrationToJson(const CalibrationResult& result, const Calibration
                   {"degrees_of_freedom", result.degrees_of_freedom}};
 
   const EngineeringParameters eng = ToEngineering(result.params, result.gravity);
-  const Vec3 tau(eng.tau_yx, eng.tau_zx, eng.tau_zy);
-  doc["engineering"] = {
-      {"scale_factor", ToJson(eng.scale_factor)},
-      {"misalignment_rad", {{"tau_yx", tau(0)}, {"tau_zx", tau(1)}, {"tau_zy", tau(2)}}},
-      {"misalignment_arcsec",
-       {{"tau_yx", tau(0) * kArcsecPerRad},
-        {"tau_zx", tau(1) * kArcsecPerRad},
-        {"tau_zy", tau(2) * kArcsecPerRad}}},
-      {"bias_specific_force", ToJson(eng.bias_force)},
-      {"k2_g_per_g2", ToJson(eng.k2_g_per_g2)}};
+  const Misalignment tau = MisalignmentOf(result.params.K, result.frame);
+  ordered_json tau_rad, tau_arcsec;
+  for (int i = 0; i < 3; ++i) {
+    tau_rad[std::string(tau.names[static_cast<std::size_t>(i)])] = tau.rad(i);
+    tau_arcsec[std::string(tau.names[static_cast<std::size_t>(i)])] = tau.rad(i) * kArcsecPerRad;
+  }
+  doc["engineering"] = {{"scale_factor", ToJson(eng.scale_factor)},
+                        {"misalignment_rad", tau_rad},
+                        {"misalignment_arcsec", tau_arcsec},
+                        {"bias_specific_force", ToJson(eng.bias_force)},
+                        {"k2_g_per_g2", ToJson(eng.k2_g_per_g2)}};
 
   const std::vector<double> errors = GravityNormErrors(result.params, means, result.gravity);
   ordered_json positions = ordered_json::array();
@@ -196,8 +203,20 @@ LoadedCalibration ParseCalibrationJson(const std::string& text, const std::strin
           Number(row[j], "K[" + std::to_string(i) + "][" + std::to_string(j) + "]", source);
     }
   }
-  if (cal.params.K(0, 1) != 0 || cal.params.K(0, 2) != 0 || cal.params.K(1, 2) != 0) {
-    throw InputError(source, 0, "'K' must be lower-triangular");
+  // "frame" was added after version 1 first shipped: absent means x-first.
+  cal.frame = Frame::kXFirst;
+  if (doc.contains("frame")) {
+    const std::optional<Frame> frame =
+        doc["frame"].is_string() ? FrameFromString(doc["frame"].get<std::string>()) : std::nullopt;
+    if (!frame) throw InputError(source, 0, "'frame' must be \"x-first\" or \"z-first\"");
+    cal.frame = *frame;
+  }
+  const Mat33& K = cal.params.K;
+  if (cal.frame == Frame::kXFirst && (K(0, 1) != 0 || K(0, 2) != 0 || K(1, 2) != 0)) {
+    throw InputError(source, 0, "'K' must be lower-triangular (frame x-first)");
+  }
+  if (cal.frame == Frame::kZFirst && (K(1, 0) != 0 || K(2, 0) != 0 || K(2, 1) != 0)) {
+    throw InputError(source, 0, "'K' must be upper-triangular (frame z-first)");
   }
   if (cal.params.K(0, 0) == 0 || cal.params.K(1, 1) == 0 || cal.params.K(2, 2) == 0) {
     throw InputError(source, 0, "'K' has a zero diagonal entry");

@@ -100,7 +100,15 @@ TEST(CalibrationFile, RefusesMalformedFiles) {
   EXPECT_EQ(LoadError(j.dump()), "cal.json: unsupported calibration file version (expected 1)");
   j = good;
   j["K"][0][2] = 1.0;
-  EXPECT_EQ(LoadError(j.dump()), "cal.json: 'K' must be lower-triangular");
+  EXPECT_EQ(LoadError(j.dump()), "cal.json: 'K' must be lower-triangular (frame x-first)");
+  j = good;
+  j["frame"] = "z-first";  // with the x-first (lower-triangular) K of `good`
+  EXPECT_EQ(LoadError(j.dump()), "cal.json: 'K' must be upper-triangular (frame z-first)");
+  j["frame"] = "sideways";
+  EXPECT_EQ(LoadError(j.dump()), "cal.json: 'frame' must be \"x-first\" or \"z-first\"");
+  j = good;
+  j.erase("frame");  // files written before the key existed are x-first
+  EXPECT_EQ(LoadError(j.dump()), "no error");
   j = good;
   j["bias"] = {1, 2};
   EXPECT_EQ(LoadError(j.dump()), "cal.json: 'bias' must be an array of 3 numbers");

@@ -10,6 +10,7 @@
 #include "accelcal/compare.hpp"
 #include "accelcal/engineering.hpp"
 #include "accelcal/error.hpp"
+#include "accelcal/frame.hpp"
 #include "accelcal/gravity.hpp"
 #include "output.hpp"
 
@@ -113,9 +114,10 @@ void PrintCalibration(const CalibrationResult& r, const std::vector<Position>& p
                       const Gravity& g, const std::string& raw_unit) {
   const char* u = g.unit == ForceUnit::kMetersPerSecond2 ? "m/s2" : "g";
   const bool have_std = r.covariance.size() > 0;
-  const auto& slots = ParameterSlots(r.model);
-  std::printf("\nmodel     %s, p = K f + b + k2 * f^2, gravity %.9g %s (%s)\n",
-              std::string(ToString(r.model)).c_str(), g.in_unit, u, g.origin.c_str());
+  const auto& slots = ParameterSlots(r.model, r.frame);
+  std::printf("\nmodel     %s, p = K f + b + k2 * f^2, frame %s, gravity %.9g %s (%s)\n",
+              std::string(ToString(r.model)).c_str(), std::string(ToString(r.frame)).c_str(),
+              g.in_unit, u, g.origin.c_str());
   std::printf(
       "\nparameters (K in %s per %s, b in %s, k2 in %s per %s^2; +- 1 sigma from residuals)\n",
       raw_unit.c_str(), u, raw_unit.c_str(), raw_unit.c_str(), u);
@@ -133,10 +135,13 @@ void PrintCalibration(const CalibrationResult& r, const std::vector<Position>& p
   const double ug = 1e6 / r.gravity;
   std::printf("\nengineering (paper 000 Table 3 conventions)\n");
   std::printf("  scale factor     %s  %s/%s\n", Vec(e.scale_factor).c_str(), raw_unit.c_str(), u);
-  std::printf("  misalignment     tau_yx %.6g  tau_zx %.6g  tau_zy %.6g rad\n", e.tau_yx, e.tau_zx,
-              e.tau_zy);
-  std::printf("                   tau_yx %.4f  tau_zx %.4f  tau_zy %.4f arcsec\n",
-              e.tau_yx * kArcsecPerRad, e.tau_zx * kArcsecPerRad, e.tau_zy * kArcsecPerRad);
+  const Misalignment tau = MisalignmentOf(r.params.K, r.frame);
+  const auto name = [&](int i) { return std::string(tau.names[static_cast<std::size_t>(i)]); };
+  std::printf("  misalignment     %s %.6g  %s %.6g  %s %.6g rad\n", name(0).c_str(), tau.rad(0),
+              name(1).c_str(), tau.rad(1), name(2).c_str(), tau.rad(2));
+  std::printf("                   %s %.4f  %s %.4f  %s %.4f arcsec\n", name(0).c_str(),
+              tau.rad(0) * kArcsecPerRad, name(1).c_str(), tau.rad(1) * kArcsecPerRad,
+              name(2).c_str(), tau.rad(2) * kArcsecPerRad);
   std::printf("  bias             %s  %s  (%s ug)\n", Vec(e.bias_force).c_str(), u,
               Vec(e.bias_force * ug, "%.6g ").c_str());
   if (r.model == ModelKind::kQuadratic) {
@@ -177,6 +182,7 @@ int RunCalibrate(const CalibrateArgs& args) {
                              "joint, two-step, newton-lagrange, modulus, modulus-norm, ellipsoid");
   options.initialization = ParseEnum(InitializationFromString(args.init), args.init, "--init",
                                      "auto, ellipsoid, normalized-readings");
+  options.frame = ParseEnum(FrameFromString(args.frame), args.frame, "--frame", "x-first, z-first");
   const Gravity g = ResolveGravity(args.gravity);
   options.gravity = g.in_unit;
   if (args.max_iterations > 0) {

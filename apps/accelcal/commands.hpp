@@ -54,6 +54,7 @@ struct CalibrateArgs {
   std::string model = "linear";
   std::string method = "joint";
   std::string init = "auto";
+  std::string frame = "x-first";
   std::string raw_units = "raw";
   std::string output;
   bool json = false;

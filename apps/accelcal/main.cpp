@@ -72,6 +72,12 @@ int main(int argc, char** argv) {
       ->capture_default_str();
   calibrate->add_option("--init", cal.init, "auto, ellipsoid or normalized-readings")
       ->capture_default_str();
+  calibrate
+      ->add_option("--frame", cal.frame,
+                   "body frame of the result: x-first (body x = sensor x, K lower-triangular, "
+                   "paper 000) or z-first (body z = sensor z, K upper-triangular, paper 001, "
+                   "imu_tk)")
+      ->capture_default_str();
   calibrate->add_option("--raw-units", cal.raw_units, "label of the raw unit (e.g. counts)")
       ->capture_default_str();
   calibrate->add_option("--max-iterations", cal.max_iterations,

@@ -22,6 +22,7 @@
 
 #include <Eigen/Core>
 
+#include "accelcal/frame.hpp"
 #include "accelcal/gravity.hpp"
 #include "accelcal/model.hpp"
 
@@ -78,6 +79,11 @@ struct CalibrationOptions {
   /// (BENCHMARKS.md).
   SolverMethod method = SolverMethod::kJoint;
   Initialization initialization = Initialization::kAuto;
+  /// Body frame of the result (frame.hpp): x-first (K lower-triangular, paper 000) or z-first (K
+  /// upper-triangular, paper 001, imu_tk). The z-first fit is the x-first fit of the mirrored
+  /// readings, so both reach their optimum alike; for the quadratic model the two are different
+  /// models (k2 ∘ f² squares the body-frame components).
+  Frame frame = Frame::kXFirst;
   /// Gravity magnitude in the specific-force unit of the result (9.80665 for m/s², 1 for g).
   double gravity = kStandardGravity_ms2;
 
@@ -144,13 +150,14 @@ struct Summary {
 /// Result of a calibration.
 struct CalibrationResult {
   ModelKind model = ModelKind::kLinear;
+  Frame frame = Frame::kXFirst;           ///< K lower-triangular (x-first) or upper (z-first)
   double gravity = kStandardGravity_ms2;  ///< in the specific-force unit
   ModelParameters params;
   std::vector<Vec3> directions;  ///< estimated unit gravity directions c_k (body frame)
   std::vector<Vec3> residuals;   ///< p_k − μ(θ, g c_k) [raw]
-  /// Covariance of the flat parameters (model.hpp order) from the Fisher information of the joint
-  /// model with directions eliminated, σ² estimated from the residuals: σ̂² = J / (3m − P − 2m).
-  /// Maximum likelihood methods only (IsMaximumLikelihood); empty otherwise.
+  /// Covariance of the flat parameters (model.hpp order; frame.hpp's for z-first) from the Fisher
+  /// information of the joint model with directions eliminated, σ² estimated from the residuals: σ̂²
+  /// = J / (3m − P − 2m). Maximum likelihood methods only (IsMaximumLikelihood); empty otherwise.
   /// Empty when there are no residual degrees of freedom (m = P: exactly determined).
   Eigen::MatrixXd covariance;
   double residual_sigma = 0;   ///< σ̂ [raw], 0 when there are no degrees of freedom

@@ -26,13 +26,15 @@ std::string CalibrationToJson(const CalibrationResult& result, const Calibration
 /// What applying a calibration needs, read back from a file.
 struct LoadedCalibration {
   ModelKind model = ModelKind::kLinear;
+  Frame frame = Frame::kXFirst;
   ModelParameters params;
   double gravity = 0;
   ForceUnit unit = ForceUnit::kMetersPerSecond2;
 };
 
 /// Parses a calibration file's text; throws InputError naming `source` for anything missing,
-/// mistyped or inconsistent (unknown format/version, K not lower-triangular, non-finite numbers).
+/// mistyped or inconsistent (unknown format/version, K not triangular as its frame requires,
+/// non-finite numbers).
 LoadedCalibration ParseCalibrationJson(const std::string& text, const std::string& source);
 
 }  // namespace accelcal

@@ -6,9 +6,24 @@
 ///     plane; K is lower-triangular.
 ///   - kZFirst (paper 001's T_a, imu_tk): body z = sensor z axis, body y in the sensor y-z plane;
 ///     K is upper-triangular.
+///
+/// The z-first model is the x-first model of the axis-mirrored problem: with the rotation
+/// P = antidiag(1, −1, 1) (P = Pᵀ = P⁻¹, det P = 1), readings P p obey the x-first model with
+/// parameters (P K P, P b, P k2) and specific force P f. MirrorAxes maps either way. For the linear
+/// model the two frames describe the same device (same corrected magnitudes, ChangeFrame); for the
+/// quadratic model they differ, because k2 ∘ f² squares the body-frame components: fit in the
+/// frame you want (CalibrationOptions::frame).
+///
+/// Flat parameter order in the z-first frame (the mirror image of model.hpp's order):
+///     quadratic (12): K_zz b_z k2_z | K_yz K_yy b_y k2_y | K_xz K_xy K_xx b_x k2_x
+///     linear     (9): K_zz b_z      | K_yz K_yy b_y      | K_xz K_xy K_xx b_x
 
+#include <array>
 #include <optional>
 #include <string_view>
+#include <vector>
+
+#include <Eigen/Core>
 
 #include "accelcal/model.hpp"
 
@@ -17,6 +32,31 @@ namespace accelcal {
 enum class Frame { kXFirst, kZFirst };
 std::string_view ToString(Frame frame);  ///< "x-first", "z-first"
 std::optional<Frame> FrameFromString(std::string_view text);
+
+/// The frame a triangular K is written in (lower: x-first, else z-first); a diagonal K is x-first.
+Frame FrameOf(const Mat33& K);
+
+/// P v with P = antidiag(1, −1, 1).
+Vec3 MirrorAxes(const Vec3& v);
+/// (P K P, P b, P k2): z-first parameters to the x-first parameters of the mirrored problem and
+/// back (an involution).
+ModelParameters MirrorAxes(const ModelParameters& params);
+
+/// The slots of the flat parameter vector in a frame (model.hpp order for x-first, the order above
+/// for z-first).
+const std::vector<ParameterSlot>& ParameterSlots(ModelKind kind, Frame frame);
+/// d with θ_z-first = diag(d) θ_mirrored, slot by slot (entries ±1): a covariance of the mirrored
+/// problem becomes diag(d) C diag(d).
+Eigen::VectorXd MirrorSigns(ModelKind kind);
+
+/// Off-diagonal misalignment entries of T = K with unit rows, named for the frame:
+/// x-first τ_yx, τ_zx, τ_zy (T(1,0), T(2,0), T(2,1)); z-first τ_xy, τ_xz, τ_yz (T(0,1), T(0,2),
+/// T(1,2)).
+struct Misalignment {
+  std::array<std::string_view, 3> names;
+  Vec3 rad;
+};
+Misalignment MisalignmentOf(const Mat33& K, Frame frame);
 
 /// The same linear map from specific force to raw output expressed in the body frame of `frame`:
 /// K' = K Q with Q a rotation, K' lower- (x-first) or upper-triangular (z-first) with positive

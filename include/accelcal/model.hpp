@@ -10,7 +10,8 @@
 ///   f   specific force in the body frame b                    [specific-force unit: m/s² or g]
 ///   K   lower-triangular 3x3 (K = k_a T_b^a of eq. (2)):       [raw per specific-force unit]
 ///       body x = sensor x axis, body y in the sensor x-y plane, body z completes a right-handed
-///       frame
+///       frame (the x-first frame; the z-first frame of frame.hpp has K upper-triangular, and
+///       its parameters are those of the axis-mirrored problem, see MirrorAxes)
 ///   b   bias                                                   [raw]
 ///   k2  squared (second-order) coefficients, one per axis      [raw per (specific-force unit)²]
 ///       zero in the linear model
@@ -24,6 +25,8 @@
 ///     quadratic (12): K_xx b_x k2_x | K_yx K_yy b_y k2_y | K_zx K_zy K_zz b_z k2_z
 ///     linear     (9): K_xx b_x      | K_yx K_yy b_y      | K_zx K_zy K_zz b_z
 ///
+/// (x-first frame; the z-first order is in frame.hpp.)
+///
 /// In a static position f = g c with |c| = 1 and g the local gravity magnitude (eq. (6)).
 
 #include <array>
@@ -32,6 +35,7 @@
 #include <vector>
 
 #include <Eigen/Core>
+#include <Eigen/LU>  // SpecificForce of a full K
 
 #include "accelcal/types.hpp"
 
@@ -70,7 +74,7 @@ const std::vector<ParameterSlot>& ParameterSlots(ModelKind kind);
 /// Parameters of p = K f + b + k2 ∘ f². Units as in the file comment.
 template <typename Scalar>
 struct ModelParametersT {
-  Mat33T<Scalar> K = Mat33T<Scalar>::Identity();  ///< raw per specific-force unit, lower-triangular
+  Mat33T<Scalar> K = Mat33T<Scalar>::Identity();  ///< raw per specific-force unit, triangular
   Vec3T<Scalar> bias = Vec3T<Scalar>::Zero();     ///< raw
   Vec3T<Scalar> k2 = Vec3T<Scalar>::Zero();       ///< raw per (specific-force unit)²
 
@@ -86,23 +90,23 @@ Eigen::VectorXd Pack(const ModelParameters& params, ModelKind kind);
 /// Parameters from a flat vector of size NumParameters(kind); k2 = 0 for the linear model.
 ModelParameters Unpack(const Eigen::VectorXd& theta, ModelKind kind);
 
-/// Forward model μ(f) = K f + b + k2 ∘ f² (eq. (11) without noise). Optionally returns
-/// J_p_f = ∂p/∂f = K + 2 diag(k2 ∘ f). Only the lower triangle of K is read.
+/// Forward model μ(f) = K f + b + k2 ∘ f² (eq. (11) without noise), for any K (lower-triangular
+/// in the x-first frame, upper in the z-first frame of frame.hpp). Optionally returns
+/// J_p_f = ∂p/∂f = K + 2 diag(k2 ∘ f).
 template <typename Scalar>
 Vec3T<Scalar> PredictRaw(const ModelParametersT<Scalar>& params, const Vec3T<Scalar>& f,
                          Mat33T<Scalar>* J_p_f = nullptr) {
-  // Written out: only the lower triangle of K is read, and the 3x3 products stay inline.
   const Mat33T<Scalar>& K = params.K;
   const Vec3T<Scalar>& k2 = params.k2;
   if (J_p_f != nullptr) {
-    *J_p_f << K(0, 0) + Scalar(2) * k2(0) * f(0), Scalar(0), Scalar(0),  //
-        K(1, 0), K(1, 1) + Scalar(2) * k2(1) * f(1), Scalar(0),          //
-        K(2, 0), K(2, 1), K(2, 2) + Scalar(2) * k2(2) * f(2);
+    *J_p_f = K;
+    for (int i = 0; i < 3; ++i) (*J_p_f)(i, i) += Scalar(2) * k2(i) * f(i);
   }
-  return Vec3T<Scalar>(
-      K(0, 0) * f(0) + params.bias(0) + k2(0) * f(0) * f(0),
-      K(1, 0) * f(0) + K(1, 1) * f(1) + params.bias(1) + k2(1) * f(1) * f(1),
-      K(2, 0) * f(0) + K(2, 1) * f(1) + K(2, 2) * f(2) + params.bias(2) + k2(2) * f(2) * f(2));
+  Vec3T<Scalar> p;
+  for (int i = 0; i < 3; ++i) {
+    p(i) = K(i, 0) * f(0) + K(i, 1) * f(1) + K(i, 2) * f(2) + params.bias(i) + k2(i) * f(i) * f(i);
+  }
+  return p;
 }
 
 /// Jacobian of the forward model with respect to the 12 flat parameters (quadratic order, eq. (15)
@@ -131,20 +135,34 @@ const std::vector<int>& ActiveColumns(ModelKind kind);
 
 /// Exact inverse of the forward model: the specific force f with PredictRaw(params, f) = p.
 ///
-/// K is lower-triangular and k2 diagonal, so row i reads K_ii f_i + k2_i f_i² = r_i with r_i known
-/// once f_0..f_{i-1} are: a scalar quadratic solved in closed form, taking the root that tends to
-/// the linear solution r_i / K_ii as k2_i → 0 (written 2 r / (K + sqrt(K² + 4 k2 r)) to avoid
-/// cancellation). Returns std::nullopt when p lies outside the range the model can produce
-/// (negative discriminant) or when K has a zero diagonal.
+/// For a triangular K (lower: x-first frame; upper: z-first) and diagonal k2, row i reads
+/// K_ii f_i + k2_i f_i² = r_i with r_i known once the other components of the triangle are: a
+/// scalar quadratic solved in closed form, taking the root that tends to the linear solution
+/// r_i / K_ii as k2_i → 0 (written 2 r / (K + sqrt(K² + 4 k2 r)) to avoid cancellation). A full K
+/// is inverted for the linear model only. Returns std::nullopt when p lies outside the range the
+/// model can produce (negative discriminant), when K has a zero diagonal, or for a full K with
+/// k2 ≠ 0.
 template <typename Scalar>
 std::optional<Vec3T<Scalar>> SpecificForce(const ModelParametersT<Scalar>& params,
                                            const Vec3T<Scalar>& p) {
   using std::sqrt;
-  Vec3T<Scalar> f;
-  for (int i = 0; i < 3; ++i) {
+  const Mat33T<Scalar>& K = params.K;
+  const bool lower = K(0, 1) == Scalar(0) && K(0, 2) == Scalar(0) && K(1, 2) == Scalar(0);
+  const bool upper = K(1, 0) == Scalar(0) && K(2, 0) == Scalar(0) && K(2, 1) == Scalar(0);
+  if (!lower && !upper) {
+    if (!params.k2.isZero(0)) return std::nullopt;
+    const Scalar det = K.determinant();
+    if (det == Scalar(0)) return std::nullopt;
+    return Vec3T<Scalar>(K.inverse() * (p - params.bias));
+  }
+  Vec3T<Scalar> f = Vec3T<Scalar>::Zero();
+  for (int n = 0; n < 3; ++n) {
+    const int i = lower ? n : 2 - n;  // solve along the triangle
     Scalar r = p(i) - params.bias(i);
-    for (int j = 0; j < i; ++j) r -= params.K(i, j) * f(j);
-    const Scalar a = params.K(i, i);
+    for (int j = 0; j < 3; ++j) {
+      if (j != i) r -= K(i, j) * f(j);  // the entries outside the triangle are zero
+    }
+    const Scalar a = K(i, i);
     if (a == Scalar(0)) return std::nullopt;
     const Scalar disc = a * a + Scalar(4) * params.k2(i) * r;
     if (!(disc >= Scalar(0))) return std::nullopt;

@@ -75,7 +75,7 @@ std::string_view ToString(TerminationType type);
 
 struct CalibrationOptions {
   ModelKind model = ModelKind::kLinear;
-  /// kJoint is the default: measured 70x faster than kTwoStep to the same optimum
+  /// kJoint is the default: measured 35x faster than kTwoStep to the same optimum
   /// (BENCHMARKS.md).
   SolverMethod method = SolverMethod::kJoint;
   Initialization initialization = Initialization::kAuto;

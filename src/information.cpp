@@ -176,17 +176,53 @@ Mat12 ReducedMatrix(const NormalEquations& ne, double lambda, const Vec12& mask)
   return S;
 }
 
+Mat12 ReducedInformation(const Problem& problem, const ModelParameters& params,
+                         const std::vector<Vec3>& dirs, Vec12* A_diagonal) {
+  // The Gauss-Newton blocks give S = Σ_k [A_k − B_k D_k⁻¹ B_kᵀ], whose (i, j) block is
+  // (δ_ij − W_ij) v_i v_jᵀ with W = J_c D⁻¹ J_cᵀ the projector onto the span of J_c. That span is
+  // the plane J_p_f c⊥, so δ_ij − W_ij = n_i n_j with n its unit normal, n ∝ J_p_f⁻ᵀ c: only the
+  // residual component normal to the fitted surface carries information. S = Σ u_k u_kᵀ with
+  // u_k = (n_x v_x, n_y v_y, n_z v_z): a sum of squares, free of the cancellation in A − B D⁻¹ Bᵀ.
+  const int m = problem.positions();
+  Eigen::Matrix<double, Eigen::Dynamic, kMaxParameters> U(m, kMaxParameters);
+  A_diagonal->setZero();
+  for (int k = 0; k < m; ++k) {
+    const Vec3 f = problem.gravity * dirs[k];
+    Mat33 J;
+    PredictRaw(params, f, &J);
+    // J⁻ᵀ c up to the factor 1 / det J: the columns of J⁻ᵀ det J are cross products of J's.
+    const Vec3 n = (dirs[k](0) * J.col(1).cross(J.col(2)) + dirs[k](1) * J.col(2).cross(J.col(0)) +
+                    dirs[k](2) * J.col(0).cross(J.col(1)))
+                       .normalized();
+    const Regressors v(f);
+    U.row(k) << n(0) * v.x.transpose(), n(1) * v.y.transpose(), n(2) * v.z.transpose();
+    A_diagonal->segment<3>(kGroupStart[0]) += v.x.cwiseAbs2();
+    A_diagonal->segment<4>(kGroupStart[1]) += v.y.cwiseAbs2();
+    A_diagonal->segment<5>(kGroupStart[2]) += v.z.cwiseAbs2();
+  }
+  Mat12 S = Mat12::Zero();
+  S.selfadjointView<Eigen::Lower>().rankUpdate(U.transpose());
+  S.triangularView<Eigen::StrictlyUpper>() = S.transpose();
+  return S;
+}
+
 Information ComputeInformation(const Problem& problem, const ModelParameters& params,
                                const std::vector<Vec3>& dirs) {
-  NormalEquations ne;
-  BuildNormalEquations(problem, params, dirs, &ne);
   Information info;
   const Vec12 mask = FreeMask(problem.model);
-  info.reduced = ReducedMatrix(ne, 0.0, mask);
+  Vec12 A_diagonal;
+  info.reduced = ReducedInformation(problem, params, dirs, &A_diagonal);
+  for (int j = 0; j < kMaxParameters; ++j) {
+    if (mask(j) == 0.0) {
+      info.reduced.row(j).setZero();
+      info.reduced.col(j).setZero();
+      info.reduced(j, j) = 1.0;
+    }
+  }
   // Jacobi scaling with A's diagonal makes the condition independent of the parameters' units; a
   // parameter that the directions absorb completely then has a scaled diagonal near 0.
   for (int j = 0; j < kMaxParameters; ++j) {
-    info.scale(j) = mask(j) != 0.0 && ne.A(j, j) > 0 ? 1.0 / std::sqrt(ne.A(j, j)) : 1.0;
+    info.scale(j) = mask(j) != 0.0 && A_diagonal(j) > 0 ? 1.0 / std::sqrt(A_diagonal(j)) : 1.0;
   }
   const Mat12 scaled = info.scale.asDiagonal() * info.reduced * info.scale.asDiagonal();
   info.factor.compute(scaled);

@@ -98,6 +98,11 @@ Mat12x2 B(const NormalEquations& ne, std::size_t k);
 /// fixed parameters' rows and columns replaced by the identity.
 Mat12 ReducedMatrix(const NormalEquations& ne, double lambda, const Vec12& mask);
 
+/// ReducedMatrix(ne, 0, all free) computed directly as Σ u_k u_kᵀ (see the definition), and the
+/// diagonal of A for the Jacobi scaling.
+Mat12 ReducedInformation(const Problem& problem, const ModelParameters& params,
+                         const std::vector<Vec3>& dirs, Vec12* A_diagonal);
+
 /// The reduced information matrix at a point, factorised once for the observability check and
 /// the covariance.
 struct Information {

@@ -135,6 +135,11 @@ TEST(Derivatives, JointNormalEquationsAndSchurComplement) {
   const internal::Mat12 reduced =
       internal::ReducedMatrix(ne, 0.0, internal::FreeMask(ModelKind::kQuadratic));
   EXPECT_LT((reduced - dense).norm(), 1e-9 * dense.norm());
+  // The square-root form used for the information matrix gives the same matrix.
+  internal::Vec12 A_diagonal;
+  const internal::Mat12 direct = internal::ReducedInformation(problem, truth, start, &A_diagonal);
+  EXPECT_LT((direct - dense).norm(), 1e-9 * dense.norm());
+  EXPECT_LT((A_diagonal - ne.A.diagonal()).norm(), 1e-12 * ne.A.diagonal().norm());
 }
 
 }  // namespace

@@ -4,6 +4,7 @@
 #include "accelcal/calibrate.hpp"
 #include "accelcal/ellipsoid_fit.hpp"
 #include "accelcal/simulate.hpp"
+#include "solver_common.hpp"
 
 namespace accelcal {
 namespace {
@@ -62,6 +63,33 @@ BENCHMARK_CAPTURE(BM_SunXu300, newton_lagrange, SolverMethod::kNewtonLagrange)
 BENCHMARK_CAPTURE(BM_SunXu300, joint, SolverMethod::kJoint)->Unit(benchmark::kMicrosecond);
 BENCHMARK_CAPTURE(BM_SunXu300, modulus, SolverMethod::kModulus)->Unit(benchmark::kMicrosecond);
 BENCHMARK_CAPTURE(BM_SunXu300, ellipsoid, SolverMethod::kEllipsoid)->Unit(benchmark::kMicrosecond);
+
+// Where the time of a 300-position Calibrate() goes: the Newton-Lagrange iteration alone (from the
+// ellipsoid start, as Calibrate runs it), and the observability/covariance information at the end.
+void BM_SunXu300Stage(benchmark::State& state, bool solver) {
+  const std::vector<Vec3> readings = SimulateLinearPositions(
+      SunXu2020Ta(), SunXu2020Ba(), SunXu2020Directions(300, 1), kSunXu2020Sigma_g, 1001);
+  CalibrationOptions options;
+  options.method = SolverMethod::kNewtonLagrange;
+  options.gravity = 1.0;
+  const internal::Problem problem{readings, options.gravity, options.model};
+  const ModelParameters start = FitEllipsoid(readings, options.gravity).params;
+  const std::vector<Vec3> dirs = internal::DirectionsFromParams(problem, start);
+  const internal::SolverOutput solved =
+      internal::SolveNewtonLagrange(problem, start, dirs, options);
+  for (auto _ : state) {
+    if (solver) {
+      benchmark::DoNotOptimize(
+          internal::SolveNewtonLagrange(problem, start, dirs, options).params.K(0, 0));
+    } else {
+      benchmark::DoNotOptimize(
+          internal::ComputeInformation(problem, solved.params, solved.dirs).rcond);
+    }
+  }
+}
+BENCHMARK_CAPTURE(BM_SunXu300Stage, newton_lagrange_solver_only, true)
+    ->Unit(benchmark::kMicrosecond);
+BENCHMARK_CAPTURE(BM_SunXu300Stage, information_only, false)->Unit(benchmark::kMicrosecond);
 
 // The ellipsoid method on the 18 positions of Table 3 (linear device): the whole Calibrate() call,
 // with the data checks and the observability check at the solution.

@@ -49,14 +49,17 @@ std::string_view ToString(Initialization init) {
     case Initialization::kEllipsoidFit:
       return "ellipsoid";
     case Initialization::kNormalizedReadings:
+      return "normalized-readings";
+    case Initialization::kGiven:
       break;
   }
-  return "normalized-readings";
+  return "given";
 }
 std::optional<Initialization> InitializationFromString(std::string_view text) {
   if (text == "auto") return Initialization::kAuto;
   if (text == "ellipsoid") return Initialization::kEllipsoidFit;
   if (text == "normalized-readings") return Initialization::kNormalizedReadings;
+  if (text == "given") return Initialization::kGiven;
   return std::nullopt;
 }
 
@@ -98,7 +101,15 @@ std::optional<std::string> CalibrationOptions::Validate() const {
   if (!(newton_lagrange.parameter_tolerance >= 0)) {
     return "newton_lagrange.parameter_tolerance must be non-negative";
   }
-  if (method == SolverMethod::kEllipsoid && initialization == Initialization::kNormalizedReadings) {
+  if ((initialization == Initialization::kGiven) != initial_params.has_value()) {
+    return "initial_params must be given exactly when initialization is kGiven";
+  }
+  if (initial_params && !(initial_params->K.allFinite() && initial_params->bias.allFinite() &&
+                          initial_params->k2.allFinite())) {
+    return "initial_params must be finite";
+  }
+  if (method == SolverMethod::kEllipsoid && initialization != Initialization::kAuto &&
+      initialization != Initialization::kEllipsoidFit) {
     return "the ellipsoid method is the ellipsoid fit: it takes no other initialisation";
   }
   if ((method == SolverMethod::kModulus || method == SolverMethod::kModulusNorm ||
@@ -214,8 +225,16 @@ struct Start {
   std::string note;
 };
 
-Start Initialise(const Problem& problem, Initialization requested) {
+Start Initialise(const Problem& problem, Initialization requested,
+                 const std::optional<ModelParameters>& given) {
   Start start;
+  if (requested == Initialization::kGiven) {
+    start.params = *given;
+    if (problem.model == ModelKind::kLinear) start.params.k2.setZero();
+    start.dirs = internal::DirectionsFromParams(problem, start.params);
+    start.used = Initialization::kGiven;
+    return start;
+  }
   if (requested != Initialization::kNormalizedReadings) {
     const EllipsoidFitResult fit = FitEllipsoid(problem.readings, problem.gravity);
     if (fit.ok) {
@@ -254,7 +273,7 @@ CalibrationResult CalibrateXFirst(const std::vector<Vec3>& readings,
   CheckData(readings, options.model);
   const Problem problem{readings, options.gravity, options.model};
 
-  Start start = Initialise(problem, options.initialization);
+  Start start = Initialise(problem, options.initialization, options.initial_params);
   internal::SolverOutput out;
   switch (options.method) {
     case SolverMethod::kTwoStep:
@@ -333,16 +352,16 @@ CalibrationResult CalibrateXFirst(const std::vector<Vec3>& readings,
   return result;
 }
 
-}  // namespace
-
-CalibrationResult Calibrate(const std::vector<Vec3>& readings, const CalibrationOptions& options) {
-  if (auto why = options.Validate()) throw std::invalid_argument(*why);
+// The fit in the requested frame (frame.hpp): z-first is the x-first fit of the mirrored readings.
+CalibrationResult CalibrateInFrame(const std::vector<Vec3>& readings,
+                                   const CalibrationOptions& options) {
   if (options.frame == Frame::kXFirst) return CalibrateXFirst(readings, options, Frame::kXFirst);
-  // z-first: the x-first fit of the mirrored readings P p, mapped back (frame.hpp).
   std::vector<Vec3> mirrored;
   mirrored.reserve(readings.size());
   for (const Vec3& p : readings) mirrored.push_back(MirrorAxes(p));
-  CalibrationResult result = CalibrateXFirst(mirrored, options, Frame::kZFirst);
+  CalibrationOptions mirrored_options = options;
+  if (options.initial_params) mirrored_options.initial_params = MirrorAxes(*options.initial_params);
+  CalibrationResult result = CalibrateXFirst(mirrored, mirrored_options, Frame::kZFirst);
   result.frame = Frame::kZFirst;
   result.params = MirrorAxes(result.params);
   for (Vec3& c : result.directions) c = MirrorAxes(c);
@@ -350,6 +369,57 @@ CalibrationResult Calibrate(const std::vector<Vec3>& readings, const Calibration
   if (result.covariance.size() > 0) {
     const Eigen::VectorXd d = MirrorSigns(options.model);
     result.covariance = d.asDiagonal() * result.covariance * d.asDiagonal();
+  }
+  return result;
+}
+
+// Leave-one-position-out: each position corrected by a fit without it, started from the full fit
+// (the held-out optimum is close to it, so each refit takes a few iterations).
+void CrossValidate(const std::vector<Vec3>& readings, const CalibrationOptions& options,
+                   CalibrationResult* result) {
+  CalibrationOptions held_out = options;
+  held_out.cross_validate = false;
+  if (options.method != SolverMethod::kEllipsoid) {  // closed form: nothing to start from
+    held_out.initialization = Initialization::kGiven;
+    held_out.initial_params = result->params;
+  }
+  std::vector<Vec3> subset(readings.size() - 1);
+  std::vector<double> errors;
+  for (std::size_t k = 0; k < readings.size(); ++k) {
+    std::copy(readings.begin(), readings.begin() + static_cast<std::ptrdiff_t>(k), subset.begin());
+    std::copy(readings.begin() + static_cast<std::ptrdiff_t>(k) + 1, readings.end(),
+              subset.begin() + static_cast<std::ptrdiff_t>(k));
+    const std::string without = "without position " + std::to_string(k + 1) + ": ";
+    CalibrationResult fit;
+    try {
+      fit = CalibrateInFrame(subset, held_out);
+    } catch (const DataError& e) {
+      result->crossval_note = without + e.what();
+      return;
+    }
+    if (!fit.summary.converged()) {
+      result->crossval_note = without + "did not converge: " + fit.summary.termination_message;
+      return;
+    }
+    const double e = GravityNormErrors(fit.params, {readings[k]}, options.gravity)[0];
+    if (!std::isfinite(e)) {
+      result->crossval_note =
+          "position " + std::to_string(k + 1) + " lies outside the range of the fit without it";
+      return;
+    }
+    errors.push_back(e);
+  }
+  result->crossval_rms = Rms(errors);
+  result->crossval_errors = std::move(errors);
+}
+
+}  // namespace
+
+CalibrationResult Calibrate(const std::vector<Vec3>& readings, const CalibrationOptions& options) {
+  if (auto why = options.Validate()) throw std::invalid_argument(*why);
+  CalibrationResult result = CalibrateInFrame(readings, options);
+  if (options.cross_validate && result.summary.converged()) {
+    CrossValidate(readings, options, &result);
   }
   return result;
 }

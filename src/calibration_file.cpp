@@ -122,11 +122,14 @@ std::string CalibrationToJson(const CalibrationResult& result, const Calibration
     entry["direction"] = ToJson(result.directions[k]);
     entry["residual"] = ToJson(result.residuals[k]);
     entry["gravity_norm_error"] = Nullable(errors[k]);
+    if (result.crossval_rms) entry["crossval_error"] = result.crossval_errors[k];
     positions.push_back(entry);
   }
   doc["positions"] = positions;
   doc["gravity_norm_rms_before"] = Nullable(GravityNormRmsUncalibrated(means, result.gravity));
   doc["gravity_norm_rms_after"] = Nullable(Rms(errors));
+  doc["crossval_rms"] = Nullable(result.crossval_rms);
+  if (!result.crossval_note.empty()) doc["crossval_note"] = result.crossval_note;
   const Summary& s = result.summary;
   doc["solver"] = {{"method", std::string(ToString(s.method))},
                    {"initialization", std::string(ToString(s.initialization))},

@@ -40,29 +40,22 @@ std::optional<std::string> Fit(const std::vector<Vec3>& readings, const Calibrat
   return std::nullopt;
 }
 
-void LeaveOneOut(const std::vector<Vec3>& readings, const CalibrationOptions& options,
+// Held-out figures from Calibrate's cross-validation, its refits started from this method's full
+// fit (re-run from there: it stops at once).
+void LeaveOneOut(const std::vector<Vec3>& readings, CalibrationOptions options,
                  MethodComparison* out) {
-  std::vector<double> errors;
-  std::vector<Vec3> subset(readings.size() - 1);
-  for (std::size_t k = 0; k < readings.size(); ++k) {
-    std::size_t j = 0;
-    for (std::size_t i = 0; i < readings.size(); ++i) {
-      if (i != k) subset[j++] = readings[i];
-    }
-    CalibrationResult fit;
-    if (auto why = Fit(subset, options, &fit)) {
-      out->leave_one_out_error = "without position " + std::to_string(k + 1) + ": " + *why;
-      return;
-    }
-    const double e = GravityNormErrors(fit.params, {readings[k]}, options.gravity)[0];
-    if (!std::isfinite(e)) {
-      out->leave_one_out_error =
-          "position " + std::to_string(k + 1) + " lies outside the range of the fit without it";
-      return;
-    }
-    errors.push_back(e);
+  options.cross_validate = true;
+  if (options.method != SolverMethod::kEllipsoid) {
+    options.initialization = Initialization::kGiven;
+    options.initial_params = out->result.params;
   }
-  out->leave_one_out_rms = Rms(errors);
+  CalibrationResult validated;
+  if (auto why = Fit(readings, options, &validated)) {
+    out->leave_one_out_error = "refit from the solution: " + *why;
+    return;
+  }
+  out->leave_one_out_rms = validated.crossval_rms;
+  if (!validated.crossval_rms) out->leave_one_out_error = validated.crossval_note;
 }
 
 // An earlier maximum-likelihood result at the same optimum as `c` (parameters equal to 1e-8 of

@@ -85,6 +85,15 @@ TEST_F(Cli, CalibratesTheXsensRecording) {
   EXPECT_LE(doc["gravity_norm_rms_after"].get<double>(), 0.0012);
   EXPECT_EQ(doc["positions"].size(), 38u);
   EXPECT_EQ(doc["positions"][0]["interval"]["begin"].get<int>() > 0, true);
+  // Leave-one-position-out validation by default: the compare table's held-out figure (README).
+  EXPECT_NEAR(doc["crossval_rms"].get<double>(), 1.4031e-3, 1e-7);
+  EXPECT_TRUE(doc["positions"][0].contains("crossval_error"));
+  EXPECT_NE(r.out.find("held-out  rms |f|-g 0.0014031"), std::string::npos) << r.out;
+  const CliRun quick =
+      Exec("calibrate " + kData +
+           "/imutk-xsens-mti/xsens_acc.mat --gravity 9.81744 --no-crossval --json");
+  ASSERT_EQ(quick.status, 0) << quick.err;
+  EXPECT_TRUE(nlohmann::json::parse(quick.out)["crossval_rms"].is_null());
 
   // --json prints exactly the file; a second run gives the same bytes (determinism).
   const CliRun j =

@@ -160,6 +160,12 @@ void PrintCalibration(const CalibrationResult& r, const std::vector<Position>& p
               before ? Format("%.6g %s", *before, u).c_str()
                      : Format("n/a (raw readings are not in %s)", u).c_str(),
               Rms(errors), u);
+  if (r.crossval_rms) {
+    std::printf("held-out  rms |f|-g %.6g %s (each position corrected by a fit without it)\n",
+                *r.crossval_rms, u);
+  } else if (!r.crossval_note.empty()) {
+    std::printf("held-out  n/a: %s\n", r.crossval_note.c_str());
+  }
   std::printf("solver    %s\n", r.summary.BriefReport().c_str());
   if (!r.summary.initialization_note.empty()) {
     std::printf("note      %s\n", r.summary.initialization_note.c_str());
@@ -183,6 +189,7 @@ int RunCalibrate(const CalibrateArgs& args) {
   options.initialization = ParseEnum(InitializationFromString(args.init), args.init, "--init",
                                      "auto, ellipsoid, normalized-readings");
   options.frame = ParseEnum(FrameFromString(args.frame), args.frame, "--frame", "x-first, z-first");
+  options.cross_validate = args.cross_validate;
   const Gravity g = ResolveGravity(args.gravity);
   options.gravity = g.in_unit;
   if (args.max_iterations > 0) {

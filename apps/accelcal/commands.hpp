@@ -55,6 +55,7 @@ struct CalibrateArgs {
   std::string method = "joint";
   std::string init = "auto";
   std::string frame = "x-first";
+  bool cross_validate = true;
   std::string raw_units = "raw";
   std::string output;
   bool json = false;

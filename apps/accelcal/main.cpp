@@ -78,6 +78,8 @@ int main(int argc, char** argv) {
                    "paper 000) or z-first (body z = sensor z, K upper-triangular, paper 001, "
                    "imu_tk)")
       ->capture_default_str();
+  calibrate->add_flag("!--no-crossval", cal.cross_validate,
+                      "skip the leave-one-position-out validation (one refit per position)");
   calibrate->add_option("--raw-units", cal.raw_units, "label of the raw unit (e.g. counts)")
       ->capture_default_str();
   calibrate->add_option("--max-iterations", cal.max_iterations,

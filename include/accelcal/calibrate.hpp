@@ -49,6 +49,8 @@ enum class Initialization {
   kAuto,                ///< ellipsoid fit, falling back to normalised readings if it fails
   kEllipsoidFit,        ///< ellipsoid fit only (DataError when neither fit gives an ellipsoid)
   kNormalizedReadings,  ///< paper 000 eq. (26): c_k = p_k / |p_k|
+  kGiven,               ///< CalibrationOptions::initial_params (e.g. a nominal device, a previous
+                        ///< calibration, or the full fit when a position is held out)
 };
 std::string_view ToString(Initialization init);
 std::optional<Initialization> InitializationFromString(std::string_view text);
@@ -86,6 +88,13 @@ struct CalibrationOptions {
   Frame frame = Frame::kXFirst;
   /// Gravity magnitude in the specific-force unit of the result (9.80665 for m/s², 1 for g).
   double gravity = kStandardGravity_ms2;
+  /// Parameters to start from, in `frame`, with initialization kGiven (required then, and used
+  /// only then); the directions start as the normalised corrected readings.
+  std::optional<ModelParameters> initial_params;
+  /// Leave-one-position-out validation (CalibrationResult::crossval_rms): m extra fits, each
+  /// started from the full fit (a few iterations each). Off by default in the library because of
+  /// that cost; the command line turns it on.
+  bool cross_validate = false;
 
   struct TwoStep {
     int max_sweeps = 20000;              ///< cap on alternations
@@ -163,6 +172,12 @@ struct CalibrationResult {
   double residual_sigma = 0;   ///< σ̂ [raw], 0 when there are no degrees of freedom
   int degrees_of_freedom = 0;  ///< m − P
   Summary summary;
+  /// With CalibrationOptions::cross_validate: the RMS of |f_k| − g with each position k corrected
+  /// by a fit without it (paper 000 verifies on held-out positions), and the per-position errors.
+  /// Absent when some fit without a position fails; crossval_note then says which and why.
+  std::optional<double> crossval_rms;
+  std::vector<double> crossval_errors;
+  std::string crossval_note;
 };
 
 /// Calibrates from averaged raw readings (one per position). Throws DataError when the data cannot

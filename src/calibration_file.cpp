@@ -130,6 +130,19 @@ std::string CalibrationToJson(const CalibrationResult& result, const Calibration
   doc["gravity_norm_rms_after"] = Nullable(Rms(errors));
   doc["crossval_rms"] = Nullable(result.crossval_rms);
   if (!result.crossval_note.empty()) doc["crossval_note"] = result.crossval_note;
+  if (const ModelSelection* s = info.model_selection) {
+    ordered_json selection;
+    selection["requested"] = info.model_requested;
+    selection["chosen"] = std::string(ToString(s->chosen));
+    selection["reason"] = s->reason;
+    selection["linear_crossval_rms"] = Nullable(s->linear.crossval_rms);
+    selection["quadratic_crossval_rms"] =
+        s->quadratic ? Nullable(s->quadratic->crossval_rms) : ordered_json(nullptr);
+    selection["k2_t"] =
+        s->quadratic && std::isfinite(s->k2_t.sum()) ? ToJson(s->k2_t) : ordered_json(nullptr);
+    if (!s->quadratic_error.empty()) selection["quadratic_error"] = s->quadratic_error;
+    doc["model_selection"] = selection;
+  }
   const Summary& s = result.summary;
   doc["solver"] = {{"method", std::string(ToString(s.method))},
                    {"initialization", std::string(ToString(s.initialization))},

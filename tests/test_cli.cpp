@@ -166,6 +166,28 @@ TEST_F(Cli, CalibratesInTheZFirstFrame) {
   EXPECT_NE(bad.err.find("--frame"), std::string::npos) << bad.err;
 }
 
+TEST_F(Cli, ModelAutoChoosesOnHeldOutError) {
+  const std::string ctu =
+      kData + "/ctu-innalabs-ahrs-m3/measured_accelerations_49pos.csv --units g --model auto";
+  const CliRun r = Exec("calibrate " + ctu + " --json");
+  ASSERT_EQ(r.status, 0) << r.err;
+  const nlohmann::json doc = nlohmann::json::parse(r.out);
+  // CTU-49: the quadratic model fits better in sample but predicts held-out positions worse
+  // (1.085e-3 g against 1.035e-3 g), so the linear model is kept.
+  EXPECT_EQ(doc["model"], "linear");
+  const auto& s = doc["model_selection"];
+  EXPECT_EQ(s["requested"], "auto");
+  EXPECT_EQ(s["chosen"], "linear");
+  EXPECT_LT(s["linear_crossval_rms"].get<double>(), s["quadratic_crossval_rms"].get<double>());
+  EXPECT_EQ(s["k2_t"].size(), 3u);
+  EXPECT_EQ(s["reason"].get<std::string>().rfind("the quadratic model does not predict", 0), 0u);
+  const CliRun text = Exec("calibrate " + ctu);
+  EXPECT_NE(text.out.find("model     auto -> linear"), std::string::npos) << text.out;
+  const CliRun bad = Exec("calibrate " + ctu + " --no-crossval");
+  EXPECT_EQ(bad.status, 2);
+  EXPECT_NE(bad.err.find("--model auto decides on held-out error"), std::string::npos) << bad.err;
+}
+
 TEST_F(Cli, PositionsFileInG) {
   const CliRun r = Exec("calibrate " + kData +
                         "/ctu-innalabs-ahrs-m3/measured_accelerations_24pos.csv --units g --json");
@@ -340,7 +362,7 @@ TEST_F(Cli, UsageErrorsExitWithStatus2) {
   EXPECT_EQ(Exec("calibrate " + in + " --no-such-option").status, 2);
   CliRun r = Exec("calibrate " + in + " --model cubic");
   EXPECT_EQ(r.status, 2);
-  EXPECT_EQ(r.err, "accelcal: usage: --model: 'cubic' is not one of linear, quadratic\n");
+  EXPECT_EQ(r.err, "accelcal: usage: --model: 'cubic' is not one of linear, quadratic, auto\n");
   r = Exec("calibrate " + in + " --gravity 9.8 --latitude 45");
   EXPECT_EQ(r.status, 2);
   r = Exec("calibrate " + in + " --units furlongs");

@@ -12,6 +12,7 @@
 #include "accelcal/error.hpp"
 #include "accelcal/frame.hpp"
 #include "accelcal/gravity.hpp"
+#include "accelcal/model_selection.hpp"
 #include "output.hpp"
 
 namespace accelcal::cli {
@@ -180,16 +181,39 @@ std::string FormatNumber(double v) {
 
 }  // namespace
 
+namespace {
+
+void PrintModelSelection(const ModelSelection& s, bool requested_auto) {
+  std::printf("model     %s -> %s: %s\n", requested_auto ? "auto" : "quadratic (requested)",
+              std::string(ToString(requested_auto ? s.chosen : ModelKind::kQuadratic)).c_str(),
+              s.reason.c_str());
+  if (s.quadratic && std::isfinite(s.k2_t.sum())) {
+    std::printf(
+        "          squared coefficients k2/sigma: %.3g %.3g %.3g (|t| <= 2: not "
+        "distinguishable from 0)\n",
+        s.k2_t(0), s.k2_t(1), s.k2_t(2));
+  }
+}
+
+}  // namespace
+
 int RunCalibrate(const CalibrateArgs& args) {
   CalibrationOptions options;
-  options.model =
-      ParseEnum(ModelKindFromString(args.model), args.model, "--model", "linear, quadratic");
+  const bool auto_model = args.model == "auto";
+  options.model = auto_model ? ModelKind::kLinear
+                             : ParseEnum(ModelKindFromString(args.model), args.model, "--model",
+                                         "linear, quadratic, auto");
   options.method = ParseEnum(SolverMethodFromString(args.method), args.method, "--method",
                              "joint, two-step, newton-lagrange, modulus, modulus-norm, ellipsoid");
   options.initialization = ParseEnum(InitializationFromString(args.init), args.init, "--init",
                                      "auto, ellipsoid, normalized-readings");
   options.frame = ParseEnum(FrameFromString(args.frame), args.frame, "--frame", "x-first, z-first");
   options.cross_validate = args.cross_validate;
+  if (auto_model && !args.cross_validate) {
+    throw UsageError(
+        "--model auto decides on held-out error: it needs the cross-validation that "
+        "--no-crossval turns off");
+  }
   const Gravity g = ResolveGravity(args.gravity);
   options.gravity = g.in_unit;
   if (args.max_iterations > 0) {
@@ -199,8 +223,27 @@ int RunCalibrate(const CalibrateArgs& args) {
     options.newton_lagrange.max_iterations = args.max_iterations;
   }
   if (auto why = options.Validate()) throw UsageError(*why);
+  if (auto_model) {
+    CalibrationOptions quadratic = options;
+    quadratic.model = ModelKind::kQuadratic;
+    if (auto why = quadratic.Validate()) throw UsageError("--model auto: " + *why);
+  }
   const LoadedInput in = LoadInput(args.input);
-  const CalibrationResult result = Calibrate(Means(in.positions), options);
+  const std::vector<Vec3> means = Means(in.positions);
+  // For a quadratic fit (asked for, or a candidate of --model auto) the linear fit is the
+  // comparison: both with held-out validation, decided by ModelSelection's rule.
+  std::optional<ModelSelection> selection;
+  if (auto_model || (options.model == ModelKind::kQuadratic && args.cross_validate)) {
+    selection = SelectModel(means, options);
+  }
+  CalibrationResult result;
+  if (auto_model) {
+    result = selection->chosen_result();
+  } else if (selection && selection->quadratic) {
+    result = *selection->quadratic;
+  } else {
+    result = Calibrate(means, options);  // also the error path of a quadratic fit that failed
+  }
   if (!result.summary.converged()) {
     std::fprintf(stderr, "accelcal: %s: the solver did not converge: %s; nothing written\n",
                  args.input.path.c_str(), result.summary.termination_message.c_str());
@@ -211,6 +254,8 @@ int RunCalibrate(const CalibrateArgs& args) {
   info.raw_unit = args.raw_units;
   info.source = args.input.path;
   info.positions = in.positions;
+  info.model_selection = selection ? &*selection : nullptr;
+  info.model_requested = args.model;
   const std::string json = CalibrationToJson(result, info);
   if (!args.output.empty()) WriteFileAtomically(args.output, json);
   if (args.json) {
@@ -218,6 +263,7 @@ int RunCalibrate(const CalibrateArgs& args) {
   } else {
     PrintInput(in, args.input.path);
     PrintCalibration(result, in.positions, g, args.raw_units);
+    if (selection) PrintModelSelection(*selection, auto_model);
     if (!args.output.empty()) std::printf("wrote     %s\n", args.output.c_str());
   }
   return kExitOk;

@@ -65,7 +65,11 @@ int main(int argc, char** argv) {
   AddInputOptions(calibrate, &cal.input, true);
   AddDetectionOptions(calibrate, &cal.input);
   AddGravityOptions(calibrate, &cal.gravity);
-  calibrate->add_option("--model", cal.model, "linear or quadratic")->capture_default_str();
+  calibrate
+      ->add_option("--model", cal.model,
+                   "linear, quadratic, or auto (the model that predicts held-out positions "
+                   "better)")
+      ->capture_default_str();
   calibrate
       ->add_option("--method", cal.method,
                    "joint, two-step, newton-lagrange, modulus, modulus-norm or ellipsoid")

@@ -8,6 +8,7 @@
 
 #include "accelcal/calibrate.hpp"
 #include "accelcal/gravity.hpp"
+#include "accelcal/model_selection.hpp"
 #include "accelcal/positions.hpp"
 
 namespace accelcal {
@@ -18,6 +19,10 @@ struct CalibrationFileInfo {
   std::string raw_unit = "raw";     ///< label of the raw unit, e.g. "counts"
   std::string source;               ///< input file name
   std::vector<Position> positions;  ///< the positions that were fitted, same order as the result
+  /// When the linear and quadratic models were compared (model "auto", or "quadratic" with the
+  /// linear fit as comparison): written as `model_selection`.
+  const ModelSelection* model_selection = nullptr;
+  std::string model_requested;  ///< "linear", "quadratic" or "auto"
 };
 
 /// Serialises a calibration as the JSON document (2-space indented, trailing newline).

@@ -265,6 +265,28 @@ Start Initialise(const Problem& problem, Initialization requested,
 
 namespace {
 
+// The sandwich covariance with per-position noise, inflated by the scatter ratio (calibrate.hpp).
+internal::Mat12 SampleNoiseCovariance(const Problem& problem, const internal::SolverOutput& out,
+                                      const internal::Mat12& S_inverse,
+                                      const std::vector<Vec3>& sigmas, CalibrationResult* result) {
+  const internal::InformationRows rows =
+      internal::ReducedInformationRows(problem, out.params, out.dirs);
+  const int m = problem.positions();
+  Eigen::VectorXd variance(m);
+  double chi2 = 0;
+  for (int k = 0; k < m; ++k) {
+    const Vec3& n = rows.normals[static_cast<std::size_t>(k)];
+    variance(k) = n.cwiseAbs2().dot(sigmas[static_cast<std::size_t>(k)].cwiseAbs2());
+    const double along_normal = n.dot(result->residuals[static_cast<std::size_t>(k)]);
+    chi2 += along_normal * along_normal / variance(k);
+  }
+  const internal::Mat12 meat = rows.U.transpose() * variance.asDiagonal() * rows.U;
+  const double ratio2 = chi2 / result->degrees_of_freedom;
+  result->noise_source = "samples";
+  result->scatter_ratio = std::sqrt(ratio2);
+  return std::max(1.0, ratio2) * S_inverse * meat * S_inverse;
+}
+
 // The fit in the x-first gauge; `frame` only names parameters in messages (the z-first fit runs
 // here on mirrored readings).
 CalibrationResult CalibrateXFirst(const std::vector<Vec3>& readings,
@@ -340,10 +362,14 @@ CalibrationResult CalibrateXFirst(const std::vector<Vec3>& readings,
     const double sigma2 = out.summary.final_cost / result.degrees_of_freedom;
     result.residual_sigma = std::sqrt(sigma2);
     const internal::Mat12 inverse = info.Inverse();
+    internal::Mat12 covariance = sigma2 * inverse;
+    if (!options.reading_sigmas.empty()) {
+      covariance = SampleNoiseCovariance(problem, out, inverse, options.reading_sigmas, &result);
+    }
     const std::vector<int>& cols = ActiveColumns(options.model);
     result.covariance.resize(P, P);
     for (int i = 0; i < P; ++i) {
-      for (int j = 0; j < P; ++j) result.covariance(i, j) = sigma2 * inverse(cols[i], cols[j]);
+      for (int j = 0; j < P; ++j) result.covariance(i, j) = covariance(cols[i], cols[j]);
     }
   }
   result.summary = out.summary;
@@ -361,6 +387,7 @@ CalibrationResult CalibrateInFrame(const std::vector<Vec3>& readings,
   for (const Vec3& p : readings) mirrored.push_back(MirrorAxes(p));
   CalibrationOptions mirrored_options = options;
   if (options.initial_params) mirrored_options.initial_params = MirrorAxes(*options.initial_params);
+  for (Vec3& s : mirrored_options.reading_sigmas) s = MirrorAxes(s).cwiseAbs();
   CalibrationResult result = CalibrateXFirst(mirrored, mirrored_options, Frame::kZFirst);
   result.frame = Frame::kZFirst;
   result.params = MirrorAxes(result.params);
@@ -379,6 +406,7 @@ void CrossValidate(const std::vector<Vec3>& readings, const CalibrationOptions& 
                    CalibrationResult* result) {
   CalibrationOptions held_out = options;
   held_out.cross_validate = false;
+  held_out.reading_sigmas.clear();                   // no covariance needed from the held-out fits
   if (options.method != SolverMethod::kEllipsoid) {  // closed form: nothing to start from
     held_out.initialization = Initialization::kGiven;
     held_out.initial_params = result->params;
@@ -417,6 +445,18 @@ void CrossValidate(const std::vector<Vec3>& readings, const CalibrationOptions& 
 
 CalibrationResult Calibrate(const std::vector<Vec3>& readings, const CalibrationOptions& options) {
   if (auto why = options.Validate()) throw std::invalid_argument(*why);
+  if (!options.reading_sigmas.empty()) {
+    if (options.reading_sigmas.size() != readings.size()) {
+      throw std::invalid_argument("reading_sigmas has " +
+                                  std::to_string(options.reading_sigmas.size()) + " entries for " +
+                                  std::to_string(readings.size()) + " readings");
+    }
+    for (const Vec3& s : options.reading_sigmas) {
+      if (!s.allFinite() || !(s.minCoeff() > 0)) {
+        throw std::invalid_argument("reading_sigmas must be finite and positive");
+      }
+    }
+  }
   CalibrationResult result = CalibrateInFrame(readings, options);
   if (options.cross_validate && result.summary.converged()) {
     CrossValidate(readings, options, &result);

@@ -87,10 +87,14 @@ std::string CalibrationToJson(const CalibrationResult& result, const Calibration
     doc["std"] = nullptr;
     doc["covariance"] = nullptr;
   }
-  doc["noise"] = {{"source", "residuals"},
+  doc["noise"] = {{"source", result.noise_source},
                   {"sigma_raw", result.degrees_of_freedom > 0 ? ordered_json(result.residual_sigma)
                                                               : ordered_json(nullptr)},
                   {"degrees_of_freedom", result.degrees_of_freedom}};
+  if (result.noise_source == "samples") {
+    doc["noise"]["scatter_ratio"] = Nullable(result.scatter_ratio);
+    doc["noise"]["inflated"] = result.scatter_ratio > 1.0;
+  }
 
   const EngineeringParameters eng = ToEngineering(result.params, result.gravity);
   const Misalignment tau = MisalignmentOf(result.params.K, result.frame);

@@ -176,16 +176,18 @@ Mat12 ReducedMatrix(const NormalEquations& ne, double lambda, const Vec12& mask)
   return S;
 }
 
-Mat12 ReducedInformation(const Problem& problem, const ModelParameters& params,
-                         const std::vector<Vec3>& dirs, Vec12* A_diagonal) {
+InformationRows ReducedInformationRows(const Problem& problem, const ModelParameters& params,
+                                       const std::vector<Vec3>& dirs) {
   // The Gauss-Newton blocks give S = Σ_k [A_k − B_k D_k⁻¹ B_kᵀ], whose (i, j) block is
   // (δ_ij − W_ij) v_i v_jᵀ with W = J_c D⁻¹ J_cᵀ the projector onto the span of J_c. That span is
   // the plane J_p_f c⊥, so δ_ij − W_ij = n_i n_j with n its unit normal, n ∝ J_p_f⁻ᵀ c: only the
   // residual component normal to the fitted surface carries information. S = Σ u_k u_kᵀ with
   // u_k = (n_x v_x, n_y v_y, n_z v_z): a sum of squares, free of the cancellation in A − B D⁻¹ Bᵀ.
   const int m = problem.positions();
-  Eigen::Matrix<double, Eigen::Dynamic, kMaxParameters> U(m, kMaxParameters);
-  A_diagonal->setZero();
+  InformationRows rows;
+  rows.U.resize(m, kMaxParameters);
+  rows.normals.resize(static_cast<std::size_t>(m));
+  rows.A_diagonal.setZero();
   for (int k = 0; k < m; ++k) {
     const Vec3 f = problem.gravity * dirs[k];
     Mat33 J;
@@ -194,14 +196,22 @@ Mat12 ReducedInformation(const Problem& problem, const ModelParameters& params,
     const Vec3 n = (dirs[k](0) * J.col(1).cross(J.col(2)) + dirs[k](1) * J.col(2).cross(J.col(0)) +
                     dirs[k](2) * J.col(0).cross(J.col(1)))
                        .normalized();
+    rows.normals[static_cast<std::size_t>(k)] = n;
     const Regressors v(f);
-    U.row(k) << n(0) * v.x.transpose(), n(1) * v.y.transpose(), n(2) * v.z.transpose();
-    A_diagonal->segment<3>(kGroupStart[0]) += v.x.cwiseAbs2();
-    A_diagonal->segment<4>(kGroupStart[1]) += v.y.cwiseAbs2();
-    A_diagonal->segment<5>(kGroupStart[2]) += v.z.cwiseAbs2();
+    rows.U.row(k) << n(0) * v.x.transpose(), n(1) * v.y.transpose(), n(2) * v.z.transpose();
+    rows.A_diagonal.segment<3>(kGroupStart[0]) += v.x.cwiseAbs2();
+    rows.A_diagonal.segment<4>(kGroupStart[1]) += v.y.cwiseAbs2();
+    rows.A_diagonal.segment<5>(kGroupStart[2]) += v.z.cwiseAbs2();
   }
+  return rows;
+}
+
+Mat12 ReducedInformation(const Problem& problem, const ModelParameters& params,
+                         const std::vector<Vec3>& dirs, Vec12* A_diagonal) {
+  const InformationRows rows = ReducedInformationRows(problem, params, dirs);
+  *A_diagonal = rows.A_diagonal;
   Mat12 S = Mat12::Zero();
-  S.selfadjointView<Eigen::Lower>().rankUpdate(U.transpose());
+  S.selfadjointView<Eigen::Lower>().rankUpdate(rows.U.transpose());
   S.triangularView<Eigen::StrictlyUpper>() = S.transpose();
   return S;
 }

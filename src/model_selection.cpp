@@ -53,24 +53,22 @@ ModelSelection SelectModel(const std::vector<Vec3>& readings, CalibrationOptions
     selection.quadratic.reset();
   }
   if (!selection.quadratic) {
-    selection.reason =
-        "the quadratic model cannot be fitted (" + selection.quadratic_error + ")";
+    selection.reason = "the quadratic model cannot be fitted (" + selection.quadratic_error + ")";
     return selection;
   }
   selection.k2_t = SquaredCoefficientT(*selection.quadratic);
   const std::optional<double>& lin = selection.linear.crossval_rms;
   const std::optional<double>& quad = selection.quadratic->crossval_rms;
   if (!quad) {
-    selection.reason = "the quadratic model cannot be validated (" +
-                       selection.quadratic->crossval_note + ")";
+    selection.reason =
+        "the quadratic model cannot be validated (" + selection.quadratic->crossval_note + ")";
   } else if (!lin) {
-    selection.reason = "the linear model cannot be validated (" +
-                       selection.linear.crossval_note + "), so nothing shows the quadratic better";
+    selection.reason = "the linear model cannot be validated (" + selection.linear.crossval_note +
+                       "), so nothing shows the quadratic better";
   } else if (*quad < *lin) {
     selection.chosen = ModelKind::kQuadratic;
     selection.reason =
-        Format("it predicts held-out positions better (rms |f|-g %.4g against %.4g)",
-               *quad, *lin);
+        Format("it predicts held-out positions better (rms |f|-g %.4g against %.4g)", *quad, *lin);
   } else {
     selection.reason = Format(
         "the quadratic model does not predict held-out positions better (rms |f|-g "

@@ -1,5 +1,7 @@
 #include "accelcal/positions.hpp"
 
+#include <cmath>
+
 namespace accelcal {
 
 std::vector<Position> PositionsFromIntervals(const std::vector<StaticInterval>& intervals) {
@@ -21,6 +23,15 @@ std::vector<Vec3> Means(const std::vector<Position>& positions) {
   means.reserve(positions.size());
   for (const Position& p : positions) means.push_back(p.mean);
   return means;
+}
+
+std::vector<Vec3> SigmasOfMeans(const std::vector<Position>& positions) {
+  std::vector<Vec3> sigmas;
+  for (const Position& p : positions) {
+    if (!p.std || p.samples < 2 || !p.std->allFinite() || !(p.std->minCoeff() > 0)) return {};
+    sigmas.push_back(*p.std / std::sqrt(static_cast<double>(p.samples)));
+  }
+  return sigmas;
 }
 
 }  // namespace accelcal

@@ -98,6 +98,17 @@ Mat12x2 B(const NormalEquations& ne, std::size_t k);
 /// fixed parameters' rows and columns replaced by the identity.
 Mat12 ReducedMatrix(const NormalEquations& ne, double lambda, const Vec12& mask);
 
+/// The rows u_k of the reduced information S = Σ u_k u_kᵀ (see ReducedInformation), with the unit
+/// normals n_k of the fitted surface (a reading error moves the fit only through n_kᵀ e) and A's
+/// diagonal.
+struct InformationRows {
+  Eigen::Matrix<double, Eigen::Dynamic, kMaxParameters> U;
+  std::vector<Vec3> normals;
+  Vec12 A_diagonal;
+};
+InformationRows ReducedInformationRows(const Problem& problem, const ModelParameters& params,
+                                       const std::vector<Vec3>& dirs);
+
 /// ReducedMatrix(ne, 0, all free) computed directly as Σ u_k u_kᵀ (see the definition), and the
 /// diagonal of A for the Jacobi scaling.
 Mat12 ReducedInformation(const Problem& problem, const ModelParameters& params,

@@ -1,5 +1,6 @@
 #include "commands.hpp"
 
+#include <algorithm>
 #include <charconv>
 #include <cmath>
 #include <cstdio>
@@ -111,6 +112,33 @@ void PrintInput(const LoadedInput& in, const std::string& path) {
       d.noise_reference > 0 ? d.threshold / d.noise_reference : 0.0);
 }
 
+// The three parameter pairs with the largest |correlation|: what the positions cannot separate.
+void PrintStrongestCorrelations(const Eigen::MatrixXd& covariance,
+                                const std::vector<ParameterSlot>& slots) {
+  struct Pair {
+    double rho;
+    Eigen::Index i, j;
+  };
+  std::vector<Pair> pairs;
+  for (Eigen::Index i = 0; i < covariance.rows(); ++i) {
+    for (Eigen::Index j = 0; j < i; ++j) {
+      const double rho = covariance(i, j) / std::sqrt(covariance(i, i) * covariance(j, j));
+      if (std::isfinite(rho)) pairs.push_back({rho, i, j});
+    }
+  }
+  const std::size_t shown = std::min<std::size_t>(3, pairs.size());
+  std::partial_sort(pairs.begin(), pairs.begin() + static_cast<std::ptrdiff_t>(shown), pairs.end(),
+                    [](const Pair& a, const Pair& b) { return std::abs(a.rho) > std::abs(b.rho); });
+  std::printf("  strongest correlations:");
+  for (std::size_t k = 0; k < shown; ++k) {
+    std::printf("%s %s/%s %+.3f", k ? "," : "",
+                std::string(slots[static_cast<std::size_t>(pairs[k].i)].name).c_str(),
+                std::string(slots[static_cast<std::size_t>(pairs[k].j)].name).c_str(),
+                pairs[k].rho);
+  }
+  std::printf("\n");
+}
+
 void PrintCalibration(const CalibrationResult& r, const std::vector<Position>& positions,
                       const Gravity& g, const std::string& raw_unit) {
   const char* u = g.unit == ForceUnit::kMetersPerSecond2 ? "m/s2" : "g";
@@ -119,19 +147,33 @@ void PrintCalibration(const CalibrationResult& r, const std::vector<Position>& p
   std::printf("\nmodel     %s, p = K f + b + k2 * f^2, frame %s, gravity %.9g %s (%s)\n",
               std::string(ToString(r.model)).c_str(), std::string(ToString(r.frame)).c_str(),
               g.in_unit, u, g.origin.c_str());
-  std::printf(
-      "\nparameters (K in %s per %s, b in %s, k2 in %s per %s^2; +- 1 sigma from residuals)\n",
-      raw_unit.c_str(), u, raw_unit.c_str(), raw_unit.c_str(), u);
-  const Eigen::VectorXd theta = Pack(r.params, r.model);
+  const std::string noise =
+      r.noise_source == "samples"
+          ? Format("noise of each interval's samples, x %.3g scatter ratio", r.scatter_ratio)
+          : std::string("noise from the residuals");
+  std::printf("\nparameters (K in %s per %s, b in %s, k2 in %s per %s^2; +- 1 sigma, %s)\n",
+              raw_unit.c_str(), u, raw_unit.c_str(), raw_unit.c_str(), u, noise.c_str());
+  const auto value = [&r](const ParameterSlot& slot) {
+    switch (slot.group) {
+      case ParameterGroup::kK:
+        return r.params.K(slot.row, slot.col);
+      case ParameterGroup::kBias:
+        return r.params.bias(slot.row);
+      case ParameterGroup::kK2:
+        break;
+    }
+    return r.params.k2(slot.row);
+  };
   for (std::size_t i = 0; i < slots.size(); ++i) {
     const auto idx = static_cast<Eigen::Index>(i);
     if (have_std) {
-      std::printf("  %-5s %18.10g +- %.3g\n", std::string(slots[i].name).c_str(), theta(idx),
+      std::printf("  %-5s %18.10g +- %.3g\n", std::string(slots[i].name).c_str(), value(slots[i]),
                   std::sqrt(r.covariance(idx, idx)));
     } else {
-      std::printf("  %-5s %18.10g\n", std::string(slots[i].name).c_str(), theta(idx));
+      std::printf("  %-5s %18.10g\n", std::string(slots[i].name).c_str(), value(slots[i]));
     }
   }
+  if (have_std) PrintStrongestCorrelations(r.covariance, slots);
   const EngineeringParameters e = ToEngineering(r.params, r.gravity);
   const double ug = 1e6 / r.gravity;
   std::printf("\nengineering (paper 000 Table 3 conventions)\n");
@@ -230,6 +272,7 @@ int RunCalibrate(const CalibrateArgs& args) {
   }
   const LoadedInput in = LoadInput(args.input);
   const std::vector<Vec3> means = Means(in.positions);
+  options.reading_sigmas = SigmasOfMeans(in.positions);  // empty: noise from the residuals
   // For a quadratic fit (asked for, or a candidate of --model auto) the linear fit is the
   // comparison: both with held-out validation, decided by ModelSelection's rule.
   std::optional<ModelSelection> selection;

@@ -15,6 +15,7 @@
 /// ellipsoid, the constrained fit of Li & Griffiths 2004, see ellipsoid_fit.hpp) or, where both
 /// fail, from the normalised readings (paper 000 eq. (26)).
 
+#include <cmath>
 #include <optional>
 #include <string>
 #include <string_view>
@@ -91,6 +92,11 @@ struct CalibrationOptions {
   /// Parameters to start from, in `frame`, with initialization kGiven (required then, and used
   /// only then); the directions start as the normalised corrected readings.
   std::optional<ModelParameters> initial_params;
+  /// The noise of the readings when the data give it: per position, the 1σ of each axis of the
+  /// averaged reading [raw] (the interval's sample standard deviation over √samples). Empty: the
+  /// covariance takes the noise from the residuals. Must match the readings in number, finite and
+  /// positive. See CalibrationResult::covariance.
+  std::vector<Vec3> reading_sigmas;
   /// Leave-one-position-out validation (CalibrationResult::crossval_rms): m extra fits, each
   /// started from the full fit (a few iterations each). Off by default in the library because of
   /// that cost; the command line turns it on.
@@ -165,11 +171,21 @@ struct CalibrationResult {
   std::vector<Vec3> directions;  ///< estimated unit gravity directions c_k (body frame)
   std::vector<Vec3> residuals;   ///< p_k − μ(θ, g c_k) [raw]
   /// Covariance of the flat parameters (model.hpp order; frame.hpp's for z-first) from the Fisher
-  /// information of the joint model with directions eliminated, σ² estimated from the residuals: σ̂²
-  /// = J / (3m − P − 2m). Maximum likelihood methods only (IsMaximumLikelihood); empty otherwise.
-  /// Empty when there are no residual degrees of freedom (m = P: exactly determined).
+  /// information of the joint model with directions eliminated (S = Σ u_k u_kᵀ, information.cpp).
+  /// Noise from the residuals, σ̂² = J / (3m − P − 2m): C = σ̂² S⁻¹. With reading_sigmas: the
+  /// sandwich C = S⁻¹ (Σ σ_k² u_k u_kᵀ) S⁻¹ with σ_k² = Σ_i n_ki² s_ki² the variance of position
+  /// k along the fitted surface's normal, multiplied by the squared scatter ratio R² = χ²/(m − P),
+  /// χ² = Σ (n_kᵀ r_k)² / σ_k², when R > 1: white noise that does not explain the scatter of the
+  /// positions (model error, drift between positions) must not make the result look better.
+  /// Maximum likelihood methods only (IsMaximumLikelihood); empty otherwise, and empty when there
+  /// are no residual degrees of freedom (m = P: exactly determined).
   Eigen::MatrixXd covariance;
-  double residual_sigma = 0;   ///< σ̂ [raw], 0 when there are no degrees of freedom
+  double residual_sigma = 0;  ///< σ̂ [raw], 0 when there are no degrees of freedom
+  /// Where the covariance's noise came from: "residuals" or "samples" (reading_sigmas).
+  std::string noise_source = "residuals";
+  /// With reading_sigmas: R = sqrt(χ² / (m − P)), 1 when the per-position noise explains the
+  /// scatter of the positions; NaN otherwise. The covariance is multiplied by R² when R > 1.
+  double scatter_ratio = std::nan("");
   int degrees_of_freedom = 0;  ///< m − P
   Summary summary;
   /// With CalibrationOptions::cross_validate: the RMS of |f_k| − g with each position k corrected

@@ -31,5 +31,8 @@ struct Position {
 
 std::vector<Position> PositionsFromIntervals(const std::vector<StaticInterval>& intervals);
 std::vector<Vec3> Means(const std::vector<Position>& positions);
+/// The 1σ of each averaged reading, std / √samples, when every position has a positive sample
+/// standard deviation from at least 2 samples; else empty (CalibrationOptions::reading_sigmas).
+std::vector<Vec3> SigmasOfMeans(const std::vector<Position>& positions);
 
 }  // namespace accelcal

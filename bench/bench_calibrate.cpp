@@ -2,6 +2,7 @@
 #include <benchmark/benchmark.h>
 
 #include "accelcal/calibrate.hpp"
+#include "accelcal/design.hpp"
 #include "accelcal/ellipsoid_fit.hpp"
 #include "accelcal/simulate.hpp"
 #include "solver_common.hpp"
@@ -108,6 +109,18 @@ void BM_FitEllipsoid(benchmark::State& state, bool constrained) {
 }
 BENCHMARK_CAPTURE(BM_FitEllipsoid, algebraic_18, false)->Unit(benchmark::kMicrosecond);
 BENCHMARK_CAPTURE(BM_FitEllipsoid, constrained_18, true)->Unit(benchmark::kMicrosecond);
+
+// The Cramér-Rao bound of 18 planned positions for the Table-3 device (issue 4: <= 1 ms).
+void BM_Design18(benchmark::State& state) {
+  const ModelParameters device = Yang2012Truth();
+  const std::vector<Vec3> directions = Yang18Directions();
+  for (auto _ : state) {
+    const PlannedUncertainty planned = PredictUncertainty(
+        device, ModelKind::kQuadratic, kYang2012Gravity_ms2, directions, Vec3::Constant(0.5));
+    benchmark::DoNotOptimize(planned.rcond);
+  }
+}
+BENCHMARK(BM_Design18)->Unit(benchmark::kMicrosecond);
 
 }  // namespace
 }  // namespace accelcal

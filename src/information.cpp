@@ -219,9 +219,15 @@ Mat12 ReducedInformation(const Problem& problem, const ModelParameters& params,
 Information ComputeInformation(const Problem& problem, const ModelParameters& params,
                                const std::vector<Vec3>& dirs) {
   Information info;
-  const Vec12 mask = FreeMask(problem.model);
   Vec12 A_diagonal;
   info.reduced = ReducedInformation(problem, params, dirs, &A_diagonal);
+  FinishInformation(problem.model, A_diagonal, &info);
+  return info;
+}
+
+void FinishInformation(ModelKind model, const Vec12& A_diagonal, Information* out) {
+  Information& info = *out;
+  const Vec12 mask = FreeMask(model);
   for (int j = 0; j < kMaxParameters; ++j) {
     if (mask(j) == 0.0) {
       info.reduced.row(j).setZero();
@@ -254,7 +260,6 @@ Information ComputeInformation(const Problem& problem, const ModelParameters& pa
     }
     eig.eigenvectors().col(lo_index).cwiseProduct(mask).cwiseAbs().maxCoeff(&info.weakest);
   }
-  return info;
 }
 
 Mat12 Information::Inverse() const {

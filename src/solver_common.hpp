@@ -132,6 +132,9 @@ inline constexpr double kMinInformationRcond = 1e-10;
 inline constexpr double kPoorInformationRcond = 1e-6;
 Information ComputeInformation(const Problem& problem, const ModelParameters& params,
                                const std::vector<Vec3>& dirs);
+/// Completes `info` whose `reduced` holds a (weighted) information matrix: masks the fixed
+/// parameters, scales with A's diagonal, factorises, estimates rcond and names the weakest.
+void FinishInformation(ModelKind model, const Vec12& A_diagonal, Information* info);
 
 /// Unit directions of the readings under params: normalize(f(p_k)), falling back to p_k − b.
 std::vector<Vec3> DirectionsFromParams(const Problem& problem, const ModelParameters& params);

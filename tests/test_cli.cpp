@@ -194,6 +194,35 @@ TEST_F(Cli, ModelAutoChoosesOnHeldOutError) {
   EXPECT_NE(bad.err.find("--model auto decides on held-out error"), std::string::npos) << bad.err;
 }
 
+TEST_F(Cli, DesignPredictsTheBoundBeforeRecording) {
+  // The nominal device: the Xsens calibration. Paper 000's 18 positions determine it; the six
+  // axis-aligned ones (orientations unknown) do not, and the command says so with status 3.
+  const CliRun c = Exec("calibrate " + kData +
+                        "/imutk-xsens-mti/xsens_acc.mat --gravity 9.81744 --no-crossval -o " +
+                        Path("device.json"));
+  ASSERT_EQ(c.status, 0) << c.err;
+  const std::string device = " --device " + Path("device.json");
+  const CliRun y = Exec("design --positions yang18 --noise 0.12 --json" + device);
+  ASSERT_EQ(y.status, 0) << y.err;
+  const nlohmann::json doc = nlohmann::json::parse(y.out);
+  EXPECT_EQ(doc["positions"], 18);
+  EXPECT_TRUE(doc["observable"].get<bool>());
+  EXPECT_EQ(doc["crlb"].size(), 9u);
+  // σ_b ≈ σ·√(1/6·...) : every bias std is positive and below the reading noise.
+  for (int i = 0; i < 3; ++i) {
+    EXPECT_GT(doc["std"]["bias"][i].get<double>(), 0.0);
+    EXPECT_LT(doc["std"]["bias"][i].get<double>(), 0.12);
+  }
+  const CliRun six = Exec("design --positions six --noise 0.12" + device);
+  EXPECT_EQ(six.status, 3);
+  EXPECT_NE(six.out.find("NOT OBSERVABLE"), std::string::npos) << six.out;
+  const std::string bad = Write("dirs.csv", "x,y,z\n1,0,0\n0,2,0\n");
+  const CliRun b = Exec("design --positions " + bad + " --noise 0.1" + device);
+  EXPECT_EQ(b.status, 3);
+  EXPECT_NE(b.err.find("direction 2 (0, 2, 0) is not a unit vector"), std::string::npos) << b.err;
+  EXPECT_EQ(Exec("design --positions yang18 --noise 0.1,0.2" + device).status, 2);
+}
+
 TEST_F(Cli, PositionsFileInG) {
   const CliRun r = Exec("calibrate " + kData +
                         "/ctu-innalabs-ahrs-m3/measured_accelerations_24pos.csv --units g --json");

@@ -9,6 +9,7 @@
 
 #include "accelcal/calibration_file.hpp"
 #include "accelcal/compare.hpp"
+#include "accelcal/design.hpp"
 #include "accelcal/engineering.hpp"
 #include "accelcal/error.hpp"
 #include "accelcal/frame.hpp"
@@ -532,6 +533,107 @@ int RunApply(const ApplyArgs& args) {
   }
   WriteFileAtomically(args.output.empty() ? "-" : args.output, out);
   return kExitOk;
+}
+
+namespace {
+
+// Planned directions: a named scheme, or a file with one unit vector per row.
+std::vector<Vec3> PlannedDirections(const std::string& spec) {
+  if (std::optional<std::vector<Vec3>> scheme = SchemeDirections(spec)) return *scheme;
+  ReadOptions options;
+  options.kind = InputKind::kPositions;
+  const InputData data = ReadInput(spec, options);
+  std::vector<Vec3> directions;
+  for (std::size_t k = 0; k < data.positions.size(); ++k) {
+    const Vec3& c = data.positions[k].mean;
+    if (!(std::abs(c.norm() - 1.0) <= 1e-3)) {
+      throw InputError(spec, 0,
+                       Format("direction %zu (%.6g, %.6g, %.6g) is not a unit vector (norm %.6g)",
+                              k + 1, c(0), c(1), c(2), c.norm()));
+    }
+    directions.push_back(c.normalized());
+  }
+  return directions;
+}
+
+}  // namespace
+
+int RunDesign(const DesignArgs& args) {
+  if (args.noise_raw.size() != 1 && args.noise_raw.size() != 3) {
+    throw UsageError("--noise takes one value or three (x,y,z)");
+  }
+  const Vec3 sigma = args.noise_raw.size() == 1
+                         ? Vec3::Constant(args.noise_raw[0])
+                         : Vec3(args.noise_raw[0], args.noise_raw[1], args.noise_raw[2]);
+  if (!sigma.allFinite() || !(sigma.minCoeff() > 0)) throw UsageError("--noise must be positive");
+  const LoadedCalibration device = ParseCalibrationJson(ReadFileToString(args.device), args.device);
+  const ModelKind model = args.model ? ParseEnum(ModelKindFromString(*args.model), *args.model,
+                                                 "--model", "linear, quadratic")
+                                     : device.model;
+  const std::vector<Vec3> directions = PlannedDirections(args.positions);
+  const PlannedUncertainty planned =
+      PredictUncertainty(device.params, model, device.gravity, directions, sigma);
+  const auto& slots = ParameterSlots(model, planned.frame);
+  std::string out;
+  if (args.json) {
+    auto vec = [](const Vec3& v) {
+      return "[" + FormatNumber(v(0)) + ", " + FormatNumber(v(1)) + ", " + FormatNumber(v(2)) + "]";
+    };
+    out += "{\n  \"positions\": " + std::to_string(directions.size()) + ",\n";
+    out += "  \"model\": \"" + std::string(ToString(model)) + "\",\n";
+    out += "  \"frame\": \"" + std::string(ToString(planned.frame)) + "\",\n";
+    out += "  \"noise_raw\": " + vec(sigma) + ",\n";
+    out += "  \"observable\": " + std::string(planned.observable ? "true" : "false") + ",\n";
+    out += "  \"reciprocal_condition\": " + FormatNumber(planned.rcond) + ",\n";
+    out += "  \"weakest\": " +
+           (planned.weakest.empty() ? std::string("null") : "\"" + planned.weakest + "\"") + ",\n";
+    out += "  \"parameter_order\": [";
+    for (std::size_t i = 0; i < slots.size(); ++i) {
+      out += (i ? ", \"" : "\"") + std::string(slots[i].name) + "\"";
+    }
+    out += "],\n";
+    if (planned.observable) {
+      const Mat33& K = planned.std.K;
+      out += "  \"std\": {\"K\": [" + vec(K.row(0).transpose()) + ", " + vec(K.row(1).transpose()) +
+             ", " + vec(K.row(2).transpose()) + "], \"bias\": " + vec(planned.std.bias) +
+             ", \"k2\": " + vec(planned.std.k2) + "},\n  \"crlb\": [";
+      for (Eigen::Index i = 0; i < planned.crlb.rows(); ++i) {
+        out += i ? ",\n    [" : "\n    [";
+        for (Eigen::Index j = 0; j < planned.crlb.cols(); ++j) {
+          out += (j ? ", " : "") + FormatNumber(planned.crlb(i, j));
+        }
+        out += "]";
+      }
+      out += "]\n}\n";
+    } else {
+      out += "  \"std\": null,\n  \"crlb\": null\n}\n";
+    }
+  } else {
+    out += Format(
+        "design    %zu positions (%s), %s model in the %s frame, noise %.4g %.4g %.4g "
+        "raw per averaged reading\n",
+        directions.size(), args.positions.c_str(), std::string(ToString(model)).c_str(),
+        std::string(ToString(planned.frame)).c_str(), sigma(0), sigma(1), sigma(2));
+    if (!planned.observable) {
+      out += Format(
+          "NOT OBSERVABLE: these positions do not determine parameter %s (reciprocal "
+          "condition %.2g); add positions with other orientations\n",
+          planned.weakest.c_str(), planned.rcond);
+    } else {
+      out += "predicted 1 sigma (Cramer-Rao bound; raw units as the device file)\n";
+      for (std::size_t i = 0; i < slots.size(); ++i) {
+        const auto index = static_cast<Eigen::Index>(i);
+        out += Format("  %-5s %.4g\n", std::string(slots[i].name).c_str(),
+                      std::sqrt(planned.crlb(index, index)));
+      }
+      if (!planned.weakest.empty()) {
+        out += Format("poorly determined: %s (reciprocal condition %.2g)\n",
+                      planned.weakest.c_str(), planned.rcond);
+      }
+    }
+  }
+  WriteFileAtomically("-", out);
+  return planned.observable ? kExitOk : kExitBadInput;
 }
 
 }  // namespace accelcal::cli

@@ -85,7 +85,16 @@ struct ApplyArgs {
   std::optional<std::string> units;  // convert to this unit
 };
 
+struct DesignArgs {
+  std::string positions;             // scheme name or CSV file of unit directions
+  std::string device;                // calibration file of the nominal device
+  std::vector<double> noise_raw;     // 1 or 3 values: 1σ of one averaged reading [raw]
+  std::optional<std::string> model;  // default: the device's
+  bool json = false;
+};
+
 int RunCalibrate(const CalibrateArgs& args);
+int RunDesign(const DesignArgs& args);
 int RunDetect(const DetectArgs& args);
 int RunCompare(const CompareArgs& args);
 int RunApply(const ApplyArgs& args);

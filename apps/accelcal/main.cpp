@@ -116,6 +116,23 @@ int main(int argc, char** argv) {
   AddDetectionOptions(detect, &det.input);
   detect->add_flag("--json", det.json, "machine-readable output");
 
+  DesignArgs des;
+  CLI::App* design = app.add_subcommand(
+      "design", "predict the 1-sigma of every parameter (Cramer-Rao bound) for planned positions");
+  design
+      ->add_option("--positions", des.positions,
+                   "yang18, six, random:N[:SEED], or a CSV file of unit directions (x,y,z)")
+      ->required();
+  design->add_option("--device", des.device, "calibration file of the nominal device")->required();
+  design
+      ->add_option("--noise", des.noise_raw,
+                   "1 sigma of one averaged reading in raw units: one value or three (x,y,z)")
+      ->required()
+      ->delimiter(',')
+      ->expected(1, 3);
+  design->add_option("--model", des.model, "linear or quadratic (default: the device's)");
+  design->add_flag("--json", des.json, "machine-readable output");
+
   ApplyArgs apply;
   CLI::App* apply_cmd =
       app.add_subcommand("apply", "write the calibrated specific force of every sample of a log");
@@ -144,6 +161,7 @@ int main(int argc, char** argv) {
     if (*detect) return RunDetect(det);
     if (*compare) return RunCompare(cmp);
     if (*apply_cmd) return RunApply(apply);
+    if (*design) return RunDesign(des);
   } catch (const UsageError& e) {
     std::fprintf(stderr, "accelcal: usage: %s\n", e.what());
     return kExitUsage;
@@ -154,6 +172,7 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "accelcal: %s: %s\n",
                  (*calibrate ? cal.input.path
                   : *detect  ? det.input.path
+                  : *design  ? des.positions
                              : apply.input.path)
                      .c_str(),
                  e.what());

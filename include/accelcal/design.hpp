@@ -1,0 +1,47 @@
+#pragma once
+/// @file design.hpp
+/// Before recording: the Cramér-Rao bound of a planned set of positions for a nominal device.
+///
+/// Readings p_k = μ(θ, g c_k) + v_k with v_k ~ N(0, diag(s²)) and unknown directions c_k. The
+/// Fisher information of θ with the directions as nuisance parameters is
+///     I = Σ_k u_k u_kᵀ / σ_k²,   σ_k² = Σ_i n_ki² s_i²,
+/// with u_k and the fitted surface's normal n_k as in the covariance of calibrate.hpp (the whitened
+/// projector gives the same normal-direction form). CRLB = I⁻¹: no unbiased estimator does better;
+/// the maximum-likelihood solvers reach it when the noise is the same on every axis (else a
+/// weighted fit would).
+
+#include <optional>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "accelcal/frame.hpp"
+#include "accelcal/model.hpp"
+
+namespace accelcal {
+
+struct PlannedUncertainty {
+  ModelKind model = ModelKind::kLinear;
+  Frame frame = Frame::kXFirst;  ///< the device's frame: parameter order of `crlb`
+  /// P x P, flat parameter order of the frame (frame.hpp); empty when not observable.
+  Eigen::MatrixXd crlb;
+  ModelParameters std;      ///< 1σ of each parameter in the layout of ModelParameters (0: absent)
+  double rcond = 0;         ///< reciprocal condition of the (scaled) information matrix
+  bool observable = false;  ///< rcond ≥ 1e-10, the threshold calibrate refuses below
+  std::string weakest;      ///< the least determined parameter when rcond < 1e-6, else empty
+};
+
+/// The CRLB of `directions` (unit vectors, body frame) for `device` (K triangular as its frame
+/// says) with per-axis noise `sigma_raw` of one averaged reading [raw]. Throws
+/// std::invalid_argument for non-unit directions or non-positive noise.
+PlannedUncertainty PredictUncertainty(const ModelParameters& device, ModelKind model,
+                                      double gravity, const std::vector<Vec3>& directions,
+                                      const Vec3& sigma_raw);
+
+/// Named observation schemes: "yang18" (paper 000 Table 2), "six" (±x, ±y, ±z), "random:N" or
+/// "random:N:SEED" (uniform on the sphere, seed 1 by default). std::nullopt for another name.
+std::optional<std::vector<Vec3>> SchemeDirections(std::string_view name);
+
+}  // namespace accelcal

@@ -1,0 +1,120 @@
+// The Cramér-Rao bound of a planned set of positions (design.hpp).
+#include <cmath>
+
+#include <gtest/gtest.h>
+#include <Eigen/Dense>
+
+#include "accelcal/calibrate.hpp"
+#include "accelcal/design.hpp"
+#include "accelcal/simulate.hpp"
+#include "solver_common.hpp"
+#include "support/jacobian_check.hpp"
+
+namespace accelcal {
+namespace {
+
+constexpr double kG = kYang2012Gravity_ms2;
+
+Vec3 Table4Sigma(const ModelParameters& truth) {
+  Vec3 s;
+  for (int i = 0; i < 3; ++i) s(i) = truth.K.row(i).norm() * kYang2012PositionSigma_ms2;
+  return s;
+}
+
+TEST(Design, CrlbIsTheInverseOfTheFiniteDifferenceFisherMatrix) {
+  // The full Fisher matrix of (θ, the tangent coordinates of every direction) from central
+  // differences of the whitened prediction, inverted, its θ block: the bound with the directions
+  // unknown. The closed form (Σ u uᵀ/σ_k²) must agree.
+  const ModelParameters device = Yang2012Truth();
+  const Vec3 sigma = Table4Sigma(device);
+  const std::vector<Vec3> dirs = Yang18Directions();
+  const int m = static_cast<int>(dirs.size());
+  std::vector<internal::Mat32> tangent;
+  for (const Vec3& c : dirs) tangent.push_back(internal::TangentBasis(c));
+  const std::vector<int>& cols = ActiveColumns(ModelKind::kQuadratic);
+  const int P = static_cast<int>(cols.size());
+  Eigen::VectorXd x = Eigen::VectorXd::Zero(P + 2 * m);
+  x.head(P) = Pack(device, ModelKind::kQuadratic);
+  const auto whitened = [&](const Eigen::VectorXd& v) {
+    const ModelParameters params = Unpack(v.head(P), ModelKind::kQuadratic);
+    Eigen::VectorXd out(3 * m);
+    for (int k = 0; k < m; ++k) {
+      const Vec3 c =
+          internal::Retract(dirs[static_cast<std::size_t>(k)], tangent[static_cast<std::size_t>(k)],
+                            v.segment<2>(P + 2 * k));
+      out.segment<3>(3 * k) = PredictRaw(params, Vec3(kG * c)).cwiseQuotient(sigma);
+    }
+    return out;
+  };
+  const Eigen::MatrixXd J = testing::NumericalJacobian(whitened, x);
+  const Eigen::MatrixXd fisher = J.transpose() * J;
+  const Eigen::MatrixXd bound =
+      fisher.ldlt().solve(Eigen::MatrixXd::Identity(P + 2 * m, P + 2 * m)).topLeftCorner(P, P);
+  const PlannedUncertainty planned =
+      PredictUncertainty(device, ModelKind::kQuadratic, kG, dirs, sigma);
+  ASSERT_TRUE(planned.observable);
+  // Central differences of a function linear in θ and smooth in δ: errors ~1e-10 relative; the
+  // inversion amplifies them by the condition number of the scaled Fisher matrix (~1e4).
+  for (int i = 0; i < P; ++i) {
+    EXPECT_NEAR(std::sqrt(planned.crlb(i, i)), std::sqrt(bound(i, i)),
+                1e-5 * std::sqrt(bound(i, i)))
+        << ParameterSlots(ModelKind::kQuadratic)[static_cast<std::size_t>(i)].name;
+  }
+  EXPECT_LT((planned.crlb - bound).norm(), 1e-5 * bound.norm());
+}
+
+TEST(Design, MaximumLikelihoodReachesTheBound) {
+  // 300 simulated calibrations of the Table-3 device on Table 2's 18 positions: the spread of the
+  // joint solver's estimates against the CRLB. The standard deviation of a sample standard
+  // deviation over 300 runs is 1/√600 = 4 %: ±15 % is 3.6 of those.
+  const ModelParameters device = Yang2012Truth();
+  const Vec3 sigma = Table4Sigma(device);
+  const PlannedUncertainty planned =
+      PredictUncertainty(device, ModelKind::kQuadratic, kG, Yang18Directions(), sigma);
+  CalibrationOptions o;
+  o.model = ModelKind::kQuadratic;
+  o.gravity = kG;
+  const Eigen::VectorXd truth = Pack(device, ModelKind::kQuadratic);
+  Eigen::VectorXd sum2 = Eigen::VectorXd::Zero(truth.size());
+  const int runs = 300;
+  for (int run = 0; run < runs; ++run) {
+    const std::vector<Vec3> readings =
+        SimulatePositions(device, kG, Yang18Directions(), sigma, 5000 + static_cast<unsigned>(run));
+    const Eigen::VectorXd e = Pack(Calibrate(readings, o).params, ModelKind::kQuadratic) - truth;
+    sum2 += e.cwiseAbs2();
+  }
+  for (Eigen::Index i = 0; i < truth.size(); ++i) {
+    const double ratio = std::sqrt(sum2(i) / runs / planned.crlb(i, i));
+    EXPECT_NEAR(ratio, 1.0, 0.15)
+        << ParameterSlots(ModelKind::kQuadratic)[static_cast<std::size_t>(i)].name;
+  }
+}
+
+TEST(Design, FlagsWhatSixAxisPositionsCannotDetermine) {
+  // Six axis-aligned positions with unknown orientations cannot fix 9 parameters.
+  const std::vector<Vec3> six = *SchemeDirections("six");
+  ModelParameters device = Yang2012Truth();
+  const PlannedUncertainty planned =
+      PredictUncertainty(device, ModelKind::kLinear, kG, six, Table4Sigma(device));
+  EXPECT_FALSE(planned.observable);
+  EXPECT_FALSE(planned.weakest.empty());
+  EXPECT_EQ(planned.crlb.size(), 0);
+  EXPECT_TRUE(PredictUncertainty(device, ModelKind::kLinear, kG, *SchemeDirections("yang18"),
+                                 Table4Sigma(device))
+                  .observable);
+}
+
+TEST(Design, NamedSchemes) {
+  EXPECT_EQ(SchemeDirections("yang18")->size(), 18u);
+  EXPECT_EQ(SchemeDirections("six")->size(), 6u);
+  EXPECT_EQ(SchemeDirections("random:25")->size(), 25u);
+  EXPECT_EQ(*SchemeDirections("random:25"), *SchemeDirections("random:25:1"));
+  EXPECT_NE(*SchemeDirections("random:25:2"), *SchemeDirections("random:25:1"));
+  EXPECT_FALSE(SchemeDirections("random:").has_value());
+  EXPECT_FALSE(SchemeDirections("random:0").has_value());
+  EXPECT_FALSE(SchemeDirections("random:5x").has_value());
+  EXPECT_FALSE(SchemeDirections("octahedron").has_value());
+}
+
+}  // namespace
+}  // namespace accelcal

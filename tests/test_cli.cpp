@@ -223,6 +223,30 @@ TEST_F(Cli, DesignPredictsTheBoundBeforeRecording) {
   EXPECT_EQ(Exec("design --positions yang18 --noise 0.1,0.2" + device).status, 2);
 }
 
+TEST_F(Cli, MonteCarloPrintsTable4AgainstTheBound) {
+  const CliRun r = Exec("montecarlo --scenario yang2012 --runs 60 --json");
+  ASSERT_EQ(r.status, 0) << r.err;
+  const nlohmann::json doc = nlohmann::json::parse(r.out);
+  EXPECT_EQ(doc["scenario"], "yang2012");
+  EXPECT_EQ(doc["method"], "joint");
+  EXPECT_EQ(doc["runs"], 60);
+  const std::vector<std::string> names = {"ka_x",   "ka_y",   "ka_z",   "tau_yx", "tau_zx",
+                                          "tau_zy", "tau_yy", "tau_zz", "p0_x",   "p0_y",
+                                          "p0_z",   "k2_x",   "k2_y",   "k2_z"};
+  ASSERT_EQ(doc["parameters"].size(), names.size());
+  for (std::size_t i = 0; i < names.size(); ++i) {
+    const auto& p = doc["parameters"][i];
+    EXPECT_EQ(p["name"], names[i]);
+    for (const char* key : {"unit", "min", "max", "mean", "median", "std", "crlb", "ratio"}) {
+      EXPECT_TRUE(p.contains(key)) << names[i] << " " << key;
+    }
+  }
+  // Same seed, same bytes.
+  EXPECT_EQ(Exec("montecarlo --runs 60 --json --threads 1").out, r.out);
+  EXPECT_EQ(Exec("montecarlo --scenario nonesuch").status, 2);
+  EXPECT_EQ(Exec("montecarlo --method modulus").status, 2);
+}
+
 TEST_F(Cli, PositionsFileInG) {
   const CliRun r = Exec("calibrate " + kData +
                         "/ctu-innalabs-ahrs-m3/measured_accelerations_24pos.csv --units g --json");

@@ -15,6 +15,7 @@
 #include "accelcal/frame.hpp"
 #include "accelcal/gravity.hpp"
 #include "accelcal/model_selection.hpp"
+#include "accelcal/montecarlo.hpp"
 #include "output.hpp"
 
 namespace accelcal::cli {
@@ -634,6 +635,61 @@ int RunDesign(const DesignArgs& args) {
   }
   WriteFileAtomically("-", out);
   return planned.observable ? kExitOk : kExitBadInput;
+}
+
+int RunMonteCarlo(const MonteCarloArgs& args) {
+  const std::optional<Scenario> scenario = ScenarioByName(args.scenario);
+  if (!scenario) throw UsageError("--scenario: '" + args.scenario + "' is not one of yang2012");
+  if (args.runs < 2) throw UsageError("--runs must be at least 2");
+  if (args.threads < 0) throw UsageError("--threads must be 0 (all cores) or positive");
+  MonteCarloOptions options;
+  options.runs = args.runs;
+  options.seed = args.seed;
+  options.threads = args.threads;
+  options.known_noise = !args.residual_noise;
+  options.calibration.method = ParseEnum(SolverMethodFromString(args.method), args.method,
+                                         "--method", "joint, two-step, newton-lagrange");
+  if (!IsMaximumLikelihood(options.calibration.method)) {
+    throw UsageError(
+        "--method: the Monte Carlo compares maximum-likelihood methods with the "
+        "bound: joint, two-step or newton-lagrange");
+  }
+  options.calibration.model = scenario->model;
+  if (auto why = options.calibration.Validate()) throw UsageError(*why);
+  const MonteCarloResult r = RunMonteCarlo(*scenario, options);
+  std::string out;
+  if (args.json) {
+    out +=
+        "{\n  \"scenario\": \"" + r.scenario + "\",\n  \"method\": \"" +
+        std::string(ToString(r.method)) + "\",\n  \"runs\": " + std::to_string(r.runs) +
+        ",\n  \"failed\": " + std::to_string(r.failed) +
+        ",\n  \"coverage\": " + FormatNumber(r.coverage) +
+        ",\n  \"inclination_error_rms_arcsec\": " + FormatNumber(r.inclination_error_rms_arcsec) +
+        ",\n  \"parameters\": [";
+    for (std::size_t i = 0; i < r.errors.size(); ++i) {
+      const ErrorStatistics& e = r.errors[i];
+      out += (i ? ",\n    " : "\n    ") + std::string("{\"name\": \"") + e.name +
+             "\", \"unit\": \"" + e.unit + "\", \"min\": " + FormatNumber(e.min) +
+             ", \"max\": " + FormatNumber(e.max) + ", \"mean\": " + FormatNumber(e.mean) +
+             ", \"median\": " + FormatNumber(e.median) + ", \"std\": " + FormatNumber(e.std) +
+             ", \"crlb\": " + FormatNumber(e.crlb) + ", \"ratio\": " + FormatNumber(e.ratio) + "}";
+    }
+    out += "\n  ]\n}\n";
+  } else {
+    out += Format("montecarlo %s, %d runs, %s solver (%d failed)\n", r.scenario.c_str(), r.runs,
+                  std::string(ToString(r.method)).c_str(), r.failed);
+    out += Format("  %-7s %-6s %11s %11s %11s %11s %11s %11s %7s\n", "error", "unit", "min", "max",
+                  "mean", "median", "std", "CRLB", "std/CRLB");
+    for (const ErrorStatistics& e : r.errors) {
+      out += Format("  %-7s %-6s %11.4g %11.4g %11.4g %11.4g %11.4g %11.4g %7.3f\n", e.name.c_str(),
+                    e.unit.c_str(), e.min, e.max, e.mean, e.median, e.std, e.crlb, e.ratio);
+    }
+    out += Format("coverage of the reported 1-sigma intervals: %.1f %% (noise %s)\n",
+                  100 * r.coverage, args.residual_noise ? "from the residuals" : "known");
+    out += Format("inclination vector error: rms %.3f arcsec\n", r.inclination_error_rms_arcsec);
+  }
+  WriteFileAtomically("-", out);
+  return kExitOk;
 }
 
 }  // namespace accelcal::cli

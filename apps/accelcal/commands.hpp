@@ -2,6 +2,7 @@
 // The subcommands of the accelcal tool: argument structs filled by main.cpp, handlers that call
 // the library and do the I/O.
 
+#include <cstdint>
 #include <optional>
 #include <stdexcept>
 #include <string>
@@ -93,7 +94,18 @@ struct DesignArgs {
   bool json = false;
 };
 
+struct MonteCarloArgs {
+  std::string scenario = "yang2012";
+  int runs = 500;
+  std::string method = "joint";
+  std::uint64_t seed = 1;
+  int threads = 0;  // 0: all cores
+  bool residual_noise = false;
+  bool json = false;
+};
+
 int RunCalibrate(const CalibrateArgs& args);
+int RunMonteCarlo(const MonteCarloArgs& args);
 int RunDesign(const DesignArgs& args);
 int RunDetect(const DetectArgs& args);
 int RunCompare(const CompareArgs& args);

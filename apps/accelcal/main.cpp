@@ -133,6 +133,20 @@ int main(int argc, char** argv) {
   design->add_option("--model", des.model, "linear or quadratic (default: the device's)");
   design->add_flag("--json", des.json, "machine-readable output");
 
+  MonteCarloArgs mc;
+  CLI::App* montecarlo = app.add_subcommand(
+      "montecarlo", "simulate a scenario many times: errors against the Cramer-Rao bound");
+  montecarlo->add_option("--scenario", mc.scenario, "yang2012 (paper 000 Table 3/4)")
+      ->capture_default_str();
+  montecarlo->add_option("--runs", mc.runs, "number of runs")->capture_default_str();
+  montecarlo->add_option("--method", mc.method, "joint, two-step or newton-lagrange")
+      ->capture_default_str();
+  montecarlo->add_option("--seed", mc.seed, "seed of the first run's noise")->capture_default_str();
+  montecarlo->add_option("--threads", mc.threads, "threads (0: all cores)")->capture_default_str();
+  montecarlo->add_flag("--residual-noise", mc.residual_noise,
+                       "covariance from the residuals instead of the known noise");
+  montecarlo->add_flag("--json", mc.json, "machine-readable output");
+
   ApplyArgs apply;
   CLI::App* apply_cmd =
       app.add_subcommand("apply", "write the calibrated specific force of every sample of a log");
@@ -162,6 +176,7 @@ int main(int argc, char** argv) {
     if (*compare) return RunCompare(cmp);
     if (*apply_cmd) return RunApply(apply);
     if (*design) return RunDesign(des);
+    if (*montecarlo) return RunMonteCarlo(mc);
   } catch (const UsageError& e) {
     std::fprintf(stderr, "accelcal: usage: %s\n", e.what());
     return kExitUsage;

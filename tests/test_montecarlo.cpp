@@ -1,0 +1,67 @@
+// Paper 000 §5: 500 Monte Carlo runs of the Table-3 device against the Cramér-Rao bound.
+#include <cmath>
+#include <map>
+#include <string>
+
+#include <gtest/gtest.h>
+
+#include "accelcal/montecarlo.hpp"
+
+namespace accelcal {
+namespace {
+
+TEST(MonteCarlo, Yang2012ReachesTheBoundAndReproducesTable4) {
+  const Scenario s = *ScenarioByName("yang2012");
+  MonteCarloOptions o;  // 500 runs, joint solver, the true noise given to each run
+  const MonteCarloResult r = RunMonteCarlo(s, o);
+  EXPECT_EQ(r.failed, 0);
+  ASSERT_EQ(r.errors.size(), 14u);
+  // Table 4's standard deviations (ERRATA: they equal the CRLB within sampling error).
+  const std::map<std::string, double> table4 = {
+      {"ka_x", 0.654},    {"ka_y", 0.647},   {"ka_z", 0.709},      {"tau_yx", 0.269},
+      {"tau_zx", 0.257},  {"tau_zy", 0.264}, {"tau_yy", 4.698e-5}, {"tau_zz", 8.842e-5},
+      {"p0_x", 1.631},    {"p0_y", 1.576},   {"p0_z", 1.633},      {"k2_x", 2.312e-6},
+      {"k2_y", 2.208e-6}, {"k2_z", 2.271e-6}};
+  for (const ErrorStatistics& e : r.errors) {
+    // The sample standard deviation of 500 runs has a relative error of 1/√1000 = 3.2 %: the
+    // ratio to the bound within ±10 % is 3 of those; the mean within 4 standard errors.
+    EXPECT_NEAR(e.ratio, 1.0, 0.10) << e.name;
+    EXPECT_LT(std::abs(e.mean), 4.0 * e.std / std::sqrt(500.0)) << e.name;
+    // Against the paper: both standard deviations carry ~3 % sampling error.
+    EXPECT_NEAR(e.std, table4.at(e.name), 0.15 * table4.at(e.name)) << e.name;
+    EXPECT_LE(e.min, e.median);
+    EXPECT_LE(e.median, e.max);
+  }
+  // Coverage of the reported 1σ intervals. With the true per-axis noise the covariance is inflated
+  // by R² = χ²₆/6 when R > 1 (calibrate.hpp), so the expected coverage is E[P(|z| ≤ max(1, R))] =
+  // 0.720 (numerical integration), not 0.683; 500 runs x 12 correlated parameters: ±3 %.
+  EXPECT_NEAR(r.coverage, 0.720, 0.03);
+  // With the noise from the residuals (6 degrees of freedom) it is P(|t₆| ≤ 1) = 0.644.
+  o.known_noise = false;
+  EXPECT_NEAR(RunMonteCarlo(s, o).coverage, 0.644, 0.03);
+  // Paper 000: the inclination vector error is below 1 arcsec with the 18 positions.
+  EXPECT_LT(r.inclination_error_rms_arcsec, 1.0);
+}
+
+TEST(MonteCarlo, SameStatisticsWhateverTheThreadCount) {
+  const Scenario s = *ScenarioByName("yang2012");
+  MonteCarloOptions o;
+  o.runs = 40;
+  o.threads = 1;
+  const MonteCarloResult one = RunMonteCarlo(s, o);
+  o.threads = 2;
+  const MonteCarloResult two = RunMonteCarlo(s, o);
+  ASSERT_EQ(one.errors.size(), two.errors.size());
+  for (std::size_t i = 0; i < one.errors.size(); ++i) {
+    EXPECT_EQ(one.errors[i].mean, two.errors[i].mean);
+    EXPECT_EQ(one.errors[i].std, two.errors[i].std);
+    EXPECT_EQ(one.errors[i].max, two.errors[i].max);
+  }
+  EXPECT_EQ(one.coverage, two.coverage);
+  o.seed = 2;
+  EXPECT_NE(RunMonteCarlo(s, o).errors[0].mean, one.errors[0].mean);
+  EXPECT_FALSE(ScenarioByName("nonesuch").has_value());
+}
+
+}  // namespace
+}  // namespace accelcal

@@ -4,6 +4,8 @@
 #include <cmath>
 #include <random>
 
+#include <Eigen/Geometry>
+
 #include "accelcal/engineering.hpp"
 
 namespace accelcal {
@@ -118,6 +120,39 @@ std::vector<Vec3> RandomDirectionsInCap(int count, double half_angle_rad, std::u
     dirs.emplace_back(r * std::cos(azimuth), r * std::sin(azimuth), z);
   }
   return dirs;
+}
+
+SimulatedLog SimulateRawLog(const ModelParameters& truth, double gravity,
+                            const std::vector<Vec3>& directions, const RawLogSimulation& options) {
+  std::mt19937_64 rng(options.seed);
+  std::normal_distribution<double> normal(0.0, 1.0);
+  SimulatedLog log;
+  const auto still = static_cast<std::size_t>(std::llround(options.static_s * options.rate_hz));
+  const auto turn = static_cast<std::size_t>(std::llround(options.transition_s * options.rate_hz));
+  const auto emit = [&](const Vec3& c) {
+    log.time_s.push_back(static_cast<double>(log.samples.size()) / options.rate_hz);
+    const Vec3 noise(normal(rng), normal(rng), normal(rng));
+    log.samples.push_back(PredictRaw(truth, Vec3(gravity * c)) +
+                          options.sigma_raw_per_sample.cwiseProduct(noise));
+  };
+  for (std::size_t k = 0; k < directions.size(); ++k) {
+    const Vec3 c = directions[k].normalized();
+    for (std::size_t i = 0; i < still; ++i) emit(c);
+    if (k + 1 == directions.size()) break;
+    // Turn to the next direction: slerp with a smooth-step profile (zero rate at both ends).
+    const Vec3 next = directions[k + 1].normalized();
+    const double angle = std::atan2(c.cross(next).norm(), c.dot(next));
+    Vec3 axis = c.cross(next);
+    if (axis.norm() < 1e-12)
+      axis = c.cross(Vec3::UnitX()).norm() > 0.1 ? c.cross(Vec3::UnitX()) : c.cross(Vec3::UnitY());
+    axis.normalize();
+    for (std::size_t i = 1; i < turn; ++i) {
+      const double s = static_cast<double>(i) / static_cast<double>(turn);
+      const double progress = s * s * (3.0 - 2.0 * s);
+      emit(Eigen::AngleAxisd(progress * angle, axis) * c);
+    }
+  }
+  return log;
 }
 
 }  // namespace accelcal

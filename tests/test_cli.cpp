@@ -247,6 +247,33 @@ TEST_F(Cli, MonteCarloPrintsTable4AgainstTheBound) {
   EXPECT_EQ(Exec("montecarlo --method modulus").status, 2);
 }
 
+TEST_F(Cli, SimulateWritesRecordingsThatCalibrateBackToTheTruth) {
+  // Paper 000's scenario as a raw log: 18 intervals detected, the Table-3 biases recovered
+  // (b = k_a · p0: 48, 98, 150 raw, 0.074 raw 1σ at most).
+  const CliRun s = Exec("simulate --scenario yang2012 --raw -o " + Path("log.csv"));
+  ASSERT_EQ(s.status, 0) << s.err;
+  const CliRun c = Exec("calibrate " + Path("log.csv") +
+                        " --gravity 9.8 --model quadratic --json --no-crossval");
+  ASSERT_EQ(c.status, 0) << c.err;
+  const nlohmann::json doc = nlohmann::json::parse(c.out);
+  EXPECT_EQ(doc["positions"].size(), 18u);
+  const double expected[3] = {48.0, 98.0, 150.0};
+  for (int i = 0; i < 3; ++i) {
+    EXPECT_NEAR(doc["bias"][i].get<double>(), expected[i],
+                4.5 * doc["std"]["bias"][i].get<double>());
+  }
+  EXPECT_EQ(doc["noise"]["source"], "samples");
+  // Positions files too, deterministic in the seed.
+  const CliRun p1 = Exec("simulate --scenario yang2012 --seed 7");
+  const CliRun p2 = Exec("simulate --scenario yang2012 --seed 7");
+  ASSERT_EQ(p1.status, 0) << p1.err;
+  EXPECT_EQ(p1.out, p2.out);
+  EXPECT_NE(p1.out, Exec("simulate --scenario yang2012 --seed 8").out);
+  EXPECT_EQ(p1.out.rfind("x,y,z,n,sx,sy,sz\n", 0), 0u);
+  EXPECT_EQ(Exec("simulate").status, 2);
+  EXPECT_EQ(Exec("simulate --scenario yang2012 --rate 0").status, 2);
+}
+
 TEST_F(Cli, PositionsFileInG) {
   const CliRun r = Exec("calibrate " + kData +
                         "/ctu-innalabs-ahrs-m3/measured_accelerations_24pos.csv --units g --json");

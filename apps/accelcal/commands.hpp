@@ -104,7 +104,21 @@ struct MonteCarloArgs {
   bool json = false;
 };
 
+struct SimulateArgs {
+  std::string scenario;   // "yang2012", or empty with --truth
+  std::string truth;      // calibration file of the simulated device
+  std::string positions;  // scheme or CSV of unit directions (default with --scenario: yang18)
+  std::optional<double> noise_density_ug;  // µg/√Hz (relative to the truth's gravity)
+  double rate_hz = 100;
+  double duration_s = 60;
+  double transition_s = 4;
+  std::uint64_t seed = 1;
+  bool raw = false;  // raw log instead of a positions file
+  std::string output;
+};
+
 int RunCalibrate(const CalibrateArgs& args);
+int RunSimulate(const SimulateArgs& args);
 int RunMonteCarlo(const MonteCarloArgs& args);
 int RunDesign(const DesignArgs& args);
 int RunDetect(const DetectArgs& args);

@@ -147,6 +147,24 @@ int main(int argc, char** argv) {
                        "covariance from the residuals instead of the known noise");
   montecarlo->add_flag("--json", mc.json, "machine-readable output");
 
+  SimulateArgs sim;
+  CLI::App* simulate = app.add_subcommand(
+      "simulate", "write a simulated recording (raw log or positions file) of a known device");
+  simulate->add_option("--scenario", sim.scenario,
+                       "yang2012: paper 000's device, 18 positions, 10 ug/sqrt(Hz), 100 Hz, 60 s");
+  simulate->add_option("--truth", sim.truth, "calibration file of the simulated device");
+  simulate->add_option("--positions", sim.positions,
+                       "yang18, six, random:N[:SEED], or a CSV file of unit directions");
+  simulate->add_option("--noise-density", sim.noise_density_ug, "white noise [ug/sqrt(Hz)]");
+  simulate->add_option("--rate", sim.rate_hz, "sample rate [Hz]")->capture_default_str();
+  simulate->add_option("--duration", sim.duration_s, "still time per position [s]")
+      ->capture_default_str();
+  simulate->add_option("--transition", sim.transition_s, "turning time between positions [s]")
+      ->capture_default_str();
+  simulate->add_option("--seed", sim.seed, "noise seed")->capture_default_str();
+  simulate->add_flag("--raw", sim.raw, "write a raw log (time,x,y,z) instead of positions");
+  simulate->add_option("-o,--output", sim.output, "output file (default: stdout)");
+
   ApplyArgs apply;
   CLI::App* apply_cmd =
       app.add_subcommand("apply", "write the calibrated specific force of every sample of a log");
@@ -177,6 +195,7 @@ int main(int argc, char** argv) {
     if (*apply_cmd) return RunApply(apply);
     if (*design) return RunDesign(des);
     if (*montecarlo) return RunMonteCarlo(mc);
+    if (*simulate) return RunSimulate(sim);
   } catch (const UsageError& e) {
     std::fprintf(stderr, "accelcal: usage: %s\n", e.what());
     return kExitUsage;

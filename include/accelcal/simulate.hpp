@@ -48,6 +48,25 @@ std::vector<Vec3> SimulateLinearPositions(const Mat33& M, const Vec3& b,
                                           const std::vector<Vec3>& directions, double sigma,
                                           std::uint64_t seed);
 
+/// A raw log as an accelerometer would record it: `static_s` seconds still in each direction,
+/// joined by `transition_s` seconds of turning (the direction moves along the great circle with a
+/// smooth start and stop), white noise of `sigma_raw_per_sample` on every sample, deterministic in
+/// seed.
+struct RawLogSimulation {
+  double rate_hz = 100.0;
+  double static_s = 60.0;
+  double transition_s = 4.0;
+  Vec3 sigma_raw_per_sample = Vec3::Ones();
+  std::uint64_t seed = 1;
+};
+/// Samples and their times (t = index / rate).
+struct SimulatedLog {
+  std::vector<double> time_s;
+  std::vector<Vec3> samples;
+};
+SimulatedLog SimulateRawLog(const ModelParameters& truth, double gravity,
+                            const std::vector<Vec3>& directions, const RawLogSimulation& options);
+
 /// Random unit directions, uniform on the sphere, deterministic in seed.
 std::vector<Vec3> RandomDirections(int count, std::uint64_t seed);
 

@@ -122,5 +122,17 @@ void BM_Design18(benchmark::State& state) {
 }
 BENCHMARK(BM_Design18)->Unit(benchmark::kMicrosecond);
 
+// D-optimal choice of 18 of 500 random candidates (issue 4: <= 1 s).
+void BM_DOptimal18Of500(benchmark::State& state) {
+  const ModelParameters device = Yang2012Truth();
+  const std::vector<Vec3> candidates = RandomDirections(500, 1);
+  for (auto _ : state) {
+    benchmark::DoNotOptimize(ChooseDOptimal(device, ModelKind::kQuadratic, kYang2012Gravity_ms2,
+                                            candidates, Vec3::Constant(0.5), 18)
+                                 .size());
+  }
+}
+BENCHMARK(BM_DOptimal18Of500)->Unit(benchmark::kMillisecond);
+
 }  // namespace
 }  // namespace accelcal

@@ -2,7 +2,10 @@
 
 #include <charconv>
 #include <cmath>
+#include <limits>
 #include <stdexcept>
+
+#include <Eigen/Cholesky>
 
 #include "accelcal/simulate.hpp"
 #include "solver_common.hpp"
@@ -26,7 +29,118 @@ internal::Information Fisher(const internal::Problem& problem, const ModelParame
   return info;
 }
 
+// Whitened information rows w_k = u_k / σ_k on the model's active columns, x-first gauge.
+Eigen::MatrixXd WhitenedRows(const ModelParameters& device, ModelKind model, double gravity,
+                             const std::vector<Vec3>& directions, const Vec3& sigma_raw) {
+  const bool mirror = FrameOf(device.K) == Frame::kZFirst;
+  ModelParameters x_device = mirror ? MirrorAxes(device) : device;
+  if (model == ModelKind::kLinear) x_device.k2.setZero();
+  std::vector<Vec3> x_directions = directions;
+  if (mirror) {
+    for (Vec3& c : x_directions) c = MirrorAxes(c);
+  }
+  const Vec3 x_sigma = mirror ? MirrorAxes(sigma_raw).cwiseAbs() : sigma_raw;
+  const std::vector<Vec3> no_readings(directions.size());
+  const internal::Problem problem{no_readings, gravity, model};
+  const internal::InformationRows rows =
+      internal::ReducedInformationRows(problem, x_device, x_directions);
+  const std::vector<int>& cols = ActiveColumns(model);
+  Eigen::MatrixXd W(static_cast<Eigen::Index>(directions.size()),
+                    static_cast<Eigen::Index>(cols.size()));
+  for (Eigen::Index k = 0; k < W.rows(); ++k) {
+    const double sigma_k =
+        std::sqrt(rows.normals[static_cast<std::size_t>(k)].cwiseAbs2().dot(x_sigma.cwiseAbs2()));
+    for (Eigen::Index j = 0; j < W.cols(); ++j) {
+      W(k, j) = rows.U(k, cols[static_cast<std::size_t>(j)]) / sigma_k;
+    }
+  }
+  // In the parameter metric of TerminationType (relative change of the prediction): a scaling
+  // fixed by the device, so log det compares sets and does not depend on the parameters' units.
+  const internal::Vec12 metric = internal::ParameterScales(problem, x_device);
+  Eigen::VectorXd scale(W.cols());
+  for (Eigen::Index j = 0; j < W.cols(); ++j)
+    scale(j) = 1.0 / metric(cols[static_cast<std::size_t>(j)]);
+  return W * scale.asDiagonal();
+}
+
 }  // namespace
+
+double LogDetInformation(const ModelParameters& device, ModelKind model, double gravity,
+                         const std::vector<Vec3>& directions, const Vec3& sigma_raw) {
+  const Eigen::MatrixXd W = WhitenedRows(device, model, gravity, directions, sigma_raw);
+  Eigen::LDLT<Eigen::MatrixXd> ldlt(W.transpose() * W);
+  const Eigen::VectorXd d = ldlt.vectorD();
+  if (ldlt.info() != Eigen::Success || !(d.minCoeff() > 0)) {
+    return -std::numeric_limits<double>::infinity();
+  }
+  return d.array().log().sum();
+}
+
+std::vector<int> ChooseDOptimal(const ModelParameters& device, ModelKind model, double gravity,
+                                const std::vector<Vec3>& candidates, const Vec3& sigma_raw,
+                                int count) {
+  const int n = static_cast<int>(candidates.size());
+  const int P = NumParameters(model);
+  if (count > n) throw std::invalid_argument("more positions asked for than there are candidates");
+  if (count < MinimumPositions(model)) {
+    throw std::invalid_argument("the " + std::string(ToString(model)) + " model needs at least " +
+                                std::to_string(MinimumPositions(model)) + " positions");
+  }
+  // In the device's parameter metric (WhitenedRows): the argmax does not depend on a fixed
+  // scaling, and it keeps the matrices well conditioned.
+  const Eigen::MatrixXd W = WhitenedRows(device, model, gravity, candidates, sigma_raw);
+  std::vector<bool> chosen(static_cast<std::size_t>(n), false);
+  // Greedy: add the candidate with the largest w A⁻¹ wᵀ, A regularised while singular (relative to
+  // one candidate's contribution, so the first picks see a well-conditioned A).
+  const double regularisation = 1e-6 * W.colwise().squaredNorm().maxCoeff() / n;
+  Eigen::MatrixXd A = regularisation * Eigen::MatrixXd::Identity(P, P);
+  for (int step = 0; step < count; ++step) {
+    const Eigen::MatrixXd A_inv = A.ldlt().solve(Eigen::MatrixXd::Identity(P, P));
+    int best = -1;
+    double best_gain = -1;
+    for (int j = 0; j < n; ++j) {
+      if (chosen[static_cast<std::size_t>(j)]) continue;
+      const double gain = W.row(j) * A_inv * W.row(j).transpose();
+      if (gain > best_gain) best_gain = gain, best = j;
+    }
+    if (best < 0) throw std::invalid_argument("the candidates give no information (degenerate)");
+    chosen[static_cast<std::size_t>(best)] = true;
+    A += W.row(best).transpose() * W.row(best);
+  }
+  A -= regularisation * Eigen::MatrixXd::Identity(P, P);
+  // Fedorov exchange: swap i (in) for j (out) when det grows, by the rank-2 determinant lemma
+  // Δ = (1 + d_j)(1 − d_i) + d_ij² with d = w A⁻¹ wᵀ.
+  for (int sweep = 0; sweep < 100; ++sweep) {
+    bool improved = false;
+    const Eigen::MatrixXd A_inv = A.ldlt().solve(Eigen::MatrixXd::Identity(P, P));
+    const Eigen::MatrixXd V = W * A_inv;  // rows w_k A⁻¹
+    const Eigen::VectorXd d = (V.array() * W.array()).rowwise().sum();
+    double best = 1.0 + 1e-10;
+    int best_in = -1, best_out = -1;
+    for (int i = 0; i < n; ++i) {
+      if (!chosen[static_cast<std::size_t>(i)]) continue;
+      for (int j = 0; j < n; ++j) {
+        if (chosen[static_cast<std::size_t>(j)]) continue;
+        const double dij = V.row(i).dot(W.row(j));
+        const double ratio = (1.0 + d(j)) * (1.0 - d(i)) + dij * dij;
+        if (ratio > best) best = ratio, best_in = i, best_out = j;
+      }
+    }
+    if (best_in >= 0) {
+      chosen[static_cast<std::size_t>(best_in)] = false;
+      chosen[static_cast<std::size_t>(best_out)] = true;
+      A += W.row(best_out).transpose() * W.row(best_out) -
+           W.row(best_in).transpose() * W.row(best_in);
+      improved = true;
+    }
+    if (!improved) break;
+  }
+  std::vector<int> indices;
+  for (int k = 0; k < n; ++k) {
+    if (chosen[static_cast<std::size_t>(k)]) indices.push_back(k);
+  }
+  return indices;
+}
 
 PlannedUncertainty PredictUncertainty(const ModelParameters& device, ModelKind model,
                                       double gravity, const std::vector<Vec3>& directions,

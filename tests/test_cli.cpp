@@ -221,6 +221,15 @@ TEST_F(Cli, DesignPredictsTheBoundBeforeRecording) {
   EXPECT_EQ(b.status, 3);
   EXPECT_NE(b.err.find("direction 2 (0, 2, 0) is not a unit vector"), std::string::npos) << b.err;
   EXPECT_EQ(Exec("design --positions yang18 --noise 0.1,0.2" + device).status, 2);
+  // D-optimal choice of 18 among 200 candidates, compared with yang18.
+  const CliRun d = Exec("design --positions random:200 --choose 18 --noise 0.12 --json" + device);
+  ASSERT_EQ(d.status, 0) << d.err;
+  const nlohmann::json chosen = nlohmann::json::parse(d.out);
+  EXPECT_EQ(chosen["positions"], 18);
+  EXPECT_EQ(chosen["chosen"].size(), 18u);
+  EXPECT_NE(chosen["choice"].get<std::string>().find("D-efficiency against yang18"),
+            std::string::npos);
+  EXPECT_EQ(Exec("design --positions random:200 --choose 5 --noise 0.12" + device).status, 2);
 }
 
 TEST_F(Cli, MonteCarloPrintsTable4AgainstTheBound) {

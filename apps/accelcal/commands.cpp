@@ -572,7 +572,27 @@ int RunDesign(const DesignArgs& args) {
   const ModelKind model = args.model ? ParseEnum(ModelKindFromString(*args.model), *args.model,
                                                  "--model", "linear, quadratic")
                                      : device.model;
-  const std::vector<Vec3> directions = PlannedDirections(args.positions);
+  std::vector<Vec3> directions = PlannedDirections(args.positions);
+  std::string chosen_note;
+  if (args.choose > 0) {
+    std::vector<int> chosen;
+    try {
+      chosen = ChooseDOptimal(device.params, model, device.gravity, directions, sigma, args.choose);
+    } catch (const std::invalid_argument& e) {
+      throw UsageError(std::string("--choose: ") + e.what());
+    }
+    std::vector<Vec3> subset;
+    for (int k : chosen) subset.push_back(directions[static_cast<std::size_t>(k)]);
+    const double efficiency = std::exp(
+        (LogDetInformation(device.params, model, device.gravity, subset, sigma) -
+         LogDetInformation(device.params, model, device.gravity, Yang18Directions(), sigma)) /
+        NumParameters(model));
+    chosen_note = Format(
+        "D-optimal %d of %zu candidates; D-efficiency against yang18 %.4f "
+        "((det I / det I_yang18)^(1/%d); > 1: better)",
+        args.choose, directions.size(), efficiency, NumParameters(model));
+    directions = std::move(subset);
+  }
   const PlannedUncertainty planned =
       PredictUncertainty(device.params, model, device.gravity, directions, sigma);
   const auto& slots = ParameterSlots(model, planned.frame);
@@ -585,6 +605,13 @@ int RunDesign(const DesignArgs& args) {
     out += "  \"model\": \"" + std::string(ToString(model)) + "\",\n";
     out += "  \"frame\": \"" + std::string(ToString(planned.frame)) + "\",\n";
     out += "  \"noise_raw\": " + vec(sigma) + ",\n";
+    if (args.choose > 0) {
+      out += "  \"chosen\": [";
+      for (std::size_t k = 0; k < directions.size(); ++k) {
+        out += (k ? ", " : "") + vec(directions[k]);
+      }
+      out += "],\n  \"choice\": \"" + chosen_note + "\",\n";
+    }
     out += "  \"observable\": " + std::string(planned.observable ? "true" : "false") + ",\n";
     out += "  \"reciprocal_condition\": " + FormatNumber(planned.rcond) + ",\n";
     out += "  \"weakest\": " +
@@ -616,6 +643,10 @@ int RunDesign(const DesignArgs& args) {
         "raw per averaged reading\n",
         directions.size(), args.positions.c_str(), std::string(ToString(model)).c_str(),
         std::string(ToString(planned.frame)).c_str(), sigma(0), sigma(1), sigma(2));
+    if (args.choose > 0) {
+      out += chosen_note + "\n";
+      for (const Vec3& c : directions) out += Format("  %+.6f %+.6f %+.6f\n", c(0), c(1), c(2));
+    }
     if (!planned.observable) {
       out += Format(
           "NOT OBSERVABLE: these positions do not determine parameter %s (reciprocal "

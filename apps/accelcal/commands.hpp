@@ -91,6 +91,7 @@ struct DesignArgs {
   std::string device;                // calibration file of the nominal device
   std::vector<double> noise_raw;     // 1 or 3 values: 1σ of one averaged reading [raw]
   std::optional<std::string> model;  // default: the device's
+  int choose = 0;                    // > 0: D-optimal subset of the positions (candidates)
   bool json = false;
 };
 

@@ -131,6 +131,9 @@ int main(int argc, char** argv) {
       ->delimiter(',')
       ->expected(1, 3);
   design->add_option("--model", des.model, "linear or quadratic (default: the device's)");
+  design->add_option("--choose", des.choose,
+                     "choose this many of the positions (the candidates) to maximise det of the "
+                     "information (D-optimal); compared with paper 000's yang18");
   design->add_flag("--json", des.json, "machine-readable output");
 
   MonteCarloArgs mc;

@@ -40,6 +40,21 @@ PlannedUncertainty PredictUncertainty(const ModelParameters& device, ModelKind m
                                       double gravity, const std::vector<Vec3>& directions,
                                       const Vec3& sigma_raw);
 
+/// D-optimal choice of `count` distinct positions out of `candidates`: maximises det I (the
+/// volume of the CRLB's confidence ellipsoid shrinks with it; invariant to the parameters' units).
+/// Greedy start (regularised until `count` ≥ P), then Fedorov exchanges until no swap of a chosen
+/// and an unchosen candidate increases det I. Returns the chosen indices in increasing order.
+/// Throws std::invalid_argument when count exceeds the candidates or is below the model's minimum.
+std::vector<int> ChooseDOptimal(const ModelParameters& device, ModelKind model, double gravity,
+                                const std::vector<Vec3>& candidates, const Vec3& sigma_raw,
+                                int count);
+
+/// log det of the information matrix of `directions`, the parameters measured in the device's
+/// metric (relative change of the prediction, as in TerminationType): comparable between sets for
+/// the same device, model and noise; −inf when singular.
+double LogDetInformation(const ModelParameters& device, ModelKind model, double gravity,
+                         const std::vector<Vec3>& directions, const Vec3& sigma_raw);
+
 /// Named observation schemes: "yang18" (paper 000 Table 2), "six" (±x, ±y, ±z), "random:N" or
 /// "random:N:SEED" (uniform on the sphere, seed 1 by default). std::nullopt for another name.
 std::optional<std::vector<Vec3>> SchemeDirections(std::string_view name);

@@ -230,6 +230,19 @@ TEST_F(Cli, DesignPredictsTheBoundBeforeRecording) {
   EXPECT_NE(chosen["choice"].get<std::string>().find("D-efficiency against yang18"),
             std::string::npos);
   EXPECT_EQ(Exec("design --positions random:200 --choose 5 --noise 0.12" + device).status, 2);
+  // The noise from a density: 10 ug/sqrt(Hz) at 100 Hz averaged over 60 s is 1.29 ug, times the
+  // length of K's row (raw per m/s2) and the device's gravity per g.
+  const CliRun nd = Exec(
+      "design --positions yang18 --noise-density 10 --rate 100 --duration 60 "
+      "--json" +
+      device);
+  ASSERT_EQ(nd.status, 0) << nd.err;
+  const nlohmann::json dev = nlohmann::json::parse(Slurp(Path("device.json")));
+  double row0 = 0;
+  for (int j = 0; j < 3; ++j) row0 += std::pow(dev["K"][0][j].get<double>(), 2);
+  EXPECT_NEAR(nlohmann::json::parse(nd.out)["noise_raw"][0].get<double>(),
+              std::sqrt(row0) * 10e-6 * 9.81744 * std::sqrt(100.0 / 6000.0), 1e-12);
+  EXPECT_EQ(Exec("design --positions yang18 --noise-density 10" + device).status, 2);
 }
 
 TEST_F(Cli, MonteCarloPrintsTable4AgainstTheBound) {

@@ -561,14 +561,34 @@ std::vector<Vec3> PlannedDirections(const std::string& spec) {
 }  // namespace
 
 int RunDesign(const DesignArgs& args) {
-  if (args.noise_raw.size() != 1 && args.noise_raw.size() != 3) {
+  const bool from_density = args.noise_density_ug.has_value();
+  if (from_density == !args.noise_raw.empty()) {
+    throw UsageError("give --noise, or --noise-density with --rate and --duration");
+  }
+  if (from_density && (!args.rate_hz || !args.duration_s)) {
+    throw UsageError("--noise-density needs --rate and --duration");
+  }
+  if (!from_density && args.noise_raw.size() != 1 && args.noise_raw.size() != 3) {
     throw UsageError("--noise takes one value or three (x,y,z)");
   }
-  const Vec3 sigma = args.noise_raw.size() == 1
-                         ? Vec3::Constant(args.noise_raw[0])
-                         : Vec3(args.noise_raw[0], args.noise_raw[1], args.noise_raw[2]);
-  if (!sigma.allFinite() || !(sigma.minCoeff() > 0)) throw UsageError("--noise must be positive");
   const LoadedCalibration device = ParseCalibrationJson(ReadFileToString(args.device), args.device);
+  Vec3 sigma;
+  if (from_density) {
+    // One averaged reading: density · √rate per sample (µg relative to the device's gravity),
+    // over rate · duration samples, mapped to each raw axis by the length of its row of K.
+    const double samples = *args.rate_hz * *args.duration_s;
+    const double sigma_force =
+        *args.noise_density_ug * 1e-6 * device.gravity * std::sqrt(*args.rate_hz / samples);
+    for (int i = 0; i < 3; ++i) sigma(i) = device.params.K.row(i).norm() * sigma_force;
+  } else {
+    sigma = args.noise_raw.size() == 1
+                ? Vec3::Constant(args.noise_raw[0])
+                : Vec3(args.noise_raw[0], args.noise_raw[1], args.noise_raw[2]);
+  }
+  if (!sigma.allFinite() || !(sigma.minCoeff() > 0)) {
+    throw UsageError(
+        "the noise must be positive (--noise, or --noise-density, --rate, --duration)");
+  }
   const ModelKind model = args.model ? ParseEnum(ModelKindFromString(*args.model), *args.model,
                                                  "--model", "linear, quadratic")
                                      : device.model;

@@ -87,11 +87,14 @@ struct ApplyArgs {
 };
 
 struct DesignArgs {
-  std::string positions;             // scheme name or CSV file of unit directions
-  std::string device;                // calibration file of the nominal device
-  std::vector<double> noise_raw;     // 1 or 3 values: 1σ of one averaged reading [raw]
-  std::optional<std::string> model;  // default: the device's
-  int choose = 0;                    // > 0: D-optimal subset of the positions (candidates)
+  std::string positions;                   // scheme name or CSV file of unit directions
+  std::string device;                      // calibration file of the nominal device
+  std::vector<double> noise_raw;           // 1 or 3 values: 1σ of one averaged reading [raw]
+  std::optional<std::string> model;        // default: the device's
+  int choose = 0;                          // > 0: D-optimal subset of the positions (candidates)
+  std::optional<double> noise_density_ug;  // instead of noise_raw, with rate and duration
+  std::optional<double> rate_hz;
+  std::optional<double> duration_s;
   bool json = false;
 };
 

@@ -127,9 +127,13 @@ int main(int argc, char** argv) {
   design
       ->add_option("--noise", des.noise_raw,
                    "1 sigma of one averaged reading in raw units: one value or three (x,y,z)")
-      ->required()
       ->delimiter(',')
       ->expected(1, 3);
+  design->add_option("--noise-density", des.noise_density_ug,
+                     "instead of --noise: white noise [ug/sqrt(Hz)], with --rate and --duration");
+  design->add_option("--rate", des.rate_hz, "sample rate [Hz], with --noise-density");
+  design->add_option("--duration", des.duration_s,
+                     "still time per position [s], with --noise-density");
   design->add_option("--model", des.model, "linear or quadratic (default: the device's)");
   design->add_option("--choose", des.choose,
                      "choose this many of the positions (the candidates) to maximise det of the "
@@ -166,6 +170,8 @@ int main(int argc, char** argv) {
       ->capture_default_str();
   simulate->add_option("--seed", sim.seed, "noise seed")->capture_default_str();
   simulate->add_flag("--raw", sim.raw, "write a raw log (time,x,y,z) instead of positions");
+  simulate->add_flag("!--positions-out", sim.raw,
+                     "write a positions file x,y,z,n,sx,sy,sz (the default)");
   simulate->add_option("-o,--output", sim.output, "output file (default: stdout)");
 
   ApplyArgs apply;

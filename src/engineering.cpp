@@ -1,5 +1,9 @@
 #include "accelcal/engineering.hpp"
 
+#include <cmath>
+
+#include "accelcal/frame.hpp"
+
 namespace accelcal {
 
 EngineeringParameters ToEngineering(const ModelParameters& params, double gravity) {
@@ -32,6 +36,53 @@ ModelParameters FromEngineering(const EngineeringParameters& eng, double gravity
   params.bias = eng.scale_factor.cwiseProduct(eng.bias_force);
   params.k2 = eng.scale_factor.cwiseProduct(eng.k2_g_per_g2) / gravity;
   return params;
+}
+
+namespace {
+
+using Vec12 = Eigen::Matrix<double, 12, 1>;
+
+Vec12 EngineeringVector(const ModelParameters& params, Frame frame, double gravity) {
+  const EngineeringParameters e = ToEngineering(params, gravity);
+  Vec12 v;
+  v << e.scale_factor, MisalignmentOf(params.K, frame).rad, e.bias_force, e.k2_g_per_g2;
+  return v;
+}
+
+double& Slot(ModelParameters& p, const ParameterSlot& s) {
+  switch (s.group) {
+    case ParameterGroup::kK:
+      return p.K(s.row, s.col);
+    case ParameterGroup::kBias:
+      return p.bias(s.row);
+    case ParameterGroup::kK2:
+      break;
+  }
+  return p.k2(s.row);
+}
+
+}  // namespace
+
+EngineeringStd EngineeringUncertainty(const ModelParameters& params, ModelKind model, bool z_first,
+                                      double gravity, const Eigen::MatrixXd& covariance) {
+  const Frame frame = z_first ? Frame::kZFirst : Frame::kXFirst;
+  const auto& slots = ParameterSlots(model, frame);
+  Eigen::MatrixXd J(12, static_cast<Eigen::Index>(slots.size()));
+  ModelParameters copy = params;
+  for (std::size_t j = 0; j < slots.size(); ++j) {
+    const auto col = static_cast<Eigen::Index>(j);
+    const double h = 1e-6 * std::sqrt(std::max(covariance(col, col), 0.0)) +
+                     1e-12 * std::max(1.0, std::abs(Slot(copy, slots[j])));
+    ModelParameters plus = params, minus = params;
+    Slot(plus, slots[j]) += h;
+    Slot(minus, slots[j]) -= h;
+    J.col(col) =
+        (EngineeringVector(plus, frame, gravity) - EngineeringVector(minus, frame, gravity)) /
+        (2 * h);
+  }
+  const Eigen::MatrixXd C = J * covariance * J.transpose();
+  const Vec12 sd = C.diagonal().cwiseMax(0.0).cwiseSqrt();
+  return {sd.segment<3>(0), sd.segment<3>(3), sd.segment<3>(6), sd.segment<3>(9)};
 }
 
 }  // namespace accelcal

@@ -7,6 +7,7 @@
 #include <gtest/gtest.h>
 
 #include "accelcal/calibrate.hpp"
+#include "accelcal/engineering.hpp"
 #include "accelcal/simulate.hpp"
 
 namespace accelcal {
@@ -110,6 +111,21 @@ TEST(Uncertainty, RefusesMismatchedSigmas) {
   EXPECT_THROW(Calibrate(readings, o), std::invalid_argument);
   o.reading_sigmas.assign(readings.size(), Vec3(1, 0, 1));
   EXPECT_THROW(Calibrate(readings, o), std::invalid_argument);
+}
+
+TEST(Uncertainty, EngineeringStandardDeviationsFollowFromTheParameters) {
+  // Independent parameters: row x of K is K_xx alone, so σ(k_a,x) = σ(K_xx); p0_x = b_x / k_a,x
+  // has σ² = (σ_b/k)² + (b σ_k/k²)² to first order (known answer of the propagation).
+  const ModelParameters p = LinearTruth();
+  Eigen::VectorXd sd(9);
+  sd << 0.5, 2.0, 0.1, 0.4, 1.5, 0.2, 0.3, 0.6, 2.5;  // model.hpp order
+  const Eigen::MatrixXd covariance = sd.cwiseAbs2().asDiagonal();
+  const EngineeringStd e = EngineeringUncertainty(p, ModelKind::kLinear, false, kG, covariance);
+  const double k = p.K(0, 0), b = p.bias(0);
+  EXPECT_NEAR(e.scale_factor(0), 0.5, 1e-6 * 0.5);
+  EXPECT_NEAR(e.bias_force(0), std::hypot(2.0 / k, b * 0.5 / (k * k)), 1e-6 * 2.0 / k);
+  // A misalignment of row y, τ_yx = K_yx / |row y|: σ ≈ σ(K_yx) / k_a,y for a small angle.
+  EXPECT_NEAR(e.misalignment_rad(0), 0.1 / p.K.row(1).norm(), 1e-3 * 0.1 / p.K.row(1).norm());
 }
 
 }  // namespace

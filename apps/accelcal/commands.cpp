@@ -179,19 +179,38 @@ void PrintCalibration(const CalibrationResult& r, const std::vector<Position>& p
   if (have_std) PrintStrongestCorrelations(r.covariance, slots);
   const EngineeringParameters e = ToEngineering(r.params, r.gravity);
   const double ug = 1e6 / r.gravity;
-  std::printf("\nengineering (paper 000 Table 3 conventions)\n");
-  std::printf("  scale factor     %s  %s/%s\n", Vec(e.scale_factor).c_str(), raw_unit.c_str(), u);
+  // ±1σ propagated from the parameter covariance, when there is one.
+  std::optional<EngineeringStd> sd;
+  if (have_std) {
+    sd = EngineeringUncertainty(r.params, r.model, r.frame == Frame::kZFirst, r.gravity,
+                                r.covariance);
+  }
+  const auto pm = [&](const Vec3& v, const Vec3* sigma, double scale, const char* format) {
+    std::string text;
+    for (int i = 0; i < 3; ++i) {
+      text += Format(format, v(i) * scale);
+      if (sigma) text += Format(" +- %.2g", (*sigma)(i)*scale);
+      text += i < 2 ? "   " : "";
+    }
+    return text;
+  };
+  std::printf("\nengineering (paper 000 Table 3 conventions%s)\n",
+              sd ? "; +- 1 sigma propagated from the parameters" : "");
+  std::printf("  scale factor     %s  %s/%s\n",
+              pm(e.scale_factor, sd ? &sd->scale_factor : nullptr, 1.0, "%.10g").c_str(),
+              raw_unit.c_str(), u);
   const Misalignment tau = MisalignmentOf(r.params.K, r.frame);
-  const auto name = [&](int i) { return std::string(tau.names[static_cast<std::size_t>(i)]); };
-  std::printf("  misalignment     %s %.6g  %s %.6g  %s %.6g rad\n", name(0).c_str(), tau.rad(0),
-              name(1).c_str(), tau.rad(1), name(2).c_str(), tau.rad(2));
-  std::printf("                   %s %.4f  %s %.4f  %s %.4f arcsec\n", name(0).c_str(),
-              tau.rad(0) * kArcsecPerRad, name(1).c_str(), tau.rad(1) * kArcsecPerRad,
-              name(2).c_str(), tau.rad(2) * kArcsecPerRad);
-  std::printf("  bias             %s  %s  (%s ug)\n", Vec(e.bias_force).c_str(), u,
-              Vec(e.bias_force * ug, "%.6g ").c_str());
+  std::printf("  misalignment     %s, %s, %s\n", std::string(tau.names[0]).c_str(),
+              std::string(tau.names[1]).c_str(), std::string(tau.names[2]).c_str());
+  std::printf("                   %s  arcsec\n",
+              pm(tau.rad, sd ? &sd->misalignment_rad : nullptr, kArcsecPerRad, "%.4f").c_str());
+  std::printf("  bias             %s  %s\n",
+              pm(e.bias_force, sd ? &sd->bias_force : nullptr, 1.0, "%.6g").c_str(), u);
+  std::printf("                   %s  ug\n",
+              pm(e.bias_force, sd ? &sd->bias_force : nullptr, ug, "%.6g").c_str());
   if (r.model == ModelKind::kQuadratic) {
-    std::printf("  squared coeff.   %s  g/g^2\n", Vec(e.k2_g_per_g2).c_str());
+    std::printf("  squared coeff.   %s  g/g^2\n",
+                pm(e.k2_g_per_g2, sd ? &sd->k2_g_per_g2 : nullptr, 1.0, "%.4g").c_str());
   }
   const std::vector<Vec3> means = Means(positions);
   const std::vector<double> errors = GravityNormErrors(r.params, means, r.gravity);

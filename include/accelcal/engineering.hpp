@@ -30,4 +30,17 @@ EngineeringParameters ToEngineering(const ModelParameters& params, double gravit
 /// Inverse of ToEngineering (for building truths such as paper 000 Table 3).
 ModelParameters FromEngineering(const EngineeringParameters& eng, double gravity);
 
+/// 1σ of the engineering quantities, propagated to first order from the covariance of the flat
+/// parameters (in the order of ParameterSlots(model, frame), frame.hpp): J C Jᵀ with J by central
+/// differences of the smooth map (steps of 1e-6 of each parameter's own standard deviation, far
+/// inside the region where the map is linear).
+struct EngineeringStd {
+  Vec3 scale_factor;      ///< [raw per specific-force unit]
+  Vec3 misalignment_rad;  ///< the frame's three off-diagonal entries of T (MisalignmentOf)
+  Vec3 bias_force;        ///< [specific-force unit]
+  Vec3 k2_g_per_g2;       ///< [g/g²]
+};
+EngineeringStd EngineeringUncertainty(const ModelParameters& params, ModelKind model, bool z_first,
+                                      double gravity, const Eigen::MatrixXd& covariance);
+
 }  // namespace accelcal

@@ -7,6 +7,7 @@
 
 #include <Eigen/Geometry>
 
+#include "accelcal/compare.hpp"
 #include "accelcal/design.hpp"
 #include "accelcal/engineering.hpp"
 #include "accelcal/simulate.hpp"
@@ -36,8 +37,23 @@ const char* const kNames[kErrors] = {"ka_x",   "ka_y",   "ka_z",   "tau_yx", "ta
 const char* const kUnits[kErrors] = {"ppm",    "ppm", "ppm", "arcsec", "arcsec", "arcsec", "arcsec",
                                      "arcsec", "ug",  "ug",  "ug",     "g/g^2",  "g/g^2",  "g/g^2"};
 
+// Flat parameters in the frame's slot order (the order of a result's covariance).
+Eigen::VectorXd Flat(const ModelParameters& p, ModelKind model, Frame frame) {
+  const auto& slots = ParameterSlots(model, frame);
+  Eigen::VectorXd v(static_cast<Eigen::Index>(slots.size()));
+  for (std::size_t i = 0; i < slots.size(); ++i) {
+    const ParameterSlot& s = slots[i];
+    v(static_cast<Eigen::Index>(i)) = s.group == ParameterGroup::kK      ? p.K(s.row, s.col)
+                                      : s.group == ParameterGroup::kBias ? p.bias(s.row)
+                                                                         : p.k2(s.row);
+  }
+  return v;
+}
+
 struct RunOutcome {
   bool ok = false;
+  double e_T = 0, e_b = 0;
+  Vec3 diag_T_error = Vec3::Zero();
   Eigen::Matrix<double, kErrors, 1> error;
   int covered = 0, parameters = 0;
   double inclination_sum2 = 0;
@@ -47,8 +63,11 @@ RunOutcome OneRun(const Scenario& s, const CalibrationOptions& options, std::uin
                   const Eigen::Matrix<double, kErrors, 1>& truth_eng,
                   const EngineeringParameters& truth) {
   RunOutcome out;
+  const std::vector<Vec3> directions =
+      s.random_attitudes > 0 ? SunXu2020Directions(s.random_attitudes, seed ^ 0x9e3779b97f4a7c15u)
+                             : s.directions;
   const std::vector<Vec3> readings =
-      SimulatePositions(s.truth, s.gravity, s.directions, s.sigma_raw, seed);
+      SimulatePositions(s.truth, s.gravity, directions, s.sigma_raw, seed);
   CalibrationResult r;
   try {
     r = Calibrate(readings, options);
@@ -57,17 +76,22 @@ RunOutcome OneRun(const Scenario& s, const CalibrationOptions& options, std::uin
   }
   if (!r.summary.converged()) return out;
   out.ok = true;
-  out.error = Engineering(r.params, s.gravity, truth) - truth_eng;
+  if (s.random_attitudes == 0) out.error = Engineering(r.params, s.gravity, truth) - truth_eng;
+  const ParameterErrors sx = SunXuErrors(s.truth, r.params);
+  out.e_T = sx.e_T_percent;
+  out.e_b = sx.e_b_percent;
+  out.diag_T_error = ChangeFrame(r.params.K, Frame::kZFirst).K.diagonal() -
+                     ChangeFrame(s.truth.K, Frame::kZFirst).K.diagonal();
   if (r.covariance.size() > 0) {
-    const Eigen::VectorXd e = Pack(r.params, s.model) - Pack(s.truth, s.model);
+    const Eigen::VectorXd e = Flat(r.params, s.model, s.frame) - Flat(s.truth, s.model, s.frame);
     for (Eigen::Index i = 0; i < e.size(); ++i) {
       out.covered += std::abs(e(i)) <= std::sqrt(r.covariance(i, i)) ? 1 : 0;
       ++out.parameters;
     }
   }
-  for (std::size_t k = 0; k < s.directions.size(); ++k) {
-    const double angle = std::atan2(r.directions[k].cross(s.directions[k]).norm(),
-                                    r.directions[k].dot(s.directions[k]));
+  for (std::size_t k = 0; k < directions.size(); ++k) {
+    const double angle =
+        std::atan2(r.directions[k].cross(directions[k]).norm(), r.directions[k].dot(directions[k]));
     out.inclination_sum2 += angle * angle;
   }
   return out;
@@ -101,6 +125,19 @@ Eigen::Matrix<double, kErrors, 1> EngineeringBound(const Scenario& s,
 }  // namespace
 
 std::optional<Scenario> ScenarioByName(std::string_view name) {
+  if (name == "sunxu2020") {
+    Scenario s;
+    s.name = "sunxu2020";
+    s.truth.K = SunXu2020Ta();
+    s.truth.bias = SunXu2020Ba();
+    s.model = ModelKind::kLinear;
+    s.gravity = 1.0;
+    s.random_attitudes = 300;
+    s.directions = SunXu2020Directions(300, 1);  // for the bound: one typical draw
+    s.sigma_raw = Vec3::Constant(kSunXu2020Sigma_g);
+    s.frame = Frame::kZFirst;
+    return s;
+  }
   if (name != "yang2012") return std::nullopt;
   Scenario s;
   s.name = "yang2012";
@@ -118,8 +155,11 @@ MonteCarloResult RunMonteCarlo(const Scenario& scenario, const MonteCarloOptions
   calibration.model = scenario.model;
   calibration.gravity = scenario.gravity;
   calibration.cross_validate = false;
-  if (options.known_noise)
-    calibration.reading_sigmas.assign(scenario.directions.size(), scenario.sigma_raw);
+  calibration.frame = scenario.frame;
+  const std::size_t positions = scenario.random_attitudes > 0
+                                    ? static_cast<std::size_t>(scenario.random_attitudes)
+                                    : scenario.directions.size();
+  if (options.known_noise) calibration.reading_sigmas.assign(positions, scenario.sigma_raw);
   if (auto why = calibration.Validate()) throw std::invalid_argument(*why);
 
   const EngineeringParameters truth = ToEngineering(scenario.truth, scenario.gravity);
@@ -159,10 +199,28 @@ MonteCarloResult RunMonteCarlo(const Scenario& scenario, const MonteCarloOptions
     covered += o.covered;
     parameters += o.parameters;
     inclination_sum2 += o.inclination_sum2;
-    inclination_count += static_cast<long>(scenario.directions.size());
+    inclination_count += static_cast<long>(positions);
+    result.e_T_percent_mean += o.e_T;
+    result.e_b_percent_mean += o.e_b;
+    result.diag_T_bias += o.diag_T_error;
   }
+  const int ok_runs = options.runs - result.failed;
+  if (ok_runs > 0) {
+    result.e_T_percent_mean /= ok_runs;
+    result.e_b_percent_mean /= ok_runs;
+    result.diag_T_bias /= ok_runs;
+    Vec3 spread = Vec3::Zero();
+    for (const RunOutcome& o : outcomes) {
+      if (o.ok) spread += (o.diag_T_error - result.diag_T_bias).cwiseAbs2();
+    }
+    result.diag_T_bias_standard_error =
+        (spread / std::max(1, ok_runs - 1)).cwiseSqrt() / std::sqrt(static_cast<double>(ok_runs));
+  }
+  const Mat33 T = ChangeFrame(scenario.truth.K, Frame::kZFirst).K;
+  const double sigma2 = scenario.sigma_raw.squaredNorm() / 3.0;
+  for (int i = 0; i < 3; ++i) result.diag_T_bias_expected(i) = sigma2 / T(i, i);
   const Eigen::Matrix<double, kErrors, 1> bound = EngineeringBound(scenario, truth);
-  for (int i = 0; i < kErrors; ++i) {
+  for (int i = 0; i < kErrors && scenario.random_attitudes == 0; ++i) {
     std::vector<double>& v = values[static_cast<std::size_t>(i)];
     ErrorStatistics st;
     st.name = kNames[i];

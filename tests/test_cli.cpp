@@ -266,6 +266,12 @@ TEST_F(Cli, MonteCarloPrintsTable4AgainstTheBound) {
   // Same seed, same bytes.
   EXPECT_EQ(Exec("montecarlo --runs 60 --json --threads 1").out, r.out);
   EXPECT_EQ(Exec("montecarlo --scenario nonesuch").status, 2);
+  const CliRun sx = Exec("montecarlo --scenario sunxu2020 --runs 10 --json");
+  ASSERT_EQ(sx.status, 0) << sx.err;
+  const nlohmann::json sunxu = nlohmann::json::parse(sx.out);
+  EXPECT_TRUE(sunxu["parameters"].empty());
+  EXPECT_EQ(sunxu["diag_T_bias"].size(), 3u);
+  EXPECT_GT(sunxu["e_T_percent_mean"].get<double>(), 0.0);
   EXPECT_EQ(Exec("montecarlo --method modulus").status, 2);
 }
 

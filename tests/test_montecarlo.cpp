@@ -43,6 +43,24 @@ TEST(MonteCarlo, Yang2012ReachesTheBoundAndReproducesTable4) {
   EXPECT_LT(r.inclination_error_rms_arcsec, 1.0);
 }
 
+TEST(MonteCarlo, SunXu2020MaximumLikelihoodIsBiasedBySigmaSquaredOverT) {
+  // Paper 001 §4.1 with new attitudes every run. ERRATA: at σ = 0.1 g the maximum-likelihood
+  // estimate of diag(T_a) carries the incidental-parameter bias ≈ σ²/T_ii (measured 0.0088 against
+  // 0.0087-0.0091 over 200 runs); the test asks for it within 4 standard errors, and the mean e_T
+  // near the paper's 0.85 % (measured 0.90 % here, 0.83 % on the 50 runs of test_paper001).
+  MonteCarloOptions o;
+  o.runs = 200;
+  const MonteCarloResult r = RunMonteCarlo(*ScenarioByName("sunxu2020"), o);
+  EXPECT_EQ(r.failed, 0);
+  EXPECT_TRUE(r.errors.empty());  // no Table 4 for this scenario
+  for (int i = 0; i < 3; ++i) {
+    EXPECT_NEAR(r.diag_T_bias(i), r.diag_T_bias_expected(i), 4.0 * r.diag_T_bias_standard_error(i))
+        << i;
+    EXPECT_GT(r.diag_T_bias(i), 4.0 * r.diag_T_bias_standard_error(i));  // a real bias, not noise
+  }
+  EXPECT_NEAR(r.e_T_percent_mean, 0.85, 0.1);
+}
+
 TEST(MonteCarlo, SameStatisticsWhateverTheThreadCount) {
   const Scenario s = *ScenarioByName("yang2012");
   MonteCarloOptions o;

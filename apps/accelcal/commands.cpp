@@ -710,7 +710,9 @@ int RunDesign(const DesignArgs& args) {
 
 int RunMonteCarlo(const MonteCarloArgs& args) {
   const std::optional<Scenario> scenario = ScenarioByName(args.scenario);
-  if (!scenario) throw UsageError("--scenario: '" + args.scenario + "' is not one of yang2012");
+  if (!scenario) {
+    throw UsageError("--scenario: '" + args.scenario + "' is not one of yang2012, sunxu2020");
+  }
   if (args.runs < 2) throw UsageError("--runs must be at least 2");
   if (args.threads < 0) throw UsageError("--threads must be 0 (all cores) or positive");
   MonteCarloOptions options;
@@ -730,13 +732,23 @@ int RunMonteCarlo(const MonteCarloArgs& args) {
   const MonteCarloResult r = RunMonteCarlo(*scenario, options);
   std::string out;
   if (args.json) {
-    out +=
-        "{\n  \"scenario\": \"" + r.scenario + "\",\n  \"method\": \"" +
-        std::string(ToString(r.method)) + "\",\n  \"runs\": " + std::to_string(r.runs) +
-        ",\n  \"failed\": " + std::to_string(r.failed) +
-        ",\n  \"coverage\": " + FormatNumber(r.coverage) +
-        ",\n  \"inclination_error_rms_arcsec\": " + FormatNumber(r.inclination_error_rms_arcsec) +
-        ",\n  \"parameters\": [";
+    out += "{\n  \"scenario\": \"" + r.scenario + "\",\n  \"method\": \"" +
+           std::string(ToString(r.method)) + "\",\n  \"runs\": " + std::to_string(r.runs) +
+           ",\n  \"failed\": " + std::to_string(r.failed) +
+           ",\n  \"coverage\": " + FormatNumber(r.coverage) +
+           ",\n  \"inclination_error_rms_arcsec\": " + FormatNumber(r.inclination_error_rms_arcsec);
+    if (scenario->random_attitudes > 0) {
+      const auto vec = [](const Vec3& v) {
+        return "[" + FormatNumber(v(0)) + ", " + FormatNumber(v(1)) + ", " + FormatNumber(v(2)) +
+               "]";
+      };
+      out += ",\n  \"e_T_percent_mean\": " + FormatNumber(r.e_T_percent_mean) +
+             ",\n  \"e_b_percent_mean\": " + FormatNumber(r.e_b_percent_mean) +
+             ",\n  \"diag_T_bias\": " + vec(r.diag_T_bias) +
+             ",\n  \"diag_T_bias_standard_error\": " + vec(r.diag_T_bias_standard_error) +
+             ",\n  \"diag_T_bias_expected\": " + vec(r.diag_T_bias_expected);
+    }
+    out += ",\n  \"parameters\": [";
     for (std::size_t i = 0; i < r.errors.size(); ++i) {
       const ErrorStatistics& e = r.errors[i];
       out += (i ? ",\n    " : "\n    ") + std::string("{\"name\": \"") + e.name +
@@ -758,6 +770,16 @@ int RunMonteCarlo(const MonteCarloArgs& args) {
     out += Format("coverage of the reported 1-sigma intervals: %.1f %% (noise %s)\n",
                   100 * r.coverage, args.residual_noise ? "from the residuals" : "known");
     out += Format("inclination vector error: rms %.3f arcsec\n", r.inclination_error_rms_arcsec);
+    if (scenario->random_attitudes > 0) {
+      out += Format("paper 001 eq. (20): mean e_T %.4f %%, mean e_b %.4f %%\n", r.e_T_percent_mean,
+                    r.e_b_percent_mean);
+      out += Format(
+          "bias of diag(T) (z-first): %.3g %.3g %.3g (+- %.2g %.2g %.2g); sigma^2/T_ii "
+          "%.3g %.3g %.3g\n",
+          r.diag_T_bias(0), r.diag_T_bias(1), r.diag_T_bias(2), r.diag_T_bias_standard_error(0),
+          r.diag_T_bias_standard_error(1), r.diag_T_bias_standard_error(2),
+          r.diag_T_bias_expected(0), r.diag_T_bias_expected(1), r.diag_T_bias_expected(2));
+    }
   }
   WriteFileAtomically("-", out);
   return kExitOk;

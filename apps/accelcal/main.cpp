@@ -143,7 +143,9 @@ int main(int argc, char** argv) {
   MonteCarloArgs mc;
   CLI::App* montecarlo = app.add_subcommand(
       "montecarlo", "simulate a scenario many times: errors against the Cramer-Rao bound");
-  montecarlo->add_option("--scenario", mc.scenario, "yang2012 (paper 000 Table 3/4)")
+  montecarlo
+      ->add_option("--scenario", mc.scenario,
+                   "yang2012 (paper 000 Table 3/4) or sunxu2020 (paper 001 section 4.1)")
       ->capture_default_str();
   montecarlo->add_option("--runs", mc.runs, "number of runs")->capture_default_str();
   montecarlo->add_option("--method", mc.method, "joint, two-step or newton-lagrange")

@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "accelcal/calibrate.hpp"
+#include "accelcal/frame.hpp"
 
 namespace accelcal {
 
@@ -22,10 +23,16 @@ struct Scenario {
   double gravity = 9.8;          ///< in the specific-force unit
   std::vector<Vec3> directions;  ///< unit, body frame
   Vec3 sigma_raw = Vec3::Ones();
+  /// > 0: each run draws this many new paper 001 §4.1 attitudes (SunXu2020Directions) instead of
+  /// using `directions`; results are then reported as paper 001's e_T, e_b (no Table 4).
+  int random_attitudes = 0;
+  Frame frame = Frame::kXFirst;  ///< the frame of `truth` (and of the fits)
 };
 
 /// "yang2012": paper 000 Table 3 truth (quadratic), Table 2's 18 positions, 10 µg/√Hz at 100 Hz
 /// for 60 s per position (ERRATA: 1.291 µg per axis per averaged reading), g = 9.8 m/s².
+/// "sunxu2020": paper 001 eq. (19) (T_a upper-triangular, z-first; linear model, g units), 300
+/// new Gaussian attitudes per run, σ = 0.1 g.
 std::optional<Scenario> ScenarioByName(std::string_view name);
 
 struct MonteCarloOptions {
@@ -56,6 +63,12 @@ struct MonteCarloResult {
   /// Fraction of (run, flat parameter) pairs whose reported 1σ interval covers the truth.
   double coverage = 0;
   double inclination_error_rms_arcsec = 0;  ///< angle between estimated and true directions
+  /// Paper 001 eq. (20), means over the runs [%], and the mean error of diag(T_a) (z-first form)
+  /// beside σ²/T_ii, the incidental-parameter bias ERRATA expects at this noise level.
+  double e_T_percent_mean = 0, e_b_percent_mean = 0;
+  Vec3 diag_T_bias = Vec3::Zero();
+  Vec3 diag_T_bias_expected = Vec3::Zero();
+  Vec3 diag_T_bias_standard_error = Vec3::Zero();
 };
 
 /// Throws std::invalid_argument for invalid options (fewer than 2 runs, bad calibration options).

@@ -299,6 +299,18 @@ TEST_F(Cli, SimulateWritesRecordingsThatCalibrateBackToTheTruth) {
   EXPECT_NE(p1.out, Exec("simulate --scenario yang2012 --seed 8").out);
   EXPECT_EQ(p1.out.rfind("x,y,z,n,sx,sy,sz\n", 0), 0u);
   EXPECT_EQ(Exec("simulate").status, 2);
+  // Paper 001's scenario: 300 averaged readings in g whose fit is biased as ERRATA says, but
+  // calibrates to about 1 % (e_T ~ 0.9 %).
+  const CliRun sx = Exec("simulate --scenario sunxu2020 -o " + Path("sunxu.csv"));
+  ASSERT_EQ(sx.status, 0) << sx.err;
+  const CliRun sc = Exec("calibrate " + Path("sunxu.csv") +
+                         " --input-kind positions --units g --frame z-first --no-crossval --json");
+  ASSERT_EQ(sc.status, 0) << sc.err;
+  const nlohmann::json sd = nlohmann::json::parse(sc.out);
+  EXPECT_EQ(sd["positions"].size(), 300u);
+  EXPECT_EQ(sd["noise"]["source"], "samples");
+  EXPECT_NEAR(sd["K"][0][0].get<double>(), 1.15, 0.05);  // eq. (19): T_a(0,0) = 1.15
+  EXPECT_EQ(Exec("simulate --scenario sunxu2020 --raw").status, 2);
   EXPECT_EQ(Exec("simulate --scenario yang2012 --rate 0").status, 2);
 }
 

@@ -785,15 +785,48 @@ int RunMonteCarlo(const MonteCarloArgs& args) {
   return kExitOk;
 }
 
+namespace {
+
+// Paper 001 §4.1 as a positions file: eq. (19)'s device (g units, z-first), 300 Gaussian attitudes
+// from the seed, σ = 0.1 g per averaged reading, written as 100 samples of σ = 1 g so that
+// calibrate takes the known noise (SigmasOfMeans) as it would from a raw log.
+std::string SunXu2020Positions(const SimulateArgs& args) {
+  if (args.raw) {
+    throw UsageError(
+        "--scenario sunxu2020 is defined on averaged readings (sigma = 0.1 g per "
+        "position): use --positions-out");
+  }
+  if (!args.truth.empty() || !args.positions.empty() || args.noise_density_ug) {
+    throw UsageError("--scenario sunxu2020 fixes the device, the attitudes and the noise");
+  }
+  const std::vector<Vec3> means =
+      SimulateLinearPositions(SunXu2020Ta(), SunXu2020Ba(), SunXu2020Directions(300, args.seed),
+                              kSunXu2020Sigma_g, args.seed + 1000);
+  const double samples = 100;
+  const double sample_sigma = kSunXu2020Sigma_g * std::sqrt(samples);
+  std::string out = "x,y,z,n,sx,sy,sz\n";
+  for (const Vec3& p : means) {
+    out += FormatNumber(p(0)) + "," + FormatNumber(p(1)) + "," + FormatNumber(p(2)) + "," +
+           FormatNumber(samples) + "," + FormatNumber(sample_sigma) + "," +
+           FormatNumber(sample_sigma) + "," + FormatNumber(sample_sigma) + "\n";
+  }
+  return out;
+}
+
+}  // namespace
+
 int RunSimulate(const SimulateArgs& args) {
+  if (args.scenario == "sunxu2020") {
+    WriteFileAtomically(args.output.empty() ? "-" : args.output, SunXu2020Positions(args));
+    return kExitOk;
+  }
   ModelParameters truth;
   double gravity = 0;
-  ModelKind model = ModelKind::kQuadratic;
   std::string positions = args.positions;
   std::optional<double> density = args.noise_density_ug;
   if (!args.scenario.empty()) {
     if (args.scenario != "yang2012") {
-      throw UsageError("--scenario: '" + args.scenario + "' is not one of yang2012");
+      throw UsageError("--scenario: '" + args.scenario + "' is not one of yang2012, sunxu2020");
     }
     if (!args.truth.empty()) throw UsageError("give --scenario or --truth, not both");
     truth = Yang2012Truth();
@@ -805,7 +838,6 @@ int RunSimulate(const SimulateArgs& args) {
     const LoadedCalibration cal = ParseCalibrationJson(ReadFileToString(args.truth), args.truth);
     truth = cal.params;
     gravity = cal.gravity;
-    model = cal.model;
     if (positions.empty()) throw UsageError("--positions is required with --truth");
     if (!density) throw UsageError("--noise-density is required with --truth");
   }
@@ -813,7 +845,6 @@ int RunSimulate(const SimulateArgs& args) {
       !(args.transition_s >= 0)) {
     throw UsageError("--noise-density, --rate and --duration must be positive");
   }
-  (void)model;
   const std::vector<Vec3> directions = PlannedDirections(positions);
   // Per-sample white noise in the specific-force unit (µg relative to the device's gravity),
   // mapped to each raw axis by the length of its row of K.

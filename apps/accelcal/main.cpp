@@ -160,7 +160,8 @@ int main(int argc, char** argv) {
   CLI::App* simulate = app.add_subcommand(
       "simulate", "write a simulated recording (raw log or positions file) of a known device");
   simulate->add_option("--scenario", sim.scenario,
-                       "yang2012: paper 000's device, 18 positions, 10 ug/sqrt(Hz), 100 Hz, 60 s");
+                       "yang2012: paper 000's device, 18 positions, 10 ug/sqrt(Hz), 100 Hz, 60 s; "
+                       "sunxu2020: paper 001's, 300 Gaussian attitudes, 0.1 g per position");
   simulate->add_option("--truth", sim.truth, "calibration file of the simulated device");
   simulate->add_option("--positions", sim.positions,
                        "yang18, six, random:N[:SEED], or a CSV file of unit directions");

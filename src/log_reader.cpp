@@ -223,6 +223,16 @@ bool ParseNumber(std::string_view field, double* value) {
   return ParseNumber(field.data(), field.data() + field.size(), value);
 }
 
+// The header of a positions file with counts and standard deviations, as accelcal simulate writes
+// it: columns named n, sx, sy and sz. ("samples" alone is not enough: raw logs carry sample
+// indices under that name.)
+bool NamesPositionsColumns(const std::vector<std::string>& header) {
+  const auto has = [&](const char* name) {
+    return std::find(header.begin(), header.end(), name) != header.end();
+  };
+  return has("n") && has("sx") && has("sy") && has("sz");
+}
+
 std::string Normalise(std::string_view name) {
   std::string s;
   for (char c : name) s.push_back(static_cast<char>(std::tolower(static_cast<unsigned char>(c))));
@@ -478,6 +488,10 @@ InputData ParseInput(std::string_view text, const std::string& source, const Rea
   } else if (named.column[kTime] >= 0) {
     data.kind = InputKind::kRaw;
     data.kind_reason = "auto: the header names a time column";
+  } else if (NamesPositionsColumns(header)) {
+    // Only averaged readings carry a sample count and standard deviations, however many rows.
+    data.kind = InputKind::kPositions;
+    data.kind_reason = "auto: the header is a positions file's (n, sx, sy, sz)";
   } else if (rows <= options.max_rows_of_positions_file) {
     data.kind = InputKind::kPositions;
     data.kind_reason = "auto: " + std::to_string(rows) +

@@ -303,8 +303,8 @@ TEST_F(Cli, SimulateWritesRecordingsThatCalibrateBackToTheTruth) {
   // calibrates to about 1 % (e_T ~ 0.9 %).
   const CliRun sx = Exec("simulate --scenario sunxu2020 -o " + Path("sunxu.csv"));
   ASSERT_EQ(sx.status, 0) << sx.err;
-  const CliRun sc = Exec("calibrate " + Path("sunxu.csv") +
-                         " --input-kind positions --units g --frame z-first --no-crossval --json");
+  const CliRun sc =
+      Exec("calibrate " + Path("sunxu.csv") + " --units g --frame z-first --no-crossval --json");
   ASSERT_EQ(sc.status, 0) << sc.err;
   const nlohmann::json sd = nlohmann::json::parse(sc.out);
   EXPECT_EQ(sd["positions"].size(), 300u);

@@ -88,6 +88,18 @@ TEST(LogReader, ColumnSelectionByNumberAndName) {
             "test.csv: --columns entry '9' is not a column number between 1 and 6");
 }
 
+TEST(LogReader, AHeaderWithASampleCountMeansPositionsWhateverTheRowCount) {
+  // 300 averaged readings (paper 001's scenario as accelcal simulate writes it): more rows than a
+  // positions file usually has, but only averaged readings carry a sample count.
+  std::string text = "x,y,z,n,sx,sy,sz\n";
+  for (int k = 0; k < 300; ++k) text += "0.1,0.2,0.97,100,1,1,1\n";
+  const InputData d = Parse(text);
+  ASSERT_EQ(d.kind, InputKind::kPositions);
+  EXPECT_EQ(d.kind_reason, "auto: the header is a positions file's (n, sx, sy, sz)");
+  EXPECT_EQ(d.positions.size(), 300u);
+  EXPECT_EQ(d.positions[0].samples, 100u);
+}
+
 TEST(LogReader, PositionsFilesAutoDetected) {
   const InputData d = Parse("ax_g,ay_g,az_g\n0.1,0.2,0.97\n-0.9,0.1,0.3\n");
   ASSERT_EQ(d.kind, InputKind::kPositions);

@@ -62,23 +62,8 @@ std::string CalibrationToJson(const CalibrationResult& result, const Calibration
         row.push_back(result.covariance(i, j));
       cov.push_back(row);
     }
-    ModelParameters std_params;
-    std_params.K.setZero();
-    for (std::size_t i = 0; i < slots.size(); ++i) {
-      const double sd = std::sqrt(std::max(
-          0.0, result.covariance(static_cast<Eigen::Index>(i), static_cast<Eigen::Index>(i))));
-      switch (slots[i].group) {
-        case ParameterGroup::kK:
-          std_params.K(slots[i].row, slots[i].col) = sd;
-          break;
-        case ParameterGroup::kBias:
-          std_params.bias(slots[i].row) = sd;
-          break;
-        case ParameterGroup::kK2:
-          std_params.k2(slots[i].row) = sd;
-          break;
-      }
-    }
+    const ModelParameters std_params =
+        Unpack(result.covariance.diagonal().cwiseMax(0.0).cwiseSqrt(), slots);
     doc["std"] = {{"K", ToJson(std_params.K)},
                   {"bias", ToJson(std_params.bias)},
                   {"k2", ToJson(std_params.k2)}};

@@ -49,36 +49,23 @@ Vec12 EngineeringVector(const ModelParameters& params, Frame frame, double gravi
   return v;
 }
 
-double& Slot(ModelParameters& p, const ParameterSlot& s) {
-  switch (s.group) {
-    case ParameterGroup::kK:
-      return p.K(s.row, s.col);
-    case ParameterGroup::kBias:
-      return p.bias(s.row);
-    case ParameterGroup::kK2:
-      break;
-  }
-  return p.k2(s.row);
-}
-
 }  // namespace
 
 EngineeringStd EngineeringUncertainty(const ModelParameters& params, ModelKind model, bool z_first,
                                       double gravity, const Eigen::MatrixXd& covariance) {
   const Frame frame = z_first ? Frame::kZFirst : Frame::kXFirst;
   const auto& slots = ParameterSlots(model, frame);
-  Eigen::MatrixXd J(12, static_cast<Eigen::Index>(slots.size()));
-  ModelParameters copy = params;
-  for (std::size_t j = 0; j < slots.size(); ++j) {
-    const auto col = static_cast<Eigen::Index>(j);
-    const double h = 1e-6 * std::sqrt(std::max(covariance(col, col), 0.0)) +
-                     1e-12 * std::max(1.0, std::abs(Slot(copy, slots[j])));
-    ModelParameters plus = params, minus = params;
-    Slot(plus, slots[j]) += h;
-    Slot(minus, slots[j]) -= h;
-    J.col(col) =
-        (EngineeringVector(plus, frame, gravity) - EngineeringVector(minus, frame, gravity)) /
-        (2 * h);
+  const Eigen::VectorXd theta = Pack(params, slots);
+  Eigen::MatrixXd J(12, theta.size());
+  for (Eigen::Index j = 0; j < theta.size(); ++j) {
+    const double h = 1e-6 * std::sqrt(std::max(covariance(j, j), 0.0)) +
+                     1e-12 * std::max(1.0, std::abs(theta(j)));
+    Eigen::VectorXd plus = theta, minus = theta;
+    plus(j) += h;
+    minus(j) -= h;
+    J.col(j) = (EngineeringVector(Unpack(plus, slots), frame, gravity) -
+                EngineeringVector(Unpack(minus, slots), frame, gravity)) /
+               (2 * h);
   }
   const Eigen::MatrixXd C = J * covariance * J.transpose();
   const Vec12 sd = C.diagonal().cwiseMax(0.0).cwiseSqrt();

@@ -49,7 +49,14 @@ double& SlotRef(ModelParameters& p, const ParameterSlot& s) {
 }  // namespace
 
 Eigen::VectorXd Pack(const ModelParameters& params, ModelKind kind) {
-  const auto& slots = ParameterSlots(kind);
+  return Pack(params, ParameterSlots(kind));
+}
+
+ModelParameters Unpack(const Eigen::VectorXd& theta, ModelKind kind) {
+  return Unpack(theta, ParameterSlots(kind));
+}
+
+Eigen::VectorXd Pack(const ModelParameters& params, const std::vector<ParameterSlot>& slots) {
   Eigen::VectorXd theta(static_cast<Eigen::Index>(slots.size()));
   ModelParameters copy = params;
   for (std::size_t i = 0; i < slots.size(); ++i) {
@@ -58,8 +65,7 @@ Eigen::VectorXd Pack(const ModelParameters& params, ModelKind kind) {
   return theta;
 }
 
-ModelParameters Unpack(const Eigen::VectorXd& theta, ModelKind kind) {
-  const auto& slots = ParameterSlots(kind);
+ModelParameters Unpack(const Eigen::VectorXd& theta, const std::vector<ParameterSlot>& slots) {
   ModelParameters params;
   params.K.setZero();
   for (std::size_t i = 0; i < slots.size(); ++i) {

@@ -156,24 +156,14 @@ void PrintCalibration(const CalibrationResult& r, const std::vector<Position>& p
           : std::string("noise from the residuals");
   std::printf("\nparameters (K in %s per %s, b in %s, k2 in %s per %s^2; +- 1 sigma, %s)\n",
               raw_unit.c_str(), u, raw_unit.c_str(), raw_unit.c_str(), u, noise.c_str());
-  const auto value = [&r](const ParameterSlot& slot) {
-    switch (slot.group) {
-      case ParameterGroup::kK:
-        return r.params.K(slot.row, slot.col);
-      case ParameterGroup::kBias:
-        return r.params.bias(slot.row);
-      case ParameterGroup::kK2:
-        break;
-    }
-    return r.params.k2(slot.row);
-  };
+  const Eigen::VectorXd theta = Pack(r.params, slots);
   for (std::size_t i = 0; i < slots.size(); ++i) {
     const auto idx = static_cast<Eigen::Index>(i);
     if (have_std) {
-      std::printf("  %-5s %18.10g +- %.3g\n", std::string(slots[i].name).c_str(), value(slots[i]),
+      std::printf("  %-5s %18.10g +- %.3g\n", std::string(slots[i].name).c_str(), theta(idx),
                   std::sqrt(r.covariance(idx, idx)));
     } else {
-      std::printf("  %-5s %18.10g\n", std::string(slots[i].name).c_str(), value(slots[i]));
+      std::printf("  %-5s %18.10g\n", std::string(slots[i].name).c_str(), theta(idx));
     }
   }
   if (have_std) PrintStrongestCorrelations(r.covariance, slots);

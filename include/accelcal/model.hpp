@@ -89,6 +89,10 @@ using ModelParameters = ModelParametersT<double>;
 Eigen::VectorXd Pack(const ModelParameters& params, ModelKind kind);
 /// Parameters from a flat vector of size NumParameters(kind); k2 = 0 for the linear model.
 ModelParameters Unpack(const Eigen::VectorXd& theta, ModelKind kind);
+/// The same in the order of any slot list (e.g. a frame's, frame.hpp); Unpack leaves every entry
+/// that no slot names at zero.
+Eigen::VectorXd Pack(const ModelParameters& params, const std::vector<ParameterSlot>& slots);
+ModelParameters Unpack(const Eigen::VectorXd& theta, const std::vector<ParameterSlot>& slots);
 
 /// Forward model μ(f) = K f + b + k2 ∘ f² (eq. (11) without noise), for any K (lower-triangular
 /// in the x-first frame, upper in the z-first frame of frame.hpp). Optionally returns

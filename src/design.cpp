@@ -14,60 +14,68 @@ namespace accelcal {
 
 namespace {
 
-// The information matrix of the x-first gauge (12-parameter layout; masked entries identity).
-internal::Information Fisher(const internal::Problem& problem, const ModelParameters& device,
-                             const std::vector<Vec3>& directions, const Vec3& sigma) {
-  const internal::InformationRows rows =
-      internal::ReducedInformationRows(problem, device, directions);
-  Eigen::VectorXd weight(problem.positions());
-  for (int k = 0; k < problem.positions(); ++k) {
-    weight(k) = 1.0 / rows.normals[static_cast<std::size_t>(k)].cwiseAbs2().dot(sigma.cwiseAbs2());
-  }
-  internal::Information info;
-  info.reduced = rows.U.transpose() * weight.asDiagonal() * rows.U;
-  internal::FinishInformation(problem.model, rows.A_diagonal, &info);
-  return info;
-}
+using Rows12 = Eigen::Matrix<double, Eigen::Dynamic, kMaxParameters>;
 
-// Whitened information rows w_k = u_k / σ_k on the model's active columns, x-first gauge.
-Eigen::MatrixXd WhitenedRows(const ModelParameters& device, ModelKind model, double gravity,
-                             const std::vector<Vec3>& directions, const Vec3& sigma_raw) {
-  const bool mirror = FrameOf(device.K) == Frame::kZFirst;
-  ModelParameters x_device = mirror ? MirrorAxes(device) : device;
-  if (model == ModelKind::kLinear) x_device.k2.setZero();
-  std::vector<Vec3> x_directions = directions;
-  if (mirror) {
-    for (Vec3& c : x_directions) c = MirrorAxes(c);
-  }
-  const Vec3 x_sigma = mirror ? MirrorAxes(sigma_raw).cwiseAbs() : sigma_raw;
-  const std::vector<Vec3> no_readings(directions.size());
-  const internal::Problem problem{no_readings, gravity, model};
-  const internal::InformationRows rows =
-      internal::ReducedInformationRows(problem, x_device, x_directions);
-  const std::vector<int>& cols = ActiveColumns(model);
-  Eigen::MatrixXd W(static_cast<Eigen::Index>(directions.size()),
-                    static_cast<Eigen::Index>(cols.size()));
-  for (Eigen::Index k = 0; k < W.rows(); ++k) {
-    const double sigma_k =
-        std::sqrt(rows.normals[static_cast<std::size_t>(k)].cwiseAbs2().dot(x_sigma.cwiseAbs2()));
-    for (Eigen::Index j = 0; j < W.cols(); ++j) {
-      W(k, j) = rows.U(k, cols[static_cast<std::size_t>(j)]) / sigma_k;
+// A planned experiment in the x-first gauge the solvers use: a z-first device is the x-first
+// device of the mirrored problem (frame.hpp). Holds the (absent) readings its Problem refers to.
+struct Plan {
+  Plan(const ModelParameters& device_in, ModelKind model, double gravity,
+       const std::vector<Vec3>& directions_in, const Vec3& sigma_raw)
+      : frame(FrameOf(device_in.K)),
+        device(frame == Frame::kZFirst ? MirrorAxes(device_in) : device_in),
+        directions(directions_in),
+        sigma(frame == Frame::kZFirst ? Vec3(MirrorAxes(sigma_raw).cwiseAbs()) : sigma_raw),
+        no_readings(directions_in.size()),
+        problem{no_readings, gravity, model} {
+    if (model == ModelKind::kLinear) device.k2.setZero();
+    if (frame == Frame::kZFirst) {
+      for (Vec3& c : directions) c = MirrorAxes(c);
     }
   }
-  // In the parameter metric of TerminationType (relative change of the prediction): a scaling
-  // fixed by the device, so log det compares sets and does not depend on the parameters' units.
-  const internal::Vec12 metric = internal::ParameterScales(problem, x_device);
-  Eigen::VectorXd scale(W.cols());
-  for (Eigen::Index j = 0; j < W.cols(); ++j)
-    scale(j) = 1.0 / metric(cols[static_cast<std::size_t>(j)]);
-  return W * scale.asDiagonal();
+  Plan(const Plan&) = delete;
+  Plan& operator=(const Plan&) = delete;
+
+  // The information rows u_k divided by the noise along each normal, so I = WᵀW (12-parameter
+  // layout); A's diagonal for FinishInformation.
+  Rows12 WhitenedRows(internal::Vec12* A_diagonal) const {
+    const internal::InformationRows rows =
+        internal::ReducedInformationRows(problem, device, directions);
+    Rows12 W = rows.U;
+    for (Eigen::Index k = 0; k < W.rows(); ++k) {
+      W.row(k) /=
+          std::sqrt(rows.normals[static_cast<std::size_t>(k)].cwiseAbs2().dot(sigma.cwiseAbs2()));
+    }
+    if (A_diagonal != nullptr) *A_diagonal = rows.A_diagonal;
+    return W;
+  }
+
+  Frame frame;
+  ModelParameters device;
+  std::vector<Vec3> directions;
+  Vec3 sigma;
+  std::vector<Vec3> no_readings;
+  internal::Problem problem;  // refers to no_readings
+};
+
+// Whitened rows on the model's active columns, in the parameter metric of TerminationType
+// (relative change of the prediction): a scaling fixed by the device, so log det compares sets
+// and does not depend on the parameters' units.
+Eigen::MatrixXd ScaledActiveRows(const Plan& plan) {
+  const Rows12 W = plan.WhitenedRows(nullptr);
+  const internal::Vec12 metric = internal::ParameterScales(plan.problem, plan.device);
+  const std::vector<int>& cols = ActiveColumns(plan.problem.model);
+  Eigen::MatrixXd scaled(W.rows(), static_cast<Eigen::Index>(cols.size()));
+  for (std::size_t j = 0; j < cols.size(); ++j) {
+    scaled.col(static_cast<Eigen::Index>(j)) = W.col(cols[j]) / metric(cols[j]);
+  }
+  return scaled;
 }
 
 }  // namespace
 
 double LogDetInformation(const ModelParameters& device, ModelKind model, double gravity,
                          const std::vector<Vec3>& directions, const Vec3& sigma_raw) {
-  const Eigen::MatrixXd W = WhitenedRows(device, model, gravity, directions, sigma_raw);
+  const Eigen::MatrixXd W = ScaledActiveRows(Plan(device, model, gravity, directions, sigma_raw));
   Eigen::LDLT<Eigen::MatrixXd> ldlt(W.transpose() * W);
   const Eigen::VectorXd d = ldlt.vectorD();
   if (ldlt.info() != Eigen::Success || !(d.minCoeff() > 0)) {
@@ -88,7 +96,7 @@ std::vector<int> ChooseDOptimal(const ModelParameters& device, ModelKind model, 
   }
   // In the device's parameter metric (WhitenedRows): the argmax does not depend on a fixed
   // scaling, and it keeps the matrices well conditioned.
-  const Eigen::MatrixXd W = WhitenedRows(device, model, gravity, candidates, sigma_raw);
+  const Eigen::MatrixXd W = ScaledActiveRows(Plan(device, model, gravity, candidates, sigma_raw));
   std::vector<bool> chosen(static_cast<std::size_t>(n), false);
   // Greedy: add the candidate with the largest w A⁻¹ wᵀ, A regularised while singular (relative to
   // one candidate's contribution, so the first picks see a well-conditioned A).
@@ -153,21 +161,15 @@ PlannedUncertainty PredictUncertainty(const ModelParameters& device, ModelKind m
       throw std::invalid_argument("planned directions must be unit vectors");
     }
   }
+  const Plan plan(device, model, gravity, directions, sigma_raw);
   PlannedUncertainty out;
   out.model = model;
-  out.frame = FrameOf(device.K);
-  // The z-first device is the x-first device of the mirrored problem (frame.hpp).
-  const bool mirror = out.frame == Frame::kZFirst;
-  ModelParameters x_device = mirror ? MirrorAxes(device) : device;
-  if (model == ModelKind::kLinear) x_device.k2.setZero();
-  std::vector<Vec3> x_directions = directions;
-  if (mirror) {
-    for (Vec3& c : x_directions) c = MirrorAxes(c);
-  }
-  const Vec3 x_sigma = mirror ? MirrorAxes(sigma_raw).cwiseAbs() : sigma_raw;
-  const std::vector<Vec3> no_readings(directions.size());
-  const internal::Problem problem{no_readings, gravity, model};
-  const internal::Information info = Fisher(problem, x_device, x_directions, x_sigma);
+  out.frame = plan.frame;
+  internal::Vec12 A_diagonal;
+  const Rows12 W = plan.WhitenedRows(&A_diagonal);
+  internal::Information info;
+  info.reduced = W.transpose() * W;
+  internal::FinishInformation(model, A_diagonal, &info);
   out.rcond = info.rcond;
   out.observable = info.rcond >= internal::kMinInformationRcond;
   if (info.weakest >= 0) {
@@ -184,26 +186,11 @@ PlannedUncertainty PredictUncertainty(const ModelParameters& device, ModelKind m
   for (int i = 0; i < P; ++i) {
     for (int j = 0; j < P; ++j) out.crlb(i, j) = inverse(cols[i], cols[j]);
   }
-  if (mirror) {
+  if (plan.frame == Frame::kZFirst) {
     const Eigen::VectorXd d = MirrorSigns(model);
     out.crlb = d.asDiagonal() * out.crlb * d.asDiagonal();
   }
-  const auto& slots = ParameterSlots(model, out.frame);
-  for (std::size_t i = 0; i < slots.size(); ++i) {
-    const auto index = static_cast<Eigen::Index>(i);
-    const double sd = std::sqrt(std::max(0.0, out.crlb(index, index)));
-    switch (slots[i].group) {
-      case ParameterGroup::kK:
-        out.std.K(slots[i].row, slots[i].col) = sd;
-        break;
-      case ParameterGroup::kBias:
-        out.std.bias(slots[i].row) = sd;
-        break;
-      case ParameterGroup::kK2:
-        out.std.k2(slots[i].row) = sd;
-        break;
-    }
-  }
+  out.std = Unpack(out.crlb.diagonal().cwiseMax(0.0).cwiseSqrt(), ParameterSlots(model, out.frame));
   return out;
 }
 

@@ -37,19 +37,6 @@ const char* const kNames[kErrors] = {"ka_x",   "ka_y",   "ka_z",   "tau_yx", "ta
 const char* const kUnits[kErrors] = {"ppm",    "ppm", "ppm", "arcsec", "arcsec", "arcsec", "arcsec",
                                      "arcsec", "ug",  "ug",  "ug",     "g/g^2",  "g/g^2",  "g/g^2"};
 
-// Flat parameters in the frame's slot order (the order of a result's covariance).
-Eigen::VectorXd Flat(const ModelParameters& p, ModelKind model, Frame frame) {
-  const auto& slots = ParameterSlots(model, frame);
-  Eigen::VectorXd v(static_cast<Eigen::Index>(slots.size()));
-  for (std::size_t i = 0; i < slots.size(); ++i) {
-    const ParameterSlot& s = slots[i];
-    v(static_cast<Eigen::Index>(i)) = s.group == ParameterGroup::kK      ? p.K(s.row, s.col)
-                                      : s.group == ParameterGroup::kBias ? p.bias(s.row)
-                                                                         : p.k2(s.row);
-  }
-  return v;
-}
-
 struct RunOutcome {
   bool ok = false;
   double e_T = 0, e_b = 0;
@@ -83,7 +70,8 @@ RunOutcome OneRun(const Scenario& s, const CalibrationOptions& options, std::uin
   out.diag_T_error = ChangeFrame(r.params.K, Frame::kZFirst).K.diagonal() -
                      ChangeFrame(s.truth.K, Frame::kZFirst).K.diagonal();
   if (r.covariance.size() > 0) {
-    const Eigen::VectorXd e = Flat(r.params, s.model, s.frame) - Flat(s.truth, s.model, s.frame);
+    const auto& slots = ParameterSlots(s.model, s.frame);  // the covariance's order
+    const Eigen::VectorXd e = Pack(r.params, slots) - Pack(s.truth, slots);
     for (Eigen::Index i = 0; i < e.size(); ++i) {
       out.covered += std::abs(e(i)) <= std::sqrt(r.covariance(i, i)) ? 1 : 0;
       ++out.parameters;
@@ -219,8 +207,12 @@ MonteCarloResult RunMonteCarlo(const Scenario& scenario, const MonteCarloOptions
   const Mat33 T = ChangeFrame(scenario.truth.K, Frame::kZFirst).K;
   const double sigma2 = scenario.sigma_raw.squaredNorm() / 3.0;
   for (int i = 0; i < 3; ++i) result.diag_T_bias_expected(i) = sigma2 / T(i, i);
-  const Eigen::Matrix<double, kErrors, 1> bound = EngineeringBound(scenario, truth);
-  for (int i = 0; i < kErrors && scenario.random_attitudes == 0; ++i) {
+  // Table 4 for fixed positions only (random attitudes are reported by e_T, e_b above).
+  const bool table4 = scenario.random_attitudes == 0;
+  const Eigen::Matrix<double, kErrors, 1> bound =
+      table4 ? EngineeringBound(scenario, truth)
+             : Eigen::Matrix<double, kErrors, 1>::Constant(std::nan(""));
+  for (int i = 0; i < kErrors && table4; ++i) {
     std::vector<double>& v = values[static_cast<std::size_t>(i)];
     ErrorStatistics st;
     st.name = kNames[i];

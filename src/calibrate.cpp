@@ -400,10 +400,13 @@ CalibrationResult CalibrateInFrame(const std::vector<Vec3>& readings,
   return result;
 }
 
+}  // namespace
+
 // Leave-one-position-out: each position corrected by a fit without it, started from the full fit
 // (the held-out optimum is close to it, so each refit takes a few iterations).
 void CrossValidate(const std::vector<Vec3>& readings, const CalibrationOptions& options,
                    CalibrationResult* result) {
+  if (auto why = options.Validate()) throw std::invalid_argument(*why);
   CalibrationOptions held_out = options;
   held_out.cross_validate = false;
   held_out.reading_sigmas.clear();                   // no covariance needed from the held-out fits
@@ -440,8 +443,6 @@ void CrossValidate(const std::vector<Vec3>& readings, const CalibrationOptions& 
   result->crossval_rms = Rms(errors);
   result->crossval_errors = std::move(errors);
 }
-
-}  // namespace
 
 CalibrationResult Calibrate(const std::vector<Vec3>& readings, const CalibrationOptions& options) {
   if (auto why = options.Validate()) throw std::invalid_argument(*why);

@@ -40,22 +40,12 @@ std::optional<std::string> Fit(const std::vector<Vec3>& readings, const Calibrat
   return std::nullopt;
 }
 
-// Held-out figures from Calibrate's cross-validation, its refits started from this method's full
-// fit (re-run from there: it stops at once).
-void LeaveOneOut(const std::vector<Vec3>& readings, CalibrationOptions options,
+// Held-out figures from Calibrate's cross-validation, its refits started from this method's fit.
+void LeaveOneOut(const std::vector<Vec3>& readings, const CalibrationOptions& options,
                  MethodComparison* out) {
-  options.cross_validate = true;
-  if (options.method != SolverMethod::kEllipsoid) {
-    options.initialization = Initialization::kGiven;
-    options.initial_params = out->result.params;
-  }
-  CalibrationResult validated;
-  if (auto why = Fit(readings, options, &validated)) {
-    out->leave_one_out_error = "refit from the solution: " + *why;
-    return;
-  }
-  out->leave_one_out_rms = validated.crossval_rms;
-  if (!validated.crossval_rms) out->leave_one_out_error = validated.crossval_note;
+  CrossValidate(readings, options, &out->result);
+  out->leave_one_out_rms = out->result.crossval_rms;
+  if (!out->result.crossval_rms) out->leave_one_out_error = out->result.crossval_note;
 }
 
 // An earlier maximum-likelihood result at the same optimum as `c` (parameters equal to 1e-8 of

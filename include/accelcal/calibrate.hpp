@@ -202,6 +202,12 @@ struct CalibrationResult {
 /// result.summary (converged() == false), never as a usable result.
 CalibrationResult Calibrate(const std::vector<Vec3>& readings, const CalibrationOptions& options);
 
+/// Leave-one-position-out validation of `result`, a converged Calibrate(readings, options):
+/// fills its crossval_rms and crossval_errors, or crossval_note (CalibrationOptions::
+/// cross_validate does this inside Calibrate). Each refit starts from result->params.
+void CrossValidate(const std::vector<Vec3>& readings, const CalibrationOptions& options,
+                   CalibrationResult* result);
+
 /// |f_k| − g for each reading under `params` (NaN where the model cannot be inverted).
 std::vector<double> GravityNormErrors(const ModelParameters& params,
                                       const std::vector<Vec3>& readings, double gravity);

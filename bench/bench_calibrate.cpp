@@ -18,12 +18,9 @@ std::vector<Vec3> Table3Readings(ModelKind model) {
   return SimulatePositions(truth, kYang2012Gravity_ms2, Yang18Directions(), sigma, 42);
 }
 
-void BM_Calibrate(benchmark::State& state, ModelKind model, SolverMethod method) {
-  const std::vector<Vec3> readings = Table3Readings(model);
-  CalibrationOptions options;
-  options.model = model;
-  options.method = method;
-  options.gravity = kYang2012Gravity_ms2;
+// Times Calibrate() and reports the solver's iterations as a counter.
+void TimeCalibrate(benchmark::State& state, const std::vector<Vec3>& readings,
+                   const CalibrationOptions& options) {
   int iterations = 0;
   for (auto _ : state) {
     const CalibrationResult r = Calibrate(readings, options);
@@ -31,6 +28,14 @@ void BM_Calibrate(benchmark::State& state, ModelKind model, SolverMethod method)
     benchmark::DoNotOptimize(r.params.K(0, 0));
   }
   state.counters["solver_iterations"] = iterations;
+}
+
+void BM_Calibrate(benchmark::State& state, ModelKind model, SolverMethod method) {
+  CalibrationOptions options;
+  options.model = model;
+  options.method = method;
+  options.gravity = kYang2012Gravity_ms2;
+  TimeCalibrate(state, Table3Readings(model), options);
 }
 
 BENCHMARK_CAPTURE(BM_Calibrate, joint_quadratic_18, ModelKind::kQuadratic, SolverMethod::kJoint)
@@ -50,13 +55,7 @@ void BM_SunXu300(benchmark::State& state, SolverMethod method) {
   CalibrationOptions options;
   options.method = method;
   options.gravity = 1.0;
-  int iterations = 0;
-  for (auto _ : state) {
-    const CalibrationResult r = Calibrate(readings, options);
-    iterations = r.summary.iterations;
-    benchmark::DoNotOptimize(r.params.K(0, 0));
-  }
-  state.counters["solver_iterations"] = iterations;
+  TimeCalibrate(state, readings, options);
 }
 
 BENCHMARK_CAPTURE(BM_SunXu300, newton_lagrange, SolverMethod::kNewtonLagrange)

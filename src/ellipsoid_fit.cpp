@@ -152,10 +152,10 @@ void FitConstrained(const Mat10& scatter, const Vec3& mean, double scale, double
   result->ok = true;
 }
 
-}  // namespace
-
-EllipsoidFitResult FitEllipsoid(const std::vector<Vec3>& readings, double gravity) {
+// The algebraic fit when it is an ellipsoid (algebraic_first), else the constrained one.
+EllipsoidFitResult Fit(const std::vector<Vec3>& readings, double gravity, bool algebraic_first) {
   EllipsoidFitResult result;
+  if (!algebraic_first) result.kind = EllipsoidFitKind::kConstrained;
   Mat10 scatter;
   Vec3 mean;
   double scale = 0;
@@ -163,29 +163,27 @@ EllipsoidFitResult FitEllipsoid(const std::vector<Vec3>& readings, double gravit
     result.failure = std::move(*why);
     return result;
   }
-  const std::optional<std::string> algebraic_failure =
-      ToParameters(AlgebraicQuadric(scatter), mean, scale, gravity, &result.params);
-  if (!algebraic_failure) {
-    result.ok = true;
-    return result;
+  if (algebraic_first) {
+    const std::optional<std::string> algebraic_failure =
+        ToParameters(AlgebraicQuadric(scatter), mean, scale, gravity, &result.params);
+    if (!algebraic_failure) {
+      result.ok = true;
+      return result;
+    }
+    result.failure = *algebraic_failure;
   }
-  result.failure = *algebraic_failure;
   FitConstrained(scatter, mean, scale, gravity, &result);
   return result;
 }
 
+}  // namespace
+
+EllipsoidFitResult FitEllipsoid(const std::vector<Vec3>& readings, double gravity) {
+  return Fit(readings, gravity, /*algebraic_first=*/true);
+}
+
 EllipsoidFitResult FitEllipsoidConstrained(const std::vector<Vec3>& readings, double gravity) {
-  EllipsoidFitResult result;
-  result.kind = EllipsoidFitKind::kConstrained;
-  Mat10 scatter;
-  Vec3 mean;
-  double scale = 0;
-  if (auto why = Scatter(readings, &scatter, &mean, &scale)) {
-    result.failure = std::move(*why);
-    return result;
-  }
-  FitConstrained(scatter, mean, scale, gravity, &result);
-  return result;
+  return Fit(readings, gravity, /*algebraic_first=*/false);
 }
 
 }  // namespace accelcal

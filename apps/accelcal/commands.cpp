@@ -233,6 +233,23 @@ std::string FormatNumber(double v) {
   return std::string(buf, res.ptr);
 }
 
+// A JSON array of three shortest round-trip numbers.
+std::string JsonVector(const Vec3& v) {
+  return "[" + FormatNumber(v(0)) + ", " + FormatNumber(v(1)) + ", " + FormatNumber(v(2)) + "]";
+}
+
+// A positions file as calibrate reads it: averaged readings with their sample count and the
+// per-axis standard deviation of one sample.
+std::string PositionsCsv(const std::vector<Vec3>& means, double samples, const Vec3& sample_sigma) {
+  std::string out = "x,y,z,n,sx,sy,sz\n";
+  for (const Vec3& p : means) {
+    out += FormatNumber(p(0)) + "," + FormatNumber(p(1)) + "," + FormatNumber(p(2)) + "," +
+           FormatNumber(samples) + "," + FormatNumber(sample_sigma(0)) + "," +
+           FormatNumber(sample_sigma(1)) + "," + FormatNumber(sample_sigma(2)) + "\n";
+  }
+  return out;
+}
+
 }  // namespace
 
 namespace {
@@ -627,17 +644,14 @@ int RunDesign(const DesignArgs& args) {
   const auto& slots = ParameterSlots(model, planned.frame);
   std::string out;
   if (args.json) {
-    auto vec = [](const Vec3& v) {
-      return "[" + FormatNumber(v(0)) + ", " + FormatNumber(v(1)) + ", " + FormatNumber(v(2)) + "]";
-    };
     out += "{\n  \"positions\": " + std::to_string(directions.size()) + ",\n";
     out += "  \"model\": \"" + std::string(ToString(model)) + "\",\n";
     out += "  \"frame\": \"" + std::string(ToString(planned.frame)) + "\",\n";
-    out += "  \"noise_raw\": " + vec(sigma) + ",\n";
+    out += "  \"noise_raw\": " + JsonVector(sigma) + ",\n";
     if (args.choose > 0) {
       out += "  \"chosen\": [";
       for (std::size_t k = 0; k < directions.size(); ++k) {
-        out += (k ? ", " : "") + vec(directions[k]);
+        out += (k ? ", " : "") + JsonVector(directions[k]);
       }
       out += "],\n  \"choice\": \"" + chosen_note + "\",\n";
     }
@@ -652,9 +666,10 @@ int RunDesign(const DesignArgs& args) {
     out += "],\n";
     if (planned.observable) {
       const Mat33& K = planned.std.K;
-      out += "  \"std\": {\"K\": [" + vec(K.row(0).transpose()) + ", " + vec(K.row(1).transpose()) +
-             ", " + vec(K.row(2).transpose()) + "], \"bias\": " + vec(planned.std.bias) +
-             ", \"k2\": " + vec(planned.std.k2) + "},\n  \"crlb\": [";
+      out += "  \"std\": {\"K\": [" + JsonVector(K.row(0).transpose()) + ", " +
+             JsonVector(K.row(1).transpose()) + ", " + JsonVector(K.row(2).transpose()) +
+             "], \"bias\": " + JsonVector(planned.std.bias) +
+             ", \"k2\": " + JsonVector(planned.std.k2) + "},\n  \"crlb\": [";
       for (Eigen::Index i = 0; i < planned.crlb.rows(); ++i) {
         out += i ? ",\n    [" : "\n    [";
         for (Eigen::Index j = 0; j < planned.crlb.cols(); ++j) {
@@ -728,15 +743,11 @@ int RunMonteCarlo(const MonteCarloArgs& args) {
            ",\n  \"coverage\": " + FormatNumber(r.coverage) +
            ",\n  \"inclination_error_rms_arcsec\": " + FormatNumber(r.inclination_error_rms_arcsec);
     if (scenario->random_attitudes > 0) {
-      const auto vec = [](const Vec3& v) {
-        return "[" + FormatNumber(v(0)) + ", " + FormatNumber(v(1)) + ", " + FormatNumber(v(2)) +
-               "]";
-      };
       out += ",\n  \"e_T_percent_mean\": " + FormatNumber(r.e_T_percent_mean) +
              ",\n  \"e_b_percent_mean\": " + FormatNumber(r.e_b_percent_mean) +
-             ",\n  \"diag_T_bias\": " + vec(r.diag_T_bias) +
-             ",\n  \"diag_T_bias_standard_error\": " + vec(r.diag_T_bias_standard_error) +
-             ",\n  \"diag_T_bias_expected\": " + vec(r.diag_T_bias_expected);
+             ",\n  \"diag_T_bias\": " + JsonVector(r.diag_T_bias) +
+             ",\n  \"diag_T_bias_standard_error\": " + JsonVector(r.diag_T_bias_standard_error) +
+             ",\n  \"diag_T_bias_expected\": " + JsonVector(r.diag_T_bias_expected);
     }
     out += ",\n  \"parameters\": [";
     for (std::size_t i = 0; i < r.errors.size(); ++i) {
@@ -793,14 +804,7 @@ std::string SunXu2020Positions(const SimulateArgs& args) {
       SimulateLinearPositions(SunXu2020Ta(), SunXu2020Ba(), SunXu2020Directions(300, args.seed),
                               kSunXu2020Sigma_g, args.seed + 1000);
   const double samples = 100;
-  const double sample_sigma = kSunXu2020Sigma_g * std::sqrt(samples);
-  std::string out = "x,y,z,n,sx,sy,sz\n";
-  for (const Vec3& p : means) {
-    out += FormatNumber(p(0)) + "," + FormatNumber(p(1)) + "," + FormatNumber(p(2)) + "," +
-           FormatNumber(samples) + "," + FormatNumber(sample_sigma) + "," +
-           FormatNumber(sample_sigma) + "," + FormatNumber(sample_sigma) + "\n";
-  }
-  return out;
+  return PositionsCsv(means, samples, Vec3::Constant(kSunXu2020Sigma_g * std::sqrt(samples)));
 }
 
 }  // namespace
@@ -861,12 +865,7 @@ int RunSimulate(const SimulateArgs& args) {
     const double n = std::round(args.duration_s * args.rate_hz);
     const std::vector<Vec3> means =
         SimulatePositions(truth, gravity, directions, sigma_raw / std::sqrt(n), args.seed);
-    out += "x,y,z,n,sx,sy,sz\n";
-    for (const Vec3& p : means) {
-      out += FormatNumber(p(0)) + "," + FormatNumber(p(1)) + "," + FormatNumber(p(2)) + "," +
-             FormatNumber(n) + "," + FormatNumber(sigma_raw(0)) + "," + FormatNumber(sigma_raw(1)) +
-             "," + FormatNumber(sigma_raw(2)) + "\n";
-    }
+    out = PositionsCsv(means, n, sigma_raw);
   }
   WriteFileAtomically(args.output.empty() ? "-" : args.output, out);
   return kExitOk;

@@ -234,6 +234,27 @@ TEST(NewtonLagrange, SameOptimumAsTheOtherSolversInAFewIterations) {
   EXPECT_LE(worst_iterations, 8);
 }
 
+TEST(NewtonLagrange, StopsOnlyWhenTheNextStepIsRoundOff) {
+  // The stopping rule predicts the next step from the quadratic rate (10 κ δ²) and skips it: that
+  // skipped step must indeed be below the tolerance. One more forced iteration (tolerance 0) moves
+  // the solution by ~1e-16 relative; stopping an iteration early would leave 3e-12 (the step
+  // sizes are 1.5e-2, 8e-4, 1.6e-6, 3.4e-12, 9e-17 on this problem).
+  const std::vector<Vec3> readings = SimulateLinearPositions(
+      SunXu2020Ta(), SunXu2020Ba(), SunXu2020Directions(300, 1), kSunXu2020Sigma_g, 1001);
+  CalibrationOptions o;
+  o.method = SolverMethod::kNewtonLagrange;
+  o.gravity = 1.0;
+  const CalibrationResult stopped = Calibrate(readings, o);
+  ASSERT_TRUE(stopped.summary.converged()) << stopped.summary.BriefReport();
+  o.newton_lagrange.parameter_tolerance = 0.0;
+  o.newton_lagrange.max_iterations = stopped.summary.iterations + 1;
+  const CalibrationResult further = Calibrate(readings, o);
+  ASSERT_EQ(further.summary.iterations, stopped.summary.iterations + 1);
+  const Eigen::VectorXd a = Pack(stopped.params, ModelKind::kLinear);
+  const Eigen::VectorXd b = Pack(further.params, ModelKind::kLinear);
+  EXPECT_LE((a - b).cwiseAbs().maxCoeff(), 1e-13 * a.cwiseAbs().maxCoeff());
+}
+
 TEST(NewtonLagrange, FitsTheLinearModelOnly) {
   CalibrationOptions o;
   o.method = SolverMethod::kNewtonLagrange;

@@ -1,4 +1,5 @@
 // The raw-log simulator: what detection and calibration see on a recording with known truth.
+#include <algorithm>
 #include <cmath>
 
 #include <gtest/gtest.h>
@@ -24,6 +25,15 @@ TEST(SimulateRawLog, DetectionAndCalibrationRecoverTheTruth) {
   const std::vector<Vec3> dirs = Yang18Directions();
   const SimulatedLog simulated = SimulateRawLog(truth, kG, dirs, sim);
   ASSERT_EQ(simulated.samples.size(), 18u * 6000u + 17u * 399u);
+  // The turns are smooth: the direction moves at most 1.5·angle/T per second (smooth-step
+  // profile), ≤ 1.5·π/400 = 0.012 rad per sample here, so consecutive samples differ by at most
+  // 0.012·|K|·g plus noise; 0.02·|K|·g would catch a jump from one position to the next.
+  double largest_step = 0;
+  for (std::size_t i = 1; i < simulated.samples.size(); ++i) {
+    largest_step = std::max(
+        largest_step, (simulated.samples[i] - simulated.samples[i - 1]).lpNorm<Eigen::Infinity>());
+  }
+  EXPECT_LT(largest_step, 0.02 * truth.K.rowwise().norm().maxCoeff() * kG);
   RawLog log;
   log.samples = simulated.samples;
   log.time_s = simulated.time_s;

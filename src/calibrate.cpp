@@ -42,6 +42,15 @@ std::optional<SolverMethod> SolverMethodFromString(std::string_view text) {
   return std::nullopt;
 }
 
+std::string_view ToString(Estimator estimator) {
+  return estimator == Estimator::kMaximumLikelihood ? "ml" : "bias-corrected";
+}
+std::optional<Estimator> EstimatorFromString(std::string_view text) {
+  if (text == "ml") return Estimator::kMaximumLikelihood;
+  if (text == "bias-corrected") return Estimator::kBiasCorrected;
+  return std::nullopt;
+}
+
 std::string_view ToString(Initialization init) {
   switch (init) {
     case Initialization::kAuto:
@@ -108,6 +117,12 @@ std::optional<std::string> CalibrationOptions::Validate() const {
                           initial_params->k2.allFinite())) {
     return "initial_params must be finite";
   }
+  if (estimator == Estimator::kBiasCorrected && !IsMaximumLikelihood(method)) {
+    return "the bias-corrected estimator corrects maximum likelihood: it does not apply to the " +
+           std::string(ToString(method)) + " method";
+  }
+  if (bias_correction.max_rounds < 1) return "bias_correction.max_rounds must be at least 1";
+  if (!(bias_correction.tolerance > 0)) return "bias_correction.tolerance must be positive";
   if (method == SolverMethod::kEllipsoid && initialization != Initialization::kAuto &&
       initialization != Initialization::kEllipsoidFit) {
     return "the ellipsoid method is the ellipsoid fit: it takes no other initialisation";
@@ -127,6 +142,10 @@ std::string Summary::BriefReport() const {
       std::string(ToString(method)).c_str(), std::string(ToString(initialization)).c_str(),
       converged() ? "converged" : "NOT CONVERGED", iterations, termination_message.c_str(),
       initial_cost, final_cost, time_s * 1e6);
+  if (estimator == Estimator::kBiasCorrected) {
+    return std::string(buf) + "; bias-corrected in " + std::to_string(correction_rounds) +
+           " refits";
+  }
   return buf;
 }
 
@@ -275,10 +294,12 @@ internal::Mat12 SampleNoiseCovariance(const Problem& problem, const internal::So
   Eigen::VectorXd variance(m);
   double chi2 = 0;
   for (int k = 0; k < m; ++k) {
-    const Vec3& n = rows.normals[static_cast<std::size_t>(k)];
-    variance(k) = n.cwiseAbs2().dot(sigmas[static_cast<std::size_t>(k)].cwiseAbs2());
-    const double along_normal = n.dot(result->residuals[static_cast<std::size_t>(k)]);
-    chi2 += along_normal * along_normal / variance(k);
+    const auto i = static_cast<std::size_t>(k);
+    const Vec3& n = rows.normals[i];
+    variance(k) = n.cwiseAbs2().dot(sigmas[i].cwiseAbs2());
+    const Vec3 residual =
+        problem.readings[i] - PredictRaw(out.params, Vec3(problem.gravity * out.dirs[i]));
+    chi2 += std::pow(n.dot(residual), 2) / variance(k);
   }
   const internal::Mat12 meat = rows.U.transpose() * variance.asDiagonal() * rows.U;
   const double ratio2 = chi2 / result->degrees_of_freedom;
@@ -287,47 +308,130 @@ internal::Mat12 SampleNoiseCovariance(const Problem& problem, const internal::So
   return std::max(1.0, ratio2) * S_inverse * meat * S_inverse;
 }
 
+// The iterative methods from a start.
+internal::SolverOutput SolveFrom(const Problem& problem, const ModelParameters& params,
+                                 std::vector<Vec3> dirs, const CalibrationOptions& options) {
+  switch (options.method) {
+    case SolverMethod::kTwoStep:
+      return internal::SolveTwoStep(problem, params, std::move(dirs), options);
+    case SolverMethod::kModulus:
+    case SolverMethod::kModulusNorm:
+      return internal::SolveModulus(problem, params, options);
+    case SolverMethod::kNewtonLagrange:
+      return internal::SolveNewtonLagrange(problem, params, std::move(dirs), options);
+    case SolverMethod::kJoint:
+    case SolverMethod::kEllipsoid:
+      break;
+  }
+  return internal::SolveJoint(problem, params, std::move(dirs), options);
+}
+
+// The per-axis noise of each reading that the bias correction assumes: the covariance's
+// (calibrate.hpp), from the fit to `problem`.
+std::vector<Vec3> CorrectionNoise(const Problem& problem, const internal::SolverOutput& out,
+                                  const CalibrationOptions& options, int dof) {
+  const std::size_t m = problem.readings.size();
+  if (options.reading_sigmas.empty()) {
+    return std::vector<Vec3>(m, Vec3::Constant(std::sqrt(out.summary.final_cost / dof)));
+  }
+  const internal::SurfaceOffsets at_fit =
+      internal::ExpectedSurfaceOffsets(problem, out.params, out.dirs, options.reading_sigmas);
+  double chi2 = 0;
+  for (std::size_t k = 0; k < m; ++k) {
+    const Vec3 residual =
+        problem.readings[k] - PredictRaw(out.params, Vec3(problem.gravity * out.dirs[k]));
+    chi2 += std::pow(at_fit.normal[k].dot(residual) / at_fit.normal_sigma[k], 2);
+  }
+  const double inflation = std::sqrt(std::max(1.0, chi2 / dof));
+  std::vector<Vec3> sigmas = options.reading_sigmas;
+  for (Vec3& s : sigmas) s *= inflation;
+  return sigmas;
+}
+
+// Estimator::kBiasCorrected (calibrate.hpp): refits `out` with each reading moved inward by its
+// expected offset from the fitted surface until the shifts settle; returns the readings of the
+// last fit.
+std::vector<Vec3> CorrectBias(const std::vector<Vec3>& readings, const CalibrationOptions& options,
+                              internal::SolverOutput* out) {
+  std::vector<Vec3> shifted = readings;
+  Summary& summary = out->summary;
+  const int dof = static_cast<int>(readings.size()) - NumParameters(options.model);
+  if (dof <= 0 && options.reading_sigmas.empty()) {
+    summary.termination_message +=
+        "; bias correction not applied: no residual degrees of freedom to estimate the noise";
+    return shifted;
+  }
+  const Summary ml = summary;
+  int iterations = ml.iterations;
+  double change = 0;
+  for (int round = 0; round <= options.bias_correction.max_rounds; ++round) {
+    const Problem problem{shifted, options.gravity, options.model};
+    const internal::SurfaceOffsets offsets = internal::ExpectedSurfaceOffsets(
+        problem, out->params, out->dirs, CorrectionNoise(problem, *out, options, std::max(dof, 1)));
+    std::vector<Vec3> next(readings.size());
+    change = 0;
+    for (std::size_t k = 0; k < readings.size(); ++k) {
+      next[k] = readings[k] - offsets.offset[k] * offsets.normal[k];
+      change = std::max(change, (next[k] - shifted[k]).norm() / offsets.normal_sigma[k]);
+    }
+    if (change <= options.bias_correction.tolerance) break;  // the last fit used these shifts
+    if (round == options.bias_correction.max_rounds) break;
+    shifted = std::move(next);
+    *out = SolveFrom(Problem{shifted, options.gravity, options.model}, out->params,
+                     std::move(out->dirs), options);
+    iterations += summary.iterations;
+    summary.correction_rounds = round + 1;
+    if (!summary.converged()) break;
+  }
+  summary.estimator = Estimator::kBiasCorrected;
+  summary.iterations = iterations;
+  summary.initial_cost = ml.initial_cost;
+  if (summary.converged() && change > options.bias_correction.tolerance) {
+    char buf[200];
+    std::snprintf(buf, sizeof buf,
+                  "; bias correction: a reading's shift still changed by %.2g of its noise after "
+                  "%d refits",
+                  change, summary.correction_rounds);
+    summary.termination = TerminationType::kMaxIterations;
+    summary.termination_message += buf;
+  }
+  return shifted;
+}
+
 // The fit in the x-first gauge; `frame` only names parameters in messages (the z-first fit runs
 // here on mirrored readings).
 CalibrationResult CalibrateXFirst(const std::vector<Vec3>& readings,
                                   const CalibrationOptions& options, Frame frame) {
   const auto t0 = std::chrono::steady_clock::now();
   CheckData(readings, options.model);
-  const Problem problem{readings, options.gravity, options.model};
+  const Problem data{readings, options.gravity, options.model};
 
-  Start start = Initialise(problem, options.initialization, options.initial_params);
+  Start start = Initialise(data, options.initialization, options.initial_params);
   internal::SolverOutput out;
-  switch (options.method) {
-    case SolverMethod::kTwoStep:
-      out = internal::SolveTwoStep(problem, start.params, std::move(start.dirs), options);
-      break;
-    case SolverMethod::kJoint:
-      out = internal::SolveJoint(problem, start.params, std::move(start.dirs), options);
-      break;
-    case SolverMethod::kModulus:
-    case SolverMethod::kModulusNorm:
-      out = internal::SolveModulus(problem, start.params, options);
-      break;
-    case SolverMethod::kNewtonLagrange:
-      out = internal::SolveNewtonLagrange(problem, start.params, std::move(start.dirs), options);
-      break;
-    case SolverMethod::kEllipsoid:
-      if (start.used != Initialization::kEllipsoidFit) {
-        throw DataError("the ellipsoid method cannot run: " + start.note);
-      }
-      out.params = start.params;
-      out.dirs = std::move(start.dirs);
-      out.summary.method = SolverMethod::kEllipsoid;
-      out.summary.termination = TerminationType::kClosedForm;
-      out.summary.termination_message =
-          start.fit_kind == EllipsoidFitKind::kAlgebraic
-              ? "algebraic fit (paper 001 eq. (16)-(18))"
-              : "ellipsoid-specific fit (Li & Griffiths 2004): the algebraic quadric of paper "
-                "001 eq. (16)-(18) is no ellipsoid";
-      out.summary.initial_cost = out.summary.final_cost =
-          internal::Cost(problem, out.params, out.dirs);
-      break;
+  if (options.method == SolverMethod::kEllipsoid) {
+    if (start.used != Initialization::kEllipsoidFit) {
+      throw DataError("the ellipsoid method cannot run: " + start.note);
+    }
+    out.params = start.params;
+    out.dirs = std::move(start.dirs);
+    out.summary.method = SolverMethod::kEllipsoid;
+    out.summary.termination = TerminationType::kClosedForm;
+    out.summary.termination_message =
+        start.fit_kind == EllipsoidFitKind::kAlgebraic
+            ? "algebraic fit (paper 001 eq. (16)-(18))"
+            : "ellipsoid-specific fit (Li & Griffiths 2004): the algebraic quadric of paper "
+              "001 eq. (16)-(18) is no ellipsoid";
+    out.summary.initial_cost = out.summary.final_cost = internal::Cost(data, out.params, out.dirs);
+  } else {
+    out = SolveFrom(data, start.params, std::move(start.dirs), options);
   }
+  // The readings the final fit was solved for (shifted by the bias correction).
+  std::vector<Vec3> fit_readings;
+  if (options.estimator == Estimator::kBiasCorrected && out.summary.converged()) {
+    fit_readings = CorrectBias(readings, options, &out);
+  }
+  const Problem problem{fit_readings.empty() ? readings : fit_readings, options.gravity,
+                        options.model};
   out.summary.initialization = start.used;
   out.summary.initialization_note = start.note;
 

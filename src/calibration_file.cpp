@@ -134,9 +134,11 @@ std::string CalibrationToJson(const CalibrationResult& result, const Calibration
   }
   const Summary& s = result.summary;
   doc["solver"] = {{"method", std::string(ToString(s.method))},
+                   {"estimator", std::string(ToString(s.estimator))},
                    {"initialization", std::string(ToString(s.initialization))},
                    {"initialization_note", s.initialization_note},
                    {"iterations", s.iterations},
+                   {"correction_rounds", s.correction_rounds},
                    {"converged", s.converged()},
                    {"termination", std::string(ToString(s.termination))},
                    {"termination_message", s.termination_message},

@@ -39,6 +39,8 @@ const char* const kUnits[kErrors] = {"ppm",    "ppm", "ppm", "arcsec", "arcsec",
 
 struct RunOutcome {
   bool ok = false;
+  Eigen::VectorXd parameter_error;  // random attitudes: flat, the scenario frame's order
+  Eigen::VectorXd crlb_variance;    // random attitudes: this run's bound (diagonal)
   double e_T = 0, e_b = 0;
   Vec3 diag_T_error = Vec3::Zero();
   Eigen::Matrix<double, kErrors, 1> error;
@@ -63,7 +65,15 @@ RunOutcome OneRun(const Scenario& s, const CalibrationOptions& options, std::uin
   }
   if (!r.summary.converged()) return out;
   out.ok = true;
-  if (s.random_attitudes == 0) out.error = Engineering(r.params, s.gravity, truth) - truth_eng;
+  if (s.random_attitudes == 0) {
+    out.error = Engineering(r.params, s.gravity, truth) - truth_eng;
+  } else {
+    const auto& slots = ParameterSlots(s.model, s.frame);
+    out.parameter_error = Pack(r.params, slots) - Pack(s.truth, slots);
+    const PlannedUncertainty bound =
+        PredictUncertainty(s.truth, s.model, s.gravity, directions, s.sigma_raw);
+    if (bound.observable) out.crlb_variance = bound.crlb.diagonal();
+  }
   const ParameterErrors sx = SunXuErrors(s.truth, r.params);
   out.e_T = sx.e_T_percent;
   out.e_b = sx.e_b_percent;
@@ -108,6 +118,60 @@ Eigen::Matrix<double, kErrors, 1> EngineeringBound(const Scenario& s,
   const Eigen::MatrixXd C = J * planned.crlb * J.transpose();
   for (int i = 0; i < kErrors; ++i) bound(i) = std::sqrt(std::max(0.0, C(i, i)));
   return bound;
+}
+
+// min, max, mean, median, std and RMSE of `values` (sorted in place) against `crlb`.
+ErrorStatistics Statistics(std::string name, std::string unit, std::vector<double>* values,
+                           double crlb) {
+  ErrorStatistics st;
+  st.name = std::move(name);
+  st.unit = std::move(unit);
+  st.crlb = crlb;
+  std::vector<double>& v = *values;
+  if (v.size() < 2) return st;
+  const auto n = static_cast<double>(v.size());
+  double sum = 0, sum2 = 0;
+  for (double x : v) {
+    sum += x;
+    sum2 += x * x;
+  }
+  st.mean = sum / n;
+  double ss = 0;
+  for (double x : v) ss += (x - st.mean) * (x - st.mean);
+  st.std = std::sqrt(ss / (n - 1));
+  st.rmse = std::sqrt(sum2 / n);
+  std::sort(v.begin(), v.end());
+  st.min = v.front();
+  st.max = v.back();
+  st.median = v.size() % 2 ? v[v.size() / 2] : 0.5 * (v[v.size() / 2 - 1] + v[v.size() / 2]);
+  st.ratio = st.std / st.crlb;
+  st.rmse_ratio = st.rmse / st.crlb;
+  return st;
+}
+
+// Random attitudes: the flat parameters' errors against the mean of the runs' own bounds.
+std::vector<ErrorStatistics> ParameterStatistics(const Scenario& s,
+                                                 const std::vector<RunOutcome>& outcomes) {
+  const auto& slots = ParameterSlots(s.model, s.frame);
+  std::vector<ErrorStatistics> out;
+  for (std::size_t i = 0; i < slots.size(); ++i) {
+    const auto index = static_cast<Eigen::Index>(i);
+    std::vector<double> values;
+    double variance = 0;
+    int bounded = 0;
+    for (const RunOutcome& o : outcomes) {
+      if (!o.ok) continue;
+      values.push_back(o.parameter_error(index));
+      if (o.crlb_variance.size() > 0) {
+        variance += o.crlb_variance(index);
+        ++bounded;
+      }
+    }
+    const double crlb = bounded > 0 ? std::sqrt(variance / bounded) : std::nan("");
+    const bool is_K = slots[i].group == ParameterGroup::kK;
+    out.push_back(Statistics(std::string(slots[i].name), is_K ? "g/g" : "g", &values, crlb));
+  }
+  return out;
 }
 
 }  // namespace
@@ -207,33 +271,16 @@ MonteCarloResult RunMonteCarlo(const Scenario& scenario, const MonteCarloOptions
   const Mat33 T = ChangeFrame(scenario.truth.K, Frame::kZFirst).K;
   const double sigma2 = scenario.sigma_raw.squaredNorm() / 3.0;
   for (int i = 0; i < 3; ++i) result.diag_T_bias_expected(i) = sigma2 / T(i, i);
-  // Table 4 for fixed positions only (random attitudes are reported by e_T, e_b above).
+  // Table 4 for fixed positions; random attitudes: the flat parameters, and e_T, e_b above.
   const bool table4 = scenario.random_attitudes == 0;
   const Eigen::Matrix<double, kErrors, 1> bound =
       table4 ? EngineeringBound(scenario, truth)
              : Eigen::Matrix<double, kErrors, 1>::Constant(std::nan(""));
   for (int i = 0; i < kErrors && table4; ++i) {
-    std::vector<double>& v = values[static_cast<std::size_t>(i)];
-    ErrorStatistics st;
-    st.name = kNames[i];
-    st.unit = kUnits[i];
-    st.crlb = bound(i);
-    if (v.size() >= 2) {
-      const auto n = static_cast<double>(v.size());
-      double sum = 0;
-      for (double x : v) sum += x;
-      st.mean = sum / n;
-      double ss = 0;
-      for (double x : v) ss += (x - st.mean) * (x - st.mean);
-      st.std = std::sqrt(ss / (n - 1));
-      std::sort(v.begin(), v.end());
-      st.min = v.front();
-      st.max = v.back();
-      st.median = v.size() % 2 ? v[v.size() / 2] : 0.5 * (v[v.size() / 2 - 1] + v[v.size() / 2]);
-      st.ratio = st.std / st.crlb;
-    }
-    result.errors.push_back(st);
+    result.errors.push_back(
+        Statistics(kNames[i], kUnits[i], &values[static_cast<std::size_t>(i)], bound(i)));
   }
+  if (!table4) result.errors = ParameterStatistics(scenario, outcomes);
   result.coverage = parameters > 0 ? static_cast<double>(covered) / static_cast<double>(parameters)
                                    : std::nan("");
   result.inclination_error_rms_arcsec =

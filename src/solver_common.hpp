@@ -169,6 +169,19 @@ class Damping {
 };
 
 /// Result of a solver run, before the common post-processing in Calibrate().
+/// The shifts of the bias-corrected estimator (calibrate.hpp, Estimator::kBiasCorrected) at a
+/// fit: per position the expected signed distance m_k of a reading with per-axis noise sigma_k
+/// (1σ, independent axes) from the fitted surface, the surface's unit normal n_k (m_k n_k does not
+/// depend on n_k's sign) and the noise along it, sqrt(Σ n_i² σ_i²).
+struct SurfaceOffsets {
+  std::vector<double> offset;
+  std::vector<Vec3> normal;
+  std::vector<double> normal_sigma;
+};
+SurfaceOffsets ExpectedSurfaceOffsets(const Problem& problem, const ModelParameters& params,
+                                      const std::vector<Vec3>& dirs,
+                                      const std::vector<Vec3>& sigmas);
+
 struct SolverOutput {
   ModelParameters params;
   std::vector<Vec3> dirs;

@@ -259,17 +259,22 @@ TEST_F(Cli, MonteCarloPrintsTable4AgainstTheBound) {
   for (std::size_t i = 0; i < names.size(); ++i) {
     const auto& p = doc["parameters"][i];
     EXPECT_EQ(p["name"], names[i]);
-    for (const char* key : {"unit", "min", "max", "mean", "median", "std", "crlb", "ratio"}) {
+    for (const char* key :
+         {"unit", "min", "max", "mean", "median", "std", "rmse", "crlb", "ratio", "rmse_ratio"}) {
       EXPECT_TRUE(p.contains(key)) << names[i] << " " << key;
     }
   }
   // Same seed, same bytes.
   EXPECT_EQ(Exec("montecarlo --runs 60 --json --threads 1").out, r.out);
   EXPECT_EQ(Exec("montecarlo --scenario nonesuch").status, 2);
-  const CliRun sx = Exec("montecarlo --scenario sunxu2020 --runs 10 --json");
+  EXPECT_EQ(doc["estimator"], "ml");
+  const CliRun sx =
+      Exec("montecarlo --scenario sunxu2020 --runs 10 --json --estimator bias-corrected");
   ASSERT_EQ(sx.status, 0) << sx.err;
   const nlohmann::json sunxu = nlohmann::json::parse(sx.out);
-  EXPECT_TRUE(sunxu["parameters"].empty());
+  EXPECT_EQ(sunxu["estimator"], "bias-corrected");
+  ASSERT_EQ(sunxu["parameters"].size(), 9u);  // the flat parameters, z-first
+  EXPECT_EQ(sunxu["parameters"][0]["name"], "K_zz");
   EXPECT_EQ(sunxu["diag_T_bias"].size(), 3u);
   EXPECT_GT(sunxu["e_T_percent_mean"].get<double>(), 0.0);
   EXPECT_EQ(Exec("montecarlo --method modulus").status, 2);
@@ -310,6 +315,25 @@ TEST_F(Cli, SimulateWritesRecordingsThatCalibrateBackToTheTruth) {
   EXPECT_EQ(sd["positions"].size(), 300u);
   EXPECT_EQ(sd["noise"]["source"], "samples");
   EXPECT_NEAR(sd["K"][0][0].get<double>(), 1.15, 0.05);  // eq. (19): T_a(0,0) = 1.15
+  EXPECT_EQ(sd["solver"]["estimator"], "ml");
+  // The bias-corrected estimate lowers each diagonal entry by about σ²/T_ii ≈ 0.0087 (0.1 g noise,
+  // calibrate.hpp); the shift is deterministic given the data, up to the O(σ⁴) terms: ±20 %.
+  const CliRun bc =
+      Exec("calibrate " + Path("sunxu.csv") +
+           " --units g --frame z-first --no-crossval --json --estimator bias-corrected");
+  ASSERT_EQ(bc.status, 0) << bc.err;
+  const nlohmann::json bd = nlohmann::json::parse(bc.out);
+  EXPECT_EQ(bd["solver"]["estimator"], "bias-corrected");
+  EXPECT_GE(bd["solver"]["correction_rounds"].get<int>(), 1);
+  for (int i = 0; i < 3; ++i) {
+    const double shift = sd["K"][i][i].get<double>() - bd["K"][i][i].get<double>();
+    EXPECT_NEAR(shift, 0.01 / sd["K"][i][i].get<double>(), 0.2 * 0.01 / sd["K"][i][i].get<double>())
+        << i;
+  }
+  EXPECT_EQ(Exec("calibrate " + Path("sunxu.csv") + " --estimator unbiased").status, 2);
+  EXPECT_EQ(Exec("calibrate " + Path("sunxu.csv") + " --method modulus --estimator bias-corrected")
+                .status,
+            2);
   EXPECT_EQ(Exec("simulate --scenario sunxu2020 --raw").status, 2);
   EXPECT_EQ(Exec("simulate --scenario yang2012 --rate 0").status, 2);
 }

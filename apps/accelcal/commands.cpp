@@ -279,6 +279,8 @@ int RunCalibrate(const CalibrateArgs& args) {
   options.initialization = ParseEnum(InitializationFromString(args.init), args.init, "--init",
                                      "auto, ellipsoid, normalized-readings");
   options.frame = ParseEnum(FrameFromString(args.frame), args.frame, "--frame", "x-first, z-first");
+  options.estimator = ParseEnum(EstimatorFromString(args.estimator), args.estimator, "--estimator",
+                                "ml, bias-corrected");
   options.cross_validate = args.cross_validate;
   if (auto_model && !args.cross_validate) {
     throw UsageError(
@@ -732,13 +734,16 @@ int RunMonteCarlo(const MonteCarloArgs& args) {
         "--method: the Monte Carlo compares maximum-likelihood methods with the "
         "bound: joint, two-step or newton-lagrange");
   }
+  options.calibration.estimator = ParseEnum(EstimatorFromString(args.estimator), args.estimator,
+                                            "--estimator", "ml, bias-corrected");
   options.calibration.model = scenario->model;
   if (auto why = options.calibration.Validate()) throw UsageError(*why);
   const MonteCarloResult r = RunMonteCarlo(*scenario, options);
   std::string out;
   if (args.json) {
     out += "{\n  \"scenario\": \"" + r.scenario + "\",\n  \"method\": \"" +
-           std::string(ToString(r.method)) + "\",\n  \"runs\": " + std::to_string(r.runs) +
+           std::string(ToString(r.method)) + "\",\n  \"estimator\": \"" + args.estimator +
+           "\",\n  \"runs\": " + std::to_string(r.runs) +
            ",\n  \"failed\": " + std::to_string(r.failed) +
            ",\n  \"coverage\": " + FormatNumber(r.coverage) +
            ",\n  \"inclination_error_rms_arcsec\": " + FormatNumber(r.inclination_error_rms_arcsec);
@@ -756,17 +761,21 @@ int RunMonteCarlo(const MonteCarloArgs& args) {
              "\", \"unit\": \"" + e.unit + "\", \"min\": " + FormatNumber(e.min) +
              ", \"max\": " + FormatNumber(e.max) + ", \"mean\": " + FormatNumber(e.mean) +
              ", \"median\": " + FormatNumber(e.median) + ", \"std\": " + FormatNumber(e.std) +
-             ", \"crlb\": " + FormatNumber(e.crlb) + ", \"ratio\": " + FormatNumber(e.ratio) + "}";
+             ", \"rmse\": " + FormatNumber(e.rmse) + ", \"crlb\": " + FormatNumber(e.crlb) +
+             ", \"ratio\": " + FormatNumber(e.ratio) +
+             ", \"rmse_ratio\": " + FormatNumber(e.rmse_ratio) + "}";
     }
     out += "\n  ]\n}\n";
   } else {
-    out += Format("montecarlo %s, %d runs, %s solver (%d failed)\n", r.scenario.c_str(), r.runs,
-                  std::string(ToString(r.method)).c_str(), r.failed);
-    out += Format("  %-7s %-6s %11s %11s %11s %11s %11s %11s %7s\n", "error", "unit", "min", "max",
-                  "mean", "median", "std", "CRLB", "std/CRLB");
+    out +=
+        Format("montecarlo %s, %d runs, %s solver, %s estimator (%d failed)\n", r.scenario.c_str(),
+               r.runs, std::string(ToString(r.method)).c_str(), args.estimator.c_str(), r.failed);
+    out += Format("  %-7s %-6s %10s %10s %10s %10s %10s %10s %10s %8s %9s\n", "error", "unit",
+                  "min", "max", "mean", "median", "std", "RMSE", "CRLB", "std/CRLB", "RMSE/CRLB");
     for (const ErrorStatistics& e : r.errors) {
-      out += Format("  %-7s %-6s %11.4g %11.4g %11.4g %11.4g %11.4g %11.4g %7.3f\n", e.name.c_str(),
-                    e.unit.c_str(), e.min, e.max, e.mean, e.median, e.std, e.crlb, e.ratio);
+      out += Format("  %-7s %-6s %10.4g %10.4g %10.4g %10.4g %10.4g %10.4g %10.4g %8.3f %9.3f\n",
+                    e.name.c_str(), e.unit.c_str(), e.min, e.max, e.mean, e.median, e.std, e.rmse,
+                    e.crlb, e.ratio, e.rmse_ratio);
     }
     out += Format("coverage of the reported 1-sigma intervals: %.1f %% (noise %s)\n",
                   100 * r.coverage, args.residual_noise ? "from the residuals" : "known");

@@ -56,6 +56,7 @@ struct CalibrateArgs {
   std::string method = "joint";
   std::string init = "auto";
   std::string frame = "x-first";
+  std::string estimator = "ml";
   bool cross_validate = true;
   std::string raw_units = "raw";
   std::string output;
@@ -102,6 +103,7 @@ struct MonteCarloArgs {
   std::string scenario = "yang2012";
   int runs = 500;
   std::string method = "joint";
+  std::string estimator = "ml";
   std::uint64_t seed = 1;
   int threads = 0;  // 0: all cores
   bool residual_noise = false;

@@ -82,6 +82,11 @@ int main(int argc, char** argv) {
                    "paper 000) or z-first (body z = sensor z, K upper-triangular, paper 001, "
                    "imu_tk)")
       ->capture_default_str();
+  calibrate
+      ->add_option("--estimator", cal.estimator,
+                   "ml (maximum likelihood) or bias-corrected (removes the bias of order "
+                   "sigma^2/g that ML has at MEMS noise levels; same covariance)")
+      ->capture_default_str();
   calibrate->add_flag("!--no-crossval", cal.cross_validate,
                       "skip the leave-one-position-out validation (one refit per position)");
   calibrate->add_option("--raw-units", cal.raw_units, "label of the raw unit (e.g. counts)")
@@ -149,6 +154,8 @@ int main(int argc, char** argv) {
       ->capture_default_str();
   montecarlo->add_option("--runs", mc.runs, "number of runs")->capture_default_str();
   montecarlo->add_option("--method", mc.method, "joint, two-step or newton-lagrange")
+      ->capture_default_str();
+  montecarlo->add_option("--estimator", mc.estimator, "ml or bias-corrected")
       ->capture_default_str();
   montecarlo->add_option("--seed", mc.seed, "seed of the first run's noise")->capture_default_str();
   montecarlo->add_option("--threads", mc.threads, "threads (0: all cores)")->capture_default_str();

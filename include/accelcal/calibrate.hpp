@@ -46,6 +46,26 @@ constexpr bool IsMaximumLikelihood(SolverMethod method) {
 std::string_view ToString(SolverMethod method);
 std::optional<SolverMethod> SolverMethodFromString(std::string_view text);
 
+/// Which estimate the maximum-likelihood methods return.
+///
+/// With every direction a free parameter, the ML estimate is biased at MEMS noise levels (the
+/// incidental-parameter problem): a noisy reading lies on average outside the fitted surface, by
+/// the expected signed distance m_k = −½ tr(L_k G_k⁻¹ T_kᵀ Σ_k T_k G_k⁻¹) (T_k the surface's
+/// tangent vectors ∂μ/∂s at the foot point, G_k = T_kᵀT_k, L_k = n_k·∂²μ/∂s∂s its second
+/// fundamental form, Σ_k the reading's noise covariance). For a sphere of radius g|K| this is
+/// σ²/(g|K|): the scale factors come out too large by σ²/(g²K) relative (ERRATA.md, paper 001).
+enum class Estimator {
+  kMaximumLikelihood,  ///< "ml": the optimum of J (paper 000 eq. (13), paper 001 eq. (12))
+  /// "bias-corrected": the ML equations solved with each reading moved m_k inward along the
+  /// surface normal n_k, p̃_k = p_k − m_k n_k, refitted until the shifts settle (a corrected
+  /// score: its expectation at the truth vanishes to second order in the noise). m_k uses the
+  /// noise of the covariance (reading_sigmas times max(1, R²), or σ̂ from the residuals). The
+  /// covariance is the ML one (equal to first order); residuals stay p_k − μ.
+  kBiasCorrected,
+};
+std::string_view ToString(Estimator estimator);
+std::optional<Estimator> EstimatorFromString(std::string_view text);
+
 enum class Initialization {
   kAuto,                ///< ellipsoid fit, falling back to normalised readings if it fails
   kEllipsoidFit,        ///< ellipsoid fit only (DataError when neither fit gives an ellipsoid)
@@ -101,6 +121,16 @@ struct CalibrationOptions {
   /// started from the full fit (a few iterations each). Off by default in the library because of
   /// that cost; the command line turns it on.
   bool cross_validate = false;
+  /// Maximum-likelihood methods only.
+  Estimator estimator = Estimator::kMaximumLikelihood;
+
+  /// Estimator::kBiasCorrected: refit until no reading's shift changes by more than
+  /// `tolerance` times its noise along the normal (then the parameters are settled far below
+  /// their standard deviation); not settling within `max_rounds` refits ends as kMaxIterations.
+  struct BiasCorrection {
+    int max_rounds = 10;
+    double tolerance = 1e-6;
+  } bias_correction;
 
   struct TwoStep {
     int max_sweeps = 20000;              ///< cap on alternations
@@ -154,6 +184,10 @@ struct Summary {
   double initial_cost = 0;
   double final_cost = 0;
   double time_s = 0;  ///< wall time of the solve (initialisation included)
+  Estimator estimator = Estimator::kMaximumLikelihood;
+  /// Estimator::kBiasCorrected: refits with shifted readings after the ML fit (iterations counts
+  /// those of every fit; final_cost is J of the shifted readings).
+  int correction_rounds = 0;
 
   bool converged() const {
     return termination != TerminationType::kMaxIterations &&

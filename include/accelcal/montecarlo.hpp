@@ -24,7 +24,8 @@ struct Scenario {
   std::vector<Vec3> directions;  ///< unit, body frame
   Vec3 sigma_raw = Vec3::Ones();
   /// > 0: each run draws this many new paper 001 §4.1 attitudes (SunXu2020Directions) instead of
-  /// using `directions`; results are then reported as paper 001's e_T, e_b (no Table 4).
+  /// using `directions`; results are then the flat parameters' errors and paper 001's e_T, e_b
+  /// (no Table 4).
   int random_attitudes = 0;
   Frame frame = Frame::kXFirst;  ///< the frame of `truth` (and of the fits)
 };
@@ -38,20 +39,26 @@ std::optional<Scenario> ScenarioByName(std::string_view name);
 struct MonteCarloOptions {
   int runs = 500;
   std::uint64_t seed = 1;
-  CalibrationOptions calibration;  ///< model and gravity are taken from the scenario
+  CalibrationOptions calibration;  ///< model, gravity and frame are taken from the scenario
   /// Give each run its true per-axis noise (CalibrationOptions::reading_sigmas), as a raw log's
   /// intervals would; false: the covariance comes from the residuals.
   bool known_noise = true;
   int threads = 0;  ///< 0: all hardware threads
 };
 
-/// Statistics of one engineering error over the runs, in the paper's units.
+/// Statistics of one error over the runs. Fixed positions (yang2012): paper 000 Table 4's
+/// engineering errors in its units. Random attitudes (sunxu2020): the flat parameters in the
+/// scenario's frame (g units).
 struct ErrorStatistics {
-  std::string name;  ///< ka_x … tau_yx … p0_x … k2_x
-  std::string unit;  ///< ppm, arcsec, ug, g/g^2
+  std::string name;  ///< ka_x … tau_yx … p0_x … k2_x, or the frame's slot names (K_zz, b_z, …)
+  std::string unit;  ///< ppm, arcsec, ug, g/g^2; or g/g (K), g (b)
   double min = 0, max = 0, mean = 0, median = 0, std = 0;
-  double crlb = 0;   ///< 1σ bound in the same unit (propagated from the parameters' CRLB)
-  double ratio = 0;  ///< std / crlb
+  double rmse = 0;  ///< root mean square error (bias and spread)
+  /// 1σ bound in the same unit (propagated from the parameters' CRLB); with random attitudes
+  /// the root of the mean over the runs of each run's bound (its own attitudes).
+  double crlb = 0;
+  double ratio = 0;       ///< std / crlb
+  double rmse_ratio = 0;  ///< rmse / crlb
 };
 
 struct MonteCarloResult {

@@ -133,5 +133,17 @@ void BM_DOptimal18Of500(benchmark::State& state) {
 }
 BENCHMARK(BM_DOptimal18Of500)->Unit(benchmark::kMillisecond);
 
+// A-optimal choice of 18 of 500 (the D-optimal start and 8 random restarts).
+void BM_AOptimal18Of500(benchmark::State& state) {
+  const ModelParameters device = Yang2012Truth();
+  const std::vector<Vec3> candidates = RandomDirections(500, 1);
+  for (auto _ : state) {
+    benchmark::DoNotOptimize(ChooseAOptimal(device, ModelKind::kQuadratic, kYang2012Gravity_ms2,
+                                            candidates, Vec3::Constant(0.5), 18)
+                                 .size());
+  }
+}
+BENCHMARK(BM_AOptimal18Of500)->Unit(benchmark::kMillisecond);
+
 }  // namespace
 }  // namespace accelcal

@@ -3,6 +3,8 @@
 #include <charconv>
 #include <cmath>
 #include <limits>
+#include <numeric>
+#include <random>
 #include <stdexcept>
 
 #include <Eigen/Cholesky>
@@ -146,6 +148,96 @@ std::vector<int> ChooseDOptimal(const ModelParameters& device, ModelKind model, 
   std::vector<int> indices;
   for (int k = 0; k < n; ++k) {
     if (chosen[static_cast<std::size_t>(k)]) indices.push_back(k);
+  }
+  return indices;
+}
+
+double TraceCrlb(const ModelParameters& device, ModelKind model, double gravity,
+                 const std::vector<Vec3>& directions, const Vec3& sigma_raw) {
+  const Eigen::MatrixXd W = ScaledActiveRows(Plan(device, model, gravity, directions, sigma_raw));
+  const Eigen::LDLT<Eigen::MatrixXd> ldlt(W.transpose() * W);
+  if (ldlt.info() != Eigen::Success || !(ldlt.vectorD().minCoeff() > 0)) {
+    return std::numeric_limits<double>::infinity();
+  }
+  return ldlt.solve(Eigen::MatrixXd::Identity(W.cols(), W.cols())).trace();
+}
+
+namespace {
+
+// Fedorov exchange on the trace of A⁻¹ from the chosen set `chosen` (nonsingular). Swapping i (in)
+// for j (out) is A' = A + U C Uᵀ, U = (w_jᵀ w_iᵀ), C = diag(1, −1); by Woodbury tr A'⁻¹ = tr A⁻¹ −
+// tr(M⁻¹ N) with M = C⁻¹ + UᵀA⁻¹U and N = UᵀA⁻²U. det M = −((1 + d_j)(1 − d_i) + d_ij²) is minus
+// the determinant ratio of ChooseDOptimal: a swap that would make A singular is skipped.
+double ExchangeOnTrace(const Eigen::MatrixXd& W, std::vector<bool>* chosen_in) {
+  std::vector<bool>& chosen = *chosen_in;
+  const auto n = static_cast<int>(W.rows());
+  const auto P = static_cast<int>(W.cols());
+  Eigen::MatrixXd A = Eigen::MatrixXd::Zero(P, P);
+  for (int k = 0; k < n; ++k) {
+    if (chosen[static_cast<std::size_t>(k)]) A += W.row(k).transpose() * W.row(k);
+  }
+  Eigen::LDLT<Eigen::MatrixXd> ldlt(A);
+  if (ldlt.info() != Eigen::Success || !(ldlt.vectorD().minCoeff() > 0)) {
+    return std::numeric_limits<double>::infinity();
+  }
+  for (int sweep = 0; sweep < 200; ++sweep) {
+    const Eigen::MatrixXd A_inv = A.ldlt().solve(Eigen::MatrixXd::Identity(P, P));
+    const Eigen::MatrixXd V = W * A_inv;
+    const Eigen::VectorXd d = (V.array() * W.array()).rowwise().sum();
+    const Eigen::VectorXd e = V.rowwise().squaredNorm();
+    double best = 1e-10 * A_inv.trace();
+    int best_in = -1, best_out = -1;
+    for (int i = 0; i < n; ++i) {
+      if (!chosen[static_cast<std::size_t>(i)]) continue;
+      for (int j = 0; j < n; ++j) {
+        if (chosen[static_cast<std::size_t>(j)]) continue;
+        const double dij = V.row(i).dot(W.row(j));
+        const double ratio = (1.0 + d(j)) * (1.0 - d(i)) + dij * dij;
+        if (!(ratio > 1e-9)) continue;
+        const double eij = V.row(i).dot(V.row(j));
+        // tr(M⁻¹N) with M = [[1 + d_j, d_ij], [d_ij, d_i − 1]], det M = −ratio.
+        const double reduction =
+            ((d(i) - 1.0) * e(j) - 2.0 * dij * eij + (1.0 + d(j)) * e(i)) / -ratio;
+        if (reduction > best) best = reduction, best_in = i, best_out = j;
+      }
+    }
+    if (best_in < 0) return A_inv.trace();
+    chosen[static_cast<std::size_t>(best_in)] = false;
+    chosen[static_cast<std::size_t>(best_out)] = true;
+    A +=
+        W.row(best_out).transpose() * W.row(best_out) - W.row(best_in).transpose() * W.row(best_in);
+  }
+  return A.ldlt().solve(Eigen::MatrixXd::Identity(P, P)).trace();
+}
+
+}  // namespace
+
+std::vector<int> ChooseAOptimal(const ModelParameters& device, ModelKind model, double gravity,
+                                const std::vector<Vec3>& candidates, const Vec3& sigma_raw,
+                                int count) {
+  const std::vector<int> d_optimal =
+      ChooseDOptimal(device, model, gravity, candidates, sigma_raw, count);
+  const auto n = candidates.size();
+  const Eigen::MatrixXd W = ScaledActiveRows(Plan(device, model, gravity, candidates, sigma_raw));
+  // The trace has more local minima under single exchanges than log det: besides the D-optimal
+  // start, kRestarts random subsets (a fixed seed: deterministic), keeping the best.
+  constexpr int kRestarts = 8;
+  std::vector<bool> best(n, false);
+  for (int k : d_optimal) best[static_cast<std::size_t>(k)] = true;
+  double best_trace = ExchangeOnTrace(W, &best);
+  std::mt19937_64 random(12345);
+  std::vector<std::size_t> order(n);
+  for (int restart = 0; restart < kRestarts; ++restart) {
+    std::iota(order.begin(), order.end(), 0);
+    for (std::size_t i = n - 1; i > 0; --i) std::swap(order[i], order[random() % (i + 1)]);
+    std::vector<bool> chosen(n, false);
+    for (int k = 0; k < count; ++k) chosen[order[static_cast<std::size_t>(k)]] = true;
+    const double trace = ExchangeOnTrace(W, &chosen);
+    if (trace < best_trace) best_trace = trace, best = chosen;
+  }
+  std::vector<int> indices;
+  for (std::size_t k = 0; k < n; ++k) {
+    if (best[k]) indices.push_back(static_cast<int>(k));
   }
   return indices;
 }

@@ -227,8 +227,16 @@ TEST_F(Cli, DesignPredictsTheBoundBeforeRecording) {
   const nlohmann::json chosen = nlohmann::json::parse(d.out);
   EXPECT_EQ(chosen["positions"], 18);
   EXPECT_EQ(chosen["chosen"].size(), 18u);
-  EXPECT_NE(chosen["choice"].get<std::string>().find("D-efficiency against yang18"),
+  EXPECT_NE(chosen["choice"].get<std::string>().find("D-optimal 18 of 200"), std::string::npos);
+  EXPECT_NE(chosen["choice"].get<std::string>().find("A-efficiency"), std::string::npos);
+  const CliRun a =
+      Exec("design --positions random:200 --choose 18 --criterion a --noise 0.12 --json" + device);
+  ASSERT_EQ(a.status, 0) << a.err;
+  EXPECT_NE(nlohmann::json::parse(a.out)["choice"].get<std::string>().find("A-optimal 18 of 200"),
             std::string::npos);
+  EXPECT_EQ(
+      Exec("design --positions random:200 --choose 18 --criterion e --noise 0.12" + device).status,
+      2);
   EXPECT_EQ(Exec("design --positions random:200 --choose 5 --noise 0.12" + device).status, 2);
   // The noise from a density: 10 ug/sqrt(Hz) at 100 Hz averaged over 60 s is 1.29 ug, times the
   // length of K's row (raw per m/s2) and the device's gravity per g.

@@ -623,22 +623,33 @@ int RunDesign(const DesignArgs& args) {
   std::vector<Vec3> directions = PlannedDirections(args.positions);
   std::string chosen_note;
   if (args.choose > 0) {
+    if (args.criterion != "d" && args.criterion != "a") {
+      throw UsageError("--criterion: '" + args.criterion + "' is not one of d, a");
+    }
     std::vector<int> chosen;
     try {
-      chosen = ChooseDOptimal(device.params, model, device.gravity, directions, sigma, args.choose);
+      chosen = args.criterion == "d" ? ChooseDOptimal(device.params, model, device.gravity,
+                                                      directions, sigma, args.choose)
+                                     : ChooseAOptimal(device.params, model, device.gravity,
+                                                      directions, sigma, args.choose);
     } catch (const std::invalid_argument& e) {
       throw UsageError(std::string("--choose: ") + e.what());
     }
     std::vector<Vec3> subset;
     for (int k : chosen) subset.push_back(directions[static_cast<std::size_t>(k)]);
-    const double efficiency = std::exp(
-        (LogDetInformation(device.params, model, device.gravity, subset, sigma) -
-         LogDetInformation(device.params, model, device.gravity, Yang18Directions(), sigma)) /
-        NumParameters(model));
+    const std::vector<Vec3> yang18 = Yang18Directions();
+    const double d_efficiency =
+        std::exp((LogDetInformation(device.params, model, device.gravity, subset, sigma) -
+                  LogDetInformation(device.params, model, device.gravity, yang18, sigma)) /
+                 NumParameters(model));
+    const double a_efficiency = TraceCrlb(device.params, model, device.gravity, yang18, sigma) /
+                                TraceCrlb(device.params, model, device.gravity, subset, sigma);
     chosen_note = Format(
-        "D-optimal %d of %zu candidates; D-efficiency against yang18 %.4f "
-        "((det I / det I_yang18)^(1/%d); > 1: better)",
-        args.choose, directions.size(), efficiency, NumParameters(model));
+        "%s-optimal %d of %zu candidates; against yang18: D-efficiency %.4f ((det I / det "
+        "I_yang18)^(1/%d)), A-efficiency %.4f (tr CRLB_yang18 / tr CRLB, parameters in the "
+        "device's relative metric); > 1: better",
+        args.criterion == "d" ? "D" : "A", args.choose, directions.size(), d_efficiency,
+        NumParameters(model), a_efficiency);
     directions = std::move(subset);
   }
   const PlannedUncertainty planned =

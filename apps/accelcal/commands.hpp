@@ -92,7 +92,8 @@ struct DesignArgs {
   std::string device;                      // calibration file of the nominal device
   std::vector<double> noise_raw;           // 1 or 3 values: 1σ of one averaged reading [raw]
   std::optional<std::string> model;        // default: the device's
-  int choose = 0;                          // > 0: D-optimal subset of the positions (candidates)
+  int choose = 0;                          // > 0: optimal subset of the positions (candidates)
+  std::string criterion = "d";             // "d" (det) or "a" (trace of the CRLB)
   std::optional<double> noise_density_ug;  // instead of noise_raw, with rate and duration
   std::optional<double> rate_hz;
   std::optional<double> duration_s;

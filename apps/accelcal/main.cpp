@@ -141,8 +141,13 @@ int main(int argc, char** argv) {
                      "still time per position [s], with --noise-density");
   design->add_option("--model", des.model, "linear or quadratic (default: the device's)");
   design->add_option("--choose", des.choose,
-                     "choose this many of the positions (the candidates) to maximise det of the "
-                     "information (D-optimal); compared with paper 000's yang18");
+                     "choose this many of the positions (the candidates) by --criterion; compared "
+                     "with paper 000's yang18");
+  design
+      ->add_option("--criterion", des.criterion,
+                   "with --choose: d (maximise det of the information, D-optimal) or a (minimise "
+                   "the trace of the CRLB, parameters in the device's relative metric, A-optimal)")
+      ->capture_default_str();
   design->add_flag("--json", des.json, "machine-readable output");
 
   MonteCarloArgs mc;

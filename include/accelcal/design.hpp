@@ -49,6 +49,21 @@ std::vector<int> ChooseDOptimal(const ModelParameters& device, ModelKind model, 
                                 const std::vector<Vec3>& candidates, const Vec3& sigma_raw,
                                 int count);
 
+/// A-optimal choice of `count` distinct positions out of `candidates`: minimises the trace of the
+/// CRLB with the parameters in the device's metric (relative change of the prediction, as for
+/// LogDetInformation: the trace then does not depend on the parameters' units; it is the mean
+/// squared prediction error the parameters' uncertainty causes, summed over them). Starts from the
+/// D-optimal choice and exchanges a chosen and an unchosen candidate while the trace falls (exact
+/// rank-2 Woodbury update). Returns the chosen indices in increasing order; throws as
+/// ChooseDOptimal.
+std::vector<int> ChooseAOptimal(const ModelParameters& device, ModelKind model, double gravity,
+                                const std::vector<Vec3>& candidates, const Vec3& sigma_raw,
+                                int count);
+
+/// Trace of the CRLB of `directions` in the metric of ChooseAOptimal (+inf when singular).
+double TraceCrlb(const ModelParameters& device, ModelKind model, double gravity,
+                 const std::vector<Vec3>& directions, const Vec3& sigma_raw);
+
 /// log det of the information matrix of `directions`, the parameters measured in the device's
 /// metric (relative change of the prediction, as in TerminationType): comparable between sets for
 /// the same device, model and noise; −inf when singular.

@@ -213,6 +213,23 @@ TEST_F(Cli, DesignPredictsTheBoundBeforeRecording) {
     EXPECT_GT(doc["std"]["bias"][i].get<double>(), 0.0);
     EXPECT_LT(doc["std"]["bias"][i].get<double>(), 0.12);
   }
+  // The same positions as attitudes (orientation_file.hpp: pitch = asin(−c_x), roll = atan2(c_y,
+  // c_z)) give the same bound, to the 17 digits written.
+  std::string attitudes = "roll_deg,pitch_deg,yaw_deg\n";
+  for (const Vec3& up : Yang18Directions()) {
+    char line[128];
+    std::snprintf(line, sizeof line, "%.17g,%.17g,30\n", std::atan2(up(1), up(2)) * 180 / M_PI,
+                  std::asin(-up(0)) * 180 / M_PI);
+    attitudes += line;
+  }
+  const CliRun att =
+      Exec("design --positions " + Write("att.csv", attitudes) + " --noise 0.12 --json" + device);
+  ASSERT_EQ(att.status, 0) << att.err;
+  const nlohmann::json att_doc = nlohmann::json::parse(att.out);
+  for (int i = 0; i < 9; ++i) {
+    EXPECT_NEAR(att_doc["crlb"][i][i].get<double>(), doc["crlb"][i][i].get<double>(),
+                1e-9 * doc["crlb"][i][i].get<double>());
+  }
   const CliRun six = Exec("design --positions six --noise 0.12" + device);
   EXPECT_EQ(six.status, 3);
   EXPECT_NE(six.out.find("NOT OBSERVABLE"), std::string::npos) << six.out;

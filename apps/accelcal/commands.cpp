@@ -16,6 +16,7 @@
 #include "accelcal/gravity.hpp"
 #include "accelcal/model_selection.hpp"
 #include "accelcal/montecarlo.hpp"
+#include "accelcal/orientation_file.hpp"
 #include "accelcal/simulate.hpp"
 #include "output.hpp"
 
@@ -570,20 +571,7 @@ namespace {
 // Planned directions: a named scheme, or a file with one unit vector per row.
 std::vector<Vec3> PlannedDirections(const std::string& spec) {
   if (std::optional<std::vector<Vec3>> scheme = SchemeDirections(spec)) return *scheme;
-  ReadOptions options;
-  options.kind = InputKind::kPositions;
-  const InputData data = ReadInput(spec, options);
-  std::vector<Vec3> directions;
-  for (std::size_t k = 0; k < data.positions.size(); ++k) {
-    const Vec3& c = data.positions[k].mean;
-    if (!(std::abs(c.norm() - 1.0) <= 1e-3)) {
-      throw InputError(spec, 0,
-                       Format("direction %zu (%.6g, %.6g, %.6g) is not a unit vector (norm %.6g)",
-                              k + 1, c(0), c(1), c(2), c.norm()));
-    }
-    directions.push_back(c.normalized());
-  }
-  return directions;
+  return ReadOrientations(spec).directions;
 }
 
 }  // namespace

@@ -126,7 +126,8 @@ int main(int argc, char** argv) {
       "design", "predict the 1-sigma of every parameter (Cramer-Rao bound) for planned positions");
   design
       ->add_option("--positions", des.positions,
-                   "yang18, six, random:N[:SEED], or a CSV file of unit directions (x,y,z)")
+                   "yang18, six, random:N[:SEED], or a file of unit directions (x,y,z) or "
+                   "attitudes (roll_deg,pitch_deg[,yaw_deg] or qw,qx,qy,qz; body to level, z up)")
       ->required();
   design->add_option("--device", des.device, "calibration file of the nominal device")->required();
   design
@@ -176,7 +177,8 @@ int main(int argc, char** argv) {
                        "sunxu2020: paper 001's, 300 Gaussian attitudes, 0.1 g per position");
   simulate->add_option("--truth", sim.truth, "calibration file of the simulated device");
   simulate->add_option("--positions", sim.positions,
-                       "yang18, six, random:N[:SEED], or a CSV file of unit directions");
+                       "yang18, six, random:N[:SEED], or a file of unit directions or attitudes "
+                       "(as for design)");
   simulate->add_option("--noise-density", sim.noise_density_ug, "white noise [ug/sqrt(Hz)]");
   simulate->add_option("--rate", sim.rate_hz, "sample rate [Hz]")->capture_default_str();
   simulate->add_option("--duration", sim.duration_s, "still time per position [s]")

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <mutex>
 #include <stdexcept>
 #include <thread>
 
@@ -222,11 +223,17 @@ MonteCarloResult RunMonteCarlo(const Scenario& scenario, const MonteCarloOptions
   const int threads =
       std::min(options.runs, options.threads > 0 ? options.threads : static_cast<int>(hardware));
   // Runs are independent and seeded by their index; each thread fills its own slots.
+  std::mutex progress_mutex;
+  int done = 0;
   const auto work = [&](int first) {
     for (int run = first; run < options.runs; run += threads) {
       outcomes[static_cast<std::size_t>(run)] =
           OneRun(scenario, calibration, options.seed * 1000003u + static_cast<std::uint64_t>(run),
                  truth_eng, truth);
+      if (options.progress) {
+        const std::lock_guard<std::mutex> lock(progress_mutex);
+        options.progress(++done, options.runs);
+      }
     }
   };
   std::vector<std::thread> pool;

@@ -293,6 +293,7 @@ TEST_F(Cli, MonteCarloPrintsTable4AgainstTheBound) {
   EXPECT_EQ(Exec("montecarlo --runs 60 --json --threads 1").out, r.out);
   EXPECT_EQ(Exec("montecarlo --scenario nonesuch").status, 2);
   EXPECT_EQ(doc["estimator"], "ml");
+  EXPECT_EQ(r.err, "");  // no progress bar when stderr is not a terminal
   const CliRun sx =
       Exec("montecarlo --scenario sunxu2020 --runs 10 --json --estimator bias-corrected");
   ASSERT_EQ(sx.status, 0) << sx.err;

@@ -2,6 +2,7 @@
 #include <cmath>
 #include <map>
 #include <string>
+#include <vector>
 
 #include <gtest/gtest.h>
 
@@ -74,7 +75,16 @@ TEST(MonteCarlo, SameStatisticsWhateverTheThreadCount) {
   o.threads = 1;
   const MonteCarloResult one = RunMonteCarlo(s, o);
   o.threads = 2;
+  // The progress callback: one call per run, one at a time, the count rising to the total.
+  std::vector<int> calls;
+  o.progress = [&calls](int done, int total) {
+    EXPECT_EQ(total, 40);
+    calls.push_back(done);
+  };
   const MonteCarloResult two = RunMonteCarlo(s, o);
+  ASSERT_EQ(calls.size(), 40u);
+  for (std::size_t i = 0; i < calls.size(); ++i) EXPECT_EQ(calls[i], static_cast<int>(i) + 1);
+  o.progress = nullptr;
   ASSERT_EQ(one.errors.size(), two.errors.size());
   for (std::size_t i = 0; i < one.errors.size(); ++i) {
     EXPECT_EQ(one.errors[i].mean, two.errors[i].mean);

@@ -737,7 +737,10 @@ int RunMonteCarlo(const MonteCarloArgs& args) {
                                             "--estimator", "ml, bias-corrected");
   options.calibration.model = scenario->model;
   if (auto why = options.calibration.Validate()) throw UsageError(*why);
+  ProgressBar bar("montecarlo " + args.scenario);
+  options.progress = [&bar](int done, int total) { bar.Update(done, total); };
   const MonteCarloResult r = RunMonteCarlo(*scenario, options);
+  bar.Finish();
   std::string out;
   if (args.json) {
     out += "{\n  \"scenario\": \"" + r.scenario + "\",\n  \"method\": \"" +

@@ -3,6 +3,7 @@
 #include <unistd.h>
 
 #include <cerrno>
+#include <chrono>
 #include <cstdarg>
 #include <cstdio>
 #include <cstring>
@@ -10,6 +11,37 @@
 #include "commands.hpp"
 
 namespace accelcal::cli {
+
+namespace {
+double NowSeconds() {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count();
+}
+}  // namespace
+
+ProgressBar::ProgressBar(std::string label)
+    : label_(std::move(label)), active_(isatty(STDERR_FILENO) == 1) {}
+
+ProgressBar::~ProgressBar() { Finish(); }
+
+void ProgressBar::Update(long done, long total) {
+  if (!active_ || total <= 0) return;
+  const double now = NowSeconds();
+  if (done < total && now - last_draw_s_ < 0.1) return;
+  last_draw_s_ = now;
+  constexpr int kWidth = 30;
+  const long filled = kWidth * done / total;
+  std::fprintf(stderr, "\r%s [%s%s] %ld/%ld", label_.c_str(), std::string(filled, '#').c_str(),
+               std::string(kWidth - filled, '.').c_str(), done, total);
+  std::fflush(stderr);
+  drawn_ = true;
+}
+
+void ProgressBar::Finish() {
+  if (!drawn_) return;
+  std::fprintf(stderr, "\r\033[K");  // erase the line
+  std::fflush(stderr);
+  drawn_ = false;
+}
 
 std::string Format(const char* format, ...) {
   va_list args;

@@ -2,12 +2,31 @@
 // Output helpers of the command-line tool.
 
 #include <string>
+#include <utility>
 
 namespace accelcal::cli {
 
 /// Writes `content` to `path` through a temporary file in the same directory and a rename, so a
 /// failure never leaves a partial file. "-" writes to stdout. Throws OutputError.
 void WriteFileAtomically(const std::string& path, const std::string& content);
+
+/// A progress bar on stderr, drawn only when stderr is a terminal, at most every 0.1 s; erased by
+/// Finish() (and the destructor) so that it never mixes with the output.
+class ProgressBar {
+ public:
+  explicit ProgressBar(std::string label);
+  ~ProgressBar();
+  ProgressBar(const ProgressBar&) = delete;
+  ProgressBar& operator=(const ProgressBar&) = delete;
+  void Update(long done, long total);
+  void Finish();
+
+ private:
+  std::string label_;
+  bool active_;
+  bool drawn_ = false;
+  double last_draw_s_ = -1.0;
+};
 
 /// printf into a std::string.
 std::string Format(const char* format, ...) __attribute__((format(printf, 1, 2)));

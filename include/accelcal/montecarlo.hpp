@@ -5,6 +5,7 @@
 /// on how many threads share the runs.
 
 #include <cstdint>
+#include <functional>
 #include <optional>
 #include <string>
 #include <string_view>
@@ -44,6 +45,10 @@ struct MonteCarloOptions {
   /// intervals would; false: the covariance comes from the residuals.
   bool known_noise = true;
   int threads = 0;  ///< 0: all hardware threads
+  /// Called after runs finish with (runs done, runs in total), one call at a time, the count
+  /// increasing; from the worker threads, so it must be cheap and thread-safe in what it touches
+  /// (e.g. a progress bar). Empty: not called.
+  std::function<void(int done, int total)> progress;
 };
 
 /// Statistics of one error over the runs. Fixed positions (yang2012): paper 000 Table 4's

@@ -130,7 +130,8 @@ std::optional<std::string> Scatter(const std::vector<Vec3>& readings, Mat10* sca
   scatter->setZero();
   for (const Vec3& p : readings) {
     const Vec10 row = DesignRow((p - *mean) / *scale);
-    scatter->noalias() += row * row.transpose();  // fixed size: faster than a rankUpdate
+    // Coefficient-based: the default product of a 10x1 by a 1x10 takes the general (GEMM) path.
+    scatter->noalias() += row.lazyProduct(row.transpose());
   }
   return std::nullopt;
 }

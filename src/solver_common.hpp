@@ -206,7 +206,9 @@ Eigen::VectorXd ModulusResiduals(const Problem& problem, const Eigen::VectorXd& 
 
 /// Paper 001 eq. (12): L = Σ_k ‖p_k − μ(θ, g c_k)‖² + λ_k (‖c_k‖² − 1) for the linear model,
 /// θ the 9 linear flat parameters, z_k = (c_k, λ_k). Gradient and Hessian in blocks (eq. (14)-(15)
-/// in the x-first gauge): the θθ block, and per position the θz coupling and the 4x4 zz block.
+/// in the x-first gauge): the θθ block, and per position the θz coupling and the 4x4 zz block. The
+/// solver does not form them (ComputeNewtonLagrangeStep); the tests check them by finite
+/// differences and the solver's step against the dense Newton step they define.
 using Vec9 = Eigen::Matrix<double, 9, 1>;
 struct LagrangianBlocks {
   double value = 0;  ///< L
@@ -220,8 +222,33 @@ struct LagrangianBlocks {
 void LagrangianDerivatives(const Problem& problem, const Vec9& theta, const std::vector<Vec3>& c,
                            const std::vector<double>& lambda, LagrangianBlocks* blocks);
 
-/// Paper 001 §3.2: Newton's method on the Lagrangian (linear model), the per-position 4x4 blocks
-/// eliminated by the Schur complement.
+/// The Newton step of eq. (13), −H⁻¹∇L for the full Lagrangian of LagrangianDerivatives, computed
+/// without its blocks: each position's (Δc_k, Δλ_k) is eliminated in the plane tangent to c_k,
+/// where the 4x4 KKT block reduces to the 2x2 W_k⁻¹ = Eᵀ H_cc E (E ⟂ c_k orthonormal) and the
+/// coupling to G_k = H_θc E (9x2, from the structure of J_θ: no dense 9x4 block). See the .cpp.
+struct NewtonLagrangeStep {
+  Vec9 d_theta;
+  std::vector<Vec3> d_c;
+  std::vector<double> d_lambda;
+  double cost = 0;  ///< J at the point the step starts from
+  /// Per-position pieces kept for the back-substitution (reused between calls).
+  struct Position {
+    Eigen::Matrix<double, 9, 2> G;
+    Eigen::Matrix2d W;
+    Eigen::Vector2d e;
+    Vec9 u;  ///< H_θc c_k
+    Mat32 E;
+    Vec3 gKc;
+    double normal_rhs = 0;  ///< cᵀ∇_c L − λh, the constant part of the Δλ equation
+  };
+  std::vector<Position> positions;
+};
+void ComputeNewtonLagrangeStep(const Problem& problem, const Vec9& theta,
+                               const std::vector<Vec3>& c, const std::vector<double>& lambda,
+                               NewtonLagrangeStep* step);
+
+/// Paper 001 §3.2: Newton's method on the Lagrangian (linear model), each position's block
+/// eliminated (ComputeNewtonLagrangeStep).
 SolverOutput SolveNewtonLagrange(const Problem& problem, const ModelParameters& init_params,
                                  std::vector<Vec3> init_dirs, const CalibrationOptions& options);
 

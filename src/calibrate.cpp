@@ -29,14 +29,16 @@ std::string_view ToString(SolverMethod method) {
     case SolverMethod::kNewtonLagrange:
       return "newton-lagrange";
     case SolverMethod::kEllipsoid:
+      return "ellipsoid";
+    case SolverMethod::kKnownOrientation:
       break;
   }
-  return "ellipsoid";
+  return "known-orientation";
 }
 std::optional<SolverMethod> SolverMethodFromString(std::string_view text) {
-  for (SolverMethod m :
-       {SolverMethod::kTwoStep, SolverMethod::kJoint, SolverMethod::kModulus,
-        SolverMethod::kModulusNorm, SolverMethod::kNewtonLagrange, SolverMethod::kEllipsoid}) {
+  for (SolverMethod m : {SolverMethod::kTwoStep, SolverMethod::kJoint, SolverMethod::kModulus,
+                         SolverMethod::kModulusNorm, SolverMethod::kNewtonLagrange,
+                         SolverMethod::kEllipsoid, SolverMethod::kKnownOrientation}) {
     if (text == ToString(m)) return m;
   }
   return std::nullopt;
@@ -116,6 +118,10 @@ std::optional<std::string> CalibrationOptions::Validate() const {
   if (initial_params && !(initial_params->K.allFinite() && initial_params->bias.allFinite() &&
                           initial_params->k2.allFinite())) {
     return "initial_params must be finite";
+  }
+  if (method == SolverMethod::kKnownOrientation || frame == Frame::kPlatform) {
+    return "known orientations (the platform frame) need CalibrateKnownOrientations "
+           "(known_orientation.hpp; the command line's --orientations)";
   }
   if (estimator == Estimator::kBiasCorrected && !IsMaximumLikelihood(method)) {
     return "the bias-corrected estimator corrects maximum likelihood: it does not apply to the " +
@@ -321,6 +327,7 @@ internal::SolverOutput SolveFrom(const Problem& problem, const ModelParameters& 
       return internal::SolveNewtonLagrange(problem, params, std::move(dirs), options);
     case SolverMethod::kJoint:
     case SolverMethod::kEllipsoid:
+    case SolverMethod::kKnownOrientation:
       break;
   }
   return internal::SolveJoint(problem, params, std::move(dirs), options);

@@ -29,9 +29,15 @@ ordered_json Nullable(const std::optional<double>& v) {
 std::string Equation(Frame frame) {
   const std::string common =
       "p = K f + b + k2 * f^2 (element-wise square); p raw, f specific force in the body frame ";
-  return frame == Frame::kXFirst
-             ? common + "(x = sensor x, y in the sensor x-y plane), K lower-triangular"
-             : common + "(z = sensor z, y in the sensor y-z plane), K upper-triangular";
+  switch (frame) {
+    case Frame::kXFirst:
+      return common + "(x = sensor x, y in the sensor x-y plane), K lower-triangular";
+    case Frame::kZFirst:
+      return common + "(z = sensor z, y in the sensor y-z plane), K upper-triangular";
+    case Frame::kPlatform:
+      break;
+  }
+  return common + "(the platform frame of the known orientations), K full";
 }
 
 }  // namespace
@@ -84,9 +90,10 @@ std::string CalibrationToJson(const CalibrationResult& result, const Calibration
   const EngineeringParameters eng = ToEngineering(result.params, result.gravity);
   const Misalignment tau = MisalignmentOf(result.params.K, result.frame);
   ordered_json tau_rad, tau_arcsec;
-  for (int i = 0; i < 3; ++i) {
-    tau_rad[std::string(tau.names[static_cast<std::size_t>(i)])] = tau.rad(i);
-    tau_arcsec[std::string(tau.names[static_cast<std::size_t>(i)])] = tau.rad(i) * kArcsecPerRad;
+  for (std::size_t i = 0; i < tau.names.size(); ++i) {
+    const auto index = static_cast<Eigen::Index>(i);
+    tau_rad[std::string(tau.names[i])] = tau.rad(index);
+    tau_arcsec[std::string(tau.names[i])] = tau.rad(index) * kArcsecPerRad;
   }
   doc["engineering"] = {{"scale_factor", ToJson(eng.scale_factor)},
                         {"misalignment_rad", tau_rad},
@@ -215,7 +222,9 @@ LoadedCalibration ParseCalibrationJson(const std::string& text, const std::strin
   if (doc.contains("frame")) {
     const std::optional<Frame> frame =
         doc["frame"].is_string() ? FrameFromString(doc["frame"].get<std::string>()) : std::nullopt;
-    if (!frame) throw InputError(source, 0, "'frame' must be \"x-first\" or \"z-first\"");
+    if (!frame) {
+      throw InputError(source, 0, "'frame' must be \"x-first\", \"z-first\" or \"platform\"");
+    }
     cal.frame = *frame;
   }
   const Mat33& K = cal.params.K;

@@ -18,12 +18,23 @@ namespace {
 
 using Rows12 = Eigen::Matrix<double, Eigen::Dynamic, kMaxParameters>;
 
+// The frame of a device for an orientation-free design: a platform-frame (full) K has no gauge of
+// its own (frame.hpp); its x-first form (ChangeFrame, linear model) is the same device.
+Frame GravityOnlyFrame(const Mat33& K) {
+  const Frame frame = FrameOf(K);
+  if (frame == Frame::kPlatform) {
+    throw std::invalid_argument(
+        "the device's K is a full matrix (platform frame): give its x-first form (ChangeFrame)");
+  }
+  return frame;
+}
+
 // A planned experiment in the x-first gauge the solvers use: a z-first device is the x-first
 // device of the mirrored problem (frame.hpp). Holds the (absent) readings its Problem refers to.
 struct Plan {
   Plan(const ModelParameters& device_in, ModelKind model, double gravity,
        const std::vector<Vec3>& directions_in, const Vec3& sigma_raw)
-      : frame(FrameOf(device_in.K)),
+      : frame(GravityOnlyFrame(device_in.K)),
         device(frame == Frame::kZFirst ? MirrorAxes(device_in) : device_in),
         directions(directions_in),
         sigma(frame == Frame::kZFirst ? Vec3(MirrorAxes(sigma_raw).cwiseAbs()) : sigma_raw),

@@ -40,23 +40,23 @@ ModelParameters FromEngineering(const EngineeringParameters& eng, double gravity
 
 namespace {
 
-using Vec12 = Eigen::Matrix<double, 12, 1>;
-
-Vec12 EngineeringVector(const ModelParameters& params, Frame frame, double gravity) {
+// scale factors (3), misalignment angles (3 or 6), bias (3), k2 (3)
+Eigen::VectorXd EngineeringVector(const ModelParameters& params, Frame frame, double gravity) {
   const EngineeringParameters e = ToEngineering(params, gravity);
-  Vec12 v;
-  v << e.scale_factor, MisalignmentOf(params.K, frame).rad, e.bias_force, e.k2_g_per_g2;
+  const Eigen::VectorXd angles = MisalignmentOf(params.K, frame).rad;
+  Eigen::VectorXd v(9 + angles.size());
+  v << e.scale_factor, angles, e.bias_force, e.k2_g_per_g2;
   return v;
 }
 
 }  // namespace
 
-EngineeringStd EngineeringUncertainty(const ModelParameters& params, ModelKind model, bool z_first,
+EngineeringStd EngineeringUncertainty(const ModelParameters& params, ModelKind model, Frame frame,
                                       double gravity, const Eigen::MatrixXd& covariance) {
-  const Frame frame = z_first ? Frame::kZFirst : Frame::kXFirst;
   const auto& slots = ParameterSlots(model, frame);
   const Eigen::VectorXd theta = Pack(params, slots);
-  Eigen::MatrixXd J(12, theta.size());
+  const Eigen::Index angles = frame == Frame::kPlatform ? 6 : 3;
+  Eigen::MatrixXd J(9 + angles, theta.size());
   for (Eigen::Index j = 0; j < theta.size(); ++j) {
     const double h = 1e-6 * std::sqrt(std::max(covariance(j, j), 0.0)) +
                      1e-12 * std::max(1.0, std::abs(theta(j)));
@@ -68,8 +68,8 @@ EngineeringStd EngineeringUncertainty(const ModelParameters& params, ModelKind m
                (2 * h);
   }
   const Eigen::MatrixXd C = J * covariance * J.transpose();
-  const Vec12 sd = C.diagonal().cwiseMax(0.0).cwiseSqrt();
-  return {sd.segment<3>(0), sd.segment<3>(3), sd.segment<3>(6), sd.segment<3>(9)};
+  const Eigen::VectorXd sd = C.diagonal().cwiseMax(0.0).cwiseSqrt();
+  return {sd.head<3>(), sd.segment(3, angles), sd.segment<3>(3 + angles), sd.tail<3>()};
 }
 
 }  // namespace accelcal

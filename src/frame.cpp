@@ -20,17 +20,29 @@ ParameterSlot Mirrored(const ParameterSlot& s, std::string_view name) {
 
 }  // namespace
 
-std::string_view ToString(Frame frame) { return frame == Frame::kXFirst ? "x-first" : "z-first"; }
+std::string_view ToString(Frame frame) {
+  switch (frame) {
+    case Frame::kXFirst:
+      return "x-first";
+    case Frame::kZFirst:
+      return "z-first";
+    case Frame::kPlatform:
+      break;
+  }
+  return "platform";
+}
 
 std::optional<Frame> FrameFromString(std::string_view text) {
-  if (text == "x-first") return Frame::kXFirst;
-  if (text == "z-first") return Frame::kZFirst;
+  for (Frame f : {Frame::kXFirst, Frame::kZFirst, Frame::kPlatform}) {
+    if (text == ToString(f)) return f;
+  }
   return std::nullopt;
 }
 
 Frame FrameOf(const Mat33& K) {
   const bool lower = K(0, 1) == 0 && K(0, 2) == 0 && K(1, 2) == 0;
-  return lower ? Frame::kXFirst : Frame::kZFirst;
+  const bool upper = K(1, 0) == 0 && K(2, 0) == 0 && K(2, 1) == 0;
+  return lower ? Frame::kXFirst : upper ? Frame::kZFirst : Frame::kPlatform;
 }
 
 Vec3 MirrorAxes(const Vec3& v) { return Vec3(v(2), -v(1), v(0)); }
@@ -45,8 +57,33 @@ ModelParameters MirrorAxes(const ModelParameters& params) {
   return out;
 }
 
+namespace {
+
+const std::vector<ParameterSlot>& PlatformSlots(ModelKind kind) {
+  static const std::vector<ParameterSlot> quadratic = {
+      {ParameterGroup::kK, 0, 0, "K_xx"},   {ParameterGroup::kK, 0, 1, "K_xy"},
+      {ParameterGroup::kK, 0, 2, "K_xz"},   {ParameterGroup::kBias, 0, 0, "b_x"},
+      {ParameterGroup::kK2, 0, 0, "k2_x"},  {ParameterGroup::kK, 1, 0, "K_yx"},
+      {ParameterGroup::kK, 1, 1, "K_yy"},   {ParameterGroup::kK, 1, 2, "K_yz"},
+      {ParameterGroup::kBias, 1, 0, "b_y"}, {ParameterGroup::kK2, 1, 0, "k2_y"},
+      {ParameterGroup::kK, 2, 0, "K_zx"},   {ParameterGroup::kK, 2, 1, "K_zy"},
+      {ParameterGroup::kK, 2, 2, "K_zz"},   {ParameterGroup::kBias, 2, 0, "b_z"},
+      {ParameterGroup::kK2, 2, 0, "k2_z"}};
+  static const std::vector<ParameterSlot> linear = [] {
+    std::vector<ParameterSlot> slots;
+    for (const ParameterSlot& s : quadratic) {
+      if (s.group != ParameterGroup::kK2) slots.push_back(s);
+    }
+    return slots;
+  }();
+  return kind == ModelKind::kLinear ? linear : quadratic;
+}
+
+}  // namespace
+
 const std::vector<ParameterSlot>& ParameterSlots(ModelKind kind, Frame frame) {
   if (frame == Frame::kXFirst) return ParameterSlots(kind);
+  if (frame == Frame::kPlatform) return PlatformSlots(kind);
   static const std::vector<std::string_view> names = {
       "K_zz", "b_z", "k2_z", "K_yz", "K_yy", "b_y", "k2_y", "K_xz", "K_xy", "K_xx", "b_x", "k2_x"};
   static const std::vector<ParameterSlot> quadratic = [] {
@@ -81,9 +118,17 @@ Eigen::VectorXd MirrorSigns(ModelKind kind) {
 Misalignment MisalignmentOf(const Mat33& K, Frame frame) {
   Mat33 T;
   for (int i = 0; i < 3; ++i) T.row(i) = K.row(i) / K.row(i).norm();
-  if (frame == Frame::kXFirst)
-    return {{"tau_yx", "tau_zx", "tau_zy"}, Vec3(T(1, 0), T(2, 0), T(2, 1))};
-  return {{"tau_xy", "tau_xz", "tau_yz"}, Vec3(T(0, 1), T(0, 2), T(1, 2))};
+  switch (frame) {
+    case Frame::kXFirst:
+      return {{"tau_yx", "tau_zx", "tau_zy"}, Vec3(T(1, 0), T(2, 0), T(2, 1))};
+    case Frame::kZFirst:
+      return {{"tau_xy", "tau_xz", "tau_yz"}, Vec3(T(0, 1), T(0, 2), T(1, 2))};
+    case Frame::kPlatform:
+      break;
+  }
+  Eigen::VectorXd beta(6);
+  beta << T(0, 1), -T(0, 2), -T(1, 0), T(1, 2), T(2, 0), -T(2, 1);
+  return {{"beta_xz", "beta_xy", "beta_yz", "beta_yx", "beta_zy", "beta_zx"}, beta};
 }
 
 FrameChange ChangeFrame(const Mat33& K, Frame frame) {

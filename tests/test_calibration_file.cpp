@@ -105,7 +105,8 @@ TEST(CalibrationFile, RefusesMalformedFiles) {
   j["frame"] = "z-first";  // with the x-first (lower-triangular) K of `good`
   EXPECT_EQ(LoadError(j.dump()), "cal.json: 'K' must be upper-triangular (frame z-first)");
   j["frame"] = "sideways";
-  EXPECT_EQ(LoadError(j.dump()), "cal.json: 'frame' must be \"x-first\" or \"z-first\"");
+  EXPECT_EQ(LoadError(j.dump()),
+            "cal.json: 'frame' must be \"x-first\", \"z-first\" or \"platform\"");
   j = good;
   j.erase("frame");  // files written before the key existed are x-first
   EXPECT_EQ(LoadError(j.dump()), "no error");

@@ -52,9 +52,18 @@ TEST(Frame, SpecificForceInvertsUpperTriangularAndFullMatrices) {
     ASSERT_TRUE(back_full.has_value());
     EXPECT_LT((*back_full - f).norm(), 1e-12 * f.norm());
   }
-  // A full K with squared terms has no closed-form inverse: refused, not guessed.
-  full.k2 = Vec3(1e-3, 0, 0);
-  EXPECT_FALSE(SpecificForce(full, Vec3(1, 2, 3)).has_value());
+  // A full K with squared terms (platform frame): Newton from the linear solution.
+  full.k2 = Yang2012Truth().k2;
+  for (const Vec3& c : RandomDirections(200, 5)) {
+    const Vec3 f = 3.0 * kG * c;
+    const std::optional<Vec3> back = SpecificForce(full, PredictRaw(full, f));
+    ASSERT_TRUE(back.has_value());
+    EXPECT_LT((*back - f).norm(), 1e-12 * f.norm());
+  }
+  // A reading beyond the range of the model (the x row K_x·f − f_x² is bounded above): refused,
+  // not guessed.
+  full.k2 = Vec3(-1.0, 0, 0);
+  EXPECT_FALSE(SpecificForce(full, Vec3(1e12, 0, 0)).has_value());
 }
 
 std::vector<Vec3> Table3Readings(const ModelParameters& truth, std::uint64_t seed) {

@@ -120,7 +120,8 @@ TEST(Uncertainty, EngineeringStandardDeviationsFollowFromTheParameters) {
   Eigen::VectorXd sd(9);
   sd << 0.5, 2.0, 0.1, 0.4, 1.5, 0.2, 0.3, 0.6, 2.5;  // model.hpp order
   const Eigen::MatrixXd covariance = sd.cwiseAbs2().asDiagonal();
-  const EngineeringStd e = EngineeringUncertainty(p, ModelKind::kLinear, false, kG, covariance);
+  const EngineeringStd e =
+      EngineeringUncertainty(p, ModelKind::kLinear, Frame::kXFirst, kG, covariance);
   const double k = p.K(0, 0), b = p.bias(0);
   EXPECT_NEAR(e.scale_factor(0), 0.5, 1e-6 * 0.5);
   EXPECT_NEAR(e.bias_force(0), std::hypot(2.0 / k, b * 0.5 / (k * k)), 1e-6 * 2.0 / k);

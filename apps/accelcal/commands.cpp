@@ -14,6 +14,7 @@
 #include "accelcal/error.hpp"
 #include "accelcal/frame.hpp"
 #include "accelcal/gravity.hpp"
+#include "accelcal/known_orientation.hpp"
 #include "accelcal/model_selection.hpp"
 #include "accelcal/montecarlo.hpp"
 #include "accelcal/orientation_file.hpp"
@@ -173,35 +174,41 @@ void PrintCalibration(const CalibrationResult& r, const std::vector<Position>& p
   // ±1σ propagated from the parameter covariance, when there is one.
   std::optional<EngineeringStd> sd;
   if (have_std) {
-    sd = EngineeringUncertainty(r.params, r.model, r.frame == Frame::kZFirst, r.gravity,
-                                r.covariance);
+    sd = EngineeringUncertainty(r.params, r.model, r.frame, r.gravity, r.covariance);
   }
-  const auto pm = [&](const Vec3& v, const Vec3* sigma, double scale, const char* format) {
+  // Values ± their 1σ (`sigma` empty: none).
+  const auto pm = [&](const Eigen::VectorXd& v, const Eigen::VectorXd& sigma, double scale,
+                      const char* format) {
     std::string text;
-    for (int i = 0; i < 3; ++i) {
+    for (Eigen::Index i = 0; i < v.size(); ++i) {
       text += Format(format, v(i) * scale);
-      if (sigma) text += Format(" +- %.2g", (*sigma)(i)*scale);
-      text += i < 2 ? "   " : "";
+      if (sigma.size() > 0) text += Format(" +- %.2g", sigma(i) * scale);
+      text += i + 1 < v.size() ? "   " : "";
     }
     return text;
   };
-  std::printf("\nengineering (paper 000 Table 3 conventions%s)\n",
+  const auto sd_of = [&](auto member) {
+    return sd ? Eigen::VectorXd(*sd.*member) : Eigen::VectorXd();
+  };
+  std::printf("\nengineering (%s conventions%s)\n",
+              r.frame == Frame::kPlatform ? "paper 003 eq. (5)" : "paper 000 Table 3",
               sd ? "; +- 1 sigma propagated from the parameters" : "");
   std::printf("  scale factor     %s  %s/%s\n",
-              pm(e.scale_factor, sd ? &sd->scale_factor : nullptr, 1.0, "%.10g").c_str(),
+              pm(e.scale_factor, sd_of(&EngineeringStd::scale_factor), 1.0, "%.10g").c_str(),
               raw_unit.c_str(), u);
   const Misalignment tau = MisalignmentOf(r.params.K, r.frame);
-  std::printf("  misalignment     %s, %s, %s\n", std::string(tau.names[0]).c_str(),
-              std::string(tau.names[1]).c_str(), std::string(tau.names[2]).c_str());
+  std::string names;
+  for (std::string_view name : tau.names) names += (names.empty() ? "" : ", ") + std::string(name);
+  std::printf("  misalignment     %s\n", names.c_str());
   std::printf("                   %s  arcsec\n",
-              pm(tau.rad, sd ? &sd->misalignment_rad : nullptr, kArcsecPerRad, "%.4f").c_str());
+              pm(tau.rad, sd_of(&EngineeringStd::misalignment_rad), kArcsecPerRad, "%.4f").c_str());
   std::printf("  bias             %s  %s\n",
-              pm(e.bias_force, sd ? &sd->bias_force : nullptr, 1.0, "%.6g").c_str(), u);
+              pm(e.bias_force, sd_of(&EngineeringStd::bias_force), 1.0, "%.6g").c_str(), u);
   std::printf("                   %s  ug\n",
-              pm(e.bias_force, sd ? &sd->bias_force : nullptr, ug, "%.6g").c_str());
+              pm(e.bias_force, sd_of(&EngineeringStd::bias_force), ug, "%.6g").c_str());
   if (r.model == ModelKind::kQuadratic) {
     std::printf("  squared coeff.   %s  g/g^2\n",
-                pm(e.k2_g_per_g2, sd ? &sd->k2_g_per_g2 : nullptr, 1.0, "%.4g").c_str());
+                pm(e.k2_g_per_g2, sd_of(&EngineeringStd::k2_g_per_g2), 1.0, "%.4g").c_str());
   }
   const std::vector<Vec3> means = Means(positions);
   const std::vector<double> errors = GravityNormErrors(r.params, means, r.gravity);
@@ -269,7 +276,58 @@ void PrintModelSelection(const ModelSelection& s, bool requested_auto) {
 
 }  // namespace
 
+namespace {
+
+// calibrate --orientations: the platform-frame least squares of known_orientation.hpp.
+int RunCalibrateKnownOrientations(const CalibrateArgs& args) {
+  if (!args.gravity_only_options.empty()) {
+    throw UsageError(args.gravity_only_options.front() +
+                     " does not apply with --orientations (a closed-form fit in the platform "
+                     "frame)");
+  }
+  if (args.model == "auto") {
+    throw UsageError("--model auto is not available with --orientations: give linear or quadratic");
+  }
+  KnownOrientationOptions options;
+  options.model =
+      ParseEnum(ModelKindFromString(args.model), args.model, "--model", "linear, quadratic");
+  options.cross_validate = args.cross_validate;
+  const Gravity g = ResolveGravity(args.gravity);
+  options.gravity = g.in_unit;
+  const OrientationFile orientations = ReadOrientations(args.orientations);
+  const LoadedInput in = LoadInput(args.input);
+  if (orientations.directions.size() != in.positions.size()) {
+    throw DataError(args.orientations + " has " + std::to_string(orientations.directions.size()) +
+                    " orientations for the " + std::to_string(in.positions.size()) +
+                    " positions of " + args.input.path);
+  }
+  options.reading_sigmas = SigmasOfMeans(in.positions);
+  const CalibrationResult result =
+      CalibrateKnownOrientations(Means(in.positions), orientations.directions, options);
+  CalibrationFileInfo info;
+  info.unit = g.unit;
+  info.raw_unit = args.raw_units;
+  info.source = args.input.path;
+  info.positions = in.positions;
+  info.model_requested = args.model;
+  const std::string json = CalibrationToJson(result, info);
+  if (!args.output.empty()) WriteFileAtomically(args.output, json);
+  if (args.json) {
+    WriteFileAtomically("-", json);
+  } else {
+    PrintInput(in, args.input.path);
+    std::printf("orient.   %s: %zu known orientations\n", args.orientations.c_str(),
+                orientations.directions.size());
+    PrintCalibration(result, in.positions, g, args.raw_units);
+    if (!args.output.empty()) std::printf("wrote     %s\n", args.output.c_str());
+  }
+  return kExitOk;
+}
+
+}  // namespace
+
 int RunCalibrate(const CalibrateArgs& args) {
+  if (!args.orientations.empty()) return RunCalibrateKnownOrientations(args);
   CalibrationOptions options;
   const bool auto_model = args.model == "auto";
   options.model = auto_model ? ModelKind::kLinear
@@ -279,6 +337,11 @@ int RunCalibrate(const CalibrateArgs& args) {
                              "joint, two-step, newton-lagrange, modulus, modulus-norm, ellipsoid");
   options.initialization = ParseEnum(InitializationFromString(args.init), args.init, "--init",
                                      "auto, ellipsoid, normalized-readings");
+  if (args.frame == "platform") {
+    throw UsageError(
+        "--frame platform is the frame of known orientations: give them with "
+        "--orientations");
+  }
   options.frame = ParseEnum(FrameFromString(args.frame), args.frame, "--frame", "x-first, z-first");
   options.estimator = ParseEnum(EstimatorFromString(args.estimator), args.estimator, "--estimator",
                                 "ml, bias-corrected");
@@ -609,6 +672,21 @@ int RunDesign(const DesignArgs& args) {
                                                  "--model", "linear, quadratic")
                                      : device.model;
   std::vector<Vec3> directions = PlannedDirections(args.positions);
+  LoadedCalibration nominal = device;
+  if (device.frame == Frame::kPlatform) {
+    // A platform-frame device (known-orientation fit) has a full K. The orientation-free bound
+    // is computed for the same linear device in its x-first form (frame.hpp), the planned
+    // directions rotated with it.
+    if (model != ModelKind::kLinear) {
+      throw UsageError(
+          "design: a quadratic platform-frame device has no orientation-free "
+          "equivalent (the squared terms act on platform axes); use --model linear");
+    }
+    const FrameChange change = ChangeFrame(device.params.K, Frame::kXFirst);
+    nominal.params.K = change.K;
+    nominal.params.k2.setZero();
+    for (Vec3& c : directions) c = change.Q_old_new.transpose() * c;
+  }
   std::string chosen_note;
   if (args.choose > 0) {
     if (args.criterion != "d" && args.criterion != "a") {
@@ -616,9 +694,9 @@ int RunDesign(const DesignArgs& args) {
     }
     std::vector<int> chosen;
     try {
-      chosen = args.criterion == "d" ? ChooseDOptimal(device.params, model, device.gravity,
+      chosen = args.criterion == "d" ? ChooseDOptimal(nominal.params, model, device.gravity,
                                                       directions, sigma, args.choose)
-                                     : ChooseAOptimal(device.params, model, device.gravity,
+                                     : ChooseAOptimal(nominal.params, model, device.gravity,
                                                       directions, sigma, args.choose);
     } catch (const std::invalid_argument& e) {
       throw UsageError(std::string("--choose: ") + e.what());
@@ -627,11 +705,11 @@ int RunDesign(const DesignArgs& args) {
     for (int k : chosen) subset.push_back(directions[static_cast<std::size_t>(k)]);
     const std::vector<Vec3> yang18 = Yang18Directions();
     const double d_efficiency =
-        std::exp((LogDetInformation(device.params, model, device.gravity, subset, sigma) -
-                  LogDetInformation(device.params, model, device.gravity, yang18, sigma)) /
+        std::exp((LogDetInformation(nominal.params, model, device.gravity, subset, sigma) -
+                  LogDetInformation(nominal.params, model, device.gravity, yang18, sigma)) /
                  NumParameters(model));
-    const double a_efficiency = TraceCrlb(device.params, model, device.gravity, yang18, sigma) /
-                                TraceCrlb(device.params, model, device.gravity, subset, sigma);
+    const double a_efficiency = TraceCrlb(nominal.params, model, device.gravity, yang18, sigma) /
+                                TraceCrlb(nominal.params, model, device.gravity, subset, sigma);
     chosen_note = Format(
         "%s-optimal %d of %zu candidates; against yang18: D-efficiency %.4f ((det I / det "
         "I_yang18)^(1/%d)), A-efficiency %.4f (tr CRLB_yang18 / tr CRLB, parameters in the "
@@ -641,7 +719,7 @@ int RunDesign(const DesignArgs& args) {
     directions = std::move(subset);
   }
   const PlannedUncertainty planned =
-      PredictUncertainty(device.params, model, device.gravity, directions, sigma);
+      PredictUncertainty(nominal.params, model, device.gravity, directions, sigma);
   const auto& slots = ParameterSlots(model, planned.frame);
   std::string out;
   if (args.json) {

@@ -57,6 +57,9 @@ struct CalibrateArgs {
   std::string init = "auto";
   std::string frame = "x-first";
   std::string estimator = "ml";
+  std::string orientations;  // known orientations (orientation_file.hpp): platform-frame fit
+  /// Options that a known-orientation fit does not take, when given explicitly.
+  std::vector<std::string> gravity_only_options;
   bool cross_validate = true;
   std::string raw_units = "raw";
   std::string output;

@@ -87,6 +87,10 @@ int main(int argc, char** argv) {
                    "ml (maximum likelihood) or bias-corrected (removes the bias of order "
                    "sigma^2/g that ML has at MEMS noise levels; same covariance)")
       ->capture_default_str();
+  calibrate->add_option("--orientations", cal.orientations,
+                        "known orientation of every position, in order (a file of directions or "
+                        "attitudes, as for design): full misalignment in the platform frame, "
+                        "paper 003");
   calibrate->add_flag("!--no-crossval", cal.cross_validate,
                       "skip the leave-one-position-out validation (one refit per position)");
   calibrate->add_option("--raw-units", cal.raw_units, "label of the raw unit (e.g. counts)")
@@ -215,7 +219,13 @@ int main(int argc, char** argv) {
   }
 
   try {
-    if (*calibrate) return RunCalibrate(cal);
+    if (*calibrate) {
+      for (const char* name :
+           {"--method", "--init", "--frame", "--estimator", "--max-iterations"}) {
+        if (calibrate->count(name) > 0) cal.gravity_only_options.emplace_back(name);
+      }
+      return RunCalibrate(cal);
+    }
     if (*detect) return RunDetect(det);
     if (*compare) return RunCompare(cmp);
     if (*apply_cmd) return RunApply(apply);

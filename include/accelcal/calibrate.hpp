@@ -36,12 +36,15 @@ enum class SolverMethod {
   kModulusNorm,     ///< "modulus-norm": min Σ (|f_k|/g − 1)², the variant on the norm
   kNewtonLagrange,  ///< "newton-lagrange": paper 001 §3.2, Newton on the Lagrangian, linear model
   kEllipsoid,  ///< "ellipsoid": paper 001 §3.3, the algebraic ellipsoid fit itself, linear model
+  /// "known-orientation": linear least squares with the direction of every position known
+  /// (known_orientation.hpp); Calibrate() refuses it, CalibrateKnownOrientations() uses it.
+  kKnownOrientation,
 };
 /// Whether a method estimates by maximum likelihood (and so carries a covariance). The modulus
 /// methods do not: their residual (|f|² − g²) has a noise-dependent mean (paper 001 eq. (11)).
 constexpr bool IsMaximumLikelihood(SolverMethod method) {
   return method == SolverMethod::kTwoStep || method == SolverMethod::kJoint ||
-         method == SolverMethod::kNewtonLagrange;
+         method == SolverMethod::kNewtonLagrange || method == SolverMethod::kKnownOrientation;
 }
 std::string_view ToString(SolverMethod method);
 std::optional<SolverMethod> SolverMethodFromString(std::string_view text);

@@ -3,6 +3,7 @@
 /// Engineering quantities of a calibration, as in paper 000 Table 3 (see shared ERRATA.md for the
 /// conventions): K = k_a T with k_a = diag(scale factors) and T lower-triangular with unit rows.
 
+#include "accelcal/frame.hpp"
 #include "accelcal/model.hpp"
 
 namespace accelcal {
@@ -35,12 +36,12 @@ ModelParameters FromEngineering(const EngineeringParameters& eng, double gravity
 /// differences of the smooth map (steps of 1e-6 of each parameter's own standard deviation, far
 /// inside the region where the map is linear).
 struct EngineeringStd {
-  Vec3 scale_factor;      ///< [raw per specific-force unit]
-  Vec3 misalignment_rad;  ///< the frame's three off-diagonal entries of T (MisalignmentOf)
-  Vec3 bias_force;        ///< [specific-force unit]
-  Vec3 k2_g_per_g2;       ///< [g/g²]
+  Vec3 scale_factor;                 ///< [raw per specific-force unit]
+  Eigen::VectorXd misalignment_rad;  ///< the frame's misalignment angles (MisalignmentOf)
+  Vec3 bias_force;                   ///< [specific-force unit]
+  Vec3 k2_g_per_g2;                  ///< [g/g²]
 };
-EngineeringStd EngineeringUncertainty(const ModelParameters& params, ModelKind model, bool z_first,
+EngineeringStd EngineeringUncertainty(const ModelParameters& params, ModelKind model, Frame frame,
                                       double gravity, const Eigen::MatrixXd& covariance);
 
 }  // namespace accelcal

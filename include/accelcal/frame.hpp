@@ -17,6 +17,13 @@
 /// Flat parameter order in the z-first frame (the mirror image of model.hpp's order):
 ///     quadratic (12): K_zz b_z k2_z | K_yz K_yy b_y k2_y | K_xz K_xy K_xx b_x k2_x
 ///     linear     (9): K_zz b_z      | K_yz K_yy b_y      | K_xz K_xy K_xx b_x
+///
+/// A third frame needs more than gravity magnitudes: kPlatform, the frame in which the direction
+/// of gravity of every position is known (a turntable's, a dividing head's; paper 003's p-frame).
+/// Nothing is left to a convention, so K is a full matrix, scale factors times paper 003 eq. (5)'s
+/// six small misalignment angles (known_orientation.hpp). Flat order, by output axis:
+///     quadratic (15): K_xx K_xy K_xz b_x k2_x | K_yx K_yy K_yz b_y k2_y | K_zx K_zy K_zz b_z k2_z
+///     linear    (12): the same without k2
 
 #include <array>
 #include <optional>
@@ -29,11 +36,12 @@
 
 namespace accelcal {
 
-enum class Frame { kXFirst, kZFirst };
-std::string_view ToString(Frame frame);  ///< "x-first", "z-first"
+enum class Frame { kXFirst, kZFirst, kPlatform };
+std::string_view ToString(Frame frame);  ///< "x-first", "z-first", "platform"
 std::optional<Frame> FrameFromString(std::string_view text);
 
-/// The frame a triangular K is written in (lower: x-first, else z-first); a diagonal K is x-first.
+/// The frame K is written in: lower-triangular x-first (a diagonal K too), upper-triangular
+/// z-first, else platform.
 Frame FrameOf(const Mat33& K);
 
 /// P v with P = antidiag(1, −1, 1).
@@ -42,8 +50,8 @@ Vec3 MirrorAxes(const Vec3& v);
 /// back (an involution).
 ModelParameters MirrorAxes(const ModelParameters& params);
 
-/// The slots of the flat parameter vector in a frame (model.hpp order for x-first, the order above
-/// for z-first).
+/// The slots of the flat parameter vector in a frame (model.hpp order for x-first, the orders above
+/// for z-first and platform).
 const std::vector<ParameterSlot>& ParameterSlots(ModelKind kind, Frame frame);
 /// d with θ_z-first = diag(d) θ_mirrored, slot by slot (entries ±1): a covariance of the mirrored
 /// problem becomes diag(d) C diag(d).
@@ -51,10 +59,13 @@ Eigen::VectorXd MirrorSigns(ModelKind kind);
 
 /// Off-diagonal misalignment entries of T = K with unit rows, named for the frame:
 /// x-first τ_yx, τ_zx, τ_zy (T(1,0), T(2,0), T(2,1)); z-first τ_xy, τ_xz, τ_yz (T(0,1), T(0,2),
-/// T(1,2)).
+/// T(1,2)); platform the six angles of paper 003 eq. (5), C_p^a = [[1, β_xz, −β_xy], [−β_yz, 1,
+/// β_yx], [β_zy, −β_zx, 1]] read from T: β_xz = T(0,1), β_xy = −T(0,2), β_yz = −T(1,0), β_yx =
+/// T(1,2), β_zy = T(2,0), β_zx = −T(2,1) (small angles; T's rows are unit vectors where eq. (5)
+/// has unit diagonal entries, a second-order difference).
 struct Misalignment {
-  std::array<std::string_view, 3> names;
-  Vec3 rad;
+  std::vector<std::string_view> names;
+  Eigen::VectorXd rad;
 };
 Misalignment MisalignmentOf(const Mat33& K, Frame frame);
 

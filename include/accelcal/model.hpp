@@ -143,9 +143,10 @@ const std::vector<int>& ActiveColumns(ModelKind kind);
 /// K_ii f_i + k2_i f_i² = r_i with r_i known once the other components of the triangle are: a
 /// scalar quadratic solved in closed form, taking the root that tends to the linear solution
 /// r_i / K_ii as k2_i → 0 (written 2 r / (K + sqrt(K² + 4 k2 r)) to avoid cancellation). A full K
-/// is inverted for the linear model only. Returns std::nullopt when p lies outside the range the
-/// model can produce (negative discriminant), when K has a zero diagonal, or for a full K with
-/// k2 ≠ 0.
+/// (platform frame) is inverted, and with k2 ≠ 0 refined by Newton's method from that linear
+/// solution. Returns std::nullopt when p lies outside the range the model can produce (negative
+/// discriminant, or Newton not converging in 8 steps), or when K is singular (a zero diagonal of
+/// a triangular K).
 template <typename Scalar>
 std::optional<Vec3T<Scalar>> SpecificForce(const ModelParametersT<Scalar>& params,
                                            const Vec3T<Scalar>& p) {
@@ -154,10 +155,22 @@ std::optional<Vec3T<Scalar>> SpecificForce(const ModelParametersT<Scalar>& param
   const bool lower = K(0, 1) == Scalar(0) && K(0, 2) == Scalar(0) && K(1, 2) == Scalar(0);
   const bool upper = K(1, 0) == Scalar(0) && K(2, 0) == Scalar(0) && K(2, 1) == Scalar(0);
   if (!lower && !upper) {
-    if (!params.k2.isZero(0)) return std::nullopt;
     const Scalar det = K.determinant();
     if (det == Scalar(0)) return std::nullopt;
-    return Vec3T<Scalar>(K.inverse() * (p - params.bias));
+    const Vec3T<Scalar> target = p - params.bias;
+    Vec3T<Scalar> f = K.inverse() * target;
+    if (params.k2.isZero(0)) return f;
+    // Full K with squared terms (platform frame): Newton from the linear solution, the root that
+    // continues it (|2 k2 f| ≪ |K| for any real device). Quadratic convergence: 8 steps take a
+    // start 10 % off to round-off; more means no such root.
+    for (int iteration = 0; iteration < 8; ++iteration) {
+      Mat33T<Scalar> J;
+      const Vec3T<Scalar> step = (PredictRaw(params, f, &J) - p);
+      const Vec3T<Scalar> delta = J.inverse() * step;
+      f -= delta;
+      if (!(delta.squaredNorm() > Scalar(1e-30) * f.squaredNorm())) return f;
+    }
+    return std::nullopt;
   }
   Vec3T<Scalar> f = Vec3T<Scalar>::Zero();
   for (int n = 0; n < 3; ++n) {

@@ -1,10 +1,5 @@
 #include "accelcal/log_reader.hpp"
 
-#include <fcntl.h>
-#include <sys/mman.h>
-#include <sys/stat.h>
-#include <unistd.h>
-
 #include <algorithm>
 #include <cctype>
 #include <cmath>
@@ -15,6 +10,7 @@
 #include <fast_float/fast_float.h>
 
 #include "accelcal/error.hpp"
+#include "mapped_file.hpp"
 
 namespace accelcal {
 
@@ -564,40 +560,8 @@ InputData ParseInput(std::string_view text, const std::string& source, const Rea
   return data;
 }
 
-namespace {
-
-// A read-only view of a whole regular file, mapped and pre-faulted in one call: cheaper than
-// copying it into a buffer page by page (ReadFileToString remains the fallback).
-class MappedFile {
- public:
-  explicit MappedFile(const std::string& path) {
-    const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
-    if (fd < 0) return;
-    struct stat st;
-    if (::fstat(fd, &st) == 0 && S_ISREG(st.st_mode) && st.st_size > 0) {
-      size_ = static_cast<std::size_t>(st.st_size);
-      void* p = ::mmap(nullptr, size_, PROT_READ, MAP_PRIVATE | MAP_POPULATE, fd, 0);
-      if (p != MAP_FAILED) data_ = static_cast<const char*>(p);
-    }
-    ::close(fd);
-  }
-  ~MappedFile() {
-    if (data_ != nullptr) ::munmap(const_cast<char*>(data_), size_);
-  }
-  MappedFile(const MappedFile&) = delete;
-  MappedFile& operator=(const MappedFile&) = delete;
-  bool ok() const { return data_ != nullptr; }
-  std::string_view text() const { return {data_, size_}; }
-
- private:
-  const char* data_ = nullptr;
-  std::size_t size_ = 0;
-};
-
-}  // namespace
-
 InputData ReadInput(const std::string& path, const ReadOptions& options) {
-  const MappedFile mapped(path);
+  const internal::MappedFile mapped(path);
   if (mapped.ok()) return ParseInput(mapped.text(), path, options);
   const std::string text = ReadFileToString(path);  // pipes, empty files, errors with errno
   return ParseInput(text, path, options);

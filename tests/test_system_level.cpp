@@ -1,6 +1,7 @@
 // Paper 003 §5, system-level calibration (system_level.hpp): the printed equations as known
 // answers, Table 4 against them (ERRATA), and the estimator on a simulated day.
 #include <cmath>
+#include <cstdio>
 #include <map>
 #include <string>
 
@@ -8,6 +9,7 @@
 
 #include "accelcal/error.hpp"
 #include "accelcal/gravity.hpp"
+#include "accelcal/series_file.hpp"
 #include "accelcal/system_level.hpp"
 
 namespace accelcal {
@@ -129,6 +131,54 @@ TEST(SystemLevel, RecoversTheCoefficientsOfASimulatedDayWithinTheirUncertainty) 
     EXPECT_NEAR(d.value, separated_truth.at(d.name), 4 * d.std) << d.name;
     EXPECT_GT(d.std, 0.0) << d.name;
   }
+}
+
+TEST(SystemLevel, SeriesFilesRoundTripInBothLayouts) {
+  SystemSimulationOptions o;
+  o.duration_s = 10;
+  std::vector<SystemSample> samples;
+  SimulateSystemLevel(o, [&](const SystemSample& s) { samples.push_back(s); });
+  ASSERT_EQ(samples.size(), 1000u);
+  std::string binary;
+  AppendSeriesHeader(&binary);
+  std::string text = "t,fx,fy,fz,roll,pitch\n";
+  for (const SystemSample& s : samples) {
+    AppendSeriesSample(s, &binary);
+    char row[256];
+    std::snprintf(row, sizeof row, "%.17g,%.17g,%.17g,%.17g,%.17g,%.17g\n", s.t, s.f(0), s.f(1),
+                  s.f(2), s.roll, s.pitch);
+    text += row;
+  }
+  EXPECT_EQ(binary.size(), kSeriesMagic.size() + 48 * 1000);
+  for (const std::string* content : {&binary, &text}) {
+    std::size_t k = 0;
+    ParseSeries(*content, "s", [&](const SystemSample& s) {
+      ASSERT_LT(k, samples.size());
+      EXPECT_EQ(s.t, samples[k].t);
+      EXPECT_EQ(s.f, samples[k].f);
+      EXPECT_EQ(s.roll, samples[k].roll);
+      EXPECT_EQ(s.pitch, samples[k].pitch);
+      ++k;
+    });
+    EXPECT_EQ(k, samples.size());
+  }
+  const auto error = [](const std::string& content) {
+    try {
+      ParseSeries(content, "s.bin", [](const SystemSample&) {});
+    } catch (const InputError& e) {
+      return std::string(e.what());
+    }
+    return std::string("no error");
+  };
+  EXPECT_EQ(error(binary.substr(0, binary.size() - 5)),
+            "s.bin: truncated binary series: 47995 bytes after the header is not a whole number "
+            "of 48-byte samples");
+  EXPECT_EQ(error("t,fx,fy,fz,roll,pitch\n1,2,3,4,5,6\n1,2,3\n"),
+            "s.bin:3: expected 6 numbers (t,fx,fy,fz,roll,pitch)");
+  EXPECT_EQ(error("1,2,3,4,5,nan\n"), "s.bin:1: a value is not finite");
+  EXPECT_EQ(error("# nothing\n"), "s.bin: no samples in the series");
+  EXPECT_EQ(error("accelcal-series 2 whatever\n").rfind("s.bin:1: unsupported binary series", 0),
+            0u);
 }
 
 TEST(SystemLevel, RefusesTooShortASeries) {

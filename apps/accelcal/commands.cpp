@@ -18,7 +18,9 @@
 #include "accelcal/model_selection.hpp"
 #include "accelcal/montecarlo.hpp"
 #include "accelcal/orientation_file.hpp"
+#include "accelcal/series_file.hpp"
 #include "accelcal/simulate.hpp"
+#include "accelcal/system_level.hpp"
 #include "output.hpp"
 
 namespace accelcal::cli {
@@ -898,7 +900,107 @@ std::string SunXu2020Positions(const SimulateArgs& args) {
 
 }  // namespace
 
+int RunSystemLevel(const SystemLevelArgs& args) {
+  const double latitude = *args.latitude_deg;
+  if (!(std::abs(latitude) < 89)) throw UsageError("--latitude must lie in (-89, 89) degrees");
+  if (std::abs(latitude) < 1) {
+    throw UsageError(
+        "--latitude: within 1 degree of the equator sin L vanishes and the second "
+        "harmonics of the attitude errors carry no information (eq. (32), (33))");
+  }
+  const double g = args.gravity_ms2 ? *args.gravity_ms2 : NormalGravityWgs84_ms2(latitude);
+  if (!(g > 0) || !std::isfinite(g)) throw UsageError("--gravity must be a positive number");
+  SystemLevelEstimator estimator(latitude * 3.14159265358979323846 / 180.0, g);
+  ReadSeries(args.series, [&](const SystemSample& s) { estimator.Add(s); });
+  const SystemLevelResult r = estimator.Finish();
+  const auto fourier = [](const FourierCoefficients& f) {
+    return "{\"mean\": " + FormatNumber(f.mean) + ", \"c1\": " + FormatNumber(f.c1) +
+           ", \"s1\": " + FormatNumber(f.s1) + ", \"c2\": " + FormatNumber(f.c2) +
+           ", \"s2\": " + FormatNumber(f.s2) + "}";
+  };
+  std::string out;
+  if (args.json) {
+    out += "{\n  \"samples\": " + std::to_string(r.samples) +
+           ",\n  \"latitude_deg\": " + FormatNumber(latitude) +
+           ",\n  \"gravity_ms2\": " + FormatNumber(g) +
+           ",\n  \"noise_ms2\": " + JsonVector(r.noise_ms2) +
+           ",\n  \"x1_noise_correction\": " + FormatNumber(r.x1_noise_correction) +
+           ",\n  \"combined\": {";
+    for (int i = 0; i < 5; ++i) {
+      out += (i ? ", " : "") + Format("\"x%d\": {\"value\": ", i + 1) + FormatNumber(r.x(i)) +
+             ", \"std\": " + FormatNumber(r.x_std(i)) + "}";
+    }
+    out += "},\n  \"fourier\": {\"pitch\": " + fourier(r.pitch) +
+           ", \"pitch_std\": " + fourier(r.pitch_std) + ",\n    \"roll\": " + fourier(r.roll) +
+           ", \"roll_std\": " + fourier(r.roll_std) +
+           "},\n  \"separated\": {\"rank\": " + std::to_string(r.rank) + ", \"determined\": {";
+    for (std::size_t i = 0; i < r.determined.size(); ++i) {
+      out += (i ? ", " : "") + std::string("\"") + r.determined[i].name +
+             "\": {\"value\": " + FormatNumber(r.determined[i].value) +
+             ", \"std\": " + FormatNumber(r.determined[i].std) + "}";
+    }
+    out += "}, \"undetermined\": [";
+    for (std::size_t i = 0; i < r.undetermined.size(); ++i) {
+      out += (i ? ", \"" : "\"") + r.undetermined[i] + "\"";
+    }
+    out += "]}\n}\n";
+  } else {
+    out += Format("system-level  %s: %ld samples, latitude %.6g deg, g %.9g m/s2\n",
+                  args.series.c_str(), r.samples, latitude, g);
+    out += Format(
+        "noise         %.3g %.3g %.3g m/s2 per axis (successive differences); x1 "
+        "corrected by E|n|^2/(2g^2) = %.3g\n",
+        r.noise_ms2(0), r.noise_ms2(1), r.noise_ms2(2), r.x1_noise_correction);
+    out += "combined coefficients, eq. (21)-(25) [rad]\n";
+    for (int i = 0; i < 5; ++i) {
+      out += Format("  x%d  %+.5e +- %.2e\n", i + 1, r.x(i), r.x_std(i));
+    }
+    const auto line = [](const char* name, const FourierCoefficients& f,
+                         const FourierCoefficients& sd) {
+      return Format(
+          "  %-5s mean %+.4e +- %.1e  c1 %+.4e +- %.1e  s1 %+.4e +- %.1e  c2 %+.4e +- "
+          "%.1e  s2 %+.4e +- %.1e\n",
+          name, f.mean, sd.mean, f.c1, sd.c1, f.s1, sd.s1, f.c2, sd.c2, f.s2, sd.s2);
+    };
+    out += "attitude errors, Fourier coefficients of S = Earth rate x t [rad]\n";
+    out += line("pitch", r.pitch, r.pitch_std) + line("roll", r.roll, r.roll_std);
+    out += Format("separated, eq. (39)-(41) (rank %d of 6)\n", r.rank);
+    for (const Estimate& e : r.determined) {
+      out += Format("  %-34s %+.5e +- %.2e\n", e.name.c_str(), e.value, e.std);
+    }
+    if (!r.undetermined.empty()) {
+      std::string names;
+      for (const std::string& n : r.undetermined) names += (names.empty() ? "" : ", ") + n;
+      out += "  not determined on their own (only in the combinations above): " + names + "\n";
+    }
+  }
+  WriteFileAtomically("-", out);
+  return kExitOk;
+}
+
 int RunSimulate(const SimulateArgs& args) {
+  if (args.scenario == "wu2018-system") {
+    if (!args.truth.empty() || !args.positions.empty() || args.noise_density_ug || args.raw) {
+      throw UsageError("--scenario wu2018-system takes only --seed, --rate, --duration and -o");
+    }
+    if (args.output.empty()) {
+      throw UsageError("--scenario wu2018-system writes a binary series: give -o FILE");
+    }
+    SystemSimulationOptions o;
+    o.seed = args.seed;
+    if (args.rate_given) o.rate_hz = args.rate_hz;
+    if (args.duration_given) o.duration_s = args.duration_s;
+    if (!(o.rate_hz > 0) || !(o.duration_s > 0)) {
+      throw UsageError("--rate and --duration must be positive");
+    }
+    std::string series;
+    series.reserve(kSeriesMagic.size() +
+                   48 * static_cast<std::size_t>(std::llround(o.rate_hz * o.duration_s)));
+    AppendSeriesHeader(&series);
+    SimulateSystemLevel(o, [&](const SystemSample& s) { AppendSeriesSample(s, &series); });
+    WriteFileAtomically(args.output, series);
+    return kExitOk;
+  }
   if (args.scenario == "sunxu2020") {
     WriteFileAtomically(args.output.empty() ? "-" : args.output, SunXu2020Positions(args));
     return kExitOk;
@@ -909,7 +1011,8 @@ int RunSimulate(const SimulateArgs& args) {
   std::optional<double> density = args.noise_density_ug;
   if (!args.scenario.empty()) {
     if (args.scenario != "yang2012") {
-      throw UsageError("--scenario: '" + args.scenario + "' is not one of yang2012, sunxu2020");
+      throw UsageError("--scenario: '" + args.scenario +
+                       "' is not one of yang2012, sunxu2020, wu2018-system");
     }
     if (!args.truth.empty()) throw UsageError("give --scenario or --truth, not both");
     truth = Yang2012Truth();

@@ -121,13 +121,22 @@ struct SimulateArgs {
   std::optional<double> noise_density_ug;  // µg/√Hz (relative to the truth's gravity)
   double rate_hz = 100;
   double duration_s = 60;
+  bool rate_given = false, duration_given = false;  // wu2018-system has its own defaults
   double transition_s = 4;
   std::uint64_t seed = 1;
   bool raw = false;  // raw log instead of a positions file
   std::string output;
 };
 
+struct SystemLevelArgs {
+  std::string series;
+  std::optional<double> latitude_deg;
+  std::optional<double> gravity_ms2;  // default: WGS-84 normal gravity at the latitude
+  bool json = false;
+};
+
 int RunCalibrate(const CalibrateArgs& args);
+int RunSystemLevel(const SystemLevelArgs& args);
 int RunSimulate(const SimulateArgs& args);
 int RunMonteCarlo(const MonteCarloArgs& args);
 int RunDesign(const DesignArgs& args);

@@ -173,12 +173,27 @@ int main(int argc, char** argv) {
                        "covariance from the residuals instead of the known noise");
   montecarlo->add_flag("--json", mc.json, "machine-readable output");
 
+  SystemLevelArgs sys;
+  CLI::App* system_level = app.add_subcommand(
+      "system-level",
+      "paper 003 stage 3: residual accelerometer errors of a space-stable INS from a day of "
+      "specific-force and attitude errors on a static, level base");
+  system_level->add_option("SERIES", sys.series, "series file (binary or t,fx,fy,fz,roll,pitch)")
+      ->required();
+  system_level->add_option("--latitude", sys.latitude_deg, "latitude of the base [deg]")
+      ->required();
+  system_level->add_option("--gravity", sys.gravity_ms2,
+                           "local gravity [m/s2] (default: WGS-84 normal gravity)");
+  system_level->add_flag("--json", sys.json, "machine-readable output");
+
   SimulateArgs sim;
   CLI::App* simulate = app.add_subcommand(
       "simulate", "write a simulated recording (raw log or positions file) of a known device");
   simulate->add_option("--scenario", sim.scenario,
                        "yang2012: paper 000's device, 18 positions, 10 ug/sqrt(Hz), 100 Hz, 60 s; "
-                       "sunxu2020: paper 001's, 300 Gaussian attitudes, 0.1 g per position");
+                       "sunxu2020: paper 001's, 300 Gaussian attitudes, 0.1 g per position; "
+                       "wu2018-system: paper 003's system-level series (Tables 2-3, 40 deg, "
+                       "5e-3 m/s2, 100 Hz, 24 h; binary, -o required)");
   simulate->add_option("--truth", sim.truth, "calibration file of the simulated device");
   simulate->add_option("--positions", sim.positions,
                        "yang18, six, random:N[:SEED], or a file of unit directions or attitudes "
@@ -231,7 +246,12 @@ int main(int argc, char** argv) {
     if (*apply_cmd) return RunApply(apply);
     if (*design) return RunDesign(des);
     if (*montecarlo) return RunMonteCarlo(mc);
-    if (*simulate) return RunSimulate(sim);
+    if (*simulate) {
+      sim.rate_given = simulate->count("--rate") > 0;
+      sim.duration_given = simulate->count("--duration") > 0;
+      return RunSimulate(sim);
+    }
+    if (*system_level) return RunSystemLevel(sys);
   } catch (const UsageError& e) {
     std::fprintf(stderr, "accelcal: usage: %s\n", e.what());
     return kExitUsage;
@@ -240,10 +260,12 @@ int main(int argc, char** argv) {
     return kExitBadInput;
   } catch (const accelcal::DataError& e) {
     std::fprintf(stderr, "accelcal: %s: %s\n",
-                 (*calibrate ? cal.input.path
-                  : *detect  ? det.input.path
-                  : *design  ? des.positions
-                             : apply.input.path)
+                 (*calibrate      ? cal.input.path
+                  : *detect       ? det.input.path
+                  : *design       ? des.positions
+                  : *system_level ? sys.series
+                  : *compare      ? cmp.input.path
+                                  : apply.input.path)
                      .c_str(),
                  e.what());
     return kExitBadInput;

@@ -210,4 +210,77 @@ CoarseCalibrationResult IteratedCoarseCalibration(
   return result;
 }
 
+FineCalibrationResult FineCalibration(const std::vector<Vec3>& outputs,
+                                      const PlatformAccelerometer& coarse, double gravity) {
+  const std::size_t m = outputs.size();
+  if (m < 13) {
+    throw DataError("the fine stage needs at least 13 positions (12 unknowns), got " +
+                    std::to_string(m));
+  }
+  using Vec12 = Eigen::Matrix<double, 12, 1>;
+  FineCalibrationResult result;
+  result.device = coarse;
+  PlatformAccelerometer& d = result.device;
+  Eigen::Matrix<double, Eigen::Dynamic, 12> A(m, 12);
+  Eigen::VectorXd z(m);
+  const auto linearise = [&]() {
+    const Mat33 C_inverse = InstallationMatrix(d.beta).inverse();  // Ĉ_a^p
+    for (std::size_t j = 0; j < m; ++j) {
+      // v = ŜF (f^a − δ̂b) with the nonlinear term of eq. (8) removed as far as it is known.
+      const Vec3 deviation = outputs[j] - d.bias;
+      const Vec3 v = (deviation - d.k_nl.cwiseProduct(deviation.cwiseAbs2())).cwiseQuotient(d.s);
+      const Vec3 f_p = C_inverse * v;
+      const auto row = static_cast<Eigen::Index>(j);
+      z(row) = 0.5 * (gravity * gravity - f_p.squaredNorm());
+      A.row(row) << v(0) * v(0), v(1) * v(1), v(2) * v(2), -v(0), -v(1), -v(2), -v(0) * v(0) * v(0),
+          -v(1) * v(1) * v(1), -v(2) * v(2) * v(2), v(0) * v(1), v(0) * v(2), v(1) * v(2);
+    }
+  };
+  Eigen::Matrix<double, 12, 12> normal_inverse;
+  for (int it = 0; it < 20; ++it) {
+    linearise();
+    const Vec12 scale = A.colwise().norm().cwiseInverse().transpose();
+    const Eigen::Matrix<double, 12, 12> N =
+        scale.asDiagonal() * (A.transpose() * A) * scale.asDiagonal();
+    Eigen::SelfAdjointEigenSolver<Eigen::Matrix<double, 12, 12>> eig(N);
+    if (!(eig.eigenvalues().minCoeff() > 1e-12 * eig.eigenvalues().maxCoeff())) {
+      throw DataError("the positions do not determine the fine-stage error vector (eq. (17))");
+    }
+    normal_inverse = scale.asDiagonal() * eig.eigenvectors() *
+                     eig.eigenvalues().cwiseInverse().asDiagonal() *
+                     eig.eigenvectors().transpose() * scale.asDiagonal();
+    const Vec12 dx = normal_inverse * (A.transpose() * z);
+    result.dx += dx;
+    // Full-value update (the paper's "using scale factors to convert the solved dx").
+    for (int i = 0; i < 3; ++i) {
+      const double sf = 1.0 / d.s(i);  // ŜF_i
+      d.bias(i) += dx(3 + i) / sf;
+      d.k_nl(i) += dx(6 + i) * sf;
+      d.s(i) /= 1.0 + dx(i);
+    }
+    d.beta(2) += dx(9) / 2;   // β_yz
+    d.beta(0) -= dx(9) / 2;   // β_xz
+    d.beta(1) += dx(10) / 2;  // β_xy
+    d.beta(4) -= dx(10) / 2;  // β_zy
+    d.beta(5) += dx(11) / 2;  // β_zx
+    d.beta(3) -= dx(11) / 2;  // β_yx
+    ++result.iterations;
+    if ((A * dx).cwiseAbs().maxCoeff() <= 1e-13 * gravity * gravity) {
+      result.converged = true;
+      break;
+    }
+  }
+  linearise();
+  const double dof = static_cast<double>(m) - 12;
+  const double sigma2 = dof > 0 ? z.squaredNorm() / dof : 0.0;
+  result.dx_std = (sigma2 * normal_inverse.diagonal()).cwiseSqrt();
+  result.residual_rms = std::sqrt(z.squaredNorm() / static_cast<double>(m)) / gravity;
+  result.note =
+      "the pairs (beta_xz, beta_yz), (beta_zy, beta_xy), (beta_yx, beta_zx) are not separable here "
+      "(paper 003 section 4): gravity magnitudes determine only beta_yz - beta_xz, beta_xy - "
+      "beta_zy, beta_zx - beta_yx; each pair was moved symmetrically, its sum kept from the coarse "
+      "stage";
+  return result;
+}
+
 }  // namespace accelcal

@@ -86,6 +86,10 @@ TEST(GimbalPlatform, CoarseStageRecoversNoiseFreeParametersExactly) {
   const CoarseCalibrationResult r =
       CoarseCalibration(Measure(truth, offsets, angles, 0.0, 1), angles, kG);
   EXPECT_TRUE(r.converged);
+  // Gauss-Newton on zero-residual data converges quadratically only with the exact Jacobian (the
+  // θ20, θ30 columns come from PlatformUp's, checked above): 3 iterations measured from the
+  // known-orientation start; a wrong column would leave linear convergence, tens of iterations.
+  EXPECT_LE(r.iterations, 4);
   EXPECT_LT((r.device.s - truth.s).cwiseAbs().maxCoeff(), 1e-9);
   EXPECT_LT((r.device.bias - truth.bias).cwiseAbs().maxCoeff(), 1e-9);
   EXPECT_LT((r.device.beta - truth.beta).cwiseAbs().maxCoeff(), 1e-9);
@@ -125,6 +129,53 @@ TEST(GimbalPlatform, CoarseStageWithinItsUncertaintyAndTheta10Absorbed) {
   EXPECT_LE(rounds, 3);
   EXPECT_LT(std::abs(loop.offsets(1) - offsets(1)), 1e-9);
   EXPECT_LT(std::abs(loop.offsets(2) - offsets(2)), 1e-9);
+}
+
+// The installation-angle differences the fine stage determines (eq. (17)'s last three).
+Vec3 BetaDifferences(const PlatformAccelerometer& d) {
+  return Vec3(d.beta(2) - d.beta(0), d.beta(1) - d.beta(4), d.beta(5) - d.beta(3));
+}
+
+TEST(GimbalPlatform, FineStageAfterTheCoarseStage) {
+  // The pipeline: a device with squared terms (which the coarse stage ignores), coarse on 20-s
+  // holds, re-zeroing, fine on 10-min holds at Table 1's angles.
+  PlatformAccelerometer truth = Truth();
+  truth.k_nl = Vec3(5e-6, -3e-6, 4e-6);  // [per m/s²]: 5e-6 x g² = 0.5 mm/s² at 1 g
+  const Vec3 offsets(0.0, 3 * kArcmin, -2 * kArcmin);
+  const std::vector<Vec3> angles = Wu2018Table1Angles();
+  for (const double noise : {0.0, 5e-5}) {
+    const CoarseCalibrationResult coarse = IteratedCoarseCalibration(
+        [&](const std::vector<Vec3>& commanded) {
+          return Measure(truth, offsets, commanded, 3 * noise, 11);
+        },
+        kG);
+    std::vector<Vec3> fine_angles = angles;  // the platform re-zeroed by the coarse offsets
+    for (Vec3& a : fine_angles) a -= coarse.offsets;
+    const FineCalibrationResult fine =
+        FineCalibration(Measure(truth, offsets, fine_angles, noise, 13), coarse.device, kG);
+    ASSERT_TRUE(fine.converged) << noise;
+    EXPECT_LE(fine.iterations, 5);  // measured 4: quadratic convergence from the coarse start
+    EXPECT_NE(fine.note.find("not separable"), std::string::npos);
+    const PlatformAccelerometer& d = fine.device;
+    if (noise == 0.0) {
+      // Exact up to the second-order effect of the coarse stage's installation sums on the
+      // magnitudes (a rotation to first order), ~1e-12.
+      EXPECT_LT((d.s - truth.s).cwiseAbs().maxCoeff(), 1e-9);
+      EXPECT_LT((d.bias - truth.bias).cwiseAbs().maxCoeff(), 1e-9);
+      EXPECT_LT((d.k_nl - truth.k_nl).cwiseAbs().maxCoeff(), 1e-11);
+      EXPECT_LT((BetaDifferences(d) - BetaDifferences(truth)).cwiseAbs().maxCoeff(), 1e-9);
+      // The coarse stage alone misses the squared terms.
+      EXPECT_GT((coarse.device.bias - truth.bias).cwiseAbs().maxCoeff(), 1e-5);
+      continue;
+    }
+    // Within 4σ, σ from dx's covariance mapped through the update (first order).
+    for (int i = 0; i < 3; ++i) {
+      EXPECT_NEAR(d.s(i), truth.s(i), 4 * d.s(i) * fine.dx_std(i)) << i;
+      EXPECT_NEAR(d.bias(i), truth.bias(i), 4 * d.s(i) * fine.dx_std(3 + i)) << i;
+      EXPECT_NEAR(d.k_nl(i), truth.k_nl(i), 4 * fine.dx_std(6 + i) / d.s(i)) << i;
+      EXPECT_NEAR(BetaDifferences(d)(i), BetaDifferences(truth)(i), 4 * fine.dx_std(9 + i)) << i;
+    }
+  }
 }
 
 TEST(GimbalPlatform, RefusesTooFewPositions) {

@@ -77,4 +77,30 @@ CoarseCalibrationResult IteratedCoarseCalibration(
     const std::function<std::vector<Vec3>(const std::vector<Vec3>& commanded)>& measure,
     double gravity, double tolerance_rad = 1e-7, int max_rounds = 5);
 
+/// Paper 003 §4, device-level fine calibration. With the coarse estimate, each position's output
+/// gives v = ŜF (f^a − δ̂b) and f̂^p = Ĉ_a^p v (eq. (9)); the observation ½(g² − |f̂^p|²) is linear
+/// in the error vector dx of eq. (17) with the row of eq. (16):
+///     [v_x², v_y², v_z², −v_x, −v_y, −v_z, −v_x³, −v_y³, −v_z³, v_x v_y, v_x v_z, v_y v_z],
+///     dx = [ΔSF_i/SF_i (3), SF_i δb̃_i (3), K_nl,i/SF_i (3), Δβ_yz − Δβ_xz, Δβ_xy − Δβ_zy,
+///           Δβ_zx − Δβ_yx].
+/// It uses gravity magnitudes only, so the pairs (β_xz, β_yz), (β_zy, β_xy), (β_yx, β_zx) are not
+/// separable: the update moves each pair symmetrically by half its difference, keeping the coarse
+/// value of its sum. The paper takes one least-squares step; this iterates it (Gauss-Newton) until
+/// the step changes no prediction by more than 1e-13 of g, which removes the linearisation's
+/// second-order error.
+struct FineCalibrationResult {
+  PlatformAccelerometer device;  ///< the coarse device with every update applied
+  /// dx of the last step's linearisation, summed over the iterations, and its 1σ (σ̂ from the
+  /// residuals, m − 12 degrees of freedom)
+  Eigen::Matrix<double, 12, 1> dx = Eigen::Matrix<double, 12, 1>::Zero();
+  Eigen::Matrix<double, 12, 1> dx_std = Eigen::Matrix<double, 12, 1>::Zero();
+  double residual_rms = 0;  ///< of ½(g² − |f̂^p|²)/g [output]
+  int iterations = 0;
+  bool converged = false;
+  std::string note;
+};
+/// Throws DataError for fewer than 13 positions or positions that do not determine dx.
+FineCalibrationResult FineCalibration(const std::vector<Vec3>& outputs,
+                                      const PlatformAccelerometer& coarse, double gravity);
+
 }  // namespace accelcal

@@ -8,6 +8,7 @@
 
 #include "accelcal/error.hpp"
 #include "accelcal/known_orientation.hpp"
+#include "gimbal_internal.hpp"
 
 namespace accelcal {
 
@@ -94,6 +95,81 @@ Vec3 PlatformOutput(const PlatformAccelerometer& d, const Vec3& f_p) {
   return deviation + d.bias;
 }
 
+namespace internal {
+
+Eigen::VectorXd CoarsePrediction(const std::vector<Vec3>& commanded, double gravity,
+                                 const CoarseParameters& q, CoarseJacobian* J) {
+  const std::size_t m = commanded.size();
+  const PlatformAccelerometer d = Unpack14(q);
+  const Mat33 C = InstallationMatrix(d.beta);
+  Eigen::VectorXd predicted(3 * m);
+  if (J != nullptr) J->resize(static_cast<Eigen::Index>(3 * m), kParameters);
+  for (std::size_t k = 0; k < m; ++k) {
+    Mat33 du;
+    const Vec3 angles = commanded[k] + Vec3(0.0, q(12), q(13));
+    const Vec3 f = gravity * PlatformUp(angles, &du);
+    const Vec3 Cf = C * f;
+    const auto row = static_cast<Eigen::Index>(3 * k);
+    predicted.segment<3>(row) = d.s.cwiseProduct(Cf) + d.bias;
+    if (J == nullptr) continue;
+    auto Jk = J->middleRows<3>(row);
+    Jk.setZero();
+    for (int i = 0; i < 3; ++i) {
+      Jk(i, i) = Cf(i);    // ∂/∂s_i
+      Jk(i, 3 + i) = 1.0;  // ∂/∂δb_i
+    }
+    Jk(0, 6) = d.s(0) * f(1);    // β_xz
+    Jk(0, 7) = -d.s(0) * f(2);   // β_xy
+    Jk(1, 8) = -d.s(1) * f(0);   // β_yz
+    Jk(1, 9) = d.s(1) * f(2);    // β_yx
+    Jk(2, 10) = d.s(2) * f(0);   // β_zy
+    Jk(2, 11) = -d.s(2) * f(1);  // β_zx
+    const Mat33 dC = d.s.asDiagonal() * C * gravity * du;
+    Jk.col(12) = dC.col(1);  // θ20
+    Jk.col(13) = dC.col(2);  // θ30
+  }
+  return predicted;
+}
+
+Eigen::VectorXd FineObservation(const std::vector<Vec3>& outputs, const PlatformAccelerometer& d,
+                                double gravity, Eigen::Matrix<double, Eigen::Dynamic, 12>* A) {
+  const std::size_t m = outputs.size();
+  const Mat33 C_inverse = InstallationMatrix(d.beta).inverse();  // Ĉ_a^p
+  Eigen::VectorXd z(m);
+  if (A != nullptr) A->resize(static_cast<Eigen::Index>(m), 12);
+  for (std::size_t j = 0; j < m; ++j) {
+    // v = ŜF (f^a − δ̂b) with the nonlinear term of eq. (8) removed as far as it is known.
+    const Vec3 deviation = outputs[j] - d.bias;
+    const Vec3 v = (deviation - d.k_nl.cwiseProduct(deviation.cwiseAbs2())).cwiseQuotient(d.s);
+    const Vec3 f_p = C_inverse * v;
+    const auto row = static_cast<Eigen::Index>(j);
+    z(row) = 0.5 * (gravity * gravity - f_p.squaredNorm());
+    if (A == nullptr) continue;
+    A->row(row) << v(0) * v(0), v(1) * v(1), v(2) * v(2), -v(0), -v(1), -v(2), -v(0) * v(0) * v(0),
+        -v(1) * v(1) * v(1), -v(2) * v(2) * v(2), v(0) * v(1), v(0) * v(2), v(1) * v(2);
+  }
+  return z;
+}
+
+void ApplyFineUpdate(const Eigen::Matrix<double, 12, 1>& dx, PlatformAccelerometer* device) {
+  PlatformAccelerometer& d = *device;
+  // Full-value update (the paper's "using scale factors to convert the solved dx").
+  for (int i = 0; i < 3; ++i) {
+    const double sf = 1.0 / d.s(i);  // ŜF_i
+    d.bias(i) += dx(3 + i) / sf;
+    d.k_nl(i) += dx(6 + i) * sf;
+    d.s(i) /= 1.0 + dx(i);
+  }
+  d.beta(2) += dx(9) / 2;   // β_yz
+  d.beta(0) -= dx(9) / 2;   // β_xz
+  d.beta(1) += dx(10) / 2;  // β_xy
+  d.beta(4) -= dx(10) / 2;  // β_zy
+  d.beta(5) += dx(11) / 2;  // β_zx
+  d.beta(3) -= dx(11) / 2;  // β_yx
+}
+
+}  // namespace internal
+
 CoarseCalibrationResult CoarseCalibration(const std::vector<Vec3>& outputs,
                                           const std::vector<Vec3>& commanded, double gravity) {
   const std::size_t m = outputs.size();
@@ -126,30 +202,10 @@ CoarseCalibrationResult CoarseCalibration(const std::vector<Vec3>& outputs,
   Eigen::Matrix<double, Eigen::Dynamic, kParameters> J(3 * m, kParameters);
   Eigen::VectorXd r(3 * m);
   const auto linearise = [&](const Vec14& q) {
-    const PlatformAccelerometer d = Unpack14(q);
-    const Mat33 C = InstallationMatrix(d.beta);
+    const Eigen::VectorXd predicted = internal::CoarsePrediction(commanded, gravity, q, &J);
     for (std::size_t k = 0; k < m; ++k) {
-      Mat33 du;
-      const Vec3 angles = commanded[k] + Vec3(0.0, q(12), q(13));
-      const Vec3 f = gravity * PlatformUp(angles, &du);
-      const Vec3 Cf = C * f;
-      const auto row = static_cast<Eigen::Index>(3 * k);
-      r.segment<3>(row) = outputs[k] - (d.s.cwiseProduct(Cf) + d.bias);
-      auto Jk = J.middleRows<3>(row);
-      Jk.setZero();
-      for (int i = 0; i < 3; ++i) {
-        Jk(i, i) = Cf(i);    // ∂/∂s_i
-        Jk(i, 3 + i) = 1.0;  // ∂/∂δb_i
-      }
-      Jk(0, 6) = d.s(0) * f(1);    // β_xz
-      Jk(0, 7) = -d.s(0) * f(2);   // β_xy
-      Jk(1, 8) = -d.s(1) * f(0);   // β_yz
-      Jk(1, 9) = d.s(1) * f(2);    // β_yx
-      Jk(2, 10) = d.s(2) * f(0);   // β_zy
-      Jk(2, 11) = -d.s(2) * f(1);  // β_zx
-      const Mat33 dC = d.s.asDiagonal() * C * gravity * du;
-      Jk.col(12) = dC.col(1);  // θ20
-      Jk.col(13) = dC.col(2);  // θ30
+      r.segment<3>(static_cast<Eigen::Index>(3 * k)) =
+          outputs[k] - predicted.segment<3>(static_cast<Eigen::Index>(3 * k));
     }
   };
   for (int it = 0; it < 50; ++it) {
@@ -223,19 +279,7 @@ FineCalibrationResult FineCalibration(const std::vector<Vec3>& outputs,
   PlatformAccelerometer& d = result.device;
   Eigen::Matrix<double, Eigen::Dynamic, 12> A(m, 12);
   Eigen::VectorXd z(m);
-  const auto linearise = [&]() {
-    const Mat33 C_inverse = InstallationMatrix(d.beta).inverse();  // Ĉ_a^p
-    for (std::size_t j = 0; j < m; ++j) {
-      // v = ŜF (f^a − δ̂b) with the nonlinear term of eq. (8) removed as far as it is known.
-      const Vec3 deviation = outputs[j] - d.bias;
-      const Vec3 v = (deviation - d.k_nl.cwiseProduct(deviation.cwiseAbs2())).cwiseQuotient(d.s);
-      const Vec3 f_p = C_inverse * v;
-      const auto row = static_cast<Eigen::Index>(j);
-      z(row) = 0.5 * (gravity * gravity - f_p.squaredNorm());
-      A.row(row) << v(0) * v(0), v(1) * v(1), v(2) * v(2), -v(0), -v(1), -v(2), -v(0) * v(0) * v(0),
-          -v(1) * v(1) * v(1), -v(2) * v(2) * v(2), v(0) * v(1), v(0) * v(2), v(1) * v(2);
-    }
-  };
+  const auto linearise = [&]() { z = internal::FineObservation(outputs, d, gravity, &A); };
   Eigen::Matrix<double, 12, 12> normal_inverse;
   for (int it = 0; it < 20; ++it) {
     linearise();
@@ -251,19 +295,7 @@ FineCalibrationResult FineCalibration(const std::vector<Vec3>& outputs,
                      eig.eigenvectors().transpose() * scale.asDiagonal();
     const Vec12 dx = normal_inverse * (A.transpose() * z);
     result.dx += dx;
-    // Full-value update (the paper's "using scale factors to convert the solved dx").
-    for (int i = 0; i < 3; ++i) {
-      const double sf = 1.0 / d.s(i);  // ŜF_i
-      d.bias(i) += dx(3 + i) / sf;
-      d.k_nl(i) += dx(6 + i) * sf;
-      d.s(i) /= 1.0 + dx(i);
-    }
-    d.beta(2) += dx(9) / 2;   // β_yz
-    d.beta(0) -= dx(9) / 2;   // β_xz
-    d.beta(1) += dx(10) / 2;  // β_xy
-    d.beta(4) -= dx(10) / 2;  // β_zy
-    d.beta(5) += dx(11) / 2;  // β_zx
-    d.beta(3) -= dx(11) / 2;  // β_yx
+    internal::ApplyFineUpdate(dx, &d);
     ++result.iterations;
     if ((A * dx).cwiseAbs().maxCoeff() <= 1e-13 * gravity * gravity) {
       result.converged = true;

@@ -7,6 +7,7 @@
 
 #include "accelcal/error.hpp"
 #include "accelcal/gimbal_platform.hpp"
+#include "gimbal_internal.hpp"
 #include "support/jacobian_check.hpp"
 
 namespace accelcal {
@@ -176,6 +177,40 @@ TEST(GimbalPlatform, FineStageAfterTheCoarseStage) {
       EXPECT_NEAR(BetaDifferences(d)(i), BetaDifferences(truth)(i), 4 * fine.dx_std(9 + i)) << i;
     }
   }
+}
+
+TEST(GimbalPlatform, CoarseJacobianMatchesFiniteDifferences) {
+  const std::vector<Vec3> angles = Wu2018Table1Angles();
+  internal::CoarseParameters p;
+  p << 1.01, 0.98, 1.03, 0.2, -0.1, 0.05, 0.01, -0.02, 0.015, 0.03, -0.01, 0.02, 0.05, -0.04;
+  internal::CoarseJacobian J;
+  internal::CoarsePrediction(angles, kG, p, &J);
+  auto f = [&](const Eigen::VectorXd& q) -> Eigen::VectorXd {
+    return internal::CoarsePrediction(angles, kG, q, nullptr);
+  };
+  EXPECT_TRUE(testing::JacobianMatches(f, p, J));
+}
+
+TEST(GimbalPlatform, FineRowsAreTheFirstOrderChangeOfTheObservation) {
+  // Eq. (16) is a linearisation: the change of ½(g² − |f̂^p|²) under the full-value update by dx is
+  // −A dx to first order in dx, up to terms of the size of the device's own errors that the rows
+  // neglect (Ĉ ≠ I: installation angles of 0.5-2e-4 here) relative to the largest entry: measured
+  // to agree at 1e-4, not at 3e-5; checked at 3e-4. The sign of A is part of the check.
+  PlatformAccelerometer d = Truth();
+  d.k_nl = Vec3(5e-6, -3e-6, 4e-6);
+  std::vector<Vec3> outputs;
+  for (const Vec3& a : Wu2018Table1Angles())
+    outputs.push_back(PlatformOutput(d, kG * PlatformUp(a)));
+  Eigen::Matrix<double, Eigen::Dynamic, 12> A;
+  internal::FineObservation(outputs, d, kG, &A);
+  auto z = [&](const Eigen::VectorXd& dx) -> Eigen::VectorXd {
+    PlatformAccelerometer updated = d;
+    internal::ApplyFineUpdate(dx, &updated);
+    return internal::FineObservation(outputs, updated, kG, nullptr);
+  };
+  // Steps of 1e-7 on dx entries of size ~1e-4 (not the default relative step on zero).
+  EXPECT_TRUE(testing::JacobianMatches(z, Eigen::VectorXd::Zero(12), -A, 3e-4, 1e-7));
+  EXPECT_FALSE(testing::JacobianMatches(z, Eigen::VectorXd::Zero(12), A, 3e-4, 1e-7));
 }
 
 TEST(GimbalPlatform, RefusesTooFewPositions) {

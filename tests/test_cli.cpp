@@ -11,6 +11,7 @@
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
+#include "accelcal/gimbal_platform.hpp"
 #include "accelcal/simulate.hpp"
 
 namespace accelcal {
@@ -518,6 +519,51 @@ TEST_F(Cli, SystemLevelFromASimulatedSeries) {
   EXPECT_NE(truncated.err.find("truncated binary series"), std::string::npos) << truncated.err;
   EXPECT_EQ(Exec("system-level " + Path("series.bin")).status, 2);
   EXPECT_EQ(Exec("simulate --scenario wu2018-system").status, 2);  // binary needs -o
+}
+
+TEST_F(Cli, GimbalCoarseAndFineStages) {
+  // Paper 003 stages 1-2 from files: Table 1's commanded angles with a device's mean outputs (the
+  // library's model, gimbal offsets of 3' and -2'), then the fine stage's outputs after
+  // re-zeroing. Noise-free, but with squared terms the coarse stage ignores: they pull its offsets
+  // by 1-2 arc-seconds (measured 4.7e-6 and 7.9e-6 rad), which the fine stage does not need.
+  PlatformAccelerometer truth;
+  truth.s = Vec3(1.0004, 0.9993, 1.0011);
+  truth.bias = Vec3(2e-3, -1.5e-3, 3e-3);
+  truth.beta << 1.2e-4, -0.8e-4, 0.5e-4, 2.0e-4, -1.1e-4, 0.7e-4;
+  truth.k_nl = Vec3(5e-6, -3e-6, 4e-6);
+  const double arcmin = 3.14159265358979323846 / 180 / 60;
+  const Vec3 offsets(0.0, 3 * arcmin, -2 * arcmin);
+  const double g = 9.80665;
+  std::string coarse = "theta1_deg,theta2_deg,theta3_deg,ax,ay,az\n", fine = "ax,ay,az\n";
+  for (const Vec3& a : Wu2018Table1Angles()) {
+    const Vec3 out = PlatformOutput(truth, g * PlatformUp(a + offsets));
+    const Vec3 deg = a * 180 / 3.14159265358979323846;
+    char row[256];
+    std::snprintf(row, sizeof row, "%.17g,%.17g,%.17g,%.17g,%.17g,%.17g\n", deg(0), deg(1), deg(2),
+                  out(0), out(1), out(2));
+    coarse += row;
+    const Vec3 fine_out = PlatformOutput(truth, g * PlatformUp(a));  // re-zeroed platform
+    std::snprintf(row, sizeof row, "%.17g,%.17g,%.17g\n", fine_out(0), fine_out(1), fine_out(2));
+    fine += row;
+  }
+  const CliRun r = Exec("gimbal " + Write("coarse.csv", coarse) + " --fine " +
+                        Write("fine.csv", fine) + " --json");
+  ASSERT_EQ(r.status, 0) << r.err;
+  const nlohmann::json doc = nlohmann::json::parse(r.out);
+  EXPECT_NEAR(doc["coarse"]["offsets_rad"]["theta20"].get<double>(), offsets(1), 1.5e-5);
+  EXPECT_NEAR(doc["coarse"]["offsets_rad"]["theta30"].get<double>(), offsets(2), 1.5e-5);
+  EXPECT_NE(doc["coarse"]["note"].get<std::string>().find("theta10"), std::string::npos);
+  for (int i = 0; i < 3; ++i) {
+    EXPECT_NEAR(doc["fine"]["device"]["sf_inverse"][i].get<double>(), truth.s(i), 1e-9);
+    EXPECT_NEAR(doc["fine"]["device"]["k_nl"][i].get<double>(), truth.k_nl(i), 1e-11);
+  }
+  EXPECT_NE(doc["fine"]["note"].get<std::string>().find("not separable"), std::string::npos);
+  const CliRun text = Exec("gimbal " + Path("coarse.csv"));
+  EXPECT_EQ(text.status, 0) << text.err;
+  EXPECT_NE(text.out.find("offsets theta20 180.97 +- "), std::string::npos) << text.out;
+  const CliRun bad = Exec("gimbal " + Write("bad.csv", "1,2,3,4,5\n"));
+  EXPECT_EQ(bad.status, 3);
+  EXPECT_NE(bad.err.find("bad.csv:1: expected 6 numbers"), std::string::npos) << bad.err;
 }
 
 TEST_F(Cli, LatitudeGivesWgs84Gravity) {

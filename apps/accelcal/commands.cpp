@@ -4,7 +4,9 @@
 #include <charconv>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <iostream>
+#include <sstream>
 #include <stdexcept>
 
 #include "accelcal/calibration_file.hpp"
@@ -13,6 +15,7 @@
 #include "accelcal/engineering.hpp"
 #include "accelcal/error.hpp"
 #include "accelcal/frame.hpp"
+#include "accelcal/gimbal_platform.hpp"
 #include "accelcal/gravity.hpp"
 #include "accelcal/known_orientation.hpp"
 #include "accelcal/model_selection.hpp"
@@ -976,6 +979,139 @@ int RunSystemLevel(const SystemLevelArgs& args) {
   }
   WriteFileAtomically("-", out);
   return kExitOk;
+}
+
+namespace {
+
+// Rows of `columns` numbers (commas or whitespace; `#` comments; a header line whose first field
+// is no number is skipped).
+std::vector<std::vector<double>> ReadTable(const std::string& path, std::size_t columns) {
+  const std::string text = ReadFileToString(path);
+  std::vector<std::vector<double>> rows;
+  std::istringstream lines(text);
+  std::string line;
+  std::size_t number = 0;
+  while (std::getline(lines, line)) {
+    ++number;
+    line = line.substr(0, line.find('#'));
+    for (char& ch : line) {
+      if (ch == ',' || ch == '\t' || ch == '\r') ch = ' ';
+    }
+    std::istringstream fields(line);
+    std::vector<double> row;
+    std::string field;
+    bool numeric = true;
+    while (fields >> field) {
+      char* end = nullptr;
+      const double v = std::strtod(field.c_str(), &end);
+      if (end == field.c_str() || *end != '\0') {
+        numeric = false;
+        break;
+      }
+      row.push_back(v);
+    }
+    if (!numeric && rows.empty() && row.empty()) continue;  // header
+    if (row.empty() && numeric) continue;                   // blank
+    if (!numeric || row.size() != columns) {
+      throw InputError(path, number, "expected " + std::to_string(columns) + " numbers");
+    }
+    for (double v : row) {
+      if (!std::isfinite(v)) throw InputError(path, number, "a value is not finite");
+    }
+    rows.push_back(std::move(row));
+  }
+  if (rows.empty()) throw InputError(path, 0, "no rows");
+  return rows;
+}
+
+std::string BetaJson(const Eigen::Matrix<double, 6, 1>& beta) {
+  static const char* const kNames[6] = {"beta_xz", "beta_xy", "beta_yz",
+                                        "beta_yx", "beta_zy", "beta_zx"};
+  std::string out = "{";
+  for (int i = 0; i < 6; ++i) {
+    out += (i ? ", \"" : "\"") + std::string(kNames[i]) + "\": " + FormatNumber(beta(i));
+  }
+  return out + "}";
+}
+
+std::string DeviceJson(const PlatformAccelerometer& d) {
+  return "{\"sf_inverse\": " + JsonVector(d.s) + ", \"bias\": " + JsonVector(d.bias) +
+         ", \"beta_rad\": " + BetaJson(d.beta) + ", \"k_nl\": " + JsonVector(d.k_nl) + "}";
+}
+
+}  // namespace
+
+int RunGimbal(const GimbalArgs& args) {
+  const Gravity g = ResolveGravity(args.gravity);
+  constexpr double kDeg = 3.14159265358979323846 / 180.0;
+  std::vector<Vec3> commanded, outputs;
+  for (const std::vector<double>& row : ReadTable(args.coarse, 6)) {
+    commanded.emplace_back(row[0] * kDeg, row[1] * kDeg, row[2] * kDeg);
+    outputs.emplace_back(row[3], row[4], row[5]);
+  }
+  const CoarseCalibrationResult coarse = CoarseCalibration(outputs, commanded, g.in_unit);
+  std::optional<FineCalibrationResult> fine;
+  if (!args.fine.empty()) {
+    std::vector<Vec3> fine_outputs;
+    for (const std::vector<double>& row : ReadTable(args.fine, 3)) {
+      fine_outputs.emplace_back(row[0], row[1], row[2]);
+    }
+    fine = FineCalibration(fine_outputs, coarse.device, g.in_unit);
+  }
+  std::string out;
+  if (args.json) {
+    out += "{\n  \"gravity\": " + FormatNumber(g.in_unit) +
+           ",\n  \"coarse\": {\"device\": " + DeviceJson(coarse.device) +
+           ",\n    \"offsets_rad\": {\"theta20\": " + FormatNumber(coarse.offsets(1)) +
+           ", \"theta30\": " + FormatNumber(coarse.offsets(2)) + "}, \"std\": [";
+    for (int i = 0; i < 14; ++i) out += (i ? ", " : "") + FormatNumber(coarse.std(i));
+    out +=
+        "],\n    \"parameter_order\": [\"s_x\", \"s_y\", \"s_z\", \"b_x\", \"b_y\", "
+        "\"b_z\", \"beta_xz\", \"beta_xy\", \"beta_yz\", \"beta_yx\", \"beta_zy\", "
+        "\"beta_zx\", \"theta20\", \"theta30\"],\n    \"residual_rms\": " +
+        FormatNumber(coarse.residual_rms) +
+        ", \"converged\": " + (coarse.converged ? "true" : "false") + ", \"note\": \"" +
+        coarse.note + "\"}";
+    if (fine) {
+      out += ",\n  \"fine\": {\"device\": " + DeviceJson(fine->device) + ",\n    \"dx\": [";
+      for (int i = 0; i < 12; ++i) out += (i ? ", " : "") + FormatNumber(fine->dx(i));
+      out += "], \"dx_std\": [";
+      for (int i = 0; i < 12; ++i) out += (i ? ", " : "") + FormatNumber(fine->dx_std(i));
+      out += "],\n    \"residual_rms\": " + FormatNumber(fine->residual_rms) +
+             ", \"converged\": " + (fine->converged ? "true" : "false") + ", \"note\": \"" +
+             fine->note + "\"}";
+    }
+    out += "\n}\n";
+  } else {
+    const auto device = [&](const PlatformAccelerometer& d) {
+      std::string text = Format("  SF^-1   %.10g %.10g %.10g\n", d.s(0), d.s(1), d.s(2));
+      text += Format("  bias    %.6g %.6g %.6g\n", d.bias(0), d.bias(1), d.bias(2));
+      text += Format("  beta    xz %.2f  xy %.2f  yz %.2f  yx %.2f  zy %.2f  zx %.2f arcsec\n",
+                     d.beta(0) / kDeg * 3600, d.beta(1) / kDeg * 3600, d.beta(2) / kDeg * 3600,
+                     d.beta(3) / kDeg * 3600, d.beta(4) / kDeg * 3600, d.beta(5) / kDeg * 3600);
+      return text;
+    };
+    out += Format("coarse    %zu positions, %s after %d iterations, residual rms %.3g\n",
+                  outputs.size(), coarse.converged ? "converged" : "NOT CONVERGED",
+                  coarse.iterations, coarse.residual_rms);
+    out += device(coarse.device);
+    out += Format("  offsets theta20 %.2f +- %.2f arcsec, theta30 %.2f +- %.2f arcsec\n",
+                  coarse.offsets(1) / kDeg * 3600, coarse.std(12) / kDeg * 3600,
+                  coarse.offsets(2) / kDeg * 3600, coarse.std(13) / kDeg * 3600);
+    out += "  note    " + coarse.note + "\n";
+    if (fine) {
+      out += Format("fine      %s after %d iterations, residual rms %.3g\n",
+                    fine->converged ? "converged" : "NOT CONVERGED", fine->iterations,
+                    fine->residual_rms);
+      out += device(fine->device);
+      out += Format("  K_nl    %.4g %.4g %.4g per output unit\n", fine->device.k_nl(0),
+                    fine->device.k_nl(1), fine->device.k_nl(2));
+      out += "  note    " + fine->note + "\n";
+    }
+  }
+  WriteFileAtomically("-", out);
+  const bool ok = coarse.converged && (!fine || fine->converged);
+  return ok ? kExitOk : kExitNotConverged;
 }
 
 int RunSimulate(const SimulateArgs& args) {

@@ -135,7 +135,15 @@ struct SystemLevelArgs {
   bool json = false;
 };
 
+struct GimbalArgs {
+  std::string coarse;  // theta1_deg,theta2_deg,theta3_deg,ax,ay,az per position
+  std::string fine;    // ax,ay,az per position (re-zeroed platform), optional
+  GravityArgs gravity;
+  bool json = false;
+};
+
 int RunCalibrate(const CalibrateArgs& args);
+int RunGimbal(const GimbalArgs& args);
 int RunSystemLevel(const SystemLevelArgs& args);
 int RunSimulate(const SimulateArgs& args);
 int RunMonteCarlo(const MonteCarloArgs& args);

@@ -186,6 +186,22 @@ int main(int argc, char** argv) {
                            "local gravity [m/s2] (default: WGS-84 normal gravity)");
   system_level->add_flag("--json", sys.json, "machine-readable output");
 
+  GimbalArgs gim;
+  CLI::App* gimbal = app.add_subcommand(
+      "gimbal",
+      "paper 003 stages 1-2: accelerometer on a three-gimbal platform, coarse (gimbal zero "
+      "offsets) and fine (squared-amplitude) device-level calibration");
+  gimbal
+      ->add_option("COARSE", gim.coarse,
+                   "commanded gimbal angles and mean output per position: "
+                   "theta1_deg,theta2_deg,theta3_deg,ax,ay,az (Table 1's 18 positions)")
+      ->required();
+  gimbal->add_option("--fine", gim.fine,
+                     "mean outputs ax,ay,az of the fine stage's positions, measured after "
+                     "re-zeroing the gimbals by the coarse offsets");
+  AddGravityOptions(gimbal, &gim.gravity);
+  gimbal->add_flag("--json", gim.json, "machine-readable output");
+
   SimulateArgs sim;
   CLI::App* simulate = app.add_subcommand(
       "simulate", "write a simulated recording (raw log or positions file) of a known device");
@@ -252,6 +268,7 @@ int main(int argc, char** argv) {
       return RunSimulate(sim);
     }
     if (*system_level) return RunSystemLevel(sys);
+    if (*gimbal) return RunGimbal(gim);
   } catch (const UsageError& e) {
     std::fprintf(stderr, "accelcal: usage: %s\n", e.what());
     return kExitUsage;
@@ -264,6 +281,7 @@ int main(int argc, char** argv) {
                   : *detect       ? det.input.path
                   : *design       ? des.positions
                   : *system_level ? sys.series
+                  : *gimbal       ? gim.coarse
                   : *compare      ? cmp.input.path
                                   : apply.input.path)
                      .c_str(),

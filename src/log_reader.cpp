@@ -1,5 +1,7 @@
 #include "accelcal/log_reader.hpp"
 
+#include <sys/stat.h>
+
 #include <algorithm>
 #include <cctype>
 #include <cmath>
@@ -37,6 +39,10 @@ std::string ReadFileToString(const std::string& path) {
   std::unique_ptr<std::FILE, int (*)(std::FILE*)> file(std::fopen(path.c_str(), "rb"),
                                                        &std::fclose);
   if (!file) throw InputError(path, 0, std::string("cannot open: ") + std::strerror(errno));
+  struct stat st;
+  if (::fstat(::fileno(file.get()), &st) == 0 && S_ISDIR(st.st_mode)) {
+    throw InputError(path, 0, "is a directory, not a file");
+  }
   std::string data;
   // One allocation and one read for regular files; pipes and the like grow as they come.
   if (std::fseek(file.get(), 0, SEEK_END) == 0) {

@@ -564,6 +564,13 @@ TEST_F(Cli, GimbalCoarseAndFineStages) {
   const CliRun bad = Exec("gimbal " + Write("bad.csv", "1,2,3,4,5\n"));
   EXPECT_EQ(bad.status, 3);
   EXPECT_NE(bad.err.find("bad.csv:1: expected 6 numbers"), std::string::npos) << bad.err;
+  // Only the first line may be a header: a second line of words is an error, not another header.
+  const CliRun words = Exec("gimbal " + Write("words.csv", "a,b,c,d,e,f\ng,h,i,j,k,l\n"));
+  EXPECT_EQ(words.status, 3);
+  EXPECT_NE(words.err.find("words.csv:2: expected 6 numbers"), std::string::npos) << words.err;
+  const CliRun directory = Exec("gimbal " + Path(""));
+  EXPECT_EQ(directory.status, 3);
+  EXPECT_NE(directory.err.find("is a directory, not a file"), std::string::npos) << directory.err;
 }
 
 TEST_F(Cli, LatitudeGivesWgs84Gravity) {

@@ -991,6 +991,7 @@ std::vector<std::vector<double>> ReadTable(const std::string& path, std::size_t 
   std::istringstream lines(text);
   std::string line;
   std::size_t number = 0;
+  bool first = true;  // a header is allowed on the first non-blank line only
   while (std::getline(lines, line)) {
     ++number;
     line = line.substr(0, line.find('#'));
@@ -1010,8 +1011,10 @@ std::vector<std::vector<double>> ReadTable(const std::string& path, std::size_t 
       }
       row.push_back(v);
     }
-    if (!numeric && rows.empty() && row.empty()) continue;  // header
-    if (row.empty() && numeric) continue;                   // blank
+    if (row.empty() && numeric) continue;  // blank
+    const bool header = first && !numeric && row.empty();
+    first = false;
+    if (header) continue;
     if (!numeric || row.size() != columns) {
       throw InputError(path, number, "expected " + std::to_string(columns) + " numbers");
     }

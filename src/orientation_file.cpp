@@ -7,6 +7,7 @@
 #include <fast_float/fast_float.h>
 
 #include "accelcal/error.hpp"
+#include "accelcal/gimbal_platform.hpp"
 #include "accelcal/log_reader.hpp"
 
 namespace accelcal {
@@ -76,6 +77,8 @@ bool LayoutOfHeader(const std::vector<std::string_view>& fields, OrientationLayo
     *layout = OrientationLayout::kRollPitchYaw;
   } else if (is({"qw", "qx", "qy", "qz"})) {
     *layout = OrientationLayout::kQuaternions;
+  } else if (is({"theta1_deg", "theta2_deg", "theta3_deg"})) {
+    *layout = OrientationLayout::kGimbalAngles;
   } else {
     return false;
   }
@@ -118,7 +121,7 @@ OrientationFile ParseOrientations(std::string_view text, const std::string& sour
       if (!LayoutOfHeader(fields, &out.layout)) {
         throw InputError(source, line_number,
                          "unknown header: expected x,y,z or roll_deg,pitch_deg[,yaw_deg] or "
-                         "qw,qx,qy,qz");
+                         "qw,qx,qy,qz or theta1_deg,theta2_deg,theta3_deg");
       }
       header_seen = true;
       columns = fields.size();
@@ -148,6 +151,9 @@ OrientationFile ParseOrientations(std::string_view text, const std::string& sour
                              ") is not a unit vector (norm " + Number6(c.norm()) + ")");
       }
       c.normalize();
+    } else if (out.layout == OrientationLayout::kGimbalAngles) {
+      constexpr double kDeg = 3.14159265358979323846 / 180.0;
+      c = PlatformUp(Vec3(v[0], v[1], v[2]) * kDeg);
     } else {
       Eigen::Quaterniond q;
       if (out.layout == OrientationLayout::kRollPitchYaw) {

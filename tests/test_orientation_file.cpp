@@ -59,6 +59,18 @@ TEST(OrientationFile, QuaternionsGiveTheSameDirectionsAsTheirAngles) {
   EXPECT_NEAR(f.attitudes[0].norm(), 1.0, 1e-15);
 }
 
+TEST(OrientationFile, GimbalAnglesFollowPaper003sChain) {
+  // Table 1 rows 2 and 14 (θ in degrees): (0, 45, 0) → (0, ½√2, ½√2), (135, 270, 0) →
+  // (−½√2, ½√2, 0).
+  const OrientationFile f =
+      ParseOrientations("theta1_deg,theta2_deg,theta3_deg\n0,45,0\n135,270,0\n", "g.csv");
+  EXPECT_EQ(f.layout, OrientationLayout::kGimbalAngles);
+  const double h = std::sqrt(0.5);
+  EXPECT_LT((f.directions[0] - Vec3(0, h, h)).norm(), 1e-15);
+  EXPECT_LT((f.directions[1] - Vec3(-h, h, 0)).norm(), 1e-15);
+  EXPECT_TRUE(f.attitudes.empty());
+}
+
 // The InputError of `text`, or a failure when it parses.
 InputError ErrorOf(const std::string& text) {
   try {

@@ -7,6 +7,8 @@
 ///                               three numbers per line are read as this)
 ///   roll_deg,pitch_deg[,yaw_deg] attitudes, degrees
 ///   qw,qx,qy,qz                 attitudes as unit quaternions (Hamilton, scalar first)
+///   theta1_deg,theta2_deg,theta3_deg  gimbal angles of paper 003's three-gimbal platform, degrees:
+///                               c = PlatformUp(θ) (gimbal_platform.hpp; no attitude stored)
 ///
 /// Attitude convention: R = Rz(yaw) Ry(pitch) Rx(roll) maps body-frame vectors to a level frame
 /// whose z axis points up, so a sensor at rest senses the specific force g Rᵀ e_z:
@@ -27,12 +29,12 @@
 
 namespace accelcal {
 
-enum class OrientationLayout { kDirections, kRollPitchYaw, kQuaternions };
+enum class OrientationLayout { kDirections, kRollPitchYaw, kQuaternions, kGimbalAngles };
 
 struct OrientationFile {
   OrientationLayout layout = OrientationLayout::kDirections;
   std::vector<Vec3> directions;               ///< unit c per position, body frame
-  std::vector<Eigen::Quaterniond> attitudes;  ///< R per position (attitude layouts only)
+  std::vector<Eigen::Quaterniond> attitudes;  ///< R per position (roll/pitch/yaw, quaternions)
   std::vector<std::size_t> lines;             ///< 1-based line of each position
 };
 

@@ -333,26 +333,33 @@ internal::SolverOutput SolveFrom(const Problem& problem, const ModelParameters& 
   return internal::SolveJoint(problem, params, std::move(dirs), options);
 }
 
-// The per-axis noise of each reading that the bias correction assumes: the covariance's
-// (calibrate.hpp), from the fit to `problem`.
-std::vector<Vec3> CorrectionNoise(const Problem& problem, const internal::SolverOutput& out,
-                                  const CalibrationOptions& options, int dof) {
+// The bias correction's offsets at the fit to `problem`, with the noise the covariance uses
+// (calibrate.hpp): σ̂ from the residuals, or the readings' sigmas inflated by the scatter ratio.
+// The offsets are linear in the noise covariance, so the inflation R² (which needs the normals)
+// scales those of the uninflated sigmas: one pass over the positions.
+internal::SurfaceOffsets CorrectionOffsets(const Problem& problem,
+                                           const internal::SolverOutput& out,
+                                           const CalibrationOptions& options, int dof) {
   const std::size_t m = problem.readings.size();
   if (options.reading_sigmas.empty()) {
-    return std::vector<Vec3>(m, Vec3::Constant(std::sqrt(out.summary.final_cost / dof)));
+    const Vec3 sigma = Vec3::Constant(std::sqrt(out.summary.final_cost / dof));
+    return internal::ExpectedSurfaceOffsets(problem, out.params, out.dirs,
+                                            std::vector<Vec3>(m, sigma));
   }
-  const internal::SurfaceOffsets at_fit =
+  internal::SurfaceOffsets offsets =
       internal::ExpectedSurfaceOffsets(problem, out.params, out.dirs, options.reading_sigmas);
   double chi2 = 0;
   for (std::size_t k = 0; k < m; ++k) {
     const Vec3 residual =
         problem.readings[k] - PredictRaw(out.params, Vec3(problem.gravity * out.dirs[k]));
-    chi2 += std::pow(at_fit.normal[k].dot(residual) / at_fit.normal_sigma[k], 2);
+    chi2 += std::pow(offsets.normal[k].dot(residual) / offsets.normal_sigma[k], 2);
   }
-  const double inflation = std::sqrt(std::max(1.0, chi2 / dof));
-  std::vector<Vec3> sigmas = options.reading_sigmas;
-  for (Vec3& s : sigmas) s *= inflation;
-  return sigmas;
+  const double inflation2 = std::max(1.0, chi2 / dof);
+  for (std::size_t k = 0; k < m; ++k) {
+    offsets.offset[k] *= inflation2;
+    offsets.normal_sigma[k] *= std::sqrt(inflation2);
+  }
+  return offsets;
 }
 
 // Estimator::kBiasCorrected (calibrate.hpp): refits `out` with each reading moved inward by its
@@ -373,8 +380,8 @@ std::vector<Vec3> CorrectBias(const std::vector<Vec3>& readings, const Calibrati
   double change = 0;
   for (int round = 0; round <= options.bias_correction.max_rounds; ++round) {
     const Problem problem{shifted, options.gravity, options.model};
-    const internal::SurfaceOffsets offsets = internal::ExpectedSurfaceOffsets(
-        problem, out->params, out->dirs, CorrectionNoise(problem, *out, options, std::max(dof, 1)));
+    const internal::SurfaceOffsets offsets =
+        CorrectionOffsets(problem, *out, options, std::max(dof, 1));
     std::vector<Vec3> next(readings.size());
     change = 0;
     for (std::size_t k = 0; k < readings.size(); ++k) {

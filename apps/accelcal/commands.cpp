@@ -283,6 +283,32 @@ void PrintModelSelection(const ModelSelection& s, bool requested_auto) {
 
 namespace {
 
+// The end of every calibrate: the file to -o, then the file to stdout (--json) or the summary
+// (`input_note`, when not empty, printed after the input's description).
+int WriteCalibration(const CalibrateArgs& args, const LoadedInput& in, const Gravity& g,
+                     const CalibrationResult& result, const ModelSelection* selection,
+                     const std::string& input_note) {
+  CalibrationFileInfo info;
+  info.unit = g.unit;
+  info.raw_unit = args.raw_units;
+  info.source = args.input.path;
+  info.positions = in.positions;
+  info.model_selection = selection;
+  info.model_requested = args.model;
+  const std::string json = CalibrationToJson(result, info);
+  if (!args.output.empty()) WriteFileAtomically(args.output, json);
+  if (args.json) {
+    WriteFileAtomically("-", json);
+  } else {
+    PrintInput(in, args.input.path);
+    std::fputs(input_note.c_str(), stdout);
+    PrintCalibration(result, in.positions, g, args.raw_units);
+    if (selection) PrintModelSelection(*selection, args.model == "auto");
+    if (!args.output.empty()) std::printf("wrote     %s\n", args.output.c_str());
+  }
+  return kExitOk;
+}
+
 // calibrate --orientations: the platform-frame least squares of known_orientation.hpp.
 int RunCalibrateKnownOrientations(const CalibrateArgs& args) {
   if (!args.gravity_only_options.empty()) {
@@ -309,24 +335,9 @@ int RunCalibrateKnownOrientations(const CalibrateArgs& args) {
   options.reading_sigmas = SigmasOfMeans(in.positions);
   const CalibrationResult result =
       CalibrateKnownOrientations(Means(in.positions), orientations.directions, options);
-  CalibrationFileInfo info;
-  info.unit = g.unit;
-  info.raw_unit = args.raw_units;
-  info.source = args.input.path;
-  info.positions = in.positions;
-  info.model_requested = args.model;
-  const std::string json = CalibrationToJson(result, info);
-  if (!args.output.empty()) WriteFileAtomically(args.output, json);
-  if (args.json) {
-    WriteFileAtomically("-", json);
-  } else {
-    PrintInput(in, args.input.path);
-    std::printf("orient.   %s: %zu known orientations\n", args.orientations.c_str(),
-                orientations.directions.size());
-    PrintCalibration(result, in.positions, g, args.raw_units);
-    if (!args.output.empty()) std::printf("wrote     %s\n", args.output.c_str());
-  }
-  return kExitOk;
+  return WriteCalibration(args, in, g, result, nullptr,
+                          Format("orient.   %s: %zu known orientations\n",
+                                 args.orientations.c_str(), orientations.directions.size()));
 }
 
 }  // namespace
@@ -392,24 +403,7 @@ int RunCalibrate(const CalibrateArgs& args) {
                  args.input.path.c_str(), result.summary.termination_message.c_str());
     return kExitNotConverged;
   }
-  CalibrationFileInfo info;
-  info.unit = g.unit;
-  info.raw_unit = args.raw_units;
-  info.source = args.input.path;
-  info.positions = in.positions;
-  info.model_selection = selection ? &*selection : nullptr;
-  info.model_requested = args.model;
-  const std::string json = CalibrationToJson(result, info);
-  if (!args.output.empty()) WriteFileAtomically(args.output, json);
-  if (args.json) {
-    WriteFileAtomically("-", json);
-  } else {
-    PrintInput(in, args.input.path);
-    PrintCalibration(result, in.positions, g, args.raw_units);
-    if (selection) PrintModelSelection(*selection, auto_model);
-    if (!args.output.empty()) std::printf("wrote     %s\n", args.output.c_str());
-  }
-  return kExitOk;
+  return WriteCalibration(args, in, g, result, selection ? &*selection : nullptr, "");
 }
 
 int RunCompare(const CompareArgs& args) {

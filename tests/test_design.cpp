@@ -123,6 +123,23 @@ TEST(Design, NamedSchemes) {
 namespace accelcal {
 namespace {
 
+// Every choice of 10 of 13 candidates (286), for the exhaustive checks of the optimal designs.
+std::vector<std::vector<int>> TenOfThirteen() {
+  std::vector<std::vector<int>> subsets;
+  for (int a = 0; a < 13; ++a) {
+    for (int b = a + 1; b < 13; ++b) {
+      for (int c = b + 1; c < 13; ++c) {
+        std::vector<int> subset;
+        for (int k = 0; k < 13; ++k) {
+          if (k != a && k != b && k != c) subset.push_back(k);
+        }
+        subsets.push_back(std::move(subset));
+      }
+    }
+  }
+  return subsets;
+}
+
 TEST(Design, DOptimalChoiceMatchesExhaustiveSearchOnASmallSet) {
   // 10 of 13 random candidates, linear model: all 286 subsets checked.
   const ModelParameters device = Yang2012Truth();
@@ -137,17 +154,7 @@ TEST(Design, DOptimalChoiceMatchesExhaustiveSearchOnASmallSet) {
     return LogDetInformation(device, ModelKind::kLinear, kG, dirs, sigma);
   };
   double best = -std::numeric_limits<double>::infinity();
-  for (int a = 0; a < 13; ++a) {
-    for (int b = a + 1; b < 13; ++b) {
-      for (int c = b + 1; c < 13; ++c) {
-        std::vector<int> subset;
-        for (int k = 0; k < 13; ++k) {
-          if (k != a && k != b && k != c) subset.push_back(k);
-        }
-        best = std::max(best, logdet(subset));
-      }
-    }
-  }
+  for (const std::vector<int>& subset : TenOfThirteen()) best = std::max(best, logdet(subset));
   EXPECT_NEAR(logdet(chosen), best, 1e-9 * std::abs(best));
 }
 
@@ -168,17 +175,7 @@ TEST(Design, AOptimalChoiceMatchesExhaustiveSearchOnASmallSet) {
       ChooseAOptimal(device, ModelKind::kLinear, kG, candidates, sigma, 10);
   ASSERT_EQ(chosen.size(), 10u);
   double best = std::numeric_limits<double>::infinity();
-  for (int a = 0; a < 13; ++a) {
-    for (int b = a + 1; b < 13; ++b) {
-      for (int c = b + 1; c < 13; ++c) {
-        std::vector<int> subset;
-        for (int k = 0; k < 13; ++k) {
-          if (k != a && k != b && k != c) subset.push_back(k);
-        }
-        best = std::min(best, trace(subset));
-      }
-    }
-  }
+  for (const std::vector<int>& subset : TenOfThirteen()) best = std::min(best, trace(subset));
   EXPECT_NEAR(trace(chosen), best, 1e-9 * best);
   EXPECT_LE(trace(chosen),
             trace(ChooseDOptimal(device, ModelKind::kLinear, kG, candidates, sigma, 10)));

@@ -59,6 +59,15 @@ ModelParameters MirrorAxes(const ModelParameters& params) {
 
 namespace {
 
+// The linear model's slots: the quadratic model's without k2.
+std::vector<ParameterSlot> WithoutSquaredTerms(const std::vector<ParameterSlot>& quadratic) {
+  std::vector<ParameterSlot> slots;
+  for (const ParameterSlot& s : quadratic) {
+    if (s.group != ParameterGroup::kK2) slots.push_back(s);
+  }
+  return slots;
+}
+
 const std::vector<ParameterSlot>& PlatformSlots(ModelKind kind) {
   static const std::vector<ParameterSlot> quadratic = {
       {ParameterGroup::kK, 0, 0, "K_xx"},   {ParameterGroup::kK, 0, 1, "K_xy"},
@@ -69,13 +78,7 @@ const std::vector<ParameterSlot>& PlatformSlots(ModelKind kind) {
       {ParameterGroup::kK, 2, 0, "K_zx"},   {ParameterGroup::kK, 2, 1, "K_zy"},
       {ParameterGroup::kK, 2, 2, "K_zz"},   {ParameterGroup::kBias, 2, 0, "b_z"},
       {ParameterGroup::kK2, 2, 0, "k2_z"}};
-  static const std::vector<ParameterSlot> linear = [] {
-    std::vector<ParameterSlot> slots;
-    for (const ParameterSlot& s : quadratic) {
-      if (s.group != ParameterGroup::kK2) slots.push_back(s);
-    }
-    return slots;
-  }();
+  static const std::vector<ParameterSlot> linear = WithoutSquaredTerms(quadratic);
   return kind == ModelKind::kLinear ? linear : quadratic;
 }
 
@@ -93,13 +96,7 @@ const std::vector<ParameterSlot>& ParameterSlots(ModelKind kind, Frame frame) {
       slots.push_back(Mirrored(x_first[i], names[i]));
     return slots;
   }();
-  static const std::vector<ParameterSlot> linear = [] {
-    std::vector<ParameterSlot> slots;
-    for (const ParameterSlot& s : quadratic) {
-      if (s.group != ParameterGroup::kK2) slots.push_back(s);
-    }
-    return slots;
-  }();
+  static const std::vector<ParameterSlot> linear = WithoutSquaredTerms(quadratic);
   return kind == ModelKind::kLinear ? linear : quadratic;
 }
 

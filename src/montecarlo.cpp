@@ -198,7 +198,7 @@ std::optional<Scenario> ScenarioByName(std::string_view name) {
   s.model = ModelKind::kQuadratic;
   s.gravity = kYang2012Gravity_ms2;
   s.directions = Yang18Directions();
-  for (int i = 0; i < 3; ++i) s.sigma_raw(i) = s.truth.K.row(i).norm() * kYang2012PositionSigma_ms2;
+  s.sigma_raw = Yang2012SigmaRaw(s.truth);
   return s;
 }
 

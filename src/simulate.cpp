@@ -33,6 +33,12 @@ std::vector<Vec3> Yang18Directions() {
   return dirs;
 }
 
+Vec3 Yang2012SigmaRaw(const ModelParameters& device) {
+  Vec3 sigma;
+  for (int i = 0; i < 3; ++i) sigma(i) = device.K.row(i).norm() * kYang2012PositionSigma_ms2;
+  return sigma;
+}
+
 ModelParameters Yang2012Truth() {
   EngineeringParameters eng;
   eng.scale_factor = Vec3(4800, 4900, 5000);

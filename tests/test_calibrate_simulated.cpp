@@ -20,13 +20,6 @@ ModelParameters Truth(ModelKind model) {
   return t;
 }
 
-// Per-axis raw noise of one averaged position in paper 000 Table 4 (ERRATA.md).
-Vec3 Table4Sigma(const ModelParameters& truth) {
-  Vec3 s;
-  for (int i = 0; i < 3; ++i) s(i) = truth.K.row(i).norm() * kYang2012PositionSigma_ms2;
-  return s;
-}
-
 CalibrationOptions Options(ModelKind model, SolverMethod method) {
   CalibrationOptions o;
   o.model = model;
@@ -82,7 +75,7 @@ TEST_P(NoisyTable3, TwoStepAndJointReachTheSameOptimum) {
   const ModelParameters truth = Truth(model);
   for (std::uint64_t seed = 10; seed < 13; ++seed) {
     const std::vector<Vec3> readings =
-        SimulatePositions(truth, kG, Yang18Directions(), Table4Sigma(truth), seed);
+        SimulatePositions(truth, kG, Yang18Directions(), Yang2012SigmaRaw(truth), seed);
     const CalibrationResult joint = Calibrate(readings, Options(model, SolverMethod::kJoint));
     const CalibrationResult two = Calibrate(readings, Options(model, SolverMethod::kTwoStep));
     ASSERT_TRUE(joint.summary.converged()) << joint.summary.BriefReport();
@@ -120,7 +113,7 @@ TEST(Calibrate, ResidualSigmaEstimatesTheSimulatedNoise) {
 TEST(Calibrate, NormalizedReadingsInitialisationWorksWhenBiasIsSmall) {
   const ModelParameters truth = Truth(ModelKind::kQuadratic);
   const std::vector<Vec3> readings =
-      SimulatePositions(truth, kG, Yang18Directions(), Table4Sigma(truth), 3);
+      SimulatePositions(truth, kG, Yang18Directions(), Yang2012SigmaRaw(truth), 3);
   CalibrationOptions o = Options(ModelKind::kQuadratic, SolverMethod::kJoint);
   o.initialization = Initialization::kNormalizedReadings;
   const CalibrationResult a = Calibrate(readings, o);
@@ -220,7 +213,7 @@ TEST(Calibrate, InvalidOptionsThrow) {
 TEST(Calibrate, IterationCapReportsNotConverged) {
   const ModelParameters truth = Truth(ModelKind::kQuadratic);
   const std::vector<Vec3> readings =
-      SimulatePositions(truth, kG, Yang18Directions(), Table4Sigma(truth), 3);
+      SimulatePositions(truth, kG, Yang18Directions(), Yang2012SigmaRaw(truth), 3);
   CalibrationOptions o = Options(ModelKind::kQuadratic, SolverMethod::kTwoStep);
   o.two_step.max_sweeps = 5;
   const CalibrationResult r = Calibrate(readings, o);

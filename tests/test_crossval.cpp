@@ -15,8 +15,7 @@ constexpr double kG = kYang2012Gravity_ms2;
 std::vector<Vec3> Table3Readings(ModelKind model, std::uint64_t seed) {
   ModelParameters truth = Yang2012Truth();
   if (model == ModelKind::kLinear) truth.k2.setZero();
-  Vec3 sigma;
-  for (int i = 0; i < 3; ++i) sigma(i) = truth.K.row(i).norm() * kYang2012PositionSigma_ms2;
+  const Vec3 sigma = Yang2012SigmaRaw(truth);
   return SimulatePositions(truth, kG, Yang18Directions(), sigma, seed);
 }
 

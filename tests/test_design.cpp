@@ -16,18 +16,12 @@ namespace {
 
 constexpr double kG = kYang2012Gravity_ms2;
 
-Vec3 Table4Sigma(const ModelParameters& truth) {
-  Vec3 s;
-  for (int i = 0; i < 3; ++i) s(i) = truth.K.row(i).norm() * kYang2012PositionSigma_ms2;
-  return s;
-}
-
 TEST(Design, CrlbIsTheInverseOfTheFiniteDifferenceFisherMatrix) {
   // The full Fisher matrix of (θ, the tangent coordinates of every direction) from central
   // differences of the whitened prediction, inverted, its θ block: the bound with the directions
   // unknown. The closed form (Σ u uᵀ/σ_k²) must agree.
   const ModelParameters device = Yang2012Truth();
-  const Vec3 sigma = Table4Sigma(device);
+  const Vec3 sigma = Yang2012SigmaRaw(device);
   const std::vector<Vec3> dirs = Yang18Directions();
   const int m = static_cast<int>(dirs.size());
   std::vector<internal::Mat32> tangent;
@@ -69,7 +63,7 @@ TEST(Design, MaximumLikelihoodReachesTheBound) {
   // joint solver's estimates against the CRLB. The standard deviation of a sample standard
   // deviation over 300 runs is 1/√600 = 4 %: ±15 % is 3.6 of those.
   const ModelParameters device = Yang2012Truth();
-  const Vec3 sigma = Table4Sigma(device);
+  const Vec3 sigma = Yang2012SigmaRaw(device);
   const PlannedUncertainty planned =
       PredictUncertainty(device, ModelKind::kQuadratic, kG, Yang18Directions(), sigma);
   CalibrationOptions o;
@@ -96,12 +90,12 @@ TEST(Design, FlagsWhatSixAxisPositionsCannotDetermine) {
   const std::vector<Vec3> six = *SchemeDirections("six");
   ModelParameters device = Yang2012Truth();
   const PlannedUncertainty planned =
-      PredictUncertainty(device, ModelKind::kLinear, kG, six, Table4Sigma(device));
+      PredictUncertainty(device, ModelKind::kLinear, kG, six, Yang2012SigmaRaw(device));
   EXPECT_FALSE(planned.observable);
   EXPECT_FALSE(planned.weakest.empty());
   EXPECT_EQ(planned.crlb.size(), 0);
   EXPECT_TRUE(PredictUncertainty(device, ModelKind::kLinear, kG, *SchemeDirections("yang18"),
-                                 Table4Sigma(device))
+                                 Yang2012SigmaRaw(device))
                   .observable);
 }
 
@@ -143,7 +137,7 @@ std::vector<std::vector<int>> TenOfThirteen() {
 TEST(Design, DOptimalChoiceMatchesExhaustiveSearchOnASmallSet) {
   // 10 of 13 random candidates, linear model: all 286 subsets checked.
   const ModelParameters device = Yang2012Truth();
-  const Vec3 sigma = Table4Sigma(device);
+  const Vec3 sigma = Yang2012SigmaRaw(device);
   const std::vector<Vec3> candidates = *SchemeDirections("random:13:4");
   const std::vector<int> chosen =
       ChooseDOptimal(device, ModelKind::kLinear, kG, candidates, sigma, 10);
@@ -164,7 +158,7 @@ TEST(Design, AOptimalChoiceMatchesExhaustiveSearchOnASmallSet) {
   // the D-optimal start alone the exchange stopped 0.6 % above the minimum on this set, a local
   // minimum no single swap leaves; with the restarts it reaches it on all of 30 such sets.)
   const ModelParameters device = Yang2012Truth();
-  const Vec3 sigma = Table4Sigma(device);
+  const Vec3 sigma = Yang2012SigmaRaw(device);
   const std::vector<Vec3> candidates = *SchemeDirections("random:13:4");
   const auto trace = [&](const std::vector<int>& subset) {
     std::vector<Vec3> dirs;
@@ -203,7 +197,7 @@ TEST(Design, DOptimalEighteenOutOfFiveHundredRivalsPaper000sScheme) {
   // choice from 500 random candidates does better on that criterion (D-efficiency
   // (det/det_yang18)^(1/P) measured 1.147; a search that lost to a fixed scheme would be broken).
   const ModelParameters device = Yang2012Truth();
-  const Vec3 sigma = Table4Sigma(device);
+  const Vec3 sigma = Yang2012SigmaRaw(device);
   const std::vector<Vec3> candidates = *SchemeDirections("random:500");
   const std::vector<int> chosen =
       ChooseDOptimal(device, ModelKind::kQuadratic, kG, candidates, sigma, 18);

@@ -67,8 +67,7 @@ TEST(Frame, SpecificForceInvertsUpperTriangularAndFullMatrices) {
 }
 
 std::vector<Vec3> Table3Readings(const ModelParameters& truth, std::uint64_t seed) {
-  Vec3 sigma;
-  for (int i = 0; i < 3; ++i) sigma(i) = truth.K.row(i).norm() * kYang2012PositionSigma_ms2;
+  const Vec3 sigma = Yang2012SigmaRaw(truth);
   return SimulatePositions(truth, kG, Yang18Directions(), sigma, seed);
 }
 

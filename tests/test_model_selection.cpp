@@ -13,8 +13,7 @@ constexpr double kG = kYang2012Gravity_ms2;
 
 std::vector<Vec3> Readings(const ModelParameters& truth, const std::vector<Vec3>& dirs,
                            std::uint64_t seed) {
-  Vec3 sigma;
-  for (int i = 0; i < 3; ++i) sigma(i) = truth.K.row(i).norm() * kYang2012PositionSigma_ms2;
+  const Vec3 sigma = Yang2012SigmaRaw(truth);
   return SimulatePositions(truth, kG, dirs, sigma, seed);
 }
 

@@ -21,13 +21,6 @@ ModelParameters LinearTruth() {
   return t;
 }
 
-// Table-4 noise of one averaged reading, per axis [raw]: the axes differ (K's rows do).
-Vec3 Table4Sigma(const ModelParameters& truth) {
-  Vec3 s;
-  for (int i = 0; i < 3; ++i) s(i) = truth.K.row(i).norm() * kYang2012PositionSigma_ms2;
-  return s;
-}
-
 TEST(Uncertainty, EqualSampleNoiseGivesTheResidualCovarianceShape) {
   // With the same σ on every axis and position, the sandwich is σ² S⁻¹: the residual-based
   // covariance rescaled from σ̂² to σ² (times R² when R > 1). An exact identity.
@@ -55,7 +48,7 @@ TEST(Uncertainty, EqualSampleNoiseGivesTheResidualCovarianceShape) {
 // Fraction of runs whose 1σ interval covers the truth, over all 9 parameters.
 double Coverage(double extra_position_error, bool give_sigmas, double* mean_ratio) {
   const ModelParameters truth = LinearTruth();
-  const Vec3 sigma = Table4Sigma(truth);
+  const Vec3 sigma = Yang2012SigmaRaw(truth);
   const Eigen::VectorXd theta_true = Pack(truth, ModelKind::kLinear);
   CalibrationOptions o;
   o.gravity = kG;

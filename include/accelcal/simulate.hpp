@@ -24,6 +24,8 @@ ModelParameters Yang2012Truth();
 inline constexpr double kYang2012Gravity_ms2 = 9.8;
 /// Per-axis noise of one averaged position in Table 4 (ERRATA): 10 µg/√Hz·√100 Hz / √6000 [m/s²].
 inline constexpr double kYang2012PositionSigma_ms2 = 10e-6 * 10.0 / 77.45966692414834 * 9.8;
+/// That noise in raw units for a device: per axis, the length of its row of K times it.
+Vec3 Yang2012SigmaRaw(const ModelParameters& device);
 
 /// Averaged readings p_k = μ(g c_k) + v_k, v_k ~ N(0, diag(sigma_raw²)), deterministic in seed.
 std::vector<Vec3> SimulatePositions(const ModelParameters& truth, double gravity,

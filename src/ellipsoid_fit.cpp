@@ -1,5 +1,7 @@
 #include "accelcal/ellipsoid_fit.hpp"
 
+#include "smallest_eigenvector.hpp"
+
 #include <cmath>
 #include <cstdio>
 #include <optional>
@@ -20,18 +22,10 @@ using Vec10 = Eigen::Matrix<double, 10, 1>;
 using Mat10 = Eigen::Matrix<double, 10, 10>;
 using Mat66 = Eigen::Matrix<double, 6, 6>;
 
-/// Coefficients v = (a, b, c, h, g, f, p, q, r, d) of
-///   a x² + b y² + c z² + 2h xy + 2g xz + 2f yz + 2p x + 2q y + 2r z + d = 0.
-Vec10 DesignRow(const Vec3& q) {
-  Vec10 row;
-  row << q.x() * q.x(), q.y() * q.y(), q.z() * q.z(), 2 * q.x() * q.y(), 2 * q.x() * q.z(),
-      2 * q.y() * q.z(), 2 * q.x(), 2 * q.y(), 2 * q.z(), 1.0;
-  return row;
-}
-
 /// Paper 001 eq. (17)-(18) fix one coefficient; the unit-norm minimiser is invariant to that
 /// choice: the eigenvector of DᵀD with the smallest eigenvalue.
 Vec10 AlgebraicQuadric(const Mat10& scatter) {
+  if (const std::optional<Vec10> v = internal::SmallestEigenvector(scatter)) return *v;
   Eigen::SelfAdjointEigenSolver<Mat10> eig(scatter);
   return eig.eigenvectors().col(0);
 }
@@ -126,13 +120,36 @@ std::optional<std::string> Scatter(const std::vector<Vec3>& readings, Mat10* sca
   for (const Vec3& p : readings) *scale = std::max(*scale, (p - *mean).lpNorm<Eigen::Infinity>());
   if (!(*scale > 0)) return std::string("all readings are identical");
   // In the centred, scaled coordinates DᵀD is well enough conditioned for an initial estimate,
-  // and a 10x10 scatter matrix is far cheaper than an SVD of the m x 10 design matrix.
-  scatter->setZero();
-  for (const Vec3& p : readings) {
-    const Vec10 row = DesignRow((p - *mean) / *scale);
-    // Coefficient-based: the default product of a 10x1 by a 1x10 takes the general (GEMM) path.
-    scatter->noalias() += row.lazyProduct(row.transpose());
+  // and a 10x10 scatter matrix is far cheaper than an SVD of the m x 10 design matrix. Four
+  // readings at a time (SIMD); lanes past the end have weight 0.
+  using Lanes = Eigen::Array<double, 4, 1>;
+  Lanes sums[55];
+  for (Lanes& s : sums) s.setZero();
+  for (int first = 0; first < m; first += 4) {
+    Lanes q[3], weight;
+    for (int l = 0; l < 4; ++l) {
+      const bool valid = first + l < m;
+      const Vec3 p =
+          (readings[static_cast<std::size_t>(valid ? first + l : first)] - *mean) / *scale;
+      for (int d = 0; d < 3; ++d) q[d](l) = p(d);
+      weight(l) = valid ? 1.0 : 0.0;
+    }
+    // The design row: the quadric's coefficients v = (a, b, c, h, g, f, p, q, r, d) of
+    // a x² + b y² + c z² + 2h xy + 2g xz + 2f yz + 2p x + 2q y + 2r z + d = 0 multiply it.
+    const Lanes row[10] = {q[0] * q[0],       q[1] * q[1],       q[2] * q[2], 2.0 * q[0] * q[1],
+                           2.0 * q[0] * q[2], 2.0 * q[1] * q[2], 2.0 * q[0],  2.0 * q[1],
+                           2.0 * q[2],        Lanes::Ones()};
+    int n = 0;
+    for (int j = 0; j < 10; ++j) {
+      const Lanes weighted = weight * row[j];
+      for (int i = j; i < 10; ++i) sums[n++] += row[i] * weighted;
+    }
   }
+  int n = 0;
+  for (int j = 0; j < 10; ++j) {
+    for (int i = j; i < 10; ++i) (*scatter)(i, j) = sums[n++].sum();
+  }
+  scatter->triangularView<Eigen::StrictlyUpper>() = scatter->transpose();
   return std::nullopt;
 }
 

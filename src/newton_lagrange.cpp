@@ -1,8 +1,10 @@
 // Paper 001 (Sun & Xu 2020) §3.2: Newton iteration on the Lagrangian of the ML problem.
+#include <array>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <limits>
+#include <vector>
 
 #include <Eigen/Cholesky>
 #include <Eigen/LU>
@@ -84,80 +86,246 @@ void LagrangianDerivatives(const Problem& problem, const Vec9& theta, const std:
 // 2 gKc·r + 2λ|c|² and cᵀH_ccΔc = 2 gKc·(gK Δc) − λh.
 // C never appears as a matrix: J_θ's rows are the regressors v_i = (f_0..f_i, 1) of output axis i,
 // and ∂(2 r_i f_j)/∂c = 2 g (gK)_i· c_j + 2 g r_i e_j, so for any x ∈ R³ the entries of C x are
-// 2 (f_j y_i + g r_i x_j) for K_ij and 2 y_i for b_i, y = gKx.
+// 2 (f_j y_i + g r_i x_j) for K_ij and 2 y_i for b_i, y = gKx. Its transpose is as simple:
+// Cᵀ Δθ = 2 (gK)ᵀ(ΔK f + Δb) + 2 g ΔKᵀ r, so the back-substitution needs no stored G.
+//
+// For speed, positions are processed kLanes at a time, every scalar of one position becoming an
+// Eigen array of kLanes positions (SIMD on any x86-64), and nothing per position is stored: the
+// first pass sums the reduced system, the second recomputes the few pieces it needs.
+namespace {
+constexpr int kLanes = 4;
+using Lanes = Eigen::Array<double, kLanes, 1>;
+using Lanes3 = std::array<Lanes, 3>;
+
+// θ = (K00, b0, K10, K11, b1, K20, K21, K22, b2), K lower triangular; returns g K x.
+struct LowerTriangular {
+  explicit LowerTriangular(const Vec9& theta, double scale)
+      : k00(scale * theta(0)),
+        k10(scale * theta(2)),
+        k11(scale * theta(3)),
+        k20(scale * theta(5)),
+        k21(scale * theta(6)),
+        k22(scale * theta(7)) {}
+  Lanes3 operator*(const Lanes3& x) const {
+    return {k00 * x[0], k10 * x[0] + k11 * x[1], k20 * x[0] + k21 * x[1] + k22 * x[2]};
+  }
+  /// Kᵀ x
+  Lanes3 TransposeTimes(const Lanes3& x) const {
+    return {k00 * x[0] + k10 * x[1] + k20 * x[2], k11 * x[1] + k21 * x[2], k22 * x[2]};
+  }
+  double k00, k10, k11, k20, k21, k22;
+};
+
+Lanes Dot(const Lanes3& a, const Lanes3& b) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
+
+// kLanes positions starting at `first`; lanes past the end repeat the first position and have
+// weight 0 (so they never divide by zero and add nothing).
+struct Block {
+  Block(const Problem& problem, const std::vector<Vec3>& c, const std::vector<double>& lambda,
+        int first) {
+    const int m = problem.positions();
+    for (int l = 0; l < kLanes; ++l) {
+      const bool valid = first + l < m;
+      const auto k = static_cast<std::size_t>(valid ? first + l : first);
+      weight(l) = valid ? 1.0 : 0.0;
+      lam(l) = lambda[k];
+      for (int d = 0; d < 3; ++d) {
+        dir[d](l) = c[k](d);
+        reading[d](l) = problem.readings[k](d);
+      }
+    }
+  }
+  Lanes3 dir, reading;
+  Lanes lam, weight;
+};
+
+// What both passes need of each position: the pieces of the elimination above.
+struct Local {
+  Local(const Block& in, const LowerTriangular& gK, const Vec3& bias, double g) : c(in.dir) {
+    cc = Dot(c, c);
+    h = cc - 1.0;
+    const Lanes inv_norm = cc.sqrt().inverse();
+    // Orthonormal basis of the plane ⟂ n without branches (Duff et al. 2017, "Building an
+    // orthonormal basis, revisited", JCGT 6(1)); any basis gives the same step.
+    const Lanes nx = c[0] * inv_norm, ny = c[1] * inv_norm, nz = c[2] * inv_norm;
+    const Lanes s = (nz >= 0.0).select(Lanes::Constant(1.0), Lanes::Constant(-1.0));
+    const Lanes a = -(s + nz).inverse();
+    const Lanes b = nx * ny * a;
+    E[0] = {1.0 + s * nx * nx * a, s * b, -s * nx};
+    E[1] = {b, s + ny * ny * a, -ny};
+    f = {g * c[0], g * c[1], g * c[2]};
+    y = gK * c;
+    for (int d = 0; d < 3; ++d) r[d] = y[d] + bias(d) - in.reading[d];
+    T[0] = gK * E[0];
+    T[1] = gK * E[1];
+    const Lanes a00 = 2.0 * (Dot(T[0], T[0]) + in.lam);
+    const Lanes a01 = 2.0 * Dot(T[0], T[1]);
+    const Lanes a11 = 2.0 * (Dot(T[1], T[1]) + in.lam);
+    const Lanes inv_det = (a00 * a11 - a01 * a01).inverse();
+    w00 = a11 * inv_det;
+    w01 = -a01 * inv_det;
+    w11 = a00 * inv_det;
+    const Lanes h_cc = h / cc;
+    const Lanes3 q = {2.0 * r[0] - h_cc * y[0], 2.0 * r[1] - h_cc * y[1], 2.0 * r[2] - h_cc * y[2]};
+    e0 = Dot(T[0], q);
+    e1 = Dot(T[1], q);
+  }
+  Lanes3 c, E[2], f, y, r, T[2];
+  Lanes cc, h, w00, w01, w11, e0, e1;
+};
+
+// What the back-substitution needs of a block, kept from the first pass.
+struct Kept {
+  explicit Kept(const Local& p)
+      : E{p.E[0], p.E[1]},
+        y(p.y),
+        r(p.r),
+        cc(p.cc),
+        h(p.h),
+        w00(p.w00),
+        w01(p.w01),
+        w11(p.w11),
+        e0(p.e0),
+        e1(p.e1) {}
+  Lanes3 E[2], y, r;
+  Lanes cc, h, w00, w01, w11, e0, e1;
+};
+
+// The 9 entries of C x for x (with y = gK x).
+inline void Coupling(const Local& p, double g, const Lanes3& x, const Lanes3& gKx, Lanes* out) {
+  out[0] = 2.0 * (p.f[0] * gKx[0] + g * p.r[0] * x[0]);
+  out[1] = 2.0 * gKx[0];
+  out[2] = 2.0 * (p.f[0] * gKx[1] + g * p.r[1] * x[0]);
+  out[3] = 2.0 * (p.f[1] * gKx[1] + g * p.r[1] * x[1]);
+  out[4] = 2.0 * gKx[1];
+  out[5] = 2.0 * (p.f[0] * gKx[2] + g * p.r[2] * x[0]);
+  out[6] = 2.0 * (p.f[1] * gKx[2] + g * p.r[2] * x[1]);
+  out[7] = 2.0 * (p.f[2] * gKx[2] + g * p.r[2] * x[2]);
+  out[8] = 2.0 * gKx[2];
+}
+
+// Running sums of the first pass, one lane per position slot.
+struct Sums {
+  Lanes S[45];      // −Σ G W Gᵀ, lower triangle by columns
+  Lanes rhs[9];     // Σ (h/(2|c|²)) C c + G W e
+  Lanes grad[9];    // Σ J_θᵀ r
+  Lanes moment[9];  // Σ f_a f_b (a ≥ b), then Σ f_a
+  Lanes count = Lanes::Zero(), cost = Lanes::Zero();
+  Sums() {
+    for (Lanes& x : S) x.setZero();
+    for (Lanes& x : rhs) x.setZero();
+    for (Lanes& x : grad) x.setZero();
+    for (Lanes& x : moment) x.setZero();
+  }
+  void Add(const Block& in, const Local& p, double g) {
+    Lanes G0[9], G1[9], u[9];
+    Coupling(p, g, p.E[0], p.T[0], G0);
+    Coupling(p, g, p.E[1], p.T[1], G1);
+    Coupling(p, g, p.c, p.y, u);
+    const Lanes w00 = in.weight * p.w00, w01 = in.weight * p.w01, w11 = in.weight * p.w11;
+    const Lanes half_h = in.weight * p.h / (2.0 * p.cc);
+    int n = 0;
+    for (int j = 0; j < 9; ++j) {
+      const Lanes z0 = G0[j] * w00 + G1[j] * w01;
+      const Lanes z1 = G0[j] * w01 + G1[j] * w11;
+      for (int i = j; i < 9; ++i) S[n++] -= z0 * G0[i] + z1 * G1[i];
+      rhs[j] += half_h * u[j] + z0 * p.e0 + z1 * p.e1;
+    }
+    const Lanes3 r = {in.weight * p.r[0], in.weight * p.r[1], in.weight * p.r[2]};
+    grad[0] += r[0] * p.f[0];
+    grad[1] += r[0];
+    grad[2] += r[1] * p.f[0];
+    grad[3] += r[1] * p.f[1];
+    grad[4] += r[1];
+    grad[5] += r[2] * p.f[0];
+    grad[6] += r[2] * p.f[1];
+    grad[7] += r[2] * p.f[2];
+    grad[8] += r[2];
+    const Lanes3 fw = {in.weight * p.f[0], in.weight * p.f[1], in.weight * p.f[2]};
+    n = 0;
+    for (int a = 0; a < 3; ++a) {
+      for (int b = 0; b <= a; ++b) moment[n++] += fw[a] * p.f[b];
+    }
+    for (int a = 0; a < 3; ++a) moment[6 + a] += fw[a];
+    count += in.weight;
+    cost += Dot(r, p.r);
+  }
+};
+}  // namespace
+
 void ComputeNewtonLagrangeStep(const Problem& problem, const Vec9& theta,
                                const std::vector<Vec3>& c, const std::vector<double>& lambda,
                                NewtonLagrangeStep* step) {
   const double g = problem.gravity;
   const int m = problem.positions();
-  const Mat33 gK = g * Unpack(theta, ModelKind::kLinear).K;
+  const LowerTriangular gK(theta, g);
   const Vec3 bias(theta(1), theta(4), theta(8));
-  step->positions.resize(static_cast<std::size_t>(m));
-  step->d_c.resize(static_cast<std::size_t>(m));
-  step->d_lambda.resize(static_cast<std::size_t>(m));
-  step->cost = 0;
-  Eigen::Matrix<double, 9, 9> S = Eigen::Matrix<double, 9, 9>::Zero();
-  Vec9 rhs = Vec9::Zero();
-  for (int k = 0; k < m; ++k) {
-    NewtonLagrangeStep::Position& pos = step->positions[static_cast<std::size_t>(k)];
-    const Vec3& ck = c[static_cast<std::size_t>(k)];
-    const double lam = lambda[static_cast<std::size_t>(k)];
-    const double cc = ck.squaredNorm();
-    const double h = cc - 1.0;
-    const Vec3 f = g * ck;
-    pos.gKc = gK * ck;
-    const Vec3 r = pos.gKc + bias - problem.readings[static_cast<std::size_t>(k)];
-    step->cost += r.squaredNorm();
-    // ∇_θ and H_θθ = 2 Σ J_θᵀJ_θ (block diagonal by output axis).
-    const Eigen::Vector2d vx(f(0), 1.0);
-    const Eigen::Vector3d vy(f(0), f(1), 1.0);
-    const Eigen::Vector4d vz(f(0), f(1), f(2), 1.0);
-    rhs.segment<2>(0) -= 2.0 * r(0) * vx;
-    rhs.segment<3>(2) -= 2.0 * r(1) * vy;
-    rhs.segment<4>(5) -= 2.0 * r(2) * vz;
-    S.block<2, 2>(0, 0).noalias() += 2.0 * vx * vx.transpose();
-    S.block<3, 3>(2, 2).noalias() += 2.0 * vy * vy.transpose();
-    S.block<4, 4>(5, 5).noalias() += 2.0 * vz * vz.transpose();
-    pos.E = TangentBasis(ck / std::sqrt(cc));
-    const Mat32 T = gK * pos.E;
-    // C x for x = E₀, E₁ and c.
-    const auto coupling = [&](const Vec3& x, const Vec3& y, auto out) {
-      out(0) = 2.0 * (f(0) * y(0) + g * r(0) * x(0));
-      out(1) = 2.0 * y(0);
-      out(2) = 2.0 * (f(0) * y(1) + g * r(1) * x(0));
-      out(3) = 2.0 * (f(1) * y(1) + g * r(1) * x(1));
-      out(4) = 2.0 * y(1);
-      out(5) = 2.0 * (f(0) * y(2) + g * r(2) * x(0));
-      out(6) = 2.0 * (f(1) * y(2) + g * r(2) * x(1));
-      out(7) = 2.0 * (f(2) * y(2) + g * r(2) * x(2));
-      out(8) = 2.0 * y(2);
-    };
-    coupling(pos.E.col(0), T.col(0), pos.G.col(0));
-    coupling(pos.E.col(1), T.col(1), pos.G.col(1));
-    coupling(ck, pos.gKc, pos.u.col(0));
-    Eigen::Matrix2d reduced = 2.0 * T.transpose() * T;
-    reduced.diagonal().array() += 2.0 * lam;
-    pos.W = reduced.inverse();
-    pos.e = T.transpose() * (2.0 * r - (h / cc) * pos.gKc);
-    pos.normal_rhs = 2.0 * pos.gKc.dot(r) + 2.0 * lam * cc - lam * h;
-    const Eigen::Matrix<double, 9, 2> Z = pos.G * pos.W;
-    // Coefficient-based: the default product of a 9x2 by a 2x9 takes the general (GEMM) path,
-    // measured 2x slower here.
-    S.noalias() -= Z.lazyProduct(pos.G.transpose());
-    rhs.noalias() += (h / (2.0 * cc)) * pos.u + Z * pos.e;
+  Sums sums;
+  std::vector<Kept> kept;
+  kept.reserve(static_cast<std::size_t>((m + kLanes - 1) / kLanes));
+  for (int first = 0; first < m; first += kLanes) {
+    const Block in(problem, c, lambda, first);
+    const Local local(in, gK, bias, g);
+    sums.Add(in, local, g);
+    kept.emplace_back(local);
   }
+  step->cost = sums.cost.sum();
+  // H_θθ = 2 Σ J_θᵀJ_θ: block diagonal by output axis, with regressors v_i = (f_0..f_i, 1).
+  Eigen::Matrix4d moments;  // Σ (f, 1)(f, 1)ᵀ
+  int n = 0;
+  for (int a = 0; a < 3; ++a) {
+    for (int b = 0; b <= a; ++b) moments(a, b) = moments(b, a) = sums.moment[n++].sum();
+    moments(a, 3) = moments(3, a) = sums.moment[6 + a].sum();
+  }
+  moments(3, 3) = sums.count.sum();
+  Eigen::Matrix<double, 9, 9> S = Eigen::Matrix<double, 9, 9>::Zero();
+  constexpr int kStart[3] = {0, 2, 5};
+  for (int i = 0; i < 3; ++i) {
+    const auto regressor = [i](int a) { return a <= i ? a : 3; };  // f_0..f_i, then the 1
+    for (int a = 0; a < i + 2; ++a) {
+      for (int b = 0; b < i + 2; ++b) {
+        S(kStart[i] + a, kStart[i] + b) = 2.0 * moments(regressor(a), regressor(b));
+      }
+    }
+  }
+  Vec9 rhs;
+  n = 0;
+  for (int j = 0; j < 9; ++j) {
+    for (int i = j; i < 9; ++i) S(i, j) += sums.S[n++].sum();
+    rhs(j) = sums.rhs[j].sum() - 2.0 * sums.grad[j].sum();
+  }
+  S.triangularView<Eigen::StrictlyUpper>() = S.transpose();
   const Vec9 scale = S.diagonal().cwiseAbs().cwiseSqrt().cwiseInverse();
   const Eigen::Matrix<double, 9, 9> scaled = scale.asDiagonal() * S * scale.asDiagonal();
-  step->d_theta = scale.cwiseProduct(scaled.partialPivLu().solve(scale.cwiseProduct(rhs)));
-  for (int k = 0; k < m; ++k) {
-    const auto i = static_cast<std::size_t>(k);
-    const NewtonLagrangeStep::Position& pos = step->positions[i];
-    const double cc = c[i].squaredNorm();
-    const Eigen::Vector2d a = -pos.W * (pos.G.transpose() * step->d_theta + pos.e);
-    step->d_c[i] = -((cc - 1.0) / (2.0 * cc)) * c[i] + pos.E * a;
-    const Vec3 gK_dc = gK * step->d_c[i];
-    step->d_lambda[i] =
-        -(pos.normal_rhs + pos.u.dot(step->d_theta) + 2.0 * pos.gKc.dot(gK_dc)) / (2.0 * cc);
+  const Vec9 d_theta = scale.cwiseProduct(scaled.partialPivLu().solve(scale.cwiseProduct(rhs)));
+  step->d_theta = d_theta;
+
+  // Back-substitution with v = Cᵀ Δθ = 2 (gK)ᵀ(ΔK f + Δb) + 2 g ΔKᵀ r.
+  const LowerTriangular dK(d_theta, 1.0);
+  const Vec3 d_bias(d_theta(1), d_theta(4), d_theta(8));
+  step->d_c.resize(static_cast<std::size_t>(m));
+  step->d_lambda.resize(static_cast<std::size_t>(m));
+  for (int first = 0; first < m; first += kLanes) {
+    const Block in(problem, c, lambda, first);
+    const Kept& p = kept[static_cast<std::size_t>(first / kLanes)];
+    const Lanes3& dir = in.dir;
+    const Lanes3 f = {g * dir[0], g * dir[1], g * dir[2]};
+    Lanes3 w = dK * f;
+    for (int d = 0; d < 3; ++d) w[d] += d_bias(d);
+    const Lanes3 a = gK.TransposeTimes(w), b = dK.TransposeTimes(p.r);
+    const Lanes3 v = {2.0 * (a[0] + g * b[0]), 2.0 * (a[1] + g * b[1]), 2.0 * (a[2] + g * b[2])};
+    const Lanes t0 = Dot(p.E[0], v) + p.e0, t1 = Dot(p.E[1], v) + p.e1;
+    const Lanes a0 = -(p.w00 * t0 + p.w01 * t1), a1 = -(p.w01 * t0 + p.w11 * t1);
+    const Lanes half_h = p.h / (2.0 * p.cc);
+    Lanes3 d_c;
+    for (int d = 0; d < 3; ++d) d_c[d] = -half_h * dir[d] + p.E[0][d] * a0 + p.E[1][d] * a1;
+    const Lanes normal_rhs = 2.0 * Dot(p.y, p.r) + 2.0 * in.lam * p.cc - in.lam * p.h;
+    const Lanes d_lambda = -(normal_rhs + Dot(dir, v) + 2.0 * Dot(p.y, gK * d_c)) / (2.0 * p.cc);
+    for (int l = 0; l < kLanes && first + l < m; ++l) {
+      const auto k = static_cast<std::size_t>(first + l);
+      step->d_c[k] = Vec3(d_c[0](l), d_c[1](l), d_c[2](l));
+      step->d_lambda[k] = d_lambda(l);
+    }
   }
 }
 

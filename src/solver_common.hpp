@@ -231,17 +231,6 @@ struct NewtonLagrangeStep {
   std::vector<Vec3> d_c;
   std::vector<double> d_lambda;
   double cost = 0;  ///< J at the point the step starts from
-  /// Per-position pieces kept for the back-substitution (reused between calls).
-  struct Position {
-    Eigen::Matrix<double, 9, 2> G;
-    Eigen::Matrix2d W;
-    Eigen::Vector2d e;
-    Vec9 u;  ///< H_θc c_k
-    Mat32 E;
-    Vec3 gKc;
-    double normal_rhs = 0;  ///< cᵀ∇_c L − λh, the constant part of the Δλ equation
-  };
-  std::vector<Position> positions;
 };
 void ComputeNewtonLagrangeStep(const Problem& problem, const Vec9& theta,
                                const std::vector<Vec3>& c, const std::vector<double>& lambda,

@@ -1,15 +1,19 @@
 // The ellipsoid fit (paper 001 §3.3) and its constrained fallback (Li & Griffiths 2004), alone and
 // as the start of every method.
 #include <cmath>
+#include <optional>
+#include <random>
 #include <string>
 
 #include <gtest/gtest.h>
 #include <Eigen/Eigenvalues>
+#include <Eigen/QR>
 
 #include "accelcal/calibrate.hpp"
 #include "accelcal/ellipsoid_fit.hpp"
 #include "accelcal/error.hpp"
 #include "accelcal/simulate.hpp"
+#include "smallest_eigenvector.hpp"
 
 namespace accelcal {
 namespace {
@@ -154,6 +158,41 @@ TEST(Calibrate, ConstrainedStartLeadsTheJointSolverToTheOptimum) {
     EXPECT_EQ(r.summary.initialization, Initialization::kEllipsoidFit);
     EXPECT_FALSE(r.summary.converged()) << r.summary.BriefReport();
   }
+}
+
+// The algebraic fit's inverse iteration against the full decomposition: symmetric positive definite
+// matrices Q diag(λ) Qᵀ with a random orthogonal Q, the smallest eigenvalue separated by a factor
+// of 10 to 1e6 (as the scatter of readings on an ellipsoid is) — and refused, for the full
+// decomposition to take over, when it is not separated enough to converge or not positive definite.
+TEST(EllipsoidFit, SmallestEigenvectorMatchesTheFullDecomposition) {
+  using Mat10 = Eigen::Matrix<double, 10, 10>;
+  using Vec10 = Eigen::Matrix<double, 10, 1>;
+  std::mt19937_64 rng(5);
+  std::normal_distribution<double> normal;
+  const auto random_matrix = [&](double smallest, double second) {
+    Mat10 A;
+    for (int i = 0; i < 100; ++i) A(i) = normal(rng);
+    const Mat10 Q = Eigen::HouseholderQR<Mat10>(A).householderQ();
+    Vec10 lambda;
+    lambda(0) = smallest;
+    lambda(1) = second;
+    for (int i = 2; i < 10; ++i) lambda(i) = second * std::pow(10.0, i / 3.0);
+    return Mat10(Q * lambda.asDiagonal() * Q.transpose());
+  };
+  for (int trial = 0; trial < 200; ++trial) {
+    const double ratio = std::pow(10.0, 1.0 + 5.0 * (trial % 50) / 49.0);  // λ2/λ1 from 10 to 1e6
+    const Mat10 S = random_matrix(1.0, ratio);
+    const std::optional<Vec10> v = internal::SmallestEigenvector(S);
+    ASSERT_TRUE(v.has_value()) << trial;
+    const Vec10 reference = Eigen::SelfAdjointEigenSolver<Mat10>(S).eigenvectors().col(0);
+    // Both are unit vectors up to sign; the angle between them is bounded by the residual over
+    // the gap, ~1e-15 here.
+    EXPECT_LT((*v - std::copysign(1.0, v->dot(reference)) * reference).norm(), 1e-12) << trial;
+  }
+  // Two nearly equal smallest eigenvalues: 30 iterations at a ratio of 1.001 cannot converge.
+  EXPECT_FALSE(internal::SmallestEigenvector(random_matrix(1.0, 1.001)).has_value());
+  // Indefinite: inverse iteration would find the eigenvalue nearest 0, not the smallest.
+  EXPECT_FALSE(internal::SmallestEigenvector(random_matrix(-1.0, 10.0)).has_value());
 }
 
 }  // namespace

@@ -181,6 +181,11 @@ std::optional<Vec3T<Scalar>> SpecificForce(const ModelParametersT<Scalar>& param
     }
     const Scalar a = K(i, i);
     if (a == Scalar(0)) return std::nullopt;
+    // k2 = 0: the root below is exactly r / a (√(a²) = |a| in floating point), without its cost.
+    if (params.k2(i) == Scalar(0) && a * a >= Scalar(0)) {
+      f(i) = r / a;
+      continue;
+    }
     const Scalar disc = a * a + Scalar(4) * params.k2(i) * r;
     if (!(disc >= Scalar(0))) return std::nullopt;
     const Scalar root = sqrt(disc);

@@ -155,7 +155,10 @@ struct Local {
     E[1] = {b, s + ny * ny * a, -ny};
     f = {g * c[0], g * c[1], g * c[2]};
     y = gK * c;
-    for (int d = 0; d < 3; ++d) r[d] = y[d] + bias(d) - in.reading[d];
+    for (int d = 0; d < 3; ++d) {
+      r[d] = y[d] + bias(d) - in.reading[d];
+      gr[d] = g * r[d];
+    }
     T[0] = gK * E[0];
     T[1] = gK * E[1];
     const Lanes a00 = 2.0 * (Dot(T[0], T[0]) + in.lam);
@@ -170,7 +173,7 @@ struct Local {
     e0 = Dot(T[0], q);
     e1 = Dot(T[1], q);
   }
-  Lanes3 c, E[2], f, y, r, T[2];
+  Lanes3 c, E[2], f, y, r, gr, T[2];
   Lanes cc, h, w00, w01, w11, e0, e1;
 };
 
@@ -191,17 +194,17 @@ struct Kept {
   Lanes cc, h, w00, w01, w11, e0, e1;
 };
 
-// The 9 entries of C x for x (with y = gK x).
-inline void Coupling(const Local& p, double g, const Lanes3& x, const Lanes3& gKx, Lanes* out) {
-  out[0] = 2.0 * (p.f[0] * gKx[0] + g * p.r[0] * x[0]);
-  out[1] = 2.0 * gKx[0];
-  out[2] = 2.0 * (p.f[0] * gKx[1] + g * p.r[1] * x[0]);
-  out[3] = 2.0 * (p.f[1] * gKx[1] + g * p.r[1] * x[1]);
-  out[4] = 2.0 * gKx[1];
-  out[5] = 2.0 * (p.f[0] * gKx[2] + g * p.r[2] * x[0]);
-  out[6] = 2.0 * (p.f[1] * gKx[2] + g * p.r[2] * x[1]);
-  out[7] = 2.0 * (p.f[2] * gKx[2] + g * p.r[2] * x[2]);
-  out[8] = 2.0 * gKx[2];
+// The 9 entries of ½ C x for x (with y = gK x); the factor 2 is applied to the sums instead.
+inline void HalfCoupling(const Local& p, const Lanes3& x, const Lanes3& gKx, Lanes* out) {
+  out[0] = p.f[0] * gKx[0] + p.gr[0] * x[0];
+  out[1] = gKx[0];
+  out[2] = p.f[0] * gKx[1] + p.gr[1] * x[0];
+  out[3] = p.f[1] * gKx[1] + p.gr[1] * x[1];
+  out[4] = gKx[1];
+  out[5] = p.f[0] * gKx[2] + p.gr[2] * x[0];
+  out[6] = p.f[1] * gKx[2] + p.gr[2] * x[1];
+  out[7] = p.f[2] * gKx[2] + p.gr[2] * x[2];
+  out[8] = gKx[2];
 }
 
 // Running sums of the first pass, one lane per position slot.
@@ -217,19 +220,22 @@ struct Sums {
     for (Lanes& x : grad) x.setZero();
     for (Lanes& x : moment) x.setZero();
   }
-  void Add(const Block& in, const Local& p, double g) {
+  // With G = 2G', u = 2u': G W Gᵀ = G' (4W) G'ᵀ, (h/(2|c|²)) u + G W e = (h/|c|²) u' + G' (4W) e/2.
+  void Add(const Block& in, const Local& p) {
     Lanes G0[9], G1[9], u[9];
-    Coupling(p, g, p.E[0], p.T[0], G0);
-    Coupling(p, g, p.E[1], p.T[1], G1);
-    Coupling(p, g, p.c, p.y, u);
-    const Lanes w00 = in.weight * p.w00, w01 = in.weight * p.w01, w11 = in.weight * p.w11;
-    const Lanes half_h = in.weight * p.h / (2.0 * p.cc);
+    HalfCoupling(p, p.E[0], p.T[0], G0);
+    HalfCoupling(p, p.E[1], p.T[1], G1);
+    HalfCoupling(p, p.c, p.y, u);
+    const Lanes weight4 = 4.0 * in.weight;
+    const Lanes w00 = weight4 * p.w00, w01 = weight4 * p.w01, w11 = weight4 * p.w11;
+    const Lanes h_cc = in.weight * p.h / p.cc;
+    const Lanes half_e0 = 0.5 * p.e0, half_e1 = 0.5 * p.e1;
     int n = 0;
     for (int j = 0; j < 9; ++j) {
       const Lanes z0 = G0[j] * w00 + G1[j] * w01;
       const Lanes z1 = G0[j] * w01 + G1[j] * w11;
       for (int i = j; i < 9; ++i) S[n++] -= z0 * G0[i] + z1 * G1[i];
-      rhs[j] += half_h * u[j] + z0 * p.e0 + z1 * p.e1;
+      rhs[j] += h_cc * u[j] + z0 * half_e0 + z1 * half_e1;
     }
     const Lanes3 r = {in.weight * p.r[0], in.weight * p.r[1], in.weight * p.r[2]};
     grad[0] += r[0] * p.f[0];
@@ -266,7 +272,7 @@ void ComputeNewtonLagrangeStep(const Problem& problem, const Vec9& theta,
   for (int first = 0; first < m; first += kLanes) {
     const Block in(problem, c, lambda, first);
     const Local local(in, gK, bias, g);
-    sums.Add(in, local, g);
+    sums.Add(in, local);
     kept.emplace_back(local);
   }
   step->cost = sums.cost.sum();

@@ -242,6 +242,23 @@ LoadedCalibration ParseCalibrationJson(const std::string& text, const std::strin
   if (cal.model == ModelKind::kLinear && !cal.params.k2.isZero(0)) {
     throw InputError(source, 0, "a linear model must have k2 = [0, 0, 0]");
   }
+  if (doc["units"].contains("raw")) {
+    if (!doc["units"]["raw"].is_string()) throw InputError(source, 0, "'units.raw' must be text");
+    cal.raw_unit = doc["units"]["raw"].get<std::string>();
+  }
+  if (doc.contains("source") && doc["source"].is_string()) {
+    cal.source = doc["source"].get<std::string>();
+  }
+  if (doc.contains("positions")) {
+    if (!doc["positions"].is_array()) throw InputError(source, 0, "'positions' must be an array");
+    for (std::size_t k = 0; k < doc["positions"].size(); ++k) {
+      const ordered_json& position = doc["positions"][k];
+      if (!position.is_object()) {
+        throw InputError(source, 0, "'positions[" + std::to_string(k) + "]' must be an object");
+      }
+      cal.position_means.push_back(Vector3(position, "mean", source));
+    }
+  }
   return cal;
 }
 

@@ -406,6 +406,47 @@ TEST_F(Cli, ApplyInvertsTheQuadraticModelAndConvertsUnits) {
   EXPECT_EQ(rows, 49);
 }
 
+TEST_F(Cli, ExportWritesTheTargetFormatAndSaysWhatItDrops) {
+  // Paper 001's simulated readings are in g: a calibration PX4 can take (offsets and scales in
+  // m/s², misalignments dropped and measured).
+  ASSERT_EQ(Exec("simulate --scenario sunxu2020 -o " + Path("sunxu.csv")).status, 0);
+  const CliRun c = Exec("calibrate " + Path("sunxu.csv") +
+                        " --units g --raw-units g --no-crossval -o " + Path("cal.json"));
+  ASSERT_EQ(c.status, 0) << c.err;
+  const CliRun px4 = Exec("export " + Path("cal.json") + " --to px4 --instance 1");
+  ASSERT_EQ(px4.status, 0) << px4.err;
+  EXPECT_NE(px4.out.find("\tCAL_ACC1_XOFF\t"), std::string::npos) << px4.out;
+  EXPECT_NE(px4.out.find("\tCAL_ACC1_ZSCALE\t"), std::string::npos) << px4.out;
+  EXPECT_NE(px4.err.find("dropped: the misalignments (K's off-diagonal terms)"), std::string::npos)
+      << px4.err;
+  EXPECT_NE(px4.err.find("on the calibration's 300 positions"), std::string::npos) << px4.err;
+  // With -o the export goes to the file, the note to stdout; the file is the same text.
+  const CliRun to_file =
+      Exec("export " + Path("cal.json") + " --to px4 --instance 1 -o " + Path("cal.params"));
+  ASSERT_EQ(to_file.status, 0) << to_file.err;
+  EXPECT_EQ(Slurp(Path("cal.params")), px4.out);
+  EXPECT_NE(to_file.out.find("dropped:"), std::string::npos);
+  const CliRun header = Exec("export " + Path("cal.json") + " --to c-header");
+  ASSERT_EQ(header.status, 0) << header.err;
+  EXPECT_NE(header.err.find("exact: nothing of the model is dropped"), std::string::npos);
+  // Refusals: an unknown format is a usage error; a raw unit PX4 cannot take names the file.
+  const CliRun unknown = Exec("export " + Path("cal.json") + " --to csv");
+  EXPECT_EQ(unknown.status, 2);
+  EXPECT_NE(unknown.err.find("--to"), std::string::npos) << unknown.err;
+  ASSERT_EQ(Exec("calibrate " + Path("sunxu.csv") +
+                 " --units g --raw-units counts --no-crossval -o " + Path("counts.json"))
+                .status,
+            0);
+  const CliRun counts =
+      Exec("export " + Path("counts.json") + " --to ardupilot -o " + Path("never.param"));
+  EXPECT_EQ(counts.status, 3);
+  EXPECT_NE(counts.err.find(Path("counts.json") + ": ArduPilot applies its calibration to readings "
+                                                  "already in m/s2"),
+            std::string::npos)
+      << counts.err;
+  EXPECT_FALSE(fs::exists(Path("never.param")));
+}
+
 TEST_F(Cli, KnownOrientationsCalibrateImucalsFerrarisHolds) {
   // Six axis-aligned holds (raw counts) with their known directions: the full misalignment in the
   // platform frame (paper 003), a file apply reads, and the corrected holds within 0.045 m/s² of

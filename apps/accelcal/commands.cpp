@@ -14,6 +14,7 @@
 #include "accelcal/design.hpp"
 #include "accelcal/engineering.hpp"
 #include "accelcal/error.hpp"
+#include "accelcal/export.hpp"
 #include "accelcal/frame.hpp"
 #include "accelcal/gimbal_platform.hpp"
 #include "accelcal/gravity.hpp"
@@ -625,6 +626,50 @@ int RunApply(const ApplyArgs& args) {
     }
   }
   WriteFileAtomically(args.output.empty() ? "-" : args.output, out);
+  return kExitOk;
+}
+
+int RunExport(const ExportArgs& args) {
+  std::string names;
+  for (const ExportFormat f : AllExportFormats())
+    names += (names.empty() ? "" : ", ") + std::string(ToString(f));
+  const ExportFormat format =
+      ParseEnum(ExportFormatFromString(args.format), args.format, "--to", names.c_str());
+  const std::string text = ReadFileToString(args.calibration);
+  const LoadedCalibration cal = ParseCalibrationJson(text, args.calibration);
+  ExportOptions options;
+  options.raw_unit = args.raw_unit;
+  options.instance = args.instance;
+  options.c_prefix = args.c_prefix;
+  ExportResult exported;
+  try {
+    exported = ExportCalibration(cal, text, format, options);
+  } catch (const std::invalid_argument& e) {
+    throw UsageError(e.what());
+  } catch (const DataError& e) {
+    throw InputError(args.calibration, 0, e.what());
+  }
+  // The file (or stdout) gets the export alone; what it means and what it lost goes to the
+  // terminal: stdout when the export went to a file, else stderr.
+  WriteFileAtomically(args.output.empty() ? "-" : args.output, exported.text);
+  std::FILE* note = args.output.empty() ? stderr : stdout;
+  std::fprintf(note, "%s\n", exported.convention.c_str());
+  const ExportLoss& loss = exported.loss;
+  const std::string unit(ToString(cal.unit));
+  if (loss.dropped.empty()) {
+    std::fprintf(note, "exact: nothing of the model is dropped\n");
+  } else {
+    std::fprintf(note, "dropped: %s\n", loss.dropped.c_str());
+  }
+  if (loss.positions > 0 && !loss.dropped.empty()) {
+    std::fprintf(note,
+                 "on the calibration's %d positions: corrected specific force off by %.3g %s max, "
+                 "%.3g %s RMS; RMS of |f| - g %.3g %s (full model %.3g %s)\n",
+                 loss.positions, loss.max_error, unit.c_str(), loss.rms_error, unit.c_str(),
+                 loss.norm_rms_export, unit.c_str(), loss.norm_rms_full, unit.c_str());
+  } else if (!loss.dropped.empty()) {
+    std::fprintf(note, "the file holds no positions to measure the loss on\n");
+  }
   return kExitOk;
 }
 

@@ -90,6 +90,15 @@ struct ApplyArgs {
   std::optional<std::string> units;  // convert to this unit
 };
 
+struct ExportArgs {
+  std::string calibration;
+  std::string format;
+  std::string output;    // empty: stdout
+  std::string raw_unit;  // overrides the file's units.raw (kalibr, px4, ardupilot)
+  int instance = 0;
+  std::string c_prefix = "accelcal";
+};
+
 struct DesignArgs {
   std::string positions;                   // scheme name or CSV file of unit directions
   std::string device;                      // calibration file of the nominal device
@@ -151,5 +160,6 @@ int RunDesign(const DesignArgs& args);
 int RunDetect(const DetectArgs& args);
 int RunCompare(const CompareArgs& args);
 int RunApply(const ApplyArgs& args);
+int RunExport(const ExportArgs& args);
 
 }  // namespace accelcal::cli

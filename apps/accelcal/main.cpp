@@ -236,6 +236,25 @@ int main(int argc, char** argv) {
   apply_cmd->add_option("--units", apply.units,
                         "output unit m/s2 or g (default: the calibration's)");
 
+  ExportArgs exp;
+  CLI::App* export_cmd = app.add_subcommand(
+      "export", "write a calibration in another tool's format, saying what it cannot hold");
+  export_cmd->add_option("CAL", exp.calibration, "calibration file (JSON)")->required();
+  export_cmd
+      ->add_option("--to", exp.format,
+                   "json, yaml, kalibr, px4, ardupilot, c-header or imutk (docs/conventions.md)")
+      ->required();
+  export_cmd->add_option("-o,--output", exp.output, "output file (default: stdout)");
+  export_cmd->add_option("--raw-unit", exp.raw_unit,
+                         "unit of the calibrated raw readings, m/s2 or g, when the file's label "
+                         "is another (kalibr, px4, ardupilot need readings in m/s2)");
+  export_cmd
+      ->add_option("--instance", exp.instance,
+                   "accelerometer index: PX4 CAL_ACC<n>, ArduPilot INS_ACC / INS_ACC2 / INS_ACC3")
+      ->capture_default_str();
+  export_cmd->add_option("--c-prefix", exp.c_prefix, "prefix of the C identifiers (c-header)")
+      ->capture_default_str();
+
   try {
     app.parse(argc, argv);
   } catch (const CLI::CallForHelp& e) {
@@ -260,6 +279,7 @@ int main(int argc, char** argv) {
     if (*detect) return RunDetect(det);
     if (*compare) return RunCompare(cmp);
     if (*apply_cmd) return RunApply(apply);
+    if (*export_cmd) return RunExport(exp);
     if (*design) return RunDesign(des);
     if (*montecarlo) return RunMonteCarlo(mc);
     if (*simulate) {

@@ -35,6 +35,9 @@ struct LoadedCalibration {
   ModelParameters params;
   double gravity = 0;
   ForceUnit unit = ForceUnit::kMetersPerSecond2;
+  std::string raw_unit = "raw";      ///< `units.raw` (a label given at calibration)
+  std::vector<Vec3> position_means;  ///< `positions[].mean` [raw]; empty when the file has none
+  std::string source;                ///< `source`: the calibrated input's name, when present
 };
 
 /// Parses a calibration file's text; throws InputError naming `source` for anything missing,

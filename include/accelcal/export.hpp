@@ -1,0 +1,73 @@
+#pragma once
+/// @file export.hpp
+/// A calibration in the formats of the tools that apply it (`accelcal export CAL.json --to F`).
+/// Every export states its convention, and when the target cannot hold the model it says what is
+/// dropped and how large the resulting error is on the calibration's own positions. The exact
+/// conversion formulas are in docs/conventions.md.
+///
+/// accelcal's model: p = K f + b + k2 ∘ f² (p raw reading, f specific force in the body frame of
+/// `frame`, K triangular: calibrate.hpp, docs/model.md). Every format below instead maps a reading
+/// to a corrected specific force, f = M (p − o) or f = diag(s) (p − o).
+
+#include <optional>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "accelcal/calibration_file.hpp"
+
+namespace accelcal {
+
+enum class ExportFormat {
+  kJson,       ///< "json": the native calibration file, unchanged
+  kYaml,       ///< "yaml": the same document in YAML
+  kKalibr,     ///< "kalibr": Kalibr's imu.yaml with the scale-misalignment intrinsics
+  kPx4,        ///< "px4": CAL_ACCn_{X,Y,Z}OFF and CAL_ACCn_{X,Y,Z}SCALE (QGroundControl .params)
+  kArduPilot,  ///< "ardupilot": INS_ACC[n]OFFS_{X,Y,Z} and INS_ACC[n]SCAL_{X,Y,Z} (.param)
+  kCHeader,    ///< "c-header": constants and an inline correction function for firmware
+  kImuTk,      ///< "imutk": imu_tk's CalibratedTriad .calib (misalignment, scale, bias)
+};
+std::string_view ToString(ExportFormat format);
+std::optional<ExportFormat> ExportFormatFromString(std::string_view text);
+/// All formats, in the order above (help texts, tests).
+const std::vector<ExportFormat>& AllExportFormats();
+
+struct ExportOptions {
+  /// Overrides the calibration's raw-unit label for the formats that need readings in m/s²
+  /// (kalibr, px4, ardupilot): "m/s2" or "g". Empty: the file's `units.raw`.
+  std::string raw_unit;
+  /// Sensor instance: PX4 CAL_ACC<n> (0-based), ArduPilot INS_ACC / INS_ACC2 / INS_ACC3 (0, 1, 2).
+  int instance = 0;
+  /// Prefix of the C identifiers (c-header).
+  std::string c_prefix = "accelcal";
+};
+
+/// What the target format could not hold, measured on the calibration's own positions (the means
+/// in the file): the exported correction against the full model, both in the specific-force unit
+/// of the calibration.
+struct ExportLoss {
+  std::string dropped;   ///< empty: the export is exact (to round-off)
+  int positions = 0;     ///< how many positions the errors are measured on (0: none in the file)
+  double max_error = 0;  ///< max_k |f_export,k − f_k|
+  double rms_error = 0;  ///< RMS_k |f_export,k − f_k|
+  double norm_rms_full = 0;    ///< RMS_k (|f_k| − g), the full model
+  double norm_rms_export = 0;  ///< RMS_k (|f_export,k| − g)
+};
+
+struct ExportResult {
+  std::string text;        ///< the file's content
+  std::string convention;  ///< what the exported numbers mean (direction, units, frame)
+  ExportLoss loss;
+};
+
+/// `native_json` is the calibration file's text (for json and yaml, which carry all of it).
+/// Throws DataError when the format cannot express this calibration at all (kalibr, px4 and
+/// ardupilot need readings in m/s² or g), std::invalid_argument for bad options.
+ExportResult ExportCalibration(const LoadedCalibration& calibration, const std::string& native_json,
+                               ExportFormat format, const ExportOptions& options = {});
+
+/// YAML (block style) of a JSON document; scalars keep their JSON spelling, so numbers read back
+/// exactly.
+std::string JsonToYaml(const std::string& json_text);
+
+}  // namespace accelcal

@@ -1,0 +1,266 @@
+// Exports to other tools' formats (export.hpp, docs/conventions.md): each read back the way its
+// tool reads it and applied the way its tool applies it, against accelcal's own correction.
+#include <sys/wait.h>
+
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+
+#include <gtest/gtest.h>
+#include <Eigen/LU>
+
+#include "accelcal/calibration_file.hpp"
+#include "accelcal/error.hpp"
+#include "accelcal/export.hpp"
+#include "accelcal/frame.hpp"
+#include "accelcal/simulate.hpp"
+
+namespace accelcal {
+namespace {
+
+namespace fs = std::filesystem;
+constexpr double kPi = 3.14159265358979323846;
+
+// A MEMS device in g (raw readings in g too, as a phone logs them), fitted on 24 noisy positions.
+struct Fitted {
+  std::string json;
+  LoadedCalibration cal;
+};
+Fitted Fit(ModelKind model, Frame frame, const std::string& raw_unit = "g") {
+  ModelParameters truth;
+  truth.K << 1.02, 0, 0, 0.01, 0.98, 0, -0.02, 0.015, 1.01;
+  truth.bias << 0.03, -0.02, 0.05;
+  if (model == ModelKind::kQuadratic) truth.k2 << 0.01, -0.008, 0.012;
+  const std::vector<Vec3> readings =
+      SimulatePositions(truth, 1.0, RandomDirectionsInCap(24, kPi, 3), Vec3::Constant(1e-3), 4);
+  CalibrationOptions options;
+  options.model = model;
+  options.frame = frame;
+  options.gravity = 1.0;
+  const CalibrationResult result = Calibrate(readings, options);
+  CalibrationFileInfo info;
+  info.unit = ForceUnit::kStandardGravity;
+  info.raw_unit = raw_unit;
+  info.source = "simulated";
+  for (const Vec3& p : readings)
+    info.positions.push_back(Position{p, 1, std::nullopt, std::nullopt});
+  Fitted fitted;
+  fitted.json = CalibrationToJson(result, info);
+  fitted.cal = ParseCalibrationJson(fitted.json, "cal.json");
+  return fitted;
+}
+
+std::vector<double> Numbers(const std::string& text) {
+  std::istringstream in(text);
+  std::vector<double> v;
+  double x;
+  while (in >> x) v.push_back(x);
+  return v;
+}
+
+// Every value of `NAME<sep>VALUE` lines whose name starts with `prefix`, in order.
+std::vector<double> ParameterValues(const std::string& text, const std::string& prefix, char sep,
+                                    int value_field) {
+  std::vector<double> values;
+  std::istringstream in(text);
+  std::string line;
+  while (std::getline(in, line)) {
+    if (line.empty() || line[0] == '#') continue;
+    std::vector<std::string> fields;
+    std::stringstream fs_line(line);
+    std::string field;
+    while (std::getline(fs_line, field, sep)) fields.push_back(field);
+    const std::string& name = fields[static_cast<std::size_t>(value_field - 1)];
+    if (name.rfind(prefix, 0) == 0)
+      values.push_back(std::stod(fields[static_cast<std::size_t>(value_field)]));
+  }
+  return values;
+}
+
+TEST(Export, ImuTkAppliedAsImuTkDoesIsAccelcalsCorrection) {
+  for (const Frame frame : {Frame::kXFirst, Frame::kZFirst}) {
+    const Fitted f = Fit(ModelKind::kLinear, frame);
+    const ExportResult e = ExportCalibration(f.cal, f.json, ExportFormat::kImuTk);
+    // CalibratedTriad::load: 9 numbers of T (row-major), 9 of S, 3 of B; f = T S (p − B).
+    const std::vector<double> n = Numbers(e.text);
+    ASSERT_EQ(n.size(), 21u);
+    const Mat33 T = Eigen::Map<const Eigen::Matrix<double, 3, 3, Eigen::RowMajor>>(n.data());
+    const Mat33 S = Eigen::Map<const Eigen::Matrix<double, 3, 3, Eigen::RowMajor>>(n.data() + 9);
+    const Vec3 B(n[18], n[19], n[20]);
+    EXPECT_EQ(T.diagonal(), Vec3::Ones());
+    EXPECT_TRUE(S.isDiagonal(0));
+    for (const Vec3& p : f.cal.position_means) {
+      const Vec3 expected = *SpecificForce(f.cal.params, p);
+      // K⁻¹ computed and split: a few roundings of a well-conditioned 3x3.
+      EXPECT_LT((T * S * (p - B) - expected).norm(), 1e-14) << ToString(frame);
+    }
+    EXPECT_TRUE(e.loss.dropped.empty());
+    EXPECT_LT(e.loss.max_error, 1e-14);
+  }
+}
+
+TEST(Export, QuadraticTermsDroppedAreNamedAndMeasured) {
+  const Fitted f = Fit(ModelKind::kQuadratic, Frame::kXFirst);
+  const ExportResult e = ExportCalibration(f.cal, f.json, ExportFormat::kImuTk);
+  EXPECT_EQ(e.loss.dropped, "the squared terms k2");
+  // Independently: the linear part's correction against the full one on the file's positions.
+  double max_error = 0;
+  for (const Vec3& p : f.cal.position_means) {
+    const Vec3 linear = f.cal.params.K.inverse() * (p - f.cal.params.bias);
+    max_error = std::max(max_error, (linear - *SpecificForce(f.cal.params, p)).norm());
+  }
+  EXPECT_EQ(e.loss.positions, 24);
+  EXPECT_NEAR(e.loss.max_error, max_error, 1e-12);
+  EXPECT_GT(e.loss.max_error, 5e-3);  // k2 ~ 0.01 per g²: a real loss, ~0.01 g
+}
+
+TEST(Export, Px4AndArduPilotHoldTheDiagonalAndSayWhatTheyDrop) {
+  const Fitted f = Fit(ModelKind::kLinear, Frame::kXFirst);
+  const double g0 = kStandardGravity_ms2;
+  for (const ExportFormat format : {ExportFormat::kPx4, ExportFormat::kArduPilot}) {
+    const ExportResult e = ExportCalibration(f.cal, f.json, format);
+    const bool px4 = format == ExportFormat::kPx4;
+    // PX4: `1 1 CAL_ACC0_XOFF value 9` (tab-separated, offsets then scales); ArduPilot: NAME,VALUE.
+    const std::vector<double> offsets = px4 ? ParameterValues(e.text, "CAL_ACC0_", '\t', 3)
+                                            : ParameterValues(e.text, "INS_ACCOFFS", ',', 1);
+    const std::vector<double> scales = px4 ? std::vector<double>(offsets.begin() + 3, offsets.end())
+                                           : ParameterValues(e.text, "INS_ACCSCAL", ',', 1);
+    ASSERT_EQ(offsets.size(), px4 ? 6u : 3u);
+    ASSERT_EQ(scales.size(), 3u);
+    // The tool's correction (p − offset) .* scale on readings in m/s², here g · 9.80665, gives
+    // m/s²; it equals (p − b)_i / K_ii in g, to the 9 digits written.
+    for (const Vec3& p : f.cal.position_means) {
+      for (int i = 0; i < 3; ++i) {
+        const auto j = static_cast<std::size_t>(i);
+        const double tool = (g0 * p(i) - offsets[j]) * scales[j];
+        const double expected = g0 * (p(i) - f.cal.params.bias(i)) / f.cal.params.K(i, i);
+        EXPECT_NEAR(tool, expected, 1e-7) << ToString(format);
+      }
+    }
+    EXPECT_EQ(e.loss.dropped, "the misalignments (K's off-diagonal terms)");
+    // The dropped misalignments (0.01-0.02) move corrected readings by up to ~2e-2 g.
+    EXPECT_GT(e.loss.max_error, 1e-3);
+    EXPECT_LT(e.loss.max_error, 5e-2);
+  }
+}
+
+TEST(Export, ToolsThatNeedMetersPerSecond2RefuseOtherRawUnits) {
+  const Fitted f = Fit(ModelKind::kLinear, Frame::kXFirst, "counts");
+  for (const ExportFormat format :
+       {ExportFormat::kPx4, ExportFormat::kArduPilot, ExportFormat::kKalibr}) {
+    try {
+      ExportCalibration(f.cal, f.json, format);
+      ADD_FAILURE() << ToString(format);
+    } catch (const DataError& e) {
+      EXPECT_NE(std::string(e.what()).find("this calibration's raw unit is 'counts'"),
+                std::string::npos);
+    }
+  }
+  ExportOptions said_g;
+  said_g.raw_unit = "g";
+  EXPECT_NO_THROW(ExportCalibration(f.cal, f.json, ExportFormat::kPx4, said_g));
+}
+
+TEST(Export, KalibrMIsKInTheXFirstFrameInMetersPerSecond2) {
+  for (const Frame frame : {Frame::kXFirst, Frame::kZFirst}) {
+    const Fitted f = Fit(ModelKind::kLinear, frame);
+    const ExportResult e = ExportCalibration(f.cal, f.json, ExportFormat::kKalibr);
+    // The three rows after "M:": a_measured = M a (+ b), lower-triangular.
+    const std::string rows = e.text.substr(e.text.find("M:\n") + 3);
+    std::string flat = rows.substr(0, rows.find("  #"));
+    for (char& c : flat) {
+      if (c == '[' || c == ']' || c == ',') c = ' ';
+    }
+    std::vector<double> n;
+    std::istringstream in(flat);
+    std::string token;
+    while (in >> token) {
+      if (token != "-") n.push_back(std::stod(token));  // "-" is the YAML list bullet
+    }
+    ASSERT_EQ(n.size(), 9u);
+    const Mat33 M = Eigen::Map<const Eigen::Matrix<double, 3, 3, Eigen::RowMajor>>(n.data());
+    EXPECT_EQ(M(0, 1), 0.0);
+    EXPECT_EQ(M(0, 2), 0.0);
+    EXPECT_EQ(M(1, 2), 0.0);
+    // Readings and bias in m/s² (raw g · g0); the corrected magnitude is the frame-free check.
+    const double g0 = kStandardGravity_ms2;
+    for (const Vec3& p : f.cal.position_means) {
+      const Vec3 a = M.inverse() * (g0 * (p - f.cal.params.bias));
+      EXPECT_NEAR(a.norm(), g0 * SpecificForce(f.cal.params, p)->norm(), 1e-12);
+    }
+    EXPECT_TRUE(e.loss.dropped.empty());
+  }
+}
+
+int Shell(const std::string& command) {
+  const int status = std::system(command.c_str());
+  return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+}
+
+TEST(Export, CHeaderCompiledAndRunGivesAccelcalsCorrectionBitForBit) {
+  const fs::path dir = fs::path(::testing::TempDir()) / "accelcal_c_header";
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  for (const auto& [model, frame] : {std::pair{ModelKind::kLinear, Frame::kXFirst},
+                                     std::pair{ModelKind::kQuadratic, Frame::kXFirst},
+                                     std::pair{ModelKind::kQuadratic, Frame::kZFirst}}) {
+    const Fitted f = Fit(model, frame);
+    ExportOptions options;
+    options.c_prefix = "imu0";
+    std::ofstream((dir / "cal.h").string())
+        << ExportCalibration(f.cal, f.json, ExportFormat::kCHeader, options).text;
+    std::ofstream((dir / "main.c").string())
+        << "#include <stdio.h>\n#include \"cal.h\"\nint main(void) {\n  double p[3], f[3];\n"
+           "  while (scanf(\"%lf %lf %lf\", &p[0], &p[1], &p[2]) == 3) {\n"
+           "    if (imu0_correct(p, f) != 0) return 2;\n"
+           "    printf(\"%.17g %.17g %.17g\\n\", f[0], f[1], f[2]);\n  }\n  return 0;\n}\n";
+    std::ofstream in((dir / "in.txt").string());
+    in.precision(17);
+    for (const Vec3& p : f.cal.position_means) in << p(0) << " " << p(1) << " " << p(2) << "\n";
+    in.close();
+    // -ffp-contract=off: no fused multiply-add, as the library is compiled.
+    ASSERT_EQ(Shell("cc -std=c99 -pedantic -Wall -Werror -O2 -ffp-contract=off -o " +
+                    (dir / "app").string() + " " + (dir / "main.c").string() + " -lm"),
+              0);
+    ASSERT_EQ(Shell((dir / "app").string() + " < " + (dir / "in.txt").string() + " > " +
+                    (dir / "out.txt").string()),
+              0);
+    std::ifstream out((dir / "out.txt").string());
+    std::vector<double> n = Numbers(std::string(std::istreambuf_iterator<char>(out), {}));
+    ASSERT_EQ(n.size(), 3 * f.cal.position_means.size());
+    for (std::size_t k = 0; k < f.cal.position_means.size(); ++k) {
+      const Vec3 expected = *SpecificForce(f.cal.params, f.cal.position_means[k]);
+      for (int i = 0; i < 3; ++i)
+        EXPECT_EQ(n[3 * k + static_cast<std::size_t>(i)], expected(i)) << k;
+    }
+  }
+}
+
+TEST(Export, YamlReadsBackAsTheSameDocumentInAYaml11Reader) {
+  // PyYAML (YAML 1.1, Debian's python3-yaml) is the strictest common reader: it takes 1e-05 for a
+  // string. The document must compare equal to the JSON one, every number exactly.
+  const fs::path dir = fs::path(::testing::TempDir()) / "accelcal_yaml";
+  fs::create_directories(dir);
+  const Fitted f = Fit(ModelKind::kQuadratic, Frame::kZFirst);
+  std::ofstream((dir / "cal.json").string()) << f.json;
+  std::ofstream((dir / "cal.yaml").string())
+      << ExportCalibration(f.cal, f.json, ExportFormat::kYaml).text;
+  EXPECT_NE(f.json.find("e-"), std::string::npos);  // small numbers in exponent form are in it
+  EXPECT_EQ(Shell("/usr/bin/python3 -c \"import json, sys, yaml; "
+                  "sys.exit(json.load(open(sys.argv[1])) != yaml.safe_load(open(sys.argv[2])))\" " +
+                  (dir / "cal.json").string() + " " + (dir / "cal.yaml").string()),
+            0);
+  EXPECT_EQ(ExportCalibration(f.cal, f.json, ExportFormat::kJson).text, f.json);
+}
+
+TEST(Export, FormatNamesRoundTrip) {
+  for (const ExportFormat format : AllExportFormats()) {
+    EXPECT_EQ(ExportFormatFromString(ToString(format)), format);
+  }
+  EXPECT_FALSE(ExportFormatFromString("csv").has_value());
+}
+
+}  // namespace
+}  // namespace accelcal

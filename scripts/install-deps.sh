@@ -7,6 +7,8 @@ packages=(
   libeigen3-dev libcli11-dev nlohmann-json3-dev libfast-float-dev
   libgtest-dev libgmock-dev libbenchmark-dev
   clang-format hyperfine valgrind
+  python3-yaml  # the YAML export's round-trip test reads it with PyYAML
+  chromium      # the report test renders the page as a person would see it
 )
 missing=()
 for p in "${packages[@]}"; do

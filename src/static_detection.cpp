@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 
 #include "accelcal/error.hpp"
 
@@ -120,19 +121,28 @@ StaticDetectionResult DetectStaticIntervals(const RawLog& log,
       in_run = true;
     } else if (!still && in_run) {
       in_run = false;
+      const auto time_of = [&](std::size_t i) {
+        return log.time_s.empty() ? static_cast<double>(i) / result.rate_hz : log.time_s[i];
+      };
       if (c - run_start >= min_len) {
         StaticInterval interval;
         interval.begin = run_start;
         interval.end = c;
         MeanAndStd(log.samples, interval.begin, interval.end, &interval.mean, &interval.std);
-        if (!log.time_s.empty()) {
-          interval.t_begin_s = log.time_s[interval.begin];
-          interval.t_end_s = log.time_s[interval.end - 1];
-        } else {
-          interval.t_begin_s = static_cast<double>(interval.begin) / result.rate_hz;
-          interval.t_end_s = static_cast<double>(interval.end - 1) / result.rate_hz;
-        }
+        interval.t_begin_s = time_of(interval.begin);
+        interval.t_end_s = time_of(interval.end - 1);
         result.intervals.push_back(interval);
+      } else if (4 * (c - run_start) >= min_len) {
+        RejectedInterval rejected;
+        rejected.begin = run_start;
+        rejected.end = c;
+        rejected.t_begin_s = time_of(run_start);
+        rejected.t_end_s = time_of(c - 1);
+        char buf[120];
+        std::snprintf(buf, sizeof buf, "still for %.2f s, shorter than the minimum %.2f s",
+                      static_cast<double>(c - run_start) / result.rate_hz, options.min_duration_s);
+        rejected.reason = buf;
+        result.rejected.push_back(rejected);
       }
     }
   }

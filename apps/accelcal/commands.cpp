@@ -22,6 +22,7 @@
 #include "accelcal/model_selection.hpp"
 #include "accelcal/montecarlo.hpp"
 #include "accelcal/orientation_file.hpp"
+#include "accelcal/report.hpp"
 #include "accelcal/series_file.hpp"
 #include "accelcal/simulate.hpp"
 #include "accelcal/system_level.hpp"
@@ -297,7 +298,18 @@ int WriteCalibration(const CalibrateArgs& args, const LoadedInput& in, const Gra
   info.model_selection = selection;
   info.model_requested = args.model;
   const std::string json = CalibrationToJson(result, info);
+  // Everything is rendered before anything is written: a failure leaves no file behind.
+  std::string report;
+  if (!args.report.empty()) {
+    ReportInput input;
+    input.calibration_json = json;
+    input.calibration_name = args.output.empty() ? args.input.path : args.output;
+    if (in.data.kind == InputKind::kRaw) input.log = &in.data.raw;
+    if (in.detection) input.rejected = in.detection->rejected;
+    report = RenderReport(input);
+  }
   if (!args.output.empty()) WriteFileAtomically(args.output, json);
+  if (!args.report.empty()) WriteFileAtomically(args.report, report);
   if (args.json) {
     WriteFileAtomically("-", json);
   } else {
@@ -306,6 +318,7 @@ int WriteCalibration(const CalibrateArgs& args, const LoadedInput& in, const Gra
     PrintCalibration(result, in.positions, g, args.raw_units);
     if (selection) PrintModelSelection(*selection, args.model == "auto");
     if (!args.output.empty()) std::printf("wrote     %s\n", args.output.c_str());
+    if (!args.report.empty()) std::printf("report    %s\n", args.report.c_str());
   }
   return kExitOk;
 }
@@ -626,6 +639,28 @@ int RunApply(const ApplyArgs& args) {
     }
   }
   WriteFileAtomically(args.output.empty() ? "-" : args.output, out);
+  return kExitOk;
+}
+
+int RunReport(const ReportArgs& args) {
+  ReportInput input;
+  input.calibration_json = ReadFileToString(args.calibration);
+  input.calibration_name = args.calibration;
+  InputData data;
+  if (!args.log.path.empty()) {
+    if (auto why = args.log.detection.Validate()) throw UsageError(*why);
+    ReadOptions read = MakeReadOptions(args.log);
+    read.kind = InputKind::kRaw;
+    data = ReadInput(args.log.path, read);
+    input.log = &data.raw;
+    // The same detection as calibrate's (same options) says which still periods were not used.
+    input.rejected = DetectStaticIntervals(data.raw, args.log.detection).rejected;
+  }
+  WriteFileAtomically(args.output.empty() ? "-" : args.output, RenderReport(input));
+  if (!args.output.empty()) {
+    for (const std::string& w : ReportWarnings(input)) std::printf("warning: %s\n", w.c_str());
+    std::printf("report    %s\n", args.output.c_str());
+  }
   return kExitOk;
 }
 

@@ -62,6 +62,7 @@ struct CalibrateArgs {
   std::vector<std::string> gravity_only_options;
   bool cross_validate = true;
   std::string raw_units = "raw";
+  std::string report;  // HTML report path (report.hpp); empty: none
   std::string output;
   bool json = false;
   int max_iterations = 0;  // 0: the solver's default
@@ -88,6 +89,12 @@ struct ApplyArgs {
   InputArgs input;
   std::string output;                // empty: stdout
   std::optional<std::string> units;  // convert to this unit
+};
+
+struct ReportArgs {
+  std::string calibration;
+  InputArgs log;       // path empty: no raw-signal plot
+  std::string output;  // empty: stdout
 };
 
 struct ExportArgs {
@@ -161,5 +168,6 @@ int RunDetect(const DetectArgs& args);
 int RunCompare(const CompareArgs& args);
 int RunApply(const ApplyArgs& args);
 int RunExport(const ExportArgs& args);
+int RunReport(const ReportArgs& args);
 
 }  // namespace accelcal::cli

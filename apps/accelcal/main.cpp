@@ -98,6 +98,8 @@ int main(int argc, char** argv) {
   calibrate->add_option("--max-iterations", cal.max_iterations,
                         "iteration cap of the solver (0: its default)");
   calibrate->add_option("-o,--output", cal.output, "write the calibration file (JSON) here");
+  calibrate->add_option("--report", cal.report,
+                        "write the HTML report here (self-contained: plots, parameters, warnings)");
   calibrate->add_flag("--json", cal.json,
                       "print the calibration file to stdout instead of the summary");
 
@@ -236,6 +238,15 @@ int main(int argc, char** argv) {
   apply_cmd->add_option("--units", apply.units,
                         "output unit m/s2 or g (default: the calibration's)");
 
+  ReportArgs rep;
+  CLI::App* report_cmd = app.add_subcommand(
+      "report", "write the HTML report of a calibration file (and its raw log, when given)");
+  report_cmd->add_option("CAL", rep.calibration, "calibration file (JSON)")->required();
+  report_cmd->add_option("LOG", rep.log.path, "the raw log it was calibrated from (optional)");
+  AddInputOptions(report_cmd, &rep.log, false);
+  AddDetectionOptions(report_cmd, &rep.log);
+  report_cmd->add_option("-o,--output", rep.output, "HTML file (default: stdout)");
+
   ExportArgs exp;
   CLI::App* export_cmd = app.add_subcommand(
       "export", "write a calibration in another tool's format, saying what it cannot hold");
@@ -280,6 +291,7 @@ int main(int argc, char** argv) {
     if (*compare) return RunCompare(cmp);
     if (*apply_cmd) return RunApply(apply);
     if (*export_cmd) return RunExport(exp);
+    if (*report_cmd) return RunReport(rep);
     if (*design) return RunDesign(des);
     if (*montecarlo) return RunMonteCarlo(mc);
     if (*simulate) {

@@ -38,8 +38,18 @@ struct StaticDetectionOptions {
   std::optional<std::string> Validate() const;
 };
 
+/// A still run that did not become an interval, and why (the report shows them).
+struct RejectedInterval {
+  std::size_t begin = 0, end = 0;     ///< sample indices, end one past the last
+  double t_begin_s = 0, t_end_s = 0;  ///< [s]
+  std::string reason;
+};
+
 struct StaticDetectionResult {
   std::vector<StaticInterval> intervals;
+  /// Still runs shorter than min_duration_s but at least a quarter of it (shorter blips are
+  /// noise, not attempted positions).
+  std::vector<RejectedInterval> rejected;
   double rate_hz = 0;              ///< rate used
   std::size_t window_samples = 0;  ///< window length used
   double noise_reference = 0;      ///< s_ref [raw²]

@@ -1,0 +1,136 @@
+// The HTML report (report.hpp): its structure, checked without a browser, and its warnings. The
+// page as a person sees it is checked in headless Chromium by tests/report_browser_test.sh.
+#include <string>
+
+#include <gtest/gtest.h>
+
+#include "accelcal/calibration_file.hpp"
+#include "accelcal/error.hpp"
+#include "accelcal/report.hpp"
+#include "accelcal/simulate.hpp"
+#include "accelcal/static_detection.hpp"
+
+namespace accelcal {
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+
+std::size_t Count(const std::string& text, const std::string& what) {
+  std::size_t n = 0;
+  for (std::size_t at = text.find(what); at != std::string::npos; at = text.find(what, at + 1)) ++n;
+  return n;
+}
+
+// A simulated recording of a MEMS device in g, detected and calibrated as the CLI does.
+struct Recording {
+  RawLog log;
+  StaticDetectionResult detection;
+  std::string json;
+};
+Recording Record(const std::vector<Vec3>& directions, ModelKind model, double static_s = 4.0,
+                 int moved = -1) {
+  ModelParameters truth;
+  truth.K << 1.02, 0, 0, 0.01, 0.98, 0, -0.02, 0.015, 1.01;
+  truth.bias << 0.03, -0.02, 0.05;
+  RawLogSimulation sim;
+  sim.rate_hz = 100;
+  sim.static_s = static_s;
+  sim.transition_s = 2;
+  sim.sigma_raw_per_sample = Vec3::Constant(2e-3);
+  const SimulatedLog simulated = SimulateRawLog(truth, 1.0, directions, sim);
+  Recording r;
+  r.log.source = "simulated.csv";
+  r.log.time_s = simulated.time_s;
+  r.log.samples = simulated.samples;
+  r.log.line.resize(r.log.samples.size(), 1);
+  r.log.rate_hz = sim.rate_hz;
+  r.detection = DetectStaticIntervals(r.log, StaticDetectionOptions());
+  std::vector<Position> positions = PositionsFromIntervals(r.detection.intervals);
+  if (moved >= 0) positions[static_cast<std::size_t>(moved)].mean += Vec3(0.02, -0.02, 0.02);
+  CalibrationOptions options;
+  options.model = model;
+  options.gravity = 1.0;
+  options.reading_sigmas = SigmasOfMeans(positions);
+  CalibrationResult result = Calibrate(Means(positions), options);
+  CrossValidate(Means(positions), options, &result);
+  CalibrationFileInfo info;
+  info.unit = ForceUnit::kStandardGravity;
+  info.raw_unit = "g";
+  info.source = "simulated.csv";
+  info.positions = positions;
+  r.json = CalibrationToJson(result, info);
+  return r;
+}
+
+TEST(Report, SelfContainedPageWithEveryPlotAndTheParameterTable) {
+  const Recording r = Record(Yang18Directions(), ModelKind::kQuadratic);
+  ASSERT_EQ(r.detection.intervals.size(), 18u);
+  ReportInput input{r.json, "cal.json", &r.log, r.detection.rejected};
+  const std::string html = RenderReport(input);
+  for (const char* id : {"raw-signal", "norm-error", "sphere", "residuals"}) {
+    EXPECT_EQ(Count(html, std::string("<svg id=\"") + id + "\""), 1u) << id;
+  }
+  EXPECT_EQ(Count(html, "<svg "), Count(html, "</svg>"));
+  // One shaded interval and one number per position, one dot per direction, one held-out circle.
+  EXPECT_EQ(Count(html, "<rect class=\"interval\""), 18u);
+  EXPECT_EQ(Count(html, "<circle class=\"direction\""), 18u);
+  EXPECT_EQ(Count(html, "<circle class=\"held-out\""), 18u);
+  EXPECT_EQ(Count(html, "<circle class=\"after\""), 18u);
+  EXPECT_EQ(Count(html, "<rect class=\"before\""), 18u);  // readings in g: |p| − g means something
+  // Scale factors, three misalignments, biases, squared coefficients, each with its 1σ.
+  EXPECT_EQ(Count(html, "<tr><td>"), 12u);
+  EXPECT_EQ(Count(html, "&plusmn; "), 12u);
+  // Nothing is fetched: no scripts, links, images or external styles (the SVG namespace is a name,
+  // not a request).
+  for (const char* external : {"<script", "src=", "href=", "url(", "<link", "@import"}) {
+    EXPECT_EQ(Count(html, external), 0u) << external;
+  }
+  EXPECT_EQ(Count(html, "http"), Count(html, "xmlns=\"http://www.w3.org/2000/svg\""));
+  EXPECT_EQ(RenderReport(input), html);                     // deterministic
+  EXPECT_NE(html.find("<p>None.</p>"), std::string::npos);  // a clean recording: no warnings
+}
+
+TEST(Report, WarnsAboutAMovedPositionAGapInCoverageAndUnusedStillPeriods) {
+  // Position 5's mean pushed by 0.035 g: far beyond the held-out error of the others.
+  const Recording moved = Record(Yang18Directions(), ModelKind::kLinear, 4.0, 4);
+  const std::vector<std::string> w = ReportWarnings({moved.json, "cal.json", nullptr, {}});
+  // Two warnings: the scatter it causes, beyond the interval noise, and the position itself (and
+  // no other position).
+  ASSERT_EQ(w.size(), 2u);
+  EXPECT_EQ(w[0].rfind("the positions scatter ", 0), 0u) << w[0];
+  EXPECT_EQ(w[1].rfind("position 5: held-out |f| - g = ", 0), 0u) << w[1];
+  // All positions within 60° of +z: nothing near -z.
+  const Recording cap = Record(RandomDirectionsInCap(14, kPi / 3, 9), ModelKind::kLinear);
+  bool gap = false;
+  for (const std::string& s : ReportWarnings({cap.json, "cal.json", nullptr, {}})) {
+    gap = gap || s.rfind("no position within ", 0) == 0;
+  }
+  EXPECT_TRUE(gap);
+  // A rejected still period is listed with its reason.
+  RejectedInterval short_one;
+  short_one.t_begin_s = 3.5;
+  short_one.t_end_s = 4.1;
+  short_one.reason = "still for 0.60 s, shorter than the minimum 1.00 s";
+  const std::vector<std::string> with_rejected =
+      ReportWarnings({moved.json, "cal.json", nullptr, {short_one}});
+  EXPECT_EQ(with_rejected.back(),
+            "still period at 3.50-4.10 s not used: still for 0.60 s, shorter than the minimum "
+            "1.00 s");
+}
+
+TEST(StaticDetection, StillRunsTooShortAreReportedAsRejected) {
+  // Still 0.7 s between turns: detected as still but shorter than the 1 s minimum.
+  const Recording r = Record(Yang18Directions(), ModelKind::kLinear, 1.2);
+  ASSERT_FALSE(r.detection.rejected.empty());
+  for (const RejectedInterval& rej : r.detection.rejected) {
+    EXPECT_LT(rej.t_end_s - rej.t_begin_s, 1.0);
+    EXPECT_NE(rej.reason.find("shorter than the minimum 1.00 s"), std::string::npos);
+  }
+}
+
+TEST(Report, RefusesAFileThatIsNoCalibration) {
+  EXPECT_THROW(RenderReport({"{\"format\": \"other\"}", "x.json", nullptr, {}}), InputError);
+}
+
+}  // namespace
+}  // namespace accelcal

@@ -406,6 +406,30 @@ TEST_F(Cli, ApplyInvertsTheQuadraticModelAndConvertsUnits) {
   EXPECT_EQ(rows, 49);
 }
 
+TEST_F(Cli, QuietSaysNothingAndVerboseAddsDiagnosticsOnStderr) {
+  const std::string log = kData + "/imutk-xsens-mti/xsens_acc.mat";
+  const CliRun quiet = Exec("calibrate " + log + " --no-crossval -q -o " + Path("q.json"));
+  ASSERT_EQ(quiet.status, 0) << quiet.err;
+  EXPECT_EQ(quiet.out, "");
+  EXPECT_EQ(quiet.err, "");
+  EXPECT_TRUE(fs::exists(Path("q.json")));  // results still go where asked
+  const CliRun normal = Exec("calibrate " + log + " --no-crossval -o " + Path("n.json"));
+  const CliRun verbose = Exec("--verbose calibrate " + log + " --no-crossval -o " + Path("v.json"));
+  ASSERT_EQ(verbose.status, 0) << verbose.err;
+  // The diagnostics go to stderr only: stdout is the usual summary (whose solver time varies).
+  EXPECT_EQ(verbose.out.substr(0, verbose.out.find("solver ")),
+            normal.out.substr(0, normal.out.find("solver ")));
+  EXPECT_EQ(normal.err, "");
+  EXPECT_NE(verbose.err.find("detection: 100.01 Hz, window 51 samples"), std::string::npos)
+      << verbose.err;
+  EXPECT_NE(verbose.err.find("done in "), std::string::npos) << verbose.err;
+  EXPECT_EQ(Slurp(Path("q.json")), Slurp(Path("v.json")));
+  EXPECT_EQ(Exec("-q -v calibrate " + log).status, 2);
+  // --json is a result: quiet keeps it.
+  const CliRun json = Exec("calibrate " + log + " --no-crossval --json --quiet");
+  EXPECT_EQ(json.out, Slurp(Path("q.json")));
+}
+
 TEST_F(Cli, ExportWritesTheTargetFormatAndSaysWhatItDrops) {
   // Paper 001's simulated readings are in g: a calibration PX4 can take (offsets and scales in
   // m/s², misalignments dropped and measured).

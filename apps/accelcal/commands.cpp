@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <charconv>
+#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -57,12 +58,24 @@ ReadOptions MakeReadOptions(const InputArgs& in) {
 LoadedInput LoadInput(const InputArgs& in) {
   if (auto why = in.detection.Validate()) throw UsageError(*why);
   LoadedInput loaded;
+  const auto start = std::chrono::steady_clock::now();
   loaded.data = ReadInput(in.path, MakeReadOptions(in));
+  Detail("read %s in %.1f ms\n", in.path.c_str(),
+         1e3 * std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
   if (loaded.data.kind == InputKind::kPositions) {
     loaded.positions = loaded.data.positions;
     return loaded;
   }
   loaded.detection = DetectStaticIntervals(loaded.data.raw, in.detection);
+  const StaticDetectionResult& d = *loaded.detection;
+  Detail(
+      "detection: %.6g Hz, window %zu samples, noise reference %.4g raw^2, threshold %.4g raw^2: "
+      "%zu intervals, %zu still periods too short\n",
+      d.rate_hz, d.window_samples, d.noise_reference, d.threshold, d.intervals.size(),
+      d.rejected.size());
+  for (const RejectedInterval& r : d.rejected) {
+    Detail("  not used: %.3f-%.3f s, %s\n", r.t_begin_s, r.t_end_s, r.reason.c_str());
+  }
   if (loaded.detection->intervals.empty()) {
     throw DataError("no static interval found (threshold " +
                     Format("%.3g", loaded.detection->threshold) +
@@ -110,15 +123,14 @@ std::string Vec(const Vec3& v, const char* fmt = "%14.8g") {
 
 void PrintInput(const LoadedInput& in, const std::string& path) {
   if (in.data.kind == InputKind::kPositions) {
-    std::printf("input     %s: %zu positions (%s)\n", path.c_str(), in.positions.size(),
-                in.data.kind_reason.c_str());
+    Say("input     %s: %zu positions (%s)\n", path.c_str(), in.positions.size(),
+        in.data.kind_reason.c_str());
     return;
   }
   const StaticDetectionResult& d = *in.detection;
-  std::printf("input     %s: raw log, %zu samples at %.6g Hz (%s)\n", path.c_str(),
-              in.data.raw.samples.size(), d.rate_hz, in.data.kind_reason.c_str());
-  std::printf(
-      "detection %zu static intervals (window %zu samples, threshold %.4g raw^2 = %.3g x "
+  Say("input     %s: raw log, %zu samples at %.6g Hz (%s)\n", path.c_str(),
+      in.data.raw.samples.size(), d.rate_hz, in.data.kind_reason.c_str());
+  Say("detection %zu static intervals (window %zu samples, threshold %.4g raw^2 = %.3g x "
       "noise reference)\n",
       d.intervals.size(), d.window_samples, d.threshold,
       d.noise_reference > 0 ? d.threshold / d.noise_reference : 0.0);
@@ -141,14 +153,13 @@ void PrintStrongestCorrelations(const Eigen::MatrixXd& covariance,
   const std::size_t shown = std::min<std::size_t>(3, pairs.size());
   std::partial_sort(pairs.begin(), pairs.begin() + static_cast<std::ptrdiff_t>(shown), pairs.end(),
                     [](const Pair& a, const Pair& b) { return std::abs(a.rho) > std::abs(b.rho); });
-  std::printf("  strongest correlations:");
+  Say("  strongest correlations:");
   for (std::size_t k = 0; k < shown; ++k) {
-    std::printf("%s %s/%s %+.3f", k ? "," : "",
-                std::string(slots[static_cast<std::size_t>(pairs[k].i)].name).c_str(),
-                std::string(slots[static_cast<std::size_t>(pairs[k].j)].name).c_str(),
-                pairs[k].rho);
+    Say("%s %s/%s %+.3f", k ? "," : "",
+        std::string(slots[static_cast<std::size_t>(pairs[k].i)].name).c_str(),
+        std::string(slots[static_cast<std::size_t>(pairs[k].j)].name).c_str(), pairs[k].rho);
   }
-  std::printf("\n");
+  Say("\n");
 }
 
 void PrintCalibration(const CalibrationResult& r, const std::vector<Position>& positions,
@@ -156,23 +167,23 @@ void PrintCalibration(const CalibrationResult& r, const std::vector<Position>& p
   const char* u = g.unit == ForceUnit::kMetersPerSecond2 ? "m/s2" : "g";
   const bool have_std = r.covariance.size() > 0;
   const auto& slots = ParameterSlots(r.model, r.frame);
-  std::printf("\nmodel     %s, p = K f + b + k2 * f^2, frame %s, gravity %.9g %s (%s)\n",
-              std::string(ToString(r.model)).c_str(), std::string(ToString(r.frame)).c_str(),
-              g.in_unit, u, g.origin.c_str());
+  Say("\nmodel     %s, p = K f + b + k2 * f^2, frame %s, gravity %.9g %s (%s)\n",
+      std::string(ToString(r.model)).c_str(), std::string(ToString(r.frame)).c_str(), g.in_unit, u,
+      g.origin.c_str());
   const std::string noise =
       r.noise_source == "samples"
           ? Format("noise of each interval's samples, x %.3g scatter ratio", r.scatter_ratio)
           : std::string("noise from the residuals");
-  std::printf("\nparameters (K in %s per %s, b in %s, k2 in %s per %s^2; +- 1 sigma, %s)\n",
-              raw_unit.c_str(), u, raw_unit.c_str(), raw_unit.c_str(), u, noise.c_str());
+  Say("\nparameters (K in %s per %s, b in %s, k2 in %s per %s^2; +- 1 sigma, %s)\n",
+      raw_unit.c_str(), u, raw_unit.c_str(), raw_unit.c_str(), u, noise.c_str());
   const Eigen::VectorXd theta = Pack(r.params, slots);
   for (std::size_t i = 0; i < slots.size(); ++i) {
     const auto idx = static_cast<Eigen::Index>(i);
     if (have_std) {
-      std::printf("  %-5s %18.10g +- %.3g\n", std::string(slots[i].name).c_str(), theta(idx),
-                  std::sqrt(r.covariance(idx, idx)));
+      Say("  %-5s %18.10g +- %.3g\n", std::string(slots[i].name).c_str(), theta(idx),
+          std::sqrt(r.covariance(idx, idx)));
     } else {
-      std::printf("  %-5s %18.10g\n", std::string(slots[i].name).c_str(), theta(idx));
+      Say("  %-5s %18.10g\n", std::string(slots[i].name).c_str(), theta(idx));
     }
   }
   if (have_std) PrintStrongestCorrelations(r.covariance, slots);
@@ -197,48 +208,48 @@ void PrintCalibration(const CalibrationResult& r, const std::vector<Position>& p
   const auto sd_of = [&](auto member) {
     return sd ? Eigen::VectorXd(*sd.*member) : Eigen::VectorXd();
   };
-  std::printf("\nengineering (%s conventions%s)\n",
-              r.frame == Frame::kPlatform ? "paper 003 eq. (5)" : "paper 000 Table 3",
-              sd ? "; +- 1 sigma propagated from the parameters" : "");
-  std::printf("  scale factor     %s  %s/%s\n",
-              pm(e.scale_factor, sd_of(&EngineeringStd::scale_factor), 1.0, "%.10g").c_str(),
-              raw_unit.c_str(), u);
+  Say("\nengineering (%s conventions%s)\n",
+      r.frame == Frame::kPlatform ? "paper 003 eq. (5)" : "paper 000 Table 3",
+      sd ? "; +- 1 sigma propagated from the parameters" : "");
+  Say("  scale factor     %s  %s/%s\n",
+      pm(e.scale_factor, sd_of(&EngineeringStd::scale_factor), 1.0, "%.10g").c_str(),
+      raw_unit.c_str(), u);
   const Misalignment tau = MisalignmentOf(r.params.K, r.frame);
   std::string names;
   for (std::string_view name : tau.names) names += (names.empty() ? "" : ", ") + std::string(name);
-  std::printf("  misalignment     %s\n", names.c_str());
-  std::printf("                   %s  arcsec\n",
-              pm(tau.rad, sd_of(&EngineeringStd::misalignment_rad), kArcsecPerRad, "%.4f").c_str());
-  std::printf("  bias             %s  %s\n",
-              pm(e.bias_force, sd_of(&EngineeringStd::bias_force), 1.0, "%.6g").c_str(), u);
-  std::printf("                   %s  ug\n",
-              pm(e.bias_force, sd_of(&EngineeringStd::bias_force), ug, "%.6g").c_str());
+  Say("  misalignment     %s\n", names.c_str());
+  Say("                   %s  arcsec\n",
+      pm(tau.rad, sd_of(&EngineeringStd::misalignment_rad), kArcsecPerRad, "%.4f").c_str());
+  Say("  bias             %s  %s\n",
+      pm(e.bias_force, sd_of(&EngineeringStd::bias_force), 1.0, "%.6g").c_str(), u);
+  Say("                   %s  ug\n",
+      pm(e.bias_force, sd_of(&EngineeringStd::bias_force), ug, "%.6g").c_str());
   if (r.model == ModelKind::kQuadratic) {
-    std::printf("  squared coeff.   %s  g/g^2\n",
-                pm(e.k2_g_per_g2, sd_of(&EngineeringStd::k2_g_per_g2), 1.0, "%.4g").c_str());
+    Say("  squared coeff.   %s  g/g^2\n",
+        pm(e.k2_g_per_g2, sd_of(&EngineeringStd::k2_g_per_g2), 1.0, "%.4g").c_str());
   }
   const std::vector<Vec3> means = Means(positions);
   const std::vector<double> errors = GravityNormErrors(r.params, means, r.gravity);
-  std::printf("\npositions (|f|-g in %s, residual p - mu in %s)\n", u, raw_unit.c_str());
-  std::printf("  %3s %8s %42s %12s %36s\n", "#", "samples", "mean", "|f|-g", "residual");
+  Say("\npositions (|f|-g in %s, residual p - mu in %s)\n", u, raw_unit.c_str());
+  Say("  %3s %8s %42s %12s %36s\n", "#", "samples", "mean", "|f|-g", "residual");
   for (std::size_t k = 0; k < positions.size(); ++k) {
-    std::printf("  %3zu %8zu %s %12.4g %s\n", k + 1, positions[k].samples,
-                Vec(positions[k].mean).c_str(), errors[k], Vec(r.residuals[k], "%12.4g").c_str());
+    Say("  %3zu %8zu %s %12.4g %s\n", k + 1, positions[k].samples, Vec(positions[k].mean).c_str(),
+        errors[k], Vec(r.residuals[k], "%12.4g").c_str());
   }
   const std::optional<double> before = GravityNormRmsUncalibrated(means, r.gravity);
-  std::printf("\nrms |f|-g  before: %s   after: %.6g %s\n",
-              before ? Format("%.6g %s", *before, u).c_str()
-                     : Format("n/a (raw readings are not in %s)", u).c_str(),
-              Rms(errors), u);
+  Say("\nrms |f|-g  before: %s   after: %.6g %s\n",
+      before ? Format("%.6g %s", *before, u).c_str()
+             : Format("n/a (raw readings are not in %s)", u).c_str(),
+      Rms(errors), u);
   if (r.crossval_rms) {
-    std::printf("held-out  rms |f|-g %.6g %s (each position corrected by a fit without it)\n",
-                *r.crossval_rms, u);
+    Say("held-out  rms |f|-g %.6g %s (each position corrected by a fit without it)\n",
+        *r.crossval_rms, u);
   } else if (!r.crossval_note.empty()) {
-    std::printf("held-out  n/a: %s\n", r.crossval_note.c_str());
+    Say("held-out  n/a: %s\n", r.crossval_note.c_str());
   }
-  std::printf("solver    %s\n", r.summary.BriefReport().c_str());
+  Say("solver    %s\n", r.summary.BriefReport().c_str());
   if (!r.summary.initialization_note.empty()) {
-    std::printf("note      %s\n", r.summary.initialization_note.c_str());
+    Say("note      %s\n", r.summary.initialization_note.c_str());
   }
 }
 
@@ -270,12 +281,11 @@ std::string PositionsCsv(const std::vector<Vec3>& means, double samples, const V
 namespace {
 
 void PrintModelSelection(const ModelSelection& s, bool requested_auto) {
-  std::printf("model     %s -> %s: %s\n", requested_auto ? "auto" : "quadratic (requested)",
-              std::string(ToString(requested_auto ? s.chosen : ModelKind::kQuadratic)).c_str(),
-              s.reason.c_str());
+  Say("model     %s -> %s: %s\n", requested_auto ? "auto" : "quadratic (requested)",
+      std::string(ToString(requested_auto ? s.chosen : ModelKind::kQuadratic)).c_str(),
+      s.reason.c_str());
   if (s.quadratic && std::isfinite(s.k2_t.sum())) {
-    std::printf(
-        "          squared coefficients k2/sigma: %.3g %.3g %.3g (|t| <= 2: not "
+    Say("          squared coefficients k2/sigma: %.3g %.3g %.3g (|t| <= 2: not "
         "distinguishable from 0)\n",
         s.k2_t(0), s.k2_t(1), s.k2_t(2));
   }
@@ -314,11 +324,11 @@ int WriteCalibration(const CalibrateArgs& args, const LoadedInput& in, const Gra
     WriteFileAtomically("-", json);
   } else {
     PrintInput(in, args.input.path);
-    std::fputs(input_note.c_str(), stdout);
+    Say("%s", input_note.c_str());
     PrintCalibration(result, in.positions, g, args.raw_units);
     if (selection) PrintModelSelection(*selection, args.model == "auto");
-    if (!args.output.empty()) std::printf("wrote     %s\n", args.output.c_str());
-    if (!args.report.empty()) std::printf("report    %s\n", args.report.c_str());
+    if (!args.output.empty()) Say("wrote     %s\n", args.output.c_str());
+    if (!args.report.empty()) Say("report    %s\n", args.report.c_str());
   }
   return kExitOk;
 }
@@ -658,8 +668,8 @@ int RunReport(const ReportArgs& args) {
   }
   WriteFileAtomically(args.output.empty() ? "-" : args.output, RenderReport(input));
   if (!args.output.empty()) {
-    for (const std::string& w : ReportWarnings(input)) std::printf("warning: %s\n", w.c_str());
-    std::printf("report    %s\n", args.output.c_str());
+    for (const std::string& w : ReportWarnings(input)) Say("warning: %s\n", w.c_str());
+    Say("report    %s\n", args.output.c_str());
   }
   return kExitOk;
 }
@@ -687,23 +697,23 @@ int RunExport(const ExportArgs& args) {
   // The file (or stdout) gets the export alone; what it means and what it lost goes to the
   // terminal: stdout when the export went to a file, else stderr.
   WriteFileAtomically(args.output.empty() ? "-" : args.output, exported.text);
-  std::FILE* note = args.output.empty() ? stderr : stdout;
-  std::fprintf(note, "%s\n", exported.convention.c_str());
+  std::string note = exported.convention + "\n";
   const ExportLoss& loss = exported.loss;
-  const std::string unit(ToString(cal.unit));
-  if (loss.dropped.empty()) {
-    std::fprintf(note, "exact: nothing of the model is dropped\n");
-  } else {
-    std::fprintf(note, "dropped: %s\n", loss.dropped.c_str());
-  }
+  const std::string unit_name(ToString(cal.unit));
+  const char* unit = unit_name.c_str();
+  note += loss.dropped.empty() ? "exact: nothing of the model is dropped\n"
+                               : "dropped: " + loss.dropped + "\n";
   if (loss.positions > 0 && !loss.dropped.empty()) {
-    std::fprintf(note,
-                 "on the calibration's %d positions: corrected specific force off by %.3g %s max, "
-                 "%.3g %s RMS; RMS of |f| - g %.3g %s (full model %.3g %s)\n",
-                 loss.positions, loss.max_error, unit.c_str(), loss.rms_error, unit.c_str(),
-                 loss.norm_rms_export, unit.c_str(), loss.norm_rms_full, unit.c_str());
+    note += Format(
+        "on the calibration's %d positions: corrected specific force off by %.3g %s max, %.3g %s "
+        "RMS; RMS of |f| - g %.3g %s (full model %.3g %s)\n",
+        loss.positions, loss.max_error, unit, loss.rms_error, unit, loss.norm_rms_export, unit,
+        loss.norm_rms_full, unit);
   } else if (!loss.dropped.empty()) {
-    std::fprintf(note, "the file holds no positions to measure the loss on\n");
+    note += "the file holds no positions to measure the loss on\n";
+  }
+  if (CurrentVerbosity() != Verbosity::kQuiet) {
+    std::fputs(note.c_str(), args.output.empty() ? stderr : stdout);
   }
   return kExitOk;
 }

@@ -1,4 +1,5 @@
 // accelcal: command-line front end. Parses arguments, calls the library, maps errors to exit codes.
+#include <chrono>
 #include <cstdio>
 #include <exception>
 
@@ -6,6 +7,7 @@
 
 #include "accelcal/error.hpp"
 #include "commands.hpp"
+#include "output.hpp"
 
 namespace {
 
@@ -56,6 +58,7 @@ int main(int argc, char** argv) {
   CLI::App app{
       "accelcal: calibration of triaxial accelerometers from static multi-position recordings"};
   app.require_subcommand(1);
+  app.fallthrough();  // --quiet and --verbose may also follow the subcommand
   app.set_version_flag("--version", "accelcal 0.1.0");
 
   CalibrateArgs cal;
@@ -266,6 +269,13 @@ int main(int argc, char** argv) {
   export_cmd->add_option("--c-prefix", exp.c_prefix, "prefix of the C identifiers (c-header)")
       ->capture_default_str();
 
+  bool quiet = false, verbose = false;
+  auto* quiet_flag =
+      app.add_flag("-q,--quiet", quiet, "say nothing but errors (results still go where asked)");
+  app.add_flag("-v,--verbose", verbose,
+               "also print diagnostics on stderr (detection thresholds, timings)")
+      ->excludes(quiet_flag);
+
   try {
     app.parse(argc, argv);
   } catch (const CLI::CallForHelp& e) {
@@ -279,6 +289,15 @@ int main(int argc, char** argv) {
     return kExitUsage;
   }
 
+  SetVerbosity(quiet ? Verbosity::kQuiet : verbose ? Verbosity::kVerbose : Verbosity::kNormal);
+  const auto start = std::chrono::steady_clock::now();
+  struct Timer {  // reports the whole command's time when verbose, however it ends
+    std::chrono::steady_clock::time_point start;
+    ~Timer() {
+      Detail("done in %.1f ms\n",
+             1e3 * std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
+    }
+  } timer{start};
   try {
     if (*calibrate) {
       for (const char* name :

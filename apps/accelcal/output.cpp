@@ -18,8 +18,32 @@ double NowSeconds() {
 }
 }  // namespace
 
+namespace {
+Verbosity g_verbosity = Verbosity::kNormal;
+}  // namespace
+
+void SetVerbosity(Verbosity verbosity) { g_verbosity = verbosity; }
+Verbosity CurrentVerbosity() { return g_verbosity; }
+
+void Say(const char* format, ...) {
+  if (g_verbosity == Verbosity::kQuiet) return;
+  va_list args;
+  va_start(args, format);
+  std::vprintf(format, args);
+  va_end(args);
+}
+
+void Detail(const char* format, ...) {
+  if (g_verbosity != Verbosity::kVerbose) return;
+  va_list args;
+  va_start(args, format);
+  std::vfprintf(stderr, format, args);
+  va_end(args);
+}
+
 ProgressBar::ProgressBar(std::string label)
-    : label_(std::move(label)), active_(isatty(STDERR_FILENO) == 1) {}
+    : label_(std::move(label)),
+      active_(isatty(STDERR_FILENO) == 1 && g_verbosity != Verbosity::kQuiet) {}
 
 ProgressBar::~ProgressBar() { Finish(); }
 

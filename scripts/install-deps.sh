@@ -9,6 +9,7 @@ packages=(
   clang-format hyperfine valgrind
   python3-yaml  # the YAML export's round-trip test reads it with PyYAML
   chromium      # the report test renders the page as a person would see it
+  pybind11-dev python3-dev python3-numpy python3-pytest python3-matplotlib  # Python bindings
 )
 missing=()
 for p in "${packages[@]}"; do

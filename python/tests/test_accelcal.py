@@ -1,0 +1,92 @@
+"""The Python bindings: the same results as the library and the CLI, numpy in and out, the same
+error messages, and the example script running end to end."""
+
+import json
+import os
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+import accelcal
+
+DATA = os.environ["ACCELCAL_DATA_DIR"]
+CLI = os.environ["ACCELCAL_CLI"]
+XSENS = os.path.join(DATA, "imutk-xsens-mti", "xsens_acc.mat")
+
+
+def cli_calibration(tmp_path, *args):
+    out = tmp_path / "cal.json"
+    subprocess.run([CLI, "calibrate", XSENS, "-q", "-o", str(out), *args], check=True)
+    return json.loads(out.read_text())
+
+
+def test_calibrate_log_gives_the_cli_calibration_exactly(tmp_path):
+    # Same reading, detection, averaging and solver: the same doubles as `accelcal calibrate`.
+    cli = cli_calibration(tmp_path, "--gravity", "9.81744")
+    result, positions = accelcal.calibrate_log(XSENS, gravity=9.81744)
+    assert result.model == "linear" and result.frame == "x-first"
+    assert result.summary["converged"]
+    np.testing.assert_array_equal(result.K, np.array(cli["K"]))
+    np.testing.assert_array_equal(result.bias, np.array(cli["bias"]))
+    assert positions.shape == (38, 3)
+    np.testing.assert_array_equal(positions, np.array([p["mean"] for p in cli["positions"]]))
+    assert result.crossval_rms == cli["crossval_rms"]
+    assert result.parameter_names == cli["parameter_order"]
+    np.testing.assert_array_equal(result.covariance, np.array(cli["covariance"]))
+
+
+def test_apply_inverts_the_model_and_matches_the_calibration_file(tmp_path):
+    ModelLike = accelcal.calibrate(
+        np.array([[1, 0, 0], [-1, 0, 0], [0, 1, 0], [0, -1, 0], [0, 0, 1], [0, 0, -1],
+                  [0.6, 0.8, 0], [0, 0.6, -0.8], [-0.8, 0, 0.6], [0.577, 0.577, 0.578],
+                  [-0.577, 0.577, -0.578], [0.577, -0.577, -0.578]]) * 1.01 + 0.02,
+        gravity=1.0, cross_validate=False)
+    readings = np.array([[1.03, 0.02, 0.02], [0.02, 0.02, -0.99]])
+    f = accelcal.apply(ModelLike, readings)
+    # f solves p = K f + b exactly.
+    np.testing.assert_allclose(f @ ModelLike.K.T + ModelLike.bias, readings, rtol=0, atol=1e-14)
+    # Through the file: the JSON round trip keeps every double.
+    text = ModelLike.to_json(readings, units="g", raw_units="g")
+    loaded = accelcal.parse_calibration_json(text)
+    np.testing.assert_array_equal(loaded.K, ModelLike.K)
+    np.testing.assert_array_equal(loaded.apply(readings), f)
+
+
+def test_errors_carry_the_cli_messages(tmp_path):
+    bad = tmp_path / "bad.csv"
+    bad.write_text("x,y,z\n1,2,3\n1,2,oops\n")
+    with pytest.raises(accelcal.InputError) as e:
+        accelcal.read_input(str(bad), "positions")
+    cli = subprocess.run([CLI, "calibrate", str(bad), "--input-kind", "positions"],
+                         capture_output=True, text=True)
+    assert cli.returncode == 3
+    assert cli.stderr.strip() == "accelcal: " + str(e.value)
+    with pytest.raises(accelcal.DataError, match="at least 9 positions, got 3"):
+        accelcal.calibrate(np.eye(3), cross_validate=False)
+    with pytest.raises(ValueError, match="unknown model 'cubic'"):
+        accelcal.calibrate(np.eye(3), model="cubic")
+
+
+def test_detect_export_and_report_from_python(tmp_path):
+    data = accelcal.read_input(XSENS)
+    assert data["kind"] == "raw" and data["samples"].shape == (51175, 3)
+    detected = accelcal.detect_static_intervals(data["samples"], data["time"])
+    assert len(detected["intervals"]) == 38
+    result, positions = accelcal.calibrate_log(XSENS, gravity=9.81744)
+    text = result.to_json(positions, raw_units="counts", source="xsens_acc.mat")
+    exported = accelcal.export_calibration(text, "imutk")
+    assert exported["loss"]["dropped"] == ""
+    html = accelcal.render_report(text, data["samples"], data["time"])
+    assert html.count('<circle class="direction"') == 38 and '<svg id="raw-signal"' in html
+
+
+def test_the_example_runs_and_draws_its_figure(tmp_path):
+    example = os.path.join(os.environ["ACCELCAL_EXAMPLES"], "calibrate_xsens.py")
+    run = subprocess.run([sys.executable, example, str(tmp_path)], capture_output=True, text=True,
+                         env=dict(os.environ))
+    assert run.returncode == 0, run.stderr
+    assert "held-out RMS of |f| - g" in run.stdout
+    png = (tmp_path / "xsens_calibration.png").read_bytes()
+    assert png[:8] == b"\x89PNG\r\n\x1a\n" and len(png) > 20000

@@ -45,8 +45,11 @@ std::string RowError(long row, const char* what) {
   return "sample " + std::to_string(row) + ": " + what;
 }
 
+constexpr long kProgressEvery = 1 << 16;
+
 void ParseBinary(std::string_view body, const std::string& source,
-                 const std::function<void(const SystemSample&)>& sink) {
+                 const std::function<void(const SystemSample&)>& sink,
+                 const SeriesProgress& progress) {
   if (body.size() % kRowBytes != 0) {
     throw InputError(source, 0,
                      "truncated binary series: " + std::to_string(body.size()) +
@@ -55,6 +58,9 @@ void ParseBinary(std::string_view body, const std::string& source,
   const long rows = static_cast<long>(body.size() / kRowBytes);
   for (long r = 0; r < rows; ++r) {
     const char* p = body.data() + static_cast<std::size_t>(r) * kRowBytes;
+    if (progress && r % kProgressEvery == 0) {
+      progress(static_cast<std::size_t>(r) * kRowBytes, body.size());
+    }
     SystemSample s;
     s.t = GetDouble(p);
     s.f = Vec3(GetDouble(p + 8), GetDouble(p + 16), GetDouble(p + 24));
@@ -69,13 +75,15 @@ void ParseBinary(std::string_view body, const std::string& source,
 }
 
 void ParseText(std::string_view text, const std::string& source,
-               const std::function<void(const SystemSample&)>& sink) {
+               const std::function<void(const SystemSample&)>& sink,
+               const SeriesProgress& progress) {
   std::size_t begin = 0, line = 0;
   bool first_data = true;
   while (begin < text.size()) {
     std::size_t end = text.find('\n', begin);
     if (end == std::string_view::npos) end = text.size();
     std::string_view row = text.substr(begin, end - begin);
+    if (progress && line % kProgressEvery == 0) progress(begin, text.size());
     begin = end + 1;
     ++line;
     const std::size_t hash = row.find('#');
@@ -137,31 +145,34 @@ void AppendSeriesSample(const SystemSample& s, std::string* out) {
 }
 
 void ParseSeries(std::string_view content, const std::string& source,
-                 const std::function<void(const SystemSample&)>& sink) {
+                 const std::function<void(const SystemSample&)>& sink,
+                 const SeriesProgress& progress) {
   long count = 0;
   const auto counted = [&](const SystemSample& s) {
     ++count;
     sink(s);
   };
   if (content.substr(0, kSeriesMagic.size()) == kSeriesMagic) {
-    ParseBinary(content.substr(kSeriesMagic.size()), source, counted);
+    ParseBinary(content.substr(kSeriesMagic.size()), source, counted, progress);
   } else if (content.substr(0, 16) == "accelcal-series ") {
     throw InputError(source, 1,
                      "unsupported binary series header (expected: " +
                          std::string(kSeriesMagic.substr(0, kSeriesMagic.size() - 1)) + ")");
   } else {
-    ParseText(content, source, counted);
+    ParseText(content, source, counted, progress);
   }
   if (count == 0) throw InputError(source, 0, "no samples in the series");
 }
 
-void ReadSeries(const std::string& path, const std::function<void(const SystemSample&)>& sink) {
+void ReadSeries(const std::string& path, const std::function<void(const SystemSample&)>& sink,
+                const SeriesProgress& progress) {
   const internal::MappedFile mapped(path);
   if (mapped.ok()) {
-    ParseSeries(mapped.text(), path, sink);
+    ParseSeries(mapped.text(), path, sink, progress);
     return;
   }
-  ParseSeries(ReadFileToString(path), path, sink);  // pipes, empty files, errors with errno
+  ParseSeries(ReadFileToString(path), path, sink,
+              progress);  // pipes, empty files, errors with errno
 }
 
 }  // namespace accelcal

@@ -162,6 +162,19 @@ TEST(SystemLevel, SeriesFilesRoundTripInBothLayouts) {
     });
     EXPECT_EQ(k, samples.size());
   }
+  // Progress for a bar: every 65536 samples, bytes done increasing, of one total.
+  std::string long_binary;
+  AppendSeriesHeader(&long_binary);
+  for (int r = 0; r < 200; ++r) long_binary.append(binary, kSeriesMagic.size(), std::string::npos);
+  std::vector<std::pair<std::size_t, std::size_t>> reports;
+  ParseSeries(
+      long_binary, "s", [](const SystemSample&) {},
+      [&](std::size_t done, std::size_t total) { reports.emplace_back(done, total); });
+  ASSERT_EQ(reports.size(), 4u);  // samples 0, 65536, 131072, 196608 of 200000
+  for (std::size_t r = 0; r < reports.size(); ++r) {
+    EXPECT_EQ(reports[r].first, r * 65536 * 48);
+    EXPECT_EQ(reports[r].second, 200000u * 48);
+  }
   const auto error = [](const std::string& content) {
     try {
       ParseSeries(content, "s.bin", [](const SystemSample&) {});

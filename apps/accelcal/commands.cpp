@@ -998,7 +998,13 @@ int RunSystemLevel(const SystemLevelArgs& args) {
   const double g = args.gravity_ms2 ? *args.gravity_ms2 : NormalGravityWgs84_ms2(latitude);
   if (!(g > 0) || !std::isfinite(g)) throw UsageError("--gravity must be a positive number");
   SystemLevelEstimator estimator(latitude * 3.14159265358979323846 / 180.0, g);
-  ReadSeries(args.series, [&](const SystemSample& s) { estimator.Add(s); });
+  ProgressBar bar("system-level");
+  ReadSeries(
+      args.series, [&](const SystemSample& s) { estimator.Add(s); },
+      [&](std::size_t done, std::size_t total) {
+        bar.Update(static_cast<long>(done), static_cast<long>(total));
+      });
+  bar.Finish();
   const SystemLevelResult r = estimator.Finish();
   const auto fourier = [](const FourierCoefficients& f) {
     return "{\"mean\": " + FormatNumber(f.mean) + ", \"c1\": " + FormatNumber(f.c1) +

@@ -26,12 +26,18 @@ inline constexpr std::string_view kSeriesMagic =
 void AppendSeriesHeader(std::string* out);
 void AppendSeriesSample(const SystemSample& sample, std::string* out);
 
+/// Reports how far a read has come: bytes consumed of the total (for a progress bar), every
+/// 65536 samples.
+using SeriesProgress = std::function<void(std::size_t bytes_done, std::size_t bytes_total)>;
+
 /// Calls `sink` with every sample of `content` in file order. Throws InputError (source, line or
 /// 0 for binary, reason) for a truncated binary file, a text row without six finite numbers, or
 /// no samples.
 void ParseSeries(std::string_view content, const std::string& source,
-                 const std::function<void(const SystemSample&)>& sink);
+                 const std::function<void(const SystemSample&)>& sink,
+                 const SeriesProgress& progress = nullptr);
 /// ParseSeries of a file, memory-mapped when it is a regular file.
-void ReadSeries(const std::string& path, const std::function<void(const SystemSample&)>& sink);
+void ReadSeries(const std::string& path, const std::function<void(const SystemSample&)>& sink,
+                const SeriesProgress& progress = nullptr);
 
 }  // namespace accelcal

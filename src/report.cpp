@@ -340,18 +340,24 @@ std::string Row(const std::string& quantity, double value, std::optional<double>
          "</td><td>" + Escape(unit) + "</td></tr>\n";
 }
 
+// ±1σ of the engineering quantities from the file's covariance; none without degrees of freedom.
+std::optional<EngineeringStd> EngineeringSigmas(const Document& d) {
+  if (!d.doc.contains("covariance") || !d.doc["covariance"].is_array()) return std::nullopt;
+  const ordered_json& c = d.doc["covariance"];
+  const auto n = static_cast<Eigen::Index>(c.size());
+  Eigen::MatrixXd cov(n, n);
+  for (Eigen::Index i = 0; i < n; ++i) {
+    for (Eigen::Index j = 0; j < n; ++j) {
+      cov(i, j) = c[static_cast<std::size_t>(i)][static_cast<std::size_t>(j)].get<double>();
+    }
+  }
+  const LoadedCalibration& cal = d.cal;
+  return EngineeringUncertainty(cal.params, cal.model, cal.frame, cal.gravity, cov);
+}
+
 std::string ParameterTable(const Document& d) {
   const LoadedCalibration& cal = d.cal;
-  std::optional<EngineeringStd> std_eng;
-  if (d.doc.contains("covariance") && d.doc["covariance"].is_array()) {
-    const ordered_json& c = d.doc["covariance"];
-    Eigen::MatrixXd cov(c.size(), c.size());
-    for (std::size_t i = 0; i < c.size(); ++i) {
-      for (std::size_t j = 0; j < c.size(); ++j)
-        cov(static_cast<Eigen::Index>(i), static_cast<Eigen::Index>(j)) = c[i][j].get<double>();
-    }
-    std_eng = EngineeringUncertainty(cal.params, cal.model, cal.frame, cal.gravity, cov);
-  }
+  const std::optional<EngineeringStd> std_eng = EngineeringSigmas(d);
   const EngineeringParameters eng = ToEngineering(cal.params, cal.gravity);
   const Misalignment mis = MisalignmentOf(cal.params.K, cal.frame);
   const std::string scale_unit = cal.raw_unit + " per " + d.unit;
@@ -448,6 +454,36 @@ std::vector<std::string> Warnings(const Document& d, const ReportInput& input) {
                   Format("%.2f", where(0)) + ", " + Format("%.2f", where(1)) + ", " +
                   Format("%.2f", where(2)) +
                   "): the calibration is extrapolated there; add positions facing it");
+    }
+  }
+  // Poorly determined: 1σ beyond what any calibration worth applying has (1 % of a scale
+  // factor, 0.5° of an angle, 10 mg of a bias, 0.01 g/g² of a squared coefficient).
+  if (const std::optional<EngineeringStd> s = EngineeringSigmas(d)) {
+    const EngineeringParameters eng = ToEngineering(d.cal.params, d.cal.gravity);
+    const Misalignment mis = MisalignmentOf(d.cal.params.K, d.cal.frame);
+    const auto poorly = [&](const std::string& what, double sigma, const std::string& unit) {
+      w.push_back(what + " is poorly determined (1 sigma " + Short(sigma) + " " + unit +
+                  "): add positions that excite it");
+    };
+    for (int i = 0; i < 3; ++i) {
+      if (s->scale_factor(i) > 0.01 * std::abs(eng.scale_factor(i))) {
+        poorly(std::string("scale factor ") + kAxisName[i],
+               100 * s->scale_factor(i) / std::abs(eng.scale_factor(i)), "%");
+      }
+    }
+    for (Eigen::Index i = 0; i < s->misalignment_rad.size(); ++i) {
+      if (s->misalignment_rad(i) > 0.5 * kPi / 180) {
+        poorly("misalignment " + std::string(mis.names[static_cast<std::size_t>(i)]),
+               s->misalignment_rad(i) * 180 / kPi, "deg");
+      }
+    }
+    for (int i = 0; i < 3; ++i) {
+      if (s->bias_force(i) > 0.01 * d.cal.gravity) {
+        poorly(std::string("bias ") + kAxisName[i], 1e3 * s->bias_force(i) / d.cal.gravity, "mg");
+      }
+      if (d.cal.model == ModelKind::kQuadratic && s->k2_g_per_g2(i) > 0.01) {
+        poorly(std::string("squared coefficient ") + kAxisName[i], s->k2_g_per_g2(i), "g/g^2");
+      }
     }
   }
   for (const RejectedInterval& r : input.rejected) {

@@ -106,6 +106,13 @@ TEST(Report, WarnsAboutAMovedPositionAGapInCoverageAndUnusedStillPeriods) {
     gap = gap || s.rfind("no position within ", 0) == 0;
   }
   EXPECT_TRUE(gap);
+  // Tilted at most 30°: the scale factors and biases are barely determined, and said to be.
+  const Recording narrow = Record(RandomDirectionsInCap(14, kPi / 6, 9), ModelKind::kLinear);
+  int poorly = 0;
+  for (const std::string& s : ReportWarnings({narrow.json, "cal.json", nullptr, {}})) {
+    poorly += s.find(" is poorly determined (1 sigma ") != std::string::npos;
+  }
+  EXPECT_GE(poorly, 4);
   // A rejected still period is listed with its reason.
   RejectedInterval short_one;
   short_one.t_begin_s = 3.5;

@@ -314,6 +314,7 @@ struct RowParser {
   std::size_t ncols;
   Layout layout;
   bool raw;
+  const std::function<void(std::size_t, std::size_t)>& progress;
 
   void Parse(std::string_view text, std::uint32_t lines_before, std::size_t expected_rows,
              InputData* data) const {
@@ -332,7 +333,11 @@ struct RowParser {
     LineReader reader(text, lines_before);
     Line line;
     double values[kRoles];
+    std::size_t rows = 0;
     while (reader.Next(&line)) {
+      if (progress && (++rows & 0xFFFF) == 0) {
+        progress(text.size() - reader.rest().size(), text.size());
+      }
       ParseFields(line, role_of_column, values);
       const Vec3 xyz(values[kX], values[kY], values[kZ]);
       if (raw) {
@@ -552,7 +557,7 @@ InputData ParseInput(std::string_view text, const std::string& source, const Rea
                  : text.substr(static_cast<std::size_t>(first.text.data() - text.data()));
   const std::uint32_t lines_before = has_header ? rows_reader.lines_read() : first.number - 1;
   if (raw) data.raw.source = source;
-  const RowParser parser{source, delim, ncols, layout, raw};
+  const RowParser parser{source, delim, ncols, layout, raw, options.progress};
   parser.Parse(body, lines_before, expected_rows, &data);
   if (raw) {
     if (options.rate_hz) {

@@ -35,11 +35,35 @@ std::string ManyRows(int n, const char* sep, bool with_time) {
   return s;
 }
 
+TEST(LogReader, ReportsProgressEvery65536Rows) {
+  std::string text = "t,x,y,z\n";
+  for (int k = 0; k < 200000; ++k) text += std::to_string(k) + ",1,2,3\n";
+  ReadOptions options;
+  options.kind = InputKind::kRaw;
+  std::vector<std::pair<std::size_t, std::size_t>> reports;
+  options.progress = [&](std::size_t done, std::size_t total) {
+    reports.emplace_back(done, total);
+  };
+  const InputData d = ParseInput(text, "big.csv", options);
+  ASSERT_EQ(d.raw.samples.size(), 200000u);
+  ASSERT_EQ(reports.size(), 3u);  // after rows 65536, 131072, 196608
+  for (std::size_t r = 0; r < reports.size(); ++r) {
+    EXPECT_EQ(reports[r].second, reports[0].second);
+    if (r > 0) {
+      EXPECT_GT(reports[r].first, reports[r - 1].first);
+    }
+    EXPECT_LT(reports[r].first, reports[r].second);
+  }
+  // Row 65536 ends where the parser stands: ~65536/200000 of the data.
+  EXPECT_NEAR(static_cast<double>(reports[0].first) / static_cast<double>(reports[0].second),
+              65536.0 / 200000.0, 0.02);
+}
+
 TEST(LogReader, ImuTkAsciiWithTime) {
   const InputData d = Parse(
       "   2.98e-02   3.3108e+04   3.3329e+04   3.6429e+04\n"
       "   3.98e-02   3.3096e+04   3.3336e+04   3.6437e+04\n",
-      ReadOptions{InputKind::kRaw, {}, std::nullopt, 200});
+      ReadOptions{InputKind::kRaw, {}, std::nullopt, 200, nullptr});
   ASSERT_EQ(d.kind, InputKind::kRaw);
   ASSERT_EQ(d.raw.samples.size(), 2u);
   EXPECT_EQ(d.raw.samples[1], Vec3(33096, 33336, 36437));

@@ -59,7 +59,13 @@ LoadedInput LoadInput(const InputArgs& in) {
   if (auto why = in.detection.Validate()) throw UsageError(*why);
   LoadedInput loaded;
   const auto start = std::chrono::steady_clock::now();
-  loaded.data = ReadInput(in.path, MakeReadOptions(in));
+  ReadOptions read = MakeReadOptions(in);
+  ProgressBar bar("reading");
+  read.progress = [&bar](std::size_t done, std::size_t total) {
+    bar.Update(static_cast<long>(done), static_cast<long>(total));
+  };
+  loaded.data = ReadInput(in.path, read);
+  bar.Finish();
   Detail("read %s in %.1f ms\n", in.path.c_str(),
          1e3 * std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
   if (loaded.data.kind == InputKind::kPositions) {
@@ -624,7 +630,12 @@ int RunApply(const ApplyArgs& args) {
   }
   ReadOptions read = MakeReadOptions(args.input);
   read.kind = InputKind::kRaw;
+  ProgressBar bar("reading");
+  read.progress = [&bar](std::size_t done, std::size_t total) {
+    bar.Update(static_cast<long>(done), static_cast<long>(total));
+  };
   const InputData data = ReadInput(args.input.path, read);
+  bar.Finish();
   const RawLog& log = data.raw;
   const bool has_time = !log.time_s.empty();
   std::string out;

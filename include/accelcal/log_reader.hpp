@@ -12,6 +12,7 @@
 /// Every error names the file, the 1-based line and the reason (InputError).
 
 #include <cstdint>
+#include <functional>
 #include <optional>
 #include <string>
 #include <string_view>
@@ -42,6 +43,8 @@ struct ReadOptions {
   /// header naming a time column (t, time, timestamp) makes it raw, one naming n/samples/count
   /// or std columns makes it a positions file.
   std::size_t max_rows_of_positions_file = 200;
+  /// Called every 65536 data rows with the bytes parsed and the total (a progress bar); optional.
+  std::function<void(std::size_t bytes_done, std::size_t bytes_total)> progress;
 };
 
 /// A raw recording: samples in raw units, with optional timestamps.

@@ -11,6 +11,18 @@
 namespace accelcal {
 
 namespace {
+// Three draws in a fixed order. Vec3(normal(rng), normal(rng), normal(rng)) leaves the order to the
+// compiler (GCC draws z first, clang x first), which made simulations compiler-dependent; this
+// keeps GCC's order, so every figure computed before stays the same.
+Vec3 NormalVector(std::normal_distribution<double>& normal, std::mt19937_64& rng) {
+  const double z = normal(rng);
+  const double y = normal(rng);
+  const double x = normal(rng);
+  return Vec3(x, y, z);
+}
+}  // namespace
+
+namespace {
 constexpr double kPi = 3.14159265358979323846;
 constexpr double kDeg = kPi / 180.0;
 }  // namespace
@@ -97,7 +109,7 @@ std::vector<Vec3> SimulateLinearPositions(const Mat33& M, const Vec3& b,
   std::vector<Vec3> readings;
   readings.reserve(directions.size());
   for (const Vec3& c : directions) {
-    readings.push_back(M * c + b + sigma * Vec3(normal(rng), normal(rng), normal(rng)));
+    readings.push_back(M * c + b + sigma * NormalVector(normal, rng));
   }
   return readings;
 }
@@ -107,7 +119,7 @@ std::vector<Vec3> RandomDirections(int count, std::uint64_t seed) {
   std::normal_distribution<double> normal(0.0, 1.0);
   std::vector<Vec3> dirs;
   for (int k = 0; k < count; ++k) {
-    Vec3 v(normal(rng), normal(rng), normal(rng));
+    Vec3 v = NormalVector(normal, rng);
     dirs.push_back(v.normalized());
   }
   return dirs;
@@ -137,7 +149,7 @@ SimulatedLog SimulateRawLog(const ModelParameters& truth, double gravity,
   const auto turn = static_cast<std::size_t>(std::llround(options.transition_s * options.rate_hz));
   const auto emit = [&](const Vec3& c) {
     log.time_s.push_back(static_cast<double>(log.samples.size()) / options.rate_hz);
-    const Vec3 noise(normal(rng), normal(rng), normal(rng));
+    const Vec3 noise = NormalVector(normal, rng);
     log.samples.push_back(PredictRaw(truth, Vec3(gravity * c)) +
                           options.sigma_raw_per_sample.cwiseProduct(noise));
   };

@@ -174,7 +174,8 @@ TEST(LogReader, NumbersAreCorrectlyRounded) {
   std::string text;
   std::vector<double> expected;
   for (int i = 0; i < 3000; ++i) {
-    const double v = mant(rng) * std::pow(10.0, expo(rng));
+    const int exponent = expo(rng);  // drawn first: the order of the operands of * is unspecified
+    const double v = mant(rng) * std::pow(10.0, exponent);
     char buf[3][96];
     for (int a = 0; a < 3; ++a) {
       std::snprintf(buf[a], sizeof buf[a], formats[(i + a) % 4], prec(rng), v * (a + 1));

@@ -22,7 +22,8 @@ RawLog SyntheticLog(const std::vector<double>& still_s,
     const std::size_t n = static_cast<std::size_t>(still_s[k] * 100);
     truth->push_back({log.samples.size(), log.samples.size() + n});
     for (std::size_t i = 0; i < n; ++i) {
-      log.samples.push_back(level + Vec3(noise(rng), noise(rng), noise(rng)));
+      const double z = noise(rng), y = noise(rng), x = noise(rng);  // a fixed order (GCC's)
+      log.samples.push_back(level + Vec3(x, y, z));
     }
     const Vec3 next = level + Vec3(3000.0 * std::sin(static_cast<double>(k) + 1.0),
                                    -2500.0 * std::cos(static_cast<double>(k)), 1000.0);

@@ -63,7 +63,8 @@ double Coverage(double extra_position_error, bool give_sigmas, double* mean_rati
         SimulatePositions(truth, kG, Yang18Directions(), sigma, 1000 + static_cast<unsigned>(run));
     // An error per position that the interval's own samples do not show (drift, repositioning).
     for (Vec3& p : readings) {
-      p += extra_position_error * sigma.cwiseProduct(Vec3(normal(rng), normal(rng), normal(rng)));
+      const double z = normal(rng), y = normal(rng), x = normal(rng);  // a fixed order (GCC's)
+      p += extra_position_error * sigma.cwiseProduct(Vec3(x, y, z));
     }
     const CalibrationResult r = Calibrate(readings, o);
     const Eigen::VectorXd error = Pack(r.params, ModelKind::kLinear) - theta_true;

@@ -432,8 +432,11 @@ struct RowParser {
     Position position;
     position.mean = xyz;
     if (layout.column[kCount] >= 0) {
-      if (!(values[kCount] >= 1) || values[kCount] != std::floor(values[kCount])) {
-        throw InputError(source, line_number, "the sample count must be a whole number >= 1");
+      // Beyond 2^53 a double no longer tells whole numbers apart (and the cast would overflow).
+      if (!(values[kCount] >= 1 && values[kCount] <= 9007199254740992.0) ||
+          values[kCount] != std::floor(values[kCount])) {
+        throw InputError(source, line_number,
+                         "the sample count must be a whole number from 1 to 2^53");
       }
       position.samples = static_cast<std::size_t>(values[kCount]);
     }

@@ -161,7 +161,13 @@ TEST(LogReader, ErrorsNameFileLineAndReason) {
   EXPECT_EQ(ErrorOf("0,1,2,3\n1,1,2,3\n0.5,1,2,3\n", raw),
             "test.csv:3: time goes backwards (0.5 after 1)");
   EXPECT_EQ(ErrorOf("1,2,3,4\n1,2,3,4\n", raw), "test.csv: the timestamps do not advance");
-  EXPECT_EQ(ErrorOf("1,2,3,0\n"), "test.csv:1: the sample count must be a whole number >= 1");
+  EXPECT_EQ(ErrorOf("1,2,3,0\n"),
+            "test.csv:1: the sample count must be a whole number from 1 to 2^53");
+  // Found by fuzz_log_reader: a count too large for any integer (the cast was undefined).
+  EXPECT_EQ(ErrorOf("1,2,3,3.6437e+41\n"),
+            "test.csv:1: the sample count must be a whole number from 1 to 2^53");
+  EXPECT_EQ(ErrorOf("1,2,3,9007199254740994\n"),
+            "test.csv:1: the sample count must be a whole number from 1 to 2^53");
 }
 
 TEST(LogReader, NumbersAreCorrectlyRounded) {

@@ -249,6 +249,23 @@ LoadedCalibration ParseCalibrationJson(const std::string& text, const std::strin
   if (doc.contains("source") && doc["source"].is_string()) {
     cal.source = doc["source"].get<std::string>();
   }
+  if (doc.contains("covariance") && !doc["covariance"].is_null()) {
+    const std::size_t P = ParameterSlots(cal.model, cal.frame).size();
+    const ordered_json& cov = doc["covariance"];
+    const std::string shape = "'covariance' must be null or a " + std::to_string(P) + "x" +
+                              std::to_string(P) + " array (the " +
+                              std::string(ToString(cal.model)) + " model in frame " +
+                              std::string(ToString(cal.frame)) + ")";
+    if (!cov.is_array() || cov.size() != P) throw InputError(source, 0, shape);
+    cal.covariance.resize(static_cast<Eigen::Index>(P), static_cast<Eigen::Index>(P));
+    for (std::size_t i = 0; i < P; ++i) {
+      if (!cov[i].is_array() || cov[i].size() != P) throw InputError(source, 0, shape);
+      for (std::size_t j = 0; j < P; ++j) {
+        cal.covariance(static_cast<Eigen::Index>(i), static_cast<Eigen::Index>(j)) = Number(
+            cov[i][j], "covariance[" + std::to_string(i) + "][" + std::to_string(j) + "]", source);
+      }
+    }
+  }
   if (doc.contains("positions")) {
     if (!doc["positions"].is_array()) throw InputError(source, 0, "'positions' must be an array");
     for (std::size_t k = 0; k < doc["positions"].size(); ++k) {

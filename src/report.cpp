@@ -342,17 +342,9 @@ std::string Row(const std::string& quantity, double value, std::optional<double>
 
 // ±1σ of the engineering quantities from the file's covariance; none without degrees of freedom.
 std::optional<EngineeringStd> EngineeringSigmas(const Document& d) {
-  if (!d.doc.contains("covariance") || !d.doc["covariance"].is_array()) return std::nullopt;
-  const ordered_json& c = d.doc["covariance"];
-  const auto n = static_cast<Eigen::Index>(c.size());
-  Eigen::MatrixXd cov(n, n);
-  for (Eigen::Index i = 0; i < n; ++i) {
-    for (Eigen::Index j = 0; j < n; ++j) {
-      cov(i, j) = c[static_cast<std::size_t>(i)][static_cast<std::size_t>(j)].get<double>();
-    }
-  }
+  if (d.cal.covariance.size() == 0) return std::nullopt;
   const LoadedCalibration& cal = d.cal;
-  return EngineeringUncertainty(cal.params, cal.model, cal.frame, cal.gravity, cov);
+  return EngineeringUncertainty(cal.params, cal.model, cal.frame, cal.gravity, cal.covariance);
 }
 
 std::string ParameterTable(const Document& d) {
@@ -504,13 +496,7 @@ table{border-collapse:collapse}td,th{padding:3px 10px;border-bottom:1px solid #d
 td.num{text-align:right;font-variant-numeric:tabular-nums}.warn li{color:#a33}dl{display:grid;grid-template-columns:max-content auto;gap:2px 16px}dd{margin:0}
 )";
 
-}  // namespace
-
-std::vector<std::string> ReportWarnings(const ReportInput& input) {
-  return Warnings(Read(input), input);
-}
-
-std::string RenderReport(const ReportInput& input) {
+std::string Render(const ReportInput& input) {
   const Document d = Read(input);
   const std::string source = d.cal.source.empty() ? input.calibration_name : d.cal.source;
   std::string html =
@@ -561,6 +547,27 @@ std::string RenderReport(const ReportInput& input) {
   html += "<section><h2>Residuals per axis</h2>\n" + ResidualPlot(d) + "</section>\n";
   html += "<footer><p>accelcal " + Escape(source) + "</p></footer>\n</body>\n</html>\n";
   return html;
+}
+
+// A field of the wrong JSON type anywhere the report reads is the file's fault, said as such.
+template <typename Function>
+auto ReadingTheFile(const ReportInput& input, Function function) {
+  try {
+    return function();
+  } catch (const nlohmann::json::exception& e) {
+    throw InputError(input.calibration_name, 0,
+                     std::string("malformed calibration file: ") + e.what());
+  }
+}
+
+}  // namespace
+
+std::vector<std::string> ReportWarnings(const ReportInput& input) {
+  return ReadingTheFile(input, [&] { return Warnings(Read(input), input); });
+}
+
+std::string RenderReport(const ReportInput& input) {
+  return ReadingTheFile(input, [&] { return Render(input); });
 }
 
 }  // namespace accelcal

@@ -3,6 +3,7 @@
 #include <string>
 
 #include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
 
 #include "accelcal/calibration_file.hpp"
 #include "accelcal/error.hpp"
@@ -137,6 +138,28 @@ TEST(StaticDetection, StillRunsTooShortAreReportedAsRejected) {
 
 TEST(Report, RefusesAFileThatIsNoCalibration) {
   EXPECT_THROW(RenderReport({"{\"format\": \"other\"}", "x.json", nullptr, {}}), InputError);
+  // Found by fuzz_calibration_file: a covariance of the wrong size was read past its end, and a
+  // field of the wrong type escaped as a JSON exception. Both are now the file's error.
+  const Recording r = Record(Yang18Directions(), ModelKind::kLinear);
+  nlohmann::ordered_json doc = nlohmann::ordered_json::parse(r.json);
+  doc["covariance"] = {{1.0, 0.0}, {0.0, 1.0}};
+  try {
+    RenderReport({doc.dump(), "x.json", nullptr, {}});
+    ADD_FAILURE();
+  } catch (const InputError& e) {
+    EXPECT_EQ(std::string(e.what()),
+              "x.json: 'covariance' must be null or a 9x9 array (the linear model in frame "
+              "x-first)");
+  }
+  doc = nlohmann::ordered_json::parse(r.json);
+  doc["solver"] = {{"method", 5}};
+  try {
+    RenderReport({doc.dump(), "x.json", nullptr, {}});
+    ADD_FAILURE();
+  } catch (const InputError& e) {
+    EXPECT_EQ(std::string(e.what()).rfind("x.json: malformed calibration file: ", 0), 0u)
+        << e.what();
+  }
 }
 
 }  // namespace

@@ -38,11 +38,13 @@ struct LoadedCalibration {
   std::string raw_unit = "raw";      ///< `units.raw` (a label given at calibration)
   std::vector<Vec3> position_means;  ///< `positions[].mean` [raw]; empty when the file has none
   std::string source;                ///< `source`: the calibrated input's name, when present
+  /// `covariance` in the order of ParameterSlots(model, frame); empty when the file has null.
+  Eigen::MatrixXd covariance;
 };
 
 /// Parses a calibration file's text; throws InputError naming `source` for anything missing,
 /// mistyped or inconsistent (unknown format/version, K not triangular as its frame requires,
-/// non-finite numbers).
+/// non-finite numbers, a covariance that is not P x P for the model's P parameters).
 LoadedCalibration ParseCalibrationJson(const std::string& text, const std::string& source);
 
 }  // namespace accelcal

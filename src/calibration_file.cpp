@@ -180,7 +180,7 @@ LoadedCalibration ParseCalibrationJson(const std::string& text, const std::strin
   ordered_json doc;
   try {
     doc = ordered_json::parse(text);
-  } catch (const nlohmann::json::parse_error& e) {
+  } catch (const nlohmann::json::exception& e) {  // syntax, or a number beyond double's range
     throw InputError(source, 0, std::string("not valid JSON: ") + e.what());
   }
   if (!doc.is_object() || doc.value("format", "") != "accelcal-calibration") {

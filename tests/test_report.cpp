@@ -151,6 +151,15 @@ TEST(Report, RefusesAFileThatIsNoCalibration) {
               "x.json: 'covariance' must be null or a 9x9 array (the linear model in frame "
               "x-first)");
   }
+  // Found by fuzz_calibration_file: a number beyond double's range escaped as a JSON exception.
+  try {
+    ParseCalibrationJson("{\"format\": \"accelcal-calibration\", \"gravity\": 1e708}", "x.json");
+    ADD_FAILURE();
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("x.json: not valid JSON: "), std::string::npos)
+        << e.what();
+    EXPECT_NE(std::string(e.what()).find("number overflow"), std::string::npos) << e.what();
+  }
   doc = nlohmann::ordered_json::parse(r.json);
   doc["solver"] = {{"method", 5}};
   try {

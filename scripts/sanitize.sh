@@ -1,0 +1,40 @@
+#!/usr/bin/env bash
+# The reliability checks of issue 7, with clang:
+#  1. the whole test suite built with AddressSanitizer and UndefinedBehaviorSanitizer (any report
+#     is fatal, leaks included);
+#  2. every libFuzzer harness (fuzz/, built with the same sanitizers and coverage instrumentation)
+#     run on its committed seed corpus for FUZZ_SECONDS seconds each (default 60; run much longer
+#     by hand). New inputs go to a scratch directory, never into the repository; an input that
+#     once failed is kept in fuzz/regressions/<harness> (and as a unit test) and replayed.
+# Two build trees: the fuzzers' coverage instrumentation would slow the tests several times over.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+seconds=${FUZZ_SECONDS:-60}
+common=(-DCMAKE_BUILD_TYPE=RelWithDebInfo -DCMAKE_C_COMPILER=clang -DCMAKE_CXX_COMPILER=clang++
+  -DACCELCAL_WERROR=ON -DACCELCAL_SANITIZE=ON -DACCELCAL_BUILD_PYTHON=OFF
+  -DACCELCAL_BUILD_BENCHMARKS=OFF -DACCELCAL_INSTALL=OFF)
+export ASAN_OPTIONS=detect_leaks=1:abort_on_error=1:strict_string_checks=1
+export UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1
+
+if [ -z "${SKIP_SANITIZED_TESTS:-}" ]; then
+  cmake -S . -B build-sanitize "${common[@]}" > /dev/null
+  cmake --build build-sanitize -j"$(nproc)"
+  ctest --test-dir build-sanitize --output-on-failure -j"$(nproc)"
+fi
+
+cmake -S . -B build-fuzz "${common[@]}" -DACCELCAL_FUZZ=ON -DACCELCAL_BUILD_TESTS=OFF \
+  -DACCELCAL_BUILD_CLI=OFF > /dev/null
+cmake --build build-fuzz -j"$(nproc)"
+scratch=$(mktemp -d)
+trap 'rm -rf "$scratch"' EXIT
+for harness in log_reader orientations calibration_file series calibrate; do
+  mkdir -p "$scratch/$harness"
+  # Inputs that once failed (fuzz/regressions) are replayed with the seeds.
+  regressions=()
+  [ -d "fuzz/regressions/$harness" ] && regressions=("fuzz/regressions/$harness")
+  "build-fuzz/fuzz/fuzz_$harness" "$scratch/$harness" "fuzz/corpus/$harness" "${regressions[@]}" \
+    -max_total_time="$seconds" -timeout=10 -rss_limit_mb=2048 -max_len=20000 -print_final_stats=1 \
+    > "$scratch/$harness.log" 2>&1 || { tail -60 "$scratch/$harness.log"; exit 1; }
+  echo "fuzz_$harness: $(grep -E '^stat::number_of_executed_units' "$scratch/$harness.log" |
+    awk '{print $2}') executions in ${seconds} s, no finding"
+done

@@ -14,13 +14,14 @@
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   if (size < 1) return 0;
   using accelcal::SolverMethod;
-  constexpr SolverMethod kMethods[] = {SolverMethod::kJoint, SolverMethod::kTwoStep,
+  constexpr SolverMethod kMethods[] = {SolverMethod::kJoint,          SolverMethod::kTwoStep,
                                        SolverMethod::kNewtonLagrange, SolverMethod::kModulus,
-                                       SolverMethod::kModulusNorm, SolverMethod::kEllipsoid};
+                                       SolverMethod::kModulusNorm,    SolverMethod::kEllipsoid};
   const std::uint8_t control = data[0];
   accelcal::CalibrationOptions options;
   options.method = kMethods[control % 6];
-  options.model = (control / 6) % 2 ? accelcal::ModelKind::kQuadratic : accelcal::ModelKind::kLinear;
+  options.model =
+      (control / 6) % 2 ? accelcal::ModelKind::kQuadratic : accelcal::ModelKind::kLinear;
   options.frame = (control / 12) % 2 ? accelcal::Frame::kZFirst : accelcal::Frame::kXFirst;
   options.joint.max_iterations = 50;  // bounded work per input
   options.two_step.max_sweeps = 200;

@@ -61,9 +61,7 @@ LoadedInput LoadInput(const InputArgs& in) {
   const auto start = std::chrono::steady_clock::now();
   ReadOptions read = MakeReadOptions(in);
   ProgressBar bar("reading");
-  read.progress = [&bar](std::size_t done, std::size_t total) {
-    bar.Update(static_cast<long>(done), static_cast<long>(total));
-  };
+  read.progress = bar.ByteCallback();
   loaded.data = ReadInput(in.path, read);
   bar.Finish();
   Detail("read %s in %.1f ms\n", in.path.c_str(),
@@ -631,9 +629,7 @@ int RunApply(const ApplyArgs& args) {
   ReadOptions read = MakeReadOptions(args.input);
   read.kind = InputKind::kRaw;
   ProgressBar bar("reading");
-  read.progress = [&bar](std::size_t done, std::size_t total) {
-    bar.Update(static_cast<long>(done), static_cast<long>(total));
-  };
+  read.progress = bar.ByteCallback();
   const InputData data = ReadInput(args.input.path, read);
   bar.Finish();
   const RawLog& log = data.raw;
@@ -1011,10 +1007,7 @@ int RunSystemLevel(const SystemLevelArgs& args) {
   SystemLevelEstimator estimator(latitude * 3.14159265358979323846 / 180.0, g);
   ProgressBar bar("system-level");
   ReadSeries(
-      args.series, [&](const SystemSample& s) { estimator.Add(s); },
-      [&](std::size_t done, std::size_t total) {
-        bar.Update(static_cast<long>(done), static_cast<long>(total));
-      });
+      args.series, [&](const SystemSample& s) { estimator.Add(s); }, bar.ByteCallback());
   bar.Finish();
   const SystemLevelResult r = estimator.Finish();
   const auto fourier = [](const FourierCoefficients& f) {

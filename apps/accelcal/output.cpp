@@ -60,6 +60,12 @@ void ProgressBar::Update(long done, long total) {
   drawn_ = true;
 }
 
+std::function<void(std::size_t, std::size_t)> ProgressBar::ByteCallback() {
+  return [this](std::size_t done, std::size_t total) {
+    Update(static_cast<long>(done), static_cast<long>(total));
+  };
+}
+
 void ProgressBar::Finish() {
   if (!drawn_) return;
   std::fprintf(stderr, "\r\033[K");  // erase the line

@@ -1,6 +1,8 @@
 #pragma once
 // Output helpers of the command-line tool.
 
+#include <cstddef>
+#include <functional>
 #include <string>
 #include <utility>
 
@@ -31,6 +33,9 @@ class ProgressBar {
   ProgressBar(const ProgressBar&) = delete;
   ProgressBar& operator=(const ProgressBar&) = delete;
   void Update(long done, long total);
+  /// Update as a callback for the library's byte-count progress hooks (ReadOptions::progress,
+  /// ReadSeries); the bar must outlive it.
+  std::function<void(std::size_t, std::size_t)> ByteCallback();
   void Finish();
 
  private:

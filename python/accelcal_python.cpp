@@ -162,6 +162,23 @@ PYBIND11_MODULE(_accelcal, m) {
       .def_readonly("crossval_rms", &CalibrationResult::crossval_rms)
       .def_readonly("crossval_errors", &CalibrationResult::crossval_errors)
       .def_readonly("crossval_note", &CalibrationResult::crossval_note)
+      .def_property_readonly("outliers",
+                             [](const CalibrationResult& r) {
+                               py::list list;
+                               for (const OutlierFinding& o : r.outliers) {
+                                 py::dict d;
+                                 d["position"] = o.position;  // 0-based, as the readings' rows
+                                 d["excluded"] = o.excluded;
+                                 d["t"] = o.t;
+                                 d["threshold"] = o.threshold;
+                                 d["degrees_of_freedom"] = o.degrees_of_freedom;
+                                 d["normal_residual"] = o.normal_residual;
+                                 d["scatter"] = o.scatter;
+                                 list.append(d);
+                               }
+                               return list;
+                             })
+      .def_readonly("outlier_note", &CalibrationResult::outlier_note)
       .def_property_readonly("summary",
                              [](const CalibrationResult& r) { return SummaryDict(r.summary); })
       .def(
@@ -215,8 +232,9 @@ PYBIND11_MODULE(_accelcal, m) {
       "calibrate",
       [](const Rows& readings, const std::string& model, const std::string& method,
          const std::string& frame, double gravity, const std::string& estimator,
-         std::optional<Rows> reading_sigmas, bool cross_validate) {
+         std::optional<Rows> reading_sigmas, bool cross_validate, const std::string& outliers) {
         CalibrationOptions o = Options(model, method, frame, gravity, estimator);
+        o.outliers.policy = Parse(OutlierPolicyFromString(outliers), outliers, "outliers");
         if (reading_sigmas) o.reading_sigmas = ToVectors(*reading_sigmas);
         const std::vector<Vec3> r = ToVectors(readings);
         CalibrationResult result = Calibrate(r, o);
@@ -226,8 +244,9 @@ PYBIND11_MODULE(_accelcal, m) {
       py::arg("readings"), py::arg("model") = "linear", py::arg("method") = "joint",
       py::arg("frame") = "x-first", py::arg("gravity") = kStandardGravity_ms2,
       py::arg("estimator") = "ml", py::arg("reading_sigmas") = std::nullopt,
-      py::arg("cross_validate") = true,
-      "Calibrates from averaged readings (m x 3), one per static position");
+      py::arg("cross_validate") = true, py::arg("outliers") = "exclude",
+      "Calibrates from averaged readings (m x 3), one per static position; outliers: exclude, "
+      "flag or off (positions that disagree with the others, calibrate.hpp OutlierPolicy)");
 
   m.def(
       "read_input",

@@ -10,6 +10,7 @@ packages=(
   python3-yaml  # the YAML export's round-trip test reads it with PyYAML
   chromium      # the report test renders the page as a person would see it
   pybind11-dev python3-dev python3-numpy python3-pytest python3-matplotlib  # Python bindings
+  clang libclang-rt-14-dev llvm-14  # sanitizers, libFuzzer and the symbolizer (scripts/sanitize.sh)
 )
 missing=()
 for p in "${packages[@]}"; do

@@ -12,6 +12,7 @@
 #include "accelcal/ellipsoid_fit.hpp"
 #include "accelcal/error.hpp"
 #include "accelcal/frame.hpp"
+#include "outliers.hpp"
 #include "solver_common.hpp"
 
 namespace accelcal {
@@ -51,6 +52,30 @@ std::optional<Estimator> EstimatorFromString(std::string_view text) {
   if (text == "ml") return Estimator::kMaximumLikelihood;
   if (text == "bias-corrected") return Estimator::kBiasCorrected;
   return std::nullopt;
+}
+
+std::string_view ToString(OutlierPolicy policy) {
+  switch (policy) {
+    case OutlierPolicy::kOff:
+      return "off";
+    case OutlierPolicy::kFlag:
+      return "flag";
+    case OutlierPolicy::kExclude:
+      break;
+  }
+  return "exclude";
+}
+std::optional<OutlierPolicy> OutlierPolicyFromString(std::string_view text) {
+  for (OutlierPolicy p : {OutlierPolicy::kOff, OutlierPolicy::kFlag, OutlierPolicy::kExclude}) {
+    if (text == ToString(p)) return p;
+  }
+  return std::nullopt;
+}
+
+int CalibrationResult::positions_used() const {
+  int used = static_cast<int>(directions.size());
+  for (const OutlierFinding& o : outliers) used -= o.excluded ? 1 : 0;
+  return used;
 }
 
 std::string_view ToString(Initialization init) {
@@ -127,6 +152,10 @@ std::optional<std::string> CalibrationOptions::Validate() const {
     return "the bias-corrected estimator corrects maximum likelihood: it does not apply to the " +
            std::string(ToString(method)) + " method";
   }
+  if (!(outliers.false_alarm_probability > 0 && outliers.false_alarm_probability < 1)) {
+    return "outliers.false_alarm_probability must be in (0, 1)";
+  }
+  if (outliers.max_excluded < 0) return "outliers.max_excluded must be non-negative";
   if (bias_correction.max_rounds < 1) return "bias_correction.max_rounds must be at least 1";
   if (!(bias_correction.tolerance > 0)) return "bias_correction.tolerance must be positive";
   if (method == SolverMethod::kEllipsoid && initialization != Initialization::kAuto &&
@@ -521,23 +550,32 @@ CalibrationResult CalibrateInFrame(const std::vector<Vec3>& readings,
 }  // namespace
 
 // Leave-one-position-out: each position corrected by a fit without it, started from the full fit
-// (the held-out optimum is close to it, so each refit takes a few iterations).
+// (the held-out optimum is close to it, so each refit takes a few iterations). Positions the
+// screening excluded are held out of every fit already: their error is that of the final fit.
 void CrossValidate(const std::vector<Vec3>& readings, const CalibrationOptions& options,
                    CalibrationResult* result) {
   if (auto why = options.Validate()) throw std::invalid_argument(*why);
   CalibrationOptions held_out = options;
   held_out.cross_validate = false;
+  held_out.outliers.policy = OutlierPolicy::kOff;    // the same positions as the full fit
   held_out.reading_sigmas.clear();                   // no covariance needed from the held-out fits
   if (options.method != SolverMethod::kEllipsoid) {  // closed form: nothing to start from
     held_out.initialization = Initialization::kGiven;
     held_out.initial_params = result->params;
   }
-  std::vector<Vec3> subset(readings.size() - 1);
+  std::vector<Vec3> subset;
+  subset.reserve(readings.size());
   std::vector<double> errors;
+  std::vector<double> used_errors;
   for (std::size_t k = 0; k < readings.size(); ++k) {
-    std::copy(readings.begin(), readings.begin() + static_cast<std::ptrdiff_t>(k), subset.begin());
-    std::copy(readings.begin() + static_cast<std::ptrdiff_t>(k) + 1, readings.end(),
-              subset.begin() + static_cast<std::ptrdiff_t>(k));
+    if (result->excluded(k)) {
+      errors.push_back(GravityNormErrors(result->params, {readings[k]}, options.gravity)[0]);
+      continue;
+    }
+    subset.clear();
+    for (std::size_t j = 0; j < readings.size(); ++j) {
+      if (j != k && !result->excluded(j)) subset.push_back(readings[j]);
+    }
     const std::string without = "without position " + std::to_string(k + 1) + ": ";
     CalibrationResult fit;
     try {
@@ -557,10 +595,147 @@ void CrossValidate(const std::vector<Vec3>& readings, const CalibrationOptions& 
       return;
     }
     errors.push_back(e);
+    used_errors.push_back(e);
   }
-  result->crossval_rms = Rms(errors);
+  result->crossval_rms = Rms(used_errors);
   result->crossval_errors = std::move(errors);
 }
+
+namespace {
+
+// The readings (and their sigmas) of the positions in `keep`.
+CalibrationOptions SubsetOptions(const CalibrationOptions& options, const std::vector<int>& keep,
+                                 const ModelParameters& start) {
+  CalibrationOptions subset = options;
+  subset.cross_validate = false;
+  if (!options.reading_sigmas.empty()) {
+    subset.reading_sigmas.clear();
+    for (int k : keep) subset.reading_sigmas.push_back(options.reading_sigmas[std::size_t(k)]);
+  }
+  if (options.method != SolverMethod::kEllipsoid) {
+    subset.initialization = Initialization::kGiven;
+    subset.initial_params = start;
+  }
+  return subset;
+}
+
+// `fit` (of the positions `keep`) spread back over all readings: an excluded position gets its
+// direction and residual under the final fit.
+void SpreadOverAllPositions(const std::vector<Vec3>& readings, const std::vector<int>& keep,
+                            CalibrationResult* fit) {
+  std::vector<Vec3> directions(readings.size()), residuals(readings.size());
+  std::vector<bool> kept(readings.size(), false);
+  for (std::size_t i = 0; i < keep.size(); ++i) {
+    const auto k = static_cast<std::size_t>(keep[i]);
+    directions[k] = fit->directions[i];
+    residuals[k] = fit->residuals[i];
+    kept[k] = true;
+  }
+  for (std::size_t k = 0; k < readings.size(); ++k) {
+    if (kept[k]) continue;
+    const std::optional<Vec3> f = SpecificForce(fit->params, readings[k]);
+    directions[k] = f && f->norm() > 0 ? Vec3(f->normalized()) : Vec3::UnitZ();
+    residuals[k] = readings[k] - PredictRaw(fit->params, Vec3(fit->gravity * directions[k]));
+  }
+  fit->directions = std::move(directions);
+  fit->residuals = std::move(residuals);
+}
+
+// The fit with the screening of OutlierOptions, as Rosner's generalised ESD test (1983): the most
+// discordant position is removed and the rest refitted, r = max(1, max_excluded) times, each step
+// recording its t and threshold; the number of discordant positions is the last step whose |t|
+// exceeds its threshold. Testing the later steps as well is what finds two discordant positions
+// that inflate the scatter enough to hide each other from the first step. The refits run only when
+// the first step is significant or the robust scale finds a position suspicious (Screening).
+CalibrationResult CalibrateScreened(const std::vector<Vec3>& readings,
+                                    const CalibrationOptions& options) {
+  const auto t0 = std::chrono::steady_clock::now();
+  CalibrationResult full = CalibrateInFrame(readings, options);
+  if (options.outliers.policy == OutlierPolicy::kOff || !full.summary.converged()) return full;
+  const double alpha = options.outliers.false_alarm_probability;
+  internal::Screening screening = internal::ScreenPositions(full, alpha);
+  std::string note = screening.note;
+  if (!screening.significant() && !screening.suspicious) {
+    full.outlier_note = std::move(note);
+    return full;
+  }
+  struct Step {
+    OutlierFinding finding;
+    CalibrationResult fit;  // without the positions of this and the previous steps
+    std::vector<int> keep;
+  };
+  std::vector<Step> steps;
+  const int max_steps = std::max(1, options.outliers.max_excluded);
+  steps.reserve(static_cast<std::size_t>(max_steps));  // `current` points into it
+  std::vector<int> keep(readings.size());
+  for (std::size_t k = 0; k < keep.size(); ++k) keep[k] = static_cast<int>(k);
+  const CalibrationResult* current = &full;
+  while (static_cast<int>(steps.size()) < max_steps && screening.most_discordant >= 0) {
+    OutlierFinding finding = screening.Finding(screening.most_discordant);
+    finding.position = keep[std::size_t(finding.position)];
+    std::vector<int> rest;
+    std::vector<Vec3> rest_readings;
+    for (int k : keep) {
+      if (k == finding.position) continue;
+      rest.push_back(k);
+      rest_readings.push_back(readings[std::size_t(k)]);
+    }
+    std::optional<CalibrationResult> refit;
+    std::string why;
+    try {
+      refit = CalibrateInFrame(rest_readings, SubsetOptions(options, rest, current->params));
+      if (!refit->summary.converged()) why = "the fit without it did not converge";
+    } catch (const DataError& e) {
+      why = e.what();
+    }
+    if (!why.empty()) {
+      if (std::abs(finding.t) > finding.threshold) {
+        note = "position " + std::to_string(finding.position + 1) +
+               " disagrees but cannot be left out: without it, " + why;
+      }
+      break;
+    }
+    steps.push_back({finding, std::move(*refit), rest});
+    current = &steps.back().fit;
+    keep = std::move(rest);
+    screening = internal::ScreenPositions(*current, alpha);
+    if (!screening.ran) break;
+  }
+  std::size_t discordant = 0;
+  for (std::size_t i = 0; i < steps.size(); ++i) {
+    if (std::abs(steps[i].finding.t) > steps[i].finding.threshold) discordant = i + 1;
+  }
+  if (discordant == steps.size() && screening.significant()) {
+    note = "more positions may disagree: the screening tests at most " + std::to_string(max_steps);
+  }
+  const std::size_t excluded =
+      options.outliers.policy == OutlierPolicy::kExclude
+          ? std::min(discordant, static_cast<std::size_t>(options.outliers.max_excluded))
+          : 0;
+  CalibrationResult result = excluded > 0 ? std::move(steps[excluded - 1].fit) : std::move(full);
+  if (excluded > 0) {
+    SpreadOverAllPositions(readings, steps[excluded - 1].keep, &result);
+    // The summary tells the whole solve: where it started, every fit's iterations and time.
+    Summary& summary = result.summary;
+    summary.initialization = full.summary.initialization;
+    summary.initialization_note = full.summary.initialization_note;
+    summary.initial_cost = full.summary.initial_cost;
+    for (std::size_t i = 0; i + 1 < excluded; ++i) {
+      summary.iterations += steps[i].fit.summary.iterations;
+    }
+    summary.iterations += full.summary.iterations;
+  }
+  for (std::size_t i = 0; i < discordant; ++i) {
+    steps[i].finding.excluded = i < excluded;
+    result.outliers.push_back(steps[i].finding);
+  }
+  result.outlier_note = std::move(note);
+  result.summary.time_s =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  return result;
+}
+
+}  // namespace
 
 CalibrationResult Calibrate(const std::vector<Vec3>& readings, const CalibrationOptions& options) {
   if (auto why = options.Validate()) throw std::invalid_argument(*why);
@@ -576,7 +751,7 @@ CalibrationResult Calibrate(const std::vector<Vec3>& readings, const Calibration
       }
     }
   }
-  CalibrationResult result = CalibrateInFrame(readings, options);
+  CalibrationResult result = CalibrateScreened(readings, options);
   if (options.cross_validate && result.summary.converged()) {
     CrossValidate(readings, options, &result);
   }

@@ -119,13 +119,30 @@ std::string CalibrationToJson(const CalibrationResult& result, const Calibration
     entry["residual"] = ToJson(result.residuals[k]);
     entry["gravity_norm_error"] = Nullable(errors[k]);
     if (result.crossval_rms) entry["crossval_error"] = result.crossval_errors[k];
+    if (result.excluded(k)) entry["excluded"] = true;
     positions.push_back(entry);
   }
   doc["positions"] = positions;
   doc["gravity_norm_rms_before"] = Nullable(GravityNormRmsUncalibrated(means, result.gravity));
-  doc["gravity_norm_rms_after"] = Nullable(Rms(errors));
+  std::vector<double> used_errors;  // the positions of the fit (outliers excluded)
+  for (std::size_t k = 0; k < errors.size(); ++k) {
+    if (!result.excluded(k)) used_errors.push_back(errors[k]);
+  }
+  doc["gravity_norm_rms_after"] = Nullable(Rms(used_errors));
   doc["crossval_rms"] = Nullable(result.crossval_rms);
   if (!result.crossval_note.empty()) doc["crossval_note"] = result.crossval_note;
+  ordered_json outliers = ordered_json::array();
+  for (const OutlierFinding& o : result.outliers) {
+    outliers.push_back({{"position", o.position + 1},
+                        {"excluded", o.excluded},
+                        {"t", o.t},
+                        {"threshold", o.threshold},
+                        {"degrees_of_freedom", o.degrees_of_freedom},
+                        {"normal_residual", o.normal_residual},
+                        {"scatter", o.scatter}});
+  }
+  doc["outliers"] = outliers;
+  if (!result.outlier_note.empty()) doc["outlier_note"] = result.outlier_note;
   if (const ModelSelection* s = info.model_selection) {
     ordered_json selection;
     selection["requested"] = info.model_requested;

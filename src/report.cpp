@@ -420,7 +420,19 @@ std::vector<std::string> Warnings(const Document& d, const ReportInput& input) {
   if (d.doc.contains("crossval_note") && d.doc["crossval_note"].is_string()) {
     w.push_back(d.doc["crossval_note"].get<std::string>());
   }
-  // Held-out errors far beyond the typical one: a position that moved or was bumped.
+  // The calibration's own test for discordant positions (calibrate.hpp, OutlierPolicy).
+  std::vector<bool> found(d.positions.size(), false);
+  for (const ordered_json& o : d.doc.value("outliers", ordered_json::array())) {
+    const int k = o.at("position").get<int>();
+    if (k >= 1 && static_cast<std::size_t>(k) <= found.size()) found[std::size_t(k - 1)] = true;
+    w.push_back("position " + std::to_string(k) +
+                " disagrees with the others (t = " + Format("%.1f", o.at("t").get<double>()) +
+                ", beyond " + Format("%.2f", o.at("threshold").get<double>()) +
+                "): " + (o.at("excluded").get<bool>() ? "left out of the fit" : "kept in the fit") +
+                "; it may have moved or been bumped during its interval");
+  }
+  // Held-out errors far beyond the typical one: a position that moved or was bumped (files
+  // without the screening, or screened with it off).
   std::vector<double> magnitudes;
   for (const PositionView& p : d.positions) {
     if (p.held_out) magnitudes.push_back(std::abs(*p.held_out));
@@ -431,7 +443,7 @@ std::vector<std::string> Warnings(const Document& d, const ReportInput& input) {
                      sorted.begin() + static_cast<std::ptrdiff_t>(sorted.size() / 2), sorted.end());
     const double typical = 1.4826 * sorted[sorted.size() / 2];  // σ of a zero-mean normal from |e|
     for (std::size_t k = 0; k < magnitudes.size(); ++k) {
-      if (typical > 0 && magnitudes[k] > 5.0 * typical) {
+      if (typical > 0 && magnitudes[k] > 5.0 * typical && !found[k]) {
         w.push_back("position " + std::to_string(k + 1) +
                     ": held-out |f| - g = " + Short(*d.positions[k].held_out) + " " + d.unit +
                     ", " + Format("%.1f", magnitudes[k] / typical) +

@@ -29,7 +29,7 @@ struct Recording {
   std::string json;
 };
 Recording Record(const std::vector<Vec3>& directions, ModelKind model, double static_s = 4.0,
-                 int moved = -1) {
+                 int moved = -1, OutlierPolicy outliers = OutlierPolicy::kExclude) {
   ModelParameters truth;
   truth.K << 1.02, 0, 0, 0.01, 0.98, 0, -0.02, 0.015, 1.01;
   truth.bias << 0.03, -0.02, 0.05;
@@ -52,6 +52,7 @@ Recording Record(const std::vector<Vec3>& directions, ModelKind model, double st
   options.model = model;
   options.gravity = 1.0;
   options.reading_sigmas = SigmasOfMeans(positions);
+  options.outliers.policy = outliers;
   CalibrationResult result = Calibrate(Means(positions), options);
   CrossValidate(Means(positions), options, &result);
   CalibrationFileInfo info;
@@ -92,11 +93,18 @@ TEST(Report, SelfContainedPageWithEveryPlotAndTheParameterTable) {
 }
 
 TEST(Report, WarnsAboutAMovedPositionAGapInCoverageAndUnusedStillPeriods) {
-  // Position 5's mean pushed by 0.035 g: far beyond the held-out error of the others.
+  // Position 5's mean pushed by 0.035 g: far beyond the held-out error of the others. The
+  // calibration's screening leaves it out, and the report says so (and nothing else).
   const Recording moved = Record(Yang18Directions(), ModelKind::kLinear, 4.0, 4);
-  const std::vector<std::string> w = ReportWarnings({moved.json, "cal.json", nullptr, {}});
-  // Two warnings: the scatter it causes, beyond the interval noise, and the position itself (and
-  // no other position).
+  std::vector<std::string> w = ReportWarnings({moved.json, "cal.json", nullptr, {}});
+  ASSERT_EQ(w.size(), 1u);
+  EXPECT_EQ(w[0].rfind("position 5 disagrees with the others (t = -", 0), 0u) << w[0];
+  EXPECT_NE(w[0].find("): left out of the fit;"), std::string::npos) << w[0];
+  // A file calibrated with the screening off: two warnings, the scatter the position causes,
+  // beyond the interval noise, and the position itself by its held-out error (and no other).
+  const Recording kept =
+      Record(Yang18Directions(), ModelKind::kLinear, 4.0, 4, OutlierPolicy::kOff);
+  w = ReportWarnings({kept.json, "cal.json", nullptr, {}});
   ASSERT_EQ(w.size(), 2u);
   EXPECT_EQ(w[0].rfind("the positions scatter ", 0), 0u) << w[0];
   EXPECT_EQ(w[1].rfind("position 5: held-out |f| - g = ", 0), 0u) << w[1];

@@ -166,6 +166,22 @@ void PrintStrongestCorrelations(const Eigen::MatrixXd& covariance,
   Say("\n");
 }
 
+// One discordant position, for the summary and the warning.
+std::string OutlierMessage(const OutlierFinding& o, const std::vector<Position>& positions,
+                           const std::vector<double>& errors, const char* unit) {
+  const auto k = static_cast<std::size_t>(o.position);
+  std::string where;
+  if (positions[k].interval) {
+    where =
+        Format(" (%.2f-%.2f s)", positions[k].interval->t_begin_s, positions[k].interval->t_end_s);
+  }
+  return Format(
+      "position %d%s disagrees with the others: |f|-g %.3g %s under the fit %s it; t = %.1f, "
+      "beyond %.2f (Student t, %d degrees of freedom); moved or bumped during its interval?",
+      o.position + 1, where.c_str(), errors[k], unit, o.excluded ? "without" : "with", o.t,
+      o.threshold, o.degrees_of_freedom);
+}
+
 void PrintCalibration(const CalibrationResult& r, const std::vector<Position>& positions,
                       const Gravity& g, const std::string& raw_unit) {
   const char* u = g.unit == ForceUnit::kMetersPerSecond2 ? "m/s2" : "g";
@@ -237,14 +253,23 @@ void PrintCalibration(const CalibrationResult& r, const std::vector<Position>& p
   Say("\npositions (|f|-g in %s, residual p - mu in %s)\n", u, raw_unit.c_str());
   Say("  %3s %8s %42s %12s %36s\n", "#", "samples", "mean", "|f|-g", "residual");
   for (std::size_t k = 0; k < positions.size(); ++k) {
-    Say("  %3zu %8zu %s %12.4g %s\n", k + 1, positions[k].samples, Vec(positions[k].mean).c_str(),
-        errors[k], Vec(r.residuals[k], "%12.4g").c_str());
+    Say("  %3zu %8zu %s %12.4g %s%s\n", k + 1, positions[k].samples, Vec(positions[k].mean).c_str(),
+        errors[k], Vec(r.residuals[k], "%12.4g").c_str(), r.excluded(k) ? "  excluded" : "");
   }
+  for (const OutlierFinding& o : r.outliers) {
+    Say("%s  %s\n", o.excluded ? "excluded " : "flagged  ",
+        OutlierMessage(o, positions, errors, u).c_str());
+  }
+  if (!r.outlier_note.empty()) Say("screening %s\n", r.outlier_note.c_str());
   const std::optional<double> before = GravityNormRmsUncalibrated(means, r.gravity);
-  Say("\nrms |f|-g  before: %s   after: %.6g %s\n",
+  std::vector<double> used_errors;  // the positions of the fit (outliers excluded)
+  for (std::size_t k = 0; k < errors.size(); ++k) {
+    if (!r.excluded(k)) used_errors.push_back(errors[k]);
+  }
+  Say("\nrms |f|-g  before: %s   after: %.6g %s%s\n",
       before ? Format("%.6g %s", *before, u).c_str()
              : Format("n/a (raw readings are not in %s)", u).c_str(),
-      Rms(errors), u);
+      Rms(used_errors), u, used_errors.size() < errors.size() ? " (positions in the fit)" : "");
   if (r.crossval_rms) {
     Say("held-out  rms |f|-g %.6g %s (each position corrected by a fit without it)\n",
         *r.crossval_rms, u);
@@ -324,6 +349,15 @@ int WriteCalibration(const CalibrateArgs& args, const LoadedInput& in, const Gra
   }
   if (!args.output.empty()) WriteFileAtomically(args.output, json);
   if (!args.report.empty()) WriteFileAtomically(args.report, report);
+  const std::vector<double> errors =
+      GravityNormErrors(result.params, Means(in.positions), result.gravity);
+  for (const OutlierFinding& o : result.outliers) {
+    Warn("%s: %s%s\n", args.input.path.c_str(),
+         OutlierMessage(o, in.positions, errors,
+                        g.unit == ForceUnit::kMetersPerSecond2 ? "m/s2" : "g")
+             .c_str(),
+         o.excluded ? " It was left out of the fit." : " It was kept in the fit.");
+  }
   if (args.json) {
     WriteFileAtomically("-", json);
   } else {
@@ -389,6 +423,9 @@ int RunCalibrate(const CalibrateArgs& args) {
   options.frame = ParseEnum(FrameFromString(args.frame), args.frame, "--frame", "x-first, z-first");
   options.estimator = ParseEnum(EstimatorFromString(args.estimator), args.estimator, "--estimator",
                                 "ml, bias-corrected");
+  options.outliers.policy = ParseEnum(OutlierPolicyFromString(args.outliers), args.outliers,
+                                      "--outliers", "exclude, flag, off");
+  options.outliers.false_alarm_probability = args.outlier_probability;
   options.cross_validate = args.cross_validate;
   if (auto_model && !args.cross_validate) {
     throw UsageError(

@@ -57,6 +57,8 @@ struct CalibrateArgs {
   std::string init = "auto";
   std::string frame = "x-first";
   std::string estimator = "ml";
+  std::string outliers = "exclude";   // OutlierPolicy
+  double outlier_probability = 1e-3;  // OutlierOptions::false_alarm_probability
   std::string orientations;  // known orientations (orientation_file.hpp): platform-frame fit
   /// Options that a known-orientation fit does not take, when given explicitly.
   std::vector<std::string> gravity_only_options;

@@ -90,6 +90,15 @@ int main(int argc, char** argv) {
                    "ml (maximum likelihood) or bias-corrected (removes the bias of order "
                    "sigma^2/g that ML has at MEMS noise levels; same covariance)")
       ->capture_default_str();
+  calibrate
+      ->add_option("--outliers", cal.outliers,
+                   "a position that disagrees with the others (moved or bumped during its "
+                   "interval): exclude it with a warning, flag it only, or off")
+      ->capture_default_str();
+  calibrate
+      ->add_option("--outlier-probability", cal.outlier_probability,
+                   "chance that a calibration whose positions all agree loses one to the test")
+      ->capture_default_str();
   calibrate->add_option("--orientations", cal.orientations,
                         "known orientation of every position, in order (a file of directions or "
                         "attitudes, as for design): full misalignment in the platform frame, "
@@ -300,8 +309,8 @@ int main(int argc, char** argv) {
   } timer{start};
   try {
     if (*calibrate) {
-      for (const char* name :
-           {"--method", "--init", "--frame", "--estimator", "--max-iterations"}) {
+      for (const char* name : {"--method", "--init", "--frame", "--estimator", "--max-iterations",
+                               "--outliers", "--outlier-probability"}) {
         if (calibrate->count(name) > 0) cal.gravity_only_options.emplace_back(name);
       }
       return RunCalibrate(cal);

@@ -33,6 +33,15 @@ void Say(const char* format, ...) {
   va_end(args);
 }
 
+void Warn(const char* format, ...) {
+  if (g_verbosity == Verbosity::kQuiet) return;
+  std::fputs("accelcal: warning: ", stderr);
+  va_list args;
+  va_start(args, format);
+  std::vfprintf(stderr, format, args);
+  va_end(args);
+}
+
 void Detail(const char* format, ...) {
   if (g_verbosity != Verbosity::kVerbose) return;
   va_list args;

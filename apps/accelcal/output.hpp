@@ -16,6 +16,9 @@ Verbosity CurrentVerbosity();
 
 /// An informational line on stdout (summaries, "wrote FILE"); nothing when quiet.
 void Say(const char* format, ...) __attribute__((format(printf, 1, 2)));
+/// "accelcal: warning: ..." on stderr (something the user must know about a result that was still
+/// written); nothing when quiet.
+void Warn(const char* format, ...) __attribute__((format(printf, 1, 2)));
 /// A diagnostic line on stderr (detection thresholds, timings); only when verbose.
 void Detail(const char* format, ...) __attribute__((format(printf, 1, 2)));
 

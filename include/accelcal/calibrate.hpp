@@ -99,6 +99,57 @@ enum class TerminationType {
 };
 std::string_view ToString(TerminationType type);
 
+/// Screening of the positions for one that does not agree with the others: a position recorded
+/// while the sensor crept, or knocked during its interval, averages to a reading off the fitted
+/// surface by far more than the scatter of the other positions. At a converged fit of m positions
+/// and P parameters, each position's residual along the surface normal, e_k = n_kᵀ r_k [raw], is
+/// compared with the scatter of the rest by the externally studentised residual of linear least
+/// squares (the fit linearised at the solution, with the directions eliminated):
+///
+///     r_k = e_k / (s √(1 − h_k)),  s² = Σ e_j² / ν,  ν = m − P,  h_k = u_kᵀ S⁻¹ u_k
+///     t_k = r_k √((ν − 1) / (ν − r_k²))   (Student's t with ν − 1 degrees of freedom)
+///
+/// (u_k and S = Σ u_j u_jᵀ as in CalibrationResult::covariance; t_k is the residual of position k
+/// against the fit of the others, scaled by their scatter, computed without refitting). The
+/// noise level is the scatter of the positions themselves, never the samples' white noise alone,
+/// which real recordings exceed (CalibrationResult::scatter_ratio). The largest |t_k| is
+/// discordant when its two-sided probability, times m (Bonferroni), is below
+/// `false_alarm_probability`: the chance that a calibration whose positions all agree loses one.
+/// Two discordant positions inflate s and can hide each other; so the test is Rosner's (1983)
+/// generalised ESD: the most discordant position is removed and the rest refitted, up to
+/// max(1, max_excluded) times, each step tested against its own threshold, and the number of
+/// discordant positions is the last step that exceeds it. These refits run only when the first
+/// step is significant or some position is beyond the threshold on a robust scale (1.4826 times
+/// the median |e_k| / √(1 − h_k)). Needs ν ≥ 2; positions with h_k > 1 − 1e-9 (the others cannot
+/// predict them) are not tested.
+enum class OutlierPolicy {
+  kOff,      ///< "off": no screening
+  kFlag,     ///< "flag": findings in CalibrationResult::outliers, every position stays in the fit
+  kExclude,  ///< "exclude": the discordant positions are left out of the fit (at most
+             ///< `max_excluded`; any more are flagged)
+};
+std::string_view ToString(OutlierPolicy policy);
+std::optional<OutlierPolicy> OutlierPolicyFromString(std::string_view text);
+
+struct OutlierOptions {
+  OutlierPolicy policy = OutlierPolicy::kExclude;
+  double false_alarm_probability = 1e-3;  ///< per calibration, see OutlierPolicy
+  /// At most this many positions are excluded (and max(1, max_excluded) tested): many positions
+  /// that disagree point at the model or the recording, not at single bad positions.
+  int max_excluded = 3;
+};
+
+/// A position the screening found discordant (OutlierPolicy).
+struct OutlierFinding {
+  int position = 0;            ///< 0-based index into the readings
+  double t = 0;                ///< t_k when it was found
+  double threshold = 0;        ///< the |t| that false_alarm_probability allowed then
+  int degrees_of_freedom = 0;  ///< of t_k, ν − 1
+  double normal_residual = 0;  ///< e_k [raw]
+  double scatter = 0;          ///< s of that fit [raw]
+  bool excluded = false;       ///< left out of the result's fit
+};
+
 struct CalibrationOptions {
   ModelKind model = ModelKind::kLinear;
   /// kJoint is the default: measured 35x faster than kTwoStep to the same optimum
@@ -124,6 +175,8 @@ struct CalibrationOptions {
   /// started from the full fit (a few iterations each). Off by default in the library because of
   /// that cost; the command line turns it on.
   bool cross_validate = false;
+  /// Screening for discordant positions (see OutlierPolicy): on by default, excluding.
+  OutlierOptions outliers;
   /// Maximum-likelihood methods only.
   Estimator estimator = Estimator::kMaximumLikelihood;
 
@@ -231,6 +284,21 @@ struct CalibrationResult {
   std::optional<double> crossval_rms;
   std::vector<double> crossval_errors;
   std::string crossval_note;
+  /// Discordant positions, in the order found (CalibrationOptions::outliers). The fit, its
+  /// covariance, cost and degrees of freedom are those of the positions not excluded; the
+  /// per-position vectors (directions, residuals, crossval_errors) still have one entry per
+  /// reading, an excluded one evaluated under the final fit (its crossval error is then already
+  /// held out).
+  std::vector<OutlierFinding> outliers;
+  /// Why the screening did not run or could not test some position ("" when it ran on all).
+  std::string outlier_note;
+  bool excluded(std::size_t position) const {
+    for (const OutlierFinding& o : outliers) {
+      if (o.excluded && static_cast<std::size_t>(o.position) == position) return true;
+    }
+    return false;
+  }
+  int positions_used() const;
 };
 
 /// Calibrates from averaged raw readings (one per position). Throws DataError when the data cannot

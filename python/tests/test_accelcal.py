@@ -37,6 +37,31 @@ def test_calibrate_log_gives_the_cli_calibration_exactly(tmp_path):
     np.testing.assert_array_equal(result.covariance, np.array(cli["covariance"]))
 
 
+def test_a_corrupted_position_is_excluded_as_the_cli_excludes_it(tmp_path):
+    # One position pushed 20 counts (0.05 m/s2) inside the ellipsoid: the screening leaves it out
+    # in Python and in the CLI alike, and "flag" keeps it in the fit.
+    _, positions = accelcal.calibrate_log(XSENS, gravity=9.81744)
+    bias = accelcal.calibrate(positions, gravity=9.81744).bias
+    moved = positions.copy()
+    moved[7] -= 20.0 * (moved[7] - bias) / np.linalg.norm(moved[7] - bias)
+    csv = tmp_path / "moved.csv"
+    np.savetxt(csv, moved, delimiter=",", header="x,y,z", comments="", fmt="%.17g")
+    cli = tmp_path / "cal.json"
+    subprocess.run([CLI, "calibrate", str(csv), "-q", "--gravity", "9.81744", "-o", str(cli)],
+                   check=True)
+    doc = json.loads(cli.read_text())
+    result = accelcal.calibrate(moved, gravity=9.81744)
+    assert [o["position"] for o in result.outliers] == [7]
+    assert result.outliers[0]["excluded"]
+    assert [o["position"] for o in doc["outliers"]] == [8]  # the file counts from 1
+    assert doc["positions"][7]["excluded"]
+    np.testing.assert_array_equal(result.K, np.array(doc["K"]))
+    flagged = accelcal.calibrate(moved, gravity=9.81744, outliers="flag")
+    assert not flagged.outliers[0]["excluded"]
+    with pytest.raises(ValueError):
+        accelcal.calibrate(moved, outliers="sometimes")
+
+
 def test_apply_inverts_the_model_and_matches_the_calibration_file(tmp_path):
     ModelLike = accelcal.calibrate(
         np.array([[1, 0, 0], [-1, 0, 0], [0, 1, 0], [0, -1, 0], [0, 0, 1], [0, 0, -1],

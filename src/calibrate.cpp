@@ -321,10 +321,9 @@ namespace {
 
 // The sandwich covariance with per-position noise, inflated by the scatter ratio (calibrate.hpp).
 internal::Mat12 SampleNoiseCovariance(const Problem& problem, const internal::SolverOutput& out,
+                                      const internal::InformationRows& rows,
                                       const internal::Mat12& S_inverse,
                                       const std::vector<Vec3>& sigmas, CalibrationResult* result) {
-  const internal::InformationRows rows =
-      internal::ReducedInformationRows(problem, out.params, out.dirs);
   const int m = problem.positions();
   Eigen::VectorXd variance(m);
   double chi2 = 0;
@@ -441,10 +440,16 @@ std::vector<Vec3> CorrectBias(const std::vector<Vec3>& readings, const Calibrati
   return shifted;
 }
 
+// A fit and, when the options ask for it and the fit converged, its outlier statistics.
+struct Fit {
+  CalibrationResult result;
+  internal::Screening screening;
+};
+
 // The fit in the x-first gauge; `frame` only names parameters in messages (the z-first fit runs
 // here on mirrored readings).
-CalibrationResult CalibrateXFirst(const std::vector<Vec3>& readings,
-                                  const CalibrationOptions& options, Frame frame) {
+Fit CalibrateXFirst(const std::vector<Vec3>& readings, const CalibrationOptions& options,
+                    Frame frame) {
   const auto t0 = std::chrono::steady_clock::now();
   CheckData(readings, options.model);
   const Problem data{readings, options.gravity, options.model};
@@ -480,7 +485,9 @@ CalibrationResult CalibrateXFirst(const std::vector<Vec3>& readings,
 
   // Observability at the solution: a (near) singular reduced information matrix means some
   // parameter is not determined by these positions, whatever the solver returned.
-  const internal::Information info = internal::ComputeInformation(problem, out.params, out.dirs);
+  internal::InformationRows rows;
+  const internal::Information info =
+      internal::ComputeInformation(problem, out.params, out.dirs, &rows);
   ThrowIfUnobservable(info, options.model, frame);
   // A solver that did not converge on poorly conditioned data is usually wandering along a
   // valley of nearly equal fits: say which parameter the positions barely determine.
@@ -493,7 +500,8 @@ CalibrationResult CalibrateXFirst(const std::vector<Vec3>& readings,
     out.summary.termination_message += buf;
   }
 
-  CalibrationResult result;
+  Fit fit;
+  CalibrationResult& result = fit.result;
   result.model = options.model;
   result.gravity = options.gravity;
   result.params = out.params;
@@ -505,13 +513,27 @@ CalibrationResult CalibrateXFirst(const std::vector<Vec3>& readings,
   }
   const int P = NumParameters(options.model);
   result.degrees_of_freedom = static_cast<int>(readings.size()) - P;
-  if (result.degrees_of_freedom > 0 && IsMaximumLikelihood(options.method)) {
+  const bool screen = options.outliers.policy != OutlierPolicy::kOff && out.summary.converged();
+  const bool covariance_wanted =
+      result.degrees_of_freedom > 0 && IsMaximumLikelihood(options.method);
+  const internal::Mat12 inverse =
+      screen || covariance_wanted ? info.Inverse() : internal::Mat12::Zero();
+  if (screen) {
+    double signal = 0;  // the largest axis signal, for the round-off floor
+    for (int i = 0; i < 3; ++i) {
+      signal = std::max(
+          signal, std::abs(out.params.K(i, i)) * options.gravity + std::abs(out.params.bias(i)));
+    }
+    fit.screening = internal::ScreenPositions(rows, inverse, options.model, result.residuals,
+                                              signal, options.outliers.false_alarm_probability);
+  }
+  if (covariance_wanted) {
     const double sigma2 = out.summary.final_cost / result.degrees_of_freedom;
     result.residual_sigma = std::sqrt(sigma2);
-    const internal::Mat12 inverse = info.Inverse();
     internal::Mat12 covariance = sigma2 * inverse;
     if (!options.reading_sigmas.empty()) {
-      covariance = SampleNoiseCovariance(problem, out, inverse, options.reading_sigmas, &result);
+      covariance =
+          SampleNoiseCovariance(problem, out, rows, inverse, options.reading_sigmas, &result);
     }
     const std::vector<int>& cols = ActiveColumns(options.model);
     result.covariance.resize(P, P);
@@ -522,12 +544,12 @@ CalibrationResult CalibrateXFirst(const std::vector<Vec3>& readings,
   result.summary = out.summary;
   result.summary.time_s =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-  return result;
+  return fit;
 }
 
-// The fit in the requested frame (frame.hpp): z-first is the x-first fit of the mirrored readings.
-CalibrationResult CalibrateInFrame(const std::vector<Vec3>& readings,
-                                   const CalibrationOptions& options) {
+// The fit in the requested frame (frame.hpp): z-first is the x-first fit of the mirrored readings
+// (the outlier statistics do not depend on the gauge).
+Fit CalibrateInFrame(const std::vector<Vec3>& readings, const CalibrationOptions& options) {
   if (options.frame == Frame::kXFirst) return CalibrateXFirst(readings, options, Frame::kXFirst);
   std::vector<Vec3> mirrored;
   mirrored.reserve(readings.size());
@@ -535,7 +557,8 @@ CalibrationResult CalibrateInFrame(const std::vector<Vec3>& readings,
   CalibrationOptions mirrored_options = options;
   if (options.initial_params) mirrored_options.initial_params = MirrorAxes(*options.initial_params);
   for (Vec3& s : mirrored_options.reading_sigmas) s = MirrorAxes(s).cwiseAbs();
-  CalibrationResult result = CalibrateXFirst(mirrored, mirrored_options, Frame::kZFirst);
+  Fit fit = CalibrateXFirst(mirrored, mirrored_options, Frame::kZFirst);
+  CalibrationResult& result = fit.result;
   result.frame = Frame::kZFirst;
   result.params = MirrorAxes(result.params);
   for (Vec3& c : result.directions) c = MirrorAxes(c);
@@ -544,7 +567,7 @@ CalibrationResult CalibrateInFrame(const std::vector<Vec3>& readings,
     const Eigen::VectorXd d = MirrorSigns(options.model);
     result.covariance = d.asDiagonal() * result.covariance * d.asDiagonal();
   }
-  return result;
+  return fit;
 }
 
 }  // namespace
@@ -579,7 +602,7 @@ void CrossValidate(const std::vector<Vec3>& readings, const CalibrationOptions& 
     const std::string without = "without position " + std::to_string(k + 1) + ": ";
     CalibrationResult fit;
     try {
-      fit = CalibrateInFrame(subset, held_out);
+      fit = CalibrateInFrame(subset, held_out).result;
     } catch (const DataError& e) {
       result->crossval_note = without + e.what();
       return;
@@ -650,12 +673,12 @@ void SpreadOverAllPositions(const std::vector<Vec3>& readings, const std::vector
 CalibrationResult CalibrateScreened(const std::vector<Vec3>& readings,
                                     const CalibrationOptions& options) {
   const auto t0 = std::chrono::steady_clock::now();
-  CalibrationResult full = CalibrateInFrame(readings, options);
+  Fit first = CalibrateInFrame(readings, options);
+  CalibrationResult& full = first.result;
   if (options.outliers.policy == OutlierPolicy::kOff || !full.summary.converged()) return full;
-  const double alpha = options.outliers.false_alarm_probability;
-  internal::Screening screening = internal::ScreenPositions(full, alpha);
+  internal::Screening screening = std::move(first.screening);
   std::string note = screening.note;
-  if (!screening.significant() && !screening.suspicious) {
+  if (!screening.significant && !screening.suspicious) {
     full.outlier_note = std::move(note);
     return full;
   }
@@ -680,11 +703,11 @@ CalibrationResult CalibrateScreened(const std::vector<Vec3>& readings,
       rest.push_back(k);
       rest_readings.push_back(readings[std::size_t(k)]);
     }
-    std::optional<CalibrationResult> refit;
+    std::optional<Fit> refit;
     std::string why;
     try {
       refit = CalibrateInFrame(rest_readings, SubsetOptions(options, rest, current->params));
-      if (!refit->summary.converged()) why = "the fit without it did not converge";
+      if (!refit->result.summary.converged()) why = "the fit without it did not converge";
     } catch (const DataError& e) {
       why = e.what();
     }
@@ -695,17 +718,17 @@ CalibrationResult CalibrateScreened(const std::vector<Vec3>& readings,
       }
       break;
     }
-    steps.push_back({finding, std::move(*refit), rest});
+    steps.push_back({finding, std::move(refit->result), rest});
     current = &steps.back().fit;
     keep = std::move(rest);
-    screening = internal::ScreenPositions(*current, alpha);
+    screening = std::move(refit->screening);
     if (!screening.ran) break;
   }
   std::size_t discordant = 0;
   for (std::size_t i = 0; i < steps.size(); ++i) {
     if (std::abs(steps[i].finding.t) > steps[i].finding.threshold) discordant = i + 1;
   }
-  if (discordant == steps.size() && screening.significant()) {
+  if (discordant == steps.size() && screening.significant) {
     note = "more positions may disagree: the screening tests at most " + std::to_string(max_steps);
   }
   const std::size_t excluded =

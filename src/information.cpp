@@ -206,22 +206,29 @@ InformationRows ReducedInformationRows(const Problem& problem, const ModelParame
   return rows;
 }
 
-Mat12 ReducedInformation(const Problem& problem, const ModelParameters& params,
-                         const std::vector<Vec3>& dirs, Vec12* A_diagonal) {
-  const InformationRows rows = ReducedInformationRows(problem, params, dirs);
-  *A_diagonal = rows.A_diagonal;
+namespace {
+Mat12 SumOfRows(const InformationRows& rows) {
   Mat12 S = Mat12::Zero();
   S.selfadjointView<Eigen::Lower>().rankUpdate(rows.U.transpose());
   S.triangularView<Eigen::StrictlyUpper>() = S.transpose();
   return S;
 }
+}  // namespace
+
+Mat12 ReducedInformation(const Problem& problem, const ModelParameters& params,
+                         const std::vector<Vec3>& dirs, Vec12* A_diagonal) {
+  const InformationRows rows = ReducedInformationRows(problem, params, dirs);
+  *A_diagonal = rows.A_diagonal;
+  return SumOfRows(rows);
+}
 
 Information ComputeInformation(const Problem& problem, const ModelParameters& params,
-                               const std::vector<Vec3>& dirs) {
+                               const std::vector<Vec3>& dirs, InformationRows* rows_out) {
+  InformationRows rows = ReducedInformationRows(problem, params, dirs);
   Information info;
-  Vec12 A_diagonal;
-  info.reduced = ReducedInformation(problem, params, dirs, &A_diagonal);
-  FinishInformation(problem.model, A_diagonal, &info);
+  info.reduced = SumOfRows(rows);
+  FinishInformation(problem.model, rows.A_diagonal, &info);
+  if (rows_out) *rows_out = std::move(rows);
   return info;
 }
 

@@ -130,8 +130,9 @@ inline constexpr double kMinInformationRcond = 1e-10;
 /// Measured at the solution: 1.7e-5 to 0.16 on the bundled recordings and the Table-3 problem
 /// (linear), 7.5e-7 on the T265 set with the quadratic model.
 inline constexpr double kPoorInformationRcond = 1e-6;
+/// `rows`, when given, receives the rows S was summed from (the outlier screening uses them).
 Information ComputeInformation(const Problem& problem, const ModelParameters& params,
-                               const std::vector<Vec3>& dirs);
+                               const std::vector<Vec3>& dirs, InformationRows* rows = nullptr);
 /// Completes `info` whose `reduced` holds a (weighted) information matrix: masks the fixed
 /// parameters, scales with A's diagonal, factorises, estimates rcond and names the weakest.
 void FinishInformation(ModelKind model, const Vec12& A_diagonal, Information* info);

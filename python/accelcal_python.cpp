@@ -225,7 +225,9 @@ PYBIND11_MODULE(_accelcal, m) {
         py::arg("source") = "<string>", "Reads a calibration file's text (accelcal calibrate -o)");
   m.def(
       "load_calibration",
-      [](const std::string& path) { return ParseCalibrationJson(ReadFileToString(path), path); },
+      [](const std::string& path) {
+        return ParseCalibrationJson(ReadFileToString(path, kMaxSmallFileBytes), path);
+      },
       py::arg("path"));
 
   m.def(

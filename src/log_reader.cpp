@@ -13,6 +13,7 @@
 
 #include "accelcal/error.hpp"
 #include "mapped_file.hpp"
+#include "text_lines.hpp"
 
 namespace accelcal {
 
@@ -35,7 +36,7 @@ std::optional<InputKind> InputKindFromString(std::string_view text) {
   return std::nullopt;
 }
 
-std::string ReadFileToString(const std::string& path) {
+std::string ReadFileToString(const std::string& path, std::size_t max_bytes) {
   std::unique_ptr<std::FILE, int (*)(std::FILE*)> file(std::fopen(path.c_str(), "rb"),
                                                        &std::fclose);
   if (!file) throw InputError(path, 0, std::string("cannot open: ") + std::strerror(errno));
@@ -44,9 +45,15 @@ std::string ReadFileToString(const std::string& path) {
     throw InputError(path, 0, "is a directory, not a file");
   }
   std::string data;
+  const auto too_large = [&] {
+    return InputError(
+        path, 0,
+        "larger than " + std::to_string(max_bytes >> 20) + " MiB: not a file of this kind");
+  };
   // One allocation and one read for regular files; pipes and the like grow as they come.
   if (std::fseek(file.get(), 0, SEEK_END) == 0) {
     const long size = std::ftell(file.get());
+    if (size > 0 && static_cast<std::size_t>(size) > max_bytes) throw too_large();
     if (size > 0) data.reserve(static_cast<std::size_t>(size));
     std::rewind(file.get());
   }
@@ -57,7 +64,10 @@ std::string ReadFileToString(const std::string& path) {
     n = std::fread(data.data(), 1, data.size(), file.get());
     data.resize(n);
   }
-  while ((n = std::fread(buffer, 1, sizeof buffer, file.get())) > 0) data.append(buffer, n);
+  while ((n = std::fread(buffer, 1, sizeof buffer, file.get())) > 0) {
+    data.append(buffer, n);
+    if (data.size() > max_bytes) throw too_large();
+  }
   if (std::ferror(file.get())) {
     throw InputError(path, 0, std::string("cannot read: ") + std::strerror(errno));
   }
@@ -66,57 +76,12 @@ std::string ReadFileToString(const std::string& path) {
 
 namespace {
 
+using internal::IsBlank;
+using internal::Line;
+using internal::LineReader;
+using internal::Trim;
+
 enum class Delimiter { kComma, kWhitespace };
-
-struct Line {
-  std::string_view text;  // comment stripped, trimmed
-  std::uint32_t number;   // 1-based
-};
-
-bool IsBlank(char c) { return c == ' ' || c == '\t' || c == '\r'; }
-
-std::string_view Trim(std::string_view s) {
-  while (!s.empty() && IsBlank(s.front())) s.remove_prefix(1);
-  while (!s.empty() && IsBlank(s.back())) s.remove_suffix(1);
-  return s;
-}
-
-// Walks the text line by line, skipping blank lines and comments.
-class LineReader {
- public:
-  /// `lines_before`: how many lines of the file precede `text` (for 1-based line numbers).
-  explicit LineReader(std::string_view text, std::uint32_t lines_before = 0)
-      : text_(text), number_(lines_before) {}
-  /// The text not yet read.
-  std::string_view rest() const {
-    return pos_ < text_.size() ? text_.substr(pos_) : std::string_view();
-  }
-  std::uint32_t lines_read() const { return number_; }
-  bool Next(Line* line) {
-    while (pos_ < text_.size()) {
-      const char* begin = text_.data() + pos_;
-      const void* nl = std::memchr(begin, '\n', text_.size() - pos_);
-      const std::size_t len =
-          nl ? static_cast<std::size_t>(static_cast<const char*>(nl) - begin) : text_.size() - pos_;
-      pos_ += len + 1;
-      ++number_;
-      std::string_view s(begin, len);
-      const std::size_t hash = s.find('#');
-      if (hash != std::string_view::npos) s = s.substr(0, hash);
-      s = Trim(s);
-      if (!s.empty()) {
-        *line = {s, number_};
-        return true;
-      }
-    }
-    return false;
-  }
-
- private:
-  std::string_view text_;
-  std::size_t pos_ = 0;
-  std::uint32_t number_;
-};
 
 // Splits a trimmed line into fields; returns the count (fields beyond `max` are counted only).
 std::size_t Split(std::string_view s, Delimiter delim, std::string_view* fields, std::size_t max) {
@@ -330,7 +295,7 @@ struct RowParser {
       log.line.reserve(expected_rows);
       if (has_time) log.time_s.reserve(expected_rows);
     }
-    LineReader reader(text, lines_before);
+    LineReader reader(text, source, lines_before);
     Line line;
     double values[kRoles];
     std::size_t rows = 0;
@@ -456,7 +421,7 @@ InputData ParseInput(std::string_view text, const std::string& source, const Rea
   if (options.rate_hz && !(*options.rate_hz > 0 && std::isfinite(*options.rate_hz))) {
     throw InputError(source, 0, "the rate must be a positive number of Hz");
   }
-  LineReader reader(text);
+  LineReader reader(text, source);
   Line first;
   if (!reader.Next(&first))
     throw InputError(source, 0, "no data (the file is empty or all comments)");
@@ -482,13 +447,16 @@ InputData ParseInput(std::string_view text, const std::string& source, const Rea
   // Auto-detection needs to know only whether there are more rows than a positions file has.
   std::size_t rows = has_header ? 0 : 1;
   {
-    LineReader counter(text);
+    LineReader counter(text, source);
     Line l;
     counter.Next(&l);
     while (rows <= options.max_rows_of_positions_file && counter.Next(&l)) ++rows;
   }
   if (rows == 0) throw InputError(source, first.number, "a header but no data rows");
-  const std::size_t expected_rows = text.size() / (first.text.size() + 1) + 1;
+  // A guess for reserving; capped, so that a huge file with a short first line cannot make the
+  // reader ask for memory its rows will never fill (the vectors grow past it as needed).
+  const std::size_t expected_rows =
+      std::min<std::size_t>(text.size() / (first.text.size() + 1) + 1, std::size_t{1} << 22);
 
   const Layout named = NamedLayout(header);
   InputData data;
@@ -552,7 +520,7 @@ InputData ParseInput(std::string_view text, const std::string& source, const Rea
                               : ": a positions file has x,y,z [,n [,sx,sy,sz]]"));
   }
   // Parse every data row.
-  LineReader rows_reader(text);
+  LineReader rows_reader(text, source);
   Line skipped;
   rows_reader.Next(&skipped);  // the header or the first data row
   const std::string_view body =

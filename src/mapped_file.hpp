@@ -21,8 +21,14 @@ class MappedFile {
     struct stat st;
     if (::fstat(fd, &st) == 0 && S_ISREG(st.st_mode) && st.st_size > 0) {
       size_ = static_cast<std::size_t>(st.st_size);
-      void* p = ::mmap(nullptr, size_, PROT_READ, MAP_PRIVATE | MAP_POPULATE, fd, 0);
-      if (p != MAP_FAILED) data_ = static_cast<const char*>(p);
+      // No MAP_POPULATE: it reads the whole file before the parser sees its first line, so a
+      // 10 GB file that fails on line 1 took 35 s and 10 GB of memory. Sequential advice keeps
+      // the kernel reading ahead of the parser instead.
+      void* p = ::mmap(nullptr, size_, PROT_READ, MAP_PRIVATE, fd, 0);
+      if (p != MAP_FAILED) {
+        data_ = static_cast<const char*>(p);
+        ::madvise(p, size_, MADV_SEQUENTIAL);
+      }
     }
     ::close(fd);
   }

@@ -9,6 +9,7 @@
 #include "accelcal/error.hpp"
 #include "accelcal/gimbal_platform.hpp"
 #include "accelcal/log_reader.hpp"
+#include "text_lines.hpp"
 
 namespace accelcal {
 
@@ -105,16 +106,12 @@ Vec3 UpDirectionInBody(const Eigen::Quaterniond& body_to_level) {
 OrientationFile ParseOrientations(std::string_view text, const std::string& source) {
   OrientationFile out;
   bool header_seen = false;
-  std::size_t line_number = 0;
   std::size_t columns = 3;
-  std::size_t begin = 0;
-  while (begin < text.size()) {
-    std::size_t end = text.find('\n', begin);
-    if (end == std::string_view::npos) end = text.size();
-    const std::string_view line = text.substr(begin, end - begin);
-    begin = end + 1;
-    ++line_number;
-    const std::vector<std::string_view> fields = Fields(line);
+  internal::LineReader reader(text, source);
+  internal::Line line;
+  while (reader.Next(&line)) {
+    const std::size_t line_number = line.number;
+    const std::vector<std::string_view> fields = Fields(line.text);
     if (fields.empty()) continue;
     double first = 0;
     if (!header_seen && out.directions.empty() && !ParseNumber(fields[0], &first)) {
@@ -179,7 +176,7 @@ OrientationFile ParseOrientations(std::string_view text, const std::string& sour
 }
 
 OrientationFile ReadOrientations(const std::string& path) {
-  return ParseOrientations(ReadFileToString(path), path);
+  return ParseOrientations(ReadFileToString(path, kMaxSmallFileBytes), path);
 }
 
 }  // namespace accelcal

@@ -8,6 +8,7 @@
 #include "accelcal/error.hpp"
 #include "accelcal/log_reader.hpp"
 #include "mapped_file.hpp"
+#include "text_lines.hpp"
 
 namespace accelcal {
 
@@ -77,17 +78,14 @@ void ParseBinary(std::string_view body, const std::string& source,
 void ParseText(std::string_view text, const std::string& source,
                const std::function<void(const SystemSample&)>& sink,
                const SeriesProgress& progress) {
-  std::size_t begin = 0, line = 0;
+  internal::LineReader reader(text, source);
+  internal::Line text_line;
   bool first_data = true;
-  while (begin < text.size()) {
-    std::size_t end = text.find('\n', begin);
-    if (end == std::string_view::npos) end = text.size();
-    std::string_view row = text.substr(begin, end - begin);
-    if (progress && line % kProgressEvery == 0) progress(begin, text.size());
-    begin = end + 1;
-    ++line;
-    const std::size_t hash = row.find('#');
-    if (hash != std::string_view::npos) row = row.substr(0, hash);
+  std::size_t rows = 0;
+  while (reader.Next(&text_line)) {
+    if (progress && rows++ % kProgressEvery == 0) progress(reader.offset(), text.size());
+    const std::string_view row = text_line.text;
+    const std::uint32_t line = text_line.number;
     double v[6];
     int n = 0;
     const char* p = row.data();
@@ -108,7 +106,6 @@ void ParseText(std::string_view text, const std::string& source,
       p = r.ptr;
       ++n;
     }
-    if (n == 0 && ok) continue;  // blank or comment
     if (!ok || n != 6) {
       if (first_data && !ok && n == 0) {  // a header line (its first field is no number)
         first_data = false;

@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <optional>
+#include <utility>
 
 #include "accelcal/error.hpp"
 
@@ -34,6 +36,42 @@ void MeanAndStd(const std::vector<Vec3>& s, std::size_t begin, std::size_t end, 
   *std = n > 1 ? Vec3((sq / (n - 1)).cwiseSqrt()) : Vec3::Zero();
 }
 
+// The smallest and largest value of each axis over the whole log.
+std::pair<Vec3, Vec3> LogExtremes(const std::vector<Vec3>& samples) {
+  Vec3 lo = Vec3::Constant(INFINITY), hi = Vec3::Constant(-INFINITY);
+  for (const Vec3& p : samples) {
+    lo = lo.cwiseMin(p);
+    hi = hi.cwiseMax(p);
+  }
+  return {lo, hi};
+}
+
+// Why `interval` is clipped (RejectedInterval::Cause::kClipped), or nothing.
+std::optional<std::string> Clipping(const std::vector<Vec3>& samples,
+                                    const StaticInterval& interval,
+                                    const std::pair<Vec3, Vec3>& extremes) {
+  const std::size_t n = interval.count();
+  for (int a = 0; a < 3; ++a) {
+    // Another axis must vary: a noise-free (simulated) log sits still at its extremes too.
+    if (!(interval.std((a + 1) % 3) > 0 || interval.std((a + 2) % 3) > 0)) continue;
+    for (const bool largest : {true, false}) {
+      const double limit = largest ? extremes.second(a) : extremes.first(a);
+      std::size_t at_limit = 0;
+      for (std::size_t i = interval.begin; i < interval.end; ++i)
+        at_limit += samples[i](a) == limit;
+      if (at_limit >= 3 && 100 * at_limit >= n) {
+        char buf[200];
+        std::snprintf(buf, sizeof buf,
+                      "axis %c reads %.9g, the %s value in the log, in %.0f%% of its samples: the "
+                      "sensor is saturated (clipped)",
+                      "xyz"[a], limit, largest ? "largest" : "smallest",
+                      100.0 * static_cast<double>(at_limit) / static_cast<double>(n));
+        return std::string(buf);
+      }
+    }
+  }
+  return std::nullopt;
+}
 }  // namespace
 
 StaticDetectionResult DetectStaticIntervals(const RawLog& log,
@@ -114,6 +152,7 @@ StaticDetectionResult DetectStaticIntervals(const RawLog& log,
       2, static_cast<std::size_t>(std::ceil(options.min_duration_s * result.rate_hz)));
   std::size_t run_start = 0;
   bool in_run = false;
+  std::optional<std::pair<Vec3, Vec3>> extremes;  // of the whole log, computed when first needed
   for (std::size_t c = first; c <= last + 1; ++c) {
     const bool still = c <= last && score[c] <= result.threshold && white[c];
     if (still && !in_run) {
@@ -131,7 +170,14 @@ StaticDetectionResult DetectStaticIntervals(const RawLog& log,
         MeanAndStd(log.samples, interval.begin, interval.end, &interval.mean, &interval.std);
         interval.t_begin_s = time_of(interval.begin);
         interval.t_end_s = time_of(interval.end - 1);
-        result.intervals.push_back(interval);
+        if (!extremes) extremes = LogExtremes(log.samples);
+        if (std::optional<std::string> clipped = Clipping(log.samples, interval, *extremes)) {
+          result.rejected.push_back({interval.begin, interval.end, interval.t_begin_s,
+                                     interval.t_end_s, RejectedInterval::Cause::kClipped,
+                                     *clipped});
+        } else {
+          result.intervals.push_back(interval);
+        }
       } else if (4 * (c - run_start) >= min_len) {
         RejectedInterval rejected;
         rejected.begin = run_start;

@@ -74,11 +74,16 @@ LoadedInput LoadInput(const InputArgs& in) {
   const StaticDetectionResult& d = *loaded.detection;
   Detail(
       "detection: %.6g Hz, window %zu samples, noise reference %.4g raw^2, threshold %.4g raw^2: "
-      "%zu intervals, %zu still periods too short\n",
+      "%zu intervals, %zu still periods not used\n",
       d.rate_hz, d.window_samples, d.noise_reference, d.threshold, d.intervals.size(),
       d.rejected.size());
   for (const RejectedInterval& r : d.rejected) {
-    Detail("  not used: %.3f-%.3f s, %s\n", r.t_begin_s, r.t_end_s, r.reason.c_str());
+    if (r.cause == RejectedInterval::Cause::kClipped) {  // a position the user meant to record
+      Warn("%s: the still period %.3f-%.3f s is not used: %s\n", in.path.c_str(), r.t_begin_s,
+           r.t_end_s, r.reason.c_str());
+    } else {
+      Detail("  not used: %.3f-%.3f s, %s\n", r.t_begin_s, r.t_end_s, r.reason.c_str());
+    }
   }
   if (loaded.detection->intervals.empty()) {
     throw DataError("no static interval found (threshold " +
@@ -482,7 +487,8 @@ int RunCompare(const CompareArgs& args) {
   options.leave_one_out = args.leave_one_out;
   if (!args.reference.empty()) {
     options.reference =
-        ParseCalibrationJson(ReadFileToString(args.reference), args.reference).params;
+        ParseCalibrationJson(ReadFileToString(args.reference, kMaxSmallFileBytes), args.reference)
+            .params;
   }
   for (const std::string& name : args.methods) {
     options.methods.push_back(
@@ -652,8 +658,8 @@ int RunDetect(const DetectArgs& args) {
 }
 
 int RunApply(const ApplyArgs& args) {
-  const LoadedCalibration cal =
-      ParseCalibrationJson(ReadFileToString(args.calibration), args.calibration);
+  const LoadedCalibration cal = ParseCalibrationJson(
+      ReadFileToString(args.calibration, kMaxSmallFileBytes), args.calibration);
   ForceUnit unit = cal.unit;
   if (args.units)
     unit = ParseEnum(ForceUnitFromString(*args.units), *args.units, "--units", "m/s2, g");
@@ -698,7 +704,7 @@ int RunApply(const ApplyArgs& args) {
 
 int RunReport(const ReportArgs& args) {
   ReportInput input;
-  input.calibration_json = ReadFileToString(args.calibration);
+  input.calibration_json = ReadFileToString(args.calibration, kMaxSmallFileBytes);
   input.calibration_name = args.calibration;
   InputData data;
   if (!args.log.path.empty()) {
@@ -724,7 +730,7 @@ int RunExport(const ExportArgs& args) {
     names += (names.empty() ? "" : ", ") + std::string(ToString(f));
   const ExportFormat format =
       ParseEnum(ExportFormatFromString(args.format), args.format, "--to", names.c_str());
-  const std::string text = ReadFileToString(args.calibration);
+  const std::string text = ReadFileToString(args.calibration, kMaxSmallFileBytes);
   const LoadedCalibration cal = ParseCalibrationJson(text, args.calibration);
   ExportOptions options;
   options.raw_unit = args.raw_unit;
@@ -783,7 +789,8 @@ int RunDesign(const DesignArgs& args) {
   if (!from_density && args.noise_raw.size() != 1 && args.noise_raw.size() != 3) {
     throw UsageError("--noise takes one value or three (x,y,z)");
   }
-  const LoadedCalibration device = ParseCalibrationJson(ReadFileToString(args.device), args.device);
+  const LoadedCalibration device =
+      ParseCalibrationJson(ReadFileToString(args.device, kMaxSmallFileBytes), args.device);
   Vec3 sigma;
   if (from_density) {
     // One averaged reading: density · √rate per sample (µg relative to the device's gravity),
@@ -1117,7 +1124,7 @@ namespace {
 // Rows of `columns` numbers (commas or whitespace; `#` comments; a header line whose first field
 // is no number is skipped).
 std::vector<std::vector<double>> ReadTable(const std::string& path, std::size_t columns) {
-  const std::string text = ReadFileToString(path);
+  const std::string text = ReadFileToString(path, kMaxSmallFileBytes);
   std::vector<std::vector<double>> rows;
   std::istringstream lines(text);
   std::string line;
@@ -1291,7 +1298,8 @@ int RunSimulate(const SimulateArgs& args) {
     if (!density) density = 10.0;
   } else {
     if (args.truth.empty()) throw UsageError("give --scenario or --truth");
-    const LoadedCalibration cal = ParseCalibrationJson(ReadFileToString(args.truth), args.truth);
+    const LoadedCalibration cal =
+        ParseCalibrationJson(ReadFileToString(args.truth, kMaxSmallFileBytes), args.truth);
     truth = cal.params;
     gravity = cal.gravity;
     if (positions.empty()) throw UsageError("--positions is required with --truth");

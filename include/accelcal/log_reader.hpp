@@ -70,7 +70,12 @@ struct InputData {
 InputData ParseInput(std::string_view text, const std::string& source, const ReadOptions& options);
 /// Reads and parses a file. Throws InputError (unreadable path, parse error).
 InputData ReadInput(const std::string& path, const ReadOptions& options);
-/// Reads a whole file into a string. Throws InputError when it cannot be read.
-std::string ReadFileToString(const std::string& path);
+/// Calibration, orientation and other small files are refused beyond this size (64 MiB), so a
+/// huge or sparse file given by mistake fails at once instead of filling memory.
+inline constexpr std::size_t kMaxSmallFileBytes = std::size_t{64} << 20;
+/// Reads a whole file into a string. Throws InputError when it cannot be read or is larger than
+/// `max_bytes`.
+std::string ReadFileToString(const std::string& path,
+                             std::size_t max_bytes = static_cast<std::size_t>(-1));
 
 }  // namespace accelcal

@@ -40,15 +40,24 @@ struct StaticDetectionOptions {
 
 /// A still run that did not become an interval, and why (the report shows them).
 struct RejectedInterval {
+  enum class Cause {
+    kTooShort,  ///< shorter than min_duration_s (but at least a quarter of it)
+    /// Some axis sits at the log's largest or smallest value in at least 1 % of the run's
+    /// samples (and at least 3) while another axis varies: the sensor saturated, so the mean is
+    /// wrong. In a real log the extremes belong to the motion between positions, so a still run
+    /// reaching them repeatedly is at the sensor's limit.
+    kClipped,
+  };
   std::size_t begin = 0, end = 0;     ///< sample indices, end one past the last
   double t_begin_s = 0, t_end_s = 0;  ///< [s]
+  Cause cause = Cause::kTooShort;
   std::string reason;
 };
 
 struct StaticDetectionResult {
   std::vector<StaticInterval> intervals;
   /// Still runs shorter than min_duration_s but at least a quarter of it (shorter blips are
-  /// noise, not attempted positions).
+  /// noise, not attempted positions), and clipped runs (RejectedInterval::Cause).
   std::vector<RejectedInterval> rejected;
   double rate_hz = 0;              ///< rate used
   std::size_t window_samples = 0;  ///< window length used

@@ -1,0 +1,85 @@
+#pragma once
+// Walking delimited text line by line, shared by every text reader (logs, series, orientations):
+// comments and blank lines skipped, line numbers kept, and hostile input refused on the line
+// where it appears (InputError) instead of being scanned or held whole.
+
+#include <algorithm>
+#include <cstdint>
+#include <cstring>
+#include <string>
+#include <string_view>
+
+#include "accelcal/error.hpp"
+
+namespace accelcal::internal {
+
+/// No delimited row of at most 256 numbers comes near this; a longer line is not such a file (and
+/// must not make the reader scan, or hold, gigabytes looking for its end).
+inline constexpr std::size_t kMaxLineBytes = 65536;
+
+struct Line {
+  std::string_view text;  ///< comment stripped, trimmed
+  std::uint32_t number;   ///< 1-based
+};
+
+inline bool IsBlank(char c) { return c == ' ' || c == '\t' || c == '\r'; }
+
+inline std::string_view Trim(std::string_view s) {
+  while (!s.empty() && IsBlank(s.front())) s.remove_prefix(1);
+  while (!s.empty() && IsBlank(s.back())) s.remove_suffix(1);
+  return s;
+}
+
+/// Walks the text line by line, skipping blank lines and `#` comments. Throws InputError for a
+/// line longer than kMaxLineBytes or holding a NUL byte (binary data).
+class LineReader {
+ public:
+  /// `lines_before`: how many lines of the file precede `text` (for 1-based line numbers).
+  LineReader(std::string_view text, const std::string& source, std::uint32_t lines_before = 0)
+      : text_(text), source_(source), number_(lines_before) {}
+  /// The text not yet read.
+  std::string_view rest() const {
+    return pos_ < text_.size() ? text_.substr(pos_) : std::string_view();
+  }
+  std::size_t offset() const { return std::min(pos_, text_.size()); }
+  std::uint32_t lines_read() const { return number_; }
+  bool Next(Line* line) {
+    while (pos_ < text_.size()) {
+      const char* begin = text_.data() + pos_;
+      const std::size_t remaining = text_.size() - pos_;
+      const void* nl = std::memchr(begin, '\n', std::min(remaining, kMaxLineBytes + 1));
+      ++number_;
+      if (!nl && remaining > kMaxLineBytes) {
+        throw InputError(
+            source_, number_,
+            "longer than " + std::to_string(kMaxLineBytes) + " bytes: not a delimited text file");
+      }
+      const std::size_t len =
+          nl ? static_cast<std::size_t>(static_cast<const char*>(nl) - begin) : remaining;
+      if (const void* nul = std::memchr(begin, '\0', len)) {
+        throw InputError(source_, number_,
+                         "a NUL byte at column " +
+                             std::to_string(static_cast<const char*>(nul) - begin + 1) +
+                             ": binary data, not a delimited text file");
+      }
+      pos_ += len + 1;
+      std::string_view s(begin, len);
+      const std::size_t hash = s.find('#');
+      if (hash != std::string_view::npos) s = s.substr(0, hash);
+      s = Trim(s);
+      if (!s.empty()) {
+        *line = {s, number_};
+        return true;
+      }
+    }
+    return false;
+  }
+
+ private:
+  std::string_view text_;
+  const std::string& source_;
+  std::size_t pos_ = 0;
+  std::uint32_t number_;
+};
+
+}  // namespace accelcal::internal

@@ -753,6 +753,46 @@ TEST_F(Cli, BadInputGivesOneClearMessageAndNoOutput) {
   }
 }
 
+// The committed corpus of hostile files (tests/hostile/cases.json): exact message and status,
+// and no output file from a failure.
+TEST_F(Cli, HostileCorpus) {
+  const std::string dir = std::string(ACCELCAL_SOURCE_DIR) + "/tests/hostile/";
+  const nlohmann::json manifest = nlohmann::json::parse(Slurp(dir + "cases.json"));
+  ASSERT_GE(manifest["cases"].size(), 12u);
+  for (const nlohmann::json& c : manifest["cases"]) {
+    const std::string input = dir + c["file"].get<std::string>();
+    const std::string out = Path("out.json");
+    fs::remove(out);
+    const CliRun r = Exec("calibrate " + input + " " + c["args"].get<std::string>() + " -o " + out);
+    std::string expected = c["stderr"];
+    for (std::size_t pos; (pos = expected.find("FILE")) != std::string::npos;)
+      expected.replace(pos, 4, input);
+    EXPECT_EQ(r.status, c["status"].get<int>()) << input << "\n" << r.err;
+    EXPECT_EQ(r.err, expected) << input;
+    EXPECT_EQ(fs::exists(out), c["output"].get<bool>()) << input;
+  }
+  // Made here rather than committed: a file that looks like 10 GB (sparse: it costs nothing) and
+  // a line of 1 MB. Both fail on their first line at once, without reading the rest.
+  fs::remove(Path("out.json"));
+  const std::string sparse = Path("sparse.csv");
+  { std::ofstream(sparse) << "time,x,y,z\n"; }
+  fs::resize_file(sparse, std::uintmax_t{10} << 30);
+  CliRun r = Exec("calibrate " + sparse + " -o " + Path("out.json"));
+  EXPECT_EQ(r.status, 3);
+  EXPECT_EQ(r.err,
+            "accelcal: " + sparse + ":2: longer than 65536 bytes: not a delimited text file\n");
+  r = Exec("apply " + sparse + " " + dir + "clean.csv");
+  EXPECT_EQ(r.err, "accelcal: " + sparse + ": larger than 64 MiB: not a file of this kind\n");
+  fs::remove(sparse);
+  const std::string long_line =
+      Write("long.csv", "x,y,z\n1,2,3\n" + std::string(1 << 20, '7') + "\n");
+  r = Exec("calibrate " + long_line + " -o " + Path("out.json"));
+  EXPECT_EQ(r.status, 3);
+  EXPECT_EQ(r.err,
+            "accelcal: " + long_line + ":3: longer than 65536 bytes: not a delimited text file\n");
+  EXPECT_FALSE(fs::exists(Path("out.json")));
+}
+
 TEST_F(Cli, FailureKeepsAnExistingOutputFileUntouched) {
   const std::string out = Write("cal.json", "previous contents\n");
   const std::string in = Write("bad.csv", "1,2,3\n1,x,3\n");

@@ -793,6 +793,41 @@ TEST_F(Cli, HostileCorpus) {
   EXPECT_FALSE(fs::exists(Path("out.json")));
 }
 
+// The same input gives the same bytes: every output file, on every run, and the Monte Carlo (the
+// only command with threads) whatever the number of threads sharing its runs.
+TEST_F(Cli, OutputsAreByteIdenticalAcrossRunsAndThreadCounts) {
+  const std::string log = kData + "/imutk-xsens-mti/xsens_acc.mat";
+  const std::vector<std::string> names = {"c.json", "r.html", "a.csv", "e.h", "s.csv"};
+  std::vector<std::string> first;
+  for (int run = 0; run < 2; ++run) {
+    for (const std::string& name : names) fs::remove(Path(name));
+    ASSERT_EQ(Exec("calibrate " + log + " -q -o " + Path("c.json") + " --report " + Path("r.html"))
+                  .status,
+              0);
+    ASSERT_EQ(Exec("apply " + Path("c.json") + " " + log + " -o " + Path("a.csv")).status, 0);
+    ASSERT_EQ(Exec("export " + Path("c.json") + " --to c-header -o " + Path("e.h")).status, 0);
+    ASSERT_EQ(
+        Exec("simulate --scenario yang2012 --raw --duration 5 --seed 5 -o " + Path("s.csv")).status,
+        0);
+    for (std::size_t i = 0; i < names.size(); ++i) {
+      const std::string bytes = Slurp(Path(names[i]));
+      EXPECT_GT(bytes.size(), 100u) << names[i];
+      if (run == 0) {
+        first.push_back(bytes);
+      } else {
+        EXPECT_TRUE(bytes == first[i]) << names[i] << " differs between runs";  // no huge diff
+      }
+    }
+  }
+  const CliRun one = Exec("montecarlo --runs 64 --json --threads 1");
+  ASSERT_EQ(one.status, 0) << one.err;
+  for (int threads : {2, 3, 7}) {
+    EXPECT_TRUE(Exec("montecarlo --runs 64 --json --threads " + std::to_string(threads)).out ==
+                one.out)
+        << threads << " threads";
+  }
+}
+
 TEST_F(Cli, FailureKeepsAnExistingOutputFileUntouched) {
   const std::string out = Write("cal.json", "previous contents\n");
   const std::string in = Write("bad.csv", "1,2,3\n1,x,3\n");

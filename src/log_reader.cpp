@@ -544,7 +544,16 @@ InputData ParseInput(std::string_view text, const std::string& source, const Rea
 
 InputData ReadInput(const std::string& path, const ReadOptions& options) {
   const internal::MappedFile mapped(path);
-  if (mapped.ok()) return ParseInput(mapped.text(), path, options);
+  if (mapped.ok()) {
+    // Streaming: the pages of rows already parsed are released as the parser goes (every 65536
+    // rows), so a large log costs its samples, not its text as well.
+    ReadOptions streaming = options;
+    streaming.progress = [&mapped, &options](std::size_t done, std::size_t total) {
+      mapped.ReleaseBefore(done);
+      if (options.progress) options.progress(done, total);
+    };
+    return ParseInput(mapped.text(), path, streaming);
+  }
   const std::string text = ReadFileToString(path);  // pipes, empty files, errors with errno
   return ParseInput(text, path, options);
 }

@@ -3,8 +3,11 @@
 
 #include <fcntl.h>
 #include <sys/mman.h>
+#include <unistd.h>
+
 #include <sys/stat.h>
 #include <unistd.h>
+#include <algorithm>
 
 #include <string>
 #include <string_view>
@@ -38,6 +41,14 @@ class MappedFile {
   MappedFile(const MappedFile&) = delete;
   MappedFile& operator=(const MappedFile&) = delete;
   bool ok() const { return data_ != nullptr; }
+  /// Gives the pages wholly before `offset` back to the kernel: a parser that has consumed them
+  /// keeps a constant footprint of the file instead of all of it (the mapping is read-only and
+  /// private, so they would be read again from the file if touched).
+  void ReleaseBefore(std::size_t offset) const {
+    const std::size_t page = static_cast<std::size_t>(::sysconf(_SC_PAGESIZE));
+    const std::size_t end = std::min(offset, size_) / page * page;
+    if (data_ != nullptr && end > 0) ::madvise(const_cast<char*>(data_), end, MADV_DONTNEED);
+  }
   std::string_view text() const { return {data_, size_}; }
 
  private:

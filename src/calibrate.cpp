@@ -739,6 +739,7 @@ CalibrationResult CalibrateScreened(const std::vector<Vec3>& readings,
   std::vector<int> keep(readings.size());
   for (std::size_t k = 0; k < keep.size(); ++k) keep[k] = static_cast<int>(k);
   const CalibrationResult* current = &full;
+  std::optional<OutlierFinding> unremovable;  // discordant, but the rest cannot be fitted
   while (static_cast<int>(steps.size()) < max_steps && screening.most_discordant >= 0) {
     OutlierFinding finding = screening.Finding(screening.most_discordant);
     finding.position = keep[std::size_t(finding.position)];
@@ -759,6 +760,7 @@ CalibrationResult CalibrateScreened(const std::vector<Vec3>& readings,
     }
     if (!why.empty()) {
       if (std::abs(finding.t) > finding.threshold) {
+        unremovable = finding;
         note = "position " + std::to_string(finding.position + 1) +
                " disagrees but cannot be left out: without it, " + why;
       }
@@ -774,7 +776,8 @@ CalibrationResult CalibrateScreened(const std::vector<Vec3>& readings,
   for (std::size_t i = 0; i < steps.size(); ++i) {
     if (std::abs(steps[i].finding.t) > steps[i].finding.threshold) discordant = i + 1;
   }
-  if (discordant == steps.size() && screening.significant) {
+  if (!unremovable && discordant == steps.size() && static_cast<int>(steps.size()) == max_steps &&
+      screening.significant) {
     note = "more positions may disagree: the screening tests at most " + std::to_string(max_steps);
   }
   const std::size_t excluded =
@@ -798,6 +801,7 @@ CalibrationResult CalibrateScreened(const std::vector<Vec3>& readings,
     steps[i].finding.excluded = i < excluded;
     result.outliers.push_back(steps[i].finding);
   }
+  if (unremovable && discordant == steps.size()) result.outliers.push_back(*unremovable);
   result.outlier_note = std::move(note);
   result.summary.time_s =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();

@@ -565,13 +565,10 @@ Fit CalibrateXFirst(const std::vector<Vec3>& readings, const CalibrationOptions&
   const internal::Mat12 inverse =
       screen || covariance_wanted ? info.Inverse() : internal::Mat12::Zero();
   if (screen) {
-    double signal = 0;  // the largest axis signal, for the round-off floor
-    for (int i = 0; i < 3; ++i) {
-      signal = std::max(
-          signal, std::abs(out.params.K(i, i)) * options.gravity + std::abs(out.params.bias(i)));
-    }
-    fit.screening = internal::ScreenPositions(rows, inverse, options.model, result.residuals,
-                                              signal, options.outliers.false_alarm_probability);
+    fit.screening =
+        internal::ScreenPositions(rows, inverse, options.model, result.residuals,
+                                  internal::SignalAmplitude(out.params, options.gravity),
+                                  options.outliers.false_alarm_probability);
   }
   if (covariance_wanted) {
     const double sigma2 = out.summary.final_cost / result.degrees_of_freedom;

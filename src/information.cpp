@@ -67,13 +67,17 @@ double ScaledNorm(const Vec12& delta, const Vec12& scales) {
   return delta.cwiseAbs().cwiseProduct(scales).maxCoeff();
 }
 
-double ZeroResidualCost(const Problem& problem, const ModelParameters& params) {
+double SignalAmplitude(const ModelParameters& params, double gravity) {
   double signal = 0;
   for (int i = 0; i < 3; ++i) {
-    signal =
-        std::max(signal, std::abs(params.K(i, i)) * problem.gravity + std::abs(params.bias(i)));
+    signal = std::max(signal, std::abs(params.K(i, i)) * gravity + std::abs(params.bias(i)));
   }
-  const double unit = 8.0 * std::numeric_limits<double>::epsilon() * signal;
+  return signal;
+}
+
+double ZeroResidualCost(const Problem& problem, const ModelParameters& params) {
+  const double unit =
+      8.0 * std::numeric_limits<double>::epsilon() * SignalAmplitude(params, problem.gravity);
   return unit * unit * 3.0 * problem.positions();
 }
 

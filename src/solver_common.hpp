@@ -51,6 +51,9 @@ Vec12 ParameterScales(const Problem& problem, const ModelParameters& params);
 double ScaledNorm(const Vec12& delta, const Vec12& scales);
 
 /// Cost below which the data are fitted to round-off (TerminationType::kZeroResidual).
+/// The largest raw reading an axis sees from gravity, max_i |K_ii| g + |b_i| [raw]: the scale of
+/// round-off in the readings.
+double SignalAmplitude(const ModelParameters& params, double gravity);
 double ZeroResidualCost(const Problem& problem, const ModelParameters& params);
 
 /// Orthonormal basis of the plane tangent to the unit sphere at the unit vector c (columns ⟂ c).

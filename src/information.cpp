@@ -211,10 +211,18 @@ InformationRows ReducedInformationRows(const Problem& problem, const ModelParame
 }
 
 namespace {
-Mat12 SumOfRows(const InformationRows& rows) {
+// S = Uᵀ U on the model's free parameters (the others stay 0), as dot products of U's contiguous
+// columns: a quarter of the instructions of Eigen's rank update, whose GEMM path packs and blocks
+// a 12-column product it cannot profit from (measured on 300 rows).
+Mat12 SumOfRows(const InformationRows& rows, ModelKind model) {
+  const Vec12 mask = FreeMask(model);
   Mat12 S = Mat12::Zero();
-  S.selfadjointView<Eigen::Lower>().rankUpdate(rows.U.transpose());
-  S.triangularView<Eigen::StrictlyUpper>() = S.transpose();
+  for (int j = 0; j < kMaxParameters; ++j) {
+    if (mask(j) == 0.0) continue;
+    for (int i = j; i < kMaxParameters; ++i) {
+      if (mask(i) != 0.0) S(i, j) = S(j, i) = rows.U.col(i).dot(rows.U.col(j));
+    }
+  }
   return S;
 }
 }  // namespace
@@ -223,14 +231,14 @@ Mat12 ReducedInformation(const Problem& problem, const ModelParameters& params,
                          const std::vector<Vec3>& dirs, Vec12* A_diagonal) {
   const InformationRows rows = ReducedInformationRows(problem, params, dirs);
   *A_diagonal = rows.A_diagonal;
-  return SumOfRows(rows);
+  return SumOfRows(rows, problem.model);
 }
 
 Information ComputeInformation(const Problem& problem, const ModelParameters& params,
                                const std::vector<Vec3>& dirs, InformationRows* rows_out) {
   InformationRows rows = ReducedInformationRows(problem, params, dirs);
   Information info;
-  info.reduced = SumOfRows(rows);
+  info.reduced = SumOfRows(rows, problem.model);
   FinishInformation(problem.model, rows.A_diagonal, &info);
   if (rows_out) *rows_out = std::move(rows);
   return info;

@@ -112,7 +112,8 @@ struct InformationRows {
 InformationRows ReducedInformationRows(const Problem& problem, const ModelParameters& params,
                                        const std::vector<Vec3>& dirs);
 
-/// ReducedMatrix(ne, 0, all free) computed directly as Σ u_k u_kᵀ (see the definition), and the
+/// ReducedMatrix(ne, 0, all free) computed directly as Σ u_k u_kᵀ (see the definition) on the
+/// problem model's free parameters (zero rows and columns elsewhere), and the
 /// diagonal of A for the Jacobi scaling.
 Mat12 ReducedInformation(const Problem& problem, const ModelParameters& params,
                          const std::vector<Vec3>& dirs, Vec12* A_diagonal);

@@ -91,6 +91,30 @@ BENCHMARK_CAPTURE(BM_SunXu300Stage, newton_lagrange_solver_only, true)
     ->Unit(benchmark::kMicrosecond);
 BENCHMARK_CAPTURE(BM_SunXu300Stage, information_only, false)->Unit(benchmark::kMicrosecond);
 
+// One Newton-Lagrange step on the 300 positions with each build of the per-position kernel (packing
+// the positions into the kernel's blocks included): what AVX gains over the baseline x86-64.
+void BM_SunXu300Step(benchmark::State& state, internal::KernelIsa isa) {
+  if (!internal::KernelAvailable(isa)) {
+    state.SkipWithError("this CPU or build has no such kernel");
+    return;
+  }
+  const std::vector<Vec3> readings = SimulateLinearPositions(
+      SunXu2020Ta(), SunXu2020Ba(), SunXu2020Directions(300, 1), kSunXu2020Sigma_g, 1001);
+  const internal::Problem problem{readings, 1.0, ModelKind::kLinear};
+  const ModelParameters start = FitEllipsoid(readings, 1.0).params;
+  const std::vector<Vec3> dirs = internal::DirectionsFromParams(problem, start);
+  const std::vector<double> lambda(dirs.size(), 0.0);
+  const internal::Vec9 theta = Pack(start, ModelKind::kLinear);
+  internal::NewtonLagrangeStep step;
+  for (auto _ : state) {
+    internal::ComputeNewtonLagrangeStep(problem, theta, dirs, lambda, &step, isa);
+    benchmark::DoNotOptimize(step.d_theta(0));
+  }
+}
+BENCHMARK_CAPTURE(BM_SunXu300Step, baseline, internal::KernelIsa::kBaseline)
+    ->Unit(benchmark::kMicrosecond);
+BENCHMARK_CAPTURE(BM_SunXu300Step, avx, internal::KernelIsa::kAvx)->Unit(benchmark::kMicrosecond);
+
 // The ellipsoid method on the 18 positions of Table 3 (linear device): the whole Calibrate() call,
 // with the data checks and the observability check at the solution.
 BENCHMARK_CAPTURE(BM_Calibrate, ellipsoid_linear_18, ModelKind::kLinear, SolverMethod::kEllipsoid)

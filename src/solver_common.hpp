@@ -237,9 +237,15 @@ struct NewtonLagrangeStep {
   std::vector<double> d_lambda;
   double cost = 0;  ///< J at the point the step starts from
 };
+/// The instruction sets the step's per-position kernel is built for (newton_lagrange_kernel.hpp);
+/// they give the same bits.
+enum class KernelIsa { kBaseline, kAvx };
+/// kAvx when this build has the AVX kernel (x86-64) and the CPU and OS support AVX.
+KernelIsa BestKernelIsa();
+bool KernelAvailable(KernelIsa isa);
 void ComputeNewtonLagrangeStep(const Problem& problem, const Vec9& theta,
                                const std::vector<Vec3>& c, const std::vector<double>& lambda,
-                               NewtonLagrangeStep* step);
+                               NewtonLagrangeStep* step, KernelIsa isa = BestKernelIsa());
 
 /// Paper 001 §3.2: Newton's method on the Lagrangian (linear model), each position's block
 /// eliminated (ComputeNewtonLagrangeStep).

@@ -1,6 +1,7 @@
 // Paper 001 (Sun & Xu 2020): body-frame conventions, the modulus baseline and the §4.1 simulation.
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 
 #include <gtest/gtest.h>
 #include <Eigen/Dense>
@@ -211,21 +212,32 @@ TEST(NewtonLagrange, DerivativesOfEquation15MatchFiniteDifferences) {
   EXPECT_TRUE(testing::JacobianMatches(gradient, x, L.Hessian(x)));
 }
 
+// Every instruction set the step's kernel is built for that this CPU can run.
+std::vector<internal::KernelIsa> RunnableKernels() {
+  std::vector<internal::KernelIsa> isas;
+  for (internal::KernelIsa isa : {internal::KernelIsa::kBaseline, internal::KernelIsa::kAvx}) {
+    if (internal::KernelAvailable(isa)) isas.push_back(isa);
+  }
+  return isas;
+}
+
 TEST(NewtonLagrange, EliminatedStepEqualsTheDenseNewtonStep) {
   // The solver's step (tangent-plane elimination, no Hessian blocks) against −H⁻¹∇L of the whole
   // (9 + 4m)-square Hessian assembled from the FD-checked blocks above, at a point off the
-  // constraint with non-zero multipliers so that every term of the elimination takes part.
+  // constraint with non-zero multipliers so that every term of the elimination takes part. 13
+  // positions: the kernel's last block of four has three padding lanes.
+  constexpr int m = 13;
   const std::vector<Vec3> readings = SimulateLinearPositions(
-      SunXu2020Ta().transpose(), SunXu2020Ba(), SunXu2020Directions(12, 3), 0.05, 4);
+      SunXu2020Ta().transpose(), SunXu2020Ba(), SunXu2020Directions(m, 3), 0.05, 4);
   const internal::Problem problem{readings, 9.8, ModelKind::kLinear};
-  const Lagrangian L{problem, 12};
-  Eigen::VectorXd x(9 + 4 * 12);
+  const Lagrangian L{problem, m};
+  Eigen::VectorXd x(9 + 4 * m);
   ModelParameters p;
   p.K << 1.1, 0, 0, 0.05, 0.95, 0, -0.03, 0.04, 1.05;
   p.bias << 0.1, -0.2, 0.05;
   x.head<9>() = Pack(p, ModelKind::kLinear);
-  const std::vector<Vec3> dirs = SunXu2020Directions(12, 9);
-  for (int k = 0; k < 12; ++k) {
+  const std::vector<Vec3> dirs = SunXu2020Directions(m, 9);
+  for (int k = 0; k < m; ++k) {
     x.segment<3>(9 + 4 * k) = (1.0 + 0.02 * (k - 6)) * dirs[k];
     x(9 + 4 * k + 3) = 0.3 * (k - 6);
   }
@@ -234,18 +246,55 @@ TEST(NewtonLagrange, EliminatedStepEqualsTheDenseNewtonStep) {
   std::vector<Vec3> c;
   std::vector<double> lambda;
   L.Split(x, &theta, &c, &lambda);
-  internal::NewtonLagrangeStep step;
-  internal::ComputeNewtonLagrangeStep(problem, theta, c, lambda, &step);
-  Eigen::VectorXd eliminated(9 + 4 * 12);
-  eliminated.head<9>() = step.d_theta;
-  for (int k = 0; k < 12; ++k) {
-    eliminated.segment<3>(9 + 4 * k) = step.d_c[k];
-    eliminated(9 + 4 * k + 3) = step.d_lambda[k];
+  for (internal::KernelIsa isa : RunnableKernels()) {
+    SCOPED_TRACE(isa == internal::KernelIsa::kAvx ? "AVX kernel" : "baseline kernel");
+    internal::NewtonLagrangeStep step;
+    internal::ComputeNewtonLagrangeStep(problem, theta, c, lambda, &step, isa);
+    Eigen::VectorXd eliminated(9 + 4 * m);
+    eliminated.head<9>() = step.d_theta;
+    for (int k = 0; k < m; ++k) {
+      eliminated.segment<3>(9 + 4 * k) = step.d_c[k];
+      eliminated(9 + 4 * k + 3) = step.d_lambda[k];
+    }
+    // Both solve the same well-conditioned system in double precision (measured 1e-14 relative).
+    EXPECT_LE((eliminated - dense).cwiseAbs().maxCoeff(), 1e-12 * dense.cwiseAbs().maxCoeff());
+    EXPECT_GT(dense.cwiseAbs().maxCoeff(), 1e-3);  // a real step
+    EXPECT_DOUBLE_EQ(step.cost, L.Blocks(x).cost);
   }
-  // Both solve the same well-conditioned system in double precision (measured 1e-14 relative).
-  EXPECT_LE((eliminated - dense).cwiseAbs().maxCoeff(), 1e-12 * dense.cwiseAbs().maxCoeff());
-  EXPECT_GT(dense.cwiseAbs().maxCoeff(), 1e-3);  // a real step
-  EXPECT_DOUBLE_EQ(step.cost, L.Blocks(x).cost);
+}
+
+TEST(NewtonLagrange, KernelsForEveryInstructionSetGiveTheSameBits) {
+  // The AVX kernel does the baseline's IEEE operations four lanes at once in the same order, and
+  // the lanes are summed in a fixed order: the steps must be equal bit for bit (the results must
+  // not depend on the machine's CPU). 301 positions: a padded last block.
+  if (!internal::KernelAvailable(internal::KernelIsa::kAvx)) {
+    GTEST_SKIP() << "this CPU (or build) has no AVX kernel to compare";
+  }
+  const std::vector<Vec3> readings = SimulateLinearPositions(
+      SunXu2020Ta(), SunXu2020Ba(), SunXu2020Directions(301, 5), kSunXu2020Sigma_g, 6);
+  const internal::Problem problem{readings, 1.0, ModelKind::kLinear};
+  const ModelParameters start = FitEllipsoid(readings, 1.0).params;
+  std::vector<Vec3> c = internal::DirectionsFromParams(problem, start);
+  std::vector<double> lambda(c.size());
+  for (std::size_t k = 0; k < c.size(); ++k) {
+    c[k] *= 1.0 + 1e-3 * std::sin(double(k));  // off the constraint
+    lambda[k] = 0.1 * std::cos(double(k));
+  }
+  const internal::Vec9 theta = Pack(start, ModelKind::kLinear);
+  internal::NewtonLagrangeStep baseline, avx;
+  internal::ComputeNewtonLagrangeStep(problem, theta, c, lambda, &baseline,
+                                      internal::KernelIsa::kBaseline);
+  internal::ComputeNewtonLagrangeStep(problem, theta, c, lambda, &avx, internal::KernelIsa::kAvx);
+  const auto same_bits = [](double a, double b) { return std::memcmp(&a, &b, sizeof a) == 0; };
+  EXPECT_TRUE(same_bits(baseline.cost, avx.cost));
+  for (int i = 0; i < 9; ++i) EXPECT_TRUE(same_bits(baseline.d_theta(i), avx.d_theta(i))) << i;
+  int differing = 0;
+  for (std::size_t k = 0; k < c.size(); ++k) {
+    for (int d = 0; d < 3; ++d) differing += !same_bits(baseline.d_c[k](d), avx.d_c[k](d));
+    differing += !same_bits(baseline.d_lambda[k], avx.d_lambda[k]);
+  }
+  EXPECT_EQ(differing, 0);
+  EXPECT_GT(baseline.d_theta.cwiseAbs().maxCoeff(), 1e-6);  // a real step
 }
 
 TEST(NewtonLagrange, SameOptimumAsTheOtherSolversInAFewIterations) {

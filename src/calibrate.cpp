@@ -615,6 +615,26 @@ Fit CalibrateInFrame(const std::vector<Vec3>& readings, const CalibrationOptions
 
 }  // namespace
 
+void internal::SpreadOverAllPositions(const std::vector<Vec3>& readings,
+                                      const std::vector<int>& keep, CalibrationResult* fit) {
+  std::vector<Vec3> directions(readings.size()), residuals(readings.size());
+  std::vector<bool> kept(readings.size(), false);
+  for (std::size_t i = 0; i < keep.size(); ++i) {
+    const auto k = static_cast<std::size_t>(keep[i]);
+    directions[k] = fit->directions[i];
+    residuals[k] = fit->residuals[i];
+    kept[k] = true;
+  }
+  for (std::size_t k = 0; k < readings.size(); ++k) {
+    if (kept[k]) continue;
+    const std::optional<Vec3> f = SpecificForce(fit->params, readings[k]);
+    directions[k] = f && f->norm() > 0 ? Vec3(f->normalized()) : Vec3::UnitZ();
+    residuals[k] = readings[k] - PredictRaw(fit->params, Vec3(fit->gravity * directions[k]));
+  }
+  fit->directions = std::move(directions);
+  fit->residuals = std::move(residuals);
+}
+
 // Leave-one-position-out: each position corrected by a fit without it, started from the full fit
 // (the held-out optimum is close to it, so each refit takes a few iterations). Positions the
 // screening excluded are held out of every fit already: their error is that of the final fit.
@@ -683,28 +703,6 @@ CalibrationOptions SubsetOptions(const CalibrationOptions& options, const std::v
     subset.initial_params = start;
   }
   return subset;
-}
-
-// `fit` (of the positions `keep`) spread back over all readings: an excluded position gets its
-// direction and residual under the final fit.
-void SpreadOverAllPositions(const std::vector<Vec3>& readings, const std::vector<int>& keep,
-                            CalibrationResult* fit) {
-  std::vector<Vec3> directions(readings.size()), residuals(readings.size());
-  std::vector<bool> kept(readings.size(), false);
-  for (std::size_t i = 0; i < keep.size(); ++i) {
-    const auto k = static_cast<std::size_t>(keep[i]);
-    directions[k] = fit->directions[i];
-    residuals[k] = fit->residuals[i];
-    kept[k] = true;
-  }
-  for (std::size_t k = 0; k < readings.size(); ++k) {
-    if (kept[k]) continue;
-    const std::optional<Vec3> f = SpecificForce(fit->params, readings[k]);
-    directions[k] = f && f->norm() > 0 ? Vec3(f->normalized()) : Vec3::UnitZ();
-    residuals[k] = readings[k] - PredictRaw(fit->params, Vec3(fit->gravity * directions[k]));
-  }
-  fit->directions = std::move(directions);
-  fit->residuals = std::move(residuals);
 }
 
 // The fit with the screening of OutlierOptions, as Rosner's generalised ESD test (1983): the most
@@ -783,7 +781,7 @@ CalibrationResult CalibrateScreened(const std::vector<Vec3>& readings,
           : 0;
   CalibrationResult result = excluded > 0 ? std::move(steps[excluded - 1].fit) : std::move(full);
   if (excluded > 0) {
-    SpreadOverAllPositions(readings, steps[excluded - 1].keep, &result);
+    internal::SpreadOverAllPositions(readings, steps[excluded - 1].keep, &result);
     // The summary tells the whole solve: where it started, every fit's iterations and time.
     Summary& summary = result.summary;
     summary.initialization = full.summary.initialization;

@@ -5,6 +5,7 @@
 
 #include "accelcal/error.hpp"
 #include "accelcal/frame.hpp"
+#include "outliers.hpp"
 
 namespace accelcal {
 
@@ -62,15 +63,57 @@ const MethodComparison* SameMaximumLikelihoodOptimum(const std::vector<MethodCom
   return nullptr;
 }
 
+// Screens the positions once with the maximum-likelihood fit and `base.outliers`; fills the
+// comparison's positions and findings and returns the readings (and sigmas) every method gets.
+CalibrationOptions ScreenOnce(const std::vector<Vec3>& readings, const CalibrationOptions& base,
+                              Comparison* out, std::vector<Vec3>* used) {
+  CalibrationOptions shared = base;
+  shared.outliers.policy = OutlierPolicy::kOff;
+  shared.cross_validate = false;
+  std::vector<bool> excluded(readings.size(), false);
+  if (base.outliers.policy != OutlierPolicy::kOff) {
+    CalibrationOptions screen = base;
+    screen.method = SolverMethod::kJoint;
+    screen.cross_validate = false;
+    try {
+      const CalibrationResult fit = Calibrate(readings, screen);
+      out->outliers = fit.outliers;
+      out->outlier_note = fit.outlier_note;
+      for (std::size_t k = 0; k < readings.size(); ++k) excluded[k] = fit.excluded(k);
+      if (!fit.summary.converged()) {
+        out->outlier_note = "not screened: the maximum-likelihood fit did not converge";
+      }
+    } catch (const DataError& e) {
+      out->outlier_note = std::string("not screened: ") + e.what();
+    }
+  }
+  if (!base.reading_sigmas.empty()) shared.reading_sigmas.clear();
+  for (std::size_t k = 0; k < readings.size(); ++k) {
+    if (excluded[k]) continue;
+    out->positions_used.push_back(static_cast<int>(k));
+    used->push_back(readings[k]);
+    if (!base.reading_sigmas.empty()) shared.reading_sigmas.push_back(base.reading_sigmas[k]);
+  }
+  return shared;
+}
+
 }  // namespace
 
-std::vector<MethodComparison> CompareMethods(const std::vector<Vec3>& readings,
-                                             const CompareOptions& options) {
+Comparison CompareMethods(const std::vector<Vec3>& all_readings, const CompareOptions& options) {
+  if (auto why = options.base.Validate()) throw std::invalid_argument(*why);
+  const std::size_t sigmas = options.base.reading_sigmas.size();
+  if (sigmas != 0 && sigmas != all_readings.size()) {
+    throw std::invalid_argument("reading_sigmas has " + std::to_string(sigmas) + " entries for " +
+                                std::to_string(all_readings.size()) + " readings");
+  }
   const std::vector<SolverMethod> methods =
       options.methods.empty() ? MethodsFor(options.base.model) : options.methods;
-  std::vector<MethodComparison> out;
+  Comparison comparison;
+  std::vector<Vec3> readings;
+  const CalibrationOptions shared = ScreenOnce(all_readings, options.base, &comparison, &readings);
+  std::vector<MethodComparison>& out = comparison.methods;
   for (SolverMethod method : methods) {
-    CalibrationOptions o = options.base;
+    CalibrationOptions o = shared;
     o.method = method;
     if (auto why = o.Validate()) throw std::invalid_argument(*why);
     MethodComparison c;
@@ -78,10 +121,15 @@ std::vector<MethodComparison> CompareMethods(const std::vector<Vec3>& readings,
     c.error = Fit(readings, o, &c.result);
     std::vector<double> errors;
     if (!c.error) {
+      // The result over all positions, as Calibrate gives it: the screened-out ones marked.
+      internal::SpreadOverAllPositions(all_readings, comparison.positions_used, &c.result);
+      c.result.outliers = comparison.outliers;
+      c.result.outlier_note = comparison.outlier_note;
       errors = GravityNormErrors(c.result.params, readings, o.gravity);
       for (std::size_t k = 0; k < errors.size() && !c.error; ++k) {
         if (!std::isfinite(errors[k])) {
-          c.error = "position " + std::to_string(k + 1) + " lies outside the range of the fit";
+          c.error = "position " + std::to_string(comparison.positions_used[k] + 1) +
+                    " lies outside the range of the fit";
         }
       }
     }
@@ -104,13 +152,15 @@ std::vector<MethodComparison> CompareMethods(const std::vector<Vec3>& readings,
           c.leave_one_out_error = same->leave_one_out_error;
           c.leave_one_out_from = same->method;
         } else {
-          LeaveOneOut(readings, o, &c);
+          // On all readings: the screened-out positions are held out of every refit and the
+          // notes number positions as the input does.
+          LeaveOneOut(all_readings, o, &c);
         }
       }
     }
     out.push_back(std::move(c));
   }
-  return out;
+  return comparison;
 }
 
 }  // namespace accelcal

@@ -38,4 +38,9 @@ Screening ScreenPositions(const InformationRows& rows, const Mat12& S_inverse, M
                           const std::vector<Vec3>& residuals, double signal,
                           double false_alarm_probability);
 
+/// `fit`, of the readings at indices `keep`, spread back over all `readings`: a left-out position
+/// gets its direction and residual under the fit.
+void SpreadOverAllPositions(const std::vector<Vec3>& readings, const std::vector<int>& keep,
+                            CalibrationResult* fit);
+
 }  // namespace accelcal::internal

@@ -680,6 +680,35 @@ TEST_F(Cli, CompareTabulatesEveryMethod) {
   EXPECT_EQ(bad.err, "accelcal: usage: the newton-lagrange method fits the linear model only\n");
 }
 
+TEST_F(Cli, CompareScreensOnceAndFitsEveryMethodToTheSamePositions) {
+  // The hostile corpus' log with position 7 moved during its interval (issue 7).
+  const std::string in = std::string(ACCELCAL_SOURCE_DIR) + "/tests/hostile/moved.csv";
+  const CliRun t = Exec("compare " + in + " --methods joint,modulus,ellipsoid");
+  ASSERT_EQ(t.status, 0) << t.err;
+  EXPECT_NE(t.out.find("every method fitted to 29 positions: position 7 left out (screening)"),
+            std::string::npos)
+      << t.out;
+  EXPECT_NE(t.err.find("position 7 disagrees with the others"), std::string::npos) << t.err;
+  EXPECT_NE(t.err.find("It was left out of every method's fit."), std::string::npos) << t.err;
+  const CliRun j = Exec("compare " + in + " --json");
+  ASSERT_EQ(j.status, 0) << j.err;
+  const nlohmann::json doc = nlohmann::json::parse(j.out);
+  EXPECT_EQ(doc["positions"], 30);
+  EXPECT_EQ(doc["positions_used"], 29);
+  ASSERT_EQ(doc["outliers"].size(), 1u);
+  EXPECT_EQ(doc["outliers"][0]["position"], 7);
+  EXPECT_EQ(doc["outliers"][0]["excluded"], true);
+  const CliRun off = Exec("compare " + in + " --outliers off --json");
+  ASSERT_EQ(off.status, 0) << off.err;
+  EXPECT_EQ(off.err, "");
+  EXPECT_EQ(nlohmann::json::parse(off.out)["positions_used"], 30);
+  const CliRun flag = Exec("compare " + in + " --outliers flag --json");
+  ASSERT_EQ(flag.status, 0) << flag.err;
+  EXPECT_NE(flag.err.find("It was kept in the fits."), std::string::npos) << flag.err;
+  EXPECT_EQ(nlohmann::json::parse(flag.out)["positions_used"], 30);
+  EXPECT_EQ(Exec("compare " + in + " --outliers maybe").status, 2);
+}
+
 TEST_F(Cli, Detect) {
   const CliRun r = Exec("detect " + kData + "/imutk-xsens-mti/xsens_acc.mat --json");
   ASSERT_EQ(r.status, 0) << r.err;

@@ -23,7 +23,7 @@ TEST(Compare, RunsEveryLinearMethodAndSharesHeldOutFiguresOfOneEstimator) {
   const std::vector<Vec3> readings = SunXuReadings(30);
   CompareOptions o;
   o.base.gravity = 1.0;
-  const std::vector<MethodComparison> rows = CompareMethods(readings, o);
+  const std::vector<MethodComparison> rows = CompareMethods(readings, o).methods;
   ASSERT_EQ(rows.size(), 6u);
   EXPECT_EQ(rows[0].method, SolverMethod::kJoint);
   for (const MethodComparison& r : rows) {
@@ -42,7 +42,7 @@ TEST(Compare, HeldOutErrorIsTheFitWithoutEachPosition) {
   CompareOptions o;
   o.base.gravity = 1.0;
   o.methods = {SolverMethod::kModulus};
-  const MethodComparison row = CompareMethods(readings, o)[0];
+  const MethodComparison row = CompareMethods(readings, o).methods[0];
   // Each held-out fit starts from the full fit; refitting the same way gives the same numbers, and
   // cold starts (from the ellipsoid fit) the same to the precision the modulus solver stops at:
   // its cost criterion |ΔJ| ≤ 1e-16 J leaves the parameters about √1e-16 = 1e-8 from the optimum.
@@ -62,12 +62,53 @@ TEST(Compare, HeldOutErrorIsTheFitWithoutEachPosition) {
   EXPECT_NEAR(*row.leave_one_out_rms, Rms(cold), 1e-7 * Rms(cold));
 }
 
+TEST(Compare, ScreensOnceAndFitsEveryMethodToTheSamePositions) {
+  // Position 8 of 30 read 0.2 g off (20 sigma): the maximum-likelihood screening excludes it, and
+  // every method, baselines included, is fitted to and measured on the other 29 (a baseline's own
+  // screening could decide otherwise, and its figures would then cover other positions).
+  std::vector<Vec3> readings = SunXuReadings(30);
+  readings[7] += Vec3(0.2, 0.0, 0.0);
+  CompareOptions o;
+  o.base.gravity = 1.0;
+  o.methods = {SolverMethod::kJoint, SolverMethod::kModulus, SolverMethod::kEllipsoid};
+  const Comparison comparison = CompareMethods(readings, o);
+  ASSERT_EQ(comparison.outliers.size(), 1u);
+  EXPECT_EQ(comparison.outliers[0].position, 7);
+  EXPECT_TRUE(comparison.outliers[0].excluded);
+  ASSERT_EQ(comparison.positions_used.size(), 29u);
+  std::vector<Vec3> kept = readings;
+  kept.erase(kept.begin() + 7);
+  for (const MethodComparison& r : comparison.methods) {
+    SCOPED_TRACE(ToString(r.method));
+    ASSERT_FALSE(r.error.has_value()) << *r.error;
+    // The fit of the 29, spread over all 30 positions as Calibrate's results are.
+    CalibrationOptions c = o.base;
+    c.method = r.method;
+    c.outliers.policy = OutlierPolicy::kOff;
+    const CalibrationResult alone = Calibrate(kept, c);
+    EXPECT_LT((r.result.params.K - alone.params.K).cwiseAbs().maxCoeff(), 1e-12);
+    EXPECT_LT((r.result.params.bias - alone.params.bias).cwiseAbs().maxCoeff(), 1e-12);
+    EXPECT_EQ(r.result.directions.size(), 30u);
+    EXPECT_TRUE(r.result.excluded(7));
+    EXPECT_DOUBLE_EQ(r.gravity_norm_rms, Rms(GravityNormErrors(r.result.params, kept, 1.0)));
+    // Held out over the 29 only: each refit leaves out position 8 as well.
+    ASSERT_TRUE(r.leave_one_out_rms.has_value());
+    EXPECT_LT(*r.leave_one_out_rms, 3 * 0.01) << "position 8's 0.2 g would dominate the RMS";
+    EXPECT_EQ(r.result.crossval_errors.size(), 30u);
+  }
+  o.base.outliers.policy = OutlierPolicy::kOff;
+  const Comparison all = CompareMethods(readings, o);
+  EXPECT_EQ(all.positions_used.size(), 30u);
+  EXPECT_TRUE(all.outliers.empty());
+  EXPECT_GT(all.methods[0].gravity_norm_rms, 2 * comparison.methods[0].gravity_norm_rms);
+}
+
 TEST(Compare, FailuresAreReportedPerMethod) {
   // Nine positions: every method fits, but no fit without a position is possible.
   std::vector<Vec3> readings = SunXuReadings(9);
   CompareOptions o;
   o.base.gravity = 1.0;
-  for (const MethodComparison& r : CompareMethods(readings, o)) {
+  for (const MethodComparison& r : CompareMethods(readings, o).methods) {
     EXPECT_FALSE(r.error.has_value());
     EXPECT_FALSE(r.leave_one_out_rms.has_value());
     ASSERT_TRUE(r.leave_one_out_error.has_value());
@@ -75,7 +116,7 @@ TEST(Compare, FailuresAreReportedPerMethod) {
               "without position 1: the linear model needs at least 9 positions, got 8");
   }
   readings.resize(8);
-  for (const MethodComparison& r : CompareMethods(readings, o)) {
+  for (const MethodComparison& r : CompareMethods(readings, o).methods) {
     ASSERT_TRUE(r.error.has_value());
     EXPECT_EQ(*r.error, "the linear model needs at least 9 positions, got 8");
   }
@@ -111,7 +152,7 @@ TEST(Compare, ReferenceAddsErrorsToEveryMethod) {
   truth.K = SunXu2020Ta();
   truth.bias = SunXu2020Ba();
   o.reference = truth;
-  for (const MethodComparison& r : CompareMethods(readings, o)) {
+  for (const MethodComparison& r : CompareMethods(readings, o).methods) {
     ASSERT_TRUE(r.against_reference.has_value()) << ToString(r.method);
     EXPECT_LT(r.against_reference->e_T_percent, 0.5) << ToString(r.method);  // σ = 0.01 g
     EXPECT_FALSE(r.leave_one_out_rms.has_value());
@@ -139,7 +180,7 @@ TEST(Compare, MaximumLikelihoodPredictsBestOnRealRecordings) {
     o.base.gravity = set.gravity;
     o.methods = {SolverMethod::kJoint, SolverMethod::kNewtonLagrange, SolverMethod::kModulus,
                  SolverMethod::kModulusNorm};
-    const std::vector<MethodComparison> rows = CompareMethods(means, o);
+    const std::vector<MethodComparison> rows = CompareMethods(means, o).methods;
     double best = INFINITY, ml = INFINITY;
     for (const MethodComparison& r : rows) {
       ASSERT_TRUE(r.leave_one_out_rms.has_value()) << set.file << " " << ToString(r.method);
@@ -160,7 +201,7 @@ TEST(Compare, QuadraticHeldOutFitsFinishOnXsens) {
   o.base.gravity = 9.81744;
   o.base.model = ModelKind::kQuadratic;
   o.methods = {SolverMethod::kJoint};
-  const MethodComparison row = CompareMethods(means, o)[0];
+  const MethodComparison row = CompareMethods(means, o).methods[0];
   ASSERT_TRUE(row.leave_one_out_rms.has_value())
       << row.leave_one_out_error.value_or(row.error.value_or(""));
   EXPECT_GT(*row.leave_one_out_rms, row.gravity_norm_rms);

@@ -495,6 +495,10 @@ int RunCompare(const CompareArgs& args) {
         ParseEnum(SolverMethodFromString(name), name, "--methods",
                   "joint, two-step, newton-lagrange, modulus, modulus-norm, ellipsoid"));
   }
+  options.base.outliers.policy = ParseEnum(OutlierPolicyFromString(args.outliers), args.outliers,
+                                           "--outliers", "exclude, flag, off");
+  options.base.outliers.false_alarm_probability = args.outlier_probability;
+  if (auto why = options.base.Validate()) throw UsageError(*why);
   for (SolverMethod m : options.methods) {
     CalibrationOptions o = options.base;
     o.method = m;
@@ -502,7 +506,33 @@ int RunCompare(const CompareArgs& args) {
   }
   const LoadedInput in = LoadInput(args.input);
   const std::vector<Vec3> means = Means(in.positions);
-  const std::vector<MethodComparison> rows = CompareMethods(means, options);
+  const Comparison comparison = CompareMethods(means, options);
+  const std::vector<MethodComparison>& rows = comparison.methods;
+  const char* unit = g.unit == ForceUnit::kMetersPerSecond2 ? "m/s2" : "g";
+  // The screening's findings, with |f| - g under the first maximum-likelihood fit (all methods
+  // were fitted to the same positions).
+  if (!comparison.outliers.empty()) {
+    const MethodComparison* reference = nullptr;
+    for (const MethodComparison& r : rows) {
+      if (!r.error && (reference == nullptr || (IsMaximumLikelihood(r.method) &&
+                                                !IsMaximumLikelihood(reference->method)))) {
+        reference = &r;
+      }
+    }
+    const std::vector<double> errors =
+        reference != nullptr
+            ? GravityNormErrors(reference->result.params, means, options.base.gravity)
+            : std::vector<double>(means.size(), std::nan(""));
+    for (const OutlierFinding& o : comparison.outliers) {
+      Warn("%s: %s%s\n", args.input.path.c_str(),
+           OutlierMessage(o, in.positions, errors, unit).c_str(),
+           o.excluded ? " It was left out of every method's fit." : " It was kept in the fits.");
+    }
+  }
+  std::string screened;  // "7, 12": the positions no method was fitted to
+  for (const OutlierFinding& o : comparison.outliers) {
+    if (o.excluded) screened += (screened.empty() ? "" : ", ") + std::to_string(o.position + 1);
+  }
   const std::vector<ParameterSlot>& slots = ParameterSlots(options.base.model);
   std::string out;
   if (args.json) {
@@ -522,7 +552,21 @@ int RunCompare(const CompareArgs& args) {
     out += "{\n  \"source\": " + quoted(args.input.path) + ",\n  \"model\": \"" +
            std::string(ToString(options.base.model)) +
            "\",\n  \"gravity\": " + FormatNumber(g.in_unit) +
-           ",\n  \"positions\": " + std::to_string(means.size()) + ",\n  \"methods\": [";
+           ",\n  \"positions\": " + std::to_string(means.size()) +
+           ",\n  \"positions_used\": " + std::to_string(comparison.positions_used.size()) +
+           ",\n  \"outliers\": [";
+    for (std::size_t i = 0; i < comparison.outliers.size(); ++i) {
+      const OutlierFinding& o = comparison.outliers[i];
+      out += (i ? ", " : "") +
+             Format("{\"position\": %d, \"excluded\": %s, \"t\": ", o.position + 1,
+                    o.excluded ? "true" : "false") +
+             number(o.t) + ", \"threshold\": " + number(o.threshold) + "}";
+    }
+    out += "]";
+    if (!comparison.outlier_note.empty()) {
+      out += ",\n  \"outlier_note\": " + quoted(comparison.outlier_note);
+    }
+    out += ",\n  \"methods\": [";
     for (std::size_t i = 0; i < rows.size(); ++i) {
       const MethodComparison& r = rows[i];
       out += i ? ",\n    {" : "\n    {";
@@ -554,9 +598,16 @@ int RunCompare(const CompareArgs& args) {
     }
     out += rows.empty() ? "]\n}\n" : "\n  ]\n}\n";
   } else {
-    out += Format("%s: %zu positions, %s model, gravity %.9g %s\n\n", args.input.path.c_str(),
+    out += Format("%s: %zu positions, %s model, gravity %.9g %s\n", args.input.path.c_str(),
                   means.size(), std::string(ToString(options.base.model)).c_str(), g.in_unit,
                   std::string(ToString(g.unit)).c_str());
+    if (!screened.empty()) {
+      out += Format("every method fitted to %zu positions: position%s %s left out (screening)\n",
+                    comparison.positions_used.size(),
+                    screened.find(',') != std::string::npos ? "s" : "", screened.c_str());
+    }
+    if (!comparison.outlier_note.empty()) out += "screening " + comparison.outlier_note + "\n";
+    out += "\n";
     out += Format("%-18s", "");
     for (const MethodComparison& r : rows)
       out += Format("%17s", std::string(ToString(r.method)).c_str());

@@ -77,7 +77,9 @@ struct CompareArgs {
   std::vector<std::string> methods;  // empty: all that fit the model
   std::string init = "auto";
   bool leave_one_out = true;
-  std::string reference;  // calibration file: adds paper 001's e_T, e_b
+  std::string reference;              // calibration file: adds paper 001's e_T, e_b
+  std::string outliers = "exclude";   // screened once, the same positions for every method
+  double outlier_probability = 1e-3;  // CalibrationOptions::outliers.false_alarm_probability
   bool json = false;
 };
 

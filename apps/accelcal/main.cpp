@@ -128,6 +128,15 @@ int main(int argc, char** argv) {
   compare->add_option("--init", cmp.init, "auto, ellipsoid or normalized-readings")
       ->capture_default_str();
   compare->add_flag("!--no-held-out", cmp.leave_one_out, "skip the leave-one-position-out fits");
+  compare
+      ->add_option("--outliers", cmp.outliers,
+                   "screen the positions once (maximum-likelihood fit) and fit every method to "
+                   "the same ones: exclude a disagreeing position, flag it only, or off")
+      ->capture_default_str();
+  compare
+      ->add_option("--outlier-probability", cmp.outlier_probability,
+                   "chance that positions which all agree lose one to the test")
+      ->capture_default_str();
   compare->add_option("--reference", cmp.reference,
                       "a known calibration (JSON): adds paper 001's e_T and e_b per method");
   compare->add_flag("--json", cmp.json, "machine-readable output");

@@ -19,6 +19,31 @@ OutlierFinding Screening::Finding(int index) const {
   return finding;
 }
 
+namespace {
+
+// The leverages h_k = u_kᵀ S⁻¹ u_k on the model's P free parameters only (S⁻¹ is the identity on
+// the fixed ones, where u_k has no business); lazyProduct keeps the fixed-size product off Eigen's
+// GEMV path (measured: half the instructions; one GEMM over all rows, a triangular factor, or the
+// symmetric half as scalar loops cost more).
+template <int P>
+std::vector<double> Leverages(const InformationRows& rows, const Mat12& S_inverse,
+                              const std::vector<int>& cols) {
+  Eigen::Matrix<double, P, P> M;
+  for (int i = 0; i < P; ++i) {
+    for (int j = 0; j < P; ++j) M(i, j) = S_inverse(cols[i], cols[j]);
+  }
+  const auto m = static_cast<std::size_t>(rows.U.rows());
+  std::vector<double> h(m);
+  Eigen::Matrix<double, P, 1> u;
+  for (std::size_t k = 0; k < m; ++k) {
+    for (int i = 0; i < P; ++i) u(i) = rows.U(static_cast<Eigen::Index>(k), cols[i]);
+    h[k] = u.dot(M.lazyProduct(u));
+  }
+  return h;
+}
+
+}  // namespace
+
 Screening ScreenPositions(const InformationRows& rows, const Mat12& S_inverse, ModelKind model,
                           const std::vector<Vec3>& residuals, double signal,
                           double false_alarm_probability) {
@@ -48,15 +73,14 @@ Screening ScreenPositions(const InformationRows& rows, const Mat12& S_inverse, M
   const double round_off = 64 * std::numeric_limits<double>::epsilon() * signal;
   if (!(s2 > round_off * round_off)) return out;
 
-  const Vec12 mask = FreeMask(model);  // S⁻¹ is the identity on the fixed parameters
+  const std::vector<int>& cols = ActiveColumns(model);
+  const std::vector<double> leverages =
+      cols.size() == 9 ? Leverages<9>(rows, S_inverse, cols) : Leverages<12>(rows, S_inverse, cols);
   std::vector<int> untested;
   std::vector<double> scaled;  // |e_k| / √(1 − h_k), for the robust scale
   for (int k = 0; k < m; ++k) {
     const auto i = static_cast<std::size_t>(k);
-    const Vec12 u = rows.U.row(k).transpose().cwiseProduct(mask);
-    // The leverage u_kᵀ S⁻¹ u_k; lazyProduct keeps this 12x12 product off Eigen's GEMV path
-    // (measured: half the instructions; one GEMM over all rows, or a triangular factor, cost more).
-    const double h = u.dot(S_inverse.lazyProduct(u));
+    const double h = leverages[i];
     if (!(1.0 - h > 1e-9)) {
       untested.push_back(k + 1);
       scaled.push_back(0.0);

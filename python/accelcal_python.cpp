@@ -169,6 +169,7 @@ PYBIND11_MODULE(_accelcal, m) {
                                  py::dict d;
                                  d["position"] = o.position;  // 0-based, as the readings' rows
                                  d["excluded"] = o.excluded;
+                                 d["statistic"] = std::string(ToString(o.statistic));
                                  d["t"] = o.t;
                                  d["threshold"] = o.threshold;
                                  d["degrees_of_freedom"] = o.degrees_of_freedom;

@@ -65,6 +65,9 @@ std::string_view ToString(OutlierPolicy policy) {
   }
   return "exclude";
 }
+std::string_view ToString(OutlierStatistic statistic) {
+  return statistic == OutlierStatistic::kFisherF ? "F" : "t";
+}
 std::optional<OutlierPolicy> OutlierPolicyFromString(std::string_view text) {
   for (OutlierPolicy p : {OutlierPolicy::kOff, OutlierPolicy::kFlag, OutlierPolicy::kExclude}) {
     if (text == ToString(p)) return p;

@@ -135,6 +135,7 @@ std::string CalibrationToJson(const CalibrationResult& result, const Calibration
   for (const OutlierFinding& o : result.outliers) {
     outliers.push_back({{"position", o.position + 1},
                         {"excluded", o.excluded},
+                        {"statistic", std::string(ToString(o.statistic))},
                         {"t", o.t},
                         {"threshold", o.threshold},
                         {"degrees_of_freedom", o.degrees_of_freedom},

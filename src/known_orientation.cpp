@@ -3,13 +3,16 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <limits>
 #include <stdexcept>
+#include <string>
 
 #include <Eigen/Cholesky>
 #include <Eigen/Eigenvalues>
 
 #include "accelcal/error.hpp"
 #include "accelcal/frame.hpp"
+#include "student_t.hpp"
 
 namespace accelcal {
 
@@ -95,10 +98,148 @@ Fit FitAll(const std::vector<Vec3>& readings, const std::vector<Vec3>& forces,
   return fit;
 }
 
+// The discordant-position test of one fit (OutlierStatistic::kFisherF). Each axis is its own
+// least squares, so adding three mean-shift parameters for position k (one per axis) lowers the
+// weighted sum of squares by Δ_k = Σ_i w_ki r_ki² / (1 − h_ki), h_ki = w_ki a_kiᵀ N_i⁻¹ a_ki its
+// leverage in axis i; the fit without k has SSE − Δ_k on ν − 3 degrees of freedom, and
+// F_k = (Δ_k / 3) / ((SSE − Δ_k) / (ν − 3)) is Fisher F(3, ν − 3) under normal noise.
+struct FTest {
+  bool ran = false;
+  int position = -1;  // the largest F_k
+  double F = 0;
+  double p = 1;               // its upper-tail probability
+  double residual = 0;        // |p_k − μ_k| [raw]
+  double scatter = 0;         // per-axis scale of the fit without it
+  int dof = 0;                // ν − 3
+  std::vector<int> untested;  // positions the others do not determine the fit without (1-based)
+};
+
+FTest MostDiscordant(const std::vector<Vec3>& readings, const std::vector<Vec3>& forces,
+                     const std::vector<Vec3>& weights, const Fit& fit, int P) {
+  FTest test;
+  int used = 0;
+  double sse = 0, largest_residual = 0;
+  std::vector<Vec3> residuals(readings.size());
+  for (std::size_t k = 0; k < readings.size(); ++k) {
+    residuals[k] = readings[k] - PredictRaw(fit.params, forces[k]);
+    if (weights[k](0) == 0) continue;
+    ++used;
+    sse += residuals[k].cwiseAbs2().dot(weights[k]);
+    largest_residual = std::max(largest_residual, residuals[k].cwiseAbs().maxCoeff());
+  }
+  const int nu = 3 * used - P;
+  test.dof = nu - 3;
+  // Positions fitted to round-off (simulated exact data) have no scatter to test against.
+  double signal = 0;
+  for (int i = 0; i < 3; ++i) {
+    signal = std::max(signal, fit.params.K.row(i).cwiseAbs().sum() * forces[0].norm() +
+                                  std::abs(fit.params.bias(i)));
+  }
+  if (test.dof < 1 || !(largest_residual > 64 * std::numeric_limits<double>::epsilon() * signal)) {
+    return test;
+  }
+  const int n = P / 3;
+  for (std::size_t k = 0; k < readings.size(); ++k) {
+    if (weights[k](0) == 0) continue;
+    double delta = 0;
+    bool testable = true;
+    for (int i = 0; i < 3; ++i) {
+      const Vec5 a = Regressors(forces[k], i);
+      const double h =
+          weights[k](i) * a.head(n).dot(fit.axes[i].normal_inverse.topLeftCorner(n, n) * a.head(n));
+      if (!(1.0 - h > 1e-9)) {
+        testable = false;
+        break;
+      }
+      delta += weights[k](i) * residuals[k](i) * residuals[k](i) / (1.0 - h);
+    }
+    if (!testable) {  // the others do not determine the fit without it
+      test.untested.push_back(static_cast<int>(k) + 1);
+      continue;
+    }
+    const double rest = std::max(sse - delta, 0.0);
+    const double F = rest > 0 ? (delta / 3.0) / (rest / test.dof) : INFINITY;
+    if (!test.ran || F > test.F) {
+      test.ran = true;
+      test.position = static_cast<int>(k);
+      test.F = F;
+      test.residual = residuals[k].norm();
+      test.scatter = std::sqrt(rest / test.dof);
+    }
+  }
+  if (test.ran) test.p = internal::FisherFSurvival(test.F, 3.0, test.dof);
+  return test;
+}
+
+// OutlierOptions' generalised ESD (Rosner 1983, as Calibrate runs it) with the F test: the most
+// discordant position is removed and the rest refitted, max(1, max_excluded) times, each step
+// tested at false_alarm / (positions in that fit); the discordant ones are the steps up to the last
+// significant one. Returns the findings (excluded as the policy allows) and sets `weights` of the
+// excluded positions to 0.
+std::vector<OutlierFinding> Screen(const std::vector<Vec3>& readings,
+                                   const std::vector<Vec3>& forces, const OutlierOptions& options,
+                                   ModelKind model, int P, std::vector<Vec3>* weights,
+                                   std::string* note) {
+  std::vector<OutlierFinding> steps;
+  std::vector<Vec3> w = *weights;
+  int used = static_cast<int>(readings.size());
+  int discordant = 0;
+  const int rounds = std::max(1, options.max_excluded);
+  for (int round = 0; round < rounds; ++round) {
+    Fit fit;
+    try {
+      fit = FitAll(readings, forces, w, model);
+    } catch (const DataError&) {
+      break;  // without the positions removed so far the model is not determined
+    }
+    const FTest test = MostDiscordant(readings, forces, w, fit, P);
+    if (round == 0 && !test.untested.empty()) {
+      *note = test.untested.size() > 1 ? "positions " : "position ";
+      for (std::size_t i = 0; i < test.untested.size(); ++i) {
+        *note += (i ? ", " : "") + std::to_string(test.untested[i]);
+      }
+      *note += " not screened: the other positions do not determine the fit without them";
+    }
+    if (!test.ran) {
+      if (round == 0 && test.dof < 1) {
+        *note = "outlier screening needs at least " + std::to_string((P + 4 + 2) / 3) +
+                " positions for the " + std::string(ToString(model)) + " model, got " +
+                std::to_string(used);
+      }
+      break;
+    }
+    const double per_position = options.false_alarm_probability / used;
+    OutlierFinding finding;
+    finding.position = test.position;
+    finding.statistic = OutlierStatistic::kFisherF;
+    finding.t = test.F;
+    finding.threshold = internal::FisherFQuantile(per_position, 3.0, test.dof);
+    finding.degrees_of_freedom = test.dof;
+    finding.normal_residual = test.residual;
+    finding.scatter = test.scatter;
+    steps.push_back(finding);
+    if (test.p < per_position) discordant = static_cast<int>(steps.size());
+    w[static_cast<std::size_t>(test.position)].setZero();
+    --used;
+  }
+  steps.resize(static_cast<std::size_t>(discordant));
+  if (options.policy == OutlierPolicy::kExclude) {
+    for (int i = 0; i < std::min(discordant, options.max_excluded); ++i) {
+      steps[static_cast<std::size_t>(i)].excluded = true;
+      (*weights)[static_cast<std::size_t>(steps[static_cast<std::size_t>(i)].position)].setZero();
+    }
+  }
+  return steps;
+}
+
 }  // namespace
 
 std::optional<std::string> KnownOrientationOptions::Validate() const {
   if (!(gravity > 0) || !std::isfinite(gravity)) return "gravity must be a positive number";
+  if (!(outliers.false_alarm_probability > 0 && outliers.false_alarm_probability < 1)) {
+    return "outliers.false_alarm_probability must be in (0, 1)";
+  }
+  if (outliers.max_excluded < 0) return "outliers.max_excluded must be non-negative";
   return std::nullopt;
 }
 
@@ -148,6 +289,13 @@ CalibrationResult CalibrateKnownOrientations(const std::vector<Vec3>& readings,
       weights[k] = options.reading_sigmas[k].cwiseAbs2().cwiseInverse();
     }
   }
+  std::string outlier_note;
+  const std::vector<OutlierFinding> outliers =
+      options.outliers.policy == OutlierPolicy::kOff
+          ? std::vector<OutlierFinding>{}
+          : Screen(readings, forces, options.outliers, options.model, P, &weights, &outlier_note);
+  int used = 0;
+  for (const Vec3& w : weights) used += w(0) != 0 ? 1 : 0;
   const Fit fit = FitAll(readings, forces, weights, options.model);
 
   CalibrationResult result;
@@ -156,14 +304,17 @@ CalibrationResult CalibrateKnownOrientations(const std::vector<Vec3>& readings,
   result.gravity = options.gravity;
   result.params = fit.params;
   result.directions = directions;
+  result.outliers = outliers;
+  result.outlier_note = outlier_note;
   double cost = 0, chi2 = 0;
   for (std::size_t k = 0; k < m; ++k) {
     const Vec3 r = readings[k] - PredictRaw(fit.params, forces[k]);
     result.residuals.push_back(r);
+    if (weights[k](0) == 0) continue;  // left out by the screening
     cost += r.squaredNorm();
     chi2 += r.cwiseAbs2().dot(weights[k]);
   }
-  result.degrees_of_freedom = 3 * static_cast<int>(m) - P;
+  result.degrees_of_freedom = 3 * used - P;
   if (result.degrees_of_freedom > 0) {
     const double dof = result.degrees_of_freedom;
     result.residual_sigma = std::sqrt(cost / dof);
@@ -187,8 +338,12 @@ CalibrationResult CalibrateKnownOrientations(const std::vector<Vec3>& readings,
   s.initial_cost = s.final_cost = cost;
 
   if (options.cross_validate) {
-    std::vector<double> errors;
+    std::vector<double> errors, used_errors;
     for (std::size_t k = 0; k < m; ++k) {
+      if (weights[k](0) == 0) {  // left out of every fit already: its error under the result
+        errors.push_back(GravityNormErrors(result.params, {readings[k]}, options.gravity)[0]);
+        continue;
+      }
       std::vector<Vec3> held_out = weights;
       held_out[k].setZero();
       ModelParameters without;
@@ -205,9 +360,10 @@ CalibrationResult CalibrateKnownOrientations(const std::vector<Vec3>& readings,
         break;
       }
       errors.push_back(e);
+      used_errors.push_back(e);
     }
     if (result.crossval_note.empty()) {
-      result.crossval_rms = Rms(errors);
+      result.crossval_rms = Rms(used_errors);
       result.crossval_errors = std::move(errors);
     }
   }

@@ -425,9 +425,10 @@ std::vector<std::string> Warnings(const Document& d, const ReportInput& input) {
   for (const ordered_json& o : d.doc.value("outliers", ordered_json::array())) {
     const int k = o.at("position").get<int>();
     if (k >= 1 && static_cast<std::size_t>(k) <= found.size()) found[std::size_t(k - 1)] = true;
-    w.push_back("position " + std::to_string(k) +
-                " disagrees with the others (t = " + Format("%.1f", o.at("t").get<double>()) +
-                ", beyond " + Format("%.2f", o.at("threshold").get<double>()) +
+    const std::string statistic = o.value("statistic", std::string("t"));  // F: known orientations
+    w.push_back("position " + std::to_string(k) + " disagrees with the others (" + statistic +
+                " = " + Format("%.1f", o.at("t").get<double>()) + ", beyond " +
+                Format("%.2f", o.at("threshold").get<double>()) +
                 "): " + (o.at("excluded").get<bool>() ? "left out of the fit" : "kept in the fit") +
                 "; it may have moved or been bumped during its interval");
   }

@@ -63,4 +63,20 @@ double StudentTTwoSidedQuantile(double p, double dof) {
   return 0.5 * (lo + hi);
 }
 
+double FisherFSurvival(double f, double d1, double d2) {
+  if (std::isinf(f)) return 0.0;
+  if (!(f > 0)) return 1.0;
+  return RegularizedIncompleteBeta(0.5 * d2, 0.5 * d1, d2 / (d2 + d1 * f));
+}
+
+double FisherFQuantile(double p, double d1, double d2) {
+  double lo = 0.0, hi = 1.0;
+  while (FisherFSurvival(hi, d1, d2) > p && hi < 1e300) hi *= 2.0;
+  while (hi - lo > 1e-12 * hi) {
+    const double mid = 0.5 * (lo + hi);
+    (FisherFSurvival(mid, d1, d2) > p ? lo : hi) = mid;
+  }
+  return 0.5 * (lo + hi);
+}
+
 }  // namespace accelcal::internal

@@ -1,5 +1,6 @@
 #pragma once
-// Student's t distribution, for the outlier test of calibrate.hpp (OutlierOptions).
+// Student's t and Fisher's F distributions, for the outlier tests of calibrate.hpp (OutlierOptions)
+// and known_orientation.hpp.
 
 namespace accelcal::internal {
 
@@ -14,5 +15,12 @@ double StudentTTwoSidedP(double t, double dof);
 /// The |t| whose two-sided probability is `p` (0 < p < 1), by bisection on StudentTTwoSidedP to
 /// a relative 1e-12.
 double StudentTTwoSidedQuantile(double p, double dof);
+
+/// P(F ≥ f) for F with (d1, d2) degrees of freedom: I_{d2/(d2+d1 f)}(d2/2, d1/2).
+double FisherFSurvival(double f, double d1, double d2);
+
+/// The f whose upper-tail probability is `p` (0 < p < 1), by bisection on FisherFSurvival to a
+/// relative 1e-12.
+double FisherFQuantile(double p, double d1, double d2);
 
 }  // namespace accelcal::internal

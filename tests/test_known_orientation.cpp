@@ -1,6 +1,7 @@
 // Calibration with known orientations (known_orientation.hpp, paper 003's general turntable case):
 // exact recovery, the covariance against Monte Carlo, refusals, and imucal's Ferraris result.
 #include <cmath>
+#include <cstdio>
 #include <fstream>
 #include <random>
 #include <sstream>
@@ -90,6 +91,7 @@ TEST(KnownOrientation, CovarianceMatchesTheScatterOfRepeatedCalibrations) {
   KnownOrientationOptions o;
   o.gravity = kG;
   o.reading_sigmas.assign(directions.size(), sigma);
+  o.outliers.policy = OutlierPolicy::kOff;  // the plain estimator's covariance
   const auto& slots = ParameterSlots(ModelKind::kLinear, Frame::kPlatform);
   const Eigen::VectorXd theta = Pack(truth, slots);
   Eigen::VectorXd sum2 = Eigen::VectorXd::Zero(theta.size());
@@ -119,6 +121,120 @@ TEST(KnownOrientation, CovarianceMatchesTheScatterOfRepeatedCalibrations) {
     EXPECT_NEAR(observed(i) / std::sqrt(reported(i)), 1.0, 0.06) << slots[i].name;
   }
   EXPECT_NEAR(static_cast<double>(covered) / entries, 0.683, 0.015);
+}
+
+// 24 known orientations spread over the sphere (fixed seed), and their noisy readings.
+struct Turntable {
+  std::vector<Vec3> directions, readings;
+};
+Turntable NoisyTurntable(const ModelParameters& device, double sigma, std::mt19937_64* random) {
+  // Two distributions: one shared by both engines would hand a value it cached from the fixed
+  // engine to the noise, the same in every run.
+  std::normal_distribution<double> direction, noise;
+  Turntable t;
+  std::mt19937_64 fixed(3);
+  for (int k = 0; k < 24; ++k) {
+    t.directions.push_back(Vec3(direction(fixed), direction(fixed), direction(fixed)).normalized());
+    t.readings.push_back(PredictRaw(device, Vec3(kG * t.directions.back())) +
+                         sigma * Vec3(noise(*random), noise(*random), noise(*random)));
+  }
+  return t;
+}
+
+TEST(KnownOrientation, ExcludesAPositionThatDisagreesAndEqualsTheFitWithoutIt) {
+  // Position 6 of 24 reads 0.2 m/s² off on y (20 sigma): a bumped fixture. The F test finds it,
+  // leaves it out, and the result is the fit of the other 23.
+  ModelParameters device = PlatformDevice();
+  device.k2.setZero();
+  std::mt19937_64 random(11);
+  Turntable t = NoisyTurntable(device, 0.01, &random);
+  t.readings[5] += Vec3(0.0, 0.2, 0.0);
+  KnownOrientationOptions o;
+  o.gravity = kG;
+  const CalibrationResult r = CalibrateKnownOrientations(t.readings, t.directions, o);
+  ASSERT_EQ(r.outliers.size(), 1u) << r.outlier_note;
+  const OutlierFinding& found = r.outliers[0];
+  EXPECT_EQ(found.position, 5);
+  EXPECT_TRUE(found.excluded);
+  EXPECT_EQ(found.statistic, OutlierStatistic::kFisherF);
+  EXPECT_GT(found.t, found.threshold);
+  EXPECT_EQ(found.degrees_of_freedom, 3 * 24 - 12 - 3);
+  EXPECT_NEAR(found.normal_residual, 0.2, 0.05);
+  EXPECT_NEAR(found.scatter, 0.01, 0.004);  // the fit without it: the noise, ±3 sampling sigma
+  EXPECT_TRUE(r.excluded(5));
+  EXPECT_EQ(r.degrees_of_freedom, 3 * 23 - 12);
+  Turntable without = t;
+  without.readings.erase(without.readings.begin() + 5);
+  without.directions.erase(without.directions.begin() + 5);
+  KnownOrientationOptions off = o;
+  off.outliers.policy = OutlierPolicy::kOff;
+  const CalibrationResult alone =
+      CalibrateKnownOrientations(without.readings, without.directions, off);
+  EXPECT_LT((r.params.K - alone.params.K).cwiseAbs().maxCoeff(), 1e-14);
+  EXPECT_LT((r.params.bias - alone.params.bias).cwiseAbs().maxCoeff(), 1e-14);
+  EXPECT_LT((r.covariance - alone.covariance).cwiseAbs().maxCoeff(),
+            1e-12 * alone.covariance.cwiseAbs().maxCoeff());
+  // Flagged only: every position stays in the fit.
+  KnownOrientationOptions flag = o;
+  flag.outliers.policy = OutlierPolicy::kFlag;
+  const CalibrationResult flagged = CalibrateKnownOrientations(t.readings, t.directions, flag);
+  ASSERT_EQ(flagged.outliers.size(), 1u);
+  EXPECT_FALSE(flagged.outliers[0].excluded);
+  EXPECT_EQ(flagged.degrees_of_freedom, 3 * 24 - 12);
+  EXPECT_TRUE(CalibrateKnownOrientations(t.readings, t.directions, off).outliers.empty());
+  // Held out: the excluded position is in no refit, and not in the RMS.
+  KnownOrientationOptions crossval = o;
+  crossval.cross_validate = true;
+  const CalibrationResult v = CalibrateKnownOrientations(t.readings, t.directions, crossval);
+  ASSERT_TRUE(v.crossval_rms.has_value()) << v.crossval_note;
+  EXPECT_EQ(v.crossval_errors.size(), 24u);
+  EXPECT_LT(*v.crossval_rms, 0.05);  // position 6's 0.2 m/s² would dominate it
+}
+
+TEST(KnownOrientation, FalseAlarmRateOnCleanDataIsTheChosenProbability) {
+  // 2000 clean turntable calibrations at false_alarm_probability = 0.05: the share with any
+  // position found discordant is at most 0.05 (Bonferroni over 24 exact F tests: about 0.049),
+  // within 3 binomial sigma (0.015); a test that never fires fails the lower bound.
+  ModelParameters device = PlatformDevice();
+  device.k2.setZero();
+  std::mt19937_64 random(12);
+  KnownOrientationOptions o;
+  o.gravity = kG;
+  o.outliers.false_alarm_probability = 0.05;
+  o.outliers.policy = OutlierPolicy::kFlag;
+  constexpr int kRuns = 2000;
+  int alarms = 0;
+  for (int run = 0; run < kRuns; ++run) {
+    const Turntable t = NoisyTurntable(device, 0.01, &random);
+    alarms += CalibrateKnownOrientations(t.readings, t.directions, o).outliers.empty() ? 0 : 1;
+  }
+  const double rate = static_cast<double>(alarms) / kRuns;
+  EXPECT_LE(rate, 0.05 + 3 * std::sqrt(0.05 * 0.95 / kRuns));
+  EXPECT_GE(rate, 0.025);
+  std::printf("known-orientation false alarms at 0.05: %.4f\n", rate);
+}
+
+TEST(KnownOrientation, TooFewPositionsToScreenSaySo) {
+  // The six axis positions, linear model: ν = 6, so F has 3 and 3 degrees of freedom and the test
+  // runs; five positions leave ν − 3 < 1.
+  ModelParameters device = PlatformDevice();
+  device.k2.setZero();
+  std::vector<Vec3> readings;
+  std::mt19937_64 random(5);
+  std::normal_distribution<double> normal;
+  for (const Vec3& c : SixPositions()) {
+    readings.push_back(PredictRaw(device, Vec3(kG * c)) +
+                       0.01 * Vec3(normal(random), normal(random), normal(random)));
+  }
+  KnownOrientationOptions o;
+  o.gravity = kG;
+  o.model = ModelKind::kQuadratic;  // 15 parameters: ν = 3 with six positions
+  const CalibrationResult r = CalibrateKnownOrientations(readings, SixPositions(), o);
+  EXPECT_TRUE(r.outliers.empty());
+  EXPECT_EQ(r.outlier_note,
+            "outlier screening needs at least 7 positions for the quadratic model, got 6");
+  o.outliers.false_alarm_probability = 1.5;
+  EXPECT_THROW(CalibrateKnownOrientations(readings, SixPositions(), o), std::invalid_argument);
 }
 
 TEST(KnownOrientation, RefusesWhatTheOrientationsCannotDetermine) {

@@ -180,11 +180,19 @@ std::string OutlierMessage(const OutlierFinding& o, const std::vector<Position>&
     where =
         Format(" (%.2f-%.2f s)", positions[k].interval->t_begin_s, positions[k].interval->t_end_s);
   }
-  return Format(
-      "position %d%s disagrees with the others: |f|-g %.3g %s under the fit %s it; t = %.1f, "
-      "beyond %.2f (Student t, %d degrees of freedom); moved or bumped during its interval?",
-      o.position + 1, where.c_str(), errors[k], unit, o.excluded ? "without" : "with", o.t,
-      o.threshold, o.degrees_of_freedom);
+  const std::string test =
+      o.statistic == OutlierStatistic::kFisherF
+          ? Format(
+                "F = %.1f, beyond %.2f (Fisher F, 3 and %d degrees of freedom); moved or "
+                "bumped during its interval, or not in the orientation the file gives?",
+                o.t, o.threshold, o.degrees_of_freedom)
+          : Format(
+                "t = %.1f, beyond %.2f (Student t, %d degrees of freedom); moved or bumped "
+                "during its interval?",
+                o.t, o.threshold, o.degrees_of_freedom);
+  return Format("position %d%s disagrees with the others: |f|-g %.3g %s under the fit %s it; %s",
+                o.position + 1, where.c_str(), errors[k], unit, o.excluded ? "without" : "with",
+                test.c_str());
 }
 
 void PrintCalibration(const CalibrationResult& r, const std::vector<Position>& positions,
@@ -390,8 +398,12 @@ int RunCalibrateKnownOrientations(const CalibrateArgs& args) {
   options.model =
       ParseEnum(ModelKindFromString(args.model), args.model, "--model", "linear, quadratic");
   options.cross_validate = args.cross_validate;
+  options.outliers.policy = ParseEnum(OutlierPolicyFromString(args.outliers), args.outliers,
+                                      "--outliers", "exclude, flag, off");
+  options.outliers.false_alarm_probability = args.outlier_probability;
   const Gravity g = ResolveGravity(args.gravity);
   options.gravity = g.in_unit;
+  if (auto why = options.Validate()) throw UsageError(*why);
   const OrientationFile orientations = ReadOrientations(args.orientations);
   const LoadedInput in = LoadInput(args.input);
   if (orientations.directions.size() != in.positions.size()) {

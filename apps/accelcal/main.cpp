@@ -318,8 +318,8 @@ int main(int argc, char** argv) {
   } timer{start};
   try {
     if (*calibrate) {
-      for (const char* name : {"--method", "--init", "--frame", "--estimator", "--max-iterations",
-                               "--outliers", "--outlier-probability"}) {
+      for (const char* name :
+           {"--method", "--init", "--frame", "--estimator", "--max-iterations"}) {
         if (calibrate->count(name) > 0) cal.gravity_only_options.emplace_back(name);
       }
       return RunCalibrate(cal);

@@ -139,14 +139,27 @@ struct OutlierOptions {
   int max_excluded = 3;
 };
 
+/// The statistic of an outlier test.
+enum class OutlierStatistic {
+  /// Orientation-free fits (Calibrate): t_k, the externally studentised residual along the
+  /// fitted surface's normal, Student t with ν − 1 degrees of freedom.
+  kStudentT,
+  /// Known orientations (known_orientation.hpp): F_k, the position's three residuals against
+  /// the scatter of the fit without it, Fisher F with 3 and ν − 3 degrees of freedom.
+  kFisherF,
+};
+std::string_view ToString(OutlierStatistic statistic);  // "t", "F"
+
 /// A position the screening found discordant (OutlierPolicy).
 struct OutlierFinding {
-  int position = 0;            ///< 0-based index into the readings
-  double t = 0;                ///< t_k when it was found
-  double threshold = 0;        ///< the |t| that false_alarm_probability allowed then
-  int degrees_of_freedom = 0;  ///< of t_k, ν − 1
-  double normal_residual = 0;  ///< e_k [raw]
-  double scatter = 0;          ///< s of that fit [raw]
+  int position = 0;  ///< 0-based index into the readings
+  OutlierStatistic statistic = OutlierStatistic::kStudentT;
+  double t = 0;                ///< the statistic when it was found: t_k, or F_k for kFisherF
+  double threshold = 0;        ///< the |t_k| (or F_k) that false_alarm_probability allowed then
+  int degrees_of_freedom = 0;  ///< of t_k, ν − 1; for kFisherF the second, ν − 3 (the first is 3)
+  double normal_residual = 0;  ///< e_k [raw]; for kFisherF the length of the residual p_k − μ_k
+  double scatter = 0;          ///< s of that fit [raw]; for kFisherF of the fit without it,
+                               ///< per axis (a ratio to the samples' noise when they weight it)
   bool excluded = false;       ///< left out of the result's fit
 };
 

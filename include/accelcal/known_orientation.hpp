@@ -34,6 +34,12 @@ struct KnownOrientationOptions {
   /// Leave-one-position-out validation (CalibrationResult::crossval_rms): m refits, each a
   /// closed-form solve.
   bool cross_validate = false;
+  /// A position that disagrees with the others (moved or bumped, or the fixture set to another
+  /// orientation than the file says), as calibrate.hpp's OutlierPolicy but with the statistic
+  /// OutlierStatistic::kFisherF: the position's three residuals against the scatter of the fit
+  /// without it, F(3, ν − 3), Bonferroni over the positions, Rosner's generalised ESD. Needs
+  /// ν ≥ 4 (linear: 6 positions, quadratic: 7); excluded positions are in no fit and no figure.
+  OutlierOptions outliers;
 
   /// An error message when an option is out of range, else std::nullopt.
   std::optional<std::string> Validate() const;

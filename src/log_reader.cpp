@@ -382,9 +382,15 @@ struct RowParser {
         throw InputError(source, line.number,
                          "mixed delimiters: a comma in a whitespace-separated file");
       }
-      throw InputError(source, line.number,
-                       "column " + std::to_string(column + 1) + ": '" +
-                           std::string(field_begin, field_end) + "' is not a number");
+      const std::string field(field_begin, field_end);
+      if (delim == Delimiter::kComma && std::any_of(field_begin, field_end, IsBlank)) {
+        throw InputError(source, line.number,
+                         "mixed delimiters: column " + std::to_string(column + 1) + " ('" + field +
+                             "') is separated by whitespace in a comma-separated file");
+      }
+      throw InputError(
+          source, line.number,
+          "column " + std::to_string(column + 1) + ": '" + field + "' is not a number");
     }
     if (!std::isfinite(*value)) {
       throw InputError(source, line.number,

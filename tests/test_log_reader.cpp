@@ -202,7 +202,9 @@ TEST(LogReader, NumbersAreCorrectlyRounded) {
         << "value " << i << ": " << got << " vs " << expected[i];
   }
   EXPECT_EQ(ErrorOf("1,2,3\n1,+-2,3\n"), "test.csv:2: column 2: '+-2' is not a number");
-  EXPECT_EQ(ErrorOf("1,2,3\n1,2 5,3\n"), "test.csv:2: column 2: '2 5' is not a number");
+  EXPECT_EQ(ErrorOf("1,2,3\n1,2 5,3\n"),
+            "test.csv:2: mixed delimiters: column 2 ('2 5') is separated by whitespace in a "
+            "comma-separated file");
   EXPECT_EQ(ErrorOf("1,2,3\n1,1e,3\n"), "test.csv:2: column 2: '1e' is not a number");
   EXPECT_EQ(ErrorOf("1,2,3\n1,0x10,3\n"), "test.csv:2: column 2: '0x10' is not a number");
 }

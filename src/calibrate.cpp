@@ -81,6 +81,15 @@ int CalibrationResult::positions_used() const {
   return used;
 }
 
+std::vector<double> CalibrationResult::InFit(const std::vector<double>& per_position) const {
+  std::vector<double> kept;
+  kept.reserve(per_position.size());
+  for (std::size_t k = 0; k < per_position.size(); ++k) {
+    if (!excluded(k)) kept.push_back(per_position[k]);
+  }
+  return kept;
+}
+
 std::string_view ToString(Initialization init) {
   switch (init) {
     case Initialization::kAuto:
@@ -655,7 +664,6 @@ void CrossValidate(const std::vector<Vec3>& readings, const CalibrationOptions& 
   std::vector<Vec3> subset;
   subset.reserve(readings.size());
   std::vector<double> errors;
-  std::vector<double> used_errors;
   for (std::size_t k = 0; k < readings.size(); ++k) {
     if (result->excluded(k)) {
       errors.push_back(GravityNormErrors(result->params, {readings[k]}, options.gravity)[0]);
@@ -684,9 +692,8 @@ void CrossValidate(const std::vector<Vec3>& readings, const CalibrationOptions& 
       return;
     }
     errors.push_back(e);
-    used_errors.push_back(e);
   }
-  result->crossval_rms = Rms(used_errors);
+  result->crossval_rms = Rms(result->InFit(errors));
   result->crossval_errors = std::move(errors);
 }
 

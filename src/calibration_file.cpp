@@ -124,11 +124,7 @@ std::string CalibrationToJson(const CalibrationResult& result, const Calibration
   }
   doc["positions"] = positions;
   doc["gravity_norm_rms_before"] = Nullable(GravityNormRmsUncalibrated(means, result.gravity));
-  std::vector<double> used_errors;  // the positions of the fit (outliers excluded)
-  for (std::size_t k = 0; k < errors.size(); ++k) {
-    if (!result.excluded(k)) used_errors.push_back(errors[k]);
-  }
-  doc["gravity_norm_rms_after"] = Nullable(Rms(used_errors));
+  doc["gravity_norm_rms_after"] = Nullable(Rms(result.InFit(errors)));  // outliers excluded
   doc["crossval_rms"] = Nullable(result.crossval_rms);
   if (!result.crossval_note.empty()) doc["crossval_note"] = result.crossval_note;
   ordered_json outliers = ordered_json::array();

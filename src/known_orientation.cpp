@@ -338,7 +338,7 @@ CalibrationResult CalibrateKnownOrientations(const std::vector<Vec3>& readings,
   s.initial_cost = s.final_cost = cost;
 
   if (options.cross_validate) {
-    std::vector<double> errors, used_errors;
+    std::vector<double> errors;
     for (std::size_t k = 0; k < m; ++k) {
       if (weights[k](0) == 0) {  // left out of every fit already: its error under the result
         errors.push_back(GravityNormErrors(result.params, {readings[k]}, options.gravity)[0]);
@@ -360,10 +360,9 @@ CalibrationResult CalibrateKnownOrientations(const std::vector<Vec3>& readings,
         break;
       }
       errors.push_back(e);
-      used_errors.push_back(e);
     }
     if (result.crossval_note.empty()) {
-      result.crossval_rms = Rms(used_errors);
+      result.crossval_rms = Rms(result.InFit(errors));
       result.crossval_errors = std::move(errors);
     }
   }

@@ -275,10 +275,7 @@ void PrintCalibration(const CalibrationResult& r, const std::vector<Position>& p
   }
   if (!r.outlier_note.empty()) Say("screening %s\n", r.outlier_note.c_str());
   const std::optional<double> before = GravityNormRmsUncalibrated(means, r.gravity);
-  std::vector<double> used_errors;  // the positions of the fit (outliers excluded)
-  for (std::size_t k = 0; k < errors.size(); ++k) {
-    if (!r.excluded(k)) used_errors.push_back(errors[k]);
-  }
+  const std::vector<double> used_errors = r.InFit(errors);  // outliers excluded
   Say("\nrms |f|-g  before: %s   after: %.6g %s%s\n",
       before ? Format("%.6g %s", *before, u).c_str()
              : Format("n/a (raw readings are not in %s)", u).c_str(),

@@ -312,6 +312,8 @@ struct CalibrationResult {
     return false;
   }
   int positions_used() const;
+  /// The entries of a per-position list (one per reading) at the positions in the fit, in order.
+  std::vector<double> InFit(const std::vector<double>& per_position) const;
 };
 
 /// Calibrates from averaged raw readings (one per position). Throws DataError when the data cannot

@@ -40,6 +40,14 @@ T ParseEnum(std::optional<T> value, const std::string& text, const char* option,
   return *value;
 }
 
+OutlierOptions ParseOutlierOptions(const OutlierArgs& args) {
+  OutlierOptions options;
+  options.policy = ParseEnum(OutlierPolicyFromString(args.policy), args.policy, "--outliers",
+                             "exclude, flag, off");
+  options.false_alarm_probability = args.probability;
+  return options;
+}
+
 struct LoadedInput {
   InputData data;
   std::vector<Position> positions;
@@ -395,9 +403,7 @@ int RunCalibrateKnownOrientations(const CalibrateArgs& args) {
   options.model =
       ParseEnum(ModelKindFromString(args.model), args.model, "--model", "linear, quadratic");
   options.cross_validate = args.cross_validate;
-  options.outliers.policy = ParseEnum(OutlierPolicyFromString(args.outliers), args.outliers,
-                                      "--outliers", "exclude, flag, off");
-  options.outliers.false_alarm_probability = args.outlier_probability;
+  options.outliers = ParseOutlierOptions(args.outliers);
   const Gravity g = ResolveGravity(args.gravity);
   options.gravity = g.in_unit;
   if (auto why = options.Validate()) throw UsageError(*why);
@@ -437,9 +443,7 @@ int RunCalibrate(const CalibrateArgs& args) {
   options.frame = ParseEnum(FrameFromString(args.frame), args.frame, "--frame", "x-first, z-first");
   options.estimator = ParseEnum(EstimatorFromString(args.estimator), args.estimator, "--estimator",
                                 "ml, bias-corrected");
-  options.outliers.policy = ParseEnum(OutlierPolicyFromString(args.outliers), args.outliers,
-                                      "--outliers", "exclude, flag, off");
-  options.outliers.false_alarm_probability = args.outlier_probability;
+  options.outliers = ParseOutlierOptions(args.outliers);
   options.cross_validate = args.cross_validate;
   if (auto_model && !args.cross_validate) {
     throw UsageError(
@@ -504,9 +508,7 @@ int RunCompare(const CompareArgs& args) {
         ParseEnum(SolverMethodFromString(name), name, "--methods",
                   "joint, two-step, newton-lagrange, modulus, modulus-norm, ellipsoid"));
   }
-  options.base.outliers.policy = ParseEnum(OutlierPolicyFromString(args.outliers), args.outliers,
-                                           "--outliers", "exclude, flag, off");
-  options.base.outliers.false_alarm_probability = args.outlier_probability;
+  options.base.outliers = ParseOutlierOptions(args.outliers);
   if (auto why = options.base.Validate()) throw UsageError(*why);
   for (SolverMethod m : options.methods) {
     CalibrationOptions o = options.base;

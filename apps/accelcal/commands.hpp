@@ -49,6 +49,12 @@ struct GravityArgs {
   std::string units = "m/s2";
 };
 
+// --outliers and --outlier-probability (calibrate.hpp OutlierOptions).
+struct OutlierArgs {
+  std::string policy = "exclude";  // OutlierPolicy
+  double probability = 1e-3;       // OutlierOptions::false_alarm_probability
+};
+
 struct CalibrateArgs {
   InputArgs input;
   GravityArgs gravity;
@@ -57,8 +63,7 @@ struct CalibrateArgs {
   std::string init = "auto";
   std::string frame = "x-first";
   std::string estimator = "ml";
-  std::string outliers = "exclude";   // OutlierPolicy
-  double outlier_probability = 1e-3;  // OutlierOptions::false_alarm_probability
+  OutlierArgs outliers;
   std::string orientations;  // known orientations (orientation_file.hpp): platform-frame fit
   /// Options that a known-orientation fit does not take, when given explicitly.
   std::vector<std::string> gravity_only_options;
@@ -77,9 +82,8 @@ struct CompareArgs {
   std::vector<std::string> methods;  // empty: all that fit the model
   std::string init = "auto";
   bool leave_one_out = true;
-  std::string reference;              // calibration file: adds paper 001's e_T, e_b
-  std::string outliers = "exclude";   // screened once, the same positions for every method
-  double outlier_probability = 1e-3;  // CalibrationOptions::outliers.false_alarm_probability
+  std::string reference;  // calibration file: adds paper 001's e_T, e_b
+  OutlierArgs outliers;   // screened once, the same positions for every method
   bool json = false;
 };
 

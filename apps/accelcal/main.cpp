@@ -40,6 +40,13 @@ void AddDetectionOptions(CLI::App* cmd, InputArgs* in) {
       ->capture_default_str();
 }
 
+void AddOutlierOptions(CLI::App* cmd, OutlierArgs* o, const std::string& policy_help) {
+  cmd->add_option("--outliers", o->policy, policy_help)->capture_default_str();
+  cmd->add_option("--outlier-probability", o->probability,
+                  "chance that a calibration whose positions all agree loses one to the test")
+      ->capture_default_str();
+}
+
 void AddGravityOptions(CLI::App* cmd, GravityArgs* g) {
   auto* gravity = cmd->add_option("--gravity", g->gravity_ms2,
                                   "local gravity magnitude [m/s2] (default 9.80665)");
@@ -90,15 +97,9 @@ int main(int argc, char** argv) {
                    "ml (maximum likelihood) or bias-corrected (removes the bias of order "
                    "sigma^2/g that ML has at MEMS noise levels; same covariance)")
       ->capture_default_str();
-  calibrate
-      ->add_option("--outliers", cal.outliers,
-                   "a position that disagrees with the others (moved or bumped during its "
-                   "interval): exclude it with a warning, flag it only, or off")
-      ->capture_default_str();
-  calibrate
-      ->add_option("--outlier-probability", cal.outlier_probability,
-                   "chance that a calibration whose positions all agree loses one to the test")
-      ->capture_default_str();
+  AddOutlierOptions(calibrate, &cal.outliers,
+                    "a position that disagrees with the others (moved or bumped during its "
+                    "interval): exclude it with a warning, flag it only, or off");
   calibrate->add_option("--orientations", cal.orientations,
                         "known orientation of every position, in order (a file of directions or "
                         "attitudes, as for design): full misalignment in the platform frame, "
@@ -128,15 +129,9 @@ int main(int argc, char** argv) {
   compare->add_option("--init", cmp.init, "auto, ellipsoid or normalized-readings")
       ->capture_default_str();
   compare->add_flag("!--no-held-out", cmp.leave_one_out, "skip the leave-one-position-out fits");
-  compare
-      ->add_option("--outliers", cmp.outliers,
-                   "screen the positions once (maximum-likelihood fit) and fit every method to "
-                   "the same ones: exclude a disagreeing position, flag it only, or off")
-      ->capture_default_str();
-  compare
-      ->add_option("--outlier-probability", cmp.outlier_probability,
-                   "chance that positions which all agree lose one to the test")
-      ->capture_default_str();
+  AddOutlierOptions(compare, &cmp.outliers,
+                    "screen the positions once (maximum-likelihood fit) and fit every method to "
+                    "the same ones: exclude a disagreeing position, flag it only, or off");
   compare->add_option("--reference", cmp.reference,
                       "a known calibration (JSON): adds paper 001's e_T and e_b per method");
   compare->add_flag("--json", cmp.json, "machine-readable output");

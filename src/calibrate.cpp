@@ -65,6 +65,14 @@ std::string_view ToString(OutlierPolicy policy) {
   }
   return "exclude";
 }
+std::optional<std::string> OutlierOptions::Validate() const {
+  if (!(false_alarm_probability > 0 && false_alarm_probability < 1)) {
+    return "false_alarm_probability must be in (0, 1)";
+  }
+  if (max_excluded < 0) return "max_excluded must be non-negative";
+  return std::nullopt;
+}
+
 std::string_view ToString(OutlierStatistic statistic) {
   return statistic == OutlierStatistic::kFisherF ? "F" : "t";
 }
@@ -164,10 +172,7 @@ std::optional<std::string> CalibrationOptions::Validate() const {
     return "the bias-corrected estimator corrects maximum likelihood: it does not apply to the " +
            std::string(ToString(method)) + " method";
   }
-  if (!(outliers.false_alarm_probability > 0 && outliers.false_alarm_probability < 1)) {
-    return "outliers.false_alarm_probability must be in (0, 1)";
-  }
-  if (outliers.max_excluded < 0) return "outliers.max_excluded must be non-negative";
+  if (auto why = outliers.Validate()) return "outliers." + *why;
   if (bias_correction.max_rounds < 1) return "bias_correction.max_rounds must be at least 1";
   if (!(bias_correction.tolerance > 0)) return "bias_correction.tolerance must be positive";
   if (method == SolverMethod::kEllipsoid && initialization != Initialization::kAuto &&
@@ -627,6 +632,19 @@ Fit CalibrateInFrame(const std::vector<Vec3>& readings, const CalibrationOptions
 
 }  // namespace
 
+void internal::CheckReadingSigmas(const std::vector<Vec3>& sigmas, std::size_t readings) {
+  if (sigmas.empty()) return;
+  if (sigmas.size() != readings) {
+    throw std::invalid_argument("reading_sigmas has " + std::to_string(sigmas.size()) +
+                                " entries for " + std::to_string(readings) + " readings");
+  }
+  for (const Vec3& s : sigmas) {
+    if (!s.allFinite() || !(s.minCoeff() > 0)) {
+      throw std::invalid_argument("reading_sigmas must be finite and positive");
+    }
+  }
+}
+
 void internal::SpreadOverAllPositions(const std::vector<Vec3>& readings,
                                       const std::vector<int>& keep, CalibrationResult* fit) {
   std::vector<Vec3> directions(readings.size()), residuals(readings.size());
@@ -817,18 +835,7 @@ CalibrationResult CalibrateScreened(const std::vector<Vec3>& readings,
 
 CalibrationResult Calibrate(const std::vector<Vec3>& readings, const CalibrationOptions& options) {
   if (auto why = options.Validate()) throw std::invalid_argument(*why);
-  if (!options.reading_sigmas.empty()) {
-    if (options.reading_sigmas.size() != readings.size()) {
-      throw std::invalid_argument("reading_sigmas has " +
-                                  std::to_string(options.reading_sigmas.size()) + " entries for " +
-                                  std::to_string(readings.size()) + " readings");
-    }
-    for (const Vec3& s : options.reading_sigmas) {
-      if (!s.allFinite() || !(s.minCoeff() > 0)) {
-        throw std::invalid_argument("reading_sigmas must be finite and positive");
-      }
-    }
-  }
+  internal::CheckReadingSigmas(options.reading_sigmas, readings.size());
   CalibrationResult result = CalibrateScreened(readings, options);
   if (options.cross_validate && result.summary.converged()) {
     CrossValidate(readings, options, &result);

@@ -101,11 +101,7 @@ CalibrationOptions ScreenOnce(const std::vector<Vec3>& readings, const Calibrati
 
 Comparison CompareMethods(const std::vector<Vec3>& all_readings, const CompareOptions& options) {
   if (auto why = options.base.Validate()) throw std::invalid_argument(*why);
-  const std::size_t sigmas = options.base.reading_sigmas.size();
-  if (sigmas != 0 && sigmas != all_readings.size()) {
-    throw std::invalid_argument("reading_sigmas has " + std::to_string(sigmas) + " entries for " +
-                                std::to_string(all_readings.size()) + " readings");
-  }
+  internal::CheckReadingSigmas(options.base.reading_sigmas, all_readings.size());
   const std::vector<SolverMethod> methods =
       options.methods.empty() ? MethodsFor(options.base.model) : options.methods;
   Comparison comparison;

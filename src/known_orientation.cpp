@@ -12,6 +12,7 @@
 
 #include "accelcal/error.hpp"
 #include "accelcal/frame.hpp"
+#include "outliers.hpp"
 #include "student_t.hpp"
 
 namespace accelcal {
@@ -130,11 +131,7 @@ FTest MostDiscordant(const std::vector<Vec3>& readings, const std::vector<Vec3>&
   const int nu = 3 * used - P;
   test.dof = nu - 3;
   // Positions fitted to round-off (simulated exact data) have no scatter to test against.
-  double signal = 0;
-  for (int i = 0; i < 3; ++i) {
-    signal = std::max(signal, fit.params.K.row(i).cwiseAbs().sum() * forces[0].norm() +
-                                  std::abs(fit.params.bias(i)));
-  }
+  const double signal = internal::SignalAmplitude(fit.params, forces[0].norm());
   if (test.dof < 1 || !(largest_residual > 64 * std::numeric_limits<double>::epsilon() * signal)) {
     return test;
   }
@@ -236,10 +233,7 @@ std::vector<OutlierFinding> Screen(const std::vector<Vec3>& readings,
 
 std::optional<std::string> KnownOrientationOptions::Validate() const {
   if (!(gravity > 0) || !std::isfinite(gravity)) return "gravity must be a positive number";
-  if (!(outliers.false_alarm_probability > 0 && outliers.false_alarm_probability < 1)) {
-    return "outliers.false_alarm_probability must be in (0, 1)";
-  }
-  if (outliers.max_excluded < 0) return "outliers.max_excluded must be non-negative";
+  if (auto why = outliers.Validate()) return "outliers." + *why;
   return std::nullopt;
 }
 
@@ -253,11 +247,7 @@ CalibrationResult CalibrateKnownOrientations(const std::vector<Vec3>& readings,
     throw std::invalid_argument(std::to_string(directions.size()) + " known directions for " +
                                 std::to_string(m) + " readings");
   }
-  if (!options.reading_sigmas.empty() && options.reading_sigmas.size() != m) {
-    throw std::invalid_argument("reading_sigmas has " +
-                                std::to_string(options.reading_sigmas.size()) + " entries for " +
-                                std::to_string(m) + " readings");
-  }
+  internal::CheckReadingSigmas(options.reading_sigmas, m);
   for (std::size_t k = 0; k < m; ++k) {
     if (!(std::abs(directions[k].norm() - 1.0) <= 1e-6)) {
       throw std::invalid_argument("known direction " + std::to_string(k + 1) +
@@ -265,10 +255,6 @@ CalibrationResult CalibrateKnownOrientations(const std::vector<Vec3>& readings,
     }
     if (!readings[k].allFinite()) {
       throw DataError("position " + std::to_string(k + 1) + " has a non-finite reading");
-    }
-    if (!options.reading_sigmas.empty() &&
-        !(options.reading_sigmas[k].allFinite() && options.reading_sigmas[k].minCoeff() > 0)) {
-      throw std::invalid_argument("reading_sigmas must be finite and positive");
     }
   }
   const auto& slots = ParameterSlots(options.model, Frame::kPlatform);

@@ -38,6 +38,10 @@ Screening ScreenPositions(const InformationRows& rows, const Mat12& S_inverse, M
                           const std::vector<Vec3>& residuals, double signal,
                           double false_alarm_probability);
 
+/// Throws std::invalid_argument unless `sigmas` (CalibrationOptions::reading_sigmas and its
+/// twins) is empty or holds one finite, positive 3-vector per reading.
+void CheckReadingSigmas(const std::vector<Vec3>& sigmas, std::size_t readings);
+
 /// `fit`, of the readings at indices `keep`, spread back over all `readings`: a left-out position
 /// gets its direction and residual under the fit.
 void SpreadOverAllPositions(const std::vector<Vec3>& readings, const std::vector<int>& keep,

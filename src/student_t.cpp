@@ -35,6 +35,19 @@ double BetaContinuedFraction(double a, double b, double x) {
   return h;
 }
 
+// The x ≥ 0 at which a decreasing tail probability `survival` falls to p, by bisection to a
+// relative 1e-12.
+template <typename Survival>
+double UpperQuantile(const Survival& survival, double p) {
+  double lo = 0.0, hi = 1.0;
+  while (survival(hi) > p && hi < 1e300) hi *= 2.0;
+  while (hi - lo > 1e-12 * hi) {
+    const double mid = 0.5 * (lo + hi);
+    (survival(mid) > p ? lo : hi) = mid;
+  }
+  return 0.5 * (lo + hi);
+}
+
 }  // namespace
 
 double RegularizedIncompleteBeta(double a, double b, double x) {
@@ -54,13 +67,7 @@ double StudentTTwoSidedP(double t, double dof) {
 }
 
 double StudentTTwoSidedQuantile(double p, double dof) {
-  double lo = 0.0, hi = 1.0;
-  while (StudentTTwoSidedP(hi, dof) > p && hi < 1e300) hi *= 2.0;
-  while (hi - lo > 1e-12 * hi) {
-    const double mid = 0.5 * (lo + hi);
-    (StudentTTwoSidedP(mid, dof) > p ? lo : hi) = mid;
-  }
-  return 0.5 * (lo + hi);
+  return UpperQuantile([dof](double t) { return StudentTTwoSidedP(t, dof); }, p);
 }
 
 double FisherFSurvival(double f, double d1, double d2) {
@@ -70,13 +77,7 @@ double FisherFSurvival(double f, double d1, double d2) {
 }
 
 double FisherFQuantile(double p, double d1, double d2) {
-  double lo = 0.0, hi = 1.0;
-  while (FisherFSurvival(hi, d1, d2) > p && hi < 1e300) hi *= 2.0;
-  while (hi - lo > 1e-12 * hi) {
-    const double mid = 0.5 * (lo + hi);
-    (FisherFSurvival(mid, d1, d2) > p ? lo : hi) = mid;
-  }
-  return 0.5 * (lo + hi);
+  return UpperQuantile([d1, d2](double f) { return FisherFSurvival(f, d1, d2); }, p);
 }
 
 }  // namespace accelcal::internal

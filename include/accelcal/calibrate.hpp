@@ -137,6 +137,9 @@ struct OutlierOptions {
   /// At most this many positions are excluded (and max(1, max_excluded) tested): many positions
   /// that disagree point at the model or the recording, not at single bad positions.
   int max_excluded = 3;
+
+  /// An error message when an option is out of range, else std::nullopt.
+  std::optional<std::string> Validate() const;
 };
 
 /// The statistic of an outlier test.

@@ -758,7 +758,8 @@ CalibrationResult CalibrateScreened(const std::vector<Vec3>& readings,
   };
   std::vector<Step> steps;
   const int max_steps = std::max(1, options.outliers.max_excluded);
-  steps.reserve(static_cast<std::size_t>(max_steps));  // `current` points into it
+  steps.reserve(std::min(static_cast<std::size_t>(max_steps), readings.size()));  // `current`
+  // points into it: no step removes more than every position
   std::vector<int> keep(readings.size());
   for (std::size_t k = 0; k < keep.size(); ++k) keep[k] = static_cast<int>(k);
   const CalibrationResult* current = &full;

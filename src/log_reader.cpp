@@ -227,7 +227,7 @@ int FindColumn(const std::vector<std::string>& header, std::initializer_list<con
 constexpr std::size_t kMaxFields = 256;
 
 // Column roles: time, x, y, z, count, sx, sy, sz. -1 = absent.
-enum Role { kTime, kX, kY, kZ, kCount, kSx, kSy, kSz, kRoles };
+enum Role { kTime, kX, kY, kZ, kCount, kSx, kSy, kSz, kInstance, kRoles };
 
 struct Layout {
   int column[kRoles];
@@ -235,7 +235,28 @@ struct Layout {
 
 Layout NamedLayout(const std::vector<std::string>& h) {
   Layout l;
-  l.column[kTime] = FindColumn(h, {"t", "time", "timestamp", "time_s", "t_s", "timestamp_s"});
+  l.column[kTime] = FindColumn(h, {"t",
+                                   "time",
+                                   "timestamp",
+                                   "time_s",
+                                   "t_s",
+                                   "timestamp_s",
+                                   "time_ms",
+                                   "t_ms",
+                                   "timestamp_ms",
+                                   "timems",
+                                   "time_us",
+                                   "t_us",
+                                   "timestamp_us",
+                                   "timeus",
+                                   "time_usec",
+                                   "timestamp_sample",
+                                   "time_ns",
+                                   "t_ns",
+                                   "timestamp_ns",
+                                   "%time",
+                                   "header.stamp",
+                                   "field.header.stamp"});
   l.column[kX] = FindColumn(h, {"x", "ax", "a_x", "acc_x", "accel_x", "accx"});
   l.column[kY] = FindColumn(h, {"y", "ay", "a_y", "acc_y", "accel_y", "accy"});
   l.column[kZ] = FindColumn(h, {"z", "az", "a_z", "acc_z", "accel_z", "accz"});
@@ -243,6 +264,9 @@ Layout NamedLayout(const std::vector<std::string>& h) {
   l.column[kSx] = FindColumn(h, {"sx", "std_x", "ax_std", "sigma_x"});
   l.column[kSy] = FindColumn(h, {"sy", "std_y", "ay_std", "sigma_y"});
   l.column[kSz] = FindColumn(h, {"sz", "std_z", "az_std", "sigma_z"});
+  // A column naming the sensor of each row: ArduPilot's I, PX4's device_id and multi_id, ...
+  l.column[kInstance] =
+      FindColumn(h, {"i", "instance", "multi_id", "device_id", "imu", "imu_id", "sensor_id", "id"});
   return l;
 }
 
@@ -266,6 +290,12 @@ int ResolveColumn(const std::string& spec, const std::vector<std::string>& heade
                        (header.empty() ? std::string(" (the file has no header)") : std::string()));
 }
 
+std::string ShortNumber(double v) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%.6g", v);
+  return buf;
+}
+
 std::string TimeBackwards(double now, double before) {
   char buf[128];
   std::snprintf(buf, sizeof buf, "time goes backwards (%.9g after %.9g)", now, before);
@@ -282,7 +312,7 @@ struct RowParser {
   const std::function<void(std::size_t, std::size_t)>& progress;
 
   void Parse(std::string_view text, std::uint32_t lines_before, std::size_t expected_rows,
-             InputData* data) const {
+             InputData* data, std::vector<double>* instances) const {
     int role_of_column[kMaxFields];
     std::fill(role_of_column, role_of_column + ncols, -1);
     for (int r = 0; r < kRoles; ++r) {
@@ -305,13 +335,9 @@ struct RowParser {
       }
       ParseFields(line, role_of_column, values);
       const Vec3 xyz(values[kX], values[kY], values[kZ]);
+      if (layout.column[kInstance] >= 0) instances->push_back(values[kInstance]);
       if (raw) {
-        if (has_time) {
-          if (!log.time_s.empty() && values[kTime] < log.time_s.back()) {
-            throw InputError(source, line.number, TimeBackwards(values[kTime], log.time_s.back()));
-          }
-          log.time_s.push_back(values[kTime]);
-        }
+        if (has_time) log.time_s.push_back(values[kTime]);
         log.samples.push_back(xyz);
         log.line.push_back(line.number);
       } else {
@@ -420,6 +446,70 @@ struct RowParser {
     return position;
   }
 };
+
+// Several sensors in one file (ArduPilot's IMU instances, PX4's device ids): the rows of one, by
+// `chosen`, or an error listing those found. A column with more than 16 distinct values is not
+// an instance column (a sample counter, say) and is left alone.
+void SelectInstance(const std::vector<double>& instances, const std::string& column,
+                    const std::optional<double>& chosen, const std::string& source,
+                    InputData* data) {
+  std::vector<std::pair<double, std::size_t>> found;  // value, rows
+  for (double v : instances) {
+    auto it = std::find_if(found.begin(), found.end(), [&](const auto& f) { return f.first == v; });
+    if (it == found.end()) {
+      if (found.size() == 16) {
+        if (chosen) {
+          throw InputError(
+              source, 0,
+              "column '" + column + "' has more than 16 distinct values: not an instance column");
+        }
+        return;
+      }
+      found.push_back({v, 1});
+    } else {
+      ++it->second;
+    }
+  }
+  std::sort(found.begin(), found.end());
+  std::string list;
+  for (const auto& [value, rows] : found) {
+    list +=
+        (list.empty() ? "" : ", ") + ShortNumber(value) + " (" + std::to_string(rows) + " rows)";
+  }
+  if (!chosen) {
+    if (found.size() <= 1) return;
+    throw InputError(source, 0,
+                     "the rows belong to " + std::to_string(found.size()) +
+                         " sensors (instance column '" + column + "': " + list +
+                         "): choose one instance");
+  }
+  if (std::none_of(found.begin(), found.end(), [&](const auto& f) { return f.first == *chosen; })) {
+    throw InputError(source, 0,
+                     "no rows of instance " + ShortNumber(*chosen) + " (column '" + column +
+                         "' has " + list + ")");
+  }
+  std::size_t kept = 0;
+  for (std::size_t i = 0; i < instances.size(); ++i) {
+    if (instances[i] != *chosen) continue;
+    if (data->kind == InputKind::kRaw) {
+      RawLog& log = data->raw;
+      if (!log.time_s.empty()) log.time_s[kept] = log.time_s[i];
+      log.samples[kept] = log.samples[i];
+      log.line[kept] = log.line[i];
+    } else {
+      data->positions[kept] = data->positions[i];
+    }
+    ++kept;
+  }
+  if (data->kind == InputKind::kRaw) {
+    RawLog& log = data->raw;
+    if (!log.time_s.empty()) log.time_s.resize(kept);
+    log.samples.resize(kept);
+    log.line.resize(kept);
+  } else {
+    data->positions.resize(kept);
+  }
+}
 
 }  // namespace
 
@@ -534,15 +624,55 @@ InputData ParseInput(std::string_view text, const std::string& source, const Rea
                  : text.substr(static_cast<std::size_t>(first.text.data() - text.data()));
   const std::uint32_t lines_before = has_header ? rows_reader.lines_read() : first.number - 1;
   if (raw) data.raw.source = source;
+  if (named.column[kInstance] >= 0 &&
+      std::find(std::begin(layout.column), std::begin(layout.column) + kInstance,
+                named.column[kInstance]) == std::begin(layout.column) + kInstance) {
+    layout.column[kInstance] = named.column[kInstance];
+  } else {
+    layout.column[kInstance] = -1;
+  }
   const RowParser parser{source, delim, ncols, layout, raw, options.progress};
-  parser.Parse(body, lines_before, expected_rows, &data);
+  std::vector<double> instances;
+  parser.Parse(body, lines_before, expected_rows, &data, &instances);
+  if (layout.column[kInstance] >= 0) {
+    SelectInstance(instances, header[std::size_t(layout.column[kInstance])], options.instance,
+                   source, &data);
+  } else if (options.instance) {
+    throw InputError(source, 0,
+                     "an instance was chosen, but the file has no instance column (i, instance, "
+                     "multi_id, device_id, imu, imu_id, sensor_id, id)");
+  }
   if (raw) {
-    if (options.rate_hz) {
-      data.raw.rate_hz = options.rate_hz;
-    } else if (data.raw.time_s.size() >= 2) {
-      const double span = data.raw.time_s.back() - data.raw.time_s.front();
-      if (!(span > 0)) throw InputError(source, 0, "the timestamps do not advance");
-      data.raw.rate_hz = static_cast<double>(data.raw.time_s.size() - 1) / span;
+    const std::vector<double>& t = data.raw.time_s;
+    for (std::size_t i = 1; i < t.size(); ++i) {
+      if (t[i] < t[i - 1]) {
+        throw InputError(source, data.raw.line[i], TimeBackwards(t[i], t[i - 1]));
+      }
+    }
+  }
+  if (raw) {
+    RawLog& log = data.raw;
+    if (log.time_s.size() >= 2) {
+      try {
+        const int c = layout.column[kTime];
+        log.time = MakeTimeAxis(&log.time_s, options.time_unit,
+                                has_header ? std::string_view(header[std::size_t(c)]) : "");
+      } catch (const DataError& e) {
+        throw InputError(source, 0, e.what());
+      }
+      log.rate_hz = log.time->rate_hz;
+      if (options.rate_hz) {
+        if (std::abs(*options.rate_hz / log.time->rate_hz - 1) > kRateTolerance) {
+          throw InputError(source, 0,
+                           "the given rate " + ShortNumber(*options.rate_hz) +
+                               " Hz contradicts the time column, whose timestamps (" +
+                               std::string(ToString(log.time->unit)) + ") come at " +
+                               ShortNumber(log.time->rate_hz) + " Hz");
+        }
+        log.rate_hz = options.rate_hz;
+      }
+    } else if (options.rate_hz) {
+      log.rate_hz = options.rate_hz;
     }
   }
   return data;

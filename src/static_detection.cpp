@@ -7,8 +7,11 @@
 #include <utility>
 
 #include "accelcal/error.hpp"
+#include "text_format.hpp"
 
 namespace accelcal {
+
+using internal::Format;
 
 std::optional<std::string> StaticDetectionOptions::Validate() const {
   if (!(window_s > 0)) return "the detection window must be positive";
@@ -46,14 +49,42 @@ std::pair<Vec3, Vec3> LogExtremes(const std::vector<Vec3>& samples) {
   return {lo, hi};
 }
 
+// The reading of 1 g, roughly, for judging motion: a calibration log turns every axis through
+// about ±1 g, so half the 2nd-98th percentile range of each axis, the median over the axes
+// (exact for the positions alone; motion widens the range a little).
+// Every k-th sample is enough for percentiles (at most 65536 of them: a long log costs no copy).
+double GravityReading(const std::vector<Vec3>& samples) {
+  const std::size_t stride = samples.size() / 65536 + 1;
+  std::vector<double> column((samples.size() + stride - 1) / stride);
+  double half_range[3];
+  for (int a = 0; a < 3; ++a) {
+    for (std::size_t i = 0; i < column.size(); ++i) column[i] = samples[i * stride](a);
+    const auto at = [&](double q) {
+      const auto k = static_cast<std::ptrdiff_t>(q * static_cast<double>(column.size() - 1));
+      std::nth_element(column.begin(), column.begin() + k, column.end());
+      return column[static_cast<std::size_t>(k)];
+    };
+    const double lo = at(0.02), hi = at(0.98);
+    half_range[a] = 0.5 * (hi - lo);
+  }
+  std::sort(half_range, half_range + 3);
+  return half_range[1];
+}
+
 // Why `interval` is clipped (RejectedInterval::Cause::kClipped), or nothing.
 std::optional<std::string> Clipping(const std::vector<Vec3>& samples,
                                     const StaticInterval& interval,
-                                    const std::pair<Vec3, Vec3>& extremes) {
+                                    const std::pair<Vec3, Vec3>& extremes,
+                                    const Vec3& quantisation_step) {
   const std::size_t n = interval.count();
   for (int a = 0; a < 3; ++a) {
-    // Another axis must vary: a noise-free (simulated) log sits still at its extremes too.
-    if (!(interval.std((a + 1) % 3) > 0 || interval.std((a + 2) % 3) > 0)) continue;
+    // Another axis must vary by more than its quantisation step: a noise-free (simulated) log
+    // sits still at its extremes too, and so does the +1 g reading of a quantised sensor whose
+    // noise is below its step (it is the log's largest value when no motion exceeds 1 g).
+    const int b = (a + 1) % 3, c = (a + 2) % 3;
+    if (!(interval.std(b) > quantisation_step(b) || interval.std(c) > quantisation_step(c))) {
+      continue;
+    }
     for (const bool largest : {true, false}) {
       const double limit = largest ? extremes.second(a) : extremes.first(a);
       std::size_t at_limit = 0;
@@ -72,97 +103,206 @@ std::optional<std::string> Clipping(const std::vector<Vec3>& samples,
   }
   return std::nullopt;
 }
+
+// Why `interval` is not still although every window in it is quiet (RejectedInterval::Cause::
+// kMoving), or nothing. A slow turn adds little variance to a short window but moves the mean
+// steadily: the interval is cut into kBatches batches, and on every axis the least-squares slope
+// of the batch means against their index is tested against the scatter of the batch means about
+// that line (t with kBatches − 2 degrees of freedom; batch means absorb the correlation of
+// successive samples). The scatter is floored by the quantisation noise q²/12 of one sample.
+// A significant slope is motion only when the mean moves by more than kMaxTurn_rad times
+// `gravity_raw` (the reading of 1 g): still periods drift too (a bias settling by 1 mg over the
+// T265's 50-s rest, 1.2 counts over 11 s of the Xsens), far less than a turn.
+std::optional<std::string> Moving(const std::vector<Vec3>& samples, const StaticInterval& interval,
+                                  const Vec3& quantisation_step, double gravity_raw) {
+  constexpr double kMaxTurn_rad = 1.0 * 3.14159265358979323846 / 180.0;
+  constexpr int kBatches = 8;
+  // |t| beyond which the mean moves: t with 6 degrees of freedom exceeds 12 with probability
+  // 2e-5 (two-sided), 6e-5 over the three axes.
+  constexpr double kMaxT = 12.0;
+  const std::size_t n = interval.count();
+  if (n < 4 * kBatches) return std::nullopt;
+  double y[3][kBatches];
+  for (int j = 0; j < kBatches; ++j) {
+    const std::size_t b = interval.begin + n * static_cast<std::size_t>(j) / kBatches;
+    const std::size_t e = interval.begin + n * static_cast<std::size_t>(j + 1) / kBatches;
+    Vec3 sum = Vec3::Zero();
+    for (std::size_t i = b; i < e; ++i) sum += samples[i] - interval.mean;
+    for (int a = 0; a < 3; ++a) y[a][j] = sum(a) / static_cast<double>(e - b);
+  }
+  const double xm = 0.5 * (kBatches - 1);
+  double sxx = 0;
+  for (int j = 0; j < kBatches; ++j) sxx += (j - xm) * (j - xm);
+  const double per_batch = static_cast<double>(n) / kBatches;
+  for (int a = 0; a < 3; ++a) {
+    double ym = 0, sxy = 0;
+    for (int j = 0; j < kBatches; ++j) ym += y[a][j] / kBatches;
+    for (int j = 0; j < kBatches; ++j) sxy += (j - xm) * (y[a][j] - ym);
+    const double slope = sxy / sxx;
+    double rss = 0;
+    for (int j = 0; j < kBatches; ++j) {
+      const double r = y[a][j] - ym - slope * (j - xm);
+      rss += r * r;
+    }
+    const double var = std::max(rss / (kBatches - 2),
+                                quantisation_step(a) * quantisation_step(a) / 12.0 / per_batch);
+    const double t = var > 0 ? slope / std::sqrt(var / sxx) : (slope != 0 ? INFINITY : 0.0);
+    const double moved = slope * (kBatches - 1);
+    if (std::abs(t) > kMaxT && std::abs(moved) > kMaxTurn_rad * gravity_raw) {
+      return Format(
+          "axis %c moves by %.4g over the period (%.2g deg of a %.4g reading of 1 g; t = "
+          "%.3g): the sensor was turning, not still",
+          "xyz"[a], moved, std::abs(moved) / gravity_raw * 180 / 3.14159265358979323846,
+          gravity_raw, t);
+    }
+  }
+  return std::nullopt;
+}
 }  // namespace
 
 StaticDetectionResult DetectStaticIntervals(const RawLog& log,
                                             const StaticDetectionOptions& options) {
   if (auto why = options.Validate()) throw DataError(*why);
-  if (!log.rate_hz) {
-    throw DataError("the log has no time column: give the sample rate (--rate HZ)");
-  }
+  if (!log.rate_hz) throw DataError("the log has no time column and no sample rate was given");
   StaticDetectionResult result;
   result.rate_hz = *log.rate_hz;
   const std::size_t n = log.samples.size();
-  const std::size_t w = std::max<std::size_t>(
-      3, static_cast<std::size_t>(std::lround(options.window_s * result.rate_hz)) | 1);
-  result.window_samples = w;
-  if (n < w + 1) {
-    throw DataError(std::to_string(n) + " samples are fewer than one detection window (" +
-                    std::to_string(w) + ")");
+  // A window or a minimum duration the rate cannot honour is an error, never a clamp.
+  const double window_samples = options.window_s * result.rate_hz;
+  if (!(window_samples >= 3)) {
+    throw DataError(
+        Format("a detection window of %.6g s holds %.3g samples at %.6g Hz; it needs "
+               "at least 3",
+               options.window_s, window_samples, result.rate_hz));
   }
+  if (!(window_samples <= static_cast<double>(n))) {
+    throw DataError(
+        Format("%zu samples are fewer than one detection window (%.6g s = %.6g samples)", n,
+               options.window_s, window_samples));
+  }
+  const double min_samples = options.min_duration_s * result.rate_hz;
+  if (options.min_duration_s > 0 && min_samples < 2) {
+    throw DataError(
+        Format("a minimum static duration of %.6g s is %.3g samples at %.6g Hz; an "
+               "interval needs at least 2",
+               options.min_duration_s, min_samples, result.rate_hz));
+  }
+  const std::size_t w = static_cast<std::size_t>(std::lround(window_samples)) | 1;
+  result.window_samples = w;
   const std::size_t h = w / 2;
+  const std::vector<std::size_t> segments =
+      log.time ? SegmentStarts(log.time->gaps) : std::vector<std::size_t>{0};
+  result.segments = segments.size();
 
-  // Sliding sums of the samples and their squares, shifted by the first sample to avoid
-  // cancellation with raw counts far from zero, and of the successive differences.
-  const Vec3 shift = log.samples.front();
-  std::vector<double> score(n, 0.0);
-  std::vector<char> white(n, 0);
-  Vec3 sum = Vec3::Zero(), sum2 = Vec3::Zero(), dsum = Vec3::Zero(), dsum2 = Vec3::Zero();
-  for (std::size_t i = 0; i < w; ++i) {
-    const Vec3 d = log.samples[i] - shift;
-    sum += d;
-    sum2 += d.cwiseAbs2();
-    if (i > 0) {
-      const Vec3 diff = log.samples[i] - log.samples[i - 1];
-      dsum += diff;
-      dsum2 += diff.cwiseAbs2();
+  // Quantisation: a sensor (or a log written with few decimals) whose noise is below its step
+  // reads the same value for many samples; its window variances are 0 or a few steps². The
+  // floor of every noise level is the quantisation noise q²/12 of each axis, with q the smallest
+  // nonzero change between successive samples.
+  Vec3 step = Vec3::Constant(INFINITY);
+  for (std::size_t i = 1; i < n; ++i) {
+    for (int a = 0; a < 3; ++a) {
+      const double d = std::abs(log.samples[i](a) - log.samples[i - 1](a));
+      if (d > 0 && d < step(a)) step(a) = d;
     }
   }
-  const double wn = static_cast<double>(w);
-  for (std::size_t c = h;; ++c) {
-    const Vec3 var = (sum2 - sum.cwiseAbs2() / wn) / (wn - 1);
-    const Vec3 dvar = (dsum2 - dsum.cwiseAbs2() / (wn - 1)) / (wn - 2);
-    score[c] = var.cwiseMax(0.0).sum();
-    white[c] = score[c] <= options.max_noise_ratio * 0.5 * dvar.cwiseMax(0.0).sum();
-    if (c + h + 1 >= n) break;
-    const Vec3 out = log.samples[c - h] - shift;
-    const Vec3 in = log.samples[c + h + 1] - shift;
-    sum += in - out;
-    sum2 += in.cwiseAbs2() - out.cwiseAbs2();
-    const Vec3 dout = log.samples[c - h + 1] - log.samples[c - h];
-    const Vec3 din = log.samples[c + h + 1] - log.samples[c + h];
-    dsum += din - dout;
-    dsum2 += din.cwiseAbs2() - dout.cwiseAbs2();
+  for (int a = 0; a < 3; ++a) {
+    if (!std::isfinite(step(a))) step(a) = 0;
   }
-  const std::size_t first = h, last = n - h - 1;  // centres with a full window
+  result.quantisation_step = step;
+  const double quantisation_variance = step.cwiseAbs2().sum() / 12.0;
+
+  // Sliding sums of the samples and their squares, shifted by the first sample of the segment to
+  // avoid cancellation with raw counts far from zero, and of the successive differences. Centres
+  // without a full window inside their segment keep score NaN: no window crosses a gap.
+  std::vector<double> score(n, std::nan(""));
+  std::vector<char> white(n, 0);
+  const double wn = static_cast<double>(w);
+  for (std::size_t s = 0; s < segments.size(); ++s) {
+    const std::size_t begin = segments[s];
+    const std::size_t end = s + 1 < segments.size() ? segments[s + 1] : n;
+    if (end - begin < w + 1) continue;
+    const Vec3 shift = log.samples[begin];
+    Vec3 sum = Vec3::Zero(), sum2 = Vec3::Zero(), dsum = Vec3::Zero(), dsum2 = Vec3::Zero();
+    for (std::size_t i = begin; i < begin + w; ++i) {
+      const Vec3 d = log.samples[i] - shift;
+      sum += d;
+      sum2 += d.cwiseAbs2();
+      if (i > begin) {
+        const Vec3 diff = log.samples[i] - log.samples[i - 1];
+        dsum += diff;
+        dsum2 += diff.cwiseAbs2();
+      }
+    }
+    for (std::size_t c = begin + h;; ++c) {
+      const Vec3 var = (sum2 - sum.cwiseAbs2() / wn) / (wn - 1);
+      const Vec3 dvar = (dsum2 - dsum.cwiseAbs2() / (wn - 1)) / (wn - 2);
+      score[c] = var.cwiseMax(0.0).sum();
+      white[c] = score[c] <= options.max_noise_ratio *
+                                 std::max(0.5 * dvar.cwiseMax(0.0).sum(), quantisation_variance);
+      if (c + h + 1 >= end) break;
+      const Vec3 out = log.samples[c - h] - shift;
+      const Vec3 in = log.samples[c + h + 1] - shift;
+      sum += in - out;
+      sum2 += in.cwiseAbs2() - out.cwiseAbs2();
+      const Vec3 dout = log.samples[c - h + 1] - log.samples[c - h];
+      const Vec3 din = log.samples[c + h + 1] - log.samples[c + h];
+      dsum += din - dout;
+      dsum2 += din.cwiseAbs2() - dout.cwiseAbs2();
+    }
+  }
+  std::vector<double> valid;
+  for (double v : score) {
+    if (!std::isnan(v)) valid.push_back(v);
+  }
+  if (valid.empty()) {
+    throw DataError(
+        Format("no segment of the log is longer than one detection window (%zu "
+               "samples): the gaps cut it into %zu pieces",
+               w, segments.size()));
+  }
 
   // Noise reference.
   if (options.init_rest_s > 0) {
     const std::size_t m = static_cast<std::size_t>(options.init_rest_s * result.rate_hz);
-    if (m < 2 || m > n) throw DataError("the initial rest period is longer than the log");
+    const std::size_t first_end = segments.size() > 1 ? segments[1] : n;
+    if (m < 2 || m > first_end) {
+      throw DataError(m > n ? "the initial rest period is longer than the log"
+                            : "the initial rest period is longer than the log's first segment");
+    }
     Vec3 mean, std;
     MeanAndStd(log.samples, 0, m, &mean, &std);
     result.noise_reference = std.cwiseAbs2().sum();
   } else {
-    std::vector<double> sorted(score.begin() + static_cast<std::ptrdiff_t>(first),
-                               score.begin() + static_cast<std::ptrdiff_t>(last) + 1);
     const std::size_t q = static_cast<std::size_t>(options.reference_quantile *
-                                                   static_cast<double>(sorted.size() - 1));
-    std::nth_element(sorted.begin(), sorted.begin() + static_cast<std::ptrdiff_t>(q), sorted.end());
-    result.noise_reference = sorted[q];
+                                                   static_cast<double>(valid.size() - 1));
+    std::nth_element(valid.begin(), valid.begin() + static_cast<std::ptrdiff_t>(q), valid.end());
+    result.noise_reference = valid[q];
   }
-  // Quantised sensors can be perfectly still (zero variance): keep a floor so that the threshold
-  // does not reject every window but the most perfectly silent ones.
-  double floor_value = 0;
+  std::vector<double>().swap(valid);  // a long log's copy of the scores is not kept
+  // Quantised sensors can be perfectly still (zero variance): the floor is their quantisation
+  // noise, and a round-off floor for noise-free (simulated) data.
+  const Vec3 shift = log.samples.front();
+  double floor_value = quantisation_variance;
   for (int a = 0; a < 3; ++a)
     floor_value += 1.0 / 12.0 * 1e-12 * std::pow(std::abs(shift(a)) + 1.0, 2);
   result.threshold = options.threshold_factor * std::max(result.noise_reference, floor_value);
 
-  const std::size_t min_len = std::max<std::size_t>(
-      2, static_cast<std::size_t>(std::ceil(options.min_duration_s * result.rate_hz)));
+  const std::size_t min_len =
+      std::max<std::size_t>(2, static_cast<std::size_t>(std::ceil(min_samples)));
+  const auto time_of = [&](std::size_t i) {
+    return log.time_s.empty() ? static_cast<double>(i) / result.rate_hz : log.time_s[i];
+  };
   std::size_t run_start = 0;
   bool in_run = false;
   std::optional<std::pair<Vec3, Vec3>> extremes;  // of the whole log, computed when first needed
-  for (std::size_t c = first; c <= last + 1; ++c) {
-    const bool still = c <= last && score[c] <= result.threshold && white[c];
+  std::optional<double> gravity_raw;              // likewise
+  for (std::size_t c = 0; c <= n; ++c) {
+    const bool still = c < n && !std::isnan(score[c]) && score[c] <= result.threshold && white[c];
     if (still && !in_run) {
       run_start = c;
       in_run = true;
     } else if (!still && in_run) {
       in_run = false;
-      const auto time_of = [&](std::size_t i) {
-        return log.time_s.empty() ? static_cast<double>(i) / result.rate_hz : log.time_s[i];
-      };
       if (c - run_start >= min_len) {
         StaticInterval interval;
         interval.begin = run_start;
@@ -171,10 +311,15 @@ StaticDetectionResult DetectStaticIntervals(const RawLog& log,
         interval.t_begin_s = time_of(interval.begin);
         interval.t_end_s = time_of(interval.end - 1);
         if (!extremes) extremes = LogExtremes(log.samples);
-        if (std::optional<std::string> clipped = Clipping(log.samples, interval, *extremes)) {
-          result.rejected.push_back({interval.begin, interval.end, interval.t_begin_s,
-                                     interval.t_end_s, RejectedInterval::Cause::kClipped,
-                                     *clipped});
+        if (!gravity_raw) gravity_raw = GravityReading(log.samples);
+        std::optional<std::string> clipped = Clipping(log.samples, interval, *extremes, step);
+        std::optional<std::string> moving =
+            clipped ? std::nullopt : Moving(log.samples, interval, step, *gravity_raw);
+        if (clipped || moving) {
+          result.rejected.push_back(
+              {interval.begin, interval.end, interval.t_begin_s, interval.t_end_s,
+               clipped ? RejectedInterval::Cause::kClipped : RejectedInterval::Cause::kMoving,
+               clipped ? *clipped : *moving});
         } else {
           result.intervals.push_back(interval);
         }
@@ -184,10 +329,9 @@ StaticDetectionResult DetectStaticIntervals(const RawLog& log,
         rejected.end = c;
         rejected.t_begin_s = time_of(run_start);
         rejected.t_end_s = time_of(c - 1);
-        char buf[120];
-        std::snprintf(buf, sizeof buf, "still for %.2f s, shorter than the minimum %.2f s",
-                      static_cast<double>(c - run_start) / result.rate_hz, options.min_duration_s);
-        rejected.reason = buf;
+        rejected.reason =
+            Format("still for %.2f s, shorter than the minimum %.2f s",
+                   static_cast<double>(c - run_start) / result.rate_hz, options.min_duration_s);
         result.rejected.push_back(rejected);
       }
     }

@@ -802,7 +802,7 @@ TEST_F(Cli, BadInputGivesOneClearMessageAndNoOutput) {
              for (int i = 0; i < 300; ++i) r += "1,2,3\n";
              return r;
            }(),
-       "", 3, "accelcal: FILE: the log has no time column: give the sample rate (--rate HZ)\n"},
+       "", 3, "accelcal: FILE: the log has no time column and no sample rate was given\n"},
       {"", "", "", 3, "accelcal: FILE: cannot open: No such file or directory\n"},
   };
   for (const BadCase& c : cases) {

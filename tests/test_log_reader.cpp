@@ -63,11 +63,15 @@ TEST(LogReader, ImuTkAsciiWithTime) {
   const InputData d = Parse(
       "   2.98e-02   3.3108e+04   3.3329e+04   3.6429e+04\n"
       "   3.98e-02   3.3096e+04   3.3336e+04   3.6437e+04\n",
-      ReadOptions{InputKind::kRaw, {}, std::nullopt, 200, nullptr});
+      ReadOptions{InputKind::kRaw, {}, std::nullopt, 200, nullptr, TimeUnit::kAuto, std::nullopt});
   ASSERT_EQ(d.kind, InputKind::kRaw);
   ASSERT_EQ(d.raw.samples.size(), 2u);
   EXPECT_EQ(d.raw.samples[1], Vec3(33096, 33336, 36437));
-  EXPECT_DOUBLE_EQ(d.raw.time_s[0], 0.0298);
+  // Times are seconds from the first sample, whose time is the origin.
+  EXPECT_EQ(d.raw.time_s[0], 0.0);
+  ASSERT_TRUE(d.raw.time);
+  EXPECT_DOUBLE_EQ(d.raw.time->origin_s, 0.0298);
+  EXPECT_EQ(d.raw.time->unit, TimeUnit::kSeconds);
   EXPECT_NEAR(*d.raw.rate_hz, 100.0, 1e-9);
   EXPECT_EQ(d.raw.line[1], 2u);
 }
@@ -102,9 +106,17 @@ TEST(LogReader, ColumnSelectionByNumberAndName) {
   InputData d = Parse(text, o);
   EXPECT_EQ(d.raw.samples[5], Vec3(1, 2, 3));
   o.columns = {"2", "3", "4", "5"};
+  // A sample counter as the time column: by its step 1 it is read as ms (1 kHz), which the given
+  // rate contradicts; in the unit it really has, it agrees.
+  EXPECT_EQ(ErrorOf(text, o),
+            "test.csv: the given rate 204.8 Hz contradicts the time column, whose timestamps (ms) "
+            "come at 1000 Hz");
+  o.rate_hz.reset();
+  o.time_unit = TimeUnit::kMilliseconds;
   d = Parse(text, o);
   EXPECT_EQ(d.raw.samples[5], Vec3(1, 2, 3));
-  EXPECT_EQ(d.raw.time_s[5], 5);
+  EXPECT_EQ(d.raw.time_s[5], 0.005);
+  o.rate_hz = 1000;
   o.columns = {"acc_q", "acc_y", "acc_z"};
   EXPECT_EQ(ErrorOf(text, o), "test.csv: --columns entry 'acc_q' names no column");
   o.columns = {"9", "2", "3"};

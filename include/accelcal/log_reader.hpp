@@ -19,6 +19,7 @@
 #include <vector>
 
 #include "accelcal/positions.hpp"
+#include "accelcal/time_axis.hpp"
 #include "accelcal/types.hpp"
 
 namespace accelcal {
@@ -37,7 +38,8 @@ struct ReadOptions {
   /// Column selection for wider logs: 3 entries (x, y, z) or 4 (time, x, y, z), each a 1-based
   /// column number or a header name. Empty: 4 columns are time,x,y,z and 3 are x,y,z.
   std::vector<std::string> columns;
-  /// Sample rate [Hz] for logs without a time column (overrides the rate implied by timestamps).
+  /// Sample rate [Hz] for logs without a time column. With a time column it must agree with the
+  /// rate of the timestamps within kRateTolerance (InputError otherwise), and is then used.
   std::optional<double> rate_hz;
   /// kAuto: a file with at most this many data rows and no time column is a positions file; a
   /// header naming a time column (t, time, timestamp) makes it raw, one naming n/samples/count
@@ -45,17 +47,30 @@ struct ReadOptions {
   std::size_t max_rows_of_positions_file = 200;
   /// Called every 65536 data rows with the bytes parsed and the total (a progress bar); optional.
   std::function<void(std::size_t bytes_done, std::size_t bytes_total)> progress;
+  /// Unit of the time column (time_axis.hpp): kAuto decides from its name and median step.
+  TimeUnit time_unit = TimeUnit::kAuto;
+  /// A file whose header names an instance column (i, instance, multi_id, device_id, imu,
+  /// imu_id, sensor_id, id) may hold several sensors' rows: with more than one value there, the
+  /// file is refused (InputError listing them) unless `instance` picks one, whose rows are kept.
+  std::optional<double> instance;
 };
+
+/// A given rate may differ from the timestamps' by this fraction (clock error, rounding).
+inline constexpr double kRateTolerance = 0.05;
 
 /// A raw recording: samples in raw units, with optional timestamps.
 struct RawLog {
-  std::string source;               ///< file name, for messages
-  std::vector<double> time_s;       ///< empty when the file has no time column
+  std::string source;  ///< file name, for messages
+  /// Seconds from the first sample (time->origin_s is that sample's time); empty when the file
+  /// has no time column.
+  std::vector<double> time_s;
   std::vector<Vec3> samples;        ///< raw readings
   std::vector<std::uint32_t> line;  ///< 1-based source line of each sample
-  /// Sample rate [Hz]: ReadOptions::rate_hz, else (t_last − t_first)/(n − 1) from timestamps
-  /// (robust to coarse timestamp resolution), else unset.
+  /// Sample rate [Hz]: ReadOptions::rate_hz, else the rate of the timestamps' segments
+  /// (TimeAxis::rate_hz), else unset.
   std::optional<double> rate_hz;
+  /// The time column's unit, origin, gaps and regularity; unset without a time column.
+  std::optional<TimeAxis> time;
 };
 
 /// What was read: either a raw log or a table of positions.

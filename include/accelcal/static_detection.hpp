@@ -47,6 +47,9 @@ struct RejectedInterval {
     /// wrong. In a real log the extremes belong to the motion between positions, so a still run
     /// reaching them repeatedly is at the sensor's limit.
     kClipped,
+    /// Every window is quiet but the mean moves steadily across the run (a slow turn): the
+    /// slope of the means of 8 batches is beyond |t| = 12 on some axis.
+    kMoving,
   };
   std::size_t begin = 0, end = 0;     ///< sample indices, end one past the last
   double t_begin_s = 0, t_end_s = 0;  ///< [s]
@@ -63,6 +66,10 @@ struct StaticDetectionResult {
   std::size_t window_samples = 0;  ///< window length used
   double noise_reference = 0;      ///< s_ref [raw²]
   double threshold = 0;            ///< [raw²]
+  /// Per axis, the smallest nonzero change between successive samples [raw]: the quantisation
+  /// step of a quantised sensor or log; q²/12 floors the noise levels.
+  Vec3 quantisation_step = Vec3::Zero();
+  std::size_t segments = 1;  ///< pieces of the log between time gaps (RawLog::time)
 };
 
 /// Throws DataError when the log is too short, has no rate (no time column and no rate given) or

@@ -45,8 +45,14 @@ std::string Equation(Frame frame) {
 std::string CalibrationToJson(const CalibrationResult& result, const CalibrationFileInfo& info) {
   const std::vector<Vec3> means = Means(info.positions);
   ordered_json doc;
+  const Diagnosis computed =
+      info.diagnosis ? Diagnosis{}
+                     : Diagnose({&result, &info.positions, OutlierOptions{}.max_excluded,
+                                 info.model_selection, nullptr, nullptr, info.unit});
+  const Diagnosis& diagnosis = info.diagnosis ? *info.diagnosis : computed;
   doc["format"] = "accelcal-calibration";
   doc["version"] = 1;
+  doc["verdict"] = std::string(ToString(diagnosis.verdict()));
   doc["model"] = std::string(ToString(result.model));
   doc["gravity"] = result.gravity;
   doc["units"] = {{"raw", info.raw_unit}, {"specific_force", std::string(ToString(info.unit))}};
@@ -165,6 +171,16 @@ std::string CalibrationToJson(const CalibrationResult& result, const Calibration
                    {"termination_message", s.termination_message},
                    {"initial_cost", s.initial_cost},
                    {"cost", s.final_cost}};
+  ordered_json findings = ordered_json::array();
+  for (const Finding& f : diagnosis.findings) {
+    ordered_json numbers = ordered_json::object();
+    for (const auto& [name, value] : f.numbers) numbers[name] = Nullable(value);
+    findings.push_back({{"code", f.code},
+                        {"severity", std::string(ToString(f.severity))},
+                        {"message", f.message},
+                        {"numbers", numbers}});
+  }
+  doc["diagnostics"] = findings;
   doc["source"] = info.source;
   return doc.dump(2) + "\n";
 }

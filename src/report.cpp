@@ -9,6 +9,7 @@
 #include <nlohmann/json.hpp>
 
 #include "accelcal/calibration_file.hpp"
+#include "accelcal/diagnosis.hpp"
 #include "accelcal/engineering.hpp"
 #include "accelcal/error.hpp"
 #include "accelcal/frame.hpp"
@@ -383,117 +384,33 @@ std::string ParameterTable(const Document& d) {
          (std_eng ? "" : "<p>No uncertainties: the fit had no degrees of freedom left.</p>\n");
 }
 
-// Largest angle from any direction to the nearest measured one, on a Fibonacci grid.
-std::pair<double, Vec3> LargestGap(const std::vector<PositionView>& positions) {
-  double worst = 0;
-  Vec3 where = Vec3::UnitZ();
-  const int n = 2000;
-  for (int i = 0; i < n; ++i) {
-    const double z = 1.0 - (2.0 * i + 1.0) / n;
-    const double phi = i * kPi * (3.0 - std::sqrt(5.0));
-    const Vec3 u(std::sqrt(1 - z * z) * std::cos(phi), std::sqrt(1 - z * z) * std::sin(phi), z);
-    double nearest = kPi;
-    for (const PositionView& p : positions) {
-      nearest =
-          std::min(nearest, std::acos(std::clamp(u.dot(p.direction.normalized()), -1.0, 1.0)));
-    }
-    if (nearest > worst) worst = nearest, where = u;
-  }
-  return {worst * 180.0 / kPi, where};
-}
-
-std::vector<std::string> Warnings(const Document& d, const ReportInput& input) {
+// The calibration file's own diagnosis (diagnosis.hpp), and the still periods not used that the
+// report's log shows, when the file does not list them already. Warnings and failures only; notes
+// are listed apart.
+std::vector<std::string> Warnings(const Document& d, const ReportInput& input, bool notes = false) {
   std::vector<std::string> w;
-  const ordered_json& solver = d.doc.value("solver", ordered_json::object());
-  if (!solver.value("converged", true)) {
-    w.push_back("the solver did not converge: " +
-                solver.value("termination_message", std::string()));
-  }
-  const ordered_json& noise = d.doc.value("noise", ordered_json::object());
-  if (noise.contains("scatter_ratio") && noise["scatter_ratio"].is_number() &&
-      noise["scatter_ratio"].get<double>() > 3.0) {
-    w.push_back("the positions scatter " + Format("%.1f", noise["scatter_ratio"].get<double>()) +
-                "x more than their interval noise explains, so the uncertainties are inflated by "
-                "that factor: positions that were not perfectly still, or a model that does not "
-                "fit this sensor (docs/model.md)");
-  }
-  if (d.doc.contains("crossval_note") && d.doc["crossval_note"].is_string()) {
-    w.push_back(d.doc["crossval_note"].get<std::string>());
-  }
-  // The calibration's own test for discordant positions (calibrate.hpp, OutlierPolicy).
-  std::vector<bool> found(d.positions.size(), false);
-  for (const ordered_json& o : d.doc.value("outliers", ordered_json::array())) {
-    const int k = o.at("position").get<int>();
-    if (k >= 1 && static_cast<std::size_t>(k) <= found.size()) found[std::size_t(k - 1)] = true;
-    const std::string statistic = o.value("statistic", std::string("t"));  // F: known orientations
-    w.push_back("position " + std::to_string(k) + " disagrees with the others (" + statistic +
-                " = " + Format("%.1f", o.at("t").get<double>()) + ", beyond " +
-                Format("%.2f", o.at("threshold").get<double>()) +
-                "): " + (o.at("excluded").get<bool>() ? "left out of the fit" : "kept in the fit") +
-                "; it may have moved or been bumped during its interval");
-  }
-  // Held-out errors far beyond the typical one: a position that moved or was bumped (files
-  // without the screening, or screened with it off).
-  std::vector<double> magnitudes;
-  for (const PositionView& p : d.positions) {
-    if (p.held_out) magnitudes.push_back(std::abs(*p.held_out));
-  }
-  if (magnitudes.size() >= 8 && magnitudes.size() == d.positions.size()) {
-    std::vector<double> sorted = magnitudes;
-    std::nth_element(sorted.begin(),
-                     sorted.begin() + static_cast<std::ptrdiff_t>(sorted.size() / 2), sorted.end());
-    const double typical = 1.4826 * sorted[sorted.size() / 2];  // σ of a zero-mean normal from |e|
-    for (std::size_t k = 0; k < magnitudes.size(); ++k) {
-      if (typical > 0 && magnitudes[k] > 5.0 * typical && !found[k]) {
-        w.push_back("position " + std::to_string(k + 1) +
-                    ": held-out |f| - g = " + Short(*d.positions[k].held_out) + " " + d.unit +
-                    ", " + Format("%.1f", magnitudes[k] / typical) +
-                    "x the typical: it may have moved or been bumped");
-      }
+  const ordered_json& findings = d.doc.value("diagnostics", ordered_json());
+  if (!findings.is_array()) {
+    if (!notes) {
+      w.push_back(
+          "the calibration file carries no diagnosis (written by an earlier accelcal): "
+          "calibrate again to have it checked");
     }
+    return w;
   }
-  if (!d.positions.empty()) {
-    const auto [gap_deg, where] = LargestGap(d.positions);
-    if (gap_deg > 60.0) {
-      w.push_back("no position within " + Format("%.0f", gap_deg) + "° of the direction (" +
-                  Format("%.2f", where(0)) + ", " + Format("%.2f", where(1)) + ", " +
-                  Format("%.2f", where(2)) +
-                  "): the calibration is extrapolated there; add positions facing it");
-    }
+  bool has_periods = false;
+  for (const ordered_json& f : findings) {
+    if (!f.is_object()) continue;
+    const std::string severity = f.value("severity", std::string());
+    const std::string code = f.value("code", std::string());
+    has_periods = has_periods || code == "rejected_period";
+    if ((severity == "note") != notes) continue;
+    w.push_back((severity == "failure" ? "FAILED: " : "") + f.value("message", std::string()));
   }
-  // Poorly determined: 1σ beyond what any calibration worth applying has (1 % of a scale
-  // factor, 0.5° of an angle, 10 mg of a bias, 0.01 g/g² of a squared coefficient).
-  if (const std::optional<EngineeringStd> s = EngineeringSigmas(d)) {
-    const EngineeringParameters eng = ToEngineering(d.cal.params, d.cal.gravity);
-    const Misalignment mis = MisalignmentOf(d.cal.params.K, d.cal.frame);
-    const auto poorly = [&](const std::string& what, double sigma, const std::string& unit) {
-      w.push_back(what + " is poorly determined (1 sigma " + Short(sigma) + " " + unit +
-                  "): add positions that excite it");
-    };
-    for (int i = 0; i < 3; ++i) {
-      if (s->scale_factor(i) > 0.01 * std::abs(eng.scale_factor(i))) {
-        poorly(std::string("scale factor ") + kAxisName[i],
-               100 * s->scale_factor(i) / std::abs(eng.scale_factor(i)), "%");
-      }
+  if (!has_periods) {
+    for (const Finding& f : RejectedPeriodFindings(input.rejected)) {
+      if ((f.severity == Severity::kNote) == notes) w.push_back(f.message);
     }
-    for (Eigen::Index i = 0; i < s->misalignment_rad.size(); ++i) {
-      if (s->misalignment_rad(i) > 0.5 * kPi / 180) {
-        poorly("misalignment " + std::string(mis.names[static_cast<std::size_t>(i)]),
-               s->misalignment_rad(i) * 180 / kPi, "deg");
-      }
-    }
-    for (int i = 0; i < 3; ++i) {
-      if (s->bias_force(i) > 0.01 * d.cal.gravity) {
-        poorly(std::string("bias ") + kAxisName[i], 1e3 * s->bias_force(i) / d.cal.gravity, "mg");
-      }
-      if (d.cal.model == ModelKind::kQuadratic && s->k2_g_per_g2(i) > 0.01) {
-        poorly(std::string("squared coefficient ") + kAxisName[i], s->k2_g_per_g2(i), "g/g^2");
-      }
-    }
-  }
-  for (const RejectedInterval& r : input.rejected) {
-    w.push_back("still period at " + Format("%.2f", r.t_begin_s) + "-" + Format("%.2f", r.t_end_s) +
-                " s not used: " + r.reason);
   }
   return w;
 }
@@ -540,12 +457,19 @@ std::string Render(const ReportInput& input) {
                                      rms("crossval_rms"));
   html += "</dl></section>\n";
   const std::vector<std::string> warnings = Warnings(d, input);
-  html += "<section id=\"warnings\"><h2>Warnings</h2>\n";
+  html += "<section id=\"warnings\"><h2>Warnings</h2>\n<p>Verdict: <b>" +
+          Escape(d.doc.value("verdict", std::string("not recorded"))) + "</b></p>\n";
   if (warnings.empty()) {
     html += "<p>None.</p>\n";
   } else {
     html += "<ul class=\"warn\">\n";
     for (const std::string& w : warnings) html += "<li>" + Escape(w) + "</li>\n";
+    html += "</ul>\n";
+  }
+  const std::vector<std::string> notes = Warnings(d, input, true);
+  if (!notes.empty()) {
+    html += "<h3>Notes</h3>\n<ul class=\"note\">\n";
+    for (const std::string& n : notes) html += "<li>" + Escape(n) + "</li>\n";
     html += "</ul>\n";
   }
   html += "</section>\n<section><h2>Parameters</h2>\n" + ParameterTable(d) + "</section>\n";

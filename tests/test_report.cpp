@@ -122,16 +122,18 @@ TEST(Report, WarnsAboutAMovedPositionAGapInCoverageAndUnusedStillPeriods) {
     poorly += s.find(" is poorly determined (1 sigma ") != std::string::npos;
   }
   EXPECT_GE(poorly, 4);
-  // A rejected still period is listed with its reason.
-  RejectedInterval short_one;
-  short_one.t_begin_s = 3.5;
-  short_one.t_end_s = 4.1;
-  short_one.reason = "still for 0.60 s, shorter than the minimum 1.00 s";
+  // A rejected still period is listed with its reason: a clipped one as a warning (a position
+  // the user meant to record is lost), a short one as a note.
+  RejectedInterval clipped;
+  clipped.t_begin_s = 3.5;
+  clipped.t_end_s = 4.1;
+  clipped.cause = RejectedInterval::Cause::kClipped;
+  clipped.reason = "axis y reads 40000, the largest value in the log, in 100% of its samples";
   const std::vector<std::string> with_rejected =
-      ReportWarnings({moved.json, "cal.json", nullptr, {short_one}});
+      ReportWarnings({moved.json, "cal.json", nullptr, {clipped}});
   EXPECT_EQ(with_rejected.back(),
-            "still period at 3.50-4.10 s not used: still for 0.60 s, shorter than the minimum "
-            "1.00 s");
+            "the still period 3.500-4.100 s is not used: axis y reads 40000, the largest value in "
+            "the log, in 100% of its samples");
 }
 
 TEST(StaticDetection, StillRunsTooShortAreReportedAsRejected) {

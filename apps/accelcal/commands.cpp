@@ -13,6 +13,7 @@
 #include "accelcal/calibration_file.hpp"
 #include "accelcal/compare.hpp"
 #include "accelcal/design.hpp"
+#include "accelcal/diagnosis.hpp"
 #include "accelcal/engineering.hpp"
 #include "accelcal/error.hpp"
 #include "accelcal/export.hpp"
@@ -45,6 +46,7 @@ OutlierOptions ParseOutlierOptions(const OutlierArgs& args) {
   options.policy = ParseEnum(OutlierPolicyFromString(args.policy), args.policy, "--outliers",
                              "exclude, flag, off");
   options.false_alarm_probability = args.probability;
+  options.max_excluded = args.max_excluded;
   return options;
 }
 
@@ -60,6 +62,12 @@ ReadOptions MakeReadOptions(const InputArgs& in) {
                            "auto, raw, positions");
   options.columns = in.columns;
   options.rate_hz = in.rate_hz;
+  options.time_unit = ParseEnum(TimeUnitFromString(in.time_unit), in.time_unit, "--time-unit",
+                                "auto, s, ms, us, ns");
+  if (in.instance && !std::isfinite(*in.instance)) {
+    throw UsageError("--instance must be a finite number");
+  }
+  options.instance = in.instance;
   return options;
 }
 
@@ -342,11 +350,43 @@ void PrintModelSelection(const ModelSelection& s, bool requested_auto) {
 
 namespace {
 
+// What the command line adds to a finding: the option that acts on it.
+const char* OptionHint(const Finding& f) {
+  if (f.code == "units") {
+    return f.message.find("in g") != std::string::npos ? " (--units g)" : " (--units m/s2)";
+  }
+  if (f.code == "outlier_limit") return " (--max-outliers)";
+  if (f.code == "time_unit") return " (--time-unit)";
+  return "";
+}
+
+// Warnings and failures on stderr (outliers and still periods not used are told where found).
+void PrintFindings(const Diagnosis& diagnosis, const std::string& path) {
+  for (const Finding& f : diagnosis.findings) {
+    if (f.code == "outlier" || f.code == "rejected_period") continue;
+    if (f.severity == Severity::kFailure) {
+      std::fprintf(stderr, "accelcal: %s: failed check (%s): %s%s\n", path.c_str(), f.code.c_str(),
+                   f.message.c_str(), OptionHint(f));
+    } else if (f.severity == Severity::kWarning) {
+      Warn("%s: %s%s\n", path.c_str(), f.message.c_str(), OptionHint(f));
+    }
+  }
+}
+
 // The end of every calibrate: the file to -o, then the file to stdout (--json) or the summary
 // (`input_note`, when not empty, printed after the input's description).
 int WriteCalibration(const CalibrateArgs& args, const LoadedInput& in, const Gravity& g,
                      const CalibrationResult& result, const ModelSelection* selection,
                      const std::string& input_note) {
+  DiagnosisInput diagnosis_input;
+  diagnosis_input.result = &result;
+  diagnosis_input.positions = &in.positions;
+  diagnosis_input.max_excluded = args.outliers.max_excluded;
+  diagnosis_input.selection = selection;
+  if (in.data.kind == InputKind::kRaw) diagnosis_input.log = &in.data.raw;
+  if (in.detection) diagnosis_input.detection = &*in.detection;
+  diagnosis_input.unit = g.unit;
+  const Diagnosis diagnosis = Diagnose(diagnosis_input);
   CalibrationFileInfo info;
   info.unit = g.unit;
   info.raw_unit = args.raw_units;
@@ -354,6 +394,7 @@ int WriteCalibration(const CalibrateArgs& args, const LoadedInput& in, const Gra
   info.positions = in.positions;
   info.model_selection = selection;
   info.model_requested = args.model;
+  info.diagnosis = &diagnosis;
   const std::string json = CalibrationToJson(result, info);
   // Everything is rendered before anything is written: a failure leaves no file behind.
   std::string report;
@@ -376,6 +417,7 @@ int WriteCalibration(const CalibrateArgs& args, const LoadedInput& in, const Gra
              .c_str(),
          o.excluded ? " It was left out of the fit." : " It was kept in the fit.");
   }
+  PrintFindings(diagnosis, args.input.path);
   if (args.json) {
     WriteFileAtomically("-", json);
   } else {
@@ -383,8 +425,19 @@ int WriteCalibration(const CalibrateArgs& args, const LoadedInput& in, const Gra
     Say("%s", input_note.c_str());
     PrintCalibration(result, in.positions, g, args.raw_units);
     if (selection) PrintModelSelection(*selection, args.model == "auto");
+    for (const Finding& f : diagnosis.findings) {
+      if (f.severity == Severity::kNote) Say("note      %s\n", f.message.c_str());
+    }
+    Say("verdict   %s\n", std::string(ToString(diagnosis.verdict())).c_str());
     if (!args.output.empty()) Say("wrote     %s\n", args.output.c_str());
     if (!args.report.empty()) Say("report    %s\n", args.report.c_str());
+  }
+  if (diagnosis.verdict() == Verdict::kFailed) {
+    std::fprintf(stderr,
+                 "accelcal: %s: the calibration failed its checks: written, but marked "
+                 "\"verdict\": \"failed\"; do not use it as it is\n",
+                 args.input.path.c_str());
+    return kExitFailedChecks;
   }
   return kExitOk;
 }

@@ -22,6 +22,9 @@ enum ExitCode : int {
   kExitBadInput = 3,      ///< unreadable, malformed or insufficient input data
   kExitNotConverged = 4,  ///< the solver did not converge: nothing written
   kExitOutput = 5,        ///< the output file could not be written
+  /// Calibrated, but the result failed its checks (diagnosis.hpp): the file and the report are
+  /// written, marked `"verdict": "failed"`, so that the user can see why.
+  kExitFailedChecks = 6,
 };
 
 /// A usage problem found after parsing (bad enum value, conflicting options).
@@ -39,6 +42,8 @@ struct InputArgs {
   std::string input_kind = "auto";
   std::vector<std::string> columns;
   std::optional<double> rate_hz;
+  std::string time_unit = "auto";  // TimeUnit
+  std::optional<double> instance;  // ReadOptions::instance
   StaticDetectionOptions detection;
 };
 
@@ -53,6 +58,7 @@ struct GravityArgs {
 struct OutlierArgs {
   std::string policy = "exclude";  // OutlierPolicy
   double probability = 1e-3;       // OutlierOptions::false_alarm_probability
+  int max_excluded = 3;            // OutlierOptions::max_excluded
 };
 
 struct CalibrateArgs {

@@ -22,7 +22,14 @@ void AddInputOptions(CLI::App* cmd, InputArgs* in, bool with_kind) {
   cmd->add_option("--columns", in->columns,
                   "x,y,z or time,x,y,z: 1-based column numbers or header names")
       ->delimiter(',');
-  cmd->add_option("--rate", in->rate_hz, "sample rate [Hz] for logs without a time column");
+  cmd->add_option("--rate", in->rate_hz,
+                  "sample rate [Hz] for logs without a time column (with one, it must agree)");
+  cmd->add_option("--time-unit", in->time_unit,
+                  "unit of the time column: s, ms, us, ns, or auto (from its name and step)")
+      ->capture_default_str();
+  cmd->add_option("--instance", in->instance,
+                  "the sensor to read from a file that interleaves several (its value in the "
+                  "i, instance, multi_id, device_id or imu column)");
 }
 
 void AddDetectionOptions(CLI::App* cmd, InputArgs* in) {
@@ -44,6 +51,9 @@ void AddOutlierOptions(CLI::App* cmd, OutlierArgs* o, const std::string& policy_
   cmd->add_option("--outliers", o->policy, policy_help)->capture_default_str();
   cmd->add_option("--outlier-probability", o->probability,
                   "chance that a calibration whose positions all agree loses one to the test")
+      ->capture_default_str();
+  cmd->add_option("--max-outliers", o->max_excluded,
+                  "most positions the screening may leave out (a warning says when reached)")
       ->capture_default_str();
 }
 

@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "accelcal/calibrate.hpp"
+#include "accelcal/diagnosis.hpp"
 #include "accelcal/gravity.hpp"
 #include "accelcal/model_selection.hpp"
 #include "accelcal/positions.hpp"
@@ -23,6 +24,9 @@ struct CalibrationFileInfo {
   /// linear fit as comparison): written as `model_selection`.
   const ModelSelection* model_selection = nullptr;
   std::string model_requested;  ///< "linear", "quadratic" or "auto"
+  /// Written as `verdict` and `diagnostics`; when null, Diagnose() of the result, the positions
+  /// and the model selection (without the log's findings).
+  const Diagnosis* diagnosis = nullptr;
 };
 
 /// Serialises a calibration as the JSON document (2-space indented, trailing newline).

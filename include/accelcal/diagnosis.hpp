@@ -1,0 +1,109 @@
+#pragma once
+/// @file diagnosis.hpp
+/// One judgement of a calibration and its input: named findings, each a note, a warning or a
+/// failure, with the numbers behind it. Every command that calibrates prints the warnings and
+/// failures, the calibration file carries all of them (`diagnostics`, `verdict`), the report
+/// lists them; a failure makes the result "calibrated, but failed its checks" (the command line's
+/// exit status 6), never a success.
+///
+/// The checks and their thresholds, each with why (docs/diagnostics.md lists the codes):
+///   - `not_converged` (failure): the solver stopped before any convergence criterion.
+///   - `misfit` (failure): the RMS of |f_k| − g over the fitted positions beyond kMisfitFailure
+///     (2 %) of g. The bundled real recordings reach 0.01-0.27 % (Xsens 0.010 %, T265 0.052 %,
+///     a phone's LIS3DH 0.27 %); two sensors interleaved in one file give 3.6 %, positions taken
+///     while turning or an orientation file in the wrong order far more. For known orientations
+///     the measure is the residual vector p_k − μ_k taken to specific force (K⁻¹), whose
+///     direction the known orientation fixes too (imucal's hand-placed Ferraris holds: 0.6 %).
+///     Not a failure when the samples' own noise explains the scatter (scatter ratio at most
+///     kScatterWarning): very noisy readings (paper 001's σ = 0.1 g) miss g by that much too.
+///   - `scatter_ratio` (note beyond 3, warning beyond kScatterWarning = 30): the positions
+///     scatter R times more than the noise of their samples explains; the covariance is already
+///     inflated by R, so the uncertainties stay honest, but beyond 30 something other than noise
+///     (drift, a model that does not fit, moving positions) dominates. Xsens 4.6, T265 9.9, the
+///     CK set 4.7, the phone 7.3, imucal's Ferraris holds 62.
+///   - `exact_fit` (warning): residual degrees of freedom but residuals at round-off (below
+///     1e-9 of the signal): the positions are not independent noisy readings.
+///   - `held_out_outlier` (warning): a position whose held-out |f| − g is beyond 5 times the
+///     typical (1.4826 × median) that the screening did not flag.
+///   - `outlier` (warning): a position the screening found discordant; `outlier_limit` (warning)
+///     when as many positions were excluded as allowed (more may disagree).
+///   - `coverage_gap` (warning): a direction more than 60° from every position (the fit is
+///     extrapolated there; six axis-aligned positions leave at most 54.7°).
+///   - `poorly_determined` (warning): a parameter's 1σ beyond what a calibration worth applying
+///     has: 1 % of a scale factor, 0.5° of a misalignment angle, 10 mg of a bias, 0.01 g/g² of a
+///     squared coefficient.
+///   - `units` (warning): the uncalibrated readings' median |p| within 20 % of 1 while gravity is
+///     given as about 9.8, or the reverse: the readings are probably in the other unit.
+///   - `crossval_unavailable` (note): why held-out validation has no number.
+///   - `rejected_period` (warning when clipped, note otherwise): a still period not used.
+///   - `time_unit`, `time_gaps`, `coarse_timestamps` (notes), `irregular_sampling` (note beyond
+///     1 % of the steps, warning beyond 10 %): what the time column was found to be.
+
+#include <string>
+#include <string_view>
+#include <utility>
+#include <vector>
+
+#include "accelcal/calibrate.hpp"
+#include "accelcal/gravity.hpp"
+#include "accelcal/log_reader.hpp"
+#include "accelcal/model_selection.hpp"
+#include "accelcal/positions.hpp"
+#include "accelcal/static_detection.hpp"
+
+namespace accelcal {
+
+enum class Severity {
+  kNote,     ///< "note": worth knowing, nothing wrong
+  kWarning,  ///< "warning": the result stands, but look at this
+  kFailure,  ///< "failure": the result failed its checks and must not be used as it is
+};
+std::string_view ToString(Severity severity);
+
+/// One finding of the diagnosis.
+struct Finding {
+  std::string code;  ///< stable identifier (see the file comment), e.g. "misfit"
+  Severity severity = Severity::kNote;
+  std::string message;  ///< one sentence for a person, with the numbers
+  /// The numbers behind it, by name (e.g. {"rms_fraction_of_g", 0.036}).
+  std::vector<std::pair<std::string, double>> numbers;
+};
+
+/// The overall verdict: the worst severity found.
+enum class Verdict {
+  kOk,        ///< "ok": notes at most
+  kWarnings,  ///< "warnings": at least one warning, no failure
+  kFailed,    ///< "failed": at least one failure
+};
+std::string_view ToString(Verdict verdict);
+
+struct Diagnosis {
+  std::vector<Finding> findings;
+  Verdict verdict() const;
+};
+
+inline constexpr double kMisfitFailure = 0.02;  ///< RMS misfit as a fraction of g
+inline constexpr double kScatterNote = 3.0;
+inline constexpr double kScatterWarning = 30.0;
+
+/// What the diagnosis looks at. `result` and `positions` are required (same order); the rest is
+/// used when given.
+struct DiagnosisInput {
+  const CalibrationResult* result = nullptr;
+  const std::vector<Position>* positions = nullptr;
+  /// The most positions the screening could exclude (OutlierOptions::max_excluded).
+  int max_excluded = OutlierOptions{}.max_excluded;
+  const ModelSelection* selection = nullptr;
+  const RawLog* log = nullptr;                       ///< for the time column's findings
+  const StaticDetectionResult* detection = nullptr;  ///< for the still periods not used
+  ForceUnit unit = ForceUnit::kMetersPerSecond2;     ///< of result->gravity
+};
+
+Diagnosis Diagnose(const DiagnosisInput& input);
+
+/// The findings about a log's time column (part of Diagnose; also for commands that only read).
+std::vector<Finding> TimeFindings(const TimeAxis& time);
+/// The findings about still periods that were not used (part of Diagnose).
+std::vector<Finding> RejectedPeriodFindings(const std::vector<RejectedInterval>& rejected);
+
+}  // namespace accelcal

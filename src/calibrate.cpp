@@ -632,6 +632,34 @@ Fit CalibrateInFrame(const std::vector<Vec3>& readings, const CalibrationOptions
 
 }  // namespace
 
+void internal::CheckDistinctReadings(const std::vector<Vec3>& readings) {
+  // Sorted by reading, equal readings by index: each group's first entry is the original, the
+  // others repeat it. The repeat earliest in the input is named.
+  std::vector<std::size_t> order(readings.size());
+  for (std::size_t k = 0; k < order.size(); ++k) order[k] = k;
+  std::sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) {
+    const Vec3& p = readings[a];
+    const Vec3& q = readings[b];
+    if (p != q) return std::lexicographical_compare(p.data(), p.data() + 3, q.data(), q.data() + 3);
+    return a < b;
+  });
+  std::size_t repeat = readings.size(), original = 0, group_first = 0;
+  for (std::size_t i = 0; i < order.size(); ++i) {
+    if (i == 0 || readings[order[i]] != readings[order[i - 1]]) {
+      group_first = order[i];
+    } else if (order[i] < repeat) {
+      repeat = order[i];
+      original = group_first;
+    }
+  }
+  if (repeat < readings.size()) {
+    throw DataError("position " + std::to_string(repeat + 1) + " repeats position " +
+                    std::to_string(original + 1) +
+                    " exactly: repeated rows are not independent positions (they would shrink "
+                    "every uncertainty); remove them");
+  }
+}
+
 void internal::CheckReadingSigmas(const std::vector<Vec3>& sigmas, std::size_t readings) {
   if (sigmas.empty()) return;
   if (sigmas.size() != readings) {
@@ -837,6 +865,7 @@ CalibrationResult CalibrateScreened(const std::vector<Vec3>& readings,
 CalibrationResult Calibrate(const std::vector<Vec3>& readings, const CalibrationOptions& options) {
   if (auto why = options.Validate()) throw std::invalid_argument(*why);
   internal::CheckReadingSigmas(options.reading_sigmas, readings.size());
+  internal::CheckDistinctReadings(readings);
   CalibrationResult result = CalibrateScreened(readings, options);
   if (options.cross_validate && result.summary.converged()) {
     CrossValidate(readings, options, &result);

@@ -101,12 +101,12 @@ void PoorlyDetermined(const CalibrationResult& r, std::vector<Finding>* out) {
       EngineeringUncertainty(r.params, r.model, r.frame, r.gravity, r.covariance);
   const EngineeringParameters eng = ToEngineering(r.params, r.gravity);
   const Misalignment mis = MisalignmentOf(r.params.K, r.frame);
+  std::string list;
+  std::vector<std::pair<std::string, double>> numbers;
   const auto poorly = [&](const std::string& what, double sigma, double limit, const char* unit) {
-    Add(out, "poorly_determined", Severity::kWarning,
-        Format("%s is poorly determined (1 sigma %.3g %s, beyond %.3g %s): add positions that "
-               "excite it",
-               what.c_str(), sigma, unit, limit, unit),
-        {{"sigma", sigma}, {"limit", limit}});
+    list += Format("%s%s (1 sigma %.3g %s, beyond %.3g)", list.empty() ? "" : ", ", what.c_str(),
+                   sigma, unit, limit);
+    numbers.push_back({what, sigma});
   };
   for (int i = 0; i < 3; ++i) {
     const double relative = 100 * s.scale_factor(i) / std::abs(eng.scale_factor(i));
@@ -126,6 +126,27 @@ void PoorlyDetermined(const CalibrationResult& r, std::vector<Finding>* out) {
       poorly(std::string("squared coefficient ") + kAxisName[i], s.k2_g_per_g2(i), 0.01, "g/g^2");
     }
   }
+  if (!list.empty()) {
+    Add(out, "poorly_determined", Severity::kWarning,
+        "poorly determined: " + list + "; add positions that excite them", numbers);
+  }
+}
+
+// The lag-1 autocorrelation of the samples about their mean, pooled over the axes, of each still
+// interval; the median over the intervals. White noise gives 0, samples repeated in pairs +0.5
+// (the T265), two sensors whose rows alternate −1: each step jumps between them.
+double MedianLagOneCorrelation(const RawLog& log, const std::vector<StaticInterval>& intervals) {
+  std::vector<double> rho;
+  for (const StaticInterval& s : intervals) {
+    double num = 0, den = 0;
+    for (std::size_t i = s.begin; i < s.end; ++i) {
+      const Vec3 d = log.samples[i] - s.mean;
+      den += d.squaredNorm();
+      if (i + 1 < s.end) num += d.dot(log.samples[i + 1] - s.mean);
+    }
+    if (den > 0) rho.push_back(num / den);
+  }
+  return rho.empty() ? 0.0 : Median(rho);
 }
 
 }  // namespace
@@ -209,6 +230,16 @@ Diagnosis Diagnose(const DiagnosisInput& input) {
                        100 * misfit, 100 * kMisfitFailure),
         {{"rms_fraction_of_g", misfit}, {"limit", kMisfitFailure}});
   }
+  if (input.log && input.detection && !input.detection->intervals.empty()) {
+    const double rho = MedianLagOneCorrelation(*input.log, input.detection->intervals);
+    if (rho < kInterleavedCorrelation) {
+      Add(&out, "interleaved", Severity::kFailure,
+          Format("successive samples alternate in the still intervals (lag-1 correlation %.2f, "
+                 "below %.1f): the rows come from two sensors in turn; read one of them",
+                 rho, kInterleavedCorrelation),
+          {{"lag1_correlation", rho}, {"limit", kInterleavedCorrelation}});
+    }
+  }
   if (std::isfinite(r.scatter_ratio) && r.scatter_ratio > kScatterNote) {
     const bool warn = r.scatter_ratio > kScatterWarning;
     Add(&out, "scatter_ratio", warn ? Severity::kWarning : Severity::kNote,
@@ -286,26 +317,32 @@ Diagnosis Diagnose(const DiagnosisInput& input) {
     }
   }
   PoorlyDetermined(r, &out);
-  // Units: uncalibrated magnitudes that look like the other unit than gravity's.
-  if (!means.empty()) {
+  // Gravity and units: a gravity no place on Earth has, or uncalibrated magnitudes that look like
+  // the other unit than gravity's.
+  const double g_ms2 =
+      input.unit == ForceUnit::kMetersPerSecond2 ? r.gravity : r.gravity * kStandardGravity_ms2;
+  if (std::abs(g_ms2 / kStandardGravity_ms2 - 1.0) > 0.01) {
+    Add(&out, "gravity_value", Severity::kWarning,
+        Format("gravity is %.6g m/s2, while on Earth it lies within 9.76-9.84 m/s2 (surface, any "
+               "latitude): the scale factors carry that error",
+               g_ms2),
+        {{"gravity_ms2", g_ms2}});
+  } else if (!means.empty()) {
     std::vector<double> norms;
     for (const Vec3& p : means) norms.push_back(p.norm());
     const double median = Median(norms);
-    const double g_ms2 =
-        input.unit == ForceUnit::kMetersPerSecond2 ? r.gravity : r.gravity * kStandardGravity_ms2;
-    const bool looks_g = std::abs(median - 1.0) < 0.2;
-    const bool looks_ms2 = std::abs(median / kStandardGravity_ms2 - 1.0) < 0.2;
-    if (looks_g && std::abs(r.gravity / kStandardGravity_ms2 - 1.0) < 0.2) {
+    const bool in_g = input.unit == ForceUnit::kStandardGravity;
+    if (!in_g && std::abs(median - 1.0) < 0.2) {
       Add(&out, "units", Severity::kWarning,
-          Format("the readings' median magnitude is %.4g, about 1 g, while gravity is %.6g: if "
-                 "they are in g, calibrate in g (the result then maps g to g)",
+          Format("the readings' median magnitude is %.4g, about 1 g, while gravity is %.6g m/s2: "
+                 "if they are in g, calibrate in g (the result then maps g to g)",
                  median, r.gravity),
           {{"median_norm", median}, {"gravity", r.gravity}});
-    } else if (looks_ms2 && std::abs(r.gravity - 1.0) < 0.2) {
+    } else if (in_g && std::abs(median / kStandardGravity_ms2 - 1.0) < 0.2) {
       Add(&out, "units", Severity::kWarning,
-          Format("the readings' median magnitude is %.4g, about 9.8 m/s2, while gravity is %.6g "
-                 "(%.6g m/s2): if they are in m/s2, calibrate in m/s2",
-                 median, r.gravity, g_ms2),
+          Format("the readings' median magnitude is %.4g, about 9.8 m/s2, while the result is in "
+                 "g: if they are in m/s2, calibrate in m/s2",
+                 median),
           {{"median_norm", median}, {"gravity", r.gravity}});
     }
   }

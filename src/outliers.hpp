@@ -41,6 +41,9 @@ Screening ScreenPositions(const InformationRows& rows, const Mat12& S_inverse, M
 /// Throws std::invalid_argument unless `sigmas` (CalibrationOptions::reading_sigmas and its
 /// twins) is empty or holds one finite, positive 3-vector per reading.
 void CheckReadingSigmas(const std::vector<Vec3>& sigmas, std::size_t readings);
+/// Throws DataError naming the first reading that repeats an earlier one exactly (duplicated
+/// rows, a file concatenated with itself): the degrees of freedom count distinct positions.
+void CheckDistinctReadings(const std::vector<Vec3>& readings);
 
 /// `fit`, of the readings at indices `keep`, spread back over all `readings`: a left-out position
 /// gets its direction and residual under the fit.

@@ -16,6 +16,10 @@
 ///     direction the known orientation fixes too (imucal's hand-placed Ferraris holds: 0.6 %).
 ///     Not a failure when the samples' own noise explains the scatter (scatter ratio at most
 ///     kScatterWarning): very noisy readings (paper 001's σ = 0.1 g) miss g by that much too.
+///   - `interleaved` (failure): the median lag-1 autocorrelation of the still samples below
+///     kInterleavedCorrelation (−0.5): rows that alternate between two sensors (−1 when
+///     interleaved evenly; white noise 0, the T265's repeated samples +0.5). Their average is a
+///     consistent device, so no misfit shows it.
 ///   - `scatter_ratio` (note beyond 3, warning beyond kScatterWarning = 30): the positions
 ///     scatter R times more than the noise of their samples explains; the covariance is already
 ///     inflated by R, so the uncertainties stay honest, but beyond 30 something other than noise
@@ -32,6 +36,8 @@
 ///   - `poorly_determined` (warning): a parameter's 1σ beyond what a calibration worth applying
 ///     has: 1 % of a scale factor, 0.5° of a misalignment angle, 10 mg of a bias, 0.01 g/g² of a
 ///     squared coefficient.
+///   - `gravity_value` (warning): gravity more than 1 % from 9.80665 m/s² (Earth's surface spans
+///     9.78-9.83).
 ///   - `units` (warning): the uncalibrated readings' median |p| within 20 % of 1 while gravity is
 ///     given as about 9.8, or the reverse: the readings are probably in the other unit.
 ///   - `crossval_unavailable` (note): why held-out validation has no number.
@@ -85,6 +91,7 @@ struct Diagnosis {
 inline constexpr double kMisfitFailure = 0.02;  ///< RMS misfit as a fraction of g
 inline constexpr double kScatterNote = 3.0;
 inline constexpr double kScatterWarning = 30.0;
+inline constexpr double kInterleavedCorrelation = -0.5;
 
 /// What the diagnosis looks at. `result` and `positions` are required (same order); the rest is
 /// used when given.

@@ -156,6 +156,12 @@ std::string CalibrationToJson(const CalibrationResult& result, const Calibration
         s->quadratic ? Nullable(s->quadratic->crossval_rms) : ordered_json(nullptr);
     selection["k2_t"] =
         s->quadratic && std::isfinite(s->k2_t.sum()) ? ToJson(s->k2_t) : ordered_json(nullptr);
+    selection["k2_t_threshold"] = Nullable(s->k2_t_threshold);
+    selection["improvement"] = Nullable(s->improvement);
+    selection["improvement_se"] = Nullable(s->improvement_se);
+    selection["improvement_threshold"] = Nullable(s->improvement_threshold);
+    selection["screened_with"] = std::string(ToString(s->screened_with));
+    selection["positions_compared"] = s->positions_used.size();
     if (!s->quadratic_error.empty()) selection["quadratic_error"] = s->quadratic_error;
     doc["model_selection"] = selection;
   }

@@ -264,6 +264,12 @@ Diagnosis Diagnose(const DiagnosisInput& input) {
           {{"residual_sigma", r.residual_sigma}});
     }
   }
+  if (input.selection && r.model == ModelKind::kQuadratic &&
+      input.selection->chosen == ModelKind::kLinear) {
+    Add(&out, "model_choice", Severity::kWarning,
+        "the quadratic model was asked for, but the data do not support it: " +
+            input.selection->reason);
+  }
   if (!r.crossval_note.empty()) {
     Add(&out, "crossval_unavailable", Severity::kNote, "held-out validation: " + r.crossval_note);
   }
@@ -348,6 +354,14 @@ Diagnosis Diagnose(const DiagnosisInput& input) {
   }
   if (input.detection) {
     for (Finding& f : RejectedPeriodFindings(input.detection->rejected)) out.push_back(f);
+    if (input.detection->joined > 0) {
+      Add(&out, "joined_periods", Severity::kNote,
+          Format("%zu still period%s split by a short disturbance %s joined (the same orientation "
+                 "on both sides, within 5 standard errors)",
+                 input.detection->joined, input.detection->joined == 1 ? "" : "s",
+                 input.detection->joined == 1 ? "was" : "were"),
+          {{"joined", static_cast<double>(input.detection->joined)}});
+    }
   }
   if (input.log && input.log->time) {
     for (Finding& f : TimeFindings(*input.log->time)) out.push_back(f);

@@ -538,6 +538,20 @@ InputData ParseInput(std::string_view text, const std::string& source, const Rea
   }
   if (has_header) {
     for (std::size_t i = 0; i < ncols; ++i) header.push_back(Normalise(fields[i]));
+  } else if (!reader.preceding_comment().empty()) {
+    // A comment line just above the first row that names as many columns as it has, none a
+    // number, is the header ("# time tx ty tz").
+    std::string_view names[kMaxFields];
+    const std::string_view comment = reader.preceding_comment();
+    const Delimiter comment_delim =
+        comment.find(',') != std::string_view::npos ? Delimiter::kComma : Delimiter::kWhitespace;
+    if (Split(comment, comment_delim, names, kMaxFields) == ncols &&
+        std::none_of(names, names + ncols, [](std::string_view f) {
+          double v;
+          return f.empty() || ParseNumber(f, &v);
+        })) {
+      for (std::size_t i = 0; i < ncols; ++i) header.push_back(Normalise(names[i]));
+    }
   }
 
   // Auto-detection needs to know only whether there are more rows than a positions file has.
@@ -655,8 +669,9 @@ InputData ParseInput(std::string_view text, const std::string& source, const Rea
     if (log.time_s.size() >= 2) {
       try {
         const int c = layout.column[kTime];
-        log.time = MakeTimeAxis(&log.time_s, options.time_unit,
-                                has_header ? std::string_view(header[std::size_t(c)]) : "");
+        log.time = MakeTimeAxis(
+            &log.time_s, options.time_unit,
+            header.empty() ? std::string_view() : std::string_view(header[std::size_t(c)]));
       } catch (const DataError& e) {
         throw InputError(source, 0, e.what());
       }
@@ -679,6 +694,7 @@ InputData ParseInput(std::string_view text, const std::string& source, const Rea
 }
 
 InputData ReadInput(const std::string& path, const ReadOptions& options) {
+  if (path == "-") return ParseInput(ReadFileToString("/dev/stdin"), "<stdin>", options);
   const internal::MappedFile mapped(path);
   if (mapped.ok()) {
     // Streaming: the pages of rows already parsed are released as the parser goes (every 65536

@@ -208,7 +208,13 @@ std::string SignalPlot(const Document& d, const ReportInput& input) {
     shade(timed ? r.t_begin_s : static_cast<double>(r.begin),
           timed ? r.t_end_s : static_cast<double>(r.end), "rejected", "not used: " + r.reason);
   }
-  body += Axes(f, timed ? "time [s]" : "sample", "raw reading [" + d.cal.raw_unit + "]");
+  // Times are seconds from the first sample; a clock that does not start at 0 (an epoch time) is
+  // stated once, here.
+  const std::string time_label =
+      log.time && log.time->origin_s != 0
+          ? "time [s] from the first sample, at " + Format("%.15g", log.time->origin_s) + " s"
+          : std::string("time [s]");
+  body += Axes(f, timed ? time_label : "sample", "raw reading [" + d.cal.raw_unit + "]");
   const std::size_t buckets = std::min<std::size_t>(n, 1000);
   for (int a = 0; a < 3; ++a) {
     std::string points;

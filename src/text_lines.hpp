@@ -43,6 +43,10 @@ class LineReader {
   }
   std::size_t offset() const { return std::min(pos_, text_.size()); }
   std::uint32_t lines_read() const { return number_; }
+  /// The text of the last whole-line comment before the line Next returned last (blank lines
+  /// between them allowed), without its `#`; empty when there is none. A `# t ax ay az` line
+  /// above the first row names the columns in many loggers' files.
+  std::string_view preceding_comment() const { return preceding_comment_; }
   bool Next(Line* line) {
     while (pos_ < text_.size()) {
       const char* begin = text_.data() + pos_;
@@ -65,12 +69,19 @@ class LineReader {
       pos_ += len + 1;
       std::string_view s(begin, len);
       const std::size_t hash = s.find('#');
-      if (hash != std::string_view::npos) s = s.substr(0, hash);
+      std::string_view comment;
+      if (hash != std::string_view::npos) {
+        comment = Trim(s.substr(hash + 1));
+        s = s.substr(0, hash);
+      }
       s = Trim(s);
       if (!s.empty()) {
         *line = {s, number_};
+        preceding_comment_ = comment_;
+        comment_ = {};
         return true;
       }
+      if (!comment.empty()) comment_ = comment;
     }
     return false;
   }
@@ -80,6 +91,7 @@ class LineReader {
   const std::string& source_;
   std::size_t pos_ = 0;
   std::uint32_t number_;
+  std::string_view comment_, preceding_comment_;
 };
 
 }  // namespace accelcal::internal

@@ -56,6 +56,22 @@ struct LoadedInput {
   std::optional<StaticDetectionResult> detection;
 };
 
+// Why detection found nothing, with what to change.
+DataError NoStaticInterval(const StaticDetectionResult& d) {
+  std::size_t moving = 0;
+  for (const RejectedInterval& r : d.rejected)
+    moving += r.cause == RejectedInterval::Cause::kMoving;
+  if (moving > 0) {
+    return DataError(
+        Format("no static interval found: %zu quiet period%s rejected because the "
+               "sensor was turning through it (a log in continuous motion has no "
+               "static positions; --verbose lists them)",
+               moving, moving == 1 ? " was" : "s were"));
+  }
+  return DataError("no static interval found (threshold " + Format("%.3g", d.threshold) +
+                   " raw^2; try --threshold-factor or --min-static)");
+}
+
 ReadOptions MakeReadOptions(const InputArgs& in) {
   ReadOptions options;
   options.kind = ParseEnum(InputKindFromString(in.input_kind), in.input_kind, "--input-kind",
@@ -101,11 +117,7 @@ LoadedInput LoadInput(const InputArgs& in) {
       Detail("  not used: %.3f-%.3f s, %s\n", r.t_begin_s, r.t_end_s, r.reason.c_str());
     }
   }
-  if (loaded.detection->intervals.empty()) {
-    throw DataError("no static interval found (threshold " +
-                    Format("%.3g", loaded.detection->threshold) +
-                    " raw^2; try --threshold-factor or --min-static)");
-  }
+  if (loaded.detection->intervals.empty()) throw NoStaticInterval(d);
   loaded.positions = PositionsFromIntervals(loaded.detection->intervals);
   return loaded;
 }
@@ -336,13 +348,15 @@ std::string PositionsCsv(const std::vector<Vec3>& means, double samples, const V
 namespace {
 
 void PrintModelSelection(const ModelSelection& s, bool requested_auto) {
-  Say("model     %s -> %s: %s\n", requested_auto ? "auto" : "quadratic (requested)",
-      std::string(ToString(requested_auto ? s.chosen : ModelKind::kQuadratic)).c_str(),
-      s.reason.c_str());
+  if (requested_auto) {
+    Say("model     auto -> %s: %s\n", std::string(ToString(s.chosen)).c_str(), s.reason.c_str());
+  } else {
+    Say("model     quadratic (requested); the data support %s: %s\n",
+        std::string(ToString(s.chosen)).c_str(), s.reason.c_str());
+  }
   if (s.quadratic && std::isfinite(s.k2_t.sum())) {
-    Say("          squared coefficients k2/sigma: %.3g %.3g %.3g (|t| <= 2: not "
-        "distinguishable from 0)\n",
-        s.k2_t(0), s.k2_t(1), s.k2_t(2));
+    Say("          squared coefficients k2/sigma: %.3g %.3g %.3g (significant beyond %.3g)\n",
+        s.k2_t(0), s.k2_t(1), s.k2_t(2), s.k2_t_threshold);
   }
 }
 
@@ -730,10 +744,7 @@ int RunDetect(const DetectArgs& args) {
   if (auto why = in.detection.Validate()) throw UsageError(*why);
   const InputData data = ReadInput(in.path, read);
   const StaticDetectionResult d = DetectStaticIntervals(data.raw, in.detection);
-  if (d.intervals.empty()) {
-    throw DataError("no static interval found (threshold " + Format("%.3g", d.threshold) +
-                    " raw^2; try --threshold-factor or --min-static)");
-  }
+  if (d.intervals.empty()) throw NoStaticInterval(d);
   std::string out;
   if (args.json) {
     out += "{\n  \"source\": \"" + in.path + "\",\n";

@@ -40,8 +40,11 @@
 ///     9.78-9.83).
 ///   - `units` (warning): the uncalibrated readings' median |p| within 20 % of 1 while gravity is
 ///     given as about 9.8, or the reverse: the readings are probably in the other unit.
+///   - `model_choice` (warning): a quadratic result where the model selection's evidence rule
+///     (model_selection.hpp) keeps the linear model.
 ///   - `crossval_unavailable` (note): why held-out validation has no number.
-///   - `rejected_period` (warning when clipped, note otherwise): a still period not used.
+///   - `rejected_period` (warning when clipped, note otherwise): a still period not used;
+///     `joined_periods` (note): still periods split by a short disturbance that were joined.
 ///   - `time_unit`, `time_gaps`, `coarse_timestamps` (notes), `irregular_sampling` (note beyond
 ///     1 % of the steps, warning beyond 10 %): what the time column was found to be.
 

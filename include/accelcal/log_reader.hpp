@@ -83,7 +83,8 @@ struct InputData {
 
 /// Parses text already in memory; `source` names it in errors.
 InputData ParseInput(std::string_view text, const std::string& source, const ReadOptions& options);
-/// Reads and parses a file. Throws InputError (unreadable path, parse error).
+/// Reads and parses a file; "-" reads standard input (named "<stdin>" in messages). Throws
+/// InputError (unreadable path, parse error).
 InputData ReadInput(const std::string& path, const ReadOptions& options);
 /// Calibration, orientation and other small files are refused beyond this size (64 MiB), so a
 /// huge or sparse file given by mistake fails at once instead of filling memory.

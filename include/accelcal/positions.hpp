@@ -18,7 +18,11 @@ struct StaticInterval {
   double t_end_s = 0;        ///< time of the last sample [s]
   Vec3 mean = Vec3::Zero();  ///< raw
   Vec3 std = Vec3::Zero();   ///< per-axis sample standard deviation, raw
-  std::size_t count() const { return end - begin; }
+  /// Samples in `mean` and `std` when fewer than end − begin: a still period joined across a
+  /// short disturbance (StaticDetectionResult::joined) leaves the disturbance out. 0: all.
+  std::size_t averaged = 0;
+  /// Samples averaged.
+  std::size_t count() const { return averaged > 0 ? averaged : end - begin; }
 };
 
 /// One static position: the averaged raw reading.

@@ -48,7 +48,8 @@ struct RejectedInterval {
     /// reaching them repeatedly is at the sensor's limit.
     kClipped,
     /// Every window is quiet but the mean moves steadily across the run (a slow turn): the
-    /// slope of the means of 8 batches is beyond |t| = 12 on some axis.
+    /// slope of the means of 8 batches is beyond |t| = 12 on some axis and moves it by more
+    /// than 3° of a 1 g reading.
     kMoving,
   };
   std::size_t begin = 0, end = 0;     ///< sample indices, end one past the last
@@ -70,6 +71,9 @@ struct StaticDetectionResult {
   /// step of a quantised sensor or log; q²/12 floors the noise levels.
   Vec3 quantisation_step = Vec3::Zero();
   std::size_t segments = 1;  ///< pieces of the log between time gaps (RawLog::time)
+  /// Still periods split by a short disturbance that were joined: two intervals at most a window
+  /// apart whose means agree within 5 standard errors per axis (plus a quantisation step).
+  std::size_t joined = 0;
 };
 
 /// Throws DataError when the log is too short, has no rate (no time column and no rate given) or

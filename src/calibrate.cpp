@@ -867,6 +867,7 @@ CalibrationResult Calibrate(const std::vector<Vec3>& readings, const Calibration
   internal::CheckReadingSigmas(options.reading_sigmas, readings.size());
   internal::CheckDistinctReadings(readings);
   CalibrationResult result = CalibrateScreened(readings, options);
+  if (result.summary.converged()) result.screening = options.outliers.policy;
   if (options.cross_validate && result.summary.converged()) {
     CrossValidate(readings, options, &result);
   }

@@ -294,7 +294,11 @@ Diagnosis Diagnose(const DiagnosisInput& input) {
                excluded),
         {{"excluded", excluded}});
   }
-  if (r.crossval_rms && r.crossval_errors.size() == positions.size() && positions.size() >= 8) {
+  // Only where the screening did not test every position: where it did, its test (Student t,
+  // Bonferroni) is the judgement, and this cruder rule would contradict it.
+  const bool screened_all = r.screening != OutlierPolicy::kOff && r.outlier_note.empty();
+  if (!screened_all && r.crossval_rms && r.crossval_errors.size() == positions.size() &&
+      positions.size() >= 8) {
     std::vector<double> magnitudes;
     for (double e : r.crossval_errors) magnitudes.push_back(std::abs(e));
     const double typical = 1.4826 * Median(magnitudes);  // σ of a zero-mean normal from |e|

@@ -292,6 +292,7 @@ CalibrationResult CalibrateKnownOrientations(const std::vector<Vec3>& readings,
   result.directions = directions;
   result.outliers = outliers;
   result.outlier_note = outlier_note;
+  result.screening = options.outliers.policy;
   double cost = 0, chi2 = 0;
   for (std::size_t k = 0; k < m; ++k) {
     const Vec3 r = readings[k] - PredictRaw(fit.params, forces[k]);

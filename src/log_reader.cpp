@@ -256,7 +256,23 @@ Layout NamedLayout(const std::vector<std::string>& h) {
                                    "timestamp_ns",
                                    "%time",
                                    "header.stamp",
-                                   "field.header.stamp"});
+                                   "field.header.stamp",
+                                   "t[s]",
+                                   "time[s]",
+                                   "t[ms]",
+                                   "time[ms]",
+                                   "t[us]",
+                                   "time[us]",
+                                   "t[ns]",
+                                   "time[ns]",
+                                   "t(s)",
+                                   "time(s)",
+                                   "t(ms)",
+                                   "time(ms)",
+                                   "t(us)",
+                                   "time(us)",
+                                   "t(ns)",
+                                   "time(ns)"});
   l.column[kX] = FindColumn(h, {"x", "ax", "a_x", "acc_x", "accel_x", "accx"});
   l.column[kY] = FindColumn(h, {"y", "ay", "a_y", "acc_y", "accel_y", "accy"});
   l.column[kZ] = FindColumn(h, {"z", "az", "a_z", "acc_z", "accel_z", "accz"});

@@ -69,6 +69,7 @@ CalibrationResult FitOnPositions(const std::vector<Vec3>& readings,
   if (keep.size() < readings.size()) internal::SpreadOverAllPositions(readings, keep, &result);
   result.outliers = screened.outliers;
   result.outlier_note = screened.outlier_note;
+  result.screening = screened.screening;
   if (result.summary.converged()) CrossValidate(readings, options, &result);
   return result;
 }

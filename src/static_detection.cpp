@@ -347,7 +347,11 @@ StaticDetectionResult DetectStaticIntervals(const RawLog& log,
     if (!joined.empty()) {
       StaticInterval& prev = joined.back();
       const double n1 = static_cast<double>(prev.count()), n2 = static_cast<double>(cur.count());
-      bool same = cur.begin - prev.end <= w;
+      // Never across a time gap: the first sample after a gap starts a segment.
+      const bool gap_between =
+          std::any_of(segments.begin(), segments.end(),
+                      [&](std::size_t start) { return start >= prev.end && start <= cur.begin; });
+      bool same = cur.begin - prev.end <= w && !gap_between;
       for (int a = 0; a < 3 && same; ++a) {
         const double se = std::sqrt(prev.std(a) * prev.std(a) / n1 + cur.std(a) * cur.std(a) / n2);
         same = std::abs(prev.mean(a) - cur.mean(a)) <= 5 * se + step(a);

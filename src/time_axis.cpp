@@ -86,6 +86,17 @@ struct NameHint {
 // What a (lower-case) time column name says of its unit.
 NameHint HintOf(std::string_view name) {
   if (name.empty()) return {};
+  // "t[us]", "time(ms)": a unit in brackets.
+  const std::size_t open = name.find_first_of("[(");
+  if (open != std::string_view::npos && open > 0 && name.size() > open + 2 &&
+      (name.back() == ']' || name.back() == ')')) {
+    const std::string_view unit = name.substr(open + 1, name.size() - open - 2);
+    for (TimeUnit u : kUnits) {
+      if (unit == ToString(u) || (u == TimeUnit::kMicroseconds && unit == "µs")) {
+        return {u, true};
+      }
+    }
+  }
   // rostopic echo -p writes "%time" in ns; ROS header stamps are ns as well.
   if (name == "%time" || EndsWith(name, "stamp_ns") || EndsWith(name, "header.stamp")) {
     return {TimeUnit::kNanoseconds, true};

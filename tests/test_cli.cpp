@@ -14,56 +14,17 @@
 
 #include "accelcal/gimbal_platform.hpp"
 #include "accelcal/simulate.hpp"
+#include "support/cli_test.hpp"
 
 namespace accelcal {
 namespace {
 
 namespace fs = std::filesystem;
-const std::string kCli = ACCELCAL_CLI;
 const std::string kData = ACCELCAL_DATA_DIR;
 
-struct CliRun {
-  int status;
-  std::string out;  // stdout
-  std::string err;  // stderr
-};
-
-std::string Slurp(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  std::stringstream ss;
-  ss << in.rdbuf();
-  return ss.str();
-}
-
-class Cli : public ::testing::Test {
- protected:
-  void SetUp() override {
-    dir_ = fs::path(::testing::TempDir()) /
-           ("accelcal_cli_" +
-            std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()));
-    fs::remove_all(dir_);
-    fs::create_directories(dir_);
-  }
-  std::string Path(const std::string& name) const { return (dir_ / name).string(); }
-  std::string Write(const std::string& name, const std::string& text) const {
-    std::ofstream(Path(name), std::ios::binary) << text;
-    return Path(name);
-  }
-  CliRun Exec(const std::string& args) const {
-    const std::string err = Path("stderr.txt");
-    const std::string cmd = kCli + " " + args + " 2>" + err;
-    CliRun r;
-    FILE* pipe = popen(cmd.c_str(), "r");
-    char buf[4096];
-    std::size_t n;
-    while ((n = fread(buf, 1, sizeof buf, pipe)) > 0) r.out.append(buf, n);
-    const int status = pclose(pipe);
-    r.status = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-    r.err = Slurp(err);
-    return r;
-  }
-  fs::path dir_;
-};
+using Cli = test::CliTest;
+using test::CliRun;
+using test::Slurp;
 
 std::string PositionsCsv(int count) {
   const std::vector<Vec3> readings = SimulatePositions(

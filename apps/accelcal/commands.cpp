@@ -367,7 +367,8 @@ namespace {
 // What the command line adds to a finding: the option that acts on it.
 const char* OptionHint(const Finding& f) {
   if (f.code == "units") {
-    return f.message.find("in g") != std::string::npos ? " (--units g)" : " (--units m/s2)";
+    return f.message.find("calibrate in g") != std::string::npos ? " (--units g)"
+                                                                 : " (--units m/s2)";
   }
   if (f.code == "outlier_limit") return " (--max-outliers)";
   if (f.code == "time_unit") return " (--time-unit)";

@@ -308,6 +308,9 @@ struct CalibrationResult {
   std::vector<OutlierFinding> outliers;
   /// Why the screening did not run or could not test some position ("" when it ran on all).
   std::string outlier_note;
+  /// The screening's policy (OutlierOptions::policy); kOff when it did not run (turned off, or
+  /// the fit did not converge).
+  OutlierPolicy screening = OutlierPolicy::kOff;
   bool excluded(std::size_t position) const {
     for (const OutlierFinding& o : outliers) {
       if (o.excluded && static_cast<std::size_t>(o.position) == position) return true;

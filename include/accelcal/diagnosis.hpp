@@ -28,7 +28,8 @@
 ///   - `exact_fit` (warning): residual degrees of freedom but residuals at round-off (below
 ///     1e-9 of the signal): the positions are not independent noisy readings.
 ///   - `held_out_outlier` (warning): a position whose held-out |f| − g is beyond 5 times the
-///     typical (1.4826 × median) that the screening did not flag.
+///     typical (1.4826 × median), where the screening did not test every position (turned off,
+///     or too few degrees of freedom): where it did, its own test decides.
 ///   - `outlier` (warning): a position the screening found discordant; `outlier_limit` (warning)
 ///     when as many positions were excluded as allowed (more may disagree).
 ///   - `coverage_gap` (warning): a direction more than 60° from every position (the fit is

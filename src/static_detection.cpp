@@ -110,14 +110,17 @@ std::optional<std::string> Clipping(const std::vector<Vec3>& samples,
 // of the batch means against their index is tested against the scatter of the batch means about
 // that line (t with kBatches − 2 degrees of freedom; batch means absorb the correlation of
 // successive samples). The scatter is floored by the quantisation noise q²/12 of one sample.
-// A significant slope is motion only when the mean moves by more than kMaxTurn_rad times
-// `gravity_raw` (the reading of 1 g): still periods drift too (a bias settling by 1 mg over the
-// T265's 50-s rest, 1.2 counts over 11 s of the Xsens, a hand-held phone settling by 2.1° in 1.4 s
-// in a period its author took as still), and a turn of θ across the period puts its mean only
-// θ²/24 of g inside the sphere: 0.14 mg at 3°, below the noise of a MEMS position's mean.
+// A significant slope is motion only when the mean turns faster than kMaxTurnRate_rad_s (the
+// change of the mean relative to `gravity_raw`, the reading of 1 g, over the period's duration):
+// still periods drift too, but slowly (a bias settling by 1 mg over the T265's 50-s rest:
+// 0.001 deg/s; 1.2 counts over 11 s of the Xsens: 0.002 deg/s), while a sensor turned by hand
+// moves at degrees per second (a phone settling through 2.1 deg in 1.4 s, 1.6 deg/s; a slow
+// continuous rotation, 1-8 deg/s, whose windows each look still).
 std::optional<std::string> Moving(const std::vector<Vec3>& samples, const StaticInterval& interval,
-                                  const Vec3& quantisation_step, double gravity_raw) {
-  constexpr double kMaxTurn_rad = 3.0 * 3.14159265358979323846 / 180.0;
+                                  const Vec3& quantisation_step, double gravity_raw,
+                                  double rate_hz) {
+  constexpr double kDegPerRad = 180 / 3.14159265358979323846;
+  constexpr double kMaxTurnRate_rad_s = 0.5 / kDegPerRad;
   constexpr int kBatches = 8;
   // |t| beyond which the mean moves: t with 6 degrees of freedom exceeds 12 with probability
   // 2e-5 (two-sided), 6e-5 over the three axes.
@@ -149,13 +152,15 @@ std::optional<std::string> Moving(const std::vector<Vec3>& samples, const Static
     const double var = std::max(rss / (kBatches - 2),
                                 quantisation_step(a) * quantisation_step(a) / 12.0 / per_batch);
     const double t = var > 0 ? slope / std::sqrt(var / sxx) : (slope != 0 ? INFINITY : 0.0);
+    // From the first batch's centre to the last's: 7/8 of the period.
     const double moved = slope * (kBatches - 1);
-    if (std::abs(t) > kMaxT && std::abs(moved) > kMaxTurn_rad * gravity_raw) {
+    const double seconds = static_cast<double>(n) / rate_hz * (kBatches - 1) / kBatches;
+    const double turn_rate = std::abs(moved) / gravity_raw / seconds;
+    if (std::abs(t) > kMaxT && turn_rate > kMaxTurnRate_rad_s) {
       return Format(
-          "axis %c moves by %.4g over the period (%.2g deg of a %.4g reading of 1 g; t = "
-          "%.3g): the sensor was turning, not still",
-          "xyz"[a], moved, std::abs(moved) / gravity_raw * 180 / 3.14159265358979323846,
-          gravity_raw, t);
+          "axis %c moves by %.4g in %.3g s (%.2g deg/s of a %.4g reading of 1 g; t = %.3g): the "
+          "sensor was turning, not still",
+          "xyz"[a], moved, seconds, turn_rate * kDegPerRad, gravity_raw, t);
     }
   }
   return std::nullopt;
@@ -316,7 +321,8 @@ StaticDetectionResult DetectStaticIntervals(const RawLog& log,
         if (!gravity_raw) gravity_raw = GravityReading(log.samples);
         std::optional<std::string> clipped = Clipping(log.samples, interval, *extremes, step);
         std::optional<std::string> moving =
-            clipped ? std::nullopt : Moving(log.samples, interval, step, *gravity_raw);
+            clipped ? std::nullopt
+                    : Moving(log.samples, interval, step, *gravity_raw, result.rate_hz);
         if (clipped || moving) {
           result.rejected.push_back(
               {interval.begin, interval.end, interval.t_begin_s, interval.t_end_s,

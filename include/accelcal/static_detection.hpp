@@ -48,8 +48,8 @@ struct RejectedInterval {
     /// reaching them repeatedly is at the sensor's limit.
     kClipped,
     /// Every window is quiet but the mean moves steadily across the run (a slow turn): the
-    /// slope of the means of 8 batches is beyond |t| = 12 on some axis and moves it by more
-    /// than 3° of a 1 g reading.
+    /// slope of the means of 8 batches is beyond |t| = 12 on some axis and turns the mean
+    /// faster than 0.5°/s (relative to a 1 g reading).
     kMoving,
   };
   std::size_t begin = 0, end = 0;     ///< sample indices, end one past the last

@@ -73,3 +73,19 @@ for i in range(3):
 write("moved.csv", header + "".join(
     "%.3f,%.3f,%.3f,%d,%.4f,%.4f,%.4f\n" % tuple(p) for p in positions))
 write("clean.csv", log_text(rows))
+
+# Issue 15: logs as users really have them.
+# PX4's ulog2csv: `timestamp` in µs. Read in its unit; read as seconds, refused.
+write("time-us.csv", "timestamp,x,y,z\n" + "".join(
+    "%d,%.2f,%.2f,%.2f\n" % (round(r[0] * 1e6), r[1], r[2], r[3]) for r in rows))
+# Two sessions joined: the clock jumps by 1000 s in the middle of a turn.
+half = len(rows) // 2 + 25
+write("gap.csv", log_text(rows[:half] + [[r[0] + 1000.0] + r[1:] for r in rows[half:]]))
+# ArduPilot's IMU messages of two instances, interleaved, with the instance column I.
+write("two-sensors.csv", "TimeUS,I,AccX,AccY,AccZ\n" + "".join(
+    "%d,%d,%.2f,%.2f,%.2f\n" % (round(r[0] * 1e6) + 1000 * i, i, *(v * (1 + 0.01 * i) for v in r[1:]))
+    for r in rows for i in (0, 1)))
+# A positions file concatenated with itself.
+with open(os.path.join(here, "moved.csv")) as f:
+    moved = f.read()
+write("repeated-rows.csv", moved + moved.split("\n", 1)[1])

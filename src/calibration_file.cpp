@@ -45,10 +45,13 @@ std::string Equation(Frame frame) {
 std::string CalibrationToJson(const CalibrationResult& result, const CalibrationFileInfo& info) {
   const std::vector<Vec3> means = Means(info.positions);
   ordered_json doc;
-  const Diagnosis computed =
-      info.diagnosis ? Diagnosis{}
-                     : Diagnose({&result, &info.positions, OutlierOptions{}.max_excluded,
-                                 info.model_selection, nullptr, nullptr, info.unit});
+  const Diagnosis computed = info.diagnosis ? Diagnosis{}
+                                            : Diagnose({&result,
+                                                        &info.positions,
+                                                        OutlierOptions{}.max_excluded,
+                                                        info.model_selection,
+                                                        {},
+                                                        info.unit});
   const Diagnosis& diagnosis = info.diagnosis ? *info.diagnosis : computed;
   doc["format"] = "accelcal-calibration";
   doc["version"] = 1;
@@ -126,6 +129,7 @@ std::string CalibrationToJson(const CalibrationResult& result, const Calibration
     entry["gravity_norm_error"] = Nullable(errors[k]);
     if (result.crossval_rms) entry["crossval_error"] = result.crossval_errors[k];
     if (result.excluded(k)) entry["excluded"] = true;
+    if (k < info.position_source.size()) entry["file"] = info.position_source[k];
     positions.push_back(entry);
   }
   doc["positions"] = positions;
@@ -188,6 +192,7 @@ std::string CalibrationToJson(const CalibrationResult& result, const Calibration
   }
   doc["diagnostics"] = findings;
   doc["source"] = info.source;
+  if (!info.sources.empty()) doc["sources"] = info.sources;
   return doc.dump(2) + "\n";
 }
 

@@ -189,6 +189,35 @@ std::vector<Finding> TimeFindings(const TimeAxis& time) {
   return out;
 }
 
+std::vector<Finding> LogFindings(const RawLog* log, const StaticDetectionResult* detection) {
+  std::vector<Finding> out;
+  if (log && detection && !detection->intervals.empty()) {
+    const double rho = MedianLagOneCorrelation(*log, detection->intervals);
+    if (rho < kInterleavedCorrelation) {
+      Add(&out, "interleaved", Severity::kFailure,
+          Format("successive samples alternate in the still intervals (lag-1 correlation %.2f, "
+                 "below %.1f): the rows come from two sensors in turn; read one of them",
+                 rho, kInterleavedCorrelation),
+          {{"lag1_correlation", rho}, {"limit", kInterleavedCorrelation}});
+    }
+  }
+  if (detection) {
+    for (Finding& f : RejectedPeriodFindings(detection->rejected)) out.push_back(std::move(f));
+    if (detection->joined > 0) {
+      Add(&out, "joined_periods", Severity::kNote,
+          Format("%zu still period%s split by a short disturbance %s joined (the same orientation "
+                 "on both sides, within 5 standard errors)",
+                 detection->joined, detection->joined == 1 ? "" : "s",
+                 detection->joined == 1 ? "was" : "were"),
+          {{"joined", static_cast<double>(detection->joined)}});
+    }
+  }
+  if (log && log->time) {
+    for (Finding& f : TimeFindings(*log->time)) out.push_back(std::move(f));
+  }
+  return out;
+}
+
 std::vector<Finding> RejectedPeriodFindings(const std::vector<RejectedInterval>& rejected) {
   std::vector<Finding> out;
   for (const RejectedInterval& r : rejected) {
@@ -229,16 +258,6 @@ Diagnosis Diagnose(const DiagnosisInput& input) {
                        "positions taken while moving, or the wrong gravity or model)",
                        100 * misfit, 100 * kMisfitFailure),
         {{"rms_fraction_of_g", misfit}, {"limit", kMisfitFailure}});
-  }
-  if (input.log && input.detection && !input.detection->intervals.empty()) {
-    const double rho = MedianLagOneCorrelation(*input.log, input.detection->intervals);
-    if (rho < kInterleavedCorrelation) {
-      Add(&out, "interleaved", Severity::kFailure,
-          Format("successive samples alternate in the still intervals (lag-1 correlation %.2f, "
-                 "below %.1f): the rows come from two sensors in turn; read one of them",
-                 rho, kInterleavedCorrelation),
-          {{"lag1_correlation", rho}, {"limit", kInterleavedCorrelation}});
-    }
   }
   if (std::isfinite(r.scatter_ratio) && r.scatter_ratio > kScatterNote) {
     const bool warn = r.scatter_ratio > kScatterWarning;
@@ -356,19 +375,11 @@ Diagnosis Diagnose(const DiagnosisInput& input) {
           {{"median_norm", median}, {"gravity", r.gravity}});
     }
   }
-  if (input.detection) {
-    for (Finding& f : RejectedPeriodFindings(input.detection->rejected)) out.push_back(f);
-    if (input.detection->joined > 0) {
-      Add(&out, "joined_periods", Severity::kNote,
-          Format("%zu still period%s split by a short disturbance %s joined (the same orientation "
-                 "on both sides, within 5 standard errors)",
-                 input.detection->joined, input.detection->joined == 1 ? "" : "s",
-                 input.detection->joined == 1 ? "was" : "were"),
-          {{"joined", static_cast<double>(input.detection->joined)}});
+  for (const DiagnosedLog& l : input.logs) {
+    for (Finding& f : LogFindings(l.log, l.detection)) {
+      if (input.logs.size() > 1) f.message = l.name + ": " + f.message;
+      out.push_back(std::move(f));
     }
-  }
-  if (input.log && input.log->time) {
-    for (Finding& f : TimeFindings(*input.log->time)) out.push_back(f);
   }
   // Failures first, then warnings, then notes; each kind in the order found.
   std::stable_sort(out.begin(), out.end(), [](const Finding& a, const Finding& b) {

@@ -469,6 +469,37 @@ TEST_F(Trust, ScreeningLimitIsAnOptionAndReachingItIsSaid) {
   EXPECT_EQ(doc.at("verdict"), "warnings");
 }
 
+// Several files of one device (sessions): positions pooled, time never joined across files; the
+// split Xsens recording gives the whole one's calibration, and a bad file is named.
+TEST_F(Trust, SeveralFilesArePooled) {
+  const std::string xsens = kData + "/imutk-xsens-mti/xsens_acc.mat";
+  const std::string text = Slurp(xsens);
+  std::size_t cut = 0;
+  for (int line = 0; line < 25000; ++line) cut = text.find('\n', cut) + 1;
+  const std::string a = Write("a.txt", text.substr(0, cut));
+  const std::string b = Write("b.txt", text.substr(cut));
+  CliRun r = Exec("calibrate " + xsens + " --gravity 9.81744 -o " + Path("whole.json"));
+  ASSERT_EQ(r.status, 0) << r.err;
+  r = Exec("calibrate " + a + " " + b + " --gravity 9.81744 -o " + Path("two.json"));
+  ASSERT_EQ(r.status, 0) << r.err;
+  EXPECT_NE(r.out.find("pooled    39 positions from 2 files"), std::string::npos) << r.out;
+  const json whole = Json(Path("whole.json")), two = Json(Path("two.json"));
+  EXPECT_EQ(two.at("sources"), json::array({a, b}));
+  EXPECT_EQ(two.at("positions").front().at("file"), 0);
+  EXPECT_EQ(two.at("positions").back().at("file"), 1);
+  // The interval cut in two becomes two positions: the same device within its uncertainty.
+  ModelParameters reference;
+  for (int i = 0; i < 3; ++i) {
+    reference.bias(i) = whole.at("bias")[i];
+    for (int j = 0; j < 3; ++j) reference.K(i, j) = whole.at("K")[i][j];
+  }
+  ExpectWithinSigma(two, reference, 1.0);
+  const std::string empty = Write("empty.csv", "");
+  r = Exec("calibrate " + a + " " + empty);
+  EXPECT_EQ(r.status, 3);
+  EXPECT_EQ(r.err, "accelcal: " + empty + ": no data (the file is empty or all comments)\n");
+}
+
 // The bundled recordings keep their numbers and raise no warning that is not true.
 TEST_F(Trust, BundledRecordingsPassTheirChecks) {
   struct Case {

@@ -50,10 +50,27 @@ OutlierOptions ParseOutlierOptions(const OutlierArgs& args) {
   return options;
 }
 
-struct LoadedInput {
+// One input file as read, with its static intervals when it is a raw log.
+struct LoadedFile {
+  std::string path;
   InputData data;
-  std::vector<Position> positions;
   std::optional<StaticDetectionResult> detection;
+};
+
+// The input files of a calibration (sessions of one device: positions pooled in file order, time
+// never joined across files).
+struct LoadedInput {
+  std::vector<LoadedFile> files;
+  std::vector<Position> positions;
+  /// The file of each position, when there are several files (else empty).
+  std::vector<std::string> position_file;
+  /// The first raw log, for the report's signal plot (nullptr: none).
+  const LoadedFile* FirstRaw() const {
+    for (const LoadedFile& f : files) {
+      if (f.data.kind == InputKind::kRaw) return &f;
+    }
+    return nullptr;
+  }
 };
 
 // Why detection found nothing, with what to change.
@@ -87,21 +104,18 @@ ReadOptions MakeReadOptions(const InputArgs& in) {
   return options;
 }
 
-LoadedInput LoadInput(const InputArgs& in) {
-  if (auto why = in.detection.Validate()) throw UsageError(*why);
-  LoadedInput loaded;
+LoadedFile LoadFile(const InputArgs& in, const std::string& path) {
+  LoadedFile loaded;
+  loaded.path = path;
   const auto start = std::chrono::steady_clock::now();
   ReadOptions read = MakeReadOptions(in);
   ProgressBar bar("reading");
   read.progress = bar.ByteCallback();
-  loaded.data = ReadInput(in.path, read);
+  loaded.data = ReadInput(path, read);
   bar.Finish();
-  Detail("read %s in %.1f ms\n", in.path.c_str(),
+  Detail("read %s in %.1f ms\n", path.c_str(),
          1e3 * std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
-  if (loaded.data.kind == InputKind::kPositions) {
-    loaded.positions = loaded.data.positions;
-    return loaded;
-  }
+  if (loaded.data.kind == InputKind::kPositions) return loaded;
   loaded.detection = DetectStaticIntervals(loaded.data.raw, in.detection);
   const StaticDetectionResult& d = *loaded.detection;
   Detail(
@@ -111,14 +125,35 @@ LoadedInput LoadInput(const InputArgs& in) {
       d.rejected.size());
   for (const RejectedInterval& r : d.rejected) {
     if (r.cause == RejectedInterval::Cause::kClipped) {  // a position the user meant to record
-      Warn("%s: the still period %.3f-%.3f s is not used: %s\n", in.path.c_str(), r.t_begin_s,
+      Warn("%s: the still period %.3f-%.3f s is not used: %s\n", path.c_str(), r.t_begin_s,
            r.t_end_s, r.reason.c_str());
     } else {
       Detail("  not used: %.3f-%.3f s, %s\n", r.t_begin_s, r.t_end_s, r.reason.c_str());
     }
   }
   if (loaded.detection->intervals.empty()) throw NoStaticInterval(d);
-  loaded.positions = PositionsFromIntervals(loaded.detection->intervals);
+  return loaded;
+}
+
+LoadedInput LoadInput(const InputArgs& in) {
+  if (auto why = in.detection.Validate()) throw UsageError(*why);
+  LoadedInput loaded;
+  std::vector<std::string> paths{in.path};
+  paths.insert(paths.end(), in.more_paths.begin(), in.more_paths.end());
+  for (const std::string& path : paths) {
+    try {
+      loaded.files.push_back(LoadFile(in, path));
+    } catch (const DataError& e) {  // what is wrong with one file of several names that file
+      if (paths.size() == 1) throw;
+      throw InputError(path, 0, e.what());
+    }
+    const LoadedFile& f = loaded.files.back();
+    const std::vector<Position> positions = f.data.kind == InputKind::kPositions
+                                                ? f.data.positions
+                                                : PositionsFromIntervals(f.detection->intervals);
+    loaded.positions.insert(loaded.positions.end(), positions.begin(), positions.end());
+    if (paths.size() > 1) loaded.position_file.resize(loaded.positions.size(), path);
+  }
   return loaded;
 }
 
@@ -158,19 +193,24 @@ std::string Vec(const Vec3& v, const char* fmt = "%14.8g") {
   return Format(fmt, v(0)) + Format(fmt, v(1)) + Format(fmt, v(2));
 }
 
-void PrintInput(const LoadedInput& in, const std::string& path) {
-  if (in.data.kind == InputKind::kPositions) {
-    Say("input     %s: %zu positions (%s)\n", path.c_str(), in.positions.size(),
-        in.data.kind_reason.c_str());
-    return;
+void PrintInput(const LoadedInput& in) {
+  for (const LoadedFile& f : in.files) {
+    if (f.data.kind == InputKind::kPositions) {
+      Say("input     %s: %zu positions (%s)\n", f.path.c_str(), f.data.positions.size(),
+          f.data.kind_reason.c_str());
+      continue;
+    }
+    const StaticDetectionResult& d = *f.detection;
+    Say("input     %s: raw log, %zu samples at %.6g Hz (%s)\n", f.path.c_str(),
+        f.data.raw.samples.size(), d.rate_hz, f.data.kind_reason.c_str());
+    Say("detection %zu static intervals (window %zu samples, threshold %.4g raw^2 = %.3g x "
+        "noise reference)\n",
+        d.intervals.size(), d.window_samples, d.threshold,
+        d.noise_reference > 0 ? d.threshold / d.noise_reference : 0.0);
   }
-  const StaticDetectionResult& d = *in.detection;
-  Say("input     %s: raw log, %zu samples at %.6g Hz (%s)\n", path.c_str(),
-      in.data.raw.samples.size(), d.rate_hz, in.data.kind_reason.c_str());
-  Say("detection %zu static intervals (window %zu samples, threshold %.4g raw^2 = %.3g x "
-      "noise reference)\n",
-      d.intervals.size(), d.window_samples, d.threshold,
-      d.noise_reference > 0 ? d.threshold / d.noise_reference : 0.0);
+  if (in.files.size() > 1) {
+    Say("pooled    %zu positions from %zu files\n", in.positions.size(), in.files.size());
+  }
 }
 
 // The three parameter pairs with the largest |correlation|: what the positions cannot separate.
@@ -200,13 +240,18 @@ void PrintStrongestCorrelations(const Eigen::MatrixXd& covariance,
 }
 
 // One discordant position, for the summary and the warning.
+// `position_file`: the file of each position when there are several (LoadedInput).
 std::string OutlierMessage(const OutlierFinding& o, const std::vector<Position>& positions,
-                           const std::vector<double>& errors, const char* unit) {
+                           const std::vector<double>& errors, const char* unit,
+                           const std::vector<std::string>& position_file) {
   const auto k = static_cast<std::size_t>(o.position);
   std::string where;
+  const std::string file = position_file.empty() ? "" : position_file[k] + " ";
   if (positions[k].interval) {
-    where =
-        Format(" (%.2f-%.2f s)", positions[k].interval->t_begin_s, positions[k].interval->t_end_s);
+    where = Format(" (%s%.2f-%.2f s)", file.c_str(), positions[k].interval->t_begin_s,
+                   positions[k].interval->t_end_s);
+  } else if (!file.empty()) {
+    where = " (" + position_file[k] + ")";
   }
   const std::string test =
       o.statistic == OutlierStatistic::kFisherF
@@ -224,7 +269,8 @@ std::string OutlierMessage(const OutlierFinding& o, const std::vector<Position>&
 }
 
 void PrintCalibration(const CalibrationResult& r, const std::vector<Position>& positions,
-                      const Gravity& g, const std::string& raw_unit) {
+                      const std::vector<std::string>& position_file, const Gravity& g,
+                      const std::string& raw_unit) {
   const char* u = g.unit == ForceUnit::kMetersPerSecond2 ? "m/s2" : "g";
   const bool have_std = r.covariance.size() > 0;
   const auto& slots = ParameterSlots(r.model, r.frame);
@@ -299,7 +345,7 @@ void PrintCalibration(const CalibrationResult& r, const std::vector<Position>& p
   }
   for (const OutlierFinding& o : r.outliers) {
     Say("%s  %s\n", o.excluded ? "excluded " : "flagged  ",
-        OutlierMessage(o, positions, errors, u).c_str());
+        OutlierMessage(o, positions, errors, u, position_file).c_str());
   }
   if (!r.outlier_note.empty()) Say("screening %s\n", r.outlier_note.c_str());
   const std::optional<double> before = GravityNormRmsUncalibrated(means, r.gravity);
@@ -398,14 +444,24 @@ int WriteCalibration(const CalibrateArgs& args, const LoadedInput& in, const Gra
   diagnosis_input.positions = &in.positions;
   diagnosis_input.max_excluded = args.outliers.max_excluded;
   diagnosis_input.selection = selection;
-  if (in.data.kind == InputKind::kRaw) diagnosis_input.log = &in.data.raw;
-  if (in.detection) diagnosis_input.detection = &*in.detection;
+  for (const LoadedFile& f : in.files) {
+    if (f.data.kind == InputKind::kRaw) {
+      diagnosis_input.logs.push_back({f.path, &f.data.raw, &*f.detection});
+    }
+  }
   diagnosis_input.unit = g.unit;
   const Diagnosis diagnosis = Diagnose(diagnosis_input);
   CalibrationFileInfo info;
   info.unit = g.unit;
   info.raw_unit = args.raw_units;
   info.source = args.input.path;
+  if (in.files.size() > 1) {
+    for (const LoadedFile& f : in.files) info.sources.push_back(f.path);
+    for (const std::string& file : in.position_file) {
+      info.position_source.push_back(static_cast<int>(
+          std::find(info.sources.begin(), info.sources.end(), file) - info.sources.begin()));
+    }
+  }
   info.positions = in.positions;
   info.model_selection = selection;
   info.model_requested = args.model;
@@ -417,8 +473,10 @@ int WriteCalibration(const CalibrateArgs& args, const LoadedInput& in, const Gra
     ReportInput input;
     input.calibration_json = json;
     input.calibration_name = args.output.empty() ? args.input.path : args.output;
-    if (in.data.kind == InputKind::kRaw) input.log = &in.data.raw;
-    if (in.detection) input.rejected = in.detection->rejected;
+    if (const LoadedFile* raw = in.FirstRaw()) {  // the report plots one log: the first
+      input.log = &raw->data.raw;
+      input.rejected = raw->detection->rejected;
+    }
     report = RenderReport(input);
   }
   if (!args.output.empty()) WriteFileAtomically(args.output, json);
@@ -428,7 +486,7 @@ int WriteCalibration(const CalibrateArgs& args, const LoadedInput& in, const Gra
   for (const OutlierFinding& o : result.outliers) {
     Warn("%s: %s%s\n", args.input.path.c_str(),
          OutlierMessage(o, in.positions, errors,
-                        g.unit == ForceUnit::kMetersPerSecond2 ? "m/s2" : "g")
+                        g.unit == ForceUnit::kMetersPerSecond2 ? "m/s2" : "g", in.position_file)
              .c_str(),
          o.excluded ? " It was left out of the fit." : " It was kept in the fit.");
   }
@@ -436,9 +494,9 @@ int WriteCalibration(const CalibrateArgs& args, const LoadedInput& in, const Gra
   if (args.json) {
     WriteFileAtomically("-", json);
   } else {
-    PrintInput(in, args.input.path);
+    PrintInput(in);
     Say("%s", input_note.c_str());
-    PrintCalibration(result, in.positions, g, args.raw_units);
+    PrintCalibration(result, in.positions, in.position_file, g, args.raw_units);
     if (selection) PrintModelSelection(*selection, args.model == "auto");
     for (const Finding& f : diagnosis.findings) {
       if (f.severity == Severity::kNote) Say("note      %s\n", f.message.c_str());
@@ -604,7 +662,7 @@ int RunCompare(const CompareArgs& args) {
             : std::vector<double>(means.size(), std::nan(""));
     for (const OutlierFinding& o : comparison.outliers) {
       Warn("%s: %s%s\n", args.input.path.c_str(),
-           OutlierMessage(o, in.positions, errors, unit).c_str(),
+           OutlierMessage(o, in.positions, errors, unit, in.position_file).c_str(),
            o.excluded ? " It was left out of every method's fit." : " It was kept in the fits.");
     }
   }

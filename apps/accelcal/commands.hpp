@@ -39,6 +39,8 @@ struct OutputError : std::runtime_error {
 
 struct InputArgs {
   std::string path;
+  /// Further files of the same device (calibrate): their positions are pooled with the first's.
+  std::vector<std::string> more_paths;
   std::string input_kind = "auto";
   std::vector<std::string> columns;
   std::optional<double> rate_hz;

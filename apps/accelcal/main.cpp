@@ -81,7 +81,12 @@ int main(int argc, char** argv) {
   CalibrateArgs cal;
   CLI::App* calibrate =
       app.add_subcommand("calibrate", "estimate K, b (and k2) from a raw log or a positions file");
-  calibrate->add_option("INPUT", cal.input.path, "raw log or positions file")->required();
+  std::vector<std::string> calibrate_inputs;
+  calibrate
+      ->add_option("INPUT", calibrate_inputs,
+                   "raw logs or positions files (several: sessions of one device, positions "
+                   "pooled; - reads standard input)")
+      ->required();
   AddInputOptions(calibrate, &cal.input, true);
   AddDetectionOptions(calibrate, &cal.input);
   AddGravityOptions(calibrate, &cal.gravity);
@@ -313,6 +318,10 @@ int main(int argc, char** argv) {
   }
 
   SetVerbosity(quiet ? Verbosity::kQuiet : verbose ? Verbosity::kVerbose : Verbosity::kNormal);
+  if (!calibrate_inputs.empty()) {
+    cal.input.path = calibrate_inputs.front();
+    cal.input.more_paths.assign(calibrate_inputs.begin() + 1, calibrate_inputs.end());
+  }
   const auto start = std::chrono::steady_clock::now();
   struct Timer {  // reports the whole command's time when verbose, however it ends
     std::chrono::steady_clock::time_point start;

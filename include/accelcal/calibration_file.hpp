@@ -17,8 +17,12 @@ namespace accelcal {
 /// What the file needs besides the CalibrationResult.
 struct CalibrationFileInfo {
   ForceUnit unit = ForceUnit::kMetersPerSecond2;
-  std::string raw_unit = "raw";     ///< label of the raw unit, e.g. "counts"
-  std::string source;               ///< input file name
+  std::string raw_unit = "raw";  ///< label of the raw unit, e.g. "counts"
+  std::string source;            ///< input file name (the first, when there are several)
+  /// Several input files (sessions of one device, positions pooled): their names, written as
+  /// `sources`, and the index into them of each position, written as `positions[].file`.
+  std::vector<std::string> sources;
+  std::vector<int> position_source;
   std::vector<Position> positions;  ///< the positions that were fitted, same order as the result
   /// When the linear and quadratic models were compared (model "auto", or "quadratic" with the
   /// linear fit as comparison): written as `model_selection`.

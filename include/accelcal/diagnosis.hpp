@@ -97,6 +97,13 @@ inline constexpr double kScatterNote = 3.0;
 inline constexpr double kScatterWarning = 30.0;
 inline constexpr double kInterleavedCorrelation = -0.5;
 
+/// A raw log that gave positions, for the findings about it (LogFindings).
+struct DiagnosedLog {
+  std::string name;  ///< prefixes its findings' messages when there are several logs
+  const RawLog* log = nullptr;
+  const StaticDetectionResult* detection = nullptr;
+};
+
 /// What the diagnosis looks at. `result` and `positions` are required (same order); the rest is
 /// used when given.
 struct DiagnosisInput {
@@ -105,14 +112,17 @@ struct DiagnosisInput {
   /// The most positions the screening could exclude (OutlierOptions::max_excluded).
   int max_excluded = OutlierOptions{}.max_excluded;
   const ModelSelection* selection = nullptr;
-  const RawLog* log = nullptr;                       ///< for the time column's findings
-  const StaticDetectionResult* detection = nullptr;  ///< for the still periods not used
-  ForceUnit unit = ForceUnit::kMetersPerSecond2;     ///< of result->gravity
+  /// The raw logs the positions came from (none for a positions file), in order.
+  std::vector<DiagnosedLog> logs;
+  ForceUnit unit = ForceUnit::kMetersPerSecond2;  ///< of result->gravity
 };
 
 Diagnosis Diagnose(const DiagnosisInput& input);
 
-/// The findings about a log's time column (part of Diagnose; also for commands that only read).
+/// The findings about one raw log and its detection (part of Diagnose): interleaved sensors,
+/// still periods not used or joined, the time column.
+std::vector<Finding> LogFindings(const RawLog* log, const StaticDetectionResult* detection);
+/// The findings about a log's time column (part of LogFindings).
 std::vector<Finding> TimeFindings(const TimeAxis& time);
 /// The findings about still periods that were not used (part of Diagnose).
 std::vector<Finding> RejectedPeriodFindings(const std::vector<RejectedInterval>& rejected);

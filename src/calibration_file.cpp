@@ -287,6 +287,13 @@ LoadedCalibration ParseCalibrationJson(const std::string& text, const std::strin
     if (!doc["units"]["raw"].is_string()) throw InputError(source, 0, "'units.raw' must be text");
     cal.raw_unit = doc["units"]["raw"].get<std::string>();
   }
+  if (doc.contains("verdict")) {
+    if (!doc["verdict"].is_string() ||
+        (doc["verdict"] != "ok" && doc["verdict"] != "warnings" && doc["verdict"] != "failed")) {
+      throw InputError(source, 0, "'verdict' must be \"ok\", \"warnings\" or \"failed\"");
+    }
+    cal.verdict = doc["verdict"].get<std::string>();
+  }
   if (doc.contains("source") && doc["source"].is_string()) {
     cal.source = doc["source"].get<std::string>();
   }

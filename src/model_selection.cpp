@@ -98,6 +98,22 @@ Paired PairedImprovement(const std::vector<double>& linear, const std::vector<do
 
 }  // namespace
 
+ModelChoice CalibrateChoosingModel(const std::vector<Vec3>& readings,
+                                   const CalibrationOptions& options, bool auto_model) {
+  ModelChoice choice;
+  if (auto_model || (options.model == ModelKind::kQuadratic && options.cross_validate)) {
+    choice.selection = SelectModel(readings, options);
+  }
+  if (auto_model) {
+    choice.result = choice.selection->chosen_result();
+  } else if (choice.selection && choice.selection->quadratic) {
+    choice.result = *choice.selection->quadratic;
+  } else {
+    choice.result = Calibrate(readings, options);  // also the error of a quadratic fit that failed
+  }
+  return choice;
+}
+
 ModelSelection SelectModel(const std::vector<Vec3>& readings, CalibrationOptions options) {
   ModelSelection selection;
   options.cross_validate = true;

@@ -167,6 +167,20 @@ std::optional<std::string> Moving(const std::vector<Vec3>& samples, const Static
 }
 }  // namespace
 
+std::string NoStaticIntervalReason(const StaticDetectionResult& d) {
+  std::size_t moving = 0;
+  for (const RejectedInterval& r : d.rejected) {
+    moving += r.cause == RejectedInterval::Cause::kMoving;
+  }
+  if (moving > 0) {
+    return Format(
+        "no static interval found: %zu quiet period%s rejected because the sensor was "
+        "turning through it (a log in continuous motion has no static positions)",
+        moving, moving == 1 ? " was" : "s were");
+  }
+  return Format("no static interval found (threshold %.3g raw^2)", d.threshold);
+}
+
 StaticDetectionResult DetectStaticIntervals(const RawLog& log,
                                             const StaticDetectionOptions& options) {
   if (auto why = options.Validate()) throw DataError(*why);

@@ -389,6 +389,16 @@ TEST_F(Trust, AMisorderedOrientationFileFailsTheChecks) {
             std::string::npos)
       << r.err;
   EXPECT_EQ(Json(Path("bad.json")).at("verdict"), "failed");
+  // Written so that the reasons can be read, never applied or exported.
+  for (const std::string& use : {"apply " + Path("bad.json") + " " + dir + "ferraris_raw_means.csv",
+                                 "export " + Path("bad.json") + " --to yaml"}) {
+    r = Exec(use + " -o " + Path("used.txt"));
+    EXPECT_EQ(r.status, 3) << use;
+    EXPECT_EQ(r.err, "accelcal: " + Path("bad.json") +
+                         ": this calibration failed its checks (\"verdict\": \"failed\"; its "
+                         "\"diagnostics\" say why): it is not applied or exported\n");
+    EXPECT_FALSE(fs::exists(Path("used.txt")));
+  }
   r = Exec("calibrate " + base + dir + "ferraris_orientations.csv -o " + Path("good.json"));
   EXPECT_EQ(r.status, 0) << r.err;
   EXPECT_EQ(Json(Path("good.json")).at("verdict"), "warnings");  // its holds scatter 62x

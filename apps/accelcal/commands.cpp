@@ -73,20 +73,12 @@ struct LoadedInput {
   }
 };
 
-// Why detection found nothing, with what to change.
+// Why detection found nothing, with the options that act on it.
 DataError NoStaticInterval(const StaticDetectionResult& d) {
-  std::size_t moving = 0;
-  for (const RejectedInterval& r : d.rejected)
-    moving += r.cause == RejectedInterval::Cause::kMoving;
-  if (moving > 0) {
-    return DataError(
-        Format("no static interval found: %zu quiet period%s rejected because the "
-               "sensor was turning through it (a log in continuous motion has no "
-               "static positions; --verbose lists them)",
-               moving, moving == 1 ? " was" : "s were"));
-  }
-  return DataError("no static interval found (threshold " + Format("%.3g", d.threshold) +
-                   " raw^2; try --threshold-factor or --min-static)");
+  const std::string reason = NoStaticIntervalReason(d);
+  return DataError(reason + (reason.find("turning") != std::string::npos
+                                 ? "; --verbose lists them"
+                                 : "; try --threshold-factor or --min-static"));
 }
 
 ReadOptions MakeReadOptions(const InputArgs& in) {
@@ -595,18 +587,9 @@ int RunCalibrate(const CalibrateArgs& args) {
   options.reading_sigmas = SigmasOfMeans(in.positions);  // empty: noise from the residuals
   // For a quadratic fit (asked for, or a candidate of --model auto) the linear fit is the
   // comparison: both with held-out validation, decided by ModelSelection's rule.
-  std::optional<ModelSelection> selection;
-  if (auto_model || (options.model == ModelKind::kQuadratic && args.cross_validate)) {
-    selection = SelectModel(means, options);
-  }
-  CalibrationResult result;
-  if (auto_model) {
-    result = selection->chosen_result();
-  } else if (selection && selection->quadratic) {
-    result = *selection->quadratic;
-  } else {
-    result = Calibrate(means, options);  // also the error path of a quadratic fit that failed
-  }
+  const ModelChoice choice = CalibrateChoosingModel(means, options, auto_model);
+  const CalibrationResult& result = choice.result;
+  const std::optional<ModelSelection>& selection = choice.selection;
   if (!result.summary.converged()) {
     std::fprintf(stderr, "accelcal: %s: the solver did not converge: %s; nothing written\n",
                  args.input.path.c_str(), result.summary.termination_message.c_str());
@@ -842,9 +825,19 @@ int RunDetect(const DetectArgs& args) {
   return kExitOk;
 }
 
+// A calibration that failed its checks is written so that its reasons can be read, never used.
+void RefuseFailed(const LoadedCalibration& cal, const std::string& path) {
+  if (cal.verdict == "failed") {
+    throw InputError(path, 0,
+                     "this calibration failed its checks (\"verdict\": \"failed\"; its "
+                     "\"diagnostics\" say why): it is not applied or exported");
+  }
+}
+
 int RunApply(const ApplyArgs& args) {
   const LoadedCalibration cal = ParseCalibrationJson(
       ReadFileToString(args.calibration, kMaxSmallFileBytes), args.calibration);
+  RefuseFailed(cal, args.calibration);
   ForceUnit unit = cal.unit;
   if (args.units)
     unit = ParseEnum(ForceUnitFromString(*args.units), *args.units, "--units", "m/s2, g");
@@ -917,6 +910,7 @@ int RunExport(const ExportArgs& args) {
       ParseEnum(ExportFormatFromString(args.format), args.format, "--to", names.c_str());
   const std::string text = ReadFileToString(args.calibration, kMaxSmallFileBytes);
   const LoadedCalibration cal = ParseCalibrationJson(text, args.calibration);
+  RefuseFailed(cal, args.calibration);
   ExportOptions options;
   options.raw_unit = args.raw_unit;
   options.instance = args.instance;

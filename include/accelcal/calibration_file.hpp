@@ -46,6 +46,8 @@ struct LoadedCalibration {
   std::string raw_unit = "raw";      ///< `units.raw` (a label given at calibration)
   std::vector<Vec3> position_means;  ///< `positions[].mean` [raw]; empty when the file has none
   std::string source;                ///< `source`: the calibrated input's name, when present
+  /// `verdict` ("ok", "warnings", "failed"); empty in a file written before diagnoses existed.
+  std::string verdict;
   /// `covariance` in the order of ParameterSlots(model, frame); empty when the file has null.
   Eigen::MatrixXd covariance;
 };

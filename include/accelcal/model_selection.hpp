@@ -91,4 +91,17 @@ struct ModelSelection {
 /// Throws as Calibrate() does when the linear model cannot be fitted.
 ModelSelection SelectModel(const std::vector<Vec3>& readings, CalibrationOptions options);
 
+/// A calibration with the model asked for, and the comparison that goes with it.
+struct ModelChoice {
+  CalibrationResult result;
+  /// With `auto_model`, or a quadratic fit with cross-validation: the comparison of both models
+  /// (the quadratic fit is compared with the linear one even when asked for, so that a quadratic
+  /// model the data do not support can be said to be so).
+  std::optional<ModelSelection> selection;
+};
+/// `auto_model`: the model SelectModel chooses (options.model is ignored; cross-validation
+/// required). Otherwise options.model, compared as above when quadratic. Throws as Calibrate().
+ModelChoice CalibrateChoosingModel(const std::vector<Vec3>& readings,
+                                   const CalibrationOptions& options, bool auto_model);
+
 }  // namespace accelcal

@@ -76,6 +76,11 @@ struct StaticDetectionResult {
   std::size_t joined = 0;
 };
 
+/// Why `detection` found no interval, for a message: "no static interval found" and, when quiet
+/// periods were rejected as turning, how many ("a log in continuous motion has no static
+/// positions"), else the threshold used.
+std::string NoStaticIntervalReason(const StaticDetectionResult& detection);
+
 /// Throws DataError when the log is too short, has no rate (no time column and no rate given) or
 /// the options are invalid. Returns an empty interval list when nothing is still.
 StaticDetectionResult DetectStaticIntervals(const RawLog& log,

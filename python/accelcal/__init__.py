@@ -1,17 +1,43 @@
 """accelcal: calibration of triaxial accelerometers from static multi-position recordings.
 
 The C++ library's API under the same names in snake_case (``calibrate``, ``read_input``,
-``detect_static_intervals``, ``export_calibration``, ``render_report``), numpy arrays for readings
-(n x 3) and matrices, and the library's errors as ``InputError`` / ``DataError`` (both
-``ValueError``) with the command-line tool's messages.
+``detect_static_intervals``, ``diagnose``, ``export_calibration``, ``render_report``), numpy arrays
+for readings (n x 3) and matrices, and the library's errors as ``InputError`` / ``DataError``
+(both ``ValueError``) with the command-line tool's messages. ``calibrate_log`` is
+``accelcal calibrate LOG``: the same reading, detection, fit and diagnosis, the same doubles.
+
+Never silently wrong: every ``CalibrationResult`` from ``calibrate`` and ``calibrate_log``
+carries its diagnosis (diagnosis.hpp, docs/diagnostics.md), as the calibration file does:
+
+- ``result.verdict``: ``"ok"`` (notes at most), ``"warnings"`` or ``"failed"``;
+- ``result.diagnostics``: the findings, failures first, then warnings, then notes, each a dict
+  ``{"code", "severity", "message", "numbers"}`` (``numbers`` a dict of floats; position numbers
+  in messages and numbers count from 1, as in the file; ``result.outliers[i]["position"]`` and
+  every other index of the Python API count from 0).
+
+``calibrate_log`` still returns ``(result, positions)``, so the diagnosis rides on the result
+rather than on a new return type: old code keeps working, and the verdict cannot be lost by
+unpacking. Where the command line exits with status 6 (a result that failed its checks, written
+but marked ``"verdict": "failed"``), Python returns the result with ``verdict == "failed"`` and
+emits a ``CalibrationCheckFailed`` warning naming the failed checks; it raises nothing, so the
+result stays available to see why. To make it an exception::
+
+    warnings.simplefilter("error", accelcal.CalibrationCheckFailed)
+
+(the exception raised is the warning itself: its ``result`` attribute holds the calibration).
+Each warning-severity finding is emitted as a ``CalibrationWarning``; notes are not emitted.
+The two categories are separate ``UserWarning`` subclasses, so silencing the warnings never
+silences a failure. ``diagnose(result, ...)`` computes the diagnosis again (other units, other
+positions, or a raw log and detection from arrays) and only returns it.
 """
+
+import warnings as _warnings
 
 from ._accelcal import (  # noqa: F401
     Calibration,
     CalibrationResult,
     DataError,
     InputError,
-    calibrate,
     detect_static_intervals,
     export_calibration,
     load_calibration,
@@ -19,6 +45,39 @@ from ._accelcal import (  # noqa: F401
     read_input,
     render_report,
 )
+from . import _accelcal
+
+
+class CalibrationWarning(UserWarning):
+    """A warning of a calibration's diagnosis: the result stands, but look at this
+    (``finding`` holds the finding's dict, ``result`` the calibration)."""
+
+
+class CalibrationCheckFailed(UserWarning):
+    """The calibration failed its checks (``result.verdict == "failed"``): do not use it as it is.
+    ``result`` holds the calibration and ``findings`` the failed findings (dicts). Turn it into an
+    exception with ``warnings.simplefilter("error", accelcal.CalibrationCheckFailed)``."""
+
+
+def _emit_diagnosis(result, source, stacklevel):
+    """Warns of the result's warning-severity findings (CalibrationWarning, one each) and, when it
+    failed, once of its failures (CalibrationCheckFailed). Notes are not emitted."""
+    prefix = f"{source}: " if source else ""
+    failures = []
+    for finding in result.diagnostics:
+        if finding["severity"] == "failure":
+            failures.append(finding)
+        elif finding["severity"] == "warning":
+            w = CalibrationWarning(f"{prefix}{finding['message']} [{finding['code']}]")
+            w.finding, w.result = finding, result
+            _warnings.warn(w, stacklevel=stacklevel + 1)
+    if failures:
+        checks = "; ".join(f"{f['code']}: {f['message']}" for f in failures)
+        w = CalibrationCheckFailed(
+            f"{prefix}the calibration failed its checks (result.verdict == 'failed'); do not use "
+            f"it as it is. {checks}")
+        w.findings, w.result = failures, result
+        _warnings.warn(w, stacklevel=stacklevel + 1)
 
 
 def apply(calibration, readings):
@@ -26,26 +85,86 @@ def apply(calibration, readings):
     return calibration.apply(readings)
 
 
+def calibrate(readings, model="linear", method="joint", frame="x-first", gravity=9.80665,
+              estimator="ml", reading_sigmas=None, cross_validate=True, outliers="exclude", *,
+              outlier_probability=1e-3, max_outliers=3, units=None, max_iterations=0):
+    """Calibrates from averaged readings (m x 3), one per static position, and diagnoses the result.
+
+    model: "linear", "quadratic" or "auto" (the quadratic model kept only when its held-out error
+    is lower on evidence, model_selection.hpp; needs cross_validate); a quadratic fit with
+    cross_validate is compared with the linear one (``result.model_selection``), as the command
+    line does. gravity: the gravity magnitude in ``units``. reading_sigmas: the 1 sigma per axis of
+    each averaged reading (m x 3) when known (else the noise comes from the residuals).
+    outliers: "exclude", "flag" or "off", the screening of positions that disagree with the others
+    (``outlier_probability``: the chance that a calibration whose positions all agree loses one;
+    ``max_outliers``: the most positions it may leave out, the command line's --max-outliers).
+    units: "m/s2" or "g", the unit of ``gravity`` and of the calibrated specific force, for the
+    diagnosis and the file; None: "g" when gravity is below 2, else "m/s2". max_iterations: the
+    solver's iteration cap (0: its default).
+
+    Returns a ``CalibrationResult`` carrying ``verdict`` and ``diagnostics``; emits a
+    ``CalibrationWarning`` per warning and a ``CalibrationCheckFailed`` when the verdict is
+    "failed" (a solver that did not converge, readings that miss gravity: see the module
+    docstring). Raises DataError when the readings cannot determine the model (too few, degenerate,
+    non-finite) and ValueError for invalid options.
+    """
+    result = _accelcal.calibrate(
+        readings, model, method, frame, gravity, estimator, reading_sigmas, cross_validate,
+        outliers, outlier_probability=outlier_probability, max_outliers=max_outliers, units=units,
+        max_iterations=max_iterations)
+    _emit_diagnosis(result, None, stacklevel=2)
+    return result
+
+
 def calibrate_log(path, model="linear", method="joint", frame="x-first", gravity=9.80665,
                   estimator="ml", columns=(), rate_hz=None, window_s=0.5, min_static_s=1.0,
-                  threshold_factor=10.0, init_rest_s=0.0, cross_validate=True):
-    """What ``accelcal calibrate LOG`` does: read, detect the static intervals, average them and
-    calibrate with each interval's noise. Returns (result, positions) with positions the
-    (m x 3) averaged readings, in the order of the result's directions and residuals."""
-    import numpy as np
+                  threshold_factor=10.0, init_rest_s=0.0, cross_validate=True, *,
+                  outliers="exclude", outlier_probability=1e-3, max_outliers=3, units=None,
+                  time_unit="auto", instance=None, input_kind="raw", max_iterations=0):
+    """What ``accelcal calibrate LOG`` does: read, detect the static intervals, average them,
+    calibrate with each interval's noise and diagnose (the time column, still periods not used,
+    interleaved sensors, the fit). Gives exactly the command line's doubles and diagnosis; with
+    the defaults ``result.to_json()`` is the text of ``accelcal calibrate LOG --json``.
 
-    data = read_input(path, "raw", list(columns), rate_hz)
-    detected = detect_static_intervals(data["samples"], data["time"], data["rate_hz"], window_s,
-                                       min_static_s, threshold_factor, init_rest_s)
-    intervals = detected["intervals"]
-    if not intervals:
-        raise DataError(f"{path}: no static interval found (threshold {detected['threshold']:.3g} raw^2)")
-    positions = np.array([i["mean"] for i in intervals])
-    counts = np.array([i["end"] - i["begin"] for i in intervals], dtype=float)
-    sigmas = np.array([i["std"] for i in intervals]) / np.sqrt(counts)[:, None]
-    try:
-        result = calibrate(positions, model, method, frame, gravity, estimator, sigmas,
-                           cross_validate)
-    except DataError as e:
-        raise DataError(f"{path}: {e}") from None
+    Returns ``(result, positions)``: positions the (m x 3) averaged readings, in the order of the
+    result's directions and residuals; ``result.verdict`` and ``result.diagnostics`` the
+    diagnosis. Warnings and a failed verdict are emitted as for ``calibrate`` (prefixed with the
+    path); nothing is raised for a failed verdict.
+
+    Options as ``calibrate`` (gravity in ``units``: "m/s2", "g" or None for "g" below 2), and as
+    the command line's: columns (--columns: 3 or 4 column numbers or header names), rate_hz
+    (--rate), time_unit ("auto", "s", "ms", "us", "ns": --time-unit; "auto" decides from the
+    column's name and step, time_axis.hpp), instance (--instance: the sensor to keep of a file
+    whose instance column holds several), input_kind ("raw", "positions" or "auto":
+    --input-kind), window_s, min_static_s, threshold_factor, init_rest_s (detection),
+    max_iterations (--max-iterations). Raises InputError (unreadable or malformed file) or
+    DataError (no static interval, too few positions), both naming the file.
+    """
+    result, positions = _accelcal.calibrate_log(
+        path, model, method, frame, gravity, estimator, list(columns), rate_hz, window_s,
+        min_static_s, threshold_factor, init_rest_s, cross_validate, outliers=outliers,
+        outlier_probability=outlier_probability, max_outliers=max_outliers, units=units,
+        time_unit=time_unit, instance=instance, input_kind=input_kind,
+        max_iterations=max_iterations)
+    _emit_diagnosis(result, str(path), stacklevel=2)
     return result, positions
+
+
+def diagnose(result, positions=None, units=None, samples=None, time=None, rate_hz=None,
+             time_unit="s", detection=None, max_outliers=None):
+    """The diagnosis of a calibration (diagnosis.hpp), computed again; emits no warning.
+
+    result: a CalibrationResult of ``calibrate`` or ``calibrate_log``. positions: the averaged
+    readings it was fitted to (m x 3, the result's order; default: those it was fitted to).
+    units: "m/s2" or "g", the unit of the result's gravity (default: the result's). samples
+    (n x 3), time (n, seconds unless ``time_unit`` says otherwise) or rate_hz: the raw log, for
+    the time column's findings (unit, gaps, irregular sampling) and, with ``detection`` (the dict
+    of ``detect_static_intervals``), for interleaved sensors; detection alone gives the findings
+    of still periods not used. max_outliers: the screening's limit (default: the result's).
+
+    Returns ``{"verdict": "ok" | "warnings" | "failed", "diagnostics": [finding, ...]}``, each
+    finding a dict ``{"code", "severity", "message", "numbers"}``; position numbers in messages
+    and numbers count from 1.
+    """
+    return _accelcal.diagnose(result, positions, units, samples, time, rate_hz, time_unit,
+                              detection, max_outliers)

@@ -22,6 +22,12 @@ def cli_calibration(tmp_path, *args):
     return json.loads(out.read_text())
 
 
+def cli_json(*args):
+    """`accelcal calibrate ... --json`: the exit status and the calibration file's text."""
+    run = subprocess.run([CLI, "calibrate", *args, "-q", "--json"], capture_output=True, text=True)
+    return run.returncode, run.stdout
+
+
 def test_calibrate_log_gives_the_cli_calibration_exactly(tmp_path):
     # Same reading, detection, averaging and solver: the same doubles as `accelcal calibrate`.
     cli = cli_calibration(tmp_path, "--gravity", "9.81744")
@@ -35,6 +41,30 @@ def test_calibrate_log_gives_the_cli_calibration_exactly(tmp_path):
     assert result.crossval_rms == cli["crossval_rms"]
     assert result.parameter_names == cli["parameter_order"]
     np.testing.assert_array_equal(result.covariance, np.array(cli["covariance"]))
+    # And the same judgement: verdict and findings, codes and numbers, as `--json` prints them.
+    status, text = cli_json(XSENS, "--gravity", "9.81744")
+    assert status == 0
+    doc = json.loads(text)
+    np.testing.assert_array_equal(result.K, np.array(doc["K"]))
+    np.testing.assert_array_equal(result.bias, np.array(doc["bias"]))
+    assert result.verdict == doc["verdict"] == "ok"
+    assert [f["code"] for f in result.diagnostics] == [f["code"] for f in doc["diagnostics"]]
+    assert [f["code"] for f in result.diagnostics] == ["scatter_ratio", "time_unit"]
+    assert result.diagnostics == doc["diagnostics"]
+    assert result.to_json() == text  # the whole file, byte for byte
+
+
+def test_calibrate_log_model_auto_is_the_cli_model_auto():
+    # --model auto: both models fitted on the quadratic screening's positions, chosen on held-out
+    # evidence; the Xsens keeps the linear model, and says why.
+    status, text = cli_json(XSENS, "--gravity", "9.81744", "--model", "auto")
+    assert status == 0
+    result, _ = accelcal.calibrate_log(XSENS, gravity=9.81744, model="auto")
+    assert result.model == "linear" and result.model_selection["chosen"] == "linear"
+    assert result.model_selection["reason"] == json.loads(text)["model_selection"]["reason"]
+    assert result.to_json() == text
+    with pytest.raises(ValueError, match="cross_validate"):
+        accelcal.calibrate_log(XSENS, model="auto", cross_validate=False)
 
 
 def test_a_corrupted_position_is_excluded_as_the_cli_excludes_it(tmp_path):
@@ -50,13 +80,19 @@ def test_a_corrupted_position_is_excluded_as_the_cli_excludes_it(tmp_path):
     subprocess.run([CLI, "calibrate", str(csv), "-q", "--gravity", "9.81744", "-o", str(cli)],
                    check=True)
     doc = json.loads(cli.read_text())
-    result = accelcal.calibrate(moved, gravity=9.81744)
+    with pytest.warns(accelcal.CalibrationWarning, match="position 8 disagrees"):
+        result = accelcal.calibrate(moved, gravity=9.81744)
     assert [o["position"] for o in result.outliers] == [7]
+    # The diagnosis counts from 1, as the file and the messages do.
+    outlier = [f for f in result.diagnostics if f["code"] == "outlier"]
+    assert len(outlier) == 1 and outlier[0]["numbers"]["position"] == 8
+    assert result.verdict == "warnings"
     assert result.outliers[0]["excluded"]
     assert [o["position"] for o in doc["outliers"]] == [8]  # the file counts from 1
     assert doc["positions"][7]["excluded"]
     np.testing.assert_array_equal(result.K, np.array(doc["K"]))
-    flagged = accelcal.calibrate(moved, gravity=9.81744, outliers="flag")
+    with pytest.warns(accelcal.CalibrationWarning, match="kept in the fit"):
+        flagged = accelcal.calibrate(moved, gravity=9.81744, outliers="flag")
     assert not flagged.outliers[0]["excluded"]
     with pytest.raises(ValueError):
         accelcal.calibrate(moved, outliers="sometimes")
@@ -72,11 +108,18 @@ def test_apply_inverts_the_model_and_matches_the_calibration_file(tmp_path):
     f = accelcal.apply(ModelLike, readings)
     # f solves p = K f + b exactly.
     np.testing.assert_allclose(f @ ModelLike.K.T + ModelLike.bias, readings, rtol=0, atol=1e-14)
-    # Through the file: the JSON round trip keeps every double.
-    text = ModelLike.to_json(readings, units="g", raw_units="g")
+    # Through the file (of the fitted positions, in g: gravity 1 means g): the JSON round trip
+    # keeps every double.
+    assert ModelLike.units == "g"
+    text = ModelLike.to_json(raw_units="g")
+    assert json.loads(text)["units"] == {"raw": "g", "specific_force": "g"}
     loaded = accelcal.parse_calibration_json(text)
     np.testing.assert_array_equal(loaded.K, ModelLike.K)
     np.testing.assert_array_equal(loaded.apply(readings), f)
+    # Other positions than the fit's 12 would make the file inconsistent (and read past the
+    # residuals): refused.
+    with pytest.raises(ValueError, match="2 positions for a calibration of 12"):
+        ModelLike.to_json(readings)
 
 
 def test_errors_carry_the_cli_messages(tmp_path):

@@ -702,6 +702,8 @@ InputData ParseInput(std::string_view text, const std::string& source, const Rea
         }
         log.rate_hz = options.rate_hz;
       }
+    } else if (log.time_s.size() == 1) {
+      throw InputError(source, 0, "one sample: a raw log needs more");
     } else if (options.rate_hz) {
       log.rate_hz = options.rate_hz;
     }

@@ -2,7 +2,9 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <cstdio>
+#include <cstring>
 #include <optional>
 #include <utility>
 
@@ -49,6 +51,48 @@ std::pair<Vec3, Vec3> LogExtremes(const std::vector<Vec3>& samples) {
   return {lo, hi};
 }
 
+// The k-th smallest (0-based) of the non-NaN values of `v`, all >= 0, without copying them: a
+// radix selection on the bit patterns, which order non-negative doubles as unsigned integers.
+// Each pass counts the next 16 bits of the values that share the bits fixed so far and fixes the
+// 16 bits of the bucket holding the k-th; once that bucket is small, its values are copied and
+// nth_element finishes. The same value as nth_element on a copy (detection of a 1-hour log would
+// otherwise hold a second copy of its scores, 29 MB).
+double KthSmallest(const std::vector<double>& v, std::size_t k) {
+  const auto bits = [](double x) {
+    std::uint64_t b;
+    std::memcpy(&b, &x, sizeof b);
+    return b;
+  };
+  std::uint64_t prefix = 0;
+  std::vector<std::size_t> count(1 << 16);
+  for (int shift = 48;; shift -= 16) {
+    // Values whose bits above shift + 16 equal the prefix's.
+    const auto matches = [&](double x) {
+      return !std::isnan(x) &&
+             (shift == 48 || (bits(x) >> (shift + 16)) == (prefix >> (shift + 16)));
+    };
+    std::fill(count.begin(), count.end(), 0);
+    std::size_t total = 0;
+    for (double x : v) {
+      if (!matches(x)) continue;
+      ++count[(bits(x) >> shift) & 0xFFFF];
+      ++total;
+    }
+    if (total <= (std::size_t{1} << 16) || shift == 0) {
+      std::vector<double> kept;
+      kept.reserve(total);
+      for (double x : v) {
+        if (matches(x)) kept.push_back(x);
+      }
+      std::nth_element(kept.begin(), kept.begin() + static_cast<std::ptrdiff_t>(k), kept.end());
+      return kept[k];
+    }
+    std::size_t bucket = 0;
+    while (k >= count[bucket]) k -= count[bucket++];
+    prefix |= static_cast<std::uint64_t>(bucket) << shift;
+  }
+}
+
 // The reading of 1 g, roughly, for judging motion: a calibration log turns every axis through
 // about ±1 g, so half the 2nd-98th percentile range of each axis, the median over the axes
 // (exact for the positions alone; motion widens the range a little).
@@ -81,10 +125,11 @@ std::optional<std::string> Clipping(const std::vector<Vec3>& samples,
     // Another axis must vary by more than its quantisation step: a noise-free (simulated) log
     // sits still at its extremes too, and so does the +1 g reading of a quantised sensor whose
     // noise is below its step (it is the log's largest value when no motion exceeds 1 g).
-    const int b = (a + 1) % 3, c = (a + 2) % 3;
-    if (!(interval.std(b) > quantisation_step(b) || interval.std(c) > quantisation_step(c))) {
-      continue;
-    }
+    // (A constant axis's standard deviation is round-off, not variation.)
+    const auto varies = [&](int i) {
+      return interval.std(i) > std::max(quantisation_step(i), 1e-9 * std::abs(interval.mean(i)));
+    };
+    if (!varies((a + 1) % 3) && !varies((a + 2) % 3)) continue;
     for (const bool largest : {true, false}) {
       const double limit = largest ? extremes.second(a) : extremes.first(a);
       std::size_t at_limit = 0;
@@ -271,11 +316,9 @@ StaticDetectionResult DetectStaticIntervals(const RawLog& log,
       dsum2 += din.cwiseAbs2() - dout.cwiseAbs2();
     }
   }
-  std::vector<double> valid;
-  for (double v : score) {
-    if (!std::isnan(v)) valid.push_back(v);
-  }
-  if (valid.empty()) {
+  std::size_t valid = 0;
+  for (double v : score) valid += !std::isnan(v);
+  if (valid == 0) {
     throw DataError(
         Format("no segment of the log is longer than one detection window (%zu "
                "samples): the gaps cut it into %zu pieces",
@@ -294,12 +337,10 @@ StaticDetectionResult DetectStaticIntervals(const RawLog& log,
     MeanAndStd(log.samples, 0, m, &mean, &std);
     result.noise_reference = std.cwiseAbs2().sum();
   } else {
-    const std::size_t q = static_cast<std::size_t>(options.reference_quantile *
-                                                   static_cast<double>(valid.size() - 1));
-    std::nth_element(valid.begin(), valid.begin() + static_cast<std::ptrdiff_t>(q), valid.end());
-    result.noise_reference = valid[q];
+    const std::size_t q =
+        static_cast<std::size_t>(options.reference_quantile * static_cast<double>(valid - 1));
+    result.noise_reference = KthSmallest(score, q);
   }
-  std::vector<double>().swap(valid);  // a long log's copy of the scores is not kept
   // Quantised sensors can be perfectly still (zero variance): the floor is their quantisation
   // noise, and a round-off floor for noise-free (simulated) data.
   const Vec3 shift = log.samples.front();

@@ -59,10 +59,9 @@ std::pair<double, Vec3> LargestGap(const std::vector<Vec3>& directions) {
     const double z = 1.0 - (2.0 * i + 1.0) / n;
     const double phi = i * kPi * (3.0 - std::sqrt(5.0));
     const Vec3 u(std::sqrt(1 - z * z) * std::cos(phi), std::sqrt(1 - z * z) * std::sin(phi), z);
-    double nearest = kPi;
-    for (const Vec3& d : directions) {
-      nearest = std::min(nearest, std::acos(std::clamp(u.dot(d.normalized()), -1.0, 1.0)));
-    }
+    double closest = -1;  // the largest cosine is the nearest direction: one acos per point
+    for (const Vec3& d : directions) closest = std::max(closest, u.dot(d.normalized()));
+    const double nearest = std::acos(std::clamp(closest, -1.0, 1.0));
     if (nearest > worst) worst = nearest, where = u;
   }
   return {worst * 180.0 / kPi, where};

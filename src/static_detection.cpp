@@ -96,9 +96,10 @@ double KthSmallest(const std::vector<double>& v, std::size_t k) {
 // The reading of 1 g, roughly, for judging motion: a calibration log turns every axis through
 // about ±1 g, so half the 2nd-98th percentile range of each axis, the median over the axes
 // (exact for the positions alone; motion widens the range a little).
-// Every k-th sample is enough for percentiles (at most 65536 of them: a long log costs no copy).
+// Every k-th sample is enough for these percentiles (at most 8192 of them: a rough scale, cheap
+// for any log).
 double GravityReading(const std::vector<Vec3>& samples) {
-  const std::size_t stride = samples.size() / 65536 + 1;
+  const std::size_t stride = samples.size() / 8192 + 1;
   std::vector<double> column((samples.size() + stride - 1) / stride);
   double half_range[3];
   for (int a = 0; a < 3; ++a) {

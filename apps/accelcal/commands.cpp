@@ -859,6 +859,10 @@ int RunApply(const ApplyArgs& args) {
   out.reserve(log.samples.size() * 64);
   out += "# accelcal apply " + args.calibration + ": specific force in " +
          std::string(ToString(unit)) + "\n";
+  if (log.time) {  // the clock stated once: times are seconds from the first sample
+    out += "# time: seconds from the first sample, at " + FormatNumber(log.time->origin_s) +
+           " s on the log's clock (read in " + std::string(ToString(log.time->unit)) + ")\n";
+  }
   out += has_time ? "time,x,y,z\n" : "x,y,z\n";
   char buf[32];
   for (std::size_t i = 0; i < log.samples.size(); ++i) {

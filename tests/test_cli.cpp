@@ -79,6 +79,9 @@ TEST_F(Cli, CalibratesTheXsensRecording) {
   std::getline(in, line);
   EXPECT_EQ(line.rfind("# accelcal apply", 0), 0u);
   std::getline(in, line);
+  EXPECT_EQ(line,
+            "# time: seconds from the first sample, at 0.02984 s on the log's clock (read in s)");
+  std::getline(in, line);
   EXPECT_EQ(line, "time,x,y,z");
   double t, x, y, z;
   char c;
@@ -120,7 +123,7 @@ TEST_F(Cli, CalibratesInTheZFirstFrame) {
   ASSERT_EQ(ax.status, 0) << ax.err;
   std::ifstream fz(Path("z.csv")), fx(Path("x.csv"));
   std::string line;
-  for (int i = 0; i < 2; ++i) std::getline(fz, line), std::getline(fx, line);
+  for (int i = 0; i < 3; ++i) std::getline(fz, line), std::getline(fx, line);
   double t, a, b, c, T, A, B, C;
   char sep;
   int n = 0;

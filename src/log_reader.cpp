@@ -306,9 +306,15 @@ int ResolveColumn(const std::string& spec, const std::vector<std::string>& heade
                        (header.empty() ? std::string(" (the file has no header)") : std::string()));
 }
 
+// A number for a message: whole numbers in full (device ids such as PX4's 2490378), others to 6
+// significant digits.
 std::string ShortNumber(double v) {
   char buf[32];
-  std::snprintf(buf, sizeof buf, "%.6g", v);
+  if (v == std::floor(v) && std::abs(v) < 1e15) {
+    std::snprintf(buf, sizeof buf, "%.0f", v);
+  } else {
+    std::snprintf(buf, sizeof buf, "%.6g", v);
+  }
   return buf;
 }
 

@@ -254,6 +254,12 @@ StaticDetectionResult DetectStaticIntervals(const RawLog& log,
                "interval needs at least 2",
                options.min_duration_s, min_samples, result.rate_hz));
   }
+  if (!(min_samples <= static_cast<double>(n))) {  // also keeps the casts below defined
+    throw DataError(
+        Format("a minimum static duration of %.6g s is longer than the log (%zu "
+               "samples at %.6g Hz)",
+               options.min_duration_s, n, result.rate_hz));
+  }
   const std::size_t w = static_cast<std::size_t>(std::lround(window_samples)) | 1;
   result.window_samples = w;
   const std::size_t h = w / 2;
@@ -328,12 +334,15 @@ StaticDetectionResult DetectStaticIntervals(const RawLog& log,
 
   // Noise reference.
   if (options.init_rest_s > 0) {
-    const std::size_t m = static_cast<std::size_t>(options.init_rest_s * result.rate_hz);
+    const double rest_samples = options.init_rest_s * result.rate_hz;
     const std::size_t first_end = segments.size() > 1 ? segments[1] : n;
-    if (m < 2 || m > first_end) {
-      throw DataError(m > n ? "the initial rest period is longer than the log"
-                            : "the initial rest period is longer than the log's first segment");
+    if (!(rest_samples <= static_cast<double>(first_end)) || rest_samples < 2) {
+      throw DataError(
+          rest_samples > static_cast<double>(n) ? "the initial rest period is longer than the log"
+          : rest_samples < 2 ? "the initial rest period holds fewer than 2 samples"
+                             : "the initial rest period is longer than the log's first segment");
     }
+    const auto m = static_cast<std::size_t>(rest_samples);
     Vec3 mean, std;
     MeanAndStd(log.samples, 0, m, &mean, &std);
     result.noise_reference = std.cwiseAbs2().sum();

@@ -166,6 +166,15 @@ TEST_F(Trust, TimeInAnyUnitGivesTheCalibrationOfSeconds) {
   EXPECT_NE(r.err.find("a minimum static duration of 0.001 s is 0.1 samples at 100 Hz"),
             std::string::npos)
       << r.err;
+  // Durations beyond the log (1e308 s overflowed a cast to a sample count).
+  r = Exec("calibrate " + us + " --min-static 1e308");
+  EXPECT_EQ(r.status, 3);
+  EXPECT_NE(r.err.find("a minimum static duration of 1e+308 s is longer than the log"),
+            std::string::npos)
+      << r.err;
+  r = Exec("calibrate " + us + " --init-rest 1e308");
+  EXPECT_EQ(r.status, 3);
+  EXPECT_EQ(r.err, "accelcal: " + us + ": the initial rest period is longer than the log\n");
   // A name that contradicts the step, and a step that leaves the unit open.
   const std::string named = Write("named.csv", LogText(log, "time_ms,x,y,z", 1, "%.2f", 6));
   r = Exec("calibrate " + named);

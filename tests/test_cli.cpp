@@ -720,8 +720,15 @@ TEST_F(Cli, Detect) {
   const nlohmann::json doc = nlohmann::json::parse(r.out);
   EXPECT_EQ(doc["intervals"].size(), 38u);
   EXPECT_EQ(doc["intervals"][0]["mean"].size(), 3u);
+  EXPECT_EQ(doc["time"]["unit"], "s");
+  EXPECT_EQ(doc["time"]["origin_s"], 0.02984);
+  EXPECT_EQ(doc["time"]["gaps"], 0);
   const CliRun t = Exec("detect " + kData + "/imutk-xsens-mti/xsens_acc.mat");
   EXPECT_NE(t.out.find("38 static intervals"), std::string::npos);
+  EXPECT_NE(t.out.find("\n# time in s: the time column read as seconds (its median step 0.01: "
+                       "100 Hz)"),
+            std::string::npos)
+      << t.out;
 }
 
 struct BadCase {

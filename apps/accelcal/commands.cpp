@@ -793,7 +793,13 @@ int RunDetect(const DetectArgs& args) {
     out += Format("  \"samples\": %zu,\n  \"rate_hz\": %s,\n  \"window_samples\": %zu,\n",
                   data.raw.samples.size(), FormatNumber(d.rate_hz).c_str(), d.window_samples);
     out += "  \"noise_reference\": " + FormatNumber(d.noise_reference) +
-           ",\n  \"threshold\": " + FormatNumber(d.threshold) + ",\n  \"intervals\": [";
+           ",\n  \"threshold\": " + FormatNumber(d.threshold) + ",\n";
+    if (const std::optional<TimeAxis>& t = data.raw.time) {
+      out += "  \"time\": {\"unit\": \"" + std::string(ToString(t->unit)) +
+             "\", \"origin_s\": " + FormatNumber(t->origin_s) +
+             ", \"gaps\": " + std::to_string(t->gaps.size()) + "},\n";
+    }
+    out += "  \"intervals\": [";
     for (std::size_t i = 0; i < d.intervals.size(); ++i) {
       const StaticInterval& s = d.intervals[i];
       out += i ? ",\n    " : "\n    ";
@@ -811,6 +817,8 @@ int RunDetect(const DetectArgs& args) {
         "(noise reference %.4g)\n",
         in.path.c_str(), data.raw.samples.size(), d.rate_hz, d.window_samples, d.threshold,
         d.noise_reference);
+    // What the time column was found to be, and the still periods not used (diagnosis.hpp).
+    for (const Finding& f : LogFindings(&data.raw, &d)) out += "# " + f.message + "\n";
     out += Format("%3s %9s %9s %11s %11s %8s %40s %33s\n", "#", "begin", "end", "t_begin", "t_end",
                   "samples", "mean", "std");
     for (std::size_t i = 0; i < d.intervals.size(); ++i) {

@@ -1,6 +1,7 @@
 #include "accelcal/calibration_file.hpp"
 
 #include <cmath>
+#include <set>
 
 #include <nlohmann/json.hpp>
 
@@ -217,14 +218,42 @@ Vec3 Vector3(const ordered_json& doc, const char* key, const std::string& source
 
 }  // namespace
 
-LoadedCalibration ParseCalibrationJson(const std::string& text, const std::string& source) {
+namespace {
+
+// Parses JSON refusing a key that appears twice in one object: the last one would silently win
+// (a second identity "K" would turn `apply` into a no-op).
+ordered_json ParseWithoutDuplicateKeys(const std::string& text, const std::string& source) {
+  std::vector<std::set<std::string>> keys;  // of each object being read
+  std::string duplicate;
+  const auto check = [&](int, nlohmann::json::parse_event_t event, ordered_json& parsed) {
+    using Event = nlohmann::json::parse_event_t;
+    if (event == Event::object_start) keys.emplace_back();
+    if (event == Event::object_end && !keys.empty()) keys.pop_back();
+    if (event == Event::key && !keys.empty() &&
+        !keys.back().insert(parsed.get<std::string>()).second && duplicate.empty()) {
+      duplicate = parsed.get<std::string>();
+    }
+    return true;
+  };
   ordered_json doc;
   try {
-    doc = ordered_json::parse(text);
+    doc = ordered_json::parse(text, check);
   } catch (const nlohmann::json::exception& e) {  // syntax, or a number beyond double's range
     throw InputError(source, 0, std::string("not valid JSON: ") + e.what());
   }
-  if (!doc.is_object() || doc.value("format", "") != "accelcal-calibration") {
+  if (!duplicate.empty()) {
+    throw InputError(source, 0, "the key '" + duplicate + "' appears twice in one object");
+  }
+  return doc;
+}
+
+}  // namespace
+
+namespace {
+
+// The checks of every key of a parsed calibration file (ParseCalibrationJson).
+LoadedCalibration ParseCalibrationDocument(ordered_json doc, const std::string& source) {
+  if (!doc.is_object() || !doc.contains("format") || doc["format"] != "accelcal-calibration") {
     throw InputError(
         source, 0, "not an accelcal calibration file (\"format\" is not \"accelcal-calibration\")");
   }
@@ -325,6 +354,19 @@ LoadedCalibration ParseCalibrationJson(const std::string& text, const std::strin
     }
   }
   return cal;
+}
+
+}  // namespace
+
+LoadedCalibration ParseCalibrationJson(const std::string& text, const std::string& source) {
+  ordered_json doc = ParseWithoutDuplicateKeys(text, source);
+  // Every key's type is checked below; a JSON type error that escapes a check (a bug) still
+  // names the file rather than ending as an internal error.
+  try {
+    return ParseCalibrationDocument(std::move(doc), source);
+  } catch (const nlohmann::json::exception& e) {
+    throw InputError(source, 0, std::string("unexpected content: ") + e.what());
+  }
 }
 
 }  // namespace accelcal

@@ -119,6 +119,25 @@ TEST(CalibrationFile, RefusesMalformedFiles) {
   j = good;
   j["units"]["specific_force"] = "ft/s2";
   EXPECT_EQ(LoadError(j.dump()), "cal.json: 'units.specific_force' must be \"m/s2\" or \"g\"");
+  // Found by the fuzzer (issue 16): a number where a string belongs escaped as a JSON type error,
+  // "internal error" without the file's name.
+  j = good;
+  j["format"] = -0.7069;
+  EXPECT_EQ(
+      LoadError(j.dump()),
+      "cal.json: not an accelcal calibration file (\"format\" is not \"accelcal-calibration\")");
+  j = good;
+  j["verdict"] = 3;
+  EXPECT_EQ(LoadError(j.dump()), "cal.json: 'verdict' must be \"ok\", \"warnings\" or \"failed\"");
+  // A key twice in one object: the last would win (a second identity K makes apply a no-op).
+  std::string text = good.dump();
+  text.insert(1, "\"K\": [[1, 0, 0], [0, 1, 0], [0, 0, 1]], ");
+  EXPECT_EQ(LoadError(text), "cal.json: the key 'K' appears twice in one object");
+  text = good.dump();
+  text.insert(text.find("\"units\":{") + 9, "\"raw\":\"x\",");
+  EXPECT_EQ(LoadError(text), "cal.json: the key 'raw' appears twice in one object");
+  // The same key in different objects is not a repeat.
+  EXPECT_EQ(LoadError(good.dump()), "no error");
 }
 
 }  // namespace

@@ -2,6 +2,7 @@
 // 2x2 tangent blocks eliminated by the Schur complement.
 #include <chrono>
 #include <cmath>
+#include <cstdint>
 #include <cstdio>
 #include <limits>
 
@@ -83,9 +84,11 @@ SolverOutput SolveJoint(const Problem& problem, const ModelParameters& init_para
   int reset_at = -1;        // the iteration at which the damping was last reset (small step)
   int trust_reset_at = -1;  // likewise, for a step below the cost's resolution
 
-  int passes = 0;  // loop passes, accepted or not: a backstop against cycling without progress
+  std::int64_t passes =
+      0;  // loop passes, accepted or not: a backstop against cycling without progress
   while (out.summary.iterations < opt.max_iterations) {
-    if (++passes > 100 * opt.max_iterations) {
+    // In 64 bits: 100 times an iteration cap near INT_MAX overflowed an int (issue 16).
+    if (++passes > 100 * static_cast<std::int64_t>(opt.max_iterations)) {
       out.summary.termination = TerminationType::kNoProgress;
       out.summary.termination_message =
           "no progress after " + std::to_string(passes - 1) + " trial steps (damping cycled)";

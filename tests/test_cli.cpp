@@ -893,6 +893,30 @@ TEST_F(Cli, UsageErrorsExitWithStatus2) {
   r = Exec("calibrate " + in + " --units furlongs");
   EXPECT_EQ(r.err, "accelcal: usage: --units: 'furlongs' is not one of m/s2, g\n");
   EXPECT_EQ(Exec("--help").status, 0);
+  // Physical quantities outside any sensible range (issue 16), with the range.
+  for (const char* g : {"1e-300", "1e300", "0", "-9.8", "nan", "inf"}) {
+    r = Exec("calibrate " + in + " --gravity " + g + " -o " + Path("c.json"));
+    EXPECT_EQ(r.status, 2) << g;
+    EXPECT_EQ(r.err,
+              "accelcal: usage: --gravity must be a number of m/s2 in [1, 100] (9.78-9.83 on "
+              "Earth's surface)\n")
+        << g;
+  }
+  for (const char* rate : {"0", "nan", "inf", "1e308", "-100"}) {
+    r = Exec("calibrate " + in + " --rate " + rate);
+    EXPECT_EQ(r.status, 2) << rate;
+    EXPECT_EQ(r.err, "accelcal: usage: --rate must be a number of Hz in (0, 1e+06]\n") << rate;
+  }
+  r = Exec("calibrate " + in + " --latitude 45 --height 1e9");
+  EXPECT_EQ(r.status, 2);
+  EXPECT_EQ(r.err,
+            "accelcal: usage: --height must lie in [-20000, 20000] m (the WGS-84 formula's "
+            "range)\n");
+  EXPECT_FALSE(fs::exists(Path("c.json")));
+  // An iteration cap near INT_MAX: 100 times it overflowed, and a fit that converges in a few
+  // iterations was reported as not converged.
+  r = Exec("calibrate " + in + " --max-iterations 21474837");
+  EXPECT_EQ(r.status, 0) << r.err;
 }
 
 TEST_F(Cli, NonConvergenceWritesNothing) {

@@ -34,6 +34,12 @@ namespace accelcal::cli {
 
 namespace {
 
+// Ranges of the options that take physical quantities (issue 16): beyond them a value is a
+// mistake (a unit slip, a typo), never a calibration.
+constexpr double kMaxRate_hz = 1e6;
+constexpr double kMinGravity_ms2 = 1.0, kMaxGravity_ms2 = 100.0;
+constexpr double kMaxHeight_m = 20000.0;
+
 template <typename T>
 T ParseEnum(std::optional<T> value, const std::string& text, const char* option,
             const char* allowed) {
@@ -86,6 +92,10 @@ ReadOptions MakeReadOptions(const InputArgs& in) {
   options.kind = ParseEnum(InputKindFromString(in.input_kind), in.input_kind, "--input-kind",
                            "auto, raw, positions");
   options.columns = in.columns;
+  // A rate that is no rate is a usage error before anything is read (issue 16).
+  if (in.rate_hz && !(*in.rate_hz > 0 && *in.rate_hz <= kMaxRate_hz)) {
+    throw UsageError(Format("--rate must be a number of Hz in (0, %g]", kMaxRate_hz));
+  }
   options.rate_hz = in.rate_hz;
   options.time_unit = ParseEnum(TimeUnitFromString(in.time_unit), in.time_unit, "--time-unit",
                                 "auto, s, ms, us, ns");
@@ -163,13 +173,22 @@ Gravity ResolveGravity(const GravityArgs& args) {
     throw UsageError("--gravity and --latitude exclude each other");
   }
   if (args.gravity_ms2) {
-    if (!(*args.gravity_ms2 > 0) || !std::isfinite(*args.gravity_ms2)) {
-      throw UsageError("--gravity must be a positive number of m/s2");
+    if (!(*args.gravity_ms2 >= kMinGravity_ms2 && *args.gravity_ms2 <= kMaxGravity_ms2)) {
+      throw UsageError(
+          Format("--gravity must be a number of m/s2 in [%g, %g] (9.78-9.83 on "
+                 "Earth's surface)",
+                 kMinGravity_ms2, kMaxGravity_ms2));
     }
     g.ms2 = *args.gravity_ms2;
     g.origin = "given";
   } else if (args.latitude_deg) {
     if (!(std::abs(*args.latitude_deg) <= 90)) throw UsageError("--latitude must lie in [-90, 90]");
+    // The WGS-84 normal-gravity formula is a series in height: within ±20 km of the ellipsoid
+    // (deep mines to high-flying aircraft); at 1e9 m it gives 720,084 m/s2.
+    if (!(std::abs(args.height_m) <= kMaxHeight_m)) {
+      throw UsageError(Format("--height must lie in [-%g, %g] m (the WGS-84 formula's range)",
+                              kMaxHeight_m, kMaxHeight_m));
+    }
     g.ms2 = NormalGravityWgs84_ms2(*args.latitude_deg, args.height_m);
     g.origin =
         Format("WGS-84 normal gravity at %.6g deg, %.6g m", *args.latitude_deg, args.height_m);

@@ -551,6 +551,12 @@ InputData ParseInput(std::string_view text, const std::string& source, const Rea
   if (ncols > kMaxFields) {
     throw InputError(source, first.number, "more than 256 columns");
   }
+  if (first.text.find(';') != std::string_view::npos) {
+    throw InputError(source, first.number,
+                     "semicolons separate the fields (a spreadsheet's export with decimal "
+                     "commas?); accelcal reads commas, tabs or spaces between fields and points "
+                     "in numbers");
+  }
   // A first line with a field that is not a number is a header.
   bool has_header = false;
   std::vector<std::string> header;

@@ -35,8 +35,21 @@ inline std::string_view Trim(std::string_view s) {
 class LineReader {
  public:
   /// `lines_before`: how many lines of the file precede `text` (for 1-based line numbers).
+  /// A UTF-8 byte-order mark at the start (spreadsheets write one) is skipped; UTF-16 text is
+  /// refused by name; lines end at '\n' (a '\r' before it is trimmed) or, in a text with no '\n'
+  /// in its first kMaxLineBytes, at '\r' (classic Mac line ends).
   LineReader(std::string_view text, const std::string& source, std::uint32_t lines_before = 0)
-      : text_(text), source_(source), number_(lines_before) {}
+      : text_(text), source_(source), number_(lines_before) {
+    if (text_.substr(0, 3) == "\xEF\xBB\xBF") pos_ = 3;
+    if (text_.substr(0, 2) == "\xFF\xFE" || text_.substr(0, 2) == "\xFE\xFF") {
+      throw InputError(source_, lines_before + 1,
+                       "UTF-16 text (it starts with a byte-order mark): save it as UTF-8");
+    }
+    const std::string_view head = text_.substr(0, kMaxLineBytes + 1);
+    if (head.find('\n') == std::string_view::npos && head.find('\r') != std::string_view::npos) {
+      eol_ = '\r';
+    }
+  }
   /// The text not yet read.
   std::string_view rest() const {
     return pos_ < text_.size() ? text_.substr(pos_) : std::string_view();
@@ -51,7 +64,7 @@ class LineReader {
     while (pos_ < text_.size()) {
       const char* begin = text_.data() + pos_;
       const std::size_t remaining = text_.size() - pos_;
-      const void* nl = std::memchr(begin, '\n', std::min(remaining, kMaxLineBytes + 1));
+      const void* nl = std::memchr(begin, eol_, std::min(remaining, kMaxLineBytes + 1));
       ++number_;
       if (!nl && remaining > kMaxLineBytes) {
         throw InputError(
@@ -92,6 +105,7 @@ class LineReader {
   std::size_t pos_ = 0;
   std::uint32_t number_;
   std::string_view comment_, preceding_comment_;
+  char eol_ = '\n';
 };
 
 }  // namespace accelcal::internal

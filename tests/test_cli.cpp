@@ -913,6 +913,17 @@ TEST_F(Cli, UsageErrorsExitWithStatus2) {
             "accelcal: usage: --height must lie in [-20000, 20000] m (the WGS-84 formula's "
             "range)\n");
   EXPECT_FALSE(fs::exists(Path("c.json")));
+  // An empty output name wrote nothing and said nothing.
+  r = Exec("calibrate " + in + " -o \"\"");
+  EXPECT_EQ(r.status, 2);
+  EXPECT_NE(r.err.find("--output: an empty file name"), std::string::npos) << r.err;
+  // report's errors name its log (they named nothing: an empty file name).
+  const std::string cal = Path("cal.json");
+  ASSERT_EQ(Exec("calibrate " + in + " -o " + cal).status, 0);
+  r = Exec("report " + cal + " " + in);
+  EXPECT_EQ(r.status, 3);
+  EXPECT_EQ(r.err,
+            "accelcal: " + in + ": the log has no time column and no sample rate was given\n");
   // An iteration cap near INT_MAX: 100 times it overflowed, and a fit that converges in a few
   // iterations was reported as not converged.
   r = Exec("calibrate " + in + " --max-iterations 21474837");

@@ -231,5 +231,31 @@ TEST(LogReader, UnreadablePath) {
   }
 }
 
+// Text as spreadsheets and old tools write it (issue 16): a UTF-8 byte-order mark is skipped (it
+// made the first row of a headerless file a "header" and dropped it), CR-only line ends are line
+// ends, and UTF-16 and semicolon-separated exports are named in the message.
+TEST(LogReader, ByteOrderMarksLineEndsAndSemicolons) {
+  const std::string rows = "1,2,3\n4,5,6\n7,8,9\n";
+  InputData d = Parse("\xEF\xBB\xBF" + rows);
+  ASSERT_EQ(d.positions.size(), 3u);
+  EXPECT_EQ(d.positions[0].mean, Vec3(1, 2, 3));
+  d = Parse("\xEF\xBB\xBFt,x,y,z\n0,1,2,3\n0.01,1,2,3\n0.02,1,2,4\n");
+  ASSERT_EQ(d.kind, InputKind::kRaw);
+  EXPECT_EQ(d.raw.samples.size(), 3u);
+  ASSERT_TRUE(d.raw.time);
+  EXPECT_EQ(d.raw.time->unit, TimeUnit::kSeconds);
+  d = Parse("x,y,z\r1,2,3\r4,5,6\r");
+  ASSERT_EQ(d.positions.size(), 2u);
+  EXPECT_EQ(d.positions[1].mean, Vec3(4, 5, 6));
+  d = Parse("x,y,z\r\n1,2,3\r\n4,5,6\r\n");
+  EXPECT_EQ(d.positions.size(), 2u);
+  EXPECT_EQ(ErrorOf("\xFF\xFEx\0,\0"),
+            "test.csv:1: UTF-16 text (it starts with a byte-order mark): save it as UTF-8");
+  EXPECT_EQ(ErrorOf("x;y;z\n0,01;0,02;0,99\n"),
+            "test.csv:1: semicolons separate the fields (a spreadsheet's export with decimal "
+            "commas?); accelcal reads commas, tabs or spaces between fields and points in "
+            "numbers");
+}
+
 }  // namespace
 }  // namespace accelcal

@@ -13,6 +13,11 @@ namespace {
 
 using namespace accelcal::cli;
 
+// An output file name must name something: `-o ""` wrote nothing and said nothing (issue 16).
+const CLI::Validator kFileName(
+    [](std::string& name) { return name.empty() ? std::string("an empty file name") : ""; },
+    "FILE");
+
 void AddInputOptions(CLI::App* cmd, InputArgs* in, bool with_kind) {
   if (with_kind) {
     cmd->add_option("--input-kind", in->input_kind,
@@ -125,9 +130,12 @@ int main(int argc, char** argv) {
       ->capture_default_str();
   calibrate->add_option("--max-iterations", cal.max_iterations,
                         "iteration cap of the solver (0: its default)");
-  calibrate->add_option("-o,--output", cal.output, "write the calibration file (JSON) here");
-  calibrate->add_option("--report", cal.report,
-                        "write the HTML report here (self-contained: plots, parameters, warnings)");
+  calibrate->add_option("-o,--output", cal.output, "write the calibration file (JSON) here")
+      ->check(kFileName);
+  calibrate
+      ->add_option("--report", cal.report,
+                   "write the HTML report here (self-contained: plots, parameters, warnings)")
+      ->check(kFileName);
   calibrate->add_flag("--json", cal.json,
                       "print the calibration file to stdout instead of the summary");
 
@@ -257,7 +265,8 @@ int main(int argc, char** argv) {
   simulate->add_flag("--raw", sim.raw, "write a raw log (time,x,y,z) instead of positions");
   simulate->add_flag("!--positions-out", sim.raw,
                      "write a positions file x,y,z,n,sx,sy,sz (the default)");
-  simulate->add_option("-o,--output", sim.output, "output file (default: stdout)");
+  simulate->add_option("-o,--output", sim.output, "output file (default: stdout)")
+      ->check(kFileName);
 
   ApplyArgs apply;
   CLI::App* apply_cmd =
@@ -265,7 +274,8 @@ int main(int argc, char** argv) {
   apply_cmd->add_option("CAL", apply.calibration, "calibration file (JSON)")->required();
   apply_cmd->add_option("LOG", apply.input.path, "raw log")->required();
   AddInputOptions(apply_cmd, &apply.input, false);
-  apply_cmd->add_option("-o,--output", apply.output, "output file (default: stdout)");
+  apply_cmd->add_option("-o,--output", apply.output, "output file (default: stdout)")
+      ->check(kFileName);
   apply_cmd->add_option("--units", apply.units,
                         "output unit m/s2 or g (default: the calibration's)");
 
@@ -276,7 +286,8 @@ int main(int argc, char** argv) {
   report_cmd->add_option("LOG", rep.log.path, "the raw log it was calibrated from (optional)");
   AddInputOptions(report_cmd, &rep.log, false);
   AddDetectionOptions(report_cmd, &rep.log);
-  report_cmd->add_option("-o,--output", rep.output, "HTML file (default: stdout)");
+  report_cmd->add_option("-o,--output", rep.output, "HTML file (default: stdout)")
+      ->check(kFileName);
 
   ExportArgs exp;
   CLI::App* export_cmd = app.add_subcommand(
@@ -286,7 +297,8 @@ int main(int argc, char** argv) {
       ->add_option("--to", exp.format,
                    "json, yaml, kalibr, px4, ardupilot, c-header or imutk (docs/conventions.md)")
       ->required();
-  export_cmd->add_option("-o,--output", exp.output, "output file (default: stdout)");
+  export_cmd->add_option("-o,--output", exp.output, "output file (default: stdout)")
+      ->check(kFileName);
   export_cmd->add_option("--raw-unit", exp.raw_unit,
                          "unit of the calibrated raw readings, m/s2 or g, when the file's label "
                          "is another (kalibr, px4, ardupilot need readings in m/s2)");
@@ -366,6 +378,7 @@ int main(int argc, char** argv) {
                   : *system_level ? sys.series
                   : *gimbal       ? gim.coarse
                   : *compare      ? cmp.input.path
+                  : *report_cmd   ? rep.log.path
                                   : apply.input.path)
                      .c_str(),
                  e.what());

@@ -9,6 +9,7 @@
 
 #include <Eigen/Cholesky>
 
+#include "accelcal/error.hpp"
 #include "accelcal/simulate.hpp"
 #include "solver_common.hpp"
 
@@ -305,19 +306,26 @@ std::optional<std::vector<Vec3>> SchemeDirections(std::string_view name) {
   }
   constexpr std::string_view kRandom = "random:";
   if (name.substr(0, kRandom.size()) != kRandom) return std::nullopt;
+  // A "random:" name is a scheme, never a file: a bad count is an error, not a missing file.
+  const auto bad = [&] {
+    return InputError(std::string(name), 0,
+                      "random:N[:SEED] takes a whole number of positions N from 1 to " +
+                          std::to_string(kMaxRandomPositions) + " and a whole-number seed");
+  };
   std::string_view rest = name.substr(kRandom.size());
   const std::size_t colon = rest.find(':');
   int count = 0;
   std::uint64_t seed = 1;
   const std::string_view count_text = rest.substr(0, colon);
   auto [end, ec] = std::from_chars(count_text.data(), count_text.data() + count_text.size(), count);
-  if (ec != std::errc() || end != count_text.data() + count_text.size() || count < 1) {
-    return std::nullopt;
+  if (ec != std::errc() || end != count_text.data() + count_text.size() || count < 1 ||
+      count > kMaxRandomPositions) {
+    throw bad();
   }
   if (colon != std::string_view::npos) {
     const std::string_view seed_text = rest.substr(colon + 1);
     auto [e2, ec2] = std::from_chars(seed_text.data(), seed_text.data() + seed_text.size(), seed);
-    if (ec2 != std::errc() || e2 != seed_text.data() + seed_text.size()) return std::nullopt;
+    if (ec2 != std::errc() || e2 != seed_text.data() + seed_text.size()) throw bad();
   }
   return RandomDirections(count, seed);
 }

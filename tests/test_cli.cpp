@@ -930,6 +930,23 @@ TEST_F(Cli, UsageErrorsExitWithStatus2) {
   EXPECT_EQ(r.status, 0) << r.err;
 }
 
+// A position scheme with a count that is no count was taken for a file name ("cannot open
+// random:-5"), and random:1000000000 allocated until the machine ran out (issue 16).
+TEST_F(Cli, PositionSchemesAreCheckedBeforeAllocation) {
+  for (const char* spec :
+       {"random:-5", "random:0", "random:1e9", "random:1000000000", "random:9:x"}) {
+    const CliRun r = Exec(std::string("simulate --scenario yang2012 --positions ") + spec + " -o " +
+                          Path("s.csv"));
+    EXPECT_EQ(r.status, 3) << spec;
+    EXPECT_EQ(r.err, std::string("accelcal: ") + spec +
+                         ": random:N[:SEED] takes a whole number of positions N from 1 to 100000 "
+                         "and a whole-number seed\n");
+    EXPECT_FALSE(fs::exists(Path("s.csv"))) << spec;
+  }
+  EXPECT_EQ(Exec("simulate --scenario yang2012 --positions random:30:4 -o " + Path("s.csv")).status,
+            0);
+}
+
 TEST_F(Cli, NonConvergenceWritesNothing) {
   const std::string in = Write("pos.csv", PositionsCsv(20));
   const CliRun r =

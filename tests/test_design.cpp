@@ -7,6 +7,7 @@
 
 #include "accelcal/calibrate.hpp"
 #include "accelcal/design.hpp"
+#include "accelcal/error.hpp"
 #include "accelcal/simulate.hpp"
 #include "solver_common.hpp"
 #include "support/jacobian_check.hpp"
@@ -105,9 +106,11 @@ TEST(Design, NamedSchemes) {
   EXPECT_EQ(SchemeDirections("random:25")->size(), 25u);
   EXPECT_EQ(*SchemeDirections("random:25"), *SchemeDirections("random:25:1"));
   EXPECT_NE(*SchemeDirections("random:25:2"), *SchemeDirections("random:25:1"));
-  EXPECT_FALSE(SchemeDirections("random:").has_value());
-  EXPECT_FALSE(SchemeDirections("random:0").has_value());
-  EXPECT_FALSE(SchemeDirections("random:5x").has_value());
+  // A "random:" spec is a scheme, never a file name: one that is not a count is an error.
+  for (const char* bad : {"random:", "random:0", "random:5x", "random:-5", "random:100001"}) {
+    EXPECT_THROW(SchemeDirections(bad), InputError) << bad;
+  }
+  EXPECT_EQ(SchemeDirections("random:100000")->size(), 100000u);
   EXPECT_FALSE(SchemeDirections("octahedron").has_value());
 }
 

@@ -70,8 +70,13 @@ double TraceCrlb(const ModelParameters& device, ModelKind model, double gravity,
 double LogDetInformation(const ModelParameters& device, ModelKind model, double gravity,
                          const std::vector<Vec3>& directions, const Vec3& sigma_raw);
 
+/// The most positions "random:N" makes (a count from an option is bounded before allocation).
+inline constexpr int kMaxRandomPositions = 100000;
+
 /// Named observation schemes: "yang18" (paper 000 Table 2), "six" (±x, ±y, ±z), "random:N" or
-/// "random:N:SEED" (uniform on the sphere, seed 1 by default). std::nullopt for another name.
+/// "random:N:SEED" (uniform on the sphere, seed 1 by default; N from 1 to kMaxRandomPositions).
+/// std::nullopt for another name; InputError (naming the spec) for a "random:" spec that is not
+/// one.
 std::optional<std::vector<Vec3>> SchemeDirections(std::string_view name);
 
 }  // namespace accelcal

@@ -203,7 +203,10 @@ std::optional<Scenario> ScenarioByName(std::string_view name) {
 }
 
 MonteCarloResult RunMonteCarlo(const Scenario& scenario, const MonteCarloOptions& options) {
-  if (options.runs < 2) throw std::invalid_argument("a Monte Carlo needs at least 2 runs");
+  if (options.runs < 2 || options.runs > kMaxMonteCarloRuns) {
+    throw std::invalid_argument("a Monte Carlo needs 2 to " + std::to_string(kMaxMonteCarloRuns) +
+                                " runs");
+  }
   CalibrationOptions calibration = options.calibration;
   calibration.model = scenario.model;
   calibration.gravity = scenario.gravity;
@@ -221,7 +224,8 @@ MonteCarloResult RunMonteCarlo(const Scenario& scenario, const MonteCarloOptions
   std::vector<RunOutcome> outcomes(static_cast<std::size_t>(options.runs));
   const unsigned hardware = std::max(1u, std::thread::hardware_concurrency());
   const int threads =
-      std::min(options.runs, options.threads > 0 ? options.threads : static_cast<int>(hardware));
+      std::min({options.runs, 4 * static_cast<int>(hardware),
+                options.threads > 0 ? options.threads : static_cast<int>(hardware)});
   // Runs are independent and seeded by their index; each thread fills its own slots.
   std::mutex progress_mutex;
   int done = 0;

@@ -947,6 +947,18 @@ TEST_F(Cli, PositionSchemesAreCheckedBeforeAllocation) {
             0);
 }
 
+// Monte Carlo sizes from options are bounded before allocation, and a thread count beyond the
+// machine's no longer aborts (SIGABRT when a thread could not be created) (issue 16).
+TEST_F(Cli, MonteCarloSizesAreBounded) {
+  CliRun r = Exec("montecarlo --runs 2000000000");
+  EXPECT_EQ(r.status, 2);
+  EXPECT_EQ(r.err, "accelcal: usage: --runs must be from 2 to 1000000\n");
+  const CliRun many = Exec("montecarlo --runs 20 --threads 100000 --json");
+  const CliRun one = Exec("montecarlo --runs 20 --threads 1 --json");
+  ASSERT_EQ(many.status, 0) << many.err;
+  EXPECT_EQ(many.out, one.out);
+}
+
 TEST_F(Cli, NonConvergenceWritesNothing) {
   const std::string in = Write("pos.csv", PositionsCsv(20));
   const CliRun r =

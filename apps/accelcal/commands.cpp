@@ -1147,7 +1147,9 @@ int RunMonteCarlo(const MonteCarloArgs& args) {
   if (!scenario) {
     throw UsageError("--scenario: '" + args.scenario + "' is not one of yang2012, sunxu2020");
   }
-  if (args.runs < 2) throw UsageError("--runs must be at least 2");
+  if (args.runs < 2 || args.runs > kMaxMonteCarloRuns) {
+    throw UsageError(Format("--runs must be from 2 to %d", kMaxMonteCarloRuns));
+  }
   if (args.threads < 0) throw UsageError("--threads must be 0 (all cores) or positive");
   MonteCarloOptions options;
   options.runs = args.runs;

@@ -37,14 +37,21 @@ struct Scenario {
 /// new Gaussian attitudes per run, σ = 0.1 g.
 std::optional<Scenario> ScenarioByName(std::string_view name);
 
+/// The most runs of one Monte Carlo: each keeps its outcome until the statistics are taken, so
+/// the count from an option is bounded before allocation (issue 16).
+inline constexpr int kMaxMonteCarloRuns = 1000000;
+
 struct MonteCarloOptions {
-  int runs = 500;
+  int runs = 500;  ///< 2 to kMaxMonteCarloRuns
   std::uint64_t seed = 1;
   CalibrationOptions calibration;  ///< model, gravity and frame are taken from the scenario
   /// Give each run its true per-axis noise (CalibrationOptions::reading_sigmas), as a raw log's
   /// intervals would; false: the covariance comes from the residuals.
   bool known_noise = true;
-  int threads = 0;  ///< 0: all hardware threads
+  /// 0: all hardware threads; at most 4 per hardware thread are started (runs are seeded by
+  /// their index, so the result is the same for every thread count; more threads only contend,
+  /// and creating thousands of them failed).
+  int threads = 0;
   /// Called after runs finish with (runs done, runs in total), one call at a time, the count
   /// increasing; from the worker threads, so it must be cheap and thread-safe in what it touches
   /// (e.g. a progress bar). Empty: not called.

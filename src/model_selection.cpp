@@ -1,14 +1,16 @@
 #include "accelcal/model_selection.hpp"
 
 #include <cmath>
-#include <cstdio>
 
 #include "accelcal/error.hpp"
 #include "accelcal/frame.hpp"
 #include "outliers.hpp"
 #include "student_t.hpp"
+#include "text_format.hpp"
 
 namespace accelcal {
+
+using internal::Format;
 
 namespace {
 
@@ -32,12 +34,6 @@ double LargestAbsolute(const Vec3& t) {
     if (!std::isnan(t(i)) && !(std::abs(t(i)) <= largest)) largest = std::abs(t(i));
   }
   return largest;
-}
-
-std::string Format(const char* format, double a, double b) {
-  char buf[200];
-  std::snprintf(buf, sizeof buf, format, a, b);
-  return buf;
 }
 
 // The 0-based positions of `result`'s fit (the ones its screening did not exclude).

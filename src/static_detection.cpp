@@ -3,7 +3,6 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
-#include <cstdio>
 #include <cstring>
 #include <optional>
 #include <utility>
@@ -137,13 +136,11 @@ std::optional<std::string> Clipping(const std::vector<Vec3>& samples,
       for (std::size_t i = interval.begin; i < interval.end; ++i)
         at_limit += samples[i](a) == limit;
       if (at_limit >= 3 && 100 * at_limit >= n) {
-        char buf[200];
-        std::snprintf(buf, sizeof buf,
-                      "axis %c reads %.9g, the %s value in the log, in %.0f%% of its samples: the "
-                      "sensor is saturated (clipped)",
-                      "xyz"[a], limit, largest ? "largest" : "smallest",
-                      100.0 * static_cast<double>(at_limit) / static_cast<double>(n));
-        return std::string(buf);
+        return Format(
+            "axis %c reads %.9g, the %s value in the log, in %.0f%% of its samples: the sensor "
+            "is saturated (clipped)",
+            "xyz"[a], limit, largest ? "largest" : "smallest",
+            100.0 * static_cast<double>(at_limit) / static_cast<double>(n));
       }
     }
   }

@@ -12,7 +12,7 @@
 #include <fast_float/fast_float.h>
 
 #include "accelcal/error.hpp"
-#include "mapped_file.hpp"
+#include "input_file.hpp"
 #include "text_lines.hpp"
 
 namespace accelcal {
@@ -37,40 +37,27 @@ std::optional<InputKind> InputKindFromString(std::string_view text) {
 }
 
 std::string ReadFileToString(const std::string& path, std::size_t max_bytes) {
-  std::unique_ptr<std::FILE, int (*)(std::FILE*)> file(std::fopen(path.c_str(), "rb"),
-                                                       &std::fclose);
-  if (!file) throw InputError(path, 0, std::string("cannot open: ") + std::strerror(errno));
-  struct stat st;
-  if (::fstat(::fileno(file.get()), &st) == 0 && S_ISDIR(st.st_mode)) {
-    throw InputError(path, 0, "is a directory, not a file");
-  }
-  std::string data;
+  internal::InputFile file(path, max_bytes);
   const auto too_large = [&] {
     return InputError(
-        path, 0,
+        file.name(), 0,
         "larger than " + std::to_string(max_bytes >> 20) + " MiB: not a file of this kind");
   };
-  // One allocation and one read for regular files; pipes and the like grow as they come.
-  if (std::fseek(file.get(), 0, SEEK_END) == 0) {
-    const long size = std::ftell(file.get());
-    if (size > 0 && static_cast<std::size_t>(size) > max_bytes) throw too_large();
-    if (size > 0) data.reserve(static_cast<std::size_t>(size));
-    std::rewind(file.get());
+  if (file.size() > max_bytes) throw too_large();
+  // One allocation and one read for regular files; pipes and the like grow as they come (up to
+  // `max_bytes`, InputFile's limit for them).
+  std::string data(file.regular() ? file.size() : std::size_t{1} << 16, '\0');
+  std::size_t used = 0;
+  while (true) {
+    if (used == data.size()) {
+      if (file.regular()) break;
+      data.resize(2 * data.size());
+    }
+    const std::size_t n = file.Read(data.data() + used, data.size() - used);
+    if (n == 0) break;
+    used += n;
   }
-  char buffer[1 << 16];
-  std::size_t n;
-  if (data.capacity() > 0) {
-    data.resize(data.capacity());
-    n = std::fread(data.data(), 1, data.size(), file.get());
-    data.resize(n);
-  }
-  while ((n = std::fread(buffer, 1, sizeof buffer, file.get())) > 0) {
-    data.append(buffer, n);
-    if (data.size() > max_bytes) throw too_large();
-  }
-  if (std::ferror(file.get())) {
-    throw InputError(path, 0, std::string("cannot read: ") + std::strerror(errno));
-  }
+  data.resize(used);
   return data;
 }
 
@@ -333,8 +320,11 @@ struct RowParser {
   bool raw;
   const std::function<void(std::size_t, std::size_t)>& progress;
 
-  void Parse(std::string_view text, std::uint32_t lines_before, std::size_t expected_rows,
-             InputData* data, std::vector<double>* instances) const {
+  // One block of whole lines (TextBlocks); returns the lines read so far. `skip_first`: the
+  // block's first line is the header.
+  std::uint32_t Parse(std::string_view block, std::size_t block_offset, std::size_t total,
+                      std::uint32_t lines_before, char eol, bool skip_first, std::size_t* rows,
+                      InputData* data, std::vector<double>* instances) const {
     int role_of_column[kMaxFields];
     std::fill(role_of_column, role_of_column + ncols, -1);
     for (int r = 0; r < kRoles; ++r) {
@@ -342,19 +332,12 @@ struct RowParser {
     }
     const bool has_time = layout.column[kTime] >= 0;
     RawLog& log = data->raw;
-    if (raw) {
-      log.samples.reserve(expected_rows);
-      log.line.reserve(expected_rows);
-      if (has_time) log.time_s.reserve(expected_rows);
-    }
-    LineReader reader(text, source, lines_before);
+    LineReader reader(block, source, lines_before, eol);
     Line line;
+    if (skip_first) reader.Next(&line);
     double values[kRoles];
-    std::size_t rows = 0;
     while (reader.Next(&line)) {
-      if (progress && (++rows & 0xFFFF) == 0) {
-        progress(text.size() - reader.rest().size(), text.size());
-      }
+      if (progress && (++*rows & 0xFFFF) == 0) progress(block_offset + reader.offset(), total);
       ParseFields(line, role_of_column, values);
       const Vec3 xyz(values[kX], values[kY], values[kZ]);
       if (layout.column[kInstance] >= 0) instances->push_back(values[kInstance]);
@@ -366,6 +349,7 @@ struct RowParser {
         data->positions.push_back(MakePosition(xyz, values, line.number));
       }
     }
+    return reader.lines_read();
   }
 
   void ParseFields(const Line& line, const int* role_of_column, double* values) const {
@@ -533,13 +517,41 @@ void SelectInstance(const std::vector<double>& instances, const std::string& col
   }
 }
 
-}  // namespace
+// The text before the first data row, and the first rows, are read into memory to tell the
+// header and the kind; beyond this they are not a log (blank lines, a binary file's padding).
+constexpr std::size_t kMaxHeadBytes = std::size_t{64} << 20;
 
-InputData ParseInput(std::string_view text, const std::string& source, const ReadOptions& options) {
+// The first `want_rows` data rows (fewer at the end of the input) of `blocks`, peeked, not
+// consumed. Throws InputError when they are spread over more than kMaxHeadBytes.
+std::string_view PeekRows(internal::TextBlocks& blocks, std::size_t want_rows,
+                          const std::string& source, std::size_t* rows_found) {
+  for (std::size_t want = std::size_t{256} << 10;; want *= 4) {
+    const std::string_view head = blocks.Peek(want);
+    LineReader counter(head, source, 0, blocks.line_end());
+    Line l;
+    std::size_t rows = 0;
+    while (rows < want_rows && counter.Next(&l)) ++rows;
+    if (rows >= want_rows || blocks.AtEnd()) {
+      *rows_found = rows;
+      return head;
+    }
+    if (want >= kMaxHeadBytes) {
+      throw InputError(source, counter.lines_read(),
+                       "only " + std::to_string(rows) + " data rows in the first " +
+                           std::to_string(kMaxHeadBytes >> 20) +
+                           " MiB (blank lines or comments): not a log accelcal reads");
+    }
+  }
+}
+
+InputData ParseBlocks(internal::TextBlocks& blocks, const std::string& source,
+                      const ReadOptions& options) {
   if (options.rate_hz && !(*options.rate_hz > 0 && std::isfinite(*options.rate_hz))) {
     throw InputError(source, 0, "the rate must be a positive number of Hz");
   }
-  LineReader reader(text, source);
+  std::size_t head_rows = 0;
+  const std::string_view head = PeekRows(blocks, 1, source, &head_rows);
+  LineReader reader(head, source, 0, blocks.line_end());
   Line first;
   if (!reader.Next(&first))
     throw InputError(source, 0, "no data (the file is empty or all comments)");
@@ -581,22 +593,20 @@ InputData ParseInput(std::string_view text, const std::string& source, const Rea
       for (std::size_t i = 0; i < ncols; ++i) header.push_back(Normalise(names[i]));
     }
   }
-
-  // Auto-detection needs to know only whether there are more rows than a positions file has.
-  std::size_t rows = has_header ? 0 : 1;
-  {
-    LineReader counter(text, source);
-    Line l;
-    counter.Next(&l);
-    while (rows <= options.max_rows_of_positions_file && counter.Next(&l)) ++rows;
-  }
-  if (rows == 0) throw InputError(source, first.number, "a header but no data rows");
+  const std::uint32_t first_line = first.number;
   // A guess for reserving; capped, so that a huge file with a short first line cannot make the
   // reader ask for memory its rows will never fill (the vectors grow past it as needed).
   const std::size_t expected_rows =
-      std::min<std::size_t>(text.size() / (first.text.size() + 1) + 1, std::size_t{1} << 22);
+      std::min<std::size_t>(blocks.total() / (first.text.size() + 1) + 1, std::size_t{1} << 22);
 
   const Layout named = NamedLayout(header);
+  // Auto-detection needs to know only whether there are more rows than a positions file has.
+  std::size_t rows = 0;
+  const auto CountRows = [&] {
+    std::size_t found = 0;
+    PeekRows(blocks, options.max_rows_of_positions_file + 2, source, &found);
+    return has_header ? found - 1 : found;
+  };
   InputData data;
   if (options.kind != InputKind::kAuto) {
     data.kind = options.kind;
@@ -608,7 +618,7 @@ InputData ParseInput(std::string_view text, const std::string& source, const Rea
     // Only averaged readings carry a sample count and standard deviations, however many rows.
     data.kind = InputKind::kPositions;
     data.kind_reason = "auto: the header is a positions file's (n, sx, sy, sz)";
-  } else if (rows <= options.max_rows_of_positions_file) {
+  } else if ((rows = CountRows()) <= options.max_rows_of_positions_file) {
     data.kind = InputKind::kPositions;
     data.kind_reason = "auto: " + std::to_string(rows) +
                        " rows <= " + std::to_string(options.max_rows_of_positions_file) +
@@ -652,19 +662,17 @@ InputData ParseInput(std::string_view text, const std::string& source, const Rea
     if (!raw && ncols >= 4) layout.column[kCount] = 3;
     if (!raw && ncols == 7) layout.column[kSx] = 4, layout.column[kSy] = 5, layout.column[kSz] = 6;
   } else {
-    throw InputError(source, first.number,
+    throw InputError(source, first_line,
                      std::to_string(ncols) + " columns" +
                          (raw ? ": use --columns to choose time,x,y,z or x,y,z"
                               : ": a positions file has x,y,z [,n [,sx,sy,sz]]"));
   }
-  // Parse every data row.
-  LineReader rows_reader(text, source);
-  Line skipped;
-  rows_reader.Next(&skipped);  // the header or the first data row
-  const std::string_view body =
-      has_header ? rows_reader.rest()
-                 : text.substr(static_cast<std::size_t>(first.text.data() - text.data()));
-  const std::uint32_t lines_before = has_header ? rows_reader.lines_read() : first.number - 1;
+  // Parse every data row, block by block.
+  if (raw) {
+    data.raw.samples.reserve(expected_rows);
+    data.raw.line.reserve(expected_rows);
+    if (layout.column[kTime] >= 0) data.raw.time_s.reserve(expected_rows);
+  }
   if (raw) data.raw.source = source;
   if (named.column[kInstance] >= 0 &&
       std::find(std::begin(layout.column), std::begin(layout.column) + kInstance,
@@ -675,7 +683,18 @@ InputData ParseInput(std::string_view text, const std::string& source, const Rea
   }
   const RowParser parser{source, delim, ncols, layout, raw, options.progress};
   std::vector<double> instances;
-  parser.Parse(body, lines_before, expected_rows, &data, &instances);
+  std::string_view block;
+  std::uint32_t lines = 0;
+  std::size_t parsed_rows = 0;
+  bool skip_header = has_header;
+  while (blocks.Next(&block)) {
+    lines = parser.Parse(block, blocks.block_offset(), blocks.total(), lines, blocks.line_end(),
+                         skip_header, &parsed_rows, &data, &instances);
+    skip_header = false;
+  }
+  if (raw ? data.raw.samples.empty() : data.positions.empty()) {
+    throw InputError(source, first_line, "a header but no data rows");
+  }
   if (layout.column[kInstance] >= 0) {
     SelectInstance(instances, header[std::size_t(layout.column[kInstance])], options.instance,
                    source, &data);
@@ -723,21 +742,17 @@ InputData ParseInput(std::string_view text, const std::string& source, const Rea
   return data;
 }
 
+}  // namespace
+
+InputData ParseInput(std::string_view text, const std::string& source, const ReadOptions& options) {
+  internal::TextBlocks blocks(text);
+  return ParseBlocks(blocks, source, options);
+}
+
 InputData ReadInput(const std::string& path, const ReadOptions& options) {
-  if (path == "-") return ParseInput(ReadFileToString("/dev/stdin"), "<stdin>", options);
-  const internal::MappedFile mapped(path);
-  if (mapped.ok()) {
-    // Streaming: the pages of rows already parsed are released as the parser goes (every 65536
-    // rows), so a large log costs its samples, not its text as well.
-    ReadOptions streaming = options;
-    streaming.progress = [&mapped, &options](std::size_t done, std::size_t total) {
-      mapped.ReleaseBefore(done);
-      if (options.progress) options.progress(done, total);
-    };
-    return ParseInput(mapped.text(), path, streaming);
-  }
-  const std::string text = ReadFileToString(path);  // pipes, empty files, errors with errno
-  return ParseInput(text, path, options);
+  internal::InputFile file(path, options.max_stream_bytes);
+  internal::TextBlocks blocks(&file);
+  return ParseBlocks(blocks, file.name(), options);
 }
 
 }  // namespace accelcal

@@ -140,18 +140,19 @@ std::vector<Vec3> RandomDirectionsInCap(int count, double half_angle_rad, std::u
   return dirs;
 }
 
-SimulatedLog SimulateRawLog(const ModelParameters& truth, double gravity,
-                            const std::vector<Vec3>& directions, const RawLogSimulation& options) {
+void SimulateRawLog(const ModelParameters& truth, double gravity,
+                    const std::vector<Vec3>& directions, const RawLogSimulation& options,
+                    const std::function<void(double time_s, const Vec3& raw)>& sink) {
   std::mt19937_64 rng(options.seed);
   std::normal_distribution<double> normal(0.0, 1.0);
-  SimulatedLog log;
   const auto still = static_cast<std::size_t>(std::llround(options.static_s * options.rate_hz));
   const auto turn = static_cast<std::size_t>(std::llround(options.transition_s * options.rate_hz));
+  std::size_t index = 0;
   const auto emit = [&](const Vec3& c) {
-    log.time_s.push_back(static_cast<double>(log.samples.size()) / options.rate_hz);
+    const double t = static_cast<double>(index++) / options.rate_hz;
     const Vec3 noise = NormalVector(normal, rng);
-    log.samples.push_back(PredictRaw(truth, Vec3(gravity * c)) +
-                          options.sigma_raw_per_sample.cwiseProduct(noise));
+    sink(t,
+         PredictRaw(truth, Vec3(gravity * c)) + options.sigma_raw_per_sample.cwiseProduct(noise));
   };
   for (std::size_t k = 0; k < directions.size(); ++k) {
     const Vec3 c = directions[k].normalized();
@@ -170,7 +171,24 @@ SimulatedLog SimulateRawLog(const ModelParameters& truth, double gravity,
       emit(Eigen::AngleAxisd(progress * angle, axis) * c);
     }
   }
+}
+
+SimulatedLog SimulateRawLog(const ModelParameters& truth, double gravity,
+                            const std::vector<Vec3>& directions, const RawLogSimulation& options) {
+  SimulatedLog log;
+  SimulateRawLog(truth, gravity, directions, options, [&log](double t, const Vec3& raw) {
+    log.time_s.push_back(t);
+    log.samples.push_back(raw);
+  });
   return log;
+}
+
+double SimulatedSampleCount(std::size_t directions, const RawLogSimulation& options) {
+  if (directions == 0) return 0;
+  const double still = std::round(options.static_s * options.rate_hz);
+  const double turn = std::round(options.transition_s * options.rate_hz);
+  return static_cast<double>(directions) * still +
+         static_cast<double>(directions - 1) * std::max(turn - 1, 0.0);
 }
 
 }  // namespace accelcal

@@ -30,25 +30,35 @@ inline std::string_view Trim(std::string_view s) {
   return s;
 }
 
+/// How lines end: '\n' (a '\r' before it is trimmed as blank), or '\r' alone in a text with no
+/// '\n' among its first kMaxLineBytes + 1 bytes (classic Mac line ends).
+inline char DetectLineEnd(std::string_view head) {
+  head = head.substr(0, kMaxLineBytes + 1);
+  return head.find('\n') == std::string_view::npos && head.find('\r') != std::string_view::npos
+             ? '\r'
+             : '\n';
+}
+
 /// Walks the text line by line, skipping blank lines and `#` comments. Throws InputError for a
-/// line longer than kMaxLineBytes or holding a NUL byte (binary data).
+/// line longer than kMaxLineBytes or holding a NUL byte (binary data), and beyond 2^32 - 1 lines
+/// (line numbers are 32-bit).
 class LineReader {
  public:
   /// `lines_before`: how many lines of the file precede `text` (for 1-based line numbers).
-  /// A UTF-8 byte-order mark at the start (spreadsheets write one) is skipped; UTF-16 text is
-  /// refused by name; lines end at '\n' (a '\r' before it is trimmed) or, in a text with no '\n'
-  /// in its first kMaxLineBytes, at '\r' (classic Mac line ends).
-  LineReader(std::string_view text, const std::string& source, std::uint32_t lines_before = 0)
+  /// At the start of a file (no lines before), a UTF-8 byte-order mark (spreadsheets write one)
+  /// is skipped and UTF-16 text is refused by name. `eol`: the line end (DetectLineEnd of the
+  /// file's start); 0 detects it from `text`.
+  LineReader(std::string_view text, const std::string& source, std::uint32_t lines_before = 0,
+             char eol = 0)
       : text_(text), source_(source), number_(lines_before) {
-    if (text_.substr(0, 3) == "\xEF\xBB\xBF") pos_ = 3;
-    if (text_.substr(0, 2) == "\xFF\xFE" || text_.substr(0, 2) == "\xFE\xFF") {
-      throw InputError(source_, lines_before + 1,
-                       "UTF-16 text (it starts with a byte-order mark): save it as UTF-8");
+    if (lines_before == 0) {
+      if (text_.substr(0, 3) == "\xEF\xBB\xBF") pos_ = 3;
+      if (text_.substr(0, 2) == "\xFF\xFE" || text_.substr(0, 2) == "\xFE\xFF") {
+        throw InputError(source_, 1,
+                         "UTF-16 text (it starts with a byte-order mark): save it as UTF-8");
+      }
     }
-    const std::string_view head = text_.substr(0, kMaxLineBytes + 1);
-    if (head.find('\n') == std::string_view::npos && head.find('\r') != std::string_view::npos) {
-      eol_ = '\r';
-    }
+    eol_ = eol != 0 ? eol : DetectLineEnd(text_);
   }
   /// The text not yet read.
   std::string_view rest() const {
@@ -64,20 +74,25 @@ class LineReader {
     while (pos_ < text_.size()) {
       const char* begin = text_.data() + pos_;
       const std::size_t remaining = text_.size() - pos_;
-      const void* nl = std::memchr(begin, eol_, std::min(remaining, kMaxLineBytes + 1));
-      ++number_;
-      if (!nl && remaining > kMaxLineBytes) {
-        throw InputError(
-            source_, number_,
-            "longer than " + std::to_string(kMaxLineBytes) + " bytes: not a delimited text file");
+      const std::size_t scan = std::min(remaining, kMaxLineBytes + 1);
+      const void* nl = std::memchr(begin, eol_, scan);
+      if (number_ == UINT32_MAX) {
+        throw InputError(source_, number_, "more than 4294967295 lines: not a file accelcal reads");
       }
+      ++number_;
       const std::size_t len =
           nl ? static_cast<std::size_t>(static_cast<const char*>(nl) - begin) : remaining;
-      if (const void* nul = std::memchr(begin, '\0', len)) {
+      // NUL first: a binary file (or /dev/zero) is named as such, not as a long line.
+      if (const void* nul = std::memchr(begin, '\0', std::min(len, scan))) {
         throw InputError(source_, number_,
                          "a NUL byte at column " +
                              std::to_string(static_cast<const char*>(nul) - begin + 1) +
                              ": binary data, not a delimited text file");
+      }
+      if (!nl && remaining > kMaxLineBytes) {
+        throw InputError(
+            source_, number_,
+            "longer than " + std::to_string(kMaxLineBytes) + " bytes: not a delimited text file");
       }
       pos_ += len + 1;
       std::string_view s(begin, len);

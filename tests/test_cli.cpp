@@ -820,8 +820,8 @@ TEST_F(Cli, HostileCorpus) {
   fs::resize_file(sparse, std::uintmax_t{10} << 30);
   CliRun r = Exec("calibrate " + sparse + " -o " + Path("out.json"));
   EXPECT_EQ(r.status, 3);
-  EXPECT_EQ(r.err,
-            "accelcal: " + sparse + ":2: longer than 65536 bytes: not a delimited text file\n");
+  EXPECT_EQ(r.err, "accelcal: " + sparse +
+                       ":2: a NUL byte at column 1: binary data, not a delimited text file\n");
   r = Exec("apply " + sparse + " " + dir + "clean.csv");
   EXPECT_EQ(r.err, "accelcal: " + sparse + ": larger than 64 MiB: not a file of this kind\n");
   fs::remove(sparse);

@@ -490,8 +490,12 @@ int WriteCalibration(const CalibrateArgs& args, const LoadedInput& in, const Gra
     }
     report = RenderReport(input);
   }
-  if (!args.output.empty()) WriteFileAtomically(args.output, json);
-  if (!args.report.empty()) WriteFileAtomically(args.report, report);
+  {  // both files or neither
+    std::optional<OutputFile> file, report_file;
+    if (!args.output.empty()) file.emplace(args.output).Write(json);
+    if (!args.report.empty()) report_file.emplace(args.report).Write(report);
+    CommitAll({file ? &*file : nullptr, report_file ? &*report_file : nullptr});
+  }
   const std::vector<double> errors =
       GravityNormErrors(result.params, Means(in.positions), result.gravity);
   for (const OutlierFinding& o : result.outliers) {
@@ -562,6 +566,12 @@ int RunCalibrateKnownOrientations(const CalibrateArgs& args) {
 }  // namespace
 
 int RunCalibrate(const CalibrateArgs& args) {
+  {
+    std::vector<std::string> inputs = args.input.more_paths;
+    inputs.push_back(args.input.path);
+    inputs.push_back(args.orientations);
+    CheckOutputs({{"-o", args.output}, {"--report", args.report}}, inputs);
+  }
   if (!args.orientations.empty()) return RunCalibrateKnownOrientations(args);
   CalibrationOptions options;
   const bool auto_model = args.model == "auto";
@@ -862,6 +872,7 @@ void RefuseFailed(const LoadedCalibration& cal, const std::string& path) {
 }
 
 int RunApply(const ApplyArgs& args) {
+  CheckOutputs({{"-o", args.output}}, {args.calibration, args.input.path});
   const LoadedCalibration cal = ParseCalibrationJson(
       ReadFileToString(args.calibration, kMaxSmallFileBytes), args.calibration);
   RefuseFailed(cal, args.calibration);
@@ -882,10 +893,16 @@ int RunApply(const ApplyArgs& args) {
   bar.Finish();
   const RawLog& log = data.raw;
   const bool has_time = !log.time_s.empty();
-  std::string out;
-  out.reserve(log.samples.size() * 64);
-  out += "# accelcal apply " + args.calibration + ": specific force in " +
-         std::string(ToString(unit)) + "\n";
+  // Every reading is checked before anything is written; the output is then streamed.
+  for (std::size_t i = 0; i < log.samples.size(); ++i) {
+    if (!SpecificForce(cal.params, log.samples[i])) {
+      throw InputError(args.input.path, log.line[i],
+                       "the reading lies outside the range the quadratic model can invert");
+    }
+  }
+  OutputFile file(args.output.empty() ? "-" : args.output);
+  std::string out = "# accelcal apply " + args.calibration + ": specific force in " +
+                    std::string(ToString(unit)) + "\n";
   if (log.time) {  // the clock stated once: times are seconds from the first sample
     out += "# time: seconds from the first sample, at " + FormatNumber(log.time->origin_s) +
            " s on the log's clock (read in " + std::string(ToString(log.time->unit)) + ")\n";
@@ -893,25 +910,27 @@ int RunApply(const ApplyArgs& args) {
   out += has_time ? "time,x,y,z\n" : "x,y,z\n";
   char buf[32];
   for (std::size_t i = 0; i < log.samples.size(); ++i) {
-    const std::optional<Vec3> f = SpecificForce(cal.params, log.samples[i]);
-    if (!f) {
-      throw InputError(args.input.path, log.line[i],
-                       "the reading lies outside the range the quadratic model can invert");
-    }
+    const Vec3 f = *SpecificForce(cal.params, log.samples[i]);
     if (has_time) {
       out.append(buf, std::to_chars(buf, buf + sizeof buf, log.time_s[i]).ptr);
       out.push_back(',');
     }
     for (int a = 0; a < 3; ++a) {
-      out.append(buf, std::to_chars(buf, buf + sizeof buf, (*f)(a)*factor).ptr);
+      out.append(buf, std::to_chars(buf, buf + sizeof buf, f(a) * factor).ptr);
       out.push_back(a < 2 ? ',' : '\n');
     }
+    if (out.size() >= (std::size_t{1} << 16)) {
+      file.Write(out);
+      out.clear();
+    }
   }
-  WriteFileAtomically(args.output.empty() ? "-" : args.output, out);
+  file.Write(out);
+  file.Commit();
   return kExitOk;
 }
 
 int RunReport(const ReportArgs& args) {
+  CheckOutputs({{"-o", args.output}}, {args.calibration, args.log.path});
   ReportInput input;
   input.calibration_json = ReadFileToString(args.calibration, kMaxSmallFileBytes);
   input.calibration_name = args.calibration;
@@ -934,6 +953,7 @@ int RunReport(const ReportArgs& args) {
 }
 
 int RunExport(const ExportArgs& args) {
+  CheckOutputs({{"-o", args.output}}, {args.calibration});
   std::string names;
   for (const ExportFormat f : AllExportFormats())
     names += (names.empty() ? "" : ", ") + std::string(ToString(f));
@@ -1467,7 +1487,19 @@ int RunGimbal(const GimbalArgs& args) {
   return ok ? kExitOk : kExitNotConverged;
 }
 
+// A simulated log or series beyond this many samples (28 hours at 1 kHz; several GB of text) is
+// an option typed wrong, not a recording anyone wants.
+constexpr double kMaxSimulatedSamples = 1e8;
+
+void CheckSimulatedSamples(double samples, const char* options) {
+  if (!(samples <= kMaxSimulatedSamples)) {
+    throw UsageError(Format("%s asks for %.3g samples; at most %g are simulated", options, samples,
+                            kMaxSimulatedSamples));
+  }
+}
+
 int RunSimulate(const SimulateArgs& args) {
+  CheckOutputs({{"-o", args.output}}, {args.truth, args.positions});
   if (args.scenario == "wu2018-system") {
     if (!args.truth.empty() || !args.positions.empty() || args.noise_density_ug || args.raw) {
       throw UsageError("--scenario wu2018-system takes only --seed, --rate, --duration and -o");
@@ -1479,15 +1511,22 @@ int RunSimulate(const SimulateArgs& args) {
     o.seed = args.seed;
     if (args.rate_given) o.rate_hz = args.rate_hz;
     if (args.duration_given) o.duration_s = args.duration_s;
-    if (!(o.rate_hz > 0) || !(o.duration_s > 0)) {
-      throw UsageError("--rate and --duration must be positive");
+    if (!(o.rate_hz > 0 && o.rate_hz <= kMaxRate_hz) || !(o.duration_s > 0)) {
+      throw UsageError(Format("--rate must be in (0, %g] Hz and --duration positive", kMaxRate_hz));
     }
+    CheckSimulatedSamples(o.rate_hz * o.duration_s, "--rate x --duration");
+    OutputFile file(args.output);  // streamed: the series is never held whole
     std::string series;
-    series.reserve(kSeriesMagic.size() +
-                   48 * static_cast<std::size_t>(std::llround(o.rate_hz * o.duration_s)));
     AppendSeriesHeader(&series);
-    SimulateSystemLevel(o, [&](const SystemSample& s) { AppendSeriesSample(s, &series); });
-    WriteFileAtomically(args.output, series);
+    SimulateSystemLevel(o, [&](const SystemSample& s) {
+      AppendSeriesSample(s, &series);
+      if (series.size() >= (std::size_t{1} << 16)) {
+        file.Write(series);
+        series.clear();
+      }
+    });
+    file.Write(series);
+    file.Commit();
     return kExitOk;
   }
   if (args.scenario == "sunxu2020") {
@@ -1518,8 +1557,21 @@ int RunSimulate(const SimulateArgs& args) {
     if (!density) throw UsageError("--noise-density is required with --truth");
   }
   if (!(*density > 0) || !(args.rate_hz > 0) || !(args.duration_s > 0) ||
-      !(args.transition_s >= 0)) {
-    throw UsageError("--noise-density, --rate and --duration must be positive");
+      !(args.transition_s >= 0) || !std::isfinite(*density) || !std::isfinite(args.duration_s) ||
+      !std::isfinite(args.transition_s)) {
+    throw UsageError(
+        "--noise-density, --rate and --duration must be positive, --transition "
+        "zero or positive");
+  }
+  if (!(args.rate_hz <= kMaxRate_hz)) {
+    throw UsageError(Format("--rate must be a number of Hz in (0, %g]", kMaxRate_hz));
+  }
+  // A position averages round(duration x rate) samples: at least one, and a whole number a
+  // positions file can state (2^53).
+  const double per_position = std::round(args.duration_s * args.rate_hz);
+  if (!(per_position >= 1 && per_position <= 9007199254740992.0)) {
+    throw UsageError(
+        Format("--duration x --rate must be 1 to 2^53 samples per position (%g)", per_position));
   }
   const std::vector<Vec3> directions = PlannedDirections(positions);
   // Per-sample white noise in the specific-force unit (µg relative to the device's gravity),
@@ -1535,14 +1587,21 @@ int RunSimulate(const SimulateArgs& args) {
     options.transition_s = args.transition_s;
     options.sigma_raw_per_sample = sigma_raw;
     options.seed = args.seed;
-    const SimulatedLog log = SimulateRawLog(truth, gravity, directions, options);
-    out.reserve(log.samples.size() * 64);
-    out += "time,x,y,z\n";
-    for (std::size_t i = 0; i < log.samples.size(); ++i) {
-      const Vec3& p = log.samples[i];
-      out += FormatNumber(log.time_s[i]) + "," + FormatNumber(p(0)) + "," + FormatNumber(p(1)) +
-             "," + FormatNumber(p(2)) + "\n";
-    }
+    CheckSimulatedSamples(SimulatedSampleCount(directions.size(), options),
+                          "positions x (--duration + --transition) x --rate");
+    OutputFile file(args.output.empty() ? "-" : args.output);  // streamed, never held whole
+    out = "time,x,y,z\n";
+    SimulateRawLog(truth, gravity, directions, options, [&](double t, const Vec3& p) {
+      out += FormatNumber(t) + "," + FormatNumber(p(0)) + "," + FormatNumber(p(1)) + "," +
+             FormatNumber(p(2)) + "\n";
+      if (out.size() >= (std::size_t{1} << 16)) {
+        file.Write(out);
+        out.clear();
+      }
+    });
+    file.Write(out);
+    file.Commit();
+    return kExitOk;
   } else {
     const double n = std::round(args.duration_s * args.rate_hz);
     const std::vector<Vec3> means =

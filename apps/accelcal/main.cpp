@@ -342,7 +342,9 @@ int main(int argc, char** argv) {
              1e3 * std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
     }
   } timer{start};
-  try {
+  InstallCleanupHandlers();
+  // The command, then stdout checked: a summary that did not reach a full disk is an error too.
+  const auto run = [&]() -> int {
     if (*calibrate) {
       for (const char* name :
            {"--method", "--init", "--frame", "--estimator", "--max-iterations"}) {
@@ -364,6 +366,12 @@ int main(int argc, char** argv) {
     }
     if (*system_level) return RunSystemLevel(sys);
     if (*gimbal) return RunGimbal(gim);
+    return kExitUsage;
+  };
+  try {
+    const int status = run();
+    FinishStdout();
+    return status;
   } catch (const UsageError& e) {
     std::fprintf(stderr, "accelcal: usage: %s\n", e.what());
     return kExitUsage;
@@ -386,6 +394,11 @@ int main(int argc, char** argv) {
   } catch (const OutputError& e) {
     std::fprintf(stderr, "accelcal: %s\n", e.what());
     return kExitOutput;
+  } catch (const std::bad_alloc&) {
+    std::fprintf(stderr,
+                 "accelcal: out of memory: the input (or what an option asks for) needs more "
+                 "memory than this machine can give\n");
+    return kExitBadInput;
   } catch (const std::exception& e) {
     std::fprintf(stderr, "accelcal: internal error: %s\n", e.what());
     return kExitInternal;

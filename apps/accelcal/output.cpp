@@ -1,12 +1,19 @@
 #include "output.hpp"
 
+#include <fcntl.h>
+#include <sys/random.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include <cerrno>
 #include <chrono>
+#include <climits>
+#include <csignal>
 #include <cstdarg>
 #include <cstdio>
+#include <cstdlib>
 #include <cstring>
+#include <optional>
 
 #include "commands.hpp"
 
@@ -102,31 +109,251 @@ std::string Format(const char* format, ...) {
   return out;
 }
 
-void WriteFileAtomically(const std::string& path, const std::string& content) {
+namespace {
+
+// The temporary files being written, for the signal handlers: fixed storage (a handler may not
+// allocate), each slot's path complete before its flag is set.
+constexpr int kCleanupSlots = 8;
+struct CleanupSlot {
+  volatile std::sig_atomic_t used = 0;
+  char path[PATH_MAX];
+};
+CleanupSlot g_cleanup[kCleanupSlots];
+
+int RegisterTemporary(const std::string& path) {
+  if (path.size() >= PATH_MAX) return -1;
+  for (int i = 0; i < kCleanupSlots; ++i) {
+    if (g_cleanup[i].used == 0) {
+      std::memcpy(g_cleanup[i].path, path.c_str(), path.size() + 1);
+      g_cleanup[i].used = 1;
+      return i;
+    }
+  }
+  return -1;
+}
+
+void UnregisterTemporary(int slot) {
+  if (slot >= 0) g_cleanup[slot].used = 0;
+}
+
+extern "C" void RemoveTemporariesAndDie(int sig) {
+  for (CleanupSlot& slot : g_cleanup) {
+    if (slot.used != 0) ::unlink(slot.path);
+  }
+  std::signal(sig, SIG_DFL);
+  std::raise(sig);
+}
+
+// An unpredictable name part: 10 characters of [a-z0-9] from the kernel's generator.
+std::string RandomPart() {
+  unsigned char bytes[10];
+  std::size_t got = 0;
+  while (got < sizeof bytes) {
+    const ssize_t n = ::getrandom(bytes + got, sizeof bytes - got, 0);
+    if (n < 0 && errno == EINTR) continue;
+    if (n <= 0) throw OutputError(std::string("no random numbers: ") + std::strerror(errno));
+    got += static_cast<std::size_t>(n);
+  }
+  static const char kAlphabet[] = "abcdefghijklmnopqrstuvwxyz0123456789";
+  std::string out;
+  for (unsigned char b : bytes) out += kAlphabet[b % 36];
+  return out;
+}
+
+std::string Why(const std::string& path, const char* what) {
+  return path + ": " + what + ": " + std::strerror(errno);
+}
+
+}  // namespace
+
+void InstallCleanupHandlers() {
+  for (int sig : {SIGINT, SIGTERM, SIGHUP, SIGPIPE, SIGQUIT}) {
+    struct sigaction action {};
+    action.sa_handler = RemoveTemporariesAndDie;
+    sigemptyset(&action.sa_mask);
+    ::sigaction(sig, &action, nullptr);
+  }
+}
+
+OutputFile::OutputFile(const std::string& path) : path_(path), target_(path) {
   if (path == "-") {
-    if (std::fwrite(content.data(), 1, content.size(), stdout) != content.size() ||
-        std::fflush(stdout) != 0) {
-      throw OutputError("cannot write to stdout");
+    to_stdout_ = true;
+    return;
+  }
+  if (path.empty()) throw OutputError("an output file name is empty");
+  struct stat st;
+  if (::lstat(path.c_str(), &st) == 0 && S_ISLNK(st.st_mode)) {
+    char* real = ::realpath(path.c_str(), nullptr);
+    if (real == nullptr) throw OutputError(Why(path, "a symbolic link that does not resolve"));
+    target_ = real;
+    std::free(real);
+  }
+  bool exists = false;
+  if (::stat(target_.c_str(), &st) == 0) {
+    exists = true;
+    if (S_ISDIR(st.st_mode)) throw OutputError(path + ": is a directory");
+    if (S_ISSOCK(st.st_mode)) throw OutputError(path + ": is a socket, not a file to write");
+    if (!S_ISREG(st.st_mode)) {  // a device, a FIFO: written to, never replaced
+      fd_ = ::open(target_.c_str(), O_WRONLY | O_NOCTTY | O_CLOEXEC);
+      if (fd_ < 0) throw OutputError(Why(path, "cannot open"));
+      return;
+    }
+    // A file made read-only is protected, as a shell's `>` would respect it (root included).
+    if ((st.st_mode & 0222) == 0 || ::access(target_.c_str(), W_OK) != 0) {
+      throw OutputError(path + ": is read-only: not replaced");
+    }
+  } else if (errno != ENOENT) {
+    throw OutputError(Why(path, "cannot write"));
+  }
+  const std::size_t slash = target_.rfind('/');
+  const std::string dir = slash == std::string::npos ? "."
+                          : slash == 0               ? "/"
+                                                     : target_.substr(0, slash);
+  const std::string base = slash == std::string::npos ? target_ : target_.substr(slash + 1);
+  // ".NAME.XXXXXXXXXX.tmp": hidden from globs, NAME cut so the whole stays within NAME_MAX.
+  for (int attempt = 0; fd_ < 0; ++attempt) {
+    temp_ = (dir == "/" ? "" : dir) + "/." + base.substr(0, 200) + "." + RandomPart() + ".tmp";
+    fd_ = ::open(temp_.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_NOFOLLOW | O_CLOEXEC, 0666);
+    if (fd_ < 0 && (errno != EEXIST || attempt == 100)) {
+      const std::string why = Why(path, ("cannot create a file in " + dir).c_str());
+      temp_.clear();
+      throw OutputError(why);
+    }
+  }
+  slot_ = RegisterTemporary(temp_);
+  if (exists) {  // the file replaced keeps its permissions (and, for root, its owner)
+    ::fchmod(fd_, st.st_mode & 0777);
+    if (::geteuid() == 0) (void)!::fchown(fd_, st.st_uid, st.st_gid);
+  }
+}
+
+OutputFile::~OutputFile() {
+  if (fd_ >= 0) ::close(fd_);
+  if (!committed_ && !temp_.empty()) ::unlink(temp_.c_str());
+  UnregisterTemporary(slot_);
+}
+
+void OutputFile::Write(std::string_view text) {
+  if (to_stdout_) {
+    if (std::fwrite(text.data(), 1, text.size(), stdout) != text.size()) {
+      throw OutputError(std::string("cannot write to stdout: ") + std::strerror(errno));
     }
     return;
   }
-  const std::string tmp = path + ".tmp." + std::to_string(::getpid());
-  std::FILE* file = std::fopen(tmp.c_str(), "wb");
-  if (file == nullptr) {
-    throw OutputError(path + ": cannot create: " + std::strerror(errno));
+  buffer_.append(text);
+  if (buffer_.size() >= (std::size_t{1} << 20)) Flush();
+}
+
+void OutputFile::Flush() {
+  std::size_t done = 0;
+  while (done < buffer_.size()) {
+    const ssize_t n = ::write(fd_, buffer_.data() + done, buffer_.size() - done);
+    if (n < 0 && errno == EINTR) continue;
+    if (n <= 0) throw OutputError(Why(path_, "cannot write"));
+    done += static_cast<std::size_t>(n);
   }
-  const bool written = std::fwrite(content.data(), 1, content.size(), file) == content.size();
-  const bool flushed = std::fflush(file) == 0 && ::fsync(::fileno(file)) == 0;
-  const int saved_errno = errno;
-  const bool closed = std::fclose(file) == 0;
-  if (!written || !flushed || !closed) {
-    std::remove(tmp.c_str());
-    throw OutputError(path + ": cannot write: " + std::strerror(saved_errno));
+  buffer_.clear();
+}
+
+void OutputFile::Finish() {
+  if (finished_) return;
+  if (to_stdout_) {
+    FinishStdout();
+  } else {
+    Flush();
+    if (!temp_.empty() && ::fsync(fd_) != 0) throw OutputError(Why(path_, "cannot write"));
+    const int fd = fd_;
+    fd_ = -1;
+    if (::close(fd) != 0) throw OutputError(Why(path_, "cannot write"));
   }
-  if (std::rename(tmp.c_str(), path.c_str()) != 0) {
+  finished_ = true;
+}
+
+void OutputFile::Commit() {
+  Finish();
+  if (!temp_.empty() && !committed_) {
+    if (std::rename(temp_.c_str(), target_.c_str()) != 0) {
+      throw OutputError(Why(path_, "cannot replace it"));
+    }
+    UnregisterTemporary(slot_);
+    slot_ = -1;
+  }
+  committed_ = true;
+}
+
+void CommitAll(std::initializer_list<OutputFile*> outputs) {
+  for (OutputFile* o : outputs) {
+    if (o) o->Finish();
+  }
+  for (OutputFile* o : outputs) {
+    if (o) o->Commit();
+  }
+}
+
+void WriteFileAtomically(const std::string& path, const std::string& content) {
+  OutputFile file(path);
+  file.Write(content);
+  file.Commit();
+}
+
+void FinishStdout() {
+  if (std::fflush(stdout) != 0 || std::ferror(stdout)) {
     const int e = errno;
-    std::remove(tmp.c_str());
-    throw OutputError(path + ": cannot rename the temporary file: " + std::strerror(e));
+    std::clearerr(stdout);
+    throw OutputError(std::string("cannot write to stdout: ") + std::strerror(e));
+  }
+}
+
+void CheckOutputs(const std::vector<std::pair<std::string, std::string>>& outputs,
+                  const std::vector<std::string>& inputs) {
+  // A file is known by its device and inode when it exists, else by its resolved directory and
+  // name; only regular files (and files to be created) can be destroyed by a rename.
+  struct Identity {
+    bool exists = false;
+    dev_t dev = 0;
+    ino_t ino = 0;
+    std::string path;
+    bool operator==(const Identity& o) const {
+      return exists == o.exists && (exists ? dev == o.dev && ino == o.ino : path == o.path);
+    }
+  };
+  const auto identify = [](const std::string& path) -> std::optional<Identity> {
+    if (path.empty() || path == "-") return std::nullopt;
+    Identity id;
+    struct stat st;
+    if (::stat(path.c_str(), &st) == 0) {
+      if (!S_ISREG(st.st_mode)) return std::nullopt;
+      id.exists = true;
+      id.dev = st.st_dev;
+      id.ino = st.st_ino;
+      return id;
+    }
+    const std::size_t slash = path.rfind('/');
+    const std::string dir = slash == std::string::npos ? "." : path.substr(0, slash + 1);
+    char* real = ::realpath(dir.c_str(), nullptr);
+    id.path = (real ? std::string(real) : dir) + "/" +
+              (slash == std::string::npos ? path : path.substr(slash + 1));
+    std::free(real);
+    return id;
+  };
+  std::vector<std::pair<std::string, Identity>> seen;
+  for (const auto& [option, path] : outputs) {
+    const std::optional<Identity> id = identify(path);
+    if (!id) continue;
+    for (const std::string& input : inputs) {
+      const std::optional<Identity> in = identify(input);
+      if (in && in->exists && *in == *id) {
+        throw UsageError(option + " " + path + " is the input " + input +
+                         ": writing it would destroy the input; choose another output file");
+      }
+    }
+    for (const auto& [other, other_id] : seen) {
+      if (other_id == *id) {
+        throw UsageError(option + " and " + other + " name the same file (" + path +
+                         "): give each output its own");
+      }
+    }
+    seen.emplace_back(option, *id);
   }
 }
 

@@ -3,8 +3,11 @@
 
 #include <cstddef>
 #include <functional>
+#include <initializer_list>
 #include <string>
+#include <string_view>
 #include <utility>
+#include <vector>
 
 namespace accelcal::cli {
 
@@ -22,9 +25,60 @@ void Warn(const char* format, ...) __attribute__((format(printf, 1, 2)));
 /// A diagnostic line on stderr (detection thresholds, timings); only when verbose.
 void Detail(const char* format, ...) __attribute__((format(printf, 1, 2)));
 
-/// Writes `content` to `path` through a temporary file in the same directory and a rename, so a
-/// failure never leaves a partial file. "-" writes to stdout. Throws OutputError.
+/// One output file of a command. A regular file (or a new one) is written to a hidden temporary
+/// file beside it (".NAME.XXXXXXXXXX.tmp": created with O_CREAT|O_EXCL|O_NOFOLLOW under an
+/// unpredictable name, so a link planted there cannot redirect it) and renamed over it by
+/// Commit, so that a failure or an interruption (SIGINT, SIGTERM: InstallCleanupHandlers) never
+/// leaves a partial file. The new file has the mode of the file it replaces (without set-id
+/// bits; and, run as root, its owner), else 0666 less the umask. A symbolic link is followed:
+/// its target is replaced, the link kept. "-" is stdout. A target that exists and is not a
+/// regular file (a device such as /dev/null, a FIFO, a terminal) is written directly, never
+/// replaced; a read-only file (no write permission for the user, or none for anyone) is not
+/// replaced. Throws OutputError naming the path.
+class OutputFile {
+ public:
+  explicit OutputFile(const std::string& path);
+  /// Removes the temporary file unless committed.
+  ~OutputFile();
+  OutputFile(const OutputFile&) = delete;
+  OutputFile& operator=(const OutputFile&) = delete;
+  void Write(std::string_view text);
+  /// Everything written reaches the disk (flushed, synced, closed); Commit then only renames.
+  void Finish();
+  /// Finish, then the temporary file replaces the target.
+  void Commit();
+  const std::string& path() const { return path_; }
+
+ private:
+  void Flush();
+  std::string path_;    // as given, for messages
+  std::string target_;  // the file replaced (a link's target)
+  std::string temp_;    // empty: written directly
+  int fd_ = -1;
+  int slot_ = -1;  // the cleanup handlers' record of temp_
+  bool to_stdout_ = false;
+  bool finished_ = false, committed_ = false;
+  std::string buffer_;
+};
+
+/// Several outputs as one: all finished before any is renamed, so an error in one (a full disk,
+/// a bad directory) leaves none of them written.
+void CommitAll(std::initializer_list<OutputFile*> outputs);
+
+/// `content` to `path` as one OutputFile.
 void WriteFileAtomically(const std::string& path, const std::string& content);
+
+/// Refuses (UsageError) an output that is one of the inputs (it would destroy it) or the same
+/// file as another output. `outputs`: option and path ("" or "-" are skipped).
+void CheckOutputs(const std::vector<std::pair<std::string, std::string>>& outputs,
+                  const std::vector<std::string>& inputs);
+
+/// SIGINT, SIGTERM, SIGHUP, SIGPIPE and SIGQUIT remove the temporary files being written, then
+/// end the process as the signal would have.
+void InstallCleanupHandlers();
+
+/// stdout flushed and checked (a summary to a full disk is an error too): OutputError.
+void FinishStdout();
 
 /// A progress bar on stderr, drawn only when stderr is a terminal and the tool is not quiet, at
 /// most every 0.1 s; erased by Finish() (and the destructor) so that it never mixes with the

@@ -53,6 +53,13 @@ struct ReadOptions {
   /// imu_id, sensor_id, id) may hold several sensors' rows: with more than one value there, the
   /// file is refused (InputError listing them) unless `instance` picks one, whose rows are kept.
   std::optional<double> instance;
+  /// An input that is not a regular file (a pipe, standard input, a device such as /dev/zero) is
+  /// refused (InputError) beyond this many bytes: it has no size to check first, and the reader
+  /// must not read forever. 1 GiB: about 5 hours of a 1 kHz log as text (its samples then take
+  /// up to 6 GB if its rows are as short as "1,2,3"). A regular file is read
+  /// up to the size it had when opened, in blocks of whole lines (a file that shrinks meanwhile
+  /// is an InputError).
+  std::size_t max_stream_bytes = std::size_t{1} << 30;
 };
 
 /// A given rate may differ from the timestamps' by this fraction (clock error, rounding).

@@ -4,6 +4,7 @@
 /// and users share it; deterministic for a given seed).
 
 #include <cstdint>
+#include <functional>
 #include <vector>
 
 #include "accelcal/model.hpp"
@@ -68,6 +69,14 @@ struct SimulatedLog {
 };
 SimulatedLog SimulateRawLog(const ModelParameters& truth, double gravity,
                             const std::vector<Vec3>& directions, const RawLogSimulation& options);
+/// The same samples, handed one at a time to `sink` (time [s], raw reading) without being held:
+/// a long log costs no memory.
+void SimulateRawLog(const ModelParameters& truth, double gravity,
+                    const std::vector<Vec3>& directions, const RawLogSimulation& options,
+                    const std::function<void(double time_s, const Vec3& raw)>& sink);
+/// How many samples SimulateRawLog gives (as a double: options may ask for more than any
+/// integer holds; check it before simulating).
+double SimulatedSampleCount(std::size_t directions, const RawLogSimulation& options);
 
 /// Random unit directions, uniform on the sphere, deterministic in seed.
 std::vector<Vec3> RandomDirections(int count, std::uint64_t seed);

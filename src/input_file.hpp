@@ -1,0 +1,81 @@
+#pragma once
+// Reading an input in blocks, with bounded memory whatever the input is (log_reader,
+// series_file): a regular file is read up to the size it had when opened, and a file that shrinks
+// while it is read (a logger rotating it with copytruncate) is an error, not a crash (it used to
+// be mapped, and touching a page past the new end raised SIGBUS); anything else (a pipe, a
+// device such as /dev/zero, standard input) is read up to a stated limit. TextBlocks hands the
+// text on in blocks of whole lines, so a parser holds one block at a time, never the file.
+
+#include <cstddef>
+#include <string>
+#include <string_view>
+
+namespace accelcal::internal {
+
+class InputFile {
+ public:
+  /// Opens `path` ("-": standard input, named "<stdin>"). Throws InputError naming the path when
+  /// it cannot be opened or is a directory.
+  InputFile(const std::string& path, std::size_t max_stream_bytes);
+  ~InputFile();
+  InputFile(const InputFile&) = delete;
+  InputFile& operator=(const InputFile&) = delete;
+
+  const std::string& name() const { return name_; }
+  bool regular() const { return regular_; }
+  /// A regular file's size when it was opened; 0 for anything else.
+  std::size_t size() const { return size_; }
+  /// Reads up to `n` bytes into `out`; 0 at the end. Throws InputError when the read fails, when
+  /// a regular file ends before the size it had when opened, or when more than
+  /// `max_stream_bytes` come from anything else.
+  std::size_t Read(char* out, std::size_t n);
+
+ private:
+  std::string name_;
+  int fd_ = -1;
+  bool owned_ = false;
+  bool regular_ = false;
+  std::size_t size_ = 0;
+  std::size_t done_ = 0;
+  std::size_t max_stream_bytes_;
+};
+
+/// The text of an input in blocks of whole lines.
+class TextBlocks {
+ public:
+  /// Blocks read from `file` (which must outlive this).
+  explicit TextBlocks(InputFile* file);
+  /// One block: the whole of `text` (which must outlive this).
+  explicit TextBlocks(std::string_view text);
+
+  /// The unconsumed text, at least `min_bytes` of it unless the input ends first, cut after its
+  /// last whole line (unless the input ended); valid until the next call.
+  std::string_view Peek(std::size_t min_bytes);
+  /// Whether Peek's text reaches the end of the input.
+  bool AtEnd() const { return eof_ && end_ - begin_ == peeked_; }
+  /// The next block of whole lines (the rest of the input at its end), consumed; false when
+  /// nothing is left. Valid until the next call.
+  bool Next(std::string_view* block);
+  /// Offset in the input of the last block's first byte.
+  std::size_t block_offset() const { return block_offset_; }
+  /// The input's size when known (a regular file or text in memory), else 0.
+  std::size_t total() const { return total_; }
+  char line_end() const { return eol_; }
+
+ private:
+  void Fill(std::size_t min_bytes);
+  std::string_view WholeLines() const;
+
+  InputFile* file_ = nullptr;
+  std::string buffer_;
+  const char* data_ = nullptr;  // buffer_.data(), or the text in memory
+  std::size_t begin_ = 0, end_ = 0, peeked_ = 0;
+  std::size_t base_ = 0;  // input offset of data_[0]
+  std::size_t block_offset_ = 0;
+  std::size_t total_ = 0;
+  bool eof_ = false;
+  bool started_ = false;
+  char eol_ = '\n';
+};
+
+}  // namespace accelcal::internal

@@ -11,6 +11,7 @@ packages=(
   chromium      # the report test renders the page as a person would see it
   pybind11-dev python3-dev python3-numpy python3-pytest python3-matplotlib  # Python bindings
   clang libclang-rt-14-dev llvm-14  # sanitizers, libFuzzer and the symbolizer (scripts/sanitize.sh)
+  locales       # the locale tests write numbers under de_DE.UTF-8 (decimal comma), generated below
 )
 missing=()
 for p in "${packages[@]}"; do
@@ -21,4 +22,11 @@ if ((${#missing[@]})); then
   export DEBIAN_FRONTEND=noninteractive
   apt-get update -qq
   apt-get install -y -qq --no-install-recommends "${missing[@]}"
+fi
+
+# The locale tests (tests/test_locale.cpp, python/tests/test_locale.py) run the library in a
+# decimal-comma locale; they fail, not skip, without it. Generated once, when missing.
+if ! locale -a 2>/dev/null | grep -qix 'de_DE\.utf-\?8'; then
+  echo "generating the locale de_DE.UTF-8"
+  localedef -i de_DE -f UTF-8 de_DE.UTF-8
 fi

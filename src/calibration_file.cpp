@@ -8,6 +8,7 @@
 #include "accelcal/engineering.hpp"
 #include "accelcal/error.hpp"
 #include "accelcal/frame.hpp"
+#include "text_format.hpp"
 
 namespace accelcal {
 
@@ -194,7 +195,9 @@ std::string CalibrationToJson(const CalibrationResult& result, const Calibration
   doc["diagnostics"] = findings;
   doc["source"] = info.source;
   if (!info.sources.empty()) doc["sources"] = info.sources;
-  return doc.dump(2) + "\n";
+  // Labels and paths are bytes from a command line: one that is no UTF-8 (a Latin-1 file name)
+  // becomes U+FFFD, which JSON can hold, rather than no file at all.
+  return doc.dump(2, ' ', false, ordered_json::error_handler_t::replace) + "\n";
 }
 
 namespace {
@@ -236,6 +239,9 @@ ordered_json ParseWithoutDuplicateKeys(const std::string& text, const std::strin
     return true;
   };
   ordered_json doc;
+  // nlohmann's parser reads numbers with strtod, after putting the C locale's decimal point in
+  // place of '.': right in any locale, but only while no other thread changes it in between.
+  const internal::ClassicLocale c_locale;
   try {
     doc = ordered_json::parse(text, check);
   } catch (const nlohmann::json::exception& e) {  // syntax, or a number beyond double's range

@@ -1,6 +1,7 @@
 #include "accelcal/ellipsoid_fit.hpp"
 
 #include "smallest_eigenvector.hpp"
+#include "text_format.hpp"
 
 #include <cmath>
 #include <cstdio>
@@ -81,9 +82,9 @@ std::optional<std::string> ToParameters(const Vec10& v, const Vec3& mean, double
   }
   if (!(ev(0) > 1e-9 * ev(2))) {
     char buf[160];
-    std::snprintf(buf, sizeof buf,
-                  "the fitted quadric is not an ellipsoid (eigenvalues %.3g, %.3g, %.3g)", ev(0),
-                  ev(1), ev(2));
+    internal::FormatTo(buf, sizeof buf,
+                       "the fitted quadric is not an ellipsoid (eigenvalues %.3g, %.3g, %.3g)",
+                       ev(0), ev(1), ev(2));
     return std::string(buf);
   }
   const Vec3 centre = -Q.ldlt().solve(L);

@@ -1,9 +1,8 @@
 // Exports of a calibration to the formats of other tools (export.hpp, docs/conventions.md).
 #include "accelcal/export.hpp"
 
-#include <cctype>
+#include <algorithm>
 #include <cmath>
-#include <cstdio>
 #include <functional>
 #include <stdexcept>
 
@@ -13,12 +12,20 @@
 #include "accelcal/error.hpp"
 #include "accelcal/frame.hpp"
 #include "accelcal/gravity.hpp"
+#include "text_format.hpp"
 
 namespace accelcal {
 
 namespace {
 
 using ordered_json = nlohmann::ordered_json;
+using internal::Format;
+
+// ASCII classes, whatever the C locale's LC_CTYPE (std::isalpha takes 0xE4 for a letter in
+// ISO-8859-1 locales).
+bool IsAsciiDigit(char c) { return c >= '0' && c <= '9'; }
+bool IsAsciiLetter(char c) { return (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z'); }
+bool IsIdentifierChar(char c) { return IsAsciiLetter(c) || IsAsciiDigit(c) || c == '_'; }
 
 struct FormatName {
   ExportFormat format;
@@ -31,8 +38,26 @@ constexpr FormatName kFormatNames[] = {
     {ExportFormat::kImuTk, "imutk"},
 };
 
-// Shortest text that reads back as the same double.
+// Shortest text that reads back as the same double (nlohmann's own conversion: no locale).
 std::string Number(double value) { return ordered_json(value).dump(); }
+
+// Text inside a C block comment: one visible line (VisibleLine) in which no "*/" ends the comment,
+// no "/*" opens a nested one (-Wcomment) and no "??/" trigraph makes a backslash; a space is put
+// inside each of them ("* /", "/ *", "?? /").
+std::string CCommentText(std::string_view text) {
+  const std::string line = internal::VisibleLine(text);
+  std::string out;
+  out.reserve(line.size());
+  for (std::size_t i = 0; i < line.size(); ++i) {
+    out += line[i];
+    const char next = i + 1 < line.size() ? line[i + 1] : '\0';
+    if ((line[i] == '*' && next == '/') || (line[i] == '/' && next == '*') ||
+        (line[i] == '?' && i > 0 && line[i - 1] == '?' && next == '/')) {
+      out += ' ';
+    }
+  }
+  return out;
+}
 
 // A correction f(p) in the calibration's specific-force unit, or nullopt where it has none.
 using Correction = std::function<std::optional<Vec3>(const Vec3&)>;
@@ -78,7 +103,8 @@ double RawToMetersPerSecond2(const LoadedCalibration& cal, const ExportOptions& 
   const std::optional<ForceUnit> unit = ForceUnitFromString(label);
   if (!unit) {
     throw DataError(std::string(format) + " applies its calibration to readings already in m/s2 (" +
-                    std::string(why) + "), but this calibration's raw unit is '" + label +
+                    std::string(why) + "), but this calibration's raw unit is '" +
+                    internal::VisibleLine(label) +
                     "': calibrate readings in m/s2 or g (--raw-units m/s2), or say which with "
                     "--raw-unit m/s2|g if the readings were in one of them");
   }
@@ -88,8 +114,9 @@ double ForceToMetersPerSecond2(const LoadedCalibration& cal) {
   return cal.unit == ForceUnit::kStandardGravity ? kStandardGravity_ms2 : 1.0;
 }
 
+// The raw-unit label as one visible line: the conventions go into comment lines of the files.
 std::string DescribeUnits(const LoadedCalibration& cal) {
-  return "raw readings in '" + cal.raw_unit + "', specific force in " +
+  return "raw readings in '" + internal::VisibleLine(cal.raw_unit) + "', specific force in " +
          std::string(ToString(cal.unit));
 }
 
@@ -143,20 +170,20 @@ Diagonal DiagonalPart(const LoadedCalibration& cal, double raw_ms2) {
 
 std::string DiagonalConvention(std::string_view tool, const LoadedCalibration& cal,
                                double raw_ms2) {
-  char buf[400];
-  std::snprintf(buf, sizeof buf,
-                "%s: f = (p - offset) .* scale in m/s2, sensor frame, before the board rotation; "
-                "offset = b * %.6g, scale_i = %.6g / K_ii (raw '%s' x %.6g = m/s2, accelcal's "
-                "specific force in %s)",
-                std::string(tool).c_str(), raw_ms2, ForceToMetersPerSecond2(cal) / raw_ms2,
-                cal.raw_unit.c_str(), raw_ms2, std::string(ToString(cal.unit)).c_str());
-  return buf;
+  return Format(
+      "%s: f = (p - offset) .* scale in m/s2, sensor frame, before the board rotation; offset = b "
+      "* %.6g, scale_i = %.6g / K_ii (raw '%s' x %.6g = m/s2, accelcal's specific force in %s)",
+      std::string(tool).c_str(), raw_ms2, ForceToMetersPerSecond2(cal) / raw_ms2,
+      internal::VisibleLine(cal.raw_unit).c_str(), raw_ms2,
+      std::string(ToString(cal.unit)).c_str());
 }
 
-std::string Header(const LoadedCalibration& cal, const char* comment) {
-  std::string text = std::string(comment) + " accelcal calibration";
-  if (!cal.source.empty()) text += " of " + cal.source;
-  return text + " (" + std::string(ToString(cal.model)) + " model)\n";
+// The first comment line (without its comment marker and line end): the log's path as one visible
+// line.
+std::string Header(const LoadedCalibration& cal) {
+  std::string text = " accelcal calibration";
+  if (!cal.source.empty()) text += " of " + internal::VisibleLine(cal.source);
+  return text + " (" + std::string(ToString(cal.model)) + " model)";
 }
 
 ExportResult Px4(const LoadedCalibration& cal, const ExportOptions& options) {
@@ -165,19 +192,14 @@ ExportResult Px4(const LoadedCalibration& cal, const ExportOptions& options) {
   ExportResult out;
   out.convention = DiagonalConvention("PX4 (src/lib/sensor_calibration)", cal, raw_ms2);
   const std::string prefix = "CAL_ACC" + std::to_string(options.instance) + "_";
-  out.text = "# Onboard parameters for Vehicle 1\n#\n" + Header(cal, "#") + "# " + out.convention +
+  out.text = "# Onboard parameters for Vehicle 1\n#\n#" + Header(cal) + "\n# " + out.convention +
              "\n#\n# Vehicle-Id Component-Id Name Value Type\n";
   const char axes[3] = {'X', 'Y', 'Z'};
-  char line[160];
   for (int i = 0; i < 3; ++i) {
-    std::snprintf(line, sizeof line, "1\t1\t%s%cOFF\t%.9g\t9\n", prefix.c_str(), axes[i],
-                  d.offset_ms2(i));
-    out.text += line;
+    out.text += Format("1\t1\t%s%cOFF\t%.9g\t9\n", prefix.c_str(), axes[i], d.offset_ms2(i));
   }
   for (int i = 0; i < 3; ++i) {
-    std::snprintf(line, sizeof line, "1\t1\t%s%cSCALE\t%.9g\t9\n", prefix.c_str(), axes[i],
-                  d.scale(i));
-    out.text += line;
+    out.text += Format("1\t1\t%s%cSCALE\t%.9g\t9\n", prefix.c_str(), axes[i], d.scale(i));
   }
   out.loss = MeasureLoss(cal, d.correction, d.dropped);
   return out;
@@ -192,16 +214,13 @@ ExportResult ArduPilot(const LoadedCalibration& cal, const ExportOptions& option
   out.convention = DiagonalConvention("ArduPilot (AP_InertialSensor)", cal, raw_ms2);
   const std::string prefix =
       options.instance == 0 ? "INS_ACC" : "INS_ACC" + std::to_string(options.instance + 1);
-  out.text = Header(cal, "#") + "# " + out.convention + "\n";
+  out.text = "#" + Header(cal) + "\n# " + out.convention + "\n";
   const char axes[3] = {'X', 'Y', 'Z'};
-  char line[160];
   for (int i = 0; i < 3; ++i) {
-    std::snprintf(line, sizeof line, "%sOFFS_%c,%.9g\n", prefix.c_str(), axes[i], d.offset_ms2(i));
-    out.text += line;
+    out.text += Format("%sOFFS_%c,%.9g\n", prefix.c_str(), axes[i], d.offset_ms2(i));
   }
   for (int i = 0; i < 3; ++i) {
-    std::snprintf(line, sizeof line, "%sSCAL_%c,%.9g\n", prefix.c_str(), axes[i], d.scale(i));
-    out.text += line;
+    out.text += Format("%sSCAL_%c,%.9g\n", prefix.c_str(), axes[i], d.scale(i));
   }
   out.loss = MeasureLoss(cal, d.correction, d.dropped);
   return out;
@@ -223,8 +242,8 @@ ExportResult Kalibr(const LoadedCalibration& cal, const ExportOptions& options) 
                       : " (converted exactly from the " + std::string(ToString(cal.frame)) +
                             " frame: the body frame turns, corrected magnitudes are unchanged)") +
       "; Kalibr estimates its own time-varying bias b, so accelcal's constant bias is a comment";
-  out.text = Header(cal, "#") + "# " + out.convention + "\nimu0:\n  model: scale-misalignment\n" +
-             "  accelerometers:\n    M:\n";
+  out.text = "#" + Header(cal) + "\n# " + out.convention +
+             "\nimu0:\n  model: scale-misalignment\n" + "  accelerometers:\n    M:\n";
   for (int i = 0; i < 3; ++i) {
     out.text +=
         "    - [" + Number(M(i, 0)) + ", " + Number(M(i, 1)) + ", " + Number(M(i, 2)) + "]\n";
@@ -243,11 +262,11 @@ ExportResult Kalibr(const LoadedCalibration& cal, const ExportOptions& options) 
 }
 
 std::string CIdentifier(const std::string& prefix) {
-  if (prefix.empty() || std::isdigit(static_cast<unsigned char>(prefix[0]))) {
+  if (prefix.empty() || IsAsciiDigit(prefix[0])) {
     throw std::invalid_argument("--c-prefix must start with a letter or '_'");
   }
   for (const char c : prefix) {
-    if (!std::isalnum(static_cast<unsigned char>(c)) && c != '_') {
+    if (!IsIdentifierChar(c)) {
       throw std::invalid_argument("--c-prefix may hold only letters, digits and '_'");
     }
   }
@@ -258,7 +277,7 @@ std::string CIdentifier(const std::string& prefix) {
 ExportResult CHeader(const LoadedCalibration& cal, const ExportOptions& options) {
   const std::string p = CIdentifier(options.c_prefix);
   std::string guard;
-  for (const char c : p) guard += static_cast<char>(std::toupper(static_cast<unsigned char>(c)));
+  for (const char c : p) guard += c >= 'a' && c <= 'z' ? static_cast<char>(c - 'a' + 'A') : c;
   guard += "_CALIBRATION_H";
   const bool full = cal.frame == Frame::kPlatform;
   if (full && cal.model == ModelKind::kQuadratic) {
@@ -278,7 +297,7 @@ ExportResult CHeader(const LoadedCalibration& cal, const ExportOptions& options)
            vec(A.row(2).transpose()) + "}";
   };
   std::string& t = out.text;
-  t = "/*" + Header(cal, "").substr(0) + " * " + out.convention +
+  t = "/*" + CCommentText(Header(cal)) + "\n * " + CCommentText(out.convention) +
       "\n * Generated by accelcal export; the numbers read back as the same doubles. */\n";
   t += "#ifndef " + guard + "\n#define " + guard + "\n\n#include <math.h>\n\n";
   t += "static const double " + p + "_K[3][3] = " + mat(cal.params.K) + ";\n";
@@ -336,11 +355,44 @@ bool IsFlowArray(const ordered_json& j) {
   }
   return true;
 }
+// A YAML double-quoted scalar holding exactly `text` (UTF-8) in YAML 1.1 and 1.2 readers: '"' and
+// '\\' escaped, tab, line feed and carriage return as \t, \n, \r, the other characters of
+// internal::IsInvisible (which readers refuse, or read as line breaks and fold) as \xHH or \uHHHH;
+// printable Unicode as it is. A byte that is no UTF-8 (a JSON document holds none) is U+FFFD.
+std::string YamlQuoted(std::string_view text) {
+  std::string out = "\"";
+  for (std::size_t i = 0; i < text.size();) {
+    const internal::CodePoint c = internal::DecodeUtf8(text, i);
+    if (c.value == '"' || c.value == '\\') {
+      out += '\\';
+      out += static_cast<char>(c.value);
+    } else if (c.value == '\t') {
+      out += "\\t";
+    } else if (c.value == '\n') {
+      out += "\\n";
+    } else if (c.value == '\r') {
+      out += "\\r";
+    } else if (c.value < 0) {
+      out += "\\uFFFD";
+    } else if (internal::IsInvisible(c.value)) {
+      out += c.value < 0x100 ? Format("\\x%02lX", c.value) : Format("\\u%04lX", c.value);
+    } else {
+      out.append(text, i, c.length);
+    }
+    i += c.length;
+  }
+  return out + "\"";
+}
+// A key plain when it is an identifier that no YAML 1.1 reader takes for a boolean or null.
 std::string YamlKey(const std::string& key) {
-  bool plain = !key.empty() && (std::isalpha(static_cast<unsigned char>(key[0])) || key[0] == '_');
-  for (const char c : key)
-    plain = plain && (std::isalnum(static_cast<unsigned char>(c)) || c == '_');
-  return plain ? key : ordered_json(key).dump();
+  bool plain = !key.empty() && (IsAsciiLetter(key[0]) || key[0] == '_');
+  for (const char c : key) plain = plain && IsIdentifierChar(c);
+  std::string lower;
+  for (const char c : key) lower += c >= 'A' && c <= 'Z' ? static_cast<char>(c - 'A' + 'a') : c;
+  for (const char* word : {"null", "true", "false", "yes", "no", "on", "off", "y", "n"}) {
+    plain = plain && lower != word;
+  }
+  return plain ? key : YamlQuoted(key);
 }
 // JSON's spelling of a scalar, except that a float always has a '.' in its mantissa: YAML 1.1
 // readers (PyYAML) take 1e-05 for a string, 1.0e-05 for a number.
@@ -350,6 +402,7 @@ std::string YamlFlow(const ordered_json& j) {
     for (std::size_t i = 0; i < j.size(); ++i) text += (i ? ", " : "") + YamlFlow(j[i]);
     return text + "]";
   }
+  if (j.is_string()) return YamlQuoted(j.get_ref<const std::string&>());
   std::string text = j.dump();
   if (j.is_number_float() && text.find('.') == std::string::npos) {
     const std::size_t e = text.find_first_of("eE");
@@ -411,6 +464,8 @@ const std::vector<ExportFormat>& AllExportFormats() {
   }();
   return all;
 }
+
+std::string VisibleLine(std::string_view text) { return internal::VisibleLine(text); }
 
 std::string JsonToYaml(const std::string& json_text) {
   const ordered_json doc = ordered_json::parse(json_text);

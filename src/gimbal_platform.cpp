@@ -9,6 +9,7 @@
 #include "accelcal/error.hpp"
 #include "accelcal/known_orientation.hpp"
 #include "gimbal_internal.hpp"
+#include "text_format.hpp"
 
 namespace accelcal {
 
@@ -218,7 +219,7 @@ CoarseCalibrationResult CoarseCalibration(const std::vector<Vec3>& outputs,
       throw DataError(
           "the positions do not determine the coarse-stage parameters (reciprocal "
           "condition " +
-          std::to_string(eig.eigenvalues().minCoeff() / eig.eigenvalues().maxCoeff()) +
+          internal::Format("%.3g", eig.eigenvalues().minCoeff() / eig.eigenvalues().maxCoeff()) +
           "): use Table 1's 18 positions");
     }
     const Vec14 step =

@@ -10,6 +10,7 @@
 #include <Eigen/LU>
 
 #include "solver_common.hpp"
+#include "text_format.hpp"
 
 namespace accelcal::internal {
 
@@ -77,7 +78,7 @@ SolverOutput SolveJoint(const Problem& problem, const ModelParameters& init_para
   Damping damping(opt.initial_damping);
   char message[256];
   out.summary.termination = TerminationType::kMaxIterations;
-  std::snprintf(message, sizeof message, "reached max_iterations = %d", opt.max_iterations);
+  internal::FormatTo(message, sizeof message, "reached max_iterations = %d", opt.max_iterations);
   out.summary.termination_message = message;
   std::vector<Vec3> trial_dirs(dirs.size());
   int evaluations = 0;
@@ -96,8 +97,8 @@ SolverOutput SolveJoint(const Problem& problem, const ModelParameters& init_para
     }
     if (ne.cost <= zero_cost) {
       out.summary.termination = TerminationType::kZeroResidual;
-      std::snprintf(message, sizeof message, "J = %.3e <= zero-residual level %.3e", ne.cost,
-                    zero_cost);
+      internal::FormatTo(message, sizeof message, "J = %.3e <= zero-residual level %.3e", ne.cost,
+                         zero_cost);
       out.summary.termination_message = message;
       break;
     }
@@ -121,8 +122,8 @@ SolverOutput SolveJoint(const Problem& problem, const ModelParameters& init_para
     // is the solution.
     if (theta_step <= opt.parameter_tolerance && dir_step <= opt.parameter_tolerance) {
       out.summary.termination = TerminationType::kParameterTolerance;
-      std::snprintf(message, sizeof message, "|dtheta|_s = %.3e and max |dc| = %.3e <= %.1e",
-                    theta_step, dir_step, opt.parameter_tolerance);
+      internal::FormatTo(message, sizeof message, "|dtheta|_s = %.3e and max |dc| = %.3e <= %.1e",
+                         theta_step, dir_step, opt.parameter_tolerance);
       out.summary.termination_message = message;
       break;
     }
@@ -141,9 +142,9 @@ SolverOutput SolveJoint(const Problem& problem, const ModelParameters& init_para
           // The nearly Gauss-Newton step was already tried from here and measurably raised J;
           // the damped steps change it by less than it can show: J is minimal to its resolution.
           out.summary.termination = TerminationType::kFunctionTolerance;
-          std::snprintf(message, sizeof message,
-                        "predicted |dJ| = %.3e below the resolution %.0e J of the cost",
-                        step.predicted_reduction, kCostResolution);
+          internal::FormatTo(message, sizeof message,
+                             "predicted |dJ| = %.3e below the resolution %.0e J of the cost",
+                             step.predicted_reduction, kCostResolution);
           out.summary.termination_message = message;
           break;
         }
@@ -168,8 +169,8 @@ SolverOutput SolveJoint(const Problem& problem, const ModelParameters& init_para
         BuildNormalEquations(problem, FromVec12(theta), dirs, &ne);
       }
       out.summary.termination = TerminationType::kFunctionTolerance;
-      std::snprintf(message, sizeof message, "|dJ| / J = %.3e <= %.1e", std::abs(actual) / ne.cost,
-                    opt.function_tolerance);
+      internal::FormatTo(message, sizeof message, "|dJ| / J = %.3e <= %.1e",
+                         std::abs(actual) / ne.cost, opt.function_tolerance);
       out.summary.termination_message = message;
       break;
     }
@@ -182,9 +183,9 @@ SolverOutput SolveJoint(const Problem& problem, const ModelParameters& init_para
     } else {
       if (!damping.Reject()) {
         out.summary.termination = TerminationType::kNoProgress;
-        std::snprintf(message, sizeof message,
-                      "no step reduced J = %.6e with damping up to 1e16 (%d evaluations)", ne.cost,
-                      evaluations);
+        internal::FormatTo(message, sizeof message,
+                           "no step reduced J = %.6e with damping up to 1e16 (%d evaluations)",
+                           ne.cost, evaluations);
         out.summary.termination_message = message;
         break;
       }

@@ -14,6 +14,7 @@
 #include "accelcal/frame.hpp"
 #include "outliers.hpp"
 #include "student_t.hpp"
+#include "text_format.hpp"
 
 namespace accelcal {
 
@@ -62,12 +63,12 @@ AxisFit FitAxis(const std::vector<Vec3>& readings, const std::vector<Vec3>& forc
     eig.eigenvectors().col(0).cwiseAbs().maxCoeff(&weakest);
     static const char* const kNames[5] = {"K_%cx", "K_%cy", "K_%cz", "b_%c", "k2_%c"};
     char name[16];
-    std::snprintf(name, sizeof name, kNames[weakest], "xyz"[axis]);
+    internal::FormatTo(name, sizeof name, kNames[weakest], "xyz"[axis]);
     char buf[256];
-    std::snprintf(buf, sizeof buf,
-                  "the known orientations do not determine parameter %s (reciprocal condition "
-                  "%.2g): add positions with gravity along other axes",
-                  name, std::max(0.0, eig.eigenvalues().minCoeff() / largest));
+    internal::FormatTo(buf, sizeof buf,
+                       "the known orientations do not determine parameter %s (reciprocal condition "
+                       "%.2g): add positions with gravity along other axes",
+                       name, std::max(0.0, eig.eigenvalues().minCoeff() / largest));
     throw DataError(buf);
   }
   const Eigen::MatrixXd inverse = s.asDiagonal() * eig.eigenvectors() *

@@ -6,6 +6,7 @@
 #include <Eigen/Cholesky>
 
 #include "solver_common.hpp"
+#include "text_format.hpp"
 
 namespace accelcal::internal {
 
@@ -52,7 +53,7 @@ SolverOutput SolveModulus(const Problem& problem, const ModelParameters& init_pa
   Damping damping(1e-9);
   char message[256];
   out.summary.termination = TerminationType::kMaxIterations;
-  std::snprintf(message, sizeof message, "reached max_iterations = %d", opt.max_iterations);
+  internal::FormatTo(message, sizeof message, "reached max_iterations = %d", opt.max_iterations);
   out.summary.termination_message = message;
 
   while (out.summary.iterations < opt.max_iterations) {
@@ -68,8 +69,8 @@ SolverOutput SolveModulus(const Problem& problem, const ModelParameters& init_pa
         ScaledNorm(ToVec12(Unpack(step, ModelKind::kLinear)), ParameterScales(problem, current));
     if (step_size <= opt.parameter_tolerance) {
       out.summary.termination = TerminationType::kParameterTolerance;
-      std::snprintf(message, sizeof message, "|dtheta|_s = %.3e <= %.1e", step_size,
-                    opt.parameter_tolerance);
+      internal::FormatTo(message, sizeof message, "|dtheta|_s = %.3e <= %.1e", step_size,
+                         opt.parameter_tolerance);
       out.summary.termination_message = message;
       break;
     }
@@ -84,8 +85,8 @@ SolverOutput SolveModulus(const Problem& problem, const ModelParameters& init_pa
         ++out.summary.iterations;
       }
       out.summary.termination = TerminationType::kFunctionTolerance;
-      std::snprintf(message, sizeof message, "|dJ| / J = %.3e <= %.1e", std::abs(actual) / cost,
-                    opt.function_tolerance);
+      internal::FormatTo(message, sizeof message, "|dJ| / J = %.3e <= %.1e",
+                         std::abs(actual) / cost, opt.function_tolerance);
       out.summary.termination_message = message;
       break;
     }
@@ -97,8 +98,8 @@ SolverOutput SolveModulus(const Problem& problem, const ModelParameters& init_pa
     } else {
       if (!damping.Reject()) {
         out.summary.termination = TerminationType::kNoProgress;
-        std::snprintf(message, sizeof message,
-                      "no step reduced the cost %.6e with damping up to 1e16", cost);
+        internal::FormatTo(message, sizeof message,
+                           "no step reduced the cost %.6e with damping up to 1e16", cost);
         out.summary.termination_message = message;
         break;
       }

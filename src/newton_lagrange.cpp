@@ -10,6 +10,7 @@
 
 #include "newton_lagrange_kernel.hpp"
 #include "solver_common.hpp"
+#include "text_format.hpp"
 
 namespace accelcal::internal {
 
@@ -235,7 +236,7 @@ SolverOutput SolveNewtonLagrange(const Problem& problem, const ModelParameters& 
   const nk::Kernel& kernel = KernelFor(BestKernelIsa());
   char message[256];
   out.summary.termination = TerminationType::kMaxIterations;
-  std::snprintf(message, sizeof message, "reached max_iterations = %d", opt.max_iterations);
+  internal::FormatTo(message, sizeof message, "reached max_iterations = %d", opt.max_iterations);
   out.summary.termination_message = message;
   double previous_step = std::numeric_limits<double>::infinity();
   double kappa = 0;  // largest observed δ_n / δ_{n−1}²
@@ -258,8 +259,8 @@ SolverOutput SolveNewtonLagrange(const Problem& problem, const ModelParameters& 
     }
     if (step <= opt.parameter_tolerance) {
       out.summary.termination = TerminationType::kParameterTolerance;
-      std::snprintf(message, sizeof message, "max(|dtheta|_s, max |dc|) = %.3e <= %.1e", step,
-                    opt.parameter_tolerance);
+      internal::FormatTo(message, sizeof message, "max(|dtheta|_s, max |dc|) = %.3e <= %.1e", step,
+                         opt.parameter_tolerance);
       out.summary.termination_message = message;
       break;
     }
@@ -272,10 +273,10 @@ SolverOutput SolveNewtonLagrange(const Problem& problem, const ModelParameters& 
       const double predicted = kQuadraticSafety * kappa * step * step;
       if (predicted <= opt.parameter_tolerance) {
         out.summary.termination = TerminationType::kParameterTolerance;
-        std::snprintf(message, sizeof message,
-                      "predicted next step 10 kappa |d|^2 = %.3e <= %.1e (|d| = %.3e, kappa = "
-                      "%.3g: quadratic convergence)",
-                      predicted, opt.parameter_tolerance, step, kappa);
+        internal::FormatTo(message, sizeof message,
+                           "predicted next step 10 kappa |d|^2 = %.3e <= %.1e (|d| = %.3e, kappa = "
+                           "%.3g: quadratic convergence)",
+                           predicted, opt.parameter_tolerance, step, kappa);
         out.summary.termination_message = message;
         break;
       }

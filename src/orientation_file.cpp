@@ -9,6 +9,7 @@
 #include "accelcal/error.hpp"
 #include "accelcal/gimbal_platform.hpp"
 #include "accelcal/log_reader.hpp"
+#include "text_format.hpp"
 #include "text_lines.hpp"
 
 namespace accelcal {
@@ -56,7 +57,7 @@ bool ParseNumber(std::string_view field, double* value) {
 
 std::string Lower(std::string_view text) {
   std::string out(text);
-  for (char& ch : out) ch = static_cast<char>(std::tolower(static_cast<unsigned char>(ch)));
+  for (char& ch : out) ch = static_cast<char>(internal::AsciiLower(ch));
   return out;
 }
 
@@ -88,7 +89,7 @@ bool LayoutOfHeader(const std::vector<std::string_view>& fields, OrientationLayo
 
 std::string Number6(double v) {
   char buf[32];
-  std::snprintf(buf, sizeof buf, "%.6g", v);
+  internal::FormatTo(buf, sizeof buf, "%.6g", v);
   return buf;
 }
 

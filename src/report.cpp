@@ -3,7 +3,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <cstdio>
 #include <optional>
 
 #include <nlohmann/json.hpp>
@@ -13,6 +12,7 @@
 #include "accelcal/engineering.hpp"
 #include "accelcal/error.hpp"
 #include "accelcal/frame.hpp"
+#include "text_format.hpp"
 
 namespace accelcal {
 
@@ -23,11 +23,7 @@ constexpr double kPi = 3.14159265358979323846;
 constexpr const char* kAxisColor[3] = {"#d62728", "#2ca02c", "#1f77b4"};
 constexpr const char* kAxisName[3] = {"x", "y", "z"};
 
-std::string Format(const char* format, double value) {
-  char buf[64];
-  std::snprintf(buf, sizeof buf, format, value);
-  return buf;
-}
+using internal::Format;  // printf in the "C" locale: 0.5, never 0,5
 std::string Px(double v) { return Format("%.1f", v); }
 std::string Short(double v) { return Format("%.4g", v); }
 

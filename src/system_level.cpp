@@ -9,6 +9,7 @@
 
 #include "accelcal/error.hpp"
 #include "accelcal/gravity.hpp"
+#include "text_format.hpp"
 
 namespace accelcal {
 
@@ -40,7 +41,7 @@ Estimate Combine(std::string name, const double values[3], const double variance
 
 std::string Number(double v) {
   char buf[32];
-  std::snprintf(buf, sizeof buf, "%.6g", v);
+  internal::FormatTo(buf, sizeof buf, "%.6g", v);
   return buf;
 }
 

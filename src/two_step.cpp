@@ -9,6 +9,7 @@
 #include <Eigen/LU>
 
 #include "solver_common.hpp"
+#include "text_format.hpp"
 
 namespace accelcal::internal {
 
@@ -107,7 +108,7 @@ SolverOutput SolveTwoStep(const Problem& problem, const ModelParameters& init_pa
   const double zero_cost = ZeroResidualCost(problem, init_params);
   out.summary.termination = TerminationType::kMaxIterations;
   char message[256];
-  std::snprintf(message, sizeof message, "reached max_sweeps = %d", opt.max_sweeps);
+  internal::FormatTo(message, sizeof message, "reached max_sweeps = %d", opt.max_sweeps);
   out.summary.termination_message = message;
 
   for (int sweep = 1; sweep <= opt.max_sweeps; ++sweep) {
@@ -130,8 +131,8 @@ SolverOutput SolveTwoStep(const Problem& problem, const ModelParameters& init_pa
 
     if (cost <= zero_cost) {
       out.summary.termination = TerminationType::kZeroResidual;
-      std::snprintf(message, sizeof message, "J = %.3e <= zero-residual level %.3e", cost,
-                    zero_cost);
+      internal::FormatTo(message, sizeof message, "J = %.3e <= zero-residual level %.3e", cost,
+                         zero_cost);
       out.summary.termination_message = message;
       break;
     }
@@ -141,9 +142,9 @@ SolverOutput SolveTwoStep(const Problem& problem, const ModelParameters& init_pa
       const double remaining = step * rho / (1.0 - rho);
       if (remaining <= opt.parameter_tolerance) {
         out.summary.termination = TerminationType::kParameterTolerance;
-        std::snprintf(message, sizeof message,
-                      "|dtheta|_s * rho/(1-rho) = %.3e <= %.1e (rho = %.4f)", remaining,
-                      opt.parameter_tolerance, rho);
+        internal::FormatTo(message, sizeof message,
+                           "|dtheta|_s * rho/(1-rho) = %.3e <= %.1e (rho = %.4f)", remaining,
+                           opt.parameter_tolerance, rho);
         out.summary.termination_message = message;
         break;
       }
@@ -152,16 +153,16 @@ SolverOutput SolveTwoStep(const Problem& problem, const ModelParameters& init_pa
     if (sweep > static_cast<int>(rho_history.size()) && rho >= 1.0 &&
         step <= opt.parameter_tolerance) {
       out.summary.termination = TerminationType::kParameterTolerance;
-      std::snprintf(message, sizeof message,
-                    "|dtheta|_s = %.3e <= %.1e and no longer shrinking (round-off)", step,
-                    opt.parameter_tolerance);
+      internal::FormatTo(message, sizeof message,
+                         "|dtheta|_s = %.3e <= %.1e and no longer shrinking (round-off)", step,
+                         opt.parameter_tolerance);
       out.summary.termination_message = message;
       break;
     }
     if (sweep >= 3 && opt.function_tolerance > 0 && cost_change <= opt.function_tolerance * cost) {
       out.summary.termination = TerminationType::kFunctionTolerance;
-      std::snprintf(message, sizeof message, "|dJ| / J = %.3e <= %.1e", cost_change / cost,
-                    opt.function_tolerance);
+      internal::FormatTo(message, sizeof message, "|dJ| / J = %.3e <= %.1e", cost_change / cost,
+                         opt.function_tolerance);
       out.summary.termination_message = message;
       break;
     }

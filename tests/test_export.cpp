@@ -28,7 +28,8 @@ struct Fitted {
   std::string json;
   LoadedCalibration cal;
 };
-Fitted Fit(ModelKind model, Frame frame, const std::string& raw_unit = "g") {
+Fitted Fit(ModelKind model, Frame frame, const std::string& raw_unit = "g",
+           const std::string& source = "simulated") {
   ModelParameters truth;
   truth.K << 1.02, 0, 0, 0.01, 0.98, 0, -0.02, 0.015, 1.01;
   truth.bias << 0.03, -0.02, 0.05;
@@ -43,7 +44,7 @@ Fitted Fit(ModelKind model, Frame frame, const std::string& raw_unit = "g") {
   CalibrationFileInfo info;
   info.unit = ForceUnit::kStandardGravity;
   info.raw_unit = raw_unit;
-  info.source = "simulated";
+  info.source = source;
   for (const Vec3& p : readings)
     info.positions.push_back(Position{p, 1, std::nullopt, std::nullopt});
   Fitted fitted;
@@ -253,6 +254,180 @@ TEST(Export, YamlReadsBackAsTheSameDocumentInAYaml11Reader) {
                   (dir / "cal.json").string() + " " + (dir / "cal.yaml").string()),
             0);
   EXPECT_EQ(ExportCalibration(f.cal, f.json, ExportFormat::kJson).text, f.json);
+}
+
+// Labels and paths as hostile as a command line allows (no NUL): the C comment's terminator and
+// opener, the ??/ trigraph (a backslash in C99), line breaks of every kind (LF, CR, VT, FF, NEL,
+// U+2028, U+2029), parameter lines of each tool after them, other control characters, quotes,
+// YAML indicators, non-ASCII letters and an emoji, and a backslash at the end.
+const std::string kEvilUnit =
+    "counts */ int evil2 = 2; /*\nINS_EVIL,1\r1\t1\tCAL_EVIL\t1\t9\x0b\x0c\x1b[31m\x7f \"q\" 'q' : "
+    "# ?\?/ \xc2\x85NEL \xe2\x80\xa8LS \xe2\x80\xa9PS \xc3\xa4 \xf0\x9f\x98\x80 \\";
+const std::string kEvilSource =
+    "/logs/*/x.csv\nimu1:\n  model: evil\r\nINS_ACCSCAL_X,7\n1\t1\tCAL_ACC0_XOFF\t7\t9\n# "
+    "*/ int evil = 1; /* \"a\" 'b': c #d \x01\x1f \xc3\xa9t\xc3\xa9 ?\?\?/";
+
+std::vector<std::string> Lines(const std::string& text) {
+  std::vector<std::string> lines;
+  std::istringstream in(text);
+  std::string line;
+  while (std::getline(in, line)) lines.push_back(line);
+  return lines;
+}
+
+// The lines that are no comment (not starting with `comment`), in order.
+std::vector<std::string> Content(const std::string& text, const std::string& comment) {
+  std::vector<std::string> out;
+  for (const std::string& line : Lines(text)) {
+    if (line.rfind(comment, 0) != 0) out.push_back(line);
+  }
+  return out;
+}
+
+// No control character but tab and line feed, and no line separator of YAML 1.1 or Python's
+// splitlines (NEL, U+2028, U+2029).
+void ExpectOnlyPlainLines(const std::string& text, const std::string& what) {
+  for (const char c : text) {
+    const auto u = static_cast<unsigned char>(c);
+    EXPECT_FALSE((u < 0x20 && c != '\t' && c != '\n') || u == 0x7f)
+        << what << ": control character " << static_cast<int>(u);
+  }
+  for (const char* separator : {"\xc2\x85", "\xe2\x80\xa8", "\xe2\x80\xa9"}) {
+    EXPECT_EQ(text.find(separator), std::string::npos) << what;
+  }
+}
+
+std::string Slurp(const fs::path& path) {
+  std::ifstream in(path.string());
+  return std::string(std::istreambuf_iterator<char>(in), {});
+}
+
+TEST(Export, LabelsAndPathsChangeNoFileBeyondItsComments) {
+  const Fitted evil = Fit(ModelKind::kLinear, Frame::kXFirst, kEvilUnit, kEvilSource);
+  const Fitted clean = Fit(ModelKind::kLinear, Frame::kXFirst, "g", "simulated");
+  ASSERT_EQ(evil.cal.raw_unit, kEvilUnit);  // the calibration file holds them exactly
+  ASSERT_EQ(evil.cal.source, kEvilSource);
+  ASSERT_EQ(evil.cal.params.K, clean.cal.params.K);
+  ExportOptions g;
+  g.raw_unit = "g";  // what the readings were: the label is no unit PX4 or ArduPilot knows
+  const auto both = [&](ExportFormat format) {
+    return std::pair(ExportCalibration(evil.cal, evil.json, format, g),
+                     ExportCalibration(clean.cal, clean.json, format, g));
+  };
+
+  // PX4 and ArduPilot: the same parameter lines, byte for byte, as many comment lines.
+  for (const ExportFormat format : {ExportFormat::kPx4, ExportFormat::kArduPilot}) {
+    const auto [e, c] = both(format);
+    EXPECT_EQ(Content(e.text, "#"), Content(c.text, "#")) << e.text;
+    EXPECT_EQ(Content(e.text, "#").size(), 6u);
+    EXPECT_EQ(Lines(e.text).size(), Lines(c.text).size()) << e.text;
+    ExpectOnlyPlainLines(e.text, std::string(ToString(format)));
+    ExpectOnlyPlainLines(e.convention, "convention");
+    // The labels are there, visibly: the path's line break as \n.
+    EXPECT_NE(e.text.find("/logs/*/x.csv\\nimu1:\\n  model: evil\\r\\nINS_ACCSCAL_X,7"),
+              std::string::npos)
+        << e.text;
+    EXPECT_NE(e.text.find("raw 'counts */ int evil2 = 2; /*\\nINS_EVIL,1\\r1\\t1"),
+              std::string::npos)
+        << e.text;
+  }
+
+  // Kalibr: the same YAML lines, and PyYAML reads the same document from both.
+  const fs::path dir = fs::path(::testing::TempDir()) / "accelcal_evil_labels";
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  {
+    const auto [e, c] = both(ExportFormat::kKalibr);
+    EXPECT_EQ(Content(e.text, "#"), Content(c.text, "#"));
+    EXPECT_EQ(Lines(e.text).size(), Lines(c.text).size()) << e.text;
+    ExpectOnlyPlainLines(e.text, "kalibr");
+    std::ofstream((dir / "evil.yaml").string()) << e.text;
+    std::ofstream((dir / "clean.yaml").string()) << c.text;
+    EXPECT_EQ(Shell("/usr/bin/python3 -c \"import sys, yaml; "
+                    "sys.exit(yaml.safe_load(open(sys.argv[1], encoding='utf-8')) != "
+                    "yaml.safe_load(open(sys.argv[2], encoding='utf-8')))\" " +
+                    (dir / "evil.yaml").string() + " " + (dir / "clean.yaml").string()),
+              0);
+  }
+
+  // imu_tk holds no label: the same bytes.
+  EXPECT_EQ(both(ExportFormat::kImuTk).first.text, both(ExportFormat::kImuTk).second.text);
+
+  // C header: compiles warning-free as C99 (trigraphs on: ??/ is a backslash; -Wcomment: no /*
+  // in a comment), and after the preprocessor (comments gone) is the clean header's code.
+  const auto [e, c] = both(ExportFormat::kCHeader);
+  ExpectOnlyPlainLines(e.text, "c-header");
+  EXPECT_EQ(Lines(e.text).size(), Lines(c.text).size()) << e.text;
+  // The first comment ends where the clean header's does: at the end of its third line.
+  EXPECT_EQ(e.text.find("*/"), e.text.find(" */\n#ifndef") + 1) << e.text;
+  EXPECT_EQ(Lines(e.text.substr(0, e.text.find("*/"))).size(), 3u) << e.text;
+  std::ofstream((dir / "evil.h").string()) << e.text;
+  std::ofstream((dir / "clean.h").string()) << c.text;
+  ASSERT_EQ(Shell("cc -std=c99 -pedantic -Wall -Wextra -Werror -fsyntax-only -x c " +
+                  (dir / "evil.h").string()),
+            0)
+      << e.text;
+  ASSERT_EQ(Shell("cc -std=c99 -E -P -x c " + (dir / "evil.h").string() + " -o " +
+                  (dir / "evil.i").string()),
+            0);
+  ASSERT_EQ(Shell("cc -std=c99 -E -P -x c " + (dir / "clean.h").string() + " -o " +
+                  (dir / "clean.i").string()),
+            0);
+  EXPECT_EQ(Slurp(dir / "evil.i"), Slurp(dir / "clean.i"));
+}
+
+TEST(Export, LabelsThatAreNoUtf8AreWrittenWithTheReplacementCharacter) {
+  // A Latin-1 file name and label: JSON holds no such bytes, so the file has U+FFFD for each.
+  const Fitted f = Fit(ModelKind::kLinear, Frame::kXFirst, "z\xe4hler", "/logs/m\xfcll.csv");
+  EXPECT_EQ(f.cal.raw_unit, "z\xef\xbf\xbdhler");
+  EXPECT_EQ(f.cal.source, "/logs/m\xef\xbf\xbdll.csv");
+  for (const ExportFormat format : AllExportFormats()) {
+    ExportOptions g;
+    g.raw_unit = "g";
+    EXPECT_NE(ExportCalibration(f.cal, f.json, format, g).text, "") << ToString(format);
+  }
+}
+
+TEST(Export, YamlHoldsEveryStringExactly) {
+  // The whole calibration document with the labels, and keys no YAML 1.1 reader may take for
+  // booleans or null, read by PyYAML: equal to the JSON, every string exact.
+  const fs::path dir = fs::path(::testing::TempDir()) / "accelcal_yaml_strings";
+  fs::create_directories(dir);
+  const Fitted f = Fit(ModelKind::kQuadratic, Frame::kZFirst, kEvilUnit, kEvilSource);
+  const std::string keys =
+      R"({"on": "off", "y": "n", "No": null, "key with space": "yes", "a\u2028b": "\u0085\u007f",
+          "\ufeff": ["\ud83d\ude00", "\u0000x\u0001", "# not a comment", "- not a list"]})";
+  int i = 0;
+  for (const std::string& json : {f.json, keys}) {
+    const std::string name = "doc" + std::to_string(i++);
+    std::ofstream((dir / (name + ".json")).string()) << json;
+    const std::string yaml = JsonToYaml(json);
+    std::ofstream((dir / (name + ".yaml")).string()) << yaml;
+    ExpectOnlyPlainLines(yaml, name);
+    EXPECT_EQ(Shell("/usr/bin/python3 -c \"import json, sys, yaml; "
+                    "sys.exit(json.load(open(sys.argv[1], encoding='utf-8')) != "
+                    "yaml.safe_load(open(sys.argv[2], encoding='utf-8')))\" " +
+                    (dir / (name + ".json")).string() + " " + (dir / (name + ".yaml")).string()),
+              0)
+        << yaml;
+  }
+  // Plain keys stay plain (the file reads as before).
+  EXPECT_EQ(JsonToYaml(R"({"format": "accelcal", "K": [1.0, 2.5e-05]})"),
+            "%YAML 1.2\n---\nformat: \"accelcal\"\nK: [1.0, 2.5e-05]\n");
+}
+
+TEST(Export, VisibleLineEscapesWhatWouldBreakALine) {
+  EXPECT_EQ(VisibleLine("a\nb\rc\td"), "a\\nb\\rc\\td");
+  EXPECT_EQ(VisibleLine(std::string("\x01\x1b\x7f", 3)), "\\x01\\x1B\\x7F");
+  EXPECT_EQ(VisibleLine("\xc2\x85\xc2\x9f\xe2\x80\xa8\xe2\x80\xa9\xef\xbb\xbf\xef\xbf\xbf"),
+            "\\x85\\x9F\\u2028\\u2029\\uFEFF\\uFFFF");
+  // Bytes that are no UTF-8: a lone continuation, a truncated sequence, an overlong '/', a
+  // surrogate.
+  EXPECT_EQ(VisibleLine("\x80 \xe2\x80 \xc0\xaf \xed\xa0\x80"),
+            "\\x80 \\xE2\\x80 \\xC0\\xAF \\xED\\xA0\\x80");
+  // Printable text is kept as it is: quotes, backslashes, comment markers, Unicode.
+  const std::string printable = "C:\\logs\\\"a\" 'b' */ # \xc3\xa4\xc2\xa0\xf0\x9f\x98\x80";
+  EXPECT_EQ(VisibleLine(printable), printable);
 }
 
 TEST(Export, FormatNamesRoundTrip) {

@@ -8,6 +8,17 @@
 /// accelcal's model: p = K f + b + k2 ∘ f² (p raw reading, f specific force in the body frame of
 /// `frame`, K triangular: calibrate.hpp, docs/model.md). Every format below instead maps a reading
 /// to a corrected specific force, f = M (p − o) or f = diag(s) (p − o).
+///
+/// Text from outside (the raw-unit label, the log's path in `source`) never changes what a file
+/// holds beyond its comments. Where the format has escaping, it is escaped: yaml writes every
+/// string as a double-quoted scalar (`\"`, `\\`, `\t`, `\n`, `\r`, `\xHH`, `\uHHHH`) that YAML
+/// 1.1 and 1.2 readers read back exactly; json is the calibration file itself. Where it goes into
+/// a comment line (px4 and ardupilot `#` lines, kalibr's YAML comments, the c-header's block
+/// comment) it is made one line of visible characters, VisibleLine below: control characters and
+/// line separators become `\n`, `\r`, `\t`, `\xHH` or `\uHHHH`, bytes that are no UTF-8 `\xHH`; in
+/// the c-header a space is put inside `*/`, `/*` and the `??/` trigraph (`* /`, `/ *`, `?? /`).
+/// The conventions (ExportResult::convention) hold the label the same way. Every number is
+/// written the same in every locale (a host program's setlocale(LC_NUMERIC, ...) changes none).
 
 #include <optional>
 #include <string>
@@ -66,8 +77,14 @@ struct ExportResult {
 ExportResult ExportCalibration(const LoadedCalibration& calibration, const std::string& native_json,
                                ExportFormat format, const ExportOptions& options = {});
 
-/// YAML (block style) of a JSON document; scalars keep their JSON spelling, so numbers read back
-/// exactly.
+/// YAML (block style) of a JSON document; numbers, booleans and null keep their JSON spelling,
+/// so numbers read back exactly; strings are double-quoted scalars, escaped as above.
 std::string JsonToYaml(const std::string& json_text);
+
+/// `text` (a label, a path) as one line of visible characters, for a comment or header line of a
+/// text file: tab, line feed and carriage return become `\t`, `\n`, `\r`; the other control
+/// characters (C0, DEL, C1), U+2028, U+2029, U+FEFF, U+FFFE and U+FFFF `\xHH` (below U+0100) or
+/// `\uHHHH`; a byte that is no UTF-8 `\xHH`. Everything else, printable Unicode too, is kept.
+std::string VisibleLine(std::string_view text);
 
 }  // namespace accelcal

@@ -27,13 +27,19 @@ cmake -S . -B build-fuzz "${common[@]}" -DACCELCAL_FUZZ=ON -DACCELCAL_BUILD_TEST
 cmake --build build-fuzz -j"$(nproc)"
 scratch=$(mktemp -d)
 trap 'rm -rf "$scratch"' EXIT
-for harness in log_reader orientations calibration_file series calibrate; do
+for harness in log_reader orientations calibration_file calibration_keys series calibrate \
+  cli_options; do
   mkdir -p "$scratch/$harness"
+  # The command line's own stdout and stderr are not the fuzzer's.
+  extra=()
+  [ "$harness" = cli_options ] && extra=(-close_fd_mask=3)
   # Inputs that once failed (fuzz/regressions) are replayed with the seeds.
   regressions=()
-  [ -d "fuzz/regressions/$harness" ] && regressions=("fuzz/regressions/$harness")
-  "build-fuzz/fuzz/fuzz_$harness" "$scratch/$harness" "fuzz/corpus/$harness" "${regressions[@]}" \
+  [ -d "fuzz/regressions/$harness" ] && regressions=("$PWD/fuzz/regressions/$harness")
+  # Absolute paths: cli_options works in a directory of its own.
+  "build-fuzz/fuzz/fuzz_$harness" "$scratch/$harness" "$PWD/fuzz/corpus/$harness" "${regressions[@]}" \
     -max_total_time="$seconds" -timeout=10 -rss_limit_mb=2048 -max_len=20000 -print_final_stats=1 \
+    "${extra[@]}" \
     > "$scratch/$harness.log" 2>&1 || { tail -60 "$scratch/$harness.log"; exit 1; }
   echo "fuzz_$harness: $(grep -E '^stat::number_of_executed_units' "$scratch/$harness.log" |
     awk '{print $2}') executions in ${seconds} s, no finding"

@@ -238,6 +238,28 @@ Diagnosis Diagnose(const DiagnosisInput& input) {
   const bool known = r.frame == Frame::kPlatform;
   const char* unit = input.unit == ForceUnit::kMetersPerSecond2 ? "m/s2" : "g";
 
+  if (input.positions_by_row_count && means.size() >= 3) {
+    Vec3 centre = Vec3::Zero();
+    for (const Vec3& m : means) centre += m;
+    centre /= static_cast<double>(means.size());
+    double spread2 = 0;
+    for (const Vec3& m : means) spread2 += (m - centre).squaredNorm();
+    const double spread = std::sqrt(spread2 / static_cast<double>(means.size()));
+    std::vector<double> steps;
+    for (std::size_t k = 1; k < means.size(); ++k)
+      steps.push_back((means[k] - means[k - 1]).norm());
+    std::nth_element(steps.begin(), steps.begin() + steps.size() / 2, steps.end());
+    const double ratio = steps[steps.size() / 2] / spread;
+    if (ratio < kRepeatedStepFraction) {
+      Add(&out, "positions_like_samples", Severity::kWarning,
+          Format("the file was read as positions (no header, few rows), but its rows barely move "
+                 "from one to the next (median step %.2g %% of their spread, where positions "
+                 "turn to a new orientation at every row): it looks like a raw log, each sample "
+                 "taken for a position",
+                 100 * ratio),
+          {{"median_step_fraction", ratio}, {"limit", kRepeatedStepFraction}});
+    }
+  }
   if (!r.summary.converged()) {
     Add(&out, "not_converged", Severity::kFailure,
         "the solver did not converge: " + r.summary.termination_message);

@@ -13,6 +13,7 @@
 
 #include "accelcal/error.hpp"
 #include "input_file.hpp"
+#include "text_format.hpp"
 #include "text_lines.hpp"
 
 namespace accelcal {
@@ -189,7 +190,7 @@ bool NamesPositionsColumns(const std::vector<std::string>& header) {
 
 std::string Normalise(std::string_view name) {
   std::string s;
-  for (char c : name) s.push_back(static_cast<char>(std::tolower(static_cast<unsigned char>(c))));
+  for (char c : name) s.push_back(static_cast<char>(internal::AsciiLower(c)));
   // Drop a unit suffix such as "_g", "_ms2", "_mps2", "_counts".
   static const char* const kUnits[] = {"_g", "_ms2", "_mps2", "_m/s2", "_counts", "_raw", "_lsb"};
   for (const char* unit : kUnits) {
@@ -298,16 +299,16 @@ int ResolveColumn(const std::string& spec, const std::vector<std::string>& heade
 std::string ShortNumber(double v) {
   char buf[32];
   if (v == std::floor(v) && std::abs(v) < 1e15) {
-    std::snprintf(buf, sizeof buf, "%.0f", v);
+    internal::FormatTo(buf, sizeof buf, "%.0f", v);
   } else {
-    std::snprintf(buf, sizeof buf, "%.6g", v);
+    internal::FormatTo(buf, sizeof buf, "%.6g", v);
   }
   return buf;
 }
 
 std::string TimeBackwards(double now, double before) {
   char buf[128];
-  std::snprintf(buf, sizeof buf, "time goes backwards (%.9g after %.9g)", now, before);
+  internal::FormatTo(buf, sizeof buf, "time goes backwards (%.9g after %.9g)", now, before);
   return buf;
 }
 
@@ -618,8 +619,12 @@ InputData ParseBlocks(internal::TextBlocks& blocks, const std::string& source,
     // Only averaged readings carry a sample count and standard deviations, however many rows.
     data.kind = InputKind::kPositions;
     data.kind_reason = "auto: the header is a positions file's (n, sx, sy, sz)";
+  } else if (options.rate_hz) {  // a sample rate belongs to a raw log, however short
+    data.kind = InputKind::kRaw;
+    data.kind_reason = "auto: a sample rate was given: a raw log";
   } else if ((rows = CountRows()) <= options.max_rows_of_positions_file) {
     data.kind = InputKind::kPositions;
+    data.kind_from_row_count = true;
     data.kind_reason = "auto: " + std::to_string(rows) +
                        " rows <= " + std::to_string(options.max_rows_of_positions_file) +
                        " is a positions file (--input-kind raw to override)";
@@ -629,6 +634,11 @@ InputData ParseBlocks(internal::TextBlocks& blocks, const std::string& source,
                        " rows is a raw log";
   }
   const bool raw = data.kind == InputKind::kRaw;
+  if (!raw && options.rate_hz) {
+    throw InputError(source, 0,
+                     "a sample rate was given, but this is a positions file (" + data.kind_reason +
+                         "): a rate belongs to a raw log");
+  }
 
   Layout layout;
   std::fill(std::begin(layout.column), std::end(layout.column), -1);

@@ -257,5 +257,21 @@ TEST(LogReader, ByteOrderMarksLineEndsAndSemicolons) {
             "numbers");
 }
 
+TEST(LogReader, AGivenRateMakesAShortHeaderlessFileARawLog) {
+  const std::string rows = ManyRows(30, ",", false);
+  EXPECT_EQ(Parse(rows).kind, InputKind::kPositions);
+  EXPECT_TRUE(Parse(rows).kind_from_row_count);
+  ReadOptions options;
+  options.rate_hz = 100;
+  const InputData raw = Parse(rows, options);
+  EXPECT_EQ(raw.kind, InputKind::kRaw);
+  EXPECT_EQ(raw.kind_reason, "auto: a sample rate was given: a raw log");
+  EXPECT_FALSE(raw.kind_from_row_count);
+  // A header that says positions wins, and then the rate is a mistake, not ignored.
+  EXPECT_NE(ErrorOf("x,y,z,n,sx,sy,sz\n1,2,3,10,1,1,1\n", options)
+                .find("a sample rate was given, but this is a positions file"),
+            std::string::npos);
+}
+
 }  // namespace
 }  // namespace accelcal

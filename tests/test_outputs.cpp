@@ -124,7 +124,7 @@ TEST_F(Outputs, ALinkPlantedAtThePredictableTemporaryNameRedirectsNothing) {
   const std::string cal = Calibration();
   Write("victim", "precious\n");
   const int pid = static_cast<int>(::getpid());
-  for (int p = pid; p < pid + 3000; ++p) {
+  for (int p = pid; p < pid + 1000; ++p) {
     fs::create_symlink(Path("victim"), Path("out.yaml.tmp." + std::to_string(p)));
   }
   const CliRun r = Exec("export " + cal + " --to yaml -q -o " + Path("out.yaml"));
@@ -169,6 +169,23 @@ TEST_F(Outputs, AnInterruptedRunLeavesNoTemporaryFile) {
     EXPECT_TRUE(WIFSIGNALED(status) && WTERMSIG(status) == sig) << status;
     EXPECT_TRUE(Entries().empty()) << Entries().front();
   }
+}
+
+TEST_F(Outputs, APathWithALineEndAddsNoLineToAppliedData) {
+  const std::string cal = Calibration();
+  const std::string evil = Path("cal\nx,y,z\n1,2,3.json");
+  fs::copy_file(cal, evil);
+  const CliRun r = Exec("apply '" + evil + "' " + kXsens + " -o " + Path("out.csv"));
+  ASSERT_EQ(r.status, 0) << r.err;
+  std::istringstream lines(Slurp(Path("out.csv")));
+  std::string line;
+  std::vector<std::string> head;
+  while (head.size() < 3 && std::getline(lines, line)) head.push_back(line);
+  ASSERT_EQ(head.size(), 3u);
+  EXPECT_NE(head[0].find("# accelcal apply "), std::string::npos);
+  EXPECT_NE(head[0].find("cal\\nx,y,z\\n1,2,3.json"), std::string::npos) << head[0];
+  EXPECT_EQ(head[1].rfind("# time:", 0), 0u) << head[1];
+  EXPECT_EQ(head[2], "time,x,y,z");
 }
 
 TEST_F(Outputs, ASummaryThatCannotBeWrittenIsAnError) {

@@ -554,5 +554,44 @@ TEST_F(Trust, BundledRecordingsPassTheirChecks) {
   }
 }
 
+// Issue 16: a short raw log without a header (150 rows of x,y,z) is read as positions by its
+// row count; the tool says it looks like one (each sample taken for a position), and a rate
+// given with it makes it a raw log.
+TEST_F(Trust, AShortHeaderlessRawLogIsNotSilentlyTakenForPositions) {
+  RawLogSimulation o;
+  o.rate_hz = 10;
+  o.static_s = 1;
+  o.transition_s = 0;
+  o.sigma_raw_per_sample = Vec3::Constant(0.002);
+  const SimulatedLog log = SimulateRawLog(MemsDevice(), kG, RandomDirections(15, 4), o);
+  ASSERT_EQ(log.samples.size(), 150u);
+  std::string text;
+  char row[96];
+  for (const Vec3& p : log.samples) {
+    std::snprintf(row, sizeof row, "%.6f,%.6f,%.6f\n", p(0), p(1), p(2));
+    text += row;
+  }
+  const std::string path = Write("short.csv", text);
+  CliRun r = Exec("calibrate " + path + " -o " + Path("short.json"));
+  EXPECT_EQ(r.status, 0) << r.err;
+  EXPECT_NE(r.err.find("it looks like a raw log, each sample taken for a position"),
+            std::string::npos)
+      << r.err;
+  EXPECT_NE(r.err.find("(--input-kind raw)"), std::string::npos) << r.err;
+  EXPECT_TRUE(Has(Json(Path("short.json")), "positions_like_samples"));
+  // The same rows as the positions file they are (repeated averages are distinct positions).
+  const std::string positions = Write(
+      "positions.csv", Slurp(std::string(ACCELCAL_DATA_DIR) + "/ctu-innalabs-ahrs-m3/"
+                                                              "measured_accelerations_24pos.csv"));
+  r = Exec("calibrate " + positions + " --units g -o " + Path("p.json"));
+  EXPECT_EQ(r.status, 0) << r.err;
+  EXPECT_FALSE(Has(Json(Path("p.json")), "positions_like_samples"));
+  // A rate belongs to a raw log: read as one, whatever its row count (1 s still periods at
+  // 10 Hz are too short for the detection: its error shows the file was read as a raw log).
+  r = Exec("calibrate " + path + " --rate 10 -o " + Path("raw.json"));
+  EXPECT_EQ(r.status, 3);
+  EXPECT_NE(r.err.find("no static interval found"), std::string::npos) << r.err;
+}
+
 }  // namespace
 }  // namespace accelcal

@@ -1,4 +1,5 @@
-// accelcal: command-line front end. Parses arguments, calls the library, maps errors to exit codes.
+// accelcal: command-line front end. Parses arguments, calls the library, maps errors to exit codes
+// (RunCommandLine: main.cpp, and the option-parsing fuzzer, fuzz/fuzz_cli_options.cpp).
 #include <chrono>
 #include <cstdio>
 #include <exception>
@@ -76,7 +77,7 @@ void AddGravityOptions(CLI::App* cmd, GravityArgs* g) {
 
 }  // namespace
 
-int main(int argc, char** argv) {
+int accelcal::cli::RunCommandLine(int argc, char** argv) {
   CLI::App app{
       "accelcal: calibration of triaxial accelerometers from static multi-position recordings"};
   app.require_subcommand(1);

@@ -429,6 +429,7 @@ const char* OptionHint(const Finding& f) {
   }
   if (f.code == "outlier_limit") return " (--max-outliers)";
   if (f.code == "time_unit") return " (--time-unit)";
+  if (f.code == "positions_like_samples") return " (--input-kind raw)";
   return "";
 }
 
@@ -461,6 +462,9 @@ int WriteCalibration(const CalibrateArgs& args, const LoadedInput& in, const Gra
     }
   }
   diagnosis_input.unit = g.unit;
+  for (const LoadedFile& f : in.files) {
+    diagnosis_input.positions_by_row_count |= f.data.kind_from_row_count;
+  }
   const Diagnosis diagnosis = Diagnose(diagnosis_input);
   CalibrationFileInfo info;
   info.unit = g.unit;
@@ -847,7 +851,7 @@ int RunDetect(const DetectArgs& args) {
         in.path.c_str(), data.raw.samples.size(), d.rate_hz, d.window_samples, d.threshold,
         d.noise_reference);
     // What the time column was found to be, and the still periods not used (diagnosis.hpp).
-    for (const Finding& f : LogFindings(&data.raw, &d)) out += "# " + f.message + "\n";
+    for (const Finding& f : LogFindings(&data.raw, &d)) out += "# " + VisibleLine(f.message) + "\n";
     out += Format("%3s %9s %9s %11s %11s %8s %40s %33s\n", "#", "begin", "end", "t_begin", "t_end",
                   "samples", "mean", "std");
     for (std::size_t i = 0; i < d.intervals.size(); ++i) {
@@ -901,7 +905,7 @@ int RunApply(const ApplyArgs& args) {
     }
   }
   OutputFile file(args.output.empty() ? "-" : args.output);
-  std::string out = "# accelcal apply " + args.calibration + ": specific force in " +
+  std::string out = "# accelcal apply " + VisibleLine(args.calibration) + ": specific force in " +
                     std::string(ToString(unit)) + "\n";
   if (log.time) {  // the clock stated once: times are seconds from the first sample
     out += "# time: seconds from the first sample, at " + FormatNumber(log.time->origin_s) +

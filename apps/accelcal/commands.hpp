@@ -27,6 +27,10 @@ enum ExitCode : int {
   kExitFailedChecks = 6,
 };
 
+/// The whole tool: parses the arguments, runs the subcommand, returns the exit status (never exits,
+/// never throws).
+int RunCommandLine(int argc, char** argv);
+
 /// A usage problem found after parsing (bad enum value, conflicting options).
 struct UsageError : std::runtime_error {
   using std::runtime_error::runtime_error;

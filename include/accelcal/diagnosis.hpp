@@ -44,6 +44,11 @@
 ///   - `model_choice` (warning): a quadratic result where the model selection's evidence rule
 ///     (model_selection.hpp) keeps the linear model.
 ///   - `crossval_unavailable` (note): why held-out validation has no number.
+///   - `positions_like_samples` (warning): positions read from a headerless file by its row count
+///     whose consecutive rows barely move (median step below kRepeatedStepFraction = 5 % of the
+///     readings' RMS spread about their mean; a positions file turns to a new orientation at
+///     almost every row: every bundled one has median steps of 40 % or more): a short raw log
+///     read as positions, one sample each.
 ///   - `rejected_period` (warning when clipped, note otherwise): a still period not used;
 ///     `joined_periods` (note): still periods split by a short disturbance that were joined.
 ///   - `time_unit`, `time_gaps`, `coarse_timestamps` (notes), `irregular_sampling` (note beyond
@@ -96,6 +101,7 @@ inline constexpr double kMisfitFailure = 0.02;  ///< RMS misfit as a fraction of
 inline constexpr double kScatterNote = 3.0;
 inline constexpr double kScatterWarning = 30.0;
 inline constexpr double kInterleavedCorrelation = -0.5;
+inline constexpr double kRepeatedStepFraction = 0.05;
 
 /// A raw log that gave positions, for the findings about it (LogFindings).
 struct DiagnosedLog {
@@ -115,6 +121,9 @@ struct DiagnosisInput {
   /// The raw logs the positions came from (none for a positions file), in order.
   std::vector<DiagnosedLog> logs;
   ForceUnit unit = ForceUnit::kMetersPerSecond2;  ///< of result->gravity
+  /// The positions were read from a file taken for a positions file by its row count alone
+  /// (InputData::kind_from_row_count): `positions_like_samples` checks they are not a raw log.
+  bool positions_by_row_count = false;
 };
 
 Diagnosis Diagnose(const DiagnosisInput& input);

@@ -43,7 +43,8 @@ struct ReadOptions {
   std::optional<double> rate_hz;
   /// kAuto: a file with at most this many data rows and no time column is a positions file; a
   /// header naming a time column (t, time, timestamp) makes it raw, one naming n/samples/count
-  /// or std columns makes it a positions file.
+  /// or std columns makes it a positions file; a given `rate_hz` makes it raw (a rate given for
+  /// a positions file is an InputError).
   std::size_t max_rows_of_positions_file = 200;
   /// Called every 65536 data rows with the bytes parsed and the total (a progress bar); optional.
   std::function<void(std::size_t bytes_done, std::size_t bytes_total)> progress;
@@ -84,8 +85,11 @@ struct RawLog {
 struct InputData {
   InputKind kind = InputKind::kRaw;  ///< never kAuto
   std::string kind_reason;           ///< why this kind was chosen (auto-detection), for messages
-  RawLog raw;                        ///< when kind == kRaw
-  std::vector<Position> positions;   ///< when kind == kPositions
+  /// Auto-detection decided by the row count alone (no header said what the file is): a short
+  /// raw log without a header is then read as positions (Diagnose checks for that).
+  bool kind_from_row_count = false;
+  RawLog raw;                       ///< when kind == kRaw
+  std::vector<Position> positions;  ///< when kind == kPositions
 };
 
 /// Parses text already in memory; `source` names it in errors.

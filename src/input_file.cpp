@@ -76,7 +76,12 @@ std::size_t InputFile::Read(char* out, std::size_t n) {
   return static_cast<std::size_t>(got);
 }
 
-TextBlocks::TextBlocks(InputFile* file) : file_(file), total_(file->size()) {}
+TextBlocks::TextBlocks(InputFile* file, std::string already_read)
+    : file_(file),
+      buffer_(std::move(already_read)),
+      data_(buffer_.data()),
+      end_(buffer_.size()),
+      total_(file->size()) {}
 
 TextBlocks::TextBlocks(std::string_view text)
     : data_(text.data()), end_(text.size()), total_(text.size()), eof_(true) {

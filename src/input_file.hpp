@@ -43,8 +43,9 @@ class InputFile {
 /// The text of an input in blocks of whole lines.
 class TextBlocks {
  public:
-  /// Blocks read from `file` (which must outlive this).
-  explicit TextBlocks(InputFile* file);
+  /// Blocks read from `file` (which must outlive this), after `already_read`: the bytes its
+  /// caller read first (to tell what the file is).
+  explicit TextBlocks(InputFile* file, std::string already_read = {});
   /// One block: the whole of `text` (which must outlive this).
   explicit TextBlocks(std::string_view text);
 

@@ -16,6 +16,7 @@
 
 #include "accelcal/error.hpp"
 #include "accelcal/log_reader.hpp"
+#include "accelcal/series_file.hpp"
 #include "text_lines.hpp"
 
 namespace accelcal {
@@ -102,6 +103,44 @@ TEST(InputBounds, AFileThatShrinksWhileReadIsAnErrorNotACrash) {
   std::remove(path.c_str());
   EXPECT_TRUE(cut);
   EXPECT_NE(error.find("shrank while it was read"), std::string::npos) << error;
+}
+
+TEST(InputBounds, ASeriesThatShrinksWhileReadIsAnErrorNotACrash) {
+  for (const bool binary : {true, false}) {
+    std::string text;
+    if (binary) AppendSeriesHeader(&text);
+    for (int k = 0; k < 300000; ++k) {
+      SystemSample s;
+      s.t = k * 1e-3;
+      s.f = Vec3(0.1, 0.2, 9.8);
+      if (binary) {
+        AppendSeriesSample(s, &text);
+      } else {
+        text += std::to_string(s.t) + ",0.1,0.2,9.8,0,0\n";
+      }
+    }
+    const std::string path = TempPath(binary ? "series.bin" : "series.csv");
+    WriteText(path, text);
+    long samples = 0;
+    bool cut = false;
+    std::string error = "no error";
+    try {
+      ReadSeries(
+          path, [&](const SystemSample&) { ++samples; },
+          [&](std::size_t done, std::size_t) {
+            if (done > 0 && !cut) {
+              ASSERT_EQ(::truncate(path.c_str(), 4096), 0);
+              cut = true;
+            }
+          });
+    } catch (const InputError& e) {
+      error = e.what();
+    }
+    std::remove(path.c_str());
+    EXPECT_TRUE(cut);
+    EXPECT_LT(samples, 300000);
+    EXPECT_NE(error.find("shrank while it was read"), std::string::npos) << error;
+  }
 }
 
 TEST(InputBounds, APipeIsReadUpToTheStreamLimit) {

@@ -36,7 +36,11 @@ using SeriesProgress = std::function<void(std::size_t bytes_done, std::size_t by
 void ParseSeries(std::string_view content, const std::string& source,
                  const std::function<void(const SystemSample&)>& sink,
                  const SeriesProgress& progress = nullptr);
-/// ParseSeries of a file, memory-mapped when it is a regular file.
+/// A series that is not a regular file (a pipe, standard input) is refused beyond this size.
+inline constexpr std::size_t kMaxSeriesStreamBytes = std::size_t{4} << 30;
+/// ParseSeries of a file, read in blocks ("-": standard input): a regular file up to the size it
+/// had when opened (one that shrinks meanwhile is an InputError), anything else up to
+/// kMaxSeriesStreamBytes.
 void ReadSeries(const std::string& path, const std::function<void(const SystemSample&)>& sink,
                 const SeriesProgress& progress = nullptr);
 

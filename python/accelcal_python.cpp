@@ -243,9 +243,29 @@ py::dict DetectionDict(const StaticDetectionResult& r, const RawLog& log) {
   return d;
 }
 
+StaticDetectionResult DetectionFromDictUnchecked(const py::dict& d,
+                                                 std::optional<std::size_t> samples);
+
 // The inverse of DetectionDict (what Diagnose reads of it), its sample indices checked against a
-// log of `samples` samples.
+// log of `samples` samples. A dict that is not such a result (a key missing, a value of another
+// type) is a ValueError naming what is wrong, not a KeyError or a RuntimeError from a cast.
 StaticDetectionResult DetectionFromDict(const py::dict& d, std::optional<std::size_t> samples) {
+  try {
+    return DetectionFromDictUnchecked(d, samples);
+  } catch (const py::error_already_set& e) {
+    if (!e.matches(PyExc_KeyError) && !e.matches(PyExc_TypeError) && !e.matches(PyExc_IndexError)) {
+      throw;
+    }
+    throw py::value_error(std::string("detection: not a result of detect_static_intervals (") +
+                          e.what() + ")");
+  } catch (const py::cast_error& e) {
+    throw py::value_error(std::string("detection: not a result of detect_static_intervals (") +
+                          e.what() + ")");
+  }
+}
+
+StaticDetectionResult DetectionFromDictUnchecked(const py::dict& d,
+                                                 std::optional<std::size_t> samples) {
   StaticDetectionResult r;
   const auto index = [&](const py::handle& item, const char* key) {
     const long long v = item[key].cast<long long>();

@@ -352,3 +352,17 @@ def test_rejected_periods_carry_their_cause(tmp_path, xsens):
     assert len(moving["intervals"]) == 5
     assert [r["cause"] for r in moving["rejected"]] == ["moving"]
     assert "turning" in moving["rejected"][0]["reason"]
+
+
+def test_a_detection_that_is_no_detection_is_a_value_error():
+    # Issue 16, found by python/fuzz/fuzz_entry_points.py: a dict without the keys of
+    # detect_static_intervals' result raised KeyError (a cast of a wrong type, RuntimeError).
+    positions = np.loadtxt(os.path.join(DATA, "imutk-xsens-mti", "derived_static_means.csv"),
+                           delimiter=",", skiprows=1)[:, 3:6]
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        result = accelcal.calibrate(positions, gravity=9.81744)
+    for detection in ({}, {"intervals": []}, {"intervals": [{"begin": "x"}], "rejected": []},
+                      {"intervals": 3, "rejected": []}):
+        with pytest.raises(ValueError, match="detection"):
+            accelcal.diagnose(result, detection=detection)

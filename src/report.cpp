@@ -436,6 +436,11 @@ std::string Render(const ReportInput& input) {
       "<title>accelcal report: " +
       Escape(source) + "</title>\n<style>\n" + kStyle +
       "</style>\n</head>\n<body>\n<h1>Accelerometer calibration: " + Escape(source) + "</h1>\n";
+  // A count as written, or "?": a file's number need not fit an int (converting 1e308 was UB).
+  const auto Iterations = [](const ordered_json& solver) -> std::string {
+    const auto it = solver.is_object() ? solver.find("iterations") : solver.end();
+    return it != solver.end() && it->is_number_integer() ? it->dump() : std::string("?");
+  };
   const ordered_json& solver = d.doc.value("solver", ordered_json::object());
   const auto item = [](const std::string& key, const std::string& value) {
     return "<dt>" + Escape(key) + "</dt><dd>" + Escape(value) + "</dd>\n";
@@ -445,7 +450,7 @@ std::string Render(const ReportInput& input) {
                             std::string(ToString(d.cal.frame)));
   html += item("method", solver.value("method", std::string("?")) + " (" +
                              solver.value("estimator", std::string("ml")) + "), " +
-                             std::to_string(solver.value("iterations", 0)) + " iterations, " +
+                             Iterations(solver) + " iterations, " +
                              (solver.value("converged", true) ? "converged" : "NOT converged"));
   html += item("positions", std::to_string(d.positions.size()));
   html += item("gravity", Format("%.6g", d.cal.gravity) + " " + d.unit);

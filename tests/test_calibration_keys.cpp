@@ -115,5 +115,21 @@ TEST(CalibrationKeys, EveryValueOfEverySeedMutatedIsReadOrRefusedByName) {
   std::printf("%d files, %d mutated documents, %d read\n", files, mutations, read);
 }
 
+// Found by fuzz_calibration_keys (fuzz/regressions/calibration_keys): an iteration count of
+// -1e308 was converted to an int (undefined behaviour; the sanitizers stop there).
+TEST(CalibrationKeys, AnIterationCountBeyondIntIsShownAsUnknown) {
+  const fs::path seed = fs::path(ACCELCAL_SOURCE_DIR) / "fuzz/corpus/calibration_file/linear.json";
+  nlohmann::json doc = nlohmann::json::parse(ReadText(seed));
+  for (const nlohmann::json& count :
+       {nlohmann::json(-1e308), nlohmann::json(1e300), nlohmann::json(2.5), nlohmann::json("7")}) {
+    doc["solver"]["iterations"] = count;
+    const std::string html = RenderReport({doc.dump(), "x.json", nullptr, {}});
+    EXPECT_NE(html.find("? iterations"), std::string::npos) << count;
+  }
+  doc["solver"]["iterations"] = 12;
+  EXPECT_NE(RenderReport({doc.dump(), "x.json", nullptr, {}}).find("12 iterations"),
+            std::string::npos);
+}
+
 }  // namespace
 }  // namespace accelcal::test

@@ -12,8 +12,10 @@
 #include "accelcal/ellipsoid_fit.hpp"
 #include "accelcal/error.hpp"
 #include "accelcal/frame.hpp"
+#include "held_out.hpp"
 #include "outliers.hpp"
 #include "solver_common.hpp"
+#include "text_format.hpp"
 
 namespace accelcal {
 
@@ -189,7 +191,7 @@ std::optional<std::string> CalibrationOptions::Validate() const {
 
 std::string Summary::BriefReport() const {
   char buf[512];
-  std::snprintf(
+  internal::FormatTo(
       buf, sizeof buf, "%s solver, init %s: %s after %d iterations (%s); J %.6e -> %.6e; %.1f us",
       std::string(ToString(method)).c_str(), std::string(ToString(initialization)).c_str(),
       converged() ? "converged" : "NOT CONVERGED", iterations, termination_message.c_str(),
@@ -263,10 +265,10 @@ void CheckData(const std::vector<Vec3>& readings, ModelKind model) {
                       .cwiseSqrt();
   if (!(sv(0) > 1e-3 * sv(2))) {
     char buf[256];
-    std::snprintf(buf, sizeof buf,
-                  "all %d positions lie in one plane (spread ratio %.2g): the sensor must be "
-                  "turned about more than one axis",
-                  m, sv(2) > 0 ? sv(0) / sv(2) : 0.0);
+    internal::FormatTo(buf, sizeof buf,
+                       "all %d positions lie in one plane (spread ratio %.2g): the sensor must be "
+                       "turned about more than one axis",
+                       m, sv(2) > 0 ? sv(0) / sv(2) : 0.0);
     throw DataError(buf);
   }
 }
@@ -280,11 +282,11 @@ std::string SlotName(int index, Frame frame) {
 void ThrowIfUnobservable(const internal::Information& info, ModelKind model, Frame frame) {
   if (info.rcond >= internal::kMinInformationRcond) return;
   char buf[256];
-  std::snprintf(buf, sizeof buf,
-                "the positions do not determine the %s model: parameter %s is not observable "
-                "(reciprocal condition %.2g); add positions with other orientations",
-                std::string(ToString(model)).c_str(), SlotName(info.weakest, frame).c_str(),
-                info.rcond);
+  internal::FormatTo(buf, sizeof buf,
+                     "the positions do not determine the %s model: parameter %s is not observable "
+                     "(reciprocal condition %.2g); add positions with other orientations",
+                     std::string(ToString(model)).c_str(), SlotName(info.weakest, frame).c_str(),
+                     info.rcond);
   throw DataError(buf);
 }
 
@@ -415,10 +417,11 @@ void MultiStart(const Problem& problem, const CalibrationOptions& options,
   }
   if (distinct > 0) {
     char buf[200];
-    std::snprintf(buf, sizeof buf,
-                  "; with %d positions for %d parameters the starts reached different minima (J "
-                  "%.3e from the first), the lowest kept: add positions",
-                  problem.positions(), NumParameters(options.model), first_cost);
+    internal::FormatTo(
+        buf, sizeof buf,
+        "; with %d positions for %d parameters the starts reached different minima (J "
+        "%.3e from the first), the lowest kept: add positions",
+        problem.positions(), NumParameters(options.model), first_cost);
     out->summary.termination_message += buf;
   }
 }
@@ -492,10 +495,11 @@ std::vector<Vec3> CorrectBias(const std::vector<Vec3>& readings, const Calibrati
   summary.initial_cost = ml.initial_cost;
   if (summary.converged() && change > options.bias_correction.tolerance) {
     char buf[200];
-    std::snprintf(buf, sizeof buf,
-                  "; bias correction: a reading's shift still changed by %.2g of its noise after "
-                  "%d refits",
-                  change, summary.correction_rounds);
+    internal::FormatTo(
+        buf, sizeof buf,
+        "; bias correction: a reading's shift still changed by %.2g of its noise after "
+        "%d refits",
+        change, summary.correction_rounds);
     summary.termination = TerminationType::kMaxIterations;
     summary.termination_message += buf;
   }
@@ -556,10 +560,11 @@ Fit CalibrateXFirst(const std::vector<Vec3>& readings, const CalibrationOptions&
   // valley of nearly equal fits: say which parameter the positions barely determine.
   if (!out.summary.converged() && info.rcond < internal::kPoorInformationRcond) {
     char buf[200];
-    std::snprintf(buf, sizeof buf,
-                  "; the positions barely determine parameter %s (reciprocal condition %.2g): add "
-                  "positions with other orientations",
-                  SlotName(info.weakest, frame).c_str(), info.rcond);
+    internal::FormatTo(
+        buf, sizeof buf,
+        "; the positions barely determine parameter %s (reciprocal condition %.2g): add "
+        "positions with other orientations",
+        SlotName(info.weakest, frame).c_str(), info.rcond);
     out.summary.termination_message += buf;
   }
 
@@ -693,54 +698,84 @@ void internal::SpreadOverAllPositions(const std::vector<Vec3>& readings,
   fit->residuals = std::move(residuals);
 }
 
-// Leave-one-position-out: each position corrected by a fit without it, started from the full fit
-// (the held-out optimum is close to it, so each refit takes a few iterations). Positions the
-// screening excluded are held out of every fit already: their error is that of the final fit.
-void CrossValidate(const std::vector<Vec3>& readings, const CalibrationOptions& options,
-                   CalibrationResult* result) {
-  if (auto why = options.Validate()) throw std::invalid_argument(*why);
+namespace {
+
+// The options of a refit without one position: started from the full fit, the same positions.
+CalibrationOptions HeldOutOptions(const CalibrationOptions& options,
+                                  const CalibrationResult& result) {
   CalibrationOptions held_out = options;
   held_out.cross_validate = false;
   held_out.outliers.policy = OutlierPolicy::kOff;    // the same positions as the full fit
   held_out.reading_sigmas.clear();                   // no covariance needed from the held-out fits
   if (options.method != SolverMethod::kEllipsoid) {  // closed form: nothing to start from
     held_out.initialization = Initialization::kGiven;
-    held_out.initial_params = result->params;
+    held_out.initial_params = result.params;
   }
+  return held_out;
+}
+
+}  // namespace
+
+// Position k's held-out error from a fit of the other positions in the fit, or why there is none.
+internal::HeldOutRefit internal::RefitWithout(const std::vector<Vec3>& readings,
+                                              const CalibrationOptions& options,
+                                              const CalibrationResult& result, std::size_t k) {
+  const CalibrationOptions held_out = HeldOutOptions(options, result);
   std::vector<Vec3> subset;
   subset.reserve(readings.size());
+  for (std::size_t j = 0; j < readings.size(); ++j) {
+    if (j != k && !result.excluded(j)) subset.push_back(readings[j]);
+  }
+  const std::string without = "without position " + std::to_string(k + 1) + ": ";
+  CalibrationResult fit;
+  try {
+    fit = CalibrateInFrame(subset, held_out).result;
+  } catch (const DataError& e) {
+    return {0.0, without + e.what()};
+  }
+  if (!fit.summary.converged()) {
+    return {0.0, without + "did not converge: " + fit.summary.termination_message};
+  }
+  const double e = GravityNormErrors(fit.params, {readings[k]}, options.gravity)[0];
+  if (!std::isfinite(e)) {
+    return {0.0,
+            "position " + std::to_string(k + 1) + " lies outside the range of the fit without it"};
+  }
+  return {e, ""};
+}
+
+// Leave-one-position-out by m refits, each started from the full fit (the held-out optimum is
+// close to it, so each refit takes a few iterations). Positions the screening excluded are held
+// out of every fit already: their error is that of the final fit.
+void internal::CrossValidateByRefits(const std::vector<Vec3>& readings,
+                                     const CalibrationOptions& options, CalibrationResult* result) {
+  if (auto why = options.Validate()) throw std::invalid_argument(*why);
   std::vector<double> errors;
   for (std::size_t k = 0; k < readings.size(); ++k) {
     if (result->excluded(k)) {
       errors.push_back(GravityNormErrors(result->params, {readings[k]}, options.gravity)[0]);
       continue;
     }
-    subset.clear();
-    for (std::size_t j = 0; j < readings.size(); ++j) {
-      if (j != k && !result->excluded(j)) subset.push_back(readings[j]);
-    }
-    const std::string without = "without position " + std::to_string(k + 1) + ": ";
-    CalibrationResult fit;
-    try {
-      fit = CalibrateInFrame(subset, held_out).result;
-    } catch (const DataError& e) {
-      result->crossval_note = without + e.what();
+    const internal::HeldOutRefit refit = internal::RefitWithout(readings, options, *result, k);
+    if (!refit.note.empty()) {
+      result->crossval_note = refit.note;
       return;
     }
-    if (!fit.summary.converged()) {
-      result->crossval_note = without + "did not converge: " + fit.summary.termination_message;
-      return;
-    }
-    const double e = GravityNormErrors(fit.params, {readings[k]}, options.gravity)[0];
-    if (!std::isfinite(e)) {
-      result->crossval_note =
-          "position " + std::to_string(k + 1) + " lies outside the range of the fit without it";
-      return;
-    }
-    errors.push_back(e);
+    errors.push_back(refit.error);
   }
   result->crossval_rms = Rms(result->InFit(errors));
   result->crossval_errors = std::move(errors);
+}
+
+// The same numbers from an expansion of the full fit, refitting only the positions it cannot serve
+// (held_out.hpp).
+void CrossValidate(const std::vector<Vec3>& readings, const CalibrationOptions& options,
+                   CalibrationResult* result) {
+  if (auto why = options.Validate()) throw std::invalid_argument(*why);
+  const CalibrationResult& full = *result;
+  internal::HeldOutErrors(
+      readings, options,
+      [&](std::size_t k) { return internal::RefitWithout(readings, options, full, k); }, result);
 }
 
 namespace {

@@ -1,5 +1,6 @@
 #include "accelcal/ellipsoid_fit.hpp"
 
+#include "ellipsoid_quadric.hpp"
 #include "smallest_eigenvector.hpp"
 #include "text_format.hpp"
 
@@ -204,5 +205,12 @@ EllipsoidFitResult FitEllipsoid(const std::vector<Vec3>& readings, double gravit
 EllipsoidFitResult FitEllipsoidConstrained(const std::vector<Vec3>& readings, double gravity) {
   return Fit(readings, gravity, /*algebraic_first=*/false);
 }
+
+namespace internal {
+std::optional<std::string> QuadricToParameters(const Vec10& v, const Vec3& mean, double scale,
+                                               double gravity, ModelParameters* params) {
+  return ToParameters(v, mean, scale, gravity, params);
+}
+}  // namespace internal
 
 }  // namespace accelcal

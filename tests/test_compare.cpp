@@ -58,7 +58,9 @@ TEST(Compare, HeldOutErrorIsTheFitWithoutEachPosition) {
     warm.push_back(GravityNormErrors(Calibrate(subset, c).params, {readings[k]}, 1.0)[0]);
   }
   ASSERT_TRUE(row.leave_one_out_rms.has_value());
-  EXPECT_DOUBLE_EQ(*row.leave_one_out_rms, Rms(warm));
+  // The held-out numbers come from the full fit's expansion (held_out.hpp), equal to converged
+  // refits to ~1e-11 g; the warm modulus refits here stop on a tiny damped step ~2e-11 short.
+  EXPECT_NEAR(*row.leave_one_out_rms, Rms(warm), 1e-7 * Rms(warm));
   EXPECT_NEAR(*row.leave_one_out_rms, Rms(cold), 1e-7 * Rms(cold));
 }
 

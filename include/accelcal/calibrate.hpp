@@ -187,9 +187,9 @@ struct CalibrationOptions {
   /// covariance takes the noise from the residuals. Must match the readings in number, finite and
   /// positive. See CalibrationResult::covariance.
   std::vector<Vec3> reading_sigmas;
-  /// Leave-one-position-out validation (CalibrationResult::crossval_rms): m extra fits, each
-  /// started from the full fit (a few iterations each). Off by default in the library because of
-  /// that cost; the command line turns it on.
+  /// Leave-one-position-out validation (CalibrationResult::crossval_rms): the fit without each
+  /// position from the full fit's expansion (held_out.hpp: O(m) in all, refits only where the
+  /// expansion cannot be trusted). Off by default in the library; the command line turns it on.
   bool cross_validate = false;
   /// Screening for discordant positions (see OutlierPolicy): on by default, excluding.
   OutlierOptions outliers;
@@ -330,7 +330,10 @@ CalibrationResult Calibrate(const std::vector<Vec3>& readings, const Calibration
 
 /// Leave-one-position-out validation of `result`, a converged Calibrate(readings, options):
 /// fills its crossval_rms and crossval_errors, or crossval_note (CalibrationOptions::
-/// cross_validate does this inside Calibrate). Each refit starts from result->params.
+/// cross_validate does this inside Calibrate): the fit without each position k minimises the
+/// full objective's expansion about result->params minus k's exact term, finished by exact
+/// passes or a refit where the expansion's error estimate is too large (held_out.hpp); equal to
+/// refits converged to the solvers' tolerance (tests/test_crossval.cpp).
 void CrossValidate(const std::vector<Vec3>& readings, const CalibrationOptions& options,
                    CalibrationResult* result);
 

@@ -80,7 +80,9 @@ class Fuzzer:
             shape = self.choice([(0, 3), (1, 3), (2, 3), (9, 3), (30, 3), (500, 3), (30, 2), (30, 4),
                                  (3,), (0,), (), (30, 3, 1), (rows or 30, 3)])
             scale = self.choice([1e-300, 1e-3, 1.0, 9.8, 3e4, 1e300])
-            a = self.np.normal(0.0, 1.0, size=shape) * scale + self.choice([0.0, 1.0, -5e4])
+            # (a 0-d draw is a Python float: asarray keeps it an array)
+            a = np.asarray(self.np.normal(0.0, 1.0, size=shape) * scale +
+                           self.choice([0.0, 1.0, -5e4]))
         if a.size and r.random() < 0.3:  # special values
             flat = a.reshape(-1)
             for _ in range(r.randrange(1, 4)):

@@ -88,8 +88,8 @@ class Fuzzer:
             for _ in range(r.randrange(1, 4)):
                 flat[r.randrange(flat.size)] = self.choice(
                     [np.nan, np.inf, -np.inf, 0.0, 1e308, -1e308, 5e-324])
-        if r.random() < 0.1:
-            a = np.zeros_like(a) + self.choice([0.0, 1.0, np.nan])
+        if r.random() < 0.1:  # (arithmetic on a 0-d array gives a scalar: asarray again)
+            a = np.asarray(np.zeros_like(a) + self.choice([0.0, 1.0, np.nan]))
         roll = r.random()
         if roll < 0.05:
             a = a.astype(np.float32)
@@ -103,7 +103,8 @@ class Fuzzer:
         elif roll < 0.16:
             a = a.astype(object)
         elif roll < 0.18:
-            return a.tolist()
+            return a.tolist()  # a list, or a Python number from a 0-d array: hostile too
+        a = np.asarray(a)
         roll = r.random()
         if roll < 0.1 and a.ndim == 2:
             a = np.asfortranarray(a)

@@ -6,8 +6,7 @@
 
 #include "accelcal/calibration_file.hpp"
 #include "accelcal/error.hpp"
-#include "accelcal/export.hpp"
-#include "accelcal/report.hpp"
+#include "support/use_calibration.hpp"
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   const std::string text(reinterpret_cast<const char*>(data), size);
@@ -17,15 +16,6 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   } catch (const accelcal::InputError&) {
     return 0;
   }
-  for (const accelcal::ExportFormat format : accelcal::AllExportFormats()) {
-    try {
-      accelcal::ExportCalibration(cal, text, format);
-    } catch (const accelcal::DataError&) {
-    }
-  }
-  try {
-    accelcal::RenderReport({text, "fuzz.json", nullptr, {}});
-  } catch (const accelcal::InputError&) {
-  }
+  accelcal::test::UseCalibration(cal, text, "fuzz.json");
   return 0;
 }

@@ -17,9 +17,8 @@
 
 #include "accelcal/calibration_file.hpp"
 #include "accelcal/error.hpp"
-#include "accelcal/export.hpp"
-#include "accelcal/report.hpp"
 #include "support/json_mutations.hpp"
+#include "support/use_calibration.hpp"
 
 namespace {
 
@@ -117,15 +116,6 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   } catch (const accelcal::InputError&) {
     return 0;
   }
-  for (const accelcal::ExportFormat format : accelcal::AllExportFormats()) {
-    try {
-      accelcal::ExportCalibration(cal, text, format);
-    } catch (const accelcal::DataError&) {
-    }
-  }
-  try {
-    accelcal::RenderReport({text, "fuzz.json", nullptr, {}});
-  } catch (const accelcal::InputError&) {
-  }
+  accelcal::test::UseCalibration(cal, text, "fuzz.json");
   return 0;
 }

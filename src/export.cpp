@@ -360,35 +360,14 @@ bool IsFlowArray(const ordered_json& j) {
 // internal::IsInvisible (which readers refuse, or read as line breaks and fold) as \xHH or \uHHHH;
 // printable Unicode as it is. A byte that is no UTF-8 (a JSON document holds none) is U+FFFD.
 std::string YamlQuoted(std::string_view text) {
-  std::string out = "\"";
-  for (std::size_t i = 0; i < text.size();) {
-    const internal::CodePoint c = internal::DecodeUtf8(text, i);
-    if (c.value == '"' || c.value == '\\') {
-      out += '\\';
-      out += static_cast<char>(c.value);
-    } else if (c.value == '\t') {
-      out += "\\t";
-    } else if (c.value == '\n') {
-      out += "\\n";
-    } else if (c.value == '\r') {
-      out += "\\r";
-    } else if (c.value < 0) {
-      out += "\\uFFFD";
-    } else if (internal::IsInvisible(c.value)) {
-      out += c.value < 0x100 ? Format("\\x%02lX", c.value) : Format("\\u%04lX", c.value);
-    } else {
-      out.append(text, i, c.length);
-    }
-    i += c.length;
-  }
-  return out + "\"";
+  return "\"" + internal::EscapeText(text, internal::Escaping::kYamlDoubleQuoted) + "\"";
 }
 // A key plain when it is an identifier that no YAML 1.1 reader takes for a boolean or null.
 std::string YamlKey(const std::string& key) {
   bool plain = !key.empty() && (IsAsciiLetter(key[0]) || key[0] == '_');
   for (const char c : key) plain = plain && IsIdentifierChar(c);
   std::string lower;
-  for (const char c : key) lower += c >= 'A' && c <= 'Z' ? static_cast<char>(c - 'A' + 'a') : c;
+  for (const char c : key) lower += internal::AsciiLower(c);
   for (const char* word : {"null", "true", "false", "yes", "no", "on", "off", "y", "n"}) {
     plain = plain && lower != word;
   }

@@ -29,6 +29,12 @@ class InputFile {
   /// a regular file ends before the size it had when opened, or when more than
   /// `max_stream_bytes` come from anything else.
   std::size_t Read(char* out, std::size_t n);
+  /// Read until `n` bytes came or the input ended; how many came.
+  std::size_t ReadFully(char* out, std::size_t n) {
+    std::size_t done = 0;
+    for (std::size_t got; done < n && (got = Read(out + done, n - done)) > 0;) done += got;
+    return done;
+  }
 
  private:
   std::string name_;

@@ -48,15 +48,10 @@ std::string ReadFileToString(const std::string& path, std::size_t max_bytes) {
   // One allocation and one read for regular files; pipes and the like grow as they come (up to
   // `max_bytes`, InputFile's limit for them).
   std::string data(file.regular() ? file.size() : std::size_t{1} << 16, '\0');
-  std::size_t used = 0;
-  while (true) {
-    if (used == data.size()) {
-      if (file.regular()) break;
-      data.resize(2 * data.size());
-    }
-    const std::size_t n = file.Read(data.data() + used, data.size() - used);
-    if (n == 0) break;
-    used += n;
+  std::size_t used = file.ReadFully(data.data(), data.size());
+  while (!file.regular() && used == data.size()) {
+    data.resize(2 * data.size());
+    used += file.ReadFully(data.data() + used, data.size() - used);
   }
   data.resize(used);
   return data;

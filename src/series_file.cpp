@@ -204,24 +204,13 @@ void ReadSeries(const std::string& path, const std::function<void(const SystemSa
     sink(s);
   };
   std::string head(kSeriesMagic.size(), '\0');
-  std::size_t got = 0;
-  while (got < head.size()) {
-    const std::size_t n = file.Read(head.data() + got, head.size() - got);
-    if (n == 0) break;
-    got += n;
-  }
-  head.resize(got);
+  head.resize(file.ReadFully(head.data(), head.size()));
   if (head == kSeriesMagic) {
     constexpr std::size_t kChunkRows = 1 << 16;
     std::string chunk(kRowBytes * kChunkRows, '\0');
     std::size_t body = 0;  // bytes after the header so far
     while (true) {
-      std::size_t filled = 0;
-      while (filled < chunk.size()) {
-        const std::size_t n = file.Read(chunk.data() + filled, chunk.size() - filled);
-        if (n == 0) break;
-        filled += n;
-      }
+      const std::size_t filled = file.ReadFully(chunk.data(), chunk.size());
       if (progress) progress(kSeriesMagic.size() + body, file.size());
       if (filled % kRowBytes != 0) {
         throw InputError(file.name(), 0, TruncatedMessage(body + filled));

@@ -120,35 +120,51 @@ inline bool IsInvisible(long c) {
          c == 0xFFFE || c == 0xFFFF;
 }
 
-// `text` as one line of visible characters, for a comment or header line of a file: tab, line
-// feed and carriage return become "\t", "\n", "\r", the other characters of IsInvisible "\xHH"
-// (below U+0100) or "\uHHHH", a byte that is not UTF-8 "\xHH"; everything else (backslashes,
-// quotes, printable Unicode) is kept as it is.
-inline std::string VisibleLine(std::string_view text) {
+// What EscapeText writes for what a line (or a quoted string) cannot hold.
+enum class Escaping {
+  /// VisibleLine: backslashes and quotes kept; a byte that is not UTF-8 as "\xHH".
+  kVisibleLine,
+  /// The inside of a YAML double-quoted scalar: '"' and '\\' escaped too; a byte that is not
+  /// UTF-8 (a JSON document holds none) as U+FFFD.
+  kYamlDoubleQuoted,
+};
+
+// Tab, line feed and carriage return as "\t", "\n", "\r", the other characters of IsInvisible
+// as "\xHH" (below U+0100) or "\uHHHH"; printable Unicode as it is; the rest per `style`.
+inline std::string EscapeText(std::string_view text, Escaping style) {
+  const bool yaml = style == Escaping::kYamlDoubleQuoted;
   std::string out;
   out.reserve(text.size());
   for (std::size_t i = 0; i < text.size();) {
     const CodePoint c = DecodeUtf8(text, i);
-    if (c.value == '\t') {
+    if (yaml && (c.value == '"' || c.value == '\\')) {
+      out += '\\';
+      out += static_cast<char>(c.value);
+    } else if (c.value == '\t') {
       out += "\\t";
     } else if (c.value == '\n') {
       out += "\\n";
     } else if (c.value == '\r') {
       out += "\\r";
     } else if (c.value < 0) {
-      char buf[8];
-      std::snprintf(buf, sizeof buf, "\\x%02X", static_cast<unsigned char>(text[i]));
-      out += buf;
+      out += yaml ? std::string("\\uFFFD")
+                  : Format("\\x%02X", static_cast<unsigned>(static_cast<unsigned char>(text[i])));
     } else if (IsInvisible(c.value)) {
-      char buf[8];
-      std::snprintf(buf, sizeof buf, c.value < 0x100 ? "\\x%02lX" : "\\u%04lX", c.value);
-      out += buf;
+      out += Format(c.value < 0x100 ? "\\x%02lX" : "\\u%04lX", c.value);
     } else {
       out.append(text, i, c.length);
     }
     i += c.length;
   }
   return out;
+}
+
+// `text` as one line of visible characters, for a comment or header line of a file: tab, line
+// feed and carriage return become "\t", "\n", "\r", the other characters of IsInvisible "\xHH"
+// (below U+0100) or "\uHHHH", a byte that is not UTF-8 "\xHH"; everything else (backslashes,
+// quotes, printable Unicode) is kept as it is.
+inline std::string VisibleLine(std::string_view text) {
+  return EscapeText(text, Escaping::kVisibleLine);
 }
 
 }  // namespace accelcal::internal

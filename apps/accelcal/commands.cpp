@@ -904,31 +904,26 @@ int RunApply(const ApplyArgs& args) {
                        "the reading lies outside the range the quadratic model can invert");
     }
   }
-  OutputFile file(args.output.empty() ? "-" : args.output);
-  std::string out = "# accelcal apply " + VisibleLine(args.calibration) + ": specific force in " +
-                    std::string(ToString(unit)) + "\n";
+  OutputFile file(args.output.empty() ? "-" : args.output);  // buffers: one Write per row
+  file.Write("# accelcal apply " + VisibleLine(args.calibration) + ": specific force in " +
+             std::string(ToString(unit)) + "\n");
   if (log.time) {  // the clock stated once: times are seconds from the first sample
-    out += "# time: seconds from the first sample, at " + FormatNumber(log.time->origin_s) +
-           " s on the log's clock (read in " + std::string(ToString(log.time->unit)) + ")\n";
+    file.Write("# time: seconds from the first sample, at " + FormatNumber(log.time->origin_s) +
+               " s on the log's clock (read in " + std::string(ToString(log.time->unit)) + ")\n");
   }
-  out += has_time ? "time,x,y,z\n" : "x,y,z\n";
-  char buf[32];
+  file.Write(has_time ? "time,x,y,z\n" : "x,y,z\n");
+  char row[128];
   for (std::size_t i = 0; i < log.samples.size(); ++i) {
     const Vec3 f = *SpecificForce(cal.params, log.samples[i]);
-    if (has_time) {
-      out.append(buf, std::to_chars(buf, buf + sizeof buf, log.time_s[i]).ptr);
-      out.push_back(',');
-    }
-    for (int a = 0; a < 3; ++a) {
-      out.append(buf, std::to_chars(buf, buf + sizeof buf, f(a) * factor).ptr);
-      out.push_back(a < 2 ? ',' : '\n');
-    }
-    if (out.size() >= (std::size_t{1} << 16)) {
-      file.Write(out);
-      out.clear();
-    }
+    char* p = row;
+    const auto number = [&](double v, char end) {
+      p = std::to_chars(p, row + sizeof row, v).ptr;
+      *p++ = end;
+    };
+    if (has_time) number(log.time_s[i], ',');
+    for (int a = 0; a < 3; ++a) number(f(a) * factor, a < 2 ? ',' : '\n');
+    file.Write(std::string_view(row, static_cast<std::size_t>(p - row)));
   }
-  file.Write(out);
   file.Commit();
   return kExitOk;
 }
@@ -1491,6 +1486,8 @@ int RunGimbal(const GimbalArgs& args) {
   return ok ? kExitOk : kExitNotConverged;
 }
 
+namespace {
+
 // A simulated log or series beyond this many samples (28 hours at 1 kHz; several GB of text) is
 // an option typed wrong, not a recording anyone wants.
 constexpr double kMaxSimulatedSamples = 1e8;
@@ -1501,6 +1498,8 @@ void CheckSimulatedSamples(double samples, const char* options) {
                             kMaxSimulatedSamples));
   }
 }
+
+}  // namespace
 
 int RunSimulate(const SimulateArgs& args) {
   CheckOutputs({{"-o", args.output}}, {args.truth, args.positions});
@@ -1520,16 +1519,14 @@ int RunSimulate(const SimulateArgs& args) {
     }
     CheckSimulatedSamples(o.rate_hz * o.duration_s, "--rate x --duration");
     OutputFile file(args.output);  // streamed: the series is never held whole
-    std::string series;
-    AppendSeriesHeader(&series);
+    std::string bytes;
+    AppendSeriesHeader(&bytes);
+    file.Write(bytes);
     SimulateSystemLevel(o, [&](const SystemSample& s) {
-      AppendSeriesSample(s, &series);
-      if (series.size() >= (std::size_t{1} << 16)) {
-        file.Write(series);
-        series.clear();
-      }
+      bytes.clear();
+      AppendSeriesSample(s, &bytes);
+      file.Write(bytes);
     });
-    file.Write(series);
     file.Commit();
     return kExitOk;
   }
@@ -1583,7 +1580,6 @@ int RunSimulate(const SimulateArgs& args) {
   const double sigma_force = *density * 1e-6 * gravity * std::sqrt(args.rate_hz);
   Vec3 sigma_raw;
   for (int i = 0; i < 3; ++i) sigma_raw(i) = truth.K.row(i).norm() * sigma_force;
-  std::string out;
   if (args.raw) {
     RawLogSimulation options;
     options.rate_hz = args.rate_hz;
@@ -1594,25 +1590,18 @@ int RunSimulate(const SimulateArgs& args) {
     CheckSimulatedSamples(SimulatedSampleCount(directions.size(), options),
                           "positions x (--duration + --transition) x --rate");
     OutputFile file(args.output.empty() ? "-" : args.output);  // streamed, never held whole
-    out = "time,x,y,z\n";
+    file.Write("time,x,y,z\n");
     SimulateRawLog(truth, gravity, directions, options, [&](double t, const Vec3& p) {
-      out += FormatNumber(t) + "," + FormatNumber(p(0)) + "," + FormatNumber(p(1)) + "," +
-             FormatNumber(p(2)) + "\n";
-      if (out.size() >= (std::size_t{1} << 16)) {
-        file.Write(out);
-        out.clear();
-      }
+      file.Write(FormatNumber(t) + "," + FormatNumber(p(0)) + "," + FormatNumber(p(1)) + "," +
+                 FormatNumber(p(2)) + "\n");
     });
-    file.Write(out);
     file.Commit();
     return kExitOk;
-  } else {
-    const double n = std::round(args.duration_s * args.rate_hz);
-    const std::vector<Vec3> means =
-        SimulatePositions(truth, gravity, directions, sigma_raw / std::sqrt(n), args.seed);
-    out = PositionsCsv(means, n, sigma_raw);
   }
-  WriteFileAtomically(args.output.empty() ? "-" : args.output, out);
+  const std::vector<Vec3> means =
+      SimulatePositions(truth, gravity, directions, sigma_raw / std::sqrt(per_position), args.seed);
+  WriteFileAtomically(args.output.empty() ? "-" : args.output,
+                      PositionsCsv(means, per_position, sigma_raw));
   return kExitOk;
 }
 

@@ -1,0 +1,30 @@
+#pragma once
+// A calibration the reader accepted, used as the tool uses one: every export format and the HTML
+// report. Expected refusals are swallowed: DataError from a format that cannot hold the
+// calibration, InputError from the report (it reads the text again). Anything else propagates
+// (the test or fuzz harness that calls this reports it). Shared by fuzz/fuzz_calibration_file.cpp,
+// fuzz/fuzz_calibration_keys.cpp and tests/test_calibration_keys.cpp.
+#include <string>
+
+#include "accelcal/calibration_file.hpp"
+#include "accelcal/error.hpp"
+#include "accelcal/export.hpp"
+#include "accelcal/report.hpp"
+
+namespace accelcal::test {
+
+inline void UseCalibration(const LoadedCalibration& calibration, const std::string& text,
+                           const std::string& source) {
+  for (const ExportFormat format : AllExportFormats()) {
+    try {
+      ExportCalibration(calibration, text, format);
+    } catch (const DataError&) {
+    }
+  }
+  try {
+    RenderReport({text, source, nullptr, {}});
+  } catch (const InputError&) {
+  }
+}
+
+}  // namespace accelcal::test

@@ -5,7 +5,7 @@
 #include "accelcal/design.hpp"
 #include "accelcal/ellipsoid_fit.hpp"
 #include "accelcal/simulate.hpp"
-#include "solver_common.hpp"
+#include "solvers/solver_common.hpp"
 
 namespace accelcal {
 namespace {

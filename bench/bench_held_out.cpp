@@ -4,7 +4,7 @@
 
 #include "accelcal/calibrate.hpp"
 #include "accelcal/simulate.hpp"
-#include "held_out.hpp"
+#include "statistics/held_out.hpp"
 
 namespace accelcal {
 namespace {

@@ -24,7 +24,7 @@ if ((${#missing[@]})); then
   apt-get install -y -qq --no-install-recommends "${missing[@]}"
 fi
 
-# The locale tests (tests/test_locale.cpp, python/tests/test_locale.py) run the library in a
+# The locale tests (tests/cli/test_locale.cpp, python/tests/test_locale.py) run the library in a
 # decimal-comma locale; they fail, not skip, without it. Generated once, when missing.
 if ! locale -a 2>/dev/null | grep -qix 'de_DE\.utf-\?8'; then
   echo "generating the locale de_DE.UTF-8"

@@ -1,0 +1,333 @@
+#include "accelcal/design.hpp"
+
+#include <charconv>
+#include <cmath>
+#include <limits>
+#include <numeric>
+#include <random>
+#include <stdexcept>
+
+#include <Eigen/Cholesky>
+
+#include "accelcal/error.hpp"
+#include "accelcal/simulate.hpp"
+#include "solvers/solver_common.hpp"
+
+namespace accelcal {
+
+namespace {
+
+using Rows12 = Eigen::Matrix<double, Eigen::Dynamic, kMaxParameters>;
+
+// The frame of a device for an orientation-free design: a platform-frame (full) K has no gauge of
+// its own (frame.hpp); its x-first form (ChangeFrame, linear model) is the same device.
+Frame GravityOnlyFrame(const Mat33& K) {
+  const Frame frame = FrameOf(K);
+  if (frame == Frame::kPlatform) {
+    throw std::invalid_argument(
+        "the device's K is a full matrix (platform frame): give its x-first form (ChangeFrame)");
+  }
+  return frame;
+}
+
+// A planned experiment in the x-first gauge the solvers use: a z-first device is the x-first
+// device of the mirrored problem (frame.hpp). Holds the (absent) readings its Problem refers to.
+struct Plan {
+  Plan(const ModelParameters& device_in, ModelKind model, double gravity,
+       const std::vector<Vec3>& directions_in, const Vec3& sigma_raw)
+      : frame(GravityOnlyFrame(device_in.K)),
+        device(frame == Frame::kZFirst ? MirrorAxes(device_in) : device_in),
+        directions(directions_in),
+        sigma(frame == Frame::kZFirst ? Vec3(MirrorAxes(sigma_raw).cwiseAbs()) : sigma_raw),
+        no_readings(directions_in.size()),
+        problem{no_readings, gravity, model} {
+    if (model == ModelKind::kLinear) device.k2.setZero();
+    if (frame == Frame::kZFirst) {
+      for (Vec3& c : directions) c = MirrorAxes(c);
+    }
+  }
+  Plan(const Plan&) = delete;
+  Plan& operator=(const Plan&) = delete;
+
+  // The information rows u_k divided by the noise along each normal, so I = WᵀW (12-parameter
+  // layout); A's diagonal for FinishInformation.
+  Rows12 WhitenedRows(internal::Vec12* A_diagonal) const {
+    const internal::InformationRows rows =
+        internal::ReducedInformationRows(problem, device, directions);
+    Rows12 W = rows.U;
+    for (Eigen::Index k = 0; k < W.rows(); ++k) {
+      W.row(k) /=
+          std::sqrt(rows.normals[static_cast<std::size_t>(k)].cwiseAbs2().dot(sigma.cwiseAbs2()));
+    }
+    if (A_diagonal != nullptr) *A_diagonal = rows.A_diagonal;
+    return W;
+  }
+
+  Frame frame;
+  ModelParameters device;
+  std::vector<Vec3> directions;
+  Vec3 sigma;
+  std::vector<Vec3> no_readings;
+  internal::Problem problem;  // refers to no_readings
+};
+
+// Whitened rows on the model's active columns, in the parameter metric of TerminationType
+// (relative change of the prediction): a scaling fixed by the device, so log det compares sets
+// and does not depend on the parameters' units.
+Eigen::MatrixXd ScaledActiveRows(const Plan& plan) {
+  const Rows12 W = plan.WhitenedRows(nullptr);
+  const internal::Vec12 metric = internal::ParameterScales(plan.problem, plan.device);
+  const std::vector<int>& cols = ActiveColumns(plan.problem.model);
+  Eigen::MatrixXd scaled(W.rows(), static_cast<Eigen::Index>(cols.size()));
+  for (std::size_t j = 0; j < cols.size(); ++j) {
+    scaled.col(static_cast<Eigen::Index>(j)) = W.col(cols[j]) / metric(cols[j]);
+  }
+  return scaled;
+}
+
+}  // namespace
+
+double LogDetInformation(const ModelParameters& device, ModelKind model, double gravity,
+                         const std::vector<Vec3>& directions, const Vec3& sigma_raw) {
+  const Eigen::MatrixXd W = ScaledActiveRows(Plan(device, model, gravity, directions, sigma_raw));
+  Eigen::LDLT<Eigen::MatrixXd> ldlt(W.transpose() * W);
+  const Eigen::VectorXd d = ldlt.vectorD();
+  if (ldlt.info() != Eigen::Success || !(d.minCoeff() > 0)) {
+    return -std::numeric_limits<double>::infinity();
+  }
+  return d.array().log().sum();
+}
+
+std::vector<int> ChooseDOptimal(const ModelParameters& device, ModelKind model, double gravity,
+                                const std::vector<Vec3>& candidates, const Vec3& sigma_raw,
+                                int count) {
+  const int n = static_cast<int>(candidates.size());
+  const int P = NumParameters(model);
+  if (count > n) throw std::invalid_argument("more positions asked for than there are candidates");
+  if (count < MinimumPositions(model)) {
+    throw std::invalid_argument("the " + std::string(ToString(model)) + " model needs at least " +
+                                std::to_string(MinimumPositions(model)) + " positions");
+  }
+  // In the device's parameter metric (WhitenedRows): the argmax does not depend on a fixed
+  // scaling, and it keeps the matrices well conditioned.
+  const Eigen::MatrixXd W = ScaledActiveRows(Plan(device, model, gravity, candidates, sigma_raw));
+  std::vector<bool> chosen(static_cast<std::size_t>(n), false);
+  // Greedy: add the candidate with the largest w A⁻¹ wᵀ, A regularised while singular (relative to
+  // one candidate's contribution, so the first picks see a well-conditioned A).
+  const double regularisation = 1e-6 * W.colwise().squaredNorm().maxCoeff() / n;
+  Eigen::MatrixXd A = regularisation * Eigen::MatrixXd::Identity(P, P);
+  for (int step = 0; step < count; ++step) {
+    const Eigen::MatrixXd A_inv = A.ldlt().solve(Eigen::MatrixXd::Identity(P, P));
+    int best = -1;
+    double best_gain = -1;
+    for (int j = 0; j < n; ++j) {
+      if (chosen[static_cast<std::size_t>(j)]) continue;
+      const double gain = W.row(j) * A_inv * W.row(j).transpose();
+      if (gain > best_gain) best_gain = gain, best = j;
+    }
+    if (best < 0) throw std::invalid_argument("the candidates give no information (degenerate)");
+    chosen[static_cast<std::size_t>(best)] = true;
+    A += W.row(best).transpose() * W.row(best);
+  }
+  A -= regularisation * Eigen::MatrixXd::Identity(P, P);
+  // Fedorov exchange: swap i (in) for j (out) when det grows, by the rank-2 determinant lemma
+  // Δ = (1 + d_j)(1 − d_i) + d_ij² with d = w A⁻¹ wᵀ.
+  for (int sweep = 0; sweep < 100; ++sweep) {
+    bool improved = false;
+    const Eigen::MatrixXd A_inv = A.ldlt().solve(Eigen::MatrixXd::Identity(P, P));
+    const Eigen::MatrixXd V = W * A_inv;  // rows w_k A⁻¹
+    const Eigen::VectorXd d = (V.array() * W.array()).rowwise().sum();
+    double best = 1.0 + 1e-10;
+    int best_in = -1, best_out = -1;
+    for (int i = 0; i < n; ++i) {
+      if (!chosen[static_cast<std::size_t>(i)]) continue;
+      for (int j = 0; j < n; ++j) {
+        if (chosen[static_cast<std::size_t>(j)]) continue;
+        const double dij = V.row(i).dot(W.row(j));
+        const double ratio = (1.0 + d(j)) * (1.0 - d(i)) + dij * dij;
+        if (ratio > best) best = ratio, best_in = i, best_out = j;
+      }
+    }
+    if (best_in >= 0) {
+      chosen[static_cast<std::size_t>(best_in)] = false;
+      chosen[static_cast<std::size_t>(best_out)] = true;
+      A += W.row(best_out).transpose() * W.row(best_out) -
+           W.row(best_in).transpose() * W.row(best_in);
+      improved = true;
+    }
+    if (!improved) break;
+  }
+  std::vector<int> indices;
+  for (int k = 0; k < n; ++k) {
+    if (chosen[static_cast<std::size_t>(k)]) indices.push_back(k);
+  }
+  return indices;
+}
+
+double TraceCrlb(const ModelParameters& device, ModelKind model, double gravity,
+                 const std::vector<Vec3>& directions, const Vec3& sigma_raw) {
+  const Eigen::MatrixXd W = ScaledActiveRows(Plan(device, model, gravity, directions, sigma_raw));
+  const Eigen::LDLT<Eigen::MatrixXd> ldlt(W.transpose() * W);
+  if (ldlt.info() != Eigen::Success || !(ldlt.vectorD().minCoeff() > 0)) {
+    return std::numeric_limits<double>::infinity();
+  }
+  return ldlt.solve(Eigen::MatrixXd::Identity(W.cols(), W.cols())).trace();
+}
+
+namespace {
+
+// Fedorov exchange on the trace of A⁻¹ from the chosen set `chosen` (nonsingular). Swapping i (in)
+// for j (out) is A' = A + U C Uᵀ, U = (w_jᵀ w_iᵀ), C = diag(1, −1); by Woodbury tr A'⁻¹ = tr A⁻¹ −
+// tr(M⁻¹ N) with M = C⁻¹ + UᵀA⁻¹U and N = UᵀA⁻²U. det M = −((1 + d_j)(1 − d_i) + d_ij²) is minus
+// the determinant ratio of ChooseDOptimal: a swap that would make A singular is skipped.
+double ExchangeOnTrace(const Eigen::MatrixXd& W, std::vector<bool>* chosen_in) {
+  std::vector<bool>& chosen = *chosen_in;
+  const auto n = static_cast<int>(W.rows());
+  const auto P = static_cast<int>(W.cols());
+  Eigen::MatrixXd A = Eigen::MatrixXd::Zero(P, P);
+  for (int k = 0; k < n; ++k) {
+    if (chosen[static_cast<std::size_t>(k)]) A += W.row(k).transpose() * W.row(k);
+  }
+  Eigen::LDLT<Eigen::MatrixXd> ldlt(A);
+  if (ldlt.info() != Eigen::Success || !(ldlt.vectorD().minCoeff() > 0)) {
+    return std::numeric_limits<double>::infinity();
+  }
+  for (int sweep = 0; sweep < 200; ++sweep) {
+    const Eigen::MatrixXd A_inv = A.ldlt().solve(Eigen::MatrixXd::Identity(P, P));
+    const Eigen::MatrixXd V = W * A_inv;
+    const Eigen::VectorXd d = (V.array() * W.array()).rowwise().sum();
+    const Eigen::VectorXd e = V.rowwise().squaredNorm();
+    double best = 1e-10 * A_inv.trace();
+    int best_in = -1, best_out = -1;
+    for (int i = 0; i < n; ++i) {
+      if (!chosen[static_cast<std::size_t>(i)]) continue;
+      for (int j = 0; j < n; ++j) {
+        if (chosen[static_cast<std::size_t>(j)]) continue;
+        const double dij = V.row(i).dot(W.row(j));
+        const double ratio = (1.0 + d(j)) * (1.0 - d(i)) + dij * dij;
+        if (!(ratio > 1e-9)) continue;
+        const double eij = V.row(i).dot(V.row(j));
+        // tr(M⁻¹N) with M = [[1 + d_j, d_ij], [d_ij, d_i − 1]], det M = −ratio.
+        const double reduction =
+            ((d(i) - 1.0) * e(j) - 2.0 * dij * eij + (1.0 + d(j)) * e(i)) / -ratio;
+        if (reduction > best) best = reduction, best_in = i, best_out = j;
+      }
+    }
+    if (best_in < 0) return A_inv.trace();
+    chosen[static_cast<std::size_t>(best_in)] = false;
+    chosen[static_cast<std::size_t>(best_out)] = true;
+    A +=
+        W.row(best_out).transpose() * W.row(best_out) - W.row(best_in).transpose() * W.row(best_in);
+  }
+  return A.ldlt().solve(Eigen::MatrixXd::Identity(P, P)).trace();
+}
+
+}  // namespace
+
+std::vector<int> ChooseAOptimal(const ModelParameters& device, ModelKind model, double gravity,
+                                const std::vector<Vec3>& candidates, const Vec3& sigma_raw,
+                                int count) {
+  const std::vector<int> d_optimal =
+      ChooseDOptimal(device, model, gravity, candidates, sigma_raw, count);
+  const auto n = candidates.size();
+  const Eigen::MatrixXd W = ScaledActiveRows(Plan(device, model, gravity, candidates, sigma_raw));
+  // The trace has more local minima under single exchanges than log det: besides the D-optimal
+  // start, kRestarts random subsets (a fixed seed: deterministic), keeping the best.
+  constexpr int kRestarts = 8;
+  std::vector<bool> best(n, false);
+  for (int k : d_optimal) best[static_cast<std::size_t>(k)] = true;
+  double best_trace = ExchangeOnTrace(W, &best);
+  std::mt19937_64 random(12345);
+  std::vector<std::size_t> order(n);
+  for (int restart = 0; restart < kRestarts; ++restart) {
+    std::iota(order.begin(), order.end(), 0);
+    for (std::size_t i = n - 1; i > 0; --i) std::swap(order[i], order[random() % (i + 1)]);
+    std::vector<bool> chosen(n, false);
+    for (int k = 0; k < count; ++k) chosen[order[static_cast<std::size_t>(k)]] = true;
+    const double trace = ExchangeOnTrace(W, &chosen);
+    if (trace < best_trace) best_trace = trace, best = chosen;
+  }
+  std::vector<int> indices;
+  for (std::size_t k = 0; k < n; ++k) {
+    if (best[k]) indices.push_back(static_cast<int>(k));
+  }
+  return indices;
+}
+
+PlannedUncertainty PredictUncertainty(const ModelParameters& device, ModelKind model,
+                                      double gravity, const std::vector<Vec3>& directions,
+                                      const Vec3& sigma_raw) {
+  if (!(gravity > 0) || !sigma_raw.allFinite() || !(sigma_raw.minCoeff() > 0)) {
+    throw std::invalid_argument("the gravity and the noise must be positive");
+  }
+  for (const Vec3& c : directions) {
+    if (!(std::abs(c.norm() - 1.0) < 1e-6)) {
+      throw std::invalid_argument("planned directions must be unit vectors");
+    }
+  }
+  const Plan plan(device, model, gravity, directions, sigma_raw);
+  PlannedUncertainty out;
+  out.model = model;
+  out.frame = plan.frame;
+  internal::Vec12 A_diagonal;
+  const Rows12 W = plan.WhitenedRows(&A_diagonal);
+  internal::Information info;
+  info.reduced = W.transpose() * W;
+  internal::FinishInformation(model, A_diagonal, &info);
+  out.rcond = info.rcond;
+  out.observable = info.rcond >= internal::kMinInformationRcond;
+  if (info.weakest >= 0) {
+    out.weakest = std::string(
+        ParameterSlots(ModelKind::kQuadratic, out.frame)[static_cast<std::size_t>(info.weakest)]
+            .name);
+  }
+  out.std.K.setZero();
+  if (!out.observable) return out;
+  const internal::Mat12 inverse = info.Inverse();
+  const std::vector<int>& cols = ActiveColumns(model);
+  const int P = NumParameters(model);
+  out.crlb.resize(P, P);
+  for (int i = 0; i < P; ++i) {
+    for (int j = 0; j < P; ++j) out.crlb(i, j) = inverse(cols[i], cols[j]);
+  }
+  if (plan.frame == Frame::kZFirst) {
+    const Eigen::VectorXd d = MirrorSigns(model);
+    out.crlb = d.asDiagonal() * out.crlb * d.asDiagonal();
+  }
+  out.std = Unpack(out.crlb.diagonal().cwiseMax(0.0).cwiseSqrt(), ParameterSlots(model, out.frame));
+  return out;
+}
+
+std::optional<std::vector<Vec3>> SchemeDirections(std::string_view name) {
+  if (name == "yang18") return Yang18Directions();
+  if (name == "six") {
+    return std::vector<Vec3>{Vec3::UnitX(),  -Vec3::UnitX(), Vec3::UnitY(),
+                             -Vec3::UnitY(), Vec3::UnitZ(),  -Vec3::UnitZ()};
+  }
+  constexpr std::string_view kRandom = "random:";
+  if (name.substr(0, kRandom.size()) != kRandom) return std::nullopt;
+  // A "random:" name is a scheme, never a file: a bad count is an error, not a missing file.
+  const auto bad = [&] {
+    return InputError(std::string(name), 0,
+                      "random:N[:SEED] takes a whole number of positions N from 1 to " +
+                          std::to_string(kMaxRandomPositions) + " and a whole-number seed");
+  };
+  std::string_view rest = name.substr(kRandom.size());
+  const std::size_t colon = rest.find(':');
+  int count = 0;
+  std::uint64_t seed = 1;
+  const std::string_view count_text = rest.substr(0, colon);
+  auto [end, ec] = std::from_chars(count_text.data(), count_text.data() + count_text.size(), count);
+  if (ec != std::errc() || end != count_text.data() + count_text.size() || count < 1 ||
+      count > kMaxRandomPositions) {
+    throw bad();
+  }
+  if (colon != std::string_view::npos) {
+    const std::string_view seed_text = rest.substr(colon + 1);
+    auto [e2, ec2] = std::from_chars(seed_text.data(), seed_text.data() + seed_text.size(), seed);
+    if (ec2 != std::errc() || e2 != seed_text.data() + seed_text.size()) throw bad();
+  }
+  return RandomDirections(count, seed);
+}
+
+}  // namespace accelcal

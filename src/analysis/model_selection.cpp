@@ -1,0 +1,212 @@
+#include "accelcal/model_selection.hpp"
+
+#include <cmath>
+
+#include "accelcal/error.hpp"
+#include "accelcal/frame.hpp"
+#include "core/text_format.hpp"
+#include "statistics/outliers.hpp"
+#include "statistics/student_t.hpp"
+
+namespace accelcal {
+
+using internal::Format;
+
+namespace {
+
+Vec3 SquaredCoefficientT(const CalibrationResult& quadratic) {
+  Vec3 t = Vec3::Constant(std::nan(""));
+  if (quadratic.covariance.size() == 0) return t;
+  const auto& slots = ParameterSlots(ModelKind::kQuadratic, quadratic.frame);
+  for (std::size_t i = 0; i < slots.size(); ++i) {
+    if (slots[i].group != ParameterGroup::kK2) continue;
+    const auto index = static_cast<Eigen::Index>(i);
+    const double sd = std::sqrt(quadratic.covariance(index, index));
+    if (sd > 0) t(slots[i].row) = quadratic.params.k2(slots[i].row) / sd;
+  }
+  return t;
+}
+
+// The largest |t_i| among those that are numbers (NaN when none is).
+double LargestAbsolute(const Vec3& t) {
+  double largest = std::nan("");
+  for (int i = 0; i < 3; ++i) {
+    if (!std::isnan(t(i)) && !(std::abs(t(i)) <= largest)) largest = std::abs(t(i));
+  }
+  return largest;
+}
+
+// The 0-based positions of `result`'s fit (the ones its screening did not exclude).
+std::vector<int> PositionsInFit(const CalibrationResult& result, std::size_t readings) {
+  std::vector<int> keep;
+  for (std::size_t k = 0; k < readings; ++k) {
+    if (!result.excluded(k)) keep.push_back(static_cast<int>(k));
+  }
+  return keep;
+}
+
+// The fit of `options.model` to the positions in `keep` (no screening of its own), spread back
+// over all readings as Calibrate spreads a screened fit, with the findings and note of the
+// screening that chose `keep` (`screened`), and validated with those positions held out.
+CalibrationResult FitOnPositions(const std::vector<Vec3>& readings,
+                                 const CalibrationOptions& options, const std::vector<int>& keep,
+                                 const CalibrationResult& screened) {
+  CalibrationOptions subset = options;
+  subset.cross_validate = false;
+  subset.outliers.policy = OutlierPolicy::kOff;
+  std::vector<Vec3> kept;
+  kept.reserve(keep.size());
+  for (int k : keep) kept.push_back(readings[std::size_t(k)]);
+  if (!options.reading_sigmas.empty()) {
+    subset.reading_sigmas.clear();
+    for (int k : keep) subset.reading_sigmas.push_back(options.reading_sigmas[std::size_t(k)]);
+  }
+  CalibrationResult result = Calibrate(kept, subset);
+  if (keep.size() < readings.size()) internal::SpreadOverAllPositions(readings, keep, &result);
+  result.outliers = screened.outliers;
+  result.outlier_note = screened.outlier_note;
+  result.screening = screened.screening;
+  if (result.summary.converged()) CrossValidate(readings, options, &result);
+  return result;
+}
+
+// Mean and standard error of d_k = e_lin,k² − e_quad,k² over `positions`.
+struct Paired {
+  double mean = 0;
+  double se = 0;
+};
+Paired PairedImprovement(const std::vector<double>& linear, const std::vector<double>& quadratic,
+                         const std::vector<int>& positions) {
+  const auto n = static_cast<double>(positions.size());
+  std::vector<double> d;
+  d.reserve(positions.size());
+  for (int k : positions) {
+    const auto i = std::size_t(k);
+    d.push_back(linear[i] * linear[i] - quadratic[i] * quadratic[i]);
+  }
+  Paired p;
+  for (double x : d) p.mean += x / n;
+  double ss = 0;
+  for (double x : d) ss += (x - p.mean) * (x - p.mean);
+  p.se = std::sqrt(ss / (n - 1) / n);
+  return p;
+}
+
+}  // namespace
+
+ModelChoice CalibrateChoosingModel(const std::vector<Vec3>& readings,
+                                   const CalibrationOptions& options, bool auto_model) {
+  ModelChoice choice;
+  if (auto_model || (options.model == ModelKind::kQuadratic && options.cross_validate)) {
+    choice.selection = SelectModel(readings, options);
+  }
+  if (auto_model) {
+    choice.result = choice.selection->chosen_result();
+  } else if (choice.selection && choice.selection->quadratic) {
+    choice.result = *choice.selection->quadratic;
+  } else {
+    choice.result = Calibrate(readings, options);  // also the error of a quadratic fit that failed
+  }
+  return choice;
+}
+
+ModelSelection SelectModel(const std::vector<Vec3>& readings, CalibrationOptions options) {
+  ModelSelection selection;
+  options.cross_validate = true;
+  CalibrationOptions linear_options = options;
+  linear_options.model = ModelKind::kLinear;
+  CalibrationOptions quadratic_options = options;
+  quadratic_options.model = ModelKind::kQuadratic;
+  if (quadratic_options.initial_params) quadratic_options.initial_params->k2.setZero();
+
+  // The linear model alone, screened by itself, as Calibrate fits it: when there is nothing to
+  // compare it with.
+  const auto linear_alone = [&](const std::string& why_not_quadratic) {
+    selection.linear = Calibrate(readings, linear_options);
+    selection.screened_with = ModelKind::kLinear;
+    selection.positions_used = PositionsInFit(selection.linear, readings.size());
+    selection.reason = selection.linear.summary.converged() ? why_not_quadratic
+                                                            : "the linear fit did not converge";
+    return selection;
+  };
+
+  // The quadratic fit, with its screening and then (converged) its validation.
+  try {
+    selection.quadratic = Calibrate(readings, quadratic_options);
+  } catch (const DataError& e) {
+    selection.quadratic_error = e.what();
+  }
+  if (selection.quadratic && !selection.quadratic->summary.converged()) {
+    selection.quadratic_error =
+        "did not converge: " + selection.quadratic->summary.termination_message;
+    selection.quadratic.reset();
+  }
+  if (!selection.quadratic) {
+    return linear_alone("the quadratic model cannot be fitted (" + selection.quadratic_error + ")");
+  }
+  const CalibrationResult& quadratic = *selection.quadratic;
+  selection.k2_t = SquaredCoefficientT(quadratic);
+  if (quadratic.covariance.size() > 0) {
+    selection.k2_t_threshold = internal::StudentTTwoSidedQuantile(kSquaredCoefficientAlpha / 3,
+                                                                  quadratic.degrees_of_freedom);
+  }
+  if (!quadratic.crossval_rms) {
+    return linear_alone("the quadratic model cannot be validated (" + quadratic.crossval_note +
+                        ")");
+  }
+
+  // The linear fit on the positions the quadratic screening kept.
+  selection.screened_with = ModelKind::kQuadratic;
+  selection.positions_used = PositionsInFit(quadratic, readings.size());
+  selection.linear = FitOnPositions(readings, linear_options, selection.positions_used, quadratic);
+  if (!selection.linear.summary.converged()) {
+    selection.reason = "the linear fit did not converge";
+    return selection;
+  }
+  const std::optional<double>& lin = selection.linear.crossval_rms;
+  const double quad = *quadratic.crossval_rms;
+  if (!lin) {
+    selection.reason = "the linear model cannot be validated (" + selection.linear.crossval_note +
+                       "), so nothing shows the quadratic better";
+    return selection;
+  }
+
+  const Paired paired = PairedImprovement(selection.linear.crossval_errors,
+                                          quadratic.crossval_errors, selection.positions_used);
+  const auto n = static_cast<int>(selection.positions_used.size());
+  selection.improvement = paired.mean;
+  selection.improvement_se = paired.se;
+  const double z = internal::StudentTTwoSidedQuantile(2 * kHeldOutImprovementAlpha, n - 1);
+  selection.improvement_threshold = z * paired.se;
+  const double max_t = LargestAbsolute(selection.k2_t);
+  const bool improves = selection.improvement > selection.improvement_threshold;
+  const bool significant = max_t > selection.k2_t_threshold;
+  // The numbers of both conditions, whichever decided.
+  const std::string numbers =
+      Format("held-out rms |f|-g %.4g (quadratic) against %.4g (linear)", quad, *lin) + " over " +
+      std::to_string(n) + " positions; paired mean square improvement " +
+      Format("%.3g +/- %.3g", paired.mean, paired.se) +
+      Format(" (needs > %.3g, %.3g standard errors); ", selection.improvement_threshold, z) +
+      (std::isnan(max_t)
+           ? std::string("the squared coefficients have no standard errors")
+           : Format("largest |k2/sigma| %.3g (needs > %.3g)", max_t, selection.k2_t_threshold));
+  if (!improves) {
+    selection.reason =
+        "the quadratic model does not predict held-out positions better beyond sampling error: " +
+        numbers;
+  } else if (!significant) {
+    selection.reason =
+        "no squared coefficient is significant, though the quadratic model predicts held-out "
+        "positions better beyond sampling error: " +
+        numbers;
+  } else {
+    selection.chosen = ModelKind::kQuadratic;
+    selection.reason =
+        "it predicts held-out positions better beyond sampling error and a squared coefficient "
+        "is significant: " +
+        numbers;
+  }
+  return selection;
+}
+
+}  // namespace accelcal

@@ -1,0 +1,763 @@
+#include "accelcal/log_reader.hpp"
+
+#include <sys/stat.h>
+
+#include <algorithm>
+#include <cctype>
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <memory>
+
+#include <fast_float/fast_float.h>
+
+#include "accelcal/error.hpp"
+#include "core/text_format.hpp"
+#include "io/input_file.hpp"
+#include "io/text_lines.hpp"
+
+namespace accelcal {
+
+std::string_view ToString(InputKind kind) {
+  switch (kind) {
+    case InputKind::kAuto:
+      return "auto";
+    case InputKind::kRaw:
+      return "raw";
+    case InputKind::kPositions:
+      break;
+  }
+  return "positions";
+}
+
+std::optional<InputKind> InputKindFromString(std::string_view text) {
+  if (text == "auto") return InputKind::kAuto;
+  if (text == "raw") return InputKind::kRaw;
+  if (text == "positions") return InputKind::kPositions;
+  return std::nullopt;
+}
+
+std::string ReadFileToString(const std::string& path, std::size_t max_bytes) {
+  internal::InputFile file(path, max_bytes);
+  const auto too_large = [&] {
+    return InputError(
+        file.name(), 0,
+        "larger than " + std::to_string(max_bytes >> 20) + " MiB: not a file of this kind");
+  };
+  if (file.size() > max_bytes) throw too_large();
+  // One allocation and one read for regular files; pipes and the like grow as they come (up to
+  // `max_bytes`, InputFile's limit for them).
+  std::string data(file.regular() ? file.size() : std::size_t{1} << 16, '\0');
+  std::size_t used = file.ReadFully(data.data(), data.size());
+  while (!file.regular() && used == data.size()) {
+    data.resize(2 * data.size());
+    used += file.ReadFully(data.data() + used, data.size() - used);
+  }
+  data.resize(used);
+  return data;
+}
+
+namespace {
+
+using internal::IsBlank;
+using internal::Line;
+using internal::LineReader;
+using internal::Trim;
+
+enum class Delimiter { kComma, kWhitespace };
+
+// Splits a trimmed line into fields; returns the count (fields beyond `max` are counted only).
+std::size_t Split(std::string_view s, Delimiter delim, std::string_view* fields, std::size_t max) {
+  std::size_t count = 0;
+  if (delim == Delimiter::kComma) {
+    std::size_t start = 0;
+    while (true) {
+      const std::size_t comma = s.find(',', start);
+      const std::string_view field = Trim(s.substr(
+          start, comma == std::string_view::npos ? std::string_view::npos : comma - start));
+      if (count < max) fields[count] = field;
+      ++count;
+      if (comma == std::string_view::npos) break;
+      start = comma + 1;
+    }
+  } else {
+    std::size_t i = 0;
+    while (i < s.size()) {
+      while (i < s.size() && IsBlank(s[i])) ++i;
+      if (i >= s.size()) break;
+      const std::size_t start = i;
+      while (i < s.size() && !IsBlank(s[i])) ++i;
+      if (count < max) fields[count] = s.substr(start, i - start);
+      ++count;
+    }
+  }
+  return count;
+}
+
+// Exact powers of ten representable in a double (10^22 is the largest).
+constexpr double kPow10[] = {1e0,  1e1,  1e2,  1e3,  1e4,  1e5,  1e6,  1e7,  1e8,  1e9,  1e10, 1e11,
+                             1e12, 1e13, 1e14, 1e15, 1e16, 1e17, 1e18, 1e19, 1e20, 1e21, 1e22};
+
+// Parses a decimal number at the start of [p, last) on the fast path (Clinger): at most 15
+// significant digits and a decimal exponent within ±22 make the mantissa and the power of ten
+// exact, so one multiplication or division rounds correctly, bit-identical to fast_float. Returns
+// the position after the number, or nullptr when the text is not such a number (long mantissas,
+// large exponents, nan/inf spellings, no digits): the caller then uses fast_float on the whole
+// field.
+const char* ParseShortDecimal(const char* p, const char* last, double* value) {
+  bool negative = false;
+  if (p != last && (*p == '+' || *p == '-')) negative = *p++ == '-';
+  std::uint64_t mantissa = 0;
+  int digits = 0, exponent = 0;
+  const char* digits_begin = p;
+  while (p != last && *p == '0') ++p;  // leading zeros are not significant
+  const char* significant_begin = p;
+  while (p != last && static_cast<unsigned>(*p - '0') < 10) {
+    mantissa = mantissa * 10 + static_cast<unsigned>(*p - '0');
+    ++p;
+  }
+  digits = static_cast<int>(p - significant_begin);  // counted once, outside the hot loop
+  bool any_digit = p != digits_begin;
+  if (p != last && *p == '.') {
+    ++p;
+    const char* fraction_begin = p;
+    if (mantissa == 0) {
+      while (p != last && *p == '0') {
+        ++p;
+        --exponent;
+      }
+    }
+    const char* fraction_digits_begin = p;
+    while (p != last && static_cast<unsigned>(*p - '0') < 10) {
+      mantissa = mantissa * 10 + static_cast<unsigned>(*p - '0');
+      ++p;
+    }
+    const int fraction_digits = static_cast<int>(p - fraction_digits_begin);
+    digits += fraction_digits;
+    exponent -= fraction_digits;
+    any_digit = any_digit || p != fraction_begin;
+  }
+  if (!any_digit || digits > 15) return nullptr;
+  if (p != last && (*p == 'e' || *p == 'E')) {
+    ++p;
+    bool exp_negative = false;
+    if (p != last && (*p == '+' || *p == '-')) exp_negative = *p++ == '-';
+    int e = 0;
+    const char* exp_begin = p;
+    while (p != last && static_cast<unsigned>(*p - '0') < 10 && e < 10000) {
+      e = e * 10 + (*p - '0');
+      ++p;
+    }
+    if (p == exp_begin) return nullptr;
+    exponent += exp_negative ? -e : e;
+  }
+  if (exponent < -22 || exponent > 22) return nullptr;
+  double v = static_cast<double>(mantissa);
+  v = exponent < 0 ? v / kPow10[-exponent] : v * kPow10[exponent];
+  *value = negative ? -v : v;
+  return p;
+}
+
+// Parses the whole of [first, last) as a number.
+bool ParseNumber(const char* first, const char* last, double* value) {
+  if (ParseShortDecimal(first, last, value) == last) return true;
+  if (first != last && *first == '+') {  // fast_float takes no '+'; nor may a second sign follow
+    ++first;
+    if (first != last && (*first == '+' || *first == '-')) return false;
+  }
+  const auto result = fast_float::from_chars(first, last, *value);
+  return result.ec == std::errc() && result.ptr == last;
+}
+
+bool ParseNumber(std::string_view field, double* value) {
+  return ParseNumber(field.data(), field.data() + field.size(), value);
+}
+
+// The header of a positions file with counts and standard deviations, as accelcal simulate writes
+// it: columns named n, sx, sy and sz. ("samples" alone is not enough: raw logs carry sample
+// indices under that name.)
+bool NamesPositionsColumns(const std::vector<std::string>& header) {
+  const auto has = [&](const char* name) {
+    return std::find(header.begin(), header.end(), name) != header.end();
+  };
+  return has("n") && has("sx") && has("sy") && has("sz");
+}
+
+std::string Normalise(std::string_view name) {
+  std::string s;
+  for (char c : name) s.push_back(static_cast<char>(internal::AsciiLower(c)));
+  // Drop a unit suffix such as "_g", "_ms2", "_mps2", "_counts".
+  static const char* const kUnits[] = {"_g", "_ms2", "_mps2", "_m/s2", "_counts", "_raw", "_lsb"};
+  for (const char* unit : kUnits) {
+    const std::size_t n = std::strlen(unit);
+    if (s.size() > n && s.compare(s.size() - n, n, unit) == 0) {
+      s.resize(s.size() - n);
+      break;
+    }
+  }
+  return s;
+}
+
+int FindColumn(const std::vector<std::string>& header, std::initializer_list<const char*> names) {
+  for (std::size_t i = 0; i < header.size(); ++i) {
+    for (const char* n : names) {
+      if (header[i] == n) return static_cast<int>(i);
+    }
+  }
+  return -1;
+}
+
+constexpr std::size_t kMaxFields = 256;
+
+// Column roles: time, x, y, z, count, sx, sy, sz. -1 = absent.
+enum Role { kTime, kX, kY, kZ, kCount, kSx, kSy, kSz, kInstance, kRoles };
+
+struct Layout {
+  int column[kRoles];
+};
+
+Layout NamedLayout(const std::vector<std::string>& h) {
+  Layout l;
+  l.column[kTime] = FindColumn(h, {"t",
+                                   "time",
+                                   "timestamp",
+                                   "time_s",
+                                   "t_s",
+                                   "timestamp_s",
+                                   "time_ms",
+                                   "t_ms",
+                                   "timestamp_ms",
+                                   "timems",
+                                   "time_us",
+                                   "t_us",
+                                   "timestamp_us",
+                                   "timeus",
+                                   "time_usec",
+                                   "timestamp_sample",
+                                   "time_ns",
+                                   "t_ns",
+                                   "timestamp_ns",
+                                   "%time",
+                                   "header.stamp",
+                                   "field.header.stamp",
+                                   "t[s]",
+                                   "time[s]",
+                                   "t[ms]",
+                                   "time[ms]",
+                                   "t[us]",
+                                   "time[us]",
+                                   "t[ns]",
+                                   "time[ns]",
+                                   "t(s)",
+                                   "time(s)",
+                                   "t(ms)",
+                                   "time(ms)",
+                                   "t(us)",
+                                   "time(us)",
+                                   "t(ns)",
+                                   "time(ns)"});
+  l.column[kX] = FindColumn(h, {"x", "ax", "a_x", "acc_x", "accel_x", "accx"});
+  l.column[kY] = FindColumn(h, {"y", "ay", "a_y", "acc_y", "accel_y", "accy"});
+  l.column[kZ] = FindColumn(h, {"z", "az", "a_z", "acc_z", "accel_z", "accz"});
+  l.column[kCount] = FindColumn(h, {"n", "samples", "n_samples", "count"});
+  l.column[kSx] = FindColumn(h, {"sx", "std_x", "ax_std", "sigma_x"});
+  l.column[kSy] = FindColumn(h, {"sy", "std_y", "ay_std", "sigma_y"});
+  l.column[kSz] = FindColumn(h, {"sz", "std_z", "az_std", "sigma_z"});
+  // A column naming the sensor of each row: ArduPilot's I, PX4's device_id and multi_id, ...
+  l.column[kInstance] =
+      FindColumn(h, {"i", "instance", "multi_id", "device_id", "imu", "imu_id", "sensor_id", "id"});
+  return l;
+}
+
+int ResolveColumn(const std::string& spec, const std::vector<std::string>& header,
+                  std::size_t columns, const std::string& source) {
+  double number = 0;
+  if (ParseNumber(spec, &number)) {
+    if (number < 1 || number > static_cast<double>(columns) || number != std::floor(number)) {
+      throw InputError(source, 0,
+                       "--columns entry '" + spec + "' is not a column number between 1 and " +
+                           std::to_string(columns));
+    }
+    return static_cast<int>(number) - 1;
+  }
+  const std::string want = Normalise(spec);
+  for (std::size_t i = 0; i < header.size(); ++i) {
+    if (header[i] == want) return static_cast<int>(i);
+  }
+  throw InputError(source, 0,
+                   "--columns entry '" + spec + "' names no column" +
+                       (header.empty() ? std::string(" (the file has no header)") : std::string()));
+}
+
+// A number for a message: whole numbers in full (device ids such as PX4's 2490378), others to 6
+// significant digits.
+std::string ShortNumber(double v) {
+  char buf[32];
+  if (v == std::floor(v) && std::abs(v) < 1e15) {
+    internal::FormatTo(buf, sizeof buf, "%.0f", v);
+  } else {
+    internal::FormatTo(buf, sizeof buf, "%.6g", v);
+  }
+  return buf;
+}
+
+std::string TimeBackwards(double now, double before) {
+  char buf[128];
+  internal::FormatTo(buf, sizeof buf, "time goes backwards (%.9g after %.9g)", now, before);
+  return buf;
+}
+
+// Parses data rows: each row is scanned once, left to right, reading only the selected columns.
+struct RowParser {
+  const std::string& source;
+  Delimiter delim;
+  std::size_t ncols;
+  Layout layout;
+  bool raw;
+  const std::function<void(std::size_t, std::size_t)>& progress;
+
+  // One block of whole lines (TextBlocks); returns the lines read so far. `skip_first`: the
+  // block's first line is the header.
+  std::uint32_t Parse(std::string_view block, std::size_t block_offset, std::size_t total,
+                      std::uint32_t lines_before, char eol, bool skip_first, std::size_t* rows,
+                      InputData* data, std::vector<double>* instances) const {
+    int role_of_column[kMaxFields];
+    std::fill(role_of_column, role_of_column + ncols, -1);
+    for (int r = 0; r < kRoles; ++r) {
+      if (layout.column[r] >= 0) role_of_column[layout.column[r]] = r;
+    }
+    const bool has_time = layout.column[kTime] >= 0;
+    RawLog& log = data->raw;
+    LineReader reader(block, source, lines_before, eol);
+    Line line;
+    if (skip_first) reader.Next(&line);
+    double values[kRoles];
+    while (reader.Next(&line)) {
+      if (progress && (++*rows & 0xFFFF) == 0) progress(block_offset + reader.offset(), total);
+      ParseFields(line, role_of_column, values);
+      const Vec3 xyz(values[kX], values[kY], values[kZ]);
+      if (layout.column[kInstance] >= 0) instances->push_back(values[kInstance]);
+      if (raw) {
+        if (has_time) log.time_s.push_back(values[kTime]);
+        log.samples.push_back(xyz);
+        log.line.push_back(line.number);
+      } else {
+        data->positions.push_back(MakePosition(xyz, values, line.number));
+      }
+    }
+    return reader.lines_read();
+  }
+
+  void ParseFields(const Line& line, const int* role_of_column, double* values) const {
+    const char* p = line.text.data();
+    const char* const end = p + line.text.size();
+    std::size_t column = 0;
+    while (true) {
+      // One field: [field_begin, field_end), then p at the delimiter after it or the end.
+      const char* field_begin = p;
+      if (delim == Delimiter::kComma) {
+        while (field_begin != end && IsBlank(*field_begin)) ++field_begin;
+      }
+      const int r = column < ncols ? role_of_column[column] : -1;
+      // Fast path: parse straight from the field's start and check that the field ends there.
+      const char* q = r >= 0 ? ParseShortDecimal(field_begin, end, &values[r]) : nullptr;
+      if (q != nullptr && delim == Delimiter::kComma) {
+        while (q != end && IsBlank(*q)) ++q;
+        if (q != end && *q != ',') q = nullptr;
+      } else if (q != nullptr && q != end && !IsBlank(*q)) {
+        q = nullptr;
+      }
+      if (q != nullptr) {
+        p = q;
+      } else {
+        p = field_begin;
+        const char* field_end;
+        if (delim == Delimiter::kComma) {
+          while (p != end && *p != ',') ++p;
+          field_end = p;
+          while (field_end != field_begin && IsBlank(field_end[-1])) --field_end;
+        } else {
+          while (p != end && !IsBlank(*p)) ++p;
+          field_end = p;
+        }
+        if (r >= 0) ParseField(line, column, field_begin, field_end, &values[r]);
+      }
+      ++column;
+      if (p == end) break;
+      if (delim == Delimiter::kComma) {
+        ++p;  // past the comma
+      } else {
+        while (p != end && IsBlank(*p)) ++p;
+        if (p == end) break;
+      }
+    }
+    if (column != ncols) {
+      if (delim == Delimiter::kWhitespace && line.text.find(',') != std::string_view::npos) {
+        throw InputError(source, line.number,
+                         "mixed delimiters: a comma in a whitespace-separated file");
+      }
+      throw InputError(
+          source, line.number,
+          "expected " + std::to_string(ncols) + " columns, found " + std::to_string(column));
+    }
+  }
+
+  // The slow path for one field: fast_float, and the error messages.
+  void ParseField(const Line& line, std::size_t column, const char* field_begin,
+                  const char* field_end, double* value) const {
+    if (!ParseNumber(field_begin, field_end, value)) {
+      if (delim == Delimiter::kWhitespace && std::find(field_begin, field_end, ',') != field_end) {
+        throw InputError(source, line.number,
+                         "mixed delimiters: a comma in a whitespace-separated file");
+      }
+      const std::string field(field_begin, field_end);
+      if (delim == Delimiter::kComma && std::any_of(field_begin, field_end, IsBlank)) {
+        throw InputError(source, line.number,
+                         "mixed delimiters: column " + std::to_string(column + 1) + " ('" + field +
+                             "') is separated by whitespace in a comma-separated file");
+      }
+      throw InputError(
+          source, line.number,
+          "column " + std::to_string(column + 1) + ": '" + field + "' is not a number");
+    }
+    if (!std::isfinite(*value)) {
+      throw InputError(source, line.number,
+                       "column " + std::to_string(column + 1) + ": '" +
+                           std::string(field_begin, field_end) + "' is not a finite number");
+    }
+  }
+
+  Position MakePosition(const Vec3& xyz, const double* values, std::uint32_t line_number) const {
+    Position position;
+    position.mean = xyz;
+    if (layout.column[kCount] >= 0) {
+      // Beyond 2^53 a double no longer tells whole numbers apart (and the cast would overflow).
+      if (!(values[kCount] >= 1 && values[kCount] <= 9007199254740992.0) ||
+          values[kCount] != std::floor(values[kCount])) {
+        throw InputError(source, line_number,
+                         "the sample count must be a whole number from 1 to 2^53");
+      }
+      position.samples = static_cast<std::size_t>(values[kCount]);
+    }
+    if (layout.column[kSx] >= 0 && layout.column[kSy] >= 0 && layout.column[kSz] >= 0) {
+      position.std = Vec3(values[kSx], values[kSy], values[kSz]);
+      if ((position.std->array() < 0).any()) {
+        throw InputError(source, line_number, "a standard deviation is negative");
+      }
+    }
+    return position;
+  }
+};
+
+// Several sensors in one file (ArduPilot's IMU instances, PX4's device ids): the rows of one, by
+// `chosen`, or an error listing those found. A column with more than 16 distinct values is not
+// an instance column (a sample counter, say) and is left alone.
+void SelectInstance(const std::vector<double>& instances, const std::string& column,
+                    const std::optional<double>& chosen, const std::string& source,
+                    InputData* data) {
+  std::vector<std::pair<double, std::size_t>> found;  // value, rows
+  for (double v : instances) {
+    auto it = std::find_if(found.begin(), found.end(), [&](const auto& f) { return f.first == v; });
+    if (it == found.end()) {
+      if (found.size() == 16) {
+        if (chosen) {
+          throw InputError(
+              source, 0,
+              "column '" + column + "' has more than 16 distinct values: not an instance column");
+        }
+        return;
+      }
+      found.push_back({v, 1});
+    } else {
+      ++it->second;
+    }
+  }
+  std::sort(found.begin(), found.end());
+  std::string list;
+  for (const auto& [value, rows] : found) {
+    list +=
+        (list.empty() ? "" : ", ") + ShortNumber(value) + " (" + std::to_string(rows) + " rows)";
+  }
+  if (!chosen) {
+    if (found.size() <= 1) return;
+    throw InputError(source, 0,
+                     "the rows belong to " + std::to_string(found.size()) +
+                         " sensors (instance column '" + column + "': " + list +
+                         "): choose one instance");
+  }
+  if (std::none_of(found.begin(), found.end(), [&](const auto& f) { return f.first == *chosen; })) {
+    throw InputError(source, 0,
+                     "no rows of instance " + ShortNumber(*chosen) + " (column '" + column +
+                         "' has " + list + ")");
+  }
+  std::size_t kept = 0;
+  for (std::size_t i = 0; i < instances.size(); ++i) {
+    if (instances[i] != *chosen) continue;
+    if (data->kind == InputKind::kRaw) {
+      RawLog& log = data->raw;
+      if (!log.time_s.empty()) log.time_s[kept] = log.time_s[i];
+      log.samples[kept] = log.samples[i];
+      log.line[kept] = log.line[i];
+    } else {
+      data->positions[kept] = data->positions[i];
+    }
+    ++kept;
+  }
+  if (data->kind == InputKind::kRaw) {
+    RawLog& log = data->raw;
+    if (!log.time_s.empty()) log.time_s.resize(kept);
+    log.samples.resize(kept);
+    log.line.resize(kept);
+  } else {
+    data->positions.resize(kept);
+  }
+}
+
+// The text before the first data row, and the first rows, are read into memory to tell the
+// header and the kind; beyond this they are not a log (blank lines, a binary file's padding).
+constexpr std::size_t kMaxHeadBytes = std::size_t{64} << 20;
+
+// The first `want_rows` data rows (fewer at the end of the input) of `blocks`, peeked, not
+// consumed. Throws InputError when they are spread over more than kMaxHeadBytes.
+std::string_view PeekRows(internal::TextBlocks& blocks, std::size_t want_rows,
+                          const std::string& source, std::size_t* rows_found) {
+  for (std::size_t want = std::size_t{256} << 10;; want *= 4) {
+    const std::string_view head = blocks.Peek(want);
+    LineReader counter(head, source, 0, blocks.line_end());
+    Line l;
+    std::size_t rows = 0;
+    while (rows < want_rows && counter.Next(&l)) ++rows;
+    if (rows >= want_rows || blocks.AtEnd()) {
+      *rows_found = rows;
+      return head;
+    }
+    if (want >= kMaxHeadBytes) {
+      throw InputError(source, counter.lines_read(),
+                       "only " + std::to_string(rows) + " data rows in the first " +
+                           std::to_string(kMaxHeadBytes >> 20) +
+                           " MiB (blank lines or comments): not a log accelcal reads");
+    }
+  }
+}
+
+InputData ParseBlocks(internal::TextBlocks& blocks, const std::string& source,
+                      const ReadOptions& options) {
+  if (options.rate_hz && !(*options.rate_hz > 0 && std::isfinite(*options.rate_hz))) {
+    throw InputError(source, 0, "the rate must be a positive number of Hz");
+  }
+  std::size_t head_rows = 0;
+  const std::string_view head = PeekRows(blocks, 1, source, &head_rows);
+  LineReader reader(head, source, 0, blocks.line_end());
+  Line first;
+  if (!reader.Next(&first))
+    throw InputError(source, 0, "no data (the file is empty or all comments)");
+  const Delimiter delim =
+      first.text.find(',') != std::string_view::npos ? Delimiter::kComma : Delimiter::kWhitespace;
+
+  std::string_view fields[kMaxFields];
+  const std::size_t ncols = Split(first.text, delim, fields, kMaxFields);
+  if (ncols > kMaxFields) {
+    throw InputError(source, first.number, "more than 256 columns");
+  }
+  if (first.text.find(';') != std::string_view::npos) {
+    throw InputError(source, first.number,
+                     "semicolons separate the fields (a spreadsheet's export with decimal "
+                     "commas?); accelcal reads commas, tabs or spaces between fields and points "
+                     "in numbers");
+  }
+  // A first line with a field that is not a number is a header.
+  bool has_header = false;
+  std::vector<std::string> header;
+  for (std::size_t i = 0; i < ncols; ++i) {
+    double v;
+    if (!ParseNumber(fields[i], &v)) has_header = true;
+  }
+  if (has_header) {
+    for (std::size_t i = 0; i < ncols; ++i) header.push_back(Normalise(fields[i]));
+  } else if (!reader.preceding_comment().empty()) {
+    // A comment line just above the first row that names as many columns as it has, none a
+    // number, is the header ("# time tx ty tz").
+    std::string_view names[kMaxFields];
+    const std::string_view comment = reader.preceding_comment();
+    const Delimiter comment_delim =
+        comment.find(',') != std::string_view::npos ? Delimiter::kComma : Delimiter::kWhitespace;
+    if (Split(comment, comment_delim, names, kMaxFields) == ncols &&
+        std::none_of(names, names + ncols, [](std::string_view f) {
+          double v;
+          return f.empty() || ParseNumber(f, &v);
+        })) {
+      for (std::size_t i = 0; i < ncols; ++i) header.push_back(Normalise(names[i]));
+    }
+  }
+  const std::uint32_t first_line = first.number;
+  // A guess for reserving; capped, so that a huge file with a short first line cannot make the
+  // reader ask for memory its rows will never fill (the vectors grow past it as needed).
+  const std::size_t expected_rows =
+      std::min<std::size_t>(blocks.total() / (first.text.size() + 1) + 1, std::size_t{1} << 22);
+
+  const Layout named = NamedLayout(header);
+  // Auto-detection needs to know only whether there are more rows than a positions file has.
+  std::size_t rows = 0;
+  const auto CountRows = [&] {
+    std::size_t found = 0;
+    PeekRows(blocks, options.max_rows_of_positions_file + 2, source, &found);
+    return has_header ? found - 1 : found;
+  };
+  InputData data;
+  if (options.kind != InputKind::kAuto) {
+    data.kind = options.kind;
+    data.kind_reason = "given";
+  } else if (named.column[kTime] >= 0) {
+    data.kind = InputKind::kRaw;
+    data.kind_reason = "auto: the header names a time column";
+  } else if (NamesPositionsColumns(header)) {
+    // Only averaged readings carry a sample count and standard deviations, however many rows.
+    data.kind = InputKind::kPositions;
+    data.kind_reason = "auto: the header is a positions file's (n, sx, sy, sz)";
+  } else if (options.rate_hz) {  // a sample rate belongs to a raw log, however short
+    data.kind = InputKind::kRaw;
+    data.kind_reason = "auto: a sample rate was given: a raw log";
+  } else if ((rows = CountRows()) <= options.max_rows_of_positions_file) {
+    data.kind = InputKind::kPositions;
+    data.kind_from_row_count = true;
+    data.kind_reason = "auto: " + std::to_string(rows) +
+                       " rows <= " + std::to_string(options.max_rows_of_positions_file) +
+                       " is a positions file (--input-kind raw to override)";
+  } else {
+    data.kind = InputKind::kRaw;
+    data.kind_reason = "auto: more than " + std::to_string(options.max_rows_of_positions_file) +
+                       " rows is a raw log";
+  }
+  const bool raw = data.kind == InputKind::kRaw;
+  if (!raw && options.rate_hz) {
+    throw InputError(source, 0,
+                     "a sample rate was given, but this is a positions file (" + data.kind_reason +
+                         "): a rate belongs to a raw log");
+  }
+
+  Layout layout;
+  std::fill(std::begin(layout.column), std::end(layout.column), -1);
+  if (!options.columns.empty()) {
+    const std::size_t n = options.columns.size();
+    if (raw ? (n != 3 && n != 4) : n != 3) {
+      throw InputError(source, 0,
+                       raw ? "--columns takes 3 entries (x,y,z) or 4 (time,x,y,z)"
+                           : "--columns takes 3 entries (x,y,z) for a positions file");
+    }
+    const int offset = n == 4 ? 1 : 0;
+    if (n == 4) layout.column[kTime] = ResolveColumn(options.columns[0], header, ncols, source);
+    for (int a = 0; a < 3; ++a) {
+      layout.column[kX + a] = ResolveColumn(options.columns[a + offset], header, ncols, source);
+    }
+    if (!raw) {
+      for (int r = kCount; r < kRoles; ++r) layout.column[r] = named.column[r];
+    }
+  } else if (named.column[kX] >= 0 && named.column[kY] >= 0 && named.column[kZ] >= 0) {
+    layout = named;
+    if (raw) {
+      for (int r = kCount; r < kRoles; ++r) layout.column[r] = -1;
+    } else {
+      layout.column[kTime] = -1;
+    }
+  } else if (raw && ncols == 4) {
+    layout.column[kTime] = 0;
+    layout.column[kX] = 1, layout.column[kY] = 2, layout.column[kZ] = 3;
+  } else if (ncols == 3 || (!raw && (ncols == 4 || ncols == 7))) {
+    layout.column[kX] = 0, layout.column[kY] = 1, layout.column[kZ] = 2;
+    if (!raw && ncols >= 4) layout.column[kCount] = 3;
+    if (!raw && ncols == 7) layout.column[kSx] = 4, layout.column[kSy] = 5, layout.column[kSz] = 6;
+  } else {
+    throw InputError(source, first_line,
+                     std::to_string(ncols) + " columns" +
+                         (raw ? ": use --columns to choose time,x,y,z or x,y,z"
+                              : ": a positions file has x,y,z [,n [,sx,sy,sz]]"));
+  }
+  // Parse every data row, block by block.
+  if (raw) {
+    data.raw.samples.reserve(expected_rows);
+    data.raw.line.reserve(expected_rows);
+    if (layout.column[kTime] >= 0) data.raw.time_s.reserve(expected_rows);
+  }
+  if (raw) data.raw.source = source;
+  if (named.column[kInstance] >= 0 &&
+      std::find(std::begin(layout.column), std::begin(layout.column) + kInstance,
+                named.column[kInstance]) == std::begin(layout.column) + kInstance) {
+    layout.column[kInstance] = named.column[kInstance];
+  } else {
+    layout.column[kInstance] = -1;
+  }
+  const RowParser parser{source, delim, ncols, layout, raw, options.progress};
+  std::vector<double> instances;
+  std::string_view block;
+  std::uint32_t lines = 0;
+  std::size_t parsed_rows = 0;
+  bool skip_header = has_header;
+  while (blocks.Next(&block)) {
+    lines = parser.Parse(block, blocks.block_offset(), blocks.total(), lines, blocks.line_end(),
+                         skip_header, &parsed_rows, &data, &instances);
+    skip_header = false;
+  }
+  if (raw ? data.raw.samples.empty() : data.positions.empty()) {
+    throw InputError(source, first_line, "a header but no data rows");
+  }
+  if (layout.column[kInstance] >= 0) {
+    SelectInstance(instances, header[std::size_t(layout.column[kInstance])], options.instance,
+                   source, &data);
+  } else if (options.instance) {
+    throw InputError(source, 0,
+                     "an instance was chosen, but the file has no instance column (i, instance, "
+                     "multi_id, device_id, imu, imu_id, sensor_id, id)");
+  }
+  if (raw) {
+    const std::vector<double>& t = data.raw.time_s;
+    for (std::size_t i = 1; i < t.size(); ++i) {
+      if (t[i] < t[i - 1]) {
+        throw InputError(source, data.raw.line[i], TimeBackwards(t[i], t[i - 1]));
+      }
+    }
+  }
+  if (raw) {
+    RawLog& log = data.raw;
+    if (log.time_s.size() >= 2) {
+      try {
+        const int c = layout.column[kTime];
+        log.time = MakeTimeAxis(
+            &log.time_s, options.time_unit,
+            header.empty() ? std::string_view() : std::string_view(header[std::size_t(c)]));
+      } catch (const DataError& e) {
+        throw InputError(source, 0, e.what());
+      }
+      log.rate_hz = log.time->rate_hz;
+      if (options.rate_hz) {
+        if (std::abs(*options.rate_hz / log.time->rate_hz - 1) > kRateTolerance) {
+          throw InputError(source, 0,
+                           "the given rate " + ShortNumber(*options.rate_hz) +
+                               " Hz contradicts the time column, whose timestamps (" +
+                               std::string(ToString(log.time->unit)) + ") come at " +
+                               ShortNumber(log.time->rate_hz) + " Hz");
+        }
+        log.rate_hz = options.rate_hz;
+      }
+    } else if (log.time_s.size() == 1) {
+      throw InputError(source, 0, "one sample: a raw log needs more");
+    } else if (options.rate_hz) {
+      log.rate_hz = options.rate_hz;
+    }
+  }
+  return data;
+}
+
+}  // namespace
+
+InputData ParseInput(std::string_view text, const std::string& source, const ReadOptions& options) {
+  internal::TextBlocks blocks(text);
+  return ParseBlocks(blocks, source, options);
+}
+
+InputData ReadInput(const std::string& path, const ReadOptions& options) {
+  internal::InputFile file(path, options.max_stream_bytes);
+  internal::TextBlocks blocks(&file);
+  return ParseBlocks(blocks, file.name(), options);
+}
+
+}  // namespace accelcal

@@ -1,0 +1,485 @@
+// Exports of a calibration to the formats of other tools (export.hpp, docs/conventions.md).
+#include "accelcal/export.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <functional>
+#include <stdexcept>
+
+#include <Eigen/LU>
+#include <nlohmann/json.hpp>
+
+#include "accelcal/error.hpp"
+#include "accelcal/frame.hpp"
+#include "accelcal/gravity.hpp"
+#include "core/text_format.hpp"
+
+namespace accelcal {
+
+namespace {
+
+using ordered_json = nlohmann::ordered_json;
+using internal::Format;
+
+// ASCII classes, whatever the C locale's LC_CTYPE (std::isalpha takes 0xE4 for a letter in
+// ISO-8859-1 locales).
+bool IsAsciiDigit(char c) { return c >= '0' && c <= '9'; }
+bool IsAsciiLetter(char c) { return (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z'); }
+bool IsIdentifierChar(char c) { return IsAsciiLetter(c) || IsAsciiDigit(c) || c == '_'; }
+
+struct FormatName {
+  ExportFormat format;
+  std::string_view name;
+};
+constexpr FormatName kFormatNames[] = {
+    {ExportFormat::kJson, "json"},           {ExportFormat::kYaml, "yaml"},
+    {ExportFormat::kKalibr, "kalibr"},       {ExportFormat::kPx4, "px4"},
+    {ExportFormat::kArduPilot, "ardupilot"}, {ExportFormat::kCHeader, "c-header"},
+    {ExportFormat::kImuTk, "imutk"},
+};
+
+// Shortest text that reads back as the same double (nlohmann's own conversion: no locale).
+std::string Number(double value) { return ordered_json(value).dump(); }
+
+// Text inside a C block comment: one visible line (VisibleLine) in which no "*/" ends the comment,
+// no "/*" opens a nested one (-Wcomment) and no "??/" trigraph makes a backslash; a space is put
+// inside each of them ("* /", "/ *", "?? /").
+std::string CCommentText(std::string_view text) {
+  const std::string line = internal::VisibleLine(text);
+  std::string out;
+  out.reserve(line.size());
+  for (std::size_t i = 0; i < line.size(); ++i) {
+    out += line[i];
+    const char next = i + 1 < line.size() ? line[i + 1] : '\0';
+    if ((line[i] == '*' && next == '/') || (line[i] == '/' && next == '*') ||
+        (line[i] == '?' && i > 0 && line[i - 1] == '?' && next == '/')) {
+      out += ' ';
+    }
+  }
+  return out;
+}
+
+// A correction f(p) in the calibration's specific-force unit, or nullopt where it has none.
+using Correction = std::function<std::optional<Vec3>(const Vec3&)>;
+
+ExportLoss MeasureLoss(const LoadedCalibration& cal, const Correction& exported,
+                       std::string dropped) {
+  ExportLoss loss;
+  loss.dropped = std::move(dropped);
+  double sum_error2 = 0, sum_full2 = 0, sum_export2 = 0;
+  for (const Vec3& p : cal.position_means) {
+    const std::optional<Vec3> full = SpecificForce(cal.params, p);
+    const std::optional<Vec3> approx = exported(p);
+    if (!full || !approx) continue;
+    const double error = (*approx - *full).norm();
+    loss.max_error = std::max(loss.max_error, error);
+    sum_error2 += error * error;
+    sum_full2 += std::pow(full->norm() - cal.gravity, 2);
+    sum_export2 += std::pow(approx->norm() - cal.gravity, 2);
+    ++loss.positions;
+  }
+  if (loss.positions > 0) {
+    loss.rms_error = std::sqrt(sum_error2 / loss.positions);
+    loss.norm_rms_full = std::sqrt(sum_full2 / loss.positions);
+    loss.norm_rms_export = std::sqrt(sum_export2 / loss.positions);
+  }
+  return loss;
+}
+
+std::string SquaredTermsDropped(const LoadedCalibration& cal) {
+  return cal.model == ModelKind::kQuadratic ? "the squared terms k2" : "";
+}
+
+std::string Join(const std::string& a, const std::string& b) {
+  if (a.empty()) return b;
+  if (b.empty()) return a;
+  return a + "; " + b;
+}
+
+// m/s² per raw unit, for the formats that apply a calibration to readings in m/s².
+double RawToMetersPerSecond2(const LoadedCalibration& cal, const ExportOptions& options,
+                             std::string_view format, std::string_view why) {
+  const std::string label = options.raw_unit.empty() ? cal.raw_unit : options.raw_unit;
+  const std::optional<ForceUnit> unit = ForceUnitFromString(label);
+  if (!unit) {
+    throw DataError(std::string(format) + " applies its calibration to readings already in m/s2 (" +
+                    std::string(why) + "), but this calibration's raw unit is '" +
+                    internal::VisibleLine(label) +
+                    "': calibrate readings in m/s2 or g (--raw-units m/s2), or say which with "
+                    "--raw-unit m/s2|g if the readings were in one of them");
+  }
+  return *unit == ForceUnit::kStandardGravity ? kStandardGravity_ms2 : 1.0;
+}
+double ForceToMetersPerSecond2(const LoadedCalibration& cal) {
+  return cal.unit == ForceUnit::kStandardGravity ? kStandardGravity_ms2 : 1.0;
+}
+
+// The raw-unit label as one visible line: the conventions go into comment lines of the files.
+std::string DescribeUnits(const LoadedCalibration& cal) {
+  return "raw readings in '" + internal::VisibleLine(cal.raw_unit) + "', specific force in " +
+         std::string(ToString(cal.unit));
+}
+
+// imu_tk: f = T S (p − B), T unit-diagonal, S diagonal: T S = K⁻¹ (any frame, linear part).
+ExportResult ImuTk(const LoadedCalibration& cal) {
+  const Mat33 M = cal.params.K.inverse();
+  const Vec3 s = M.diagonal();
+  const Mat33 T = M * s.cwiseInverse().asDiagonal();
+  ExportResult out;
+  const auto matrix = [](const Mat33& A) {
+    std::string text;
+    for (int i = 0; i < 3; ++i) {
+      text += Number(A(i, 0)) + " " + Number(A(i, 1)) + " " + Number(A(i, 2)) + "\n";
+    }
+    return text;
+  };
+  out.text = matrix(T) + "\n" + matrix(Mat33(s.asDiagonal())) + "\n" + Number(cal.params.bias(0)) +
+             "\n" + Number(cal.params.bias(1)) + "\n" + Number(cal.params.bias(2)) + "\n\n";
+  out.convention =
+      "imu_tk CalibratedTriad (load() reads misalignment T, scale S, bias B): f = T S (p - B), T "
+      "with unit diagonal, S diagonal; T S = K^-1, B = b (" +
+      DescribeUnits(cal) + ", accelcal's " + std::string(ToString(cal.frame)) + " body frame)";
+  const Mat33 TS = T * s.asDiagonal();
+  out.loss = MeasureLoss(
+      cal, [&](const Vec3& p) -> std::optional<Vec3> { return Vec3(TS * (p - cal.params.bias)); },
+      SquaredTermsDropped(cal));
+  return out;
+}
+
+// Diagonal-only targets (PX4, ArduPilot): f_i = s_i (p_i − o_i) in m/s².
+struct Diagonal {
+  Vec3 offset_ms2, scale;
+  Correction correction;  // in the calibration's unit
+  std::string dropped;
+};
+Diagonal DiagonalPart(const LoadedCalibration& cal, double raw_ms2) {
+  Diagonal d;
+  const double force_ms2 = ForceToMetersPerSecond2(cal);
+  const Vec3 K_diagonal = cal.params.K.diagonal();
+  d.offset_ms2 = raw_ms2 * cal.params.bias;
+  d.scale = (force_ms2 / raw_ms2) * K_diagonal.cwiseInverse();
+  d.correction = [&cal, K_diagonal](const Vec3& p) -> std::optional<Vec3> {
+    return Vec3((p - cal.params.bias).cwiseQuotient(K_diagonal));
+  };
+  Mat33 off_diagonal = cal.params.K;
+  off_diagonal.diagonal().setZero();
+  d.dropped = Join(off_diagonal.isZero(0) ? "" : "the misalignments (K's off-diagonal terms)",
+                   SquaredTermsDropped(cal));
+  return d;
+}
+
+std::string DiagonalConvention(std::string_view tool, const LoadedCalibration& cal,
+                               double raw_ms2) {
+  return Format(
+      "%s: f = (p - offset) .* scale in m/s2, sensor frame, before the board rotation; offset = b "
+      "* %.6g, scale_i = %.6g / K_ii (raw '%s' x %.6g = m/s2, accelcal's specific force in %s)",
+      std::string(tool).c_str(), raw_ms2, ForceToMetersPerSecond2(cal) / raw_ms2,
+      internal::VisibleLine(cal.raw_unit).c_str(), raw_ms2,
+      std::string(ToString(cal.unit)).c_str());
+}
+
+// The first comment line (without its comment marker and line end): the log's path as one visible
+// line.
+std::string Header(const LoadedCalibration& cal) {
+  std::string text = " accelcal calibration";
+  if (!cal.source.empty()) text += " of " + internal::VisibleLine(cal.source);
+  return text + " (" + std::string(ToString(cal.model)) + " model)";
+}
+
+ExportResult Px4(const LoadedCalibration& cal, const ExportOptions& options) {
+  const double raw_ms2 = RawToMetersPerSecond2(cal, options, "PX4", "its drivers scale the counts");
+  const Diagonal d = DiagonalPart(cal, raw_ms2);
+  ExportResult out;
+  out.convention = DiagonalConvention("PX4 (src/lib/sensor_calibration)", cal, raw_ms2);
+  const std::string prefix = "CAL_ACC" + std::to_string(options.instance) + "_";
+  out.text = "# Onboard parameters for Vehicle 1\n#\n#" + Header(cal) + "\n# " + out.convention +
+             "\n#\n# Vehicle-Id Component-Id Name Value Type\n";
+  const char axes[3] = {'X', 'Y', 'Z'};
+  for (int i = 0; i < 3; ++i) {
+    out.text += Format("1\t1\t%s%cOFF\t%.9g\t9\n", prefix.c_str(), axes[i], d.offset_ms2(i));
+  }
+  for (int i = 0; i < 3; ++i) {
+    out.text += Format("1\t1\t%s%cSCALE\t%.9g\t9\n", prefix.c_str(), axes[i], d.scale(i));
+  }
+  out.loss = MeasureLoss(cal, d.correction, d.dropped);
+  return out;
+}
+
+ExportResult ArduPilot(const LoadedCalibration& cal, const ExportOptions& options) {
+  if (options.instance > 2) throw std::invalid_argument("ArduPilot has accelerometers 0, 1 and 2");
+  const double raw_ms2 =
+      RawToMetersPerSecond2(cal, options, "ArduPilot", "its drivers scale the counts");
+  const Diagonal d = DiagonalPart(cal, raw_ms2);
+  ExportResult out;
+  out.convention = DiagonalConvention("ArduPilot (AP_InertialSensor)", cal, raw_ms2);
+  const std::string prefix =
+      options.instance == 0 ? "INS_ACC" : "INS_ACC" + std::to_string(options.instance + 1);
+  out.text = "#" + Header(cal) + "\n# " + out.convention + "\n";
+  const char axes[3] = {'X', 'Y', 'Z'};
+  for (int i = 0; i < 3; ++i) {
+    out.text += Format("%sOFFS_%c,%.9g\n", prefix.c_str(), axes[i], d.offset_ms2(i));
+  }
+  for (int i = 0; i < 3; ++i) {
+    out.text += Format("%sSCAL_%c,%.9g\n", prefix.c_str(), axes[i], d.scale(i));
+  }
+  out.loss = MeasureLoss(cal, d.correction, d.dropped);
+  return out;
+}
+
+// Kalibr's scale-misalignment model: a_measured = M a + b, M lower-triangular, m/s².
+ExportResult Kalibr(const LoadedCalibration& cal, const ExportOptions& options) {
+  const double raw_ms2 =
+      RawToMetersPerSecond2(cal, options, "Kalibr", "sensor_msgs/Imu linear_acceleration");
+  const FrameChange change = ChangeFrame(cal.params.K, Frame::kXFirst);
+  const Mat33 M = (raw_ms2 / ForceToMetersPerSecond2(cal)) * change.K;
+  const Vec3 bias_ms2 = raw_ms2 * cal.params.bias;
+  ExportResult out;
+  out.convention =
+      "Kalibr scale-misalignment IMU (IccScaledMisalignedImu): a_measured = M a + b in m/s2, M "
+      "lower-triangular = accelcal's K in the x-first frame" +
+      std::string(cal.frame == Frame::kXFirst
+                      ? ""
+                      : " (converted exactly from the " + std::string(ToString(cal.frame)) +
+                            " frame: the body frame turns, corrected magnitudes are unchanged)") +
+      "; Kalibr estimates its own time-varying bias b, so accelcal's constant bias is a comment";
+  out.text = "#" + Header(cal) + "\n# " + out.convention +
+             "\nimu0:\n  model: scale-misalignment\n" + "  accelerometers:\n    M:\n";
+  for (int i = 0; i < 3; ++i) {
+    out.text +=
+        "    - [" + Number(M(i, 0)) + ", " + Number(M(i, 1)) + ", " + Number(M(i, 2)) + "]\n";
+  }
+  out.text += "  # accelcal constant bias [m/s2]: [" + Number(bias_ms2(0)) + ", " +
+              Number(bias_ms2(1)) + ", " + Number(bias_ms2(2)) + "]\n";
+  // Magnitudes are frame-independent, so the loss compares |f|: the rotation Q is not a loss.
+  const Mat33 K_x = change.K;
+  out.loss = MeasureLoss(
+      cal,
+      [&](const Vec3& p) -> std::optional<Vec3> {
+        return Vec3(change.Q_old_new * (K_x.inverse() * (p - cal.params.bias)));
+      },
+      SquaredTermsDropped(cal));
+  return out;
+}
+
+std::string CIdentifier(const std::string& prefix) {
+  if (prefix.empty() || IsAsciiDigit(prefix[0])) {
+    throw std::invalid_argument("--c-prefix must start with a letter or '_'");
+  }
+  for (const char c : prefix) {
+    if (!IsIdentifierChar(c)) {
+      throw std::invalid_argument("--c-prefix may hold only letters, digits and '_'");
+    }
+  }
+  return prefix;
+}
+
+// Firmware: the model's exact inverse, as SpecificForce computes it.
+ExportResult CHeader(const LoadedCalibration& cal, const ExportOptions& options) {
+  const std::string p = CIdentifier(options.c_prefix);
+  std::string guard;
+  for (const char c : p) guard += c >= 'a' && c <= 'z' ? static_cast<char>(c - 'a' + 'A') : c;
+  guard += "_CALIBRATION_H";
+  const bool full = cal.frame == Frame::kPlatform;
+  if (full && cal.model == ModelKind::kQuadratic) {
+    throw DataError(
+        "c-header: a full K with squared terms (platform frame) needs an iterative "
+        "solve that the header does not provide; export the linear fit");
+  }
+  ExportResult out;
+  out.convention =
+      "C99 header: " + p + "_correct(raw, f) solves p = K f + b + k2 .* f^2 for f exactly (" +
+      DescribeUnits(cal) + ", accelcal's " + std::string(ToString(cal.frame)) + " body frame)";
+  const auto vec = [](const Vec3& v) {
+    return "{" + Number(v(0)) + ", " + Number(v(1)) + ", " + Number(v(2)) + "}";
+  };
+  const auto mat = [&](const Mat33& A) {
+    return "{" + vec(A.row(0).transpose()) + ", " + vec(A.row(1).transpose()) + ", " +
+           vec(A.row(2).transpose()) + "}";
+  };
+  std::string& t = out.text;
+  t = "/*" + CCommentText(Header(cal)) + "\n * " + CCommentText(out.convention) +
+      "\n * Generated by accelcal export; the numbers read back as the same doubles. */\n";
+  t += "#ifndef " + guard + "\n#define " + guard + "\n\n#include <math.h>\n\n";
+  t += "static const double " + p + "_K[3][3] = " + mat(cal.params.K) + ";\n";
+  t += "static const double " + p + "_bias[3] = " + vec(cal.params.bias) + ";\n";
+  t += "static const double " + p + "_k2[3] = " + vec(cal.params.k2) + ";\n";
+  if (full)
+    t += "static const double " + p + "_K_inv[3][3] = " + mat(cal.params.K.inverse()) + ";\n";
+  t += "\n/* Returns 0, or -1 when the reading has no real solution (quadratic model only). */\n";
+  t += "static inline int " + p + "_correct(const double raw[3], double f[3]) {\n";
+  if (full) {
+    t += "  int i;\n  for (i = 0; i < 3; ++i) {\n"
+         "    f[i] = " +
+         p + "_K_inv[i][0] * (raw[0] - " + p + "_bias[0]) + " + p + "_K_inv[i][1] * (raw[1] - " +
+         p + "_bias[1]) +\n           " + p + "_K_inv[i][2] * (raw[2] - " + p +
+         "_bias[2]);\n  }\n  return 0;\n}\n";
+  } else {
+    const bool lower = cal.frame == Frame::kXFirst;
+    t += std::string("  /* along K's triangle: ") + (lower ? "x, y, z" : "z, y, x") + " */\n";
+    t +=
+        std::string("  static const int order[3] = ") + (lower ? "{0, 1, 2}" : "{2, 1, 0}") + ";\n";
+    t += "  int n, j;\n  for (n = 0; n < 3; ++n) f[n] = 0.0;\n"
+         "  for (n = 0; n < 3; ++n) {\n    const int i = order[n];\n"
+         "    double r = raw[i] - " +
+         p +
+         "_bias[i];\n    double a, disc, root;\n"
+         "    for (j = 0; j < 3; ++j) {\n      if (j != i) r -= " +
+         p +
+         "_K[i][j] * f[j];\n    }\n"
+         "    a = " +
+         p +
+         "_K[i][i];\n"
+         "    if (" +
+         p +
+         "_k2[i] == 0.0) {\n      f[i] = r / a;\n      continue;\n    }\n"
+         "    disc = a * a + 4.0 * " +
+         p +
+         "_k2[i] * r;\n    if (!(disc >= 0.0)) return -1;\n"
+         "    root = sqrt(disc);\n    f[i] = 2.0 * r / (a >= 0.0 ? a + root : a - root);\n"
+         "  }\n  return 0;\n}\n";
+  }
+  t += "\n#endif /* " + guard + " */\n";
+  out.loss = MeasureLoss(
+      cal, [&](const Vec3& r) { return SpecificForce(cal.params, r); }, "");
+  return out;
+}
+
+// YAML emission of a JSON value at an indentation.
+bool IsScalar(const ordered_json& j) { return !j.is_object() && !j.is_array(); }
+bool IsFlowArray(const ordered_json& j) {
+  if (!j.is_array()) return false;
+  for (const auto& e : j) {
+    if (!(IsScalar(e) || (e.is_array() && std::all_of(e.begin(), e.end(), IsScalar)))) {
+      return false;
+    }
+  }
+  return true;
+}
+// A YAML double-quoted scalar holding exactly `text` (UTF-8) in YAML 1.1 and 1.2 readers: '"' and
+// '\\' escaped, tab, line feed and carriage return as \t, \n, \r, the other characters of
+// internal::IsInvisible (which readers refuse, or read as line breaks and fold) as \xHH or \uHHHH;
+// printable Unicode as it is. A byte that is no UTF-8 (a JSON document holds none) is U+FFFD.
+std::string YamlQuoted(std::string_view text) {
+  return "\"" + internal::EscapeText(text, internal::Escaping::kYamlDoubleQuoted) + "\"";
+}
+// A key plain when it is an identifier that no YAML 1.1 reader takes for a boolean or null.
+std::string YamlKey(const std::string& key) {
+  bool plain = !key.empty() && (IsAsciiLetter(key[0]) || key[0] == '_');
+  for (const char c : key) plain = plain && IsIdentifierChar(c);
+  std::string lower;
+  for (const char c : key) lower += internal::AsciiLower(c);
+  for (const char* word : {"null", "true", "false", "yes", "no", "on", "off", "y", "n"}) {
+    plain = plain && lower != word;
+  }
+  return plain ? key : YamlQuoted(key);
+}
+// JSON's spelling of a scalar, except that a float always has a '.' in its mantissa: YAML 1.1
+// readers (PyYAML) take 1e-05 for a string, 1.0e-05 for a number.
+std::string YamlFlow(const ordered_json& j) {
+  if (j.is_array()) {
+    std::string text = "[";
+    for (std::size_t i = 0; i < j.size(); ++i) text += (i ? ", " : "") + YamlFlow(j[i]);
+    return text + "]";
+  }
+  if (j.is_string()) return YamlQuoted(j.get_ref<const std::string&>());
+  std::string text = j.dump();
+  if (j.is_number_float() && text.find('.') == std::string::npos) {
+    const std::size_t e = text.find_first_of("eE");
+    text.insert(e == std::string::npos ? text.size() : e, ".0");
+  }
+  return text;
+}
+void EmitYaml(const ordered_json& j, int indent, std::string* out);
+void EmitYamlValue(const ordered_json& j, int indent, std::string* out) {
+  if (IsScalar(j) || IsFlowArray(j) || j.empty()) {
+    *out += " " + YamlFlow(j) + "\n";  // JSON scalars and flow arrays are valid YAML
+  } else {
+    *out += "\n";
+    EmitYaml(j, indent + 2, out);
+  }
+}
+void EmitYaml(const ordered_json& j, int indent, std::string* out) {
+  const std::string pad(static_cast<std::size_t>(indent), ' ');
+  if (j.is_object()) {
+    for (const auto& [key, value] : j.items()) {
+      *out += pad + YamlKey(key) + ":";
+      EmitYamlValue(value, indent, out);
+    }
+  } else {
+    for (const auto& value : j) {
+      if (value.is_object() && !value.empty()) {
+        std::string item;
+        EmitYaml(value, indent + 2, &item);
+        *out += pad + "- " + item.substr(static_cast<std::size_t>(indent) + 2);
+      } else {
+        *out += pad + "-";
+        EmitYamlValue(value, indent, out);
+      }
+    }
+  }
+}
+
+}  // namespace
+
+std::string_view ToString(ExportFormat format) {
+  for (const FormatName& f : kFormatNames) {
+    if (f.format == format) return f.name;
+  }
+  return "?";
+}
+
+std::optional<ExportFormat> ExportFormatFromString(std::string_view text) {
+  for (const FormatName& f : kFormatNames) {
+    if (f.name == text) return f.format;
+  }
+  return std::nullopt;
+}
+
+const std::vector<ExportFormat>& AllExportFormats() {
+  static const std::vector<ExportFormat> all = [] {
+    std::vector<ExportFormat> v;
+    for (const FormatName& f : kFormatNames) v.push_back(f.format);
+    return v;
+  }();
+  return all;
+}
+
+std::string VisibleLine(std::string_view text) { return internal::VisibleLine(text); }
+
+std::string JsonToYaml(const std::string& json_text) {
+  const ordered_json doc = ordered_json::parse(json_text);
+  std::string out = "%YAML 1.2\n---\n";
+  EmitYaml(doc, 0, &out);
+  return out;
+}
+
+ExportResult ExportCalibration(const LoadedCalibration& cal, const std::string& native_json,
+                               ExportFormat format, const ExportOptions& options) {
+  if (options.instance < 0) throw std::invalid_argument("--instance must be >= 0");
+  ExportResult out;
+  switch (format) {
+    case ExportFormat::kJson:
+    case ExportFormat::kYaml:
+      out.text = format == ExportFormat::kJson ? native_json : JsonToYaml(native_json);
+      out.convention =
+          "accelcal's calibration file (docs/calibration-file.md): p = K f + b + k2 "
+          ".* f^2, " +
+          DescribeUnits(cal) + ", " + std::string(ToString(cal.frame)) + " body frame";
+      out.loss = MeasureLoss(
+          cal, [&](const Vec3& p) { return SpecificForce(cal.params, p); }, "");
+      return out;
+    case ExportFormat::kKalibr:
+      return Kalibr(cal, options);
+    case ExportFormat::kPx4:
+      return Px4(cal, options);
+    case ExportFormat::kArduPilot:
+      return ArduPilot(cal, options);
+    case ExportFormat::kCHeader:
+      return CHeader(cal, options);
+    case ExportFormat::kImuTk:
+      return ImuTk(cal);
+  }
+  throw std::invalid_argument("unknown export format");
+}
+
+}  // namespace accelcal

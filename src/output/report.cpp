@@ -1,0 +1,517 @@
+// The HTML calibration report (report.hpp): hand-written inline SVG, no scripts.
+#include "accelcal/report.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <optional>
+
+#include <nlohmann/json.hpp>
+
+#include "accelcal/calibration_file.hpp"
+#include "accelcal/diagnosis.hpp"
+#include "accelcal/engineering.hpp"
+#include "accelcal/error.hpp"
+#include "accelcal/frame.hpp"
+#include "core/text_format.hpp"
+
+namespace accelcal {
+
+namespace {
+
+using ordered_json = nlohmann::ordered_json;
+constexpr double kPi = 3.14159265358979323846;
+constexpr const char* kAxisColor[3] = {"#d62728", "#2ca02c", "#1f77b4"};
+constexpr const char* kAxisName[3] = {"x", "y", "z"};
+
+using internal::Format;  // printf in the "C" locale: 0.5, never 0,5
+std::string Px(double v) { return Format("%.1f", v); }
+std::string Short(double v) { return Format("%.4g", v); }
+
+std::string Escape(const std::string& text) {
+  std::string out;
+  for (const char c : text) {
+    switch (c) {
+      case '&':
+        out += "&amp;";
+        break;
+      case '<':
+        out += "&lt;";
+        break;
+      case '>':
+        out += "&gt;";
+        break;
+      case '"':
+        out += "&quot;";
+        break;
+      default:
+        out += c;
+    }
+  }
+  return out;
+}
+
+// One position of the file, with what the plots need.
+struct PositionView {
+  Vec3 mean = Vec3::Zero(), direction = Vec3::UnitZ(), residual = Vec3::Zero();
+  double after = 0;
+  std::optional<double> held_out, before;
+  std::optional<std::pair<double, double>> time;     // interval [t_begin, t_end] s
+  std::optional<std::pair<double, double>> samples;  // interval [begin, end) indices
+};
+
+Vec3 Vector(const ordered_json& j) {
+  return Vec3(j.at(0).get<double>(), j.at(1).get<double>(), j.at(2).get<double>());
+}
+
+struct Document {
+  ordered_json doc;
+  LoadedCalibration cal;
+  std::vector<PositionView> positions;
+  std::string unit;  // specific-force unit
+};
+
+Document Read(const ReportInput& input) {
+  Document d;
+  d.cal = ParseCalibrationJson(input.calibration_json, input.calibration_name);
+  d.doc = ordered_json::parse(input.calibration_json);
+  d.unit = std::string(ToString(d.cal.unit));
+  const bool has_before =
+      d.doc.contains("gravity_norm_rms_before") && d.doc["gravity_norm_rms_before"].is_number();
+  try {
+    for (const ordered_json& p : d.doc.value("positions", ordered_json::array())) {
+      PositionView v;
+      v.mean = Vector(p.at("mean"));
+      if (p.contains("direction")) v.direction = Vector(p["direction"]);
+      if (p.contains("residual")) v.residual = Vector(p["residual"]);
+      v.after = p.value("gravity_norm_error", 0.0);
+      if (p.contains("crossval_error") && p["crossval_error"].is_number()) {
+        v.held_out = p["crossval_error"].get<double>();
+      }
+      if (has_before) v.before = v.mean.norm() - d.cal.gravity;
+      if (p.contains("interval") && p["interval"].is_object()) {
+        const ordered_json& i = p["interval"];
+        v.time = std::pair(i.value("t_begin", 0.0), i.value("t_end", 0.0));
+        v.samples = std::pair(i.value("begin", 0.0), i.value("end", 0.0));
+      }
+      d.positions.push_back(v);
+    }
+  } catch (const nlohmann::json::exception& e) {
+    throw InputError(input.calibration_name, 0, std::string("malformed 'positions': ") + e.what());
+  }
+  return d;
+}
+
+// About `target` round tick values covering [lo, hi].
+std::vector<double> NiceTicks(double lo, double hi, int target = 5) {
+  if (!(hi > lo)) return {lo};
+  const double raw = (hi - lo) / target;
+  const double magnitude = std::pow(10.0, std::floor(std::log10(raw)));
+  double step = magnitude;
+  for (const double m : {1.0, 2.0, 5.0, 10.0}) {
+    step = m * magnitude;
+    if (step >= raw) break;
+  }
+  std::vector<double> ticks;
+  for (double t = std::ceil(lo / step) * step; t <= hi + 1e-9 * step; t += step) {
+    ticks.push_back(std::abs(t) < 1e-12 * step ? 0.0 : t);
+  }
+  return ticks;
+}
+
+// A plot frame mapping data coordinates into a rectangle of the SVG.
+struct Frame2d {
+  double x0, x1, y0, y1;
+  double left = 70, top = 14, width = 800, height = 220;
+  double X(double x) const { return left + (x - x0) / (x1 - x0) * width; }
+  double Y(double y) const { return top + height - (y - y0) / (y1 - y0) * height; }
+  double Bottom() const { return top + height; }
+};
+
+Frame2d Padded(double x0, double x1, double y0, double y1) {
+  if (!(x1 > x0)) x0 -= 0.5, x1 += 0.5;
+  if (!(y1 > y0)) {
+    const double pad = std::max(std::abs(y0) * 0.1, 1e-12);
+    y0 -= pad, y1 += pad;
+  }
+  const double pad = 0.05 * (y1 - y0);
+  return Frame2d{x0, x1, y0 - pad, y1 + pad};
+}
+
+std::string Axes(const Frame2d& f, const std::string& x_label, const std::string& y_label) {
+  std::string s = "<rect class=\"frame\" x=\"" + Px(f.left) + "\" y=\"" + Px(f.top) +
+                  "\" width=\"" + Px(f.width) + "\" height=\"" + Px(f.height) + "\"/>\n";
+  for (const double t : NiceTicks(f.x0, f.x1, 8)) {
+    s += "<line class=\"grid\" x1=\"" + Px(f.X(t)) + "\" y1=\"" + Px(f.top) + "\" x2=\"" +
+         Px(f.X(t)) + "\" y2=\"" + Px(f.Bottom()) + "\"/><text class=\"tick\" x=\"" + Px(f.X(t)) +
+         "\" y=\"" + Px(f.Bottom() + 14) + "\" text-anchor=\"middle\">" + Short(t) + "</text>\n";
+  }
+  for (const double t : NiceTicks(f.y0, f.y1, 5)) {
+    s += "<line class=\"grid\" x1=\"" + Px(f.left) + "\" y1=\"" + Px(f.Y(t)) + "\" x2=\"" +
+         Px(f.left + f.width) + "\" y2=\"" + Px(f.Y(t)) + "\"/><text class=\"tick\" x=\"" +
+         Px(f.left - 6) + "\" y=\"" + Px(f.Y(t) + 4) + "\" text-anchor=\"end\">" + Short(t) +
+         "</text>\n";
+  }
+  s += "<text class=\"label\" x=\"" + Px(f.left + f.width / 2) + "\" y=\"" + Px(f.Bottom() + 32) +
+       "\" text-anchor=\"middle\">" + Escape(x_label) + "</text>\n";
+  s += "<text class=\"label\" transform=\"translate(14 " + Px(f.top + f.height / 2) +
+       ") rotate(-90)\" text-anchor=\"middle\">" + Escape(y_label) + "</text>\n";
+  return s;
+}
+
+std::string Svg(const std::string& id, double height, const std::string& title,
+                const std::string& body) {
+  return "<svg id=\"" + id + "\" xmlns=\"http://www.w3.org/2000/svg\" viewBox=\"0 0 900 " +
+         Px(height) + "\" role=\"img\"><title>" + Escape(title) + "</title>\n" + body + "</svg>\n";
+}
+
+std::string Legend(double x, double y,
+                   const std::vector<std::pair<std::string, std::string>>& items) {
+  std::string s;
+  for (const auto& [color, label] : items) {
+    s += "<circle cx=\"" + Px(x) + "\" cy=\"" + Px(y - 4) + "\" r=\"4\" fill=\"" + color +
+         "\"/><text class=\"tick\" x=\"" + Px(x + 8) + "\" y=\"" + Px(y) + "\">" + Escape(label) +
+         "</text>";
+    x += 24 + 7.0 * static_cast<double>(label.size());
+  }
+  return s + "\n";
+}
+
+// The raw signal, at most ~1000 min/max pairs per axis, with the intervals shaded.
+std::string SignalPlot(const Document& d, const ReportInput& input) {
+  const RawLog& log = *input.log;
+  const std::size_t n = log.samples.size();
+  const bool timed = log.time_s.size() == n;
+  const auto t_of = [&](std::size_t i) { return timed ? log.time_s[i] : static_cast<double>(i); };
+  double lo = log.samples[0].minCoeff(), hi = log.samples[0].maxCoeff();
+  for (const Vec3& s : log.samples)
+    lo = std::min(lo, s.minCoeff()), hi = std::max(hi, s.maxCoeff());
+  const Frame2d f = Padded(t_of(0), t_of(n - 1), lo, hi);
+  std::string body;
+  const auto shade = [&](double a, double b, const char* cls, const std::string& tip) {
+    body += "<rect class=\"" + std::string(cls) + "\" x=\"" + Px(f.X(a)) + "\" y=\"" + Px(f.top) +
+            "\" width=\"" + Px(std::max(1.0, f.X(b) - f.X(a))) + "\" height=\"" + Px(f.height) +
+            "\"><title>" + Escape(tip) + "</title></rect>\n";
+  };
+  for (std::size_t k = 0; k < d.positions.size(); ++k) {
+    const PositionView& p = d.positions[k];
+    std::optional<std::pair<double, double>> span = timed ? p.time : p.samples;
+    if (!span) continue;
+    shade(span->first, span->second, "interval", "position " + std::to_string(k + 1));
+    body += "<text class=\"tick\" x=\"" + Px(f.X((span->first + span->second) / 2)) + "\" y=\"" +
+            Px(f.top + 11) + "\" text-anchor=\"middle\">" + std::to_string(k + 1) + "</text>\n";
+  }
+  for (const RejectedInterval& r : input.rejected) {
+    shade(timed ? r.t_begin_s : static_cast<double>(r.begin),
+          timed ? r.t_end_s : static_cast<double>(r.end), "rejected", "not used: " + r.reason);
+  }
+  // Times are seconds from the first sample; a clock that does not start at 0 (an epoch time) is
+  // stated once, here.
+  const std::string time_label =
+      log.time && log.time->origin_s != 0
+          ? "time [s] from the first sample, at " + Format("%.15g", log.time->origin_s) + " s"
+          : std::string("time [s]");
+  body += Axes(f, timed ? time_label : "sample", "raw reading [" + d.cal.raw_unit + "]");
+  const std::size_t buckets = std::min<std::size_t>(n, 1000);
+  for (int a = 0; a < 3; ++a) {
+    std::string points;
+    for (std::size_t b = 0; b < buckets; ++b) {
+      const std::size_t begin = b * n / buckets, end = std::max(begin + 1, (b + 1) * n / buckets);
+      std::size_t i_min = begin, i_max = begin;
+      for (std::size_t i = begin; i < end; ++i) {
+        if (log.samples[i](a) < log.samples[i_min](a)) i_min = i;
+        if (log.samples[i](a) > log.samples[i_max](a)) i_max = i;
+      }
+      for (const std::size_t i : {std::min(i_min, i_max), std::max(i_min, i_max)}) {
+        points += Px(f.X(t_of(i))) + "," + Px(f.Y(log.samples[i](a))) + " ";
+      }
+    }
+    body += "<polyline class=\"trace\" stroke=\"" + std::string(kAxisColor[a]) + "\" points=\"" +
+            points + "\"/>\n";
+  }
+  body += Legend(f.left + 8, f.Bottom() + 50,
+                 {{kAxisColor[0], "x"},
+                  {kAxisColor[1], "y"},
+                  {kAxisColor[2], "z"},
+                  {"#cfd8e3", "static interval (used)"},
+                  {"#f4c7c3", "still, not used"}});
+  return Svg("raw-signal", 300, "raw signal with the static intervals", body);
+}
+
+// |f| − g per position: after calibration, held out, and before when the readings are forces.
+std::string NormPlot(const Document& d) {
+  const std::size_t m = d.positions.size();
+  double lo = 0, hi = 0;
+  for (const PositionView& p : d.positions) {
+    for (const std::optional<double>& v : {std::optional<double>(p.after), p.held_out, p.before}) {
+      if (v) lo = std::min(lo, *v), hi = std::max(hi, *v);
+    }
+  }
+  const Frame2d f = Padded(0.5, static_cast<double>(m) + 0.5, lo, hi);
+  std::string body = Axes(f, "position", "|f| - g [" + d.unit + "]");
+  body += "<line class=\"zero\" x1=\"" + Px(f.left) + "\" y1=\"" + Px(f.Y(0)) + "\" x2=\"" +
+          Px(f.left + f.width) + "\" y2=\"" + Px(f.Y(0)) + "\"/>\n";
+  for (std::size_t k = 0; k < m; ++k) {
+    const PositionView& p = d.positions[k];
+    const double x = f.X(static_cast<double>(k + 1));
+    const std::string tip = "position " + std::to_string(k + 1);
+    if (p.before) {
+      body += "<rect class=\"before\" x=\"" + Px(x - 3) + "\" y=\"" + Px(f.Y(*p.before) - 3) +
+              "\" width=\"6\" height=\"6\"><title>" + tip + " before: " + Short(*p.before) +
+              "</title></rect>\n";
+    }
+    if (p.held_out) {
+      body += "<circle class=\"held-out\" cx=\"" + Px(x) + "\" cy=\"" + Px(f.Y(*p.held_out)) +
+              "\" r=\"4.5\"><title>" + tip + " held out: " + Short(*p.held_out) +
+              "</title></circle>\n";
+    }
+    body += "<circle class=\"after\" cx=\"" + Px(x) + "\" cy=\"" + Px(f.Y(p.after)) +
+            "\" r=\"3\"><title>" + tip + " after: " + Short(p.after) + "</title></circle>\n";
+  }
+  std::vector<std::pair<std::string, std::string>> legend = {{"#1f77b4", "after calibration"}};
+  if (m > 0 && d.positions[0].held_out) legend.push_back({"#ff7f0e", "held out (fit without it)"});
+  if (m > 0 && d.positions[0].before) legend.push_back({"#7f7f7f", "before (raw as force)"});
+  body += Legend(f.left + 8, f.Bottom() + 50, legend);
+  return Svg("norm-error", 300, "|f| - g per position", body);
+}
+
+// Lambert azimuthal equal-area projection of each hemisphere about its pole.
+std::string SpherePlot(const Document& d) {
+  std::string body;
+  const double radius = 150, cy = 190;
+  for (int h = 0; h < 2; ++h) {
+    const double cx = 225 + 450 * h;
+    const double sign = h == 0 ? 1.0 : -1.0;
+    body += "<circle class=\"disc\" cx=\"" + Px(cx) + "\" cy=\"" + Px(cy) + "\" r=\"" + Px(radius) +
+            "\"/>\n";
+    for (const double polar_deg : {30.0, 60.0}) {  // circles of equal polar angle
+      const double r = radius * std::sqrt(2.0) * std::sin(polar_deg * kPi / 360.0);
+      body += "<circle class=\"grid\" cx=\"" + Px(cx) + "\" cy=\"" + Px(cy) + "\" r=\"" + Px(r) +
+              "\" fill=\"none\"/>\n";
+    }
+    body += "<text class=\"label\" x=\"" + Px(cx) + "\" y=\"22\" text-anchor=\"middle\">" +
+            std::string(h == 0 ? "upper hemisphere, z &gt; 0 (seen from +z)"
+                               : "lower hemisphere, z &lt; 0 (seen from -z)") +
+            "</text>\n";
+    body +=
+        "<text class=\"tick\" x=\"" + Px(cx + radius + 4) + "\" y=\"" + Px(cy + 4) + "\">+x</text>";
+    body += "<text class=\"tick\" x=\"" + Px(cx - 6) + "\" y=\"" +
+            Px(h == 0 ? cy - radius - 4 : cy + radius + 14) + "\">+y</text>\n";
+    for (std::size_t k = 0; k < d.positions.size(); ++k) {
+      const Vec3 c = d.positions[k].direction.normalized();
+      if ((h == 0) != (c(2) >= 0)) continue;
+      // Projection about the pole sign·e_z: distance 2 sin(θ/2) = √(2(1 − sign z)); seen from
+      // outside the sphere, so the lower disc mirrors y.
+      const double s = std::sqrt(2.0 / (1.0 + sign * c(2)));
+      const double px = cx + radius / std::sqrt(2.0) * s * c(0);
+      const double py = cy - sign * radius / std::sqrt(2.0) * s * c(1);
+      body += "<circle class=\"direction\" cx=\"" + Px(px) + "\" cy=\"" + Px(py) +
+              "\" r=\"5\"><title>position " + std::to_string(k + 1) + ": (" + Short(c(0)) + ", " +
+              Short(c(1)) + ", " + Short(c(2)) + ")</title></circle>\n";
+    }
+  }
+  return Svg("sphere", 380, "measured gravity directions, body frame", body);
+}
+
+std::string ResidualPlot(const Document& d) {
+  const std::size_t m = d.positions.size();
+  double lo = 0, hi = 0;
+  for (const PositionView& p : d.positions)
+    lo = std::min(lo, p.residual.minCoeff()), hi = std::max(hi, p.residual.maxCoeff());
+  const Frame2d f = Padded(0.5, static_cast<double>(m) + 0.5, lo, hi);
+  std::string body = Axes(f, "position", "residual p - mu [" + d.cal.raw_unit + "]");
+  body += "<line class=\"zero\" x1=\"" + Px(f.left) + "\" y1=\"" + Px(f.Y(0)) + "\" x2=\"" +
+          Px(f.left + f.width) + "\" y2=\"" + Px(f.Y(0)) + "\"/>\n";
+  const double dx = std::min(6.0, 0.25 * f.width / std::max<double>(1, static_cast<double>(m)));
+  for (std::size_t k = 0; k < m; ++k) {
+    for (int a = 0; a < 3; ++a) {
+      const double x = f.X(static_cast<double>(k + 1)) + (a - 1) * dx;
+      body += "<circle cx=\"" + Px(x) + "\" cy=\"" + Px(f.Y(d.positions[k].residual(a))) +
+              "\" r=\"2.5\" fill=\"" + kAxisColor[a] + "\"><title>position " +
+              std::to_string(k + 1) + " " + kAxisName[a] + ": " +
+              Short(d.positions[k].residual(a)) + "</title></circle>\n";
+    }
+  }
+  body += Legend(f.left + 8, f.Bottom() + 50,
+                 {{kAxisColor[0], "x"}, {kAxisColor[1], "y"}, {kAxisColor[2], "z"}});
+  return Svg("residuals", 300, "residuals per axis", body);
+}
+
+std::string Row(const std::string& quantity, double value, std::optional<double> sigma,
+                const std::string& unit, const char* format = "%.6g") {
+  return "<tr><td>" + Escape(quantity) + "</td><td class=\"num\">" + Format(format, value) +
+         "</td><td class=\"num\">" + (sigma ? "&plusmn; " + Format("%.2g", *sigma) : "&ndash;") +
+         "</td><td>" + Escape(unit) + "</td></tr>\n";
+}
+
+// ±1σ of the engineering quantities from the file's covariance; none without degrees of freedom.
+std::optional<EngineeringStd> EngineeringSigmas(const Document& d) {
+  if (d.cal.covariance.size() == 0) return std::nullopt;
+  const LoadedCalibration& cal = d.cal;
+  return EngineeringUncertainty(cal.params, cal.model, cal.frame, cal.gravity, cal.covariance);
+}
+
+std::string ParameterTable(const Document& d) {
+  const LoadedCalibration& cal = d.cal;
+  const std::optional<EngineeringStd> std_eng = EngineeringSigmas(d);
+  const EngineeringParameters eng = ToEngineering(cal.params, cal.gravity);
+  const Misalignment mis = MisalignmentOf(cal.params.K, cal.frame);
+  const std::string scale_unit = cal.raw_unit + " per " + d.unit;
+  std::string rows;
+  for (int i = 0; i < 3; ++i) {
+    rows += Row(std::string("scale factor ") + kAxisName[i], eng.scale_factor(i),
+                std_eng ? std::optional(std_eng->scale_factor(i)) : std::nullopt, scale_unit);
+  }
+  for (Eigen::Index i = 0; i < mis.rad.size(); ++i) {
+    rows +=
+        Row("misalignment " + std::string(mis.names[static_cast<std::size_t>(i)]),
+            mis.rad(i) * kArcsecPerRad,
+            std_eng ? std::optional(std_eng->misalignment_rad(i) * kArcsecPerRad) : std::nullopt,
+            "arcsec", "%.1f");
+  }
+  const double micro_g = 1e6 / cal.gravity;  // the calibration's g is 1 g
+  for (int i = 0; i < 3; ++i) {
+    rows +=
+        Row(std::string("bias ") + kAxisName[i], eng.bias_force(i) * micro_g,
+            std_eng ? std::optional(std_eng->bias_force(i) * micro_g) : std::nullopt, "µg", "%.1f");
+  }
+  if (cal.model == ModelKind::kQuadratic) {
+    for (int i = 0; i < 3; ++i) {
+      rows += Row(std::string("squared coefficient ") + kAxisName[i], eng.k2_g_per_g2(i),
+                  std_eng ? std::optional(std_eng->k2_g_per_g2(i)) : std::nullopt, "g/g²", "%.3g");
+    }
+  }
+  return "<table id=\"parameters\"><thead><tr><th>quantity</th><th>value</th><th>1σ</th>"
+         "<th>unit</th></tr></thead><tbody>\n" +
+         rows + "</tbody></table>\n" +
+         (std_eng ? "" : "<p>No uncertainties: the fit had no degrees of freedom left.</p>\n");
+}
+
+// The calibration file's own diagnosis (diagnosis.hpp), and the still periods not used that the
+// report's log shows, when the file does not list them already. Warnings and failures only; notes
+// are listed apart.
+std::vector<std::string> Warnings(const Document& d, const ReportInput& input, bool notes = false) {
+  std::vector<std::string> w;
+  const ordered_json& findings = d.doc.value("diagnostics", ordered_json());
+  if (!findings.is_array()) {
+    if (!notes) {
+      w.push_back(
+          "the calibration file carries no diagnosis (written by an earlier accelcal): "
+          "calibrate again to have it checked");
+    }
+    return w;
+  }
+  bool has_periods = false;
+  for (const ordered_json& f : findings) {
+    if (!f.is_object()) continue;
+    const std::string severity = f.value("severity", std::string());
+    const std::string code = f.value("code", std::string());
+    has_periods = has_periods || code == "rejected_period";
+    if ((severity == "note") != notes) continue;
+    w.push_back((severity == "failure" ? "FAILED: " : "") + f.value("message", std::string()));
+  }
+  if (!has_periods) {
+    for (const Finding& f : RejectedPeriodFindings(input.rejected)) {
+      if ((f.severity == Severity::kNote) == notes) w.push_back(f.message);
+    }
+  }
+  return w;
+}
+
+const char* kStyle =
+    R"(body{font:14px/1.45 system-ui,sans-serif;max-width:940px;margin:24px auto;color:#222}
+h1{font-size:22px}h2{font-size:17px;margin-top:28px}svg{width:100%;height:auto;display:block}
+.frame{fill:none;stroke:#888}.grid{stroke:#e3e3e3}.tick{font-size:11px;fill:#444}.label{font-size:12px;fill:#222}
+.zero{stroke:#555;stroke-dasharray:4 3}.trace{fill:none;stroke-width:1}.interval{fill:#cfd8e3}.rejected{fill:#f4c7c3}
+.after{fill:#1f77b4}.held-out{fill:none;stroke:#ff7f0e;stroke-width:1.5}.before{fill:#7f7f7f}
+.disc{fill:#f7f7f7;stroke:#888}.direction{fill:#1f77b4;stroke:#fff}
+table{border-collapse:collapse}td,th{padding:3px 10px;border-bottom:1px solid #ddd;text-align:left}
+td.num{text-align:right;font-variant-numeric:tabular-nums}.warn li{color:#a33}dl{display:grid;grid-template-columns:max-content auto;gap:2px 16px}dd{margin:0}
+)";
+
+std::string Render(const ReportInput& input) {
+  const Document d = Read(input);
+  const std::string source = d.cal.source.empty() ? input.calibration_name : d.cal.source;
+  std::string html =
+      "<!DOCTYPE html>\n<html lang=\"en\">\n<head>\n<meta charset=\"utf-8\">\n"
+      "<title>accelcal report: " +
+      Escape(source) + "</title>\n<style>\n" + kStyle +
+      "</style>\n</head>\n<body>\n<h1>Accelerometer calibration: " + Escape(source) + "</h1>\n";
+  // A count as written, or "?": a file's number need not fit an int (converting 1e308 was UB).
+  const auto Iterations = [](const ordered_json& solver) -> std::string {
+    const auto it = solver.is_object() ? solver.find("iterations") : solver.end();
+    return it != solver.end() && it->is_number_integer() ? it->dump() : std::string("?");
+  };
+  const ordered_json& solver = d.doc.value("solver", ordered_json::object());
+  const auto item = [](const std::string& key, const std::string& value) {
+    return "<dt>" + Escape(key) + "</dt><dd>" + Escape(value) + "</dd>\n";
+  };
+  html += "<section id=\"summary\"><dl>\n";
+  html += item("model", std::string(ToString(d.cal.model)) + ", frame " +
+                            std::string(ToString(d.cal.frame)));
+  html += item("method", solver.value("method", std::string("?")) + " (" +
+                             solver.value("estimator", std::string("ml")) + "), " +
+                             Iterations(solver) + " iterations, " +
+                             (solver.value("converged", true) ? "converged" : "NOT converged"));
+  html += item("positions", std::to_string(d.positions.size()));
+  html += item("gravity", Format("%.6g", d.cal.gravity) + " " + d.unit);
+  const auto rms = [&](const char* key) -> std::string {
+    return d.doc.contains(key) && d.doc[key].is_number()
+               ? Short(d.doc[key].get<double>()) + " " + d.unit
+               : "n/a";
+  };
+  html += item("RMS of |f| - g", "before " + rms("gravity_norm_rms_before") + ", after " +
+                                     rms("gravity_norm_rms_after") + ", held out " +
+                                     rms("crossval_rms"));
+  html += "</dl></section>\n";
+  const std::vector<std::string> warnings = Warnings(d, input);
+  html += "<section id=\"warnings\"><h2>Warnings</h2>\n<p>Verdict: <b>" +
+          Escape(d.doc.value("verdict", std::string("not recorded"))) + "</b></p>\n";
+  if (warnings.empty()) {
+    html += "<p>None.</p>\n";
+  } else {
+    html += "<ul class=\"warn\">\n";
+    for (const std::string& w : warnings) html += "<li>" + Escape(w) + "</li>\n";
+    html += "</ul>\n";
+  }
+  const std::vector<std::string> notes = Warnings(d, input, true);
+  if (!notes.empty()) {
+    html += "<h3>Notes</h3>\n<ul class=\"note\">\n";
+    for (const std::string& n : notes) html += "<li>" + Escape(n) + "</li>\n";
+    html += "</ul>\n";
+  }
+  html += "</section>\n<section><h2>Parameters</h2>\n" + ParameterTable(d) + "</section>\n";
+  html += "<section><h2>Raw signal and static intervals</h2>\n";
+  if (input.log != nullptr && !input.log->samples.empty()) {
+    html += SignalPlot(d, input);
+  } else {
+    html += "<p>No raw log was given (<code>accelcal report CAL.json LOG</code> shows it).</p>\n";
+  }
+  html += "</section>\n<section><h2>|f| - g per position</h2>\n" + NormPlot(d) + "</section>\n";
+  html += "<section><h2>Coverage of the sphere</h2>\n" + SpherePlot(d) + "</section>\n";
+  html += "<section><h2>Residuals per axis</h2>\n" + ResidualPlot(d) + "</section>\n";
+  html += "<footer><p>accelcal " + Escape(source) + "</p></footer>\n</body>\n</html>\n";
+  return html;
+}
+
+// A field of the wrong JSON type anywhere the report reads is the file's fault, said as such.
+template <typename Function>
+auto ReadingTheFile(const ReportInput& input, Function function) {
+  try {
+    return function();
+  } catch (const nlohmann::json::exception& e) {
+    throw InputError(input.calibration_name, 0,
+                     std::string("malformed calibration file: ") + e.what());
+  }
+}
+
+}  // namespace
+
+std::vector<std::string> ReportWarnings(const ReportInput& input) {
+  return ReadingTheFile(input, [&] { return Warnings(Read(input), input); });
+}
+
+std::string RenderReport(const ReportInput& input) {
+  return ReadingTheFile(input, [&] { return Render(input); });
+}
+
+}  // namespace accelcal

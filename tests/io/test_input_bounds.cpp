@@ -1,0 +1,207 @@
+// Inputs read in bounded memory whatever they are (issue 16): a log read from a file in blocks
+// gives exactly what the same text in memory gives; a file that shrinks while it is read is an
+// error (it was a SIGBUS when the file was mapped); a pipe is read up to a limit; the line
+// counter does not wrap.
+#include <fcntl.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include <csignal>
+#include <cstdio>
+#include <fstream>
+#include <string>
+#include <thread>
+
+#include <gtest/gtest.h>
+
+#include "accelcal/error.hpp"
+#include "accelcal/log_reader.hpp"
+#include "accelcal/series_file.hpp"
+#include "io/text_lines.hpp"
+
+namespace accelcal {
+namespace {
+
+std::string TempPath(const std::string& name) {
+  const char* dir = std::getenv("TMPDIR");
+  return std::string(dir ? dir : "/tmp") + "/accelcal_bounds_" + std::to_string(::getpid()) + "_" +
+         name;
+}
+
+void WriteText(const std::string& path, const std::string& text) {
+  std::ofstream(path, std::ios::binary) << text;
+}
+
+std::string ErrorReading(const std::string& path, const ReadOptions& options) {
+  try {
+    ReadInput(path, options);
+  } catch (const InputError& e) {
+    return e.what();
+  }
+  return "no error";
+}
+
+// Over 3 MiB with comments, blank lines, and a header, so that lines straddle the 1 MiB blocks.
+std::string LongLog(const char* eol) {
+  std::string text = std::string("# a comment") + eol + "t,x,y,z" + eol;
+  for (int k = 0; k < 160000; ++k) {
+    text += std::to_string(k) + "e-3," + std::to_string(k % 977) + ".25,-2," +
+            std::to_string(k % 13) + eol;
+    if (k % 1000 == 0) text += std::string(eol) + "  # note " + std::to_string(k) + eol;
+  }
+  return text;
+}
+
+TEST(InputBounds, AFileReadInBlocksGivesWhatTheTextInMemoryGives) {
+  for (const char* eol : {"\n", "\r\n", "\r"}) {
+    const std::string text = LongLog(eol);
+    ASSERT_GT(text.size(), std::size_t{3} << 20);
+    const std::string path = TempPath("blocks.csv");
+    WriteText(path, text);
+    ReadOptions options;
+    const InputData from_file = ReadInput(path, options);
+    const InputData in_memory = ParseInput(text, path, options);
+    std::remove(path.c_str());
+    ASSERT_EQ(from_file.kind, InputKind::kRaw);
+    ASSERT_EQ(from_file.raw.samples.size(), 160000u);
+    EXPECT_EQ(from_file.raw.samples, in_memory.raw.samples);
+    EXPECT_EQ(from_file.raw.time_s, in_memory.raw.time_s);
+    EXPECT_EQ(from_file.raw.line, in_memory.raw.line);
+    // Line numbers count every line: 2 before the first row, 2 more every 1000 rows.
+    EXPECT_EQ(from_file.raw.line[0], 3u);
+    EXPECT_EQ(from_file.raw.line[1], 6u);
+    EXPECT_EQ(from_file.raw.line.back(), 3u + 159999u + 2 * 160u);
+  }
+}
+
+TEST(InputBounds, AnErrorDeepInAFileNamesItsLine) {
+  std::string text = LongLog("\n");
+  text += "1,2,x,4\n";
+  const std::string path = TempPath("late_error.csv");
+  WriteText(path, text);
+  const std::string error = ErrorReading(path, {});
+  std::remove(path.c_str());
+  EXPECT_NE(error.find(":160323: column 3: 'x' is not a number"), std::string::npos) << error;
+}
+
+TEST(InputBounds, AFileThatShrinksWhileReadIsAnErrorNotACrash) {
+  // The progress hook runs between blocks of rows: the file is cut there, as a logger rotating
+  // it with copytruncate would. A mapped file raised SIGBUS past the new end.
+  std::string text = "t,x,y,z\n";
+  for (int k = 0; k < 400000; ++k) text += std::to_string(k) + "e-3,1.5,2.5,3.5\n";
+  const std::string path = TempPath("shrinks.csv");
+  WriteText(path, text);
+  ReadOptions options;
+  bool cut = false;
+  options.progress = [&](std::size_t, std::size_t) {
+    if (!cut) {
+      ASSERT_EQ(::truncate(path.c_str(), 4096), 0);
+    }
+    cut = true;
+  };
+  const std::string error = ErrorReading(path, options);
+  std::remove(path.c_str());
+  EXPECT_TRUE(cut);
+  EXPECT_NE(error.find("shrank while it was read"), std::string::npos) << error;
+}
+
+TEST(InputBounds, ASeriesThatShrinksWhileReadIsAnErrorNotACrash) {
+  for (const bool binary : {true, false}) {
+    std::string text;
+    if (binary) AppendSeriesHeader(&text);
+    for (int k = 0; k < 300000; ++k) {
+      SystemSample s;
+      s.t = k * 1e-3;
+      s.f = Vec3(0.1, 0.2, 9.8);
+      if (binary) {
+        AppendSeriesSample(s, &text);
+      } else {
+        text += std::to_string(s.t) + ",0.1,0.2,9.8,0,0\n";
+      }
+    }
+    const std::string path = TempPath(binary ? "series.bin" : "series.csv");
+    WriteText(path, text);
+    long samples = 0;
+    bool cut = false;
+    std::string error = "no error";
+    try {
+      ReadSeries(
+          path, [&](const SystemSample&) { ++samples; },
+          [&](std::size_t done, std::size_t) {
+            if (done > 0 && !cut) {
+              ASSERT_EQ(::truncate(path.c_str(), 4096), 0);
+              cut = true;
+            }
+          });
+    } catch (const InputError& e) {
+      error = e.what();
+    }
+    std::remove(path.c_str());
+    EXPECT_TRUE(cut);
+    EXPECT_LT(samples, 300000);
+    EXPECT_NE(error.find("shrank while it was read"), std::string::npos) << error;
+  }
+}
+
+TEST(InputBounds, APipeIsReadUpToTheStreamLimit) {
+  const std::string fifo = TempPath("pipe");
+  ASSERT_EQ(::mkfifo(fifo.c_str(), 0600), 0);
+  std::signal(SIGPIPE, SIG_IGN);  // the reader stops first; the writer's write then fails
+  std::thread writer([&] {
+    const int fd = ::open(fifo.c_str(), O_WRONLY);
+    if (fd < 0) return;
+    const std::string row = "1.5,2.5,3.5\n";
+    std::string chunk;
+    for (int k = 0; k < 4096; ++k) chunk += row;
+    for (int k = 0; k < 64; ++k) {  // 3 MiB, 1 MiB allowed
+      if (::write(fd, chunk.data(), chunk.size()) < 0) break;
+    }
+    ::close(fd);
+  });
+  ReadOptions options;
+  options.max_stream_bytes = std::size_t{1} << 20;
+  const std::string error = ErrorReading(fifo, options);
+  writer.join();
+  std::remove(fifo.c_str());
+  EXPECT_NE(error.find("more than 1 MiB from something that is not a regular file"),
+            std::string::npos)
+      << error;
+}
+
+TEST(InputBounds, DevicesAndDirectoriesAreRefusedAtOnce) {
+  EXPECT_NE(ErrorReading("/dev/zero", {}).find("/dev/zero:1: a NUL byte at column 1"),
+            std::string::npos);
+  EXPECT_NE(ErrorReading("/dev/null", {}).find("no data"), std::string::npos);
+  EXPECT_NE(ErrorReading("/", {}).find("is a directory"), std::string::npos);
+}
+
+TEST(InputBounds, BlankLinesBeforeTheFirstRowAreBounded) {
+  // 80 MiB of line ends: refused after 64 MiB, without holding the rest.
+  const std::string path = TempPath("blank.csv");
+  {
+    std::ofstream out(path, std::ios::binary);
+    const std::string blank(std::size_t{1} << 20, '\n');
+    for (int k = 0; k < 80; ++k) out << blank;
+    out << "1,2,3\n";
+  }
+  const std::string error = ErrorReading(path, {});
+  std::remove(path.c_str());
+  EXPECT_NE(error.find("only 0 data rows in the first 64 MiB"), std::string::npos) << error;
+}
+
+TEST(InputBounds, TheLineCounterStopsBeforeItWraps) {
+  const std::string source = "huge.csv";
+  internal::LineReader reader("1,2,3\n4,5,6\n", source, UINT32_MAX - 1, '\n');
+  internal::Line line;
+  ASSERT_TRUE(reader.Next(&line));
+  EXPECT_EQ(line.number, UINT32_MAX);
+  try {
+    reader.Next(&line);
+    ADD_FAILURE() << "no error";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("more than 4294967295 lines"), std::string::npos);
+  }
+}
+
+}  // namespace
+}  // namespace accelcal

@@ -1,7 +1,8 @@
 #pragma once
 /// @file engineering.hpp
-/// Engineering quantities of a calibration, as in paper 000 Table 3 (see shared ERRATA.md for the
-/// conventions): K = k_a T with k_a = diag(scale factors) and T lower-triangular with unit rows.
+/// Engineering quantities of a calibration, as in paper 000 Table 3 (see docs/errata.md#000-table3
+/// for the conventions): K = k_a T with k_a = diag(scale factors) and T lower-triangular with unit
+/// rows.
 
 #include "accelcal/frame.hpp"
 #include "accelcal/model.hpp"
@@ -19,10 +20,12 @@ struct EngineeringParameters {
   double tau_yx = 0, tau_zx = 0, tau_zy = 0;
   /// τ_yy, τ_zz: diagonal of T, close to 1.
   double tau_yy = 1, tau_zz = 1;
-  /// Acceleration-equivalent bias b_i / k_a,i [specific-force unit] (ERRATA: p0 = k_a·b).
+  /// Acceleration-equivalent bias b_i / k_a,i [specific-force unit]
+  /// (docs/errata.md#000-table3: p0 = k_a·b).
   Vec3 bias_force;
-  /// Acceleration-equivalent squared coefficients k2_i · g / k_a,i [g/g²] (ERRATA: k2 = k_a·K2/g),
-  /// with g the gravity magnitude of the calibration in the specific-force unit.
+  /// Acceleration-equivalent squared coefficients k2_i · g / k_a,i [g/g²]
+  /// (docs/errata.md#000-table3: k2 = k_a·K2/g), with g the gravity magnitude of the calibration in
+  /// the specific-force unit.
   Vec3 k2_g_per_g2;
 };
 

@@ -32,9 +32,9 @@ struct Scenario {
 };
 
 /// "yang2012": paper 000 Table 3 truth (quadratic), Table 2's 18 positions, 10 µg/√Hz at 100 Hz
-/// for 60 s per position (ERRATA: 1.291 µg per axis per averaged reading), g = 9.8 m/s².
-/// "sunxu2020": paper 001 eq. (19) (T_a upper-triangular, z-first; linear model, g units), 300
-/// new Gaussian attitudes per run, σ = 0.1 g.
+/// for 60 s per position (docs/errata.md#000-table4: 1.291 µg per axis per averaged reading), g
+/// = 9.8 m/s². "sunxu2020": paper 001 eq. (19) (T_a upper-triangular, z-first; linear model, g
+/// units), 300 new Gaussian attitudes per run, σ = 0.1 g.
 std::optional<Scenario> ScenarioByName(std::string_view name);
 
 /// The most runs of one Monte Carlo: each keeps its outcome until the statistics are taken, so
@@ -83,7 +83,8 @@ struct MonteCarloResult {
   double coverage = 0;
   double inclination_error_rms_arcsec = 0;  ///< angle between estimated and true directions
   /// Paper 001 eq. (20), means over the runs [%], and the mean error of diag(T_a) (z-first form)
-  /// beside σ²/T_ii, the incidental-parameter bias ERRATA expects at this noise level.
+  /// beside σ²/T_ii, the incidental-parameter bias docs/errata.md#001-ml-bias expects at this noise
+  /// level.
   double e_T_percent_mean = 0, e_b_percent_mean = 0;
   Vec3 diag_T_bias = Vec3::Zero();
   Vec3 diag_T_bias_expected = Vec3::Zero();

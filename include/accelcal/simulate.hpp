@@ -18,12 +18,14 @@ Vec3 DirectionFromAngles(double theta_rad, double phi_rad);
 /// Paper 000 Table 2: the 18 optimal positions (θ, φ); '*' entries taken as φ = 0.
 std::vector<Vec3> Yang18Directions();
 
-/// Paper 000 Table 3 truth in raw pulses with f in m/s² and g = 9.8 (ERRATA.md conventions):
-/// k_a = (4800, 4900, 5000) pulse/(m/s²); τ_yx = sin 0.01°, (τ_zx, τ_zy) = sin 0.02°·(cos 30°, sin
-/// 30°), unit rows; biases (0.01, 0.02, 0.03) m/s²; squared coefficients (1, 2, 3)e-5 g/g².
+/// Paper 000 Table 3 truth in raw pulses with f in m/s² and g = 9.8 (docs/errata.md#000-table3
+/// conventions): k_a = (4800, 4900, 5000) pulse/(m/s²); τ_yx = sin 0.01°, (τ_zx, τ_zy) = sin
+/// 0.02°·(cos 30°, sin 30°), unit rows; biases (0.01, 0.02, 0.03) m/s²; squared coefficients
+/// (1, 2, 3)e-5 g/g².
 ModelParameters Yang2012Truth();
 inline constexpr double kYang2012Gravity_ms2 = 9.8;
-/// Per-axis noise of one averaged position in Table 4 (ERRATA): 10 µg/√Hz·√100 Hz / √6000 [m/s²].
+/// Per-axis noise of one averaged position in Table 4 (docs/errata.md#000-table4):
+/// 10 µg/√Hz·√100 Hz / √6000 [m/s²].
 inline constexpr double kYang2012PositionSigma_ms2 = 10e-6 * 10.0 / 77.45966692414834 * 9.8;
 /// That noise in raw units for a device: per axis, the length of its row of K times it.
 Vec3 Yang2012SigmaRaw(const ModelParameters& device);
@@ -40,9 +42,9 @@ Vec3 SunXu2020Ba();
 inline constexpr double kSunXu2020Sigma_g = 0.1;  ///< §4.1 noise, per axis [g]
 
 /// Paper 001 §4.1 attitudes: pitch, roll and heading of (120°, 120°, 80°) each multiplied by a
-/// standard-normal factor (ERRATA.md: uniform factors leave the problem nearly unobservable).
-/// Returns the unit specific-force direction in the body frame, c = (sin θ, −sin φ cos θ,
-/// −cos φ cos θ) (heading does not move gravity).
+/// standard-normal factor (docs/errata.md#001-attitudes: uniform factors leave the problem nearly
+/// unobservable). Returns the unit specific-force direction in the body frame, c = (sin θ, −sin φ
+/// cos θ, −cos φ cos θ) (heading does not move gravity).
 std::vector<Vec3> SunXu2020Directions(int count, std::uint64_t seed);
 
 /// Readings p_k = M c_k + b + n_k, n_k ~ N(0, sigma² I), for any 3x3 M (paper 001 eq. (4) with

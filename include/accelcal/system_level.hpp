@@ -9,9 +9,9 @@
 ///     z = ½(|f̂^p/g|² − 1) = H x + v,  H = [1, −u_x, −u_y, u_x² − u_y², 2 u_x u_y]   (eq. (20),
 ///     (27))
 /// has the five combined coefficients x1…x5 of eq. (21)-(25). They are estimated by recursive least
-/// squares in information form (the Kalman filter of a constant state). ERRATA: the squared noise
-/// term of eq. (20) biases x1 by E|n|²/(2g²); the estimator removes it with the noise variance
-/// measured from successive differences.
+/// squares in information form (the Kalman filter of a constant state). docs/errata.md#003-eq20:
+/// the squared noise term of eq. (20) biases x1 by E|n|²/(2g²); the estimator removes it with the
+/// noise variance measured from successive differences.
 ///
 /// Attitude (eq. (28)-(38)): pitch and roll errors are a mean, an Earth-rate fundamental and a
 /// second harmonic; their ten Fourier coefficients (mean, cos/sin of S, cos/sin of 2S) are fitted
@@ -19,13 +19,14 @@
 ///
 /// Separation (eq. (39)-(41)): (ΔSF_x/2SF_x − ΔSF_y/2SF_y) from x4, δφ2s, δθ2c and (Δβ_yz −
 /// Δβ_xz)/2 from x5, δφ2c, δθ2s (inverse-variance weighted, where the paper averages equally); the
-/// six (∇x/g, ∇y/g, Δβyx, Δβzx, Δβxy, Δβzy) from x2, x3, δφ1s, δφ1c, δθ1c, δθ1s. ERRATA: that
-/// system has rank 4 (f_z^p = g sin L is constant): ∇x/g and Δβxy are determined only as ∇x/g −
-/// Δβxy sin L, ∇y/g and Δβyx only as ∇y/g + Δβyx sin L. The rank is detected, not assumed.
+/// six (∇x/g, ∇y/g, Δβyx, Δβzx, Δβxy, Δβzy) from x2, x3, δφ1s, δφ1c, δθ1c, δθ1s.
+/// docs/errata.md#003-eq41: that system has rank 4 (f_z^p = g sin L is constant): ∇x/g and Δβxy are
+/// determined only as ∇x/g − Δβxy sin L, ∇y/g and Δβyx only as ∇y/g + Δβyx sin L. The rank is
+/// detected, not assumed.
 ///
-/// Sign conventions (those that reproduce the printed equations; ERRATA: Table 4's reference
-/// values do not all follow from them): the platform-frame specific force is measured as
-/// f̂ = (I + diag(ΔSF/SF) + ΔC_p^a) f − ∇ with ΔC_p^a of eq. (14).
+/// Sign conventions (those that reproduce the printed equations; docs/errata.md#003-table4: Table
+/// 4's reference values do not all follow from them): the platform-frame specific force is measured
+/// as f̂ = (I + diag(ΔSF/SF) + ΔC_p^a) f − ∇ with ΔC_p^a of eq. (14).
 
 #include <cstdint>
 #include <functional>

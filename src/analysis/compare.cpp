@@ -5,6 +5,7 @@
 
 #include "accelcal/error.hpp"
 #include "accelcal/frame.hpp"
+#include "statistics/fit.hpp"
 #include "statistics/outliers.hpp"
 
 namespace accelcal {

@@ -5,6 +5,7 @@
 #include "accelcal/error.hpp"
 #include "accelcal/frame.hpp"
 #include "core/text_format.hpp"
+#include "statistics/fit.hpp"
 #include "statistics/outliers.hpp"
 #include "statistics/student_t.hpp"
 

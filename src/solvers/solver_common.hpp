@@ -10,7 +10,7 @@
 #include <Eigen/Cholesky>
 #include <Eigen/Core>
 
-#include "accelcal/calibrate.hpp"
+#include "accelcal/calibration_types.hpp"
 #include "accelcal/model.hpp"
 
 namespace accelcal::internal {
@@ -252,8 +252,8 @@ void ComputeNewtonLagrangeStep(const Problem& problem, const Vec9& theta,
 SolverOutput SolveNewtonLagrange(const Problem& problem, const ModelParameters& init_params,
                                  std::vector<Vec3> init_dirs, const CalibrationOptions& options);
 
-/// Per-position constrained Newton (paper 000 eq. (18)-(24), Hessian per ERRATA.md): minimises
-/// ‖p − μ(g c)‖² on |c| = 1 starting from c0. Exposed for tests.
+/// Per-position constrained Newton (paper 000 eq. (18)-(24), Hessian per docs/errata.md#000-eq25):
+/// minimises ‖p − μ(g c)‖² on |c| = 1 starting from c0. Exposed for tests.
 Vec3 KktDirection(const ModelParameters& params, double gravity, const Vec3& p, const Vec3& c0,
                   int max_iterations);
 

@@ -18,7 +18,7 @@ void DirectionCostDerivatives(const ModelParameters& params, double gravity, con
   // f(c) = ‖r‖², r = μ(g c) − p, J = ∂r/∂c = g (K + 2 diag(k2 ∘ g c)).
   // ∇f = 2 Jᵀ r (eq. (24) without the multiplier term);
   // ∇²f = 2 JᵀJ + 2 Σ_i r_i ∇²μ_i = 2 JᵀJ + 4 g² diag(k2 ∘ r): this is eq. (25) with the index
-  // typos of the printed version corrected (ERRATA.md).
+  // typos of the printed version corrected (docs/errata.md#000-eq25).
   Mat33 J_p_f;
   const Vec3 r = PredictRaw(params, Vec3(gravity * c), &J_p_f) - p;
   const Mat33 J = gravity * J_p_f;
@@ -136,8 +136,9 @@ SolverOutput SolveTwoStep(const Problem& problem, const ModelParameters& init_pa
       out.summary.termination_message = message;
       break;
     }
-    // Linear convergence: the remaining error is about step·ρ/(1−ρ) (ERRATA.md: ρ ≈ 0.92 on the
-    // Table-3 problem, so the last step alone underestimates the error tenfold).
+    // Linear convergence: the remaining error is about step·ρ/(1−ρ)
+    // (docs/errata.md#000-convergence: ρ ≈ 0.92 on the Table-3 problem, so the last step alone
+    // underestimates the error tenfold).
     if (sweep > static_cast<int>(rho_history.size()) && rho < 1.0) {
       const double remaining = step * rho / (1.0 - rho);
       if (remaining <= opt.parameter_tolerance) {

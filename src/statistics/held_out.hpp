@@ -29,7 +29,7 @@
 #include <string>
 #include <vector>
 
-#include "accelcal/calibrate.hpp"
+#include "accelcal/calibration_types.hpp"
 #include "solvers/solver_common.hpp"
 
 namespace accelcal::internal {

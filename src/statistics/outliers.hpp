@@ -4,7 +4,7 @@
 #include <string>
 #include <vector>
 
-#include "accelcal/calibrate.hpp"
+#include "accelcal/calibration_types.hpp"
 #include "solvers/solver_common.hpp"
 
 namespace accelcal::internal {
@@ -38,16 +38,9 @@ Screening ScreenPositions(const InformationRows& rows, const Mat12& S_inverse, M
                           const std::vector<Vec3>& residuals, double signal,
                           double false_alarm_probability);
 
-/// Throws std::invalid_argument unless `sigmas` (CalibrationOptions::reading_sigmas and its
-/// twins) is empty or holds one finite, positive 3-vector per reading.
-void CheckReadingSigmas(const std::vector<Vec3>& sigmas, std::size_t readings);
-/// Throws DataError naming the first reading that repeats an earlier one exactly (duplicated
-/// rows, a file concatenated with itself): the degrees of freedom count distinct positions.
-void CheckDistinctReadings(const std::vector<Vec3>& readings);
-
-/// `fit`, of the readings at indices `keep`, spread back over all `readings`: a left-out position
-/// gets its direction and residual under the fit.
-void SpreadOverAllPositions(const std::vector<Vec3>& readings, const std::vector<int>& keep,
-                            CalibrationResult* fit);
+/// Calibrate's fit with the screening of OutlierOptions (Rosner's generalised ESD, calibrate.cpp
+/// documents the policy): without cross-validation.
+CalibrationResult CalibrateScreened(const std::vector<Vec3>& readings,
+                                    const CalibrationOptions& options);
 
 }  // namespace accelcal::internal

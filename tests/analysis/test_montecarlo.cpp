@@ -17,7 +17,8 @@ TEST(MonteCarlo, Yang2012ReachesTheBoundAndReproducesTable4) {
   const MonteCarloResult r = RunMonteCarlo(s, o);
   EXPECT_EQ(r.failed, 0);
   ASSERT_EQ(r.errors.size(), 14u);
-  // Table 4's standard deviations (ERRATA: they equal the CRLB within sampling error).
+  // Table 4's standard deviations (docs/errata.md#000-table4: they equal the CRLB within sampling
+  // error).
   const std::map<std::string, double> table4 = {
       {"ka_x", 0.654},    {"ka_y", 0.647},   {"ka_z", 0.709},      {"tau_yx", 0.269},
       {"tau_zx", 0.257},  {"tau_zy", 0.264}, {"tau_yy", 4.698e-5}, {"tau_zz", 8.842e-5},
@@ -45,10 +46,11 @@ TEST(MonteCarlo, Yang2012ReachesTheBoundAndReproducesTable4) {
 }
 
 TEST(MonteCarlo, SunXu2020MaximumLikelihoodIsBiasedBySigmaSquaredOverT) {
-  // Paper 001 §4.1 with new attitudes every run. ERRATA: at σ = 0.1 g the maximum-likelihood
-  // estimate of diag(T_a) carries the incidental-parameter bias ≈ σ²/T_ii (measured 0.0088 against
-  // 0.0087-0.0091 over 200 runs); the test asks for it within 4 standard errors, and the mean e_T
-  // near the paper's 0.85 % (measured 0.90 % here, 0.83 % on the 50 runs of test_paper001).
+  // Paper 001 §4.1 with new attitudes every run. docs/errata.md#001-ml-bias: at σ = 0.1 g the
+  // maximum-likelihood estimate of diag(T_a) carries the incidental-parameter bias ≈ σ²/T_ii
+  // (measured 0.0088 against 0.0087-0.0091 over 200 runs); the test asks for it within 4 standard
+  // errors, and the mean e_T near the paper's 0.85 % (measured 0.90 % here, 0.83 % on the 50 runs
+  // of test_paper001).
   MonteCarloOptions o;
   o.runs = 200;
   const MonteCarloResult r = RunMonteCarlo(*ScenarioByName("sunxu2020"), o);

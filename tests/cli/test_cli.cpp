@@ -296,8 +296,8 @@ TEST_F(Cli, SimulateWritesRecordingsThatCalibrateBackToTheTruth) {
   EXPECT_NE(p1.out, Exec("simulate --scenario yang2012 --seed 8").out);
   EXPECT_EQ(p1.out.rfind("x,y,z,n,sx,sy,sz\n", 0), 0u);
   EXPECT_EQ(Exec("simulate").status, 2);
-  // Paper 001's scenario: 300 averaged readings in g whose fit is biased as ERRATA says, but
-  // calibrates to about 1 % (e_T ~ 0.9 %).
+  // Paper 001's scenario: 300 averaged readings in g whose fit is biased as
+  // docs/errata.md#001-ml-bias says, but calibrates to about 1 % (e_T ~ 0.9 %).
   const CliRun sx = Exec("simulate --scenario sunxu2020 -o " + Path("sunxu.csv"));
   ASSERT_EQ(sx.status, 0) << sx.err;
   const CliRun sc =

@@ -1,5 +1,5 @@
 // Paper 003 §5, system-level calibration (system_level.hpp): the printed equations as known
-// answers, Table 4 against them (ERRATA), and the estimator on a simulated day.
+// answers, Table 4 against them (docs/errata.md#003-table4), and the estimator on a simulated day.
 #include <cmath>
 #include <cstdio>
 #include <map>
@@ -59,8 +59,9 @@ TEST(SystemLevel, CombinedCoefficientsFollowThePrintedEquations) {
 }
 
 TEST(SystemLevel, Table4ReferenceValuesThatDoNotFollowFromThePrintedEquations) {
-  // ERRATA: Table 4's "reference values" (4 significant digits) agree with the printed equations
-  // for x2..x5, δφ2s, δθ2c, and not for the rest, which need sign flips of bias or Δβ terms.
+  // docs/errata.md#003-table4: Table 4's "reference values" (4 significant digits) agree with the
+  // printed equations for x2..x5, δφ2s, δθ2c, and not for the rest, which need sign flips of bias
+  // or Δβ terms.
   const std::map<std::string, double> table4 = {
       {"x1", 1.1228e-4},       {"x2", -8.645e-5},       {"x3", 8.217e-5},
       {"x4", -5.000e-5},       {"x5", 1.212e-5},        {"roll_s1", -1.3319e-4},
@@ -73,9 +74,9 @@ TEST(SystemLevel, Table4ReferenceValuesThatDoNotFollowFromThePrintedEquations) {
       {"roll_c2", false}, {"pitch_s1", false}, {"pitch_c1", false}, {"pitch_s2", false},
       {"pitch_c2", true}};
   for (const auto& [name, reference] : table4) {
-    // Agreement: within 0.1 % (the table's 4 digits and its g, ERRATA's best fit 9.8019, leave
-    // 1e-4 relative: x2 is printed −8.6442e-5 against −8.645e-5); the others are off by sign flips
-    // or other terms, tens of percent and more.
+    // Agreement: within 0.1 % (the table's 4 digits and its g, docs/errata.md#003-table4 best
+    // fit g ≈ 9.802, leave 1e-4 relative: x2 is printed −8.6442e-5 against −8.645e-5); the others
+    // are off by sign flips or other terms, tens of percent and more.
     EXPECT_EQ(std::abs(kPrinted.at(name) - reference) <= 1e-3 * std::abs(reference),
               agrees.at(name))
         << name << ": printed " << kPrinted.at(name) << ", Table 4 " << reference;
@@ -97,7 +98,7 @@ TEST(SystemLevel, RecoversTheCoefficientsOfASimulatedDayWithinTheirUncertainty) 
     EXPECT_GT(r.x_std(i), 1e-7) << "x" << i + 1;
     EXPECT_LT(r.x_std(i), 5e-7) << "x" << i + 1;
   }
-  // ERRATA: without the correction x1 would sit E|n|²/(2g²) = 3.9e-7 high, 2σ.
+  // docs/errata.md#003-eq20: without the correction x1 would sit E|n|²/(2g²) = 3.9e-7 high, 2σ.
   EXPECT_NEAR(r.x1_noise_correction, 3 * 25e-6 / (2 * g * g), 1e-9);
   EXPECT_NEAR(r.noise_ms2(0), 5e-3, 5e-3 * 0.01);
   const auto check = [](const FourierCoefficients& e, const FourierCoefficients& sd,

@@ -1,0 +1,82 @@
+// Leave-one-position-out by refits: the reference of held_out.hpp's expansion, and the refit it
+// falls back to for a position it cannot serve.
+#include <cmath>
+#include <stdexcept>
+#include <string>
+
+#include "accelcal/error.hpp"
+#include "statistics/fit.hpp"
+#include "statistics/held_out.hpp"
+
+namespace accelcal::internal {
+
+namespace {
+
+// The options of a refit without one position: started from the full fit, the same positions.
+CalibrationOptions HeldOutOptions(const CalibrationOptions& options,
+                                  const CalibrationResult& result) {
+  CalibrationOptions held_out = options;
+  held_out.cross_validate = false;
+  held_out.outliers.policy = OutlierPolicy::kOff;    // the same positions as the full fit
+  held_out.reading_sigmas.clear();                   // no covariance needed from the held-out fits
+  if (options.method != SolverMethod::kEllipsoid) {  // closed form: nothing to start from
+    held_out.initialization = Initialization::kGiven;
+    held_out.initial_params = result.params;
+  }
+  return held_out;
+}
+
+}  // namespace
+
+// Position k's held-out error from a fit of the other positions in the fit, or why there is none.
+HeldOutRefit RefitWithout(const std::vector<Vec3>& readings,
+                                              const CalibrationOptions& options,
+                                              const CalibrationResult& result, std::size_t k) {
+  const CalibrationOptions held_out = HeldOutOptions(options, result);
+  std::vector<Vec3> subset;
+  subset.reserve(readings.size());
+  for (std::size_t j = 0; j < readings.size(); ++j) {
+    if (j != k && !result.excluded(j)) subset.push_back(readings[j]);
+  }
+  const std::string without = "without position " + std::to_string(k + 1) + ": ";
+  CalibrationResult fit;
+  try {
+    fit = CalibrateInFrame(subset, held_out).result;
+  } catch (const DataError& e) {
+    return {0.0, without + e.what()};
+  }
+  if (!fit.summary.converged()) {
+    return {0.0, without + "did not converge: " + fit.summary.termination_message};
+  }
+  const double e = GravityNormErrors(fit.params, {readings[k]}, options.gravity)[0];
+  if (!std::isfinite(e)) {
+    return {0.0,
+            "position " + std::to_string(k + 1) + " lies outside the range of the fit without it"};
+  }
+  return {e, ""};
+}
+
+// Leave-one-position-out by m refits, each started from the full fit (the held-out optimum is
+// close to it, so each refit takes a few iterations). Positions the screening excluded are held
+// out of every fit already: their error is that of the final fit.
+void CrossValidateByRefits(const std::vector<Vec3>& readings,
+                                     const CalibrationOptions& options, CalibrationResult* result) {
+  if (auto why = options.Validate()) throw std::invalid_argument(*why);
+  std::vector<double> errors;
+  for (std::size_t k = 0; k < readings.size(); ++k) {
+    if (result->excluded(k)) {
+      errors.push_back(GravityNormErrors(result->params, {readings[k]}, options.gravity)[0]);
+      continue;
+    }
+    const internal::HeldOutRefit refit = internal::RefitWithout(readings, options, *result, k);
+    if (!refit.note.empty()) {
+      result->crossval_note = refit.note;
+      return;
+    }
+    errors.push_back(refit.error);
+  }
+  result->crossval_rms = Rms(result->InFit(errors));
+  result->crossval_errors = std::move(errors);
+}
+
+}  // namespace accelcal::internal

@@ -45,7 +45,8 @@ std::optional<SolverMethod> SolverMethodFromString(std::string_view text);
 /// the expected signed distance m_k = −½ tr(L_k G_k⁻¹ T_kᵀ Σ_k T_k G_k⁻¹) (T_k the surface's
 /// tangent vectors ∂μ/∂s at the foot point, G_k = T_kᵀT_k, L_k = n_k·∂²μ/∂s∂s its second
 /// fundamental form, Σ_k the reading's noise covariance). For a sphere of radius g|K| this is
-/// σ²/(g|K|): the scale factors come out too large by σ²/(g²K) relative (docs/errata.md#001-ml-bias, paper 001).
+/// σ²/(g|K|): the scale factors come out too large by σ²/(g²K) relative
+/// (docs/errata.md#001-ml-bias, paper 001).
 enum class Estimator {
   kMaximumLikelihood,  ///< "ml": the optimum of J (paper 000 eq. (13), paper 001 eq. (12))
   /// "bias-corrected": the ML equations solved with each reading moved m_k inward along the
@@ -197,8 +198,8 @@ struct CalibrationOptions {
     int max_sweeps = 20000;              ///< cap on alternations
     double parameter_tolerance = 1e-14;  ///< see TerminationType
     /// 0 disables the cost criterion, the default: J stops changing in floating point while the
-    /// parameters are still moving (docs/errata.md#000-convergence; measured on the paper 001 problem, σ = 0.1 g: J
-    /// constant to the last bit 1.9e-8 away from the optimum).
+    /// parameters are still moving (docs/errata.md#000-convergence; measured on the paper 001
+    /// problem, σ = 0.1 g: J constant to the last bit 1.9e-8 away from the optimum).
     double function_tolerance = 0.0;
     int max_newton_iterations = 50;  ///< per-position KKT Newton cap (eq. (21))
   } two_step;
@@ -310,7 +311,6 @@ struct CalibrationResult {
   /// The entries of a per-position list (one per reading) at the positions in the fit, in order.
   std::vector<double> InFit(const std::vector<double>& per_position) const;
 };
-
 
 /// |f_k| − g for each reading under `params` (NaN where the model cannot be inverted).
 std::vector<double> GravityNormErrors(const ModelParameters& params,

@@ -8,7 +8,7 @@
 ///   roll_deg,pitch_deg[,yaw_deg] attitudes, degrees
 ///   qw,qx,qy,qz                 attitudes as unit quaternions (Hamilton, scalar first)
 ///   theta1_deg,theta2_deg,theta3_deg  gimbal angles of paper 003's three-gimbal platform, degrees:
-///                               c = PlatformUp(θ) (gimbal_platform.hpp; no attitude stored)
+///                               c = PlatformUp(θ) (platform_model.hpp; no attitude stored)
 ///
 /// Attitude convention: R = Rz(yaw) Ry(pitch) Rx(roll) maps body-frame vectors to a level frame
 /// whose z axis points up, so a sensor at rest senses the specific force g Rᵀ e_z:

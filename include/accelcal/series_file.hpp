@@ -14,9 +14,17 @@
 #include <string>
 #include <string_view>
 
-#include "accelcal/system_level.hpp"
+#include "accelcal/types.hpp"
 
 namespace accelcal {
+
+/// One sample of the system-level series: time from S = 0 [s], measured platform-frame specific
+/// force [m/s²], roll and pitch errors [rad].
+struct SystemSample {
+  double t = 0;
+  Vec3 f = Vec3::Zero();
+  double roll = 0, pitch = 0;
+};
 
 /// The binary layout's first line.
 inline constexpr std::string_view kSeriesMagic =

@@ -35,6 +35,7 @@
 
 #include <Eigen/Core>
 
+#include "accelcal/series_file.hpp"
 #include "accelcal/types.hpp"
 
 namespace accelcal {
@@ -65,14 +66,6 @@ struct CombinedCoefficients {
 /// The printed equations evaluated (latitude in radians, g in m/s²).
 CombinedCoefficients CombinedFromResiduals(const ResidualErrors& errors, double latitude_rad,
                                            double gravity_ms2);
-
-/// One sample of the system-level series: time from S = 0 [s], measured platform-frame specific
-/// force [m/s²], roll and pitch errors [rad].
-struct SystemSample {
-  double t = 0;
-  Vec3 f = Vec3::Zero();
-  double roll = 0, pitch = 0;
-};
 
 struct SystemSimulationOptions {
   ResidualErrors errors = Wu2018Residuals();

@@ -7,8 +7,8 @@
 #include <fast_float/fast_float.h>
 
 #include "accelcal/error.hpp"
-#include "accelcal/gimbal_platform.hpp"
 #include "accelcal/log_reader.hpp"
+#include "accelcal/platform_model.hpp"
 #include "core/text_format.hpp"
 #include "io/text_lines.hpp"
 

@@ -29,9 +29,8 @@ CalibrationOptions HeldOutOptions(const CalibrationOptions& options,
 }  // namespace
 
 // Position k's held-out error from a fit of the other positions in the fit, or why there is none.
-HeldOutRefit RefitWithout(const std::vector<Vec3>& readings,
-                                              const CalibrationOptions& options,
-                                              const CalibrationResult& result, std::size_t k) {
+HeldOutRefit RefitWithout(const std::vector<Vec3>& readings, const CalibrationOptions& options,
+                          const CalibrationResult& result, std::size_t k) {
   const CalibrationOptions held_out = HeldOutOptions(options, result);
   std::vector<Vec3> subset;
   subset.reserve(readings.size());
@@ -59,8 +58,8 @@ HeldOutRefit RefitWithout(const std::vector<Vec3>& readings,
 // Leave-one-position-out by m refits, each started from the full fit (the held-out optimum is
 // close to it, so each refit takes a few iterations). Positions the screening excluded are held
 // out of every fit already: their error is that of the final fit.
-void CrossValidateByRefits(const std::vector<Vec3>& readings,
-                                     const CalibrationOptions& options, CalibrationResult* result) {
+void CrossValidateByRefits(const std::vector<Vec3>& readings, const CalibrationOptions& options,
+                           CalibrationResult* result) {
   if (auto why = options.Validate()) throw std::invalid_argument(*why);
   std::vector<double> errors;
   for (std::size_t k = 0; k < readings.size(); ++k) {

@@ -203,8 +203,8 @@ void CheckReadingSigmas(const std::vector<Vec3>& sigmas, std::size_t readings) {
   }
 }
 
-void SpreadOverAllPositions(const std::vector<Vec3>& readings,
-                                      const std::vector<int>& keep, CalibrationResult* fit) {
+void SpreadOverAllPositions(const std::vector<Vec3>& readings, const std::vector<int>& keep,
+                            CalibrationResult* fit) {
   std::vector<Vec3> directions(readings.size()), residuals(readings.size());
   std::vector<bool> kept(readings.size(), false);
   for (std::size_t i = 0; i < keep.size(); ++i) {

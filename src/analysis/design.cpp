@@ -59,7 +59,15 @@ struct Plan {
       W.row(k) /=
           std::sqrt(rows.normals[static_cast<std::size_t>(k)].cwiseAbs2().dot(sigma.cwiseAbs2()));
     }
-    if (A_diagonal != nullptr) *A_diagonal = rows.A_diagonal;
+    if (A_diagonal != nullptr) {
+      // A's diagonal whitened as the rows are (axis i's regressors by its σ_i²), so that the
+      // Jacobi-scaled information, and with it the observability test, does not depend on the
+      // noise level: the free block against the fixed parameters' identity block.
+      *A_diagonal = rows.A_diagonal;
+      A_diagonal->segment<3>(internal::kGroupStart[0]) /= sigma(0) * sigma(0);
+      A_diagonal->segment<4>(internal::kGroupStart[1]) /= sigma(1) * sigma(1);
+      A_diagonal->segment<5>(internal::kGroupStart[2]) /= sigma(2) * sigma(2);
+    }
     return W;
   }
 

@@ -100,6 +100,29 @@ TEST(Design, FlagsWhatSixAxisPositionsCannotDetermine) {
                   .observable);
 }
 
+TEST(Design, ObservabilityDoesNotDependOnTheNoiseLevel) {
+  // Whether positions determine the parameters is geometry: the reciprocal condition must be the
+  // same at any noise level, for a device in g (K ≈ 1) as for one in raw counts. Before issue
+  // 17 the Jacobi scaling used A's unwhitened diagonal, so paper 000's own scheme was declared
+  // unobservable for a device in g at a noise of 6e-6 g (reciprocal condition 3.6e-11).
+  ModelParameters in_g;
+  in_g.K << 1.001, 0, 0, 0.002, 0.998, 0, -0.001, 0.003, 1.002;
+  in_g.bias = Vec3(0.01, -0.02, 0.005);
+  for (const ModelParameters& device : {Yang2012Truth(), in_g}) {
+    const double g = &device == &in_g ? 1.0 : kG;
+    const PlannedUncertainty reference =
+        PredictUncertainty(device, ModelKind::kLinear, g, Yang18Directions(), Vec3(1.0, 1.2, 0.9));
+    ASSERT_TRUE(reference.observable);
+    for (double scale : {1e-9, 6e-6, 1e-3, 1e4}) {
+      const PlannedUncertainty planned = PredictUncertainty(
+          device, ModelKind::kLinear, g, Yang18Directions(), scale * Vec3(1.0, 1.2, 0.9));
+      EXPECT_TRUE(planned.observable) << scale;
+      // Only round-off differs: the matrices are the same up to a factor 1/scale².
+      EXPECT_NEAR(planned.rcond, reference.rcond, 1e-12 * reference.rcond + 1e-15) << scale;
+    }
+  }
+}
+
 TEST(Design, NamedSchemes) {
   EXPECT_EQ(SchemeDirections("yang18")->size(), 18u);
   EXPECT_EQ(SchemeDirections("six")->size(), 6u);

@@ -372,7 +372,8 @@ struct FitSettings {
   std::optional<std::string> units;
 };
 
-// The options as RunCalibrate (apps/accelcal/commands.cpp) builds them; ValueError when invalid.
+// The options as RunCalibrate (apps/accelcal/cmd_calibrate.cpp) builds them; ValueError when
+// invalid.
 CalibrationOptions MakeOptions(const FitSettings& s) {
   CalibrationOptions o;
   const bool auto_model = s.model == "auto";

@@ -1,0 +1,233 @@
+// The pieces every command shares: option values, inputs, gravity, numbers (cli_common.hpp).
+#include "cli_common.hpp"
+
+#include <algorithm>
+#include <charconv>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <iostream>
+#include <sstream>
+#include <stdexcept>
+
+#include "accelcal/calibration_file.hpp"
+#include "accelcal/compare.hpp"
+#include "accelcal/design.hpp"
+#include "accelcal/diagnosis.hpp"
+#include "accelcal/engineering.hpp"
+#include "accelcal/error.hpp"
+#include "accelcal/export.hpp"
+#include "accelcal/frame.hpp"
+#include "accelcal/gimbal_platform.hpp"
+#include "accelcal/gravity.hpp"
+#include "accelcal/known_orientation.hpp"
+#include "accelcal/model_selection.hpp"
+#include "accelcal/montecarlo.hpp"
+#include "accelcal/orientation_file.hpp"
+#include "accelcal/report.hpp"
+#include "accelcal/series_file.hpp"
+#include "accelcal/simulate.hpp"
+#include "accelcal/system_level.hpp"
+#include "output.hpp"
+
+namespace accelcal::cli {
+
+OutlierOptions ParseOutlierOptions(const OutlierArgs& args) {
+  OutlierOptions options;
+  options.policy = ParseEnum(OutlierPolicyFromString(args.policy), args.policy, "--outliers",
+                             "exclude, flag, off");
+  options.false_alarm_probability = args.probability;
+  options.max_excluded = args.max_excluded;
+  return options;
+}
+
+DataError NoStaticInterval(const StaticDetectionResult& d) {
+  const std::string reason = NoStaticIntervalReason(d);
+  return DataError(reason + (reason.find("turning") != std::string::npos
+                                 ? "; --verbose lists them"
+                                 : "; try --threshold-factor or --min-static"));
+}
+
+ReadOptions MakeReadOptions(const InputArgs& in) {
+  ReadOptions options;
+  options.kind = ParseEnum(InputKindFromString(in.input_kind), in.input_kind, "--input-kind",
+                           "auto, raw, positions");
+  options.columns = in.columns;
+  // A rate that is no rate is a usage error before anything is read (issue 16).
+  if (in.rate_hz && !(*in.rate_hz > 0 && *in.rate_hz <= kMaxRate_hz)) {
+    throw UsageError(Format("--rate must be a number of Hz in (0, %g]", kMaxRate_hz));
+  }
+  options.rate_hz = in.rate_hz;
+  options.time_unit = ParseEnum(TimeUnitFromString(in.time_unit), in.time_unit, "--time-unit",
+                                "auto, s, ms, us, ns");
+  if (in.instance && !std::isfinite(*in.instance)) {
+    throw UsageError("--instance must be a finite number");
+  }
+  options.instance = in.instance;
+  return options;
+}
+
+namespace {
+
+LoadedFile LoadFile(const InputArgs& in, const std::string& path) {
+  LoadedFile loaded;
+  loaded.path = path;
+  const auto start = std::chrono::steady_clock::now();
+  ReadOptions read = MakeReadOptions(in);
+  ProgressBar bar("reading");
+  read.progress = bar.ByteCallback();
+  loaded.data = ReadInput(path, read);
+  bar.Finish();
+  Detail("read %s in %.1f ms\n", path.c_str(),
+         1e3 * std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
+  if (loaded.data.kind == InputKind::kPositions) return loaded;
+  loaded.detection = DetectStaticIntervals(loaded.data.raw, in.detection);
+  const StaticDetectionResult& d = *loaded.detection;
+  Detail(
+      "detection: %.6g Hz, window %zu samples, noise reference %.4g raw^2, threshold %.4g raw^2: "
+      "%zu intervals, %zu still periods not used\n",
+      d.rate_hz, d.window_samples, d.noise_reference, d.threshold, d.intervals.size(),
+      d.rejected.size());
+  for (const RejectedInterval& r : d.rejected) {
+    if (r.cause == RejectedInterval::Cause::kClipped) {  // a position the user meant to record
+      Warn("%s: the still period %.3f-%.3f s is not used: %s\n", path.c_str(), r.t_begin_s,
+           r.t_end_s, r.reason.c_str());
+    } else {
+      Detail("  not used: %.3f-%.3f s, %s\n", r.t_begin_s, r.t_end_s, r.reason.c_str());
+    }
+  }
+  if (loaded.detection->intervals.empty()) throw NoStaticInterval(d);
+  return loaded;
+}
+
+}  // namespace
+
+LoadedInput LoadInput(const InputArgs& in) {
+  if (auto why = in.detection.Validate()) throw UsageError(*why);
+  LoadedInput loaded;
+  std::vector<std::string> paths{in.path};
+  paths.insert(paths.end(), in.more_paths.begin(), in.more_paths.end());
+  for (const std::string& path : paths) {
+    try {
+      loaded.files.push_back(LoadFile(in, path));
+    } catch (const DataError& e) {  // what is wrong with one file of several names that file
+      if (paths.size() == 1) throw;
+      throw InputError(path, 0, e.what());
+    }
+    const LoadedFile& f = loaded.files.back();
+    const std::vector<Position> positions = f.data.kind == InputKind::kPositions
+                                                ? f.data.positions
+                                                : PositionsFromIntervals(f.detection->intervals);
+    loaded.positions.insert(loaded.positions.end(), positions.begin(), positions.end());
+    if (paths.size() > 1) loaded.position_file.resize(loaded.positions.size(), path);
+  }
+  return loaded;
+}
+
+Gravity ResolveGravity(const GravityArgs& args) {
+  Gravity g;
+  g.unit = ParseEnum(ForceUnitFromString(args.units), args.units, "--units", "m/s2, g");
+  if (args.gravity_ms2 && args.latitude_deg) {
+    throw UsageError("--gravity and --latitude exclude each other");
+  }
+  if (args.gravity_ms2) {
+    if (!(*args.gravity_ms2 >= kMinGravity_ms2 && *args.gravity_ms2 <= kMaxGravity_ms2)) {
+      throw UsageError(
+          Format("--gravity must be a number of m/s2 in [%g, %g] (9.78-9.83 on "
+                 "Earth's surface)",
+                 kMinGravity_ms2, kMaxGravity_ms2));
+    }
+    g.ms2 = *args.gravity_ms2;
+    g.origin = "given";
+  } else if (args.latitude_deg) {
+    if (!(std::abs(*args.latitude_deg) <= 90)) throw UsageError("--latitude must lie in [-90, 90]");
+    // The WGS-84 normal-gravity formula is a series in height: within ±20 km of the ellipsoid
+    // (deep mines to high-flying aircraft); at 1e9 m it gives 720,084 m/s2.
+    if (!(std::abs(args.height_m) <= kMaxHeight_m)) {
+      throw UsageError(Format("--height must lie in [-%g, %g] m (the WGS-84 formula's range)",
+                              kMaxHeight_m, kMaxHeight_m));
+    }
+    g.ms2 = NormalGravityWgs84_ms2(*args.latitude_deg, args.height_m);
+    g.origin =
+        Format("WGS-84 normal gravity at %.6g deg, %.6g m", *args.latitude_deg, args.height_m);
+  } else {
+    g.ms2 = kStandardGravity_ms2;
+    g.origin = "standard gravity (default)";
+  }
+  g.in_unit = g.unit == ForceUnit::kMetersPerSecond2 ? g.ms2 : g.ms2 / kStandardGravity_ms2;
+  return g;
+}
+
+std::string Vec(const Vec3& v, const char* fmt) {
+  return Format(fmt, v(0)) + Format(fmt, v(1)) + Format(fmt, v(2));
+}
+
+// One discordant position, for the summary and the warning.
+// `position_file`: the file of each position when there are several (LoadedInput).
+std::string OutlierMessage(const OutlierFinding& o, const std::vector<Position>& positions,
+                           const std::vector<double>& errors, const char* unit,
+                           const std::vector<std::string>& position_file) {
+  const auto k = static_cast<std::size_t>(o.position);
+  std::string where;
+  const std::string file = position_file.empty() ? "" : position_file[k] + " ";
+  if (positions[k].interval) {
+    where = Format(" (%s%.2f-%.2f s)", file.c_str(), positions[k].interval->t_begin_s,
+                   positions[k].interval->t_end_s);
+  } else if (!file.empty()) {
+    where = " (" + position_file[k] + ")";
+  }
+  const std::string test =
+      o.statistic == OutlierStatistic::kFisherF
+          ? Format(
+                "F = %.1f, beyond %.2f (Fisher F, 3 and %d degrees of freedom); moved or "
+                "bumped during its interval, or not in the orientation the file gives?",
+                o.t, o.threshold, o.degrees_of_freedom)
+          : Format(
+                "t = %.1f, beyond %.2f (Student t, %d degrees of freedom); moved or bumped "
+                "during its interval?",
+                o.t, o.threshold, o.degrees_of_freedom);
+  return Format("position %d%s disagrees with the others: |f|-g %.3g %s under the fit %s it; %s",
+                o.position + 1, where.c_str(), errors[k], unit, o.excluded ? "without" : "with",
+                test.c_str());
+}
+
+std::string FormatNumber(double v) {
+  char buf[32];
+  const auto res = std::to_chars(buf, buf + sizeof buf, v);
+  return std::string(buf, res.ptr);
+}
+
+// A JSON array of three shortest round-trip numbers.
+std::string JsonVector(const Vec3& v) {
+  return "[" + FormatNumber(v(0)) + ", " + FormatNumber(v(1)) + ", " + FormatNumber(v(2)) + "]";
+}
+
+// A positions file as calibrate reads it: averaged readings with their sample count and the
+// per-axis standard deviation of one sample.
+std::string PositionsCsv(const std::vector<Vec3>& means, double samples, const Vec3& sample_sigma) {
+  std::string out = "x,y,z,n,sx,sy,sz\n";
+  for (const Vec3& p : means) {
+    out += FormatNumber(p(0)) + "," + FormatNumber(p(1)) + "," + FormatNumber(p(2)) + "," +
+           FormatNumber(samples) + "," + FormatNumber(sample_sigma(0)) + "," +
+           FormatNumber(sample_sigma(1)) + "," + FormatNumber(sample_sigma(2)) + "\n";
+  }
+  return out;
+}
+
+// A calibration that failed its checks is written so that its reasons can be read, never used.
+void RefuseFailed(const LoadedCalibration& cal, const std::string& path) {
+  if (cal.verdict == "failed") {
+    throw InputError(path, 0,
+                     "this calibration failed its checks (\"verdict\": \"failed\"; its "
+                     "\"diagnostics\" say why): it is not applied or exported");
+  }
+}
+
+// Planned directions: a named scheme, or a file with one unit vector per row.
+std::vector<Vec3> PlannedDirections(const std::string& spec) {
+  if (std::optional<std::vector<Vec3>> scheme = SchemeDirections(spec)) return *scheme;
+  return ReadOrientations(spec).directions;
+}
+
+}  // namespace accelcal::cli

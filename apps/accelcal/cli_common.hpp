@@ -1,0 +1,95 @@
+#pragma once
+// What the commands of the accelcal tool share (cli_common.cpp): option values checked and
+// converted, the input files of a calibration read and detected, gravity resolved, numbers written
+// shortest round-trip.
+
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "accelcal/calibration_file.hpp"
+#include "accelcal/error.hpp"
+#include "accelcal/gravity.hpp"
+#include "accelcal/log_reader.hpp"
+#include "accelcal/static_detection.hpp"
+#include "commands.hpp"
+
+namespace accelcal::cli {
+
+// Ranges of the options that take physical quantities (issue 16): beyond them a value is a
+// mistake (a unit slip, a typo), never a calibration.
+constexpr double kMaxRate_hz = 1e6;
+constexpr double kMinGravity_ms2 = 1.0, kMaxGravity_ms2 = 100.0;
+constexpr double kMaxHeight_m = 20000.0;
+
+template <typename T>
+T ParseEnum(std::optional<T> value, const std::string& text, const char* option,
+            const char* allowed) {
+  if (!value) throw UsageError(std::string(option) + ": '" + text + "' is not one of " + allowed);
+  return *value;
+}
+
+OutlierOptions ParseOutlierOptions(const OutlierArgs& args);
+
+struct LoadedFile {
+  std::string path;
+  InputData data;
+  std::optional<StaticDetectionResult> detection;
+};
+
+// The input files of a calibration (sessions of one device: positions pooled in file order, time
+// never joined across files).
+struct LoadedInput {
+  std::vector<LoadedFile> files;
+  std::vector<Position> positions;
+  /// The file of each position, when there are several files (else empty).
+  std::vector<std::string> position_file;
+  /// The first raw log, for the report's signal plot (nullptr: none).
+  const LoadedFile* FirstRaw() const {
+    for (const LoadedFile& f : files) {
+      if (f.data.kind == InputKind::kRaw) return &f;
+    }
+    return nullptr;
+  }
+};
+
+// Why detection found nothing, with the options that act on it.
+DataError NoStaticInterval(const StaticDetectionResult& d);
+
+ReadOptions MakeReadOptions(const InputArgs& in);
+
+// The input files of a calibration, read, detected and pooled.
+LoadedInput LoadInput(const InputArgs& in);
+
+struct Gravity {
+  double in_unit;  // gravity magnitude in the output unit
+  double ms2;      // the same in m/s²
+  ForceUnit unit;
+  std::string origin;
+};
+Gravity ResolveGravity(const GravityArgs& args);
+
+// Three numbers in a printf format.
+std::string Vec(const Vec3& v, const char* fmt = "%14.8g");
+
+// One discordant position, for the summary and the warning.
+// `position_file`: the file of each position when there are several (LoadedInput).
+std::string OutlierMessage(const OutlierFinding& o, const std::vector<Position>& positions,
+                           const std::vector<double>& errors, const char* unit,
+                           const std::vector<std::string>& position_file);
+
+// Shortest round-trip decimal.
+std::string FormatNumber(double v);
+// A JSON array of three shortest round-trip numbers.
+std::string JsonVector(const Vec3& v);
+// A positions file as calibrate reads it: averaged readings with their sample count and the
+// per-axis standard deviation of one sample.
+std::string PositionsCsv(const std::vector<Vec3>& means, double samples, const Vec3& sample_sigma);
+
+// A calibration that failed its checks is written so that its reasons can be read, never used.
+void RefuseFailed(const LoadedCalibration& cal, const std::string& path);
+
+// Planned directions: a named scheme, or a file with one unit vector per row.
+std::vector<Vec3> PlannedDirections(const std::string& spec);
+
+}  // namespace accelcal::cli

@@ -1,0 +1,405 @@
+// accelcal calibrate: the summary, the warnings, the calibration file and report.
+#include "commands.hpp"
+
+#include <algorithm>
+#include <charconv>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <iostream>
+#include <sstream>
+#include <stdexcept>
+
+#include "accelcal/calibration_file.hpp"
+#include "accelcal/compare.hpp"
+#include "accelcal/design.hpp"
+#include "accelcal/diagnosis.hpp"
+#include "accelcal/engineering.hpp"
+#include "accelcal/error.hpp"
+#include "accelcal/export.hpp"
+#include "accelcal/frame.hpp"
+#include "accelcal/gimbal_platform.hpp"
+#include "accelcal/gravity.hpp"
+#include "accelcal/known_orientation.hpp"
+#include "accelcal/model_selection.hpp"
+#include "accelcal/montecarlo.hpp"
+#include "accelcal/orientation_file.hpp"
+#include "accelcal/report.hpp"
+#include "accelcal/series_file.hpp"
+#include "accelcal/simulate.hpp"
+#include "accelcal/system_level.hpp"
+#include "cli_common.hpp"
+#include "output.hpp"
+
+namespace accelcal::cli {
+namespace {
+
+void PrintInput(const LoadedInput& in) {
+  for (const LoadedFile& f : in.files) {
+    if (f.data.kind == InputKind::kPositions) {
+      Say("input     %s: %zu positions (%s)\n", f.path.c_str(), f.data.positions.size(),
+          f.data.kind_reason.c_str());
+      continue;
+    }
+    const StaticDetectionResult& d = *f.detection;
+    Say("input     %s: raw log, %zu samples at %.6g Hz (%s)\n", f.path.c_str(),
+        f.data.raw.samples.size(), d.rate_hz, f.data.kind_reason.c_str());
+    Say("detection %zu static intervals (window %zu samples, threshold %.4g raw^2 = %.3g x "
+        "noise reference)\n",
+        d.intervals.size(), d.window_samples, d.threshold,
+        d.noise_reference > 0 ? d.threshold / d.noise_reference : 0.0);
+  }
+  if (in.files.size() > 1) {
+    Say("pooled    %zu positions from %zu files\n", in.positions.size(), in.files.size());
+  }
+}
+
+// The three parameter pairs with the largest |correlation|: what the positions cannot separate.
+void PrintStrongestCorrelations(const Eigen::MatrixXd& covariance,
+                                const std::vector<ParameterSlot>& slots) {
+  struct Pair {
+    double rho;
+    Eigen::Index i, j;
+  };
+  std::vector<Pair> pairs;
+  for (Eigen::Index i = 0; i < covariance.rows(); ++i) {
+    for (Eigen::Index j = 0; j < i; ++j) {
+      const double rho = covariance(i, j) / std::sqrt(covariance(i, i) * covariance(j, j));
+      if (std::isfinite(rho)) pairs.push_back({rho, i, j});
+    }
+  }
+  const std::size_t shown = std::min<std::size_t>(3, pairs.size());
+  std::partial_sort(pairs.begin(), pairs.begin() + static_cast<std::ptrdiff_t>(shown), pairs.end(),
+                    [](const Pair& a, const Pair& b) { return std::abs(a.rho) > std::abs(b.rho); });
+  Say("  strongest correlations:");
+  for (std::size_t k = 0; k < shown; ++k) {
+    Say("%s %s/%s %+.3f", k ? "," : "",
+        std::string(slots[static_cast<std::size_t>(pairs[k].i)].name).c_str(),
+        std::string(slots[static_cast<std::size_t>(pairs[k].j)].name).c_str(), pairs[k].rho);
+  }
+  Say("\n");
+}
+
+void PrintCalibration(const CalibrationResult& r, const std::vector<Position>& positions,
+                      const std::vector<std::string>& position_file, const Gravity& g,
+                      const std::string& raw_unit) {
+  const char* u = g.unit == ForceUnit::kMetersPerSecond2 ? "m/s2" : "g";
+  const bool have_std = r.covariance.size() > 0;
+  const auto& slots = ParameterSlots(r.model, r.frame);
+  Say("\nmodel     %s, p = K f + b + k2 * f^2, frame %s, gravity %.9g %s (%s)\n",
+      std::string(ToString(r.model)).c_str(), std::string(ToString(r.frame)).c_str(), g.in_unit, u,
+      g.origin.c_str());
+  const std::string noise =
+      r.noise_source == "samples"
+          ? Format("noise of each interval's samples, x %.3g scatter ratio", r.scatter_ratio)
+          : std::string("noise from the residuals");
+  Say("\nparameters (K in %s per %s, b in %s, k2 in %s per %s^2; +- 1 sigma, %s)\n",
+      raw_unit.c_str(), u, raw_unit.c_str(), raw_unit.c_str(), u, noise.c_str());
+  const Eigen::VectorXd theta = Pack(r.params, slots);
+  for (std::size_t i = 0; i < slots.size(); ++i) {
+    const auto idx = static_cast<Eigen::Index>(i);
+    if (have_std) {
+      Say("  %-5s %18.10g +- %.3g\n", std::string(slots[i].name).c_str(), theta(idx),
+          std::sqrt(r.covariance(idx, idx)));
+    } else {
+      Say("  %-5s %18.10g\n", std::string(slots[i].name).c_str(), theta(idx));
+    }
+  }
+  if (have_std) PrintStrongestCorrelations(r.covariance, slots);
+  const EngineeringParameters e = ToEngineering(r.params, r.gravity);
+  const double ug = 1e6 / r.gravity;
+  // ±1σ propagated from the parameter covariance, when there is one.
+  std::optional<EngineeringStd> sd;
+  if (have_std) {
+    sd = EngineeringUncertainty(r.params, r.model, r.frame, r.gravity, r.covariance);
+  }
+  // Values ± their 1σ (`sigma` empty: none).
+  const auto pm = [&](const Eigen::VectorXd& v, const Eigen::VectorXd& sigma, double scale,
+                      const char* format) {
+    std::string text;
+    for (Eigen::Index i = 0; i < v.size(); ++i) {
+      text += Format(format, v(i) * scale);
+      if (sigma.size() > 0) text += Format(" +- %.2g", sigma(i) * scale);
+      text += i + 1 < v.size() ? "   " : "";
+    }
+    return text;
+  };
+  const auto sd_of = [&](auto member) {
+    return sd ? Eigen::VectorXd(*sd.*member) : Eigen::VectorXd();
+  };
+  Say("\nengineering (%s conventions%s)\n",
+      r.frame == Frame::kPlatform ? "paper 003 eq. (5)" : "paper 000 Table 3",
+      sd ? "; +- 1 sigma propagated from the parameters" : "");
+  Say("  scale factor     %s  %s/%s\n",
+      pm(e.scale_factor, sd_of(&EngineeringStd::scale_factor), 1.0, "%.10g").c_str(),
+      raw_unit.c_str(), u);
+  const Misalignment tau = MisalignmentOf(r.params.K, r.frame);
+  std::string names;
+  for (std::string_view name : tau.names) names += (names.empty() ? "" : ", ") + std::string(name);
+  Say("  misalignment     %s\n", names.c_str());
+  Say("                   %s  arcsec\n",
+      pm(tau.rad, sd_of(&EngineeringStd::misalignment_rad), kArcsecPerRad, "%.4f").c_str());
+  Say("  bias             %s  %s\n",
+      pm(e.bias_force, sd_of(&EngineeringStd::bias_force), 1.0, "%.6g").c_str(), u);
+  Say("                   %s  ug\n",
+      pm(e.bias_force, sd_of(&EngineeringStd::bias_force), ug, "%.6g").c_str());
+  if (r.model == ModelKind::kQuadratic) {
+    Say("  squared coeff.   %s  g/g^2\n",
+        pm(e.k2_g_per_g2, sd_of(&EngineeringStd::k2_g_per_g2), 1.0, "%.4g").c_str());
+  }
+  const std::vector<Vec3> means = Means(positions);
+  const std::vector<double> errors = GravityNormErrors(r.params, means, r.gravity);
+  Say("\npositions (|f|-g in %s, residual p - mu in %s)\n", u, raw_unit.c_str());
+  Say("  %3s %8s %42s %12s %36s\n", "#", "samples", "mean", "|f|-g", "residual");
+  for (std::size_t k = 0; k < positions.size(); ++k) {
+    Say("  %3zu %8zu %s %12.4g %s%s\n", k + 1, positions[k].samples, Vec(positions[k].mean).c_str(),
+        errors[k], Vec(r.residuals[k], "%12.4g").c_str(), r.excluded(k) ? "  excluded" : "");
+  }
+  for (const OutlierFinding& o : r.outliers) {
+    Say("%s  %s\n", o.excluded ? "excluded " : "flagged  ",
+        OutlierMessage(o, positions, errors, u, position_file).c_str());
+  }
+  if (!r.outlier_note.empty()) Say("screening %s\n", r.outlier_note.c_str());
+  const std::optional<double> before = GravityNormRmsUncalibrated(means, r.gravity);
+  const std::vector<double> used_errors = r.InFit(errors);  // outliers excluded
+  Say("\nrms |f|-g  before: %s   after: %.6g %s%s\n",
+      before ? Format("%.6g %s", *before, u).c_str()
+             : Format("n/a (raw readings are not in %s)", u).c_str(),
+      Rms(used_errors), u, used_errors.size() < errors.size() ? " (positions in the fit)" : "");
+  if (r.crossval_rms) {
+    Say("held-out  rms |f|-g %.6g %s (each position corrected by a fit without it)\n",
+        *r.crossval_rms, u);
+  } else if (!r.crossval_note.empty()) {
+    Say("held-out  n/a: %s\n", r.crossval_note.c_str());
+  }
+  Say("solver    %s\n", r.summary.BriefReport().c_str());
+  if (!r.summary.initialization_note.empty()) {
+    Say("note      %s\n", r.summary.initialization_note.c_str());
+  }
+}
+
+void PrintModelSelection(const ModelSelection& s, bool requested_auto) {
+  if (requested_auto) {
+    Say("model     auto -> %s: %s\n", std::string(ToString(s.chosen)).c_str(), s.reason.c_str());
+  } else {
+    Say("model     quadratic (requested); the data support %s: %s\n",
+        std::string(ToString(s.chosen)).c_str(), s.reason.c_str());
+  }
+  if (s.quadratic && std::isfinite(s.k2_t.sum())) {
+    Say("          squared coefficients k2/sigma: %.3g %.3g %.3g (significant beyond %.3g)\n",
+        s.k2_t(0), s.k2_t(1), s.k2_t(2), s.k2_t_threshold);
+  }
+}
+
+// What the command line adds to a finding: the option that acts on it.
+const char* OptionHint(const Finding& f) {
+  if (f.code == "units") {
+    return f.message.find("calibrate in g") != std::string::npos ? " (--units g)"
+                                                                 : " (--units m/s2)";
+  }
+  if (f.code == "outlier_limit") return " (--max-outliers)";
+  if (f.code == "time_unit") return " (--time-unit)";
+  if (f.code == "positions_like_samples") return " (--input-kind raw)";
+  return "";
+}
+
+// Warnings and failures on stderr (outliers and still periods not used are told where found).
+void PrintFindings(const Diagnosis& diagnosis, const std::string& path) {
+  for (const Finding& f : diagnosis.findings) {
+    if (f.code == "outlier" || f.code == "rejected_period") continue;
+    if (f.severity == Severity::kFailure) {
+      std::fprintf(stderr, "accelcal: %s: failed check (%s): %s%s\n", path.c_str(), f.code.c_str(),
+                   f.message.c_str(), OptionHint(f));
+    } else if (f.severity == Severity::kWarning) {
+      Warn("%s: %s%s\n", path.c_str(), f.message.c_str(), OptionHint(f));
+    }
+  }
+}
+
+// The end of every calibrate: the file to -o, then the file to stdout (--json) or the summary
+// (`input_note`, when not empty, printed after the input's description).
+int WriteCalibration(const CalibrateArgs& args, const LoadedInput& in, const Gravity& g,
+                     const CalibrationResult& result, const ModelSelection* selection,
+                     const std::string& input_note) {
+  DiagnosisInput diagnosis_input;
+  diagnosis_input.result = &result;
+  diagnosis_input.positions = &in.positions;
+  diagnosis_input.max_excluded = args.outliers.max_excluded;
+  diagnosis_input.selection = selection;
+  for (const LoadedFile& f : in.files) {
+    if (f.data.kind == InputKind::kRaw) {
+      diagnosis_input.logs.push_back({f.path, &f.data.raw, &*f.detection});
+    }
+  }
+  diagnosis_input.unit = g.unit;
+  for (const LoadedFile& f : in.files) {
+    diagnosis_input.positions_by_row_count |= f.data.kind_from_row_count;
+  }
+  const Diagnosis diagnosis = Diagnose(diagnosis_input);
+  CalibrationFileInfo info;
+  info.unit = g.unit;
+  info.raw_unit = args.raw_units;
+  info.source = args.input.path;
+  if (in.files.size() > 1) {
+    for (const LoadedFile& f : in.files) info.sources.push_back(f.path);
+    for (const std::string& file : in.position_file) {
+      info.position_source.push_back(static_cast<int>(
+          std::find(info.sources.begin(), info.sources.end(), file) - info.sources.begin()));
+    }
+  }
+  info.positions = in.positions;
+  info.model_selection = selection;
+  info.model_requested = args.model;
+  info.diagnosis = &diagnosis;
+  const std::string json = CalibrationToJson(result, info);
+  // Everything is rendered before anything is written: a failure leaves no file behind.
+  std::string report;
+  if (!args.report.empty()) {
+    ReportInput input;
+    input.calibration_json = json;
+    input.calibration_name = args.output.empty() ? args.input.path : args.output;
+    if (const LoadedFile* raw = in.FirstRaw()) {  // the report plots one log: the first
+      input.log = &raw->data.raw;
+      input.rejected = raw->detection->rejected;
+    }
+    report = RenderReport(input);
+  }
+  {  // both files or neither
+    std::optional<OutputFile> file, report_file;
+    if (!args.output.empty()) file.emplace(args.output).Write(json);
+    if (!args.report.empty()) report_file.emplace(args.report).Write(report);
+    CommitAll({file ? &*file : nullptr, report_file ? &*report_file : nullptr});
+  }
+  const std::vector<double> errors =
+      GravityNormErrors(result.params, Means(in.positions), result.gravity);
+  for (const OutlierFinding& o : result.outliers) {
+    Warn("%s: %s%s\n", args.input.path.c_str(),
+         OutlierMessage(o, in.positions, errors,
+                        g.unit == ForceUnit::kMetersPerSecond2 ? "m/s2" : "g", in.position_file)
+             .c_str(),
+         o.excluded ? " It was left out of the fit." : " It was kept in the fit.");
+  }
+  PrintFindings(diagnosis, args.input.path);
+  if (args.json) {
+    WriteFileAtomically("-", json);
+  } else {
+    PrintInput(in);
+    Say("%s", input_note.c_str());
+    PrintCalibration(result, in.positions, in.position_file, g, args.raw_units);
+    if (selection) PrintModelSelection(*selection, args.model == "auto");
+    for (const Finding& f : diagnosis.findings) {
+      if (f.severity == Severity::kNote) Say("note      %s\n", f.message.c_str());
+    }
+    Say("verdict   %s\n", std::string(ToString(diagnosis.verdict())).c_str());
+    if (!args.output.empty()) Say("wrote     %s\n", args.output.c_str());
+    if (!args.report.empty()) Say("report    %s\n", args.report.c_str());
+  }
+  if (diagnosis.verdict() == Verdict::kFailed) {
+    std::fprintf(stderr,
+                 "accelcal: %s: the calibration failed its checks: written, but marked "
+                 "\"verdict\": \"failed\"; do not use it as it is\n",
+                 args.input.path.c_str());
+    return kExitFailedChecks;
+  }
+  return kExitOk;
+}
+
+// calibrate --orientations: the platform-frame least squares of known_orientation.hpp.
+int RunCalibrateKnownOrientations(const CalibrateArgs& args) {
+  if (!args.gravity_only_options.empty()) {
+    throw UsageError(args.gravity_only_options.front() +
+                     " does not apply with --orientations (a closed-form fit in the platform "
+                     "frame)");
+  }
+  if (args.model == "auto") {
+    throw UsageError("--model auto is not available with --orientations: give linear or quadratic");
+  }
+  KnownOrientationOptions options;
+  options.model =
+      ParseEnum(ModelKindFromString(args.model), args.model, "--model", "linear, quadratic");
+  options.cross_validate = args.cross_validate;
+  options.outliers = ParseOutlierOptions(args.outliers);
+  const Gravity g = ResolveGravity(args.gravity);
+  options.gravity = g.in_unit;
+  if (auto why = options.Validate()) throw UsageError(*why);
+  const OrientationFile orientations = ReadOrientations(args.orientations);
+  const LoadedInput in = LoadInput(args.input);
+  if (orientations.directions.size() != in.positions.size()) {
+    throw DataError(args.orientations + " has " + std::to_string(orientations.directions.size()) +
+                    " orientations for the " + std::to_string(in.positions.size()) +
+                    " positions of " + args.input.path);
+  }
+  options.reading_sigmas = SigmasOfMeans(in.positions);
+  const CalibrationResult result =
+      CalibrateKnownOrientations(Means(in.positions), orientations.directions, options);
+  return WriteCalibration(args, in, g, result, nullptr,
+                          Format("orient.   %s: %zu known orientations\n",
+                                 args.orientations.c_str(), orientations.directions.size()));
+}
+
+}  // namespace
+
+int RunCalibrate(const CalibrateArgs& args) {
+  {
+    std::vector<std::string> inputs = args.input.more_paths;
+    inputs.push_back(args.input.path);
+    inputs.push_back(args.orientations);
+    CheckOutputs({{"-o", args.output}, {"--report", args.report}}, inputs);
+  }
+  if (!args.orientations.empty()) return RunCalibrateKnownOrientations(args);
+  CalibrationOptions options;
+  const bool auto_model = args.model == "auto";
+  options.model = auto_model ? ModelKind::kLinear
+                             : ParseEnum(ModelKindFromString(args.model), args.model, "--model",
+                                         "linear, quadratic, auto");
+  options.method = ParseEnum(SolverMethodFromString(args.method), args.method, "--method",
+                             "joint, two-step, newton-lagrange, modulus, modulus-norm, ellipsoid");
+  options.initialization = ParseEnum(InitializationFromString(args.init), args.init, "--init",
+                                     "auto, ellipsoid, normalized-readings");
+  if (args.frame == "platform") {
+    throw UsageError(
+        "--frame platform is the frame of known orientations: give them with "
+        "--orientations");
+  }
+  options.frame = ParseEnum(FrameFromString(args.frame), args.frame, "--frame", "x-first, z-first");
+  options.estimator = ParseEnum(EstimatorFromString(args.estimator), args.estimator, "--estimator",
+                                "ml, bias-corrected");
+  options.outliers = ParseOutlierOptions(args.outliers);
+  options.cross_validate = args.cross_validate;
+  if (auto_model && !args.cross_validate) {
+    throw UsageError(
+        "--model auto decides on held-out error: it needs the cross-validation that "
+        "--no-crossval turns off");
+  }
+  const Gravity g = ResolveGravity(args.gravity);
+  options.gravity = g.in_unit;
+  if (args.max_iterations > 0) {
+    options.two_step.max_sweeps = args.max_iterations;
+    options.joint.max_iterations = args.max_iterations;
+    options.modulus.max_iterations = args.max_iterations;
+    options.newton_lagrange.max_iterations = args.max_iterations;
+  }
+  if (auto why = options.Validate()) throw UsageError(*why);
+  if (auto_model) {
+    CalibrationOptions quadratic = options;
+    quadratic.model = ModelKind::kQuadratic;
+    if (auto why = quadratic.Validate()) throw UsageError("--model auto: " + *why);
+  }
+  const LoadedInput in = LoadInput(args.input);
+  const std::vector<Vec3> means = Means(in.positions);
+  options.reading_sigmas = SigmasOfMeans(in.positions);  // empty: noise from the residuals
+  // For a quadratic fit (asked for, or a candidate of --model auto) the linear fit is the
+  // comparison: both with held-out validation, decided by ModelSelection's rule.
+  const ModelChoice choice = CalibrateChoosingModel(means, options, auto_model);
+  const CalibrationResult& result = choice.result;
+  const std::optional<ModelSelection>& selection = choice.selection;
+  if (!result.summary.converged()) {
+    std::fprintf(stderr, "accelcal: %s: the solver did not converge: %s; nothing written\n",
+                 args.input.path.c_str(), result.summary.termination_message.c_str());
+    return kExitNotConverged;
+  }
+  return WriteCalibration(args, in, g, result, selection ? &*selection : nullptr, "");
+}
+
+}  // namespace accelcal::cli

@@ -1,0 +1,158 @@
+// The commands that use a calibration file: apply, report, export.
+#include "commands.hpp"
+
+#include <algorithm>
+#include <charconv>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <iostream>
+#include <sstream>
+#include <stdexcept>
+
+#include "accelcal/calibration_file.hpp"
+#include "accelcal/compare.hpp"
+#include "accelcal/design.hpp"
+#include "accelcal/diagnosis.hpp"
+#include "accelcal/engineering.hpp"
+#include "accelcal/error.hpp"
+#include "accelcal/export.hpp"
+#include "accelcal/frame.hpp"
+#include "accelcal/gimbal_platform.hpp"
+#include "accelcal/gravity.hpp"
+#include "accelcal/known_orientation.hpp"
+#include "accelcal/model_selection.hpp"
+#include "accelcal/montecarlo.hpp"
+#include "accelcal/orientation_file.hpp"
+#include "accelcal/report.hpp"
+#include "accelcal/series_file.hpp"
+#include "accelcal/simulate.hpp"
+#include "accelcal/system_level.hpp"
+#include "cli_common.hpp"
+#include "output.hpp"
+
+namespace accelcal::cli {
+int RunApply(const ApplyArgs& args) {
+  CheckOutputs({{"-o", args.output}}, {args.calibration, args.input.path});
+  const LoadedCalibration cal = ParseCalibrationJson(
+      ReadFileToString(args.calibration, kMaxSmallFileBytes), args.calibration);
+  RefuseFailed(cal, args.calibration);
+  ForceUnit unit = cal.unit;
+  if (args.units)
+    unit = ParseEnum(ForceUnitFromString(*args.units), *args.units, "--units", "m/s2, g");
+  double factor = 1.0;  // calibration unit -> output unit
+  if (cal.unit == ForceUnit::kMetersPerSecond2 && unit == ForceUnit::kStandardGravity) {
+    factor = 1.0 / kStandardGravity_ms2;
+  } else if (cal.unit == ForceUnit::kStandardGravity && unit == ForceUnit::kMetersPerSecond2) {
+    factor = kStandardGravity_ms2;
+  }
+  ReadOptions read = MakeReadOptions(args.input);
+  read.kind = InputKind::kRaw;
+  ProgressBar bar("reading");
+  read.progress = bar.ByteCallback();
+  const InputData data = ReadInput(args.input.path, read);
+  bar.Finish();
+  const RawLog& log = data.raw;
+  const bool has_time = !log.time_s.empty();
+  // Every reading is checked before anything is written; the output is then streamed.
+  for (std::size_t i = 0; i < log.samples.size(); ++i) {
+    if (!SpecificForce(cal.params, log.samples[i])) {
+      throw InputError(args.input.path, log.line[i],
+                       "the reading lies outside the range the quadratic model can invert");
+    }
+  }
+  OutputFile file(args.output.empty() ? "-" : args.output);  // buffers: one Write per row
+  file.Write("# accelcal apply " + VisibleLine(args.calibration) + ": specific force in " +
+             std::string(ToString(unit)) + "\n");
+  if (log.time) {  // the clock stated once: times are seconds from the first sample
+    file.Write("# time: seconds from the first sample, at " + FormatNumber(log.time->origin_s) +
+               " s on the log's clock (read in " + std::string(ToString(log.time->unit)) + ")\n");
+  }
+  file.Write(has_time ? "time,x,y,z\n" : "x,y,z\n");
+  char row[128];
+  for (std::size_t i = 0; i < log.samples.size(); ++i) {
+    const Vec3 f = *SpecificForce(cal.params, log.samples[i]);
+    char* p = row;
+    const auto number = [&](double v, char end) {
+      p = std::to_chars(p, row + sizeof row, v).ptr;
+      *p++ = end;
+    };
+    if (has_time) number(log.time_s[i], ',');
+    for (int a = 0; a < 3; ++a) number(f(a) * factor, a < 2 ? ',' : '\n');
+    file.Write(std::string_view(row, static_cast<std::size_t>(p - row)));
+  }
+  file.Commit();
+  return kExitOk;
+}
+
+int RunReport(const ReportArgs& args) {
+  CheckOutputs({{"-o", args.output}}, {args.calibration, args.log.path});
+  ReportInput input;
+  input.calibration_json = ReadFileToString(args.calibration, kMaxSmallFileBytes);
+  input.calibration_name = args.calibration;
+  InputData data;
+  if (!args.log.path.empty()) {
+    if (auto why = args.log.detection.Validate()) throw UsageError(*why);
+    ReadOptions read = MakeReadOptions(args.log);
+    read.kind = InputKind::kRaw;
+    data = ReadInput(args.log.path, read);
+    input.log = &data.raw;
+    // The same detection as calibrate's (same options) says which still periods were not used.
+    input.rejected = DetectStaticIntervals(data.raw, args.log.detection).rejected;
+  }
+  WriteFileAtomically(args.output.empty() ? "-" : args.output, RenderReport(input));
+  if (!args.output.empty()) {
+    for (const std::string& w : ReportWarnings(input)) Say("warning: %s\n", w.c_str());
+    Say("report    %s\n", args.output.c_str());
+  }
+  return kExitOk;
+}
+
+int RunExport(const ExportArgs& args) {
+  CheckOutputs({{"-o", args.output}}, {args.calibration});
+  std::string names;
+  for (const ExportFormat f : AllExportFormats())
+    names += (names.empty() ? "" : ", ") + std::string(ToString(f));
+  const ExportFormat format =
+      ParseEnum(ExportFormatFromString(args.format), args.format, "--to", names.c_str());
+  const std::string text = ReadFileToString(args.calibration, kMaxSmallFileBytes);
+  const LoadedCalibration cal = ParseCalibrationJson(text, args.calibration);
+  RefuseFailed(cal, args.calibration);
+  ExportOptions options;
+  options.raw_unit = args.raw_unit;
+  options.instance = args.instance;
+  options.c_prefix = args.c_prefix;
+  ExportResult exported;
+  try {
+    exported = ExportCalibration(cal, text, format, options);
+  } catch (const std::invalid_argument& e) {
+    throw UsageError(e.what());
+  } catch (const DataError& e) {
+    throw InputError(args.calibration, 0, e.what());
+  }
+  // The file (or stdout) gets the export alone; what it means and what it lost goes to the
+  // terminal: stdout when the export went to a file, else stderr.
+  WriteFileAtomically(args.output.empty() ? "-" : args.output, exported.text);
+  std::string note = exported.convention + "\n";
+  const ExportLoss& loss = exported.loss;
+  const std::string unit_name(ToString(cal.unit));
+  const char* unit = unit_name.c_str();
+  note += loss.dropped.empty() ? "exact: nothing of the model is dropped\n"
+                               : "dropped: " + loss.dropped + "\n";
+  if (loss.positions > 0 && !loss.dropped.empty()) {
+    note += Format(
+        "on the calibration's %d positions: corrected specific force off by %.3g %s max, %.3g %s "
+        "RMS; RMS of |f| - g %.3g %s (full model %.3g %s)\n",
+        loss.positions, loss.max_error, unit, loss.rms_error, unit, loss.norm_rms_export, unit,
+        loss.norm_rms_full, unit);
+  } else if (!loss.dropped.empty()) {
+    note += "the file holds no positions to measure the loss on\n";
+  }
+  if (CurrentVerbosity() != Verbosity::kQuiet) {
+    std::fputs(note.c_str(), args.output.empty() ? stderr : stdout);
+  }
+  return kExitOk;
+}
+
+}  // namespace accelcal::cli

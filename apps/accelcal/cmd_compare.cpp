@@ -1,0 +1,217 @@
+// accelcal compare: every method on the same positions, tabulated.
+#include "commands.hpp"
+
+#include <algorithm>
+#include <charconv>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <iostream>
+#include <sstream>
+#include <stdexcept>
+
+#include "accelcal/calibration_file.hpp"
+#include "accelcal/compare.hpp"
+#include "accelcal/design.hpp"
+#include "accelcal/diagnosis.hpp"
+#include "accelcal/engineering.hpp"
+#include "accelcal/error.hpp"
+#include "accelcal/export.hpp"
+#include "accelcal/frame.hpp"
+#include "accelcal/gimbal_platform.hpp"
+#include "accelcal/gravity.hpp"
+#include "accelcal/known_orientation.hpp"
+#include "accelcal/model_selection.hpp"
+#include "accelcal/montecarlo.hpp"
+#include "accelcal/orientation_file.hpp"
+#include "accelcal/report.hpp"
+#include "accelcal/series_file.hpp"
+#include "accelcal/simulate.hpp"
+#include "accelcal/system_level.hpp"
+#include "cli_common.hpp"
+#include "output.hpp"
+
+namespace accelcal::cli {
+int RunCompare(const CompareArgs& args) {
+  CompareOptions options;
+  options.base.model =
+      ParseEnum(ModelKindFromString(args.model), args.model, "--model", "linear, quadratic");
+  options.base.initialization = ParseEnum(InitializationFromString(args.init), args.init, "--init",
+                                          "auto, ellipsoid, normalized-readings");
+  const Gravity g = ResolveGravity(args.gravity);
+  options.base.gravity = g.in_unit;
+  options.leave_one_out = args.leave_one_out;
+  if (!args.reference.empty()) {
+    options.reference =
+        ParseCalibrationJson(ReadFileToString(args.reference, kMaxSmallFileBytes), args.reference)
+            .params;
+  }
+  for (const std::string& name : args.methods) {
+    options.methods.push_back(
+        ParseEnum(SolverMethodFromString(name), name, "--methods",
+                  "joint, two-step, newton-lagrange, modulus, modulus-norm, ellipsoid"));
+  }
+  options.base.outliers = ParseOutlierOptions(args.outliers);
+  if (auto why = options.base.Validate()) throw UsageError(*why);
+  for (SolverMethod m : options.methods) {
+    CalibrationOptions o = options.base;
+    o.method = m;
+    if (auto why = o.Validate()) throw UsageError(*why);
+  }
+  const LoadedInput in = LoadInput(args.input);
+  const std::vector<Vec3> means = Means(in.positions);
+  const Comparison comparison = CompareMethods(means, options);
+  const std::vector<MethodComparison>& rows = comparison.methods;
+  const char* unit = g.unit == ForceUnit::kMetersPerSecond2 ? "m/s2" : "g";
+  // The screening's findings, with |f| - g under the first maximum-likelihood fit (all methods
+  // were fitted to the same positions).
+  if (!comparison.outliers.empty()) {
+    const MethodComparison* reference = nullptr;
+    for (const MethodComparison& r : rows) {
+      if (!r.error && (reference == nullptr || (IsMaximumLikelihood(r.method) &&
+                                                !IsMaximumLikelihood(reference->method)))) {
+        reference = &r;
+      }
+    }
+    const std::vector<double> errors =
+        reference != nullptr
+            ? GravityNormErrors(reference->result.params, means, options.base.gravity)
+            : std::vector<double>(means.size(), std::nan(""));
+    for (const OutlierFinding& o : comparison.outliers) {
+      Warn("%s: %s%s\n", args.input.path.c_str(),
+           OutlierMessage(o, in.positions, errors, unit, in.position_file).c_str(),
+           o.excluded ? " It was left out of every method's fit." : " It was kept in the fits.");
+    }
+  }
+  std::string screened;  // "7, 12": the positions no method was fitted to
+  for (const OutlierFinding& o : comparison.outliers) {
+    if (o.excluded) screened += (screened.empty() ? "" : ", ") + std::to_string(o.position + 1);
+  }
+  const std::vector<ParameterSlot>& slots = ParameterSlots(options.base.model);
+  std::string out;
+  if (args.json) {
+    // Built by hand to keep nlohmann out of the CLI's dependencies; numbers are shortest
+    // round-trip decimals, failures are null with the reason. No timings: output is reproducible.
+    auto number = [](const std::optional<double>& v) {
+      return v && std::isfinite(*v) ? FormatNumber(*v) : std::string("null");
+    };
+    auto quoted = [](const std::string& text) {
+      std::string q = "\"";
+      for (char c : text) {
+        if (c == '"' || c == '\\') q.push_back('\\');
+        q.push_back(c);
+      }
+      return q + "\"";
+    };
+    out += "{\n  \"source\": " + quoted(args.input.path) + ",\n  \"model\": \"" +
+           std::string(ToString(options.base.model)) +
+           "\",\n  \"gravity\": " + FormatNumber(g.in_unit) +
+           ",\n  \"positions\": " + std::to_string(means.size()) +
+           ",\n  \"positions_used\": " + std::to_string(comparison.positions_used.size()) +
+           ",\n  \"outliers\": [";
+    for (std::size_t i = 0; i < comparison.outliers.size(); ++i) {
+      const OutlierFinding& o = comparison.outliers[i];
+      out += (i ? ", " : "") +
+             Format("{\"position\": %d, \"excluded\": %s, \"t\": ", o.position + 1,
+                    o.excluded ? "true" : "false") +
+             number(o.t) + ", \"threshold\": " + number(o.threshold) + "}";
+    }
+    out += "]";
+    if (!comparison.outlier_note.empty()) {
+      out += ",\n  \"outlier_note\": " + quoted(comparison.outlier_note);
+    }
+    out += ",\n  \"methods\": [";
+    for (std::size_t i = 0; i < rows.size(); ++i) {
+      const MethodComparison& r = rows[i];
+      out += i ? ",\n    {" : "\n    {";
+      out += "\"method\": \"" + std::string(ToString(r.method)) + "\"";
+      if (r.error) {
+        out += ", \"error\": " + quoted(*r.error) + "}";
+        continue;
+      }
+      const Eigen::VectorXd theta = Pack(r.result.params, options.base.model);
+      out += ", \"parameters\": {";
+      for (std::size_t j = 0; j < slots.size(); ++j) {
+        out += (j ? ", \"" : "\"") + std::string(slots[j].name) +
+               "\": " + FormatNumber(theta(static_cast<Eigen::Index>(j)));
+      }
+      out += "}, \"modular_square_mean\": " + number(r.modular_square_mean) +
+             ", \"modular_square_std\": " + number(r.modular_square_std) +
+             ", \"gravity_norm_rms\": " + number(r.gravity_norm_rms) +
+             ", \"leave_one_out_rms\": " + number(r.leave_one_out_rms);
+      if (r.leave_one_out_error)
+        out += ", \"leave_one_out_error\": " + quoted(*r.leave_one_out_error);
+      if (r.leave_one_out_from) {
+        out += ", \"leave_one_out_from\": \"" + std::string(ToString(*r.leave_one_out_from)) + "\"";
+      }
+      if (r.against_reference) {
+        out += ", \"e_T_percent\": " + number(r.against_reference->e_T_percent) +
+               ", \"e_b_percent\": " + number(r.against_reference->e_b_percent);
+      }
+      out += ", \"iterations\": " + std::to_string(r.result.summary.iterations) + "}";
+    }
+    out += rows.empty() ? "]\n}\n" : "\n  ]\n}\n";
+  } else {
+    out += Format("%s: %zu positions, %s model, gravity %.9g %s\n", args.input.path.c_str(),
+                  means.size(), std::string(ToString(options.base.model)).c_str(), g.in_unit,
+                  std::string(ToString(g.unit)).c_str());
+    if (!screened.empty()) {
+      out += Format("every method fitted to %zu positions: position%s %s left out (screening)\n",
+                    comparison.positions_used.size(),
+                    screened.find(',') != std::string::npos ? "s" : "", screened.c_str());
+    }
+    if (!comparison.outlier_note.empty()) out += "screening " + comparison.outlier_note + "\n";
+    out += "\n";
+    out += Format("%-18s", "");
+    for (const MethodComparison& r : rows)
+      out += Format("%17s", std::string(ToString(r.method)).c_str());
+    out += "\n";
+    auto row = [&](const char* label, auto value) {
+      out += Format("%-18s", label);
+      for (const MethodComparison& r : rows) out += r.error ? Format("%17s", "-") : value(r);
+      out += "\n";
+    };
+    for (std::size_t j = 0; j < slots.size(); ++j) {
+      row(std::string(slots[j].name).c_str(), [&](const MethodComparison& r) {
+        return Format("%17.10g",
+                      Pack(r.result.params, options.base.model)(static_cast<Eigen::Index>(j)));
+      });
+    }
+    row("|f|^2/g^2 mean",
+        [](const MethodComparison& r) { return Format("%17.10f", r.modular_square_mean); });
+    row("|f|^2/g^2 std",
+        [](const MethodComparison& r) { return Format("%17.4e", r.modular_square_std); });
+    row("rms |f|-g",
+        [](const MethodComparison& r) { return Format("%17.4e", r.gravity_norm_rms); });
+    row("held-out rms", [](const MethodComparison& r) {
+      if (!r.leave_one_out_rms) return Format("%17s", "n/a");
+      return Format(r.leave_one_out_from ? "%16.4e*" : "%17.4e", *r.leave_one_out_rms);
+    });
+    if (options.reference) {
+      row("e_T [%]", [](const MethodComparison& r) {
+        return Format("%17.4f", r.against_reference->e_T_percent);
+      });
+      row("e_b [%]", [](const MethodComparison& r) {
+        return Format("%17.4f", r.against_reference->e_b_percent);
+      });
+    }
+    row("iterations",
+        [](const MethodComparison& r) { return Format("%17d", r.result.summary.iterations); });
+    row("time [us]",
+        [](const MethodComparison& r) { return Format("%17.0f", r.result.summary.time_s * 1e6); });
+    for (const MethodComparison& r : rows) {
+      if (r.error) out += "\n" + std::string(ToString(r.method)) + ": " + *r.error;
+      if (r.leave_one_out_error) {
+        out += "\n" + std::string(ToString(r.method)) + " held-out: " + *r.leave_one_out_error;
+      }
+    }
+    out +=
+        "\nheld-out rms: |f_k| - g with position k predicted by a fit without it;\n"
+        "* shared with the first solver that reached the same optimum (same estimator).\n";
+  }
+  WriteFileAtomically("-", out);
+  return kExitOk;
+}
+
+}  // namespace accelcal::cli

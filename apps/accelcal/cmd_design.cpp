@@ -1,0 +1,275 @@
+// accelcal design and montecarlo: the Cramer-Rao bound planned, and reached in simulation.
+#include "commands.hpp"
+
+#include <algorithm>
+#include <charconv>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <iostream>
+#include <sstream>
+#include <stdexcept>
+
+#include "accelcal/calibration_file.hpp"
+#include "accelcal/compare.hpp"
+#include "accelcal/design.hpp"
+#include "accelcal/diagnosis.hpp"
+#include "accelcal/engineering.hpp"
+#include "accelcal/error.hpp"
+#include "accelcal/export.hpp"
+#include "accelcal/frame.hpp"
+#include "accelcal/gimbal_platform.hpp"
+#include "accelcal/gravity.hpp"
+#include "accelcal/known_orientation.hpp"
+#include "accelcal/model_selection.hpp"
+#include "accelcal/montecarlo.hpp"
+#include "accelcal/orientation_file.hpp"
+#include "accelcal/report.hpp"
+#include "accelcal/series_file.hpp"
+#include "accelcal/simulate.hpp"
+#include "accelcal/system_level.hpp"
+#include "cli_common.hpp"
+#include "output.hpp"
+
+namespace accelcal::cli {
+int RunDesign(const DesignArgs& args) {
+  const bool from_density = args.noise_density_ug.has_value();
+  if (from_density == !args.noise_raw.empty()) {
+    throw UsageError("give --noise, or --noise-density with --rate and --duration");
+  }
+  if (from_density && (!args.rate_hz || !args.duration_s)) {
+    throw UsageError("--noise-density needs --rate and --duration");
+  }
+  if (!from_density && args.noise_raw.size() != 1 && args.noise_raw.size() != 3) {
+    throw UsageError("--noise takes one value or three (x,y,z)");
+  }
+  const LoadedCalibration device =
+      ParseCalibrationJson(ReadFileToString(args.device, kMaxSmallFileBytes), args.device);
+  Vec3 sigma;
+  if (from_density) {
+    // One averaged reading: density · √rate per sample (µg relative to the device's gravity),
+    // over rate · duration samples, mapped to each raw axis by the length of its row of K.
+    const double samples = *args.rate_hz * *args.duration_s;
+    const double sigma_force =
+        *args.noise_density_ug * 1e-6 * device.gravity * std::sqrt(*args.rate_hz / samples);
+    for (int i = 0; i < 3; ++i) sigma(i) = device.params.K.row(i).norm() * sigma_force;
+  } else {
+    sigma = args.noise_raw.size() == 1
+                ? Vec3::Constant(args.noise_raw[0])
+                : Vec3(args.noise_raw[0], args.noise_raw[1], args.noise_raw[2]);
+  }
+  if (!sigma.allFinite() || !(sigma.minCoeff() > 0)) {
+    throw UsageError(
+        "the noise must be positive (--noise, or --noise-density, --rate, --duration)");
+  }
+  const ModelKind model = args.model ? ParseEnum(ModelKindFromString(*args.model), *args.model,
+                                                 "--model", "linear, quadratic")
+                                     : device.model;
+  std::vector<Vec3> directions = PlannedDirections(args.positions);
+  LoadedCalibration nominal = device;
+  if (device.frame == Frame::kPlatform) {
+    // A platform-frame device (known-orientation fit) has a full K. The orientation-free bound
+    // is computed for the same linear device in its x-first form (frame.hpp), the planned
+    // directions rotated with it.
+    if (model != ModelKind::kLinear) {
+      throw UsageError(
+          "design: a quadratic platform-frame device has no orientation-free "
+          "equivalent (the squared terms act on platform axes); use --model linear");
+    }
+    const FrameChange change = ChangeFrame(device.params.K, Frame::kXFirst);
+    nominal.params.K = change.K;
+    nominal.params.k2.setZero();
+    for (Vec3& c : directions) c = change.Q_old_new.transpose() * c;
+  }
+  std::string chosen_note;
+  if (args.choose > 0) {
+    if (args.criterion != "d" && args.criterion != "a") {
+      throw UsageError("--criterion: '" + args.criterion + "' is not one of d, a");
+    }
+    std::vector<int> chosen;
+    try {
+      chosen = args.criterion == "d" ? ChooseDOptimal(nominal.params, model, device.gravity,
+                                                      directions, sigma, args.choose)
+                                     : ChooseAOptimal(nominal.params, model, device.gravity,
+                                                      directions, sigma, args.choose);
+    } catch (const std::invalid_argument& e) {
+      throw UsageError(std::string("--choose: ") + e.what());
+    }
+    std::vector<Vec3> subset;
+    for (int k : chosen) subset.push_back(directions[static_cast<std::size_t>(k)]);
+    const std::vector<Vec3> yang18 = Yang18Directions();
+    const double d_efficiency =
+        std::exp((LogDetInformation(nominal.params, model, device.gravity, subset, sigma) -
+                  LogDetInformation(nominal.params, model, device.gravity, yang18, sigma)) /
+                 NumParameters(model));
+    const double a_efficiency = TraceCrlb(nominal.params, model, device.gravity, yang18, sigma) /
+                                TraceCrlb(nominal.params, model, device.gravity, subset, sigma);
+    chosen_note = Format(
+        "%s-optimal %d of %zu candidates; against yang18: D-efficiency %.4f ((det I / det "
+        "I_yang18)^(1/%d)), A-efficiency %.4f (tr CRLB_yang18 / tr CRLB, parameters in the "
+        "device's relative metric); > 1: better",
+        args.criterion == "d" ? "D" : "A", args.choose, directions.size(), d_efficiency,
+        NumParameters(model), a_efficiency);
+    directions = std::move(subset);
+  }
+  const PlannedUncertainty planned =
+      PredictUncertainty(nominal.params, model, device.gravity, directions, sigma);
+  const auto& slots = ParameterSlots(model, planned.frame);
+  std::string out;
+  if (args.json) {
+    out += "{\n  \"positions\": " + std::to_string(directions.size()) + ",\n";
+    out += "  \"model\": \"" + std::string(ToString(model)) + "\",\n";
+    out += "  \"frame\": \"" + std::string(ToString(planned.frame)) + "\",\n";
+    out += "  \"noise_raw\": " + JsonVector(sigma) + ",\n";
+    if (args.choose > 0) {
+      out += "  \"chosen\": [";
+      for (std::size_t k = 0; k < directions.size(); ++k) {
+        out += (k ? ", " : "") + JsonVector(directions[k]);
+      }
+      out += "],\n  \"choice\": \"" + chosen_note + "\",\n";
+    }
+    out += "  \"observable\": " + std::string(planned.observable ? "true" : "false") + ",\n";
+    out += "  \"reciprocal_condition\": " + FormatNumber(planned.rcond) + ",\n";
+    out += "  \"weakest\": " +
+           (planned.weakest.empty() ? std::string("null") : "\"" + planned.weakest + "\"") + ",\n";
+    out += "  \"parameter_order\": [";
+    for (std::size_t i = 0; i < slots.size(); ++i) {
+      out += (i ? ", \"" : "\"") + std::string(slots[i].name) + "\"";
+    }
+    out += "],\n";
+    if (planned.observable) {
+      const Mat33& K = planned.std.K;
+      out += "  \"std\": {\"K\": [" + JsonVector(K.row(0).transpose()) + ", " +
+             JsonVector(K.row(1).transpose()) + ", " + JsonVector(K.row(2).transpose()) +
+             "], \"bias\": " + JsonVector(planned.std.bias) +
+             ", \"k2\": " + JsonVector(planned.std.k2) + "},\n  \"crlb\": [";
+      for (Eigen::Index i = 0; i < planned.crlb.rows(); ++i) {
+        out += i ? ",\n    [" : "\n    [";
+        for (Eigen::Index j = 0; j < planned.crlb.cols(); ++j) {
+          out += (j ? ", " : "") + FormatNumber(planned.crlb(i, j));
+        }
+        out += "]";
+      }
+      out += "]\n}\n";
+    } else {
+      out += "  \"std\": null,\n  \"crlb\": null\n}\n";
+    }
+  } else {
+    out += Format(
+        "design    %zu positions (%s), %s model in the %s frame, noise %.4g %.4g %.4g "
+        "raw per averaged reading\n",
+        directions.size(), args.positions.c_str(), std::string(ToString(model)).c_str(),
+        std::string(ToString(planned.frame)).c_str(), sigma(0), sigma(1), sigma(2));
+    if (args.choose > 0) {
+      out += chosen_note + "\n";
+      for (const Vec3& c : directions) out += Format("  %+.6f %+.6f %+.6f\n", c(0), c(1), c(2));
+    }
+    if (!planned.observable) {
+      out += Format(
+          "NOT OBSERVABLE: these positions do not determine parameter %s (reciprocal "
+          "condition %.2g); add positions with other orientations\n",
+          planned.weakest.c_str(), planned.rcond);
+    } else {
+      out += "predicted 1 sigma (Cramer-Rao bound; raw units as the device file)\n";
+      for (std::size_t i = 0; i < slots.size(); ++i) {
+        const auto index = static_cast<Eigen::Index>(i);
+        out += Format("  %-5s %.4g\n", std::string(slots[i].name).c_str(),
+                      std::sqrt(planned.crlb(index, index)));
+      }
+      if (!planned.weakest.empty()) {
+        out += Format("poorly determined: %s (reciprocal condition %.2g)\n",
+                      planned.weakest.c_str(), planned.rcond);
+      }
+    }
+  }
+  WriteFileAtomically("-", out);
+  return planned.observable ? kExitOk : kExitBadInput;
+}
+
+int RunMonteCarlo(const MonteCarloArgs& args) {
+  const std::optional<Scenario> scenario = ScenarioByName(args.scenario);
+  if (!scenario) {
+    throw UsageError("--scenario: '" + args.scenario + "' is not one of yang2012, sunxu2020");
+  }
+  if (args.runs < 2 || args.runs > kMaxMonteCarloRuns) {
+    throw UsageError(Format("--runs must be from 2 to %d", kMaxMonteCarloRuns));
+  }
+  if (args.threads < 0) throw UsageError("--threads must be 0 (all cores) or positive");
+  MonteCarloOptions options;
+  options.runs = args.runs;
+  options.seed = args.seed;
+  options.threads = args.threads;
+  options.known_noise = !args.residual_noise;
+  options.calibration.method = ParseEnum(SolverMethodFromString(args.method), args.method,
+                                         "--method", "joint, two-step, newton-lagrange");
+  if (!IsMaximumLikelihood(options.calibration.method)) {
+    throw UsageError(
+        "--method: the Monte Carlo compares maximum-likelihood methods with the "
+        "bound: joint, two-step or newton-lagrange");
+  }
+  options.calibration.estimator = ParseEnum(EstimatorFromString(args.estimator), args.estimator,
+                                            "--estimator", "ml, bias-corrected");
+  options.calibration.model = scenario->model;
+  if (auto why = options.calibration.Validate()) throw UsageError(*why);
+  ProgressBar bar("montecarlo " + args.scenario);
+  options.progress = [&bar](int done, int total) { bar.Update(done, total); };
+  const MonteCarloResult r = RunMonteCarlo(*scenario, options);
+  bar.Finish();
+  std::string out;
+  if (args.json) {
+    out += "{\n  \"scenario\": \"" + r.scenario + "\",\n  \"method\": \"" +
+           std::string(ToString(r.method)) + "\",\n  \"estimator\": \"" + args.estimator +
+           "\",\n  \"runs\": " + std::to_string(r.runs) +
+           ",\n  \"failed\": " + std::to_string(r.failed) +
+           ",\n  \"coverage\": " + FormatNumber(r.coverage) +
+           ",\n  \"inclination_error_rms_arcsec\": " + FormatNumber(r.inclination_error_rms_arcsec);
+    if (scenario->random_attitudes > 0) {
+      out += ",\n  \"e_T_percent_mean\": " + FormatNumber(r.e_T_percent_mean) +
+             ",\n  \"e_b_percent_mean\": " + FormatNumber(r.e_b_percent_mean) +
+             ",\n  \"diag_T_bias\": " + JsonVector(r.diag_T_bias) +
+             ",\n  \"diag_T_bias_standard_error\": " + JsonVector(r.diag_T_bias_standard_error) +
+             ",\n  \"diag_T_bias_expected\": " + JsonVector(r.diag_T_bias_expected);
+    }
+    out += ",\n  \"parameters\": [";
+    for (std::size_t i = 0; i < r.errors.size(); ++i) {
+      const ErrorStatistics& e = r.errors[i];
+      out += (i ? ",\n    " : "\n    ") + std::string("{\"name\": \"") + e.name +
+             "\", \"unit\": \"" + e.unit + "\", \"min\": " + FormatNumber(e.min) +
+             ", \"max\": " + FormatNumber(e.max) + ", \"mean\": " + FormatNumber(e.mean) +
+             ", \"median\": " + FormatNumber(e.median) + ", \"std\": " + FormatNumber(e.std) +
+             ", \"rmse\": " + FormatNumber(e.rmse) + ", \"crlb\": " + FormatNumber(e.crlb) +
+             ", \"ratio\": " + FormatNumber(e.ratio) +
+             ", \"rmse_ratio\": " + FormatNumber(e.rmse_ratio) + "}";
+    }
+    out += "\n  ]\n}\n";
+  } else {
+    out +=
+        Format("montecarlo %s, %d runs, %s solver, %s estimator (%d failed)\n", r.scenario.c_str(),
+               r.runs, std::string(ToString(r.method)).c_str(), args.estimator.c_str(), r.failed);
+    out += Format("  %-7s %-6s %10s %10s %10s %10s %10s %10s %10s %8s %9s\n", "error", "unit",
+                  "min", "max", "mean", "median", "std", "RMSE", "CRLB", "std/CRLB", "RMSE/CRLB");
+    for (const ErrorStatistics& e : r.errors) {
+      out += Format("  %-7s %-6s %10.4g %10.4g %10.4g %10.4g %10.4g %10.4g %10.4g %8.3f %9.3f\n",
+                    e.name.c_str(), e.unit.c_str(), e.min, e.max, e.mean, e.median, e.std, e.rmse,
+                    e.crlb, e.ratio, e.rmse_ratio);
+    }
+    out += Format("coverage of the reported 1-sigma intervals: %.1f %% (noise %s)\n",
+                  100 * r.coverage, args.residual_noise ? "from the residuals" : "known");
+    out += Format("inclination vector error: rms %.3f arcsec\n", r.inclination_error_rms_arcsec);
+    if (scenario->random_attitudes > 0) {
+      out += Format("paper 001 eq. (20): mean e_T %.4f %%, mean e_b %.4f %%\n", r.e_T_percent_mean,
+                    r.e_b_percent_mean);
+      out += Format(
+          "bias of diag(T) (z-first): %.3g %.3g %.3g (+- %.2g %.2g %.2g); sigma^2/T_ii "
+          "%.3g %.3g %.3g\n",
+          r.diag_T_bias(0), r.diag_T_bias(1), r.diag_T_bias(2), r.diag_T_bias_standard_error(0),
+          r.diag_T_bias_standard_error(1), r.diag_T_bias_standard_error(2),
+          r.diag_T_bias_expected(0), r.diag_T_bias_expected(1), r.diag_T_bias_expected(2));
+    }
+  }
+  WriteFileAtomically("-", out);
+  return kExitOk;
+}
+
+}  // namespace accelcal::cli

@@ -1,0 +1,90 @@
+// accelcal detect: the static intervals of a raw log.
+#include "commands.hpp"
+
+#include <algorithm>
+#include <charconv>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <iostream>
+#include <sstream>
+#include <stdexcept>
+
+#include "accelcal/calibration_file.hpp"
+#include "accelcal/compare.hpp"
+#include "accelcal/design.hpp"
+#include "accelcal/diagnosis.hpp"
+#include "accelcal/engineering.hpp"
+#include "accelcal/error.hpp"
+#include "accelcal/export.hpp"
+#include "accelcal/frame.hpp"
+#include "accelcal/gimbal_platform.hpp"
+#include "accelcal/gravity.hpp"
+#include "accelcal/known_orientation.hpp"
+#include "accelcal/model_selection.hpp"
+#include "accelcal/montecarlo.hpp"
+#include "accelcal/orientation_file.hpp"
+#include "accelcal/report.hpp"
+#include "accelcal/series_file.hpp"
+#include "accelcal/simulate.hpp"
+#include "accelcal/system_level.hpp"
+#include "cli_common.hpp"
+#include "output.hpp"
+
+namespace accelcal::cli {
+int RunDetect(const DetectArgs& args) {
+  InputArgs in = args.input;
+  ReadOptions read = MakeReadOptions(in);
+  read.kind = InputKind::kRaw;
+  if (auto why = in.detection.Validate()) throw UsageError(*why);
+  const InputData data = ReadInput(in.path, read);
+  const StaticDetectionResult d = DetectStaticIntervals(data.raw, in.detection);
+  if (d.intervals.empty()) throw NoStaticInterval(d);
+  std::string out;
+  if (args.json) {
+    out += "{\n  \"source\": \"" + in.path + "\",\n";
+    out += Format("  \"samples\": %zu,\n  \"rate_hz\": %s,\n  \"window_samples\": %zu,\n",
+                  data.raw.samples.size(), FormatNumber(d.rate_hz).c_str(), d.window_samples);
+    out += "  \"noise_reference\": " + FormatNumber(d.noise_reference) +
+           ",\n  \"threshold\": " + FormatNumber(d.threshold) + ",\n";
+    if (const std::optional<TimeAxis>& t = data.raw.time) {
+      out += "  \"time\": {\"unit\": \"" + std::string(ToString(t->unit)) +
+             "\", \"origin_s\": " + FormatNumber(t->origin_s) +
+             ", \"gaps\": " + std::to_string(t->gaps.size()) + "},\n";
+    }
+    out += "  \"intervals\": [";
+    for (std::size_t i = 0; i < d.intervals.size(); ++i) {
+      const StaticInterval& s = d.intervals[i];
+      out += i ? ",\n    " : "\n    ";
+      out += Format("{\"begin\": %zu, \"end\": %zu, \"samples\": %zu, ", s.begin, s.end, s.count());
+      out +=
+          "\"t_begin\": " + FormatNumber(s.t_begin_s) + ", \"t_end\": " + FormatNumber(s.t_end_s);
+      out += ", \"mean\": [" + FormatNumber(s.mean(0)) + ", " + FormatNumber(s.mean(1)) + ", " +
+             FormatNumber(s.mean(2)) + "], \"std\": [" + FormatNumber(s.std(0)) + ", " +
+             FormatNumber(s.std(1)) + ", " + FormatNumber(s.std(2)) + "]}";
+    }
+    out += d.intervals.empty() ? "]\n}\n" : "\n  ]\n}\n";
+  } else {
+    out += Format(
+        "%s: %zu samples at %.6g Hz; window %zu samples; threshold %.4g raw^2 "
+        "(noise reference %.4g)\n",
+        in.path.c_str(), data.raw.samples.size(), d.rate_hz, d.window_samples, d.threshold,
+        d.noise_reference);
+    // What the time column was found to be, and the still periods not used (diagnosis.hpp).
+    for (const Finding& f : LogFindings(&data.raw, &d)) out += "# " + VisibleLine(f.message) + "\n";
+    out += Format("%3s %9s %9s %11s %11s %8s %40s %33s\n", "#", "begin", "end", "t_begin", "t_end",
+                  "samples", "mean", "std");
+    for (std::size_t i = 0; i < d.intervals.size(); ++i) {
+      const StaticInterval& s = d.intervals[i];
+      out += Format("%3zu %9zu %9zu %11.4f %11.4f %8zu %s %s\n", i + 1, s.begin, s.end, s.t_begin_s,
+                    s.t_end_s, s.count(), Vec(s.mean, "%13.7g ").c_str(),
+                    Vec(s.std, "%10.4g ").c_str());
+    }
+    out += Format("%zu static intervals\n", d.intervals.size());
+  }
+  WriteFileAtomically("-", out);
+  return kExitOk;
+}
+
+}  // namespace accelcal::cli

@@ -1,0 +1,253 @@
+// Paper 003's commands: system-level and gimbal.
+#include "commands.hpp"
+
+#include <algorithm>
+#include <charconv>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <iostream>
+#include <sstream>
+#include <stdexcept>
+
+#include "accelcal/calibration_file.hpp"
+#include "accelcal/compare.hpp"
+#include "accelcal/design.hpp"
+#include "accelcal/diagnosis.hpp"
+#include "accelcal/engineering.hpp"
+#include "accelcal/error.hpp"
+#include "accelcal/export.hpp"
+#include "accelcal/frame.hpp"
+#include "accelcal/gimbal_platform.hpp"
+#include "accelcal/gravity.hpp"
+#include "accelcal/known_orientation.hpp"
+#include "accelcal/model_selection.hpp"
+#include "accelcal/montecarlo.hpp"
+#include "accelcal/orientation_file.hpp"
+#include "accelcal/report.hpp"
+#include "accelcal/series_file.hpp"
+#include "accelcal/simulate.hpp"
+#include "accelcal/system_level.hpp"
+#include "cli_common.hpp"
+#include "output.hpp"
+
+namespace accelcal::cli {
+int RunSystemLevel(const SystemLevelArgs& args) {
+  const double latitude = *args.latitude_deg;
+  if (!(std::abs(latitude) < 89)) throw UsageError("--latitude must lie in (-89, 89) degrees");
+  if (std::abs(latitude) < 1) {
+    throw UsageError(
+        "--latitude: within 1 degree of the equator sin L vanishes and the second "
+        "harmonics of the attitude errors carry no information (eq. (32), (33))");
+  }
+  const double g = args.gravity_ms2 ? *args.gravity_ms2 : NormalGravityWgs84_ms2(latitude);
+  if (!(g > 0) || !std::isfinite(g)) throw UsageError("--gravity must be a positive number");
+  SystemLevelEstimator estimator(latitude * 3.14159265358979323846 / 180.0, g);
+  ProgressBar bar("system-level");
+  ReadSeries(
+      args.series, [&](const SystemSample& s) { estimator.Add(s); }, bar.ByteCallback());
+  bar.Finish();
+  const SystemLevelResult r = estimator.Finish();
+  const auto fourier = [](const FourierCoefficients& f) {
+    return "{\"mean\": " + FormatNumber(f.mean) + ", \"c1\": " + FormatNumber(f.c1) +
+           ", \"s1\": " + FormatNumber(f.s1) + ", \"c2\": " + FormatNumber(f.c2) +
+           ", \"s2\": " + FormatNumber(f.s2) + "}";
+  };
+  std::string out;
+  if (args.json) {
+    out += "{\n  \"samples\": " + std::to_string(r.samples) +
+           ",\n  \"latitude_deg\": " + FormatNumber(latitude) +
+           ",\n  \"gravity_ms2\": " + FormatNumber(g) +
+           ",\n  \"noise_ms2\": " + JsonVector(r.noise_ms2) +
+           ",\n  \"x1_noise_correction\": " + FormatNumber(r.x1_noise_correction) +
+           ",\n  \"combined\": {";
+    for (int i = 0; i < 5; ++i) {
+      out += (i ? ", " : "") + Format("\"x%d\": {\"value\": ", i + 1) + FormatNumber(r.x(i)) +
+             ", \"std\": " + FormatNumber(r.x_std(i)) + "}";
+    }
+    out += "},\n  \"fourier\": {\"pitch\": " + fourier(r.pitch) +
+           ", \"pitch_std\": " + fourier(r.pitch_std) + ",\n    \"roll\": " + fourier(r.roll) +
+           ", \"roll_std\": " + fourier(r.roll_std) +
+           "},\n  \"separated\": {\"rank\": " + std::to_string(r.rank) + ", \"determined\": {";
+    for (std::size_t i = 0; i < r.determined.size(); ++i) {
+      out += (i ? ", " : "") + std::string("\"") + r.determined[i].name +
+             "\": {\"value\": " + FormatNumber(r.determined[i].value) +
+             ", \"std\": " + FormatNumber(r.determined[i].std) + "}";
+    }
+    out += "}, \"undetermined\": [";
+    for (std::size_t i = 0; i < r.undetermined.size(); ++i) {
+      out += (i ? ", \"" : "\"") + r.undetermined[i] + "\"";
+    }
+    out += "]}\n}\n";
+  } else {
+    out += Format("system-level  %s: %ld samples, latitude %.6g deg, g %.9g m/s2\n",
+                  args.series.c_str(), r.samples, latitude, g);
+    out += Format(
+        "noise         %.3g %.3g %.3g m/s2 per axis (successive differences); x1 "
+        "corrected by E|n|^2/(2g^2) = %.3g\n",
+        r.noise_ms2(0), r.noise_ms2(1), r.noise_ms2(2), r.x1_noise_correction);
+    out += "combined coefficients, eq. (21)-(25) [rad]\n";
+    for (int i = 0; i < 5; ++i) {
+      out += Format("  x%d  %+.5e +- %.2e\n", i + 1, r.x(i), r.x_std(i));
+    }
+    const auto line = [](const char* name, const FourierCoefficients& f,
+                         const FourierCoefficients& sd) {
+      return Format(
+          "  %-5s mean %+.4e +- %.1e  c1 %+.4e +- %.1e  s1 %+.4e +- %.1e  c2 %+.4e +- "
+          "%.1e  s2 %+.4e +- %.1e\n",
+          name, f.mean, sd.mean, f.c1, sd.c1, f.s1, sd.s1, f.c2, sd.c2, f.s2, sd.s2);
+    };
+    out += "attitude errors, Fourier coefficients of S = Earth rate x t [rad]\n";
+    out += line("pitch", r.pitch, r.pitch_std) + line("roll", r.roll, r.roll_std);
+    out += Format("separated, eq. (39)-(41) (rank %d of 6)\n", r.rank);
+    for (const Estimate& e : r.determined) {
+      out += Format("  %-34s %+.5e +- %.2e\n", e.name.c_str(), e.value, e.std);
+    }
+    if (!r.undetermined.empty()) {
+      std::string names;
+      for (const std::string& n : r.undetermined) names += (names.empty() ? "" : ", ") + n;
+      out += "  not determined on their own (only in the combinations above): " + names + "\n";
+    }
+  }
+  WriteFileAtomically("-", out);
+  return kExitOk;
+}
+
+namespace {
+
+// Rows of `columns` numbers (commas or whitespace; `#` comments; a header line whose first field
+// is no number is skipped).
+std::vector<std::vector<double>> ReadTable(const std::string& path, std::size_t columns) {
+  const std::string text = ReadFileToString(path, kMaxSmallFileBytes);
+  std::vector<std::vector<double>> rows;
+  std::istringstream lines(text);
+  std::string line;
+  std::size_t number = 0;
+  bool first = true;  // a header is allowed on the first non-blank line only
+  while (std::getline(lines, line)) {
+    ++number;
+    line = line.substr(0, line.find('#'));
+    for (char& ch : line) {
+      if (ch == ',' || ch == '\t' || ch == '\r') ch = ' ';
+    }
+    std::istringstream fields(line);
+    std::vector<double> row;
+    std::string field;
+    bool numeric = true;
+    while (fields >> field) {
+      char* end = nullptr;
+      const double v = std::strtod(field.c_str(), &end);
+      if (end == field.c_str() || *end != '\0') {
+        numeric = false;
+        break;
+      }
+      row.push_back(v);
+    }
+    if (row.empty() && numeric) continue;  // blank
+    const bool header = first && !numeric && row.empty();
+    first = false;
+    if (header) continue;
+    if (!numeric || row.size() != columns) {
+      throw InputError(path, number, "expected " + std::to_string(columns) + " numbers");
+    }
+    for (double v : row) {
+      if (!std::isfinite(v)) throw InputError(path, number, "a value is not finite");
+    }
+    rows.push_back(std::move(row));
+  }
+  if (rows.empty()) throw InputError(path, 0, "no rows");
+  return rows;
+}
+
+std::string BetaJson(const Eigen::Matrix<double, 6, 1>& beta) {
+  static const char* const kNames[6] = {"beta_xz", "beta_xy", "beta_yz",
+                                        "beta_yx", "beta_zy", "beta_zx"};
+  std::string out = "{";
+  for (int i = 0; i < 6; ++i) {
+    out += (i ? ", \"" : "\"") + std::string(kNames[i]) + "\": " + FormatNumber(beta(i));
+  }
+  return out + "}";
+}
+
+std::string DeviceJson(const PlatformAccelerometer& d) {
+  return "{\"sf_inverse\": " + JsonVector(d.s) + ", \"bias\": " + JsonVector(d.bias) +
+         ", \"beta_rad\": " + BetaJson(d.beta) + ", \"k_nl\": " + JsonVector(d.k_nl) + "}";
+}
+
+}  // namespace
+
+int RunGimbal(const GimbalArgs& args) {
+  const Gravity g = ResolveGravity(args.gravity);
+  constexpr double kDeg = 3.14159265358979323846 / 180.0;
+  std::vector<Vec3> commanded, outputs;
+  for (const std::vector<double>& row : ReadTable(args.coarse, 6)) {
+    commanded.emplace_back(row[0] * kDeg, row[1] * kDeg, row[2] * kDeg);
+    outputs.emplace_back(row[3], row[4], row[5]);
+  }
+  const CoarseCalibrationResult coarse = CoarseCalibration(outputs, commanded, g.in_unit);
+  std::optional<FineCalibrationResult> fine;
+  if (!args.fine.empty()) {
+    std::vector<Vec3> fine_outputs;
+    for (const std::vector<double>& row : ReadTable(args.fine, 3)) {
+      fine_outputs.emplace_back(row[0], row[1], row[2]);
+    }
+    fine = FineCalibration(fine_outputs, coarse.device, g.in_unit);
+  }
+  std::string out;
+  if (args.json) {
+    out += "{\n  \"gravity\": " + FormatNumber(g.in_unit) +
+           ",\n  \"coarse\": {\"device\": " + DeviceJson(coarse.device) +
+           ",\n    \"offsets_rad\": {\"theta20\": " + FormatNumber(coarse.offsets(1)) +
+           ", \"theta30\": " + FormatNumber(coarse.offsets(2)) + "}, \"std\": [";
+    for (int i = 0; i < 14; ++i) out += (i ? ", " : "") + FormatNumber(coarse.std(i));
+    out +=
+        "],\n    \"parameter_order\": [\"s_x\", \"s_y\", \"s_z\", \"b_x\", \"b_y\", "
+        "\"b_z\", \"beta_xz\", \"beta_xy\", \"beta_yz\", \"beta_yx\", \"beta_zy\", "
+        "\"beta_zx\", \"theta20\", \"theta30\"],\n    \"residual_rms\": " +
+        FormatNumber(coarse.residual_rms) +
+        ", \"converged\": " + (coarse.converged ? "true" : "false") + ", \"note\": \"" +
+        coarse.note + "\"}";
+    if (fine) {
+      out += ",\n  \"fine\": {\"device\": " + DeviceJson(fine->device) + ",\n    \"dx\": [";
+      for (int i = 0; i < 12; ++i) out += (i ? ", " : "") + FormatNumber(fine->dx(i));
+      out += "], \"dx_std\": [";
+      for (int i = 0; i < 12; ++i) out += (i ? ", " : "") + FormatNumber(fine->dx_std(i));
+      out += "],\n    \"residual_rms\": " + FormatNumber(fine->residual_rms) +
+             ", \"converged\": " + (fine->converged ? "true" : "false") + ", \"note\": \"" +
+             fine->note + "\"}";
+    }
+    out += "\n}\n";
+  } else {
+    const auto device = [&](const PlatformAccelerometer& d) {
+      std::string text = Format("  SF^-1   %.10g %.10g %.10g\n", d.s(0), d.s(1), d.s(2));
+      text += Format("  bias    %.6g %.6g %.6g\n", d.bias(0), d.bias(1), d.bias(2));
+      text += Format("  beta    xz %.2f  xy %.2f  yz %.2f  yx %.2f  zy %.2f  zx %.2f arcsec\n",
+                     d.beta(0) / kDeg * 3600, d.beta(1) / kDeg * 3600, d.beta(2) / kDeg * 3600,
+                     d.beta(3) / kDeg * 3600, d.beta(4) / kDeg * 3600, d.beta(5) / kDeg * 3600);
+      return text;
+    };
+    out += Format("coarse    %zu positions, %s after %d iterations, residual rms %.3g\n",
+                  outputs.size(), coarse.converged ? "converged" : "NOT CONVERGED",
+                  coarse.iterations, coarse.residual_rms);
+    out += device(coarse.device);
+    out += Format("  offsets theta20 %.2f +- %.2f arcsec, theta30 %.2f +- %.2f arcsec\n",
+                  coarse.offsets(1) / kDeg * 3600, coarse.std(12) / kDeg * 3600,
+                  coarse.offsets(2) / kDeg * 3600, coarse.std(13) / kDeg * 3600);
+    out += "  note    " + coarse.note + "\n";
+    if (fine) {
+      out += Format("fine      %s after %d iterations, residual rms %.3g\n",
+                    fine->converged ? "converged" : "NOT CONVERGED", fine->iterations,
+                    fine->residual_rms);
+      out += device(fine->device);
+      out += Format("  K_nl    %.4g %.4g %.4g per output unit\n", fine->device.k_nl(0),
+                    fine->device.k_nl(1), fine->device.k_nl(2));
+      out += "  note    " + fine->note + "\n";
+    }
+  }
+  WriteFileAtomically("-", out);
+  const bool ok = coarse.converged && (!fine || fine->converged);
+  return ok ? kExitOk : kExitNotConverged;
+}
+
+}  // namespace accelcal::cli

@@ -1,0 +1,178 @@
+// accelcal simulate: recordings of a known device.
+#include "commands.hpp"
+
+#include <algorithm>
+#include <charconv>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <iostream>
+#include <sstream>
+#include <stdexcept>
+
+#include "accelcal/calibration_file.hpp"
+#include "accelcal/compare.hpp"
+#include "accelcal/design.hpp"
+#include "accelcal/diagnosis.hpp"
+#include "accelcal/engineering.hpp"
+#include "accelcal/error.hpp"
+#include "accelcal/export.hpp"
+#include "accelcal/frame.hpp"
+#include "accelcal/gimbal_platform.hpp"
+#include "accelcal/gravity.hpp"
+#include "accelcal/known_orientation.hpp"
+#include "accelcal/model_selection.hpp"
+#include "accelcal/montecarlo.hpp"
+#include "accelcal/orientation_file.hpp"
+#include "accelcal/report.hpp"
+#include "accelcal/series_file.hpp"
+#include "accelcal/simulate.hpp"
+#include "accelcal/system_level.hpp"
+#include "cli_common.hpp"
+#include "output.hpp"
+
+namespace accelcal::cli {
+namespace {
+
+// Paper 001 §4.1 as a positions file: eq. (19)'s device (g units, z-first), 300 Gaussian attitudes
+// from the seed, σ = 0.1 g per averaged reading, written as 100 samples of σ = 1 g so that
+// calibrate takes the known noise (SigmasOfMeans) as it would from a raw log.
+std::string SunXu2020Positions(const SimulateArgs& args) {
+  if (args.raw) {
+    throw UsageError(
+        "--scenario sunxu2020 is defined on averaged readings (sigma = 0.1 g per "
+        "position): use --positions-out");
+  }
+  if (!args.truth.empty() || !args.positions.empty() || args.noise_density_ug) {
+    throw UsageError("--scenario sunxu2020 fixes the device, the attitudes and the noise");
+  }
+  const std::vector<Vec3> means =
+      SimulateLinearPositions(SunXu2020Ta(), SunXu2020Ba(), SunXu2020Directions(300, args.seed),
+                              kSunXu2020Sigma_g, args.seed + 1000);
+  const double samples = 100;
+  return PositionsCsv(means, samples, Vec3::Constant(kSunXu2020Sigma_g * std::sqrt(samples)));
+}
+
+}  // namespace
+
+namespace {
+
+// A simulated log or series beyond this many samples (28 hours at 1 kHz; several GB of text) is
+// an option typed wrong, not a recording anyone wants.
+constexpr double kMaxSimulatedSamples = 1e8;
+
+void CheckSimulatedSamples(double samples, const char* options) {
+  if (!(samples <= kMaxSimulatedSamples)) {
+    throw UsageError(Format("%s asks for %.3g samples; at most %g are simulated", options, samples,
+                            kMaxSimulatedSamples));
+  }
+}
+
+}  // namespace
+
+int RunSimulate(const SimulateArgs& args) {
+  CheckOutputs({{"-o", args.output}}, {args.truth, args.positions});
+  if (args.scenario == "wu2018-system") {
+    if (!args.truth.empty() || !args.positions.empty() || args.noise_density_ug || args.raw) {
+      throw UsageError("--scenario wu2018-system takes only --seed, --rate, --duration and -o");
+    }
+    if (args.output.empty()) {
+      throw UsageError("--scenario wu2018-system writes a binary series: give -o FILE");
+    }
+    SystemSimulationOptions o;
+    o.seed = args.seed;
+    if (args.rate_given) o.rate_hz = args.rate_hz;
+    if (args.duration_given) o.duration_s = args.duration_s;
+    if (!(o.rate_hz > 0 && o.rate_hz <= kMaxRate_hz) || !(o.duration_s > 0)) {
+      throw UsageError(Format("--rate must be in (0, %g] Hz and --duration positive", kMaxRate_hz));
+    }
+    CheckSimulatedSamples(o.rate_hz * o.duration_s, "--rate x --duration");
+    OutputFile file(args.output);  // streamed: the series is never held whole
+    std::string bytes;
+    AppendSeriesHeader(&bytes);
+    file.Write(bytes);
+    SimulateSystemLevel(o, [&](const SystemSample& s) {
+      bytes.clear();
+      AppendSeriesSample(s, &bytes);
+      file.Write(bytes);
+    });
+    file.Commit();
+    return kExitOk;
+  }
+  if (args.scenario == "sunxu2020") {
+    WriteFileAtomically(args.output.empty() ? "-" : args.output, SunXu2020Positions(args));
+    return kExitOk;
+  }
+  ModelParameters truth;
+  double gravity = 0;
+  std::string positions = args.positions;
+  std::optional<double> density = args.noise_density_ug;
+  if (!args.scenario.empty()) {
+    if (args.scenario != "yang2012") {
+      throw UsageError("--scenario: '" + args.scenario +
+                       "' is not one of yang2012, sunxu2020, wu2018-system");
+    }
+    if (!args.truth.empty()) throw UsageError("give --scenario or --truth, not both");
+    truth = Yang2012Truth();
+    gravity = kYang2012Gravity_ms2;
+    if (positions.empty()) positions = "yang18";
+    if (!density) density = 10.0;
+  } else {
+    if (args.truth.empty()) throw UsageError("give --scenario or --truth");
+    const LoadedCalibration cal =
+        ParseCalibrationJson(ReadFileToString(args.truth, kMaxSmallFileBytes), args.truth);
+    truth = cal.params;
+    gravity = cal.gravity;
+    if (positions.empty()) throw UsageError("--positions is required with --truth");
+    if (!density) throw UsageError("--noise-density is required with --truth");
+  }
+  if (!(*density > 0) || !(args.rate_hz > 0) || !(args.duration_s > 0) ||
+      !(args.transition_s >= 0) || !std::isfinite(*density) || !std::isfinite(args.duration_s) ||
+      !std::isfinite(args.transition_s)) {
+    throw UsageError(
+        "--noise-density, --rate and --duration must be positive, --transition "
+        "zero or positive");
+  }
+  if (!(args.rate_hz <= kMaxRate_hz)) {
+    throw UsageError(Format("--rate must be a number of Hz in (0, %g]", kMaxRate_hz));
+  }
+  // A position averages round(duration x rate) samples: at least one, and a whole number a
+  // positions file can state (2^53).
+  const double per_position = std::round(args.duration_s * args.rate_hz);
+  if (!(per_position >= 1 && per_position <= 9007199254740992.0)) {
+    throw UsageError(
+        Format("--duration x --rate must be 1 to 2^53 samples per position (%g)", per_position));
+  }
+  const std::vector<Vec3> directions = PlannedDirections(positions);
+  // Per-sample white noise in the specific-force unit (µg relative to the device's gravity),
+  // mapped to each raw axis by the length of its row of K.
+  const double sigma_force = *density * 1e-6 * gravity * std::sqrt(args.rate_hz);
+  Vec3 sigma_raw;
+  for (int i = 0; i < 3; ++i) sigma_raw(i) = truth.K.row(i).norm() * sigma_force;
+  if (args.raw) {
+    RawLogSimulation options;
+    options.rate_hz = args.rate_hz;
+    options.static_s = args.duration_s;
+    options.transition_s = args.transition_s;
+    options.sigma_raw_per_sample = sigma_raw;
+    options.seed = args.seed;
+    CheckSimulatedSamples(SimulatedSampleCount(directions.size(), options),
+                          "positions x (--duration + --transition) x --rate");
+    OutputFile file(args.output.empty() ? "-" : args.output);  // streamed, never held whole
+    file.Write("time,x,y,z\n");
+    SimulateRawLog(truth, gravity, directions, options, [&](double t, const Vec3& p) {
+      file.Write(FormatNumber(t) + "," + FormatNumber(p(0)) + "," + FormatNumber(p(1)) + "," +
+                 FormatNumber(p(2)) + "\n");
+    });
+    file.Commit();
+    return kExitOk;
+  }
+  const std::vector<Vec3> means =
+      SimulatePositions(truth, gravity, directions, sigma_raw / std::sqrt(per_position), args.seed);
+  WriteFileAtomically(args.output.empty() ? "-" : args.output,
+                      PositionsCsv(means, per_position, sigma_raw));
+  return kExitOk;
+}
+
+}  // namespace accelcal::cli

@@ -215,6 +215,8 @@ std::string PositionsCsv(const std::vector<Vec3>& means, double samples, const V
   return out;
 }
 
+nlohmann::ordered_json JsonArray(const Vec3& v) { return {v(0), v(1), v(2)}; }
+
 // A calibration that failed its checks is written so that its reasons can be read, never used.
 void RefuseFailed(const LoadedCalibration& cal, const std::string& path) {
   if (cal.verdict == "failed") {

@@ -7,6 +7,8 @@
 #include <string>
 #include <vector>
 
+#include "accelcal/json_text.hpp"
+
 #include "accelcal/calibration_file.hpp"
 #include "accelcal/error.hpp"
 #include "accelcal/gravity.hpp"
@@ -85,6 +87,9 @@ std::string JsonVector(const Vec3& v);
 // A positions file as calibrate reads it: averaged readings with their sample count and the
 // per-axis standard deviation of one sample.
 std::string PositionsCsv(const std::vector<Vec3>& means, double samples, const Vec3& sample_sigma);
+
+// Three numbers as a JSON array.
+nlohmann::ordered_json JsonArray(const Vec3& v);
 
 // A calibration that failed its checks is written so that its reasons can be read, never used.
 void RefuseFailed(const LoadedCalibration& cal, const std::string& path);

@@ -91,67 +91,52 @@ int RunCompare(const CompareArgs& args) {
   const std::vector<ParameterSlot>& slots = ParameterSlots(options.base.model);
   std::string out;
   if (args.json) {
-    // Built by hand to keep nlohmann out of the CLI's dependencies; numbers are shortest
-    // round-trip decimals, failures are null with the reason. No timings: output is reproducible.
-    auto number = [](const std::optional<double>& v) {
-      return v && std::isfinite(*v) ? FormatNumber(*v) : std::string("null");
-    };
-    auto quoted = [](const std::string& text) {
-      std::string q = "\"";
-      for (char c : text) {
-        if (c == '"' || c == '\\') q.push_back('\\');
-        q.push_back(c);
-      }
-      return q + "\"";
-    };
-    out += "{\n  \"source\": " + quoted(args.input.path) + ",\n  \"model\": \"" +
-           std::string(ToString(options.base.model)) +
-           "\",\n  \"gravity\": " + FormatNumber(g.in_unit) +
-           ",\n  \"positions\": " + std::to_string(means.size()) +
-           ",\n  \"positions_used\": " + std::to_string(comparison.positions_used.size()) +
-           ",\n  \"outliers\": [";
-    for (std::size_t i = 0; i < comparison.outliers.size(); ++i) {
-      const OutlierFinding& o = comparison.outliers[i];
-      out += (i ? ", " : "") +
-             Format("{\"position\": %d, \"excluded\": %s, \"t\": ", o.position + 1,
-                    o.excluded ? "true" : "false") +
-             number(o.t) + ", \"threshold\": " + number(o.threshold) + "}";
+    // Numbers shortest round-trip, failures null with the reason. No timings: output is
+    // reproducible.
+    using Json = nlohmann::ordered_json;
+    const auto number = [](const std::optional<double>& v) { return v ? Json(*v) : Json(); };
+    Json doc;
+    doc["source"] = args.input.path;
+    doc["model"] = ToString(options.base.model);
+    doc["gravity"] = g.in_unit;
+    doc["positions"] = means.size();
+    doc["positions_used"] = comparison.positions_used.size();
+    Json& outliers = doc["outliers"] = Json::array();
+    for (const OutlierFinding& o : comparison.outliers) {
+      outliers.push_back({{"position", o.position + 1},
+                          {"excluded", o.excluded},
+                          {"t", number(o.t)},
+                          {"threshold", number(o.threshold)}});
     }
-    out += "]";
-    if (!comparison.outlier_note.empty()) {
-      out += ",\n  \"outlier_note\": " + quoted(comparison.outlier_note);
-    }
-    out += ",\n  \"methods\": [";
-    for (std::size_t i = 0; i < rows.size(); ++i) {
-      const MethodComparison& r = rows[i];
-      out += i ? ",\n    {" : "\n    {";
-      out += "\"method\": \"" + std::string(ToString(r.method)) + "\"";
+    if (!comparison.outlier_note.empty()) doc["outlier_note"] = comparison.outlier_note;
+    Json& methods = doc["methods"] = Json::array();
+    for (const MethodComparison& r : rows) {
+      Json row;
+      row["method"] = ToString(r.method);
       if (r.error) {
-        out += ", \"error\": " + quoted(*r.error) + "}";
+        row["error"] = *r.error;
+        methods.push_back(std::move(row));
         continue;
       }
       const Eigen::VectorXd theta = Pack(r.result.params, options.base.model);
-      out += ", \"parameters\": {";
+      Json& parameters = row["parameters"] = Json::object();
       for (std::size_t j = 0; j < slots.size(); ++j) {
-        out += (j ? ", \"" : "\"") + std::string(slots[j].name) +
-               "\": " + FormatNumber(theta(static_cast<Eigen::Index>(j)));
+        parameters[std::string(slots[j].name)] = theta(static_cast<Eigen::Index>(j));
       }
-      out += "}, \"modular_square_mean\": " + number(r.modular_square_mean) +
-             ", \"modular_square_std\": " + number(r.modular_square_std) +
-             ", \"gravity_norm_rms\": " + number(r.gravity_norm_rms) +
-             ", \"leave_one_out_rms\": " + number(r.leave_one_out_rms);
-      if (r.leave_one_out_error)
-        out += ", \"leave_one_out_error\": " + quoted(*r.leave_one_out_error);
-      if (r.leave_one_out_from) {
-        out += ", \"leave_one_out_from\": \"" + std::string(ToString(*r.leave_one_out_from)) + "\"";
-      }
+      row["modular_square_mean"] = number(r.modular_square_mean);
+      row["modular_square_std"] = number(r.modular_square_std);
+      row["gravity_norm_rms"] = number(r.gravity_norm_rms);
+      row["leave_one_out_rms"] = number(r.leave_one_out_rms);
+      if (r.leave_one_out_error) row["leave_one_out_error"] = *r.leave_one_out_error;
+      if (r.leave_one_out_from) row["leave_one_out_from"] = ToString(*r.leave_one_out_from);
       if (r.against_reference) {
-        out += ", \"e_T_percent\": " + number(r.against_reference->e_T_percent) +
-               ", \"e_b_percent\": " + number(r.against_reference->e_b_percent);
+        row["e_T_percent"] = number(r.against_reference->e_T_percent);
+        row["e_b_percent"] = number(r.against_reference->e_b_percent);
       }
-      out += ", \"iterations\": " + std::to_string(r.result.summary.iterations) + "}";
+      row["iterations"] = r.result.summary.iterations;
+      methods.push_back(std::move(row));
     }
-    out += rows.empty() ? "]\n}\n" : "\n  ]\n}\n";
+    out = JsonText(doc);
   } else {
     out += Format("%s: %zu positions, %s model, gravity %.9g %s\n", args.input.path.c_str(),
                   means.size(), std::string(ToString(options.base.model)).c_str(), g.in_unit,

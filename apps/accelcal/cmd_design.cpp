@@ -118,43 +118,40 @@ int RunDesign(const DesignArgs& args) {
   const auto& slots = ParameterSlots(model, planned.frame);
   std::string out;
   if (args.json) {
-    out += "{\n  \"positions\": " + std::to_string(directions.size()) + ",\n";
-    out += "  \"model\": \"" + std::string(ToString(model)) + "\",\n";
-    out += "  \"frame\": \"" + std::string(ToString(planned.frame)) + "\",\n";
-    out += "  \"noise_raw\": " + JsonVector(sigma) + ",\n";
+    using Json = nlohmann::ordered_json;
+    Json doc;
+    doc["positions"] = directions.size();
+    doc["model"] = ToString(model);
+    doc["frame"] = ToString(planned.frame);
+    doc["noise_raw"] = JsonArray(sigma);
     if (args.choose > 0) {
-      out += "  \"chosen\": [";
-      for (std::size_t k = 0; k < directions.size(); ++k) {
-        out += (k ? ", " : "") + JsonVector(directions[k]);
-      }
-      out += "],\n  \"choice\": \"" + chosen_note + "\",\n";
+      Json& chosen = doc["chosen"] = Json::array();
+      for (const Vec3& c : directions) chosen.push_back(JsonArray(c));
+      doc["choice"] = chosen_note;
     }
-    out += "  \"observable\": " + std::string(planned.observable ? "true" : "false") + ",\n";
-    out += "  \"reciprocal_condition\": " + FormatNumber(planned.rcond) + ",\n";
-    out += "  \"weakest\": " +
-           (planned.weakest.empty() ? std::string("null") : "\"" + planned.weakest + "\"") + ",\n";
-    out += "  \"parameter_order\": [";
-    for (std::size_t i = 0; i < slots.size(); ++i) {
-      out += (i ? ", \"" : "\"") + std::string(slots[i].name) + "\"";
-    }
-    out += "],\n";
+    doc["observable"] = planned.observable;
+    doc["reciprocal_condition"] = planned.rcond;
+    doc["weakest"] = planned.weakest.empty() ? Json() : Json(planned.weakest);
+    Json& order = doc["parameter_order"] = Json::array();
+    for (const ParameterSlot& slot : slots) order.push_back(std::string(slot.name));
     if (planned.observable) {
       const Mat33& K = planned.std.K;
-      out += "  \"std\": {\"K\": [" + JsonVector(K.row(0).transpose()) + ", " +
-             JsonVector(K.row(1).transpose()) + ", " + JsonVector(K.row(2).transpose()) +
-             "], \"bias\": " + JsonVector(planned.std.bias) +
-             ", \"k2\": " + JsonVector(planned.std.k2) + "},\n  \"crlb\": [";
+      doc["std"] = {{"K",
+                     {JsonArray(K.row(0).transpose()), JsonArray(K.row(1).transpose()),
+                      JsonArray(K.row(2).transpose())}},
+                    {"bias", JsonArray(planned.std.bias)},
+                    {"k2", JsonArray(planned.std.k2)}};
+      Json& crlb = doc["crlb"] = Json::array();
       for (Eigen::Index i = 0; i < planned.crlb.rows(); ++i) {
-        out += i ? ",\n    [" : "\n    [";
-        for (Eigen::Index j = 0; j < planned.crlb.cols(); ++j) {
-          out += (j ? ", " : "") + FormatNumber(planned.crlb(i, j));
-        }
-        out += "]";
+        Json row = Json::array();
+        for (Eigen::Index j = 0; j < planned.crlb.cols(); ++j) row.push_back(planned.crlb(i, j));
+        crlb.push_back(std::move(row));
       }
-      out += "]\n}\n";
     } else {
-      out += "  \"std\": null,\n  \"crlb\": null\n}\n";
+      doc["std"] = nullptr;
+      doc["crlb"] = nullptr;
     }
+    out = JsonText(doc);
   } else {
     out += Format(
         "design    %zu positions (%s), %s model in the %s frame, noise %.4g %.4g %.4g "
@@ -218,31 +215,37 @@ int RunMonteCarlo(const MonteCarloArgs& args) {
   bar.Finish();
   std::string out;
   if (args.json) {
-    out += "{\n  \"scenario\": \"" + r.scenario + "\",\n  \"method\": \"" +
-           std::string(ToString(r.method)) + "\",\n  \"estimator\": \"" + args.estimator +
-           "\",\n  \"runs\": " + std::to_string(r.runs) +
-           ",\n  \"failed\": " + std::to_string(r.failed) +
-           ",\n  \"coverage\": " + FormatNumber(r.coverage) +
-           ",\n  \"inclination_error_rms_arcsec\": " + FormatNumber(r.inclination_error_rms_arcsec);
+    using Json = nlohmann::ordered_json;
+    Json doc;
+    doc["scenario"] = r.scenario;
+    doc["method"] = ToString(r.method);
+    doc["estimator"] = args.estimator;
+    doc["runs"] = r.runs;
+    doc["failed"] = r.failed;
+    doc["coverage"] = r.coverage;
+    doc["inclination_error_rms_arcsec"] = r.inclination_error_rms_arcsec;
     if (scenario->random_attitudes > 0) {
-      out += ",\n  \"e_T_percent_mean\": " + FormatNumber(r.e_T_percent_mean) +
-             ",\n  \"e_b_percent_mean\": " + FormatNumber(r.e_b_percent_mean) +
-             ",\n  \"diag_T_bias\": " + JsonVector(r.diag_T_bias) +
-             ",\n  \"diag_T_bias_standard_error\": " + JsonVector(r.diag_T_bias_standard_error) +
-             ",\n  \"diag_T_bias_expected\": " + JsonVector(r.diag_T_bias_expected);
+      doc["e_T_percent_mean"] = r.e_T_percent_mean;
+      doc["e_b_percent_mean"] = r.e_b_percent_mean;
+      doc["diag_T_bias"] = JsonArray(r.diag_T_bias);
+      doc["diag_T_bias_standard_error"] = JsonArray(r.diag_T_bias_standard_error);
+      doc["diag_T_bias_expected"] = JsonArray(r.diag_T_bias_expected);
     }
-    out += ",\n  \"parameters\": [";
-    for (std::size_t i = 0; i < r.errors.size(); ++i) {
-      const ErrorStatistics& e = r.errors[i];
-      out += (i ? ",\n    " : "\n    ") + std::string("{\"name\": \"") + e.name +
-             "\", \"unit\": \"" + e.unit + "\", \"min\": " + FormatNumber(e.min) +
-             ", \"max\": " + FormatNumber(e.max) + ", \"mean\": " + FormatNumber(e.mean) +
-             ", \"median\": " + FormatNumber(e.median) + ", \"std\": " + FormatNumber(e.std) +
-             ", \"rmse\": " + FormatNumber(e.rmse) + ", \"crlb\": " + FormatNumber(e.crlb) +
-             ", \"ratio\": " + FormatNumber(e.ratio) +
-             ", \"rmse_ratio\": " + FormatNumber(e.rmse_ratio) + "}";
+    Json& parameters = doc["parameters"] = Json::array();
+    for (const ErrorStatistics& e : r.errors) {
+      parameters.push_back({{"name", e.name},
+                            {"unit", e.unit},
+                            {"min", e.min},
+                            {"max", e.max},
+                            {"mean", e.mean},
+                            {"median", e.median},
+                            {"std", e.std},
+                            {"rmse", e.rmse},
+                            {"crlb", e.crlb},
+                            {"ratio", e.ratio},
+                            {"rmse_ratio", e.rmse_ratio}});
     }
-    out += "\n  ]\n}\n";
+    out = JsonText(doc);
   } else {
     out +=
         Format("montecarlo %s, %d runs, %s solver, %s estimator (%d failed)\n", r.scenario.c_str(),

@@ -43,28 +43,28 @@ int RunDetect(const DetectArgs& args) {
   if (d.intervals.empty()) throw NoStaticInterval(d);
   std::string out;
   if (args.json) {
-    out += "{\n  \"source\": \"" + in.path + "\",\n";
-    out += Format("  \"samples\": %zu,\n  \"rate_hz\": %s,\n  \"window_samples\": %zu,\n",
-                  data.raw.samples.size(), FormatNumber(d.rate_hz).c_str(), d.window_samples);
-    out += "  \"noise_reference\": " + FormatNumber(d.noise_reference) +
-           ",\n  \"threshold\": " + FormatNumber(d.threshold) + ",\n";
+    nlohmann::ordered_json doc;
+    doc["source"] = in.path;
+    doc["samples"] = data.raw.samples.size();
+    doc["rate_hz"] = d.rate_hz;
+    doc["window_samples"] = d.window_samples;
+    doc["noise_reference"] = d.noise_reference;
+    doc["threshold"] = d.threshold;
     if (const std::optional<TimeAxis>& t = data.raw.time) {
-      out += "  \"time\": {\"unit\": \"" + std::string(ToString(t->unit)) +
-             "\", \"origin_s\": " + FormatNumber(t->origin_s) +
-             ", \"gaps\": " + std::to_string(t->gaps.size()) + "},\n";
+      doc["time"] = {
+          {"unit", ToString(t->unit)}, {"origin_s", t->origin_s}, {"gaps", t->gaps.size()}};
     }
-    out += "  \"intervals\": [";
-    for (std::size_t i = 0; i < d.intervals.size(); ++i) {
-      const StaticInterval& s = d.intervals[i];
-      out += i ? ",\n    " : "\n    ";
-      out += Format("{\"begin\": %zu, \"end\": %zu, \"samples\": %zu, ", s.begin, s.end, s.count());
-      out +=
-          "\"t_begin\": " + FormatNumber(s.t_begin_s) + ", \"t_end\": " + FormatNumber(s.t_end_s);
-      out += ", \"mean\": [" + FormatNumber(s.mean(0)) + ", " + FormatNumber(s.mean(1)) + ", " +
-             FormatNumber(s.mean(2)) + "], \"std\": [" + FormatNumber(s.std(0)) + ", " +
-             FormatNumber(s.std(1)) + ", " + FormatNumber(s.std(2)) + "]}";
+    nlohmann::ordered_json& intervals = doc["intervals"] = nlohmann::ordered_json::array();
+    for (const StaticInterval& s : d.intervals) {
+      intervals.push_back({{"begin", s.begin},
+                           {"end", s.end},
+                           {"samples", s.count()},
+                           {"t_begin", s.t_begin_s},
+                           {"t_end", s.t_end_s},
+                           {"mean", JsonArray(s.mean)},
+                           {"std", JsonArray(s.std)}});
     }
-    out += d.intervals.empty() ? "]\n}\n" : "\n  ]\n}\n";
+    out = JsonText(doc);
   } else {
     out += Format(
         "%s: %zu samples at %.6g Hz; window %zu samples; threshold %.4g raw^2 "

@@ -2,6 +2,7 @@
 #include "cli_common.hpp"
 
 #include <algorithm>
+#include <cctype>
 #include <charconv>
 #include <chrono>
 #include <cmath>
@@ -216,6 +217,24 @@ std::string PositionsCsv(const std::vector<Vec3>& means, double samples, const V
 }
 
 nlohmann::ordered_json JsonArray(const Vec3& v) { return {v(0), v(1), v(2)}; }
+
+std::string WithFlags(std::string message,
+                      std::initializer_list<std::pair<const char*, const char*>> flags) {
+  const auto word = [](char c) { return std::isalnum(static_cast<unsigned char>(c)) || c == '_'; };
+  for (const auto& [field, flag] : flags) {
+    const std::string name = field;
+    for (std::size_t at = message.find(name); at != std::string::npos;
+         at = message.find(name, at + 1)) {
+      const std::size_t end = at + name.size();
+      if ((at > 0 && word(message[at - 1])) || (end < message.size() && word(message[end]))) {
+        continue;  // part of a longer word
+      }
+      message.replace(at, name.size(), flag);
+      at += std::string_view(flag).size() - 1;
+    }
+  }
+  return message;
+}
 
 // A calibration that failed its checks is written so that its reasons can be read, never used.
 void RefuseFailed(const LoadedCalibration& cal, const std::string& path) {

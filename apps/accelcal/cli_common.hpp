@@ -3,8 +3,10 @@
 // converted, the input files of a calibration read and detected, gravity resolved, numbers written
 // shortest round-trip.
 
+#include <initializer_list>
 #include <optional>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "accelcal/json_text.hpp"
@@ -90,6 +92,12 @@ std::string PositionsCsv(const std::vector<Vec3>& means, double samples, const V
 
 // Three numbers as a JSON array.
 nlohmann::ordered_json JsonArray(const Vec3& v);
+
+// A library message with the names of the options it mentions (the library's field names, as
+// Python spells them: c_prefix) replaced by the command line's flags (--c-prefix): the library
+// speaks neutrally, the tool names what the user types.
+std::string WithFlags(std::string message,
+                      std::initializer_list<std::pair<const char*, const char*>> flags);
 
 // A calibration that failed its checks is written so that its reasons can be read, never used.
 void RefuseFailed(const LoadedCalibration& cal, const std::string& path);

@@ -127,9 +127,14 @@ int RunExport(const ExportArgs& args) {
   try {
     exported = ExportCalibration(cal, text, format, options);
   } catch (const std::invalid_argument& e) {
-    throw UsageError(e.what());
+    throw UsageError(WithFlags(
+        e.what(),
+        {{"c_prefix", "--c-prefix"}, {"instance", "--instance"}, {"raw_unit", "--raw-unit"}}));
   } catch (const DataError& e) {
-    throw InputError(args.calibration, 0, e.what());
+    throw InputError(
+        args.calibration, 0,
+        WithFlags(e.what(), {{"raw_unit", "--raw-unit"},
+                             {"in m/s2 or g", "in m/s2 or g (calibrate --raw-units)"}}));
   }
   // The file (or stdout) gets the export alone; what it means and what it lost goes to the
   // terminal: stdout when the export went to a file, else stderr.

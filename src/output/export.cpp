@@ -105,8 +105,8 @@ double RawToMetersPerSecond2(const LoadedCalibration& cal, const ExportOptions& 
     throw DataError(std::string(format) + " applies its calibration to readings already in m/s2 (" +
                     std::string(why) + "), but this calibration's raw unit is '" +
                     internal::VisibleLine(label) +
-                    "': calibrate readings in m/s2 or g (--raw-units m/s2), or say which with "
-                    "--raw-unit m/s2|g if the readings were in one of them");
+                    "': calibrate readings in m/s2 or g, or give raw_unit (m/s2 or g) if the "
+                    "readings were in one of them");
   }
   return *unit == ForceUnit::kStandardGravity ? kStandardGravity_ms2 : 1.0;
 }
@@ -263,11 +263,11 @@ ExportResult Kalibr(const LoadedCalibration& cal, const ExportOptions& options) 
 
 std::string CIdentifier(const std::string& prefix) {
   if (prefix.empty() || IsAsciiDigit(prefix[0])) {
-    throw std::invalid_argument("--c-prefix must start with a letter or '_'");
+    throw std::invalid_argument("c_prefix must start with a letter or '_'");
   }
   for (const char c : prefix) {
     if (!IsIdentifierChar(c)) {
-      throw std::invalid_argument("--c-prefix may hold only letters, digits and '_'");
+      throw std::invalid_argument("c_prefix may hold only letters, digits and '_'");
     }
   }
   return prefix;
@@ -455,7 +455,7 @@ std::string JsonToYaml(const std::string& json_text) {
 
 ExportResult ExportCalibration(const LoadedCalibration& cal, const std::string& native_json,
                                ExportFormat format, const ExportOptions& options) {
-  if (options.instance < 0) throw std::invalid_argument("--instance must be >= 0");
+  if (options.instance < 0) throw std::invalid_argument("instance must be >= 0");
   ExportResult out;
   switch (format) {
     case ExportFormat::kJson:

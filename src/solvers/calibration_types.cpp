@@ -159,7 +159,7 @@ std::optional<std::string> CalibrationOptions::Validate() const {
   }
   if (method == SolverMethod::kKnownOrientation || frame == Frame::kPlatform) {
     return "known orientations (the platform frame) need CalibrateKnownOrientations "
-           "(known_orientation.hpp; the command line's --orientations)";
+           "(known_orientation.hpp)";
   }
   if (estimator == Estimator::kBiasCorrected && !IsMaximumLikelihood(method)) {
     return "the bias-corrected estimator corrects maximum likelihood: it does not apply to the " +

@@ -18,6 +18,7 @@
 #include "accelcal/diagnosis.hpp"
 #include "accelcal/error.hpp"
 #include "accelcal/export.hpp"
+#include "accelcal/load_positions.hpp"
 #include "accelcal/log_reader.hpp"
 #include "accelcal/model_selection.hpp"
 #include "accelcal/report.hpp"
@@ -672,17 +673,15 @@ PYBIND11_MODULE(_accelcal, m) {
         const CalibrationOptions options = MakeOptions(s);
         const ReadOptions read =
             MakeReadOptions(input_kind, std::move(columns), rate_hz, time_unit, instance);
-        const InputData data = ReadInput(path, read);
-        std::optional<StaticDetectionResult> detection;
-        std::vector<Position> positions;
+        LoadOptions load;
+        load.read = read;
+        load.detection = detection_options;
         try {
-          if (data.kind == InputKind::kPositions) {
-            positions = data.positions;
-          } else {
-            detection = DetectStaticIntervals(data.raw, detection_options);
-            if (detection->intervals.empty()) throw DataError(NoStaticIntervalReason(*detection));
-            positions = PositionsFromIntervals(detection->intervals);
-          }
+          const LoadedInput in = LoadPositions({path}, load);
+          const LoadedFile& file = in.files.front();
+          const std::vector<Position>& positions = in.positions;
+          const InputData& data = file.data;
+          const std::optional<StaticDetectionResult>& detection = file.detection;
           std::vector<Vec3> sigmas = SigmasOfMeans(positions);  // empty: from the residuals
           PyCalibration c = Fit(positions, std::move(sigmas), s, options,
                                 data.kind == InputKind::kRaw ? &data.raw : nullptr,

@@ -69,61 +69,42 @@ ReadOptions MakeReadOptions(const InputArgs& in) {
   return options;
 }
 
-namespace {
-
-LoadedFile LoadFile(const InputArgs& in, const std::string& path) {
-  LoadedFile loaded;
-  loaded.path = path;
-  const auto start = std::chrono::steady_clock::now();
-  ReadOptions read = MakeReadOptions(in);
-  ProgressBar bar("reading");
-  read.progress = bar.ByteCallback();
-  loaded.data = ReadInput(path, read);
-  bar.Finish();
-  Detail("read %s in %.1f ms\n", path.c_str(),
-         1e3 * std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
-  if (loaded.data.kind == InputKind::kPositions) return loaded;
-  loaded.detection = DetectStaticIntervals(loaded.data.raw, in.detection);
-  const StaticDetectionResult& d = *loaded.detection;
-  Detail(
-      "detection: %.6g Hz, window %zu samples, noise reference %.4g raw^2, threshold %.4g raw^2: "
-      "%zu intervals, %zu still periods not used\n",
-      d.rate_hz, d.window_samples, d.noise_reference, d.threshold, d.intervals.size(),
-      d.rejected.size());
-  for (const RejectedInterval& r : d.rejected) {
-    if (r.cause == RejectedInterval::Cause::kClipped) {  // a position the user meant to record
-      Warn("%s: the still period %.3f-%.3f s is not used: %s\n", path.c_str(), r.t_begin_s,
-           r.t_end_s, r.reason.c_str());
-    } else {
-      Detail("  not used: %.3f-%.3f s, %s\n", r.t_begin_s, r.t_end_s, r.reason.c_str());
-    }
-  }
-  if (loaded.detection->intervals.empty()) throw NoStaticInterval(d);
-  return loaded;
-}
-
-}  // namespace
-
 LoadedInput LoadInput(const InputArgs& in) {
   if (auto why = in.detection.Validate()) throw UsageError(*why);
-  LoadedInput loaded;
+  LoadOptions options;
+  options.read = MakeReadOptions(in);
+  options.detection = in.detection;
+  std::optional<ProgressBar> bar;
+  auto start = std::chrono::steady_clock::now();
+  options.before_file = [&](const std::string&) {
+    start = std::chrono::steady_clock::now();
+    bar.emplace("reading");
+    options.read.progress = bar->ByteCallback();
+  };
+  options.after_file = [&](const LoadedFile& loaded) {
+    bar->Finish();
+    Detail("read %s in %.1f ms\n", loaded.path.c_str(),
+           1e3 * std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
+    if (!loaded.detection) return;
+    const StaticDetectionResult& d = *loaded.detection;
+    Detail(
+        "detection: %.6g Hz, window %zu samples, noise reference %.4g raw^2, threshold %.4g "
+        "raw^2: %zu intervals, %zu still periods not used\n",
+        d.rate_hz, d.window_samples, d.noise_reference, d.threshold, d.intervals.size(),
+        d.rejected.size());
+    for (const RejectedInterval& r : d.rejected) {
+      if (r.cause == RejectedInterval::Cause::kClipped) {  // a position the user meant to record
+        Warn("%s: the still period %.3f-%.3f s is not used: %s\n", loaded.path.c_str(), r.t_begin_s,
+             r.t_end_s, r.reason.c_str());
+      } else {
+        Detail("  not used: %.3f-%.3f s, %s\n", r.t_begin_s, r.t_end_s, r.reason.c_str());
+      }
+    }
+    if (d.intervals.empty()) throw NoStaticInterval(d);  // with the options that act on it
+  };
   std::vector<std::string> paths{in.path};
   paths.insert(paths.end(), in.more_paths.begin(), in.more_paths.end());
-  for (const std::string& path : paths) {
-    try {
-      loaded.files.push_back(LoadFile(in, path));
-    } catch (const DataError& e) {  // what is wrong with one file of several names that file
-      if (paths.size() == 1) throw;
-      throw InputError(path, 0, e.what());
-    }
-    const LoadedFile& f = loaded.files.back();
-    const std::vector<Position> positions = f.data.kind == InputKind::kPositions
-                                                ? f.data.positions
-                                                : PositionsFromIntervals(f.detection->intervals);
-    loaded.positions.insert(loaded.positions.end(), positions.begin(), positions.end());
-    if (paths.size() > 1) loaded.position_file.resize(loaded.positions.size(), path);
-  }
-  return loaded;
+  return LoadPositions(paths, options);
 }
 
 Gravity ResolveGravity(const GravityArgs& args) {

@@ -14,6 +14,7 @@
 #include "accelcal/calibration_file.hpp"
 #include "accelcal/error.hpp"
 #include "accelcal/gravity.hpp"
+#include "accelcal/load_positions.hpp"
 #include "accelcal/log_reader.hpp"
 #include "accelcal/static_detection.hpp"
 #include "commands.hpp"
@@ -34,28 +35,6 @@ T ParseEnum(std::optional<T> value, const std::string& text, const char* option,
 }
 
 OutlierOptions ParseOutlierOptions(const OutlierArgs& args);
-
-struct LoadedFile {
-  std::string path;
-  InputData data;
-  std::optional<StaticDetectionResult> detection;
-};
-
-// The input files of a calibration (sessions of one device: positions pooled in file order, time
-// never joined across files).
-struct LoadedInput {
-  std::vector<LoadedFile> files;
-  std::vector<Position> positions;
-  /// The file of each position, when there are several files (else empty).
-  std::vector<std::string> position_file;
-  /// The first raw log, for the report's signal plot (nullptr: none).
-  const LoadedFile* FirstRaw() const {
-    for (const LoadedFile& f : files) {
-      if (f.data.kind == InputKind::kRaw) return &f;
-    }
-    return nullptr;
-  }
-};
 
 // Why detection found nothing, with the options that act on it.
 DataError NoStaticInterval(const StaticDetectionResult& d);

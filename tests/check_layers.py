@@ -12,7 +12,7 @@ import re
 import sys
 
 LAYERS = ["core", "model", "io", "solvers", "statistics", "analysis", "platform", "output"]
-PUBLIC_ONLY = {"types.hpp": "core"}
+PUBLIC_ONLY = {"types.hpp": "core", "names.hpp": "core"}
 INCLUDE = re.compile(r'^\s*#\s*include\s+"([^"]+)"', re.M)
 
 

@@ -36,8 +36,7 @@ namespace accelcal::cli {
 
 OutlierOptions ParseOutlierOptions(const OutlierArgs& args) {
   OutlierOptions options;
-  options.policy = ParseEnum(OutlierPolicyFromString(args.policy), args.policy, "--outliers",
-                             "exclude, flag, off");
+  options.policy = ParseChoice<OutlierPolicy>(args.policy, "--outliers");
   options.false_alarm_probability = args.probability;
   options.max_excluded = args.max_excluded;
   return options;
@@ -109,7 +108,7 @@ LoadedInput LoadInput(const InputArgs& in) {
 
 Gravity ResolveGravity(const GravityArgs& args) {
   Gravity g;
-  g.unit = ParseEnum(ForceUnitFromString(args.units), args.units, "--units", "m/s2, g");
+  g.unit = ParseChoice<ForceUnit>(args.units, "--units");
   if (args.gravity_ms2 && args.latitude_deg) {
     throw UsageError("--gravity and --latitude exclude each other");
   }

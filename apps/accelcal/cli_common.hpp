@@ -3,6 +3,7 @@
 // converted, the input files of a calibration read and detected, gravity resolved, numbers written
 // shortest round-trip.
 
+#include <algorithm>
 #include <initializer_list>
 #include <optional>
 #include <string>
@@ -31,6 +32,26 @@ template <typename T>
 T ParseEnum(std::optional<T> value, const std::string& text, const char* option,
             const char* allowed) {
   if (!value) throw UsageError(std::string(option) + ": '" + text + "' is not one of " + allowed);
+  return *value;
+}
+
+// The methods and starts a user chooses for an orientation-free fit (known-orientation and a
+// given start are the library's, chosen by other means).
+inline constexpr std::initializer_list<SolverMethod> kOrientationFreeMethods = {
+    SolverMethod::kJoint,   SolverMethod::kTwoStep,     SolverMethod::kNewtonLagrange,
+    SolverMethod::kModulus, SolverMethod::kModulusNorm, SolverMethod::kEllipsoid};
+inline constexpr std::initializer_list<Initialization> kInitializations = {
+    Initialization::kAuto, Initialization::kEllipsoidFit, Initialization::kNormalizedReadings};
+
+// The value of an enum option named `text`, one of `allowed` (default: any the library names);
+// else a usage error listing the choices from the library's name table (names.hpp).
+template <typename T>
+T ParseChoice(const std::string& text, const char* option, std::initializer_list<T> allowed = {}) {
+  const std::optional<T> value = FromName<T>(text);
+  bool ok = value.has_value();
+  if (ok && allowed.size() > 0)
+    ok = std::find(allowed.begin(), allowed.end(), *value) != allowed.end();
+  if (!ok) ParseEnum<T>(std::nullopt, text, option, NameList<T>(allowed).c_str());
   return *value;
 }
 

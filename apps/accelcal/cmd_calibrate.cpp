@@ -316,8 +316,7 @@ int RunCalibrateKnownOrientations(const CalibrateArgs& args) {
     throw UsageError("--model auto is not available with --orientations: give linear or quadratic");
   }
   KnownOrientationOptions options;
-  options.model =
-      ParseEnum(ModelKindFromString(args.model), args.model, "--model", "linear, quadratic");
+  options.model = ParseChoice<ModelKind>(args.model, "--model");
   options.cross_validate = args.cross_validate;
   options.outliers = ParseOutlierOptions(args.outliers);
   const Gravity g = ResolveGravity(args.gravity);
@@ -352,19 +351,16 @@ int RunCalibrate(const CalibrateArgs& args) {
   const bool auto_model = args.model == "auto";
   options.model = auto_model ? ModelKind::kLinear
                              : ParseEnum(ModelKindFromString(args.model), args.model, "--model",
-                                         "linear, quadratic, auto");
-  options.method = ParseEnum(SolverMethodFromString(args.method), args.method, "--method",
-                             "joint, two-step, newton-lagrange, modulus, modulus-norm, ellipsoid");
-  options.initialization = ParseEnum(InitializationFromString(args.init), args.init, "--init",
-                                     "auto, ellipsoid, normalized-readings");
+                                         (NameList<ModelKind>() + ", auto").c_str());
+  options.method = ParseChoice<SolverMethod>(args.method, "--method", kOrientationFreeMethods);
+  options.initialization = ParseChoice<Initialization>(args.init, "--init", kInitializations);
   if (args.frame == "platform") {
     throw UsageError(
         "--frame platform is the frame of known orientations: give them with "
         "--orientations");
   }
-  options.frame = ParseEnum(FrameFromString(args.frame), args.frame, "--frame", "x-first, z-first");
-  options.estimator = ParseEnum(EstimatorFromString(args.estimator), args.estimator, "--estimator",
-                                "ml, bias-corrected");
+  options.frame = ParseChoice<Frame>(args.frame, "--frame", {Frame::kXFirst, Frame::kZFirst});
+  options.estimator = ParseChoice<Estimator>(args.estimator, "--estimator");
   options.outliers = ParseOutlierOptions(args.outliers);
   options.cross_validate = args.cross_validate;
   if (auto_model && !args.cross_validate) {

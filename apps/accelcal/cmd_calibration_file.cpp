@@ -39,8 +39,7 @@ int RunApply(const ApplyArgs& args) {
       ReadFileToString(args.calibration, kMaxSmallFileBytes), args.calibration);
   RefuseFailed(cal, args.calibration);
   ForceUnit unit = cal.unit;
-  if (args.units)
-    unit = ParseEnum(ForceUnitFromString(*args.units), *args.units, "--units", "m/s2, g");
+  if (args.units) unit = ParseChoice<ForceUnit>(*args.units, "--units");
   double factor = 1.0;  // calibration unit -> output unit
   if (cal.unit == ForceUnit::kMetersPerSecond2 && unit == ForceUnit::kStandardGravity) {
     factor = 1.0 / kStandardGravity_ms2;
@@ -111,11 +110,7 @@ int RunReport(const ReportArgs& args) {
 
 int RunExport(const ExportArgs& args) {
   CheckOutputs({{"-o", args.output}}, {args.calibration});
-  std::string names;
-  for (const ExportFormat f : AllExportFormats())
-    names += (names.empty() ? "" : ", ") + std::string(ToString(f));
-  const ExportFormat format =
-      ParseEnum(ExportFormatFromString(args.format), args.format, "--to", names.c_str());
+  const ExportFormat format = ParseChoice<ExportFormat>(args.format, "--to");
   const std::string text = ReadFileToString(args.calibration, kMaxSmallFileBytes);
   const LoadedCalibration cal = ParseCalibrationJson(text, args.calibration);
   RefuseFailed(cal, args.calibration);

@@ -35,10 +35,8 @@
 namespace accelcal::cli {
 int RunCompare(const CompareArgs& args) {
   CompareOptions options;
-  options.base.model =
-      ParseEnum(ModelKindFromString(args.model), args.model, "--model", "linear, quadratic");
-  options.base.initialization = ParseEnum(InitializationFromString(args.init), args.init, "--init",
-                                          "auto, ellipsoid, normalized-readings");
+  options.base.model = ParseChoice<ModelKind>(args.model, "--model");
+  options.base.initialization = ParseChoice<Initialization>(args.init, "--init", kInitializations);
   const Gravity g = ResolveGravity(args.gravity);
   options.base.gravity = g.in_unit;
   options.leave_one_out = args.leave_one_out;
@@ -49,8 +47,7 @@ int RunCompare(const CompareArgs& args) {
   }
   for (const std::string& name : args.methods) {
     options.methods.push_back(
-        ParseEnum(SolverMethodFromString(name), name, "--methods",
-                  "joint, two-step, newton-lagrange, modulus, modulus-norm, ellipsoid"));
+        ParseChoice<SolverMethod>(name, "--methods", kOrientationFreeMethods));
   }
   options.base.outliers = ParseOutlierOptions(args.outliers);
   if (auto why = options.base.Validate()) throw UsageError(*why);

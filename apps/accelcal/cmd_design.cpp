@@ -63,9 +63,8 @@ int RunDesign(const DesignArgs& args) {
     throw UsageError(
         "the noise must be positive (--noise, or --noise-density, --rate, --duration)");
   }
-  const ModelKind model = args.model ? ParseEnum(ModelKindFromString(*args.model), *args.model,
-                                                 "--model", "linear, quadratic")
-                                     : device.model;
+  const ModelKind model =
+      args.model ? ParseChoice<ModelKind>(*args.model, "--model") : device.model;
   std::vector<Vec3> directions = PlannedDirections(args.positions);
   LoadedCalibration nominal = device;
   if (device.frame == Frame::kPlatform) {
@@ -198,15 +197,15 @@ int RunMonteCarlo(const MonteCarloArgs& args) {
   options.seed = args.seed;
   options.threads = args.threads;
   options.known_noise = !args.residual_noise;
-  options.calibration.method = ParseEnum(SolverMethodFromString(args.method), args.method,
-                                         "--method", "joint, two-step, newton-lagrange");
+  options.calibration.method = ParseChoice<SolverMethod>(
+      args.method, "--method",
+      {SolverMethod::kJoint, SolverMethod::kTwoStep, SolverMethod::kNewtonLagrange});
   if (!IsMaximumLikelihood(options.calibration.method)) {
     throw UsageError(
         "--method: the Monte Carlo compares maximum-likelihood methods with the "
         "bound: joint, two-step or newton-lagrange");
   }
-  options.calibration.estimator = ParseEnum(EstimatorFromString(args.estimator), args.estimator,
-                                            "--estimator", "ml, bias-corrected");
+  options.calibration.estimator = ParseChoice<Estimator>(args.estimator, "--estimator");
   options.calibration.model = scenario->model;
   if (auto why = options.calibration.Validate()) throw UsageError(*why);
   ProgressBar bar("montecarlo " + args.scenario);

@@ -15,6 +15,7 @@
 #include "accelcal/frame.hpp"
 #include "accelcal/gravity.hpp"
 #include "accelcal/model.hpp"
+#include "accelcal/names.hpp"
 
 namespace accelcal {
 
@@ -37,6 +38,17 @@ constexpr bool IsMaximumLikelihood(SolverMethod method) {
 }
 std::string_view ToString(SolverMethod method);
 std::optional<SolverMethod> SolverMethodFromString(std::string_view text);
+template <>
+struct EnumNames<SolverMethod> {
+  static constexpr std::pair<SolverMethod, std::string_view> kTable[] = {
+      {SolverMethod::kJoint, "joint"},
+      {SolverMethod::kTwoStep, "two-step"},
+      {SolverMethod::kNewtonLagrange, "newton-lagrange"},
+      {SolverMethod::kModulus, "modulus"},
+      {SolverMethod::kModulusNorm, "modulus-norm"},
+      {SolverMethod::kEllipsoid, "ellipsoid"},
+      {SolverMethod::kKnownOrientation, "known-orientation"}};
+};
 
 /// Which estimate the maximum-likelihood methods return.
 ///
@@ -58,6 +70,11 @@ enum class Estimator {
 };
 std::string_view ToString(Estimator estimator);
 std::optional<Estimator> EstimatorFromString(std::string_view text);
+template <>
+struct EnumNames<Estimator> {
+  static constexpr std::pair<Estimator, std::string_view> kTable[] = {
+      {Estimator::kMaximumLikelihood, "ml"}, {Estimator::kBiasCorrected, "bias-corrected"}};
+};
 
 enum class Initialization {
   kAuto,                ///< ellipsoid fit, falling back to normalised readings if it fails
@@ -68,6 +85,14 @@ enum class Initialization {
 };
 std::string_view ToString(Initialization init);
 std::optional<Initialization> InitializationFromString(std::string_view text);
+template <>
+struct EnumNames<Initialization> {
+  static constexpr std::pair<Initialization, std::string_view> kTable[] = {
+      {Initialization::kAuto, "auto"},
+      {Initialization::kEllipsoidFit, "ellipsoid"},
+      {Initialization::kNormalizedReadings, "normalized-readings"},
+      {Initialization::kGiven, "given"}};
+};
 
 /// Why a solver stopped. The criteria, with Δ measured in the parameter metric ‖·‖_s (each
 /// parameter change converted to the change of the prediction it causes, in raw units, divided by
@@ -120,6 +145,13 @@ enum class OutlierPolicy {
 };
 std::string_view ToString(OutlierPolicy policy);
 std::optional<OutlierPolicy> OutlierPolicyFromString(std::string_view text);
+template <>
+struct EnumNames<OutlierPolicy> {
+  static constexpr std::pair<OutlierPolicy, std::string_view> kTable[] = {
+      {OutlierPolicy::kExclude, "exclude"},
+      {OutlierPolicy::kFlag, "flag"},
+      {OutlierPolicy::kOff, "off"}};
+};
 
 struct OutlierOptions {
   OutlierPolicy policy = OutlierPolicy::kExclude;

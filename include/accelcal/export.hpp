@@ -40,6 +40,14 @@ enum class ExportFormat {
 };
 std::string_view ToString(ExportFormat format);
 std::optional<ExportFormat> ExportFormatFromString(std::string_view text);
+template <>
+struct EnumNames<ExportFormat> {
+  static constexpr std::pair<ExportFormat, std::string_view> kTable[] = {
+      {ExportFormat::kJson, "json"},           {ExportFormat::kYaml, "yaml"},
+      {ExportFormat::kKalibr, "kalibr"},       {ExportFormat::kPx4, "px4"},
+      {ExportFormat::kArduPilot, "ardupilot"}, {ExportFormat::kCHeader, "c-header"},
+      {ExportFormat::kImuTk, "imutk"}};
+};
 /// All formats, in the order above (help texts, tests).
 const std::vector<ExportFormat>& AllExportFormats();
 

@@ -39,6 +39,11 @@ namespace accelcal {
 enum class Frame { kXFirst, kZFirst, kPlatform };
 std::string_view ToString(Frame frame);  ///< "x-first", "z-first", "platform"
 std::optional<Frame> FrameFromString(std::string_view text);
+template <>
+struct EnumNames<Frame> {
+  static constexpr std::pair<Frame, std::string_view> kTable[] = {
+      {Frame::kXFirst, "x-first"}, {Frame::kZFirst, "z-first"}, {Frame::kPlatform, "platform"}};
+};
 
 /// The frame K is written in: lower-triangular x-first (a diagonal K too), upper-triangular
 /// z-first, else platform.

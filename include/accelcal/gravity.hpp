@@ -5,6 +5,8 @@
 #include <optional>
 #include <string_view>
 
+#include "accelcal/names.hpp"
+
 namespace accelcal {
 
 /// Standard gravity g0 [m/s²] (CGPM 1901), the default gravity magnitude.
@@ -25,5 +27,13 @@ enum class ForceUnit {
 std::string_view ToString(ForceUnit unit);
 /// Parses "m/s2" (also "m/s^2", "ms2") or "g".
 std::optional<ForceUnit> ForceUnitFromString(std::string_view text);
+template <>
+struct EnumNames<ForceUnit> {
+  static constexpr std::pair<ForceUnit, std::string_view> kTable[] = {
+      {ForceUnit::kMetersPerSecond2, "m/s2"},
+      {ForceUnit::kStandardGravity, "g"},
+      {ForceUnit::kMetersPerSecond2, "m/s^2"},  // accepted spellings
+      {ForceUnit::kMetersPerSecond2, "ms2"}};
+};
 
 }  // namespace accelcal

@@ -37,6 +37,7 @@
 #include <Eigen/Core>
 #include <Eigen/LU>  // SpecificForce of a full K
 
+#include "accelcal/names.hpp"
 #include "accelcal/types.hpp"
 
 namespace accelcal {
@@ -50,6 +51,11 @@ enum class ModelKind {
 std::string_view ToString(ModelKind kind);
 /// Parses "linear" or "quadratic"; std::nullopt for anything else.
 std::optional<ModelKind> ModelKindFromString(std::string_view text);
+template <>
+struct EnumNames<ModelKind> {
+  static constexpr std::pair<ModelKind, std::string_view> kTable[] = {
+      {ModelKind::kLinear, "linear"}, {ModelKind::kQuadratic, "quadratic"}};
+};
 
 /// Number of free parameters of the model (9 or 12).
 constexpr int NumParameters(ModelKind kind) { return kind == ModelKind::kLinear ? 9 : 12; }

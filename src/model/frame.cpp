@@ -20,24 +20,9 @@ ParameterSlot Mirrored(const ParameterSlot& s, std::string_view name) {
 
 }  // namespace
 
-std::string_view ToString(Frame frame) {
-  switch (frame) {
-    case Frame::kXFirst:
-      return "x-first";
-    case Frame::kZFirst:
-      return "z-first";
-    case Frame::kPlatform:
-      break;
-  }
-  return "platform";
-}
+std::string_view ToString(Frame frame) { return NameOf(frame); }
 
-std::optional<Frame> FrameFromString(std::string_view text) {
-  for (Frame f : {Frame::kXFirst, Frame::kZFirst, Frame::kPlatform}) {
-    if (text == ToString(f)) return f;
-  }
-  return std::nullopt;
-}
+std::optional<Frame> FrameFromString(std::string_view text) { return FromName<Frame>(text); }
 
 Frame FrameOf(const Mat33& K) {
   const bool lower = K(0, 1) == 0 && K(0, 2) == 0 && K(1, 2) == 0;

@@ -20,14 +20,10 @@ double NormalGravityWgs84_ms2(double latitude_deg, double height_m) {
   return gamma0 * (1.0 - 2.0 / kA * (1.0 + kF + kM - 2.0 * kF * s2) * h + 3.0 * h * h / (kA * kA));
 }
 
-std::string_view ToString(ForceUnit unit) {
-  return unit == ForceUnit::kMetersPerSecond2 ? "m/s2" : "g";
-}
+std::string_view ToString(ForceUnit unit) { return NameOf(unit); }
 
 std::optional<ForceUnit> ForceUnitFromString(std::string_view text) {
-  if (text == "m/s2" || text == "m/s^2" || text == "ms2") return ForceUnit::kMetersPerSecond2;
-  if (text == "g") return ForceUnit::kStandardGravity;
-  return std::nullopt;
+  return FromName<ForceUnit>(text);
 }
 
 }  // namespace accelcal

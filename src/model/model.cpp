@@ -1,14 +1,10 @@
 #include "accelcal/model.hpp"
 namespace accelcal {
 
-std::string_view ToString(ModelKind kind) {
-  return kind == ModelKind::kLinear ? "linear" : "quadratic";
-}
+std::string_view ToString(ModelKind kind) { return NameOf(kind); }
 
 std::optional<ModelKind> ModelKindFromString(std::string_view text) {
-  if (text == "linear") return ModelKind::kLinear;
-  if (text == "quadratic") return ModelKind::kQuadratic;
-  return std::nullopt;
+  return FromName<ModelKind>(text);
 }
 
 const std::vector<ParameterSlot>& ParameterSlots(ModelKind kind) {

@@ -27,17 +27,6 @@ bool IsAsciiDigit(char c) { return c >= '0' && c <= '9'; }
 bool IsAsciiLetter(char c) { return (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z'); }
 bool IsIdentifierChar(char c) { return IsAsciiLetter(c) || IsAsciiDigit(c) || c == '_'; }
 
-struct FormatName {
-  ExportFormat format;
-  std::string_view name;
-};
-constexpr FormatName kFormatNames[] = {
-    {ExportFormat::kJson, "json"},           {ExportFormat::kYaml, "yaml"},
-    {ExportFormat::kKalibr, "kalibr"},       {ExportFormat::kPx4, "px4"},
-    {ExportFormat::kArduPilot, "ardupilot"}, {ExportFormat::kCHeader, "c-header"},
-    {ExportFormat::kImuTk, "imutk"},
-};
-
 // Shortest text that reads back as the same double (nlohmann's own conversion: no locale).
 std::string Number(double value) { return ordered_json(value).dump(); }
 
@@ -421,24 +410,16 @@ void EmitYaml(const ordered_json& j, int indent, std::string* out) {
 
 }  // namespace
 
-std::string_view ToString(ExportFormat format) {
-  for (const FormatName& f : kFormatNames) {
-    if (f.format == format) return f.name;
-  }
-  return "?";
-}
+std::string_view ToString(ExportFormat format) { return NameOf(format); }
 
 std::optional<ExportFormat> ExportFormatFromString(std::string_view text) {
-  for (const FormatName& f : kFormatNames) {
-    if (f.name == text) return f.format;
-  }
-  return std::nullopt;
+  return FromName<ExportFormat>(text);
 }
 
 const std::vector<ExportFormat>& AllExportFormats() {
   static const std::vector<ExportFormat> all = [] {
     std::vector<ExportFormat> v;
-    for (const FormatName& f : kFormatNames) v.push_back(f.format);
+    for (const auto& [format, name] : EnumNames<ExportFormat>::kTable) v.push_back(format);
     return v;
   }();
   return all;

@@ -10,54 +10,17 @@
 
 namespace accelcal {
 
-std::string_view ToString(SolverMethod method) {
-  switch (method) {
-    case SolverMethod::kTwoStep:
-      return "two-step";
-    case SolverMethod::kJoint:
-      return "joint";
-    case SolverMethod::kModulus:
-      return "modulus";
-    case SolverMethod::kModulusNorm:
-      return "modulus-norm";
-    case SolverMethod::kNewtonLagrange:
-      return "newton-lagrange";
-    case SolverMethod::kEllipsoid:
-      return "ellipsoid";
-    case SolverMethod::kKnownOrientation:
-      break;
-  }
-  return "known-orientation";
-}
+std::string_view ToString(SolverMethod method) { return NameOf(method); }
 std::optional<SolverMethod> SolverMethodFromString(std::string_view text) {
-  for (SolverMethod m : {SolverMethod::kTwoStep, SolverMethod::kJoint, SolverMethod::kModulus,
-                         SolverMethod::kModulusNorm, SolverMethod::kNewtonLagrange,
-                         SolverMethod::kEllipsoid, SolverMethod::kKnownOrientation}) {
-    if (text == ToString(m)) return m;
-  }
-  return std::nullopt;
+  return FromName<SolverMethod>(text);
 }
 
-std::string_view ToString(Estimator estimator) {
-  return estimator == Estimator::kMaximumLikelihood ? "ml" : "bias-corrected";
-}
+std::string_view ToString(Estimator estimator) { return NameOf(estimator); }
 std::optional<Estimator> EstimatorFromString(std::string_view text) {
-  if (text == "ml") return Estimator::kMaximumLikelihood;
-  if (text == "bias-corrected") return Estimator::kBiasCorrected;
-  return std::nullopt;
+  return FromName<Estimator>(text);
 }
 
-std::string_view ToString(OutlierPolicy policy) {
-  switch (policy) {
-    case OutlierPolicy::kOff:
-      return "off";
-    case OutlierPolicy::kFlag:
-      return "flag";
-    case OutlierPolicy::kExclude:
-      break;
-  }
-  return "exclude";
-}
+std::string_view ToString(OutlierPolicy policy) { return NameOf(policy); }
 std::optional<std::string> OutlierOptions::Validate() const {
   if (!(false_alarm_probability > 0 && false_alarm_probability < 1)) {
     return "false_alarm_probability must be in (0, 1)";
@@ -70,10 +33,7 @@ std::string_view ToString(OutlierStatistic statistic) {
   return statistic == OutlierStatistic::kFisherF ? "F" : "t";
 }
 std::optional<OutlierPolicy> OutlierPolicyFromString(std::string_view text) {
-  for (OutlierPolicy p : {OutlierPolicy::kOff, OutlierPolicy::kFlag, OutlierPolicy::kExclude}) {
-    if (text == ToString(p)) return p;
-  }
-  return std::nullopt;
+  return FromName<OutlierPolicy>(text);
 }
 
 int CalibrationResult::positions_used() const {
@@ -91,25 +51,9 @@ std::vector<double> CalibrationResult::InFit(const std::vector<double>& per_posi
   return kept;
 }
 
-std::string_view ToString(Initialization init) {
-  switch (init) {
-    case Initialization::kAuto:
-      return "auto";
-    case Initialization::kEllipsoidFit:
-      return "ellipsoid";
-    case Initialization::kNormalizedReadings:
-      return "normalized-readings";
-    case Initialization::kGiven:
-      break;
-  }
-  return "given";
-}
+std::string_view ToString(Initialization init) { return NameOf(init); }
 std::optional<Initialization> InitializationFromString(std::string_view text) {
-  if (text == "auto") return Initialization::kAuto;
-  if (text == "ellipsoid") return Initialization::kEllipsoidFit;
-  if (text == "normalized-readings") return Initialization::kNormalizedReadings;
-  if (text == "given") return Initialization::kGiven;
-  return std::nullopt;
+  return FromName<Initialization>(text);
 }
 
 std::string_view ToString(TerminationType type) {

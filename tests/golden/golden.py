@@ -80,8 +80,10 @@ def run_case(accelcal, work, args):
     before = snapshot(work)
     env = dict(os.environ, LC_ALL="C", LANG="C")
     env.pop("ACCELCAL_THREADS", None)
-    r = subprocess.run([accelcal] + args, cwd=work, stdin=subprocess.DEVNULL,
-                       capture_output=True, env=env, timeout=600)
+    # argv[0] is "accelcal", as on a PATH: help texts print it, and the build directory differs
+    # from one clone to the next.
+    r = subprocess.run(["accelcal"] + args, executable=accelcal, cwd=work,
+                       stdin=subprocess.DEVNULL, capture_output=True, env=env, timeout=600)
     after = snapshot(work)
     record = [f"$ accelcal {shlex.join(args)}\n", f"status {r.returncode}\n",
               "--- stdout\n", describe(r.stdout), "--- stderr\n", describe(r.stderr)]

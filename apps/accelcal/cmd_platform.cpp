@@ -43,12 +43,17 @@ int RunSystemLevel(const SystemLevelArgs& args) {
   }
   const double g = args.gravity_ms2 ? *args.gravity_ms2 : NormalGravityWgs84_ms2(latitude);
   if (!(g > 0) || !std::isfinite(g)) throw UsageError("--gravity must be a positive number");
-  SystemLevelEstimator estimator(latitude * 3.14159265358979323846 / 180.0, g);
+  SystemLevelOptions options;
+  options.latitude_rad = latitude * 3.14159265358979323846 / 180.0;
+  options.gravity_ms2 = g;
+  if (const auto error = options.Validate()) throw UsageError(*error);
+  SystemLevelEstimator estimator(options);
   ProgressBar bar("system-level");
   ReadSeries(
       args.series, [&](const SystemSample& s) { estimator.Add(s); }, bar.ByteCallback());
   bar.Finish();
   const SystemLevelResult r = estimator.Finish();
+  Detail("system-level: %s\n", r.summary.termination_message.c_str());
   const auto fourier = [](const FourierCoefficients& f) {
     return "{\"mean\": " + FormatNumber(f.mean) + ", \"c1\": " + FormatNumber(f.c1) +
            ", \"s1\": " + FormatNumber(f.s1) + ", \"c2\": " + FormatNumber(f.c2) +
@@ -185,14 +190,20 @@ int RunGimbal(const GimbalArgs& args) {
     commanded.emplace_back(row[0] * kDeg, row[1] * kDeg, row[2] * kDeg);
     outputs.emplace_back(row[3], row[4], row[5]);
   }
-  const CoarseCalibrationResult coarse = CoarseCalibration(outputs, commanded, g.in_unit);
+  CoarseCalibrationOptions coarse_options;
+  coarse_options.gravity = g.in_unit;
+  const CoarseCalibrationResult coarse = CoarseCalibration(outputs, commanded, coarse_options);
+  Detail("gimbal coarse: %s\n", coarse.summary.BriefReport().c_str());
   std::optional<FineCalibrationResult> fine;
   if (!args.fine.empty()) {
     std::vector<Vec3> fine_outputs;
     for (const std::vector<double>& row : ReadTable(args.fine, 3)) {
       fine_outputs.emplace_back(row[0], row[1], row[2]);
     }
-    fine = FineCalibration(fine_outputs, coarse.device, g.in_unit);
+    FineCalibrationOptions fine_options;
+    fine_options.gravity = g.in_unit;
+    fine = FineCalibration(fine_outputs, coarse.device, fine_options);
+    Detail("gimbal fine: %s\n", fine->summary.BriefReport().c_str());
   }
   std::string out;
   if (args.json) {
@@ -206,7 +217,7 @@ int RunGimbal(const GimbalArgs& args) {
         "\"b_z\", \"beta_xz\", \"beta_xy\", \"beta_yz\", \"beta_yx\", \"beta_zy\", "
         "\"beta_zx\", \"theta20\", \"theta30\"],\n    \"residual_rms\": " +
         FormatNumber(coarse.residual_rms) +
-        ", \"converged\": " + (coarse.converged ? "true" : "false") + ", \"note\": \"" +
+        ", \"converged\": " + (coarse.summary.converged() ? "true" : "false") + ", \"note\": \"" +
         coarse.note + "\"}";
     if (fine) {
       out += ",\n  \"fine\": {\"device\": " + DeviceJson(fine->device) + ",\n    \"dx\": [";
@@ -214,8 +225,8 @@ int RunGimbal(const GimbalArgs& args) {
       out += "], \"dx_std\": [";
       for (int i = 0; i < 12; ++i) out += (i ? ", " : "") + FormatNumber(fine->dx_std(i));
       out += "],\n    \"residual_rms\": " + FormatNumber(fine->residual_rms) +
-             ", \"converged\": " + (fine->converged ? "true" : "false") + ", \"note\": \"" +
-             fine->note + "\"}";
+             ", \"converged\": " + (fine->summary.converged() ? "true" : "false") +
+             ", \"note\": \"" + fine->note + "\"}";
     }
     out += "\n}\n";
   } else {
@@ -228,8 +239,8 @@ int RunGimbal(const GimbalArgs& args) {
       return text;
     };
     out += Format("coarse    %zu positions, %s after %d iterations, residual rms %.3g\n",
-                  outputs.size(), coarse.converged ? "converged" : "NOT CONVERGED",
-                  coarse.iterations, coarse.residual_rms);
+                  outputs.size(), coarse.summary.converged() ? "converged" : "NOT CONVERGED",
+                  coarse.summary.iterations, coarse.residual_rms);
     out += device(coarse.device);
     out += Format("  offsets theta20 %.2f +- %.2f arcsec, theta30 %.2f +- %.2f arcsec\n",
                   coarse.offsets(1) / kDeg * 3600, coarse.std(12) / kDeg * 3600,
@@ -237,8 +248,8 @@ int RunGimbal(const GimbalArgs& args) {
     out += "  note    " + coarse.note + "\n";
     if (fine) {
       out += Format("fine      %s after %d iterations, residual rms %.3g\n",
-                    fine->converged ? "converged" : "NOT CONVERGED", fine->iterations,
-                    fine->residual_rms);
+                    fine->summary.converged() ? "converged" : "NOT CONVERGED",
+                    fine->summary.iterations, fine->residual_rms);
       out += device(fine->device);
       out += Format("  K_nl    %.4g %.4g %.4g per output unit\n", fine->device.k_nl(0),
                     fine->device.k_nl(1), fine->device.k_nl(2));
@@ -246,7 +257,7 @@ int RunGimbal(const GimbalArgs& args) {
     }
   }
   WriteFileAtomically("-", out);
-  const bool ok = coarse.converged && (!fine || fine->converged);
+  const bool ok = coarse.summary.converged() && (!fine || fine->summary.converged());
   return ok ? kExitOk : kExitNotConverged;
 }
 

@@ -5,7 +5,8 @@
 ///
 /// Gimbal chain, reconstructed from Table 1 (docs/wu2018-table1.md): outer gimbal angle θ3 about
 /// y, middle θ2 about x, inner (platform) θ1 about z. With R_a the right-handed rotation about
-/// axis a, the direction of the specific force of gravity (up) in the platform frame is
+/// axis a (AxisRotation, rotations.hpp), the direction of the specific force of gravity (up) in
+/// the platform frame is
 ///     u(θ) = R_z(θ1)ᵀ R_x(θ2)ᵀ R_y(θ3)ᵀ e_z,  f^p = g u,
 /// which reproduces every legible nominal entry of Table 1 and all but two of its first-order
 /// offset terms (the two are explained in the doc).

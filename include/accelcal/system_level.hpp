@@ -30,11 +30,13 @@
 
 #include <cstdint>
 #include <functional>
+#include <optional>
 #include <string>
 #include <vector>
 
 #include <Eigen/Core>
 
+#include "accelcal/gimbal_platform.hpp"
 #include "accelcal/series_file.hpp"
 #include "accelcal/types.hpp"
 
@@ -90,8 +92,29 @@ struct Estimate {
   double value = 0, std = 0;
 };
 
+/// Options of the system-level estimator. The estimate is a closed form (kClosedForm: normal
+/// equations of linear least squares); the options state what the data must hold for it.
+struct SystemLevelOptions {
+  /// Latitude of the base [rad]: required; within (−89°, 89°) and at least 1° from the equator
+  /// (where sin L vanishes and the attitude errors' second harmonics carry no information,
+  /// eq. (32), (33)).
+  double latitude_rad = std::nan("");
+  double gravity_ms2 = 0;  ///< 0: WGS-84 normal gravity at the latitude
+  long min_samples = 100;  ///< fewer: DataError from Finish()
+  /// Platform angle S = ω_ie t the series must cover [rad] (1 rad is 3.8 h; 24 h recommended);
+  /// less: DataError from Finish().
+  double min_platform_angle_rad = 1.0;
+  /// Eq. (41)'s whitened 6x6 system has rank r = #{σ_i > rank_tolerance · σ_1}.
+  double rank_tolerance = 1e-9;
+  /// Remove the noise term E|n|²/(2g²) from x1 (docs/errata.md#003-eq20).
+  bool correct_x1_noise = true;
+  /// An error message when an option is out of range, else std::nullopt.
+  std::optional<std::string> Validate() const;
+};
+
 struct SystemLevelResult {
   long samples = 0;
+  double gravity_ms2 = 0;  ///< the g used
   Eigen::Matrix<double, 5, 1> x = Eigen::Matrix<double, 5, 1>::Zero(), x_std = x;
   FourierCoefficients pitch, roll, pitch_std, roll_std;
   Vec3 noise_ms2 = Vec3::Zero();          ///< per-axis white noise from successive differences
@@ -99,17 +122,23 @@ struct SystemLevelResult {
   int rank = 0;                           ///< of the eq. (41) system (6 unknowns)
   std::vector<Estimate> determined;       ///< parameters and combinations the data determine
   std::vector<std::string> undetermined;  ///< parameters they do not (never given a value)
+  /// kClosedForm; the message states the solution's conditioning and the rank rule. The costs
+  /// are those of the specific-force fit (eq. (27)): Σ z² and the residual sum of squares.
+  PlatformSummary summary;
 };
 
-/// Accumulates samples (any order, constant memory) and solves. Throws DataError from Finish()
-/// with fewer than 100 samples or less than one radian of platform angle covered.
+/// Accumulates samples (any order, constant memory) and solves. The constructor throws
+/// std::invalid_argument for options that fail Validate(); Finish() throws DataError with fewer
+/// than min_samples samples or less platform angle covered than min_platform_angle_rad.
 class SystemLevelEstimator {
  public:
-  SystemLevelEstimator(double latitude_rad, double gravity_ms2);
+  explicit SystemLevelEstimator(const SystemLevelOptions& options);
   void Add(const SystemSample& sample);
   SystemLevelResult Finish() const;
+  double gravity_ms2() const { return gravity_; }  ///< resolved from the options
 
  private:
+  SystemLevelOptions options_;
   double latitude_, gravity_;
   Eigen::Matrix<double, 5, 5> gram_ = Eigen::Matrix<double, 5, 5>::Zero();  // Σ b bᵀ
   Eigen::Matrix<double, 5, 3> rhs_ = Eigen::Matrix<double, 5, 3>::Zero();   // Σ b (z, roll, pitch)

@@ -2,46 +2,27 @@
 
 #include <cmath>
 
+#include "accelcal/rotations.hpp"
+
 namespace accelcal {
 
 namespace {
 
 constexpr double kPi = 3.14159265358979323846;
 
-Mat33 Rotation(int axis, double angle) {
-  const double c = std::cos(angle), s = std::sin(angle);
-  Mat33 R = Mat33::Identity();
-  const int i = (axis + 1) % 3, j = (axis + 2) % 3;
-  R(i, i) = c;
-  R(i, j) = -s;
-  R(j, i) = s;
-  R(j, j) = c;
-  return R;
-}
-
-// d R_a(θ)ᵀ / dθ = −[e_a×] R_a(θ)ᵀ... written directly: the derivative of the transpose.
-Mat33 RotationTransposeDerivative(int axis, double angle) {
-  const double c = std::cos(angle), s = std::sin(angle);
-  Mat33 D = Mat33::Zero();
-  const int i = (axis + 1) % 3, j = (axis + 2) % 3;
-  // R(θ)ᵀ has (i,i) = c, (i,j) = s, (j,i) = −s, (j,j) = c.
-  D(i, i) = -s;
-  D(i, j) = c;
-  D(j, i) = -c;
-  D(j, j) = -s;
-  return D;
-}
-
 }  // namespace
 
 Vec3 PlatformUp(const Vec3& a, Mat33* jacobian) {
-  const Mat33 Rz = Rotation(2, a(0)).transpose(), Rx = Rotation(0, a(1)).transpose(),
-              Ry = Rotation(1, a(2)).transpose();
+  // R_a(θ)ᵀ and its derivative (dR_a/dθ)ᵀ for each gimbal (rotations.hpp).
+  Mat33 dRz, dRx, dRy;
+  const Mat33 Rz = AxisRotation(Axis::kZ, a(0), &dRz).transpose(),
+              Rx = AxisRotation(Axis::kX, a(1), &dRx).transpose(),
+              Ry = AxisRotation(Axis::kY, a(2), &dRy).transpose();
   const Vec3 ez = Vec3::UnitZ();
   if (jacobian != nullptr) {
-    jacobian->col(0) = RotationTransposeDerivative(2, a(0)) * Rx * Ry * ez;
-    jacobian->col(1) = Rz * RotationTransposeDerivative(0, a(1)) * Ry * ez;
-    jacobian->col(2) = Rz * Rx * RotationTransposeDerivative(1, a(2)) * ez;
+    jacobian->col(0) = dRz.transpose() * Rx * Ry * ez;
+    jacobian->col(1) = Rz * dRx.transpose() * Ry * ez;
+    jacobian->col(2) = Rz * Rx * dRy.transpose() * ez;
   }
   return Rz * Rx * Ry * ez;
 }

@@ -2,14 +2,13 @@
 
 #include <cmath>
 #include <cstdio>
-
-#include <Eigen/Cholesky>
-#include <Eigen/Eigenvalues>
+#include <stdexcept>
 
 #include "accelcal/error.hpp"
 #include "accelcal/known_orientation.hpp"
 #include "core/text_format.hpp"
 #include "platform/gimbal_internal.hpp"
+#include "solvers/least_squares.hpp"
 
 namespace accelcal {
 
@@ -27,7 +26,135 @@ PlatformAccelerometer Unpack14(const Vec14& p) {
   return d;
 }
 
+// The options shared by the two stages' checks.
+std::optional<std::string> ValidateStage(double gravity, int max_iterations, double step_tolerance,
+                                         double initial_damping, double min_rcond) {
+  if (!(gravity > 0) || !std::isfinite(gravity)) return "gravity must be a positive number";
+  if (max_iterations < 1) return "max_iterations must be at least 1";
+  if (!(step_tolerance >= 0) || !std::isfinite(step_tolerance)) {
+    return "step_tolerance must be a non-negative number";
+  }
+  if (!(initial_damping >= 0) || !std::isfinite(initial_damping)) {
+    return "initial_damping must be a non-negative number";
+  }
+  if (!(min_rcond > 0 && min_rcond < 1)) return "min_reciprocal_condition must lie in (0, 1)";
+  return std::nullopt;
+}
+
+template <typename Options>
+void ThrowIfInvalid(const Options& options) {
+  if (const auto error = options.Validate()) throw std::invalid_argument(*error);
+}
+
+PlatformSummary ToPlatformSummary(const internal::LeastSquaresSummary& s) {
+  PlatformSummary out;
+  out.iterations = s.iterations;
+  out.termination = s.termination;
+  out.termination_message = s.termination_message;
+  out.initial_cost = s.initial_cost;
+  out.final_cost = s.final_cost;
+  return out;
+}
+
+// Eq. (7) as a least-squares problem: one residual block, predicted − measured outputs (3m),
+// in the 14 parameters.
+class CoarseProblem : public internal::LeastSquaresProblem {
+ public:
+  CoarseProblem(const std::vector<Vec3>& outputs, const std::vector<Vec3>& commanded,
+                double gravity)
+      : outputs_(outputs), commanded_(commanded), gravity_(gravity) {}
+  int GlobalSize() const override { return kParameters; }
+  int NumBlocks() const override { return 1; }
+  bool Evaluate(int /*block*/, const Eigen::VectorXd& x, const Eigen::VectorXd& /*y*/,
+                Eigen::VectorXd* residual, Eigen::MatrixXd* J_x,
+                Eigen::MatrixXd* /*J_y*/) const override {
+    internal::CoarseJacobian J;
+    *residual = internal::CoarsePrediction(commanded_, gravity_, x, J_x != nullptr ? &J : nullptr);
+    for (std::size_t k = 0; k < outputs_.size(); ++k) {
+      residual->segment<3>(static_cast<Eigen::Index>(3 * k)) -= outputs_[k];
+    }
+    if (J_x != nullptr) *J_x = J;
+    return true;
+  }
+
+ private:
+  const std::vector<Vec3>& outputs_;
+  const std::vector<Vec3>& commanded_;
+  double gravity_;
+};
+
+// The fine stage's state: the device (s, δb, β, K_nl: 15 values) followed by the sum of the
+// steps dx taken (12); the tangent is dx, applied by the full-value update of eq. (17).
+using FineState = Eigen::Matrix<double, 27, 1>;
+PlatformAccelerometer UnpackFine(const Eigen::VectorXd& x) {
+  PlatformAccelerometer d;
+  d.s = x.segment<3>(0);
+  d.bias = x.segment<3>(3);
+  d.beta = x.segment<6>(6);
+  d.k_nl = x.segment<3>(12);
+  return d;
+}
+Eigen::VectorXd PackFine(const PlatformAccelerometer& d, const Eigen::Matrix<double, 12, 1>& sum) {
+  FineState x;
+  x << d.s, d.bias, d.beta, d.k_nl, sum;
+  return x;
+}
+
+// Σ_j z_j², z_j = ½(g² − |f̂^p_j|²) of the device, with the Jacobian −A of eq. (16) (the rows
+// neglect the device's own small errors: an approximate Gauss-Newton).
+class FineProblem : public internal::LeastSquaresProblem {
+ public:
+  FineProblem(const std::vector<Vec3>& outputs, double gravity)
+      : outputs_(outputs), gravity_(gravity) {}
+  int GlobalSize() const override { return 12; }
+  int NumBlocks() const override { return 1; }
+  bool Evaluate(int /*block*/, const Eigen::VectorXd& x, const Eigen::VectorXd& /*y*/,
+                Eigen::VectorXd* residual, Eigen::MatrixXd* J_x,
+                Eigen::MatrixXd* /*J_y*/) const override {
+    Eigen::Matrix<double, Eigen::Dynamic, 12> A;
+    *residual =
+        internal::FineObservation(outputs_, UnpackFine(x), gravity_, J_x != nullptr ? &A : nullptr);
+    if (J_x != nullptr) *J_x = -A;
+    return true;
+  }
+  Eigen::VectorXd PlusGlobal(const Eigen::VectorXd& x,
+                             const Eigen::VectorXd& delta) const override {
+    PlatformAccelerometer d = UnpackFine(x);
+    const Eigen::Matrix<double, 12, 1> dx = delta;
+    internal::ApplyFineUpdate(dx, &d);
+    return PackFine(d, x.tail<12>() + dx);
+  }
+
+ private:
+  const std::vector<Vec3>& outputs_;
+  double gravity_;
+};
+
 }  // namespace
+
+std::string PlatformSummary::BriefReport() const {
+  return std::string(ToString(termination)) + " (" + termination_message + ") after " +
+         std::to_string(iterations) + " iterations";
+}
+
+std::optional<std::string> CoarseCalibrationOptions::Validate() const {
+  return ValidateStage(gravity, max_iterations, step_tolerance, initial_damping,
+                       min_reciprocal_condition);
+}
+
+std::optional<std::string> FineCalibrationOptions::Validate() const {
+  return ValidateStage(gravity, max_iterations, step_tolerance, initial_damping,
+                       min_reciprocal_condition);
+}
+
+std::optional<std::string> IteratedCoarseCalibrationOptions::Validate() const {
+  if (auto error = coarse.Validate()) return error;
+  if (!(offset_tolerance_rad > 0) || !std::isfinite(offset_tolerance_rad)) {
+    return "offset_tolerance_rad must be a positive number";
+  }
+  if (max_rounds < 1) return "max_rounds must be at least 1";
+  return std::nullopt;
+}
 
 namespace internal {
 
@@ -105,7 +232,10 @@ void ApplyFineUpdate(const Eigen::Matrix<double, 12, 1>& dx, PlatformAcceleromet
 }  // namespace internal
 
 CoarseCalibrationResult CoarseCalibration(const std::vector<Vec3>& outputs,
-                                          const std::vector<Vec3>& commanded, double gravity) {
+                                          const std::vector<Vec3>& commanded,
+                                          const CoarseCalibrationOptions& options) {
+  ThrowIfInvalid(options);
+  const double gravity = options.gravity;
   const std::size_t m = outputs.size();
   if (commanded.size() != m) {
     throw DataError(std::to_string(commanded.size()) + " commanded positions for " +
@@ -132,47 +262,33 @@ CoarseCalibrationResult CoarseCalibration(const std::vector<Vec3>& outputs,
   p(10) = start.K(2, 0) / start.K(2, 2);
   p(11) = -start.K(2, 1) / start.K(2, 2);
 
-  CoarseCalibrationResult result;
-  Eigen::Matrix<double, Eigen::Dynamic, kParameters> J(3 * m, kParameters);
-  Eigen::VectorXd r(3 * m);
-  const auto linearise = [&](const Vec14& q) {
-    const Eigen::VectorXd predicted = internal::CoarsePrediction(commanded, gravity, q, &J);
-    for (std::size_t k = 0; k < m; ++k) {
-      r.segment<3>(static_cast<Eigen::Index>(3 * k)) =
-          outputs[k] - predicted.segment<3>(static_cast<Eigen::Index>(3 * k));
-    }
-  };
-  for (int it = 0; it < 50; ++it) {
-    linearise(p);
-    // Jacobi-scaled normal equations (s ~ 1, angles ~ 1e-4, biases in output units).
-    const Vec14 scale = J.colwise().norm().cwiseInverse().transpose();
-    const Mat14 N = scale.asDiagonal() * (J.transpose() * J) * scale.asDiagonal();
-    Eigen::SelfAdjointEigenSolver<Mat14> eig(N);
-    if (!(eig.eigenvalues().minCoeff() > 1e-12 * eig.eigenvalues().maxCoeff())) {
-      throw DataError(
-          "the positions do not determine the coarse-stage parameters (reciprocal "
-          "condition " +
-          internal::Format("%.3g", eig.eigenvalues().minCoeff() / eig.eigenvalues().maxCoeff()) +
-          "): use Table 1's 18 positions");
-    }
-    const Vec14 step =
-        scale.cwiseProduct(eig.eigenvectors() * eig.eigenvalues().cwiseInverse().asDiagonal() *
-                           eig.eigenvectors().transpose() * scale.cwiseProduct(J.transpose() * r));
-    p += step;
-    ++result.iterations;
-    // Converged when no step moves a prediction by more than 1e-13 of the signal.
-    if ((J * step).cwiseAbs().maxCoeff() <= 1e-13 * gravity * p.head<3>().maxCoeff()) {
-      result.converged = true;
-      break;
-    }
+  internal::LeastSquaresOptions solver;
+  solver.max_iterations = options.max_iterations;
+  // Converged when no step moves a prediction by more than step_tolerance of the signal.
+  solver.step_tolerance = options.step_tolerance * gravity * p.head<3>().maxCoeff();
+  solver.initial_damping = options.initial_damping;
+  solver.min_reciprocal_condition = options.min_reciprocal_condition;
+  internal::LeastSquaresState state{p, {}};
+  const internal::LeastSquaresSummary s =
+      internal::SolveLeastSquares(CoarseProblem(outputs, commanded, gravity), solver, &state);
+  if (s.rank_deficient) {
+    throw DataError(
+        "the positions do not determine the coarse-stage parameters (reciprocal "
+        "condition " +
+        internal::Format("%.3g", s.reciprocal_condition) + "): use Table 1's 18 positions");
   }
-  linearise(p);
+  p = state.x;
+  CoarseCalibrationResult result;
+  result.summary = ToPlatformSummary(s);
+  if (s.termination == TerminationType::kParameterTolerance) {
+    result.summary.termination_message =
+        internal::Format("max_k |(J dp)_k| = %.3e <= %.1e g max_i s_i = %.3e", s.step_change,
+                         options.step_tolerance, solver.step_tolerance);
+  }
   result.device = Unpack14(p);
   result.offsets = Vec3(0.0, p(12), p(13));
-  const double dof = static_cast<double>(3 * m - kParameters);
-  const double sigma2 = r.squaredNorm() / dof;
-  result.residual_rms = std::sqrt(r.squaredNorm() / static_cast<double>(3 * m));
-  result.covariance = sigma2 * (J.transpose() * J).inverse();
+  result.residual_rms = std::sqrt(s.final_cost / static_cast<double>(3 * m));
+  result.covariance = s.covariance;
   result.std = result.covariance.diagonal().cwiseSqrt();
   result.note =
       "theta10 (the platform's own axis) is not separable from the installation angles: held at "
@@ -182,65 +298,79 @@ CoarseCalibrationResult CoarseCalibration(const std::vector<Vec3>& outputs,
 
 CoarseCalibrationResult IteratedCoarseCalibration(
     const std::function<std::vector<Vec3>(const std::vector<Vec3>& commanded)>& measure,
-    double gravity, double tolerance_rad, int max_rounds) {
+    const IteratedCoarseCalibrationOptions& options) {
+  ThrowIfInvalid(options);
   Vec3 correction = Vec3::Zero();
   CoarseCalibrationResult result;
   const std::vector<Vec3> nominal = Wu2018Table1Angles();
-  for (int round = 0; round < max_rounds; ++round) {
+  PlatformSummary loop;
+  loop.termination = TerminationType::kMaxIterations;
+  loop.termination_message = internal::Format("reached max_rounds = %d", options.max_rounds);
+  for (int round = 0; round < options.max_rounds; ++round) {
     // Re-zeroing the angle sensors by the offsets found so far: the gimbals turn to the nominal
     // angles minus the correction in the original readings, and the fit, given the nominal
     // angles, sees only the offset that is left.
     std::vector<Vec3> commanded = nominal;
     for (Vec3& a : commanded) a -= correction;
-    result = CoarseCalibration(measure(commanded), nominal, gravity);
+    result = CoarseCalibration(measure(commanded), nominal, options.coarse);
     correction += result.offsets;
-    if (result.offsets.cwiseAbs().maxCoeff() < tolerance_rad) break;
+    ++loop.iterations;
+    if (round == 0) loop.initial_cost = result.summary.initial_cost;
+    loop.final_cost = result.summary.final_cost;
+    if (!result.summary.converged()) {
+      // A run that did not converge ends the loop with its reason.
+      loop.termination = result.summary.termination;
+      loop.termination_message =
+          internal::Format("round %d: ", round + 1) + result.summary.termination_message;
+      break;
+    }
+    const double latest = result.offsets.cwiseAbs().maxCoeff();
+    if (latest < options.offset_tolerance_rad) {
+      loop.termination = TerminationType::kParameterTolerance;
+      loop.termination_message =
+          internal::Format("max(|theta20|, |theta30|) of round %d = %.3e < %.1e rad", round + 1,
+                           latest, options.offset_tolerance_rad);
+      break;
+    }
   }
   result.offsets = correction;
+  result.rounds = loop.iterations;
+  result.summary = loop;
   return result;
 }
 
 FineCalibrationResult FineCalibration(const std::vector<Vec3>& outputs,
-                                      const PlatformAccelerometer& coarse, double gravity) {
+                                      const PlatformAccelerometer& coarse,
+                                      const FineCalibrationOptions& options) {
+  ThrowIfInvalid(options);
+  const double gravity = options.gravity;
   const std::size_t m = outputs.size();
   if (m < 13) {
     throw DataError("the fine stage needs at least 13 positions (12 unknowns), got " +
                     std::to_string(m));
   }
-  using Vec12 = Eigen::Matrix<double, 12, 1>;
-  FineCalibrationResult result;
-  result.device = coarse;
-  PlatformAccelerometer& d = result.device;
-  Eigen::Matrix<double, Eigen::Dynamic, 12> A(m, 12);
-  Eigen::VectorXd z(m);
-  const auto linearise = [&]() { z = internal::FineObservation(outputs, d, gravity, &A); };
-  Eigen::Matrix<double, 12, 12> normal_inverse;
-  for (int it = 0; it < 20; ++it) {
-    linearise();
-    const Vec12 scale = A.colwise().norm().cwiseInverse().transpose();
-    const Eigen::Matrix<double, 12, 12> N =
-        scale.asDiagonal() * (A.transpose() * A) * scale.asDiagonal();
-    Eigen::SelfAdjointEigenSolver<Eigen::Matrix<double, 12, 12>> eig(N);
-    if (!(eig.eigenvalues().minCoeff() > 1e-12 * eig.eigenvalues().maxCoeff())) {
-      throw DataError("the positions do not determine the fine-stage error vector (eq. (17))");
-    }
-    normal_inverse = scale.asDiagonal() * eig.eigenvectors() *
-                     eig.eigenvalues().cwiseInverse().asDiagonal() *
-                     eig.eigenvectors().transpose() * scale.asDiagonal();
-    const Vec12 dx = normal_inverse * (A.transpose() * z);
-    result.dx += dx;
-    internal::ApplyFineUpdate(dx, &d);
-    ++result.iterations;
-    if ((A * dx).cwiseAbs().maxCoeff() <= 1e-13 * gravity * gravity) {
-      result.converged = true;
-      break;
-    }
+  internal::LeastSquaresOptions solver;
+  solver.max_iterations = options.max_iterations;
+  solver.step_tolerance = options.step_tolerance * gravity * gravity;
+  solver.initial_damping = options.initial_damping;
+  solver.min_reciprocal_condition = options.min_reciprocal_condition;
+  internal::LeastSquaresState state{PackFine(coarse, Eigen::Matrix<double, 12, 1>::Zero()), {}};
+  const internal::LeastSquaresSummary s =
+      internal::SolveLeastSquares(FineProblem(outputs, gravity), solver, &state);
+  if (s.rank_deficient) {
+    throw DataError("the positions do not determine the fine-stage error vector (eq. (17))");
   }
-  linearise();
-  const double dof = static_cast<double>(m) - 12;
-  const double sigma2 = dof > 0 ? z.squaredNorm() / dof : 0.0;
-  result.dx_std = (sigma2 * normal_inverse.diagonal()).cwiseSqrt();
-  result.residual_rms = std::sqrt(z.squaredNorm() / static_cast<double>(m)) / gravity;
+  FineCalibrationResult result;
+  result.summary = ToPlatformSummary(s);
+  if (s.termination == TerminationType::kParameterTolerance) {
+    result.summary.termination_message =
+        internal::Format("max_j |(A dx)_j| = %.3e <= %.1e g^2 = %.3e", s.step_change,
+                         options.step_tolerance, solver.step_tolerance);
+  }
+  result.device = UnpackFine(state.x);
+  result.dx = state.x.tail<12>();
+  result.dx_std = s.covariance.diagonal().cwiseSqrt();
+  result.residual_rms = std::sqrt(s.final_cost / static_cast<double>(m)) / gravity;
   result.note =
       "the pairs (beta_xz, beta_yz), (beta_zy, beta_xy), (beta_yx, beta_zx) are not separable here "
       "(paper 003 section 4): gravity magnitudes determine only beta_yz - beta_xz, beta_xy - "

@@ -3,8 +3,10 @@
 #include <cmath>
 #include <cstdio>
 #include <random>
+#include <stdexcept>
 
 #include <Eigen/Cholesky>
+#include <Eigen/Eigenvalues>
 #include <Eigen/SVD>
 
 #include "accelcal/error.hpp"
@@ -116,8 +118,29 @@ void SimulateSystemLevel(const SystemSimulationOptions& o,
   }
 }
 
-SystemLevelEstimator::SystemLevelEstimator(double latitude_rad, double gravity_ms2)
-    : latitude_(latitude_rad), gravity_(gravity_ms2) {}
+std::optional<std::string> SystemLevelOptions::Validate() const {
+  const double degrees = latitude_rad * 180.0 / 3.14159265358979323846;
+  if (!(std::abs(degrees) < 89)) return "latitude must lie in (-89, 89) degrees";
+  if (std::abs(degrees) < 1) {
+    return "latitude: within 1 degree of the equator sin L vanishes and the second harmonics of "
+           "the attitude errors carry no information (eq. (32), (33))";
+  }
+  if (!(gravity_ms2 >= 0) || !std::isfinite(gravity_ms2)) {
+    return "gravity_ms2 must be positive (or 0 for normal gravity at the latitude)";
+  }
+  if (min_samples < 6) return "min_samples must be at least 6 (5 coefficients per fit)";
+  if (!(min_platform_angle_rad > 0) || !std::isfinite(min_platform_angle_rad)) {
+    return "min_platform_angle_rad must be a positive number";
+  }
+  if (!(rank_tolerance > 0 && rank_tolerance < 1)) return "rank_tolerance must lie in (0, 1)";
+  return std::nullopt;
+}
+
+SystemLevelEstimator::SystemLevelEstimator(const SystemLevelOptions& options)
+    : options_(options), latitude_(options.latitude_rad), gravity_(options.gravity_ms2) {
+  if (const auto error = options.Validate()) throw std::invalid_argument(*error);
+  if (gravity_ == 0) gravity_ = NormalGravityWgs84_ms2(latitude_ * 180.0 / 3.14159265358979323846);
+}
 
 void SystemLevelEstimator::Add(const SystemSample& sample) {
   const double S = kEarthRate_rad_s * sample.t;
@@ -135,17 +158,20 @@ void SystemLevelEstimator::Add(const SystemSample& sample) {
 }
 
 SystemLevelResult SystemLevelEstimator::Finish() const {
-  if (count_ < 100) {
+  if (count_ < options_.min_samples) {
     throw DataError("the series has " + std::to_string(count_) +
-                    " samples; the system-level fit needs at least 100");
+                    " samples; the system-level fit needs at least " +
+                    std::to_string(options_.min_samples));
   }
-  if (s_max_ - s_min_ < 1.0) {
+  if (s_max_ - s_min_ < options_.min_platform_angle_rad) {
+    const double hours = options_.min_platform_angle_rad / kEarthRate_rad_s / 3600;
     throw DataError("the series covers " + Number((s_max_ - s_min_) / kEarthRate_rad_s / 3600) +
-                    " h of platform rotation; the Earth-rate harmonics need at least 4 h (24 h "
-                    "recommended)");
+                    " h of platform rotation; the Earth-rate harmonics need at least " +
+                    Number(std::ceil(hours)) + " h (24 h recommended)");
   }
   SystemLevelResult r;
   r.samples = count_;
+  r.gravity_ms2 = gravity_;
   const double n = static_cast<double>(count_);
   const Eigen::LDLT<Eigen::Matrix<double, 5, 5>> gram(gram_);
   const Eigen::Matrix<double, 5, 5> gram_inverse =
@@ -161,7 +187,8 @@ SystemLevelResult SystemLevelEstimator::Finish() const {
   Eigen::Matrix<double, 5, 1> t_inverse;
   t_inverse << 1.0, -1.0 / cL, -1.0 / cL, 1.0 / (cL * cL), 1.0 / (cL * cL);
   r.noise_ms2 = (difference_squares_ / (2.0 * (n - 1))).cwiseSqrt();
-  r.x1_noise_correction = r.noise_ms2.squaredNorm() / (2 * gravity_ * gravity_);
+  r.x1_noise_correction =
+      options_.correct_x1_noise ? r.noise_ms2.squaredNorm() / (2 * gravity_ * gravity_) : 0.0;
   r.x = t_inverse.cwiseProduct(coefficients.col(0));
   r.x(0) -= r.x1_noise_correction;
   const Eigen::Matrix<double, 5, 5> x_cov =
@@ -214,7 +241,7 @@ SystemLevelResult SystemLevelEstimator::Finish() const {
   Eigen::JacobiSVD<Eigen::Matrix<double, 6, 6>> svd(Aw, Eigen::ComputeFullU | Eigen::ComputeFullV);
   const auto& sv = svd.singularValues();
   r.rank = 0;
-  for (int i = 0; i < 6; ++i) r.rank += sv(i) > 1e-9 * sv(0) ? 1 : 0;
+  for (int i = 0; i < 6; ++i) r.rank += sv(i) > options_.rank_tolerance * sv(0) ? 1 : 0;
   const Eigen::MatrixXd null_space = svd.matrixV().rightCols(6 - r.rank);
   Eigen::Matrix<double, 6, 6> pinv = Eigen::Matrix<double, 6, 6>::Zero();
   for (int i = 0; i < r.rank; ++i) {
@@ -272,6 +299,17 @@ SystemLevelResult SystemLevelEstimator::Finish() const {
       estimate(name, w);
     }
   }
+  // The closed form's summary: the specific-force fit's sums of squares and conditioning.
+  const Eigen::Matrix<double, 5, 1> scale = gram_.diagonal().cwiseSqrt().cwiseInverse();
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix<double, 5, 5>> scaled(
+      scale.asDiagonal() * gram_ * scale.asDiagonal(), Eigen::EigenvaluesOnly);
+  r.summary.termination = TerminationType::kClosedForm;
+  r.summary.initial_cost = sum_squares_(0);
+  r.summary.final_cost = variance(0) * (n - 5);
+  r.summary.termination_message = internal::Format(
+      "closed form: normal equations of %ld samples (Gram matrix reciprocal condition %.3g); "
+      "eq. (41) rank %d of 6 = #{sigma_i > %.0e sigma_1}",
+      count_, scaled.eigenvalues()(0) / scaled.eigenvalues()(4), r.rank, options_.rank_tolerance);
   return r;
 }
 

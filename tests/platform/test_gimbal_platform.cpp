@@ -16,6 +16,22 @@ namespace {
 constexpr double kG = 9.80169686;
 constexpr double kArcmin = 3.14159265358979323846 / 180.0 / 60.0;
 
+CoarseCalibrationOptions Coarse() {
+  CoarseCalibrationOptions options;
+  options.gravity = kG;
+  return options;
+}
+IteratedCoarseCalibrationOptions Iterated() {
+  IteratedCoarseCalibrationOptions options;
+  options.coarse.gravity = kG;
+  return options;
+}
+FineCalibrationOptions Fine() {
+  FineCalibrationOptions options;
+  options.gravity = kG;
+  return options;
+}
+
 TEST(GimbalPlatform, ChainReproducesTable1) {
   // Nominal gravity components of Table 1 (units of g; the legible ones, and those the garbled
   // cells must be: docs/wu2018-table1.md).
@@ -85,12 +101,15 @@ TEST(GimbalPlatform, CoarseStageRecoversNoiseFreeParametersExactly) {
   const Vec3 offsets(0.0, 3 * kArcmin, -2 * kArcmin);
   const std::vector<Vec3> angles = Wu2018Table1Angles();
   const CoarseCalibrationResult r =
-      CoarseCalibration(Measure(truth, offsets, angles, 0.0, 1), angles, kG);
-  EXPECT_TRUE(r.converged);
+      CoarseCalibration(Measure(truth, offsets, angles, 0.0, 1), angles, Coarse());
+  EXPECT_TRUE(r.summary.converged());
+  EXPECT_EQ(r.summary.termination, TerminationType::kParameterTolerance);
+  EXPECT_NE(r.summary.termination_message.find("<= 1.0e-13 g max_i s_i"), std::string::npos)
+      << r.summary.termination_message;
   // Gauss-Newton on zero-residual data converges quadratically only with the exact Jacobian (the
   // θ20, θ30 columns come from PlatformUp's, checked above): 3 iterations measured from the
   // known-orientation start; a wrong column would leave linear convergence, tens of iterations.
-  EXPECT_LE(r.iterations, 4);
+  EXPECT_LE(r.summary.iterations, 4);
   EXPECT_LT((r.device.s - truth.s).cwiseAbs().maxCoeff(), 1e-9);
   EXPECT_LT((r.device.bias - truth.bias).cwiseAbs().maxCoeff(), 1e-9);
   EXPECT_LT((r.device.beta - truth.beta).cwiseAbs().maxCoeff(), 1e-9);
@@ -105,8 +124,8 @@ TEST(GimbalPlatform, CoarseStageWithinItsUncertaintyAndTheta10Absorbed) {
   const Vec3 offsets(4 * kArcmin, 3 * kArcmin, -2 * kArcmin);
   const std::vector<Vec3> angles = Wu2018Table1Angles();
   const CoarseCalibrationResult r =
-      CoarseCalibration(Measure(truth, offsets, angles, 5e-4, 7), angles, kG);
-  ASSERT_TRUE(r.converged);
+      CoarseCalibration(Measure(truth, offsets, angles, 5e-4, 7), angles, Coarse());
+  ASSERT_TRUE(r.summary.converged());
   Eigen::Matrix<double, 14, 1> expected;
   Eigen::Matrix<double, 6, 1> beta = truth.beta;
   beta(0) += offsets(0);
@@ -126,8 +145,13 @@ TEST(GimbalPlatform, CoarseStageWithinItsUncertaintyAndTheta10Absorbed) {
         ++rounds;
         return Measure(truth, offsets, commanded, 0.0, 9);
       },
-      kG);
+      Iterated());
   EXPECT_LE(rounds, 3);
+  EXPECT_EQ(loop.rounds, rounds);
+  EXPECT_EQ(loop.summary.iterations, rounds);
+  EXPECT_EQ(loop.summary.termination, TerminationType::kParameterTolerance);
+  EXPECT_NE(loop.summary.termination_message.find("< 1.0e-07 rad"), std::string::npos)
+      << loop.summary.termination_message;
   EXPECT_LT(std::abs(loop.offsets(1) - offsets(1)), 1e-9);
   EXPECT_LT(std::abs(loop.offsets(2) - offsets(2)), 1e-9);
 }
@@ -149,13 +173,15 @@ TEST(GimbalPlatform, FineStageAfterTheCoarseStage) {
         [&](const std::vector<Vec3>& commanded) {
           return Measure(truth, offsets, commanded, 3 * noise, 11);
         },
-        kG);
+        Iterated());
     std::vector<Vec3> fine_angles = angles;  // the platform re-zeroed by the coarse offsets
     for (Vec3& a : fine_angles) a -= coarse.offsets;
     const FineCalibrationResult fine =
-        FineCalibration(Measure(truth, offsets, fine_angles, noise, 13), coarse.device, kG);
-    ASSERT_TRUE(fine.converged) << noise;
-    EXPECT_LE(fine.iterations, 5);  // measured 4: quadratic convergence from the coarse start
+        FineCalibration(Measure(truth, offsets, fine_angles, noise, 13), coarse.device, Fine());
+    ASSERT_TRUE(fine.summary.converged()) << noise;
+    EXPECT_NE(fine.summary.termination_message.find("g^2"), std::string::npos);
+    EXPECT_LE(fine.summary.iterations,
+              5);  // measured 4: quadratic convergence from the coarse start
     EXPECT_NE(fine.note.find("not separable"), std::string::npos);
     const PlatformAccelerometer& d = fine.device;
     if (noise == 0.0) {
@@ -216,8 +242,56 @@ TEST(GimbalPlatform, FineRowsAreTheFirstOrderChangeOfTheObservation) {
 TEST(GimbalPlatform, RefusesTooFewPositions) {
   const std::vector<Vec3> all = Wu2018Table1Angles();
   const std::vector<Vec3> angles(all.begin(), all.begin() + 3);
-  EXPECT_THROW(CoarseCalibration(Measure(Truth(), Vec3::Zero(), angles, 0, 1), angles, kG),
+  EXPECT_THROW(CoarseCalibration(Measure(Truth(), Vec3::Zero(), angles, 0, 1), angles, Coarse()),
                DataError);
+}
+
+TEST(GimbalPlatform, RefusesPositionsThatDoNotDetermineTheParameters) {
+  // Six positions that are two orientations repeated: enough rows, too little geometry.
+  std::vector<Vec3> angles;
+  for (int k = 0; k < 6; ++k) angles.push_back(Wu2018Table1Angles()[k % 2]);
+  try {
+    CoarseCalibration(Measure(Truth(), Vec3::Zero(), angles, 1e-4, 1), angles, Coarse());
+    ADD_FAILURE() << "no DataError";
+  } catch (const DataError& e) {
+    EXPECT_NE(std::string(e.what()).find("do not determine"), std::string::npos) << e.what();
+  }
+}
+
+TEST(GimbalPlatform, IterationCapIsReportedNotThrown) {
+  // One iteration from the known-orientation start cannot meet the step criterion on offsets of
+  // a few arc-minutes: the result comes back, not converged, with the cap in its message.
+  const std::vector<Vec3> angles = Wu2018Table1Angles();
+  CoarseCalibrationOptions options = Coarse();
+  options.max_iterations = 1;
+  const CoarseCalibrationResult r = CoarseCalibration(
+      Measure(Truth(), Vec3(0, 3 * kArcmin, -2 * kArcmin), angles, 0, 1), angles, options);
+  EXPECT_FALSE(r.summary.converged());
+  EXPECT_EQ(r.summary.termination, TerminationType::kMaxIterations);
+  EXPECT_EQ(r.summary.termination_message, "reached max_iterations = 1");
+  EXPECT_EQ(r.summary.iterations, 1);
+  EXPECT_LT(r.summary.final_cost, r.summary.initial_cost);
+  EXPECT_NE(r.summary.BriefReport().find("max_iterations (reached"), std::string::npos)
+      << r.summary.BriefReport();
+}
+
+TEST(GimbalPlatform, OptionsAreValidated) {
+  CoarseCalibrationOptions coarse;
+  EXPECT_FALSE(coarse.Validate().has_value());
+  coarse.gravity = 0;
+  EXPECT_TRUE(coarse.Validate().has_value());
+  const std::vector<Vec3> angles = Wu2018Table1Angles();
+  EXPECT_THROW(CoarseCalibration(angles, angles, coarse), std::invalid_argument);
+  coarse = Coarse();
+  coarse.max_iterations = 0;
+  EXPECT_TRUE(coarse.Validate().has_value());
+  IteratedCoarseCalibrationOptions loop = Iterated();
+  loop.max_rounds = 0;
+  EXPECT_TRUE(loop.Validate().has_value());
+  FineCalibrationOptions fine = Fine();
+  fine.step_tolerance = -1;
+  ASSERT_TRUE(fine.Validate().has_value());
+  EXPECT_EQ(fine.Validate()->find("--"), std::string::npos);  // no command-line flag named
 }
 
 }  // namespace

@@ -87,10 +87,18 @@ TEST(SystemLevel, RecoversTheCoefficientsOfASimulatedDayWithinTheirUncertainty) 
   // Paper 003 §6.1: Tables 2-3, L = 40°, 5e-3 m/s² per axis, 100 Hz, 24 h (8.64 million samples).
   SystemSimulationOptions o;
   const double g = NormalGravityWgs84_ms2(o.latitude_deg);
-  SystemLevelEstimator estimator(kLatitude, g);
+  SystemLevelOptions options;
+  options.latitude_rad = kLatitude;
+  options.gravity_ms2 = g;
+  SystemLevelEstimator estimator(options);
   SimulateSystemLevel(o, [&](const SystemSample& s) { estimator.Add(s); });
   const SystemLevelResult r = estimator.Finish();
   EXPECT_EQ(r.samples, 8640000);
+  EXPECT_EQ(r.summary.termination, TerminationType::kClosedForm);
+  EXPECT_TRUE(r.summary.converged());
+  EXPECT_EQ(r.summary.iterations, 0);
+  EXPECT_NE(r.summary.termination_message.find("rank 4 of 6"), std::string::npos)
+      << r.summary.termination_message;
   const CombinedCoefficients truth = CombinedFromResiduals(o.errors, kLatitude, g);
   for (int i = 0; i < 5; ++i) {
     // The bounds: within 4σ, σ between 1e-7 and 5e-7 (the paper's errors 1.1-4.3e-7).
@@ -196,11 +204,37 @@ TEST(SystemLevel, SeriesFilesRoundTripInBothLayouts) {
 }
 
 TEST(SystemLevel, RefusesTooShortASeries) {
-  SystemLevelEstimator estimator(kLatitude, 9.8);
+  SystemLevelOptions options;
+  options.latitude_rad = kLatitude;
+  options.gravity_ms2 = 9.8;
+  SystemLevelEstimator estimator(options);
   SystemSimulationOptions o;
   o.duration_s = 3600;  // 0.26 rad of platform angle
   SimulateSystemLevel(o, [&](const SystemSample& s) { estimator.Add(s); });
   EXPECT_THROW(estimator.Finish(), DataError);
+  // The requirement is an option: a quarter radian suffices when asked for.
+  options.min_platform_angle_rad = 0.25;
+  SystemLevelEstimator lenient(options);
+  SimulateSystemLevel(o, [&](const SystemSample& s) { lenient.Add(s); });
+  EXPECT_EQ(lenient.Finish().summary.termination, TerminationType::kClosedForm);
+}
+
+TEST(SystemLevel, OptionsAreValidatedWithoutNamingFlags) {
+  SystemLevelOptions options;  // no latitude
+  ASSERT_TRUE(options.Validate().has_value());
+  EXPECT_THROW(SystemLevelEstimator{options}, std::invalid_argument);
+  options.latitude_rad = 0.5 * 3.14159265358979323846 / 180;  // within 1° of the equator
+  ASSERT_TRUE(options.Validate().has_value());
+  EXPECT_NE(options.Validate()->find("equator"), std::string::npos);
+  options.latitude_rad = kLatitude;
+  EXPECT_FALSE(options.Validate().has_value());
+  options.gravity_ms2 = -1;
+  ASSERT_TRUE(options.Validate().has_value());
+  EXPECT_EQ(options.Validate()->find("--"), std::string::npos);
+  options.gravity_ms2 = 0;  // WGS-84 normal gravity at the latitude
+  EXPECT_EQ(SystemLevelEstimator(options).gravity_ms2(), NormalGravityWgs84_ms2(40.0));
+  options.rank_tolerance = 0;
+  EXPECT_TRUE(options.Validate().has_value());
 }
 
 }  // namespace

@@ -1,0 +1,330 @@
+// The reusable Gauss-Newton / Levenberg-Marquardt driver (least_squares.hpp).
+#include "solvers/least_squares.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <limits>
+
+#include <Eigen/Cholesky>
+#include <Eigen/Eigenvalues>
+
+#include "core/text_format.hpp"
+
+namespace accelcal::internal {
+
+namespace {
+
+using Eigen::MatrixXd;
+using Eigen::VectorXd;
+
+// The damping at or below which a step is close enough to Gauss-Newton to judge convergence.
+constexpr double kMaxConvergedDamping = 1e-6;
+// The damping a rejected undamped (λ = 0) step continues with.
+constexpr double kFirstDamping = 1e-8;
+constexpr double kMaxDamping = 1e16;
+
+// The residuals and Jacobians at a point, and the normal equations' blocks.
+struct Linearization {
+  std::vector<VectorXd> r;
+  std::vector<MatrixXd> J_x, J_y;
+  MatrixXd A;   // Σ J_xᵀ J_x
+  VectorXd gx;  // Σ J_xᵀ r
+  std::vector<MatrixXd> B, D;
+  std::vector<VectorXd> gy;
+  double cost = 0;
+};
+
+bool Linearize(const LeastSquaresProblem& problem, const LeastSquaresState& state,
+               Linearization* lin) {
+  const int n = problem.GlobalSize(), m = problem.NumBlocks();
+  lin->r.resize(m);
+  lin->J_x.resize(m);
+  lin->J_y.resize(m);
+  lin->B.resize(m);
+  lin->D.resize(m);
+  lin->gy.resize(m);
+  lin->A = MatrixXd::Zero(n, n);
+  lin->gx = VectorXd::Zero(n);
+  lin->cost = 0;
+  for (int k = 0; k < m; ++k) {
+    const int q = problem.LocalSize(k);
+    if (!problem.Evaluate(k, state.x, state.y[k], &lin->r[k], &lin->J_x[k],
+                          q > 0 ? &lin->J_y[k] : nullptr)) {
+      return false;
+    }
+    if (!lin->r[k].allFinite() || !lin->J_x[k].allFinite()) return false;
+    lin->cost += lin->r[k].squaredNorm();
+    if (m == 1) {
+      lin->A.noalias() = lin->J_x[k].transpose() * lin->J_x[k];
+    } else {
+      lin->A.noalias() += lin->J_x[k].transpose() * lin->J_x[k];
+    }
+    lin->gx.noalias() += lin->J_x[k].transpose() * lin->r[k];
+    if (q > 0) {
+      if (!lin->J_y[k].allFinite()) return false;
+      lin->B[k].noalias() = lin->J_x[k].transpose() * lin->J_y[k];
+      lin->D[k].noalias() = lin->J_y[k].transpose() * lin->J_y[k];
+      lin->gy[k].noalias() = lin->J_y[k].transpose() * lin->r[k];
+    } else {
+      lin->J_y[k].resize(lin->r[k].size(), 0);
+    }
+  }
+  return std::isfinite(lin->cost);
+}
+
+double Cost(const LeastSquaresProblem& problem, const LeastSquaresState& state) {
+  double cost = 0;
+  VectorXd r;
+  for (int k = 0; k < problem.NumBlocks(); ++k) {
+    if (!problem.Evaluate(k, state.x, state.y[k], &r, nullptr, nullptr)) {
+      return std::numeric_limits<double>::infinity();
+    }
+    cost += r.squaredNorm();
+  }
+  return std::isfinite(cost) ? cost : std::numeric_limits<double>::infinity();
+}
+
+// The reduced system at a damping, factorised.
+struct ReducedSolve {
+  bool ok = false;
+  std::string failure;  // why not
+  int weakest = -1;     // global parameter most in the null direction
+  double rcond = 0;
+  VectorXd scale;  // Jacobi scaling 1/√S_jj
+  Eigen::SelfAdjointEigenSolver<MatrixXd> eig;
+  std::vector<MatrixXd> D_inv;  // (D_kλ)⁻¹
+  MatrixXd S;
+  // S⁻¹ v
+  VectorXd Solve(const VectorXd& v) const {
+    return scale.cwiseProduct(eig.eigenvectors() * eig.eigenvalues().cwiseInverse().asDiagonal() *
+                              eig.eigenvectors().transpose() * scale.cwiseProduct(v));
+  }
+  MatrixXd Inverse() const {
+    return scale.asDiagonal() * eig.eigenvectors() * eig.eigenvalues().cwiseInverse().asDiagonal() *
+           eig.eigenvectors().transpose() * scale.asDiagonal();
+  }
+};
+
+void Reduce(const Linearization& lin, double lambda, double min_rcond, ReducedSolve* out) {
+  const auto m = static_cast<int>(lin.r.size());
+  out->ok = false;
+  out->S = lin.A;
+  out->S.diagonal() += lambda * lin.A.diagonal();
+  out->D_inv.assign(m, MatrixXd());
+  for (int k = 0; k < m; ++k) {
+    if (lin.J_y[k].cols() == 0) continue;
+    MatrixXd D = lin.D[k];
+    D.diagonal() += lambda * lin.D[k].diagonal();
+    const Eigen::LDLT<MatrixXd> ldlt(D);
+    if (ldlt.info() != Eigen::Success || !ldlt.isPositive() ||
+        !(ldlt.vectorD().minCoeff() > min_rcond * ldlt.vectorD().maxCoeff())) {
+      out->failure = internal::Format("block %d's own parameters are not determined", k);
+      return;
+    }
+    out->D_inv[k] = ldlt.solve(MatrixXd::Identity(D.rows(), D.cols()));
+    out->S.noalias() -= lin.B[k] * out->D_inv[k] * lin.B[k].transpose();
+  }
+  const Eigen::Index n = out->S.rows();
+  if (n == 0) {
+    out->ok = true;
+    out->rcond = 1;
+    return;
+  }
+  const VectorXd diagonal = out->S.diagonal();
+  for (Eigen::Index j = 0; j < n; ++j) {
+    if (!(diagonal(j) > 0)) {
+      out->weakest = static_cast<int>(j);
+      out->failure = internal::Format("global parameter %d has no information", out->weakest);
+      return;
+    }
+  }
+  out->scale = diagonal.cwiseSqrt().cwiseInverse();
+  const MatrixXd N = out->scale.asDiagonal() * out->S * out->scale.asDiagonal();
+  out->eig.compute(N);
+  const VectorXd& ev = out->eig.eigenvalues();  // ascending
+  out->rcond = ev(0) / ev(n - 1);
+  if (!(out->rcond > min_rcond)) {
+    out->eig.eigenvectors().col(0).cwiseAbs().maxCoeff(&out->weakest);
+    out->failure = internal::Format(
+        "the reduced normal matrix is singular: reciprocal condition %.3g <= %.0e (min/max "
+        "eigenvalue, Jacobi-scaled), weakest global parameter %d",
+        out->rcond, min_rcond, out->weakest);
+    return;
+  }
+  out->ok = true;
+}
+
+struct Step {
+  VectorXd dx;
+  std::vector<VectorXd> dy;
+  double predicted_reduction = 0;  // F − Σ ‖r_k + J_k δ‖²
+  double max_change = 0;           // max |J δ|
+};
+
+Step ComputeStep(const Linearization& lin, const ReducedSolve& reduced) {
+  const auto m = static_cast<int>(lin.r.size());
+  VectorXd rhs = -lin.gx;
+  for (int k = 0; k < m; ++k) {
+    if (lin.J_y[k].cols() > 0) rhs.noalias() += lin.B[k] * (reduced.D_inv[k] * lin.gy[k]);
+  }
+  Step step;
+  step.dx = rhs.size() > 0 ? reduced.Solve(rhs) : VectorXd();
+  step.dy.resize(m);
+  double remaining = 0;
+  for (int k = 0; k < m; ++k) {
+    VectorXd change = lin.J_x[k] * step.dx;
+    if (lin.J_y[k].cols() > 0) {
+      step.dy[k] = -reduced.D_inv[k] * (lin.gy[k] + lin.B[k].transpose() * step.dx);
+      change.noalias() += lin.J_y[k] * step.dy[k];
+    }
+    if (change.size() > 0)
+      step.max_change = std::max(step.max_change, change.cwiseAbs().maxCoeff());
+    remaining += (lin.r[k] + change).squaredNorm();
+  }
+  step.predicted_reduction = lin.cost - remaining;
+  return step;
+}
+
+LeastSquaresState Plus(const LeastSquaresProblem& problem, const LeastSquaresState& state,
+                       const Step& step) {
+  LeastSquaresState out;
+  out.x = step.dx.size() > 0 ? problem.PlusGlobal(state.x, step.dx) : state.x;
+  out.y.resize(state.y.size());
+  for (std::size_t k = 0; k < state.y.size(); ++k) {
+    out.y[k] = step.dy[k].size() > 0
+                   ? problem.PlusLocal(static_cast<int>(k), state.y[k], step.dy[k])
+                   : state.y[k];
+  }
+  return out;
+}
+
+}  // namespace
+
+LeastSquaresSummary SolveLeastSquares(const LeastSquaresProblem& problem,
+                                      const LeastSquaresOptions& options,
+                                      LeastSquaresState* state) {
+  LeastSquaresSummary summary;
+  const int m = problem.NumBlocks();
+  state->y.resize(m);
+  Linearization lin;
+  if (!Linearize(problem, *state, &lin)) {
+    summary.termination = TerminationType::kNoProgress;
+    summary.termination_message = "the residuals are not finite at the start";
+    return summary;
+  }
+  summary.parameters = problem.GlobalSize();
+  for (int k = 0; k < m; ++k) {
+    summary.residuals += static_cast<int>(lin.r[k].size());
+    summary.parameters += problem.LocalSize(k);
+  }
+  summary.degrees_of_freedom = summary.residuals - summary.parameters;
+  summary.initial_cost = lin.cost;
+  summary.cost_history.push_back(lin.cost);
+  summary.termination = TerminationType::kMaxIterations;
+  summary.termination_message =
+      internal::Format("reached max_iterations = %d", options.max_iterations);
+
+  double lambda = options.initial_damping, nu = 2;
+  int reset_at = -1;  // the iteration at which the damping was last reset for a small step
+  ReducedSolve reduced;
+  std::int64_t passes = 0;  // trial steps, accepted or not: a backstop against cycling
+  while (summary.iterations < options.max_iterations) {
+    if (++passes > 100 * static_cast<std::int64_t>(options.max_iterations)) {
+      summary.termination = TerminationType::kNoProgress;
+      summary.termination_message =
+          internal::Format("no progress after %lld trial steps (damping cycled)",
+                           static_cast<long long>(passes - 1));
+      break;
+    }
+    if (options.zero_residual_cost >= 0 && lin.cost <= options.zero_residual_cost) {
+      summary.termination = TerminationType::kZeroResidual;
+      summary.termination_message = internal::Format("F = %.3e <= zero-residual level %.3e",
+                                                     lin.cost, options.zero_residual_cost);
+      break;
+    }
+    Reduce(lin, lambda, options.min_reciprocal_condition, &reduced);
+    if (!reduced.ok) {
+      summary.termination = TerminationType::kNoProgress;
+      summary.rank_deficient = true;
+      summary.reciprocal_condition = reduced.rcond;
+      summary.termination_message = reduced.failure;
+      break;
+    }
+    const Step step = ComputeStep(lin, reduced);
+    summary.step_change = step.max_change;
+    const bool small = options.step_tolerance > 0 && step.max_change <= options.step_tolerance;
+    if (small && lambda > kMaxConvergedDamping && reset_at != summary.iterations) {
+      // A small step under heavy damping says only that λ is large: retry near Gauss-Newton.
+      reset_at = summary.iterations;
+      lambda = std::min(options.initial_damping, kMaxConvergedDamping);
+      nu = 2;
+      continue;
+    }
+    LeastSquaresState trial = Plus(problem, *state, step);
+    if (small) {
+      // The change is below the tolerance and at the level where F's round-off decides
+      // acceptance: the step is taken, and the point is the solution.
+      Linearization next;
+      if (Linearize(problem, trial, &next)) {
+        *state = std::move(trial);
+        lin = std::move(next);
+        ++summary.iterations;
+        summary.cost_history.push_back(lin.cost);
+      }
+      summary.termination = TerminationType::kParameterTolerance;
+      summary.termination_message = internal::Format("max |J dx| = %.3e <= step_tolerance %.3e",
+                                                     step.max_change, options.step_tolerance);
+      break;
+    }
+    const double trial_cost = Cost(problem, trial);
+    ++summary.evaluations;
+    Linearization next;
+    if (trial_cost < lin.cost && Linearize(problem, trial, &next)) {
+      const double actual = lin.cost - trial_cost;
+      const double rho = step.predicted_reduction > 0 ? actual / step.predicted_reduction : 1.0;
+      lambda *= std::max(1.0 / 3.0, 1.0 - std::pow(2.0 * rho - 1.0, 3));
+      nu = 2;
+      const double before = lin.cost;
+      *state = std::move(trial);
+      lin = std::move(next);
+      ++summary.iterations;
+      summary.cost_history.push_back(lin.cost);
+      if (options.function_tolerance > 0 && actual <= options.function_tolerance * before) {
+        summary.termination = TerminationType::kFunctionTolerance;
+        summary.termination_message = internal::Format("|dF| / F = %.3e <= function_tolerance %.1e",
+                                                       actual / before, options.function_tolerance);
+        break;
+      }
+    } else {
+      lambda = lambda > 0 ? lambda * nu : kFirstDamping;
+      nu *= 2;
+      if (lambda > kMaxDamping) {
+        summary.termination = TerminationType::kNoProgress;
+        summary.termination_message =
+            internal::Format("no step reduced F = %.6e with damping up to %.0e (%d evaluations)",
+                             lin.cost, kMaxDamping, summary.evaluations);
+        break;
+      }
+    }
+  }
+  summary.final_cost = lin.cost;
+  summary.sigma2 = summary.degrees_of_freedom > 0
+                       ? lin.cost / static_cast<double>(summary.degrees_of_freedom)
+                       : 0.0;
+  Reduce(lin, 0.0, options.min_reciprocal_condition, &reduced);
+  summary.information = reduced.S;
+  summary.reciprocal_condition = reduced.rcond;
+  if (!reduced.ok) {
+    summary.rank_deficient = true;
+    if (summary.converged()) {
+      summary.termination = TerminationType::kNoProgress;
+      summary.termination_message = reduced.failure;
+    }
+  } else if (options.compute_covariance && problem.GlobalSize() > 0) {
+    summary.covariance = summary.sigma2 * reduced.Inverse();
+  }
+  return summary;
+}
+
+}  // namespace accelcal::internal

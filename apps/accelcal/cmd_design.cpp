@@ -48,12 +48,9 @@ int RunDesign(const DesignArgs& args) {
       ParseCalibrationJson(ReadFileToString(args.device, kMaxSmallFileBytes), args.device);
   Vec3 sigma;
   if (from_density) {
-    // One averaged reading: density · √rate per sample (µg relative to the device's gravity),
-    // over rate · duration samples, mapped to each raw axis by the length of its row of K.
-    const double samples = *args.rate_hz * *args.duration_s;
-    const double sigma_force =
-        *args.noise_density_ug * 1e-6 * device.gravity * std::sqrt(*args.rate_hz / samples);
-    for (int i = 0; i < 3; ++i) sigma(i) = device.params.K.row(i).norm() * sigma_force;
+    // One averaged reading: rate · duration samples.
+    sigma = RawNoiseFromDensity(device.params, device.gravity, *args.noise_density_ug,
+                                *args.rate_hz, *args.rate_hz * *args.duration_s);
   } else {
     sigma = args.noise_raw.size() == 1
                 ? Vec3::Constant(args.noise_raw[0])
@@ -63,57 +60,39 @@ int RunDesign(const DesignArgs& args) {
     throw UsageError(
         "the noise must be positive (--noise, or --noise-density, --rate, --duration)");
   }
-  const ModelKind model =
-      args.model ? ParseChoice<ModelKind>(*args.model, "--model") : device.model;
-  std::vector<Vec3> directions = PlannedDirections(args.positions);
-  LoadedCalibration nominal = device;
-  if (device.frame == Frame::kPlatform) {
-    // A platform-frame device (known-orientation fit) has a full K. The orientation-free bound
-    // is computed for the same linear device in its x-first form (frame.hpp), the planned
-    // directions rotated with it.
-    if (model != ModelKind::kLinear) {
-      throw UsageError(
-          "design: a quadratic platform-frame device has no orientation-free "
-          "equivalent (the squared terms act on platform axes); use --model linear");
-    }
-    const FrameChange change = ChangeFrame(device.params.K, Frame::kXFirst);
-    nominal.params.K = change.K;
-    nominal.params.k2.setZero();
-    for (Vec3& c : directions) c = change.Q_old_new.transpose() * c;
+  DesignOptions options;
+  options.device = device.params;
+  options.frame = device.frame;
+  options.model = args.model ? ParseChoice<ModelKind>(*args.model, "--model") : device.model;
+  options.gravity = device.gravity;
+  options.sigma_raw = sigma;
+  options.choose = args.choose;
+  options.criterion = ParseChoice<DesignCriterion>(args.criterion, "--criterion");
+  if (auto why = options.Validate()) {
+    throw UsageError(WithFlags(
+        *why, {{"choose", "--choose"}, {"the model must be linear", "use --model linear"}}));
   }
+  const std::vector<Vec3> candidates = PlannedDirections(args.positions);
+  DesignResult design;
+  try {
+    design = Design(candidates, options);
+  } catch (const std::invalid_argument& e) {
+    throw UsageError(std::string("--choose: ") + e.what());
+  }
+  const ModelKind model = options.model;
+  const PlannedUncertainty& planned = design.planned;
+  std::vector<Vec3> directions;
+  for (int k : design.chosen) directions.push_back(candidates[static_cast<std::size_t>(k)]);
   std::string chosen_note;
   if (args.choose > 0) {
-    if (args.criterion != "d" && args.criterion != "a") {
-      throw UsageError("--criterion: '" + args.criterion + "' is not one of d, a");
-    }
-    std::vector<int> chosen;
-    try {
-      chosen = args.criterion == "d" ? ChooseDOptimal(nominal.params, model, device.gravity,
-                                                      directions, sigma, args.choose)
-                                     : ChooseAOptimal(nominal.params, model, device.gravity,
-                                                      directions, sigma, args.choose);
-    } catch (const std::invalid_argument& e) {
-      throw UsageError(std::string("--choose: ") + e.what());
-    }
-    std::vector<Vec3> subset;
-    for (int k : chosen) subset.push_back(directions[static_cast<std::size_t>(k)]);
-    const std::vector<Vec3> yang18 = Yang18Directions();
-    const double d_efficiency =
-        std::exp((LogDetInformation(nominal.params, model, device.gravity, subset, sigma) -
-                  LogDetInformation(nominal.params, model, device.gravity, yang18, sigma)) /
-                 NumParameters(model));
-    const double a_efficiency = TraceCrlb(nominal.params, model, device.gravity, yang18, sigma) /
-                                TraceCrlb(nominal.params, model, device.gravity, subset, sigma);
     chosen_note = Format(
         "%s-optimal %d of %zu candidates; against yang18: D-efficiency %.4f ((det I / det "
         "I_yang18)^(1/%d)), A-efficiency %.4f (tr CRLB_yang18 / tr CRLB, parameters in the "
         "device's relative metric); > 1: better",
-        args.criterion == "d" ? "D" : "A", args.choose, directions.size(), d_efficiency,
-        NumParameters(model), a_efficiency);
-    directions = std::move(subset);
+        options.criterion == DesignCriterion::kD ? "D" : "A", args.choose, candidates.size(),
+        design.d_efficiency, NumParameters(model), design.a_efficiency);
+    if (!design.summary.converged) chosen_note += "; " + design.summary.termination_message;
   }
-  const PlannedUncertainty planned =
-      PredictUncertainty(nominal.params, model, device.gravity, directions, sigma);
   const auto& slots = ParameterSlots(model, planned.frame);
   std::string out;
   if (args.json) {

@@ -145,11 +145,8 @@ int RunSimulate(const SimulateArgs& args) {
         Format("--duration x --rate must be 1 to 2^53 samples per position (%g)", per_position));
   }
   const std::vector<Vec3> directions = PlannedDirections(positions);
-  // Per-sample white noise in the specific-force unit (µg relative to the device's gravity),
-  // mapped to each raw axis by the length of its row of K.
-  const double sigma_force = *density * 1e-6 * gravity * std::sqrt(args.rate_hz);
-  Vec3 sigma_raw;
-  for (int i = 0; i < 3; ++i) sigma_raw(i) = truth.K.row(i).norm() * sigma_force;
+  // Per-sample white noise.
+  const Vec3 sigma_raw = RawNoiseFromDensity(truth, gravity, *density, args.rate_hz);
   if (args.raw) {
     RawLogSimulation options;
     options.rate_hz = args.rate_hz;

@@ -10,6 +10,7 @@
 /// the maximum-likelihood solvers reach it when the noise is the same on every axis (else a
 /// weighted fit would).
 
+#include <limits>
 #include <optional>
 #include <string>
 #include <string_view>
@@ -19,6 +20,7 @@
 
 #include "accelcal/frame.hpp"
 #include "accelcal/model.hpp"
+#include "accelcal/names.hpp"
 
 namespace accelcal {
 
@@ -69,6 +71,61 @@ double TraceCrlb(const ModelParameters& device, ModelKind model, double gravity,
 /// the same device, model and noise; −inf when singular.
 double LogDetInformation(const ModelParameters& device, ModelKind model, double gravity,
                          const std::vector<Vec3>& directions, const Vec3& sigma_raw);
+
+/// Which optimality ChoosePositions seeks.
+enum class DesignCriterion {
+  kD,  ///< "d": maximise det I (ChooseDOptimal)
+  kA,  ///< "a": minimise the trace of the CRLB in the device's metric (ChooseAOptimal)
+};
+std::string_view ToString(DesignCriterion criterion);
+template <>
+struct EnumNames<DesignCriterion> {
+  static constexpr std::pair<DesignCriterion, std::string_view> kTable[] = {
+      {DesignCriterion::kD, "d"}, {DesignCriterion::kA, "a"}};
+};
+
+/// What Design evaluates: a nominal device and the noise of one averaged reading, and
+/// optionally the choice of `choose` positions out of the given ones.
+struct DesignOptions {
+  ModelParameters device;
+  Frame frame = Frame::kXFirst;  ///< the device's frame (its K's shape, frame.hpp)
+  ModelKind model = ModelKind::kLinear;
+  double gravity = 0;             ///< > 0, in the device's specific-force unit
+  Vec3 sigma_raw = Vec3::Zero();  ///< 1σ per axis of one averaged reading [raw], > 0
+  int choose = 0;                 ///< 0: evaluate every position; else choose this many
+  DesignCriterion criterion = DesignCriterion::kD;
+  /// Cap on the exchange sweeps of the choice (Fedorov exchanges; each sweep makes the best
+  /// single swap): reached, the summary says so.
+  int max_exchanges = 100;
+  /// Why the options are invalid (messages name the fields), or nothing.
+  std::optional<std::string> Validate() const;
+};
+
+/// How Design ended, with its stopping rule as a formula.
+struct DesignSummary {
+  int exchanges = 0;  ///< swaps made by the choice (0 without one)
+  bool converged = true;
+  /// "no exchange improves det I by more than 1e-10 relative" (or the trace), or the cap.
+  std::string termination_message;
+};
+
+struct DesignResult {
+  /// Indices of the chosen positions in the given order (all of them without a choice).
+  std::vector<int> chosen;
+  /// Against paper 000's 18 positions, with a choice: (det I / det I_yang18)^(1/P) and
+  /// tr CRLB_yang18 / tr CRLB (the device's metric); > 1 is better. NaN without a choice.
+  double d_efficiency = std::numeric_limits<double>::quiet_NaN();
+  double a_efficiency = std::numeric_limits<double>::quiet_NaN();
+  PlannedUncertainty planned;  ///< the bound of the chosen positions
+  DesignSummary summary;
+};
+
+/// The Cramér-Rao bound of `directions` (unit vectors in the device's body frame), or of the best
+/// `options.choose` of them. A platform-frame device (a known-orientation fit, full K) is
+/// evaluated as the same linear device in its x-first form, the directions rotated with it; its
+/// quadratic model has no orientation-free equivalent and is refused. Throws
+/// std::invalid_argument for invalid options or directions.
+DesignResult Design(const std::vector<Vec3>& directions, const DesignOptions& options);
 
 /// The most positions "random:N" makes (a count from an option is bounded before allocation).
 inline constexpr int kMaxRandomPositions = 100000;

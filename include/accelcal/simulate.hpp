@@ -30,6 +30,13 @@ inline constexpr double kYang2012PositionSigma_ms2 = 10e-6 * 10.0 / 77.459666924
 /// That noise in raw units for a device: per axis, the length of its row of K times it.
 Vec3 Yang2012SigmaRaw(const ModelParameters& device);
 
+/// Per-axis 1σ [raw] of the mean of `samples` samples of white noise of density `density_ug`
+/// [µg/√Hz, µg relative to `gravity`] sampled at `rate_hz` (`samples` = 1: one sample): density ·
+/// √(rate / samples) in the specific-force unit, mapped to each raw axis by the length of its row
+/// of K. The one conversion design and simulate use.
+Vec3 RawNoiseFromDensity(const ModelParameters& device, double gravity, double density_ug,
+                         double rate_hz, double samples = 1);
+
 /// Averaged readings p_k = μ(g c_k) + v_k, v_k ~ N(0, diag(sigma_raw²)), deterministic in seed.
 std::vector<Vec3> SimulatePositions(const ModelParameters& truth, double gravity,
                                     const std::vector<Vec3>& directions, const Vec3& sigma_raw,

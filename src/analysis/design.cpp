@@ -106,9 +106,17 @@ double LogDetInformation(const ModelParameters& device, ModelKind model, double 
   return d.array().log().sum();
 }
 
-std::vector<int> ChooseDOptimal(const ModelParameters& device, ModelKind model, double gravity,
-                                const std::vector<Vec3>& candidates, const Vec3& sigma_raw,
-                                int count) {
+namespace {
+
+// What an exchange search did: swaps made, and whether it stopped at its sweep cap.
+struct ExchangeReport {
+  int exchanges = 0;
+  bool capped = false;
+};
+
+std::vector<int> ChooseD(const ModelParameters& device, ModelKind model, double gravity,
+                         const std::vector<Vec3>& candidates, const Vec3& sigma_raw, int count,
+                         int max_sweeps, ExchangeReport* report) {
   const int n = static_cast<int>(candidates.size());
   const int P = NumParameters(model);
   if (count > n) throw std::invalid_argument("more positions asked for than there are candidates");
@@ -140,7 +148,11 @@ std::vector<int> ChooseDOptimal(const ModelParameters& device, ModelKind model, 
   A -= regularisation * Eigen::MatrixXd::Identity(P, P);
   // Fedorov exchange: swap i (in) for j (out) when det grows, by the rank-2 determinant lemma
   // Δ = (1 + d_j)(1 − d_i) + d_ij² with d = w A⁻¹ wᵀ.
-  for (int sweep = 0; sweep < 100; ++sweep) {
+  for (int sweep = 0;; ++sweep) {
+    if (sweep == max_sweeps) {
+      report->capped = true;
+      break;
+    }
     bool improved = false;
     const Eigen::MatrixXd A_inv = A.ldlt().solve(Eigen::MatrixXd::Identity(P, P));
     const Eigen::MatrixXd V = W * A_inv;  // rows w_k A⁻¹
@@ -162,6 +174,7 @@ std::vector<int> ChooseDOptimal(const ModelParameters& device, ModelKind model, 
       A += W.row(best_out).transpose() * W.row(best_out) -
            W.row(best_in).transpose() * W.row(best_in);
       improved = true;
+      ++report->exchanges;
     }
     if (!improved) break;
   }
@@ -170,6 +183,15 @@ std::vector<int> ChooseDOptimal(const ModelParameters& device, ModelKind model, 
     if (chosen[static_cast<std::size_t>(k)]) indices.push_back(k);
   }
   return indices;
+}
+
+}  // namespace
+
+std::vector<int> ChooseDOptimal(const ModelParameters& device, ModelKind model, double gravity,
+                                const std::vector<Vec3>& candidates, const Vec3& sigma_raw,
+                                int count) {
+  ExchangeReport report;
+  return ChooseD(device, model, gravity, candidates, sigma_raw, count, 100, &report);
 }
 
 double TraceCrlb(const ModelParameters& device, ModelKind model, double gravity,
@@ -188,7 +210,8 @@ namespace {
 // for j (out) is A' = A + U C Uᵀ, U = (w_jᵀ w_iᵀ), C = diag(1, −1); by Woodbury tr A'⁻¹ = tr A⁻¹ −
 // tr(M⁻¹ N) with M = C⁻¹ + UᵀA⁻¹U and N = UᵀA⁻²U. det M = −((1 + d_j)(1 − d_i) + d_ij²) is minus
 // the determinant ratio of ChooseDOptimal: a swap that would make A singular is skipped.
-double ExchangeOnTrace(const Eigen::MatrixXd& W, std::vector<bool>* chosen_in) {
+double ExchangeOnTrace(const Eigen::MatrixXd& W, std::vector<bool>* chosen_in, int max_sweeps,
+                       ExchangeReport* report) {
   std::vector<bool>& chosen = *chosen_in;
   const auto n = static_cast<int>(W.rows());
   const auto P = static_cast<int>(W.cols());
@@ -200,7 +223,7 @@ double ExchangeOnTrace(const Eigen::MatrixXd& W, std::vector<bool>* chosen_in) {
   if (ldlt.info() != Eigen::Success || !(ldlt.vectorD().minCoeff() > 0)) {
     return std::numeric_limits<double>::infinity();
   }
-  for (int sweep = 0; sweep < 200; ++sweep) {
+  for (int sweep = 0; sweep < max_sweeps; ++sweep) {
     const Eigen::MatrixXd A_inv = A.ldlt().solve(Eigen::MatrixXd::Identity(P, P));
     const Eigen::MatrixXd V = W * A_inv;
     const Eigen::VectorXd d = (V.array() * W.array()).rowwise().sum();
@@ -226,17 +249,21 @@ double ExchangeOnTrace(const Eigen::MatrixXd& W, std::vector<bool>* chosen_in) {
     chosen[static_cast<std::size_t>(best_out)] = true;
     A +=
         W.row(best_out).transpose() * W.row(best_out) - W.row(best_in).transpose() * W.row(best_in);
+    ++report->exchanges;
   }
+  report->capped = true;
   return A.ldlt().solve(Eigen::MatrixXd::Identity(P, P)).trace();
 }
 
 }  // namespace
 
-std::vector<int> ChooseAOptimal(const ModelParameters& device, ModelKind model, double gravity,
-                                const std::vector<Vec3>& candidates, const Vec3& sigma_raw,
-                                int count) {
+namespace {
+
+std::vector<int> ChooseA(const ModelParameters& device, ModelKind model, double gravity,
+                         const std::vector<Vec3>& candidates, const Vec3& sigma_raw, int count,
+                         int max_sweeps, ExchangeReport* report) {
   const std::vector<int> d_optimal =
-      ChooseDOptimal(device, model, gravity, candidates, sigma_raw, count);
+      ChooseD(device, model, gravity, candidates, sigma_raw, count, max_sweeps, report);
   const auto n = candidates.size();
   const Eigen::MatrixXd W = ScaledActiveRows(Plan(device, model, gravity, candidates, sigma_raw));
   // The trace has more local minima under single exchanges than log det: besides the D-optimal
@@ -244,7 +271,7 @@ std::vector<int> ChooseAOptimal(const ModelParameters& device, ModelKind model, 
   constexpr int kRestarts = 8;
   std::vector<bool> best(n, false);
   for (int k : d_optimal) best[static_cast<std::size_t>(k)] = true;
-  double best_trace = ExchangeOnTrace(W, &best);
+  double best_trace = ExchangeOnTrace(W, &best, 2 * max_sweeps, report);
   std::mt19937_64 random(12345);
   std::vector<std::size_t> order(n);
   for (int restart = 0; restart < kRestarts; ++restart) {
@@ -252,7 +279,7 @@ std::vector<int> ChooseAOptimal(const ModelParameters& device, ModelKind model, 
     for (std::size_t i = n - 1; i > 0; --i) std::swap(order[i], order[random() % (i + 1)]);
     std::vector<bool> chosen(n, false);
     for (int k = 0; k < count; ++k) chosen[order[static_cast<std::size_t>(k)]] = true;
-    const double trace = ExchangeOnTrace(W, &chosen);
+    const double trace = ExchangeOnTrace(W, &chosen, 2 * max_sweeps, report);
     if (trace < best_trace) best_trace = trace, best = chosen;
   }
   std::vector<int> indices;
@@ -260,6 +287,15 @@ std::vector<int> ChooseAOptimal(const ModelParameters& device, ModelKind model, 
     if (best[k]) indices.push_back(static_cast<int>(k));
   }
   return indices;
+}
+
+}  // namespace
+
+std::vector<int> ChooseAOptimal(const ModelParameters& device, ModelKind model, double gravity,
+                                const std::vector<Vec3>& candidates, const Vec3& sigma_raw,
+                                int count) {
+  ExchangeReport report;
+  return ChooseA(device, model, gravity, candidates, sigma_raw, count, 100, &report);
 }
 
 PlannedUncertainty PredictUncertainty(const ModelParameters& device, ModelKind model,
@@ -336,6 +372,77 @@ std::optional<std::vector<Vec3>> SchemeDirections(std::string_view name) {
     if (ec2 != std::errc() || e2 != seed_text.data() + seed_text.size()) throw bad();
   }
   return RandomDirections(count, seed);
+}
+
+std::string_view ToString(DesignCriterion criterion) { return NameOf(criterion); }
+
+std::optional<std::string> DesignOptions::Validate() const {
+  if (!(gravity > 0) || !std::isfinite(gravity)) return "gravity must be positive and finite";
+  if (!sigma_raw.allFinite() || !(sigma_raw.minCoeff() > 0)) {
+    return "sigma_raw must be positive and finite on every axis";
+  }
+  if (!device.K.allFinite() || !device.bias.allFinite() || !device.k2.allFinite()) {
+    return "the device's parameters must be finite";
+  }
+  if (choose < 0) return "choose must be 0 (no choice) or a number of positions";
+  if (max_exchanges < 1) return "max_exchanges must be at least 1";
+  if (frame == Frame::kPlatform && model != ModelKind::kLinear) {
+    return "a quadratic platform-frame device has no orientation-free equivalent (the squared "
+           "terms act on platform axes): the model must be linear";
+  }
+  return std::nullopt;
+}
+
+DesignResult Design(const std::vector<Vec3>& directions_in, const DesignOptions& options) {
+  if (auto why = options.Validate()) throw std::invalid_argument(*why);
+  // A platform-frame device (known-orientation fit) has a full K: the orientation-free bound is
+  // that of the same linear device in its x-first form (frame.hpp), the directions rotated with it.
+  ModelParameters device = options.device;
+  std::vector<Vec3> directions = directions_in;
+  if (options.frame == Frame::kPlatform) {
+    const FrameChange change = ChangeFrame(device.K, Frame::kXFirst);
+    device.K = change.K;
+    device.k2.setZero();
+    for (Vec3& c : directions) c = change.Q_old_new.transpose() * c;
+  }
+  const ModelKind model = options.model;
+  const double g = options.gravity;
+  const Vec3& sigma = options.sigma_raw;
+  DesignResult out;
+  if (options.choose > 0) {
+    ExchangeReport report;
+    out.chosen = options.criterion == DesignCriterion::kD
+                     ? ChooseD(device, model, g, directions, sigma, options.choose,
+                               options.max_exchanges, &report)
+                     : ChooseA(device, model, g, directions, sigma, options.choose,
+                               options.max_exchanges, &report);
+    std::vector<Vec3> subset;
+    for (int k : out.chosen) subset.push_back(directions[static_cast<std::size_t>(k)]);
+    const std::vector<Vec3> yang18 = Yang18Directions();
+    out.d_efficiency = std::exp((LogDetInformation(device, model, g, subset, sigma) -
+                                 LogDetInformation(device, model, g, yang18, sigma)) /
+                                NumParameters(model));
+    out.a_efficiency =
+        TraceCrlb(device, model, g, yang18, sigma) / TraceCrlb(device, model, g, subset, sigma);
+    out.summary.exchanges = report.exchanges;
+    out.summary.converged = !report.capped;
+    out.summary.termination_message =
+        report.capped
+            ? "reached max_exchanges = " + std::to_string(options.max_exchanges) +
+                  " sweeps with swaps still improving the criterion"
+            : std::string(options.criterion == DesignCriterion::kD
+                              ? "no swap of a chosen and an unchosen position raises det I by "
+                                "more than 1e-10 relative"
+                              : "no swap of a chosen and an unchosen position lowers tr CRLB by "
+                                "more than 1e-10 relative");
+    directions = std::move(subset);
+  } else {
+    out.chosen.resize(directions.size());
+    std::iota(out.chosen.begin(), out.chosen.end(), 0);
+    out.summary.termination_message = "no choice: every position evaluated";
+  }
+  out.planned = PredictUncertainty(device, model, g, directions, sigma);
+  return out;
 }
 
 }  // namespace accelcal

@@ -45,6 +45,14 @@ std::vector<Vec3> Yang18Directions() {
   return dirs;
 }
 
+Vec3 RawNoiseFromDensity(const ModelParameters& device, double gravity, double density_ug,
+                         double rate_hz, double samples) {
+  const double sigma_force = density_ug * 1e-6 * gravity * std::sqrt(rate_hz / samples);
+  Vec3 sigma;
+  for (int i = 0; i < 3; ++i) sigma(i) = device.K.row(i).norm() * sigma_force;
+  return sigma;
+}
+
 Vec3 Yang2012SigmaRaw(const ModelParameters& device) {
   Vec3 sigma;
   for (int i = 0; i < 3; ++i) sigma(i) = device.K.row(i).norm() * kYang2012PositionSigma_ms2;

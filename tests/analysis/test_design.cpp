@@ -4,6 +4,7 @@
 
 #include <gtest/gtest.h>
 #include <Eigen/Dense>
+#include <Eigen/Geometry>
 
 #include "accelcal/calibrate.hpp"
 #include "accelcal/design.hpp"
@@ -121,6 +122,67 @@ TEST(Design, ObservabilityDoesNotDependOnTheNoiseLevel) {
       EXPECT_NEAR(planned.rcond, reference.rcond, 1e-12 * reference.rcond + 1e-15) << scale;
     }
   }
+}
+
+TEST(Design, NoiseDensityGivesPaper000sPositionNoise) {
+  // 10 µg/√Hz at 100 Hz averaged over 60 s is Table 4's per-position noise (errata 000-table4),
+  // mapped to raw units by the rows of K; one sample is √6000 times larger.
+  const ModelParameters device = Yang2012Truth();
+  const Vec3 averaged = RawNoiseFromDensity(device, kG, 10.0, 100.0, 6000.0);
+  const Vec3 table4 = Yang2012SigmaRaw(device);
+  for (int i = 0; i < 3; ++i) {
+    EXPECT_NEAR(averaged(i), table4(i), 1e-14 * table4(i)) << i;
+    EXPECT_NEAR(RawNoiseFromDensity(device, kG, 10.0, 100.0)(i), std::sqrt(6000.0) * table4(i),
+                1e-12 * table4(i))
+        << i;
+  }
+}
+
+TEST(Design, OptionsInSummaryOut) {
+  const ModelParameters device = Yang2012Truth();
+  const Vec3 sigma = Yang2012SigmaRaw(device);
+  const std::vector<Vec3> candidates = *SchemeDirections("random:60:4");
+  DesignOptions options;
+  options.device = device;
+  options.gravity = kG;
+  options.sigma_raw = sigma;
+  options.choose = 12;
+  const DesignResult d = Design(candidates, options);
+  EXPECT_EQ(d.chosen, ChooseDOptimal(device, ModelKind::kLinear, kG, candidates, sigma, 12));
+  EXPECT_TRUE(d.summary.converged) << d.summary.termination_message;
+  EXPECT_NE(d.summary.termination_message.find("det I"), std::string::npos);
+  std::vector<Vec3> subset;
+  for (int k : d.chosen) subset.push_back(candidates[static_cast<std::size_t>(k)]);
+  EXPECT_EQ(d.planned.crlb, PredictUncertainty(device, ModelKind::kLinear, kG, subset, sigma).crlb);
+  EXPECT_GT(d.d_efficiency, 0.0);
+  // A cap of one sweep is reported, not hidden.
+  options.max_exchanges = 1;
+  const DesignResult capped = Design(candidates, options);
+  if (capped.summary.exchanges > 0) {
+    EXPECT_FALSE(capped.summary.converged);
+    EXPECT_NE(capped.summary.termination_message.find("max_exchanges = 1"), std::string::npos);
+  }
+  // A platform-frame device (full K: the x-first K turned by a rotation) has the bound of its
+  // x-first form with the directions turned the same way.
+  const Mat33 R = Eigen::AngleAxisd(0.3, Vec3(1, 2, 3).normalized()).toRotationMatrix();
+  DesignOptions platform = options;
+  platform.choose = 0;
+  platform.frame = Frame::kPlatform;
+  platform.device.K = device.K * R;
+  platform.device.k2.setZero();
+  std::vector<Vec3> turned;
+  for (const Vec3& c : Yang18Directions()) turned.push_back(R.transpose() * c);
+  const PlannedUncertainty a = Design(turned, platform).planned;
+  const PlannedUncertainty b =
+      PredictUncertainty(device, ModelKind::kLinear, kG, Yang18Directions(), sigma);
+  ASSERT_TRUE(a.observable && b.observable);
+  EXPECT_LT((a.crlb - b.crlb).norm(), 1e-9 * b.crlb.norm());
+  // Invalid options name the fields, never a command-line flag.
+  platform.model = ModelKind::kQuadratic;
+  ASSERT_TRUE(platform.Validate());
+  EXPECT_EQ(platform.Validate()->find("--"), std::string::npos);
+  options.sigma_raw = Vec3(1, 0, 1);
+  EXPECT_THROW(Design(candidates, options), std::invalid_argument);
 }
 
 TEST(Design, NamedSchemes) {

@@ -345,28 +345,55 @@ int accelcal::cli::RunCommandLine(int argc, char** argv) {
   } timer{start};
   InstallCleanupHandlers();
   // The command, then stdout checked: a summary that did not reach a full disk is an error too.
+  // The file a DataError of the command is about (empty: none, e.g. a simulation).
+  std::string data_subject;
   const auto run = [&]() -> int {
     if (*calibrate) {
+      data_subject = cal.input.path;
       for (const char* name :
            {"--method", "--init", "--frame", "--estimator", "--max-iterations"}) {
         if (calibrate->count(name) > 0) cal.gravity_only_options.emplace_back(name);
       }
       return RunCalibrate(cal);
     }
-    if (*detect) return RunDetect(det);
-    if (*compare) return RunCompare(cmp);
-    if (*apply_cmd) return RunApply(apply);
-    if (*export_cmd) return RunExport(exp);
-    if (*report_cmd) return RunReport(rep);
-    if (*design) return RunDesign(des);
+    if (*detect) {
+      data_subject = det.input.path;
+      return RunDetect(det);
+    }
+    if (*compare) {
+      data_subject = cmp.input.path;
+      return RunCompare(cmp);
+    }
+    if (*apply_cmd) {
+      data_subject = apply.input.path;
+      return RunApply(apply);
+    }
+    if (*export_cmd) {
+      data_subject = exp.calibration;
+      return RunExport(exp);
+    }
+    if (*report_cmd) {
+      data_subject = rep.log.path.empty() ? rep.calibration : rep.log.path;
+      return RunReport(rep);
+    }
+    if (*design) {
+      data_subject = des.positions;
+      return RunDesign(des);
+    }
     if (*montecarlo) return RunMonteCarlo(mc);
     if (*simulate) {
       sim.rate_given = simulate->count("--rate") > 0;
       sim.duration_given = simulate->count("--duration") > 0;
       return RunSimulate(sim);
     }
-    if (*system_level) return RunSystemLevel(sys);
-    if (*gimbal) return RunGimbal(gim);
+    if (*system_level) {
+      data_subject = sys.series;
+      return RunSystemLevel(sys);
+    }
+    if (*gimbal) {
+      data_subject = gim.coarse;
+      return RunGimbal(gim);
+    }
     return kExitUsage;
   };
   try {
@@ -380,17 +407,11 @@ int accelcal::cli::RunCommandLine(int argc, char** argv) {
     std::fprintf(stderr, "accelcal: %s\n", e.what());
     return kExitBadInput;
   } catch (const accelcal::DataError& e) {
-    std::fprintf(stderr, "accelcal: %s: %s\n",
-                 (*calibrate      ? cal.input.path
-                  : *detect       ? det.input.path
-                  : *design       ? des.positions
-                  : *system_level ? sys.series
-                  : *gimbal       ? gim.coarse
-                  : *compare      ? cmp.input.path
-                  : *report_cmd   ? rep.log.path
-                                  : apply.input.path)
-                     .c_str(),
-                 e.what());
+    if (data_subject.empty()) {
+      std::fprintf(stderr, "accelcal: %s\n", e.what());
+    } else {
+      std::fprintf(stderr, "accelcal: %s: %s\n", data_subject.c_str(), e.what());
+    }
     return kExitBadInput;
   } catch (const OutputError& e) {
     std::fprintf(stderr, "accelcal: %s\n", e.what());

@@ -78,10 +78,13 @@ std::size_t InputFile::Read(char* out, std::size_t n) {
 
 TextBlocks::TextBlocks(InputFile* file, std::string already_read)
     : file_(file),
-      buffer_(std::move(already_read)),
-      data_(buffer_.data()),
-      end_(buffer_.size()),
-      total_(file->size()) {}
+      buffer_(new char[already_read.size()]),
+      capacity_(already_read.size()),
+      data_(buffer_.get()),
+      end_(already_read.size()),
+      total_(file->size()) {
+  std::memcpy(buffer_.get(), already_read.data(), already_read.size());
+}
 
 TextBlocks::TextBlocks(std::string_view text)
     : data_(text.data()), end_(text.size()), total_(text.size()), eof_(true) {
@@ -93,16 +96,22 @@ void TextBlocks::Fill(std::size_t min_bytes) {
   if (file_ == nullptr) return;
   while (!eof_ && end_ - begin_ < min_bytes) {
     if (begin_ > 0) {  // the consumed text goes; the rest moves to the front
-      std::memmove(buffer_.data(), buffer_.data() + begin_, end_ - begin_);
+      std::memmove(buffer_.get(), buffer_.get() + begin_, end_ - begin_);
       base_ += begin_;
       end_ -= begin_;
       begin_ = 0;
     }
-    if (buffer_.size() < min_bytes) buffer_.resize(std::max(min_bytes, kBlockBytes));
-    const std::size_t got = file_->Read(buffer_.data() + end_, buffer_.size() - end_);
+    if (capacity_ < min_bytes) {
+      const std::size_t capacity = std::max(min_bytes, kBlockBytes);
+      std::unique_ptr<char[]> larger(new char[capacity]);
+      if (end_ > 0) std::memcpy(larger.get(), buffer_.get(), end_);
+      buffer_ = std::move(larger);
+      capacity_ = capacity;
+    }
+    const std::size_t got = file_->Read(buffer_.get() + end_, capacity_ - end_);
     if (got == 0) eof_ = true;
     end_ += got;
-    data_ = buffer_.data();
+    data_ = buffer_.get();
   }
   if (!started_) {
     started_ = true;

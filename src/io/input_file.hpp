@@ -7,6 +7,7 @@
 // text on in blocks of whole lines, so a parser holds one block at a time, never the file.
 
 #include <cstddef>
+#include <memory>
 #include <string>
 #include <string_view>
 
@@ -74,8 +75,10 @@ class TextBlocks {
   std::string_view WholeLines() const;
 
   InputFile* file_ = nullptr;
-  std::string buffer_;
-  const char* data_ = nullptr;  // buffer_.data(), or the text in memory
+  // The block buffer, not zero-filled (every byte used is read into it first).
+  std::unique_ptr<char[]> buffer_;
+  std::size_t capacity_ = 0;
+  const char* data_ = nullptr;  // buffer_.get(), or the text in memory
   std::size_t begin_ = 0, end_ = 0, peeked_ = 0;
   std::size_t base_ = 0;  // input offset of data_[0]
   std::size_t block_offset_ = 0;

@@ -9,11 +9,11 @@
 #include <cstring>
 #include <memory>
 
-#include <fast_float/fast_float.h>
-
 #include "accelcal/error.hpp"
 #include "core/text_format.hpp"
 #include "io/input_file.hpp"
+#include "io/number_parser.hpp"
+#include "io/row_parser.hpp"
 #include "io/text_lines.hpp"
 
 namespace accelcal {
@@ -59,119 +59,17 @@ std::string ReadFileToString(const std::string& path, std::size_t max_bytes) {
 
 namespace {
 
-using internal::IsBlank;
+using internal::Delimiter;
+using internal::kMaxFields;
+using internal::Layout;
 using internal::Line;
 using internal::LineReader;
-using internal::Trim;
-
-enum class Delimiter { kComma, kWhitespace };
-
-// Splits a trimmed line into fields; returns the count (fields beyond `max` are counted only).
-std::size_t Split(std::string_view s, Delimiter delim, std::string_view* fields, std::size_t max) {
-  std::size_t count = 0;
-  if (delim == Delimiter::kComma) {
-    std::size_t start = 0;
-    while (true) {
-      const std::size_t comma = s.find(',', start);
-      const std::string_view field = Trim(s.substr(
-          start, comma == std::string_view::npos ? std::string_view::npos : comma - start));
-      if (count < max) fields[count] = field;
-      ++count;
-      if (comma == std::string_view::npos) break;
-      start = comma + 1;
-    }
-  } else {
-    std::size_t i = 0;
-    while (i < s.size()) {
-      while (i < s.size() && IsBlank(s[i])) ++i;
-      if (i >= s.size()) break;
-      const std::size_t start = i;
-      while (i < s.size() && !IsBlank(s[i])) ++i;
-      if (count < max) fields[count] = s.substr(start, i - start);
-      ++count;
-    }
-  }
-  return count;
-}
-
-// Exact powers of ten representable in a double (10^22 is the largest).
-constexpr double kPow10[] = {1e0,  1e1,  1e2,  1e3,  1e4,  1e5,  1e6,  1e7,  1e8,  1e9,  1e10, 1e11,
-                             1e12, 1e13, 1e14, 1e15, 1e16, 1e17, 1e18, 1e19, 1e20, 1e21, 1e22};
-
-// Parses a decimal number at the start of [p, last) on the fast path (Clinger): at most 15
-// significant digits and a decimal exponent within ±22 make the mantissa and the power of ten
-// exact, so one multiplication or division rounds correctly, bit-identical to fast_float. Returns
-// the position after the number, or nullptr when the text is not such a number (long mantissas,
-// large exponents, nan/inf spellings, no digits): the caller then uses fast_float on the whole
-// field.
-const char* ParseShortDecimal(const char* p, const char* last, double* value) {
-  bool negative = false;
-  if (p != last && (*p == '+' || *p == '-')) negative = *p++ == '-';
-  std::uint64_t mantissa = 0;
-  int digits = 0, exponent = 0;
-  const char* digits_begin = p;
-  while (p != last && *p == '0') ++p;  // leading zeros are not significant
-  const char* significant_begin = p;
-  while (p != last && static_cast<unsigned>(*p - '0') < 10) {
-    mantissa = mantissa * 10 + static_cast<unsigned>(*p - '0');
-    ++p;
-  }
-  digits = static_cast<int>(p - significant_begin);  // counted once, outside the hot loop
-  bool any_digit = p != digits_begin;
-  if (p != last && *p == '.') {
-    ++p;
-    const char* fraction_begin = p;
-    if (mantissa == 0) {
-      while (p != last && *p == '0') {
-        ++p;
-        --exponent;
-      }
-    }
-    const char* fraction_digits_begin = p;
-    while (p != last && static_cast<unsigned>(*p - '0') < 10) {
-      mantissa = mantissa * 10 + static_cast<unsigned>(*p - '0');
-      ++p;
-    }
-    const int fraction_digits = static_cast<int>(p - fraction_digits_begin);
-    digits += fraction_digits;
-    exponent -= fraction_digits;
-    any_digit = any_digit || p != fraction_begin;
-  }
-  if (!any_digit || digits > 15) return nullptr;
-  if (p != last && (*p == 'e' || *p == 'E')) {
-    ++p;
-    bool exp_negative = false;
-    if (p != last && (*p == '+' || *p == '-')) exp_negative = *p++ == '-';
-    int e = 0;
-    const char* exp_begin = p;
-    while (p != last && static_cast<unsigned>(*p - '0') < 10 && e < 10000) {
-      e = e * 10 + (*p - '0');
-      ++p;
-    }
-    if (p == exp_begin) return nullptr;
-    exponent += exp_negative ? -e : e;
-  }
-  if (exponent < -22 || exponent > 22) return nullptr;
-  double v = static_cast<double>(mantissa);
-  v = exponent < 0 ? v / kPow10[-exponent] : v * kPow10[exponent];
-  *value = negative ? -v : v;
-  return p;
-}
-
-// Parses the whole of [first, last) as a number.
-bool ParseNumber(const char* first, const char* last, double* value) {
-  if (ParseShortDecimal(first, last, value) == last) return true;
-  if (first != last && *first == '+') {  // fast_float takes no '+'; nor may a second sign follow
-    ++first;
-    if (first != last && (*first == '+' || *first == '-')) return false;
-  }
-  const auto result = fast_float::from_chars(first, last, *value);
-  return result.ec == std::errc() && result.ptr == last;
-}
-
-bool ParseNumber(std::string_view field, double* value) {
-  return ParseNumber(field.data(), field.data() + field.size(), value);
-}
+using internal::ParseNumber;
+using internal::RowParser;
+using internal::Split;
+// The column roles.
+using internal::kCount, internal::kInstance, internal::kRoles, internal::kSx, internal::kSy,
+    internal::kSz, internal::kTime, internal::kX, internal::kY, internal::kZ;
 
 // The header of a positions file with counts and standard deviations, as accelcal simulate writes
 // it: columns named n, sx, sy and sz. ("samples" alone is not enough: raw logs carry sample
@@ -206,15 +104,6 @@ int FindColumn(const std::vector<std::string>& header, std::initializer_list<con
   }
   return -1;
 }
-
-constexpr std::size_t kMaxFields = 256;
-
-// Column roles: time, x, y, z, count, sx, sy, sz. -1 = absent.
-enum Role { kTime, kX, kY, kZ, kCount, kSx, kSy, kSz, kInstance, kRoles };
-
-struct Layout {
-  int column[kRoles];
-};
 
 Layout NamedLayout(const std::vector<std::string>& h) {
   Layout l;
@@ -306,148 +195,6 @@ std::string TimeBackwards(double now, double before) {
   internal::FormatTo(buf, sizeof buf, "time goes backwards (%.9g after %.9g)", now, before);
   return buf;
 }
-
-// Parses data rows: each row is scanned once, left to right, reading only the selected columns.
-struct RowParser {
-  const std::string& source;
-  Delimiter delim;
-  std::size_t ncols;
-  Layout layout;
-  bool raw;
-  const std::function<void(std::size_t, std::size_t)>& progress;
-
-  // One block of whole lines (TextBlocks); returns the lines read so far. `skip_first`: the
-  // block's first line is the header.
-  std::uint32_t Parse(std::string_view block, std::size_t block_offset, std::size_t total,
-                      std::uint32_t lines_before, char eol, bool skip_first, std::size_t* rows,
-                      InputData* data, std::vector<double>* instances) const {
-    int role_of_column[kMaxFields];
-    std::fill(role_of_column, role_of_column + ncols, -1);
-    for (int r = 0; r < kRoles; ++r) {
-      if (layout.column[r] >= 0) role_of_column[layout.column[r]] = r;
-    }
-    const bool has_time = layout.column[kTime] >= 0;
-    RawLog& log = data->raw;
-    LineReader reader(block, source, lines_before, eol);
-    Line line;
-    if (skip_first) reader.Next(&line);
-    double values[kRoles];
-    while (reader.Next(&line)) {
-      if (progress && (++*rows & 0xFFFF) == 0) progress(block_offset + reader.offset(), total);
-      ParseFields(line, role_of_column, values);
-      const Vec3 xyz(values[kX], values[kY], values[kZ]);
-      if (layout.column[kInstance] >= 0) instances->push_back(values[kInstance]);
-      if (raw) {
-        if (has_time) log.time_s.push_back(values[kTime]);
-        log.samples.push_back(xyz);
-        log.line.push_back(line.number);
-      } else {
-        data->positions.push_back(MakePosition(xyz, values, line.number));
-      }
-    }
-    return reader.lines_read();
-  }
-
-  void ParseFields(const Line& line, const int* role_of_column, double* values) const {
-    const char* p = line.text.data();
-    const char* const end = p + line.text.size();
-    std::size_t column = 0;
-    while (true) {
-      // One field: [field_begin, field_end), then p at the delimiter after it or the end.
-      const char* field_begin = p;
-      if (delim == Delimiter::kComma) {
-        while (field_begin != end && IsBlank(*field_begin)) ++field_begin;
-      }
-      const int r = column < ncols ? role_of_column[column] : -1;
-      // Fast path: parse straight from the field's start and check that the field ends there.
-      const char* q = r >= 0 ? ParseShortDecimal(field_begin, end, &values[r]) : nullptr;
-      if (q != nullptr && delim == Delimiter::kComma) {
-        while (q != end && IsBlank(*q)) ++q;
-        if (q != end && *q != ',') q = nullptr;
-      } else if (q != nullptr && q != end && !IsBlank(*q)) {
-        q = nullptr;
-      }
-      if (q != nullptr) {
-        p = q;
-      } else {
-        p = field_begin;
-        const char* field_end;
-        if (delim == Delimiter::kComma) {
-          while (p != end && *p != ',') ++p;
-          field_end = p;
-          while (field_end != field_begin && IsBlank(field_end[-1])) --field_end;
-        } else {
-          while (p != end && !IsBlank(*p)) ++p;
-          field_end = p;
-        }
-        if (r >= 0) ParseField(line, column, field_begin, field_end, &values[r]);
-      }
-      ++column;
-      if (p == end) break;
-      if (delim == Delimiter::kComma) {
-        ++p;  // past the comma
-      } else {
-        while (p != end && IsBlank(*p)) ++p;
-        if (p == end) break;
-      }
-    }
-    if (column != ncols) {
-      if (delim == Delimiter::kWhitespace && line.text.find(',') != std::string_view::npos) {
-        throw InputError(source, line.number,
-                         "mixed delimiters: a comma in a whitespace-separated file");
-      }
-      throw InputError(
-          source, line.number,
-          "expected " + std::to_string(ncols) + " columns, found " + std::to_string(column));
-    }
-  }
-
-  // The slow path for one field: fast_float, and the error messages.
-  void ParseField(const Line& line, std::size_t column, const char* field_begin,
-                  const char* field_end, double* value) const {
-    if (!ParseNumber(field_begin, field_end, value)) {
-      if (delim == Delimiter::kWhitespace && std::find(field_begin, field_end, ',') != field_end) {
-        throw InputError(source, line.number,
-                         "mixed delimiters: a comma in a whitespace-separated file");
-      }
-      const std::string field(field_begin, field_end);
-      if (delim == Delimiter::kComma && std::any_of(field_begin, field_end, IsBlank)) {
-        throw InputError(source, line.number,
-                         "mixed delimiters: column " + std::to_string(column + 1) + " ('" + field +
-                             "') is separated by whitespace in a comma-separated file");
-      }
-      throw InputError(
-          source, line.number,
-          "column " + std::to_string(column + 1) + ": '" + field + "' is not a number");
-    }
-    if (!std::isfinite(*value)) {
-      throw InputError(source, line.number,
-                       "column " + std::to_string(column + 1) + ": '" +
-                           std::string(field_begin, field_end) + "' is not a finite number");
-    }
-  }
-
-  Position MakePosition(const Vec3& xyz, const double* values, std::uint32_t line_number) const {
-    Position position;
-    position.mean = xyz;
-    if (layout.column[kCount] >= 0) {
-      // Beyond 2^53 a double no longer tells whole numbers apart (and the cast would overflow).
-      if (!(values[kCount] >= 1 && values[kCount] <= 9007199254740992.0) ||
-          values[kCount] != std::floor(values[kCount])) {
-        throw InputError(source, line_number,
-                         "the sample count must be a whole number from 1 to 2^53");
-      }
-      position.samples = static_cast<std::size_t>(values[kCount]);
-    }
-    if (layout.column[kSx] >= 0 && layout.column[kSy] >= 0 && layout.column[kSz] >= 0) {
-      position.std = Vec3(values[kSx], values[kSy], values[kSz]);
-      if ((position.std->array() < 0).any()) {
-        throw InputError(source, line_number, "a standard deviation is negative");
-      }
-    }
-    return position;
-  }
-};
 
 // Several sensors in one file (ArduPilot's IMU instances, PX4's device ids): the rows of one, by
 // `chosen`, or an error listing those found. A column with more than 16 distinct values is not
@@ -686,7 +433,7 @@ InputData ParseBlocks(internal::TextBlocks& blocks, const std::string& source,
   } else {
     layout.column[kInstance] = -1;
   }
-  const RowParser parser{source, delim, ncols, layout, raw, options.progress};
+  const RowParser parser(source, delim, ncols, layout, raw, options.progress);
   std::vector<double> instances;
   std::string_view block;
   std::uint32_t lines = 0;

@@ -28,6 +28,8 @@ std::optional<std::string> StaticDetectionOptions::Validate() const {
 
 namespace {
 
+static_assert(sizeof(Vec3) == 3 * sizeof(double), "samples are read as x y z x y z ...");
+
 // Per-axis mean and sample standard deviation of samples [begin, end), two-pass for accuracy.
 void MeanAndStd(const std::vector<Vec3>& s, std::size_t begin, std::size_t end, Vec3* mean,
                 Vec3* std) {
@@ -121,20 +123,30 @@ std::optional<std::string> Clipping(const std::vector<Vec3>& samples,
                                     const std::pair<Vec3, Vec3>& extremes,
                                     const Vec3& quantisation_step) {
   const std::size_t n = interval.count();
+  // Another axis must vary by more than its quantisation step: a noise-free (simulated) log
+  // sits still at its extremes too, and so does the +1 g reading of a quantised sensor whose
+  // noise is below its step (it is the log's largest value when no motion exceeds 1 g).
+  // (A constant axis's standard deviation is round-off, not variation.)
+  bool varies[3], tested[3];
+  for (int i = 0; i < 3; ++i) {
+    varies[i] = interval.std(i) > std::max(quantisation_step(i), 1e-9 * std::abs(interval.mean(i)));
+  }
+  for (int a = 0; a < 3; ++a) tested[a] = varies[(a + 1) % 3] || varies[(a + 2) % 3];
+  if (!tested[0] && !tested[1] && !tested[2]) return std::nullopt;
+  // The samples at each axis's largest and smallest value, in one pass.
+  std::size_t at[3][2] = {};  // [axis][0: largest, 1: smallest]
+  const double* x = samples[interval.begin].data();
+  for (std::size_t i = interval.begin; i < interval.end; ++i, x += 3) {
+    for (int a = 0; a < 3; ++a) {
+      at[a][0] += x[a] == extremes.second(a);
+      at[a][1] += x[a] == extremes.first(a);
+    }
+  }
   for (int a = 0; a < 3; ++a) {
-    // Another axis must vary by more than its quantisation step: a noise-free (simulated) log
-    // sits still at its extremes too, and so does the +1 g reading of a quantised sensor whose
-    // noise is below its step (it is the log's largest value when no motion exceeds 1 g).
-    // (A constant axis's standard deviation is round-off, not variation.)
-    const auto varies = [&](int i) {
-      return interval.std(i) > std::max(quantisation_step(i), 1e-9 * std::abs(interval.mean(i)));
-    };
-    if (!varies((a + 1) % 3) && !varies((a + 2) % 3)) continue;
+    if (!tested[a]) continue;
     for (const bool largest : {true, false}) {
       const double limit = largest ? extremes.second(a) : extremes.first(a);
-      std::size_t at_limit = 0;
-      for (std::size_t i = interval.begin; i < interval.end; ++i)
-        at_limit += samples[i](a) == limit;
+      const std::size_t at_limit = at[a][largest ? 0 : 1];
       if (at_limit >= 3 && 100 * at_limit >= n) {
         return Format(
             "axis %c reads %.9g, the %s value in the log, in %.0f%% of its samples: the sensor "
@@ -268,13 +280,15 @@ StaticDetectionResult DetectStaticIntervals(const RawLog& log,
   // reads the same value for many samples; its window variances are 0 or a few steps². The
   // floor of every noise level is the quantisation noise q²/12 of each axis, with q the smallest
   // nonzero change between successive samples.
-  Vec3 step = Vec3::Constant(INFINITY);
+  const double* const x = log.samples.empty() ? nullptr : log.samples.front().data();  // x y z ...
+  double step_axis[3] = {INFINITY, INFINITY, INFINITY};
   for (std::size_t i = 1; i < n; ++i) {
     for (int a = 0; a < 3; ++a) {
-      const double d = std::abs(log.samples[i](a) - log.samples[i - 1](a));
-      if (d > 0 && d < step(a)) step(a) = d;
+      const double d = std::abs(x[3 * i + a] - x[3 * (i - 1) + a]);
+      if (d > 0 && d < step_axis[a]) step_axis[a] = d;
     }
   }
+  Vec3 step(step_axis[0], step_axis[1], step_axis[2]);
   for (int a = 0; a < 3; ++a) {
     if (!std::isfinite(step(a))) step(a) = 0;
   }

@@ -65,6 +65,17 @@ class LineReader {
     return pos_ < text_.size() ? text_.substr(pos_) : std::string_view();
   }
   std::size_t offset() const { return std::min(pos_, text_.size()); }
+  /// The first byte not yet read (a caller's own scan of the next line, then AcceptLine).
+  const char* cursor() const { return text_.data() + offset(); }
+  /// Consumes the next line, `bytes` long with its line end, as Next would have returned it: the
+  /// caller has read it as a data line (not blank, no comment, no NUL byte, at most
+  /// kMaxLineBytes before its line end; lines_read() below 2^32 − 1). Returns its number.
+  std::uint32_t AcceptLine(std::size_t bytes) {
+    pos_ += bytes;
+    preceding_comment_ = comment_;
+    comment_ = {};
+    return ++number_;
+  }
   std::uint32_t lines_read() const { return number_; }
   /// The text of the last whole-line comment before the line Next returned last (blank lines
   /// between them allowed), without its `#`; empty when there is none. A `# t ax ay az` line

@@ -14,16 +14,22 @@
 #include <Eigen/LU>
 
 #include "accelcal/frame.hpp"
-#include "model/ellipsoid_quadric.hpp"
-#include "solvers/smallest_eigenvector.hpp"
+#include "statistics/held_out_detail.hpp"
 
 namespace accelcal::internal {
 
+using held_out::Candidates;
+using held_out::EllipsoidHeldOut;
+using held_out::HeldOutError;
+using held_out::kFootPointIterations;
+using held_out::MayFailWithout;
+using held_out::Objective;
+using held_out::Setup;
+using held_out::Structure;
+using held_out::StructureOf;
+
 namespace {
 
-// Cap of the foot point's Newton iteration (KktDirection); from the previous foot point it takes
-// one or two steps.
-constexpr int kFootPointIterations = 50;
 // With fewer residual degrees of freedom than this, held out (m − 1 − P), every position is
 // refitted: the likelihood may have several minima there (calibrate.cpp's MultiStart: ≤ 3), and
 // the refits cost nothing.
@@ -66,159 +72,7 @@ constexpr double kCoplanarRatio = 1e-3;
 
 }  // namespace
 
-ProfiledTerm ProfiledPosition(const ModelParameters& params, double gravity, ModelKind model,
-                              const Vec3& reading, const Vec3& start, bool with_hessian) {
-  ProfiledTerm t;
-  const double g = gravity;
-  const Vec3 c = KktDirection(params, g, reading, start, kFootPointIterations);
-  if (!c.allFinite()) return t;
-  const Vec3 f = g * c;
-  Mat33 J;
-  const Vec3 r = reading - PredictRaw(params, f, &J);
-  const Mat32 E = TangentBasis(c);
-  const Mat32 T = g * J * E;
-  const Vec3 cross = T.col(0).cross(T.col(1));
-  if (!(cross.norm() > 0)) return t;
-  const Vec3 n = cross.normalized();
-  const Vec12 mask = FreeMask(model);
-  // M = ∂μ/∂θ (3 x 12) has axis i's regressors v_i = (f_x, .., f_i, 1, f_i²) in group i
-  // (model.hpp), so Mᵀa has the blocks a_i v_i.
-  const Regressors v(f);
-  const auto M_transpose_times = [&](const Vec3& a) {
-    Vec12 out;
-    out << a(0) * v.x, a(1) * v.y, a(2) * v.z;
-    return Vec12(out.cwiseProduct(mask));
-  };
-  t.dir = c;
-  t.normal = n;
-  t.e = n.dot(r);
-  t.u = M_transpose_times(n);
-  t.gradient = -2.0 * M_transpose_times(r);
-  // The second fundamental form of the surface, as ExpectedSurfaceOffsets: with Σ = σ² I the
-  // offset is −½ σ² tr(L G⁻¹).
-  const Eigen::Matrix2d G = T.transpose() * T;
-  const Eigen::Matrix2d G_inverse = G.inverse();
-  const double radial = g * n.dot(J * c);
-  Eigen::Matrix2d L;
-  for (int a = 0; a < 2; ++a) {
-    for (int b = 0; b < 2; ++b) {
-      const Vec3 curvature = 2.0 * g * g * params.k2.cwiseProduct(E.col(a)).cwiseProduct(E.col(b));
-      L(a, b) = n.dot(curvature) - (a == b ? radial : 0.0);
-    }
-  }
-  t.omega = -0.5 * (L * G_inverse).trace();
-  t.ok = std::isfinite(t.omega) && t.gradient.allFinite();
-  if (!with_hessian) return t;
-  // φ(θ, s) = ‖p − μ(θ, g c(s))‖² in tangent coordinates s of the sphere at c (c_s = E,
-  // c_ss = −δ c); μ = M(f) θ is linear in θ. The profile's Hessian is φ_θθ − φ_θs φ_ss⁻¹ φ_sθ:
-  //   φ_θθ = 2 MᵀM,  φ_θs = 2 MᵀT − 2 Σ_i r_i ∂M_i/∂s,
-  //   φ_ss = 2 G − 2 Σ_i r_i ∂²μ_i/∂s∂s,  ∂²μ/∂s_a∂s_b = 2 g² k2 ∘ E_a ∘ E_b − δ_ab g J c,
-  // with ∂v_i/∂s_a = (∂v_i/∂f) w, w = g E_a: (w_x, 0, 2 f_x w_x), (w_x, w_y, 0, 2 f_y w_y),
-  // (w_x, w_y, w_z, 0, 2 f_z w_z).
-  Mat12x2 C;
-  for (int a = 0; a < 2; ++a) {
-    const Vec3 w = g * E.col(a);
-    Vec12 N;
-    N << r(0) * w(0), 0.0, r(0) * 2.0 * f(0) * w(0),                           //
-        r(1) * w(0), r(1) * w(1), 0.0, r(1) * 2.0 * f(1) * w(1),               //
-        r(2) * w(0), r(2) * w(1), r(2) * w(2), 0.0, r(2) * 2.0 * f(2) * w(2);  //
-    C.col(a) = 2.0 * (M_transpose_times(T.col(a)) - N.cwiseProduct(mask));
-  }
-  Eigen::Matrix2d phi_ss;
-  const double radial_r = g * r.dot(J * c);
-  const Vec3 rk2 = r.cwiseProduct(params.k2);
-  for (int a = 0; a < 2; ++a) {
-    for (int b = 0; b < 2; ++b) {
-      const double second =
-          2.0 * g * g * rk2.cwiseProduct(E.col(a)).dot(E.col(b)) - (a == b ? radial_r : 0.0);
-      phi_ss(a, b) = 2.0 * G(a, b) - 2.0 * second;
-    }
-  }
-  Mat12& H = t.hessian;
-  H.setZero();
-  H.block<3, 3>(kGroupStart[0], kGroupStart[0]).noalias() = 2.0 * v.x * v.x.transpose();
-  H.block<4, 4>(kGroupStart[1], kGroupStart[1]).noalias() = 2.0 * v.y * v.y.transpose();
-  H.block<5, 5>(kGroupStart[2], kGroupStart[2]).noalias() = 2.0 * v.z * v.z.transpose();
-  H = (mask.asDiagonal() * H * mask.asDiagonal()).eval();
-  const Mat12x2 W = C * phi_ss.inverse();
-  H.noalias() -= W.lazyProduct(C.transpose());
-  t.ok = t.ok && H.allFinite();
-  return t;
-}
-
-ModulusTerm ModulusPosition(const ModelParameters& params, double gravity, bool squared,
-                            const Vec3& reading, bool with_hessian) {
-  ModulusTerm t;
-  const Eigen::TriangularView<const Mat33, Eigen::Lower> K =
-      params.K.triangularView<Eigen::Lower>();
-  if (params.K(0, 0) == 0 || params.K(1, 1) == 0 || params.K(2, 2) == 0) return t;
-  const Vec3 w = K.solve(Vec3(reading - params.bias));  // f, as ModulusResiduals
-  const Mat33 Z = K.solve(Mat33::Identity());           // K⁻¹, column r = z_r
-  // p = K w + b: ∂w/∂K_ij = −z_i w_j, ∂w/∂b_i = −z_i (k2 fixed at 0).
-  struct Slot {
-    int index, row, col;  // col −1: a bias
-  };
-  static constexpr Slot kSlots[9] = {{0, 0, 0}, {1, 0, -1}, {3, 1, 0}, {4, 1, 1},  {5, 1, -1},
-                                     {7, 2, 0}, {8, 2, 1},  {9, 2, 2}, {10, 2, -1}};
-  Mat3x12 W = Mat3x12::Zero();
-  Vec12 coefficient = Vec12::Zero();  // c_s: w_j for K_ij, 1 for b_i
-  for (const Slot& s : kSlots) {
-    coefficient(s.index) = s.col >= 0 ? w(s.col) : 1.0;
-    W.col(s.index) = -Z.col(s.row) * coefficient(s.index);
-  }
-  const double q = w.squaredNorm();
-  const Vec12 grad_q = 2.0 * W.transpose() * w;
-  Mat12 hess_q = Mat12::Zero();
-  if (with_hessian) {
-    // ∂²w/∂θ_s∂θ_t = [t ∈ K] z_r(t) Z(col t, r s) c_s + [s ∈ K] z_r(s) Z(col s, r t) c_t, so
-    // wᵀ∂²w = [t ∈ K] y_r(t) Z(col t, r s) c_s + [s ∈ K] y_r(s) Z(col s, r t) c_t, y = Zᵀw.
-    const Vec3 y = Z.transpose() * w;
-    for (const Slot& s : kSlots) {
-      for (const Slot& u : kSlots) {
-        double value = 0;
-        if (u.col >= 0) value += y(u.row) * Z(u.col, s.row) * coefficient(s.index);
-        if (s.col >= 0) value += y(s.row) * Z(s.col, u.row) * coefficient(u.index);
-        hess_q(s.index, u.index) = value;
-      }
-    }
-    hess_q = 2.0 * (W.transpose() * W + hess_q);
-  }
-  Vec12 grad_e;
-  Mat12 hess_e = Mat12::Zero();
-  const double g = gravity;
-  if (squared) {
-    t.e = q / (g * g) - 1.0;
-    grad_e = grad_q / (g * g);
-    if (with_hessian) hess_e = hess_q / (g * g);
-  } else {
-    const double a = std::sqrt(q);
-    t.e = a / g - 1.0;
-    grad_e = grad_q / (2.0 * a * g);
-    if (with_hessian) {
-      hess_e = (hess_q / (2.0 * a) - grad_q * grad_q.transpose() / (4.0 * a * a * a)) / g;
-    }
-  }
-  t.gradient = 2.0 * t.e * grad_e;
-  if (with_hessian) t.hessian = 2.0 * (grad_e * grad_e.transpose() + t.e * hess_e);
-  t.ok = t.gradient.allFinite() && (!with_hessian || t.hessian.allFinite());
-  return t;
-}
-
 namespace {
-
-enum class Objective { kProfiled, kModulusSquared, kModulusNorm };
-
-// What the held-out fits solve, and the positions of the full fit in the x-first gauge.
-struct Setup {
-  Objective objective = Objective::kProfiled;
-  bool bias_corrected = false;
-  ModelKind model = ModelKind::kLinear;
-  double gravity = 1;
-  Vec12 mask;
-  std::vector<Vec3> readings;  ///< the positions in the fit (x-first gauge)
-  std::vector<Vec3> dirs;      ///< their foot points at the full fit (profiled objective)
-  int dof_held_out = 0;        ///< m − 1 − P of a held-out fit
-};
 
 struct Term {
   double e = 0;
@@ -477,62 +331,6 @@ double ExactStep(const Setup& setup, const Expansion& x, std::size_t k, bool exa
   return ScaledNorm(step, x.scales);
 }
 
-double HeldOutError(const ModelParameters& params, const Vec3& reading, double gravity) {
-  const std::optional<Vec3> f = SpecificForce(params, reading);
-  return f ? f->norm() - gravity : std::nan("");
-}
-
-// Whether the refit without position k might fail a check the expansion cannot see (CheckData's
-// coplanarity, the observability of the model): those positions are refitted. The scatter of the
-// other readings is the full scatter minus n/(n−1) (p_k − p̄)(p_k − p̄)ᵀ, whose smallest eigenvalue
-// is at least the full one's minus n/(n−1) |p_k − p̄|².
-struct Structure {
-  Vec3 mean = Vec3::Zero();
-  double lowest = 0, highest = 0;  // eigenvalues of the scatter
-  double rcond = 0;                // of the full fit's information
-  Mat12 S_inverse;
-  Eigen::Matrix<double, Eigen::Dynamic, kMaxParameters> U;
-};
-
-Structure StructureOf(const Setup& setup, const ModelParameters& params,
-                      const std::vector<Vec3>& dirs) {
-  Structure s;
-  const auto n = static_cast<double>(setup.readings.size());
-  for (const Vec3& p : setup.readings) s.mean += p;
-  s.mean /= n;
-  Mat33 scatter = Mat33::Zero();
-  for (const Vec3& p : setup.readings) scatter += (p - s.mean) * (p - s.mean).transpose();
-  const Vec3 ev =
-      Eigen::SelfAdjointEigenSolver<Mat33>(scatter, Eigen::EigenvaluesOnly).eigenvalues();
-  s.lowest = ev(0);
-  s.highest = ev(2);
-  const Problem problem{setup.readings, setup.gravity, setup.model};
-  InformationRows rows;
-  const Information info = ComputeInformation(problem, params, dirs, &rows);
-  s.rcond = info.rcond;
-  s.S_inverse = info.Inverse();
-  s.U = std::move(rows.U);
-  return s;
-}
-
-bool MayFailWithout(const Setup& setup, const Structure& s, std::size_t k) {
-  const auto n = static_cast<double>(setup.readings.size());
-  const double lowest = s.lowest - n / (n - 1) * (setup.readings[k] - s.mean).squaredNorm();
-  if (!(lowest > 0) || !(std::sqrt(lowest) > 2 * kCoplanarRatio * std::sqrt(s.highest))) {
-    return true;
-  }
-  const Vec12 u = s.U.row(static_cast<Eigen::Index>(k)).transpose().cwiseProduct(setup.mask);
-  const double leverage = u.dot(s.S_inverse * u);
-  return !((1.0 - leverage) * s.rcond >= kObservabilityMargin * kMinInformationRcond);
-}
-
-// The held-out numbers of the iterative methods (fit positions' order); `refit` marks those a
-// refit must give.
-struct Candidates {
-  std::vector<double> error;
-  std::vector<bool> refit;
-};
-
 Candidates IterativeHeldOut(const Setup& setup, const ModelParameters& params,
                             const HeldOutSettings& settings, HeldOutPaths* paths) {
   const std::size_t n = setup.readings.size();
@@ -631,114 +429,48 @@ Candidates IterativeHeldOut(const Setup& setup, const ModelParameters& params,
   return out;
 }
 
-// The ellipsoid method's held-out fits: its algebraic fit is the smallest eigenvector of the
-// scatter D'ᵀD' of the design rows d(q) = (x², y², z², 2xy, 2xz, 2yz, 2x, 2y, 2z, 1) of the
-// readings centred on their mean and divided by their largest deviation (ellipsoid_fit.cpp).
-// Without position k the mean and scale change: q' = a q + t, d(q') = A d(q), so the held-out
-// scatter is A (DᵀD − d_k d_kᵀ) Aᵀ, exactly.
-using Vec10 = Eigen::Matrix<double, 10, 1>;
-using Mat10 = Eigen::Matrix<double, 10, 10>;
-
-Vec10 DesignRow(const Vec3& q) {
-  Vec10 d;
-  d << q(0) * q(0), q(1) * q(1), q(2) * q(2), 2 * q(0) * q(1), 2 * q(0) * q(2), 2 * q(1) * q(2),
-      2 * q(0), 2 * q(1), 2 * q(2), 1.0;
-  return d;
-}
-
-Mat10 DesignTransform(double a, const Vec3& t) {
-  Mat10 A = Mat10::Zero();
-  for (int i = 0; i < 3; ++i) {
-    A(i, i) = a * a;  // x'² = a² x² + a t_x (2x) + t_x²
-    A(i, 6 + i) = a * t(i);
-    A(i, 9) = t(i) * t(i);
-    A(6 + i, 6 + i) = a;  // 2x' = a (2x) + 2 t_x
-    A(6 + i, 9) = 2 * t(i);
-  }
-  const int pairs[3][2] = {{0, 1}, {0, 2}, {1, 2}};  // 2xy, 2xz, 2yz
-  for (int p = 0; p < 3; ++p) {
-    const int i = pairs[p][0], j = pairs[p][1];
-    A(3 + p, 3 + p) = a * a;  // 2x'y' = a² (2xy) + a t_y (2x) + a t_x (2y) + 2 t_x t_y
-    A(3 + p, 6 + i) = a * t(j);
-    A(3 + p, 6 + j) = a * t(i);
-    A(3 + p, 9) = 2 * t(i) * t(j);
-  }
-  A(9, 9) = 1.0;
-  return A;
-}
-
-// K and b of the quadric v in coordinates q = (p − mean) / scale (the algebraic fit's
-// parameters, ellipsoid_fit.hpp); false when it is no real ellipsoid (the refit then tries the
-// constrained fit).
-bool QuadricParameters(const Vec10& v, const Vec3& mean, double scale, double gravity,
-                       ModelParameters* params) {
-  return !QuadricToParameters(v, mean, scale, gravity, params);
-}
-
-Candidates EllipsoidHeldOut(const Setup& setup, const ModelParameters& params,
-                            HeldOutPaths* paths) {
-  const std::size_t n = setup.readings.size();
-  Candidates out{std::vector<double>(n, std::nan("")), std::vector<bool>(n, true)};
-  Vec3 sum = Vec3::Zero();
-  for (const Vec3& p : setup.readings) sum += p;
-  const Vec3 mean = sum / static_cast<double>(n);
-  double scale = 0;
-  for (const Vec3& p : setup.readings)
-    scale = std::max(scale, (p - mean).lpNorm<Eigen::Infinity>());
-  Mat10 S = Mat10::Zero();
-  for (const Vec3& p : setup.readings) {
-    const Vec10 d = DesignRow((p - mean) / scale);
-    S.selfadjointView<Eigen::Lower>().rankUpdate(d);
-  }
-  S.triangularView<Eigen::StrictlyUpper>() = S.transpose();
-  // The two largest and smallest readings of each axis: the held-out scale's extremes.
-  std::array<std::array<std::size_t, 2>, 3> high{}, low{};
-  for (int axis = 0; axis < 3; ++axis) {
-    std::vector<std::size_t> order(n);
-    for (std::size_t j = 0; j < n; ++j) order[j] = j;
-    const auto by = [&](std::size_t a, std::size_t b) {
-      return setup.readings[a](axis) > setup.readings[b](axis);
-    };
-    std::partial_sort(order.begin(), order.begin() + 2, order.end(), by);
-    high[axis] = {order[0], order[1]};
-    const auto below = [&](std::size_t a, std::size_t b) { return by(b, a); };
-    std::partial_sort(order.begin(), order.begin() + 2, order.end(), below);
-    low[axis] = {order[0], order[1]};
-  }
-  const Problem problem{setup.readings, setup.gravity, setup.model};
-  const Structure structure = StructureOf(setup, params, DirectionsFromParams(problem, params));
-  for (std::size_t k = 0; k < n; ++k) {
-    if (MayFailWithout(setup, structure, k)) continue;
-    const Vec3& p = setup.readings[k];
-    const Vec3 held_mean = (sum - p) / static_cast<double>(n - 1);
-    double held_scale = 0;
-    for (int axis = 0; axis < 3; ++axis) {
-      const double hi = setup.readings[high[axis][high[axis][0] == k ? 1 : 0]](axis);
-      const double lo = setup.readings[low[axis][low[axis][0] == k ? 1 : 0]](axis);
-      held_scale = std::max({held_scale, hi - held_mean(axis), held_mean(axis) - lo});
-    }
-    const Vec10 d = DesignRow((p - mean) / scale);
-    const Mat10 A = DesignTransform(scale / held_scale, (mean - held_mean) / held_scale);
-    Mat10 held = A * (S - d * d.transpose()) * A.transpose();
-    held = (0.5 * (held + held.transpose())).eval();
-    Vec10 v;
-    if (const std::optional<Vec10> smallest = SmallestEigenvector(held)) {
-      v = *smallest;
-    } else {
-      v = Eigen::SelfAdjointEigenSolver<Mat10>(held).eigenvectors().col(0);
-    }
-    ModelParameters fit;
-    if (!QuadricParameters(v, held_mean, held_scale, setup.gravity, &fit)) continue;
-    const double e = HeldOutError(fit, p, setup.gravity);
-    if (!std::isfinite(e)) continue;
-    out.error[k] = e;
-    out.refit[k] = false;
-    if (paths) ++paths->from_expansion;
-  }
-  return out;
-}
-
 }  // namespace
+
+namespace held_out {
+
+double HeldOutError(const ModelParameters& params, const Vec3& reading, double gravity) {
+  const std::optional<Vec3> f = SpecificForce(params, reading);
+  return f ? f->norm() - gravity : std::nan("");
+}
+
+Structure StructureOf(const Setup& setup, const ModelParameters& params,
+                      const std::vector<Vec3>& dirs) {
+  Structure s;
+  const auto n = static_cast<double>(setup.readings.size());
+  for (const Vec3& p : setup.readings) s.mean += p;
+  s.mean /= n;
+  Mat33 scatter = Mat33::Zero();
+  for (const Vec3& p : setup.readings) scatter += (p - s.mean) * (p - s.mean).transpose();
+  const Vec3 ev =
+      Eigen::SelfAdjointEigenSolver<Mat33>(scatter, Eigen::EigenvaluesOnly).eigenvalues();
+  s.lowest = ev(0);
+  s.highest = ev(2);
+  const Problem problem{setup.readings, setup.gravity, setup.model};
+  InformationRows rows;
+  const Information info = ComputeInformation(problem, params, dirs, &rows);
+  s.rcond = info.rcond;
+  s.S_inverse = info.Inverse();
+  s.U = std::move(rows.U);
+  return s;
+}
+
+bool MayFailWithout(const Setup& setup, const Structure& s, std::size_t k) {
+  const auto n = static_cast<double>(setup.readings.size());
+  const double lowest = s.lowest - n / (n - 1) * (setup.readings[k] - s.mean).squaredNorm();
+  if (!(lowest > 0) || !(std::sqrt(lowest) > 2 * kCoplanarRatio * std::sqrt(s.highest))) {
+    return true;
+  }
+  const Vec12 u = s.U.row(static_cast<Eigen::Index>(k)).transpose().cwiseProduct(setup.mask);
+  const double leverage = u.dot(s.S_inverse * u);
+  return !((1.0 - leverage) * s.rcond >= kObservabilityMargin * kMinInformationRcond);
+}
+
+}  // namespace held_out
 
 void HeldOutErrors(const std::vector<Vec3>& readings, const CalibrationOptions& options,
                    const HeldOutRefitFunction& refit, CalibrationResult* result,

@@ -1,14 +1,18 @@
 // Reading raw logs and positions files, and the messages for malformed ones.
+#include <array>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
 #include <random>
+#include <string>
+#include <vector>
 
 #include <gtest/gtest.h>
 
 #include "accelcal/error.hpp"
 #include "accelcal/log_reader.hpp"
+#include "io/number_parser.hpp"
 
 namespace accelcal {
 namespace {
@@ -271,6 +275,142 @@ TEST(LogReader, AGivenRateMakesAShortHeaderlessFileARawLog) {
   EXPECT_NE(ErrorOf("x,y,z,n,sx,sy,sz\n1,2,3,10,1,1,1\n", options)
                 .find("a sample rate was given, but this is a positions file"),
             std::string::npos);
+}
+
+// The number parser's fast paths (number_parser.hpp) against the C library's correctly rounded
+// strtod, bit for bit: every decimal they accept, in the spellings loggers write.
+std::string RandomNumber(std::mt19937_64& rng) {
+  std::uniform_real_distribution<double> mantissa(-10, 10);
+  std::uniform_int_distribution<int> exponent(-30, 30), digits(0, 18), style(0, 5);
+  const double v = mantissa(rng) * std::pow(10.0, exponent(rng));
+  char buf[64];
+  const int p = digits(rng);
+  switch (style(rng)) {
+    case 0:
+      std::snprintf(buf, sizeof buf, "%.*e", p, v);
+      break;
+    case 1:
+      std::snprintf(buf, sizeof buf, "%.*f", p % 10, v / std::pow(10.0, exponent(rng) / 3));
+      break;
+    case 2:
+      std::snprintf(buf, sizeof buf, "%.*g", p + 1, v);
+      break;
+    case 3:
+      std::snprintf(buf, sizeof buf, "+%.*E", p, v < 0 ? -v : v);
+      break;
+    case 4:
+      std::snprintf(buf, sizeof buf, "00%.*f", p % 9, std::abs(v) / std::pow(10.0, exponent(rng)));
+      break;
+    default:
+      std::snprintf(buf, sizeof buf, "%d.%0*de%+d", static_cast<int>(rng() % 100), p % 9 + 1,
+                    static_cast<int>(rng() % 1000), exponent(rng) / 2);
+      break;
+  }
+  return buf;
+}
+
+std::uint64_t Bits(double v) {
+  std::uint64_t b;
+  std::memcpy(&b, &v, sizeof b);
+  return b;
+}
+
+TEST(NumberParser, FastPathsAreCorrectlyRounded) {
+  std::mt19937_64 rng(17);
+  int wide = 0, short_path = 0;
+  for (int i = 0; i < 200000; ++i) {
+    const std::string number = RandomNumber(rng);
+    // Followed by what ends a field, and bytes enough for the 16-byte path.
+    const std::string text = number + (i % 2 ? " " : ",") + std::string(40, '7');
+    const double expected = std::strtod(number.c_str(), nullptr);
+    double value = 0;
+    const char* last = text.data() + text.size();
+    if (const char* end = internal::ParseShortDecimal(text.data(), last, &value)) {
+      ++short_path;
+      ASSERT_EQ(end - text.data(), static_cast<std::ptrdiff_t>(number.size())) << number;
+      ASSERT_EQ(Bits(value), Bits(expected)) << number;
+    }
+#if defined(__SSE2__)
+    value = 0;
+    if (const char* end = internal::ParseDecimal16(text.data(), &value)) {
+      ++wide;
+      if (end - text.data() == static_cast<std::ptrdiff_t>(number.size())) {
+        ASSERT_EQ(Bits(value), Bits(expected)) << number;
+      } else {  // a number longer than 16 bytes: the caller sees a digit where it must end
+        ASSERT_GE(end - text.data(), 16) << number;
+      }
+    }
+#endif
+    ASSERT_TRUE(internal::ParseNumber(number, &value)) << number;
+    ASSERT_EQ(Bits(value), Bits(expected)) << number;
+  }
+  EXPECT_GT(short_path, 50000);
+#if defined(__SSE2__)
+  EXPECT_GT(wide, 50000);
+#endif
+}
+
+TEST(LogReader, EveryRowIsReadAsStrtodReadsIt) {
+  // Whitespace and comma logs of mixed spellings (long mantissas, signs, exponents, CRLF, blank
+  // lines and comments between the rows, no line end after the last), read by the fast path and
+  // the general one: every value bit-identical to strtod's.
+  std::mt19937_64 rng(5);
+  for (const char* sep : {"   ", ",", " , ", "\t"}) {
+    std::string text;
+    std::vector<std::array<std::string, 4>> rows;
+    for (int i = 0; i < 3000; ++i) {
+      std::array<std::string, 4> row{std::to_string(0.01 * i), RandomNumber(rng), RandomNumber(rng),
+                                     RandomNumber(rng)};
+      if (i % 3 == 0) text += "  ";
+      for (int c = 0; c < 4; ++c) text += (c ? sep : "") + row[c];
+      text += i % 7 == 0 ? " \r\n" : (i % 11 == 0 ? "  # note\n" : "\n");
+      if (i % 97 == 0) text += "\n# a comment line\n";
+      rows.push_back(row);
+    }
+    text.pop_back();  // the last row without its line end
+    const InputData d = Parse(text);
+    ASSERT_EQ(d.raw.samples.size(), rows.size()) << sep;
+    for (std::size_t i = 0; i < rows.size(); ++i) {
+      for (int a = 0; a < 3; ++a) {
+        ASSERT_EQ(Bits(d.raw.samples[i](a)), Bits(std::strtod(rows[i][a + 1].c_str(), nullptr)))
+            << "row " << i << " '" << rows[i][a + 1] << "' separated by '" << sep << "'";
+      }
+    }
+  }
+}
+
+TEST(LogReader, ErrorsDeepInTheFileNameTheirLine) {
+  // Line 2001 of a log whose rows the fast path reads: what it does not take whole goes to the
+  // general path, which names it as before.
+  std::string ws, csv;
+  for (int i = 0; i < 2000; ++i) {
+    ws += "  " + std::to_string(0.01 * i) + "   1.5e+00   -2.25   3\n";
+    csv += std::to_string(0.01 * i) + ",1.5e+00,-2.25,3\n";
+  }
+  EXPECT_EQ(ErrorOf(ws + "20 1,5 2 3\n" + ws),
+            "test.csv:2001: mixed delimiters: a comma in a whitespace-separated file");
+  EXPECT_EQ(ErrorOf(ws + "20 1 2\n" + ws), "test.csv:2001: expected 4 columns, found 3");
+  EXPECT_EQ(ErrorOf(ws + "20 1 2 3 4\n" + ws), "test.csv:2001: expected 4 columns, found 5");
+  EXPECT_EQ(ErrorOf(ws + "20 1 nan 3\n" + ws),
+            "test.csv:2001: column 3: 'nan' is not a finite number");
+  EXPECT_EQ(ErrorOf(ws + "20 1 1e400 3\n" + ws),
+            "test.csv:2001: column 3: '1e400' is not a finite number");
+  EXPECT_EQ(ErrorOf(ws + "20 1 2x 3\n" + ws), "test.csv:2001: column 3: '2x' is not a number");
+  EXPECT_EQ(ErrorOf(ws + std::string("20 1 2 3\0\n", 10) + ws),
+            "test.csv:2001: a NUL byte at column 9: binary data, not a delimited text file");
+  EXPECT_EQ(ErrorOf(csv + "20,1,2 5,3\n" + csv),
+            "test.csv:2001: mixed delimiters: column 3 ('2 5') is separated by whitespace in a "
+            "comma-separated file");
+  EXPECT_EQ(ErrorOf(csv + "20,1,,3\n" + csv), "test.csv:2001: column 3: '' is not a number");
+  EXPECT_EQ(ErrorOf(csv + "20,1,2,3,\n" + csv), "test.csv:2001: expected 4 columns, found 5");
+  EXPECT_EQ(ErrorOf(csv + "20,1,2\n" + csv), "test.csv:2001: expected 4 columns, found 3");
+  EXPECT_EQ(ErrorOf(csv + "20,1,2,3\n" + csv), "test.csv:2002: time goes backwards (0 after 20)");
+  // Comments, blank lines and a long number in between change nothing.
+  const InputData d = Parse(ws + "# c\n\n  20.5 1.00000000000000001 -0.0 3 # x\n");
+  ASSERT_EQ(d.raw.samples.size(), 2001u);
+  EXPECT_EQ(d.raw.line.back(), 2003u);
+  EXPECT_EQ(d.raw.samples.back()(0), 1.0);
+  EXPECT_TRUE(std::signbit(d.raw.samples.back()(1)));
 }
 
 }  // namespace

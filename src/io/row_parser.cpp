@@ -1,0 +1,256 @@
+#include "io/row_parser.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+#include "accelcal/error.hpp"
+#include "io/number_parser.hpp"
+
+namespace accelcal::internal {
+
+std::size_t Split(std::string_view s, Delimiter delim, std::string_view* fields, std::size_t max) {
+  std::size_t count = 0;
+  if (delim == Delimiter::kComma) {
+    std::size_t start = 0;
+    while (true) {
+      const std::size_t comma = s.find(',', start);
+      const std::string_view field = Trim(s.substr(
+          start, comma == std::string_view::npos ? std::string_view::npos : comma - start));
+      if (count < max) fields[count] = field;
+      ++count;
+      if (comma == std::string_view::npos) break;
+      start = comma + 1;
+    }
+  } else {
+    std::size_t i = 0;
+    while (i < s.size()) {
+      while (i < s.size() && IsBlank(s[i])) ++i;
+      if (i >= s.size()) break;
+      const std::size_t start = i;
+      while (i < s.size() && !IsBlank(s[i])) ++i;
+      if (count < max) fields[count] = s.substr(start, i - start);
+      ++count;
+    }
+  }
+  return count;
+}
+
+RowParser::RowParser(const std::string& source, Delimiter delim, std::size_t ncols,
+                     const Layout& layout, bool raw,
+                     const std::function<void(std::size_t, std::size_t)>& progress)
+    : source_(source),
+      delim_(delim),
+      ncols_(ncols),
+      layout_(layout),
+      raw_(raw),
+      progress_(progress) {
+  std::fill(std::begin(role_of_column_), std::end(role_of_column_), -1);
+  for (int r = 0; r < kRoles; ++r) {
+    if (layout_.column[r] >= 0) role_of_column_[layout_.column[r]] = r;
+  }
+}
+
+std::uint32_t RowParser::Parse(std::string_view block, std::size_t block_offset, std::size_t total,
+                               std::uint32_t lines_before, char eol, bool skip_first,
+                               std::size_t* rows, InputData* data,
+                               std::vector<double>* instances) const {
+  const bool has_time = layout_.column[kTime] >= 0;
+  RawLog& log = data->raw;
+  LineReader reader(block, source_, lines_before, eol);
+  Line line;
+  if (skip_first) reader.Next(&line);
+  const char* const last = block.data() + block.size();
+  // The fast path reads lines ending in '\n' (a '\r' before it is blank); others, and any line
+  // it does not read whole, take LineReader and ParseFields, which give every error.
+  const bool fast = eol == '\n';
+  double values[kRoles] = {};
+  while (true) {
+    const char* after = nullptr;
+    if (fast && reader.lines_read() < UINT32_MAX) after = FastRow(reader.cursor(), last, values);
+    std::uint32_t number;
+    if (after != nullptr) {
+      number = reader.AcceptLine(static_cast<std::size_t>(after - reader.cursor()));
+    } else {
+      if (!reader.Next(&line)) break;
+      ParseFields(line, values);
+      number = line.number;
+    }
+    if (progress_ && (++*rows & 0xFFFF) == 0) progress_(block_offset + reader.offset(), total);
+    const Vec3 xyz(values[kX], values[kY], values[kZ]);
+    if (layout_.column[kInstance] >= 0) instances->push_back(values[kInstance]);
+    if (raw_) {
+      if (has_time) log.time_s.push_back(values[kTime]);
+      log.samples.push_back(xyz);
+      log.line.push_back(number);
+    } else {
+      data->positions.push_back(MakePosition(xyz, values, number));
+    }
+  }
+  return reader.lines_read();
+}
+
+namespace {
+
+// A byte of a field, in the fast path: not a delimiter, a line end, a comment or a NUL (nor a
+// control character or a non-ASCII byte: those lines take the general path).
+inline bool IsFieldByte(char c) { return c > ' ' && c != ',' && c != '#'; }
+
+}  // namespace
+
+// One data row at `p` (the start of a line, in a text ending at `last`) whose fields are all
+// plain and well formed, read into `values`: returns the position after its '\n'. nullptr for
+// anything else (a blank line, a comment, a NUL byte, a field that is not a finite number, the
+// wrong number of fields, no '\n' before `last`, a line longer than kMaxLineBytes): LineReader and
+// ParseFields then read the line, and skip it or name what is wrong. Where this accepts a line,
+// they give the same values.
+const char* RowParser::FastRow(const char* p, const char* last, double* values) const {
+  const char* const line_begin = p;
+  const bool comma = delim_ == Delimiter::kComma;
+  for (std::size_t column = 0; column < ncols_; ++column) {
+    const char* q = nullptr;
+#if defined(__SSE2__)
+    // Far from the block's end, 16 bytes at a time: the blanks before the field, and the number.
+    if (last - p >= 64) {
+      const unsigned blank = BlankMask(_mm_loadu_si128(reinterpret_cast<const __m128i*>(p)));
+      p += __builtin_ctz(~blank);  // at most 16
+    }
+#endif
+    while (p != last && IsBlank(*p)) ++p;
+    const int r = role_of_column_[column];
+    if (r >= 0) {
+#if defined(__SSE2__)
+      if (last - p >= 32) q = ParseDecimal16(p, &values[r]);
+#endif
+      if (q == nullptr) q = ParseShortDecimal(p, last, &values[r]);
+      if (q == nullptr || q == last || !(IsBlank(*q) || *q == '\n' || (comma && *q == ','))) {
+        // Not a short decimal ending the field: the whole field, correctly rounded.
+        q = p;
+        while (q != last && IsFieldByte(*q)) ++q;
+        if (q == p || q == last || !ParseNumber(p, q, &values[r]) || !std::isfinite(values[r])) {
+          return nullptr;
+        }
+      }
+      p = q;
+    } else if (comma) {
+      while (p != last && *p != ',' && *p != '\n' && *p != '#' && *p != '\0') ++p;
+    } else {
+      const char* begin = p;
+      while (p != last && IsFieldByte(*p)) ++p;
+      if (p == begin) return nullptr;
+    }
+    if (comma) {
+      while (p != last && IsBlank(*p)) ++p;
+      if (column + 1 < ncols_) {
+        if (p == last || *p != ',') return nullptr;
+        ++p;
+      }
+    }
+  }
+  while (p != last && IsBlank(*p)) ++p;
+  if (p == last || *p != '\n' || static_cast<std::size_t>(p - line_begin) > kMaxLineBytes) {
+    return nullptr;
+  }
+  return p + 1;
+}
+
+void RowParser::ParseFields(const Line& line, double* values) const {
+  const char* p = line.text.data();
+  const char* const end = p + line.text.size();
+  std::size_t column = 0;
+  while (true) {
+    // One field: [field_begin, field_end), then p at the delimiter after it or the end.
+    const char* field_begin = p;
+    if (delim_ == Delimiter::kComma) {
+      while (field_begin != end && IsBlank(*field_begin)) ++field_begin;
+    }
+    const int r = column < ncols_ ? role_of_column_[column] : -1;
+    // Fast path: parse straight from the field's start and check that the field ends there.
+    const char* q = r >= 0 ? ParseShortDecimal(field_begin, end, &values[r]) : nullptr;
+    if (q != nullptr && delim_ == Delimiter::kComma) {
+      while (q != end && IsBlank(*q)) ++q;
+      if (q != end && *q != ',') q = nullptr;
+    } else if (q != nullptr && q != end && !IsBlank(*q)) {
+      q = nullptr;
+    }
+    if (q != nullptr) {
+      p = q;
+    } else {
+      p = field_begin;
+      const char* field_end;
+      if (delim_ == Delimiter::kComma) {
+        while (p != end && *p != ',') ++p;
+        field_end = p;
+        while (field_end != field_begin && IsBlank(field_end[-1])) --field_end;
+      } else {
+        while (p != end && !IsBlank(*p)) ++p;
+        field_end = p;
+      }
+      if (r >= 0) ParseField(line, column, field_begin, field_end, &values[r]);
+    }
+    ++column;
+    if (p == end) break;
+    if (delim_ == Delimiter::kComma) {
+      ++p;  // past the comma
+    } else {
+      while (p != end && IsBlank(*p)) ++p;
+      if (p == end) break;
+    }
+  }
+  if (column != ncols_) {
+    if (delim_ == Delimiter::kWhitespace && line.text.find(',') != std::string_view::npos) {
+      throw InputError(source_, line.number,
+                       "mixed delimiters: a comma in a whitespace-separated file");
+    }
+    throw InputError(
+        source_, line.number,
+        "expected " + std::to_string(ncols_) + " columns, found " + std::to_string(column));
+  }
+}
+
+// The slow path for one field: fast_float, and the error messages.
+void RowParser::ParseField(const Line& line, std::size_t column, const char* field_begin,
+                           const char* field_end, double* value) const {
+  if (!ParseNumber(field_begin, field_end, value)) {
+    if (delim_ == Delimiter::kWhitespace && std::find(field_begin, field_end, ',') != field_end) {
+      throw InputError(source_, line.number,
+                       "mixed delimiters: a comma in a whitespace-separated file");
+    }
+    const std::string field(field_begin, field_end);
+    if (delim_ == Delimiter::kComma && std::any_of(field_begin, field_end, IsBlank)) {
+      throw InputError(source_, line.number,
+                       "mixed delimiters: column " + std::to_string(column + 1) + " ('" + field +
+                           "') is separated by whitespace in a comma-separated file");
+    }
+    throw InputError(source_, line.number,
+                     "column " + std::to_string(column + 1) + ": '" + field + "' is not a number");
+  }
+  if (!std::isfinite(*value)) {
+    throw InputError(source_, line.number,
+                     "column " + std::to_string(column + 1) + ": '" +
+                         std::string(field_begin, field_end) + "' is not a finite number");
+  }
+}
+
+Position RowParser::MakePosition(const Vec3& xyz, const double* values,
+                                 std::uint32_t line_number) const {
+  Position position;
+  position.mean = xyz;
+  if (layout_.column[kCount] >= 0) {
+    // Beyond 2^53 a double no longer tells whole numbers apart (and the cast would overflow).
+    if (!(values[kCount] >= 1 && values[kCount] <= 9007199254740992.0) ||
+        values[kCount] != std::floor(values[kCount])) {
+      throw InputError(source_, line_number,
+                       "the sample count must be a whole number from 1 to 2^53");
+    }
+    position.samples = static_cast<std::size_t>(values[kCount]);
+  }
+  if (layout_.column[kSx] >= 0 && layout_.column[kSy] >= 0 && layout_.column[kSz] >= 0) {
+    position.std = Vec3(values[kSx], values[kSy], values[kSz]);
+    if ((position.std->array() < 0).any()) {
+      throw InputError(source_, line_number, "a standard deviation is negative");
+    }
+  }
+  return position;
+}
+
+}  // namespace accelcal::internal

@@ -128,8 +128,7 @@ int RunExport(const ExportArgs& args) {
   } catch (const DataError& e) {
     throw InputError(
         args.calibration, 0,
-        WithFlags(e.what(), {{"raw_unit", "--raw-unit"},
-                             {"in m/s2 or g", "in m/s2 or g (calibrate --raw-units)"}}));
+        WithFlags(e.what(), {{"raw_unit", "--raw-unit"}, {"raw_units", "calibrate --raw-units"}}));
   }
   // The file (or stdout) gets the export alone; what it means and what it lost goes to the
   // terminal: stdout when the export went to a file, else stderr.

@@ -91,11 +91,12 @@ double RawToMetersPerSecond2(const LoadedCalibration& cal, const ExportOptions& 
   const std::string label = options.raw_unit.empty() ? cal.raw_unit : options.raw_unit;
   const std::optional<ForceUnit> unit = ForceUnitFromString(label);
   if (!unit) {
-    throw DataError(std::string(format) + " applies its calibration to readings already in m/s2 (" +
-                    std::string(why) + "), but this calibration's raw unit is '" +
-                    internal::VisibleLine(label) +
-                    "': calibrate readings in m/s2 or g, or give raw_unit (m/s2 or g) if the "
-                    "readings were in one of them");
+    throw DataError(
+        std::string(format) + " applies its calibration to readings already in m/s2 (" +
+        std::string(why) + "), but this calibration's raw unit is '" +
+        internal::VisibleLine(label) +
+        "': calibrate readings in m/s2 or g (raw_units), or give raw_unit (m/s2 or g) if "
+        "the readings were in one of them");
   }
   return *unit == ForceUnit::kStandardGravity ? kStandardGravity_ms2 : 1.0;
 }

@@ -1,12 +1,15 @@
 // accelcal: command-line front end. Parses arguments, calls the library, maps errors to exit codes
 // (RunCommandLine: main.cpp, and the option-parsing fuzzer, fuzz/fuzz_cli_options.cpp).
+#include <algorithm>
 #include <chrono>
 #include <cstdio>
 #include <exception>
 
 #include <CLI/CLI.hpp>
 
+#include "accelcal/calibration_file.hpp"
 #include "accelcal/error.hpp"
+#include "accelcal/version.hpp"
 #include "commands.hpp"
 #include "output.hpp"
 
@@ -75,6 +78,22 @@ void AddGravityOptions(CLI::App* cmd, GravityArgs* g) {
       ->capture_default_str();
 }
 
+// The options given to `command` (long names without dashes, with their values as typed; none for
+// a flag), in the order the command defines them, except the positional arguments and `skip`:
+// what a calibration file's provenance records.
+std::vector<std::pair<std::string, std::vector<std::string>>> GivenOptions(
+    const CLI::App& command, std::initializer_list<const char*> skip) {
+  std::vector<std::pair<std::string, std::vector<std::string>>> given;
+  for (const CLI::Option* option : command.get_options()) {
+    if (option->count() == 0 || option->get_lnames().empty()) continue;
+    const std::string name = option->get_lnames().front();
+    if (std::find(skip.begin(), skip.end(), name) != skip.end() || name == "help") continue;
+    given.emplace_back(
+        name, option->get_expected_min() == 0 ? std::vector<std::string>() : option->results());
+  }
+  return given;
+}
+
 }  // namespace
 
 int accelcal::cli::RunCommandLine(int argc, char** argv) {
@@ -82,7 +101,7 @@ int accelcal::cli::RunCommandLine(int argc, char** argv) {
       "accelcal: calibration of triaxial accelerometers from static multi-position recordings"};
   app.require_subcommand(1);
   app.fallthrough();  // --quiet and --verbose may also follow the subcommand
-  app.set_version_flag("--version", "accelcal 0.1.0");
+  app.set_version_flag("--version", "accelcal " + std::string(accelcal::Version()));
 
   CalibrateArgs cal;
   CLI::App* calibrate =
@@ -137,6 +156,13 @@ int accelcal::cli::RunCommandLine(int argc, char** argv) {
       ->add_option("--report", cal.report,
                    "write the HTML report here (self-contained: plots, parameters, warnings)")
       ->check(kFileName);
+  calibrate
+      ->add_option("--date", cal.date,
+                   "a date for the file's provenance (YYYY-MM-DD[THH:MM[:SS]Z]); without it none "
+                   "is written, so the same input gives the same bytes")
+      ->check(CLI::Validator(
+          [](std::string& date) { return accelcal::CheckProvenanceDate(date).value_or(""); },
+          "DATE"));
   calibrate->add_flag("--json", cal.json,
                       "print the calibration file to stdout instead of the summary");
 
@@ -354,6 +380,7 @@ int accelcal::cli::RunCommandLine(int argc, char** argv) {
            {"--method", "--init", "--frame", "--estimator", "--max-iterations"}) {
         if (calibrate->count(name) > 0) cal.gravity_only_options.emplace_back(name);
       }
+      cal.given_options = GivenOptions(*calibrate, {"output", "report", "json", "date"});
       return RunCalibrate(cal);
     }
     if (*detect) {

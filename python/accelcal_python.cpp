@@ -859,13 +859,13 @@ PYBIND11_MODULE(_accelcal, m) {
          std::optional<Eigen::VectorXd> time, std::optional<double> rate_hz,
          const std::string& time_unit) {
         ReportInput input;
-        input.calibration_json = json_text;
         input.calibration_name = "<calibration>";
         RawLog log;
         if (samples) {
           log = LogFromArrays(time, *samples, rate_hz, time_unit);
           input.log = &log;
         }
+        input.calibration = ParseCalibrationJson(json_text, input.calibration_name);
         return RenderReport(input);
       },
       py::arg("json_text"), py::arg("samples") = std::nullopt, py::arg("time") = std::nullopt,

@@ -217,6 +217,22 @@ void PrintFindings(const Diagnosis& diagnosis, const std::string& path) {
   }
 }
 
+// The file's provenance: the options given, every input file (with the orientations) by name, size
+// and SHA-256 of the bytes read, and the date when one was given.
+Provenance MakeProvenance(const CalibrateArgs& args, const LoadedInput& in) {
+  Provenance provenance;
+  provenance.command = "accelcal calibrate";
+  for (const auto& [name, values] : args.given_options) {
+    provenance.options[name] = values.empty()       ? nlohmann::ordered_json(true)
+                               : values.size() == 1 ? nlohmann::ordered_json(values.front())
+                                                    : nlohmann::ordered_json(values);
+  }
+  for (const LoadedFile& f : in.files) provenance.inputs.push_back({f.path, 0, ""});
+  if (!args.orientations.empty()) provenance.inputs.push_back({args.orientations, 0, ""});
+  provenance.date = args.date;
+  return provenance;
+}
+
 // The end of every calibrate: the file to -o, then the file to stdout (--json) or the summary
 // (`input_note`, when not empty, printed after the input's description).
 int WriteCalibration(const CalibrateArgs& args, const LoadedInput& in, const Gravity& g,
@@ -252,13 +268,14 @@ int WriteCalibration(const CalibrateArgs& args, const LoadedInput& in, const Gra
   info.model_selection = selection;
   info.model_requested = args.model;
   info.diagnosis = &diagnosis;
+  info.provenance = MakeProvenance(args, in);
   const std::string json = CalibrationToJson(result, info);
   // Everything is rendered before anything is written: a failure leaves no file behind.
   std::string report;
   if (!args.report.empty()) {
     ReportInput input;
-    input.calibration_json = json;
     input.calibration_name = args.output.empty() ? args.input.path : args.output;
+    input.calibration = ParseCalibrationJson(json, input.calibration_name);
     if (const LoadedFile* raw = in.FirstRaw()) {  // the report plots one log: the first
       input.log = &raw->data.raw;
       input.rejected = raw->detection->rejected;

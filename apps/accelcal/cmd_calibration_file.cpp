@@ -88,7 +88,8 @@ int RunApply(const ApplyArgs& args) {
 int RunReport(const ReportArgs& args) {
   CheckOutputs({{"-o", args.output}}, {args.calibration, args.log.path});
   ReportInput input;
-  input.calibration_json = ReadFileToString(args.calibration, kMaxSmallFileBytes);
+  input.calibration = ParseCalibrationJson(ReadFileToString(args.calibration, kMaxSmallFileBytes),
+                                           args.calibration);
   input.calibration_name = args.calibration;
   InputData data;
   if (!args.log.path.empty()) {

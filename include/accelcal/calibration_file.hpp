@@ -1,10 +1,19 @@
 #pragma once
 /// @file calibration_file.hpp
-/// The calibration file: JSON, `format` "accelcal-calibration", `version` 1. Keys are documented
-/// in docs/calibration-file.md. Writing is deterministic (same result → same bytes).
+/// The calibration file: JSON, `format` "accelcal-calibration". Version 2 (written since issue
+/// 17) holds the sensors of one unit under `sensors` (today `sensors.accelerometer`, with every
+/// key version 1 had at its top level) and `provenance` (which accelcal, which options, which
+/// input bytes). Version 1 files are still read everywhere. docs/calibration-file.md lists every
+/// key. Writing is deterministic (same result, same provenance → same bytes), through the one
+/// JSON writer (json_text.hpp).
 
+#include <cstdint>
+#include <optional>
 #include <string>
+#include <utility>
 #include <vector>
+
+#include <nlohmann/json.hpp>
 
 #include "accelcal/calibrate.hpp"
 #include "accelcal/diagnosis.hpp"
@@ -13,6 +22,37 @@
 #include "accelcal/positions.hpp"
 
 namespace accelcal {
+
+/// The version CalibrationToJson writes; ParseCalibrationJson reads it and every earlier one.
+inline constexpr int kCalibrationFileVersion = 2;
+
+/// One input file a calibration read: its name as given, its size and the SHA-256 of its bytes
+/// (sha256.hpp), so that a file can be matched to the recording it came from.
+struct InputRecord {
+  std::string name;
+  std::uint64_t bytes = 0;
+  std::string sha256;  ///< 64 lowercase hexadecimal digits; empty when not hashed (not written)
+};
+
+/// Where a calibration came from: written as `provenance`.
+struct Provenance {
+  /// What made it, e.g. "accelcal calibrate" or "accelcal Python calibrate_log"; empty: the
+  /// library, called directly.
+  std::string command;
+  /// The options that change the result, as the caller names and spells them (the tool: each
+  /// option given on its command line, without the ones that only choose where output goes).
+  nlohmann::ordered_json options = nlohmann::ordered_json::object();
+  std::vector<InputRecord> inputs;
+  /// A date (YYYY-MM-DD, optionally THH:MM[:SS] and Z or ±HH:MM) given by the caller; empty:
+  /// none is written, so that the same input gives the same bytes.
+  std::string date;
+  /// Read from a file: the accelcal version that wrote it (empty in version 1). Writing always
+  /// states this library's Version().
+  std::string accelcal_version;
+};
+
+/// Why a provenance date is not one, or nothing when it is.
+std::optional<std::string> CheckProvenanceDate(const std::string& date);
 
 /// What the file needs besides the CalibrationResult.
 struct CalibrationFileInfo {
@@ -31,30 +71,66 @@ struct CalibrationFileInfo {
   /// Written as `verdict` and `diagnostics`; when null, Diagnose() of the result, the positions
   /// and the model selection (without the log's findings).
   const Diagnosis* diagnosis = nullptr;
+  Provenance provenance;  ///< accelcal_version is ignored: Version() is written
 };
 
-/// Serialises a calibration as the JSON document (2-space indented, trailing newline).
+/// Serialises a calibration as a version-2 document (json_text.hpp's layout, trailing newline).
+/// Throws std::invalid_argument for a provenance date CheckProvenanceDate refuses.
 std::string CalibrationToJson(const CalibrationResult& result, const CalibrationFileInfo& info);
 
-/// What applying a calibration needs, read back from a file.
+/// One position as the file records it (`positions[]`).
+struct FilePosition {
+  Vec3 mean = Vec3::Zero();  ///< raw
+  std::optional<std::size_t> samples;
+  std::optional<Vec3> std;  ///< raw, per axis, one sample
+  /// `interval`: sample indices [begin, end) and times [s], for positions from a raw log.
+  struct Interval {
+    double begin = 0, end = 0, t_begin = 0, t_end = 0;
+  };
+  std::optional<Interval> interval;
+  std::optional<Vec3> direction;  ///< estimated (or known) unit gravity direction
+  std::optional<Vec3> residual;   ///< p − μ, raw
+  std::optional<double> gravity_norm_error, crossval_error;
+  bool excluded = false;
+  std::optional<int> file;  ///< index into `sources`
+};
+
+/// The solver's record (`solver`), as far as a reader needs it.
+struct SolverRecord {
+  std::string method, estimator = "ml";
+  std::optional<long long> iterations;  ///< none when absent or not an integer
+  bool converged = true;
+};
+
+/// A calibration file, read: every key a reader uses (apply, export, report, compare, Python),
+/// each checked once, for the accelerometer.
 struct LoadedCalibration {
+  int version = kCalibrationFileVersion;  ///< of the file it was read from
   ModelKind model = ModelKind::kLinear;
   Frame frame = Frame::kXFirst;
   ModelParameters params;
   double gravity = 0;
   ForceUnit unit = ForceUnit::kMetersPerSecond2;
-  std::string raw_unit = "raw";      ///< `units.raw` (a label given at calibration)
-  std::vector<Vec3> position_means;  ///< `positions[].mean` [raw]; empty when the file has none
-  std::string source;                ///< `source`: the calibrated input's name, when present
+  std::string raw_unit = "raw";         ///< `units.raw` (a label given at calibration)
+  std::vector<Vec3> position_means;     ///< `positions[].mean` [raw]; empty when the file has none
+  std::vector<FilePosition> positions;  ///< `positions`, same order
+  std::string source;                   ///< `source`: the calibrated input's name, when present
   /// `verdict` ("ok", "warnings", "failed"); empty in a file written before diagnoses existed.
+  /// In version 2 the worse of the file's and the accelerometer's.
   std::string verdict;
   /// `covariance` in the order of ParameterSlots(model, frame); empty when the file has null.
   Eigen::MatrixXd covariance;
+  std::optional<double> gravity_norm_rms_before, gravity_norm_rms_after, crossval_rms;
+  SolverRecord solver;
+  /// `diagnostics`; none in a file written before diagnoses existed.
+  std::optional<std::vector<Finding>> diagnostics;
+  Provenance provenance;  ///< version 2; empty in version 1
 };
 
-/// Parses a calibration file's text; throws InputError naming `source` for anything missing,
-/// mistyped or inconsistent (unknown format/version, K not triangular as its frame requires,
-/// non-finite numbers, a covariance that is not P x P for the model's P parameters).
+/// Parses a calibration file's text (version 1 or 2); throws InputError naming `source` for
+/// anything missing, mistyped or inconsistent (unknown format/version, a key twice in an object,
+/// K not triangular as its frame requires, non-finite numbers, a covariance that is not P x P for
+/// the model's P parameters).
 LoadedCalibration ParseCalibrationJson(const std::string& text, const std::string& source);
 
 }  // namespace accelcal

@@ -68,8 +68,8 @@ def test_calibrating_in_a_decimal_comma_locale_gives_the_same_numbers_and_findin
     assert comma.diagnostics == result.diagnostics
     messages = " ".join(f["message"] for f in result.diagnostics)
     assert "scatter 4." in messages
-    selection = json.loads(result.to_json())["model_selection"]["reason"]
-    assert json.loads(comma.to_json())["model_selection"]["reason"] == selection
+    selection = json.loads(result.to_json())["sensors"]["accelerometer"]["model_selection"]["reason"]
+    assert json.loads(comma.to_json())["sensors"]["accelerometer"]["model_selection"]["reason"] == selection
     assert "held-out rms |f|-g 0.0" in selection
     # The whole file, the solvers' termination messages included ("|dtheta|_s = 1.363e-15", not
     # "1,363e-15"); the brief report (its timing differs from run to run) has no decimal comma.

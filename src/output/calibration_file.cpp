@@ -1,14 +1,15 @@
 #include "accelcal/calibration_file.hpp"
 
 #include <cmath>
-#include <set>
+#include <stdexcept>
 
 #include <nlohmann/json.hpp>
 
 #include "accelcal/engineering.hpp"
 #include "accelcal/error.hpp"
 #include "accelcal/frame.hpp"
-#include "core/text_format.hpp"
+#include "accelcal/json_text.hpp"
+#include "accelcal/version.hpp"
 
 namespace accelcal {
 
@@ -42,21 +43,11 @@ std::string Equation(Frame frame) {
   return common + "(the platform frame of the known orientations), K full";
 }
 
-}  // namespace
-
-std::string CalibrationToJson(const CalibrationResult& result, const CalibrationFileInfo& info) {
+// The accelerometer's section: every key of a version-1 file but `format` and `version`.
+ordered_json AccelerometerSection(const CalibrationResult& result, const CalibrationFileInfo& info,
+                                  const Diagnosis& diagnosis) {
   const std::vector<Vec3> means = Means(info.positions);
   ordered_json doc;
-  const Diagnosis computed = info.diagnosis ? Diagnosis{}
-                                            : Diagnose({&result,
-                                                        &info.positions,
-                                                        OutlierOptions{}.max_excluded,
-                                                        info.model_selection,
-                                                        {},
-                                                        info.unit});
-  const Diagnosis& diagnosis = info.diagnosis ? *info.diagnosis : computed;
-  doc["format"] = "accelcal-calibration";
-  doc["version"] = 1;
   doc["verdict"] = std::string(ToString(diagnosis.verdict()));
   doc["model"] = std::string(ToString(result.model));
   doc["gravity"] = result.gravity;
@@ -195,184 +186,98 @@ std::string CalibrationToJson(const CalibrationResult& result, const Calibration
   doc["diagnostics"] = findings;
   doc["source"] = info.source;
   if (!info.sources.empty()) doc["sources"] = info.sources;
-  // Labels and paths are bytes from a command line: one that is no UTF-8 (a Latin-1 file name)
-  // becomes U+FFFD, which JSON can hold, rather than no file at all.
-  return doc.dump(2, ' ', false, ordered_json::error_handler_t::replace) + "\n";
+  return doc;
 }
 
-namespace {
-
-double Number(const ordered_json& j, const std::string& what, const std::string& source) {
-  if (!j.is_number()) throw InputError(source, 0, what + " must be a number");
-  const double v = j.get<double>();
-  if (!std::isfinite(v)) throw InputError(source, 0, what + " is not finite");
-  return v;
-}
-
-Vec3 Vector3(const ordered_json& doc, const char* key, const std::string& source) {
-  if (!doc.contains(key) || !doc[key].is_array() || doc[key].size() != 3) {
-    throw InputError(source, 0, std::string("'") + key + "' must be an array of 3 numbers");
-  }
-  Vec3 v;
-  for (int i = 0; i < 3; ++i)
-    v(i) = Number(doc[key][i], std::string(key) + "[" + std::to_string(i) + "]", source);
-  return v;
-}
-
-}  // namespace
-
-namespace {
-
-// Parses JSON refusing a key that appears twice in one object: the last one would silently win
-// (a second identity "K" would turn `apply` into a no-op).
-ordered_json ParseWithoutDuplicateKeys(const std::string& text, const std::string& source) {
-  std::vector<std::set<std::string>> keys;  // of each object being read
-  std::string duplicate;
-  const auto check = [&](int, nlohmann::json::parse_event_t event, ordered_json& parsed) {
-    using Event = nlohmann::json::parse_event_t;
-    if (event == Event::object_start) keys.emplace_back();
-    if (event == Event::object_end && !keys.empty()) keys.pop_back();
-    if (event == Event::key && !keys.empty() &&
-        !keys.back().insert(parsed.get<std::string>()).second && duplicate.empty()) {
-      duplicate = parsed.get<std::string>();
-    }
-    return true;
-  };
+ordered_json ProvenanceSection(const Provenance& provenance) {
   ordered_json doc;
-  // nlohmann's parser reads numbers with strtod, after putting the C locale's decimal point in
-  // place of '.': right in any locale, but only while no other thread changes it in between.
-  const internal::ClassicLocale c_locale;
-  try {
-    doc = ordered_json::parse(text, check);
-  } catch (const nlohmann::json::exception& e) {  // syntax, or a number beyond double's range
-    throw InputError(source, 0, std::string("not valid JSON: ") + e.what());
+  doc["accelcal_version"] = std::string(Version());
+  if (!provenance.command.empty()) doc["command"] = provenance.command;
+  doc["options"] = provenance.options.is_object() ? provenance.options : ordered_json::object();
+  ordered_json inputs = ordered_json::array();
+  for (const InputRecord& input : provenance.inputs) {
+    ordered_json entry = {{"name", input.name}, {"bytes", input.bytes}};
+    if (!input.sha256.empty()) entry["sha256"] = input.sha256;
+    inputs.push_back(entry);
   }
-  if (!duplicate.empty()) {
-    throw InputError(source, 0, "the key '" + duplicate + "' appears twice in one object");
-  }
+  doc["inputs"] = inputs;
+  if (!provenance.date.empty()) doc["date"] = provenance.date;
   return doc;
 }
 
 }  // namespace
 
+std::string CalibrationToJson(const CalibrationResult& result, const CalibrationFileInfo& info) {
+  if (!info.provenance.date.empty()) {
+    if (const auto why = CheckProvenanceDate(info.provenance.date)) {
+      throw std::invalid_argument("provenance date: " + *why);
+    }
+  }
+  const Diagnosis computed = info.diagnosis ? Diagnosis{}
+                                            : Diagnose({&result,
+                                                        &info.positions,
+                                                        OutlierOptions{}.max_excluded,
+                                                        info.model_selection,
+                                                        {},
+                                                        info.unit});
+  const Diagnosis& diagnosis = info.diagnosis ? *info.diagnosis : computed;
+  ordered_json doc;
+  doc["format"] = "accelcal-calibration";
+  doc["version"] = kCalibrationFileVersion;
+  // The unit's verdict: the worst of its sensors' (one sensor today).
+  doc["verdict"] = std::string(ToString(diagnosis.verdict()));
+  doc["sensors"] = {{"accelerometer", AccelerometerSection(result, info, diagnosis)}};
+  doc["provenance"] = ProvenanceSection(info.provenance);
+  // Labels and paths are bytes from a command line: one that is no UTF-8 (a Latin-1 file name)
+  // becomes U+FFFD (JsonText), which JSON can hold, rather than no file at all.
+  return JsonText(doc);
+}
+
 namespace {
 
-// The checks of every key of a parsed calibration file (ParseCalibrationJson).
-LoadedCalibration ParseCalibrationDocument(ordered_json doc, const std::string& source) {
-  if (!doc.is_object() || !doc.contains("format") || doc["format"] != "accelcal-calibration") {
-    throw InputError(
-        source, 0, "not an accelcal calibration file (\"format\" is not \"accelcal-calibration\")");
+// `count` digits of `text` at `at` as a number in [low, high]; false when they are not.
+bool Digits(const std::string& text, std::size_t at, std::size_t count, int low, int high,
+            int* value) {
+  if (at + count > text.size()) return false;
+  int v = 0;
+  for (std::size_t i = at; i < at + count; ++i) {
+    if (text[i] < '0' || text[i] > '9') return false;
+    v = 10 * v + (text[i] - '0');
   }
-  if (!doc.contains("version") || !doc["version"].is_number_integer() || doc["version"] != 1) {
-    throw InputError(source, 0, "unsupported calibration file version (expected 1)");
-  }
-  LoadedCalibration cal;
-  const std::optional<ModelKind> model = doc.contains("model") && doc["model"].is_string()
-                                             ? ModelKindFromString(doc["model"].get<std::string>())
-                                             : std::nullopt;
-  if (!model) throw InputError(source, 0, "'model' must be \"linear\" or \"quadratic\"");
-  cal.model = *model;
-  if (!doc.contains("gravity")) throw InputError(source, 0, "'gravity' is missing");
-  cal.gravity = Number(doc["gravity"], "'gravity'", source);
-  if (!(cal.gravity > 0)) throw InputError(source, 0, "'gravity' must be positive");
-  const std::optional<ForceUnit> unit =
-      doc.contains("units") && doc["units"].is_object() &&
-              doc["units"].contains("specific_force") && doc["units"]["specific_force"].is_string()
-          ? ForceUnitFromString(doc["units"]["specific_force"].get<std::string>())
-          : std::nullopt;
-  if (!unit) throw InputError(source, 0, "'units.specific_force' must be \"m/s2\" or \"g\"");
-  cal.unit = *unit;
-  if (!doc.contains("K") || !doc["K"].is_array() || doc["K"].size() != 3) {
-    throw InputError(source, 0, "'K' must be a 3x3 array");
-  }
-  for (int i = 0; i < 3; ++i) {
-    const auto& row = doc["K"][i];
-    if (!row.is_array() || row.size() != 3) throw InputError(source, 0, "'K' must be a 3x3 array");
-    for (int j = 0; j < 3; ++j) {
-      cal.params.K(i, j) =
-          Number(row[j], "K[" + std::to_string(i) + "][" + std::to_string(j) + "]", source);
-    }
-  }
-  // "frame" was added after version 1 first shipped: absent means x-first.
-  cal.frame = Frame::kXFirst;
-  if (doc.contains("frame")) {
-    const std::optional<Frame> frame =
-        doc["frame"].is_string() ? FrameFromString(doc["frame"].get<std::string>()) : std::nullopt;
-    if (!frame) {
-      throw InputError(source, 0, "'frame' must be \"x-first\", \"z-first\" or \"platform\"");
-    }
-    cal.frame = *frame;
-  }
-  const Mat33& K = cal.params.K;
-  if (cal.frame == Frame::kXFirst && (K(0, 1) != 0 || K(0, 2) != 0 || K(1, 2) != 0)) {
-    throw InputError(source, 0, "'K' must be lower-triangular (frame x-first)");
-  }
-  if (cal.frame == Frame::kZFirst && (K(1, 0) != 0 || K(2, 0) != 0 || K(2, 1) != 0)) {
-    throw InputError(source, 0, "'K' must be upper-triangular (frame z-first)");
-  }
-  if (cal.params.K(0, 0) == 0 || cal.params.K(1, 1) == 0 || cal.params.K(2, 2) == 0) {
-    throw InputError(source, 0, "'K' has a zero diagonal entry");
-  }
-  cal.params.bias = Vector3(doc, "bias", source);
-  cal.params.k2 = Vector3(doc, "k2", source);
-  if (cal.model == ModelKind::kLinear && !cal.params.k2.isZero(0)) {
-    throw InputError(source, 0, "a linear model must have k2 = [0, 0, 0]");
-  }
-  if (doc["units"].contains("raw")) {
-    if (!doc["units"]["raw"].is_string()) throw InputError(source, 0, "'units.raw' must be text");
-    cal.raw_unit = doc["units"]["raw"].get<std::string>();
-  }
-  if (doc.contains("verdict")) {
-    if (!doc["verdict"].is_string() ||
-        (doc["verdict"] != "ok" && doc["verdict"] != "warnings" && doc["verdict"] != "failed")) {
-      throw InputError(source, 0, "'verdict' must be \"ok\", \"warnings\" or \"failed\"");
-    }
-    cal.verdict = doc["verdict"].get<std::string>();
-  }
-  if (doc.contains("source") && doc["source"].is_string()) {
-    cal.source = doc["source"].get<std::string>();
-  }
-  if (doc.contains("covariance") && !doc["covariance"].is_null()) {
-    const std::size_t P = ParameterSlots(cal.model, cal.frame).size();
-    const ordered_json& cov = doc["covariance"];
-    const std::string shape = "'covariance' must be null or a " + std::to_string(P) + "x" +
-                              std::to_string(P) + " array (the " +
-                              std::string(ToString(cal.model)) + " model in frame " +
-                              std::string(ToString(cal.frame)) + ")";
-    if (!cov.is_array() || cov.size() != P) throw InputError(source, 0, shape);
-    cal.covariance.resize(static_cast<Eigen::Index>(P), static_cast<Eigen::Index>(P));
-    for (std::size_t i = 0; i < P; ++i) {
-      if (!cov[i].is_array() || cov[i].size() != P) throw InputError(source, 0, shape);
-      for (std::size_t j = 0; j < P; ++j) {
-        cal.covariance(static_cast<Eigen::Index>(i), static_cast<Eigen::Index>(j)) = Number(
-            cov[i][j], "covariance[" + std::to_string(i) + "][" + std::to_string(j) + "]", source);
-      }
-    }
-  }
-  if (doc.contains("positions")) {
-    if (!doc["positions"].is_array()) throw InputError(source, 0, "'positions' must be an array");
-    for (std::size_t k = 0; k < doc["positions"].size(); ++k) {
-      const ordered_json& position = doc["positions"][k];
-      if (!position.is_object()) {
-        throw InputError(source, 0, "'positions[" + std::to_string(k) + "]' must be an object");
-      }
-      cal.position_means.push_back(Vector3(position, "mean", source));
-    }
-  }
-  return cal;
+  *value = v;
+  return v >= low && v <= high;
 }
 
 }  // namespace
 
-LoadedCalibration ParseCalibrationJson(const std::string& text, const std::string& source) {
-  ordered_json doc = ParseWithoutDuplicateKeys(text, source);
-  // Every key's type is checked below; a JSON type error that escapes a check (a bug) still
-  // names the file rather than ending as an internal error.
-  try {
-    return ParseCalibrationDocument(std::move(doc), source);
-  } catch (const nlohmann::json::exception& e) {
-    throw InputError(source, 0, std::string("unexpected content: ") + e.what());
+std::optional<std::string> CheckProvenanceDate(const std::string& date) {
+  const std::string expected =
+      "'" + date + "' is not a date YYYY-MM-DD, optionally followed by THH:MM[:SS] and Z or +HH:MM";
+  int year = 0, month = 0, day = 0, unused = 0;
+  if (!Digits(date, 0, 4, 1, 9999, &year) || date.size() < 10 || date[4] != '-' ||
+      !Digits(date, 5, 2, 1, 12, &month) || date[7] != '-' || !Digits(date, 8, 2, 1, 31, &day)) {
+    return expected;
   }
+  const bool leap = (year % 4 == 0 && year % 100 != 0) || year % 400 == 0;
+  const int days[12] = {31, leap ? 29 : 28, 31, 30, 31, 30, 31, 31, 30, 31, 30, 31};
+  if (day > days[month - 1]) return "'" + date + "': that month has no day " + std::to_string(day);
+  std::size_t at = 10;
+  if (at == date.size()) return std::nullopt;
+  if (date[at] != 'T' || !Digits(date, at + 1, 2, 0, 23, &unused) || date.size() < at + 6 ||
+      date[at + 3] != ':' || !Digits(date, at + 4, 2, 0, 59, &unused)) {
+    return expected;
+  }
+  at += 6;
+  if (at < date.size() && date[at] == ':') {
+    if (!Digits(date, at + 1, 2, 0, 60, &unused)) return expected;  // 60: a leap second
+    at += 3;
+  }
+  if (at == date.size()) return std::nullopt;
+  if (date[at] == 'Z' && at + 1 == date.size()) return std::nullopt;
+  const bool offset = (date[at] == '+' || date[at] == '-') && date.size() == at + 6 &&
+                      Digits(date, at + 1, 2, 0, 23, &unused) && date[at + 3] == ':' &&
+                      Digits(date, at + 4, 2, 0, 59, &unused);
+  return offset ? std::nullopt : std::optional<std::string>(expected);
 }
 
 }  // namespace accelcal

@@ -5,12 +5,9 @@
 #include <cmath>
 #include <optional>
 
-#include <nlohmann/json.hpp>
-
 #include "accelcal/calibration_file.hpp"
 #include "accelcal/diagnosis.hpp"
 #include "accelcal/engineering.hpp"
-#include "accelcal/error.hpp"
 #include "accelcal/frame.hpp"
 #include "core/text_format.hpp"
 
@@ -18,7 +15,6 @@ namespace accelcal {
 
 namespace {
 
-using ordered_json = nlohmann::ordered_json;
 constexpr double kPi = 3.14159265358979323846;
 constexpr const char* kAxisColor[3] = {"#d62728", "#2ca02c", "#1f77b4"};
 constexpr const char* kAxisName[3] = {"x", "y", "z"};
@@ -59,44 +55,27 @@ struct PositionView {
   std::optional<std::pair<double, double>> samples;  // interval [begin, end) indices
 };
 
-Vec3 Vector(const ordered_json& j) {
-  return Vec3(j.at(0).get<double>(), j.at(1).get<double>(), j.at(2).get<double>());
-}
-
 struct Document {
-  ordered_json doc;
-  LoadedCalibration cal;
+  const LoadedCalibration& cal;
   std::vector<PositionView> positions;
   std::string unit;  // specific-force unit
 };
 
 Document Read(const ReportInput& input) {
-  Document d;
-  d.cal = ParseCalibrationJson(input.calibration_json, input.calibration_name);
-  d.doc = ordered_json::parse(input.calibration_json);
-  d.unit = std::string(ToString(d.cal.unit));
-  const bool has_before =
-      d.doc.contains("gravity_norm_rms_before") && d.doc["gravity_norm_rms_before"].is_number();
-  try {
-    for (const ordered_json& p : d.doc.value("positions", ordered_json::array())) {
-      PositionView v;
-      v.mean = Vector(p.at("mean"));
-      if (p.contains("direction")) v.direction = Vector(p["direction"]);
-      if (p.contains("residual")) v.residual = Vector(p["residual"]);
-      v.after = p.value("gravity_norm_error", 0.0);
-      if (p.contains("crossval_error") && p["crossval_error"].is_number()) {
-        v.held_out = p["crossval_error"].get<double>();
-      }
-      if (has_before) v.before = v.mean.norm() - d.cal.gravity;
-      if (p.contains("interval") && p["interval"].is_object()) {
-        const ordered_json& i = p["interval"];
-        v.time = std::pair(i.value("t_begin", 0.0), i.value("t_end", 0.0));
-        v.samples = std::pair(i.value("begin", 0.0), i.value("end", 0.0));
-      }
-      d.positions.push_back(v);
+  Document d{input.calibration, {}, std::string(ToString(input.calibration.unit))};
+  for (const FilePosition& p : d.cal.positions) {
+    PositionView v;
+    v.mean = p.mean;
+    v.direction = p.direction.value_or(Vec3::UnitZ());
+    v.residual = p.residual.value_or(Vec3::Zero());
+    v.after = p.gravity_norm_error.value_or(0.0);
+    v.held_out = p.crossval_error;
+    if (d.cal.gravity_norm_rms_before) v.before = v.mean.norm() - d.cal.gravity;
+    if (p.interval) {
+      v.time = std::pair(p.interval->t_begin, p.interval->t_end);
+      v.samples = std::pair(p.interval->begin, p.interval->end);
     }
-  } catch (const nlohmann::json::exception& e) {
-    throw InputError(input.calibration_name, 0, std::string("malformed 'positions': ") + e.what());
+    d.positions.push_back(v);
   }
   return d;
 }
@@ -391,8 +370,7 @@ std::string ParameterTable(const Document& d) {
 // are listed apart.
 std::vector<std::string> Warnings(const Document& d, const ReportInput& input, bool notes = false) {
   std::vector<std::string> w;
-  const ordered_json& findings = d.doc.value("diagnostics", ordered_json());
-  if (!findings.is_array()) {
+  if (!d.cal.diagnostics) {
     if (!notes) {
       w.push_back(
           "the calibration file carries no diagnosis (written by an earlier accelcal): "
@@ -401,13 +379,10 @@ std::vector<std::string> Warnings(const Document& d, const ReportInput& input, b
     return w;
   }
   bool has_periods = false;
-  for (const ordered_json& f : findings) {
-    if (!f.is_object()) continue;
-    const std::string severity = f.value("severity", std::string());
-    const std::string code = f.value("code", std::string());
-    has_periods = has_periods || code == "rejected_period";
-    if ((severity == "note") != notes) continue;
-    w.push_back((severity == "failure" ? "FAILED: " : "") + f.value("message", std::string()));
+  for (const Finding& f : *d.cal.diagnostics) {
+    has_periods = has_periods || f.code == "rejected_period";
+    if ((f.severity == Severity::kNote) != notes) continue;
+    w.push_back((f.severity == Severity::kFailure ? "FAILED: " : "") + f.message);
   }
   if (!has_periods) {
     for (const Finding& f : RejectedPeriodFindings(input.rejected)) {
@@ -436,36 +411,30 @@ std::string Render(const ReportInput& input) {
       "<title>accelcal report: " +
       Escape(source) + "</title>\n<style>\n" + kStyle +
       "</style>\n</head>\n<body>\n<h1>Accelerometer calibration: " + Escape(source) + "</h1>\n";
-  // A count as written, or "?": a file's number need not fit an int (converting 1e308 was UB).
-  const auto Iterations = [](const ordered_json& solver) -> std::string {
-    const auto it = solver.is_object() ? solver.find("iterations") : solver.end();
-    return it != solver.end() && it->is_number_integer() ? it->dump() : std::string("?");
-  };
-  const ordered_json& solver = d.doc.value("solver", ordered_json::object());
+  const SolverRecord& solver = d.cal.solver;
   const auto item = [](const std::string& key, const std::string& value) {
     return "<dt>" + Escape(key) + "</dt><dd>" + Escape(value) + "</dd>\n";
   };
   html += "<section id=\"summary\"><dl>\n";
   html += item("model", std::string(ToString(d.cal.model)) + ", frame " +
                             std::string(ToString(d.cal.frame)));
-  html += item("method", solver.value("method", std::string("?")) + " (" +
-                             solver.value("estimator", std::string("ml")) + "), " +
-                             Iterations(solver) + " iterations, " +
-                             (solver.value("converged", true) ? "converged" : "NOT converged"));
+  html += item("method", (solver.method.empty() ? std::string("?") : solver.method) + " (" +
+                             solver.estimator + "), " +
+                             (solver.iterations ? std::to_string(*solver.iterations) : "?") +
+                             " iterations, " + (solver.converged ? "converged" : "NOT converged"));
   html += item("positions", std::to_string(d.positions.size()));
   html += item("gravity", Format("%.6g", d.cal.gravity) + " " + d.unit);
-  const auto rms = [&](const char* key) -> std::string {
-    return d.doc.contains(key) && d.doc[key].is_number()
-               ? Short(d.doc[key].get<double>()) + " " + d.unit
-               : "n/a";
+  const auto rms = [&](const std::optional<double>& value) -> std::string {
+    return value ? Short(*value) + " " + d.unit : "n/a";
   };
-  html += item("RMS of |f| - g", "before " + rms("gravity_norm_rms_before") + ", after " +
-                                     rms("gravity_norm_rms_after") + ", held out " +
-                                     rms("crossval_rms"));
+  html += item("RMS of |f| - g", "before " + rms(d.cal.gravity_norm_rms_before) + ", after " +
+                                     rms(d.cal.gravity_norm_rms_after) + ", held out " +
+                                     rms(d.cal.crossval_rms));
   html += "</dl></section>\n";
   const std::vector<std::string> warnings = Warnings(d, input);
   html += "<section id=\"warnings\"><h2>Warnings</h2>\n<p>Verdict: <b>" +
-          Escape(d.doc.value("verdict", std::string("not recorded"))) + "</b></p>\n";
+          Escape(d.cal.verdict.empty() ? std::string("not recorded") : d.cal.verdict) +
+          "</b></p>\n";
   if (warnings.empty()) {
     html += "<p>None.</p>\n";
   } else {
@@ -493,25 +462,12 @@ std::string Render(const ReportInput& input) {
   return html;
 }
 
-// A field of the wrong JSON type anywhere the report reads is the file's fault, said as such.
-template <typename Function>
-auto ReadingTheFile(const ReportInput& input, Function function) {
-  try {
-    return function();
-  } catch (const nlohmann::json::exception& e) {
-    throw InputError(input.calibration_name, 0,
-                     std::string("malformed calibration file: ") + e.what());
-  }
-}
-
 }  // namespace
 
 std::vector<std::string> ReportWarnings(const ReportInput& input) {
-  return ReadingTheFile(input, [&] { return Warnings(Read(input), input); });
+  return Warnings(Read(input), input);
 }
 
-std::string RenderReport(const ReportInput& input) {
-  return ReadingTheFile(input, [&] { return Render(input); });
-}
+std::string RenderReport(const ReportInput& input) { return Render(input); }
 
 }  // namespace accelcal

@@ -13,6 +13,7 @@
 
 #include "accelcal/gravity.hpp"
 #include "accelcal/simulate.hpp"
+#include "support/calibration_keys.hpp"
 #include "support/cli_test.hpp"
 
 namespace accelcal {
@@ -64,7 +65,7 @@ std::string LogText(const SimulatedLog& log, const std::string& header, double t
   return text;
 }
 
-json Json(const std::string& path) { return json::parse(Slurp(path)); }
+json Json(const std::string& path) { return test::AccelerometerKeys(Slurp(path)); }
 
 std::vector<std::string> Codes(const json& doc) {
   std::vector<std::string> codes;
@@ -430,7 +431,7 @@ TEST_F(Trust, UnitsAndGravityThatDoNotFitTheDataAreSaid) {
   const std::string t265 = kData + "/imutk-t265/t265_acc.mat";
   r = Exec("calibrate " + t265 + " --gravity 1 --json");
   EXPECT_EQ(r.status, 0);
-  EXPECT_TRUE(Has(json::parse(r.out), "gravity_value"));
+  EXPECT_TRUE(Has(test::AccelerometerKeys(r.out), "gravity_value"));
   r = Exec("calibrate " + t265 + " --units g --json");
   EXPECT_EQ(r.status, 0);
   EXPECT_NE(r.err.find("about 9.8 m/s2, while the result is in g: if they are in m/s2, calibrate "
@@ -445,7 +446,7 @@ TEST_F(Trust, TheModelChoiceIsConsistent) {
       kData + "/ctu-innalabs-ahrs-m3/measured_accelerations_49pos.csv --units g";
   CliRun r = Exec("calibrate " + ctu + " --model quadratic --json");
   EXPECT_EQ(r.status, 0);
-  json doc = json::parse(r.out);
+  json doc = test::AccelerometerKeys(r.out);
   EXPECT_EQ(doc.at("model"), "quadratic");
   EXPECT_EQ(doc.at("model_selection").at("chosen"), "linear");
   EXPECT_TRUE(Has(doc, "model_choice"));
@@ -453,7 +454,7 @@ TEST_F(Trust, TheModelChoiceIsConsistent) {
             std::string::npos);
   r = Exec("calibrate " + ctu + " --model auto --json");
   EXPECT_EQ(r.status, 0);
-  doc = json::parse(r.out);
+  doc = test::AccelerometerKeys(r.out);
   EXPECT_EQ(doc.at("model"), "linear");
   EXPECT_EQ(doc.at("model_selection").at("chosen"), "linear");
   EXPECT_FALSE(Has(doc, "model_choice"));
@@ -474,12 +475,12 @@ TEST_F(Trust, ScreeningLimitIsAnOptionAndReachingItIsSaid) {
   const std::string path = Write("moved.csv", text) + " --gravity 9.7803267714";
   CliRun r = Exec("calibrate " + path + " --json");
   ASSERT_EQ(r.status, 0) << r.err;
-  json doc = json::parse(r.out);
+  json doc = test::AccelerometerKeys(r.out);
   EXPECT_EQ(doc.at("outliers").size(), 1u);
   EXPECT_FALSE(Has(doc, "outlier_limit"));
   r = Exec("calibrate " + path + " --max-outliers 1 --json");  // the limit reached
   ASSERT_EQ(r.status, 0) << r.err;
-  doc = json::parse(r.out);
+  doc = test::AccelerometerKeys(r.out);
   EXPECT_TRUE(Has(doc, "outlier_limit"));
   EXPECT_NE(r.err.find("1 positions were left out, the most allowed: more may disagree (raise the "
                        "limit to test further) (--max-outliers)"),
@@ -544,7 +545,7 @@ TEST_F(Trust, BundledRecordingsPassTheirChecks) {
   for (const Case& c : cases) {
     const CliRun r = Exec("calibrate " + c.args + " --json");
     ASSERT_EQ(r.status, 0) << c.args << ": " << r.err;
-    const json doc = json::parse(r.out);
+    const json doc = test::AccelerometerKeys(r.out);
     EXPECT_EQ(doc.at("verdict"), c.verdict) << c.args;
     std::vector<std::string> warnings;
     for (const json& f : doc.at("diagnostics")) {

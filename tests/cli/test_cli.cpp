@@ -14,12 +14,14 @@
 
 #include "accelcal/gimbal_platform.hpp"
 #include "accelcal/simulate.hpp"
+#include "support/calibration_keys.hpp"
 #include "support/cli_test.hpp"
 
 namespace accelcal {
 namespace {
 
 namespace fs = std::filesystem;
+using test::AccelerometerKeys;
 const std::string kData = ACCELCAL_DATA_DIR;
 
 using Cli = test::CliTest;
@@ -44,7 +46,7 @@ TEST_F(Cli, CalibratesTheXsensRecording) {
   ASSERT_EQ(r.status, 0) << r.err;
   EXPECT_NE(r.out.find("38 static intervals"), std::string::npos) << r.out;
   EXPECT_NE(r.out.find("rms |f|-g"), std::string::npos);
-  const nlohmann::json doc = nlohmann::json::parse(Slurp(Path("cal.json")));
+  const nlohmann::json doc = AccelerometerKeys(Slurp(Path("cal.json")));
   EXPECT_LE(doc["gravity_norm_rms_after"].get<double>(), 0.0012);
   EXPECT_EQ(doc["positions"].size(), 38u);
   EXPECT_EQ(doc["positions"][0]["interval"]["begin"].get<int>() > 0, true);
@@ -62,7 +64,7 @@ TEST_F(Cli, CalibratesTheXsensRecording) {
       Exec("calibrate " + kData +
            "/imutk-xsens-mti/xsens_acc.mat --gravity 9.81744 --no-crossval --json");
   ASSERT_EQ(quick.status, 0) << quick.err;
-  EXPECT_TRUE(nlohmann::json::parse(quick.out)["crossval_rms"].is_null());
+  EXPECT_TRUE(AccelerometerKeys(quick.out)["crossval_rms"].is_null());
 
   // --json prints exactly the file; a second run gives the same bytes (determinism).
   const CliRun j =
@@ -101,7 +103,7 @@ TEST_F(Cli, CalibratesInTheZFirstFrame) {
   ASSERT_EQ(r.status, 0) << r.err;
   EXPECT_NE(r.out.find("frame z-first"), std::string::npos) << r.out;
   EXPECT_NE(r.out.find("tau_xy"), std::string::npos) << r.out;
-  const nlohmann::json z = nlohmann::json::parse(Slurp(Path("z.json")));
+  const nlohmann::json z = AccelerometerKeys(Slurp(Path("z.json")));
   EXPECT_EQ(z["frame"], "z-first");
   EXPECT_EQ(z["parameter_order"][0], "K_zz");
   EXPECT_EQ(z["K"][1][0].get<double>(), 0.0);
@@ -110,7 +112,7 @@ TEST_F(Cli, CalibratesInTheZFirstFrame) {
   EXPECT_TRUE(z["engineering"]["misalignment_rad"].contains("tau_yz"));
   const CliRun x = Exec("calibrate " + xsens + " -o " + Path("x.json"));
   ASSERT_EQ(x.status, 0) << x.err;
-  const nlohmann::json xd = nlohmann::json::parse(Slurp(Path("x.json")));
+  const nlohmann::json xd = AccelerometerKeys(Slurp(Path("x.json")));
   EXPECT_EQ(xd["frame"], "x-first");
   // The same linear device: the same corrected magnitudes (to the solvers' convergence).
   EXPECT_NEAR(z["gravity_norm_rms_after"].get<double>(), xd["gravity_norm_rms_after"].get<double>(),
@@ -143,7 +145,7 @@ TEST_F(Cli, ModelAutoChoosesOnHeldOutError) {
       kData + "/ctu-innalabs-ahrs-m3/measured_accelerations_49pos.csv --units g --model auto";
   const CliRun r = Exec("calibrate " + ctu + " --json");
   ASSERT_EQ(r.status, 0) << r.err;
-  const nlohmann::json doc = nlohmann::json::parse(r.out);
+  const nlohmann::json doc = AccelerometerKeys(r.out);
   // CTU-49: the quadratic model fits better in sample but predicts held-out positions worse
   // (1.085e-3 g against 1.035e-3 g), so the linear model is kept.
   EXPECT_EQ(doc["model"], "linear");
@@ -228,7 +230,7 @@ TEST_F(Cli, DesignPredictsTheBoundBeforeRecording) {
       "--json" +
       device);
   ASSERT_EQ(nd.status, 0) << nd.err;
-  const nlohmann::json dev = nlohmann::json::parse(Slurp(Path("device.json")));
+  const nlohmann::json dev = AccelerometerKeys(Slurp(Path("device.json")));
   double row0 = 0;
   for (int j = 0; j < 3; ++j) row0 += std::pow(dev["K"][0][j].get<double>(), 2);
   EXPECT_NEAR(nlohmann::json::parse(nd.out)["noise_raw"][0].get<double>(),
@@ -280,7 +282,7 @@ TEST_F(Cli, SimulateWritesRecordingsThatCalibrateBackToTheTruth) {
   const CliRun c = Exec("calibrate " + Path("log.csv") +
                         " --gravity 9.8 --model quadratic --json --no-crossval");
   ASSERT_EQ(c.status, 0) << c.err;
-  const nlohmann::json doc = nlohmann::json::parse(c.out);
+  const nlohmann::json doc = AccelerometerKeys(c.out);
   EXPECT_EQ(doc["positions"].size(), 18u);
   const double expected[3] = {48.0, 98.0, 150.0};
   for (int i = 0; i < 3; ++i) {
@@ -303,7 +305,7 @@ TEST_F(Cli, SimulateWritesRecordingsThatCalibrateBackToTheTruth) {
   const CliRun sc =
       Exec("calibrate " + Path("sunxu.csv") + " --units g --frame z-first --no-crossval --json");
   ASSERT_EQ(sc.status, 0) << sc.err;
-  const nlohmann::json sd = nlohmann::json::parse(sc.out);
+  const nlohmann::json sd = AccelerometerKeys(sc.out);
   EXPECT_EQ(sd["positions"].size(), 300u);
   EXPECT_EQ(sd["noise"]["source"], "samples");
   EXPECT_NEAR(sd["K"][0][0].get<double>(), 1.15, 0.05);  // eq. (19): T_a(0,0) = 1.15
@@ -314,7 +316,7 @@ TEST_F(Cli, SimulateWritesRecordingsThatCalibrateBackToTheTruth) {
       Exec("calibrate " + Path("sunxu.csv") +
            " --units g --frame z-first --no-crossval --json --estimator bias-corrected");
   ASSERT_EQ(bc.status, 0) << bc.err;
-  const nlohmann::json bd = nlohmann::json::parse(bc.out);
+  const nlohmann::json bd = AccelerometerKeys(bc.out);
   EXPECT_EQ(bd["solver"]["estimator"], "bias-corrected");
   EXPECT_GE(bd["solver"]["correction_rounds"].get<int>(), 1);
   for (int i = 0; i < 3; ++i) {
@@ -334,7 +336,7 @@ TEST_F(Cli, PositionsFileInG) {
   const CliRun r = Exec("calibrate " + kData +
                         "/ctu-innalabs-ahrs-m3/measured_accelerations_24pos.csv --units g --json");
   ASSERT_EQ(r.status, 0) << r.err;
-  const nlohmann::json doc = nlohmann::json::parse(r.out);
+  const nlohmann::json doc = AccelerometerKeys(r.out);
   EXPECT_EQ(doc["units"]["specific_force"], "g");
   EXPECT_EQ(doc["gravity"], 1.0);
   EXPECT_LT(doc["gravity_norm_rms_after"].get<double>(),
@@ -448,7 +450,7 @@ TEST_F(Cli, KnownOrientationsCalibrateImucalsFerrarisHolds) {
   EXPECT_NE(c.out.find("frame platform"), std::string::npos) << c.out;
   EXPECT_NE(c.out.find("beta_xz, beta_xy, beta_yz, beta_yx, beta_zy, beta_zx"), std::string::npos)
       << c.out;
-  const nlohmann::json doc = nlohmann::json::parse(Slurp(Path("platform.json")));
+  const nlohmann::json doc = AccelerometerKeys(Slurp(Path("platform.json")));
   EXPECT_EQ(doc["frame"], "platform");
   EXPECT_EQ(doc["solver"]["method"], "known-orientation");
   EXPECT_EQ(doc["parameter_order"][1], "K_xy");
@@ -531,7 +533,7 @@ TEST_F(Cli, KnownOrientationsScreenAPositionSetInAnotherOrientation) {
   EXPECT_NE(r.err.find("position 4 disagrees with the others"), std::string::npos) << r.err;
   EXPECT_NE(r.err.find("(Fisher F, 3 and 33 degrees of freedom)"), std::string::npos) << r.err;
   EXPECT_NE(r.err.find("It was left out of the fit."), std::string::npos) << r.err;
-  const nlohmann::json doc = nlohmann::json::parse(Slurp(Path("turntable.json")));
+  const nlohmann::json doc = AccelerometerKeys(Slurp(Path("turntable.json")));
   ASSERT_EQ(doc["outliers"].size(), 1u);
   EXPECT_EQ(doc["outliers"][0]["position"], 4);
   EXPECT_EQ(doc["outliers"][0]["statistic"], "F");
@@ -539,7 +541,7 @@ TEST_F(Cli, KnownOrientationsScreenAPositionSetInAnotherOrientation) {
   const CliRun off = Exec(args + " --outliers off --json");
   ASSERT_EQ(off.status, 0) << off.err;
   EXPECT_EQ(off.err, "");
-  EXPECT_TRUE(nlohmann::json::parse(off.out)["outliers"].empty());
+  EXPECT_TRUE(AccelerometerKeys(off.out)["outliers"].empty());
   EXPECT_EQ(Exec(args + " --outlier-probability 2").status, 2);
   EXPECT_EQ(Exec(args + " --estimator bias-corrected").status, 2);
 }
@@ -651,7 +653,7 @@ TEST_F(Cli, LatitudeGivesWgs84Gravity) {
   // independent of the derived constants the library uses.
   const double a = 6378137.0, b = 6356752.3142, ge = 9.7803253359, gp = 9.8321849378;
   const double expected = (a * ge * 0.5 + b * gp * 0.5) / std::sqrt(a * a * 0.5 + b * b * 0.5);
-  EXPECT_NEAR(nlohmann::json::parse(r.out)["gravity"].get<double>(), expected, 1e-9);
+  EXPECT_NEAR(AccelerometerKeys(r.out)["gravity"].get<double>(), expected, 1e-9);
 }
 
 TEST_F(Cli, CompareTabulatesEveryMethod) {

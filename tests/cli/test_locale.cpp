@@ -165,7 +165,7 @@ TEST_F(DecimalComma, CalibrationFileIsTheSameBytesAndReadsBackExactly) {
   }
   // A number with a fraction, as a person writes it in a file.
   std::string edited = c;
-  const std::string gravity = "\"gravity\": 1.0,";
+  const std::string gravity = "\"gravity\": 1,";  // JsonText: a whole double as an integer
   ASSERT_NE(edited.find(gravity), std::string::npos);
   edited.replace(edited.find(gravity), gravity.size(), "\"gravity\": 0.98765432109876543,");
   const LoadedCalibration edited_read =
@@ -214,8 +214,8 @@ TEST_F(DecimalComma, DiagnosisModelSelectionAndReportAreTheSameBytes) {
   info.model_selection = &selection;
   info.diagnosis = &c;
   ReportInput report;
-  report.calibration_json = CalibrationToJson(result, info);
   report.calibration_name = "xsens.json";
+  report.calibration = ParseCalibrationJson(CalibrationToJson(result, info), "xsens.json");
   report.log = &data.raw;
   report.rejected = detection.rejected;
   const std::string html = RenderReport(report);

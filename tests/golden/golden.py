@@ -1,9 +1,9 @@
 #!/usr/bin/python3
 """Golden outputs: every command of the CLI on the bundled recordings and the test inputs.
 
-Each case of cases.txt runs in one shared working directory (where `data`, `hostile` and `inputs`
-name the project's folders, so that paths in outputs are the same on every machine), in order, so a
-case may read what an earlier one wrote. Its exit status, stdout, stderr and every file it created
+Each case of cases.txt runs in one shared working directory (where `data`, `hostile`, `inputs` and
+`v1`, the version-1 calibration files, name the project's folders, so that paths in outputs are the
+same on every machine), in order, so a case may read what an earlier one wrote. Its exit status, stdout, stderr and every file it created
 or changed are compared byte for byte with expected/NAME.txt: a refactoring that changes an output
 fails here. Outputs larger than 64 KiB (the HTML reports, corrected streams) are compared by
 SHA-256 and size. Wall-clock times in the text outputs (the solver's microseconds, `-v`'s
@@ -102,7 +102,8 @@ def main():
     work = tempfile.mkdtemp(prefix="accelcal-golden-")
     for link, target in (("data", os.path.join(ROOT, "data")),
                          ("hostile", os.path.join(ROOT, "tests", "hostile")),
-                         ("inputs", os.path.join(HERE, "inputs"))):
+                         ("inputs", os.path.join(HERE, "inputs")),
+                         ("v1", os.path.join(ROOT, "tests", "data", "calibration-v1"))):
         os.symlink(target, os.path.join(work, link))
     cases = read_cases()
     failures = []

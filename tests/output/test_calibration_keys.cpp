@@ -115,11 +115,13 @@ TEST(CalibrationKeys, AnIterationCountBeyondIntIsShownAsUnknown) {
   for (const nlohmann::json& count :
        {nlohmann::json(-1e308), nlohmann::json(1e300), nlohmann::json(2.5), nlohmann::json("7")}) {
     doc["solver"]["iterations"] = count;
-    const std::string html = RenderReport({doc.dump(), "x.json", nullptr, {}});
+    const std::string html =
+        RenderReport({ParseCalibrationJson(doc.dump(), "x.json"), "x.json", nullptr, {}});
     EXPECT_NE(html.find("? iterations"), std::string::npos) << count;
   }
   doc["solver"]["iterations"] = 12;
-  EXPECT_NE(RenderReport({doc.dump(), "x.json", nullptr, {}}).find("12 iterations"),
+  EXPECT_NE(RenderReport({ParseCalibrationJson(doc.dump(), "x.json"), "x.json", nullptr, {}})
+                .find("12 iterations"),
             std::string::npos);
 }
 

@@ -27,6 +27,7 @@ struct Recording {
   RawLog log;
   StaticDetectionResult detection;
   std::string json;
+  LoadedCalibration cal;  // the file, read
 };
 Recording Record(const std::vector<Vec3>& directions, ModelKind model, double static_s = 4.0,
                  int moved = -1, OutlierPolicy outliers = OutlierPolicy::kExclude) {
@@ -61,13 +62,14 @@ Recording Record(const std::vector<Vec3>& directions, ModelKind model, double st
   info.source = "simulated.csv";
   info.positions = positions;
   r.json = CalibrationToJson(result, info);
+  r.cal = ParseCalibrationJson(r.json, "cal.json");
   return r;
 }
 
 TEST(Report, SelfContainedPageWithEveryPlotAndTheParameterTable) {
   const Recording r = Record(Yang18Directions(), ModelKind::kQuadratic);
   ASSERT_EQ(r.detection.intervals.size(), 18u);
-  ReportInput input{r.json, "cal.json", &r.log, r.detection.rejected};
+  ReportInput input{r.cal, "cal.json", &r.log, r.detection.rejected};
   const std::string html = RenderReport(input);
   for (const char* id : {"raw-signal", "norm-error", "sphere", "residuals"}) {
     EXPECT_EQ(Count(html, std::string("<svg id=\"") + id + "\""), 1u) << id;
@@ -96,7 +98,7 @@ TEST(Report, WarnsAboutAMovedPositionAGapInCoverageAndUnusedStillPeriods) {
   // Position 5's mean pushed by 0.035 g: far beyond the held-out error of the others. The
   // calibration's screening leaves it out, and the report says so (and nothing else).
   const Recording moved = Record(Yang18Directions(), ModelKind::kLinear, 4.0, 4);
-  std::vector<std::string> w = ReportWarnings({moved.json, "cal.json", nullptr, {}});
+  std::vector<std::string> w = ReportWarnings({moved.cal, "cal.json", nullptr, {}});
   ASSERT_EQ(w.size(), 1u);
   EXPECT_EQ(w[0].rfind("position 5 disagrees with the others (t = -", 0), 0u) << w[0];
   EXPECT_NE(w[0].find("): left out of the fit;"), std::string::npos) << w[0];
@@ -104,21 +106,21 @@ TEST(Report, WarnsAboutAMovedPositionAGapInCoverageAndUnusedStillPeriods) {
   // beyond the interval noise, and the position itself by its held-out error (and no other).
   const Recording kept =
       Record(Yang18Directions(), ModelKind::kLinear, 4.0, 4, OutlierPolicy::kOff);
-  w = ReportWarnings({kept.json, "cal.json", nullptr, {}});
+  w = ReportWarnings({kept.cal, "cal.json", nullptr, {}});
   ASSERT_EQ(w.size(), 2u);
   EXPECT_EQ(w[0].rfind("the positions scatter ", 0), 0u) << w[0];
   EXPECT_EQ(w[1].rfind("position 5: held-out |f| - g = ", 0), 0u) << w[1];
   // All positions within 60° of +z: nothing near -z.
   const Recording cap = Record(RandomDirectionsInCap(14, kPi / 3, 9), ModelKind::kLinear);
   bool gap = false;
-  for (const std::string& s : ReportWarnings({cap.json, "cal.json", nullptr, {}})) {
+  for (const std::string& s : ReportWarnings({cap.cal, "cal.json", nullptr, {}})) {
     gap = gap || s.rfind("no position within ", 0) == 0;
   }
   EXPECT_TRUE(gap);
   // Tilted at most 30°: the scale factors and biases are barely determined, and said to be.
   const Recording narrow = Record(RandomDirectionsInCap(14, kPi / 6, 9), ModelKind::kLinear);
   int poorly = 0;
-  for (const std::string& s : ReportWarnings({narrow.json, "cal.json", nullptr, {}})) {
+  for (const std::string& s : ReportWarnings({narrow.cal, "cal.json", nullptr, {}})) {
     if (s.rfind("poorly determined: ", 0) != 0) continue;
     for (std::size_t at = 0; (at = s.find(" (1 sigma ", at)) != std::string::npos; ++at) ++poorly;
   }
@@ -131,7 +133,7 @@ TEST(Report, WarnsAboutAMovedPositionAGapInCoverageAndUnusedStillPeriods) {
   clipped.cause = RejectedInterval::Cause::kClipped;
   clipped.reason = "axis y reads 40000, the largest value in the log, in 100% of its samples";
   const std::vector<std::string> with_rejected =
-      ReportWarnings({moved.json, "cal.json", nullptr, {clipped}});
+      ReportWarnings({moved.cal, "cal.json", nullptr, {clipped}});
   EXPECT_EQ(with_rejected.back(),
             "the still period 3.500-4.100 s is not used: axis y reads 40000, the largest value in "
             "the log, in 100% of its samples");
@@ -147,20 +149,22 @@ TEST(StaticDetection, StillRunsTooShortAreReportedAsRejected) {
   }
 }
 
-TEST(Report, RefusesAFileThatIsNoCalibration) {
-  EXPECT_THROW(RenderReport({"{\"format\": \"other\"}", "x.json", nullptr, {}}), InputError);
+TEST(Report, IsMadeOnlyFromAFileThatReadsAsACalibration) {
+  // The report takes the file as read: what is no calibration is refused by the reader, with the
+  // key's place in the file.
+  EXPECT_THROW(ParseCalibrationJson("{\"format\": \"other\"}", "x.json"), InputError);
   // Found by fuzz_calibration_file: a covariance of the wrong size was read past its end, and a
   // field of the wrong type escaped as a JSON exception. Both are now the file's error.
   const Recording r = Record(Yang18Directions(), ModelKind::kLinear);
   nlohmann::ordered_json doc = nlohmann::ordered_json::parse(r.json);
-  doc["covariance"] = {{1.0, 0.0}, {0.0, 1.0}};
+  doc["sensors"]["accelerometer"]["covariance"] = {{1.0, 0.0}, {0.0, 1.0}};
   try {
-    RenderReport({doc.dump(), "x.json", nullptr, {}});
+    ParseCalibrationJson(doc.dump(), "x.json");
     ADD_FAILURE();
   } catch (const InputError& e) {
     EXPECT_EQ(std::string(e.what()),
-              "x.json: 'covariance' must be null or a 9x9 array (the linear model in frame "
-              "x-first)");
+              "x.json: 'sensors.accelerometer.covariance' must be null or a 9x9 array (the linear "
+              "model in frame x-first)");
   }
   // Found by fuzz_calibration_file: a number beyond double's range escaped as a JSON exception.
   try {
@@ -172,13 +176,12 @@ TEST(Report, RefusesAFileThatIsNoCalibration) {
     EXPECT_NE(std::string(e.what()).find("number overflow"), std::string::npos) << e.what();
   }
   doc = nlohmann::ordered_json::parse(r.json);
-  doc["solver"] = {{"method", 5}};
+  doc["sensors"]["accelerometer"]["solver"] = {{"method", 5}};
   try {
-    RenderReport({doc.dump(), "x.json", nullptr, {}});
+    ParseCalibrationJson(doc.dump(), "x.json");
     ADD_FAILURE();
   } catch (const InputError& e) {
-    EXPECT_EQ(std::string(e.what()).rfind("x.json: malformed calibration file: ", 0), 0u)
-        << e.what();
+    EXPECT_EQ(std::string(e.what()), "x.json: 'sensors.accelerometer.solver.method' must be text");
   }
 }
 

@@ -21,10 +21,7 @@ inline void UseCalibration(const LoadedCalibration& calibration, const std::stri
     } catch (const DataError&) {
     }
   }
-  try {
-    RenderReport({text, source, nullptr, {}});
-  } catch (const InputError&) {
-  }
+  RenderReport({calibration, source, nullptr, {}});
 }
 
 }  // namespace accelcal::test

@@ -1,0 +1,377 @@
+// Reading a calibration file (calibration_file.hpp), version 1 or 2: every key a reader uses is
+// checked here once, so that apply, export, report, compare and Python get typed values and never
+// read the JSON themselves.
+#include <cmath>
+#include <set>
+
+#include <nlohmann/json.hpp>
+
+#include "accelcal/calibration_file.hpp"
+#include "accelcal/error.hpp"
+#include "accelcal/frame.hpp"
+#include "core/text_format.hpp"
+
+namespace accelcal {
+
+namespace {
+
+using nlohmann::ordered_json;
+
+// The checks of one document's keys, with the file's name for the errors and the path of the
+// object being read ("" at the top; "sensors.accelerometer." in version 2) for their key names.
+class Reader {
+ public:
+  Reader(const std::string& source, std::string path) : source_(source), path_(std::move(path)) {}
+
+  [[noreturn]] void Fail(const std::string& reason) const { throw InputError(source_, 0, reason); }
+  std::string Key(const std::string& key) const { return "'" + path_ + key + "'"; }
+
+  double Number(const ordered_json& j, const std::string& what) const {
+    if (!j.is_number()) Fail(what + " must be a number");
+    const double v = j.get<double>();
+    if (!std::isfinite(v)) Fail(what + " is not finite");
+    return v;
+  }
+  // A number, or null (written for a value that does not exist), or absent.
+  std::optional<double> Nullable(const ordered_json& doc, const char* key) const {
+    if (!doc.contains(key) || doc[key].is_null()) return std::nullopt;
+    return Number(doc[key], Key(key));
+  }
+  Vec3 Vector3(const ordered_json& doc, const char* key) const {
+    if (!doc.contains(key) || !doc[key].is_array() || doc[key].size() != 3) {
+      Fail(Key(key) + " must be an array of 3 numbers");
+    }
+    Vec3 v;
+    for (int i = 0; i < 3; ++i)
+      v(i) = Number(doc[key][i], path_ + key + "[" + std::to_string(i) + "]");
+    return v;
+  }
+  std::optional<Vec3> OptionalVector3(const ordered_json& doc, const char* key) const {
+    if (!doc.contains(key)) return std::nullopt;
+    return Vector3(doc, key);
+  }
+  std::string Text(const ordered_json& doc, const char* key) const {
+    if (!doc[key].is_string()) Fail(Key(key) + " must be text");
+    return doc[key].get<std::string>();
+  }
+  const ordered_json& Object(const ordered_json& doc, const char* key) const {
+    if (!doc.contains(key) || !doc[key].is_object()) Fail(Key(key) + " must be an object");
+    return doc[key];
+  }
+  Reader Inside(const std::string& key) const { return Reader(source_, path_ + key + "."); }
+
+ private:
+  const std::string& source_;
+  std::string path_;
+};
+
+// Parses JSON refusing a key that appears twice in one object: the last one would silently win
+// (a second identity "K" would turn `apply` into a no-op).
+ordered_json ParseWithoutDuplicateKeys(const std::string& text, const std::string& source) {
+  std::vector<std::set<std::string>> keys;  // of each object being read
+  std::string duplicate;
+  const auto check = [&](int, nlohmann::json::parse_event_t event, ordered_json& parsed) {
+    using Event = nlohmann::json::parse_event_t;
+    if (event == Event::object_start) keys.emplace_back();
+    if (event == Event::object_end && !keys.empty()) keys.pop_back();
+    if (event == Event::key && !keys.empty() &&
+        !keys.back().insert(parsed.get<std::string>()).second && duplicate.empty()) {
+      duplicate = parsed.get<std::string>();
+    }
+    return true;
+  };
+  ordered_json doc;
+  // nlohmann's parser reads numbers with strtod, after putting the C locale's decimal point in
+  // place of '.': right in any locale, but only while no other thread changes it in between.
+  const internal::ClassicLocale c_locale;
+  try {
+    doc = ordered_json::parse(text, check);
+  } catch (const nlohmann::json::exception& e) {  // syntax, or a number beyond double's range
+    throw InputError(source, 0, std::string("not valid JSON: ") + e.what());
+  }
+  if (!duplicate.empty()) {
+    throw InputError(source, 0, "the key '" + duplicate + "' appears twice in one object");
+  }
+  return doc;
+}
+
+int VerdictRank(const std::string& verdict) {
+  return verdict == "failed" ? 2 : verdict == "warnings" ? 1 : 0;
+}
+
+std::string CheckedVerdict(const Reader& r, const ordered_json& doc) {
+  if (!doc["verdict"].is_string() ||
+      (doc["verdict"] != "ok" && doc["verdict"] != "warnings" && doc["verdict"] != "failed")) {
+    r.Fail(r.Key("verdict") + " must be \"ok\", \"warnings\" or \"failed\"");
+  }
+  return doc["verdict"].get<std::string>();
+}
+
+void ReadModel(const Reader& r, const ordered_json& doc, LoadedCalibration& cal) {
+  const std::optional<ModelKind> model = doc.contains("model") && doc["model"].is_string()
+                                             ? ModelKindFromString(doc["model"].get<std::string>())
+                                             : std::nullopt;
+  if (!model) r.Fail(r.Key("model") + " must be \"linear\" or \"quadratic\"");
+  cal.model = *model;
+  if (!doc.contains("gravity")) r.Fail(r.Key("gravity") + " is missing");
+  cal.gravity = r.Number(doc["gravity"], r.Key("gravity"));
+  if (!(cal.gravity > 0)) r.Fail(r.Key("gravity") + " must be positive");
+  const std::optional<ForceUnit> unit =
+      doc.contains("units") && doc["units"].is_object() &&
+              doc["units"].contains("specific_force") && doc["units"]["specific_force"].is_string()
+          ? ForceUnitFromString(doc["units"]["specific_force"].get<std::string>())
+          : std::nullopt;
+  if (!unit) r.Fail(r.Key("units.specific_force") + " must be \"m/s2\" or \"g\"");
+  cal.unit = *unit;
+  if (doc["units"].contains("raw")) cal.raw_unit = r.Inside("units").Text(doc["units"], "raw");
+  if (!doc.contains("K") || !doc["K"].is_array() || doc["K"].size() != 3) {
+    r.Fail(r.Key("K") + " must be a 3x3 array");
+  }
+  for (int i = 0; i < 3; ++i) {
+    const auto& row = doc["K"][i];
+    if (!row.is_array() || row.size() != 3) r.Fail(r.Key("K") + " must be a 3x3 array");
+    for (int j = 0; j < 3; ++j) {
+      cal.params.K(i, j) =
+          r.Number(row[j], "K[" + std::to_string(i) + "][" + std::to_string(j) + "]");
+    }
+  }
+  // "frame" was added after version 1 first shipped: absent means x-first.
+  cal.frame = Frame::kXFirst;
+  if (doc.contains("frame")) {
+    const std::optional<Frame> frame =
+        doc["frame"].is_string() ? FrameFromString(doc["frame"].get<std::string>()) : std::nullopt;
+    if (!frame) r.Fail(r.Key("frame") + " must be \"x-first\", \"z-first\" or \"platform\"");
+    cal.frame = *frame;
+  }
+  const Mat33& K = cal.params.K;
+  if (cal.frame == Frame::kXFirst && (K(0, 1) != 0 || K(0, 2) != 0 || K(1, 2) != 0)) {
+    r.Fail(r.Key("K") + " must be lower-triangular (frame x-first)");
+  }
+  if (cal.frame == Frame::kZFirst && (K(1, 0) != 0 || K(2, 0) != 0 || K(2, 1) != 0)) {
+    r.Fail(r.Key("K") + " must be upper-triangular (frame z-first)");
+  }
+  if (K(0, 0) == 0 || K(1, 1) == 0 || K(2, 2) == 0)
+    r.Fail(r.Key("K") + " has a zero diagonal entry");
+  cal.params.bias = r.Vector3(doc, "bias");
+  cal.params.k2 = r.Vector3(doc, "k2");
+  if (cal.model == ModelKind::kLinear && !cal.params.k2.isZero(0)) {
+    r.Fail("a linear model must have " + r.Key("k2") + " = [0, 0, 0]");
+  }
+}
+
+void ReadCovariance(const Reader& r, const ordered_json& doc, LoadedCalibration& cal) {
+  if (!doc.contains("covariance") || doc["covariance"].is_null()) return;
+  const std::size_t P = ParameterSlots(cal.model, cal.frame).size();
+  const ordered_json& cov = doc["covariance"];
+  const std::string shape = r.Key("covariance") + " must be null or a " + std::to_string(P) + "x" +
+                            std::to_string(P) + " array (the " + std::string(ToString(cal.model)) +
+                            " model in frame " + std::string(ToString(cal.frame)) + ")";
+  if (!cov.is_array() || cov.size() != P) r.Fail(shape);
+  cal.covariance.resize(static_cast<Eigen::Index>(P), static_cast<Eigen::Index>(P));
+  for (std::size_t i = 0; i < P; ++i) {
+    if (!cov[i].is_array() || cov[i].size() != P) r.Fail(shape);
+    for (std::size_t j = 0; j < P; ++j) {
+      cal.covariance(static_cast<Eigen::Index>(i), static_cast<Eigen::Index>(j)) =
+          r.Number(cov[i][j], "covariance[" + std::to_string(i) + "][" + std::to_string(j) + "]");
+    }
+  }
+}
+
+FilePosition ReadPosition(const Reader& r, const ordered_json& p) {
+  FilePosition position;
+  position.mean = r.Vector3(p, "mean");
+  if (p.contains("samples")) {
+    if (!p["samples"].is_number_unsigned()) r.Fail(r.Key("samples") + " must be a count");
+    position.samples = p["samples"].get<std::size_t>();
+  }
+  position.std = r.OptionalVector3(p, "std");
+  if (p.contains("interval")) {
+    const ordered_json& i = r.Object(p, "interval");
+    const Reader in = r.Inside("interval");
+    FilePosition::Interval interval;
+    for (const auto& [key, value] :
+         {std::pair("begin", &interval.begin), std::pair("end", &interval.end),
+          std::pair("t_begin", &interval.t_begin), std::pair("t_end", &interval.t_end)}) {
+      if (!i.contains(key)) in.Fail(in.Key(key) + " is missing");
+      *value = in.Number(i[key], in.Key(key));
+    }
+    position.interval = interval;
+  }
+  position.direction = r.OptionalVector3(p, "direction");
+  position.residual = r.OptionalVector3(p, "residual");
+  position.gravity_norm_error = r.Nullable(p, "gravity_norm_error");
+  position.crossval_error = r.Nullable(p, "crossval_error");
+  if (p.contains("excluded")) {
+    if (!p["excluded"].is_boolean()) r.Fail(r.Key("excluded") + " must be true or false");
+    position.excluded = p["excluded"].get<bool>();
+  }
+  if (p.contains("file")) {
+    if (!p["file"].is_number_unsigned() || p["file"].get<std::uint64_t>() > 1000000) {
+      r.Fail(r.Key("file") + " must be an index into 'sources'");
+    }
+    position.file = p["file"].get<int>();
+  }
+  return position;
+}
+
+void ReadPositions(const Reader& r, const ordered_json& doc, LoadedCalibration& cal) {
+  if (!doc.contains("positions")) return;
+  if (!doc["positions"].is_array()) r.Fail(r.Key("positions") + " must be an array");
+  for (std::size_t k = 0; k < doc["positions"].size(); ++k) {
+    const ordered_json& p = doc["positions"][k];
+    const std::string name = "positions[" + std::to_string(k) + "]";
+    if (!p.is_object()) r.Fail(r.Key(name) + " must be an object");
+    cal.positions.push_back(ReadPosition(r.Inside(name), p));
+    cal.position_means.push_back(cal.positions.back().mean);
+  }
+}
+
+void ReadSolver(const Reader& r, const ordered_json& doc, LoadedCalibration& cal) {
+  if (!doc.contains("solver")) return;
+  const ordered_json& solver = r.Object(doc, "solver");
+  const Reader s = r.Inside("solver");
+  if (solver.contains("method")) cal.solver.method = s.Text(solver, "method");
+  if (solver.contains("estimator")) cal.solver.estimator = s.Text(solver, "estimator");
+  // A count as written, or none: a file's number need not fit an integer (1e308).
+  if (solver.contains("iterations") && solver["iterations"].is_number_integer()) {
+    cal.solver.iterations = solver["iterations"].get<long long>();
+  }
+  if (solver.contains("converged")) {
+    if (!solver["converged"].is_boolean()) s.Fail(s.Key("converged") + " must be true or false");
+    cal.solver.converged = solver["converged"].get<bool>();
+  }
+}
+
+void ReadDiagnostics(const Reader& r, const ordered_json& doc, LoadedCalibration& cal) {
+  if (!doc.contains("diagnostics")) return;
+  if (!doc["diagnostics"].is_array()) r.Fail(r.Key("diagnostics") + " must be an array");
+  std::vector<Finding> findings;
+  for (std::size_t k = 0; k < doc["diagnostics"].size(); ++k) {
+    const ordered_json& f = doc["diagnostics"][k];
+    const Reader d = r.Inside("diagnostics[" + std::to_string(k) + "]");
+    if (!f.is_object())
+      r.Fail(r.Key("diagnostics[" + std::to_string(k) + "]") + " must be an object");
+    Finding finding;
+    finding.code = f.contains("code") ? d.Text(f, "code") : std::string();
+    finding.message = f.contains("message") ? d.Text(f, "message") : std::string();
+    const std::string severity = f.contains("severity") ? d.Text(f, "severity") : std::string();
+    if (severity == "note") {
+      finding.severity = Severity::kNote;
+    } else if (severity == "warning") {
+      finding.severity = Severity::kWarning;
+    } else if (severity == "failure") {
+      finding.severity = Severity::kFailure;
+    } else {
+      d.Fail(d.Key("severity") + " must be \"note\", \"warning\" or \"failure\"");
+    }
+    if (f.contains("numbers")) {
+      for (const auto& [name, value] : d.Object(f, "numbers").items()) {
+        if (!value.is_null() && !value.is_number())
+          d.Fail(d.Key("numbers." + name) + " must be a number");
+        finding.numbers.emplace_back(name, value.is_null() ? std::nan("") : value.get<double>());
+      }
+    }
+    findings.push_back(std::move(finding));
+  }
+  cal.diagnostics = std::move(findings);
+}
+
+// The accelerometer's keys: a version-1 document's top level, a version-2 document's
+// `sensors.accelerometer`.
+void ReadAccelerometer(const Reader& r, const ordered_json& doc, LoadedCalibration& cal) {
+  ReadModel(r, doc, cal);
+  if (doc.contains("verdict")) cal.verdict = CheckedVerdict(r, doc);
+  if (doc.contains("source") && doc["source"].is_string()) {
+    cal.source = doc["source"].get<std::string>();
+  }
+  ReadCovariance(r, doc, cal);
+  ReadPositions(r, doc, cal);
+  cal.gravity_norm_rms_before = r.Nullable(doc, "gravity_norm_rms_before");
+  cal.gravity_norm_rms_after = r.Nullable(doc, "gravity_norm_rms_after");
+  cal.crossval_rms = r.Nullable(doc, "crossval_rms");
+  ReadSolver(r, doc, cal);
+  ReadDiagnostics(r, doc, cal);
+}
+
+void ReadProvenance(const Reader& r, const ordered_json& doc, Provenance& provenance) {
+  if (!doc.contains("provenance")) return;
+  const ordered_json& p = r.Object(doc, "provenance");
+  const Reader in = r.Inside("provenance");
+  if (p.contains("accelcal_version")) provenance.accelcal_version = in.Text(p, "accelcal_version");
+  if (p.contains("command")) provenance.command = in.Text(p, "command");
+  if (p.contains("options")) provenance.options = in.Object(p, "options");
+  if (p.contains("date")) {
+    provenance.date = in.Text(p, "date");
+    if (const auto why = CheckProvenanceDate(provenance.date))
+      in.Fail(in.Key("date") + ": " + *why);
+  }
+  if (!p.contains("inputs")) return;
+  if (!p["inputs"].is_array()) in.Fail(in.Key("inputs") + " must be an array");
+  for (std::size_t k = 0; k < p["inputs"].size(); ++k) {
+    const std::string name = "inputs[" + std::to_string(k) + "]";
+    if (!p["inputs"][k].is_object()) in.Fail(in.Key(name) + " must be an object");
+    const ordered_json& i = p["inputs"][k];
+    const Reader f = in.Inside(name);
+    InputRecord input;
+    if (!i.contains("name")) f.Fail(f.Key("name") + " is missing");
+    input.name = f.Text(i, "name");
+    if (i.contains("bytes")) {
+      if (!i["bytes"].is_number_unsigned()) f.Fail(f.Key("bytes") + " must be a count");
+      input.bytes = i["bytes"].get<std::uint64_t>();
+    }
+    if (i.contains("sha256")) {
+      input.sha256 = f.Text(i, "sha256");
+      const bool hex = input.sha256.size() == 64 &&
+                       input.sha256.find_first_not_of("0123456789abcdef") == std::string::npos;
+      if (!hex) f.Fail(f.Key("sha256") + " must be 64 lowercase hexadecimal digits");
+    }
+    provenance.inputs.push_back(std::move(input));
+  }
+}
+
+LoadedCalibration ParseCalibrationDocument(const ordered_json& doc, const std::string& source) {
+  const Reader top(source, "");
+  if (!doc.is_object() || !doc.contains("format") || doc["format"] != "accelcal-calibration") {
+    top.Fail("not an accelcal calibration file (\"format\" is not \"accelcal-calibration\")");
+  }
+  const bool known_version = doc.contains("version") && doc["version"].is_number_integer() &&
+                             (doc["version"] == 1 || doc["version"] == 2);
+  if (!known_version) {
+    top.Fail("unsupported calibration file version " +
+             (doc.contains("version") ? doc["version"].dump() : std::string("(none)")) +
+             " (this accelcal reads versions 1 and " + std::to_string(kCalibrationFileVersion) +
+             ")");
+  }
+  LoadedCalibration cal;
+  cal.version = doc["version"].get<int>();
+  if (cal.version == 1) {
+    ReadAccelerometer(top, doc, cal);
+    return cal;
+  }
+  const ordered_json& sensors = top.Object(doc, "sensors");
+  if (!sensors.contains("accelerometer")) {
+    top.Fail("holds no accelerometer calibration ('sensors' has no 'accelerometer')");
+  }
+  ReadAccelerometer(top.Inside("sensors").Inside("accelerometer"),
+                    top.Inside("sensors").Object(sensors, "accelerometer"), cal);
+  if (!doc.contains("verdict")) top.Fail("'verdict' is missing");
+  const std::string unit_verdict = CheckedVerdict(top, doc);
+  if (VerdictRank(unit_verdict) > VerdictRank(cal.verdict)) cal.verdict = unit_verdict;
+  ReadProvenance(top, doc, cal.provenance);
+  return cal;
+}
+
+}  // namespace
+
+LoadedCalibration ParseCalibrationJson(const std::string& text, const std::string& source) {
+  const ordered_json doc = ParseWithoutDuplicateKeys(text, source);
+  // Every key's type is checked above; a JSON type error that escapes a check (a bug) still
+  // names the file rather than ending as an internal error.
+  try {
+    return ParseCalibrationDocument(doc, source);
+  } catch (const nlohmann::json::exception& e) {
+    throw InputError(source, 0, std::string("unexpected content: ") + e.what());
+  }
+}
+
+}  // namespace accelcal

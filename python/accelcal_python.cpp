@@ -317,6 +317,7 @@ struct PyCalibration {
   std::string source;               // the input file, "" from arrays
   int max_excluded = OutlierOptions{}.max_excluded;
   Diagnosis diagnosis;
+  Provenance provenance;  // the function and its arguments, the file read (to_json writes it)
 };
 
 py::list FindingsList(const Diagnosis& diagnosis) {
@@ -372,6 +373,28 @@ struct FitSettings {
   int max_iterations = 0;  // 0: the solvers' defaults
   std::optional<std::string> units;
 };
+
+// The fit's arguments as a calibration file's provenance records them: every one, as used.
+nlohmann::ordered_json SettingsJson(const FitSettings& s) {
+  nlohmann::ordered_json o;
+  o["model"] = s.model;
+  o["method"] = s.method;
+  o["frame"] = s.frame;
+  o["gravity"] = s.gravity;
+  o["estimator"] = s.estimator;
+  o["cross_validate"] = s.cross_validate;
+  o["outliers"] = s.outliers;
+  o["outlier_probability"] = s.outlier_probability;
+  o["max_outliers"] = s.max_outliers;
+  o["max_iterations"] = s.max_iterations;
+  o["units"] = s.units ? nlohmann::ordered_json(*s.units) : nlohmann::ordered_json(nullptr);
+  return o;
+}
+
+// A JSON value as the Python object json.loads makes of it.
+py::object ToPython(const nlohmann::ordered_json& value) {
+  return py::module_::import("json").attr("loads")(value.dump());
+}
 
 // The options as RunCalibrate (apps/accelcal/cmd_calibrate.cpp) builds them; ValueError when
 // invalid.
@@ -575,7 +598,7 @@ PYBIND11_MODULE(_accelcal, m) {
           "to_json",
           [](const PyCalibration& c, std::optional<Rows> positions,
              std::optional<std::string> units, const std::string& raw_units,
-             std::optional<std::string> source) {
+             std::optional<std::string> source, std::optional<std::string> date) {
             CalibrationFileInfo info;
             info.unit = units ? Parse(ForceUnitFromString(*units), *units, "units") : c.unit;
             info.raw_unit = raw_units;
@@ -594,14 +617,24 @@ PYBIND11_MODULE(_accelcal, m) {
             info.model_requested = c.model_requested;
             // The stored diagnosis is of the fitted positions in the stored unit.
             if (!positions && info.unit == c.unit) info.diagnosis = &c.diagnosis;
+            info.provenance = c.provenance;
+            if (date) {
+              if (const auto why = CheckProvenanceDate(*date))
+                throw py::value_error("date: " + *why);
+              info.provenance.date = *date;
+            }
             return CalibrationToJson(c.result, info);
           },
           py::arg("positions") = std::nullopt, py::arg("units") = std::nullopt,
           py::arg("raw_units") = "raw", py::arg("source") = std::nullopt,
+          py::arg("date") = std::nullopt,
           "The calibration file (JSON text, docs/calibration-file.md). By default of the fitted "
           "positions (with their sample counts and noise) in the result's units, with its "
           "diagnosis and source: for calibrate_log the same text as `accelcal calibrate LOG "
-          "--json`. Other positions (m x 3) or units are diagnosed anew, without the log.");
+          "--json` but its provenance (the Python function, its arguments and the file's "
+          "SHA-256). Other positions (m x 3) or units are diagnosed anew, without the log. "
+          "`date` (YYYY-MM-DD[THH:MM[:SS]Z]) is written as the provenance's date; none without "
+          "it.");
 
   py::class_<LoadedCalibration>(m, "Calibration", "A calibration read from its file")
       .def_property_readonly(
@@ -615,6 +648,33 @@ PYBIND11_MODULE(_accelcal, m) {
       .def_property_readonly("K", [](const LoadedCalibration& c) { return Mat33(c.params.K); })
       .def_property_readonly("bias", [](const LoadedCalibration& c) { return Vec3(c.params.bias); })
       .def_property_readonly("k2", [](const LoadedCalibration& c) { return Vec3(c.params.k2); })
+      .def_readonly("version", &LoadedCalibration::version, "The file's format version (1 or 2)")
+      .def_readonly("verdict", &LoadedCalibration::verdict,
+                    "\"ok\", \"warnings\" or \"failed\" ('' in files older than diagnoses)")
+      .def_readonly("source", &LoadedCalibration::source, "The calibrated input's name")
+      .def_property_readonly(
+          "provenance",
+          [](const LoadedCalibration& c) -> py::object {
+            if (c.version < 2) return py::none();
+            const Provenance& p = c.provenance;
+            py::dict d;
+            d["accelcal_version"] = p.accelcal_version;
+            d["command"] = p.command;
+            d["options"] = ToPython(p.options);
+            py::list inputs;
+            for (const InputRecord& i : p.inputs) {
+              py::dict input;
+              input["name"] = i.name;
+              input["bytes"] = i.bytes;
+              input["sha256"] = i.sha256;
+              inputs.append(input);
+            }
+            d["inputs"] = inputs;
+            d["date"] = p.date.empty() ? py::object(py::none()) : py::object(py::str(p.date));
+            return d;
+          },
+          "What made the file (version 2; None for version 1): accelcal_version, command, "
+          "options, inputs (name, bytes, sha256), date (None when none was given)")
       .def(
           "apply",
           [](const LoadedCalibration& c, const Rows& readings) {
@@ -644,7 +704,12 @@ PYBIND11_MODULE(_accelcal, m) {
         const CalibrationOptions options = MakeOptions(s);
         std::vector<Vec3> sigmas;
         if (reading_sigmas) sigmas = ToVectors(*reading_sigmas);
-        return Fit(PositionsOf(readings), std::move(sigmas), s, options, nullptr, nullptr, "");
+        PyCalibration c =
+            Fit(PositionsOf(readings), std::move(sigmas), s, options, nullptr, nullptr, "");
+        c.provenance.command = "accelcal Python calibrate";
+        c.provenance.options = SettingsJson(s);
+        c.provenance.options["reading_sigmas"] = reading_sigmas.has_value();
+        return c;
       },
       py::arg("readings"), py::arg("model") = "linear", py::arg("method") = "joint",
       py::arg("frame") = "x-first", py::arg("gravity") = kStandardGravity_ms2,
@@ -686,6 +751,19 @@ PYBIND11_MODULE(_accelcal, m) {
           PyCalibration c = Fit(positions, std::move(sigmas), s, options,
                                 data.kind == InputKind::kRaw ? &data.raw : nullptr,
                                 detection ? &*detection : nullptr, path);
+          c.provenance.command = "accelcal Python calibrate_log";
+          c.provenance.options = SettingsJson(s);
+          nlohmann::ordered_json& o = c.provenance.options;
+          o["columns"] = read.columns;
+          o["rate_hz"] = rate_hz ? nlohmann::ordered_json(*rate_hz) : nlohmann::ordered_json();
+          o["window_s"] = window_s;
+          o["min_static_s"] = min_static_s;
+          o["threshold_factor"] = threshold_factor;
+          o["init_rest_s"] = init_rest_s;
+          o["time_unit"] = time_unit;
+          o["instance"] = instance ? nlohmann::ordered_json(*instance) : nlohmann::ordered_json();
+          o["input_kind"] = input_kind;
+          c.provenance.inputs = InputRecords(in);
           return py::make_tuple(std::move(c), ToRows(Means(positions)));
         } catch (const DataError& e) {
           throw DataError(path + ": " + e.what());  // as the command line names the input

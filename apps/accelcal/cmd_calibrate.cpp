@@ -227,7 +227,7 @@ Provenance MakeProvenance(const CalibrateArgs& args, const LoadedInput& in) {
                                : values.size() == 1 ? nlohmann::ordered_json(values.front())
                                                     : nlohmann::ordered_json(values);
   }
-  for (const LoadedFile& f : in.files) provenance.inputs.push_back({f.path, 0, ""});
+  provenance.inputs = InputRecords(in);
   if (!args.orientations.empty()) provenance.inputs.push_back({args.orientations, 0, ""});
   provenance.date = args.date;
   return provenance;

@@ -18,6 +18,7 @@
 #include "accelcal/calibrate.hpp"
 #include "accelcal/diagnosis.hpp"
 #include "accelcal/gravity.hpp"
+#include "accelcal/load_positions.hpp"
 #include "accelcal/model_selection.hpp"
 #include "accelcal/positions.hpp"
 
@@ -50,6 +51,9 @@ struct Provenance {
   /// states this library's Version().
   std::string accelcal_version;
 };
+
+/// The files of a calibration's input, in order, as its provenance records them.
+std::vector<InputRecord> InputRecords(const LoadedInput& input);
 
 /// Why a provenance date is not one, or nothing when it is.
 std::optional<std::string> CheckProvenanceDate(const std::string& date);

@@ -172,3 +172,42 @@ def test_the_example_runs_and_draws_its_figure(tmp_path):
     assert "held-out RMS of |f| - g" in run.stdout
     png = (tmp_path / "xsens_calibration.png").read_bytes()
     assert png[:8] == b"\x89PNG\r\n\x1a\n" and len(png) > 20000
+
+
+# --- the calibration file's provenance and version 1 ---------------------------------------------
+
+V1 = os.path.join(os.path.dirname(DATA), "tests", "data", "calibration-v1")
+
+
+def test_the_file_says_what_made_it(tmp_path):
+    result, _ = accelcal.calibrate_log(XSENS, gravity=9.81744)
+    doc = json.loads(result.to_json())
+    provenance = doc["provenance"]
+    assert provenance["command"] == "accelcal Python calibrate_log"
+    assert provenance["options"]["gravity"] == 9.81744 and provenance["options"]["model"] == "linear"
+    assert [i["name"] for i in provenance["inputs"]] == [XSENS]
+    assert "date" not in provenance  # none given: the same input gives the same bytes
+    dated = result.to_json(date="2026-11-23")
+    assert json.loads(dated)["provenance"]["date"] == "2026-11-23"
+    with pytest.raises(ValueError, match="that month has no day 31"):
+        result.to_json(date="2026-11-31")
+    loaded = accelcal.parse_calibration_json(dated)
+    assert loaded.version == 2 and loaded.verdict == "ok"
+    assert loaded.provenance["date"] == "2026-11-23"
+    assert loaded.provenance["options"] == provenance["options"]
+    _, positions = accelcal.calibrate_log(XSENS, gravity=9.81744)
+    from_arrays = json.loads(accelcal.calibrate(positions, gravity=9.81744).to_json())
+    assert from_arrays["provenance"]["command"] == "accelcal Python calibrate"
+    assert from_arrays["provenance"]["inputs"] == []
+
+
+def test_version_1_files_still_load():
+    for name in ["xsens-linear.json", "ctu49-auto-z-first.json", "ferraris-known.json",
+                 "two-sessions.json", "failed.json"]:
+        path = os.path.join(V1, name)
+        doc = json.load(open(path))
+        loaded = accelcal.load_calibration(path)
+        assert loaded.version == 1 and loaded.provenance is None
+        assert loaded.verdict == doc["verdict"]
+        np.testing.assert_array_equal(loaded.K, np.array(doc["K"]))
+        np.testing.assert_array_equal(loaded.bias, np.array(doc["bias"]))

@@ -250,6 +250,12 @@ bool Digits(const std::string& text, std::size_t at, std::size_t count, int low,
 
 }  // namespace
 
+std::vector<InputRecord> InputRecords(const LoadedInput& input) {
+  std::vector<InputRecord> records;
+  for (const LoadedFile& f : input.files) records.push_back({f.path, 0, ""});
+  return records;
+}
+
 std::optional<std::string> CheckProvenanceDate(const std::string& date) {
   const std::string expected =
       "'" + date + "' is not a date YYYY-MM-DD, optionally followed by THH:MM[:SS] and Z or +HH:MM";

@@ -182,7 +182,15 @@ class Fuzzer:
         return accelcal.render_report(text, **self.subset(kwargs))
 
     def parse(self):
-        return accelcal.parse_calibration_json(self.mutated_json(), self.word("<string>"))
+        calibration = accelcal.parse_calibration_json(self.mutated_json(), self.word("<string>"))
+        return calibration.provenance, calibration.version, calibration.verdict
+
+    def to_json(self):
+        kwargs = dict(positions=self.array(self.positions), units=self.word(None),
+                      raw_units=self.word("raw"), source=self.word(None),
+                      date=self.choice([None, "2026-11-23", "2026-02-29", "2026-11-23T10:00Z", "",
+                                        "yesterday", "2026-11-23T25:00", 20261123, "\u00e9"]))
+        return self.result.to_json(**self.subset(kwargs))
 
     def load(self):
         return accelcal.load_calibration(self.choice(PATHS))
@@ -213,7 +221,8 @@ def main():
     warnings.simplefilter("ignore")
     fuzzer = Fuzzer(args.seed)
     calls = [fuzzer.calibrate, fuzzer.calibrate_log, fuzzer.diagnose, fuzzer.read_input,
-             fuzzer.detect, fuzzer.export, fuzzer.report, fuzzer.parse, fuzzer.load, fuzzer.apply]
+             fuzzer.detect, fuzzer.export, fuzzer.report, fuzzer.parse, fuzzer.load, fuzzer.apply,
+             fuzzer.to_json]
     counts = {c.__name__: 0 for c in calls}
     accepted = 0
     end = time.monotonic() + args.seconds

@@ -1,0 +1,416 @@
+// Python's calibrate, calibrate_log and diagnose, and their result (CalibrationResult): the
+// calibration as the command line does it, with its diagnosis and provenance.
+#include "py_common.hpp"
+
+#include <cmath>
+#include <cstdio>
+#include <optional>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include <pybind11/eigen.h>
+#include <pybind11/pybind11.h>
+#include <pybind11/stl.h>
+
+#include "accelcal/calibrate.hpp"
+#include "accelcal/calibration_file.hpp"
+#include "accelcal/diagnosis.hpp"
+#include "accelcal/error.hpp"
+#include "accelcal/export.hpp"
+#include "accelcal/load_positions.hpp"
+#include "accelcal/log_reader.hpp"
+#include "accelcal/model_selection.hpp"
+#include "accelcal/report.hpp"
+#include "accelcal/static_detection.hpp"
+#include "accelcal/time_axis.hpp"
+
+namespace accelcal::python {
+
+namespace {
+
+// ---------------------------------------------------------------------------------------------
+// Calibration as the command line does it, and its diagnosis.
+
+// A calibration with what it was fitted to and its diagnosis: Python's CalibrationResult.
+struct PyCalibration {
+  CalibrationResult result;
+  std::optional<ModelSelection> selection;  // model "auto", or "quadratic" with held-out errors
+  std::string model_requested;
+  ForceUnit unit = ForceUnit::kMetersPerSecond2;
+  std::vector<Position> positions;  // the fitted positions, in the result's order
+  std::string source;               // the input file, "" from arrays
+  int max_excluded = OutlierOptions{}.max_excluded;
+  Diagnosis diagnosis;
+  Provenance provenance;  // the function and its arguments, the file read (to_json writes it)
+};
+
+struct FitSettings {
+  std::string model = "linear";  // linear, quadratic or auto
+  std::string method = "joint";
+  std::string frame = "x-first";
+  double gravity = kStandardGravity_ms2;
+  std::string estimator = "ml";
+  bool cross_validate = true;
+  std::string outliers = "exclude";
+  double outlier_probability = 1e-3;
+  int max_outliers = 3;
+  int max_iterations = 0;  // 0: the solvers' defaults
+  std::optional<std::string> units;
+};
+
+// The fit's arguments as a calibration file's provenance records them: every one, as used.
+nlohmann::ordered_json SettingsJson(const FitSettings& s) {
+  nlohmann::ordered_json o;
+  o["model"] = s.model;
+  o["method"] = s.method;
+  o["frame"] = s.frame;
+  o["gravity"] = s.gravity;
+  o["estimator"] = s.estimator;
+  o["cross_validate"] = s.cross_validate;
+  o["outliers"] = s.outliers;
+  o["outlier_probability"] = s.outlier_probability;
+  o["max_outliers"] = s.max_outliers;
+  o["max_iterations"] = s.max_iterations;
+  o["units"] = s.units ? nlohmann::ordered_json(*s.units) : nlohmann::ordered_json(nullptr);
+  return o;
+}
+
+// The options as RunCalibrate (apps/accelcal/cmd_calibrate.cpp) builds them; ValueError when
+// invalid.
+CalibrationOptions MakeOptions(const FitSettings& s) {
+  CalibrationOptions o;
+  const bool auto_model = s.model == "auto";
+  o.model = auto_model ? ModelKind::kLinear : Parse(ModelKindFromString(s.model), s.model, "model");
+  o.method = Parse(SolverMethodFromString(s.method), s.method, "method");
+  o.frame = Parse(FrameFromString(s.frame), s.frame, "frame");
+  o.gravity = s.gravity;
+  o.estimator = Parse(EstimatorFromString(s.estimator), s.estimator, "estimator");
+  o.outliers.policy = Parse(OutlierPolicyFromString(s.outliers), s.outliers, "outliers");
+  o.outliers.false_alarm_probability = s.outlier_probability;
+  o.outliers.max_excluded = s.max_outliers;
+  o.cross_validate = s.cross_validate;
+  if (s.max_iterations < 0) throw py::value_error("max_iterations must be >= 0 (0: the default)");
+  if (s.max_iterations > 0) {
+    o.two_step.max_sweeps = s.max_iterations;
+    o.joint.max_iterations = s.max_iterations;
+    o.modulus.max_iterations = s.max_iterations;
+    o.newton_lagrange.max_iterations = s.max_iterations;
+  }
+  if (auto why = o.Validate()) throw py::value_error(*why);
+  if (auto_model) {
+    if (!s.cross_validate) {
+      throw py::value_error("model 'auto' decides on held-out error: it needs cross_validate=True");
+    }
+    CalibrationOptions quadratic = o;
+    quadratic.model = ModelKind::kQuadratic;
+    if (auto why = quadratic.Validate()) throw py::value_error("model 'auto': " + *why);
+  }
+  UnitOf(s.units, s.gravity);  // an unknown unit is an error before any work
+  return o;
+}
+
+// Fits as RunCalibrate does (a quadratic fit, asked for or a candidate of "auto", is compared
+// with the linear fit) and diagnoses the result; `log` and `detection` add their findings.
+PyCalibration Fit(std::vector<Position> positions, std::vector<Vec3> sigmas, const FitSettings& s,
+                  CalibrationOptions options, const RawLog* log,
+                  const StaticDetectionResult* detection, std::string source) {
+  PyCalibration c;
+  c.model_requested = s.model;
+  c.unit = UnitOf(s.units, s.gravity);
+  c.positions = std::move(positions);
+  c.source = std::move(source);
+  c.max_excluded = s.max_outliers;
+  const std::vector<Vec3> means = Means(c.positions);
+  options.reading_sigmas = std::move(sigmas);
+  ModelChoice choice = CalibrateChoosingModel(means, options, s.model == "auto");
+  c.result = std::move(choice.result);
+  c.selection = std::move(choice.selection);
+  DiagnosisInput in;
+  in.result = &c.result;
+  in.positions = &c.positions;
+  in.max_excluded = c.max_excluded;
+  in.selection = c.selection ? &*c.selection : nullptr;
+  // One log, so its findings are not prefixed with its name (the command line's for one file).
+  if (log || detection) in.logs.push_back({c.source, log, detection});
+  in.unit = c.unit;
+  c.diagnosis = Diagnose(in);
+  return c;
+}
+
+}  // namespace
+
+void BindCalibration(py::module_& m) {
+  py::class_<PyCalibration>(
+      m, "CalibrationResult",
+      "A calibration: p = K f + b + k2 * f**2 (docs/model.md), with its diagnosis (verdict, "
+      "diagnostics) and the positions it was fitted to")
+      .def_property_readonly(
+          "model", [](const PyCalibration& c) { return std::string(ToString(c.result.model)); })
+      .def_property_readonly(
+          "frame", [](const PyCalibration& c) { return std::string(ToString(c.result.frame)); })
+      .def_property_readonly("gravity", [](const PyCalibration& c) { return c.result.gravity; })
+      .def_property_readonly(
+          "units", [](const PyCalibration& c) { return std::string(ToString(c.unit)); },
+          "Unit of gravity and of the calibrated specific force: 'm/s2' or 'g'")
+      .def_property_readonly("K", [](const PyCalibration& c) { return Mat33(c.result.params.K); })
+      .def_property_readonly("bias",
+                             [](const PyCalibration& c) { return Vec3(c.result.params.bias); })
+      .def_property_readonly("k2", [](const PyCalibration& c) { return Vec3(c.result.params.k2); })
+      .def_property_readonly("covariance",
+                             [](const PyCalibration& c) -> std::optional<Eigen::MatrixXd> {
+                               if (c.result.covariance.size() == 0) return std::nullopt;
+                               return c.result.covariance;
+                             })
+      .def_property_readonly(
+          "parameter_names",
+          [](const PyCalibration& c) {
+            std::vector<std::string> names;
+            for (const ParameterSlot& s : ParameterSlots(c.result.model, c.result.frame))
+              names.emplace_back(s.name);
+            return names;
+          })
+      .def_property_readonly("directions",
+                             [](const PyCalibration& c) { return ToRows(c.result.directions); })
+      .def_property_readonly("residuals",
+                             [](const PyCalibration& c) { return ToRows(c.result.residuals); })
+      .def_property_readonly("residual_sigma",
+                             [](const PyCalibration& c) { return c.result.residual_sigma; })
+      .def_property_readonly("scatter_ratio",
+                             [](const PyCalibration& c) { return c.result.scatter_ratio; })
+      .def_property_readonly("degrees_of_freedom",
+                             [](const PyCalibration& c) { return c.result.degrees_of_freedom; })
+      .def_property_readonly("crossval_rms",
+                             [](const PyCalibration& c) { return c.result.crossval_rms; })
+      .def_property_readonly("crossval_errors",
+                             [](const PyCalibration& c) { return c.result.crossval_errors; })
+      .def_property_readonly("crossval_note",
+                             [](const PyCalibration& c) { return c.result.crossval_note; })
+      .def_property_readonly(
+          "outliers",
+          [](const PyCalibration& c) {
+            py::list list;
+            for (const OutlierFinding& o : c.result.outliers) {
+              py::dict d;
+              d["position"] = o.position;  // 0-based, as the readings' rows
+              d["excluded"] = o.excluded;
+              d["statistic"] = std::string(ToString(o.statistic));
+              d["t"] = o.t;
+              d["threshold"] = o.threshold;
+              d["degrees_of_freedom"] = o.degrees_of_freedom;
+              d["normal_residual"] = o.normal_residual;
+              d["scatter"] = o.scatter;
+              list.append(d);
+            }
+            return list;
+          },
+          "Positions the screening found discordant: dicts whose 'position' is the 0-based row "
+          "of the readings (the calibration file and the diagnostics count from 1)")
+      .def_property_readonly("outlier_note",
+                             [](const PyCalibration& c) { return c.result.outlier_note; })
+      .def_property_readonly("summary",
+                             [](const PyCalibration& c) { return SummaryDict(c.result.summary); })
+      .def_property_readonly(
+          "verdict",
+          [](const PyCalibration& c) { return std::string(ToString(c.diagnosis.verdict())); },
+          "'ok' (notes at most), 'warnings' or 'failed' (the calibration failed its checks and "
+          "must not be used as it is; the command line exits with status 6)")
+      .def_property_readonly(
+          "diagnostics", [](const PyCalibration& c) { return FindingsList(c.diagnosis); },
+          "The diagnosis (diagnosis.hpp), failures first, then warnings, then notes: dicts with "
+          "code, severity ('note', 'warning', 'failure'), message and numbers (a dict; position "
+          "numbers in it count from 1, as in the messages)")
+      .def_property_readonly(
+          "model_selection",
+          [](const PyCalibration& c) -> py::object {
+            if (!c.selection) return py::none();
+            return SelectionDict(*c.selection);
+          },
+          "With model 'auto' (or 'quadratic' with cross-validation): which model the held-out "
+          "errors support and why (model_selection.hpp; positions_used 0-based); else None")
+      .def_property_readonly(
+          "source", [](const PyCalibration& c) { return c.source; }, "The input file, or ''")
+      .def(
+          "apply",
+          [](const PyCalibration& c, const Rows& readings) {
+            return Apply(c.result.params, readings);
+          },
+          py::arg("readings"), "Corrected specific force (n x 3) of raw readings (n x 3)")
+      .def(
+          "to_json",
+          [](const PyCalibration& c, std::optional<Rows> positions,
+             std::optional<std::string> units, const std::string& raw_units,
+             std::optional<std::string> source, std::optional<std::string> date) {
+            CalibrationFileInfo info;
+            info.unit = units ? Parse(ForceUnitFromString(*units), *units, "units") : c.unit;
+            info.raw_unit = raw_units;
+            info.source = source ? *source : c.source;
+            if (positions) {
+              if (static_cast<std::size_t>(positions->rows()) != c.result.directions.size()) {
+                throw py::value_error("to_json: " + std::to_string(positions->rows()) +
+                                      " positions for a calibration of " +
+                                      std::to_string(c.result.directions.size()));
+              }
+              info.positions = PositionsOf(*positions);
+            } else {
+              info.positions = c.positions;
+            }
+            info.model_selection = c.selection ? &*c.selection : nullptr;
+            info.model_requested = c.model_requested;
+            // The stored diagnosis is of the fitted positions in the stored unit.
+            if (!positions && info.unit == c.unit) info.diagnosis = &c.diagnosis;
+            info.provenance = c.provenance;
+            if (date) {
+              if (const auto why = CheckProvenanceDate(*date))
+                throw py::value_error("date: " + *why);
+              info.provenance.date = *date;
+            }
+            return CalibrationToJson(c.result, info);
+          },
+          py::arg("positions") = std::nullopt, py::arg("units") = std::nullopt,
+          py::arg("raw_units") = "raw", py::arg("source") = std::nullopt,
+          py::arg("date") = std::nullopt,
+          "The calibration file (JSON text, docs/calibration-file.md). By default of the fitted "
+          "positions (with their sample counts and noise) in the result's units, with its "
+          "diagnosis and source: for calibrate_log the same text as `accelcal calibrate LOG "
+          "--json` but its provenance (the Python function, its arguments and the file's "
+          "SHA-256). Other positions (m x 3) or units are diagnosed anew, without the log. "
+          "`date` (YYYY-MM-DD[THH:MM[:SS]Z]) is written as the provenance's date; none without "
+          "it.");
+
+  m.def(
+      "calibrate",
+      [](const Rows& readings, const std::string& model, const std::string& method,
+         const std::string& frame, double gravity, const std::string& estimator,
+         std::optional<Rows> reading_sigmas, bool cross_validate, const std::string& outliers,
+         double outlier_probability, int max_outliers, std::optional<std::string> units,
+         int max_iterations) {
+        const FitSettings s{model,        method,         frame,           gravity,
+                            estimator,    cross_validate, outliers,        outlier_probability,
+                            max_outliers, max_iterations, std::move(units)};
+        const CalibrationOptions options = MakeOptions(s);
+        std::vector<Vec3> sigmas;
+        if (reading_sigmas) sigmas = ToVectors(*reading_sigmas);
+        PyCalibration c =
+            Fit(PositionsOf(readings), std::move(sigmas), s, options, nullptr, nullptr, "");
+        c.provenance.command = "accelcal Python calibrate";
+        c.provenance.options = SettingsJson(s);
+        c.provenance.options["reading_sigmas"] = reading_sigmas.has_value();
+        return c;
+      },
+      py::arg("readings"), py::arg("model") = "linear", py::arg("method") = "joint",
+      py::arg("frame") = "x-first", py::arg("gravity") = kStandardGravity_ms2,
+      py::arg("estimator") = "ml", py::arg("reading_sigmas") = std::nullopt,
+      py::arg("cross_validate") = true, py::arg("outliers") = "exclude", py::kw_only(),
+      py::arg("outlier_probability") = 1e-3, py::arg("max_outliers") = 3,
+      py::arg("units") = std::nullopt, py::arg("max_iterations") = 0,
+      "Calibrates from averaged readings and diagnoses the result (no Python warnings: "
+      "accelcal.calibrate adds them)");
+
+  m.def(
+      "calibrate_log",
+      [](const std::string& path, const std::string& model, const std::string& method,
+         const std::string& frame, double gravity, const std::string& estimator,
+         std::vector<std::string> columns, std::optional<double> rate_hz, double window_s,
+         double min_static_s, double threshold_factor, double init_rest_s, bool cross_validate,
+         const std::string& outliers, double outlier_probability, int max_outliers,
+         std::optional<std::string> units, const std::string& time_unit,
+         std::optional<double> instance, const std::string& input_kind, int max_iterations) {
+        const FitSettings s{model,        method,         frame,           gravity,
+                            estimator,    cross_validate, outliers,        outlier_probability,
+                            max_outliers, max_iterations, std::move(units)};
+        // Every option is checked before the file is read, as the command line does.
+        const StaticDetectionOptions detection_options =
+            DetectionOptions(window_s, min_static_s, threshold_factor, init_rest_s);
+        const CalibrationOptions options = MakeOptions(s);
+        const ReadOptions read =
+            MakeReadOptions(input_kind, std::move(columns), rate_hz, time_unit, instance);
+        LoadOptions load;
+        load.read = read;
+        load.detection = detection_options;
+        try {
+          const LoadedInput in = LoadPositions({path}, load);
+          const LoadedFile& file = in.files.front();
+          const std::vector<Position>& positions = in.positions;
+          const InputData& data = file.data;
+          const std::optional<StaticDetectionResult>& detection = file.detection;
+          std::vector<Vec3> sigmas = SigmasOfMeans(positions);  // empty: from the residuals
+          PyCalibration c = Fit(positions, std::move(sigmas), s, options,
+                                data.kind == InputKind::kRaw ? &data.raw : nullptr,
+                                detection ? &*detection : nullptr, path);
+          c.provenance.command = "accelcal Python calibrate_log";
+          c.provenance.options = SettingsJson(s);
+          nlohmann::ordered_json& o = c.provenance.options;
+          o["columns"] = read.columns;
+          o["rate_hz"] = rate_hz ? nlohmann::ordered_json(*rate_hz) : nlohmann::ordered_json();
+          o["window_s"] = window_s;
+          o["min_static_s"] = min_static_s;
+          o["threshold_factor"] = threshold_factor;
+          o["init_rest_s"] = init_rest_s;
+          o["time_unit"] = time_unit;
+          o["instance"] = instance ? nlohmann::ordered_json(*instance) : nlohmann::ordered_json();
+          o["input_kind"] = input_kind;
+          c.provenance.inputs = InputRecords(in);
+          return py::make_tuple(std::move(c), ToRows(Means(positions)));
+        } catch (const DataError& e) {
+          throw DataError(path + ": " + e.what());  // as the command line names the input
+        }
+      },
+      py::arg("path"), py::arg("model") = "linear", py::arg("method") = "joint",
+      py::arg("frame") = "x-first", py::arg("gravity") = kStandardGravity_ms2,
+      py::arg("estimator") = "ml", py::arg("columns") = std::vector<std::string>{},
+      py::arg("rate_hz") = std::nullopt, py::arg("window_s") = 0.5, py::arg("min_static_s") = 1.0,
+      py::arg("threshold_factor") = 10.0, py::arg("init_rest_s") = 0.0,
+      py::arg("cross_validate") = true, py::kw_only(), py::arg("outliers") = "exclude",
+      py::arg("outlier_probability") = 1e-3, py::arg("max_outliers") = 3,
+      py::arg("units") = std::nullopt, py::arg("time_unit") = "auto",
+      py::arg("instance") = std::nullopt, py::arg("input_kind") = "raw",
+      py::arg("max_iterations") = 0,
+      "What `accelcal calibrate INPUT` does, diagnosis included; returns (result, positions) "
+      "(no Python warnings: accelcal.calibrate_log adds them)");
+
+  m.def(
+      "diagnose",
+      [](const PyCalibration& c, std::optional<Rows> positions, std::optional<std::string> units,
+         std::optional<Rows> samples, std::optional<Eigen::VectorXd> time,
+         std::optional<double> rate_hz, const std::string& time_unit,
+         std::optional<py::dict> detection, std::optional<int> max_outliers) {
+        std::vector<Position> fitted = c.positions;
+        if (positions) {
+          if (static_cast<std::size_t>(positions->rows()) != c.result.directions.size()) {
+            throw py::value_error("diagnose: " + std::to_string(positions->rows()) +
+                                  " positions for a calibration of " +
+                                  std::to_string(c.result.directions.size()));
+          }
+          fitted = PositionsOf(*positions);
+        }
+        std::optional<RawLog> log;
+        if (samples) {
+          log = LogFromArrays(time, *samples, rate_hz, time_unit);
+        } else if (time) {
+          throw py::value_error("diagnose: time needs the samples");
+        }
+        std::optional<StaticDetectionResult> found;
+        if (detection) {
+          found = DetectionFromDict(
+              *detection, log ? std::optional<std::size_t>(log->samples.size()) : std::nullopt);
+        }
+        DiagnosisInput in;
+        in.result = &c.result;
+        in.positions = &fitted;
+        in.max_excluded = max_outliers ? *max_outliers : c.max_excluded;
+        in.selection = c.selection ? &*c.selection : nullptr;
+        if (log || found) {
+          in.logs.push_back({c.source, log ? &*log : nullptr, found ? &*found : nullptr});
+        }
+        in.unit = units ? Parse(ForceUnitFromString(*units), *units, "units") : c.unit;
+        return DiagnosisDict(Diagnose(in));
+      },
+      py::arg("result"), py::arg("positions") = std::nullopt, py::arg("units") = std::nullopt,
+      py::arg("samples") = std::nullopt, py::arg("time") = std::nullopt,
+      py::arg("rate_hz") = std::nullopt, py::arg("time_unit") = "s",
+      py::arg("detection") = std::nullopt, py::arg("max_outliers") = std::nullopt,
+      "The diagnosis of a calibration (diagnosis.hpp): {'verdict': ..., 'diagnostics': [...]}");
+}
+
+}  // namespace accelcal::python

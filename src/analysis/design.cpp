@@ -114,6 +114,61 @@ struct ExchangeReport {
   bool capped = false;
 };
 
+enum class Criterion {
+  kDeterminant,  ///< D-optimal: log det A
+  kTrace,        ///< A-optimal: tr A⁻¹
+};
+
+// Fedorov exchange on the information A = Σ_chosen w_kᵀ w_k of the rows W: each sweep makes the
+// one swap of a chosen i for an unchosen j that improves the criterion most, until none improves
+// it by more than a relative 1e-10 or `max_sweeps` sweeps were made (report->capped). With d_k =
+// w_k A⁻¹ w_kᵀ and d_ij = w_i A⁻¹ w_jᵀ, the swap multiplies det A by (1 + d_j)(1 − d_i) + d_ij²
+// (the rank-2 determinant lemma); it lowers tr A⁻¹ by tr(M⁻¹N) (Woodbury, A' = A + U C Uᵀ with
+// U = (w_jᵀ w_iᵀ), C = diag(1, −1), M = C⁻¹ + UᵀA⁻¹U, N = UᵀA⁻²U, det M = −ratio): a swap that
+// would make A singular (ratio ≤ 1e-9) is skipped for the trace.
+void FedorovExchange(const Eigen::MatrixXd& W, Criterion criterion, int max_sweeps,
+                     std::vector<bool>* chosen_in, Eigen::MatrixXd* A_in, ExchangeReport* report) {
+  std::vector<bool>& chosen = *chosen_in;
+  Eigen::MatrixXd& A = *A_in;
+  const auto n = static_cast<int>(W.rows());
+  const auto P = static_cast<int>(W.cols());
+  for (int sweep = 0;; ++sweep) {
+    if (sweep == max_sweeps) {
+      report->capped = true;
+      return;
+    }
+    const Eigen::MatrixXd A_inv = A.ldlt().solve(Eigen::MatrixXd::Identity(P, P));
+    const Eigen::MatrixXd V = W * A_inv;  // rows w_k A⁻¹
+    const Eigen::VectorXd d = (V.array() * W.array()).rowwise().sum();
+    Eigen::VectorXd e;  // |w_k A⁻¹|², for the trace
+    if (criterion == Criterion::kTrace) e = V.rowwise().squaredNorm();
+    double best = criterion == Criterion::kDeterminant ? 1.0 + 1e-10 : 1e-10 * A_inv.trace();
+    int best_in = -1, best_out = -1;
+    for (int i = 0; i < n; ++i) {
+      if (!chosen[static_cast<std::size_t>(i)]) continue;
+      for (int j = 0; j < n; ++j) {
+        if (chosen[static_cast<std::size_t>(j)]) continue;
+        const double dij = V.row(i).dot(W.row(j));
+        const double ratio = (1.0 + d(j)) * (1.0 - d(i)) + dij * dij;
+        double gain = ratio;
+        if (criterion == Criterion::kTrace) {
+          if (!(ratio > 1e-9)) continue;
+          const double eij = V.row(i).dot(V.row(j));
+          // tr(M⁻¹N) with M = [[1 + d_j, d_ij], [d_ij, d_i − 1]], det M = −ratio.
+          gain = ((d(i) - 1.0) * e(j) - 2.0 * dij * eij + (1.0 + d(j)) * e(i)) / -ratio;
+        }
+        if (gain > best) best = gain, best_in = i, best_out = j;
+      }
+    }
+    if (best_in < 0) return;
+    chosen[static_cast<std::size_t>(best_in)] = false;
+    chosen[static_cast<std::size_t>(best_out)] = true;
+    A +=
+        W.row(best_out).transpose() * W.row(best_out) - W.row(best_in).transpose() * W.row(best_in);
+    ++report->exchanges;
+  }
+}
+
 std::vector<int> ChooseD(const ModelParameters& device, ModelKind model, double gravity,
                          const std::vector<Vec3>& candidates, const Vec3& sigma_raw, int count,
                          int max_sweeps, ExchangeReport* report) {
@@ -146,38 +201,7 @@ std::vector<int> ChooseD(const ModelParameters& device, ModelKind model, double 
     A += W.row(best).transpose() * W.row(best);
   }
   A -= regularisation * Eigen::MatrixXd::Identity(P, P);
-  // Fedorov exchange: swap i (in) for j (out) when det grows, by the rank-2 determinant lemma
-  // Δ = (1 + d_j)(1 − d_i) + d_ij² with d = w A⁻¹ wᵀ.
-  for (int sweep = 0;; ++sweep) {
-    if (sweep == max_sweeps) {
-      report->capped = true;
-      break;
-    }
-    bool improved = false;
-    const Eigen::MatrixXd A_inv = A.ldlt().solve(Eigen::MatrixXd::Identity(P, P));
-    const Eigen::MatrixXd V = W * A_inv;  // rows w_k A⁻¹
-    const Eigen::VectorXd d = (V.array() * W.array()).rowwise().sum();
-    double best = 1.0 + 1e-10;
-    int best_in = -1, best_out = -1;
-    for (int i = 0; i < n; ++i) {
-      if (!chosen[static_cast<std::size_t>(i)]) continue;
-      for (int j = 0; j < n; ++j) {
-        if (chosen[static_cast<std::size_t>(j)]) continue;
-        const double dij = V.row(i).dot(W.row(j));
-        const double ratio = (1.0 + d(j)) * (1.0 - d(i)) + dij * dij;
-        if (ratio > best) best = ratio, best_in = i, best_out = j;
-      }
-    }
-    if (best_in >= 0) {
-      chosen[static_cast<std::size_t>(best_in)] = false;
-      chosen[static_cast<std::size_t>(best_out)] = true;
-      A += W.row(best_out).transpose() * W.row(best_out) -
-           W.row(best_in).transpose() * W.row(best_in);
-      improved = true;
-      ++report->exchanges;
-    }
-    if (!improved) break;
-  }
+  FedorovExchange(W, Criterion::kDeterminant, max_sweeps, &chosen, &A, report);
   std::vector<int> indices;
   for (int k = 0; k < n; ++k) {
     if (chosen[static_cast<std::size_t>(k)]) indices.push_back(k);
@@ -206,10 +230,8 @@ double TraceCrlb(const ModelParameters& device, ModelKind model, double gravity,
 
 namespace {
 
-// Fedorov exchange on the trace of A⁻¹ from the chosen set `chosen` (nonsingular). Swapping i (in)
-// for j (out) is A' = A + U C Uᵀ, U = (w_jᵀ w_iᵀ), C = diag(1, −1); by Woodbury tr A'⁻¹ = tr A⁻¹ −
-// tr(M⁻¹ N) with M = C⁻¹ + UᵀA⁻¹U and N = UᵀA⁻²U. det M = −((1 + d_j)(1 − d_i) + d_ij²) is minus
-// the determinant ratio of ChooseDOptimal: a swap that would make A singular is skipped.
+// Fedorov exchange on the trace of A⁻¹ from the chosen set `chosen`; the trace it reaches
+// (infinite when the start is singular).
 double ExchangeOnTrace(const Eigen::MatrixXd& W, std::vector<bool>* chosen_in, int max_sweeps,
                        ExchangeReport* report) {
   std::vector<bool>& chosen = *chosen_in;
@@ -223,35 +245,7 @@ double ExchangeOnTrace(const Eigen::MatrixXd& W, std::vector<bool>* chosen_in, i
   if (ldlt.info() != Eigen::Success || !(ldlt.vectorD().minCoeff() > 0)) {
     return std::numeric_limits<double>::infinity();
   }
-  for (int sweep = 0; sweep < max_sweeps; ++sweep) {
-    const Eigen::MatrixXd A_inv = A.ldlt().solve(Eigen::MatrixXd::Identity(P, P));
-    const Eigen::MatrixXd V = W * A_inv;
-    const Eigen::VectorXd d = (V.array() * W.array()).rowwise().sum();
-    const Eigen::VectorXd e = V.rowwise().squaredNorm();
-    double best = 1e-10 * A_inv.trace();
-    int best_in = -1, best_out = -1;
-    for (int i = 0; i < n; ++i) {
-      if (!chosen[static_cast<std::size_t>(i)]) continue;
-      for (int j = 0; j < n; ++j) {
-        if (chosen[static_cast<std::size_t>(j)]) continue;
-        const double dij = V.row(i).dot(W.row(j));
-        const double ratio = (1.0 + d(j)) * (1.0 - d(i)) + dij * dij;
-        if (!(ratio > 1e-9)) continue;
-        const double eij = V.row(i).dot(V.row(j));
-        // tr(M⁻¹N) with M = [[1 + d_j, d_ij], [d_ij, d_i − 1]], det M = −ratio.
-        const double reduction =
-            ((d(i) - 1.0) * e(j) - 2.0 * dij * eij + (1.0 + d(j)) * e(i)) / -ratio;
-        if (reduction > best) best = reduction, best_in = i, best_out = j;
-      }
-    }
-    if (best_in < 0) return A_inv.trace();
-    chosen[static_cast<std::size_t>(best_in)] = false;
-    chosen[static_cast<std::size_t>(best_out)] = true;
-    A +=
-        W.row(best_out).transpose() * W.row(best_out) - W.row(best_in).transpose() * W.row(best_in);
-    ++report->exchanges;
-  }
-  report->capped = true;
+  FedorovExchange(W, Criterion::kTrace, max_sweeps, &chosen, &A, report);
   return A.ldlt().solve(Eigen::MatrixXd::Identity(P, P)).trace();
 }
 

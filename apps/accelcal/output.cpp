@@ -89,26 +89,6 @@ void ProgressBar::Finish() {
   drawn_ = false;
 }
 
-std::string Format(const char* format, ...) {
-  va_list args;
-  va_start(args, format);
-  char stack[512];
-  va_list copy;
-  va_copy(copy, args);
-  const int n = std::vsnprintf(stack, sizeof stack, format, copy);
-  va_end(copy);
-  std::string out;
-  if (n < static_cast<int>(sizeof stack)) {
-    out.assign(stack, static_cast<std::size_t>(std::max(n, 0)));
-  } else {
-    out.resize(static_cast<std::size_t>(n) + 1);
-    std::vsnprintf(out.data(), out.size(), format, args);
-    out.resize(static_cast<std::size_t>(n));
-  }
-  va_end(args);
-  return out;
-}
-
 namespace {
 
 // The temporary files being written, for the signal handlers: fixed storage (a handler may not

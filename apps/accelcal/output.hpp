@@ -9,6 +9,8 @@
 #include <utility>
 #include <vector>
 
+#include "core/text_format.hpp"
+
 namespace accelcal::cli {
 
 /// How much the tool says besides its results (`--quiet`, `--verbose`). Results (files, and
@@ -102,7 +104,7 @@ class ProgressBar {
   double last_draw_s_ = -1.0;
 };
 
-/// printf into a std::string.
-std::string Format(const char* format, ...) __attribute__((format(printf, 1, 2)));
+/// printf into a std::string, in the "C" locale: the library's own (core/text_format.hpp).
+using internal::Format;
 
 }  // namespace accelcal::cli

@@ -113,6 +113,16 @@ enum class TerminationType {
                        ///< maximal damping, or Newton diverged: not converged
 };
 std::string_view ToString(TerminationType type);
+template <>
+struct EnumNames<TerminationType> {
+  static constexpr std::pair<TerminationType, std::string_view> kTable[] = {
+      {TerminationType::kParameterTolerance, "parameter_tolerance"},
+      {TerminationType::kFunctionTolerance, "function_tolerance"},
+      {TerminationType::kZeroResidual, "zero_residual"},
+      {TerminationType::kMaxIterations, "max_iterations"},
+      {TerminationType::kClosedForm, "closed_form"},
+      {TerminationType::kNoProgress, "no_progress"}};
+};
 
 /// Screening of the positions for one that does not agree with the others: a position recorded
 /// while the sensor crept, or knocked during its interval, averages to a reading off the fitted

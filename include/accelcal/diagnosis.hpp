@@ -63,6 +63,7 @@
 #include "accelcal/gravity.hpp"
 #include "accelcal/log_reader.hpp"
 #include "accelcal/model_selection.hpp"
+#include "accelcal/names.hpp"
 #include "accelcal/positions.hpp"
 #include "accelcal/static_detection.hpp"
 
@@ -74,6 +75,11 @@ enum class Severity {
   kFailure,  ///< "failure": the result failed its checks and must not be used as it is
 };
 std::string_view ToString(Severity severity);
+template <>
+struct EnumNames<Severity> {
+  static constexpr std::pair<Severity, std::string_view> kTable[] = {
+      {Severity::kNote, "note"}, {Severity::kWarning, "warning"}, {Severity::kFailure, "failure"}};
+};
 
 /// One finding of the diagnosis.
 struct Finding {
@@ -91,6 +97,11 @@ enum class Verdict {
   kFailed,    ///< "failed": at least one failure
 };
 std::string_view ToString(Verdict verdict);
+template <>
+struct EnumNames<Verdict> {
+  static constexpr std::pair<Verdict, std::string_view> kTable[] = {
+      {Verdict::kOk, "ok"}, {Verdict::kWarnings, "warnings"}, {Verdict::kFailed, "failed"}};
+};
 
 struct Diagnosis {
   std::vector<Finding> findings;

@@ -11,29 +11,9 @@ namespace accelcal {
 
 using internal::Format;
 
-std::string_view ToString(Severity severity) {
-  switch (severity) {
-    case Severity::kNote:
-      return "note";
-    case Severity::kWarning:
-      return "warning";
-    case Severity::kFailure:
-      break;
-  }
-  return "failure";
-}
+std::string_view ToString(Severity severity) { return NameOf(severity); }
 
-std::string_view ToString(Verdict verdict) {
-  switch (verdict) {
-    case Verdict::kOk:
-      return "ok";
-    case Verdict::kWarnings:
-      return "warnings";
-    case Verdict::kFailed:
-      break;
-  }
-  return "failed";
-}
+std::string_view ToString(Verdict verdict) { return NameOf(verdict); }
 
 Verdict Diagnosis::verdict() const {
   Verdict v = Verdict::kOk;

@@ -1,6 +1,7 @@
 // Reading a calibration file (calibration_file.hpp), version 1 or 2: every key a reader uses is
 // checked here once, so that apply, export, report, compare and Python get typed values and never
 // read the JSON themselves.
+#include <algorithm>
 #include <cmath>
 #include <set>
 
@@ -96,13 +97,25 @@ ordered_json ParseWithoutDuplicateKeys(const std::string& text, const std::strin
 }
 
 int VerdictRank(const std::string& verdict) {
-  return verdict == "failed" ? 2 : verdict == "warnings" ? 1 : 0;
+  return static_cast<int>(FromName<Verdict>(verdict).value_or(Verdict::kOk));
+}
+
+// "a, b, c" (NameList) as "\"a\", \"b\" or \"c\"", as the messages spell choices.
+std::string Quoted(const std::string& list) {
+  std::string out;
+  std::size_t at = 0;
+  while (at <= list.size()) {
+    const std::size_t end = std::min(list.find(", ", at), list.size());
+    if (!out.empty()) out += end == list.size() ? " or " : ", ";
+    out += "\"" + list.substr(at, end - at) + "\"";
+    at = end + 2;
+  }
+  return out;
 }
 
 std::string CheckedVerdict(const Reader& r, const ordered_json& doc) {
-  if (!doc["verdict"].is_string() ||
-      (doc["verdict"] != "ok" && doc["verdict"] != "warnings" && doc["verdict"] != "failed")) {
-    r.Fail(r.Key("verdict") + " must be \"ok\", \"warnings\" or \"failed\"");
+  if (!doc["verdict"].is_string() || !FromName<Verdict>(doc["verdict"].get<std::string>())) {
+    r.Fail(r.Key("verdict") + " must be " + Quoted(NameList<Verdict>()));
   }
   return doc["verdict"].get<std::string>();
 }
@@ -254,16 +267,14 @@ void ReadDiagnostics(const Reader& r, const ordered_json& doc, LoadedCalibration
     Finding finding;
     finding.code = f.contains("code") ? d.Text(f, "code") : std::string();
     finding.message = f.contains("message") ? d.Text(f, "message") : std::string();
-    const std::string severity = f.contains("severity") ? d.Text(f, "severity") : std::string();
-    if (severity == "note") {
-      finding.severity = Severity::kNote;
-    } else if (severity == "warning") {
-      finding.severity = Severity::kWarning;
-    } else if (severity == "failure") {
-      finding.severity = Severity::kFailure;
-    } else {
-      d.Fail(d.Key("severity") + " must be \"note\", \"warning\" or \"failure\"");
+    const std::optional<Severity> severity =
+        f.contains("severity") && f["severity"].is_string()
+            ? FromName<Severity>(f["severity"].get<std::string>())
+            : std::nullopt;
+    if (!severity) {
+      d.Fail(d.Key("severity") + " must be " + Quoted(NameList<Severity>()));
     }
+    finding.severity = *severity;
     if (f.contains("numbers")) {
       for (const auto& [name, value] : d.Object(f, "numbers").items()) {
         if (!value.is_null() && !value.is_number())

@@ -56,23 +56,7 @@ std::optional<Initialization> InitializationFromString(std::string_view text) {
   return FromName<Initialization>(text);
 }
 
-std::string_view ToString(TerminationType type) {
-  switch (type) {
-    case TerminationType::kParameterTolerance:
-      return "parameter_tolerance";
-    case TerminationType::kFunctionTolerance:
-      return "function_tolerance";
-    case TerminationType::kZeroResidual:
-      return "zero_residual";
-    case TerminationType::kMaxIterations:
-      return "max_iterations";
-    case TerminationType::kClosedForm:
-      return "closed_form";
-    case TerminationType::kNoProgress:
-      break;
-  }
-  return "no_progress";
-}
+std::string_view ToString(TerminationType type) { return NameOf(type); }
 
 std::optional<std::string> CalibrationOptions::Validate() const {
   if (!(gravity > 0) || !std::isfinite(gravity)) return "gravity must be a positive number";

@@ -1,7 +1,7 @@
 #pragma once
 // A calibration the reader accepted, used as the tool uses one: every export format and the HTML
 // report. Expected refusals are swallowed: DataError from a format that cannot hold the
-// calibration, InputError from the report (it reads the text again). Anything else propagates
+// calibration. Anything else propagates
 // (the test or fuzz harness that calls this reports it). Shared by fuzz/fuzz_calibration_file.cpp,
 // fuzz/fuzz_calibration_keys.cpp and tests/test_calibration_keys.cpp.
 #include <string>
@@ -22,6 +22,17 @@ inline void UseCalibration(const LoadedCalibration& calibration, const std::stri
     }
   }
   RenderReport({calibration, source, nullptr, {}});
+}
+
+// A calibration file's text as the fuzzers feed it: read, and when the reader accepts it, used.
+inline void ReadAndUseCalibration(const std::string& text, const std::string& source) {
+  LoadedCalibration calibration;
+  try {
+    calibration = ParseCalibrationJson(text, source);
+  } catch (const InputError&) {
+    return;
+  }
+  UseCalibration(calibration, text, source);
 }
 
 }  // namespace accelcal::test

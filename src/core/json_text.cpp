@@ -2,6 +2,7 @@
 
 #include <charconv>
 #include <cmath>
+#include <cstdint>
 
 namespace accelcal {
 
@@ -24,20 +25,50 @@ bool HoldsArrayOfObjects(const Json& value) {
   return false;
 }
 
-void AppendScalar(const Json& value, std::string* out) {
-  if (value.is_number_float()) {
-    const double v = value.get<double>();
-    if (!std::isfinite(v)) {
-      *out += "null";
+// A string as JSON: quoted as it is when every byte is printable ASCII other than '"' and '\\'
+// (names, numbers' labels, most messages), else through nlohmann's escaping.
+void AppendString(const std::string& text, std::string* out) {
+  for (const char c : text) {
+    if (c < 0x20 || c > 0x7e || c == '"' || c == '\\') {
+      *out += Json(text).dump(-1, ' ', false, Json::error_handler_t::replace);
       return;
     }
-    char buf[32];
-    const auto result = std::to_chars(buf, buf + sizeof buf, v);
-    out->append(buf, result.ptr);
-    return;
   }
-  // Strings (escaped, invalid UTF-8 replaced), integers, booleans, null: nlohmann's own text.
-  *out += value.dump(-1, ' ', false, Json::error_handler_t::replace);
+  *out += '"';
+  *out += text;
+  *out += '"';
+}
+
+template <typename Number>
+void AppendNumber(Number v, std::string* out) {
+  char buf[32];
+  const auto result = std::to_chars(buf, buf + sizeof buf, v);
+  out->append(buf, result.ptr);
+}
+
+void AppendScalar(const Json& value, std::string* out) {
+  switch (value.type()) {
+    case Json::value_t::number_float: {
+      const double v = value.get<double>();
+      if (std::isfinite(v)) {
+        AppendNumber(v, out);
+      } else {
+        *out += "null";
+      }
+      return;
+    }
+    case Json::value_t::number_integer:
+      AppendNumber(value.get<std::int64_t>(), out);
+      return;
+    case Json::value_t::number_unsigned:
+      AppendNumber(value.get<std::uint64_t>(), out);
+      return;
+    case Json::value_t::string:
+      AppendString(value.get_ref<const std::string&>(), out);
+      return;
+    default:  // booleans, null (and binary, which no document here holds): nlohmann's own text
+      *out += value.dump(-1, ' ', false, Json::error_handler_t::replace);
+  }
 }
 
 void Append(const Json& value, int depth, bool inline_layout, std::string* out) {
@@ -56,7 +87,7 @@ void Append(const Json& value, int depth, bool inline_layout, std::string* out) 
   const std::string indent(static_cast<std::size_t>(2 * (depth + 1)), ' ');
   *out += open;
   bool first = true;
-  for (const auto& member : value.items()) {
+  const auto separate = [&] {
     if (!first) *out += ',';
     if (one_line) {
       if (!first) *out += ' ';
@@ -65,11 +96,19 @@ void Append(const Json& value, int depth, bool inline_layout, std::string* out) 
       *out += indent;
     }
     first = false;
-    if (!array) {
-      AppendScalar(Json(member.key()), out);
-      *out += ": ";
+  };
+  if (array) {
+    for (const Json& element : value) {
+      separate();
+      Append(element, depth + 1, one_line, out);
     }
-    Append(member.value(), depth + 1, one_line, out);
+  } else {
+    for (auto member = value.begin(); member != value.end(); ++member) {
+      separate();
+      AppendString(member.key(), out);
+      *out += ": ";
+      Append(member.value(), depth + 1, one_line, out);
+    }
   }
   if (!one_line) {
     *out += '\n';

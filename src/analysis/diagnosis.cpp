@@ -32,6 +32,9 @@ constexpr const char* kAxisName[3] = {"x", "y", "z"};
 // Largest angle [deg] from any direction to the nearest of `directions`, on a Fibonacci grid of
 // 2000 points, and where.
 std::pair<double, Vec3> LargestGap(const std::vector<Vec3>& directions) {
+  std::vector<Vec3> unit;  // normalised once, not once per grid point
+  unit.reserve(directions.size());
+  for (const Vec3& d : directions) unit.push_back(d.normalized());
   double worst = 0;
   Vec3 where = Vec3::UnitZ();
   const int n = 2000;
@@ -40,7 +43,7 @@ std::pair<double, Vec3> LargestGap(const std::vector<Vec3>& directions) {
     const double phi = i * kPi * (3.0 - std::sqrt(5.0));
     const Vec3 u(std::sqrt(1 - z * z) * std::cos(phi), std::sqrt(1 - z * z) * std::sin(phi), z);
     double closest = -1;  // the largest cosine is the nearest direction: one acos per point
-    for (const Vec3& d : directions) closest = std::max(closest, u.dot(d.normalized()));
+    for (const Vec3& d : unit) closest = std::max(closest, u.dot(d));
     const double nearest = std::acos(std::clamp(closest, -1.0, 1.0));
     if (nearest > worst) worst = nearest, where = u;
   }

@@ -4,6 +4,7 @@
 #include <chrono>
 #include <cstdio>
 #include <exception>
+#include <string_view>
 
 #include <CLI/CLI.hpp>
 
@@ -94,6 +95,20 @@ std::vector<std::pair<std::string, std::vector<std::string>>> GivenOptions(
   return given;
 }
 
+// The first argument that names a command, or "" when none does (a command missing from this
+// list is only slower to start: every command's options are then set up).
+std::string ChosenCommand(int argc, char** argv) {
+  static constexpr const char* kCommands[] = {"calibrate",  "compare",      "detect", "design",
+                                              "montecarlo", "system-level", "gimbal", "simulate",
+                                              "apply",      "report",       "export"};
+  for (int i = 1; i < argc; ++i) {
+    for (const char* command : kCommands) {
+      if (std::string_view(argv[i]) == command) return command;
+    }
+  }
+  return "";
+}
+
 }  // namespace
 
 int accelcal::cli::RunCommandLine(int argc, char** argv) {
@@ -103,238 +118,272 @@ int accelcal::cli::RunCommandLine(int argc, char** argv) {
   app.fallthrough();  // --quiet and --verbose may also follow the subcommand
   app.set_version_flag("--version", "accelcal " + std::string(accelcal::Version()));
 
+  // Only the chosen command's options are set up (CLI11 builds each option's parser and help at
+  // once): every command when none is named (then the tool's help or error lists them all).
+  const std::string chosen = ChosenCommand(argc, argv);
+  const auto Wanted = [&](const CLI::App* command) {
+    return chosen.empty() || chosen == command->get_name();
+  };
   CalibrateArgs cal;
   CLI::App* calibrate =
       app.add_subcommand("calibrate", "estimate K, b (and k2) from a raw log or a positions file");
   std::vector<std::string> calibrate_inputs;
-  calibrate
-      ->add_option("INPUT", calibrate_inputs,
-                   "raw logs or positions files (several: sessions of one device, positions "
-                   "pooled; - reads standard input)")
-      ->required();
-  AddInputOptions(calibrate, &cal.input, true);
-  AddDetectionOptions(calibrate, &cal.input);
-  AddGravityOptions(calibrate, &cal.gravity);
-  calibrate
-      ->add_option("--model", cal.model,
-                   "linear, quadratic, or auto (the model that predicts held-out positions "
-                   "better)")
-      ->capture_default_str();
-  calibrate
-      ->add_option("--method", cal.method,
-                   "joint, two-step, newton-lagrange, modulus, modulus-norm or ellipsoid")
-      ->capture_default_str();
-  calibrate->add_option("--init", cal.init, "auto, ellipsoid or normalized-readings")
-      ->capture_default_str();
-  calibrate
-      ->add_option("--frame", cal.frame,
-                   "body frame of the result: x-first (body x = sensor x, K lower-triangular, "
-                   "paper 000) or z-first (body z = sensor z, K upper-triangular, paper 001, "
-                   "imu_tk)")
-      ->capture_default_str();
-  calibrate
-      ->add_option("--estimator", cal.estimator,
-                   "ml (maximum likelihood) or bias-corrected (removes the bias of order "
-                   "sigma^2/g that ML has at MEMS noise levels; same covariance)")
-      ->capture_default_str();
-  AddOutlierOptions(calibrate, &cal.outliers,
-                    "a position that disagrees with the others (moved or bumped during its "
-                    "interval): exclude it with a warning, flag it only, or off");
-  calibrate->add_option("--orientations", cal.orientations,
-                        "known orientation of every position, in order (a file of directions or "
-                        "attitudes, as for design): full misalignment in the platform frame, "
-                        "paper 003");
-  calibrate->add_flag("!--no-crossval", cal.cross_validate,
-                      "skip the leave-one-position-out validation (one refit per position)");
-  calibrate->add_option("--raw-units", cal.raw_units, "label of the raw unit (e.g. counts)")
-      ->capture_default_str();
-  calibrate->add_option("--max-iterations", cal.max_iterations,
-                        "iteration cap of the solver (0: its default)");
-  calibrate->add_option("-o,--output", cal.output, "write the calibration file (JSON) here")
-      ->check(kFileName);
-  calibrate
-      ->add_option("--report", cal.report,
-                   "write the HTML report here (self-contained: plots, parameters, warnings)")
-      ->check(kFileName);
-  calibrate
-      ->add_option("--date", cal.date,
-                   "a date for the file's provenance (YYYY-MM-DD[THH:MM[:SS]Z]); without it none "
-                   "is written, so the same input gives the same bytes")
-      ->check(CLI::Validator(
-          [](std::string& date) { return accelcal::CheckProvenanceDate(date).value_or(""); },
-          "DATE"));
-  calibrate->add_flag("--json", cal.json,
-                      "print the calibration file to stdout instead of the summary");
+  if (Wanted(calibrate)) {
+    calibrate
+        ->add_option("INPUT", calibrate_inputs,
+                     "raw logs or positions files (several: sessions of one device, positions "
+                     "pooled; - reads standard input)")
+        ->required();
+    AddInputOptions(calibrate, &cal.input, true);
+    AddDetectionOptions(calibrate, &cal.input);
+    AddGravityOptions(calibrate, &cal.gravity);
+    calibrate
+        ->add_option("--model", cal.model,
+                     "linear, quadratic, or auto (the model that predicts held-out positions "
+                     "better)")
+        ->capture_default_str();
+    calibrate
+        ->add_option("--method", cal.method,
+                     "joint, two-step, newton-lagrange, modulus, modulus-norm or ellipsoid")
+        ->capture_default_str();
+    calibrate->add_option("--init", cal.init, "auto, ellipsoid or normalized-readings")
+        ->capture_default_str();
+    calibrate
+        ->add_option("--frame", cal.frame,
+                     "body frame of the result: x-first (body x = sensor x, K lower-triangular, "
+                     "paper 000) or z-first (body z = sensor z, K upper-triangular, paper 001, "
+                     "imu_tk)")
+        ->capture_default_str();
+    calibrate
+        ->add_option("--estimator", cal.estimator,
+                     "ml (maximum likelihood) or bias-corrected (removes the bias of order "
+                     "sigma^2/g that ML has at MEMS noise levels; same covariance)")
+        ->capture_default_str();
+    AddOutlierOptions(calibrate, &cal.outliers,
+                      "a position that disagrees with the others (moved or bumped during its "
+                      "interval): exclude it with a warning, flag it only, or off");
+    calibrate->add_option("--orientations", cal.orientations,
+                          "known orientation of every position, in order (a file of directions or "
+                          "attitudes, as for design): full misalignment in the platform frame, "
+                          "paper 003");
+    calibrate->add_flag("!--no-crossval", cal.cross_validate,
+                        "skip the leave-one-position-out validation (one refit per position)");
+    calibrate->add_option("--raw-units", cal.raw_units, "label of the raw unit (e.g. counts)")
+        ->capture_default_str();
+    calibrate->add_option("--max-iterations", cal.max_iterations,
+                          "iteration cap of the solver (0: its default)");
+    calibrate->add_option("-o,--output", cal.output, "write the calibration file (JSON) here")
+        ->check(kFileName);
+    calibrate
+        ->add_option("--report", cal.report,
+                     "write the HTML report here (self-contained: plots, parameters, warnings)")
+        ->check(kFileName);
+    calibrate
+        ->add_option("--date", cal.date,
+                     "a date for the file's provenance (YYYY-MM-DD[THH:MM[:SS]Z]); without it none "
+                     "is written, so the same input gives the same bytes")
+        ->check(CLI::Validator(
+            [](std::string& date) { return accelcal::CheckProvenanceDate(date).value_or(""); },
+            "DATE"));
+    calibrate->add_flag("--json", cal.json,
+                        "print the calibration file to stdout instead of the summary");
+  }
 
   CompareArgs cmp;
   CLI::App* compare = app.add_subcommand(
       "compare", "run several calibration methods on the same data and tabulate them");
-  compare->add_option("INPUT", cmp.input.path, "raw log or positions file")->required();
-  AddInputOptions(compare, &cmp.input, true);
-  AddDetectionOptions(compare, &cmp.input);
-  AddGravityOptions(compare, &cmp.gravity);
-  compare->add_option("--model", cmp.model, "linear or quadratic")->capture_default_str();
-  compare->add_option("--methods", cmp.methods, "comma-separated (default: all for the model)")
-      ->delimiter(',');
-  compare->add_option("--init", cmp.init, "auto, ellipsoid or normalized-readings")
-      ->capture_default_str();
-  compare->add_flag("!--no-held-out", cmp.leave_one_out, "skip the leave-one-position-out fits");
-  AddOutlierOptions(compare, &cmp.outliers,
-                    "screen the positions once (maximum-likelihood fit) and fit every method to "
-                    "the same ones: exclude a disagreeing position, flag it only, or off");
-  compare->add_option("--reference", cmp.reference,
-                      "a known calibration (JSON): adds paper 001's e_T and e_b per method");
-  compare->add_flag("--json", cmp.json, "machine-readable output");
+  if (Wanted(compare)) {
+    compare->add_option("INPUT", cmp.input.path, "raw log or positions file")->required();
+    AddInputOptions(compare, &cmp.input, true);
+    AddDetectionOptions(compare, &cmp.input);
+    AddGravityOptions(compare, &cmp.gravity);
+    compare->add_option("--model", cmp.model, "linear or quadratic")->capture_default_str();
+    compare->add_option("--methods", cmp.methods, "comma-separated (default: all for the model)")
+        ->delimiter(',');
+    compare->add_option("--init", cmp.init, "auto, ellipsoid or normalized-readings")
+        ->capture_default_str();
+    compare->add_flag("!--no-held-out", cmp.leave_one_out, "skip the leave-one-position-out fits");
+    AddOutlierOptions(compare, &cmp.outliers,
+                      "screen the positions once (maximum-likelihood fit) and fit every method to "
+                      "the same ones: exclude a disagreeing position, flag it only, or off");
+    compare->add_option("--reference", cmp.reference,
+                        "a known calibration (JSON): adds paper 001's e_T and e_b per method");
+    compare->add_flag("--json", cmp.json, "machine-readable output");
+  }
 
   DetectArgs det;
   CLI::App* detect = app.add_subcommand("detect", "list the static intervals of a raw log");
-  detect->add_option("LOG", det.input.path, "raw log")->required();
-  AddInputOptions(detect, &det.input, false);
-  AddDetectionOptions(detect, &det.input);
-  detect->add_flag("--json", det.json, "machine-readable output");
+  if (Wanted(detect)) {
+    detect->add_option("LOG", det.input.path, "raw log")->required();
+    AddInputOptions(detect, &det.input, false);
+    AddDetectionOptions(detect, &det.input);
+    detect->add_flag("--json", det.json, "machine-readable output");
+  }
 
   DesignArgs des;
   CLI::App* design = app.add_subcommand(
       "design", "predict the 1-sigma of every parameter (Cramer-Rao bound) for planned positions");
-  design
-      ->add_option("--positions", des.positions,
-                   "yang18, six, random:N[:SEED], or a file of unit directions (x,y,z) or "
-                   "attitudes (roll_deg,pitch_deg[,yaw_deg] or qw,qx,qy,qz; body to level, z up)")
-      ->required();
-  design->add_option("--device", des.device, "calibration file of the nominal device")->required();
-  design
-      ->add_option("--noise", des.noise_raw,
-                   "1 sigma of one averaged reading in raw units: one value or three (x,y,z)")
-      ->delimiter(',')
-      ->expected(1, 3);
-  design->add_option("--noise-density", des.noise_density_ug,
-                     "instead of --noise: white noise [ug/sqrt(Hz)], with --rate and --duration");
-  design->add_option("--rate", des.rate_hz, "sample rate [Hz], with --noise-density");
-  design->add_option("--duration", des.duration_s,
-                     "still time per position [s], with --noise-density");
-  design->add_option("--model", des.model, "linear or quadratic (default: the device's)");
-  design->add_option("--choose", des.choose,
-                     "choose this many of the positions (the candidates) by --criterion; compared "
-                     "with paper 000's yang18");
-  design
-      ->add_option("--criterion", des.criterion,
-                   "with --choose: d (maximise det of the information, D-optimal) or a (minimise "
-                   "the trace of the CRLB, parameters in the device's relative metric, A-optimal)")
-      ->capture_default_str();
-  design->add_flag("--json", des.json, "machine-readable output");
+  if (Wanted(design)) {
+    design
+        ->add_option("--positions", des.positions,
+                     "yang18, six, random:N[:SEED], or a file of unit directions (x,y,z) or "
+                     "attitudes (roll_deg,pitch_deg[,yaw_deg] or qw,qx,qy,qz; body to level, z up)")
+        ->required();
+    design->add_option("--device", des.device, "calibration file of the nominal device")
+        ->required();
+    design
+        ->add_option("--noise", des.noise_raw,
+                     "1 sigma of one averaged reading in raw units: one value or three (x,y,z)")
+        ->delimiter(',')
+        ->expected(1, 3);
+    design->add_option("--noise-density", des.noise_density_ug,
+                       "instead of --noise: white noise [ug/sqrt(Hz)], with --rate and --duration");
+    design->add_option("--rate", des.rate_hz, "sample rate [Hz], with --noise-density");
+    design->add_option("--duration", des.duration_s,
+                       "still time per position [s], with --noise-density");
+    design->add_option("--model", des.model, "linear or quadratic (default: the device's)");
+    design->add_option(
+        "--choose", des.choose,
+        "choose this many of the positions (the candidates) by --criterion; compared "
+        "with paper 000's yang18");
+    design
+        ->add_option(
+            "--criterion", des.criterion,
+            "with --choose: d (maximise det of the information, D-optimal) or a (minimise "
+            "the trace of the CRLB, parameters in the device's relative metric, A-optimal)")
+        ->capture_default_str();
+    design->add_flag("--json", des.json, "machine-readable output");
+  }
 
   MonteCarloArgs mc;
   CLI::App* montecarlo = app.add_subcommand(
       "montecarlo", "simulate a scenario many times: errors against the Cramer-Rao bound");
-  montecarlo
-      ->add_option("--scenario", mc.scenario,
-                   "yang2012 (paper 000 Table 3/4) or sunxu2020 (paper 001 section 4.1)")
-      ->capture_default_str();
-  montecarlo->add_option("--runs", mc.runs, "number of runs")->capture_default_str();
-  montecarlo->add_option("--method", mc.method, "joint, two-step or newton-lagrange")
-      ->capture_default_str();
-  montecarlo->add_option("--estimator", mc.estimator, "ml or bias-corrected")
-      ->capture_default_str();
-  montecarlo->add_option("--seed", mc.seed, "seed of the first run's noise")->capture_default_str();
-  montecarlo->add_option("--threads", mc.threads, "threads (0: all cores)")->capture_default_str();
-  montecarlo->add_flag("--residual-noise", mc.residual_noise,
-                       "covariance from the residuals instead of the known noise");
-  montecarlo->add_flag("--json", mc.json, "machine-readable output");
+  if (Wanted(montecarlo)) {
+    montecarlo
+        ->add_option("--scenario", mc.scenario,
+                     "yang2012 (paper 000 Table 3/4) or sunxu2020 (paper 001 section 4.1)")
+        ->capture_default_str();
+    montecarlo->add_option("--runs", mc.runs, "number of runs")->capture_default_str();
+    montecarlo->add_option("--method", mc.method, "joint, two-step or newton-lagrange")
+        ->capture_default_str();
+    montecarlo->add_option("--estimator", mc.estimator, "ml or bias-corrected")
+        ->capture_default_str();
+    montecarlo->add_option("--seed", mc.seed, "seed of the first run's noise")
+        ->capture_default_str();
+    montecarlo->add_option("--threads", mc.threads, "threads (0: all cores)")
+        ->capture_default_str();
+    montecarlo->add_flag("--residual-noise", mc.residual_noise,
+                         "covariance from the residuals instead of the known noise");
+    montecarlo->add_flag("--json", mc.json, "machine-readable output");
+  }
 
   SystemLevelArgs sys;
   CLI::App* system_level = app.add_subcommand(
       "system-level",
       "paper 003 stage 3: residual accelerometer errors of a space-stable INS from a day of "
       "specific-force and attitude errors on a static, level base");
-  system_level->add_option("SERIES", sys.series, "series file (binary or t,fx,fy,fz,roll,pitch)")
-      ->required();
-  system_level->add_option("--latitude", sys.latitude_deg, "latitude of the base [deg]")
-      ->required();
-  system_level->add_option("--gravity", sys.gravity_ms2,
-                           "local gravity [m/s2] (default: WGS-84 normal gravity)");
-  system_level->add_flag("--json", sys.json, "machine-readable output");
+  if (Wanted(system_level)) {
+    system_level->add_option("SERIES", sys.series, "series file (binary or t,fx,fy,fz,roll,pitch)")
+        ->required();
+    system_level->add_option("--latitude", sys.latitude_deg, "latitude of the base [deg]")
+        ->required();
+    system_level->add_option("--gravity", sys.gravity_ms2,
+                             "local gravity [m/s2] (default: WGS-84 normal gravity)");
+    system_level->add_flag("--json", sys.json, "machine-readable output");
+  }
 
   GimbalArgs gim;
   CLI::App* gimbal = app.add_subcommand(
       "gimbal",
       "paper 003 stages 1-2: accelerometer on a three-gimbal platform, coarse (gimbal zero "
       "offsets) and fine (squared-amplitude) device-level calibration");
-  gimbal
-      ->add_option("COARSE", gim.coarse,
-                   "commanded gimbal angles and mean output per position: "
-                   "theta1_deg,theta2_deg,theta3_deg,ax,ay,az (Table 1's 18 positions)")
-      ->required();
-  gimbal->add_option("--fine", gim.fine,
-                     "mean outputs ax,ay,az of the fine stage's positions, measured after "
-                     "re-zeroing the gimbals by the coarse offsets");
-  AddGravityOptions(gimbal, &gim.gravity);
-  gimbal->add_flag("--json", gim.json, "machine-readable output");
+  if (Wanted(gimbal)) {
+    gimbal
+        ->add_option("COARSE", gim.coarse,
+                     "commanded gimbal angles and mean output per position: "
+                     "theta1_deg,theta2_deg,theta3_deg,ax,ay,az (Table 1's 18 positions)")
+        ->required();
+    gimbal->add_option("--fine", gim.fine,
+                       "mean outputs ax,ay,az of the fine stage's positions, measured after "
+                       "re-zeroing the gimbals by the coarse offsets");
+    AddGravityOptions(gimbal, &gim.gravity);
+    gimbal->add_flag("--json", gim.json, "machine-readable output");
+  }
 
   SimulateArgs sim;
   CLI::App* simulate = app.add_subcommand(
       "simulate", "write a simulated recording (raw log or positions file) of a known device");
-  simulate->add_option("--scenario", sim.scenario,
-                       "yang2012: paper 000's device, 18 positions, 10 ug/sqrt(Hz), 100 Hz, 60 s; "
-                       "sunxu2020: paper 001's, 300 Gaussian attitudes, 0.1 g per position; "
-                       "wu2018-system: paper 003's system-level series (Tables 2-3, 40 deg, "
-                       "5e-3 m/s2, 100 Hz, 24 h; binary, -o required)");
-  simulate->add_option("--truth", sim.truth, "calibration file of the simulated device");
-  simulate->add_option("--positions", sim.positions,
-                       "yang18, six, random:N[:SEED], or a file of unit directions or attitudes "
-                       "(as for design)");
-  simulate->add_option("--noise-density", sim.noise_density_ug, "white noise [ug/sqrt(Hz)]");
-  simulate->add_option("--rate", sim.rate_hz, "sample rate [Hz]")->capture_default_str();
-  simulate->add_option("--duration", sim.duration_s, "still time per position [s]")
-      ->capture_default_str();
-  simulate->add_option("--transition", sim.transition_s, "turning time between positions [s]")
-      ->capture_default_str();
-  simulate->add_option("--seed", sim.seed, "noise seed")->capture_default_str();
-  simulate->add_flag("--raw", sim.raw, "write a raw log (time,x,y,z) instead of positions");
-  simulate->add_flag("!--positions-out", sim.raw,
-                     "write a positions file x,y,z,n,sx,sy,sz (the default)");
-  simulate->add_option("-o,--output", sim.output, "output file (default: stdout)")
-      ->check(kFileName);
+  if (Wanted(simulate)) {
+    simulate->add_option(
+        "--scenario", sim.scenario,
+        "yang2012: paper 000's device, 18 positions, 10 ug/sqrt(Hz), 100 Hz, 60 s; "
+        "sunxu2020: paper 001's, 300 Gaussian attitudes, 0.1 g per position; "
+        "wu2018-system: paper 003's system-level series (Tables 2-3, 40 deg, "
+        "5e-3 m/s2, 100 Hz, 24 h; binary, -o required)");
+    simulate->add_option("--truth", sim.truth, "calibration file of the simulated device");
+    simulate->add_option("--positions", sim.positions,
+                         "yang18, six, random:N[:SEED], or a file of unit directions or attitudes "
+                         "(as for design)");
+    simulate->add_option("--noise-density", sim.noise_density_ug, "white noise [ug/sqrt(Hz)]");
+    simulate->add_option("--rate", sim.rate_hz, "sample rate [Hz]")->capture_default_str();
+    simulate->add_option("--duration", sim.duration_s, "still time per position [s]")
+        ->capture_default_str();
+    simulate->add_option("--transition", sim.transition_s, "turning time between positions [s]")
+        ->capture_default_str();
+    simulate->add_option("--seed", sim.seed, "noise seed")->capture_default_str();
+    simulate->add_flag("--raw", sim.raw, "write a raw log (time,x,y,z) instead of positions");
+    simulate->add_flag("!--positions-out", sim.raw,
+                       "write a positions file x,y,z,n,sx,sy,sz (the default)");
+    simulate->add_option("-o,--output", sim.output, "output file (default: stdout)")
+        ->check(kFileName);
+  }
 
   ApplyArgs apply;
   CLI::App* apply_cmd =
       app.add_subcommand("apply", "write the calibrated specific force of every sample of a log");
-  apply_cmd->add_option("CAL", apply.calibration, "calibration file (JSON)")->required();
-  apply_cmd->add_option("LOG", apply.input.path, "raw log")->required();
-  AddInputOptions(apply_cmd, &apply.input, false);
-  apply_cmd->add_option("-o,--output", apply.output, "output file (default: stdout)")
-      ->check(kFileName);
-  apply_cmd->add_option("--units", apply.units,
-                        "output unit m/s2 or g (default: the calibration's)");
+  if (Wanted(apply_cmd)) {
+    apply_cmd->add_option("CAL", apply.calibration, "calibration file (JSON)")->required();
+    apply_cmd->add_option("LOG", apply.input.path, "raw log")->required();
+    AddInputOptions(apply_cmd, &apply.input, false);
+    apply_cmd->add_option("-o,--output", apply.output, "output file (default: stdout)")
+        ->check(kFileName);
+    apply_cmd->add_option("--units", apply.units,
+                          "output unit m/s2 or g (default: the calibration's)");
+  }
 
   ReportArgs rep;
   CLI::App* report_cmd = app.add_subcommand(
       "report", "write the HTML report of a calibration file (and its raw log, when given)");
-  report_cmd->add_option("CAL", rep.calibration, "calibration file (JSON)")->required();
-  report_cmd->add_option("LOG", rep.log.path, "the raw log it was calibrated from (optional)");
-  AddInputOptions(report_cmd, &rep.log, false);
-  AddDetectionOptions(report_cmd, &rep.log);
-  report_cmd->add_option("-o,--output", rep.output, "HTML file (default: stdout)")
-      ->check(kFileName);
+  if (Wanted(report_cmd)) {
+    report_cmd->add_option("CAL", rep.calibration, "calibration file (JSON)")->required();
+    report_cmd->add_option("LOG", rep.log.path, "the raw log it was calibrated from (optional)");
+    AddInputOptions(report_cmd, &rep.log, false);
+    AddDetectionOptions(report_cmd, &rep.log);
+    report_cmd->add_option("-o,--output", rep.output, "HTML file (default: stdout)")
+        ->check(kFileName);
+  }
 
   ExportArgs exp;
   CLI::App* export_cmd = app.add_subcommand(
       "export", "write a calibration in another tool's format, saying what it cannot hold");
-  export_cmd->add_option("CAL", exp.calibration, "calibration file (JSON)")->required();
-  export_cmd
-      ->add_option("--to", exp.format,
-                   "json, yaml, kalibr, px4, ardupilot, c-header or imutk (docs/conventions.md)")
-      ->required();
-  export_cmd->add_option("-o,--output", exp.output, "output file (default: stdout)")
-      ->check(kFileName);
-  export_cmd->add_option("--raw-unit", exp.raw_unit,
-                         "unit of the calibrated raw readings, m/s2 or g, when the file's label "
-                         "is another (kalibr, px4, ardupilot need readings in m/s2)");
-  export_cmd
-      ->add_option("--instance", exp.instance,
-                   "accelerometer index: PX4 CAL_ACC<n>, ArduPilot INS_ACC / INS_ACC2 / INS_ACC3")
-      ->capture_default_str();
-  export_cmd->add_option("--c-prefix", exp.c_prefix, "prefix of the C identifiers (c-header)")
-      ->capture_default_str();
+  if (Wanted(export_cmd)) {
+    export_cmd->add_option("CAL", exp.calibration, "calibration file (JSON)")->required();
+    export_cmd
+        ->add_option("--to", exp.format,
+                     "json, yaml, kalibr, px4, ardupilot, c-header or imutk (docs/conventions.md)")
+        ->required();
+    export_cmd->add_option("-o,--output", exp.output, "output file (default: stdout)")
+        ->check(kFileName);
+    export_cmd->add_option("--raw-unit", exp.raw_unit,
+                           "unit of the calibrated raw readings, m/s2 or g, when the file's label "
+                           "is another (kalibr, px4, ardupilot need readings in m/s2)");
+    export_cmd
+        ->add_option("--instance", exp.instance,
+                     "accelerometer index: PX4 CAL_ACC<n>, ArduPilot INS_ACC / INS_ACC2 / INS_ACC3")
+        ->capture_default_str();
+    export_cmd->add_option("--c-prefix", exp.c_prefix, "prefix of the C identifiers (c-header)")
+        ->capture_default_str();
+  }
 
   bool quiet = false, verbose = false;
   auto* quiet_flag =

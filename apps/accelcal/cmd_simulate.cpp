@@ -11,22 +11,6 @@
 #include <sstream>
 #include <stdexcept>
 
-#include "accelcal/calibration_file.hpp"
-#include "accelcal/compare.hpp"
-#include "accelcal/design.hpp"
-#include "accelcal/diagnosis.hpp"
-#include "accelcal/engineering.hpp"
-#include "accelcal/error.hpp"
-#include "accelcal/export.hpp"
-#include "accelcal/frame.hpp"
-#include "accelcal/gimbal_platform.hpp"
-#include "accelcal/gravity.hpp"
-#include "accelcal/known_orientation.hpp"
-#include "accelcal/model_selection.hpp"
-#include "accelcal/montecarlo.hpp"
-#include "accelcal/orientation_file.hpp"
-#include "accelcal/report.hpp"
-#include "accelcal/series_file.hpp"
 #include "accelcal/simulate.hpp"
 #include "accelcal/system_level.hpp"
 #include "cli_common.hpp"

@@ -205,7 +205,8 @@ void PrintFindings(const Diagnosis& diagnosis, const std::string& path) {
 
 // The file's provenance: the options given, every input file (with the orientations) by name, size
 // and SHA-256 of the bytes read, and the date when one was given.
-Provenance MakeProvenance(const CalibrateArgs& args, const LoadedInput& in) {
+Provenance MakeProvenance(const CalibrateArgs& args, const LoadedInput& in,
+                          const OrientationFile* orientations) {
   Provenance provenance;
   provenance.command = "accelcal calibrate";
   for (const auto& [name, values] : args.given_options) {
@@ -214,7 +215,9 @@ Provenance MakeProvenance(const CalibrateArgs& args, const LoadedInput& in) {
                                                     : nlohmann::ordered_json(values);
   }
   provenance.inputs = InputRecords(in);
-  if (!args.orientations.empty()) provenance.inputs.push_back({args.orientations, 0, ""});
+  if (orientations != nullptr) {
+    provenance.inputs.push_back({args.orientations, orientations->bytes, orientations->sha256});
+  }
   provenance.date = args.date;
   return provenance;
 }
@@ -223,7 +226,7 @@ Provenance MakeProvenance(const CalibrateArgs& args, const LoadedInput& in) {
 // (`input_note`, when not empty, printed after the input's description).
 int WriteCalibration(const CalibrateArgs& args, const LoadedInput& in, const Gravity& g,
                      const CalibrationResult& result, const ModelSelection* selection,
-                     const std::string& input_note) {
+                     const std::string& input_note, const OrientationFile* orientations = nullptr) {
   DiagnosisInput diagnosis_input;
   diagnosis_input.result = &result;
   diagnosis_input.positions = &in.positions;
@@ -254,7 +257,7 @@ int WriteCalibration(const CalibrateArgs& args, const LoadedInput& in, const Gra
   info.model_selection = selection;
   info.model_requested = args.model;
   info.diagnosis = &diagnosis;
-  info.provenance = MakeProvenance(args, in);
+  info.provenance = MakeProvenance(args, in, orientations);
   const std::string json = CalibrationToJson(result, info);
   // Everything is rendered before anything is written: a failure leaves no file behind.
   std::string report;
@@ -337,7 +340,8 @@ int RunCalibrateKnownOrientations(const CalibrateArgs& args) {
       CalibrateKnownOrientations(Means(in.positions), orientations.directions, options);
   return WriteCalibration(args, in, g, result, nullptr,
                           Format("orient.   %s: %zu known orientations\n",
-                                 args.orientations.c_str(), orientations.directions.size()));
+                                 args.orientations.c_str(), orientations.directions.size()),
+                          &orientations);
 }
 
 }  // namespace

@@ -46,7 +46,9 @@ struct LoadOptions {
 
 /// Reads `paths` in order. Throws std::invalid_argument for invalid detection options, InputError
 /// for a file that cannot be read or parsed, DataError for a log without a static interval; with
-/// several files, any error names its file (InputError).
+/// several files, any error names its file (InputError). Each file is read with
+/// ReadOptions::fingerprint: its size and SHA-256 are in LoadedFile::data (a calibration's
+/// provenance, InputRecords).
 LoadedInput LoadPositions(const std::vector<std::string>& paths, const LoadOptions& options);
 
 }  // namespace accelcal

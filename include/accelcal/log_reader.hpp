@@ -61,6 +61,9 @@ struct ReadOptions {
   /// up to the size it had when opened, in blocks of whole lines (a file that shrinks meanwhile
   /// is an InputError).
   std::size_t max_stream_bytes = std::size_t{1} << 30;
+  /// Also state the input's size and the SHA-256 of its bytes as read (InputData::bytes, sha256):
+  /// what a calibration file's provenance records.
+  bool fingerprint = false;
 };
 
 /// A given rate may differ from the timestamps' by this fraction (clock error, rounding).
@@ -90,6 +93,9 @@ struct InputData {
   bool kind_from_row_count = false;
   RawLog raw;                       ///< when kind == kRaw
   std::vector<Position> positions;  ///< when kind == kPositions
+  /// With ReadOptions::fingerprint (ReadInput): the bytes read and their SHA-256 (hexadecimal).
+  std::uint64_t bytes = 0;
+  std::string sha256;
 };
 
 /// Parses text already in memory; `source` names it in errors.

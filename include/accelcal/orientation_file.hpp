@@ -19,6 +19,7 @@
 /// component: give its directions instead, or negate roll by 180°.
 /// Delimiters: commas, tabs or runs of spaces; `#` starts a comment; blank lines are skipped.
 
+#include <cstdint>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -36,6 +37,9 @@ struct OrientationFile {
   std::vector<Vec3> directions;               ///< unit c per position, body frame
   std::vector<Eigen::Quaterniond> attitudes;  ///< R per position (roll/pitch/yaw, quaternions)
   std::vector<std::size_t> lines;             ///< 1-based line of each position
+  /// ReadOrientations: the file's size and the SHA-256 of its bytes (a calibration's provenance).
+  std::uint64_t bytes = 0;
+  std::string sha256;
 };
 
 /// R = Rz(yaw) Ry(pitch) Rx(roll), angles in radians.

@@ -20,6 +20,8 @@ class Sha256 {
   void Update(const void* data, std::size_t size);
   /// The 32-byte digest; the object is spent afterwards (Update and Digest throw std::logic_error).
   std::array<std::uint8_t, 32> Digest();
+  /// Digest() as 64 lowercase hexadecimal digits.
+  std::string HexDigest();
 
  private:
   std::array<std::uint32_t, 8> state_;

@@ -1,6 +1,7 @@
 """The Python bindings: the same results as the library and the CLI, numpy in and out, the same
 error messages, and the example script running end to end."""
 
+import hashlib
 import json
 import os
 import subprocess
@@ -186,6 +187,9 @@ def test_the_file_says_what_made_it(tmp_path):
     assert provenance["command"] == "accelcal Python calibrate_log"
     assert provenance["options"]["gravity"] == 9.81744 and provenance["options"]["model"] == "linear"
     assert [i["name"] for i in provenance["inputs"]] == [XSENS]
+    raw = open(XSENS, "rb").read()
+    assert provenance["inputs"][0]["bytes"] == len(raw)
+    assert provenance["inputs"][0]["sha256"] == hashlib.sha256(raw).hexdigest()
     assert "date" not in provenance  # none given: the same input gives the same bytes
     dated = result.to_json(date="2026-11-23")
     assert json.loads(dated)["provenance"]["date"] == "2026-11-23"

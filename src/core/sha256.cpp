@@ -181,6 +181,8 @@ std::array<std::uint8_t, 32> Sha256::Digest() {
   return Hasher(internal::Blocks()).Digest(state_, buffer_, buffered_, length_);
 }
 
+std::string Sha256::HexDigest() { return Hex(Digest()); }
+
 std::string Sha256Hex(std::string_view bytes) { return HexWith(internal::Blocks(), bytes); }
 
 std::string internal::Sha256HexPortable(std::string_view bytes) {

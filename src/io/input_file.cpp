@@ -61,6 +61,7 @@ std::size_t InputFile::Read(char* out, std::size_t n) {
   } while (got < 0 && errno == EINTR);
   if (got < 0) throw InputError(name_, 0, std::string("cannot read: ") + std::strerror(errno));
   done_ += static_cast<std::size_t>(got);
+  if (hash_ != nullptr) hash_->Update(out, static_cast<std::size_t>(got));
   if (got == 0 && regular_ && done_ < size_) {
     throw InputError(name_, 0,
                      "the file shrank while it was read (" + std::to_string(size_) +

@@ -11,6 +11,8 @@
 #include <string>
 #include <string_view>
 
+#include "accelcal/sha256.hpp"
+
 namespace accelcal::internal {
 
 class InputFile {
@@ -31,6 +33,10 @@ class InputFile {
   /// `max_stream_bytes` come from anything else.
   std::size_t Read(char* out, std::size_t n);
   /// Read until `n` bytes came or the input ended; how many came.
+  /// Every byte Read returns from now on also goes into `hash` (which must outlive the reads).
+  void Fingerprint(Sha256* hash) { hash_ = hash; }
+  /// How many bytes Read has returned.
+  std::size_t bytes_read() const { return done_; }
   std::size_t ReadFully(char* out, std::size_t n) {
     std::size_t done = 0;
     for (std::size_t got; done < n && (got = Read(out + done, n - done)) > 0;) done += got;
@@ -45,6 +51,7 @@ class InputFile {
   std::size_t size_ = 0;
   std::size_t done_ = 0;
   std::size_t max_stream_bytes_;
+  Sha256* hash_ = nullptr;
 };
 
 /// The text of an input in blocks of whole lines.

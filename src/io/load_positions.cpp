@@ -19,7 +19,9 @@ LoadedFile LoadFile(const std::string& path, const LoadOptions& options) {
   if (options.before_file) options.before_file(path);
   LoadedFile loaded;
   loaded.path = path;
-  loaded.data = ReadInput(path, options.read);
+  ReadOptions read = options.read;
+  read.fingerprint = true;  // for the calibration's provenance
+  loaded.data = ReadInput(path, read);
   if (loaded.data.kind == InputKind::kRaw) {
     loaded.detection = DetectStaticIntervals(loaded.data.raw, options.detection);
   }

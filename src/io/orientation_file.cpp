@@ -9,6 +9,7 @@
 #include "accelcal/error.hpp"
 #include "accelcal/log_reader.hpp"
 #include "accelcal/platform_model.hpp"
+#include "accelcal/sha256.hpp"
 #include "core/text_format.hpp"
 #include "io/text_lines.hpp"
 
@@ -177,7 +178,11 @@ OrientationFile ParseOrientations(std::string_view text, const std::string& sour
 }
 
 OrientationFile ReadOrientations(const std::string& path) {
-  return ParseOrientations(ReadFileToString(path, kMaxSmallFileBytes), path);
+  const std::string text = ReadFileToString(path, kMaxSmallFileBytes);
+  OrientationFile file = ParseOrientations(text, path);
+  file.bytes = text.size();
+  file.sha256 = Sha256Hex(text);
+  return file;
 }
 
 }  // namespace accelcal

@@ -252,7 +252,9 @@ bool Digits(const std::string& text, std::size_t at, std::size_t count, int low,
 
 std::vector<InputRecord> InputRecords(const LoadedInput& input) {
   std::vector<InputRecord> records;
-  for (const LoadedFile& f : input.files) records.push_back({f.path, 0, ""});
+  for (const LoadedFile& f : input.files) {
+    records.push_back({f.path, f.data.bytes, f.data.sha256});
+  }
   return records;
 }
 

@@ -13,6 +13,7 @@
 #include <nlohmann/json.hpp>
 
 #include "accelcal/gimbal_platform.hpp"
+#include "accelcal/sha256.hpp"
 #include "accelcal/simulate.hpp"
 #include "support/calibration_keys.hpp"
 #include "support/cli_test.hpp"
@@ -38,6 +39,45 @@ std::string PositionsCsv(int count) {
     s += line;
   }
   return s;
+}
+
+// Provenance (calibration_file.hpp): the options given that change the result, in the tool's order
+// whatever the command line's; every input by name, size and SHA-256 (as sha256sum prints it);
+// a date only when given, checked as a date.
+TEST_F(Cli, TheCalibrationFileSaysWhatMadeIt) {
+  const std::string ctu = kData + "/ctu-innalabs-ahrs-m3/measured_accelerations_24pos.csv";
+  const CliRun a = Exec("calibrate " + ctu + " --units g --no-crossval --model quadratic --json");
+  const CliRun b = Exec("calibrate --model quadratic " + ctu + " --json --no-crossval --units g");
+  ASSERT_EQ(a.status, 0) << a.err;
+  EXPECT_EQ(a.out, b.out);  // the same calibration asked for in another order: the same bytes
+  const nlohmann::json provenance = nlohmann::json::parse(a.out).at("provenance");
+  EXPECT_EQ(provenance.at("command"), "accelcal calibrate");
+  EXPECT_EQ(provenance.at("options"),
+            nlohmann::json({{"units", "g"}, {"model", "quadratic"}, {"no-crossval", true}}));
+  ASSERT_EQ(provenance.at("inputs").size(), 1u);
+  EXPECT_EQ(provenance.at("inputs")[0].at("name"), ctu);
+  EXPECT_EQ(provenance.at("inputs")[0].at("bytes"), fs::file_size(ctu));
+  EXPECT_EQ(provenance.at("inputs")[0].at("sha256"), Sha256Hex(Slurp(ctu)));
+  EXPECT_FALSE(provenance.contains("date"));
+  const CliRun dated =
+      Exec("calibrate " + ctu + " --units g --no-crossval --json --date 2026-11-23");
+  ASSERT_EQ(dated.status, 0) << dated.err;
+  EXPECT_EQ(nlohmann::json::parse(dated.out).at("provenance").at("date"), "2026-11-23");
+  const CliRun bad = Exec("calibrate " + ctu + " --units g --date 2026-02-29 -o " + Path("d.json"));
+  EXPECT_EQ(bad.status, 2);
+  EXPECT_NE(bad.err.find("'2026-02-29': that month has no day 29"), std::string::npos) << bad.err;
+  EXPECT_FALSE(fs::exists(Path("d.json")));
+  // Standard input is hashed as read; the orientations file is an input too.
+  const std::string dir = kData + "/imucal-ferraris/";
+  const CliRun known =
+      Exec("calibrate - --orientations " + dir +
+           "ferraris_orientations.csv --gravity 9.81 --json < " + dir + "ferraris_raw_means.csv");
+  ASSERT_EQ(known.status, 0) << known.err;
+  const nlohmann::json inputs = nlohmann::json::parse(known.out)["provenance"]["inputs"];
+  ASSERT_EQ(inputs.size(), 2u);
+  EXPECT_EQ(inputs[0]["name"], "-");
+  EXPECT_EQ(inputs[0]["sha256"], Sha256Hex(Slurp(dir + "ferraris_raw_means.csv")));
+  EXPECT_EQ(inputs[1]["sha256"], Sha256Hex(Slurp(dir + "ferraris_orientations.csv")));
 }
 
 TEST_F(Cli, CalibratesTheXsensRecording) {

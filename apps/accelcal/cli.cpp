@@ -11,6 +11,7 @@
 #include "accelcal/calibration_file.hpp"
 #include "accelcal/error.hpp"
 #include "accelcal/version.hpp"
+#include "cli_common.hpp"
 #include "commands.hpp"
 #include "output.hpp"
 
@@ -480,7 +481,7 @@ int accelcal::cli::RunCommandLine(int argc, char** argv) {
     std::fprintf(stderr, "accelcal: usage: %s\n", e.what());
     return kExitUsage;
   } catch (const accelcal::InputError& e) {
-    std::fprintf(stderr, "accelcal: %s\n", e.what());
+    std::fprintf(stderr, "accelcal: %s\n", WithReaderFlags(e.what()).c_str());
     return kExitBadInput;
   } catch (const accelcal::DataError& e) {
     if (data_subject.empty()) {

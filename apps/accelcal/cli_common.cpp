@@ -216,6 +216,12 @@ std::string WithFlags(std::string message,
   return message;
 }
 
+std::string WithReaderFlags(const std::string& message) {
+  return WithFlags(message, {{"the columns option's entry", "--columns entry"},
+                             {"the columns option", "--columns"},
+                             {"input kind \"raw\"", "--input-kind raw"}});
+}
+
 // A calibration that failed its checks is written so that its reasons can be read, never used.
 void RefuseFailed(const LoadedCalibration& cal, const std::string& path) {
   if (cal.verdict == "failed") {

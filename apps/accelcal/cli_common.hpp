@@ -99,6 +99,10 @@ nlohmann::ordered_json JsonArray(const Vec3& v);
 std::string WithFlags(std::string message,
                       std::initializer_list<std::pair<const char*, const char*>> flags);
 
+// A message of the library's readers with the tool's flags for the options it names ("the columns
+// option" is --columns).
+std::string WithReaderFlags(const std::string& message);
+
 // A calibration that failed its checks is written so that its reasons can be read, never used.
 void RefuseFailed(const LoadedCalibration& cal, const std::string& path);
 

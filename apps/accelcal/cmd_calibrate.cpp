@@ -25,12 +25,12 @@ void PrintInput(const LoadedInput& in) {
   for (const LoadedFile& f : in.files) {
     if (f.data.kind == InputKind::kPositions) {
       Say("input     %s: %zu positions (%s)\n", f.path.c_str(), f.data.positions.size(),
-          f.data.kind_reason.c_str());
+          WithReaderFlags(f.data.kind_reason).c_str());
       continue;
     }
     const StaticDetectionResult& d = *f.detection;
     Say("input     %s: raw log, %zu samples at %.6g Hz (%s)\n", f.path.c_str(),
-        f.data.raw.samples.size(), d.rate_hz, f.data.kind_reason.c_str());
+        f.data.raw.samples.size(), d.rate_hz, WithReaderFlags(f.data.kind_reason).c_str());
     Say("detection %zu static intervals (window %zu samples, threshold %.4g raw^2 = %.3g x "
         "noise reference)\n",
         d.intervals.size(), d.window_samples, d.threshold,

@@ -164,8 +164,8 @@ int ResolveColumn(const std::string& spec, const std::vector<std::string>& heade
   if (ParseNumber(spec, &number)) {
     if (number < 1 || number > static_cast<double>(columns) || number != std::floor(number)) {
       throw InputError(source, 0,
-                       "--columns entry '" + spec + "' is not a column number between 1 and " +
-                           std::to_string(columns));
+                       "the columns option's entry '" + spec +
+                           "' is not a column number between 1 and " + std::to_string(columns));
     }
     return static_cast<int>(number) - 1;
   }
@@ -174,7 +174,7 @@ int ResolveColumn(const std::string& spec, const std::vector<std::string>& heade
     if (header[i] == want) return static_cast<int>(i);
   }
   throw InputError(source, 0,
-                   "--columns entry '" + spec + "' names no column" +
+                   "the columns option's entry '" + spec + "' names no column" +
                        (header.empty() ? std::string(" (the file has no header)") : std::string()));
 }
 
@@ -369,7 +369,7 @@ InputData ParseBlocks(internal::TextBlocks& blocks, const std::string& source,
     data.kind_from_row_count = true;
     data.kind_reason = "auto: " + std::to_string(rows) +
                        " rows <= " + std::to_string(options.max_rows_of_positions_file) +
-                       " is a positions file (--input-kind raw to override)";
+                       " is a positions file (input kind \"raw\" to override)";
   } else {
     data.kind = InputKind::kRaw;
     data.kind_reason = "auto: more than " + std::to_string(options.max_rows_of_positions_file) +
@@ -388,8 +388,8 @@ InputData ParseBlocks(internal::TextBlocks& blocks, const std::string& source,
     const std::size_t n = options.columns.size();
     if (raw ? (n != 3 && n != 4) : n != 3) {
       throw InputError(source, 0,
-                       raw ? "--columns takes 3 entries (x,y,z) or 4 (time,x,y,z)"
-                           : "--columns takes 3 entries (x,y,z) for a positions file");
+                       raw ? "the columns option takes 3 entries (x,y,z) or 4 (time,x,y,z)"
+                           : "the columns option takes 3 entries (x,y,z) for a positions file");
     }
     const int offset = n == 4 ? 1 : 0;
     if (n == 4) layout.column[kTime] = ResolveColumn(options.columns[0], header, ncols, source);
@@ -416,7 +416,7 @@ InputData ParseBlocks(internal::TextBlocks& blocks, const std::string& source,
   } else {
     throw InputError(source, first_line,
                      std::to_string(ncols) + " columns" +
-                         (raw ? ": use --columns to choose time,x,y,z or x,y,z"
+                         (raw ? ": use the columns option to choose time,x,y,z or x,y,z"
                               : ": a positions file has x,y,z [,n [,sx,sy,sz]]"));
   }
   // Parse every data row, block by block.

@@ -122,10 +122,10 @@ TEST(LogReader, ColumnSelectionByNumberAndName) {
   EXPECT_EQ(d.raw.time_s[5], 0.005);
   o.rate_hz = 1000;
   o.columns = {"acc_q", "acc_y", "acc_z"};
-  EXPECT_EQ(ErrorOf(text, o), "test.csv: --columns entry 'acc_q' names no column");
+  EXPECT_EQ(ErrorOf(text, o), "test.csv: the columns option's entry 'acc_q' names no column");
   o.columns = {"9", "2", "3"};
   EXPECT_EQ(ErrorOf(text, o),
-            "test.csv: --columns entry '9' is not a column number between 1 and 6");
+            "test.csv: the columns option's entry '9' is not a column number between 1 and 6");
 }
 
 TEST(LogReader, AHeaderWithASampleCountMeansPositionsWhateverTheRowCount) {
@@ -173,7 +173,7 @@ TEST(LogReader, ErrorsNameFileLineAndReason) {
   ReadOptions raw;
   raw.kind = InputKind::kRaw;
   EXPECT_EQ(ErrorOf("1,2,3,4,5\n", raw),
-            "test.csv:1: 5 columns: use --columns to choose time,x,y,z or x,y,z");
+            "test.csv:1: 5 columns: use the columns option to choose time,x,y,z or x,y,z");
   EXPECT_EQ(ErrorOf("0,1,2,3\n1,1,2,3\n0.5,1,2,3\n", raw),
             "test.csv:3: time goes backwards (0.5 after 1)");
   EXPECT_EQ(ErrorOf("1,2,3,4\n1,2,3,4\n", raw), "test.csv: the timestamps do not advance");

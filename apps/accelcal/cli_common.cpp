@@ -51,16 +51,14 @@ DataError NoStaticInterval(const StaticDetectionResult& d) {
 
 ReadOptions MakeReadOptions(const InputArgs& in) {
   ReadOptions options;
-  options.kind = ParseEnum(InputKindFromString(in.input_kind), in.input_kind, "--input-kind",
-                           "auto, raw, positions");
+  options.kind = ParseChoice<InputKind>(in.input_kind, "--input-kind");
   options.columns = in.columns;
   // A rate that is no rate is a usage error before anything is read (issue 16).
   if (in.rate_hz && !(*in.rate_hz > 0 && *in.rate_hz <= kMaxRate_hz)) {
     throw UsageError(Format("--rate must be a number of Hz in (0, %g]", kMaxRate_hz));
   }
   options.rate_hz = in.rate_hz;
-  options.time_unit = ParseEnum(TimeUnitFromString(in.time_unit), in.time_unit, "--time-unit",
-                                "auto, s, ms, us, ns");
+  options.time_unit = ParseChoice<TimeUnit>(in.time_unit, "--time-unit");
   if (in.instance && !std::isfinite(*in.instance)) {
     throw UsageError("--instance must be a finite number");
   }

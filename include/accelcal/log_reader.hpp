@@ -32,6 +32,11 @@ enum class InputKind {
 };
 std::string_view ToString(InputKind kind);
 std::optional<InputKind> InputKindFromString(std::string_view text);
+template <>
+struct EnumNames<InputKind> {
+  static constexpr std::pair<InputKind, std::string_view> kTable[] = {
+      {InputKind::kAuto, "auto"}, {InputKind::kRaw, "raw"}, {InputKind::kPositions, "positions"}};
+};
 
 struct ReadOptions {
   InputKind kind = InputKind::kAuto;

@@ -27,6 +27,8 @@
 #include <string_view>
 #include <vector>
 
+#include "accelcal/names.hpp"
+
 namespace accelcal {
 
 enum class TimeUnit {
@@ -38,6 +40,15 @@ enum class TimeUnit {
 };
 std::string_view ToString(TimeUnit unit);
 std::optional<TimeUnit> TimeUnitFromString(std::string_view text);
+template <>
+struct EnumNames<TimeUnit> {
+  static constexpr std::pair<TimeUnit, std::string_view> kTable[] = {
+      {TimeUnit::kAuto, "auto"},
+      {TimeUnit::kSeconds, "s"},
+      {TimeUnit::kMilliseconds, "ms"},
+      {TimeUnit::kMicroseconds, "us"},
+      {TimeUnit::kNanoseconds, "ns"}};
+};
 /// Seconds per unit (1, 1e-3, 1e-6, 1e-9); kAuto has none (0).
 double SecondsPer(TimeUnit unit);
 

@@ -18,23 +18,10 @@
 
 namespace accelcal {
 
-std::string_view ToString(InputKind kind) {
-  switch (kind) {
-    case InputKind::kAuto:
-      return "auto";
-    case InputKind::kRaw:
-      return "raw";
-    case InputKind::kPositions:
-      break;
-  }
-  return "positions";
-}
+std::string_view ToString(InputKind kind) { return NameOf(kind); }
 
 std::optional<InputKind> InputKindFromString(std::string_view text) {
-  if (text == "auto") return InputKind::kAuto;
-  if (text == "raw") return InputKind::kRaw;
-  if (text == "positions") return InputKind::kPositions;
-  return std::nullopt;
+  return FromName<InputKind>(text);
 }
 
 std::string ReadFileToString(const std::string& path, std::size_t max_bytes) {

@@ -10,28 +10,10 @@ namespace accelcal {
 
 using internal::Format;
 
-std::string_view ToString(TimeUnit unit) {
-  switch (unit) {
-    case TimeUnit::kAuto:
-      return "auto";
-    case TimeUnit::kSeconds:
-      return "s";
-    case TimeUnit::kMilliseconds:
-      return "ms";
-    case TimeUnit::kMicroseconds:
-      return "us";
-    case TimeUnit::kNanoseconds:
-      break;
-  }
-  return "ns";
-}
+std::string_view ToString(TimeUnit unit) { return NameOf(unit); }
 
 std::optional<TimeUnit> TimeUnitFromString(std::string_view text) {
-  for (TimeUnit u : {TimeUnit::kAuto, TimeUnit::kSeconds, TimeUnit::kMilliseconds,
-                     TimeUnit::kMicroseconds, TimeUnit::kNanoseconds}) {
-    if (text == ToString(u)) return u;
-  }
-  return std::nullopt;
+  return FromName<TimeUnit>(text);
 }
 
 double SecondsPer(TimeUnit unit) {

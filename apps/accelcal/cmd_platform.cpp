@@ -29,6 +29,7 @@
 #include "accelcal/series_file.hpp"
 #include "accelcal/simulate.hpp"
 #include "accelcal/system_level.hpp"
+#include "accelcal/table_file.hpp"
 #include "cli_common.hpp"
 #include "output.hpp"
 
@@ -121,50 +122,6 @@ int RunSystemLevel(const SystemLevelArgs& args) {
 
 namespace {
 
-// Rows of `columns` numbers (commas or whitespace; `#` comments; a header line whose first field
-// is no number is skipped).
-std::vector<std::vector<double>> ReadTable(const std::string& path, std::size_t columns) {
-  const std::string text = ReadFileToString(path, kMaxSmallFileBytes);
-  std::vector<std::vector<double>> rows;
-  std::istringstream lines(text);
-  std::string line;
-  std::size_t number = 0;
-  bool first = true;  // a header is allowed on the first non-blank line only
-  while (std::getline(lines, line)) {
-    ++number;
-    line = line.substr(0, line.find('#'));
-    for (char& ch : line) {
-      if (ch == ',' || ch == '\t' || ch == '\r') ch = ' ';
-    }
-    std::istringstream fields(line);
-    std::vector<double> row;
-    std::string field;
-    bool numeric = true;
-    while (fields >> field) {
-      char* end = nullptr;
-      const double v = std::strtod(field.c_str(), &end);
-      if (end == field.c_str() || *end != '\0') {
-        numeric = false;
-        break;
-      }
-      row.push_back(v);
-    }
-    if (row.empty() && numeric) continue;  // blank
-    const bool header = first && !numeric && row.empty();
-    first = false;
-    if (header) continue;
-    if (!numeric || row.size() != columns) {
-      throw InputError(path, number, "expected " + std::to_string(columns) + " numbers");
-    }
-    for (double v : row) {
-      if (!std::isfinite(v)) throw InputError(path, number, "a value is not finite");
-    }
-    rows.push_back(std::move(row));
-  }
-  if (rows.empty()) throw InputError(path, 0, "no rows");
-  return rows;
-}
-
 std::string BetaJson(const Eigen::Matrix<double, 6, 1>& beta) {
   static const char* const kNames[6] = {"beta_xz", "beta_xy", "beta_yz",
                                         "beta_yx", "beta_zy", "beta_zx"};
@@ -186,7 +143,7 @@ int RunGimbal(const GimbalArgs& args) {
   const Gravity g = ResolveGravity(args.gravity);
   constexpr double kDeg = 3.14159265358979323846 / 180.0;
   std::vector<Vec3> commanded, outputs;
-  for (const std::vector<double>& row : ReadTable(args.coarse, 6)) {
+  for (const std::vector<double>& row : ReadNumberTable(args.coarse, 6)) {
     commanded.emplace_back(row[0] * kDeg, row[1] * kDeg, row[2] * kDeg);
     outputs.emplace_back(row[3], row[4], row[5]);
   }
@@ -197,7 +154,7 @@ int RunGimbal(const GimbalArgs& args) {
   std::optional<FineCalibrationResult> fine;
   if (!args.fine.empty()) {
     std::vector<Vec3> fine_outputs;
-    for (const std::vector<double>& row : ReadTable(args.fine, 3)) {
+    for (const std::vector<double>& row : ReadNumberTable(args.fine, 3)) {
       fine_outputs.emplace_back(row[0], row[1], row[2]);
     }
     FineCalibrationOptions fine_options;

@@ -4,57 +4,17 @@
 #include <cmath>
 #include <cstdio>
 
-#include <fast_float/fast_float.h>
-
 #include "accelcal/error.hpp"
 #include "accelcal/log_reader.hpp"
 #include "accelcal/platform_model.hpp"
 #include "accelcal/sha256.hpp"
 #include "core/text_format.hpp"
+#include "io/number_parser.hpp"
 #include "io/text_lines.hpp"
 
 namespace accelcal {
 
 namespace {
-
-// The fields of one line split at commas, tabs or runs of spaces, the comment removed.
-std::vector<std::string_view> Fields(std::string_view line) {
-  const std::size_t hash = line.find('#');
-  if (hash != std::string_view::npos) line = line.substr(0, hash);
-  std::vector<std::string_view> fields;
-  const bool commas = line.find(',') != std::string_view::npos;
-  std::size_t i = 0;
-  while (i <= line.size()) {
-    std::size_t end = i;
-    if (commas) {
-      end = line.find(',', i);
-      if (end == std::string_view::npos) end = line.size();
-    } else {
-      while (i < line.size() && (line[i] == ' ' || line[i] == '\t' || line[i] == '\r')) ++i;
-      if (i == line.size()) break;
-      end = i;
-      while (end < line.size() && line[end] != ' ' && line[end] != '\t' && line[end] != '\r') {
-        ++end;
-      }
-    }
-    std::string_view field = line.substr(i, end - i);
-    while (!field.empty() && (field.front() == ' ' || field.front() == '\t'))
-      field.remove_prefix(1);
-    while (!field.empty() &&
-           (field.back() == ' ' || field.back() == '\t' || field.back() == '\r')) {
-      field.remove_suffix(1);
-    }
-    fields.push_back(field);
-    i = end + 1;
-  }
-  if (fields.size() == 1 && fields[0].empty()) fields.clear();
-  return fields;
-}
-
-bool ParseNumber(std::string_view field, double* value) {
-  const auto result = fast_float::from_chars(field.data(), field.data() + field.size(), *value);
-  return result.ec == std::errc() && result.ptr == field.data() + field.size();
-}
 
 std::string Lower(std::string_view text) {
   std::string out(text);
@@ -113,10 +73,10 @@ OrientationFile ParseOrientations(std::string_view text, const std::string& sour
   internal::Line line;
   while (reader.Next(&line)) {
     const std::size_t line_number = line.number;
-    const std::vector<std::string_view> fields = Fields(line.text);
+    const std::vector<std::string_view> fields = internal::SplitLine(line.text);
     if (fields.empty()) continue;
     double first = 0;
-    if (!header_seen && out.directions.empty() && !ParseNumber(fields[0], &first)) {
+    if (!header_seen && out.directions.empty() && !internal::ParseNumber(fields[0], &first)) {
       if (!LayoutOfHeader(fields, &out.layout)) {
         throw InputError(source, line_number,
                          "unknown header: expected x,y,z or roll_deg,pitch_deg[,yaw_deg] or "
@@ -133,7 +93,7 @@ OrientationFile ParseOrientations(std::string_view text, const std::string& sour
     }
     double v[4] = {0, 0, 0, 0};
     for (std::size_t i = 0; i < fields.size(); ++i) {
-      if (!ParseNumber(fields[i], &v[i]) || !std::isfinite(v[i])) {
+      if (!internal::ParseNumber(fields[i], &v[i]) || !std::isfinite(v[i])) {
         throw InputError(source, line_number,
                          "column " + std::to_string(i + 1) + " ('" + std::string(fields[i]) +
                              "') is not a finite number");

@@ -8,33 +8,6 @@
 
 namespace accelcal::internal {
 
-std::size_t Split(std::string_view s, Delimiter delim, std::string_view* fields, std::size_t max) {
-  std::size_t count = 0;
-  if (delim == Delimiter::kComma) {
-    std::size_t start = 0;
-    while (true) {
-      const std::size_t comma = s.find(',', start);
-      const std::string_view field = Trim(s.substr(
-          start, comma == std::string_view::npos ? std::string_view::npos : comma - start));
-      if (count < max) fields[count] = field;
-      ++count;
-      if (comma == std::string_view::npos) break;
-      start = comma + 1;
-    }
-  } else {
-    std::size_t i = 0;
-    while (i < s.size()) {
-      while (i < s.size() && IsBlank(s[i])) ++i;
-      if (i >= s.size()) break;
-      const std::size_t start = i;
-      while (i < s.size() && !IsBlank(s[i])) ++i;
-      if (count < max) fields[count] = s.substr(start, i - start);
-      ++count;
-    }
-  }
-  return count;
-}
-
 RowParser::RowParser(const std::string& source, Delimiter delim, std::size_t ncols,
                      const Layout& layout, bool raw,
                      const std::function<void(std::size_t, std::size_t)>& progress)

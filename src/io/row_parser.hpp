@@ -14,13 +14,6 @@
 
 namespace accelcal::internal {
 
-enum class Delimiter { kComma, kWhitespace };
-
-/// Splits a trimmed line into fields; returns the count (fields beyond `max` are counted only).
-std::size_t Split(std::string_view s, Delimiter delim, std::string_view* fields, std::size_t max);
-
-inline constexpr std::size_t kMaxFields = 256;
-
 /// Column roles: time, x, y, z, count, sx, sy, sz, instance.
 enum Role { kTime, kX, kY, kZ, kCount, kSx, kSy, kSz, kInstance, kRoles };
 

@@ -8,6 +8,7 @@
 #include <cstring>
 #include <string>
 #include <string_view>
+#include <vector>
 
 #include "accelcal/error.hpp"
 
@@ -28,6 +29,51 @@ inline std::string_view Trim(std::string_view s) {
   while (!s.empty() && IsBlank(s.front())) s.remove_prefix(1);
   while (!s.empty() && IsBlank(s.back())) s.remove_suffix(1);
   return s;
+}
+
+enum class Delimiter { kComma, kWhitespace };
+
+inline constexpr std::size_t kMaxFields = 256;
+
+/// Splits a trimmed line (Line::text) into fields: at commas, each field trimmed, or at runs of
+/// blanks. Returns the count (fields beyond `max` are counted only). The one tokenizer of every
+/// text format: logs (one delimiter for the file), orientation files and tables (SplitLine).
+inline std::size_t Split(std::string_view s, Delimiter delim, std::string_view* fields,
+                         std::size_t max) {
+  std::size_t count = 0;
+  if (delim == Delimiter::kComma) {
+    std::size_t start = 0;
+    while (true) {
+      const std::size_t comma = s.find(',', start);
+      const std::string_view field = Trim(s.substr(
+          start, comma == std::string_view::npos ? std::string_view::npos : comma - start));
+      if (count < max) fields[count] = field;
+      ++count;
+      if (comma == std::string_view::npos) break;
+      start = comma + 1;
+    }
+  } else {
+    std::size_t i = 0;
+    while (i < s.size()) {
+      while (i < s.size() && IsBlank(s[i])) ++i;
+      if (i >= s.size()) break;
+      const std::size_t start = i;
+      while (i < s.size() && !IsBlank(s[i])) ++i;
+      if (count < max) fields[count] = s.substr(start, i - start);
+      ++count;
+    }
+  }
+  return count;
+}
+
+/// The fields of one line of a small file (orientation files, tables): at commas when the line
+/// has one, else at blanks.
+inline std::vector<std::string_view> SplitLine(std::string_view line) {
+  const Delimiter delim =
+      line.find(',') != std::string_view::npos ? Delimiter::kComma : Delimiter::kWhitespace;
+  std::vector<std::string_view> fields(Split(line, delim, nullptr, 0));
+  Split(line, delim, fields.data(), fields.size());
+  return fields;
 }
 
 /// How lines end: '\n' (a '\r' before it is trimmed as blank), or '\r' alone in a text with no

@@ -177,11 +177,6 @@ std::string FormatNumber(double v) {
   return std::string(buf, res.ptr);
 }
 
-// A JSON array of three shortest round-trip numbers.
-std::string JsonVector(const Vec3& v) {
-  return "[" + FormatNumber(v(0)) + ", " + FormatNumber(v(1)) + ", " + FormatNumber(v(2)) + "]";
-}
-
 // A positions file as calibrate reads it: averaged readings with their sample count and the
 // per-axis standard deviation of one sample.
 std::string PositionsCsv(const std::vector<Vec3>& means, double samples, const Vec3& sample_sigma) {

@@ -84,8 +84,6 @@ std::string OutlierMessage(const OutlierFinding& o, const std::vector<Position>&
 
 // Shortest round-trip decimal.
 std::string FormatNumber(double v);
-// A JSON array of three shortest round-trip numbers.
-std::string JsonVector(const Vec3& v);
 // A positions file as calibrate reads it: averaged readings with their sample count and the
 // per-axis standard deviation of one sample.
 std::string PositionsCsv(const std::vector<Vec3>& means, double samples, const Vec3& sample_sigma);

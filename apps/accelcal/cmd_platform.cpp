@@ -56,36 +56,32 @@ int RunSystemLevel(const SystemLevelArgs& args) {
   const SystemLevelResult r = estimator.Finish();
   Detail("system-level: %s\n", r.summary.termination_message.c_str());
   const auto fourier = [](const FourierCoefficients& f) {
-    return "{\"mean\": " + FormatNumber(f.mean) + ", \"c1\": " + FormatNumber(f.c1) +
-           ", \"s1\": " + FormatNumber(f.s1) + ", \"c2\": " + FormatNumber(f.c2) +
-           ", \"s2\": " + FormatNumber(f.s2) + "}";
+    return nlohmann::ordered_json{
+        {"mean", f.mean}, {"c1", f.c1}, {"s1", f.s1}, {"c2", f.c2}, {"s2", f.s2}};
   };
   std::string out;
   if (args.json) {
-    out += "{\n  \"samples\": " + std::to_string(r.samples) +
-           ",\n  \"latitude_deg\": " + FormatNumber(latitude) +
-           ",\n  \"gravity_ms2\": " + FormatNumber(g) +
-           ",\n  \"noise_ms2\": " + JsonVector(r.noise_ms2) +
-           ",\n  \"x1_noise_correction\": " + FormatNumber(r.x1_noise_correction) +
-           ",\n  \"combined\": {";
+    nlohmann::ordered_json doc;
+    doc["samples"] = r.samples;
+    doc["latitude_deg"] = latitude;
+    doc["gravity_ms2"] = g;
+    doc["noise_ms2"] = JsonArray(r.noise_ms2);
+    doc["x1_noise_correction"] = r.x1_noise_correction;
+    nlohmann::ordered_json combined = nlohmann::ordered_json::object();
     for (int i = 0; i < 5; ++i) {
-      out += (i ? ", " : "") + Format("\"x%d\": {\"value\": ", i + 1) + FormatNumber(r.x(i)) +
-             ", \"std\": " + FormatNumber(r.x_std(i)) + "}";
+      combined["x" + std::to_string(i + 1)] = {{"value", r.x(i)}, {"std", r.x_std(i)}};
     }
-    out += "},\n  \"fourier\": {\"pitch\": " + fourier(r.pitch) +
-           ", \"pitch_std\": " + fourier(r.pitch_std) + ",\n    \"roll\": " + fourier(r.roll) +
-           ", \"roll_std\": " + fourier(r.roll_std) +
-           "},\n  \"separated\": {\"rank\": " + std::to_string(r.rank) + ", \"determined\": {";
-    for (std::size_t i = 0; i < r.determined.size(); ++i) {
-      out += (i ? ", " : "") + std::string("\"") + r.determined[i].name +
-             "\": {\"value\": " + FormatNumber(r.determined[i].value) +
-             ", \"std\": " + FormatNumber(r.determined[i].std) + "}";
-    }
-    out += "}, \"undetermined\": [";
-    for (std::size_t i = 0; i < r.undetermined.size(); ++i) {
-      out += (i ? ", \"" : "\"") + r.undetermined[i] + "\"";
-    }
-    out += "]}\n}\n";
+    doc["combined"] = combined;
+    doc["fourier"] = {{"pitch", fourier(r.pitch)},
+                      {"pitch_std", fourier(r.pitch_std)},
+                      {"roll", fourier(r.roll)},
+                      {"roll_std", fourier(r.roll_std)}};
+    nlohmann::ordered_json determined = nlohmann::ordered_json::object();
+    for (const Estimate& e : r.determined)
+      determined[e.name] = {{"value", e.value}, {"std", e.std}};
+    doc["separated"] = {
+        {"rank", r.rank}, {"determined", determined}, {"undetermined", r.undetermined}};
+    out = JsonText(doc);
   } else {
     out += Format("system-level  %s: %ld samples, latitude %.6g deg, g %.9g m/s2\n",
                   args.series.c_str(), r.samples, latitude, g);
@@ -122,20 +118,18 @@ int RunSystemLevel(const SystemLevelArgs& args) {
 
 namespace {
 
-std::string BetaJson(const Eigen::Matrix<double, 6, 1>& beta) {
+nlohmann::ordered_json DeviceJson(const PlatformAccelerometer& d) {
   static const char* const kNames[6] = {"beta_xz", "beta_xy", "beta_yz",
                                         "beta_yx", "beta_zy", "beta_zx"};
-  std::string out = "{";
-  for (int i = 0; i < 6; ++i) {
-    out += (i ? ", \"" : "\"") + std::string(kNames[i]) + "\": " + FormatNumber(beta(i));
-  }
-  return out + "}";
+  nlohmann::ordered_json beta;
+  for (int i = 0; i < 6; ++i) beta[kNames[i]] = d.beta(i);
+  return {{"sf_inverse", JsonArray(d.s)},
+          {"bias", JsonArray(d.bias)},
+          {"beta_rad", beta},
+          {"k_nl", JsonArray(d.k_nl)}};
 }
 
-std::string DeviceJson(const PlatformAccelerometer& d) {
-  return "{\"sf_inverse\": " + JsonVector(d.s) + ", \"bias\": " + JsonVector(d.bias) +
-         ", \"beta_rad\": " + BetaJson(d.beta) + ", \"k_nl\": " + JsonVector(d.k_nl) + "}";
-}
+std::vector<double> Values(const Eigen::VectorXd& v) { return {v.data(), v.data() + v.size()}; }
 
 }  // namespace
 
@@ -164,28 +158,24 @@ int RunGimbal(const GimbalArgs& args) {
   }
   std::string out;
   if (args.json) {
-    out += "{\n  \"gravity\": " + FormatNumber(g.in_unit) +
-           ",\n  \"coarse\": {\"device\": " + DeviceJson(coarse.device) +
-           ",\n    \"offsets_rad\": {\"theta20\": " + FormatNumber(coarse.offsets(1)) +
-           ", \"theta30\": " + FormatNumber(coarse.offsets(2)) + "}, \"std\": [";
-    for (int i = 0; i < 14; ++i) out += (i ? ", " : "") + FormatNumber(coarse.std(i));
-    out +=
-        "],\n    \"parameter_order\": [\"s_x\", \"s_y\", \"s_z\", \"b_x\", \"b_y\", "
-        "\"b_z\", \"beta_xz\", \"beta_xy\", \"beta_yz\", \"beta_yx\", \"beta_zy\", "
-        "\"beta_zx\", \"theta20\", \"theta30\"],\n    \"residual_rms\": " +
-        FormatNumber(coarse.residual_rms) +
-        ", \"converged\": " + (coarse.summary.converged() ? "true" : "false") + ", \"note\": \"" +
-        coarse.note + "\"}";
+    nlohmann::ordered_json doc;
+    doc["gravity"] = g.in_unit;
+    doc["coarse"] = {
+        {"device", DeviceJson(coarse.device)},
+        {"offsets_rad", {{"theta20", coarse.offsets(1)}, {"theta30", coarse.offsets(2)}}},
+        {"std", Values(coarse.std)},
+        {"parameter_order",
+         {"s_x", "s_y", "s_z", "b_x", "b_y", "b_z", "beta_xz", "beta_xy", "beta_yz", "beta_yx",
+          "beta_zy", "beta_zx", "theta20", "theta30"}},
+        {"residual_rms", coarse.residual_rms},
+        {"converged", coarse.summary.converged()},
+        {"note", coarse.note}};
     if (fine) {
-      out += ",\n  \"fine\": {\"device\": " + DeviceJson(fine->device) + ",\n    \"dx\": [";
-      for (int i = 0; i < 12; ++i) out += (i ? ", " : "") + FormatNumber(fine->dx(i));
-      out += "], \"dx_std\": [";
-      for (int i = 0; i < 12; ++i) out += (i ? ", " : "") + FormatNumber(fine->dx_std(i));
-      out += "],\n    \"residual_rms\": " + FormatNumber(fine->residual_rms) +
-             ", \"converged\": " + (fine->summary.converged() ? "true" : "false") +
-             ", \"note\": \"" + fine->note + "\"}";
+      doc["fine"] = {{"device", DeviceJson(fine->device)},     {"dx", Values(fine->dx)},
+                     {"dx_std", Values(fine->dx_std)},         {"residual_rms", fine->residual_rms},
+                     {"converged", fine->summary.converged()}, {"note", fine->note}};
     }
-    out += "\n}\n";
+    out = JsonText(doc);
   } else {
     const auto device = [&](const PlatformAccelerometer& d) {
       std::string text = Format("  SF^-1   %.10g %.10g %.10g\n", d.s(0), d.s(1), d.s(2));

@@ -14,6 +14,7 @@
 #include "accelcal/frame.hpp"
 #include "core/text_format.hpp"
 #include "statistics/fit.hpp"
+#include "statistics/held_out.hpp"
 #include "statistics/outliers.hpp"
 #include "statistics/student_t.hpp"
 
@@ -327,33 +328,20 @@ CalibrationResult CalibrateKnownOrientations(const std::vector<Vec3>& readings,
   s.initial_cost = s.final_cost = cost;
 
   if (options.cross_validate) {
-    std::vector<double> errors;
-    for (std::size_t k = 0; k < m; ++k) {
-      if (weights[k](0) == 0) {  // left out of every fit already: its error under the result
-        errors.push_back(GravityNormErrors(result.params, {readings[k]}, options.gravity)[0]);
-        continue;
-      }
-      std::vector<Vec3> held_out = weights;
-      held_out[k].setZero();
-      ModelParameters without;
-      try {
-        without = FitAll(readings, forces, held_out, options.model).params;
-      } catch (const DataError& e) {
-        result.crossval_note = "without position " + std::to_string(k + 1) + ": " + e.what();
-        break;
-      }
-      const double e = GravityNormErrors(without, {readings[k]}, options.gravity)[0];
-      if (!std::isfinite(e)) {
-        result.crossval_note =
-            "position " + std::to_string(k + 1) + " lies outside the range of the fit without it";
-        break;
-      }
-      errors.push_back(e);
-    }
-    if (result.crossval_note.empty()) {
-      result.crossval_rms = Rms(result.InFit(errors));
-      result.crossval_errors = std::move(errors);
-    }
+    internal::LeaveOneOut(
+        readings, options.gravity,
+        [&](std::size_t k) -> internal::HeldOutRefit {
+          std::vector<Vec3> held_out = weights;
+          held_out[k].setZero();
+          try {
+            const ModelParameters without =
+                FitAll(readings, forces, held_out, options.model).params;
+            return internal::HeldOutErrorUnder(without, readings[k], options.gravity, k);
+          } catch (const DataError& e) {
+            return {0.0, "without position " + std::to_string(k + 1) + ": " + e.what()};
+          }
+        },
+        &result);
   }
   s.time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   return result;

@@ -47,7 +47,12 @@ HeldOutRefit RefitWithout(const std::vector<Vec3>& readings, const CalibrationOp
   if (!fit.summary.converged()) {
     return {0.0, without + "did not converge: " + fit.summary.termination_message};
   }
-  const double e = GravityNormErrors(fit.params, {readings[k]}, options.gravity)[0];
+  return HeldOutErrorUnder(fit.params, readings[k], options.gravity, k);
+}
+
+HeldOutRefit HeldOutErrorUnder(const ModelParameters& without, const Vec3& reading, double gravity,
+                               std::size_t k) {
+  const double e = GravityNormErrors(without, {reading}, gravity)[0];
   if (!std::isfinite(e)) {
     return {0.0,
             "position " + std::to_string(k + 1) + " lies outside the range of the fit without it"};
@@ -61,13 +66,20 @@ HeldOutRefit RefitWithout(const std::vector<Vec3>& readings, const CalibrationOp
 void CrossValidateByRefits(const std::vector<Vec3>& readings, const CalibrationOptions& options,
                            CalibrationResult* result) {
   if (auto why = options.Validate()) throw std::invalid_argument(*why);
+  LeaveOneOut(
+      readings, options.gravity,
+      [&](std::size_t k) { return RefitWithout(readings, options, *result, k); }, result);
+}
+
+void LeaveOneOut(const std::vector<Vec3>& readings, double gravity,
+                 const HeldOutRefitFunction& refit_without, CalibrationResult* result) {
   std::vector<double> errors;
   for (std::size_t k = 0; k < readings.size(); ++k) {
     if (result->excluded(k)) {
-      errors.push_back(GravityNormErrors(result->params, {readings[k]}, options.gravity)[0]);
+      errors.push_back(GravityNormErrors(result->params, {readings[k]}, gravity)[0]);
       continue;
     }
-    const internal::HeldOutRefit refit = internal::RefitWithout(readings, options, *result, k);
+    const HeldOutRefit refit = refit_without(k);
     if (!refit.note.empty()) {
       result->crossval_note = refit.note;
       return;

@@ -87,6 +87,19 @@ HeldOutRefit RefitWithout(const std::vector<Vec3>& readings, const CalibrationOp
 void CrossValidateByRefits(const std::vector<Vec3>& readings, const CalibrationOptions& options,
                            CalibrationResult* result);
 
+/// The one leave-one-position-out loop (orientation-free refits, CrossValidateByRefits, and the
+/// known-orientation fit): each position's held-out error from `refit_without`, the excluded
+/// positions' under the result itself (they are held out of every fit already); the first note
+/// ends it as result->crossval_note, else result->crossval_rms (over the positions in the fit) and
+/// crossval_errors.
+void LeaveOneOut(const std::vector<Vec3>& readings, double gravity,
+                 const HeldOutRefitFunction& refit_without, CalibrationResult* result);
+
+/// Position k's held-out error |f| − g under `without` (a fit of the others), or the note that
+/// the reading is outside that fit's range.
+HeldOutRefit HeldOutErrorUnder(const ModelParameters& without, const Vec3& reading, double gravity,
+                               std::size_t k);
+
 /// One position's term of the profiled maximum-likelihood objective at θ (x-first gauge):
 /// f(θ) = min over |c| = 1 of ‖p − μ(θ, g c)‖². Exposed for the derivative tests.
 struct ProfiledTerm {

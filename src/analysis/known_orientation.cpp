@@ -16,6 +16,7 @@
 #include "statistics/fit.hpp"
 #include "statistics/held_out.hpp"
 #include "statistics/outliers.hpp"
+#include "statistics/screening.hpp"
 #include "statistics/student_t.hpp"
 
 namespace accelcal {
@@ -171,65 +172,60 @@ FTest MostDiscordant(const std::vector<Vec3>& readings, const std::vector<Vec3>&
   return test;
 }
 
-// OutlierOptions' generalised ESD (Rosner 1983, as Calibrate runs it) with the F test: the most
-// discordant position is removed and the rest refitted, max(1, max_excluded) times, each step
-// tested at false_alarm / (positions in that fit); the discordant ones are the steps up to the last
-// significant one. Returns the findings (excluded as the policy allows) and sets `weights` of the
-// excluded positions to 0.
+// OutlierOptions' generalised ESD (statistics/screening.hpp) with the F test. Returns the findings
+// (excluded as the policy allows) and sets `weights` of the excluded positions to 0.
 std::vector<OutlierFinding> Screen(const std::vector<Vec3>& readings,
                                    const std::vector<Vec3>& forces, const OutlierOptions& options,
                                    ModelKind model, int P, std::vector<Vec3>* weights,
                                    std::string* note) {
-  std::vector<OutlierFinding> steps;
   std::vector<Vec3> w = *weights;
   int used = static_cast<int>(readings.size());
-  int discordant = 0;
-  const int rounds = std::max(1, options.max_excluded);
-  for (int round = 0; round < rounds; ++round) {
-    Fit fit;
-    try {
-      fit = FitAll(readings, forces, w, model);
-    } catch (const DataError&) {
-      break;  // without the positions removed so far the model is not determined
-    }
-    const FTest test = MostDiscordant(readings, forces, w, fit, P);
-    if (round == 0 && !test.untested.empty()) {
-      *note = test.untested.size() > 1 ? "positions " : "position ";
-      for (std::size_t i = 0; i < test.untested.size(); ++i) {
-        *note += (i ? ", " : "") + std::to_string(test.untested[i]);
-      }
-      *note += " not screened: the other positions do not determine the fit without them";
-    }
-    if (!test.ran) {
-      if (round == 0 && test.dof < 1) {
-        *note = "outlier screening needs at least " + std::to_string((P + 4 + 2) / 3) +
-                " positions for the " + std::string(ToString(model)) + " model, got " +
-                std::to_string(used);
-      }
-      break;
-    }
-    const double per_position = options.false_alarm_probability / used;
-    OutlierFinding finding;
-    finding.position = test.position;
-    finding.statistic = OutlierStatistic::kFisherF;
-    finding.t = test.F;
-    finding.threshold = internal::FisherFQuantile(per_position, 3.0, test.dof);
-    finding.degrees_of_freedom = test.dof;
-    finding.normal_residual = test.residual;
-    finding.scatter = test.scatter;
-    steps.push_back(finding);
-    if (test.p < per_position) discordant = static_cast<int>(steps.size());
-    w[static_cast<std::size_t>(test.position)].setZero();
-    --used;
+  int removed = -1;  // the previous step's position
+  const internal::EsdOutcome outcome =
+      internal::GeneralisedEsd(options, [&](std::size_t step) -> std::optional<internal::EsdStep> {
+        if (removed >= 0) {
+          w[static_cast<std::size_t>(removed)].setZero();
+          --used;
+        }
+        Fit fit;
+        try {
+          fit = FitAll(readings, forces, w, model);
+        } catch (const DataError&) {
+          return std::nullopt;  // without the positions removed so far the model is not determined
+        }
+        const FTest test = MostDiscordant(readings, forces, w, fit, P);
+        if (step == 0 && !test.untested.empty()) {
+          *note = test.untested.size() > 1 ? "positions " : "position ";
+          for (std::size_t i = 0; i < test.untested.size(); ++i) {
+            *note += (i ? ", " : "") + std::to_string(test.untested[i]);
+          }
+          *note += " not screened: the other positions do not determine the fit without them";
+        }
+        if (!test.ran) {
+          if (step == 0 && test.dof < 1) {
+            *note = "outlier screening needs at least " + std::to_string((P + 4 + 2) / 3) +
+                    " positions for the " + std::string(ToString(model)) + " model, got " +
+                    std::to_string(used);
+          }
+          return std::nullopt;
+        }
+        const double per_position = options.false_alarm_probability / used;
+        internal::EsdStep s;
+        s.finding.position = test.position;
+        s.finding.statistic = OutlierStatistic::kFisherF;
+        s.finding.t = test.F;
+        s.finding.threshold = internal::FisherFQuantile(per_position, 3.0, test.dof);
+        s.finding.degrees_of_freedom = test.dof;
+        s.finding.normal_residual = test.residual;
+        s.finding.scatter = test.scatter;
+        s.significant = test.p < per_position;
+        removed = test.position;
+        return s;
+      });
+  for (std::size_t i = 0; i < outcome.excluded; ++i) {
+    (*weights)[static_cast<std::size_t>(outcome.steps[i].finding.position)].setZero();
   }
-  steps.resize(static_cast<std::size_t>(discordant));
-  if (options.policy == OutlierPolicy::kExclude) {
-    for (int i = 0; i < std::min(discordant, options.max_excluded); ++i) {
-      steps[static_cast<std::size_t>(i)].excluded = true;
-      (*weights)[static_cast<std::size_t>(steps[static_cast<std::size_t>(i)].position)].setZero();
-    }
-  }
-  return steps;
+  return internal::DiscordantFindings(outcome);
 }
 
 }  // namespace

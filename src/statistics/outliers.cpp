@@ -8,6 +8,7 @@
 
 #include "accelcal/error.hpp"
 #include "statistics/fit.hpp"
+#include "statistics/screening.hpp"
 #include "statistics/student_t.hpp"
 
 namespace accelcal::internal {
@@ -136,13 +137,13 @@ CalibrationOptions SubsetOptions(const CalibrationOptions& options, const std::v
   return subset;
 }
 
-// The fit with the screening of OutlierOptions, as Rosner's generalised ESD test (1983): the most
-// discordant position is removed and the rest refitted, r = max(1, max_excluded) times, each step
-// recording its t and threshold; the number of discordant positions is the last step whose |t|
-// exceeds its threshold. Testing the later steps as well is what finds two discordant positions
-// that inflate the scatter enough to hide each other from the first step. The refits run only when
-// the first step is significant or the robust scale finds a position suspicious (Screening).
 }  // namespace
+
+// The fit with the screening of OutlierOptions: the generalised ESD of statistics/screening.hpp,
+// each step's test the Student t of ScreenPositions on the refit without the positions removed so
+// far. The refits run only when the first step is significant or the robust scale finds a position
+// suspicious (Screening); a discordant position whose removal leaves positions that cannot be
+// fitted is reported as such, not removed.
 
 CalibrationResult CalibrateScreened(const std::vector<Vec3>& readings,
                                     const CalibrationOptions& options) {
@@ -156,81 +157,69 @@ CalibrationResult CalibrateScreened(const std::vector<Vec3>& readings,
     full.outlier_note = std::move(note);
     return full;
   }
-  struct Step {
-    OutlierFinding finding;
-    CalibrationResult fit;  // without the positions of this and the previous steps
-    std::vector<int> keep;
-  };
-  std::vector<Step> steps;
-  const int max_steps = std::max(1, options.outliers.max_excluded);
-  steps.reserve(std::min(static_cast<std::size_t>(max_steps), readings.size()));  // `current`
-  // points into it: no step removes more than every position
+  // Each step's refit without the positions removed so far, and those positions' complement.
+  std::vector<CalibrationResult> fits;
+  std::vector<std::vector<int>> keeps;
   std::vector<int> keep(readings.size());
   for (std::size_t k = 0; k < keep.size(); ++k) keep[k] = static_cast<int>(k);
-  const CalibrationResult* current = &full;
   std::optional<OutlierFinding> unremovable;  // discordant, but the rest cannot be fitted
-  while (static_cast<int>(steps.size()) < max_steps && screening.most_discordant >= 0) {
-    OutlierFinding finding = screening.Finding(screening.most_discordant);
-    finding.position = keep[std::size_t(finding.position)];
-    std::vector<int> rest;
-    std::vector<Vec3> rest_readings;
-    for (int k : keep) {
-      if (k == finding.position) continue;
-      rest.push_back(k);
-      rest_readings.push_back(readings[std::size_t(k)]);
-    }
-    std::optional<Fit> refit;
-    std::string why;
-    try {
-      refit = CalibrateInFrame(rest_readings, SubsetOptions(options, rest, current->params));
-      if (!refit->result.summary.converged()) why = "the fit without it did not converge";
-    } catch (const DataError& e) {
-      why = e.what();
-    }
-    if (!why.empty()) {
-      if (std::abs(finding.t) > finding.threshold) {
-        unremovable = finding;
-        note = "position " + std::to_string(finding.position + 1) +
-               " disagrees but cannot be left out: without it, " + why;
-      }
-      break;
-    }
-    steps.push_back({finding, std::move(refit->result), rest});
-    current = &steps.back().fit;
-    keep = std::move(rest);
-    screening = std::move(refit->screening);
-    if (!screening.ran) break;
-  }
-  std::size_t discordant = 0;
-  for (std::size_t i = 0; i < steps.size(); ++i) {
-    if (std::abs(steps[i].finding.t) > steps[i].finding.threshold) discordant = i + 1;
-  }
-  if (!unremovable && discordant == steps.size() && static_cast<int>(steps.size()) == max_steps &&
+  bool screened = true;                       // the last refit could be screened
+  const EsdOutcome outcome =
+      GeneralisedEsd(options.outliers, [&](std::size_t) -> std::optional<EsdStep> {
+        if (!screened || screening.most_discordant < 0) return std::nullopt;
+        OutlierFinding finding = screening.Finding(screening.most_discordant);
+        finding.position = keep[std::size_t(finding.position)];
+        std::vector<int> rest;
+        std::vector<Vec3> rest_readings;
+        for (int k : keep) {
+          if (k == finding.position) continue;
+          rest.push_back(k);
+          rest_readings.push_back(readings[std::size_t(k)]);
+        }
+        const ModelParameters& start = fits.empty() ? full.params : fits.back().params;
+        std::optional<Fit> refit;
+        std::string why;
+        try {
+          refit = CalibrateInFrame(rest_readings, SubsetOptions(options, rest, start));
+          if (!refit->result.summary.converged()) why = "the fit without it did not converge";
+        } catch (const DataError& e) {
+          why = e.what();
+        }
+        if (!why.empty()) {
+          if (std::abs(finding.t) > finding.threshold) {
+            unremovable = finding;
+            note = "position " + std::to_string(finding.position + 1) +
+                   " disagrees but cannot be left out: without it, " + why;
+          }
+          return std::nullopt;
+        }
+        fits.push_back(std::move(refit->result));
+        keeps.push_back(rest);
+        keep = std::move(rest);
+        screening = std::move(refit->screening);
+        screened = screening.ran;
+        return EsdStep{finding, std::abs(finding.t) > finding.threshold};
+      });
+  const std::size_t steps = outcome.steps.size(), discordant = outcome.discordant;
+  const int max_steps = std::max(1, options.outliers.max_excluded);
+  if (!unremovable && discordant == steps && static_cast<int>(steps) == max_steps &&
       screening.significant) {
     note = "more positions may disagree: the screening tests at most " + std::to_string(max_steps);
   }
-  const std::size_t excluded =
-      options.outliers.policy == OutlierPolicy::kExclude
-          ? std::min(discordant, static_cast<std::size_t>(options.outliers.max_excluded))
-          : 0;
-  CalibrationResult result = excluded > 0 ? std::move(steps[excluded - 1].fit) : std::move(full);
+  const std::size_t excluded = outcome.excluded;
+  CalibrationResult result = excluded > 0 ? std::move(fits[excluded - 1]) : std::move(full);
   if (excluded > 0) {
-    internal::SpreadOverAllPositions(readings, steps[excluded - 1].keep, &result);
+    internal::SpreadOverAllPositions(readings, keeps[excluded - 1], &result);
     // The summary tells the whole solve: where it started, every fit's iterations and time.
     Summary& summary = result.summary;
     summary.initialization = full.summary.initialization;
     summary.initialization_note = full.summary.initialization_note;
     summary.initial_cost = full.summary.initial_cost;
-    for (std::size_t i = 0; i + 1 < excluded; ++i) {
-      summary.iterations += steps[i].fit.summary.iterations;
-    }
+    for (std::size_t i = 0; i + 1 < excluded; ++i) summary.iterations += fits[i].summary.iterations;
     summary.iterations += full.summary.iterations;
   }
-  for (std::size_t i = 0; i < discordant; ++i) {
-    steps[i].finding.excluded = i < excluded;
-    result.outliers.push_back(steps[i].finding);
-  }
-  if (unremovable && discordant == steps.size()) result.outliers.push_back(*unremovable);
+  result.outliers = DiscordantFindings(outcome);
+  if (unremovable && discordant == steps) result.outliers.push_back(*unremovable);
   result.outlier_note = std::move(note);
   result.summary.time_s =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();

@@ -13,6 +13,7 @@
 #include "accelcal/error.hpp"
 #include "accelcal/frame.hpp"
 #include "core/text_format.hpp"
+#include "solvers/solver_common.hpp"
 #include "statistics/fit.hpp"
 #include "statistics/held_out.hpp"
 #include "statistics/outliers.hpp"
@@ -26,9 +27,10 @@ namespace {
 using Mat5 = Eigen::Matrix<double, 5, 5>;
 using Vec5 = Eigen::Matrix<double, 5, 1>;
 
-/// Below this reciprocal condition of an axis' Jacobi-scaled normal matrix the positions do not
-/// determine that axis' parameters (the threshold calibrate.hpp uses).
-constexpr double kMinRcond = 1e-10;
+// The positions determine an axis' parameters when the reciprocal condition of its Jacobi-scaled
+// normal matrix is at least the orientation-free fit's threshold (kMinInformationRcond): one
+// observability threshold for both fits.
+using internal::kMinInformationRcond;
 
 // One output axis' least squares, in its first n ≤ 5 unknowns (K_i0, K_i1, K_i2, b_i, k2_i).
 struct AxisFit {
@@ -61,7 +63,7 @@ AxisFit FitAxis(const std::vector<Vec3>& readings, const std::vector<Vec3>& forc
   const Eigen::MatrixXd scaled = s.asDiagonal() * N * s.asDiagonal();
   Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig(scaled);
   const double largest = eig.eigenvalues().maxCoeff();
-  if (!(eig.eigenvalues().minCoeff() > kMinRcond * largest)) {
+  if (!(eig.eigenvalues().minCoeff() > kMinInformationRcond * largest)) {
     Eigen::Index weakest = 0;
     eig.eigenvectors().col(0).cwiseAbs().maxCoeff(&weakest);
     static const char* const kNames[5] = {"K_%cx", "K_%cy", "K_%cz", "b_%c", "k2_%c"};
@@ -148,7 +150,7 @@ FTest MostDiscordant(const std::vector<Vec3>& readings, const std::vector<Vec3>&
       const Vec5 a = Regressors(forces[k], i);
       const double h =
           weights[k](i) * a.head(n).dot(fit.axes[i].normal_inverse.topLeftCorner(n, n) * a.head(n));
-      if (!(1.0 - h > 1e-9)) {
+      if (!(1.0 - h > internal::kMinUntestedMargin)) {
         testable = false;
         break;
       }

@@ -86,7 +86,7 @@ Screening ScreenPositions(const InformationRows& rows, const Mat12& S_inverse, M
   for (int k = 0; k < m; ++k) {
     const auto i = static_cast<std::size_t>(k);
     const double h = leverages[i];
-    if (!(1.0 - h > 1e-9)) {
+    if (!(1.0 - h > kMinUntestedMargin)) {
       untested.push_back(k + 1);
       scaled.push_back(0.0);
       continue;

@@ -16,6 +16,10 @@
 
 namespace accelcal::internal {
 
+/// A position whose leverage h_k leaves 1 − h_k at most this is not tested: the other positions
+/// do not determine the fit without it (both fits' tests).
+inline constexpr double kMinUntestedMargin = 1e-9;
+
 /// One step: the most discordant position of a fit (in the caller's numbering), and whether it
 /// is significant at that step's level.
 struct EsdStep {

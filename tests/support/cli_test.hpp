@@ -11,6 +11,8 @@
 
 #include <gtest/gtest.h>
 
+#include "accelcal/simulate.hpp"
+
 namespace accelcal::test {
 
 namespace fs = std::filesystem;
@@ -58,5 +60,18 @@ class CliTest : public ::testing::Test {
   }
   fs::path dir_;
 };
+
+// A positions file of `count` simulated readings of paper 000's device (9.8 m/s2, seed 2).
+inline std::string PositionsCsv(int count) {
+  const std::vector<Vec3> readings = SimulatePositions(
+      Yang2012Truth(), 9.8, RandomDirections(count, 1), Vec3(0.05, 0.05, 0.05), 2);
+  std::string s = "x,y,z\n";
+  char line[128];
+  for (const Vec3& p : readings) {
+    std::snprintf(line, sizeof line, "%.17g,%.17g,%.17g\n", p(0), p(1), p(2));
+    s += line;
+  }
+  return s;
+}
 
 }  // namespace accelcal::test

@@ -1,7 +1,10 @@
-// Ingestion speed: parsing the Xsens recording (3.3 MB of text) and detecting its intervals.
+// Ingestion speed: parsing the Xsens recording (3.3 MB of text), detecting its intervals, and the
+// SHA-256 of its bytes that a calibration file's provenance records (on the CPU's SHA extensions
+// when it has them, and the portable block function).
 #include <benchmark/benchmark.h>
 
 #include "accelcal/log_reader.hpp"
+#include "accelcal/sha256.hpp"
 #include "accelcal/static_detection.hpp"
 
 namespace accelcal {
@@ -28,6 +31,20 @@ void BM_DetectXsens(benchmark::State& state) {
   state.SetItemsProcessed(static_cast<int64_t>(state.iterations() * d.raw.samples.size()));
 }
 BENCHMARK(BM_DetectXsens)->Unit(benchmark::kMillisecond);
+
+void BM_Sha256Xsens(benchmark::State& state) {
+  const std::string text = ReadFileToString(kXsens);
+  const bool portable = state.range(0) != 0;
+  state.SetLabel(portable                              ? "portable"
+                 : internal::Sha256UsesShaExtensions() ? "SHA extensions"
+                                                       : "portable");
+  for (auto _ : state) {
+    const std::string hex = portable ? internal::Sha256HexPortable(text) : Sha256Hex(text);
+    benchmark::DoNotOptimize(hex.data());
+  }
+  state.SetBytesProcessed(static_cast<int64_t>(state.iterations() * text.size()));
+}
+BENCHMARK(BM_Sha256Xsens)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond);
 
 }  // namespace
 }  // namespace accelcal

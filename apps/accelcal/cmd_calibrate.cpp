@@ -347,6 +347,9 @@ int RunCalibrateKnownOrientations(const CalibrateArgs& args) {
 }  // namespace
 
 int RunCalibrate(const CalibrateArgs& args) {
+  if (args.date_given) {
+    if (const auto why = CheckProvenanceDate(args.date)) throw UsageError("--date: " + *why);
+  }
   {
     std::vector<std::string> inputs = args.input.more_paths;
     inputs.push_back(args.input.path);

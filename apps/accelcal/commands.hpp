@@ -84,8 +84,9 @@ struct CalibrateArgs {
   std::string report;  // HTML report path (report.hpp); empty: none
   std::string output;
   bool json = false;
-  int max_iterations = 0;  // 0: the solver's default
-  std::string date;        // provenance date (calibration_file.hpp); empty: none written
+  int max_iterations = 0;   // 0: the solver's default
+  std::string date;         // provenance date (calibration_file.hpp); empty: none written
+  bool date_given = false;  // --date was given (an empty one is refused, not ignored)
   /// The options given on the command line that change the result, in the order the tool
   /// defines them: the file's `provenance.options` (a flag has no values).
   std::vector<std::pair<std::string, std::vector<std::string>>> given_options;

@@ -64,6 +64,15 @@ double KthSmallest(const std::vector<double>& v, std::size_t k) {
     std::memcpy(&b, &x, sizeof b);
     return b;
   };
+  if (v.size() <= (std::size_t{1} << 16)) {  // a copy is smaller than the counts
+    std::vector<double> kept;
+    kept.reserve(v.size());
+    for (double x : v) {
+      if (!std::isnan(x)) kept.push_back(x);
+    }
+    std::nth_element(kept.begin(), kept.begin() + static_cast<std::ptrdiff_t>(k), kept.end());
+    return kept[k];
+  }
   std::uint64_t prefix = 0;
   std::vector<std::size_t> count(1 << 16);
   for (int shift = 48;; shift -= 16) {

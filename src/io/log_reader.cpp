@@ -491,12 +491,13 @@ InputData ParseInput(std::string_view text, const std::string& source, const Rea
 InputData ReadInput(const std::string& path, const ReadOptions& options) {
   internal::InputFile file(path, options.max_stream_bytes);
   Sha256 hash;
-  if (options.fingerprint) file.Fingerprint(&hash);
   internal::TextBlocks blocks(&file);
+  if (options.fingerprint) blocks.Fingerprint(&hash);
   InputData data = ParseBlocks(blocks, file.name(), options);
   if (options.fingerprint) {
     for (std::string_view rest; blocks.Next(&rest);) {
     }  // the whole input is hashed, whatever the parser left
+    blocks.FinishFingerprint();
     data.bytes = file.bytes_read();
     data.sha256 = hash.HexDigest();
   }

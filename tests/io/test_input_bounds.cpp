@@ -17,6 +17,7 @@
 #include "accelcal/error.hpp"
 #include "accelcal/log_reader.hpp"
 #include "accelcal/series_file.hpp"
+#include "accelcal/sha256.hpp"
 #include "io/text_lines.hpp"
 
 namespace accelcal {
@@ -59,9 +60,14 @@ TEST(InputBounds, AFileReadInBlocksGivesWhatTheTextInMemoryGives) {
     const std::string path = TempPath("blocks.csv");
     WriteText(path, text);
     ReadOptions options;
+    options.fingerprint = true;
     const InputData from_file = ReadInput(path, options);
     const InputData in_memory = ParseInput(text, path, options);
     std::remove(path.c_str());
+    // The blocks are hashed on a second thread while they are parsed: the digest of the whole
+    // text, in order, all 13 blocks of it.
+    EXPECT_EQ(from_file.bytes, text.size());
+    EXPECT_EQ(from_file.sha256, Sha256Hex(text));
     ASSERT_EQ(from_file.kind, InputKind::kRaw);
     ASSERT_EQ(from_file.raw.samples.size(), 160000u);
     EXPECT_EQ(from_file.raw.samples, in_memory.raw.samples);

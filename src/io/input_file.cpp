@@ -179,7 +179,7 @@ void TextBlocks::Fill(std::size_t min_bytes) {
   if (file_ == nullptr) return;
   while (!eof_ && end_ - begin_ < min_bytes) {
     if (hash_) hash_->Wait();  // the buffer is about to change
-    if (begin_ > 0) {  // the consumed text goes; the rest moves to the front
+    if (begin_ > 0) {          // the consumed text goes; the rest moves to the front
       std::memmove(buffer_.get(), buffer_.get() + begin_, end_ - begin_);
       base_ += begin_;
       end_ -= begin_;

@@ -125,6 +125,21 @@ inline const char* ParseShortDecimal(const char* p, const char* last, double* va
   return p;
 }
 
+/// Where the parts of a number lie, counted from its first byte after the sign: what
+/// ParseDecimal16 found, kept per column of a log so that the next row's number, written by the
+/// same printf format, is read by checking that its bytes have the same layout (ParseShaped)
+/// instead of finding the parts again.
+struct NumberShape {
+  std::uint32_t mask = 0;    // bits 0 to `length` (0: no shape yet)
+  std::uint32_t digits = 0;  // within `mask`: the digits' bytes (the byte after the number is not)
+  std::uint8_t length = 0;   // bytes after the sign, at most 15
+  std::uint8_t int_len = 0, frac_begin = 0, frac_len = 0;
+  bool point = false;       // a '.' at int_len
+  std::uint8_t exp_at = 0;  // the 'e' or 'E'; 0: no exponent
+  bool exp_signed = false;  // a sign after it
+  std::uint8_t exp_begin = 0, exp_len = 0;
+};
+
 #if defined(__SSE2__)
 /// Bit i set when byte i of `c` is a decimal digit.
 inline unsigned DigitMask(__m128i c) {
@@ -149,22 +164,57 @@ inline std::uint64_t DigitsValue(const char* p, unsigned n) {
   return CombineDigits((v - 0x3030303030303030) << (8 * (8 - n)));  // as LeadingDigits
 }
 
+/// The value of a decimal mantissa of `int_len` digits at `int_digits` and `frac_len` at
+/// `frac_digits` (15 in all at most, 8 readable bytes at each), or false when its parts are
+/// longer than this reads (ParseShortDecimal decides those).
+inline bool DecimalMantissa(const char* int_digits, unsigned int_len, const char* frac_digits,
+                            unsigned frac_len, std::uint64_t* mantissa) {
+  const unsigned n = int_len + frac_len;
+  if (n <= 8 && int_len < 8) {
+    // Both parts in one word: the integer digits, then the fraction's after them.
+    std::uint64_t a, b;
+    std::memcpy(&a, int_digits, sizeof a);
+    std::memcpy(&b, frac_digits, sizeof b);
+    const unsigned shift = 8 * int_len;
+    a = (a - 0x3030303030303030) & ((std::uint64_t{1} << shift) - 1);
+    b = (b - 0x3030303030303030) << shift;
+    *mantissa = CombineDigits((a | b) << (8 * (8 - n)));
+    return true;
+  }
+  if (int_len <= 8 && frac_len <= 8) {
+    *mantissa = DigitsValue(int_digits, int_len) * kPow10Integer[frac_len] +
+                DigitsValue(frac_digits, frac_len);
+    return true;
+  }
+  return false;
+}
+
+/// mantissa · 10^exponent, correctly rounded (exact operands: Clinger's fast path).
+inline double ExactDecimal(std::uint64_t mantissa, int exponent, bool negative) {
+  double v = static_cast<double>(mantissa);
+  v = exponent < 0 ? v / kExactPow10[-exponent] : v * kExactPow10[exponent];
+  return negative ? -v : v;
+}
+
 /// ParseShortDecimal for a number that lies within the 16 bytes at `p`, with at least 32 bytes
 /// readable there: its parts found from one mask of the digits instead of byte by byte. The same
 /// mantissa and exponent as ParseShortDecimal, so the same value, for the numbers it takes (at
 /// most 8 digits before the point and 8 after, 15 in all, an exponent of at most 4 digits);
 /// nullptr for others (ParseShortDecimal decides). The number may continue past the position
-/// returned when that is byte 16 or beyond: the caller checks the byte there.
-inline const char* ParseDecimal16(const char* p, double* value) {
-  const unsigned digit =
-      DigitMask(_mm_loadu_si128(reinterpret_cast<const __m128i*>(p)));  // bits 0-15
+/// returned when that is byte 16 or beyond: the caller checks the byte there. When `shape` is
+/// given and the number and the byte after it lie within 16 bytes after its sign, their layout
+/// goes there.
+inline const char* ParseDecimal16(const char* p, double* value, NumberShape* shape = nullptr) {
   const bool negative = p[0] == '-';
-  unsigned pos = (negative || p[0] == '+') ? 1 : 0;
-  const unsigned int_begin = pos;
-  const unsigned int_len = static_cast<unsigned>(__builtin_ctz(~(digit >> pos)));
-  pos += int_len;
+  const unsigned sign = (negative || p[0] == '+') ? 1 : 0;
+  const char* const q = p + sign;
+  const unsigned digit =
+      DigitMask(_mm_loadu_si128(reinterpret_cast<const __m128i*>(q)));  // bits 0-15
+  const unsigned int_len = static_cast<unsigned>(__builtin_ctz(~digit));
+  unsigned pos = int_len;
   unsigned frac_begin = pos, frac_len = 0;
-  if (p[pos] == '.') {
+  const bool point = q[pos] == '.';
+  if (point) {
     frac_begin = ++pos;
     frac_len = static_cast<unsigned>(__builtin_ctz(~(digit >> pos)));
     pos += frac_len;
@@ -172,38 +222,71 @@ inline const char* ParseDecimal16(const char* p, double* value) {
   const unsigned n = int_len + frac_len;  // all the digits (leading zeros too)
   if (n - 1 > 14) return nullptr;         // none, or more than 15
   int exponent = -static_cast<int>(frac_len);
-  if ((p[pos] | 0x20) == 'e') {
-    ++pos;
-    const bool exp_negative = p[pos] == '-';
-    if (exp_negative || p[pos] == '+') ++pos;
-    const unsigned exp_len = static_cast<unsigned>(__builtin_ctz(~(digit >> pos)));
+  unsigned exp_at = 0, exp_begin = 0, exp_len = 0;
+  bool exp_signed = false;
+  if ((q[pos] | 0x20) == 'e') {
+    exp_at = pos++;
+    const bool exp_negative = q[pos] == '-';
+    exp_signed = exp_negative || q[pos] == '+';
+    pos += exp_signed;
+    exp_begin = pos;
+    exp_len = static_cast<unsigned>(__builtin_ctz(~(digit >> pos)));
     if (exp_len == 0 || exp_len > 4) return nullptr;
-    int e = p[pos] - '0';
-    for (unsigned i = 1; i < exp_len; ++i) e = e * 10 + (p[pos + i] - '0');
+    int e = q[pos] - '0';
+    for (unsigned i = 1; i < exp_len; ++i) e = e * 10 + (q[pos + i] - '0');
     pos += exp_len;
     exponent += exp_negative ? -e : e;
   }
   if (exponent < -22 || exponent > 22) return nullptr;
   std::uint64_t mantissa;
-  if (n <= 8 && int_len < 8) {
-    // Both parts in one word: the integer digits, then the fraction's after them.
-    std::uint64_t a, b;
-    std::memcpy(&a, p + int_begin, sizeof a);
-    std::memcpy(&b, p + frac_begin, sizeof b);
-    const unsigned shift = 8 * int_len;
-    a = (a - 0x3030303030303030) & ((std::uint64_t{1} << shift) - 1);
-    b = (b - 0x3030303030303030) << shift;
-    mantissa = CombineDigits((a | b) << (8 * (8 - n)));
-  } else if (int_len <= 8 && frac_len <= 8) {
-    mantissa = DigitsValue(p + int_begin, int_len) * kPow10Integer[frac_len] +
-               DigitsValue(p + frac_begin, frac_len);
-  } else {
-    return nullptr;
+  if (!DecimalMantissa(q, int_len, q + frac_begin, frac_len, &mantissa)) return nullptr;
+  *value = ExactDecimal(mantissa, exponent, negative);
+  if (shape != nullptr && pos < 16) {
+    shape->mask = (2u << pos) - 1;
+    shape->digits = digit & ((1u << pos) - 1);
+    shape->length = static_cast<std::uint8_t>(pos);
+    shape->int_len = static_cast<std::uint8_t>(int_len);
+    shape->frac_begin = static_cast<std::uint8_t>(frac_begin);
+    shape->frac_len = static_cast<std::uint8_t>(frac_len);
+    shape->point = point;
+    shape->exp_at = static_cast<std::uint8_t>(exp_at);
+    shape->exp_signed = exp_signed;
+    shape->exp_begin = static_cast<std::uint8_t>(exp_begin);
+    shape->exp_len = static_cast<std::uint8_t>(exp_len);
   }
-  double v = static_cast<double>(mantissa);
-  v = exponent < 0 ? v / kExactPow10[-exponent] : v * kExactPow10[exponent];
-  *value = negative ? -v : v;
-  return p + pos;
+  return q + pos;
+}
+
+/// ParseDecimal16 for a number laid out as `shape` says (a sign before it allowed), with at least
+/// 32 bytes readable at `p`: its digits where the shape has them and nowhere else up to the byte
+/// after it, its point, exponent letter and exponent sign checked, and the same arithmetic, so
+/// the same value. nullptr when the number is laid out otherwise (ParseDecimal16 decides). The
+/// caller checks the byte at the position returned, as for ParseDecimal16.
+inline const char* ParseShaped(const char* p, const NumberShape& shape, double* value) {
+  const bool negative = p[0] == '-';
+  const char* const q = p + ((negative || p[0] == '+') ? 1 : 0);
+  const unsigned digit = DigitMask(_mm_loadu_si128(reinterpret_cast<const __m128i*>(q)));
+  if ((digit & shape.mask) != shape.digits) return nullptr;
+  if (shape.point && q[shape.int_len] != '.') return nullptr;
+  int exponent = -static_cast<int>(shape.frac_len);
+  if (shape.exp_at != 0) {
+    if ((q[shape.exp_at] | 0x20) != 'e') return nullptr;
+    bool exp_negative = false;
+    if (shape.exp_signed) {
+      const char c = q[shape.exp_at + 1];
+      exp_negative = c == '-';
+      if (!exp_negative && c != '+') return nullptr;
+    }
+    const char* digits = q + shape.exp_begin;
+    int e = digits[0] - '0';
+    for (unsigned i = 1; i < shape.exp_len; ++i) e = e * 10 + (digits[i] - '0');
+    exponent += exp_negative ? -e : e;
+    if (exponent < -22 || exponent > 22) return nullptr;
+  }
+  std::uint64_t mantissa = 0;  // the shape's lengths are ones DecimalMantissa reads
+  DecimalMantissa(q, shape.int_len, q + shape.frac_begin, shape.frac_len, &mantissa);
+  *value = ExactDecimal(mantissa, exponent, negative);
+  return q + shape.length;
 }
 #endif
 

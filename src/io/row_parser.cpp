@@ -37,9 +37,12 @@ std::uint32_t RowParser::Parse(std::string_view block, std::size_t block_offset,
   // it does not read whole, take LineReader and ParseFields, which give every error.
   const bool fast = eol == '\n';
   double values[kRoles] = {};
+  NumberShape shapes[kMaxFields];
   while (true) {
     const char* after = nullptr;
-    if (fast && reader.lines_read() < UINT32_MAX) after = FastRow(reader.cursor(), last, values);
+    if (fast && reader.lines_read() < UINT32_MAX) {
+      after = FastRow(reader.cursor(), last, values, shapes);
+    }
     std::uint32_t number;
     if (after != nullptr) {
       number = reader.AcceptLine(static_cast<std::size_t>(after - reader.cursor()));
@@ -76,7 +79,8 @@ inline bool IsFieldByte(char c) { return c > ' ' && c != ',' && c != '#'; }
 // wrong number of fields, no '\n' before `last`, a line longer than kMaxLineBytes): LineReader and
 // ParseFields then read the line, and skip it or name what is wrong. Where this accepts a line,
 // they give the same values.
-const char* RowParser::FastRow(const char* p, const char* last, double* values) const {
+const char* RowParser::FastRow(const char* p, const char* last, double* values,
+                               NumberShape* shapes) const {
   const char* const line_begin = p;
   const bool comma = delim_ == Delimiter::kComma;
   for (std::size_t column = 0; column < ncols_; ++column) {
@@ -92,7 +96,13 @@ const char* RowParser::FastRow(const char* p, const char* last, double* values) 
     const int r = role_of_column_[column];
     if (r >= 0) {
 #if defined(__SSE2__)
-      if (last - p >= 32) q = ParseDecimal16(p, &values[r]);
+      if (last - p >= 32) {
+        // The layout of this column's number in the last row first: a logger's printf writes
+        // every row alike.
+        NumberShape& shape = shapes[column];
+        if (shape.mask != 0) q = ParseShaped(p, shape, &values[r]);
+        if (q == nullptr) q = ParseDecimal16(p, &values[r], &shape);
+      }
 #endif
       if (q == nullptr) q = ParseShortDecimal(p, last, &values[r]);
       if (q == nullptr || q == last || !(IsBlank(*q) || *q == '\n' || (comma && *q == ','))) {

@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "accelcal/log_reader.hpp"
+#include "io/number_parser.hpp"
 #include "io/text_lines.hpp"
 
 namespace accelcal::internal {
@@ -37,7 +38,7 @@ class RowParser {
                       InputData* data, std::vector<double>* instances) const;
 
  private:
-  const char* FastRow(const char* p, const char* last, double* values) const;
+  const char* FastRow(const char* p, const char* last, double* values, NumberShape* shapes) const;
   void ParseFields(const Line& line, double* values) const;
   void ParseField(const Line& line, std::size_t column, const char* field_begin,
                   const char* field_end, double* value) const;

@@ -350,6 +350,58 @@ TEST(NumberParser, FastPathsAreCorrectlyRounded) {
 #endif
 }
 
+TEST(LogReader, ColumnsWrittenByOnePrintfFormatAreReadAsStrtodReadsThem) {
+  // The fast path keeps each column's number layout from the row before (NumberShape) and checks
+  // the next row against it: every format a logger's printf writes, with signs and exponent signs
+  // changing from row to row, bit-identical to strtod.
+  std::mt19937_64 rng(11);
+  std::uniform_real_distribution<double> unit(-1, 1);
+  std::uniform_int_distribution<int> decade(-9, 9);
+  for (const char* format : {"%15.7e", "%.6f", "%+.4E", "%12.3f", "%.9e", "%.0f", "%g"}) {
+    for (const char* sep : {" ", ","}) {
+      std::string text;
+      std::vector<std::array<double, 3>> expected;
+      for (int i = 0; i < 2000; ++i) {
+        std::array<double, 3> row{};
+        for (int a = 0; a < 3; ++a) {
+          char field[64];
+          // Mostly one magnitude (the layout repeats), sometimes another (it changes).
+          const int e = i % 13 == 0 ? decade(rng) : 2;
+          std::snprintf(field, sizeof field, format, unit(rng) * std::pow(10.0, e));
+          text += (a ? sep : "") + std::string(field);
+          row[static_cast<std::size_t>(a)] = std::strtod(field, nullptr);
+        }
+        text += "\n";
+        expected.push_back(row);
+      }
+      const InputData d = Parse(text);
+      ASSERT_EQ(d.raw.samples.size(), expected.size()) << format << sep;
+      for (std::size_t i = 0; i < expected.size(); ++i) {
+        for (int a = 0; a < 3; ++a) {
+          ASSERT_EQ(Bits(d.raw.samples[i](a)), Bits(expected[i][static_cast<std::size_t>(a)]))
+              << "row " << i << " format " << format << " separated by '" << sep << "'";
+        }
+      }
+    }
+  }
+}
+
+TEST(LogReader, AFieldLaidOutAsTheRowBeforeButNotANumberIsAnError) {
+  // Its digits where the last row's were, but another byte where the point, the exponent letter
+  // or its sign was: not read as the row before's layout.
+  const std::string row = "   2.9840000e-02   3.3108000e+04   3.3329000e+04   3.6429000e+04\n";
+  for (const char* bad : {"3.3108000x+04", "3,3108000e+04", "3.3108000e*04", "3.3108000e 04",
+                          "3.31080000+04", "3.3108000ee04"}) {
+    std::string text;
+    for (int i = 0; i < 10; ++i) text += row;
+    std::string broken = row;
+    broken.replace(broken.find("3.3108000e+04"), 13, bad);
+    text += broken + row;
+    const std::string error = ErrorOf(text);
+    EXPECT_EQ(error.rfind("test.csv:11: ", 0), 0u) << bad << ": " << error;
+  }
+}
+
 TEST(LogReader, EveryRowIsReadAsStrtodReadsIt) {
   // Whitespace and comma logs of mixed spellings (long mantissas, signs, exponents, CRLF, blank
   // lines and comments between the rows, no line end after the last), read by the fast path and

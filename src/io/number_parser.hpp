@@ -202,8 +202,8 @@ inline double ExactDecimal(std::uint64_t mantissa, int exponent, bool negative) 
 /// most 8 digits before the point and 8 after, 15 in all, an exponent of at most 4 digits);
 /// nullptr for others (ParseShortDecimal decides). The number may continue past the position
 /// returned when that is byte 16 or beyond: the caller checks the byte there. When `shape` is
-/// given and the number and the byte after it lie within 16 bytes after its sign, their layout
-/// goes there.
+/// given, the number's layout goes there when the number and the byte after it lie within 16
+/// bytes after its sign (else its mask becomes 0).
 inline const char* ParseDecimal16(const char* p, double* value, NumberShape* shape = nullptr) {
   const bool negative = p[0] == '-';
   const unsigned sign = (negative || p[0] == '+') ? 1 : 0;
@@ -241,6 +241,7 @@ inline const char* ParseDecimal16(const char* p, double* value, NumberShape* sha
   std::uint64_t mantissa;
   if (!DecimalMantissa(q, int_len, q + frac_begin, frac_len, &mantissa)) return nullptr;
   *value = ExactDecimal(mantissa, exponent, negative);
+  if (shape != nullptr) shape->mask = 0;  // none, unless the number fits
   if (shape != nullptr && pos < 16) {
     shape->mask = (2u << pos) - 1;
     shape->digits = digit & ((1u << pos) - 1);

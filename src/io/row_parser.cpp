@@ -21,6 +21,10 @@ RowParser::RowParser(const std::string& source, Delimiter delim, std::size_t nco
   for (int r = 0; r < kRoles; ++r) {
     if (layout_.column[r] >= 0) role_of_column_[layout_.column[r]] = r;
   }
+  every_column_read_ = ncols_ <= kRoles;
+  for (std::size_t c = 0; c < ncols_ && every_column_read_; ++c) {
+    every_column_read_ = role_of_column_[c] >= 0;
+  }
 }
 
 std::uint32_t RowParser::Parse(std::string_view block, std::size_t block_offset, std::size_t total,
@@ -38,10 +42,38 @@ std::uint32_t RowParser::Parse(std::string_view block, std::size_t block_offset,
   const bool fast = eol == '\n';
   double values[kRoles] = {};
   NumberShape shapes[kMaxFields];
+  // Rows laid out as the last one the fast path read are read whole (RowTemplate); when they
+  // keep changing layout (more than 1 in 8 rows, after the first 16), the template is dropped
+  // for the block.
+#if defined(__SSE2__)
+  RowTemplate row_template;
+  FieldSeen seen[kRoles];
+  bool templates = fast && every_column_read_;
+  std::size_t template_misses = 0, rows_in_block = 0;
+#endif
   while (true) {
     const char* after = nullptr;
     if (fast && reader.lines_read() < UINT32_MAX) {
-      after = FastRow(reader.cursor(), last, values, shapes);
+      const char* const row = reader.cursor();
+#if defined(__SSE2__)
+      if (templates) {
+        ++rows_in_block;
+        if (!row_template.empty()) after = row_template.Read(row, last, values);
+        if (after == nullptr) {
+          after = FastRow(row, last, values, shapes, seen);
+          if (!row_template.empty() && ++template_misses > 16 + rows_in_block / 8) {
+            templates = false;
+          } else if (after != nullptr) {
+            row_template.Build(row, static_cast<std::size_t>(after - row), seen, role_of_column_,
+                               ncols_, delim_ == Delimiter::kComma);
+          }
+        }
+      } else {
+        after = FastRow(row, last, values, shapes, nullptr);
+      }
+#else
+      after = FastRow(row, last, values, shapes, nullptr);
+#endif
     }
     std::uint32_t number;
     if (after != nullptr) {
@@ -79,8 +111,8 @@ inline bool IsFieldByte(char c) { return c > ' ' && c != ',' && c != '#'; }
 // wrong number of fields, no '\n' before `last`, a line longer than kMaxLineBytes): LineReader and
 // ParseFields then read the line, and skip it or name what is wrong. Where this accepts a line,
 // they give the same values.
-const char* RowParser::FastRow(const char* p, const char* last, double* values,
-                               NumberShape* shapes) const {
+const char* RowParser::FastRow(const char* p, const char* last, double* values, NumberShape* shapes,
+                               FieldSeen* seen) const {
   const char* const line_begin = p;
   const bool comma = delim_ == Delimiter::kComma;
   for (std::size_t column = 0; column < ncols_; ++column) {
@@ -95,6 +127,7 @@ const char* RowParser::FastRow(const char* p, const char* last, double* values,
     while (p != last && IsBlank(*p)) ++p;
     const int r = role_of_column_[column];
     if (r >= 0) {
+      bool shaped = false;  // read by a layout, which `shapes[column]` now holds
 #if defined(__SSE2__)
       if (last - p >= 32) {
         // The layout of this column's number in the last row first: a logger's printf writes
@@ -102,16 +135,23 @@ const char* RowParser::FastRow(const char* p, const char* last, double* values,
         NumberShape& shape = shapes[column];
         if (shape.mask != 0) q = ParseShaped(p, shape, &values[r]);
         if (q == nullptr) q = ParseDecimal16(p, &values[r], &shape);
+        shaped = q != nullptr && shape.mask != 0;
       }
 #endif
       if (q == nullptr) q = ParseShortDecimal(p, last, &values[r]);
       if (q == nullptr || q == last || !(IsBlank(*q) || *q == '\n' || (comma && *q == ','))) {
         // Not a short decimal ending the field: the whole field, correctly rounded.
+        shaped = false;
         q = p;
         while (q != last && IsFieldByte(*q)) ++q;
         if (q == p || q == last || !ParseNumber(p, q, &values[r]) || !std::isfinite(values[r])) {
           return nullptr;
         }
+      }
+      if (seen != nullptr) {
+        seen[column].start = static_cast<std::uint32_t>(p - line_begin);
+        seen[column].shape = shapes[column];
+        if (!shaped) seen[column].shape.mask = 0;
       }
       p = q;
     } else if (comma) {

@@ -11,6 +11,7 @@
 
 #include "accelcal/log_reader.hpp"
 #include "io/number_parser.hpp"
+#include "io/row_template.hpp"
 #include "io/text_lines.hpp"
 
 namespace accelcal::internal {
@@ -38,7 +39,8 @@ class RowParser {
                       InputData* data, std::vector<double>* instances) const;
 
  private:
-  const char* FastRow(const char* p, const char* last, double* values, NumberShape* shapes) const;
+  const char* FastRow(const char* p, const char* last, double* values, NumberShape* shapes,
+                      FieldSeen* seen) const;
   void ParseFields(const Line& line, double* values) const;
   void ParseField(const Line& line, std::size_t column, const char* field_begin,
                   const char* field_end, double* value) const;
@@ -51,6 +53,7 @@ class RowParser {
   bool raw_;
   const std::function<void(std::size_t, std::size_t)>& progress_;
   int role_of_column_[kMaxFields];
+  bool every_column_read_ = false;  // every column has a role (a row template may hold them)
 };
 
 }  // namespace accelcal::internal

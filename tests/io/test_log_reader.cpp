@@ -1,4 +1,5 @@
 // Reading raw logs and positions files, and the messages for malformed ones.
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <cstdio>
@@ -400,6 +401,99 @@ TEST(LogReader, AFieldLaidOutAsTheRowBeforeButNotANumberIsAnError) {
     const std::string error = ErrorOf(text);
     EXPECT_EQ(error.rfind("test.csv:11: ", 0), 0u) << bad << ": " << error;
   }
+}
+
+TEST(LogReader, ARowLaidOutAsTheRowBeforeButForItsSeparatorsIsNotReadAsIt) {
+  // Rows are read whole against the last row's layout (RowTemplate), where a sign may replace the
+  // blank before a number only when the number still begins a field there: with one blank between
+  // two numbers, a sign in its place joins them into one field that is not a number.
+  struct Case {
+    const char* row;
+    const char* broken;
+    const char* error;
+  };
+  for (const Case& c : {
+           Case{"1.5 2.5 3.5\n", "1.5-2.5 3.5\n",
+                "test.csv:11: column 1: '1.5-2.5' is not a number"},
+           Case{"1.5 2.5 3.5\n", "1.5+2.5 3.5\n",
+                "test.csv:11: column 1: '1.5+2.5' is not a number"},
+           Case{"1.5\t2.5\t3.5\n", "1.5-2.5\t3.5\n",
+                "test.csv:11: column 1: '1.5-2.5' is not a number"},
+           Case{"1.5,2.5,3.5\n", "1.5,2.5-3.5\n",
+                "test.csv:11: column 2: '2.5-3.5' is not a number"},
+           Case{"-1.5  2.5  3.5\n", "x1.5  2.5  3.5\n",
+                "test.csv:11: column 1: 'x1.5' is not a number"},
+           Case{"1.5e+01 2.5 3.5\n", "1.5e 01 2.5 3.5\n",
+                "test.csv:11: column 1: '1.5e' is not a number"},
+           Case{"1.5  2.5  3.5\n", "1.5 \x01 2.5  3.5\n",
+                "test.csv:11: column 2: '\x01' is not a number"},
+       }) {
+    std::string text;
+    for (int i = 0; i < 10; ++i) text += c.row;
+    text += c.broken;
+    for (int i = 0; i < 300; ++i) text += c.row;
+    EXPECT_EQ(ErrorOf(text), c.error) << c.broken;
+  }
+  // And where the sign may change, the numbers are read with it: blanks before each number, in
+  // a line of exactly 32 bytes (the template's last 16-byte block is checked whole).
+  std::string text;
+  for (int i = 0; i < 300; ++i) {
+    text += i % 2 ? "  -1.250000  +2.500000 3.750000\n" : "   1.250000  -2.500000 3.750000\n";
+  }
+  ASSERT_EQ(text.find('\n'), 31u);
+  const InputData d = Parse(text);
+  ASSERT_EQ(d.raw.samples.size(), 300u);
+  for (std::size_t i = 0; i < 300; ++i) {
+    EXPECT_EQ(d.raw.samples[i], i % 2 ? Vec3(-1.25, 2.5, 3.75) : Vec3(1.25, -2.5, 3.75)) << i;
+  }
+}
+
+TEST(LogReader, TheFastPathsReadWhatTheGeneralPathReads) {
+  // Lines ending in '\r' alone take the general path (LineReader and ParseFields) for every row;
+  // lines ending in '\n' take the fast paths (the row template, the column layouts, FastRow). The
+  // same rows either way must give the same values, bit for bit, or the same error: rows of a few
+  // printf formats with signs changing, and now and then one byte of a row replaced.
+  std::mt19937_64 rng(23);
+  std::uniform_real_distribution<double> unit(-1, 1);
+  const char* formats[] = {"%15.7e", "%.6f", "%+.4E", "%12.3f", "%g", "%.3e"};
+  const char replacements[] = {'-', '+', ' ', '.', 'e', ',', '\t', '0', '9', 'x', '#', '\0'};
+  int errors = 0;
+  for (int trial = 0; trial < 400; ++trial) {
+    const char* format = formats[trial % 6];
+    const char* sep = trial % 3 == 0 ? "," : (trial % 3 == 1 ? " " : "  ");
+    std::string text;
+    for (int i = 0; i < 260; ++i) {
+      std::string line;
+      for (int a = 0; a < 3; ++a) {
+        char field[64];
+        std::snprintf(field, sizeof field, format, unit(rng) * (i % 29 == 0 ? 1e4 : 50.0));
+        line += (a ? sep : "") + std::string(field);
+      }
+      if (trial % 2 == 0 && i == 20 + trial % 200) {  // one byte replaced
+        line[rng() % line.size()] = replacements[rng() % sizeof replacements];
+      }
+      text += line + "\n";
+    }
+    std::string mac = text;
+    std::replace(mac.begin(), mac.end(), '\n', '\r');
+    const std::string fast_error = ErrorOf(text), general_error = ErrorOf(mac);
+    ASSERT_EQ(fast_error, general_error) << text;
+    if (fast_error != "no error") {
+      ++errors;
+      continue;
+    }
+    const InputData fast = Parse(text), general = Parse(mac);
+    ASSERT_EQ(fast.raw.samples.size(), general.raw.samples.size());
+    for (std::size_t i = 0; i < fast.raw.samples.size(); ++i) {
+      for (int a = 0; a < 3; ++a) {
+        ASSERT_EQ(Bits(fast.raw.samples[i](a)), Bits(general.raw.samples[i](a)))
+            << "row " << i << " of " << text;
+      }
+    }
+    ASSERT_EQ(fast.raw.line, general.raw.line);
+  }
+  EXPECT_GT(errors, 50);   // both kinds of text are
+  EXPECT_LT(errors, 250);  // exercised
 }
 
 TEST(LogReader, EveryRowIsReadAsStrtodReadsIt) {

@@ -1,0 +1,165 @@
+#pragma once
+// A whole row read at once (row_parser): a logger's printf writes every row of a log alike, so
+// the layout of the last row the field-by-field path read is kept as a template of byte classes
+// (digits where its digits were, its other bytes as they were, and the signs that may change),
+// and the next rows are checked against it 16 bytes at a time and their numbers read from the
+// positions it gives. A row it accepts is a row exactly like the template's but for digits and
+// signs, which the field-by-field path reads as the same numbers (the same mantissa and exponent
+// through the same arithmetic, DecimalMantissa and ExactDecimal); any other row is left to it.
+
+#include <cstddef>
+#include <cstdint>
+#include <cstring>
+
+#include "io/number_parser.hpp"
+#include "io/text_lines.hpp"
+
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
+
+namespace accelcal::internal {
+
+/// Where a field's number lay in the row the field-by-field path read: its first byte (a sign
+/// or a digit) from the line's start, and its layout after the sign.
+struct FieldSeen {
+  std::uint32_t start = 0;
+  NumberShape shape;
+};
+
+class RowTemplate {
+ public:
+  /// Rows longer than this (with the line end) are read field by field.
+  static constexpr std::size_t kMaxBytes = 128;
+
+  bool empty() const { return length_ == 0; }
+  void Clear() { length_ = 0; }
+
+#if defined(__SSE2__)
+  /// The template of the row of `length` bytes at `line` (up to and with its '\n'), whose
+  /// `count` fields are all numbers read into the roles `role` with the layouts `fields`;
+  /// `comma`: the file's delimiter. Rows too long for a template leave it empty.
+  void Build(const char* line, std::size_t length, const FieldSeen* fields, const int* role,
+             std::size_t count, bool comma) {
+    length_ = 0;
+    if (length > kMaxBytes || count > kMaxNumbers) return;
+    for (std::size_t f = 0; f < count; ++f) {
+      if (fields[f].shape.mask == 0) return;  // a number not read by its layout
+    }
+    std::memset(digit_, 0, sizeof digit_);
+    std::memset(sign_, 0, sizeof sign_);
+    std::memset(exp_sign_, 0, sizeof exp_sign_);
+    std::memcpy(bytes_, line, length);
+    std::memset(bytes_ + length, 0, sizeof bytes_ - length);
+    const auto separator = [&](std::size_t at) {
+      return IsBlank(line[at]) || (comma && line[at] == ',');
+    };
+    for (std::size_t f = 0; f < count; ++f) {
+      const NumberShape& s = fields[f].shape;
+      Number& n = numbers_[f];
+      n.role = static_cast<std::uint8_t>(role[f]);
+      std::size_t at = fields[f].start;
+      // The sign's place: where the sign is, or the blank before the number, when the number
+      // still begins a field with a sign there (a separator or the line's start before it).
+      const char first = line[at];
+      n.sign_at = kNone;
+      if (first == '-' || first == '+') {
+        n.sign_at = static_cast<std::uint8_t>(at);
+        ++at;
+      } else if (at > 0 && IsBlank(line[at - 1]) && (at == 1 || separator(at - 2))) {
+        n.sign_at = static_cast<std::uint8_t>(at - 1);
+      }
+      if (n.sign_at != kNone) sign_[n.sign_at] = 0xFF;
+      n.digits_at = static_cast<std::uint8_t>(at);
+      for (unsigned i = 0; i < s.length; ++i) {
+        if ((s.digits >> i) & 1u) digit_[at + i] = 0xFF;
+      }
+      n.int_len = s.int_len;
+      n.frac_at = static_cast<std::uint8_t>(at + s.frac_begin);
+      n.frac_len = s.frac_len;
+      n.exp_at = s.exp_at == 0 ? kNone : static_cast<std::uint8_t>(at + s.exp_begin);
+      n.exp_len = s.exp_len;
+      n.exp_sign_at = kNone;
+      if (s.exp_at != 0 && s.exp_signed) {
+        n.exp_sign_at = static_cast<std::uint8_t>(at + s.exp_at + 1);
+        exp_sign_[n.exp_sign_at] = 0xFF;
+      }
+    }
+    count_ = count;
+    length_ = length;
+    chunks_ = (length + 15) / 16;
+    // Bytes past the line end are not checked.
+    tail_ = length % 16 == 0 ? 0u : (0xFFFFu << (length % 16)) & 0xFFFFu;
+  }
+
+  /// The row at `p` read into `values` when it is laid out as the template (`last` − `p` at
+  /// least 16 × chunks): the position after its '\n'; nullptr otherwise.
+  const char* Read(const char* p, const char* last, double* values) const {
+    if (static_cast<std::size_t>(last - p) < 16 * chunks_) return nullptr;
+    const __m128i zero_below = _mm_set1_epi8('0' - 1), nine_above = _mm_set1_epi8('9' + 1);
+    const __m128i space = _mm_set1_epi8(' '), plus = _mm_set1_epi8('+'), minus = _mm_set1_epi8('-');
+    for (std::size_t c = 0; c < chunks_; ++c) {
+      const __m128i text = _mm_loadu_si128(reinterpret_cast<const __m128i*>(p + 16 * c));
+      const __m128i digit = Load(digit_, c);
+      const __m128i is_digit =
+          _mm_and_si128(_mm_cmpgt_epi8(text, zero_below), _mm_cmplt_epi8(text, nine_above));
+      const __m128i is_sign = _mm_or_si128(_mm_cmpeq_epi8(text, plus), _mm_cmpeq_epi8(text, minus));
+      // A digit exactly where the template has one; elsewhere the template's byte, or a sign (or
+      // a blank) in a sign's place, or either sign in an exponent sign's place.
+      const __m128i other = _mm_or_si128(
+          _mm_or_si128(digit, _mm_cmpeq_epi8(text, Load(bytes_, c))),
+          _mm_or_si128(
+              _mm_and_si128(Load(sign_, c), _mm_or_si128(is_sign, _mm_cmpeq_epi8(text, space))),
+              _mm_and_si128(Load(exp_sign_, c), is_sign)));
+      const __m128i ok = _mm_and_si128(_mm_cmpeq_epi8(is_digit, digit), other);
+      unsigned mask = static_cast<unsigned>(_mm_movemask_epi8(ok));
+      if (c + 1 == chunks_) mask |= tail_;
+      if (mask != 0xFFFFu) return nullptr;
+    }
+    for (std::size_t f = 0; f < count_; ++f) {
+      const Number& n = numbers_[f];
+      int exponent = -static_cast<int>(n.frac_len);
+      if (n.exp_at != kNone) {
+        const char* e_digits = p + n.exp_at;
+        int e = e_digits[0] - '0';
+        for (unsigned i = 1; i < n.exp_len; ++i) e = e * 10 + (e_digits[i] - '0');
+        exponent += (n.exp_sign_at != kNone && p[n.exp_sign_at] == '-') ? -e : e;
+        if (exponent < -22 || exponent > 22) return nullptr;
+      }
+      std::uint64_t mantissa = 0;  // the template's lengths are ones DecimalMantissa reads
+      DecimalMantissa(p + n.digits_at, n.int_len, p + n.frac_at, n.frac_len, &mantissa);
+      values[n.role] = ExactDecimal(mantissa, exponent, n.sign_at != kNone && p[n.sign_at] == '-');
+    }
+    return p + length_;
+  }
+#endif
+
+ private:
+  static constexpr std::uint8_t kNone = 0xFF;
+  static constexpr std::size_t kMaxNumbers = 16;
+  struct Number {
+    std::uint8_t role = 0;
+    std::uint8_t sign_at = kNone;  // '+', '-' or ' ' may be there
+    std::uint8_t digits_at = 0, int_len = 0, frac_at = 0, frac_len = 0;
+    std::uint8_t exp_at = kNone, exp_len = 0;  // the exponent's digits
+    std::uint8_t exp_sign_at = kNone;          // '+' or '-' may be there
+  };
+#if defined(__SSE2__)
+  static __m128i Load(const unsigned char* bytes, std::size_t chunk) {
+    return _mm_load_si128(reinterpret_cast<const __m128i*>(bytes + 16 * chunk));
+  }
+  static __m128i Load(const char* bytes, std::size_t chunk) {
+    return _mm_load_si128(reinterpret_cast<const __m128i*>(bytes + 16 * chunk));
+  }
+#endif
+
+  alignas(16) char bytes_[kMaxBytes] = {};              // the row (zeros after it)
+  alignas(16) unsigned char digit_[kMaxBytes] = {};     // 0xFF where a digit must be
+  alignas(16) unsigned char sign_[kMaxBytes] = {};      // 0xFF: '+', '-' or ' '
+  alignas(16) unsigned char exp_sign_[kMaxBytes] = {};  // 0xFF: '+' or '-'
+  Number numbers_[kMaxNumbers];
+  std::size_t count_ = 0, length_ = 0, chunks_ = 0;
+  unsigned tail_ = 0;
+};
+
+}  // namespace accelcal::internal

@@ -75,9 +75,8 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     for (std::size_t i = 0; i < a.raw.samples.size(); ++i) {
       if (!SameBits(a.raw.samples[i], b.raw.samples[i])) std::abort();
     }
-    if (!a.raw.time_s.empty() &&
-        std::memcmp(a.raw.time_s.data(), b.raw.time_s.data(),
-                    a.raw.time_s.size() * sizeof(double)) != 0) {
+    if (!a.raw.time_s.empty() && std::memcmp(a.raw.time_s.data(), b.raw.time_s.data(),
+                                             a.raw.time_s.size() * sizeof(double)) != 0) {
       std::abort();
     }
     for (std::size_t i = 0; i < a.positions.size(); ++i) {

@@ -16,7 +16,10 @@
 
 #if defined(__SSE2__)
 #include <emmintrin.h>
+#include <tmmintrin.h>
 #endif
+
+#include <algorithm>
 
 namespace accelcal::internal {
 
@@ -88,14 +91,86 @@ class RowTemplate {
     count_ = count;
     length_ = length;
     chunks_ = (length + 15) / 16;
+    readable_ = 16 * chunks_;
+    // The mantissas' digits for the vector path: number 2i's at bytes 0-7 of pair i's vector and
+    // number 2i + 1's at bytes 8-15, each right-aligned (zeros before it), gathered from 16 bytes
+    // loaded at its first digit. Mantissas of more than 8 digits take the scalar path.
+    vector_ = Ssse3();
+    for (std::size_t f = 0; f < count; ++f) {
+      const Number& n = numbers_[f];
+      const unsigned digits = n.int_len + n.frac_len;
+      if (digits > 8) vector_ = false;
+      readable_ = std::max<std::size_t>(readable_, n.digits_at + std::size_t{16});
+      unsigned char* shuffle = shuffle_[f / 2] + 8 * (f % 2);
+      std::memset(shuffle, 0x80, 8);  // 0x80: a zero byte
+      for (unsigned j = 0; j < digits && digits <= 8; ++j) {
+        const unsigned from = j < n.int_len ? j : n.frac_at - n.digits_at + (j - n.int_len);
+        shuffle[8 - digits + j] = static_cast<unsigned char>(from);
+      }
+    }
+    if (count % 2 == 1) std::memset(shuffle_[count / 2] + 8, 0x80, 8);
     // Bytes past the line end are not checked.
     tail_ = length % 16 == 0 ? 0u : (0xFFFFu << (length % 16)) & 0xFFFFu;
   }
 
   /// The row at `p` read into `values` when it is laid out as the template (`last` − `p` at
-  /// least 16 × chunks): the position after its '\n'; nullptr otherwise.
+  /// least 16 × chunks, more for the vector path): the position after its '\n'; nullptr
+  /// otherwise.
   const char* Read(const char* p, const char* last, double* values) const {
-    if (static_cast<std::size_t>(last - p) < 16 * chunks_) return nullptr;
+    if (static_cast<std::size_t>(last - p) < readable_ || !Matches(p)) return nullptr;
+    std::uint64_t mantissa[kMaxNumbers];
+    if (vector_) {
+      VectorMantissas(p, mantissa);
+    } else {
+      for (std::size_t f = 0; f < count_; ++f) {
+        const Number& n = numbers_[f];
+        mantissa[f] = 0;  // the template's lengths are ones DecimalMantissa reads
+        DecimalMantissa(p + n.digits_at, n.int_len, p + n.frac_at, n.frac_len, &mantissa[f]);
+      }
+    }
+    for (std::size_t f = 0; f < count_; ++f) {
+      const Number& n = numbers_[f];
+      int exponent = -static_cast<int>(n.frac_len);
+      if (n.exp_at != kNone) {
+        const char* d = p + n.exp_at;
+        int e;
+        switch (n.exp_len) {
+          case 1:
+            e = d[0] - '0';
+            break;
+          case 2:
+            e = 10 * (d[0] - '0') + (d[1] - '0');
+            break;
+          case 3:
+            e = 100 * (d[0] - '0') + 10 * (d[1] - '0') + (d[2] - '0');
+            break;
+          default:
+            e = 1000 * (d[0] - '0') + 100 * (d[1] - '0') + 10 * (d[2] - '0') + (d[3] - '0');
+            break;
+        }
+        exponent += (n.exp_sign_at != kNone && p[n.exp_sign_at] == '-') ? -e : e;
+        if (exponent < -22 || exponent > 22) return nullptr;
+      }
+      values[n.role] =
+          ExactDecimal(mantissa[f], exponent, n.sign_at != kNone && p[n.sign_at] == '-');
+    }
+    return p + length_;
+  }
+#endif
+
+ private:
+  static constexpr std::uint8_t kNone = 0xFF;
+  static constexpr std::size_t kMaxNumbers = 16;
+  struct Number {
+    std::uint8_t role = 0;
+    std::uint8_t sign_at = kNone;  // '+', '-' or ' ' may be there
+    std::uint8_t digits_at = 0, int_len = 0, frac_at = 0, frac_len = 0;
+    std::uint8_t exp_at = kNone, exp_len = 0;  // the exponent's digits
+    std::uint8_t exp_sign_at = kNone;          // '+' or '-' may be there
+  };
+#if defined(__SSE2__)
+  // Whether the row at `p` is laid out as the template, 16 bytes at a time.
+  bool Matches(const char* p) const {
     const __m128i zero_below = _mm_set1_epi8('0' - 1), nine_above = _mm_set1_epi8('9' + 1);
     const __m128i space = _mm_set1_epi8(' '), plus = _mm_set1_epi8('+'), minus = _mm_set1_epi8('-');
     for (std::size_t c = 0; c < chunks_; ++c) {
@@ -114,37 +189,57 @@ class RowTemplate {
       const __m128i ok = _mm_and_si128(_mm_cmpeq_epi8(is_digit, digit), other);
       unsigned mask = static_cast<unsigned>(_mm_movemask_epi8(ok));
       if (c + 1 == chunks_) mask |= tail_;
-      if (mask != 0xFFFFu) return nullptr;
+      if (mask != 0xFFFFu) return false;
     }
-    for (std::size_t f = 0; f < count_; ++f) {
-      const Number& n = numbers_[f];
-      int exponent = -static_cast<int>(n.frac_len);
-      if (n.exp_at != kNone) {
-        const char* e_digits = p + n.exp_at;
-        int e = e_digits[0] - '0';
-        for (unsigned i = 1; i < n.exp_len; ++i) e = e * 10 + (e_digits[i] - '0');
-        exponent += (n.exp_sign_at != kNone && p[n.exp_sign_at] == '-') ? -e : e;
-        if (exponent < -22 || exponent > 22) return nullptr;
-      }
-      std::uint64_t mantissa = 0;  // the template's lengths are ones DecimalMantissa reads
-      DecimalMantissa(p + n.digits_at, n.int_len, p + n.frac_at, n.frac_len, &mantissa);
-      values[n.role] = ExactDecimal(mantissa, exponent, n.sign_at != kNone && p[n.sign_at] == '-');
-    }
-    return p + length_;
+    return true;
   }
-#endif
 
- private:
-  static constexpr std::uint8_t kNone = 0xFF;
-  static constexpr std::size_t kMaxNumbers = 16;
-  struct Number {
-    std::uint8_t role = 0;
-    std::uint8_t sign_at = kNone;  // '+', '-' or ' ' may be there
-    std::uint8_t digits_at = 0, int_len = 0, frac_at = 0, frac_len = 0;
-    std::uint8_t exp_at = kNone, exp_len = 0;  // the exponent's digits
-    std::uint8_t exp_sign_at = kNone;          // '+' or '-' may be there
-  };
-#if defined(__SSE2__)
+#if defined(__x86_64__)
+  // The mantissas (at most 8 digits each), two numbers a vector: the digits gathered by the
+  // template's shuffles, then combined by multiply-adds, pairs, fours, eights (SSSE3).
+  __attribute__((target("ssse3"))) void VectorMantissas(const char* p,
+                                                        std::uint64_t* mantissa) const {
+    const __m128i zero = _mm_set1_epi8('0');
+    const __m128i tens = _mm_set_epi8(1, 10, 1, 10, 1, 10, 1, 10, 1, 10, 1, 10, 1, 10, 1, 10);
+    const __m128i hundreds = _mm_set_epi16(1, 100, 1, 100, 1, 100, 1, 100);
+    const __m128i ten_thousands = _mm_set_epi16(1, 10000, 1, 10000, 1, 10000, 1, 10000);
+    for (std::size_t f = 0; f < count_; f += 2) {
+      const std::size_t g = f + 1 < count_ ? f + 1 : f;
+      const __m128i a = _mm_sub_epi8(
+          _mm_loadu_si128(reinterpret_cast<const __m128i*>(p + numbers_[f].digits_at)), zero);
+      const __m128i b = _mm_sub_epi8(
+          _mm_loadu_si128(reinterpret_cast<const __m128i*>(p + numbers_[g].digits_at)), zero);
+      // Number f's digits from a into bytes 0-7, number g's from b into bytes 8-15.
+      const __m128i shuffle = Load(shuffle_[f / 2], 0);
+      const __m128i low = _mm_shuffle_epi8(a, _mm_or_si128(shuffle, kHighHalfZero()));
+      const __m128i high = _mm_shuffle_epi8(b, _mm_or_si128(shuffle, kLowHalfZero()));
+      const __m128i digits = _mm_or_si128(low, high);
+      const __m128i pairs = _mm_maddubs_epi16(digits, tens);
+      const __m128i fours = _mm_madd_epi16(pairs, hundreds);
+      const __m128i eights = _mm_madd_epi16(_mm_packs_epi32(fours, fours), ten_thousands);
+      const auto both = static_cast<std::uint64_t>(_mm_cvtsi128_si64(eights));
+      mantissa[f] = both & 0xFFFFFFFFu;
+      if (g != f) mantissa[g] = both >> 32;
+    }
+  }
+#else
+  void VectorMantissas(const char*, std::uint64_t*) const {}  // never chosen (Ssse3)
+#endif
+  // Shuffle masks that zero one half of the result (the index's top bit set).
+  static __m128i kHighHalfZero() {
+    return _mm_set_epi8(-128, -128, -128, -128, -128, -128, -128, -128, 0, 0, 0, 0, 0, 0, 0, 0);
+  }
+  static __m128i kLowHalfZero() {
+    return _mm_set_epi8(0, 0, 0, 0, 0, 0, 0, 0, -128, -128, -128, -128, -128, -128, -128, -128);
+  }
+  static bool Ssse3() {
+#if defined(__GNUC__) && defined(__x86_64__)
+    return __builtin_cpu_supports("ssse3") != 0;
+#else
+    return false;
+#endif
+  }
+
   static __m128i Load(const unsigned char* bytes, std::size_t chunk) {
     return _mm_load_si128(reinterpret_cast<const __m128i*>(bytes + 16 * chunk));
   }
@@ -153,13 +248,16 @@ class RowTemplate {
   }
 #endif
 
-  alignas(16) char bytes_[kMaxBytes] = {};              // the row (zeros after it)
-  alignas(16) unsigned char digit_[kMaxBytes] = {};     // 0xFF where a digit must be
-  alignas(16) unsigned char sign_[kMaxBytes] = {};      // 0xFF: '+', '-' or ' '
-  alignas(16) unsigned char exp_sign_[kMaxBytes] = {};  // 0xFF: '+' or '-'
+  alignas(16) char bytes_[kMaxBytes] = {};                       // the row (zeros after it)
+  alignas(16) unsigned char digit_[kMaxBytes] = {};              // 0xFF where a digit must be
+  alignas(16) unsigned char sign_[kMaxBytes] = {};               // 0xFF: '+', '-' or ' '
+  alignas(16) unsigned char exp_sign_[kMaxBytes] = {};           // 0xFF: '+' or '-'
+  alignas(16) unsigned char shuffle_[kMaxNumbers / 2][16] = {};  // VectorMantissas' gathers
   Number numbers_[kMaxNumbers];
   std::size_t count_ = 0, length_ = 0, chunks_ = 0;
+  std::size_t readable_ = 0;  // bytes Read needs at the row
   unsigned tail_ = 0;
+  bool vector_ = false;
 };
 
 }  // namespace accelcal::internal

@@ -2,10 +2,11 @@
 // A whole row read at once (row_parser): a logger's printf writes every row of a log alike, so
 // the layout of the last row the field-by-field path read is kept as a template of byte classes
 // (digits where its digits were, its other bytes as they were, and the signs that may change),
-// and the next rows are checked against it 16 bytes at a time and their numbers read from the
-// positions it gives. A row it accepts is a row exactly like the template's but for digits and
-// signs, which the field-by-field path reads as the same numbers (the same mantissa and exponent
-// through the same arithmetic, DecimalMantissa and ExactDecimal); any other row is left to it.
+// and the next rows are checked against it 16 bytes at a time (32 with AVX2) and their numbers
+// read from the positions it gives (the mantissas two a vector with SSSE3). A row it accepts is a
+// row exactly like the template's but for digits and signs, which the field-by-field path reads as
+// the same numbers (the same mantissa and exponent through the same arithmetic, DecimalMantissa and
+// ExactDecimal); any other row is left to it.
 
 #include <cstddef>
 #include <cstdint>
@@ -37,7 +38,6 @@ class RowTemplate {
   static constexpr std::size_t kMaxBytes = 128;
 
   bool empty() const { return length_ == 0; }
-  void Clear() { length_ = 0; }
 
 #if defined(__SSE2__)
   /// The template of the row of `length` bytes at `line` (up to and with its '\n'), whose
@@ -118,9 +118,8 @@ class RowTemplate {
     tail_ = length % block == 0 ? 0u : (all << (length % block)) & all;
   }
 
-  /// The row at `p` read into `values` when it is laid out as the template (`last` − `p` at
-  /// least 16 × chunks, more for the vector path): the position after its '\n'; nullptr
-  /// otherwise.
+  /// The row at `p` read into `values` when it is laid out as the template (and the text at `p`,
+  /// up to `last`, holds the blocks it loads): the position after its '\n'; nullptr otherwise.
   const char* Read(const char* p, const char* last, double* values) const {
     if (static_cast<std::size_t>(last - p) < readable_) return nullptr;
     if (!(wide_ ? MatchesWide(p) : Matches(p))) return nullptr;

@@ -57,22 +57,26 @@ std::pair<Vec3, Vec3> LogExtremes(const std::vector<Vec3>& samples) {
 // Each pass counts the next 16 bits of the values that share the bits fixed so far and fixes the
 // 16 bits of the bucket holding the k-th; once that bucket is small, its values are copied and
 // nth_element finishes. The same value as nth_element on a copy (detection of a 1-hour log would
-// otherwise hold a second copy of its scores, 29 MB).
+// otherwise hold a second copy of its scores, 29 MB); at most 65,536 values are copied at once,
+// as their copy is smaller than the counts.
 double KthSmallest(const std::vector<double>& v, std::size_t k) {
   const auto bits = [](double x) {
     std::uint64_t b;
     std::memcpy(&b, &x, sizeof b);
     return b;
   };
-  if (v.size() <= (std::size_t{1} << 16)) {  // a copy is smaller than the counts
+  constexpr std::size_t kFew = std::size_t{1} << 16;
+  // nth_element on a copy of the `total` values that `matches`.
+  const auto select = [&](std::size_t total, const auto& matches) {
     std::vector<double> kept;
-    kept.reserve(v.size());
+    kept.reserve(total);
     for (double x : v) {
-      if (!std::isnan(x)) kept.push_back(x);
+      if (matches(x)) kept.push_back(x);
     }
     std::nth_element(kept.begin(), kept.begin() + static_cast<std::ptrdiff_t>(k), kept.end());
     return kept[k];
-  }
+  };
+  if (v.size() <= kFew) return select(v.size(), [](double x) { return !std::isnan(x); });
   std::uint64_t prefix = 0;
   std::vector<std::size_t> count(1 << 16);
   for (int shift = 48;; shift -= 16) {
@@ -88,15 +92,7 @@ double KthSmallest(const std::vector<double>& v, std::size_t k) {
       ++count[(bits(x) >> shift) & 0xFFFF];
       ++total;
     }
-    if (total <= (std::size_t{1} << 16) || shift == 0) {
-      std::vector<double> kept;
-      kept.reserve(total);
-      for (double x : v) {
-        if (matches(x)) kept.push_back(x);
-      }
-      std::nth_element(kept.begin(), kept.begin() + static_cast<std::ptrdiff_t>(k), kept.end());
-      return kept[k];
-    }
+    if (total <= kFew || shift == 0) return select(total, matches);
     std::size_t bucket = 0;
     while (k >= count[bucket]) k -= count[bucket++];
     prefix |= static_cast<std::uint64_t>(bucket) << shift;

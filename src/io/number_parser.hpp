@@ -189,6 +189,20 @@ inline bool DecimalMantissa(const char* int_digits, unsigned int_len, const char
   return false;
 }
 
+/// The value of the `length` (1 to 4) exponent digits at `digits`.
+inline int ExponentDigits(const char* d, unsigned length) {
+  switch (length) {  // unrolled: two digits, as printf's %e writes, take no loop
+    case 1:
+      return d[0] - '0';
+    case 2:
+      return 10 * (d[0] - '0') + (d[1] - '0');
+    case 3:
+      return 100 * (d[0] - '0') + 10 * (d[1] - '0') + (d[2] - '0');
+    default:
+      return 1000 * (d[0] - '0') + 100 * (d[1] - '0') + 10 * (d[2] - '0') + (d[3] - '0');
+  }
+}
+
 /// mantissa · 10^exponent, correctly rounded (exact operands: Clinger's fast path).
 inline double ExactDecimal(std::uint64_t mantissa, int exponent, bool negative) {
   double v = static_cast<double>(mantissa);
@@ -232,8 +246,7 @@ inline const char* ParseDecimal16(const char* p, double* value, NumberShape* sha
     exp_begin = pos;
     exp_len = static_cast<unsigned>(__builtin_ctz(~(digit >> pos)));
     if (exp_len == 0 || exp_len > 4) return nullptr;
-    int e = q[pos] - '0';
-    for (unsigned i = 1; i < exp_len; ++i) e = e * 10 + (q[pos + i] - '0');
+    const int e = ExponentDigits(q + pos, exp_len);
     pos += exp_len;
     exponent += exp_negative ? -e : e;
   }
@@ -278,9 +291,7 @@ inline const char* ParseShaped(const char* p, const NumberShape& shape, double* 
       exp_negative = c == '-';
       if (!exp_negative && c != '+') return nullptr;
     }
-    const char* digits = q + shape.exp_begin;
-    int e = digits[0] - '0';
-    for (unsigned i = 1; i < shape.exp_len; ++i) e = e * 10 + (digits[i] - '0');
+    const int e = ExponentDigits(q + shape.exp_begin, shape.exp_len);
     exponent += exp_negative ? -e : e;
     if (exponent < -22 || exponent > 22) return nullptr;
   }

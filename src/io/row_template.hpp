@@ -92,14 +92,14 @@ class RowTemplate {
     count_ = count;
     length_ = length;
     // 32 bytes at a time where the CPU has AVX2 (3 blocks for a 65-byte row instead of 5).
-    wide_ = Avx2();
+    wide_ = Cpu().avx2;
     const std::size_t block = wide_ ? 32 : 16;
     chunks_ = (length + block - 1) / block;
     readable_ = block * chunks_;
     // The mantissas' digits for the vector path: number 2i's at bytes 0-7 of pair i's vector and
     // number 2i + 1's at bytes 8-15, each right-aligned (zeros before it), gathered from 16 bytes
     // loaded at its first digit. Mantissas of more than 8 digits take the scalar path.
-    vector_ = Ssse3();
+    vector_ = Cpu().ssse3;
     for (std::size_t f = 0; f < count; ++f) {
       const Number& n = numbers_[f];
       const unsigned digits = n.int_len + n.frac_len;
@@ -137,22 +137,7 @@ class RowTemplate {
       const Number& n = numbers_[f];
       int exponent = -static_cast<int>(n.frac_len);
       if (n.exp_at != kNone) {
-        const char* d = p + n.exp_at;
-        int e;
-        switch (n.exp_len) {
-          case 1:
-            e = d[0] - '0';
-            break;
-          case 2:
-            e = 10 * (d[0] - '0') + (d[1] - '0');
-            break;
-          case 3:
-            e = 100 * (d[0] - '0') + 10 * (d[1] - '0') + (d[2] - '0');
-            break;
-          default:
-            e = 1000 * (d[0] - '0') + 100 * (d[1] - '0') + 10 * (d[2] - '0') + (d[3] - '0');
-            break;
-        }
+        const int e = ExponentDigits(p + n.exp_at, n.exp_len);
         exponent += (n.exp_sign_at != kNone && p[n.exp_sign_at] == '-') ? -e : e;
         if (exponent < -22 || exponent > 22) return nullptr;
       }
@@ -230,7 +215,7 @@ class RowTemplate {
     return true;
   }
 #else
-  bool MatchesWide(const char*) const { return false; }       // never chosen (Avx2)
+  bool MatchesWide(const char*) const { return false; }       // never chosen (Cpu)
 #endif
 
 #if defined(__x86_64__)
@@ -263,7 +248,7 @@ class RowTemplate {
     }
   }
 #else
-  void VectorMantissas(const char*, std::uint64_t*) const {}  // never chosen (Ssse3)
+  void VectorMantissas(const char*, std::uint64_t*) const {}  // never chosen (Cpu)
 #endif
   // Shuffle masks that zero one half of the result (the index's top bit set).
   static __m128i kHighHalfZero() {
@@ -272,19 +257,20 @@ class RowTemplate {
   static __m128i kLowHalfZero() {
     return _mm_set_epi8(0, 0, 0, 0, 0, 0, 0, 0, -128, -128, -128, -128, -128, -128, -128, -128);
   }
-  static bool Avx2() {
+  // What the CPU offers beyond SSE2, asked once.
+  struct Extensions {
+    bool ssse3 = false, avx2 = false;
+  };
+  static const Extensions& Cpu() {
+    static const Extensions cpu = [] {
+      Extensions e;
 #if defined(__GNUC__) && defined(__x86_64__)
-    return __builtin_cpu_supports("avx2") != 0;
-#else
-    return false;
+      e.ssse3 = __builtin_cpu_supports("ssse3") != 0;
+      e.avx2 = __builtin_cpu_supports("avx2") != 0;
 #endif
-  }
-  static bool Ssse3() {
-#if defined(__GNUC__) && defined(__x86_64__)
-    return __builtin_cpu_supports("ssse3") != 0;
-#else
-    return false;
-#endif
+      return e;
+    }();
+    return cpu;
   }
 
   static __m128i Load(const unsigned char* bytes, std::size_t chunk) {

@@ -4,11 +4,8 @@
 #include <cstring>
 #include <stdexcept>
 
+#include "core/cpu_features.hpp"
 #include "core/sha256_blocks.hpp"
-
-#if defined(ACCELCAL_HAVE_SHA_EXTENSIONS)
-#include <cpuid.h>
-#endif
 
 namespace accelcal {
 
@@ -68,13 +65,9 @@ using BlockFunction = void (*)(std::uint32_t*, const std::uint8_t*, std::size_t)
 
 BlockFunction ChooseBlocks() {
 #if defined(ACCELCAL_HAVE_SHA_EXTENSIONS)
-  // CPUID leaf 7 EBX bit 29 (SHA), leaf 1 ECX bits 9 (SSSE3) and 19 (SSE4.1): what the
-  // extensions' block function is built with. No OS state is involved (XMM registers only).
-  unsigned eax = 0, ebx = 0, ecx = 0, edx = 0;
-  const bool sse = __get_cpuid(1, &eax, &ebx, &ecx, &edx) != 0 && (ecx & (1u << 9)) != 0 &&
-                   (ecx & (1u << 19)) != 0;
-  const bool sha = __get_cpuid_count(7, 0, &eax, &ebx, &ecx, &edx) != 0 && (ebx & (1u << 29)) != 0;
-  if (sse && sha) return Sha256BlocksShaExtensions;
+  // What the extensions' block function is built with: SHA, SSSE3 and SSE4.1.
+  const CpuFeatures& cpu = Cpu();
+  if (cpu.sha && cpu.ssse3 && cpu.sse41) return Sha256BlocksShaExtensions;
 #endif
   return Sha256BlocksPortable;
 }

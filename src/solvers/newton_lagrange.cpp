@@ -8,6 +8,7 @@
 #include <Eigen/Cholesky>
 #include <Eigen/LU>
 
+#include "core/cpu_features.hpp"
 #include "core/text_format.hpp"
 #include "solvers/newton_lagrange_kernel.hpp"
 #include "solvers/solver_common.hpp"
@@ -186,11 +187,7 @@ ThetaStep NewtonStep(const nk::Kernel& kernel, const Problem& problem, const Vec
 
 KernelIsa BestKernelIsa() {
 #ifdef ACCELCAL_HAVE_AVX_KERNEL
-  static const bool avx = [] {
-    __builtin_cpu_init();
-    return __builtin_cpu_supports("avx") != 0;  // the CPU's flag and the OS's saving of its state
-  }();
-  if (avx) return KernelIsa::kAvx;
+  if (Cpu().avx) return KernelIsa::kAvx;
 #endif
   return KernelIsa::kBaseline;
 }

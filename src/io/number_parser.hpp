@@ -17,6 +17,14 @@ inline constexpr double kExactPow10[] = {1e0,  1e1,  1e2,  1e3,  1e4,  1e5,  1e6
                                          1e8,  1e9,  1e10, 1e11, 1e12, 1e13, 1e14, 1e15,
                                          1e16, 1e17, 1e18, 1e19, 1e20, 1e21, 1e22};
 
+/// mantissa · 10^exponent, correctly rounded (exact operands: Clinger's fast path).
+inline double ExactDecimal(std::uint64_t mantissa, int exponent, bool negative) {
+  // Through a signed integer: mantissa <= 2^53, and the unsigned conversion costs a branch.
+  double v = static_cast<double>(static_cast<std::int64_t>(mantissa));
+  v = exponent < 0 ? v / kExactPow10[-exponent] : v * kExactPow10[exponent];
+  return negative ? -v : v;
+}
+
 inline bool IsDigit(char c) { return static_cast<unsigned char>(c - '0') < 10; }
 
 /// The number whose 8 decimal digits (values 0 to 9, the first in the lowest byte) make `v`.
@@ -119,9 +127,7 @@ inline const char* ParseShortDecimal(const char* p, const char* last, double* va
     exponent += exp_negative ? -e : e;
   }
   if (exponent < -22 || exponent > 22) return nullptr;
-  double v = static_cast<double>(mantissa);
-  v = exponent < 0 ? v / kExactPow10[-exponent] : v * kExactPow10[exponent];
-  *value = negative ? -v : v;
+  *value = ExactDecimal(mantissa, exponent, negative);
   return p;
 }
 
@@ -201,13 +207,6 @@ inline int ExponentDigits(const char* d, unsigned length) {
     default:
       return 1000 * (d[0] - '0') + 100 * (d[1] - '0') + 10 * (d[2] - '0') + (d[3] - '0');
   }
-}
-
-/// mantissa · 10^exponent, correctly rounded (exact operands: Clinger's fast path).
-inline double ExactDecimal(std::uint64_t mantissa, int exponent, bool negative) {
-  double v = static_cast<double>(mantissa);
-  v = exponent < 0 ? v / kExactPow10[-exponent] : v * kExactPow10[exponent];
-  return negative ? -v : v;
 }
 
 /// ParseShortDecimal for a number that lies within the 16 bytes at `p`, with at least 32 bytes

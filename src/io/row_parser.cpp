@@ -31,12 +31,30 @@ std::uint32_t RowParser::Parse(std::string_view block, std::size_t block_offset,
                                std::uint32_t lines_before, char eol, bool skip_first,
                                std::size_t* rows, InputData* data,
                                std::vector<double>* instances) const {
-  const bool has_time = layout_.column[kTime] >= 0;
+  // Per-row tests as locals: the vectors' stores could otherwise change them for the compiler.
+  const bool has_time = layout_.column[kTime] >= 0, has_instance = layout_.column[kInstance] >= 0;
+  const bool raw = raw_, report = static_cast<bool>(progress_);
+  std::size_t rows_read = *rows;
   RawLog& log = data->raw;
   LineReader reader(block, source_, lines_before, eol);
   Line line;
   if (skip_first) reader.Next(&line);
   const char* const last = block.data() + block.size();
+  // A row's values (`values`, by role) kept, the row being line `number`, ending at `next`.
+  const auto keep = [&](const double* v, std::uint32_t number, const char* next) {
+    if (report && (++rows_read & 0xFFFF) == 0) {
+      progress_(block_offset + static_cast<std::size_t>(next - block.data()), total);
+    }
+    const Vec3 xyz(v[kX], v[kY], v[kZ]);
+    if (has_instance) instances->push_back(v[kInstance]);
+    if (raw) {
+      if (has_time) log.time_s.push_back(v[kTime]);
+      log.samples.push_back(xyz);
+      log.line.push_back(number);
+    } else {
+      data->positions.push_back(MakePosition(xyz, v, number));
+    }
+  };
   // The fast path reads lines ending in '\n' (a '\r' before it is blank); others, and any line
   // it does not read whole, take LineReader and ParseFields, which give every error.
   const bool fast = eol == '\n';
@@ -56,17 +74,27 @@ std::uint32_t RowParser::Parse(std::string_view block, std::size_t block_offset,
     if (fast && reader.lines_read() < UINT32_MAX) {
       const char* const row = reader.cursor();
 #if defined(__SSE2__)
+      if (templates && !row_template.empty()) {
+        // As many rows as the template reads, line numbers below 2^32 - 1.
+        const std::uint32_t first = reader.lines_read();
+        std::uint32_t number = first;
+        const auto whole_row = [&](const double* v, const char* next) { keep(v, ++number, next); };
+        const char* const end =
+            row_template.ReadRows(row, last, UINT32_MAX - 1 - first, values, whole_row);
+        if (end != row) {
+          reader.AcceptLines(static_cast<std::size_t>(end - row), number - first);
+          rows_in_block += number - first;
+          continue;
+        }
+      }
       if (templates) {
         ++rows_in_block;
-        if (!row_template.empty()) after = row_template.Read(row, last, values);
-        if (after == nullptr) {
-          after = FastRow(row, last, values, shapes, seen);
-          if (!row_template.empty() && ++template_misses > 16 + rows_in_block / 8) {
-            templates = false;
-          } else if (after != nullptr) {
-            row_template.Build(row, static_cast<std::size_t>(after - row), seen, role_of_column_,
-                               ncols_, delim_ == Delimiter::kComma);
-          }
+        after = FastRow(row, last, values, shapes, seen);
+        if (!row_template.empty() && ++template_misses > 16 + rows_in_block / 8) {
+          templates = false;
+        } else if (after != nullptr) {
+          row_template.Build(row, static_cast<std::size_t>(after - row), seen, role_of_column_,
+                             ncols_, delim_ == Delimiter::kComma);
         }
       } else {
         after = FastRow(row, last, values, shapes, nullptr);
@@ -75,25 +103,15 @@ std::uint32_t RowParser::Parse(std::string_view block, std::size_t block_offset,
       after = FastRow(row, last, values, shapes, nullptr);
 #endif
     }
-    std::uint32_t number;
     if (after != nullptr) {
-      number = reader.AcceptLine(static_cast<std::size_t>(after - reader.cursor()));
+      keep(values, reader.AcceptLine(static_cast<std::size_t>(after - reader.cursor())), after);
     } else {
       if (!reader.Next(&line)) break;
       ParseFields(line, values);
-      number = line.number;
-    }
-    if (progress_ && (++*rows & 0xFFFF) == 0) progress_(block_offset + reader.offset(), total);
-    const Vec3 xyz(values[kX], values[kY], values[kZ]);
-    if (layout_.column[kInstance] >= 0) instances->push_back(values[kInstance]);
-    if (raw_) {
-      if (has_time) log.time_s.push_back(values[kTime]);
-      log.samples.push_back(xyz);
-      log.line.push_back(number);
-    } else {
-      data->positions.push_back(MakePosition(xyz, values, number));
+      keep(values, line.number, reader.cursor());
     }
   }
+  *rows = rows_read;
   return reader.lines_read();
 }
 

@@ -122,6 +122,14 @@ class LineReader {
     comment_ = {};
     return ++number_;
   }
+  /// AcceptLine for `count` data lines, `bytes` long in all.
+  void AcceptLines(std::size_t bytes, std::uint32_t count) {
+    if (count == 0) return;
+    pos_ += bytes;
+    preceding_comment_ = count == 1 ? comment_ : std::string_view();
+    comment_ = {};
+    number_ += count;
+  }
   std::uint32_t lines_read() const { return number_; }
   /// The text of the last whole-line comment before the line Next returned last (blank lines
   /// between them allowed), without its `#`; empty when there is none. A `# t ax ay az` line

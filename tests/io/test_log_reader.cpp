@@ -387,6 +387,42 @@ TEST(LogReader, ColumnsWrittenByOnePrintfFormatAreReadAsStrtodReadsThem) {
   }
 }
 
+TEST(LogReader, RowsLaidOutAlikeWithExponentsBeyondTheExactRangeAreReadAsStrtodReadsThem) {
+  // A row laid out as the row before keeps its exponents when they are the same bytes; when they
+  // change it reads them again, and when one is beyond 10^±22 (the exact powers of ten) the row
+  // goes field by field. Every row alike here, its exponents moving in and out of that range and
+  // its signs changing.
+  std::mt19937_64 rng(23);
+  std::uniform_int_distribution<int> sign(0, 1), decade(0, 6), side(0, 1);
+  std::string text;
+  std::vector<std::array<double, 3>> expected;
+  for (int i = 0; i < 3000; ++i) {
+    std::array<double, 3> row{};
+    // Runs of rows with one set of exponents, as a log's values keep their decade for a while.
+    const int run = (i / 7) % 5;
+    for (int a = 0; a < 3; ++a) {
+      // %15.7e: 8 digits, so 10^(e - 7): e from -18 to -12 (-25 to -19: out below -22) and from
+      // 25 to 31 (18 to 24: out above 22).
+      const int e = run == 0 ? 2 : (side(rng) ? -12 - decade(rng) : 25 + decade(rng));
+      const double v = (sign(rng) ? -1.0 : 1.0) * (1.0 + 0.123456 * (a + 1)) * std::pow(10.0, e);
+      char field[64];
+      std::snprintf(field, sizeof field, "%15.7e", v);
+      text += field;
+      row[static_cast<std::size_t>(a)] = std::strtod(field, nullptr);
+    }
+    text += "\n";
+    expected.push_back(row);
+  }
+  const InputData d = Parse(text);
+  ASSERT_EQ(d.raw.samples.size(), expected.size());
+  for (std::size_t i = 0; i < expected.size(); ++i) {
+    for (int a = 0; a < 3; ++a) {
+      ASSERT_EQ(Bits(d.raw.samples[i](a)), Bits(expected[i][static_cast<std::size_t>(a)]))
+          << "row " << i + 1 << " axis " << a;
+    }
+  }
+}
+
 TEST(LogReader, AFieldLaidOutAsTheRowBeforeButNotANumberIsAnError) {
   // Its digits where the last row's were, but another byte where the point, the exponent letter
   // or its sign was: not read as the row before's layout.

@@ -9,6 +9,7 @@
 
 #include "accelcal/error.hpp"
 #include "core/text_format.hpp"
+#include "io/detection_kernels.hpp"
 
 namespace accelcal {
 
@@ -27,6 +28,14 @@ std::optional<std::string> StaticDetectionOptions::Validate() const {
 }
 
 namespace {
+
+using internal::detection::CountExtremes;
+using internal::detection::ExtremeCounts;
+using internal::detection::FindSmallestSteps;
+using internal::detection::RunKernel;
+using internal::detection::SlideWindows;
+using internal::detection::SmallestSteps;
+using internal::detection::WindowSums;
 
 static_assert(sizeof(Vec3) == 3 * sizeof(double), "samples are read as x y z x y z ...");
 
@@ -139,14 +148,10 @@ std::optional<std::string> Clipping(const std::vector<Vec3>& samples,
   for (int a = 0; a < 3; ++a) tested[a] = varies[(a + 1) % 3] || varies[(a + 2) % 3];
   if (!tested[0] && !tested[1] && !tested[2]) return std::nullopt;
   // The samples at each axis's largest and smallest value, in one pass.
-  std::size_t at[3][2] = {};  // [axis][0: largest, 1: smallest]
-  const double* x = samples[interval.begin].data();
-  for (std::size_t i = interval.begin; i < interval.end; ++i, x += 3) {
-    for (int a = 0; a < 3; ++a) {
-      at[a][0] += x[a] == extremes.second(a);
-      at[a][1] += x[a] == extremes.first(a);
-    }
-  }
+  ExtremeCounts counts{samples.data(),  interval.begin, interval.end,
+                       extremes.second, extremes.first, {}};
+  RunKernel<CountExtremes>(counts);
+  const auto& at = counts.at;
   for (int a = 0; a < 3; ++a) {
     if (!tested[a]) continue;
     for (const bool largest : {true, false}) {
@@ -225,6 +230,7 @@ std::optional<std::string> Moving(const std::vector<Vec3>& samples, const Static
   }
   return std::nullopt;
 }
+
 }  // namespace
 
 std::string NoStaticIntervalReason(const StaticDetectionResult& d) {
@@ -285,15 +291,9 @@ StaticDetectionResult DetectStaticIntervals(const RawLog& log,
   // reads the same value for many samples; its window variances are 0 or a few steps². The
   // floor of every noise level is the quantisation noise q²/12 of each axis, with q the smallest
   // nonzero change between successive samples.
-  const double* const x = log.samples.empty() ? nullptr : log.samples.front().data();  // x y z ...
-  double step_axis[3] = {INFINITY, INFINITY, INFINITY};
-  for (std::size_t i = 1; i < n; ++i) {
-    for (int a = 0; a < 3; ++a) {
-      const double d = std::abs(x[3 * i + a] - x[3 * (i - 1) + a]);
-      if (d > 0 && d < step_axis[a]) step_axis[a] = d;
-    }
-  }
-  Vec3 step(step_axis[0], step_axis[1], step_axis[2]);
+  SmallestSteps steps{&log.samples, Vec3::Zero()};
+  RunKernel<FindSmallestSteps>(steps);
+  Vec3 step = steps.step;
   for (int a = 0; a < 3; ++a) {
     if (!std::isfinite(step(a))) step(a) = 0;
   }
@@ -306,6 +306,7 @@ StaticDetectionResult DetectStaticIntervals(const RawLog& log,
   std::vector<double> score(n, std::nan(""));
   std::vector<char> white(n, 0);
   const double wn = static_cast<double>(w);
+  std::size_t valid = 0;
   for (std::size_t s = 0; s < segments.size(); ++s) {
     const std::size_t begin = segments[s];
     const std::size_t end = s + 1 < segments.size() ? segments[s + 1] : n;
@@ -322,25 +323,24 @@ StaticDetectionResult DetectStaticIntervals(const RawLog& log,
         dsum2 += diff.cwiseAbs2();
       }
     }
-    for (std::size_t c = begin + h;; ++c) {
-      const Vec3 var = (sum2 - sum.cwiseAbs2() / wn) / (wn - 1);
-      const Vec3 dvar = (dsum2 - dsum.cwiseAbs2() / (wn - 1)) / (wn - 2);
-      score[c] = var.cwiseMax(0.0).sum();
-      white[c] = score[c] <= options.max_noise_ratio *
-                                 std::max(0.5 * dvar.cwiseMax(0.0).sum(), quantisation_variance);
-      if (c + h + 1 >= end) break;
-      const Vec3 out = log.samples[c - h] - shift;
-      const Vec3 in = log.samples[c + h + 1] - shift;
-      sum += in - out;
-      sum2 += in.cwiseAbs2() - out.cwiseAbs2();
-      const Vec3 dout = log.samples[c - h + 1] - log.samples[c - h];
-      const Vec3 din = log.samples[c + h + 1] - log.samples[c + h];
-      dsum += din - dout;
-      dsum2 += din.cwiseAbs2() - dout.cwiseAbs2();
-    }
+    WindowSums sums{log.samples.data(),
+                    begin,
+                    end,
+                    h,
+                    shift,
+                    sum,
+                    sum2,
+                    dsum,
+                    dsum2,
+                    wn,
+                    options.max_noise_ratio,
+                    quantisation_variance,
+                    score.data(),
+                    white.data(),
+                    0};
+    RunKernel<SlideWindows>(sums);
+    valid += sums.valid;
   }
-  std::size_t valid = 0;
-  for (double v : score) valid += !std::isnan(v);
   if (valid == 0) {
     throw DataError(
         Format("no segment of the log is longer than one detection window (%zu "

@@ -201,12 +201,14 @@ TimeAxis MakeTimeAxis(std::vector<double>* time, TimeUnit unit, std::string_view
       counted += static_cast<double>(end - segment_begin - 1);
     }
   };
+  // Locals: a gap's push_back could otherwise change axis.typical_step_s for the compiler.
+  const double typical = axis.typical_step_s, tolerance = 0.5 * typical, gap = kGapFactor * typical;
   for (std::size_t i = 1; i < t.size(); ++i) {
     const double d = t[i] - t[i - 1];
     if (d > 0) resolution = std::min(resolution, d);
     repeated += d == 0;
-    if (std::abs(d - axis.typical_step_s) > 0.5 * axis.typical_step_s) ++irregular;
-    if (d > kGapFactor * axis.typical_step_s) {
+    irregular += std::abs(d - typical) > tolerance;
+    if (d > gap) {
       close_segment(i);
       axis.gaps.push_back({i, t[i - 1], t[i]});
       segment_begin = i;

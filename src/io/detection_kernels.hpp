@@ -75,10 +75,12 @@ ACCELCAL_INLINE Xyz<V> operator/(const Xyz<V>& a, double b) {
 }
 // A comparison's lanes as plain bits. The empty asm hides that they are a comparison: GCC would
 // otherwise turn a select back into a conditional, and combine comparisons as booleans, which it
-// splits into scalar code without SSE4.1.
+// splits into scalar code without SSE4.1's blend.
 template <typename M>
 ACCELCAL_INLINE M Bits(M comparison) {
-  __asm__("" : "+x"(comparison));
+  // Only the 16-byte vectors need it (AVX has a blend), and only they fit an XMM register for
+  // Clang outside an AVX function.
+  if constexpr (sizeof(M) == 16) __asm__("" : "+x"(comparison));
   return comparison;
 }
 // Lanes where `keep` is set from `a`, others from `b` (bit by bit).

@@ -18,12 +18,13 @@ namespace accelcal::internal::detection {
 #if !defined(__GNUC__)
 #error "the detection kernels are written with GCC's vector extensions (GCC, Clang)"
 #endif
-// GCC warns that a function passing a 32-byte vector has another ABI with AVX: these are all
-// inlined into their kernels, never called across that boundary. (Not popped at the end: GCC
+// GCC and Clang warn that a function passing a 32-byte vector has another ABI with AVX: these are
+// all inlined into their kernels, never called across that boundary. (Not popped at the end: GCC
 // warns about the templates' instances at the end of the file that includes this one.)
-#if !defined(__clang__)
-#pragma GCC diagnostic ignored "-Wpsabi"
+#if defined(__clang__)
+#pragma clang diagnostic ignored "-Wunknown-warning-option"
 #endif
+#pragma GCC diagnostic ignored "-Wpsabi"
 #define ACCELCAL_INLINE __attribute__((always_inline)) inline
 
 // x, y, z and a zero: one 32-byte vector for the AVX build (V = Wide), two 16-byte vectors for

@@ -8,6 +8,7 @@
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
+#include <cstring>
 #include <vector>
 
 #include "accelcal/types.hpp"
@@ -42,12 +43,17 @@ struct Xyz {
 };
 template <typename V>
 ACCELCAL_INLINE Xyz<V> Load(const Vec3& v) {
+  // x, y in one 16-byte load, z and a zero in another: a 32-byte vector written as doubles would
+  // be built on the stack and read back whole, which stalls (its store cannot be forwarded).
+  Narrow xy;
+  std::memcpy(&xy, v.data(), sizeof xy);
+  const Narrow z0 = {v(2), 0.0};
   Xyz<V> r;
   if constexpr (Xyz<V>::kParts == 1) {
-    r.part[0] = V{v(0), v(1), v(2), 0.0};
+    r.part[0] = __builtin_shufflevector(xy, z0, 0, 1, 2, 3);
   } else {
-    r.part[0] = V{v(0), v(1)};
-    r.part[1] = V{v(2), 0.0};
+    r.part[0] = xy;
+    r.part[1] = z0;
   }
   return r;
 }

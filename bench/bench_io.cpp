@@ -22,6 +22,23 @@ void BM_ParseXsens(benchmark::State& state) {
 }
 BENCHMARK(BM_ParseXsens)->Unit(benchmark::kMillisecond);
 
+// Reading the file as the tool does, in blocks, with the provenance's SHA-256 on a second thread
+// (argument 1) or without it (0): the difference is what the parser waits for the hash. Wall time,
+// the hash being on another thread.
+void BM_ReadXsens(benchmark::State& state) {
+  ReadOptions options;
+  options.fingerprint = state.range(0) != 0;
+  std::size_t rows = 0;
+  for (auto _ : state) {
+    const InputData d = ReadInput(kXsens, options);
+    rows = d.raw.samples.size();
+    benchmark::DoNotOptimize(d.raw.samples.data());
+  }
+  state.SetLabel(options.fingerprint ? "with the hash" : "without the hash");
+  state.SetItemsProcessed(static_cast<int64_t>(state.iterations() * rows));
+}
+BENCHMARK(BM_ReadXsens)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond)->UseRealTime();
+
 void BM_DetectXsens(benchmark::State& state) {
   const InputData d = ReadInput(kXsens, {});
   for (auto _ : state) {

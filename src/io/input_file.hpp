@@ -92,9 +92,10 @@ class TextBlocks {
   std::string_view WholeLines() const;
 
   InputFile* file_ = nullptr;
-  // The block buffer, not zero-filled (every byte used is read into it first).
-  std::unique_ptr<char[]> buffer_;
-  std::size_t capacity_ = 0;
+  // The block buffer, not zero-filled (every byte used is read into it first), and with a hash
+  // the other it alternates with (one is read while the other's block is hashed).
+  std::unique_ptr<char[]> buffer_, spare_;
+  std::size_t capacity_ = 0, spare_capacity_ = 0;
   const char* data_ = nullptr;  // buffer_.get(), or the text in memory
   std::size_t begin_ = 0, end_ = 0, peeked_ = 0;
   std::size_t base_ = 0;  // input offset of data_[0]

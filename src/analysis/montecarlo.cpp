@@ -12,6 +12,7 @@
 #include "accelcal/design.hpp"
 #include "accelcal/engineering.hpp"
 #include "accelcal/simulate.hpp"
+#include "core/parallel.hpp"
 
 namespace accelcal {
 
@@ -226,24 +227,18 @@ MonteCarloResult RunMonteCarlo(const Scenario& scenario, const MonteCarloOptions
   const int threads =
       std::min({options.runs, 4 * static_cast<int>(hardware),
                 options.threads > 0 ? options.threads : static_cast<int>(hardware)});
-  // Runs are independent and seeded by their index; each thread fills its own slots.
+  // Runs are independent and seeded by their index; each fills its own slot.
   std::mutex progress_mutex;
   int done = 0;
-  const auto work = [&](int first) {
-    for (int run = first; run < options.runs; run += threads) {
-      outcomes[static_cast<std::size_t>(run)] =
-          OneRun(scenario, calibration, options.seed * 1000003u + static_cast<std::uint64_t>(run),
-                 truth_eng, truth);
-      if (options.progress) {
-        const std::lock_guard<std::mutex> lock(progress_mutex);
-        options.progress(++done, options.runs);
-      }
+  internal::ParallelFor(options.runs, threads, [&](int run) {
+    outcomes[static_cast<std::size_t>(run)] =
+        OneRun(scenario, calibration, options.seed * 1000003u + static_cast<std::uint64_t>(run),
+               truth_eng, truth);
+    if (options.progress) {
+      const std::lock_guard<std::mutex> lock(progress_mutex);
+      options.progress(++done, options.runs);
     }
-  };
-  std::vector<std::thread> pool;
-  for (int t = 1; t < threads; ++t) pool.emplace_back(work, t);
-  work(0);
-  for (std::thread& t : pool) t.join();
+  });
 
   MonteCarloResult result;
   result.scenario = scenario.name;

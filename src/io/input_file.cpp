@@ -52,7 +52,30 @@ InputFile::InputFile(const std::string& path, std::size_t max_stream_bytes)
     throw InputError(name_, 0, "is a directory, not a file");
   }
   regular_ = S_ISREG(st.st_mode);
-  if (regular_) size_ = static_cast<std::size_t>(st.st_size);
+  if (regular_) {
+    const off_t at = ::lseek(fd_, 0, SEEK_CUR);  // standard input may have been read from
+    start_ = at > 0 ? static_cast<std::size_t>(at) : 0;
+    const auto size = static_cast<std::size_t>(st.st_size);
+    size_ = size > start_ ? size - start_ : 0;
+    mtime_s_ = st.st_mtim.tv_sec;
+    mtime_ns_ = st.st_mtim.tv_nsec;
+  }
+}
+
+std::optional<std::string> InputFile::Changed() const {
+  if (!regular_) return std::nullopt;
+  struct stat st;
+  if (::fstat(fd_, &st) != 0) return std::string("cannot be checked: ") + std::strerror(errno);
+  const auto size = static_cast<std::size_t>(st.st_size);
+  const std::size_t was = start_ + size_;
+  if (size != was) {
+    return std::string(size > was ? "grew" : "shrank") + " from " + std::to_string(was) + " to " +
+           std::to_string(size) + " bytes";
+  }
+  if (st.st_mtim.tv_sec != mtime_s_ || st.st_mtim.tv_nsec != mtime_ns_) {
+    return std::string("was written to (its modification time moved)");
+  }
+  return std::nullopt;
 }
 
 InputFile::~InputFile() {

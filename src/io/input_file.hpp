@@ -8,6 +8,7 @@
 
 #include <cstddef>
 #include <memory>
+#include <optional>
 #include <string>
 #include <string_view>
 
@@ -26,7 +27,8 @@ class InputFile {
 
   const std::string& name() const { return name_; }
   bool regular() const { return regular_; }
-  /// A regular file's size when it was opened; 0 for anything else.
+  /// A regular file's size when it was opened, less the offset it was opened at (standard input
+  /// may have been read from); 0 for anything else.
   std::size_t size() const { return size_; }
   /// Reads up to `n` bytes into `out`; 0 at the end. Throws InputError when the read fails, when
   /// a regular file ends before the size it had when opened, or when more than
@@ -40,12 +42,17 @@ class InputFile {
     for (std::size_t got; done < n && (got = Read(out + done, n - done)) > 0;) done += got;
     return done;
   }
+  /// A regular file whose size or modification time is not what it was when opened: how (for a
+  /// message, "grew from 10 to 12 bytes"); nullopt when unchanged or not a regular file.
+  std::optional<std::string> Changed() const;
 
  private:
   std::string name_;
   int fd_ = -1;
   bool owned_ = false;
   bool regular_ = false;
+  std::size_t start_ = 0;  // a regular file's offset when opened (standard input may be past 0)
+  long long mtime_s_ = 0, mtime_ns_ = 0;
   std::size_t size_ = 0;
   std::size_t done_ = 0;
   std::size_t max_stream_bytes_;

@@ -8,6 +8,7 @@
 #include <cstdio>
 #include <cstring>
 #include <memory>
+#include <optional>
 
 #include "accelcal/error.hpp"
 #include "core/text_format.hpp"
@@ -498,6 +499,14 @@ InputData ReadInput(const std::string& path, const ReadOptions& options) {
     for (std::string_view rest; blocks.Next(&rest);) {
     }  // the whole input is hashed, whatever the parser left
     blocks.FinishFingerprint();
+    // The digest must describe the bytes parsed: a file written to meanwhile may have given the
+    // parse some old bytes and some new.
+    if (const std::optional<std::string> how = file.Changed()) {
+      throw InputError(file.name(), 0,
+                       "the file changed while it was read (it " + *how +
+                           "): what was read may mix old and new bytes, and its SHA-256 would "
+                           "not describe them; read it once nothing writes to it (a copy)");
+    }
     data.bytes = file.bytes_read();
     data.sha256 = hash.HexDigest();
   }

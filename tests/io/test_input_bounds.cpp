@@ -111,6 +111,134 @@ TEST(InputBounds, AFileThatShrinksWhileReadIsAnErrorNotACrash) {
   EXPECT_NE(error.find("shrank while it was read"), std::string::npos) << error;
 }
 
+// A file of 400000 rows whose modification time is a day old, so that any write to it moves it.
+std::string OldFile(const std::string& name, std::string* text) {
+  *text = "t,x,y,z\n";
+  for (int k = 0; k < 400000; ++k) *text += std::to_string(k) + "e-3,1.5,2.5,3.5\n";
+  const std::string path = TempPath(name);
+  WriteText(path, *text);
+  struct stat st;
+  EXPECT_EQ(::stat(path.c_str(), &st), 0);
+  const struct timespec times[2] = {{st.st_mtim.tv_sec - 86400, 0}, {st.st_mtim.tv_sec - 86400, 0}};
+  EXPECT_EQ(::utimensat(AT_FDCWD, path.c_str(), times, 0), 0);
+  return path;
+}
+
+TEST(InputBounds, AFileWrittenToWhileReadIsAnErrorWhenItsDigestIsTaken) {
+  // Bytes rewritten in place (the size unchanged) between blocks of rows: the parse and the
+  // digest's own reading may each have seen either version, so neither is reported.
+  std::string text;
+  const std::string path = OldFile("rewritten.csv", &text);
+  ReadOptions options;
+  options.fingerprint = true;
+  bool written = false;
+  options.progress = [&](std::size_t, std::size_t) {
+    if (written) return;
+    written = true;
+    const int fd = ::open(path.c_str(), O_WRONLY);
+    ASSERT_GE(fd, 0);
+    ASSERT_EQ(::pwrite(fd, "9", 1, 100), 1);
+    ::close(fd);
+  };
+  const std::string error = ErrorReading(path, options);
+  // Read again once nothing writes to it: its digest.
+  ReadOptions again;
+  again.fingerprint = true;
+  const InputData data = ReadInput(path, again);
+  std::string changed = text;
+  changed[100] = '9';
+  std::remove(path.c_str());
+  EXPECT_TRUE(written);
+  EXPECT_NE(error.find("the file changed while it was read (it was written to"), std::string::npos)
+      << error;
+  EXPECT_EQ(data.sha256, Sha256Hex(changed));
+  EXPECT_EQ(data.bytes, changed.size());
+}
+
+TEST(InputBounds, AFileThatGrowsWhileReadIsAnErrorWhenItsDigestIsTaken) {
+  // A logger still appending: what was read is the file as opened, but the digest, whose
+  // provenance names the file, would describe something the file no longer is.
+  std::string text;
+  const std::string path = OldFile("grows.csv", &text);
+  ReadOptions options;
+  options.fingerprint = true;
+  bool appended = false;
+  options.progress = [&](std::size_t, std::size_t) {
+    if (appended) return;
+    appended = true;
+    std::ofstream(path, std::ios::binary | std::ios::app) << "400000e-3,1.5,2.5,3.5\n";
+  };
+  const std::string error = ErrorReading(path, options);
+  // Without a digest asked for, the file as it was when opened, as before.
+  appended = true;
+  ReadOptions plain;
+  const InputData data = ReadInput(path, plain);
+  std::remove(path.c_str());
+  EXPECT_NE(error.find("changed while it was read (it grew from " + std::to_string(text.size()) +
+                       " to " + std::to_string(text.size() + 22) + " bytes)"),
+            std::string::npos)
+      << error;
+  EXPECT_EQ(data.raw.samples.size(), 400001u);
+}
+
+TEST(InputBounds, StandardInputPastItsStartIsHashedFromWhereItIsRead) {
+  // A regular file as standard input, its first line already read by someone else: the digest
+  // and the size are those of the bytes read from there (the reader used to take the file's whole
+  // size for what was left, and called it shrunk).
+  const std::string text = "t,x,y,z\n0,1,2,3\n0.01,1,2,3\n0.02,1,2,3\n";
+  const std::string path = TempPath("stdin.csv");
+  WriteText(path, text);
+  const int saved = ::dup(STDIN_FILENO);
+  const int fd = ::open(path.c_str(), O_RDONLY);
+  ASSERT_GE(fd, 0);
+  ASSERT_EQ(::lseek(fd, 8, SEEK_SET), 8);  // past "t,x,y,z\n"
+  ASSERT_EQ(::dup2(fd, STDIN_FILENO), STDIN_FILENO);
+  ::close(fd);
+  ReadOptions options;
+  options.fingerprint = true;
+  options.kind = InputKind::kRaw;
+  std::string error;
+  InputData data;
+  try {
+    data = ReadInput("-", options);
+  } catch (const InputError& e) {
+    error = e.what();
+  }
+  ::dup2(saved, STDIN_FILENO);
+  ::close(saved);
+  std::remove(path.c_str());
+  ASSERT_EQ(error, "");
+  EXPECT_EQ(data.bytes, text.size() - 8);
+  EXPECT_EQ(data.sha256, Sha256Hex(text.substr(8)));
+  EXPECT_EQ(data.raw.samples.size(), 3u);
+}
+
+TEST(InputBounds, APipeIsHashedAsItIsRead) {
+  const std::string fifo = TempPath("hashed_pipe");
+  ASSERT_EQ(::mkfifo(fifo.c_str(), 0600), 0);
+  std::string text = "t,x,y,z\n";
+  for (int k = 0; k < 100000; ++k)
+    text += std::to_string(k) + "e-2,1.5,2.5," + std::to_string(k % 7) + "\n";
+  std::thread writer([&] {
+    const int fd = ::open(fifo.c_str(), O_WRONLY);
+    if (fd < 0) return;
+    for (std::size_t done = 0; done < text.size();) {
+      const ssize_t got = ::write(fd, text.data() + done, text.size() - done);
+      if (got <= 0) break;
+      done += static_cast<std::size_t>(got);
+    }
+    ::close(fd);
+  });
+  ReadOptions options;
+  options.fingerprint = true;
+  const InputData data = ReadInput(fifo, options);
+  writer.join();
+  std::remove(fifo.c_str());
+  EXPECT_EQ(data.bytes, text.size());
+  EXPECT_EQ(data.sha256, Sha256Hex(text));
+  EXPECT_EQ(data.raw.samples.size(), 100000u);
+}
+
 TEST(InputBounds, ASeriesThatShrinksWhileReadIsAnErrorNotACrash) {
   for (const bool binary : {true, false}) {
     std::string text;

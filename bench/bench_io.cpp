@@ -1,6 +1,10 @@
 // Ingestion speed: parsing the Xsens recording (3.3 MB of text), detecting its intervals, and the
 // SHA-256 of its bytes that a calibration file's provenance records (on the CPU's SHA extensions
 // when it has them, and the portable block function).
+#include <chrono>
+#include <cstdint>
+#include <thread>
+
 #include <benchmark/benchmark.h>
 
 #include "accelcal/log_reader.hpp"
@@ -62,6 +66,39 @@ void BM_Sha256Xsens(benchmark::State& state) {
   state.SetBytesProcessed(static_cast<int64_t>(state.iterations() * text.size()));
 }
 BENCHMARK(BM_Sha256Xsens)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond);
+
+// What a second thread gives on this machine at the scale of one command (BENCHMARKS.md): a
+// dependent loop of range(0) steps run by the caller alone (range(1) = 0), or by the caller while a
+// thread started for it runs the same loop beside it (range(1) = 1), each time after 20 ms without
+// work, as a command starts. With a second core in effect both take the time of one. (Without the
+// pause, iterations back to back keep the other CPU awake, and the two do run side by side.)
+double Spin(std::int64_t steps) {
+  double x = 1;
+  for (std::int64_t i = 0; i < steps; ++i) x = x * 1.0000001 + 1e-9;
+  return x;
+}
+
+void BM_SecondThread(benchmark::State& state) {
+  const std::int64_t steps = state.range(0);
+  const bool beside = state.range(1) != 0;
+  for (auto _ : state) {
+    state.PauseTiming();
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+    state.ResumeTiming();
+    double other = 0;
+    std::thread thread;
+    if (beside) thread = std::thread([&] { other = Spin(steps); });
+    benchmark::DoNotOptimize(Spin(steps));
+    if (beside) thread.join();
+    benchmark::DoNotOptimize(other);
+  }
+  state.SetLabel(beside ? "and a thread beside it" : "alone");
+}
+BENCHMARK(BM_SecondThread)
+    ->ArgsProduct({{500'000, 2'000'000, 20'000'000}, {0, 1}})
+    ->Iterations(30)
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime();
 
 }  // namespace
 }  // namespace accelcal

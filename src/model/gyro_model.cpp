@@ -1,0 +1,131 @@
+#include "accelcal/gyro_model.hpp"
+
+#include <cmath>
+#include <stdexcept>
+#include <string>
+
+namespace accelcal {
+
+std::string_view ToString(GyroModelKind kind) { return NameOf(kind); }
+
+std::optional<GyroModelKind> GyroModelKindFromString(std::string_view text) {
+  return FromName<GyroModelKind>(text);
+}
+
+const std::vector<GyroParameterSlot>& GyroParameterSlots(GyroModelKind kind) {
+  using Group = GyroParameterGroup;
+  static const std::vector<GyroParameterSlot> g_sensitive = {
+      {Group::kK, 0, 0, "Kg_xx"},    {Group::kK, 0, 1, "Kg_xy"},    {Group::kK, 0, 2, "Kg_xz"},
+      {Group::kBias, 0, -1, "bg_x"}, {Group::kG, 0, 0, "G_xx"},     {Group::kG, 0, 1, "G_xy"},
+      {Group::kG, 0, 2, "G_xz"},     {Group::kK, 1, 0, "Kg_yx"},    {Group::kK, 1, 1, "Kg_yy"},
+      {Group::kK, 1, 2, "Kg_yz"},    {Group::kBias, 1, -1, "bg_y"}, {Group::kG, 1, 0, "G_yx"},
+      {Group::kG, 1, 1, "G_yy"},     {Group::kG, 1, 2, "G_yz"},     {Group::kK, 2, 0, "Kg_zx"},
+      {Group::kK, 2, 1, "Kg_zy"},    {Group::kK, 2, 2, "Kg_zz"},    {Group::kBias, 2, -1, "bg_z"},
+      {Group::kG, 2, 0, "G_zx"},     {Group::kG, 2, 1, "G_zy"},     {Group::kG, 2, 2, "G_zz"}};
+  static const std::vector<GyroParameterSlot> linear = [] {
+    std::vector<GyroParameterSlot> slots;
+    for (const GyroParameterSlot& s : g_sensitive) {
+      if (s.group != Group::kG) slots.push_back(s);
+    }
+    return slots;
+  }();
+  return kind == GyroModelKind::kLinear ? linear : g_sensitive;
+}
+
+namespace {
+double& SlotRef(GyroParameters& p, const GyroParameterSlot& s) {
+  switch (s.group) {
+    case GyroParameterGroup::kK:
+      return p.K(s.row, s.col);
+    case GyroParameterGroup::kBias:
+      return p.bias(s.row);
+    case GyroParameterGroup::kG:
+      break;
+  }
+  return p.G(s.row, s.col);
+}
+}  // namespace
+
+Eigen::VectorXd Pack(const GyroParameters& params, GyroModelKind kind) {
+  const std::vector<GyroParameterSlot>& slots = GyroParameterSlots(kind);
+  Eigen::VectorXd theta(static_cast<Eigen::Index>(slots.size()));
+  GyroParameters copy = params;
+  for (std::size_t i = 0; i < slots.size(); ++i) {
+    theta(static_cast<Eigen::Index>(i)) = SlotRef(copy, slots[i]);
+  }
+  return theta;
+}
+
+GyroParameters UnpackGyro(const Eigen::VectorXd& theta, GyroModelKind kind) {
+  const std::vector<GyroParameterSlot>& slots = GyroParameterSlots(kind);
+  GyroParameters params;
+  params.K.setZero();
+  for (std::size_t i = 0; i < slots.size(); ++i) {
+    SlotRef(params, slots[i]) = theta(static_cast<Eigen::Index>(i));
+  }
+  return params;
+}
+
+Eigen::MatrixXd GyroJacobianWrtParameters(const Vec3& omega_rad_s, const Vec3& f,
+                                          GyroModelKind kind) {
+  const int per_axis = GyroParametersPerAxis(kind);
+  Eigen::MatrixXd J = Eigen::MatrixXd::Zero(3, NumGyroParameters(kind));
+  for (int i = 0; i < 3; ++i) {
+    const int start = i * per_axis;
+    J.block<1, 3>(i, start) = omega_rad_s.transpose();
+    J(i, start + 3) = 1.0;
+    if (kind == GyroModelKind::kGSensitive) J.block<1, 3>(i, start + 4) = f.transpose();
+  }
+  return J;
+}
+
+Mat33 IntegrateCalibratedRate(const GyroParameters& params, GyroModelKind kind,
+                              const std::vector<double>& t_s, const std::vector<Vec3>& raw,
+                              const std::vector<Vec3>& f, RateInterpolation rule,
+                              Eigen::MatrixXd* J_R_theta) {
+  if (t_s.size() != raw.size() || t_s.size() != f.size() || t_s.empty()) {
+    throw std::invalid_argument("IntegrateCalibratedRate: " + std::to_string(t_s.size()) +
+                                " times for " + std::to_string(raw.size()) + " rates and " +
+                                std::to_string(f.size()) + " specific forces");
+  }
+  const Eigen::PartialPivLU<Mat33> lu(params.K);
+  if (!(lu.determinant() != 0.0) || !std::isfinite(lu.determinant())) {
+    throw std::invalid_argument("IntegrateCalibratedRate: K_g is singular");
+  }
+  const Mat33 K_inverse = lu.inverse();
+  const int P = NumGyroParameters(kind);
+  const bool jacobian = J_R_theta != nullptr;
+  // ω_k and, with the Jacobian, ∂ω_k/∂θ of the sample the step starts from (and ends at).
+  const auto rate = [&](std::size_t k, Eigen::MatrixXd* d_omega) {
+    const Vec3 omega = K_inverse * (raw[k] - params.bias - params.G * f[k]);
+    if (d_omega != nullptr) *d_omega = -K_inverse * GyroJacobianWrtParameters(omega, f[k], kind);
+    return omega;
+  };
+  Mat33 R = Mat33::Identity();
+  Eigen::MatrixXd J = Eigen::MatrixXd::Zero(3, P), d_this, d_next;
+  Vec3 omega_this = rate(0, jacobian ? &d_this : nullptr);
+  for (std::size_t k = 0; k + 1 < t_s.size(); ++k) {
+    const double dt = t_s[k + 1] - t_s[k];
+    if (!(dt > 0)) {
+      throw std::invalid_argument("IntegrateCalibratedRate: times do not increase at sample " +
+                                  std::to_string(k + 1));
+    }
+    const Vec3 omega_next = rate(k + 1, jacobian ? &d_next : nullptr);
+    const bool trapezoid = rule == RateInterpolation::kTrapezoidal;
+    const Vec3 phi = (trapezoid ? Vec3(0.5 * (omega_this + omega_next)) : omega_this) * dt;
+    Mat33 J_r;
+    const Mat33 increment = so3::Exp(phi, jacobian ? &J_r : nullptr);
+    if (jacobian) {
+      const Eigen::MatrixXd d_phi =
+          (trapezoid ? Eigen::MatrixXd(0.5 * (d_this + d_next)) : d_this) * dt;
+      J = increment.transpose() * J + J_r * d_phi;
+      d_this = d_next;
+    }
+    omega_this = omega_next;
+    R = R * increment;
+  }
+  if (jacobian) *J_R_theta = J;
+  return R;
+}
+
+}  // namespace accelcal

@@ -1,0 +1,162 @@
+// gyro_model.hpp: the flat order round trips, the inverse model inverts the forward one, and the
+// parameter Jacobian against the one finite-difference checker.
+#include <cmath>
+#include <random>
+#include <set>
+#include <stdexcept>
+#include <string>
+
+#include <gtest/gtest.h>
+
+#include "accelcal/gyro_model.hpp"
+#include "support/jacobian_check.hpp"
+
+namespace accelcal {
+namespace {
+
+// A gyro reading counts (Xsens-like: about 4770 counts per rad/s around 32768), 1 % of
+// misalignment, and a g-sensitivity of a few counts per m/s².
+GyroParameters Typical(std::uint64_t seed) {
+  std::mt19937_64 random(seed);
+  std::normal_distribution<double> normal;
+  GyroParameters p;
+  for (int i = 0; i < 3; ++i) {
+    for (int j = 0; j < 3; ++j) {
+      p.K(i, j) = (i == j ? 4770.0 : 0.0) + 50.0 * normal(random);
+      p.G(i, j) = 2.0 * normal(random);
+    }
+    p.bias(i) = 32768.0 + 100.0 * normal(random);
+  }
+  return p;
+}
+
+TEST(GyroModel, FlatOrderRoundTripsAndNamesEverySlotOnce) {
+  for (GyroModelKind kind : {GyroModelKind::kLinear, GyroModelKind::kGSensitive}) {
+    GyroParameters p = Typical(1);
+    if (kind == GyroModelKind::kLinear) p.G.setZero();
+    const Eigen::VectorXd theta = Pack(p, kind);
+    ASSERT_EQ(theta.size(), NumGyroParameters(kind));
+    const GyroParameters back = UnpackGyro(theta, kind);
+    EXPECT_EQ(back.K, p.K);
+    EXPECT_EQ(back.bias, p.bias);
+    EXPECT_EQ(back.G, p.G);
+    std::set<std::string> names;
+    for (const GyroParameterSlot& s : GyroParameterSlots(kind)) names.insert(std::string(s.name));
+    EXPECT_EQ(static_cast<int>(names.size()), NumGyroParameters(kind));
+  }
+  // Grouped by output axis: axis y's bias is the 11th entry (g-sensitive), the 8th (linear).
+  EXPECT_EQ(GyroParameterSlots(GyroModelKind::kGSensitive)[10].name, "bg_y");
+  EXPECT_EQ(GyroParameterSlots(GyroModelKind::kLinear)[7].name, "bg_y");
+  EXPECT_EQ(GyroModelKindFromString("g-sensitive"), GyroModelKind::kGSensitive);
+  EXPECT_EQ(GyroModelKindFromString("quadratic"), std::nullopt);
+}
+
+TEST(GyroModel, BodyRateInvertsTheForwardModel) {
+  std::mt19937_64 random(2);
+  std::normal_distribution<double> normal;
+  for (int trial = 0; trial < 50; ++trial) {
+    const GyroParameters p = Typical(static_cast<std::uint64_t>(trial));
+    const Vec3 omega(normal(random), normal(random), normal(random));
+    const Vec3 f = 9.81 * Vec3(normal(random), normal(random), normal(random)).normalized();
+    const std::optional<Vec3> back = BodyRate(p, PredictRate(p, omega, f), f);
+    ASSERT_TRUE(back);
+    EXPECT_LT((*back - omega).norm(), 1e-12 * (1 + omega.norm()));
+  }
+  GyroParameters singular;
+  singular.K.row(2).setZero();
+  EXPECT_FALSE(BodyRate(singular, Vec3(1, 2, 3), Vec3(0, 0, 9.81)));
+}
+
+TEST(GyroModel, ParameterJacobianMatchesFiniteDifferences) {
+  const Vec3 omega(0.3, -1.2, 0.7), f(1.0, -2.0, 9.5);
+  for (GyroModelKind kind : {GyroModelKind::kLinear, GyroModelKind::kGSensitive}) {
+    const Eigen::VectorXd theta = Pack(Typical(3), kind);
+    const auto predict = [&](const Eigen::VectorXd& t) -> Eigen::VectorXd {
+      return PredictRate(UnpackGyro(t, kind), omega, f);
+    };
+    EXPECT_TRUE(testing::JacobianMatches(predict, theta, GyroJacobianWrtParameters(omega, f, kind)))
+        << ToString(kind);
+  }
+}
+
+// A 1.5 s turn sampled at 200 Hz, its axis and speed changing (up to about 2 rad/s), with the
+// specific force turning with it; the raw samples of `p` for it.
+struct Motion {
+  std::vector<double> t;
+  std::vector<Vec3> omega, f, raw;
+};
+Motion Turn(const GyroParameters& p) {
+  Motion m;
+  for (int k = 0; k <= 300; ++k) {
+    const double t = 0.005 * k + 1e-4 * std::sin(7.0 * k);  // a slightly irregular clock
+    const Vec3 omega(1.2 * std::sin(2.0 * t), 0.8 + 0.5 * t, -0.6 * std::cos(3.0 * t));
+    m.t.push_back(t);
+    m.omega.push_back(omega);
+    m.f.push_back(Vec3(3.0 * std::sin(t), -2.0 + t, 9.0 * std::cos(0.5 * t)));
+    m.raw.push_back(PredictRate(p, omega, m.f.back()));
+  }
+  return m;
+}
+
+TEST(GyroModel, CalibratedRatesIntegrateAsTheTrueRates) {
+  // The raw samples of a gyro with K_g, b_g and G, corrected by the same parameters, give the
+  // rotation of the true rates: the same bits as IntegrateAngularRate on them, to round-off.
+  const GyroParameters p = Typical(4);
+  const Motion m = Turn(p);
+  for (RateInterpolation rule :
+       {RateInterpolation::kPiecewiseConstant, RateInterpolation::kTrapezoidal}) {
+    const Mat33 R = IntegrateCalibratedRate(p, GyroModelKind::kGSensitive, m.t, m.raw, m.f, rule);
+    const Mat33 truth = IntegrateAngularRate(m.t, m.omega, rule);
+    EXPECT_LT((R - truth).norm(), 1e-12);
+    EXPECT_GT(so3::Log(truth).norm(), 1.0);  // a real turn
+  }
+  // The identity model integrates the raw samples as rates.
+  const GyroParameters identity;
+  EXPECT_LT((IntegrateCalibratedRate(identity, GyroModelKind::kLinear, m.t, m.omega, m.f,
+                                     RateInterpolation::kTrapezoidal) -
+             IntegrateAngularRate(m.t, m.omega, RateInterpolation::kTrapezoidal))
+                .norm(),
+            1e-15);
+}
+
+TEST(GyroModel, IntegrationJacobianMatchesFiniteDifferences) {
+  // J in right-perturbation coordinates: Log(R(θ₀)ᵀ R(θ)) = J (θ − θ₀) to first order.
+  const GyroParameters p = Typical(5);
+  const Motion m = Turn(p);
+  for (GyroModelKind kind : {GyroModelKind::kLinear, GyroModelKind::kGSensitive}) {
+    for (RateInterpolation rule :
+         {RateInterpolation::kPiecewiseConstant, RateInterpolation::kTrapezoidal}) {
+      GyroParameters q = p;
+      if (kind == GyroModelKind::kLinear) q.G.setZero();
+      const Eigen::VectorXd theta = Pack(q, kind);
+      Eigen::MatrixXd J;
+      const Mat33 R0 = IntegrateCalibratedRate(q, kind, m.t, m.raw, m.f, rule, &J);
+      const auto log = [&](const Eigen::VectorXd& t) -> Eigen::VectorXd {
+        const Mat33 R = IntegrateCalibratedRate(UnpackGyro(t, kind), kind, m.t, m.raw, m.f, rule);
+        return so3::Log(Mat33(R0.transpose() * R));
+      };
+      EXPECT_TRUE(testing::JacobianMatches(log, theta, J, 1e-6))
+          << ToString(kind) << " " << static_cast<int>(rule);
+    }
+  }
+}
+
+TEST(GyroModel, IntegrationRefusesBadInput) {
+  const Motion m = Turn(GyroParameters{});
+  std::vector<double> t = m.t;
+  t[5] = t[4];
+  EXPECT_THROW(IntegrateCalibratedRate({}, GyroModelKind::kLinear, t, m.raw, m.f,
+                                       RateInterpolation::kTrapezoidal),
+               std::invalid_argument);
+  GyroParameters singular;
+  singular.K(1, 1) = 0;
+  EXPECT_THROW(IntegrateCalibratedRate(singular, GyroModelKind::kLinear, m.t, m.raw, m.f,
+                                       RateInterpolation::kTrapezoidal),
+               std::invalid_argument);
+  EXPECT_THROW(IntegrateCalibratedRate({}, GyroModelKind::kLinear, m.t, m.raw, {},
+                                       RateInterpolation::kTrapezoidal),
+               std::invalid_argument);
+}
+
+}  // namespace
+}  // namespace accelcal

@@ -7,6 +7,7 @@
 #include <functional>
 #include <vector>
 
+#include "accelcal/gyro_model.hpp"
 #include "accelcal/model.hpp"
 
 namespace accelcal {
@@ -86,6 +87,31 @@ void SimulateRawLog(const ModelParameters& truth, double gravity,
 /// How many samples SimulateRawLog gives (as a double: options may ask for more than any
 /// integer holds; check it before simulating).
 double SimulatedSampleCount(std::size_t directions, const RawLogSimulation& options);
+
+/// A gyroscope recorded beside the accelerometer of SimulateImuLog, on the same clock.
+struct GyroSimulation {
+  GyroParameters truth;  ///< K_g [gyro raw per rad/s], b_g, G [gyro raw per force unit]
+  Vec3 sigma_raw_per_sample = Vec3::Zero();  ///< white noise of each rate sample [gyro raw]
+};
+/// An accelerometer's and a gyroscope's samples at the same times.
+struct SimulatedImuLog {
+  std::vector<double> time_s;
+  std::vector<Vec3> accel;  ///< raw accelerometer readings
+  std::vector<Vec3> gyro;   ///< raw gyro readings
+  /// The body rate [rad/s] and the force direction c (|c| = 1, body frame) at each sample.
+  std::vector<Vec3> omega_rad_s, direction;
+};
+/// A raw log as SimulateRawLog, with a gyroscope: between two still directions the body turns
+/// about the fixed axis a = c × c_next at a rate that rises and falls linearly (zero at both
+/// ends), ω = −α̇ a (the direction moves as c(t) = Exp(α(t) a) c in the body frame, so the body
+/// turns by Exp(−α a)); α at each sample is the trapezoidal sum of the sampled rates, so
+/// IntegrateAngularRate with RateInterpolation::kTrapezoidal gives the motion exactly, and the
+/// turn ends on c_next. Each gyro sample is ω_raw = K_g ω + b_g + G f + noise with f = gravity · c
+/// (no linear or centripetal acceleration: the sensor turns about itself). Noise draws: the
+/// accelerometer's three, then the gyro's three, per sample; deterministic in options.seed.
+SimulatedImuLog SimulateImuLog(const ModelParameters& accel_truth, double gravity,
+                               const std::vector<Vec3>& directions, const RawLogSimulation& options,
+                               const GyroSimulation& gyro);
 
 /// Random unit directions, uniform on the sphere, deterministic in seed.
 std::vector<Vec3> RandomDirections(int count, std::uint64_t seed);

@@ -191,6 +191,58 @@ SimulatedLog SimulateRawLog(const ModelParameters& truth, double gravity,
   return log;
 }
 
+SimulatedImuLog SimulateImuLog(const ModelParameters& accel_truth, double gravity,
+                               const std::vector<Vec3>& directions, const RawLogSimulation& options,
+                               const GyroSimulation& gyro) {
+  std::mt19937_64 rng(options.seed);
+  std::normal_distribution<double> normal(0.0, 1.0);
+  const auto still = static_cast<std::size_t>(std::llround(options.static_s * options.rate_hz));
+  const auto turn = static_cast<std::size_t>(std::llround(options.transition_s * options.rate_hz));
+  const double h = 1.0 / options.rate_hz;
+  SimulatedImuLog log;
+  const auto emit = [&](const Vec3& c, const Vec3& omega) {
+    const double t = static_cast<double>(log.time_s.size()) / options.rate_hz;
+    const Vec3 f = gravity * c;
+    const Vec3 accel_noise = NormalVector(normal, rng);
+    const Vec3 gyro_noise = NormalVector(normal, rng);
+    log.time_s.push_back(t);
+    log.accel.push_back(PredictRaw(accel_truth, f) +
+                        options.sigma_raw_per_sample.cwiseProduct(accel_noise));
+    log.gyro.push_back(PredictRate(gyro.truth, omega, f) +
+                       gyro.sigma_raw_per_sample.cwiseProduct(gyro_noise));
+    log.omega_rad_s.push_back(omega);
+    log.direction.push_back(c);
+  };
+  for (std::size_t k = 0; k < directions.size(); ++k) {
+    const Vec3 c = directions[k].normalized();
+    for (std::size_t i = 0; i < still; ++i) emit(c, Vec3::Zero());
+    if (k + 1 == directions.size() || turn < 2) continue;
+    const Vec3 next = directions[k + 1].normalized();
+    const double angle = std::atan2(c.cross(next).norm(), c.dot(next));
+    Vec3 axis = c.cross(next);
+    if (axis.norm() < 1e-12) {
+      axis = c.cross(Vec3::UnitX()).norm() > 0.1 ? c.cross(Vec3::UnitX()) : c.cross(Vec3::UnitY());
+    }
+    axis.normalize();
+    // α̇ at sample i of the turn (i = 0: the last still sample, i = turn: the next one's first) is
+    // peak · shape_i, shape a triangle; the trapezoidal sum over the turn is h Σ shape_i · peak.
+    std::vector<double> shape(turn + 1);
+    double area = 0;
+    for (std::size_t i = 0; i <= turn; ++i) {
+      const double s = static_cast<double>(i) / static_cast<double>(turn);
+      shape[i] = 1.0 - std::abs(2.0 * s - 1.0);
+      area += shape[i];
+    }
+    const double peak = angle / (h * area);
+    double alpha = 0;
+    for (std::size_t i = 1; i < turn; ++i) {
+      alpha += 0.5 * h * peak * (shape[i - 1] + shape[i]);
+      emit(Eigen::AngleAxisd(alpha, axis) * c, Vec3(-peak * shape[i] * axis));
+    }
+  }
+  return log;
+}
+
 double SimulatedSampleCount(std::size_t directions, const RawLogSimulation& options) {
   if (directions == 0) return 0;
   const double still = std::round(options.static_s * options.rate_hz);

@@ -129,11 +129,18 @@ Eigen::MatrixXd GyroJacobianWrtParameters(const Vec3& omega_rad_s, const Vec3& f
 /// Optionally its right Jacobian with respect to the flat parameters of `kind` (3 x
 /// NumGyroParameters: R(θ + δ) = R(θ) Exp(J δ) to first order), by the recursion
 ///     J_{k+1} = Exp(φ_k)ᵀ J_k + J_r(φ_k) ∂φ_k/∂θ,   ∂ω_k/∂θ = −K_g⁻¹ ∂ω_raw/∂θ (ω_k, f_k)
-/// (the forward model is linear in θ: d(K_g ω + b_g + G f) = 0 at fixed ω_raw). Throws
-/// std::invalid_argument for sizes that differ, times that do not increase, or a singular K_g.
+/// (the forward model is linear in θ: d(K_g ω + b_g + G f) = 0 at fixed ω_raw). Optionally the
+/// covariance [rad²] of the right perturbation ε of R (R(ω_raw + n) = R Exp(ε)) from white noise
+/// n_k of 1σ `noise_sigma_raw` per axis on each raw sample, to first order:
+///     ε = Rᵀ Σ_m C_m K_g⁻¹ n_m,  C_m = Σ_k R_{k+1} J_r(φ_k) ∂φ_k/∂ω_m
+/// (R_k the product of the first k increments; a sample enters the step before it and the step
+/// after it with weights Δt/2 under the trapezoidal rule, the step after it with Δt under the
+/// piecewise-constant one). Throws std::invalid_argument for sizes that differ, times that do not
+/// increase, or a singular K_g.
 Mat33 IntegrateCalibratedRate(const GyroParameters& params, GyroModelKind kind,
                               const std::vector<double>& t_s, const std::vector<Vec3>& raw,
                               const std::vector<Vec3>& f, RateInterpolation rule,
-                              Eigen::MatrixXd* J_R_theta = nullptr);
+                              Eigen::MatrixXd* J_R_theta = nullptr,
+                              const Vec3* noise_sigma_raw = nullptr, Mat33* covariance = nullptr);
 
 }  // namespace accelcal

@@ -82,7 +82,8 @@ Eigen::MatrixXd GyroJacobianWrtParameters(const Vec3& omega_rad_s, const Vec3& f
 Mat33 IntegrateCalibratedRate(const GyroParameters& params, GyroModelKind kind,
                               const std::vector<double>& t_s, const std::vector<Vec3>& raw,
                               const std::vector<Vec3>& f, RateInterpolation rule,
-                              Eigen::MatrixXd* J_R_theta) {
+                              Eigen::MatrixXd* J_R_theta, const Vec3* noise_sigma_raw,
+                              Mat33* covariance) {
   if (t_s.size() != raw.size() || t_s.size() != f.size() || t_s.empty()) {
     throw std::invalid_argument("IntegrateCalibratedRate: " + std::to_string(t_s.size()) +
                                 " times for " + std::to_string(raw.size()) + " rates and " +
@@ -101,6 +102,14 @@ Mat33 IntegrateCalibratedRate(const GyroParameters& params, GyroModelKind kind,
     if (d_omega != nullptr) *d_omega = -K_inverse * GyroJacobianWrtParameters(omega, f[k], kind);
     return omega;
   };
+  const bool noise = noise_sigma_raw != nullptr && covariance != nullptr;
+  const bool trapezoid = rule == RateInterpolation::kTrapezoidal;
+  // The rate noise K_g⁻¹ n_m, Q = K_g⁻¹ diag(σ²) K_g⁻ᵀ; C_m summed over the steps sample m enters,
+  // accumulated in the frame of the first sample (S = Σ C_m Q C_mᵀ) and turned to R's at the end.
+  const Mat33 Q =
+      noise ? Mat33(K_inverse * noise_sigma_raw->cwiseAbs2().asDiagonal() * K_inverse.transpose())
+            : Mat33::Zero();
+  Mat33 S = Mat33::Zero(), C = Mat33::Zero();  // C: sample k's C_m, so far
   Mat33 R = Mat33::Identity();
   Eigen::MatrixXd J = Eigen::MatrixXd::Zero(3, P), d_this, d_next;
   Vec3 omega_this = rate(0, jacobian ? &d_this : nullptr);
@@ -111,10 +120,15 @@ Mat33 IntegrateCalibratedRate(const GyroParameters& params, GyroModelKind kind,
                                   std::to_string(k + 1));
     }
     const Vec3 omega_next = rate(k + 1, jacobian ? &d_next : nullptr);
-    const bool trapezoid = rule == RateInterpolation::kTrapezoidal;
     const Vec3 phi = (trapezoid ? Vec3(0.5 * (omega_this + omega_next)) : omega_this) * dt;
     Mat33 J_r;
-    const Mat33 increment = so3::Exp(phi, jacobian ? &J_r : nullptr);
+    const Mat33 increment = so3::Exp(phi, jacobian || noise ? &J_r : nullptr);
+    if (noise) {
+      const Mat33 A = R * increment * J_r;   // R_{k+1} J_r(φ_k)
+      C += A * (trapezoid ? 0.5 * dt : dt);  // sample k's share of this step: C_k is complete
+      S += C * Q * C.transpose();
+      C = trapezoid ? Mat33(A * (0.5 * dt)) : Mat33::Zero();  // sample k + 1's share
+    }
     if (jacobian) {
       const Eigen::MatrixXd d_phi =
           (trapezoid ? Eigen::MatrixXd(0.5 * (d_this + d_next)) : d_this) * dt;
@@ -125,6 +139,10 @@ Mat33 IntegrateCalibratedRate(const GyroParameters& params, GyroModelKind kind,
     R = R * increment;
   }
   if (jacobian) *J_R_theta = J;
+  if (noise) {
+    S += C * Q * C.transpose();  // the last sample (its step before it)
+    *covariance = R.transpose() * S * R;
+  }
   return R;
 }
 

@@ -1,0 +1,143 @@
+// The gyroscope's two-stage fit (gyro_fit.hpp).
+#include "solvers/gyro_fit.hpp"
+
+#include <cmath>
+#include <stdexcept>
+
+#include <Eigen/Cholesky>
+#include <Eigen/Geometry>
+
+#include "solvers/solver_common.hpp"
+
+namespace accelcal::internal {
+
+std::optional<MotionWeight> WeighMotion(const GyroFitData& data, const GyroMotion& m,
+                                        const GyroParameters& params) {
+  Mat33 covariance;
+  IntegrateCalibratedRate(params, data.model, m.t_s, m.raw, m.f, data.rule, nullptr,
+                          &data.noise_sigma_raw, &covariance);
+  MotionWeight w;
+  w.B = TangentBasis(data.directions[m.to]);
+  const Eigen::Matrix2d M = w.B.transpose() * covariance * w.B;
+  const Eigen::LLT<Eigen::Matrix2d> llt(M);
+  if (llt.info() != Eigen::Success || !(M.determinant() > 0)) return std::nullopt;
+  const Eigen::Matrix2d U = llt.matrixL();
+  w.L = U.inverse();
+  return w;
+}
+
+Eigen::Vector2d MotionResidual(const GyroFitData& data, const GyroMotion& m,
+                               const MotionWeight& weight, const GyroParameters& params,
+                               const Vec3& c_i, const Vec3& c_j, Eigen::MatrixXd* J_theta,
+                               Eigen::Matrix2d* J_from, Eigen::Matrix2d* J_to) {
+  Eigen::MatrixXd J_R;
+  const Mat33 R = IntegrateCalibratedRate(params, data.model, m.t_s, m.raw, m.f, data.rule,
+                                          J_theta != nullptr ? &J_R : nullptr);
+  const Vec3 v = R.transpose() * c_i;
+  const Eigen::Matrix<double, 2, 3> W = weight.L * weight.B.transpose();
+  // e = v × c_j = −[c_j]× v = [v]× c_j; v(θ ⊞ δ) = v + [v]× J_R δ, v(c_i ⊞ δ) = v + Rᵀ E_i δ.
+  if (J_theta != nullptr) *J_theta = -W * so3::Hat(c_j) * so3::Hat(v) * J_R;
+  if (J_from != nullptr) *J_from = -W * so3::Hat(c_j) * R.transpose() * TangentBasis(c_i);
+  if (J_to != nullptr) *J_to = W * so3::Hat(v) * TangentBasis(c_j);
+  return W * v.cross(c_j);
+}
+
+double MotionAngleError(const GyroFitData& data, const GyroMotion& m,
+                        const GyroParameters& params) {
+  const Mat33 R = IntegrateCalibratedRate(params, data.model, m.t_s, m.raw, m.f, data.rule);
+  const Vec3 v = R.transpose() * data.directions[m.from];
+  const Vec3& c = data.directions[m.to];
+  return std::atan2(v.cross(c).norm(), v.dot(c));
+}
+
+GyroParameters GyroStart(const GyroFitData& data, std::optional<double> scale_raw_per_rad_s) {
+  GyroParameters start;
+  start.bias.setZero();
+  for (const GyroStill& s : data.stills) start.bias += s.mean_raw;
+  if (!data.stills.empty()) start.bias /= static_cast<double>(data.stills.size());
+  double k = 1.0;
+  if (scale_raw_per_rad_s) {
+    k = *scale_raw_per_rad_s;
+  } else {
+    double sa = 0, aa = 0;
+    for (const GyroMotion& m : data.motions) {
+      Vec3 s = Vec3::Zero();  // the bias-free raw rate summed over the motion (trapezoidal)
+      for (std::size_t k2 = 0; k2 + 1 < m.t_s.size(); ++k2) {
+        s += 0.5 * (m.raw[k2] + m.raw[k2 + 1] - 2.0 * start.bias) * (m.t_s[k2 + 1] - m.t_s[k2]);
+      }
+      const Vec3& a = data.directions[m.from];
+      const Vec3& b = data.directions[m.to];
+      const double angle = std::atan2(a.cross(b).norm(), a.dot(b));
+      sa += s.norm() * angle;
+      aa += angle * angle;
+    }
+    if (aa > 0 && sa > 0) k = sa / aa;
+  }
+  start.K = k * Mat33::Identity();
+  return start;
+}
+
+namespace {
+
+// Global parameters θ only (the directions held); blocks: the stills (3 rows), then the motions
+// (2 rows).
+class TwoStageProblem : public LeastSquaresProblem {
+ public:
+  TwoStageProblem(const GyroFitData& data, std::vector<MotionWeight> weights)
+      : data_(data), weights_(std::move(weights)) {}
+  int GlobalSize() const override { return NumGyroParameters(data_.model); }
+  int NumBlocks() const override {
+    return static_cast<int>(data_.stills.size() + data_.motions.size());
+  }
+  bool Evaluate(int block, const Eigen::VectorXd& x, const Eigen::VectorXd& /*y*/,
+                Eigen::VectorXd* residual, Eigen::MatrixXd* J_x,
+                Eigen::MatrixXd* /*J_y*/) const override {
+    const GyroParameters params = UnpackGyro(x, data_.model);
+    const auto b = static_cast<std::size_t>(block);
+    if (b < data_.stills.size()) {
+      const GyroStill& s = data_.stills[b];
+      const Vec3 inverse_sigma = s.sigma_mean_raw.cwiseInverse();
+      *residual = inverse_sigma.cwiseProduct(s.mean_raw - params.bias - params.G * s.f);
+      if (J_x != nullptr) {
+        *J_x = -(inverse_sigma.asDiagonal() *
+                 GyroJacobianWrtParameters(Vec3::Zero(), s.f, data_.model));
+      }
+      return residual->allFinite();
+    }
+    const std::size_t k = b - data_.stills.size();
+    const GyroMotion& m = data_.motions[k];
+    try {
+      *residual = MotionResidual(data_, m, weights_[k], params, data_.directions[m.from],
+                                 data_.directions[m.to], J_x);
+    } catch (const std::invalid_argument&) {
+      return false;  // a singular K_g
+    }
+    return residual->allFinite() && (J_x == nullptr || J_x->allFinite());
+  }
+
+ private:
+  const GyroFitData& data_;
+  std::vector<MotionWeight> weights_;
+};
+
+}  // namespace
+
+GyroFit FitGyro(const GyroFitData& data, const GyroParameters& start,
+                const LeastSquaresOptions& options) {
+  std::vector<MotionWeight> weights;
+  for (const GyroMotion& m : data.motions) {
+    std::optional<MotionWeight> w = WeighMotion(data, m, start);
+    if (!w) throw std::invalid_argument("a motion without rate noise: its weight is undefined");
+    weights.push_back(*w);
+  }
+  const TwoStageProblem problem(data, std::move(weights));
+  LeastSquaresState state;
+  state.x = Pack(start, data.model);
+  state.y.assign(static_cast<std::size_t>(problem.NumBlocks()), Eigen::VectorXd());
+  GyroFit fit;
+  fit.summary = SolveLeastSquares(problem, options, &state);
+  fit.params = UnpackGyro(state.x, data.model);
+  return fit;
+}
+
+}  // namespace accelcal::internal

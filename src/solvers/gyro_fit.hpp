@@ -1,0 +1,87 @@
+#pragma once
+// The gyroscope's fit from still positions and the motions between them (issue 18; Tedaldi,
+// Pretto, Menegatti, ICRA 2014, and imu_tk for the idea, written from the equations below):
+//
+//   - each still position i observes the rate bias: its mean raw rate ω̄_i = b_g + G f_i + noise
+//     (the Earth's rate neglected here), f_i = g c_i its specific force;
+//   - each motion from position i to position j observes the rotation the body made: the
+//     calibrated rates integrated from the last sample of i's interval to the first of j's
+//     (IntegrateCalibratedRate, gyro_model.hpp) give R, and R must turn the force direction of i
+//     into j's: v = Rᵀ c_i = c_j. Its residual is e = v × c_j, ≈ P ε for a rotation error ε (P the
+//     projection ⟂ c_j), taken in a basis B of the plane ⟂ c_j and whitened by the covariance the
+//     rate noise propagates to, Bᵀ Σ_ε B = L⁻¹ L⁻ᵀ: r = L Bᵀ (v × c_j) ~ N(0, I₂).
+//
+// B and L are taken once, at the start (a weight that moves with the parameters by the residual's
+// size would change nothing of note and lose the exact Jacobian). Here the directions c_i are the
+// accelerometer fit's, held fixed: the two-stage fit (the joint one frees them).
+
+#include <cstddef>
+#include <optional>
+#include <vector>
+
+#include "accelcal/gyro_model.hpp"
+#include "accelcal/rotations.hpp"
+#include "solvers/least_squares.hpp"
+#include "solvers/solver_common.hpp"
+
+namespace accelcal::internal {
+
+/// The gyro samples of one still position.
+struct GyroStill {
+  Vec3 mean_raw;        ///< mean raw rate over the interval
+  Vec3 sigma_mean_raw;  ///< 1σ of that mean per axis (the samples' σ / √n) [gyro raw]
+  Vec3 f;               ///< specific force (the accelerometer's, g c_i)
+};
+
+/// The gyro samples of one motion, from the last sample of position `from`'s interval to the first
+/// of position `to`'s.
+struct GyroMotion {
+  std::size_t from = 0, to = 0;
+  std::vector<double> t_s;
+  std::vector<Vec3> raw;
+  std::vector<Vec3> f;  ///< specific force at each sample (the calibrated accelerometer)
+};
+
+/// What the gyro fit is given.
+struct GyroFitData {
+  std::vector<GyroStill> stills;  ///< one per position
+  std::vector<Vec3> directions;   ///< c_i, unit, one per position
+  std::vector<GyroMotion> motions;
+  Vec3 noise_sigma_raw = Vec3::Ones();  ///< white noise of one raw sample, per axis
+  GyroModelKind model = GyroModelKind::kLinear;
+  RateInterpolation rule = RateInterpolation::kTrapezoidal;
+};
+
+/// One motion's residual, whitened (2 rows), with the fixed basis and weight of the fit.
+struct MotionWeight {
+  Mat32 B;            ///< basis of the plane ⟂ c_j
+  Eigen::Matrix2d L;  ///< (Bᵀ Σ_ε B)^(−1/2), lower-triangular
+};
+/// The weight of motion `m` at `params`; nullopt when its propagated covariance is not positive.
+std::optional<MotionWeight> WeighMotion(const GyroFitData& data, const GyroMotion& m,
+                                        const GyroParameters& params);
+/// r = L Bᵀ (v × c_j), v = Rᵀ c_i, and optionally ∂r/∂θ (2 x P), ∂r/∂δ_i and ∂r/∂δ_j (2 x 2, δ
+/// the tangent coordinates of c_i, c_j in TangentBasis: c ⊞ δ = normalize(c + E δ)).
+Eigen::Vector2d MotionResidual(const GyroFitData& data, const GyroMotion& m,
+                               const MotionWeight& weight, const GyroParameters& params,
+                               const Vec3& c_i, const Vec3& c_j, Eigen::MatrixXd* J_theta = nullptr,
+                               Eigen::Matrix2d* J_from = nullptr, Eigen::Matrix2d* J_to = nullptr);
+
+/// The angle [rad] between the direction the motion predicts for position `to` and c_to.
+double MotionAngleError(const GyroFitData& data, const GyroMotion& m, const GyroParameters& params);
+
+/// The start: b_g the mean of the still positions' mean rates, G = 0, and K_g = k I with k from
+/// `scale_raw_per_rad_s` when the unit is known, else in closed form from the motions: the bias-
+/// free raw rate summed over a motion is K_g φ, and a turn from c_i to c_j is at least their angle,
+/// so k = Σ |s_m| α_m / Σ α_m² (least squares of |s_m| = k α_m).
+GyroParameters GyroStart(const GyroFitData& data, std::optional<double> scale_raw_per_rad_s);
+
+struct GyroFit {
+  GyroParameters params;
+  LeastSquaresSummary summary;  ///< covariance: the flat parameters' (GyroParameterSlots order)
+};
+/// Gauss-Newton / Levenberg-Marquardt from `start` (LeastSquaresProblem, least_squares.hpp).
+GyroFit FitGyro(const GyroFitData& data, const GyroParameters& start,
+                const LeastSquaresOptions& options);
+
+}  // namespace accelcal::internal

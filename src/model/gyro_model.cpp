@@ -94,12 +94,20 @@ Mat33 IntegrateCalibratedRate(const GyroParameters& params, GyroModelKind kind,
     throw std::invalid_argument("IntegrateCalibratedRate: K_g is singular");
   }
   const Mat33 K_inverse = lu.inverse();
-  const int P = NumGyroParameters(kind);
+  const int per_axis = GyroParametersPerAxis(kind);
   const bool jacobian = J_R_theta != nullptr;
-  // ω_k and, with the Jacobian, ∂ω_k/∂θ of the sample the step starts from (and ends at).
-  const auto rate = [&](std::size_t k, Eigen::MatrixXd* d_omega) {
+  // ∂ω_k/∂θ = −K_g⁻¹ ∂ω_raw/∂θ, whose columns of axis i's group are −K_g⁻¹ e_i u_kᵀ with u_k =
+  // (ω_k, 1[, f_k]) (GyroJacobianWrtParameters): each step adds to J rank-one blocks −J_r K_g⁻¹ e_i
+  // ūᵀ Δt.
+  using Regressor = Eigen::Matrix<double, 1, Eigen::Dynamic, Eigen::RowMajor, 1, 7>;
+  const auto rate = [&](std::size_t k, Regressor* u) {
     const Vec3 omega = K_inverse * (raw[k] - params.bias - params.G * f[k]);
-    if (d_omega != nullptr) *d_omega = -K_inverse * GyroJacobianWrtParameters(omega, f[k], kind);
+    if (u != nullptr) {
+      u->resize(per_axis);
+      u->head<3>() = omega.transpose();
+      (*u)(3) = 1.0;
+      if (kind == GyroModelKind::kGSensitive) u->tail<3>() = f[k].transpose();
+    }
     return omega;
   };
   const bool noise = noise_sigma_raw != nullptr && covariance != nullptr;
@@ -111,15 +119,17 @@ Mat33 IntegrateCalibratedRate(const GyroParameters& params, GyroModelKind kind,
             : Mat33::Zero();
   Mat33 S = Mat33::Zero(), C = Mat33::Zero();  // C: sample k's C_m, so far
   Mat33 R = Mat33::Identity();
-  Eigen::MatrixXd J = Eigen::MatrixXd::Zero(3, P), d_this, d_next;
-  Vec3 omega_this = rate(0, jacobian ? &d_this : nullptr);
+  Eigen::Matrix<double, 3, Eigen::Dynamic, 0, 3, kMaxGyroParameters> J =
+      Eigen::MatrixXd::Zero(3, NumGyroParameters(kind));
+  Regressor u_this, u_next;
+  Vec3 omega_this = rate(0, jacobian ? &u_this : nullptr);
   for (std::size_t k = 0; k + 1 < t_s.size(); ++k) {
     const double dt = t_s[k + 1] - t_s[k];
     if (!(dt > 0)) {
       throw std::invalid_argument("IntegrateCalibratedRate: times do not increase at sample " +
                                   std::to_string(k + 1));
     }
-    const Vec3 omega_next = rate(k + 1, jacobian ? &d_next : nullptr);
+    const Vec3 omega_next = rate(k + 1, jacobian ? &u_next : nullptr);
     const Vec3 phi = (trapezoid ? Vec3(0.5 * (omega_this + omega_next)) : omega_this) * dt;
     Mat33 J_r;
     const Mat33 increment = so3::Exp(phi, jacobian || noise ? &J_r : nullptr);
@@ -130,10 +140,12 @@ Mat33 IntegrateCalibratedRate(const GyroParameters& params, GyroModelKind kind,
       C = trapezoid ? Mat33(A * (0.5 * dt)) : Mat33::Zero();  // sample k + 1's share
     }
     if (jacobian) {
-      const Eigen::MatrixXd d_phi =
-          (trapezoid ? Eigen::MatrixXd(0.5 * (d_this + d_next)) : d_this) * dt;
-      J = increment.transpose() * J + J_r * d_phi;
-      d_this = d_next;
+      const Regressor u =
+          trapezoid ? Regressor(0.5 * dt * (u_this + u_next)) : Regressor(dt * u_this);
+      const Mat33 JK = J_r * K_inverse;
+      J = (increment.transpose() * J).eval();
+      for (int i = 0; i < 3; ++i) J.middleCols(i * per_axis, per_axis).noalias() -= JK.col(i) * u;
+      u_this = u_next;
     }
     omega_this = omega_next;
     R = R * increment;

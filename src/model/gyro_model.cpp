@@ -79,6 +79,40 @@ Eigen::MatrixXd GyroJacobianWrtParameters(const Vec3& omega_rad_s, const Vec3& f
   return J;
 }
 
+namespace {
+
+// Exp(φ) and J_r(φ) (rotations.hpp) for the small angle of one sample step, sharing Hat(φ) and
+// its square: I + a Φ + b Φ² and I − b Φ + c Φ² with a = sin θ/θ, b = (1 − cos θ)/θ²,
+// c = (θ − sin θ)/θ³. Below θ = 1/4 their Taylor series in θ² to the θ¹⁰ term (the first term
+// left out is below 1e-17 there: θ¹²/13! < 1e-17), so no sine is taken; above, so3's closed
+// forms.
+Mat33 StepExp(const Vec3& phi, Mat33* J_r) {
+  const double t = phi.squaredNorm();
+  if (!(t < 0.0625)) {
+    if (J_r != nullptr) *J_r = so3::RightJacobian(phi);
+    return so3::Exp(phi);
+  }
+  // Horner in t = θ², the coefficients (−1)ⁿ/(2n+1)!, (−1)ⁿ/(2n+2)!, (−1)ⁿ/(2n+3)! (constants:
+  // a division per term would take most of the step's time).
+  constexpr double a1 = -1.0 / 6, a2 = 1.0 / 120, a3 = -1.0 / 5040, a4 = 1.0 / 362880,
+                   a5 = -1.0 / 39916800;
+  constexpr double b0 = 1.0 / 2, b1 = -1.0 / 24, b2 = 1.0 / 720, b3 = -1.0 / 40320,
+                   b4 = 1.0 / 3628800, b5 = -1.0 / 479001600;
+  const double a = 1 + t * (a1 + t * (a2 + t * (a3 + t * (a4 + t * a5))));
+  const double b = b0 + t * (b1 + t * (b2 + t * (b3 + t * (b4 + t * b5))));
+  const Mat33 Phi = so3::Hat(phi);
+  const Mat33 Phi2 = Phi * Phi;
+  if (J_r != nullptr) {
+    constexpr double c0 = 1.0 / 6, c1 = -1.0 / 120, c2 = 1.0 / 5040, c3 = -1.0 / 362880,
+                     c4 = 1.0 / 39916800, c5 = -1.0 / 6227020800;
+    const double c = c0 + t * (c1 + t * (c2 + t * (c3 + t * (c4 + t * c5))));
+    *J_r = Mat33::Identity() - b * Phi + c * Phi2;
+  }
+  return Mat33::Identity() + a * Phi + b * Phi2;
+}
+
+}  // namespace
+
 Mat33 IntegrateCalibratedRate(const GyroParameters& params, GyroModelKind kind,
                               const std::vector<double>& t_s, const std::vector<Vec3>& raw,
                               const std::vector<Vec3>& f, RateInterpolation rule,
@@ -132,25 +166,26 @@ Mat33 IntegrateCalibratedRate(const GyroParameters& params, GyroModelKind kind,
     const Vec3 omega_next = rate(k + 1, jacobian ? &u_next : nullptr);
     const Vec3 phi = (trapezoid ? Vec3(0.5 * (omega_this + omega_next)) : omega_this) * dt;
     Mat33 J_r;
-    const Mat33 increment = so3::Exp(phi, jacobian || noise ? &J_r : nullptr);
+    const Mat33 increment = StepExp(phi, jacobian || noise ? &J_r : nullptr);
     if (noise) {
       const Mat33 A = R * increment * J_r;   // R_{k+1} J_r(φ_k)
       C += A * (trapezoid ? 0.5 * dt : dt);  // sample k's share of this step: C_k is complete
       S += C * Q * C.transpose();
       C = trapezoid ? Mat33(A * (0.5 * dt)) : Mat33::Zero();  // sample k + 1's share
     }
+    R = R * increment;
     if (jacobian) {
+      // In the frame of the first sample, W = R_k J_k: W_{k+1} = W_k + R_{k+1} ΔJ_k, where the
+      // recursion's Exp(φ_k)ᵀ cancels (J_n = R_nᵀ W_n).
       const Regressor u =
           trapezoid ? Regressor(0.5 * dt * (u_this + u_next)) : Regressor(dt * u_this);
-      const Mat33 JK = J_r * K_inverse;
-      J = (increment.transpose() * J).eval();
-      for (int i = 0; i < 3; ++i) J.middleCols(i * per_axis, per_axis).noalias() -= JK.col(i) * u;
+      const Mat33 RJK = R * J_r * K_inverse;
+      for (int i = 0; i < 3; ++i) J.middleCols(i * per_axis, per_axis).noalias() -= RJK.col(i) * u;
       u_this = u_next;
     }
     omega_this = omega_next;
-    R = R * increment;
   }
-  if (jacobian) *J_R_theta = J;
+  if (jacobian) *J_R_theta = R.transpose() * J;
   if (noise) {
     S += C * Q * C.transpose();  // the last sample (its step before it)
     *covariance = R.transpose() * S * R;

@@ -8,6 +8,7 @@
 
 #include <Eigen/Cholesky>
 #include <Eigen/Eigenvalues>
+#include <Eigen/LU>
 
 #include "core/text_format.hpp"
 
@@ -325,6 +326,52 @@ LeastSquaresSummary SolveLeastSquares(const LeastSquaresProblem& problem,
     summary.covariance = summary.sigma2 * reduced.Inverse();
   }
   return summary;
+}
+
+std::vector<VectorXd> LeaveOneBlockOut(const LeastSquaresProblem& problem,
+                                       const LeastSquaresState& state,
+                                       const std::vector<int>& blocks) {
+  const int n = problem.GlobalSize();
+  std::vector<MatrixXd> J(static_cast<std::size_t>(problem.NumBlocks()));
+  std::vector<VectorXd> r(J.size());
+  MatrixXd S = MatrixXd::Zero(n, n);
+  for (int b = 0; b < problem.NumBlocks(); ++b) {
+    const auto k = static_cast<std::size_t>(b);
+    if (problem.LocalSize(b) != 0) {
+      throw std::invalid_argument("LeaveOneBlockOut: a block with its own parameters");
+    }
+    if (!problem.Evaluate(b, state.x, state.y[k], &r[k], &J[k], nullptr)) {
+      throw std::invalid_argument(Format("LeaveOneBlockOut: block %d cannot be evaluated", b));
+    }
+    if (J[k].rows() > 0) S.selfadjointView<Eigen::Lower>().rankUpdate(J[k].transpose());
+  }
+  S.triangularView<Eigen::StrictlyUpper>() = S.transpose();
+  // Jacobi-scaled: S = D Ŝ D with D = diag(S)^(1/2), so that parameters of any unit factor alike.
+  const VectorXd d = S.diagonal().cwiseMax(0.0).cwiseSqrt();
+  if (!(d.minCoeff() > 0)) throw std::invalid_argument("LeaveOneBlockOut: S is singular");
+  const VectorXd d_inverse = d.cwiseInverse();
+  const Eigen::LDLT<MatrixXd> ldlt(d_inverse.asDiagonal() * S * d_inverse.asDiagonal());
+  if (ldlt.info() != Eigen::Success || !(ldlt.vectorD().minCoeff() > 0)) {
+    throw std::invalid_argument("LeaveOneBlockOut: S is singular");
+  }
+  std::vector<VectorXd> out;
+  for (int b : blocks) {
+    const auto k = static_cast<std::size_t>(b);
+    if (J[k].rows() == 0) {
+      out.push_back(state.x);
+      continue;
+    }
+    // δ = S_k⁻¹ J_kᵀ r_k = U M⁻¹ r_k with U = S⁻¹ J_kᵀ, M = I − J_k U (Woodbury).
+    const MatrixXd U =
+        d_inverse.asDiagonal() * ldlt.solve(d_inverse.asDiagonal() * J[k].transpose());
+    const MatrixXd M = MatrixXd::Identity(J[k].rows(), J[k].rows()) - J[k] * U;
+    const Eigen::PartialPivLU<MatrixXd> lu(M);
+    if (!(std::abs(lu.determinant()) > 1e-12)) {
+      throw std::invalid_argument(Format("LeaveOneBlockOut: without block %d S is singular", b));
+    }
+    out.push_back(problem.PlusGlobal(state.x, U * lu.solve(r[k])));
+  }
+  return out;
 }
 
 }  // namespace accelcal::internal

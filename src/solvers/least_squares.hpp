@@ -106,4 +106,14 @@ struct LeastSquaresSummary {
 LeastSquaresSummary SolveLeastSquares(const LeastSquaresProblem& problem,
                                       const LeastSquaresOptions& options, LeastSquaresState* state);
 
+/// Leave-one-block-out to first order, for a problem without per-item parameters at a converged
+/// `state` (its gradient Σ J_bᵀ r_b zero): for each of `blocks`, x ⊞ δ_k with δ_k = S_k⁻¹ J_kᵀ r_k,
+/// S_k = S − J_kᵀ J_k, one Gauss-Newton step of the problem without block k (S⁻¹ by Woodbury's
+/// identity from one factorisation of S = Σ J_bᵀ J_b). Its error is of second order in the step:
+/// small when one block moves the fit little. Throws std::invalid_argument when the problem has
+/// per-item parameters, a block cannot be evaluated, or S (or some S_k) is singular.
+std::vector<Eigen::VectorXd> LeaveOneBlockOut(const LeastSquaresProblem& problem,
+                                              const LeastSquaresState& state,
+                                              const std::vector<int>& blocks);
+
 }  // namespace accelcal::internal

@@ -26,6 +26,17 @@ std::optional<MotionWeight> WeighMotion(const GyroFitData& data, const GyroMotio
   return w;
 }
 
+std::vector<MotionWeight> WeighMotions(const GyroFitData& data, const GyroParameters& params) {
+  std::vector<MotionWeight> weights;
+  weights.reserve(data.motions.size());
+  for (const GyroMotion& m : data.motions) {
+    std::optional<MotionWeight> w = WeighMotion(data, m, params);
+    if (!w) throw std::invalid_argument("a motion without rate noise: its weight is undefined");
+    weights.push_back(*w);
+  }
+  return weights;
+}
+
 Eigen::Vector2d MotionResidual(const GyroFitData& data, const GyroMotion& m,
                                const MotionWeight& weight, const GyroParameters& params,
                                const Vec3& c_i, const Vec3& c_j, Eigen::MatrixXd* J_theta,
@@ -83,8 +94,7 @@ namespace {
 // (2 rows).
 class TwoStageProblem : public LeastSquaresProblem {
  public:
-  TwoStageProblem(const GyroFitData& data, std::vector<MotionWeight> weights)
-      : data_(data), weights_(std::move(weights)) {}
+  explicit TwoStageProblem(const GyroFitData& data) : data_(data) {}
   int GlobalSize() const override { return NumGyroParameters(data_.model); }
   int NumBlocks() const override {
     return static_cast<int>(data_.stills.size() + data_.motions.size());
@@ -96,7 +106,7 @@ class TwoStageProblem : public LeastSquaresProblem {
     const auto b = static_cast<std::size_t>(block);
     if (b < data_.stills.size()) {
       const GyroStill& s = data_.stills[b];
-      const Vec3 inverse_sigma = s.sigma_mean_raw.cwiseInverse();
+      const Vec3 inverse_sigma = (data_.still_scale * s.sigma_mean_raw).cwiseInverse();
       *residual = inverse_sigma.cwiseProduct(s.mean_raw - params.bias - params.G * s.f);
       if (J_x != nullptr) {
         *J_x = -(inverse_sigma.asDiagonal() *
@@ -106,9 +116,16 @@ class TwoStageProblem : public LeastSquaresProblem {
     }
     const std::size_t k = b - data_.stills.size();
     const GyroMotion& m = data_.motions[k];
+    if (!data_.used(k)) {
+      residual->resize(0);
+      if (J_x != nullptr) J_x->resize(0, GlobalSize());
+      return true;
+    }
     try {
-      *residual = MotionResidual(data_, m, weights_[k], params, data_.directions[m.from],
-                                 data_.directions[m.to], J_x);
+      *residual = MotionResidual(data_, m, data_.weights[k], params, data_.directions[m.from],
+                                 data_.directions[m.to], J_x) /
+                  data_.motion_scale;
+      if (J_x != nullptr) *J_x /= data_.motion_scale;
     } catch (const std::invalid_argument&) {
       return false;  // a singular K_g
     }
@@ -117,20 +134,16 @@ class TwoStageProblem : public LeastSquaresProblem {
 
  private:
   const GyroFitData& data_;
-  std::vector<MotionWeight> weights_;
 };
 
 }  // namespace
 
 GyroFit FitGyro(const GyroFitData& data, const GyroParameters& start,
                 const LeastSquaresOptions& options) {
-  std::vector<MotionWeight> weights;
-  for (const GyroMotion& m : data.motions) {
-    std::optional<MotionWeight> w = WeighMotion(data, m, start);
-    if (!w) throw std::invalid_argument("a motion without rate noise: its weight is undefined");
-    weights.push_back(*w);
+  if (data.weights.size() != data.motions.size()) {
+    throw std::invalid_argument("FitGyro: a weight for each motion is needed");
   }
-  const TwoStageProblem problem(data, std::move(weights));
+  const TwoStageProblem problem(data);
   LeastSquaresState state;
   state.x = Pack(start, data.model);
   state.y.assign(static_cast<std::size_t>(problem.NumBlocks()), Eigen::VectorXd());
@@ -138,6 +151,23 @@ GyroFit FitGyro(const GyroFitData& data, const GyroParameters& start,
   fit.summary = SolveLeastSquares(problem, options, &state);
   fit.params = UnpackGyro(state.x, data.model);
   return fit;
+}
+
+std::vector<GyroParameters> HeldOutMotionFits(const GyroFitData& data,
+                                              const GyroParameters& params) {
+  const TwoStageProblem problem(data);
+  LeastSquaresState state;
+  state.x = Pack(params, data.model);
+  state.y.assign(static_cast<std::size_t>(problem.NumBlocks()), Eigen::VectorXd());
+  std::vector<int> blocks;
+  for (std::size_t k = 0; k < data.motions.size(); ++k) {
+    blocks.push_back(static_cast<int>(data.stills.size() + k));
+  }
+  std::vector<GyroParameters> out;
+  for (const Eigen::VectorXd& x : LeaveOneBlockOut(problem, state, blocks)) {
+    out.push_back(UnpackGyro(x, data.model));
+  }
+  return out;
 }
 
 }  // namespace accelcal::internal

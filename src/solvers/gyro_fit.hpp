@@ -42,6 +42,12 @@ struct GyroMotion {
   std::vector<Vec3> f;  ///< specific force at each sample (the calibrated accelerometer)
 };
 
+/// One motion's residual, whitened (2 rows), with the fixed basis and weight of the fit.
+struct MotionWeight {
+  Mat32 B;            ///< basis of the plane ⟂ c_j
+  Eigen::Matrix2d L;  ///< (Bᵀ Σ_ε B)^(−1/2), lower-triangular
+};
+
 /// What the gyro fit is given.
 struct GyroFitData {
   std::vector<GyroStill> stills;  ///< one per position
@@ -50,16 +56,21 @@ struct GyroFitData {
   Vec3 noise_sigma_raw = Vec3::Ones();  ///< white noise of one raw sample, per axis
   GyroModelKind model = GyroModelKind::kLinear;
   RateInterpolation rule = RateInterpolation::kTrapezoidal;
+  /// Each group's noise multiplied by these (its scatter ratio, when the sample noise does not
+  /// explain the group's scatter): residuals divided by them.
+  double still_scale = 1, motion_scale = 1;
+  /// One per motion (WeighMotions): the fits use them as given.
+  std::vector<MotionWeight> weights;
+  /// false: motion k left out of the fit (its residual block is empty); empty: all used.
+  std::vector<bool> motion_used;
+  bool used(std::size_t motion) const { return motion_used.empty() || motion_used[motion]; }
 };
 
-/// One motion's residual, whitened (2 rows), with the fixed basis and weight of the fit.
-struct MotionWeight {
-  Mat32 B;            ///< basis of the plane ⟂ c_j
-  Eigen::Matrix2d L;  ///< (Bᵀ Σ_ε B)^(−1/2), lower-triangular
-};
 /// The weight of motion `m` at `params`; nullopt when its propagated covariance is not positive.
 std::optional<MotionWeight> WeighMotion(const GyroFitData& data, const GyroMotion& m,
                                         const GyroParameters& params);
+/// Every motion's weight at `params`. Throws std::invalid_argument when one has no rate noise.
+std::vector<MotionWeight> WeighMotions(const GyroFitData& data, const GyroParameters& params);
 /// r = L Bᵀ (v × c_j), v = Rᵀ c_i, and optionally ∂r/∂θ (2 x P), ∂r/∂δ_i and ∂r/∂δ_j (2 x 2, δ
 /// the tangent coordinates of c_i, c_j in TangentBasis: c ⊞ δ = normalize(c + E δ)).
 Eigen::Vector2d MotionResidual(const GyroFitData& data, const GyroMotion& m,
@@ -80,8 +91,14 @@ struct GyroFit {
   GyroParameters params;
   LeastSquaresSummary summary;  ///< covariance: the flat parameters' (GyroParameterSlots order)
 };
-/// Gauss-Newton / Levenberg-Marquardt from `start` (LeastSquaresProblem, least_squares.hpp).
+/// Gauss-Newton / Levenberg-Marquardt from `start` (LeastSquaresProblem, least_squares.hpp),
+/// with data.weights.
 GyroFit FitGyro(const GyroFitData& data, const GyroParameters& start,
                 const LeastSquaresOptions& options);
+/// For each motion k, the parameters of the fit without it, to first order from the converged
+/// fit `params`: one Gauss-Newton step of the problem without block k, δ_k = S_k⁻¹ J_kᵀ r_k with
+/// S_k = S − J_kᵀ J_k (LeaveOneBlockOut, least_squares.hpp).
+std::vector<GyroParameters> HeldOutMotionFits(const GyroFitData& data,
+                                              const GyroParameters& params);
 
 }  // namespace accelcal::internal

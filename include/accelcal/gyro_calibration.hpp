@@ -1,0 +1,124 @@
+#pragma once
+/// @file gyro_calibration.hpp
+/// The gyroscope calibrated from the recording that calibrates the accelerometer (issue 18):
+/// still positions with turns between them. Each still position's mean rate observes the bias
+/// (and the g-sensitivity, gyro_model.hpp); each turn observes the rotation that takes the
+/// gravity direction of one position into the next, by integrating the calibrated rate sample by
+/// sample (Tedaldi, Pretto, Menegatti, ICRA 2014, for the idea).
+///
+/// Two estimators, on the same data:
+///   - two-stage: the accelerometer's calibration and gravity directions held, the gyroscope's
+///     parameters fitted to the stills and the turns;
+///   - joint: one maximum-likelihood problem over the accelerometer's parameters, the
+///     gyroscope's and every still position's gravity direction, so that the turns also inform
+///     the accelerometer (six axis-aligned positions leave its misalignment poorly determined;
+///     the rotations determine it).
+///
+/// Each group of residuals (the accelerometer's position means, the gyro's still means, the
+/// turns) is weighted by its own noise: the sample noise propagated to it, multiplied by the
+/// group's scatter ratio R = sqrt(χ²/n) when R > 1 (the two-stage fit's), so that one sensor's
+/// unmodelled error cannot pull the other.
+
+#include <optional>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "accelcal/calibration_types.hpp"
+#include "accelcal/gyro_model.hpp"
+#include "accelcal/log_reader.hpp"
+#include "accelcal/names.hpp"
+#include "accelcal/positions.hpp"
+#include "accelcal/rotations.hpp"
+
+namespace accelcal {
+
+/// The unit of the gyroscope's raw readings, for the start of the fit (never a magic seed).
+enum class GyroUnit {
+  kRadPerSecond,  ///< K_g starts at I
+  kDegPerSecond,  ///< K_g starts at (180/π) I
+  kRaw,           ///< counts: K_g's scale starts from the turned angles, in closed form
+};
+template <>
+struct EnumNames<GyroUnit> {
+  static constexpr std::pair<GyroUnit, std::string_view> kTable[] = {
+      {GyroUnit::kRadPerSecond, "rad/s"},
+      {GyroUnit::kDegPerSecond, "deg/s"},
+      {GyroUnit::kRaw, "raw"}};
+};
+std::string_view ToString(GyroUnit unit);
+
+/// Which estimator (see the file comment).
+enum class GyroEstimator { kTwoStage, kJoint };
+template <>
+struct EnumNames<GyroEstimator> {
+  static constexpr std::pair<GyroEstimator, std::string_view> kTable[] = {
+      {GyroEstimator::kTwoStage, "two-stage"}, {GyroEstimator::kJoint, "joint"}};
+};
+std::string_view ToString(GyroEstimator estimator);
+
+struct GyroCalibrationOptions {
+  /// The model; std::nullopt chooses by the leave-one-rotation-out error (g-sensitive when it
+  /// lowers it, as the accelerometer's automatic model choice).
+  std::optional<GyroModelKind> model;
+  GyroUnit unit = GyroUnit::kRaw;
+  GyroEstimator estimator = GyroEstimator::kJoint;
+  RateInterpolation rule = RateInterpolation::kTrapezoidal;
+  /// Leave-one-rotation-out validation (needed by the automatic model choice).
+  bool validate = true;
+  /// The fit without each rotation solved in full (as many fits as rotations), instead of one
+  /// Gauss-Newton step from the full fit (the default; within a few percent of the full refit on
+  /// the bundled recordings, measured by a test).
+  bool heldout_refits = false;
+};
+
+/// One turn between consecutive still positions.
+struct GyroRotation {
+  std::size_t from = 0, to = 0;                   ///< positions (0-based, in time order)
+  std::size_t first_sample = 0, last_sample = 0;  ///< the samples integrated, inclusive
+  double duration_s = 0;
+  double angle_deg = 0;     ///< the angle turned, from the calibrated rates
+  double residual_deg = 0;  ///< angle between the predicted and the fitted direction of `to`
+  /// The same with the fit that left this rotation out (validation); NaN without one.
+  double heldout_deg = std::nan("");
+};
+
+/// The gyroscope's calibration.
+struct GyroCalibration {
+  GyroModelKind model = GyroModelKind::kLinear;
+  std::string model_reason;  ///< why this model ("given", or the held-out errors compared)
+  GyroEstimator estimator = GyroEstimator::kJoint;
+  GyroUnit unit = GyroUnit::kRaw;
+  GyroParameters params;
+  /// Covariance of the flat parameters (GyroParameterSlots order), each group's scatter ratio
+  /// applied (see the file comment); empty without degrees of freedom.
+  Eigen::MatrixXd covariance;
+  Vec3 noise_sigma_raw = Vec3::Zero();  ///< white noise of one rate sample, pooled over the stills
+  std::vector<Vec3> still_mean_raw;     ///< each position's mean raw rate
+  std::vector<GyroRotation> rotations;
+  double rms_deg = 0;  ///< RMS of the rotations' residual_deg
+  /// RMS of the rotations' heldout_deg; NaN without validation.
+  double heldout_rms_deg = std::nan("");
+  /// Scatter ratios R = sqrt(χ²/n) of the stills and of the rotations under the sample noise.
+  double still_scatter_ratio = 1, rotation_scatter_ratio = 1;
+  Summary summary;
+  /// The joint estimator's accelerometer calibration (parameters, covariance and directions
+  /// refitted with the rotations); unset for the two-stage one.
+  std::optional<CalibrationResult> accelerometer;
+};
+
+/// Calibrates the gyroscope of `gyro`, recorded beside the accelerometer of `accel` on the same
+/// clock (one gyro sample at each accelerometer sample's time), from the still positions of
+/// `accel` (`positions`, in time order, each with its interval) and their calibration
+/// `accel_cal` (Calibrate, maximum likelihood). Throws DataError when the streams differ in
+/// length or time, when a position has no interval, when there are too few rotations for the
+/// model, when a rate axis is never turned about (its scale not observable, named), when a turn
+/// is too fast for the sample rate, or when the fit fails.
+GyroCalibration CalibrateGyro(const RawLog& accel, const RawLog& gyro,
+                              const std::vector<Position>& positions,
+                              const CalibrationResult& accel_cal,
+                              const GyroCalibrationOptions& options);
+
+}  // namespace accelcal

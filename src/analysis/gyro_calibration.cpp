@@ -1,0 +1,509 @@
+// The gyroscope's calibration from a recording of still positions and turns
+// (gyro_calibration.hpp).
+#include "accelcal/gyro_calibration.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <sstream>
+#include <stdexcept>
+
+#include <Eigen/Cholesky>
+#include <Eigen/Geometry>
+
+#include "accelcal/error.hpp"
+#include "accelcal/model.hpp"
+#include "core/text_format.hpp"
+#include "solvers/gyro_fit.hpp"
+#include "solvers/imu_joint_fit.hpp"
+#include "statistics/student_t.hpp"
+
+namespace accelcal {
+
+std::string_view ToString(GyroUnit unit) { return NameOf(unit); }
+std::string_view ToString(GyroEstimator estimator) { return NameOf(estimator); }
+
+namespace {
+
+using internal::GyroFitData;
+using internal::GyroMotion;
+using internal::GyroStill;
+
+constexpr double kPi = 3.14159265358979323846;
+constexpr double kRadToDeg = 180.0 / kPi;
+
+std::string Num(double x, int digits) { return internal::Format("%.*g", digits, x); }
+/// A turn of more than this per sample step is integrated too coarsely (the trapezoidal rule's
+/// error grows with the square of the angle per step).
+constexpr double kMaxDegreesPerStep = 10.0;
+
+std::string AxisName(int axis) { return std::string(1, static_cast<char>('x' + axis)); }
+
+// The two streams must be one clock: a gyro sample at each accelerometer sample's time.
+void CheckSameClock(const RawLog& accel, const RawLog& gyro) {
+  if (gyro.samples.size() != accel.samples.size()) {
+    throw DataError("the gyroscope's log " + gyro.source + " has " +
+                    std::to_string(gyro.samples.size()) + " samples and the accelerometer's " +
+                    std::to_string(accel.samples.size()) +
+                    ": the two streams must be on one clock, a rate sample at each "
+                    "accelerometer sample's time");
+  }
+  if (gyro.time_s.empty() || accel.time_s.empty()) return;  // same rows of one file
+  const double step = accel.time ? accel.time->typical_step_s : 0.0;
+  const double origin_offset =
+      (gyro.time ? gyro.time->origin_s : 0.0) - (accel.time ? accel.time->origin_s : 0.0);
+  for (std::size_t k = 0; k < gyro.time_s.size(); ++k) {
+    const double d = gyro.time_s[k] + origin_offset - accel.time_s[k];
+    if (!(std::abs(d) <= 0.5 * step)) {
+      throw DataError("the gyroscope's sample " + std::to_string(k + 1) + " (line " +
+                      std::to_string(gyro.line.empty() ? k + 1 : gyro.line[k]) + " of " +
+                      gyro.source + ") is " + Num(d, 6) +
+                      " s from the accelerometer's: the two streams must be on one clock");
+    }
+  }
+}
+
+// The times the rates are integrated at: the timestamps when every step is positive, else
+// (timestamps coarser than the samples, repeated) the sample index at the log's rate.
+std::vector<double> IntegrationTimes(const RawLog& log) {
+  bool increasing = !log.time_s.empty();
+  for (std::size_t k = 1; increasing && k < log.time_s.size(); ++k) {
+    increasing = log.time_s[k] > log.time_s[k - 1];
+  }
+  if (increasing) return log.time_s;
+  if (!log.rate_hz || !(*log.rate_hz > 0)) {
+    throw DataError("the gyroscope's log " + log.source +
+                    " has no sample rate: the rates cannot be integrated");
+  }
+  std::vector<double> t(log.samples.size());
+  for (std::size_t k = 0; k < t.size(); ++k) t[k] = static_cast<double>(k) / *log.rate_hz;
+  return t;
+}
+
+struct Built {
+  GyroFitData data;
+  std::vector<GyroRotation> rotations;  // one per motion
+};
+
+Built BuildData(const RawLog& accel, const RawLog& gyro, const std::vector<Position>& positions,
+                const CalibrationResult& accel_cal, const GyroCalibrationOptions& options) {
+  Built b;
+  GyroFitData& data = b.data;
+  data.rule = options.rule;
+  const std::size_t m = positions.size();
+  if (accel_cal.directions.size() != m) {
+    throw std::invalid_argument("CalibrateGyro: " + std::to_string(m) + " positions and " +
+                                std::to_string(accel_cal.directions.size()) + " directions");
+  }
+  for (std::size_t i = 0; i < m; ++i) {
+    if (!positions[i].interval) {
+      throw DataError("position " + std::to_string(i + 1) +
+                      " has no interval of the log: the gyroscope is calibrated from a raw log "
+                      "only");
+    }
+    if (i > 0 && positions[i].interval->begin < positions[i - 1].interval->end) {
+      throw DataError(
+          "the positions are not in time order: the gyroscope is calibrated from "
+          "one raw log");
+    }
+    if (positions[i].interval->end > gyro.samples.size()) {
+      throw DataError("position " + std::to_string(i + 1) + " ends beyond the gyroscope's log");
+    }
+  }
+  // Each position's mean rate and the pooled sample noise.
+  Vec3 sum_sq = Vec3::Zero();
+  double dof = 0;
+  std::vector<std::size_t> counts;
+  for (std::size_t i = 0; i < m; ++i) {
+    const StaticInterval& iv = *positions[i].interval;
+    Vec3 mean = Vec3::Zero();
+    for (std::size_t k = iv.begin; k < iv.end; ++k) mean += gyro.samples[k];
+    const auto n = static_cast<double>(iv.end - iv.begin);
+    mean /= n;
+    for (std::size_t k = iv.begin; k < iv.end; ++k) {
+      sum_sq += (gyro.samples[k] - mean).cwiseAbs2();
+    }
+    dof += n - 1;
+    counts.push_back(iv.end - iv.begin);
+    data.stills.push_back({mean, Vec3::Zero(), accel_cal.gravity * accel_cal.directions[i]});
+    data.directions.push_back(accel_cal.directions[i]);
+  }
+  if (!(dof > 0)) throw DataError("the still positions are too short to measure the rate noise");
+  data.noise_sigma_raw = (sum_sq / dof).cwiseSqrt();
+  for (int a = 0; a < 3; ++a) {
+    if (!(data.noise_sigma_raw(a) > 0)) {
+      throw DataError("the gyroscope's " + AxisName(a) +
+                      " axis reads the same value throughout every still position: its noise, "
+                      "and so the weight of its readings, is unknown (a constant or missing "
+                      "column?)");
+    }
+  }
+  for (std::size_t i = 0; i < m; ++i) {
+    data.stills[i].sigma_mean_raw =
+        data.noise_sigma_raw / std::sqrt(static_cast<double>(counts[i]));
+  }
+  // The turns: from the last sample of one interval to the first of the next.
+  const std::vector<double> t = IntegrationTimes(gyro);
+  Vec3 lo = gyro.samples.front(), hi = lo;
+  for (const Vec3& s : gyro.samples) {
+    lo = lo.cwiseMin(s);
+    hi = hi.cwiseMax(s);
+  }
+  const double typical_step =
+      gyro.time ? gyro.time->typical_step_s : (gyro.rate_hz ? 1.0 / *gyro.rate_hz : 0.0);
+  for (std::size_t i = 0; i + 1 < m; ++i) {
+    GyroMotion motion;
+    motion.from = i;
+    motion.to = i + 1;
+    const std::size_t first = positions[i].interval->end - 1;
+    const std::size_t last = positions[i + 1].interval->begin;
+    Vec3 last_f = accel_cal.gravity * accel_cal.directions[i];
+    int at_limit[3] = {0, 0, 0};
+    for (std::size_t k = first; k <= last; ++k) {
+      motion.t_s.push_back(t[k]);
+      motion.raw.push_back(gyro.samples[k]);
+      if (std::optional<Vec3> f = SpecificForce(accel_cal.params, accel.samples[k])) last_f = *f;
+      motion.f.push_back(last_f);
+      for (int a = 0; a < 3; ++a) {
+        at_limit[a] += gyro.samples[k](a) == lo(a) || gyro.samples[k](a) == hi(a);
+      }
+      if (k > first && typical_step > 0 && t[k] - t[k - 1] > 5 * typical_step) {
+        throw DataError("the turn from position " + std::to_string(i + 1) + " to " +
+                        std::to_string(i + 2) + " has a gap of " + Num(t[k] - t[k - 1], 4) +
+                        " s in its samples (at line " +
+                        std::to_string(gyro.line.empty() ? k + 1 : gyro.line[k]) + " of " +
+                        gyro.source + "): its rotation cannot be integrated");
+      }
+    }
+    for (int a = 0; a < 3; ++a) {
+      if (at_limit[a] >= 3 && hi(a) > lo(a)) {
+        throw DataError("the gyroscope's " + AxisName(a) + " axis reaches the log's extreme (" +
+                        Num(gyro.samples[first](a) < 0.5 * (lo(a) + hi(a)) ? lo(a) : hi(a), 6) +
+                        ") in " + std::to_string(at_limit[a]) +
+                        " samples of the turn from position " + std::to_string(i + 1) + " to " +
+                        std::to_string(i + 2) + ": it saturated, so the turn's angle is wrong");
+      }
+    }
+    GyroRotation r;
+    r.from = i;
+    r.to = i + 1;
+    r.first_sample = first;
+    r.last_sample = last;
+    r.duration_s = t[last] - t[first];
+    b.rotations.push_back(r);
+    data.motions.push_back(std::move(motion));
+  }
+  return b;
+}
+
+// The turned angle per step and about each raw axis, with the start's bias and scale: the turn
+// that is too fast for the rate, the axis never turned about.
+void CheckExcitation(const GyroFitData& data, const internal::GyroFitData& /*unused*/,
+                     const GyroParameters& start) {
+  const double k = start.K.diagonal().cwiseAbs().mean();
+  Vec3 turned = Vec3::Zero();
+  for (const GyroMotion& m : data.motions) {
+    for (std::size_t s = 0; s + 1 < m.t_s.size(); ++s) {
+      const Vec3 step =
+          0.5 * (m.raw[s] + m.raw[s + 1] - 2 * start.bias) / k * (m.t_s[s + 1] - m.t_s[s]);
+      turned += step.cwiseAbs();
+      if (step.norm() * kRadToDeg > kMaxDegreesPerStep) {
+        throw DataError("the turn from position " + std::to_string(m.from + 1) + " to " +
+                        std::to_string(m.to + 1) +
+                        " is too fast for the sample rate: " + Num(step.norm() * kRadToDeg, 3) +
+                        "° in one sample step (at "
+                        "most " +
+                        Num(kMaxDegreesPerStep, 3) + "°), so its integration is not exact");
+      }
+    }
+  }
+  const double most = turned.maxCoeff();
+  for (int a = 0; a < 3; ++a) {
+    if (!(turned(a) >= 0.05 * most) || !(turned(a) * kRadToDeg >= 90)) {
+      throw DataError("the gyroscope was hardly turned about its " + AxisName(a) + " axis (" +
+                      Num(turned(a) * kRadToDeg, 3) + "° in all the turns, against " +
+                      Num(most * kRadToDeg, 3) +
+                      "° about the most turned axis): its scale "
+                      "cannot be determined; turn the sensor about every axis between positions");
+    }
+  }
+}
+
+}  // namespace
+
+namespace {
+
+struct Solution {
+  GyroParameters gyro;
+  std::vector<Vec3> directions;
+  std::optional<internal::ImuJointFit> joint;
+  internal::LeastSquaresSummary summary;
+};
+
+// Residuals are whitened (1σ each): a step that changes none by more than 1e-6 σ, or F by a
+// relative 1e-10, leaves the parameters within about 1e-5 of a standard error of the optimum;
+// tighter tolerances only spend evaluations on steps that F's round-off rejects.
+internal::LeastSquaresOptions FitOptions() {
+  internal::LeastSquaresOptions ls;
+  ls.max_iterations = 50;
+  ls.step_tolerance = 1e-6;
+  ls.function_tolerance = 1e-10;
+  return ls;
+}
+
+// The joint problem's data: every position's accelerometer mean weighted by the residual σ̂ of
+// the accelerometer's own fit (its scatter about the fitted surface). The positions scatter by
+// model error and drift more than by their samples' noise, and not in proportion to 1/√n: on the
+// T265 recording, weights from each position's sample noise (times the scatter ratio) give
+// 0.29° held out against 0.21° with σ̂.
+internal::ImuJointData JointData(const GyroFitData& gyro, const std::vector<Position>& positions,
+                                 const CalibrationResult& accel_cal) {
+  if (!(accel_cal.residual_sigma > 0)) {
+    throw DataError(
+        "the accelerometer's calibration has no residual degrees of freedom: its "
+        "noise, and so its weight beside the gyroscope's, is unknown");
+  }
+  internal::ImuJointData joint;
+  joint.gyro = gyro;
+  joint.accel_model = accel_cal.model;
+  joint.frame = accel_cal.frame;
+  joint.gravity = accel_cal.gravity;
+  for (std::size_t k = 0; k < positions.size(); ++k) {
+    joint.accel_means.push_back(positions[k].mean);
+    joint.accel_sigmas.push_back(Vec3::Constant(accel_cal.residual_sigma));
+    joint.accel_used.push_back(!accel_cal.excluded(k));
+  }
+  return joint;
+}
+
+double AngleError(const GyroFitData& data, const GyroMotion& m, const GyroParameters& gyro,
+                  const std::vector<Vec3>& directions) {
+  const Mat33 R = IntegrateCalibratedRate(gyro, data.model, m.t_s, m.raw, m.f, data.rule);
+  const Vec3 v = R.transpose() * directions[m.from];
+  const Vec3& c = directions[m.to];
+  return std::atan2(v.cross(c).norm(), v.dot(c));
+}
+
+// Scatter ratio sqrt(χ²/n) of the stills and of the turns under the sample noise (data's
+// weights), at `gyro` and `directions`.
+std::pair<double, double> ScatterRatios(const GyroFitData& data, const GyroParameters& gyro,
+                                        const std::vector<Vec3>& directions) {
+  double stills = 0, turns = 0;
+  for (std::size_t k = 0; k < data.stills.size(); ++k) {
+    const GyroStill& st = data.stills[k];
+    stills += st.sigma_mean_raw.cwiseInverse()
+                  .cwiseProduct(st.mean_raw - gyro.bias - gyro.G * (st.f.norm() * directions[k]))
+                  .squaredNorm();
+  }
+  for (std::size_t k = 0; k < data.motions.size(); ++k) {
+    const GyroMotion& m = data.motions[k];
+    turns += internal::MotionResidual(data, m, data.weights[k], gyro, directions[m.from],
+                                      directions[m.to])
+                 .squaredNorm();
+  }
+  return {std::sqrt(stills / (3.0 * static_cast<double>(data.stills.size()))),
+          std::sqrt(turns / (2.0 * static_cast<double>(data.motions.size())))};
+}
+
+struct ModelFit {
+  GyroModelKind kind;
+  Solution solution;
+  GyroFitData data;
+  double still_ratio = 1, turn_ratio = 1;
+  std::vector<double> heldout;  // per turn [rad], empty without validation
+};
+
+void RequireConverged(const internal::LeastSquaresSummary& summary) {
+  if (!summary.converged()) {
+    throw DataError("the gyroscope's fit did not converge: " + summary.termination_message);
+  }
+}
+
+ModelFit FitModel(GyroFitData data, GyroModelKind kind, const std::vector<Position>& positions,
+                  const CalibrationResult& accel_cal, const GyroCalibrationOptions& options,
+                  const GyroParameters& start) {
+  ModelFit out;
+  out.kind = kind;
+  data.model = kind;
+  // The two-stage fit under the sample noise; each group's scatter ratio there, and the fit
+  // again with each group's noise scaled by its ratio (when above 1) and the turns' weights
+  // taken at that fit.
+  data.weights = internal::WeighMotions(data, start);
+  const internal::GyroFit two = internal::FitGyro(data, start, FitOptions());
+  RequireConverged(two.summary);
+  data.weights = internal::WeighMotions(data, two.params);
+  const auto [still_ratio, turn_ratio] = ScatterRatios(data, two.params, data.directions);
+  out.still_ratio = still_ratio;
+  out.turn_ratio = turn_ratio;
+  data.still_scale = std::max(1.0, still_ratio);
+  data.motion_scale = std::max(1.0, turn_ratio);
+  Solution& s = out.solution;
+  if (options.estimator == GyroEstimator::kJoint) {
+    const internal::ImuJointData joint = JointData(data, positions, accel_cal);
+    internal::ImuJointFit fit =
+        internal::FitImuJoint(joint, accel_cal.params, two.params, FitOptions());
+    RequireConverged(fit.summary);
+    if (options.validate && options.heldout_refits) {
+      for (std::size_t k = 0; k < data.motions.size(); ++k) {
+        internal::ImuJointData without = joint;
+        without.gyro.motion_used.assign(data.motions.size(), true);
+        without.gyro.motion_used[k] = false;
+        const internal::ImuJointFit held =
+            internal::FitImuJoint(without, fit.accel, fit.gyro, FitOptions());
+        RequireConverged(held.summary);
+        out.heldout.push_back(AngleError(data, data.motions[k], held.gyro, held.directions));
+      }
+    } else if (options.validate) {
+      for (const internal::ImuJointFit& held : internal::HeldOutMotionFits(joint, fit)) {
+        const GyroMotion& m = data.motions[out.heldout.size()];
+        out.heldout.push_back(AngleError(data, m, held.gyro, held.directions));
+      }
+    }
+    s.gyro = fit.gyro;
+    s.directions = fit.directions;
+    s.summary = fit.summary;
+    s.joint = std::move(fit);
+  } else {
+    internal::GyroFit fit = internal::FitGyro(data, two.params, FitOptions());
+    RequireConverged(fit.summary);
+    if (options.validate && options.heldout_refits) {
+      for (std::size_t k = 0; k < data.motions.size(); ++k) {
+        GyroFitData without = data;
+        without.motion_used.assign(data.motions.size(), true);
+        without.motion_used[k] = false;
+        const internal::GyroFit held = internal::FitGyro(without, fit.params, FitOptions());
+        RequireConverged(held.summary);
+        out.heldout.push_back(AngleError(data, data.motions[k], held.params, data.directions));
+      }
+    } else if (options.validate) {
+      for (const GyroParameters& held : internal::HeldOutMotionFits(data, fit.params)) {
+        const GyroMotion& m = data.motions[out.heldout.size()];
+        out.heldout.push_back(AngleError(data, m, held, data.directions));
+      }
+    }
+    s.gyro = fit.params;
+    s.directions = data.directions;
+    s.summary = std::move(fit.summary);
+  }
+  out.data = std::move(data);
+  return out;
+}
+
+double RmsDeg(const std::vector<double>& rad) {
+  double sum = 0;
+  for (double e : rad) sum += e * e;
+  return std::sqrt(sum / static_cast<double>(rad.size())) * kRadToDeg;
+}
+
+}  // namespace
+
+GyroCalibration CalibrateGyro(const RawLog& accel, const RawLog& gyro,
+                              const std::vector<Position>& positions,
+                              const CalibrationResult& accel_cal,
+                              const GyroCalibrationOptions& options) {
+  if (!options.model && !options.validate) {
+    throw std::invalid_argument("CalibrateGyro: the automatic model choice needs validation");
+  }
+  CheckSameClock(accel, gyro);
+  Built built = BuildData(accel, gyro, positions, accel_cal, options);
+  GyroFitData& data = built.data;
+  const std::size_t needed = 6;
+  if (data.motions.size() < needed) {
+    throw DataError(std::to_string(data.motions.size()) +
+                    " turns between still positions; the gyroscope's K_g (9 parameters, 2 from "
+                    "each turn) needs at least " +
+                    std::to_string(needed));
+  }
+  std::optional<double> scale;
+  if (options.unit == GyroUnit::kRadPerSecond) scale = 1.0;
+  if (options.unit == GyroUnit::kDegPerSecond) scale = kRadToDeg;
+  const GyroParameters start = internal::GyroStart(data, scale);
+  CheckExcitation(data, data, start);
+
+  std::vector<ModelFit> fits;
+  if (options.model) {
+    fits.push_back(FitModel(data, *options.model, positions, accel_cal, options, start));
+  } else {
+    // The g-sensitive model from the linear one's solution (G = 0): a few steps, where the
+    // closed-form start takes several more.
+    fits.push_back(FitModel(data, GyroModelKind::kLinear, positions, accel_cal, options, start));
+    fits.push_back(FitModel(data, GyroModelKind::kGSensitive, positions, accel_cal, options,
+                            fits[0].solution.gyro));
+  }
+  std::size_t chosen = 0;
+  GyroCalibration result;
+  if (options.model) {
+    result.model_reason = "given";
+  } else {
+    // The paired comparison of the held-out errors, turn by turn (as the accelerometer's
+    // automatic model choice): d_k = e_lin,k² − e_gs,k², g-sensitive when mean(d) exceeds
+    // t_{n−1}(0.95) · sd(d)/√n.
+    const std::size_t n = fits[0].heldout.size();
+    double mean = 0, var = 0;
+    for (std::size_t k = 0; k < n; ++k) {
+      mean += fits[0].heldout[k] * fits[0].heldout[k] - fits[1].heldout[k] * fits[1].heldout[k];
+    }
+    mean /= static_cast<double>(n);
+    for (std::size_t k = 0; k < n; ++k) {
+      const double d =
+          fits[0].heldout[k] * fits[0].heldout[k] - fits[1].heldout[k] * fits[1].heldout[k];
+      var += (d - mean) * (d - mean);
+    }
+    const double se = std::sqrt(var / static_cast<double>(n - 1) / static_cast<double>(n));
+    const double threshold =
+        internal::StudentTTwoSidedQuantile(0.10, static_cast<double>(n - 1)) * se;
+    chosen = mean > threshold ? 1 : 0;
+    result.model_reason = internal::Format(
+        "held-out RMS %.3g° (linear) against %.3g° (g-sensitive); the mean of the paired "
+        "differences of squares %.3g deg² %s the threshold %.3g deg² (t · standard error)",
+        RmsDeg(fits[0].heldout), RmsDeg(fits[1].heldout), mean * kRadToDeg * kRadToDeg,
+        chosen == 1 ? "exceeds" : "does not exceed", threshold * kRadToDeg * kRadToDeg);
+  }
+  const ModelFit& f = fits[chosen];
+  result.model = f.kind;
+  result.estimator = options.estimator;
+  result.unit = options.unit;
+  result.params = f.solution.gyro;
+  result.noise_sigma_raw = data.noise_sigma_raw;
+  result.still_scatter_ratio = f.still_ratio;
+  result.rotation_scatter_ratio = f.turn_ratio;
+  for (const GyroStill& s : data.stills) result.still_mean_raw.push_back(s.mean_raw);
+  result.rotations = built.rotations;
+  std::vector<double> errors;
+  for (std::size_t k = 0; k < f.data.motions.size(); ++k) {
+    const GyroMotion& m = f.data.motions[k];
+    errors.push_back(AngleError(f.data, m, f.solution.gyro, f.solution.directions));
+    result.rotations[k].residual_deg = errors.back() * kRadToDeg;
+    const Mat33 R =
+        IntegrateCalibratedRate(f.solution.gyro, f.kind, m.t_s, m.raw, m.f, f.data.rule);
+    result.rotations[k].angle_deg = so3::Log(R).norm() * kRadToDeg;
+    if (!f.heldout.empty()) result.rotations[k].heldout_deg = f.heldout[k] * kRadToDeg;
+  }
+  result.rms_deg = RmsDeg(errors);
+  if (!f.heldout.empty()) result.heldout_rms_deg = RmsDeg(f.heldout);
+  const internal::LeastSquaresSummary& sum = f.solution.summary;
+  const int pa = f.solution.joint ? f.solution.joint->accel_parameters : 0;
+  const int pg = NumGyroParameters(f.kind);
+  if (sum.information.rows() > 0 && sum.degrees_of_freedom > 0) {
+    const Eigen::MatrixXd C = sum.information.inverse() * std::max(1.0, sum.sigma2);
+    result.covariance = C.block(pa, pa, pg, pg);
+    if (f.solution.joint) {
+      CalibrationResult a = accel_cal;
+      a.params = f.solution.joint->accel;
+      a.directions = f.solution.directions;
+      for (std::size_t k = 0; k < a.residuals.size(); ++k) {
+        a.residuals[k] =
+            positions[k].mean - PredictRaw(a.params, Vec3(a.gravity * a.directions[k]));
+      }
+      a.covariance = C.block(0, 0, pa, pa);
+      result.accelerometer = std::move(a);
+    }
+  }
+  result.summary.iterations = sum.iterations;
+  result.summary.termination = sum.termination;
+  result.summary.termination_message = sum.termination_message;
+  result.summary.initial_cost = sum.initial_cost;
+  result.summary.final_cost = sum.final_cost;
+  return result;
+}
+
+}  // namespace accelcal

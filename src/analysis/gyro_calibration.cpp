@@ -62,17 +62,19 @@ void CheckSameClock(const RawLog& accel, const RawLog& gyro) {
   }
 }
 
-// The times the rates are integrated at: the timestamps when every step is positive, else
-// (timestamps coarser than the samples, repeated) the sample index at the log's rate.
-std::vector<double> IntegrationTimes(const RawLog& log) {
+// The times the rates are integrated at: the gyro's timestamps when every step is positive, else
+// (timestamps coarser than the samples, repeated) the sample index at the log's rate; the
+// accelerometer's (the same clock) when the gyro's log has no time column.
+std::vector<double> IntegrationTimes(const RawLog& gyro, const RawLog& accel) {
+  const RawLog& log = gyro.time_s.empty() && !gyro.rate_hz ? accel : gyro;
   bool increasing = !log.time_s.empty();
   for (std::size_t k = 1; increasing && k < log.time_s.size(); ++k) {
     increasing = log.time_s[k] > log.time_s[k - 1];
   }
   if (increasing) return log.time_s;
   if (!log.rate_hz || !(*log.rate_hz > 0)) {
-    throw DataError("the gyroscope's log " + log.source +
-                    " has no sample rate: the rates cannot be integrated");
+    throw DataError("the log " + log.source +
+                    " has no time column and no sample rate: the rates cannot be integrated");
   }
   std::vector<double> t(log.samples.size());
   for (std::size_t k = 0; k < t.size(); ++k) t[k] = static_cast<double>(k) / *log.rate_hz;
@@ -142,14 +144,16 @@ Built BuildData(const RawLog& accel, const RawLog& gyro, const std::vector<Posit
         data.noise_sigma_raw / std::sqrt(static_cast<double>(counts[i]));
   }
   // The turns: from the last sample of one interval to the first of the next.
-  const std::vector<double> t = IntegrationTimes(gyro);
+  const std::vector<double> t = IntegrationTimes(gyro, accel);
   Vec3 lo = gyro.samples.front(), hi = lo;
   for (const Vec3& s : gyro.samples) {
     lo = lo.cwiseMin(s);
     hi = hi.cwiseMax(s);
   }
-  const double typical_step =
-      gyro.time ? gyro.time->typical_step_s : (gyro.rate_hz ? 1.0 / *gyro.rate_hz : 0.0);
+  const double typical_step = gyro.time      ? gyro.time->typical_step_s
+                              : accel.time   ? accel.time->typical_step_s
+                              : gyro.rate_hz ? 1.0 / *gyro.rate_hz
+                                             : 0.0;
   for (std::size_t i = 0; i + 1 < m; ++i) {
     GyroMotion motion;
     motion.from = i;
@@ -309,12 +313,15 @@ struct ModelFit {
   Solution solution;
   GyroFitData data;
   double still_ratio = 1, turn_ratio = 1;
-  std::vector<double> heldout;  // per turn [rad], empty without validation
+  std::vector<double> heldout;                       // per turn [rad], empty without validation
+  std::optional<internal::ImuJointData> joint_data;  // the joint estimator's problem
 };
 
 void RequireConverged(const internal::LeastSquaresSummary& summary) {
   if (!summary.converged()) {
-    throw DataError("the gyroscope's fit did not converge: " + summary.termination_message);
+    throw DataError("the gyroscope's fit did not converge (" + summary.termination_message +
+                    "): are these the gyroscope's rates, recorded through the accelerometer's "
+                    "positions?");
   }
 }
 
@@ -362,6 +369,7 @@ ModelFit FitModel(GyroFitData data, GyroModelKind kind, const std::vector<Positi
     s.directions = fit.directions;
     s.summary = fit.summary;
     s.joint = std::move(fit);
+    out.joint_data = joint;
   } else {
     internal::GyroFit fit = internal::FitGyro(data, two.params, FitOptions());
     RequireConverged(fit.summary);
@@ -416,6 +424,19 @@ GyroCalibration CalibrateGyro(const RawLog& accel, const RawLog& gyro,
   std::optional<double> scale;
   if (options.unit == GyroUnit::kRadPerSecond) scale = 1.0;
   if (options.unit == GyroUnit::kDegPerSecond) scale = kRadToDeg;
+  // A declared unit must agree with the angles turned. The closed-form scale takes each turn as
+  // the smallest that joins the two directions, so it overestimates (by 16 % on the T265
+  // recording, 63 % on the Xsens one, whose turns are not the shortest): a declared scale from a
+  // fifth of it to 1.25 times it is accepted; a misread unit is a factor of 57 or more.
+  const double turned_scale = internal::GyroStart(data, std::nullopt).K(0, 0);
+  if (scale && !(*scale >= 0.2 * turned_scale && *scale <= 1.25 * turned_scale)) {
+    throw DataError(internal::Format(
+        "the rates read in %s turn the sensor %.3g times the angles the accelerometer sees "
+        "between its positions: the gyroscope's unit is not %s (taking each turn as the "
+        "shortest, its readings are at most about %.4g per rad/s)",
+        std::string(ToString(options.unit)).c_str(), turned_scale / *scale,
+        std::string(ToString(options.unit)).c_str(), turned_scale));
+  }
   const GyroParameters start = internal::GyroStart(data, scale);
   CheckExcitation(data, data, start);
 
@@ -495,6 +516,27 @@ GyroCalibration CalibrateGyro(const RawLog& accel, const RawLog& gyro,
             positions[k].mean - PredictRaw(a.params, Vec3(a.gravity * a.directions[k]));
       }
       a.covariance = C.block(0, 0, pa, pa);
+      // The summary stays the accelerometer's own fit's (its cost is in raw², the joint fit's
+      // is whitened: the gyroscope's summary).
+      a.summary.initialization_note +=
+          std::string(a.summary.initialization_note.empty() ? "" : "; ") +
+          "refitted jointly with the gyroscope's rotations (see its solver)";
+      // Held out as the accelerometer's own fit is: |f_k| − g of each position under the joint
+      // fit without its reading (to first order, LeaveOneBlockOut).
+      a.crossval_errors.clear();
+      a.crossval_rms.reset();
+      if (options.validate) {
+        for (const internal::ImuJointFit& held :
+             internal::HeldOutPositionFits(*f.joint_data, *f.solution.joint)) {
+          const std::size_t k = a.crossval_errors.size();
+          const std::optional<Vec3> force = SpecificForce(held.accel, positions[k].mean);
+          a.crossval_errors.push_back(force ? force->norm() - a.gravity : std::nan(""));
+        }
+        a.crossval_rms = Rms(a.InFit(a.crossval_errors));
+        a.crossval_note.clear();
+      } else {
+        a.crossval_note = "not validated";
+      }
       result.accelerometer = std::move(a);
     }
   }

@@ -169,7 +169,10 @@ ImuJointFit FitImuJoint(const ImuJointData& data, const ModelParameters& accel_s
   return fit;
 }
 
-std::vector<ImuJointFit> HeldOutMotionFits(const ImuJointData& data, const ImuJointFit& fit) {
+namespace {
+
+std::vector<ImuJointFit> HeldOutFits(const ImuJointData& data, const ImuJointFit& fit,
+                                     bool motions) {
   const JointProblem problem(data);
   LeastSquaresState state;
   state.x = Start(data, fit.accel, fit.gyro);
@@ -180,14 +183,28 @@ std::vector<ImuJointFit> HeldOutMotionFits(const ImuJointData& data, const ImuJo
   state.y.assign(static_cast<std::size_t>(problem.NumBlocks()), Eigen::VectorXd());
   std::vector<int> blocks;
   const int m = static_cast<int>(data.accel_means.size());
-  for (std::size_t k = 0; k < data.gyro.motions.size(); ++k) {
-    blocks.push_back(2 * m + static_cast<int>(k));
+  if (motions) {
+    for (std::size_t k = 0; k < data.gyro.motions.size(); ++k) {
+      blocks.push_back(2 * m + static_cast<int>(k));
+    }
+  } else {
+    for (int k = 0; k < m; ++k) blocks.push_back(k);
   }
   std::vector<ImuJointFit> out;
   for (const Eigen::VectorXd& x : LeaveOneBlockOut(problem, state, blocks)) {
     out.push_back(FromState(data, problem, x));
   }
   return out;
+}
+
+}  // namespace
+
+std::vector<ImuJointFit> HeldOutMotionFits(const ImuJointData& data, const ImuJointFit& fit) {
+  return HeldOutFits(data, fit, true);
+}
+
+std::vector<ImuJointFit> HeldOutPositionFits(const ImuJointData& data, const ImuJointFit& fit) {
+  return HeldOutFits(data, fit, false);
 }
 
 GroupCosts JointGroupCosts(const ImuJointData& data, const ImuJointFit& fit) {

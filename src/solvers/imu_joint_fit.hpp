@@ -48,6 +48,9 @@ ImuJointFit FitImuJoint(const ImuJointData& data, const ModelParameters& accel_s
 /// For each motion, the joint fit without it to first order from the converged `fit`
 /// (LeaveOneBlockOut, least_squares.hpp); summaries empty.
 std::vector<ImuJointFit> HeldOutMotionFits(const ImuJointData& data, const ImuJointFit& fit);
+/// The same for each position's accelerometer reading (a position left out of the fit keeps the
+/// full fit).
+std::vector<ImuJointFit> HeldOutPositionFits(const ImuJointData& data, const ImuJointFit& fit);
 
 /// The three groups' sums of squared residuals (accelerometer, stills, turns) at a fit.
 struct GroupCosts {

@@ -18,6 +18,7 @@
 #include "accelcal/calibrate.hpp"
 #include "accelcal/diagnosis.hpp"
 #include "accelcal/gravity.hpp"
+#include "accelcal/gyro_calibration.hpp"
 #include "accelcal/load_positions.hpp"
 #include "accelcal/model_selection.hpp"
 #include "accelcal/positions.hpp"
@@ -76,6 +77,11 @@ struct CalibrationFileInfo {
   /// and the model selection (without the log's findings).
   const Diagnosis* diagnosis = nullptr;
   Provenance provenance;  ///< accelcal_version is ignored: Version() is written
+  /// The gyroscope calibrated from the same recording, written as `sensors.gyroscope`; its log's
+  /// name and the label of its raw unit.
+  const GyroCalibration* gyroscope = nullptr;
+  std::string gyro_source;
+  std::string gyro_raw_unit = "raw";
 };
 
 /// Serialises a calibration as a version-2 document (json_text.hpp's layout, trailing newline).
@@ -129,6 +135,9 @@ struct LoadedCalibration {
   /// `diagnostics`; none in a file written before diagnoses existed.
   std::optional<std::vector<Finding>> diagnostics;
   Provenance provenance;  ///< version 2; empty in version 1
+  /// The file holds `sensors.gyroscope` (version 2): read only so far, so that a command that
+  /// uses the accelerometer alone can say what it leaves out.
+  bool has_gyroscope = false;
 };
 
 /// Parses a calibration file's text (version 1 or 2); throws InputError naming `source` for

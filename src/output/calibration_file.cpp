@@ -189,6 +189,83 @@ ordered_json AccelerometerSection(const CalibrationResult& result, const Calibra
   return doc;
 }
 
+ordered_json ToJson(const Eigen::MatrixXd& m) {
+  ordered_json rows = ordered_json::array();
+  for (Eigen::Index i = 0; i < m.rows(); ++i) {
+    ordered_json row = ordered_json::array();
+    for (Eigen::Index j = 0; j < m.cols(); ++j) row.push_back(m(i, j));
+    rows.push_back(row);
+  }
+  return rows;
+}
+
+// The gyroscope's section (issue 18): its model, parameters, their uncertainty, the rotations.
+ordered_json GyroscopeSection(const GyroCalibration& g, const CalibrationFileInfo& info) {
+  ordered_json doc;
+  doc["model"] = std::string(ToString(g.model));
+  doc["model_reason"] = g.model_reason;
+  doc["estimator"] = std::string(ToString(g.estimator));
+  doc["units"] = {{"raw", info.gyro_raw_unit},
+                  {"raw_declared", std::string(ToString(g.unit))},
+                  {"rate", "rad/s"},
+                  {"specific_force", std::string(ToString(info.unit))}};
+  doc["equation"] =
+      "w_raw = K w + b + G f; w_raw raw, w the body rate [rad/s] and f the specific force in the "
+      "accelerometer's body frame";
+  doc["K"] = ToJson(g.params.K);
+  doc["bias"] = ToJson(g.params.bias);
+  doc["g_sensitivity"] =
+      g.model == GyroModelKind::kGSensitive ? ToJson(g.params.G) : ordered_json(nullptr);
+  ordered_json order = ordered_json::array();
+  for (const GyroParameterSlot& s : GyroParameterSlots(g.model))
+    order.push_back(std::string(s.name));
+  doc["parameter_order"] = order;
+  if (g.covariance.size() > 0) {
+    const GyroParameters sd =
+        UnpackGyro(g.covariance.diagonal().cwiseMax(0.0).cwiseSqrt(), g.model);
+    doc["std"] = {{"K", ToJson(sd.K)},
+                  {"bias", ToJson(sd.bias)},
+                  {"g_sensitivity",
+                   g.model == GyroModelKind::kGSensitive ? ToJson(sd.G) : ordered_json(nullptr)}};
+    doc["covariance"] = ToJson(g.covariance);
+  } else {
+    doc["std"] = nullptr;
+    doc["covariance"] = nullptr;
+  }
+  ordered_json scale = ordered_json::array();
+  for (int i = 0; i < 3; ++i) scale.push_back(g.params.K.row(i).norm());
+  doc["engineering"] = {{"scale_factor_raw_per_rad_s", scale}};
+  doc["noise"] = {{"sigma_raw_per_sample", ToJson(g.noise_sigma_raw)},
+                  {"still_scatter_ratio", g.still_scatter_ratio},
+                  {"rotation_scatter_ratio", g.rotation_scatter_ratio}};
+  ordered_json stills = ordered_json::array();
+  for (const Vec3& m : g.still_mean_raw) stills.push_back(ToJson(m));
+  doc["still_mean_raw"] = stills;
+  ordered_json rotations = ordered_json::array();
+  for (const GyroRotation& r : g.rotations) {
+    rotations.push_back({{"from", r.from + 1},
+                         {"to", r.to + 1},
+                         {"first_sample", r.first_sample},
+                         {"last_sample", r.last_sample},
+                         {"duration_s", r.duration_s},
+                         {"angle_deg", r.angle_deg},
+                         {"residual_deg", r.residual_deg},
+                         {"heldout_deg", Nullable(r.heldout_deg)},
+                         {"excluded", false}});
+  }
+  doc["rotations"] = rotations;
+  doc["validation"] = {{"rms_deg", g.rms_deg}, {"heldout_rms_deg", Nullable(g.heldout_rms_deg)}};
+  const Summary& s = g.summary;
+  doc["solver"] = {{"iterations", s.iterations},
+                   {"converged", s.converged()},
+                   {"termination", std::string(ToString(s.termination))},
+                   {"termination_message", s.termination_message},
+                   {"initial_cost", s.initial_cost},
+                   {"cost", s.final_cost}};
+  doc["source"] = info.gyro_source;
+  return doc;
+}
+
 ordered_json ProvenanceSection(const Provenance& provenance) {
   ordered_json doc;
   doc["accelcal_version"] = std::string(Version());
@@ -227,6 +304,8 @@ std::string CalibrationToJson(const CalibrationResult& result, const Calibration
   // The unit's verdict: the worst of its sensors' (one sensor today).
   doc["verdict"] = std::string(ToString(diagnosis.verdict()));
   doc["sensors"] = {{"accelerometer", AccelerometerSection(result, info, diagnosis)}};
+  if (info.gyroscope != nullptr)
+    doc["sensors"]["gyroscope"] = GyroscopeSection(*info.gyroscope, info);
   doc["provenance"] = ProvenanceSection(info.provenance);
   // Labels and paths are bytes from a command line: one that is no UTF-8 (a Latin-1 file name)
   // becomes U+FFFD (JsonText), which JSON can hold, rather than no file at all.

@@ -369,6 +369,7 @@ LoadedCalibration ParseCalibrationDocument(const ordered_json& doc, const std::s
   const std::string unit_verdict = CheckedVerdict(top, doc);
   if (VerdictRank(unit_verdict) > VerdictRank(cal.verdict)) cal.verdict = unit_verdict;
   ReadProvenance(top, doc, cal.provenance);
+  cal.has_gyroscope = sensors.contains("gyroscope");
   return cal;
 }
 

@@ -448,6 +448,11 @@ std::string Render(const ReportInput& input) {
     for (const std::string& n : notes) html += "<li>" + Escape(n) + "</li>\n";
     html += "</ul>\n";
   }
+  if (d.cal.has_gyroscope) {
+    html +=
+        "<p>The file also holds a gyroscope calibration (<code>sensors.gyroscope</code>); "
+        "this report shows the accelerometer only, so far.</p>\n";
+  }
   html += "</section>\n<section><h2>Parameters</h2>\n" + ParameterTable(d) + "</section>\n";
   html += "<section><h2>Raw signal and static intervals</h2>\n";
   if (input.log != nullptr && !input.log->samples.empty()) {

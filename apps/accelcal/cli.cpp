@@ -166,6 +166,30 @@ int accelcal::cli::RunCommandLine(int argc, char** argv) {
                           "known orientation of every position, in order (a file of directions or "
                           "attitudes, as for design): full misalignment in the platform frame, "
                           "paper 003");
+    calibrate->add_option("--gyro", cal.gyro,
+                          "the gyroscope's log, recorded with the accelerometer on the same clock "
+                          "(a rate sample at each accelerometer sample's time): calibrates it too");
+    calibrate
+        ->add_option("--gyro-columns", cal.gyro_columns,
+                     "the gyroscope's x,y,z (or time,x,y,z) columns, in INPUT itself or in the "
+                     "--gyro log: 1-based column numbers or header names")
+        ->delimiter(',');
+    calibrate
+        ->add_option("--gyro-units", cal.gyro_units,
+                     "the gyro's raw unit, for the start of its fit: rad/s, deg/s, or raw "
+                     "(counts: the scale starts from the turned angles)")
+        ->capture_default_str();
+    calibrate
+        ->add_option("--gyro-model", cal.gyro_model,
+                     "linear (K, b), g-sensitive (K, b and a rate bias in proportion to the "
+                     "specific force), or auto (the one that predicts held-out rotations better)")
+        ->capture_default_str();
+    calibrate
+        ->add_option("--gyro-estimator", cal.gyro_estimator,
+                     "joint (both sensors and every gravity direction in one fit: the rotations "
+                     "also calibrate the accelerometer) or two-stage (the accelerometer's "
+                     "calibration held)")
+        ->capture_default_str();
     calibrate->add_flag("!--no-crossval", cal.cross_validate,
                         "skip the leave-one-position-out validation (one refit per position)");
     calibrate->add_option("--raw-units", cal.raw_units, "label of the raw unit (e.g. counts)")

@@ -12,6 +12,7 @@
 #include <stdexcept>
 
 #include "accelcal/engineering.hpp"
+#include "accelcal/gyro_calibration.hpp"
 #include "accelcal/known_orientation.hpp"
 #include "accelcal/orientation_file.hpp"
 #include "accelcal/report.hpp"
@@ -203,10 +204,115 @@ void PrintFindings(const Diagnosis& diagnosis, const std::string& path) {
   }
 }
 
+// The gyroscope read and calibrated beside the accelerometer (calibrate --gyro / --gyro-columns).
+struct GyroRun {
+  std::string path;
+  InputData data;
+  GyroCalibration calibration;
+};
+
+bool GyroWanted(const CalibrateArgs& args) {
+  return !args.gyro.empty() || !args.gyro_columns.empty();
+}
+
+// The gyro's columns: as given, with the accelerometer's time column in front when the rates
+// are in INPUT itself and the accelerometer's columns name a time column.
+std::vector<std::string> GyroColumns(const CalibrateArgs& args) {
+  std::vector<std::string> columns = args.gyro_columns;
+  if (args.gyro.empty() && columns.size() == 3 && args.input.columns.size() == 4) {
+    columns.insert(columns.begin(), args.input.columns.front());
+  }
+  return columns;
+}
+
+GyroCalibrationOptions GyroOptions(const CalibrateArgs& args) {
+  GyroCalibrationOptions o;
+  o.unit = ParseChoice<GyroUnit>(args.gyro_units, "--gyro-units");
+  o.estimator = ParseChoice<GyroEstimator>(args.gyro_estimator, "--gyro-estimator");
+  if (args.gyro_model != "auto") {
+    o.model = ParseEnum(GyroModelKindFromString(args.gyro_model), args.gyro_model, "--gyro-model",
+                        (NameList<GyroModelKind>() + ", auto").c_str());
+  } else if (!args.cross_validate) {
+    throw UsageError(
+        "--gyro-model auto decides on held-out rotations: it needs the validation that "
+        "--no-crossval turns off");
+  }
+  o.validate = args.cross_validate;
+  return o;
+}
+
+GyroRun RunGyro(const CalibrateArgs& args, const LoadedInput& in, const CalibrationResult& accel) {
+  const GyroCalibrationOptions options = GyroOptions(args);
+  if (in.files.size() != 1 || in.files.front().data.kind != InputKind::kRaw) {
+    throw UsageError(
+        "the gyroscope is calibrated from one raw log (its turns between the positions): give "
+        "one INPUT that is a raw log");
+  }
+  if (args.gyro_columns.size() != 0 && args.gyro_columns.size() != 3 &&
+      args.gyro_columns.size() != 4) {
+    throw UsageError("--gyro-columns takes x,y,z or time,x,y,z");
+  }
+  GyroRun run;
+  run.path = args.gyro.empty() ? args.input.path : args.gyro;
+  ReadOptions read = MakeReadOptions(args.input);
+  read.kind = InputKind::kRaw;
+  read.columns = GyroColumns(args);
+  read.fingerprint = !args.gyro.empty();  // INPUT itself is in the provenance already
+  if (args.gyro.empty() && args.input.path == "-") {
+    throw UsageError("--gyro-columns reads INPUT a second time: it cannot be standard input");
+  }
+  try {
+    run.data = ReadInput(run.path, read);
+  } catch (const DataError& e) {
+    throw InputError(run.path, 0, e.what());
+  }
+  run.calibration =
+      CalibrateGyro(in.files.front().data.raw, run.data.raw, in.positions, accel, options);
+  return run;
+}
+
+void PrintGyro(const GyroRun& run, const std::string& raw_unit, const char* force_unit) {
+  const GyroCalibration& g = run.calibration;
+  const auto& slots = GyroParameterSlots(g.model);
+  const bool have_std = g.covariance.size() > 0;
+  Say("\ngyroscope %s: %zu samples; model %s (%s), %s fit, w_raw = K w + b + G f\n",
+      run.path.c_str(), run.data.raw.samples.size(), std::string(ToString(g.model)).c_str(),
+      g.model_reason.c_str(), std::string(ToString(g.estimator)).c_str());
+  Say("parameters (K in %s per rad/s, b in %s, G in %s per %s; +- 1 sigma)\n", raw_unit.c_str(),
+      raw_unit.c_str(), raw_unit.c_str(), force_unit);
+  const Eigen::VectorXd theta = Pack(g.params, g.model);
+  for (std::size_t i = 0; i < slots.size(); ++i) {
+    const auto idx = static_cast<Eigen::Index>(i);
+    if (have_std) {
+      Say("  %-6s %18.10g +- %.3g\n", std::string(slots[i].name).c_str(), theta(idx),
+          std::sqrt(g.covariance(idx, idx)));
+    } else {
+      Say("  %-6s %18.10g\n", std::string(slots[i].name).c_str(), theta(idx));
+    }
+  }
+  Say("  scale factor (row norms of K)  %.8g  %.8g  %.8g  %s per rad/s\n", g.params.K.row(0).norm(),
+      g.params.K.row(1).norm(), g.params.K.row(2).norm(), raw_unit.c_str());
+  Say("  rate noise  %.4g  %.4g  %.4g  %s per sample; scatter ratios: stills %.3g, rotations "
+      "%.3g\n",
+      g.noise_sigma_raw(0), g.noise_sigma_raw(1), g.noise_sigma_raw(2), raw_unit.c_str(),
+      g.still_scatter_ratio, g.rotation_scatter_ratio);
+  Say("\nrotations (angle turned, and the angle between the gravity direction it predicts and the "
+      "one fitted; deg)\n");
+  Say("  %5s %5s %9s %9s %10s %10s\n", "from", "to", "time [s]", "angle", "residual", "held-out");
+  for (const GyroRotation& r : g.rotations) {
+    Say("  %5zu %5zu %9.3f %9.2f %10.4f %10.4f\n", r.from + 1, r.to + 1, r.duration_s, r.angle_deg,
+        r.residual_deg, r.heldout_deg);
+  }
+  Say("rms direction error %.4f deg; held out %.4f deg (each rotation predicted by a fit without "
+      "it)\n",
+      g.rms_deg, g.heldout_rms_deg);
+  Say("solver    %s\n", g.summary.termination_message.c_str());
+}
+
 // The file's provenance: the options given, every input file (with the orientations) by name, size
 // and SHA-256 of the bytes read, and the date when one was given.
 Provenance MakeProvenance(const CalibrateArgs& args, const LoadedInput& in,
-                          const OrientationFile* orientations) {
+                          const OrientationFile* orientations, const GyroRun* gyro) {
   Provenance provenance;
   provenance.command = "accelcal calibrate";
   for (const auto& [name, values] : args.given_options) {
@@ -218,6 +324,9 @@ Provenance MakeProvenance(const CalibrateArgs& args, const LoadedInput& in,
   if (orientations != nullptr) {
     provenance.inputs.push_back({args.orientations, orientations->bytes, orientations->sha256});
   }
+  if (gyro != nullptr && !args.gyro.empty()) {
+    provenance.inputs.push_back({gyro->path, gyro->data.bytes, gyro->data.sha256});
+  }
   provenance.date = args.date;
   return provenance;
 }
@@ -226,7 +335,8 @@ Provenance MakeProvenance(const CalibrateArgs& args, const LoadedInput& in,
 // (`input_note`, when not empty, printed after the input's description).
 int WriteCalibration(const CalibrateArgs& args, const LoadedInput& in, const Gravity& g,
                      const CalibrationResult& result, const ModelSelection* selection,
-                     const std::string& input_note, const OrientationFile* orientations = nullptr) {
+                     const std::string& input_note, const OrientationFile* orientations = nullptr,
+                     const GyroRun* gyro = nullptr) {
   DiagnosisInput diagnosis_input;
   diagnosis_input.result = &result;
   diagnosis_input.positions = &in.positions;
@@ -257,7 +367,13 @@ int WriteCalibration(const CalibrateArgs& args, const LoadedInput& in, const Gra
   info.model_selection = selection;
   info.model_requested = args.model;
   info.diagnosis = &diagnosis;
-  info.provenance = MakeProvenance(args, in, orientations);
+  info.provenance = MakeProvenance(args, in, orientations, gyro);
+  if (gyro != nullptr) {
+    info.gyroscope = &gyro->calibration;
+    info.gyro_source = gyro->path;
+    info.gyro_raw_unit =
+        gyro->calibration.unit == GyroUnit::kRaw ? args.raw_units : args.gyro_units;
+  }
   const std::string json = CalibrationToJson(result, info);
   // Everything is rendered before anything is written: a failure leaves no file behind.
   std::string report;
@@ -294,6 +410,10 @@ int WriteCalibration(const CalibrateArgs& args, const LoadedInput& in, const Gra
     Say("%s", input_note.c_str());
     PrintCalibration(result, in.positions, in.position_file, g, args.raw_units);
     if (selection) PrintModelSelection(*selection, args.model == "auto");
+    if (gyro != nullptr) {
+      PrintGyro(*gyro, gyro->calibration.unit == GyroUnit::kRaw ? args.raw_units : args.gyro_units,
+                g.unit == ForceUnit::kMetersPerSecond2 ? "m/s2" : "g");
+    }
     for (const Finding& f : diagnosis.findings) {
       if (f.severity == Severity::kNote) Say("note      %s\n", f.message.c_str());
     }
@@ -354,9 +474,16 @@ int RunCalibrate(const CalibrateArgs& args) {
     std::vector<std::string> inputs = args.input.more_paths;
     inputs.push_back(args.input.path);
     inputs.push_back(args.orientations);
+    inputs.push_back(args.gyro);
     CheckOutputs({{"-o", args.output}, {"--report", args.report}}, inputs);
   }
-  if (!args.orientations.empty()) return RunCalibrateKnownOrientations(args);
+  if (!args.orientations.empty()) {
+    if (GyroWanted(args)) {
+      throw UsageError("--gyro and --gyro-columns do not apply with --orientations");
+    }
+    return RunCalibrateKnownOrientations(args);
+  }
+  if (GyroWanted(args)) GyroOptions(args);  // usage errors before anything is read
   CalibrationOptions options;
   const bool auto_model = args.model == "auto";
   options.model = auto_model ? ModelKind::kLinear
@@ -404,6 +531,14 @@ int RunCalibrate(const CalibrateArgs& args) {
     std::fprintf(stderr, "accelcal: %s: the solver did not converge: %s; nothing written\n",
                  args.input.path.c_str(), result.summary.termination_message.c_str());
     return kExitNotConverged;
+  }
+  if (GyroWanted(args)) {
+    const GyroRun gyro = RunGyro(args, in, result);
+    // The joint fit's accelerometer is the file's: the rotations refined it.
+    const CalibrationResult& accel =
+        gyro.calibration.accelerometer ? *gyro.calibration.accelerometer : result;
+    return WriteCalibration(args, in, g, accel, selection ? &*selection : nullptr, "", nullptr,
+                            &gyro);
   }
   return WriteCalibration(args, in, g, result, selection ? &*selection : nullptr, "");
 }

@@ -22,6 +22,12 @@ int RunApply(const ApplyArgs& args) {
   const LoadedCalibration cal = ParseCalibrationJson(
       ReadFileToString(args.calibration, kMaxSmallFileBytes), args.calibration);
   RefuseFailed(cal, args.calibration);
+  if (cal.has_gyroscope) {
+    Warn(
+        "%s: its gyroscope calibration is not applied: apply corrects the accelerometer's "
+        "samples only, so far\n",
+        args.calibration.c_str());
+  }
   ForceUnit unit = cal.unit;
   if (args.units) unit = ParseChoice<ForceUnit>(*args.units, "--units");
   double factor = 1.0;  // calibration unit -> output unit
@@ -99,6 +105,12 @@ int RunExport(const ExportArgs& args) {
   const std::string text = ReadFileToString(args.calibration, kMaxSmallFileBytes);
   const LoadedCalibration cal = ParseCalibrationJson(text, args.calibration);
   RefuseFailed(cal, args.calibration);
+  if (cal.has_gyroscope && format != ExportFormat::kJson) {
+    Warn(
+        "%s: its gyroscope calibration is not exported: the %s export holds the "
+        "accelerometer's only, so far\n",
+        args.calibration.c_str(), args.format.c_str());
+  }
   ExportOptions options;
   options.raw_unit = args.raw_unit;
   options.instance = args.instance;

@@ -77,6 +77,13 @@ struct CalibrateArgs {
   std::string estimator = "ml";
   OutlierArgs outliers;
   std::string orientations;  // known orientations (orientation_file.hpp): platform-frame fit
+  // The gyroscope (gyro_calibration.hpp): its log (empty: INPUT itself when gyro_columns are
+  // given), its columns, declared unit, model and estimator.
+  std::string gyro;
+  std::vector<std::string> gyro_columns;
+  std::string gyro_units = "raw";
+  std::string gyro_model = "auto";
+  std::string gyro_estimator = "joint";
   /// Options that a known-orientation fit does not take, when given explicitly.
   std::vector<std::string> gravity_only_options;
   bool cross_validate = true;

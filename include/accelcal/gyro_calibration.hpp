@@ -72,6 +72,9 @@ struct GyroCalibrationOptions {
   /// Gauss-Newton step from the full fit (the default; within a few percent of the full refit on
   /// the bundled recordings, measured by a test).
   bool heldout_refits = false;
+  /// Threads the turns are integrated on (0: one per hardware thread); the result is the same
+  /// bits for any count.
+  int threads = 0;
 };
 
 /// One turn between consecutive still positions.

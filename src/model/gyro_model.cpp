@@ -86,7 +86,7 @@ namespace {
 // c = (θ − sin θ)/θ³. Below θ = 1/4 their Taylor series in θ² to the θ¹⁰ term (the first term
 // left out is below 1e-17 there: θ¹²/13! < 1e-17), so no sine is taken; above, so3's closed
 // forms.
-Mat33 StepExp(const Vec3& phi, Mat33* J_r) {
+inline Mat33 StepExp(const Vec3& phi, Mat33* J_r) {
   const double t = phi.squaredNorm();
   if (!(t < 0.0625)) {
     if (J_r != nullptr) *J_r = so3::RightJacobian(phi);
@@ -100,47 +100,53 @@ Mat33 StepExp(const Vec3& phi, Mat33* J_r) {
                    b4 = 1.0 / 3628800, b5 = -1.0 / 479001600;
   const double a = 1 + t * (a1 + t * (a2 + t * (a3 + t * (a4 + t * a5))));
   const double b = b0 + t * (b1 + t * (b2 + t * (b3 + t * (b4 + t * b5))));
-  const Mat33 Phi = so3::Hat(phi);
-  const Mat33 Phi2 = Phi * Phi;
+  // Φ² = φφᵀ − θ² I, so I + a Φ + b Φ² = (1 − b θ²) I + a Φ + b φφᵀ, and J_r likewise: no
+  // matrix product.
+  const double x = phi.x(), y = phi.y(), z = phi.z();
+  const auto compose = [&](double diagonal, double skew, double outer) {
+    Mat33 M;
+    M(0, 0) = diagonal + outer * x * x;
+    M(1, 1) = diagonal + outer * y * y;
+    M(2, 2) = diagonal + outer * z * z;
+    M(0, 1) = outer * x * y - skew * z;
+    M(1, 0) = outer * x * y + skew * z;
+    M(0, 2) = outer * x * z + skew * y;
+    M(2, 0) = outer * x * z - skew * y;
+    M(1, 2) = outer * y * z - skew * x;
+    M(2, 1) = outer * y * z + skew * x;
+    return M;
+  };
   if (J_r != nullptr) {
     constexpr double c0 = 1.0 / 6, c1 = -1.0 / 120, c2 = 1.0 / 5040, c3 = -1.0 / 362880,
                      c4 = 1.0 / 39916800, c5 = -1.0 / 6227020800;
     const double c = c0 + t * (c1 + t * (c2 + t * (c3 + t * (c4 + t * c5))));
-    *J_r = Mat33::Identity() - b * Phi + c * Phi2;
+    *J_r = compose(1 - c * t, -b, c);  // I − b Φ + c Φ²
   }
-  return Mat33::Identity() + a * Phi + b * Phi2;
+  return compose(1 - b * t, a, b);  // I + a Φ + b Φ²
 }
 
 }  // namespace
 
-Mat33 IntegrateCalibratedRate(const GyroParameters& params, GyroModelKind kind,
-                              const std::vector<double>& t_s, const std::vector<Vec3>& raw,
-                              const std::vector<Vec3>& f, RateInterpolation rule,
-                              Eigen::MatrixXd* J_R_theta, const Vec3* noise_sigma_raw,
-                              Mat33* covariance) {
-  if (t_s.size() != raw.size() || t_s.size() != f.size() || t_s.empty()) {
-    throw std::invalid_argument("IntegrateCalibratedRate: " + std::to_string(t_s.size()) +
-                                " times for " + std::to_string(raw.size()) + " rates and " +
-                                std::to_string(f.size()) + " specific forces");
-  }
-  const Eigen::PartialPivLU<Mat33> lu(params.K);
-  if (!(lu.determinant() != 0.0) || !std::isfinite(lu.determinant())) {
-    throw std::invalid_argument("IntegrateCalibratedRate: K_g is singular");
-  }
-  const Mat33 K_inverse = lu.inverse();
-  const int per_axis = GyroParametersPerAxis(kind);
+namespace {
+
+// The integration of IntegrateCalibratedRate for a model of `PerAxis` parameters per output axis
+// (4 or 7), in fixed-size storage: checked inputs, K_g⁻¹ given.
+template <int PerAxis>
+Mat33 Integrate(const GyroParameters& params, const Mat33& K_inverse,
+                const std::vector<double>& t_s, const std::vector<Vec3>& raw,
+                const std::vector<Vec3>& f, RateInterpolation rule, Eigen::MatrixXd* J_R_theta,
+                const Vec3* noise_sigma_raw, Mat33* covariance) {
   const bool jacobian = J_R_theta != nullptr;
   // ∂ω_k/∂θ = −K_g⁻¹ ∂ω_raw/∂θ, whose columns of axis i's group are −K_g⁻¹ e_i u_kᵀ with u_k =
   // (ω_k, 1[, f_k]) (GyroJacobianWrtParameters): each step adds to J rank-one blocks −J_r K_g⁻¹ e_i
   // ūᵀ Δt.
-  using Regressor = Eigen::Matrix<double, 1, Eigen::Dynamic, Eigen::RowMajor, 1, 7>;
+  using Regressor = Eigen::Matrix<double, 1, PerAxis>;
   const auto rate = [&](std::size_t k, Regressor* u) {
     const Vec3 omega = K_inverse * (raw[k] - params.bias - params.G * f[k]);
     if (u != nullptr) {
-      u->resize(per_axis);
-      u->head<3>() = omega.transpose();
+      u->template head<3>() = omega.transpose();
       (*u)(3) = 1.0;
-      if (kind == GyroModelKind::kGSensitive) u->tail<3>() = f[k].transpose();
+      if constexpr (PerAxis == 7) u->template tail<3>() = f[k].transpose();
     }
     return omega;
   };
@@ -153,8 +159,7 @@ Mat33 IntegrateCalibratedRate(const GyroParameters& params, GyroModelKind kind,
             : Mat33::Zero();
   Mat33 S = Mat33::Zero(), C = Mat33::Zero();  // C: sample k's C_m, so far
   Mat33 R = Mat33::Identity();
-  Eigen::Matrix<double, 3, Eigen::Dynamic, 0, 3, kMaxGyroParameters> J =
-      Eigen::MatrixXd::Zero(3, NumGyroParameters(kind));
+  Eigen::Matrix<double, 3, 3 * PerAxis> J = Eigen::Matrix<double, 3, 3 * PerAxis>::Zero();
   Regressor u_this, u_next;
   Vec3 omega_this = rate(0, jacobian ? &u_this : nullptr);
   for (std::size_t k = 0; k + 1 < t_s.size(); ++k) {
@@ -180,7 +185,9 @@ Mat33 IntegrateCalibratedRate(const GyroParameters& params, GyroModelKind kind,
       const Regressor u =
           trapezoid ? Regressor(0.5 * dt * (u_this + u_next)) : Regressor(dt * u_this);
       const Mat33 RJK = R * J_r * K_inverse;
-      for (int i = 0; i < 3; ++i) J.middleCols(i * per_axis, per_axis).noalias() -= RJK.col(i) * u;
+      for (int i = 0; i < 3; ++i) {
+        J.template middleCols<PerAxis>(i * PerAxis).noalias() -= RJK.col(i) * u;
+      }
       u_this = u_next;
     }
     omega_this = omega_next;
@@ -191,6 +198,29 @@ Mat33 IntegrateCalibratedRate(const GyroParameters& params, GyroModelKind kind,
     *covariance = R.transpose() * S * R;
   }
   return R;
+}
+
+}  // namespace
+
+Mat33 IntegrateCalibratedRate(const GyroParameters& params, GyroModelKind kind,
+                              const std::vector<double>& t_s, const std::vector<Vec3>& raw,
+                              const std::vector<Vec3>& f, RateInterpolation rule,
+                              Eigen::MatrixXd* J_R_theta, const Vec3* noise_sigma_raw,
+                              Mat33* covariance) {
+  if (t_s.size() != raw.size() || t_s.size() != f.size() || t_s.empty()) {
+    throw std::invalid_argument("IntegrateCalibratedRate: " + std::to_string(t_s.size()) +
+                                " times for " + std::to_string(raw.size()) + " rates and " +
+                                std::to_string(f.size()) + " specific forces");
+  }
+  const Eigen::PartialPivLU<Mat33> lu(params.K);
+  if (!(lu.determinant() != 0.0) || !std::isfinite(lu.determinant())) {
+    throw std::invalid_argument("IntegrateCalibratedRate: K_g is singular");
+  }
+  const Mat33 K_inverse = lu.inverse();
+  return kind == GyroModelKind::kLinear ? Integrate<4>(params, K_inverse, t_s, raw, f, rule,
+                                                       J_R_theta, noise_sigma_raw, covariance)
+                                        : Integrate<7>(params, K_inverse, t_s, raw, f, rule,
+                                                       J_R_theta, noise_sigma_raw, covariance);
 }
 
 }  // namespace accelcal

@@ -1,6 +1,7 @@
 // The gyroscope's two-stage fit (gyro_fit.hpp).
 #include "solvers/gyro_fit.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <stdexcept>
 
@@ -70,19 +71,41 @@ GyroParameters GyroStart(const GyroFitData& data, std::optional<double> scale_ra
   if (scale_raw_per_rad_s) {
     k = *scale_raw_per_rad_s;
   } else {
+    // Each turn taken about the fixed axis n = s/|s| of its bias-free raw rate summed over it
+    // (s = k θ n for K_g = k I): the angle θ about n that takes c_i to c_j, read from their
+    // projections on the plane ⟂ n, gives k = |s|/θ; the median over the turns whose directions
+    // are well off n. Without such a turn, the turned angle is taken as at least the angle
+    // between c_i and c_j: k = Σ |s_m| α_m / Σ α_m² (an overestimate when turns are longer).
+    std::vector<double> scales;
     double sa = 0, aa = 0;
     for (const GyroMotion& m : data.motions) {
-      Vec3 s = Vec3::Zero();  // the bias-free raw rate summed over the motion (trapezoidal)
+      Vec3 sum = Vec3::Zero();  // the bias-free raw rate summed over the motion (trapezoidal)
       for (std::size_t k2 = 0; k2 + 1 < m.t_s.size(); ++k2) {
-        s += 0.5 * (m.raw[k2] + m.raw[k2 + 1] - 2.0 * start.bias) * (m.t_s[k2 + 1] - m.t_s[k2]);
+        sum += 0.5 * (m.raw[k2] + m.raw[k2 + 1] - 2.0 * start.bias) * (m.t_s[k2 + 1] - m.t_s[k2]);
       }
       const Vec3& a = data.directions[m.from];
       const Vec3& b = data.directions[m.to];
       const double angle = std::atan2(a.cross(b).norm(), a.dot(b));
-      sa += s.norm() * angle;
+      sa += sum.norm() * angle;
       aa += angle * angle;
+      if (!(sum.norm() > 0)) continue;
+      const Vec3 n = sum.normalized();
+      const Vec3 pa = a - a.dot(n) * n, pb = b - b.dot(n) * n;
+      if (pa.norm() < 0.3 || pb.norm() < 0.3) continue;
+      // The body turns by θ about n, so the force direction turns by −θ: c_j = Exp(θ n)ᵀ c_i.
+      double theta = -std::atan2(n.dot(pa.cross(pb)), pa.dot(pb));
+      if (theta <= 0) theta += 2 * 3.14159265358979323846;
+      if (theta < 0.35) continue;  // under 20°: the angle is too uncertain
+      scales.push_back(sum.norm() / theta);
     }
-    if (aa > 0 && sa > 0) k = sa / aa;
+    if (!scales.empty()) {
+      std::nth_element(scales.begin(),
+                       scales.begin() + static_cast<std::ptrdiff_t>(scales.size() / 2),
+                       scales.end());
+      k = scales[scales.size() / 2];
+    } else if (aa > 0 && sa > 0) {
+      k = sa / aa;
+    }
   }
   start.K = k * Mat33::Identity();
   return start;

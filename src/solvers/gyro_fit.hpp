@@ -82,9 +82,10 @@ Eigen::Vector2d MotionResidual(const GyroFitData& data, const GyroMotion& m,
 double MotionAngleError(const GyroFitData& data, const GyroMotion& m, const GyroParameters& params);
 
 /// The start: b_g the mean of the still positions' mean rates, G = 0, and K_g = k I with k from
-/// `scale_raw_per_rad_s` when the unit is known, else in closed form from the motions: the bias-
-/// free raw rate summed over a motion is K_g φ, and a turn from c_i to c_j is at least their angle,
-/// so k = Σ |s_m| α_m / Σ α_m² (least squares of |s_m| = k α_m).
+/// `scale_raw_per_rad_s` when the unit is known, else in closed form from the turns: each taken
+/// about the fixed axis n of its bias-free raw rate summed over it, s = k θ n, with θ the angle
+/// about n that takes c_i to c_j (from their projections on the plane ⟂ n): k the median of
+/// |s|/θ over the turns whose directions lie well off n.
 GyroParameters GyroStart(const GyroFitData& data, std::optional<double> scale_raw_per_rad_s);
 
 struct GyroFit {

@@ -10,6 +10,7 @@
 #include <Eigen/Eigenvalues>
 #include <Eigen/LU>
 
+#include "core/parallel.hpp"
 #include "core/text_format.hpp"
 
 namespace accelcal::internal {
@@ -36,32 +37,67 @@ struct Linearization {
   double cost = 0;
 };
 
+// Every block's residual (and Jacobians) at `state`, on `threads` threads, each block into its
+// own slot: what is summed from them afterwards, in block order, is the same for any count.
+bool EvaluateBlocks(const LeastSquaresProblem& problem, const LeastSquaresState& state,
+                    bool jacobians, int threads, std::vector<VectorXd>* r,
+                    std::vector<MatrixXd>* J_x, std::vector<MatrixXd>* J_y) {
+  const int m = problem.NumBlocks();
+  r->resize(static_cast<std::size_t>(m));
+  if (jacobians) {
+    J_x->resize(static_cast<std::size_t>(m));
+    J_y->resize(static_cast<std::size_t>(m));
+  }
+  std::vector<char> ok(static_cast<std::size_t>(m), 0);
+  ParallelFor(m, ThreadCount(threads, m), [&](int k) {
+    const auto b = static_cast<std::size_t>(k);
+    const bool local = jacobians && problem.LocalSize(k) > 0;
+    ok[b] = problem.Evaluate(k, state.x, state.y[b], &(*r)[b], jacobians ? &(*J_x)[b] : nullptr,
+                             local ? &(*J_y)[b] : nullptr);
+  });
+  return std::all_of(ok.begin(), ok.end(), [](char v) { return v != 0; });
+}
+
 bool Linearize(const LeastSquaresProblem& problem, const LeastSquaresState& state,
-               Linearization* lin) {
+               Linearization* lin, int threads) {
   const int n = problem.GlobalSize(), m = problem.NumBlocks();
-  lin->r.resize(m);
-  lin->J_x.resize(m);
-  lin->J_y.resize(m);
   lin->B.resize(m);
   lin->D.resize(m);
   lin->gy.resize(m);
   lin->A = MatrixXd::Zero(n, n);
   lin->gx = VectorXd::Zero(n);
   lin->cost = 0;
+  if (!EvaluateBlocks(problem, state, true, threads, &lin->r, &lin->J_x, &lin->J_y)) return false;
   for (int k = 0; k < m; ++k) {
     const int q = problem.LocalSize(k);
-    if (!problem.Evaluate(k, state.x, state.y[k], &lin->r[k], &lin->J_x[k],
-                          q > 0 ? &lin->J_y[k] : nullptr)) {
-      return false;
-    }
     if (!lin->r[k].allFinite() || !lin->J_x[k].allFinite()) return false;
     lin->cost += lin->r[k].squaredNorm();
-    if (m == 1) {
-      lin->A.noalias() = lin->J_x[k].transpose() * lin->J_x[k];
-    } else {
-      lin->A.noalias() += lin->J_x[k].transpose() * lin->J_x[k];
+    const MatrixXd& J = lin->J_x[k];
+    // A block that touches few of the global parameters (a turn: the gyroscope's and two
+    // directions of many) adds to A through its nonzero columns only.
+    std::vector<Eigen::Index> cols;
+    for (Eigen::Index c = 0; c < J.cols(); ++c) {
+      if (!J.col(c).isZero(0)) cols.push_back(c);
     }
-    lin->gx.noalias() += lin->J_x[k].transpose() * lin->r[k];
+    if (J.rows() > 0 && 4 * cols.size() < static_cast<std::size_t>(n)) {
+      const auto nc = static_cast<Eigen::Index>(cols.size());
+      MatrixXd Jc(J.rows(), nc);
+      for (Eigen::Index c = 0; c < nc; ++c) Jc.col(c) = J.col(cols[static_cast<std::size_t>(c)]);
+      const MatrixXd Ac = Jc.transpose() * Jc;
+      const VectorXd gc = Jc.transpose() * lin->r[k];
+      for (Eigen::Index a = 0; a < nc; ++a) {
+        const Eigen::Index i = cols[static_cast<std::size_t>(a)];
+        lin->gx(i) += gc(a);
+        for (Eigen::Index b = 0; b < nc; ++b)
+          lin->A(i, cols[static_cast<std::size_t>(b)]) += Ac(a, b);
+      }
+    } else if (m == 1) {
+      lin->A.noalias() = J.transpose() * J;
+      lin->gx.noalias() += J.transpose() * lin->r[k];
+    } else {
+      lin->A.noalias() += J.transpose() * J;
+      lin->gx.noalias() += J.transpose() * lin->r[k];
+    }
     if (q > 0) {
       if (!lin->J_y[k].allFinite()) return false;
       lin->B[k].noalias() = lin->J_x[k].transpose() * lin->J_y[k];
@@ -74,15 +110,13 @@ bool Linearize(const LeastSquaresProblem& problem, const LeastSquaresState& stat
   return std::isfinite(lin->cost);
 }
 
-double Cost(const LeastSquaresProblem& problem, const LeastSquaresState& state) {
-  double cost = 0;
-  VectorXd r;
-  for (int k = 0; k < problem.NumBlocks(); ++k) {
-    if (!problem.Evaluate(k, state.x, state.y[k], &r, nullptr, nullptr)) {
-      return std::numeric_limits<double>::infinity();
-    }
-    cost += r.squaredNorm();
+double Cost(const LeastSquaresProblem& problem, const LeastSquaresState& state, int threads) {
+  std::vector<VectorXd> r;
+  if (!EvaluateBlocks(problem, state, false, threads, &r, nullptr, nullptr)) {
+    return std::numeric_limits<double>::infinity();
   }
+  double cost = 0;
+  for (const VectorXd& rk : r) cost += rk.squaredNorm();
   return std::isfinite(cost) ? cost : std::numeric_limits<double>::infinity();
 }
 
@@ -209,7 +243,7 @@ LeastSquaresSummary SolveLeastSquares(const LeastSquaresProblem& problem,
   const int m = problem.NumBlocks();
   state->y.resize(m);
   Linearization lin;
-  if (!Linearize(problem, *state, &lin)) {
+  if (!Linearize(problem, *state, &lin, options.threads)) {
     summary.termination = TerminationType::kNoProgress;
     summary.termination_message = "the residuals are not finite at the start";
     return summary;
@@ -267,7 +301,7 @@ LeastSquaresSummary SolveLeastSquares(const LeastSquaresProblem& problem,
       // The change is below the tolerance and at the level where F's round-off decides
       // acceptance: the step is taken, and the point is the solution.
       Linearization next;
-      if (Linearize(problem, trial, &next)) {
+      if (Linearize(problem, trial, &next, options.threads)) {
         *state = std::move(trial);
         lin = std::move(next);
         ++summary.iterations;
@@ -278,10 +312,20 @@ LeastSquaresSummary SolveLeastSquares(const LeastSquaresProblem& problem,
                                                      step.max_change, options.step_tolerance);
       break;
     }
-    const double trial_cost = Cost(problem, trial);
-    ++summary.evaluations;
+    // The trial's cost, and its linearisation when the step is taken: one evaluation with the
+    // Jacobians when most steps are taken (linearize_trials), else the cost first.
     Linearization next;
-    if (trial_cost < lin.cost && Linearize(problem, trial, &next)) {
+    double trial_cost = std::numeric_limits<double>::infinity();
+    bool linearized = false;
+    if (options.linearize_trials) {
+      linearized = Linearize(problem, trial, &next, options.threads);
+      if (linearized) trial_cost = next.cost;
+    } else {
+      trial_cost = Cost(problem, trial, options.threads);
+      linearized = trial_cost < lin.cost && Linearize(problem, trial, &next, options.threads);
+    }
+    ++summary.evaluations;
+    if (trial_cost < lin.cost && linearized) {
       const double actual = lin.cost - trial_cost;
       const double rho = step.predicted_reduction > 0 ? actual / step.predicted_reduction : 1.0;
       lambda *= std::max(1.0 / 3.0, 1.0 - std::pow(2.0 * rho - 1.0, 3));

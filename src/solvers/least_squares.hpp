@@ -75,6 +75,14 @@ struct LeastSquaresOptions {
   double min_reciprocal_condition = 1e-12;
   /// σ̂² S⁻¹ at the solution (the global parameters' marginal covariance).
   bool compute_covariance = true;
+  /// Threads the residual blocks are evaluated on (0: one per hardware thread). Each block is
+  /// evaluated whole by one thread and the sums are taken in block order, so the result is the
+  /// same bits for any count; the problem's Evaluate must be safe to call concurrently.
+  int threads = 1;
+  /// A trial point is evaluated with its Jacobians at once (one evaluation instead of two when
+  /// the step is taken, one wasted Jacobian when it is not): for expensive blocks whose steps
+  /// are mostly taken. The iterates are the same either way.
+  bool linearize_trials = false;
 };
 
 struct LeastSquaresSummary {

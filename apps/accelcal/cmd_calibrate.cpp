@@ -80,6 +80,10 @@ void PrintCalibration(const CalibrationResult& r, const std::vector<Position>& p
   const std::string noise =
       r.noise_source == "samples"
           ? Format("noise of each interval's samples, x %.3g scatter ratio", r.scatter_ratio)
+      : r.noise_source == "joint"
+          ? std::string(
+                "joint fit with the gyroscope's rotations, each group's noise from its "
+                "scatter")
           : std::string("noise from the residuals");
   Say("\nparameters (K in %s per %s, b in %s, k2 in %s per %s^2; +- 1 sigma, %s)\n",
       raw_unit.c_str(), u, raw_unit.c_str(), raw_unit.c_str(), u, noise.c_str());

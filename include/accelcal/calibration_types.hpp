@@ -319,7 +319,9 @@ struct CalibrationResult {
   /// are no residual degrees of freedom (m = P: exactly determined).
   Eigen::MatrixXd covariance;
   double residual_sigma = 0;  ///< σ̂ [raw], 0 when there are no degrees of freedom
-  /// Where the covariance's noise came from: "residuals" or "samples" (reading_sigmas).
+  /// Where the covariance's noise came from: "residuals", "samples" (reading_sigmas), or
+  /// "joint" (the joint fit with the gyroscope, gyro_calibration.hpp: the residual σ̂ of the
+  /// accelerometer's own fit, each of the gyroscope's groups scaled by its scatter ratio).
   std::string noise_source = "residuals";
   /// With reading_sigmas: R = sqrt(χ² / (m − P)), 1 when the per-position noise explains the
   /// scatter of the positions; NaN otherwise. The covariance is multiplied by R² when R > 1.

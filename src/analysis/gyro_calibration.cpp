@@ -385,7 +385,8 @@ ModelFit FitModel(GyroFitData data, GyroModelKind kind, const std::vector<Positi
         out.heldout.push_back(AngleError(data, data.motions[k], held.params, data.directions));
       }
     } else if (options.validate) {
-      for (const GyroParameters& held : internal::HeldOutMotionFits(data, fit.params)) {
+      for (const GyroParameters& held :
+           internal::HeldOutMotionFits(data, fit.params, &fit.summary.information)) {
         const GyroMotion& m = data.motions[out.heldout.size()];
         out.heldout.push_back(AngleError(data, m, held, data.directions));
       }

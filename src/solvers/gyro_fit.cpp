@@ -176,8 +176,8 @@ GyroFit FitGyro(const GyroFitData& data, const GyroParameters& start,
   return fit;
 }
 
-std::vector<GyroParameters> HeldOutMotionFits(const GyroFitData& data,
-                                              const GyroParameters& params) {
+std::vector<GyroParameters> HeldOutMotionFits(const GyroFitData& data, const GyroParameters& params,
+                                              const Eigen::MatrixXd* information) {
   const TwoStageProblem problem(data);
   LeastSquaresState state;
   state.x = Pack(params, data.model);
@@ -187,7 +187,7 @@ std::vector<GyroParameters> HeldOutMotionFits(const GyroFitData& data,
     blocks.push_back(static_cast<int>(data.stills.size() + k));
   }
   std::vector<GyroParameters> out;
-  for (const Eigen::VectorXd& x : LeaveOneBlockOut(problem, state, blocks)) {
+  for (const Eigen::VectorXd& x : LeaveOneBlockOut(problem, state, blocks, information)) {
     out.push_back(UnpackGyro(x, data.model));
   }
   return out;

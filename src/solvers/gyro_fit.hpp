@@ -99,7 +99,8 @@ GyroFit FitGyro(const GyroFitData& data, const GyroParameters& start,
 /// For each motion k, the parameters of the fit without it, to first order from the converged
 /// fit `params`: one Gauss-Newton step of the problem without block k, δ_k = S_k⁻¹ J_kᵀ r_k with
 /// S_k = S − J_kᵀ J_k (LeaveOneBlockOut, least_squares.hpp).
-std::vector<GyroParameters> HeldOutMotionFits(const GyroFitData& data,
-                                              const GyroParameters& params);
+/// `information`: the fit's LeastSquaresSummary::information, when at hand.
+std::vector<GyroParameters> HeldOutMotionFits(const GyroFitData& data, const GyroParameters& params,
+                                              const Eigen::MatrixXd* information = nullptr);
 
 }  // namespace accelcal::internal

@@ -191,7 +191,9 @@ std::vector<ImuJointFit> HeldOutFits(const ImuJointData& data, const ImuJointFit
     for (int k = 0; k < m; ++k) blocks.push_back(k);
   }
   std::vector<ImuJointFit> out;
-  for (const Eigen::VectorXd& x : LeaveOneBlockOut(problem, state, blocks)) {
+  const Eigen::MatrixXd* information =
+      fit.summary.information.rows() > 0 ? &fit.summary.information : nullptr;
+  for (const Eigen::VectorXd& x : LeaveOneBlockOut(problem, state, blocks, information)) {
     out.push_back(FromState(data, problem, x));
   }
   return out;

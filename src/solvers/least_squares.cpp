@@ -374,7 +374,8 @@ LeastSquaresSummary SolveLeastSquares(const LeastSquaresProblem& problem,
 
 std::vector<VectorXd> LeaveOneBlockOut(const LeastSquaresProblem& problem,
                                        const LeastSquaresState& state,
-                                       const std::vector<int>& blocks) {
+                                       const std::vector<int>& blocks,
+                                       const MatrixXd* information) {
   const int n = problem.GlobalSize();
   std::vector<MatrixXd> J(static_cast<std::size_t>(problem.NumBlocks()));
   std::vector<VectorXd> r(J.size());
@@ -387,9 +388,18 @@ std::vector<VectorXd> LeaveOneBlockOut(const LeastSquaresProblem& problem,
     if (!problem.Evaluate(b, state.x, state.y[k], &r[k], &J[k], nullptr)) {
       throw std::invalid_argument(Format("LeaveOneBlockOut: block %d cannot be evaluated", b));
     }
-    if (J[k].rows() > 0) S.selfadjointView<Eigen::Lower>().rankUpdate(J[k].transpose());
+    if (information == nullptr && J[k].rows() > 0) {
+      S.selfadjointView<Eigen::Lower>().rankUpdate(J[k].transpose());
+    }
   }
-  S.triangularView<Eigen::StrictlyUpper>() = S.transpose();
+  if (information != nullptr) {
+    if (information->rows() != n || information->cols() != n) {
+      throw std::invalid_argument("LeaveOneBlockOut: the information matrix is not n x n");
+    }
+    S = *information;
+  } else {
+    S.triangularView<Eigen::StrictlyUpper>() = S.transpose();
+  }
   // Jacobi-scaled: S = D Ŝ D with D = diag(S)^(1/2), so that parameters of any unit factor alike.
   const VectorXd d = S.diagonal().cwiseMax(0.0).cwiseSqrt();
   if (!(d.minCoeff() > 0)) throw std::invalid_argument("LeaveOneBlockOut: S is singular");

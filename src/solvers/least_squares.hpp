@@ -120,8 +120,11 @@ LeastSquaresSummary SolveLeastSquares(const LeastSquaresProblem& problem,
 /// identity from one factorisation of S = Σ J_bᵀ J_b). Its error is of second order in the step:
 /// small when one block moves the fit little. Throws std::invalid_argument when the problem has
 /// per-item parameters, a block cannot be evaluated, or S (or some S_k) is singular.
+/// `information`, when given, is S at `state` (LeastSquaresSummary::information of the solve
+/// that converged there), so that it is not summed again.
 std::vector<Eigen::VectorXd> LeaveOneBlockOut(const LeastSquaresProblem& problem,
                                               const LeastSquaresState& state,
-                                              const std::vector<int>& blocks);
+                                              const std::vector<int>& blocks,
+                                              const Eigen::MatrixXd* information = nullptr);
 
 }  // namespace accelcal::internal

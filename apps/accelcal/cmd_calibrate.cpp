@@ -297,9 +297,10 @@ void PrintGyro(const GyroRun& run, const std::string& raw_unit, const char* forc
   Say("  scale factor (row norms of K)  %.8g  %.8g  %.8g  %s per rad/s\n", g.params.K.row(0).norm(),
       g.params.K.row(1).norm(), g.params.K.row(2).norm(), raw_unit.c_str());
   Say("  rate noise  %.4g  %.4g  %.4g  %s per sample; scatter ratios: stills %.3g, rotations "
-      "%.3g\n",
+      "%.3g%s\n",
       g.noise_sigma_raw(0), g.noise_sigma_raw(1), g.noise_sigma_raw(2), raw_unit.c_str(),
-      g.still_scatter_ratio, g.rotation_scatter_ratio);
+      g.still_scatter_ratio, g.rotation_scatter_ratio,
+      g.accelerometer ? Format(", accelerometer %.3g", g.accel_scatter_ratio).c_str() : "");
   Say("\nrotations (angle turned, and the angle between the gravity direction it predicts and the "
       "one fitted; deg)\n");
   Say("  %5s %5s %9s %9s %10s %10s\n", "from", "to", "time [s]", "angle", "residual", "held-out");
@@ -311,6 +312,19 @@ void PrintGyro(const GyroRun& run, const std::string& raw_unit, const char* forc
       "it)\n",
       g.rms_deg, g.heldout_rms_deg);
   Say("solver    %s\n", g.summary.termination_message.c_str());
+}
+
+// The turns the screening flagged, on stderr.
+void WarnFlaggedTurns(const GyroRun& run, const std::string& path) {
+  for (const GyroRotation& r : run.calibration.rotations) {
+    if (!r.flagged) continue;
+    Warn(
+        "%s: the turn from position %zu to %zu (samples %zu-%zu, %.3g s) disagrees with the "
+        "others: its held-out chi^2 %.3g is beyond %.3g (1 %% over all turns); a bump during "
+        "it? It was kept in the fit.\n",
+        path.c_str(), r.from + 1, r.to + 1, r.first_sample + 1, r.last_sample + 1, r.duration_s,
+        r.statistic, r.threshold);
+  }
 }
 
 // The file's provenance: the options given, every input file (with the orientations) by name, size
@@ -407,6 +421,7 @@ int WriteCalibration(const CalibrateArgs& args, const LoadedInput& in, const Gra
          o.excluded ? " It was left out of the fit." : " It was kept in the fit.");
   }
   PrintFindings(diagnosis, args.input.path);
+  if (gyro != nullptr) WarnFlaggedTurns(*gyro, gyro->path);
   if (args.json) {
     WriteFileAtomically("-", json);
   } else {

@@ -15,9 +15,12 @@
 ///     the rotations determine it).
 ///
 /// Each group of residuals (the accelerometer's position means, the gyro's still means, the
-/// turns) is weighted by its own noise: the sample noise propagated to it, multiplied by the
-/// group's scatter ratio R = sqrt(χ²/n) when R > 1 (the two-stage fit's), so that one sensor's
-/// unmodelled error cannot pull the other.
+/// turns) is weighted by its own noise, multiplied by the group's scatter ratio R when R > 1, so
+/// that one sensor's unmodelled error cannot pull the other: the gyro's groups under the sample
+/// noise propagated to them, R = √(χ²/n); the accelerometer's under the residual σ̂ of its own
+/// fit, R = √(χ²/(m − P)). The ratios are taken at the two-stage fit, then again at the joint
+/// fit, which is refitted until they settle (variance components, as in geodesy's adjustment of
+/// heterogeneous observations).
 
 #include <optional>
 #include <string>
@@ -86,6 +89,12 @@ struct GyroRotation {
   double residual_deg = 0;  ///< angle between the predicted and the fitted direction of `to`
   /// The same with the fit that left this rotation out (validation); NaN without one.
   double heldout_deg = std::nan("");
+  /// The screening of the turns (with validation): ‖r‖² of the turn's whitened residual under the
+  /// fit without it (about χ² with 2 degrees of freedom), the level it must not pass (the 1 %
+  /// level over all turns, Bonferroni: 2 ln(100 K) for K turns), and whether it did: a turn that
+  /// disagrees with the others (a bump during it), kept in the fit and reported.
+  double statistic = std::nan(""), threshold = std::nan("");
+  bool flagged = false;
 };
 
 /// The gyroscope's calibration.
@@ -106,6 +115,9 @@ struct GyroCalibration {
   double heldout_rms_deg = std::nan("");
   /// Scatter ratios R = sqrt(χ²/n) of the stills and of the rotations under the sample noise.
   double still_scatter_ratio = 1, rotation_scatter_ratio = 1;
+  /// The joint estimator's: the accelerometer's readings' scatter ratio under the σ̂ of its own
+  /// fit, √(χ²/(m − P)) (1 at that fit; the turns may pull it above); 1 for the two-stage one.
+  double accel_scatter_ratio = 1;
   Summary summary;
   /// The joint estimator's accelerometer calibration (parameters, covariance and directions
   /// refitted with the rotations); unset for the two-stage one.

@@ -237,7 +237,8 @@ ordered_json GyroscopeSection(const GyroCalibration& g, const CalibrationFileInf
   doc["engineering"] = {{"scale_factor_raw_per_rad_s", scale}};
   doc["noise"] = {{"sigma_raw_per_sample", ToJson(g.noise_sigma_raw)},
                   {"still_scatter_ratio", g.still_scatter_ratio},
-                  {"rotation_scatter_ratio", g.rotation_scatter_ratio}};
+                  {"rotation_scatter_ratio", g.rotation_scatter_ratio},
+                  {"accelerometer_scatter_ratio", g.accel_scatter_ratio}};
   ordered_json stills = ordered_json::array();
   for (const Vec3& m : g.still_mean_raw) stills.push_back(ToJson(m));
   doc["still_mean_raw"] = stills;
@@ -251,6 +252,9 @@ ordered_json GyroscopeSection(const GyroCalibration& g, const CalibrationFileInf
                          {"angle_deg", r.angle_deg},
                          {"residual_deg", r.residual_deg},
                          {"heldout_deg", Nullable(r.heldout_deg)},
+                         {"statistic", Nullable(r.statistic)},
+                         {"threshold", Nullable(r.threshold)},
+                         {"flagged", r.flagged},
                          {"excluded", false}});
   }
   doc["rotations"] = rotations;

@@ -209,6 +209,28 @@ std::vector<ImuJointFit> HeldOutPositionFits(const ImuJointData& data, const Imu
   return HeldOutFits(data, fit, false);
 }
 
+GroupCosts JointGroupRedundancy(const ImuJointData& data, const ImuJointFit& fit) {
+  const JointProblem problem(data);
+  LeastSquaresState state;
+  state.x = Start(data, fit.accel, fit.gyro);
+  for (std::size_t k = 0; k < fit.directions.size(); ++k) {
+    state.x.segment<3>(fit.accel_parameters + fit.gyro_parameters +
+                       3 * static_cast<Eigen::Index>(k)) = fit.directions[k];
+  }
+  state.y.assign(static_cast<std::size_t>(problem.NumBlocks()), Eigen::VectorXd());
+  const std::vector<double> h = BlockLeverages(problem, state, fit.summary.information);
+  const std::size_t m = data.accel_means.size();
+  GroupCosts r;
+  for (std::size_t k = 0; k < m; ++k) {
+    if (data.accel_used[k]) r.accel += 3 - h[k];
+    r.stills += 3 - h[m + k];
+  }
+  for (std::size_t k = 0; k < data.gyro.motions.size(); ++k) {
+    if (data.gyro.used(k)) r.turns += 2 - h[2 * m + k];
+  }
+  return r;
+}
+
 GroupCosts JointGroupCosts(const ImuJointData& data, const ImuJointFit& fit) {
   GroupCosts costs;
   for (std::size_t k = 0; k < data.accel_means.size(); ++k) {

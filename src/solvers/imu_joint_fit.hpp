@@ -57,5 +57,8 @@ struct GroupCosts {
   double accel = 0, stills = 0, turns = 0;
 };
 GroupCosts JointGroupCosts(const ImuJointData& data, const ImuJointFit& fit);
+/// The redundancy n_G − Σ_G h_k of each group at a converged `fit` (BlockLeverages,
+/// least_squares.hpp): what its χ² is expected to be under the model.
+GroupCosts JointGroupRedundancy(const ImuJointData& data, const ImuJointFit& fit);
 
 }  // namespace accelcal::internal

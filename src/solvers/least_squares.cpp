@@ -428,4 +428,35 @@ std::vector<VectorXd> LeaveOneBlockOut(const LeastSquaresProblem& problem,
   return out;
 }
 
+std::vector<double> BlockLeverages(const LeastSquaresProblem& problem,
+                                   const LeastSquaresState& state, const MatrixXd& information) {
+  const int n = problem.GlobalSize();
+  if (information.rows() != n || information.cols() != n) {
+    throw std::invalid_argument("BlockLeverages: the information matrix is not n x n");
+  }
+  const VectorXd d = information.diagonal().cwiseMax(0.0).cwiseSqrt();
+  if (!(d.minCoeff() > 0)) throw std::invalid_argument("BlockLeverages: S is singular");
+  const VectorXd d_inverse = d.cwiseInverse();
+  const Eigen::LDLT<MatrixXd> ldlt(d_inverse.asDiagonal() * information * d_inverse.asDiagonal());
+  if (ldlt.info() != Eigen::Success || !(ldlt.vectorD().minCoeff() > 0)) {
+    throw std::invalid_argument("BlockLeverages: S is singular");
+  }
+  std::vector<double> leverage(static_cast<std::size_t>(problem.NumBlocks()), 0.0);
+  for (int b = 0; b < problem.NumBlocks(); ++b) {
+    const auto k = static_cast<std::size_t>(b);
+    if (problem.LocalSize(b) != 0) {
+      throw std::invalid_argument("BlockLeverages: a block with its own parameters");
+    }
+    VectorXd r;
+    MatrixXd J;
+    if (!problem.Evaluate(b, state.x, state.y[k], &r, &J, nullptr)) {
+      throw std::invalid_argument(Format("BlockLeverages: block %d cannot be evaluated", b));
+    }
+    if (J.rows() == 0) continue;
+    const MatrixXd scaled = J * d_inverse.asDiagonal();  // J S⁻¹ Jᵀ in the scaled coordinates
+    leverage[k] = (scaled * ldlt.solve(scaled.transpose())).trace();
+  }
+  return leverage;
+}
+
 }  // namespace accelcal::internal

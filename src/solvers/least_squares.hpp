@@ -127,4 +127,13 @@ std::vector<Eigen::VectorXd> LeaveOneBlockOut(const LeastSquaresProblem& problem
                                               const std::vector<int>& blocks,
                                               const Eigen::MatrixXd* information = nullptr);
 
+/// Each block's leverage h_k = tr(J_k S⁻¹ J_kᵀ) at `state`, for a problem without per-item
+/// parameters (S the information matrix, as LeaveOneBlockOut's): the share of the parameters
+/// that block k's residuals pay for. Σ h_k = the number of parameters, and a group G of blocks
+/// has n_G − Σ_G h_k degrees of freedom (its redundancy): E[χ²_G] = n_G − Σ_G h_k under the
+/// model. Throws std::invalid_argument as LeaveOneBlockOut.
+std::vector<double> BlockLeverages(const LeastSquaresProblem& problem,
+                                   const LeastSquaresState& state,
+                                   const Eigen::MatrixXd& information);
+
 }  // namespace accelcal::internal

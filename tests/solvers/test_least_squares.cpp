@@ -288,3 +288,71 @@ TEST(LeastSquares, TerminationReasons) {
 
 }  // namespace
 }  // namespace accelcal::internal
+
+namespace accelcal::internal {
+namespace {
+
+// A straight line through 7 points, one 2-row block each (y and a second, weighted reading of
+// it): linear, so a Gauss-Newton step from the solution without a block is that fit exactly.
+class TwoRowLine : public LeastSquaresProblem {
+ public:
+  explicit TwoRowLine(std::vector<bool> used = {}) : used_(std::move(used)) {}
+  int GlobalSize() const override { return 2; }
+  int NumBlocks() const override { return 7; }
+  bool Evaluate(int k, const VectorXd& x, const VectorXd&, VectorXd* r, MatrixXd* J_x,
+                MatrixXd*) const override {
+    if (!used_.empty() && !used_[static_cast<std::size_t>(k)]) {
+      r->resize(0);
+      if (J_x != nullptr) J_x->resize(0, 2);
+      return true;
+    }
+    const double t = k, y = 0.3 + 1.7 * t + 0.2 * std::sin(3.0 * t), w = 1.0 + 0.5 * (k % 3);
+    *r = (VectorXd(2) << x(0) + x(1) * t - y, w * (x(0) + x(1) * t - y - 0.05)).finished();
+    if (J_x != nullptr) *J_x = (MatrixXd(2, 2) << 1.0, t, w, w * t).finished();
+    return true;
+  }
+
+ private:
+  std::vector<bool> used_;
+};
+
+LeastSquaresState Solved(const LeastSquaresProblem& problem, LeastSquaresSummary* summary) {
+  LeastSquaresState state{VectorXd::Zero(2), std::vector<VectorXd>(7)};
+  LeastSquaresOptions options;
+  options.step_tolerance = 1e-13;
+  *summary = SolveLeastSquares(problem, options, &state);
+  return state;
+}
+
+TEST(LeastSquares, LeaveOneBlockOutIsTheRefitOfALinearProblem) {
+  LeastSquaresSummary summary;
+  const LeastSquaresState full = Solved(TwoRowLine(), &summary);
+  const std::vector<int> blocks = {0, 3, 6};
+  const std::vector<const MatrixXd*> informations = {nullptr, &summary.information};
+  for (const MatrixXd* information : informations) {
+    const std::vector<VectorXd> held = LeaveOneBlockOut(TwoRowLine(), full, blocks, information);
+    for (std::size_t i = 0; i < blocks.size(); ++i) {
+      std::vector<bool> used(7, true);
+      used[static_cast<std::size_t>(blocks[i])] = false;
+      LeastSquaresSummary s;
+      const LeastSquaresState refit = Solved(TwoRowLine(used), &s);
+      EXPECT_LT((held[i] - refit.x).norm(), 1e-11) << blocks[i];
+    }
+  }
+}
+
+TEST(LeastSquares, BlockLeveragesSumToTheParameters) {
+  LeastSquaresSummary summary;
+  const LeastSquaresState full = Solved(TwoRowLine(), &summary);
+  const std::vector<double> h = BlockLeverages(TwoRowLine(), full, summary.information);
+  double sum = 0;
+  for (double v : h) {
+    EXPECT_GT(v, 0);
+    EXPECT_LT(v, 2);
+    sum += v;
+  }
+  EXPECT_NEAR(sum, 2.0, 1e-12);  // tr(J S⁻¹ Jᵀ) = tr(I_P) = P
+}
+
+}  // namespace
+}  // namespace accelcal::internal

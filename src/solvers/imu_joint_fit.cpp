@@ -171,9 +171,9 @@ ImuJointFit FitImuJoint(const ImuJointData& data, const ModelParameters& accel_s
 
 namespace {
 
-std::vector<ImuJointFit> HeldOutFits(const ImuJointData& data, const ImuJointFit& fit,
-                                     bool motions) {
-  const JointProblem problem(data);
+// The driver's state at a fit: its parameters and directions.
+LeastSquaresState StateAt(const ImuJointData& data, const JointProblem& problem,
+                          const ImuJointFit& fit) {
   LeastSquaresState state;
   state.x = Start(data, fit.accel, fit.gyro);
   for (std::size_t k = 0; k < fit.directions.size(); ++k) {
@@ -181,6 +181,13 @@ std::vector<ImuJointFit> HeldOutFits(const ImuJointData& data, const ImuJointFit
                        3 * static_cast<Eigen::Index>(k)) = fit.directions[k];
   }
   state.y.assign(static_cast<std::size_t>(problem.NumBlocks()), Eigen::VectorXd());
+  return state;
+}
+
+std::vector<ImuJointFit> HeldOutFits(const ImuJointData& data, const ImuJointFit& fit,
+                                     bool motions) {
+  const JointProblem problem(data);
+  const LeastSquaresState state = StateAt(data, problem, fit);
   std::vector<int> blocks;
   const int m = static_cast<int>(data.accel_means.size());
   if (motions) {
@@ -211,13 +218,7 @@ std::vector<ImuJointFit> HeldOutPositionFits(const ImuJointData& data, const Imu
 
 GroupCosts JointGroupRedundancy(const ImuJointData& data, const ImuJointFit& fit) {
   const JointProblem problem(data);
-  LeastSquaresState state;
-  state.x = Start(data, fit.accel, fit.gyro);
-  for (std::size_t k = 0; k < fit.directions.size(); ++k) {
-    state.x.segment<3>(fit.accel_parameters + fit.gyro_parameters +
-                       3 * static_cast<Eigen::Index>(k)) = fit.directions[k];
-  }
-  state.y.assign(static_cast<std::size_t>(problem.NumBlocks()), Eigen::VectorXd());
+  const LeastSquaresState state = StateAt(data, problem, fit);
   const std::vector<double> h = BlockLeverages(problem, state, fit.summary.information);
   const std::size_t m = data.accel_means.size();
   GroupCosts r;

@@ -372,6 +372,33 @@ LeastSquaresSummary SolveLeastSquares(const LeastSquaresProblem& problem,
   return summary;
 }
 
+namespace {
+
+// S⁻¹ through S's Jacobi scaling, S = D Ŝ D with D = diag(S)^(1/2), so that parameters of any unit
+// factor alike: S⁻¹ v = D⁻¹ Ŝ⁻¹ D⁻¹ v. Throws std::invalid_argument (naming `who`) when S is
+// not positive definite.
+class ScaledInverse {
+ public:
+  ScaledInverse(const MatrixXd& S, const char* who) {
+    const VectorXd d = S.diagonal().cwiseMax(0.0).cwiseSqrt();
+    if (!(d.minCoeff() > 0)) throw std::invalid_argument(std::string(who) + ": S is singular");
+    d_inverse_ = d.cwiseInverse();
+    ldlt_.compute(d_inverse_.asDiagonal() * S * d_inverse_.asDiagonal());
+    if (ldlt_.info() != Eigen::Success || !(ldlt_.vectorD().minCoeff() > 0)) {
+      throw std::invalid_argument(std::string(who) + ": S is singular");
+    }
+  }
+  MatrixXd Solve(const MatrixXd& v) const {
+    return d_inverse_.asDiagonal() * ldlt_.solve(d_inverse_.asDiagonal() * v);
+  }
+
+ private:
+  VectorXd d_inverse_;
+  Eigen::LDLT<MatrixXd> ldlt_;
+};
+
+}  // namespace
+
 std::vector<VectorXd> LeaveOneBlockOut(const LeastSquaresProblem& problem,
                                        const LeastSquaresState& state,
                                        const std::vector<int>& blocks,
@@ -400,14 +427,7 @@ std::vector<VectorXd> LeaveOneBlockOut(const LeastSquaresProblem& problem,
   } else {
     S.triangularView<Eigen::StrictlyUpper>() = S.transpose();
   }
-  // Jacobi-scaled: S = D Ŝ D with D = diag(S)^(1/2), so that parameters of any unit factor alike.
-  const VectorXd d = S.diagonal().cwiseMax(0.0).cwiseSqrt();
-  if (!(d.minCoeff() > 0)) throw std::invalid_argument("LeaveOneBlockOut: S is singular");
-  const VectorXd d_inverse = d.cwiseInverse();
-  const Eigen::LDLT<MatrixXd> ldlt(d_inverse.asDiagonal() * S * d_inverse.asDiagonal());
-  if (ldlt.info() != Eigen::Success || !(ldlt.vectorD().minCoeff() > 0)) {
-    throw std::invalid_argument("LeaveOneBlockOut: S is singular");
-  }
+  const ScaledInverse S_inverse(S, "LeaveOneBlockOut");
   std::vector<VectorXd> out;
   for (int b : blocks) {
     const auto k = static_cast<std::size_t>(b);
@@ -416,8 +436,7 @@ std::vector<VectorXd> LeaveOneBlockOut(const LeastSquaresProblem& problem,
       continue;
     }
     // δ = S_k⁻¹ J_kᵀ r_k = U M⁻¹ r_k with U = S⁻¹ J_kᵀ, M = I − J_k U (Woodbury).
-    const MatrixXd U =
-        d_inverse.asDiagonal() * ldlt.solve(d_inverse.asDiagonal() * J[k].transpose());
+    const MatrixXd U = S_inverse.Solve(J[k].transpose());
     const MatrixXd M = MatrixXd::Identity(J[k].rows(), J[k].rows()) - J[k] * U;
     const Eigen::PartialPivLU<MatrixXd> lu(M);
     if (!(std::abs(lu.determinant()) > 1e-12)) {
@@ -434,13 +453,7 @@ std::vector<double> BlockLeverages(const LeastSquaresProblem& problem,
   if (information.rows() != n || information.cols() != n) {
     throw std::invalid_argument("BlockLeverages: the information matrix is not n x n");
   }
-  const VectorXd d = information.diagonal().cwiseMax(0.0).cwiseSqrt();
-  if (!(d.minCoeff() > 0)) throw std::invalid_argument("BlockLeverages: S is singular");
-  const VectorXd d_inverse = d.cwiseInverse();
-  const Eigen::LDLT<MatrixXd> ldlt(d_inverse.asDiagonal() * information * d_inverse.asDiagonal());
-  if (ldlt.info() != Eigen::Success || !(ldlt.vectorD().minCoeff() > 0)) {
-    throw std::invalid_argument("BlockLeverages: S is singular");
-  }
+  const ScaledInverse S_inverse(information, "BlockLeverages");
   std::vector<double> leverage(static_cast<std::size_t>(problem.NumBlocks()), 0.0);
   for (int b = 0; b < problem.NumBlocks(); ++b) {
     const auto k = static_cast<std::size_t>(b);
@@ -453,8 +466,7 @@ std::vector<double> BlockLeverages(const LeastSquaresProblem& problem,
       throw std::invalid_argument(Format("BlockLeverages: block %d cannot be evaluated", b));
     }
     if (J.rows() == 0) continue;
-    const MatrixXd scaled = J * d_inverse.asDiagonal();  // J S⁻¹ Jᵀ in the scaled coordinates
-    leverage[k] = (scaled * ldlt.solve(scaled.transpose())).trace();
+    leverage[k] = (J * S_inverse.Solve(J.transpose())).trace();
   }
   return leverage;
 }

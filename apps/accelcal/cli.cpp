@@ -404,6 +404,10 @@ int accelcal::cli::RunCommandLine(int argc, char** argv) {
         ->capture_default_str();
     export_cmd->add_option("--c-prefix", exp.c_prefix, "prefix of the C identifiers (c-header)")
         ->capture_default_str();
+    export_cmd
+        ->add_option("--sensor", exp.sensor,
+                     "accelerometer or gyroscope: the triad imutk writes (c-header writes both)")
+        ->capture_default_str();
   }
 
   bool quiet = false, verbose = false;

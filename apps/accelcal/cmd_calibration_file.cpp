@@ -22,7 +22,7 @@ int RunApply(const ApplyArgs& args) {
   const LoadedCalibration cal = ParseCalibrationJson(
       ReadFileToString(args.calibration, kMaxSmallFileBytes), args.calibration);
   RefuseFailed(cal, args.calibration);
-  if (cal.has_gyroscope) {
+  if (cal.has_gyroscope()) {
     Warn(
         "%s: its gyroscope calibration is not applied: apply corrects the accelerometer's "
         "samples only, so far\n",
@@ -105,13 +105,8 @@ int RunExport(const ExportArgs& args) {
   const std::string text = ReadFileToString(args.calibration, kMaxSmallFileBytes);
   const LoadedCalibration cal = ParseCalibrationJson(text, args.calibration);
   RefuseFailed(cal, args.calibration);
-  if (cal.has_gyroscope && format != ExportFormat::kJson) {
-    Warn(
-        "%s: its gyroscope calibration is not exported: the %s export holds the "
-        "accelerometer's only, so far\n",
-        args.calibration.c_str(), args.format.c_str());
-  }
   ExportOptions options;
+  options.sensor = args.sensor;
   options.raw_unit = args.raw_unit;
   options.instance = args.instance;
   options.c_prefix = args.c_prefix;
@@ -119,9 +114,10 @@ int RunExport(const ExportArgs& args) {
   try {
     exported = ExportCalibration(cal, text, format, options);
   } catch (const std::invalid_argument& e) {
-    throw UsageError(WithFlags(
-        e.what(),
-        {{"c_prefix", "--c-prefix"}, {"instance", "--instance"}, {"raw_unit", "--raw-unit"}}));
+    throw UsageError(WithFlags(e.what(), {{"c_prefix", "--c-prefix"},
+                                          {"instance", "--instance"},
+                                          {"raw_unit", "--raw-unit"},
+                                          {"sensor", "--sensor"}}));
   } catch (const DataError& e) {
     throw InputError(
         args.calibration, 0,
@@ -130,13 +126,26 @@ int RunExport(const ExportArgs& args) {
   // The file (or stdout) gets the export alone; what it means and what it lost goes to the
   // terminal: stdout when the export went to a file, else stderr.
   WriteFileAtomically(args.output.empty() ? "-" : args.output, exported.text);
+  if (cal.has_gyroscope() && !exported.gyroscope_included) {
+    Warn(
+        "%s: its gyroscope calibration is not in this export: the %s format holds the "
+        "accelerometer's only%s\n",
+        args.calibration.c_str(), args.format.c_str(),
+        format == ExportFormat::kImuTk ? " (--sensor gyroscope writes the gyroscope's)"
+                                       : ", so far");
+  }
   std::string note = exported.convention + "\n";
   const ExportLoss& loss = exported.loss;
   const std::string unit_name(ToString(cal.unit));
   const char* unit = unit_name.c_str();
   note += loss.dropped.empty() ? "exact: nothing of the model is dropped\n"
                                : "dropped: " + loss.dropped + "\n";
-  if (loss.positions > 0 && !loss.dropped.empty()) {
+  if (args.sensor == "gyroscope") {  // the loss above is the accelerometer's
+    note =
+        exported.convention + "\n" +
+        (exported.gyroscope_dropped.empty() ? "exact: nothing of the gyroscope's model is dropped\n"
+                                            : "dropped: " + exported.gyroscope_dropped + "\n");
+  } else if (loss.positions > 0 && !loss.dropped.empty()) {
     note += Format(
         "on the calibration's %d positions: corrected specific force off by %.3g %s max, %.3g %s "
         "RMS; RMS of |f| - g %.3g %s (full model %.3g %s)\n",

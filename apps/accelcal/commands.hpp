@@ -136,6 +136,7 @@ struct ExportArgs {
   std::string raw_unit;  // overrides the file's units.raw (kalibr, px4, ardupilot)
   int instance = 0;
   std::string c_prefix = "accelcal";
+  std::string sensor = "accelerometer";  // imutk: which sensor's triad
 };
 
 struct DesignArgs {

@@ -135,9 +135,16 @@ struct LoadedCalibration {
   /// `diagnostics`; none in a file written before diagnoses existed.
   std::optional<std::vector<Finding>> diagnostics;
   Provenance provenance;  ///< version 2; empty in version 1
-  /// The file holds `sensors.gyroscope` (version 2): read only so far, so that a command that
-  /// uses the accelerometer alone can say what it leaves out.
-  bool has_gyroscope = false;
+  /// `sensors.gyroscope` (version 2), when the file holds one.
+  struct Gyroscope {
+    GyroModelKind model = GyroModelKind::kLinear;
+    GyroParameters params;       ///< K [raw per rad/s], bias [raw], G [raw per specific-force unit]
+    std::string raw_unit;        ///< `units.raw`
+    Eigen::MatrixXd covariance;  ///< in GyroParameterSlots(model) order; empty when null
+    std::optional<double> heldout_rms_deg;  ///< `validation.heldout_rms_deg`
+  };
+  std::optional<Gyroscope> gyroscope;
+  bool has_gyroscope() const { return gyroscope.has_value(); }
 };
 
 /// Parses a calibration file's text (version 1 or 2); throws InputError naming `source` for

@@ -59,6 +59,9 @@ struct ExportOptions {
   int instance = 0;
   /// Prefix of the C identifiers (c-header).
   std::string c_prefix = "accelcal";
+  /// The sensor a one-sensor format (imutk) holds: "accelerometer" or "gyroscope". The c-header
+  /// holds both when the file has both; json and yaml hold the whole file.
+  std::string sensor = "accelerometer";
 };
 
 /// What the target format could not hold, measured on the calibration's own positions (the means
@@ -77,6 +80,11 @@ struct ExportResult {
   std::string text;        ///< the file's content
   std::string convention;  ///< what the exported numbers mean (direction, units, frame)
   ExportLoss loss;
+  /// The file's gyroscope calibration (LoadedCalibration::gyroscope) went into the export: false
+  /// when the file has none or the format does not hold it (the caller says so).
+  bool gyroscope_included = false;
+  /// What the gyroscope's export could not hold ("" when exact or not included).
+  std::string gyroscope_dropped;
 };
 
 /// `native_json` is the calibration file's text (for json and yaml, which carry all of it).

@@ -304,6 +304,62 @@ void ReadAccelerometer(const Reader& r, const ordered_json& doc, LoadedCalibrati
   ReadDiagnostics(r, doc, cal);
 }
 
+Mat33 Matrix3(const Reader& r, const ordered_json& doc, const char* key) {
+  if (!doc.contains(key) || !doc[key].is_array() || doc[key].size() != 3) {
+    r.Fail(r.Key(key) + " must be a 3x3 array");
+  }
+  Mat33 m;
+  for (int i = 0; i < 3; ++i) {
+    const auto& row = doc[key][i];
+    if (!row.is_array() || row.size() != 3) r.Fail(r.Key(key) + " must be a 3x3 array");
+    for (int j = 0; j < 3; ++j) {
+      m(i, j) = r.Number(row[j], r.Key(std::string(key) + "[" + std::to_string(i) + "][" +
+                                       std::to_string(j) + "]"));
+    }
+  }
+  return m;
+}
+
+// `sensors.gyroscope`: the model and its parameters (the rest is a record for people).
+LoadedCalibration::Gyroscope ReadGyroscope(const Reader& r, const ordered_json& doc) {
+  LoadedCalibration::Gyroscope g;
+  const std::optional<GyroModelKind> model =
+      doc.contains("model") && doc["model"].is_string()
+          ? GyroModelKindFromString(doc["model"].get<std::string>())
+          : std::nullopt;
+  if (!model) r.Fail(r.Key("model") + " must be \"linear\" or \"g-sensitive\"");
+  g.model = *model;
+  g.params.K = Matrix3(r, doc, "K");
+  if (!(std::abs(g.params.K.determinant()) > 0)) r.Fail(r.Key("K") + " is singular");
+  g.params.bias = r.Vector3(doc, "bias");
+  if (g.model == GyroModelKind::kGSensitive) {
+    g.params.G = Matrix3(r, doc, "g_sensitivity");
+  } else if (doc.contains("g_sensitivity") && !doc["g_sensitivity"].is_null()) {
+    r.Fail(r.Key("g_sensitivity") + " must be null for the linear model");
+  }
+  if (doc.contains("units") && doc["units"].is_object() && doc["units"].contains("raw")) {
+    g.raw_unit = r.Inside("units").Text(doc["units"], "raw");
+  }
+  if (doc.contains("covariance") && !doc["covariance"].is_null()) {
+    const int P = NumGyroParameters(g.model);
+    const auto& c = doc["covariance"];
+    if (!c.is_array() || static_cast<int>(c.size()) != P) {
+      r.Fail(r.Key("covariance") + " must be " + std::to_string(P) + "x" + std::to_string(P));
+    }
+    g.covariance.resize(P, P);
+    for (int i = 0; i < P; ++i) {
+      if (!c[i].is_array() || static_cast<int>(c[i].size()) != P) {
+        r.Fail(r.Key("covariance") + " must be " + std::to_string(P) + "x" + std::to_string(P));
+      }
+      for (int j = 0; j < P; ++j) g.covariance(i, j) = r.Number(c[i][j], r.Key("covariance"));
+    }
+  }
+  if (doc.contains("validation") && doc["validation"].is_object()) {
+    g.heldout_rms_deg = r.Inside("validation").Nullable(doc["validation"], "heldout_rms_deg");
+  }
+  return g;
+}
+
 void ReadProvenance(const Reader& r, const ordered_json& doc, Provenance& provenance) {
   if (!doc.contains("provenance")) return;
   const ordered_json& p = r.Object(doc, "provenance");
@@ -369,7 +425,10 @@ LoadedCalibration ParseCalibrationDocument(const ordered_json& doc, const std::s
   const std::string unit_verdict = CheckedVerdict(top, doc);
   if (VerdictRank(unit_verdict) > VerdictRank(cal.verdict)) cal.verdict = unit_verdict;
   ReadProvenance(top, doc, cal.provenance);
-  cal.has_gyroscope = sensors.contains("gyroscope");
+  if (sensors.contains("gyroscope")) {
+    cal.gyroscope = ReadGyroscope(top.Inside("sensors").Inside("gyroscope"),
+                                  top.Inside("sensors").Object(sensors, "gyroscope"));
+  }
   return cal;
 }
 

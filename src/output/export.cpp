@@ -7,6 +7,7 @@
 #include <stdexcept>
 
 #include <Eigen/LU>
+#include <Eigen/SVD>
 #include <nlohmann/json.hpp>
 
 #include "accelcal/error.hpp"
@@ -114,7 +115,7 @@ std::string DescribeUnits(const LoadedCalibration& cal) {
 ExportResult ImuTk(const LoadedCalibration& cal) {
   const Mat33 M = cal.params.K.inverse();
   const Vec3 s = M.diagonal();
-  const Mat33 T = M * s.cwiseInverse().asDiagonal();
+  const Mat33 T = M.array().rowwise() / s.transpose().array();  // x / x = 1 exactly
   ExportResult out;
   const auto matrix = [](const Mat33& A) {
     std::string text;
@@ -133,6 +134,47 @@ ExportResult ImuTk(const LoadedCalibration& cal) {
   out.loss = MeasureLoss(
       cal, [&](const Vec3& p) -> std::optional<Vec3> { return Vec3(TS * (p - cal.params.bias)); },
       SquaredTermsDropped(cal));
+  return out;
+}
+
+// The g-sensitivity an export without it drops: the largest rate error it leaves, |K_g⁻¹ G f| at
+// |f| = g over the directions (the largest singular value of K_g⁻¹ G times g), in °/h.
+std::string GSensitivityDropped(const LoadedCalibration& cal) {
+  const LoadedCalibration::Gyroscope& g = *cal.gyroscope;
+  if (g.model != GyroModelKind::kGSensitive || g.params.G.isZero(0)) return "";
+  const Mat33 M = g.params.K.inverse() * g.params.G;
+  const double largest = Eigen::JacobiSVD<Mat33>(M).singularValues()(0);
+  return internal::Format("the g-sensitivity G (a rate error of up to %.3g deg/h at 1 g)",
+                          largest * cal.gravity * 180.0 / 3.14159265358979323846 * 3600.0);
+}
+
+// imu_tk's gyroscope triad: w = T S (raw − B), T unit-diagonal, S diagonal: T S = K_g⁻¹, B = b.
+ExportResult ImuTkGyroscope(const LoadedCalibration& cal) {
+  if (!cal.gyroscope) {
+    throw DataError("imutk gyroscope: the calibration file holds no gyroscope calibration");
+  }
+  const LoadedCalibration::Gyroscope& g = *cal.gyroscope;
+  const Mat33 M = g.params.K.inverse();
+  const Vec3 s = M.diagonal();
+  const Mat33 T = M.array().rowwise() / s.transpose().array();  // x / x = 1 exactly
+  ExportResult out;
+  const auto matrix = [](const Mat33& A) {
+    std::string text;
+    for (int i = 0; i < 3; ++i) {
+      text += Number(A(i, 0)) + " " + Number(A(i, 1)) + " " + Number(A(i, 2)) + "\n";
+    }
+    return text;
+  };
+  out.text = matrix(T) + "\n" + matrix(Mat33(s.asDiagonal())) + "\n" + Number(g.params.bias(0)) +
+             "\n" + Number(g.params.bias(1)) + "\n" + Number(g.params.bias(2)) + "\n\n";
+  out.convention =
+      "imu_tk CalibratedTriad of the gyroscope (load() reads misalignment T, scale S, bias B): w "
+      "= T S (raw - B) in rad/s, T with unit diagonal, S diagonal; T S = K^-1, B = b (raw "
+      "readings in '" +
+      internal::VisibleLine(g.raw_unit) + "', accelcal's " + std::string(ToString(cal.frame)) +
+      " body frame of the accelerometer)";
+  out.gyroscope_included = true;
+  out.gyroscope_dropped = GSensitivityDropped(cal);
   return out;
 }
 
@@ -328,6 +370,27 @@ ExportResult CHeader(const LoadedCalibration& cal, const ExportOptions& options)
          "    root = sqrt(disc);\n    f[i] = 2.0 * r / (a >= 0.0 ? a + root : a - root);\n"
          "  }\n  return 0;\n}\n";
   }
+  if (cal.gyroscope) {
+    // The gyroscope: w = K_g^-1 (raw - b_g - G f), f the corrected specific force at the sample.
+    const LoadedCalibration::Gyroscope& g = *cal.gyroscope;
+    out.convention += "; " + p +
+                      "_correct_gyro(raw, f, w) gives the body rate w = K_g^-1 (raw - b_g - G f) "
+                      "in rad/s from a raw rate (in '" +
+                      internal::VisibleLine(g.raw_unit) +
+                      "') and the corrected specific force f of the same instant";
+    t += "\nstatic const double " + p + "_gyro_K_inv[3][3] = " + mat(g.params.K.inverse()) + ";\n";
+    t += "static const double " + p + "_gyro_bias[3] = " + vec(g.params.bias) + ";\n";
+    t += "static const double " + p + "_gyro_G[3][3] = " + mat(g.params.G) + ";\n";
+    t += "\nstatic inline void " + p +
+         "_correct_gyro(const double raw[3], const double f[3], double w[3]) {\n"
+         "  double r[3];\n  int i;\n  for (i = 0; i < 3; ++i) {\n"
+         "    r[i] = raw[i] - " +
+         p + "_gyro_bias[i] - " + p + "_gyro_G[i][0] * f[0] - " + p + "_gyro_G[i][1] * f[1] - " +
+         p + "_gyro_G[i][2] * f[2];\n  }\n  for (i = 0; i < 3; ++i) {\n    w[i] = " + p +
+         "_gyro_K_inv[i][0] * r[0] + " + p + "_gyro_K_inv[i][1] * r[1] + " + p +
+         "_gyro_K_inv[i][2] * r[2];\n  }\n}\n";
+    out.gyroscope_included = true;
+  }
   t += "\n#endif /* " + guard + " */\n";
   out.loss = MeasureLoss(
       cal, [&](const Vec3& r) { return SpecificForce(cal.params, r); }, "");
@@ -438,6 +501,14 @@ std::string JsonToYaml(const std::string& json_text) {
 ExportResult ExportCalibration(const LoadedCalibration& cal, const std::string& native_json,
                                ExportFormat format, const ExportOptions& options) {
   if (options.instance < 0) throw std::invalid_argument("instance must be >= 0");
+  if (options.sensor != "accelerometer" && options.sensor != "gyroscope") {
+    throw std::invalid_argument("sensor must be \"accelerometer\" or \"gyroscope\"");
+  }
+  if (options.sensor == "gyroscope" && format != ExportFormat::kImuTk) {
+    throw std::invalid_argument(
+        "sensor \"gyroscope\" is for the imutk format (the c-header holds both sensors; json "
+        "and yaml the whole file)");
+  }
   ExportResult out;
   switch (format) {
     case ExportFormat::kJson:
@@ -449,6 +520,7 @@ ExportResult ExportCalibration(const LoadedCalibration& cal, const std::string& 
           DescribeUnits(cal) + ", " + std::string(ToString(cal.frame)) + " body frame";
       out.loss = MeasureLoss(
           cal, [&](const Vec3& p) { return SpecificForce(cal.params, p); }, "");
+      out.gyroscope_included = cal.has_gyroscope();
       return out;
     case ExportFormat::kKalibr:
       return Kalibr(cal, options);
@@ -459,7 +531,7 @@ ExportResult ExportCalibration(const LoadedCalibration& cal, const std::string& 
     case ExportFormat::kCHeader:
       return CHeader(cal, options);
     case ExportFormat::kImuTk:
-      return ImuTk(cal);
+      return options.sensor == "gyroscope" ? ImuTkGyroscope(cal) : ImuTk(cal);
   }
   throw std::invalid_argument("unknown export format");
 }

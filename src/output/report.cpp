@@ -448,7 +448,7 @@ std::string Render(const ReportInput& input) {
     for (const std::string& n : notes) html += "<li>" + Escape(n) + "</li>\n";
     html += "</ul>\n";
   }
-  if (d.cal.has_gyroscope) {
+  if (d.cal.has_gyroscope()) {
     html +=
         "<p>The file also holds a gyroscope calibration (<code>sensors.gyroscope</code>); "
         "this report shows the accelerometer only, so far.</p>\n";

@@ -10,6 +10,7 @@
 
 #include <gtest/gtest.h>
 #include <Eigen/LU>
+#include <Eigen/SVD>
 
 #include "accelcal/calibration_file.hpp"
 #include "accelcal/error.hpp"
@@ -235,6 +236,101 @@ TEST(Export, CHeaderCompiledAndRunGivesAccelcalsCorrectionBitForBit) {
       const Vec3 expected = *SpecificForce(f.cal.params, f.cal.position_means[k]);
       for (int i = 0; i < 3; ++i)
         EXPECT_EQ(n[3 * k + static_cast<std::size_t>(i)], expected(i)) << k;
+    }
+  }
+}
+
+// A gyroscope beside the accelerometer of Fit (its numbers as the Xsens recording's).
+LoadedCalibration::Gyroscope Gyroscope() {
+  LoadedCalibration::Gyroscope g;
+  g.model = GyroModelKind::kGSensitive;
+  g.params.K << 4782.3, -42.2, -53.7, -25.7, 4765.3, 151.1, -75.1, 108.3, 4768.8;
+  g.params.bias << 32770.3, 32451.1, 32509.4;
+  g.params.G << 0.083, 0.305, 0.663, -1.346, 0.043, 0.841, -0.733, -0.801, 0.247;
+  g.raw_unit = "counts";
+  return g;
+}
+
+TEST(Export, ImuTkGyroscopeAppliedAsImuTkDoesIsAccelcalsCorrectionLessG) {
+  Fitted f = Fit(ModelKind::kLinear, Frame::kXFirst);
+  f.cal.gyroscope = Gyroscope();
+  ExportOptions options;
+  options.sensor = "gyroscope";
+  const ExportResult e = ExportCalibration(f.cal, f.json, ExportFormat::kImuTk, options);
+  EXPECT_TRUE(e.gyroscope_included);
+  const std::vector<double> n = Numbers(e.text);
+  ASSERT_EQ(n.size(), 21u);
+  const Mat33 T = Eigen::Map<const Eigen::Matrix<double, 3, 3, Eigen::RowMajor>>(n.data());
+  const Mat33 S = Eigen::Map<const Eigen::Matrix<double, 3, 3, Eigen::RowMajor>>(n.data() + 9);
+  const Vec3 B(n[18], n[19], n[20]);
+  EXPECT_EQ(T.diagonal(), Vec3::Ones());
+  EXPECT_TRUE(S.isDiagonal(0));
+  const GyroParameters& g = f.cal.gyroscope->params;
+  for (const Vec3& raw : {Vec3(32770, 32451, 32509), Vec3(40000, 30000, 20000)}) {
+    const Vec3 expected = g.K.inverse() * (raw - g.bias);  // G f dropped
+    EXPECT_LT((T * S * (raw - B) - expected).norm(), 1e-15 * (1 + expected.norm()));
+  }
+  // What it drops: |K⁻¹ G f| at |f| = g at its largest, in °/h.
+  const double largest = Eigen::JacobiSVD<Mat33>(Mat33(g.K.inverse() * g.G)).singularValues()(0);
+  char expected[64];
+  std::snprintf(expected, sizeof expected, "up to %.3g deg/h",
+                largest * f.cal.gravity * 180 / kPi * 3600);
+  EXPECT_NE(e.gyroscope_dropped.find(expected), std::string::npos) << e.gyroscope_dropped;
+  // Without a gyroscope in the file, or for another format, the sensor is refused.
+  EXPECT_THROW(ExportCalibration(Fit(ModelKind::kLinear, Frame::kXFirst).cal, f.json,
+                                 ExportFormat::kImuTk, options),
+               DataError);
+  EXPECT_THROW(ExportCalibration(f.cal, f.json, ExportFormat::kKalibr, options),
+               std::invalid_argument);
+}
+
+TEST(Export, CHeaderCorrectsTheGyroscopeBitForBit) {
+  const fs::path dir = fs::path(::testing::TempDir()) / "accelcal_c_header_gyro";
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  Fitted f = Fit(ModelKind::kLinear, Frame::kXFirst);
+  f.cal.gyroscope = Gyroscope();
+  const ExportResult e = ExportCalibration(f.cal, f.json, ExportFormat::kCHeader);
+  EXPECT_TRUE(e.gyroscope_included);
+  std::ofstream((dir / "cal.h").string()) << e.text;
+  std::ofstream((dir / "main.c").string())
+      << "#include <stdio.h>\n#include \"cal.h\"\nint main(void) {\n  double raw[3], f[3], w[3];\n"
+         "  while (scanf(\"%lf %lf %lf %lf %lf %lf\", &raw[0], &raw[1], &raw[2], &f[0], &f[1], "
+         "&f[2]) == 6) {\n    accelcal_correct_gyro(raw, f, w);\n"
+         "    printf(\"%.17g %.17g %.17g\\n\", w[0], w[1], w[2]);\n  }\n  return 0;\n}\n";
+  const std::vector<std::pair<Vec3, Vec3>> samples = {
+      {Vec3(32770, 32451, 32509), Vec3(0, 0, 9.81)},
+      {Vec3(40000.5, 30000.25, 20000.125), Vec3(3.1, -4.2, 8.0)}};
+  std::ofstream in((dir / "in.txt").string());
+  in.precision(17);
+  for (const auto& [raw, force] : samples) {
+    in << raw(0) << " " << raw(1) << " " << raw(2) << " " << force(0) << " " << force(1) << " "
+       << force(2) << "\n";
+  }
+  in.close();
+  ASSERT_EQ(Shell("cc -std=c99 -pedantic -Wall -Werror -O2 -ffp-contract=off -o " +
+                  (dir / "app").string() + " " + (dir / "main.c").string() + " -lm"),
+            0);
+  ASSERT_EQ(Shell((dir / "app").string() + " < " + (dir / "in.txt").string() + " > " +
+                  (dir / "out.txt").string()),
+            0);
+  std::ifstream out((dir / "out.txt").string());
+  const std::vector<double> n = Numbers(std::string(std::istreambuf_iterator<char>(out), {}));
+  ASSERT_EQ(n.size(), 6u);
+  // The header's constants are the printed doubles of K_g⁻¹, b and G: the same operations in the
+  // same order here give the same bits.
+  const GyroParameters& g = f.cal.gyroscope->params;
+  const Mat33 K_inverse = g.K.inverse();
+  for (std::size_t k = 0; k < samples.size(); ++k) {
+    const auto& [raw, force] = samples[k];
+    double r[3];
+    for (int i = 0; i < 3; ++i) {
+      r[i] =
+          raw(i) - g.bias(i) - g.G(i, 0) * force(0) - g.G(i, 1) * force(1) - g.G(i, 2) * force(2);
+    }
+    for (int i = 0; i < 3; ++i) {
+      const double w = K_inverse(i, 0) * r[0] + K_inverse(i, 1) * r[1] + K_inverse(i, 2) * r[2];
+      EXPECT_EQ(n[3 * k + static_cast<std::size_t>(i)], w) << k << " " << i;
     }
   }
 }

@@ -370,6 +370,12 @@ int accelcal::cli::RunCommandLine(int argc, char** argv) {
         ->check(kFileName);
     apply_cmd->add_option("--units", apply.units,
                           "output unit m/s2 or g (default: the calibration's)");
+    apply_cmd->add_option("--gyro", apply.gyro,
+                          "the gyroscope's log on the same clock: its body rates [rad/s] too");
+    apply_cmd
+        ->add_option("--gyro-columns", apply.gyro_columns,
+                     "the gyroscope's x,y,z (or time,x,y,z) columns, in LOG or the --gyro log")
+        ->delimiter(',');
   }
 
   ReportArgs rep;

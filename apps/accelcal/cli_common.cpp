@@ -104,6 +104,32 @@ LoadedInput LoadInput(const InputArgs& in) {
   return LoadPositions(paths, options);
 }
 
+InputData ReadGyroLog(const InputArgs& input, const std::string& gyro,
+                      const std::vector<std::string>& gyro_columns, bool fingerprint) {
+  if (gyro_columns.size() != 0 && gyro_columns.size() != 3 && gyro_columns.size() != 4) {
+    throw UsageError("--gyro-columns takes x,y,z or time,x,y,z");
+  }
+  if (gyro.empty() && gyro_columns.empty()) {
+    throw UsageError("the gyroscope's rates: give --gyro LOG or --gyro-columns");
+  }
+  if (gyro.empty() && input.path == "-") {
+    throw UsageError("--gyro-columns reads the log a second time: it cannot be standard input");
+  }
+  ReadOptions read = MakeReadOptions(input);
+  read.kind = InputKind::kRaw;
+  read.columns = gyro_columns;
+  if (gyro.empty() && read.columns.size() == 3 && input.columns.size() == 4) {
+    read.columns.insert(read.columns.begin(), input.columns.front());
+  }
+  read.fingerprint = fingerprint && !gyro.empty();  // the log itself is hashed already
+  const std::string& path = gyro.empty() ? input.path : gyro;
+  try {
+    return ReadInput(path, read);
+  } catch (const DataError& e) {
+    throw InputError(path, 0, e.what());
+  }
+}
+
 Gravity ResolveGravity(const GravityArgs& args) {
   Gravity g;
   g.unit = ParseChoice<ForceUnit>(args.units, "--units");

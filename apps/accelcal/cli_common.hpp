@@ -64,6 +64,13 @@ ReadOptions MakeReadOptions(const InputArgs& in);
 
 // The input files of a calibration, read, detected and pooled.
 LoadedInput LoadInput(const InputArgs& in);
+/// The gyroscope's log beside the accelerometer's `input`: `gyro` (empty: `input` itself, read
+/// again for `gyro_columns`), read with `input`'s options and `gyro_columns` (x,y,z or
+/// time,x,y,z; with 3 in `input` itself, `input`'s time column in front when its columns name
+/// one). `fingerprint`: hash a separate file for the provenance. Usage errors for bad columns or
+/// standard input read twice; InputError naming the file for what it holds.
+InputData ReadGyroLog(const InputArgs& input, const std::string& gyro,
+                      const std::vector<std::string>& gyro_columns, bool fingerprint);
 
 struct Gravity {
   double in_unit;  // gravity magnitude in the output unit

@@ -219,16 +219,6 @@ bool GyroWanted(const CalibrateArgs& args) {
   return !args.gyro.empty() || !args.gyro_columns.empty();
 }
 
-// The gyro's columns: as given, with the accelerometer's time column in front when the rates
-// are in INPUT itself and the accelerometer's columns name a time column.
-std::vector<std::string> GyroColumns(const CalibrateArgs& args) {
-  std::vector<std::string> columns = args.gyro_columns;
-  if (args.gyro.empty() && columns.size() == 3 && args.input.columns.size() == 4) {
-    columns.insert(columns.begin(), args.input.columns.front());
-  }
-  return columns;
-}
-
 GyroCalibrationOptions GyroOptions(const CalibrateArgs& args) {
   GyroCalibrationOptions o;
   o.unit = ParseChoice<GyroUnit>(args.gyro_units, "--gyro-units");
@@ -252,24 +242,9 @@ GyroRun RunGyro(const CalibrateArgs& args, const LoadedInput& in, const Calibrat
         "the gyroscope is calibrated from one raw log (its turns between the positions): give "
         "one INPUT that is a raw log");
   }
-  if (args.gyro_columns.size() != 0 && args.gyro_columns.size() != 3 &&
-      args.gyro_columns.size() != 4) {
-    throw UsageError("--gyro-columns takes x,y,z or time,x,y,z");
-  }
   GyroRun run;
   run.path = args.gyro.empty() ? args.input.path : args.gyro;
-  ReadOptions read = MakeReadOptions(args.input);
-  read.kind = InputKind::kRaw;
-  read.columns = GyroColumns(args);
-  read.fingerprint = !args.gyro.empty();  // INPUT itself is in the provenance already
-  if (args.gyro.empty() && args.input.path == "-") {
-    throw UsageError("--gyro-columns reads INPUT a second time: it cannot be standard input");
-  }
-  try {
-    run.data = ReadInput(run.path, read);
-  } catch (const DataError& e) {
-    throw InputError(run.path, 0, e.what());
-  }
+  run.data = ReadGyroLog(args.input, args.gyro, args.gyro_columns, true);
   run.calibration =
       CalibrateGyro(in.files.front().data.raw, run.data.raw, in.positions, accel, options);
   return run;

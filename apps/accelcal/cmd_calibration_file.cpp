@@ -12,20 +12,27 @@
 #include <stdexcept>
 
 #include "accelcal/export.hpp"
+#include "accelcal/gyro_calibration.hpp"
 #include "accelcal/report.hpp"
 #include "cli_common.hpp"
 #include "output.hpp"
 
 namespace accelcal::cli {
 int RunApply(const ApplyArgs& args) {
-  CheckOutputs({{"-o", args.output}}, {args.calibration, args.input.path});
+  CheckOutputs({{"-o", args.output}}, {args.calibration, args.input.path, args.gyro});
   const LoadedCalibration cal = ParseCalibrationJson(
       ReadFileToString(args.calibration, kMaxSmallFileBytes), args.calibration);
   RefuseFailed(cal, args.calibration);
-  if (cal.has_gyroscope()) {
+  const bool gyro = !args.gyro.empty() || !args.gyro_columns.empty();
+  if (gyro && !cal.has_gyroscope()) {
+    throw UsageError(args.calibration +
+                     " holds no gyroscope calibration: --gyro and --gyro-columns need one "
+                     "(calibrate --gyro)");
+  }
+  if (cal.has_gyroscope() && !gyro) {
     Warn(
-        "%s: its gyroscope calibration is not applied: apply corrects the accelerometer's "
-        "samples only, so far\n",
+        "%s: its gyroscope calibration is not applied: give the rates with --gyro or "
+        "--gyro-columns\n",
         args.calibration.c_str());
   }
   ForceUnit unit = cal.unit;
@@ -44,6 +51,11 @@ int RunApply(const ApplyArgs& args) {
   bar.Finish();
   const RawLog& log = data.raw;
   const bool has_time = !log.time_s.empty();
+  InputData rates;
+  if (gyro) {
+    rates = ReadGyroLog(args.input, args.gyro, args.gyro_columns, false);
+    CheckGyroClock(log, rates.raw);
+  }
   // Every reading is checked before anything is written; the output is then streamed.
   for (std::size_t i = 0; i < log.samples.size(); ++i) {
     if (!SpecificForce(cal.params, log.samples[i])) {
@@ -53,13 +65,14 @@ int RunApply(const ApplyArgs& args) {
   }
   OutputFile file(args.output.empty() ? "-" : args.output);  // buffers: one Write per row
   file.Write("# accelcal apply " + VisibleLine(args.calibration) + ": specific force in " +
-             std::string(ToString(unit)) + "\n");
+             std::string(ToString(unit)) + (gyro ? ", body rate in rad/s" : "") + "\n");
   if (log.time) {  // the clock stated once: times are seconds from the first sample
     file.Write("# time: seconds from the first sample, at " + FormatNumber(log.time->origin_s) +
                " s on the log's clock (read in " + std::string(ToString(log.time->unit)) + ")\n");
   }
-  file.Write(has_time ? "time,x,y,z\n" : "x,y,z\n");
-  char row[128];
+  file.Write(std::string(has_time ? "time,x,y,z" : "x,y,z") + (gyro ? ",wx,wy,wz\n" : "\n"));
+  const Mat33 gyro_K_inverse = gyro ? Mat33(cal.gyroscope->params.K.inverse()) : Mat33::Zero();
+  char row[256];
   for (std::size_t i = 0; i < log.samples.size(); ++i) {
     const Vec3 f = *SpecificForce(cal.params, log.samples[i]);
     char* p = row;
@@ -68,7 +81,12 @@ int RunApply(const ApplyArgs& args) {
       *p++ = end;
     };
     if (has_time) number(log.time_s[i], ',');
-    for (int a = 0; a < 3; ++a) number(f(a) * factor, a < 2 ? ',' : '\n');
+    for (int a = 0; a < 3; ++a) number(f(a) * factor, a < 2 || gyro ? ',' : '\n');
+    if (gyro) {  // w = K_g⁻¹ (raw − b_g − G f), f in the calibration's unit
+      const GyroParameters& g = cal.gyroscope->params;
+      const Vec3 w = gyro_K_inverse * (rates.raw.samples[i] - g.bias - g.G * f);
+      for (int a = 0; a < 3; ++a) number(w(a), a < 2 ? ',' : '\n');
+    }
     file.Write(std::string_view(row, static_cast<std::size_t>(p - row)));
   }
   file.Commit();

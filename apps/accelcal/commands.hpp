@@ -121,6 +121,8 @@ struct ApplyArgs {
   InputArgs input;
   std::string output;                // empty: stdout
   std::optional<std::string> units;  // convert to this unit
+  std::string gyro;                  // the gyroscope's log (ReadGyroLog)
+  std::vector<std::string> gyro_columns;
 };
 
 struct ReportArgs {

@@ -124,6 +124,10 @@ struct GyroCalibration {
   std::optional<CalibrationResult> accelerometer;
 };
 
+/// Throws DataError unless `gyro` holds a rate sample at each sample of `accel` (the same count,
+/// times within half the typical step): the two streams of one clock.
+void CheckGyroClock(const RawLog& accel, const RawLog& gyro);
+
 /// Calibrates the gyroscope of `gyro`, recorded beside the accelerometer of `accel` on the same
 /// clock (one gyro sample at each accelerometer sample's time), from the still positions of
 /// `accel` (`positions`, in time order, each with its interval) and their calibration

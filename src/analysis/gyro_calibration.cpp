@@ -38,30 +38,6 @@ constexpr double kMaxDegreesPerStep = 10.0;
 
 std::string AxisName(int axis) { return std::string(1, static_cast<char>('x' + axis)); }
 
-// The two streams must be one clock: a gyro sample at each accelerometer sample's time.
-void CheckSameClock(const RawLog& accel, const RawLog& gyro) {
-  if (gyro.samples.size() != accel.samples.size()) {
-    throw DataError("the gyroscope's log " + gyro.source + " has " +
-                    std::to_string(gyro.samples.size()) + " samples and the accelerometer's " +
-                    std::to_string(accel.samples.size()) +
-                    ": the two streams must be on one clock, a rate sample at each "
-                    "accelerometer sample's time");
-  }
-  if (gyro.time_s.empty() || accel.time_s.empty()) return;  // same rows of one file
-  const double step = accel.time ? accel.time->typical_step_s : 0.0;
-  const double origin_offset =
-      (gyro.time ? gyro.time->origin_s : 0.0) - (accel.time ? accel.time->origin_s : 0.0);
-  for (std::size_t k = 0; k < gyro.time_s.size(); ++k) {
-    const double d = gyro.time_s[k] + origin_offset - accel.time_s[k];
-    if (!(std::abs(d) <= 0.5 * step)) {
-      throw DataError("the gyroscope's sample " + std::to_string(k + 1) + " (line " +
-                      std::to_string(gyro.line.empty() ? k + 1 : gyro.line[k]) + " of " +
-                      gyro.source + ") is " + Num(d, 6) +
-                      " s from the accelerometer's: the two streams must be on one clock");
-    }
-  }
-}
-
 // The times the rates are integrated at: the gyro's timestamps when every step is positive, else
 // (timestamps coarser than the samples, repeated) the sample index at the log's rate; the
 // accelerometer's (the same clock) when the gyro's log has no time column.
@@ -461,6 +437,30 @@ double RmsDeg(const std::vector<double>& rad) {
 
 }  // namespace
 
+// The two streams must be one clock: a gyro sample at each accelerometer sample's time.
+void CheckGyroClock(const RawLog& accel, const RawLog& gyro) {
+  if (gyro.samples.size() != accel.samples.size()) {
+    throw DataError("the gyroscope's log " + gyro.source + " has " +
+                    std::to_string(gyro.samples.size()) + " samples and the accelerometer's " +
+                    std::to_string(accel.samples.size()) +
+                    ": the two streams must be on one clock, a rate sample at each "
+                    "accelerometer sample's time");
+  }
+  if (gyro.time_s.empty() || accel.time_s.empty()) return;  // same rows of one file
+  const double step = accel.time ? accel.time->typical_step_s : 0.0;
+  const double origin_offset =
+      (gyro.time ? gyro.time->origin_s : 0.0) - (accel.time ? accel.time->origin_s : 0.0);
+  for (std::size_t k = 0; k < gyro.time_s.size(); ++k) {
+    const double d = gyro.time_s[k] + origin_offset - accel.time_s[k];
+    if (!(std::abs(d) <= 0.5 * step)) {
+      throw DataError("the gyroscope's sample " + std::to_string(k + 1) + " (line " +
+                      std::to_string(gyro.line.empty() ? k + 1 : gyro.line[k]) + " of " +
+                      gyro.source + ") is " + Num(d, 6) +
+                      " s from the accelerometer's: the two streams must be on one clock");
+    }
+  }
+}
+
 GyroCalibration CalibrateGyro(const RawLog& accel, const RawLog& gyro,
                               const std::vector<Position>& positions,
                               const CalibrationResult& accel_cal,
@@ -468,7 +468,7 @@ GyroCalibration CalibrateGyro(const RawLog& accel, const RawLog& gyro,
   if (!options.model && !options.validate) {
     throw std::invalid_argument("CalibrateGyro: the automatic model choice needs validation");
   }
-  CheckSameClock(accel, gyro);
+  CheckGyroClock(accel, gyro);
   Built built = BuildData(accel, gyro, positions, accel_cal, options);
   GyroFitData& data = built.data;
   const std::size_t needed = 6;

@@ -114,6 +114,21 @@ TEST(GyroCalibration, FirstOrderHeldOutAgreesWithFullRefits) {
   }
 }
 
+TEST(GyroCalibration, SameBitsOnAnyThreadCount) {
+  GyroCalibrationOptions o;
+  o.threads = 1;
+  const GyroCalibration one = Calibrated(Xsens(), o);
+  for (int threads : {2, 3}) {
+    o.threads = threads;
+    const GyroCalibration many = Calibrated(Xsens(), o);
+    EXPECT_EQ(Pack(many.params, many.model), Pack(one.params, one.model)) << threads;
+    EXPECT_EQ(many.covariance, one.covariance) << threads;
+    EXPECT_EQ(many.heldout_rms_deg, one.heldout_rms_deg) << threads;
+    ASSERT_TRUE(many.accelerometer && one.accelerometer);
+    EXPECT_EQ(many.accelerometer->params.K, one.accelerometer->params.K) << threads;
+  }
+}
+
 TEST(GyroCalibration, RefusesStreamsOnDifferentClocks) {
   const Recording& r = Xsens();
   RawLog shorter = r.gyro.raw;

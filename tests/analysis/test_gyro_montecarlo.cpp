@@ -1,0 +1,110 @@
+// The gyroscope's calibration against the truth of simulated recordings (gyro_calibration.hpp):
+// noise-free recovery, and over many noisy recordings the RMS error of every gyro parameter
+// against its reported σ and the coverage of its ±1σ interval (issue 18: RMSE/σ ≤ 1.1, 68 ± 3 %).
+#include <cmath>
+#include <random>
+
+#include <gtest/gtest.h>
+
+#include "accelcal/calibrate.hpp"
+#include "accelcal/gyro_calibration.hpp"
+#include "accelcal/simulate.hpp"
+#include "accelcal/static_detection.hpp"
+
+namespace accelcal {
+namespace {
+
+constexpr bool kSanitized = ACCELCAL_TESTS_SANITIZED;
+constexpr double kG = kYang2012Gravity_ms2;
+
+GyroParameters XsensLikeGyro() {
+  GyroParameters g;
+  g.K << 4778, 12, -8, -15, 4758, 20, 9, -11, 4766;  // counts per rad/s
+  g.bias = Vec3(32740, 32810, 32650);
+  g.G << 1.5, -0.4, 0.2, 0.3, -1.1, 0.6, -0.2, 0.5, 0.9;  // counts per m/s²
+  return g;
+}
+
+struct Recording {
+  RawLog accel, gyro;
+  std::vector<Position> positions;
+  CalibrationResult accel_cal;
+};
+
+// Yang's 18 positions held 4 s with 3 s turns at 100 Hz; the accelerometer with 1 count of noise,
+// the gyro with `gyro_sigma` counts (27: the Xsens's).
+Recording Simulate(std::uint64_t seed, double gyro_sigma) {
+  RawLogSimulation options;
+  options.static_s = 4.0;
+  options.transition_s = 3.0;
+  options.sigma_raw_per_sample = Vec3::Constant(1.0);
+  options.seed = seed;
+  GyroSimulation gyro;
+  gyro.truth = XsensLikeGyro();
+  gyro.sigma_raw_per_sample = Vec3::Constant(gyro_sigma);
+  const SimulatedImuLog log =
+      SimulateImuLog(Yang2012Truth(), kG, Yang18Directions(), options, gyro);
+  Recording r;
+  for (RawLog* raw : {&r.accel, &r.gyro}) {
+    raw->source = "simulated";
+    raw->time_s = log.time_s;
+    raw->rate_hz = options.rate_hz;
+    for (std::size_t k = 0; k < log.time_s.size(); ++k) {
+      raw->line.push_back(static_cast<std::uint32_t>(k + 1));
+    }
+  }
+  r.accel.samples = log.accel;
+  r.gyro.samples = log.gyro;
+  r.positions = PositionsFromIntervals(DetectStaticIntervals(r.accel, {}).intervals);
+  CalibrationOptions o;
+  o.gravity = kG;
+  o.reading_sigmas = SigmasOfMeans(r.positions);
+  o.cross_validate = false;
+  r.accel_cal = Calibrate(Means(r.positions), o);
+  return r;
+}
+
+TEST(GyroMonteCarlo, RmsErrorAndCoverageOfEveryGyroParameter) {
+  const int runs = kSanitized ? 40 : 400;
+  for (GyroEstimator estimator : {GyroEstimator::kJoint, GyroEstimator::kTwoStage}) {
+    const GyroModelKind kind = GyroModelKind::kGSensitive;
+    const int P = NumGyroParameters(kind);
+    const Eigen::VectorXd truth = Pack(XsensLikeGyro(), kind);
+    Eigen::VectorXd sum_e2 = Eigen::VectorXd::Zero(P), sum_var = Eigen::VectorXd::Zero(P);
+    Eigen::VectorXi covered = Eigen::VectorXi::Zero(P);
+    int done = 0;
+    for (int seed = 1; seed <= runs; ++seed) {
+      const Recording r = Simulate(static_cast<std::uint64_t>(seed), 27.0);
+      ASSERT_EQ(r.positions.size(), 18u) << seed;
+      GyroCalibrationOptions o;
+      o.model = kind;
+      o.estimator = estimator;
+      o.validate = false;
+      const GyroCalibration g = CalibrateGyro(r.accel, r.gyro, r.positions, r.accel_cal, o);
+      ASSERT_EQ(g.covariance.rows(), P);
+      const Eigen::VectorXd e = Pack(g.params, kind) - truth;
+      for (int i = 0; i < P; ++i) {
+        sum_e2(i) += e(i) * e(i);
+        sum_var(i) += g.covariance(i, i);
+        covered(i) += std::abs(e(i)) <= std::sqrt(g.covariance(i, i)) ? 1 : 0;
+      }
+      ++done;
+    }
+    // RMSE/σ: its estimate from n runs has a relative standard error of about 1/√(2n) (5 % at 400);
+    // coverage: binomial, standard error √(0.68·0.32/n) (2.3 % at 400).
+    const double coverage_se = std::sqrt(0.68 * 0.32 / done);
+    for (int i = 0; i < P; ++i) {
+      const double ratio = std::sqrt(sum_e2(i) / sum_var(i));
+      const double coverage = static_cast<double>(covered(i)) / done;
+      const auto& name = GyroParameterSlots(kind)[static_cast<std::size_t>(i)].name;
+      std::printf("%s %s: RMSE/sigma %.3f coverage %.3f\n",
+                  std::string(ToString(estimator)).c_str(), std::string(name).c_str(), ratio,
+                  coverage);
+      EXPECT_LE(ratio, 1.1 + 2 / std::sqrt(2.0 * done)) << name;
+      EXPECT_NEAR(coverage, 0.68, 0.03 + 2 * coverage_se) << name;
+    }
+  }
+}
+
+}  // namespace
+}  // namespace accelcal

@@ -184,12 +184,12 @@ int accelcal::cli::RunCommandLine(int argc, char** argv) {
                      "linear (K, b), g-sensitive (K, b and a rate bias in proportion to the "
                      "specific force), or auto (the one that predicts held-out rotations better)")
         ->capture_default_str();
-    calibrate
-        ->add_option("--gyro-estimator", cal.gyro_estimator,
-                     "joint (both sensors and every gravity direction in one fit: the rotations "
-                     "also calibrate the accelerometer) or two-stage (the accelerometer's "
-                     "calibration held)")
-        ->capture_default_str();
+    calibrate->add_option(
+        "--gyro-estimator", cal.gyro_estimator,
+        "joint (both sensors and every gravity direction in one fit: the rotations "
+        "also calibrate the accelerometer; the default) or two-stage (the "
+        "accelerometer's calibration held; the default and the only choice with "
+        "--orientations, whose directions are known)");
     calibrate->add_flag("!--no-crossval", cal.cross_validate,
                         "skip the leave-one-position-out validation (one refit per position)");
     calibrate->add_option("--raw-units", cal.raw_units, "label of the raw unit (e.g. counts)")

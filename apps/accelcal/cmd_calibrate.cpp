@@ -222,7 +222,16 @@ bool GyroWanted(const CalibrateArgs& args) {
 GyroCalibrationOptions GyroOptions(const CalibrateArgs& args) {
   GyroCalibrationOptions o;
   o.unit = ParseChoice<GyroUnit>(args.gyro_units, "--gyro-units");
-  o.estimator = ParseChoice<GyroEstimator>(args.gyro_estimator, "--gyro-estimator");
+  const bool known = !args.orientations.empty();
+  o.estimator = args.gyro_estimator.empty()
+                    ? (known ? GyroEstimator::kTwoStage : GyroEstimator::kJoint)
+                    : ParseChoice<GyroEstimator>(args.gyro_estimator, "--gyro-estimator");
+  if (known && o.estimator == GyroEstimator::kJoint) {
+    throw UsageError(
+        "--gyro-estimator joint fits every position's gravity direction, which --orientations "
+        "gives: the gyroscope is fitted on top of the known-orientation calibration "
+        "(two-stage)");
+  }
   if (args.gyro_model != "auto") {
     o.model = ParseEnum(GyroModelKindFromString(args.gyro_model), args.gyro_model, "--gyro-model",
                         (NameList<GyroModelKind>() + ", auto").c_str());
@@ -276,12 +285,14 @@ void PrintGyro(const GyroRun& run, const std::string& raw_unit, const char* forc
       g.noise_sigma_raw(0), g.noise_sigma_raw(1), g.noise_sigma_raw(2), raw_unit.c_str(),
       g.still_scatter_ratio, g.rotation_scatter_ratio,
       g.accelerometer ? Format(", accelerometer %.3g", g.accel_scatter_ratio).c_str() : "");
-  Say("\nrotations (angle turned, and the angle between the gravity direction it predicts and the "
-      "one fitted; deg)\n");
-  Say("  %5s %5s %9s %9s %10s %10s\n", "from", "to", "time [s]", "angle", "residual", "held-out");
+  Say("\nrotations (the rotation's angle, the angle turned through +- 1 sigma, and the angle "
+      "between "
+      "the gravity direction it predicts and the one fitted; deg)\n");
+  Say("  %5s %5s %9s %9s %18s %10s %10s\n", "from", "to", "time [s]", "angle", "turned", "residual",
+      "held-out");
   for (const GyroRotation& r : g.rotations) {
-    Say("  %5zu %5zu %9.3f %9.2f %10.4f %10.4f\n", r.from + 1, r.to + 1, r.duration_s, r.angle_deg,
-        r.residual_deg, r.heldout_deg);
+    Say("  %5zu %5zu %9.3f %9.2f %9.2f +- %5.2f %10.4f %10.4f\n", r.from + 1, r.to + 1,
+        r.duration_s, r.angle_deg, r.turned_deg, r.turned_std_deg, r.residual_deg, r.heldout_deg);
   }
   Say("rms direction error %.4f deg; held out %.4f deg (each rotation predicted by a fit without "
       "it)\n",
@@ -452,10 +463,14 @@ int RunCalibrateKnownOrientations(const CalibrateArgs& args) {
   options.reading_sigmas = SigmasOfMeans(in.positions);
   const CalibrationResult result =
       CalibrateKnownOrientations(Means(in.positions), orientations.directions, options);
-  return WriteCalibration(args, in, g, result, nullptr,
-                          Format("orient.   %s: %zu known orientations\n",
-                                 args.orientations.c_str(), orientations.directions.size()),
-                          &orientations);
+  const std::string note = Format("orient.   %s: %zu known orientations\n",
+                                  args.orientations.c_str(), orientations.directions.size());
+  if (GyroWanted(args)) {
+    // The gyroscope on top of the known directions: its K_g maps into the platform frame.
+    const GyroRun gyro = RunGyro(args, in, result);
+    return WriteCalibration(args, in, g, result, nullptr, note, &orientations, &gyro);
+  }
+  return WriteCalibration(args, in, g, result, nullptr, note, &orientations);
 }
 
 }  // namespace
@@ -471,13 +486,8 @@ int RunCalibrate(const CalibrateArgs& args) {
     inputs.push_back(args.gyro);
     CheckOutputs({{"-o", args.output}, {"--report", args.report}}, inputs);
   }
-  if (!args.orientations.empty()) {
-    if (GyroWanted(args)) {
-      throw UsageError("--gyro and --gyro-columns do not apply with --orientations");
-    }
-    return RunCalibrateKnownOrientations(args);
-  }
   if (GyroWanted(args)) GyroOptions(args);  // usage errors before anything is read
+  if (!args.orientations.empty()) return RunCalibrateKnownOrientations(args);
   CalibrationOptions options;
   const bool auto_model = args.model == "auto";
   options.model = auto_model ? ModelKind::kLinear

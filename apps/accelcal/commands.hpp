@@ -83,7 +83,7 @@ struct CalibrateArgs {
   std::vector<std::string> gyro_columns;
   std::string gyro_units = "raw";
   std::string gyro_model = "auto";
-  std::string gyro_estimator = "joint";
+  std::string gyro_estimator;  // empty: joint, or two-stage with known orientations
   /// Options that a known-orientation fit does not take, when given explicitly.
   std::vector<std::string> gravity_only_options;
   bool cross_validate = true;

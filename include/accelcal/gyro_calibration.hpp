@@ -85,7 +85,12 @@ struct GyroRotation {
   std::size_t from = 0, to = 0;                   ///< positions (0-based, in time order)
   std::size_t first_sample = 0, last_sample = 0;  ///< the samples integrated, inclusive
   double duration_s = 0;
-  double angle_deg = 0;     ///< the angle turned, from the calibrated rates
+  double angle_deg = 0;  ///< the angle of the rotation, |Log R|, from the calibrated rates
+  /// The angle turned through, |∫ ω dt| of the calibrated rates (IntegrateTurnedAngle): a turn
+  /// about a fixed axis unwrapped (a full turn reads 360, where angle_deg reads about 0), and its
+  /// 1σ from the parameters' covariance and the rate noise: the check against a turn of known
+  /// angle (a turntable's, or a full turn against a stop).
+  double turned_deg = 0, turned_std_deg = 0;
   double residual_deg = 0;  ///< angle between the predicted and the fitted direction of `to`
   /// The same with the fit that left this rotation out (validation); NaN without one.
   double heldout_deg = std::nan("");

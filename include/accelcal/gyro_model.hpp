@@ -143,4 +143,24 @@ Mat33 IntegrateCalibratedRate(const GyroParameters& params, GyroModelKind kind,
                               Eigen::MatrixXd* J_R_theta = nullptr,
                               const Vec3* noise_sigma_raw = nullptr, Mat33* covariance = nullptr);
 
+/// The angle the body turned through between the first and the last sample: θ = |s|, s = ∫ ω dt
+/// of the calibrated rates ω_k = BodyRate(params, ω_raw,k, f_k), summed with the weights c_k of
+/// `rule` (trapezoidal: half of the step before sample k and half of the step after it;
+/// piecewise-constant: the step after it). About a fixed axis it is the rotation's angle unwrapped
+/// (a full turn gives 2π, where the angle of the rotation, |Log R|, gives 0); for a turn whose axis
+/// wanders it is longer than |Log R|. It is linear in the rates, so its parameter gradient and its
+/// noise are exact: with n = s/θ and a = K_g⁻ᵀ n, ∂θ/∂θ_p in output axis i's group is
+/// −a_i (s_j for K_ij, Σ c_k for b_i, (Σ c_k f_k)_j for G_ij), and white noise of 1σ
+/// `noise_sigma_raw` per axis on each raw sample adds the variance Σ c_k² aᵀ diag(σ²) a.
+struct TurnedAngle {
+  double angle_rad = 0;
+  Eigen::RowVectorXd gradient;  ///< ∂θ/∂θ_p over the flat parameters of the model [rad]
+  double noise_variance_rad2 = 0;
+};
+/// Throws std::invalid_argument as IntegrateCalibratedRate.
+TurnedAngle IntegrateTurnedAngle(const GyroParameters& params, GyroModelKind kind,
+                                 const std::vector<double>& t_s, const std::vector<Vec3>& raw,
+                                 const std::vector<Vec3>& f, RateInterpolation rule,
+                                 const Vec3& noise_sigma_raw);
+
 }  // namespace accelcal

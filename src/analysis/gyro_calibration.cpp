@@ -612,6 +612,19 @@ GyroCalibration CalibrateGyro(const RawLog& accel, const RawLog& gyro,
       result.accelerometer = std::move(a);
     }
   }
+  // The angle each turn turned through, unwrapped, and its σ from the parameters' covariance and
+  // the rate noise of its samples (a check of the scale against a turn of known angle).
+  for (std::size_t k = 0; k < f.data.motions.size(); ++k) {
+    const GyroMotion& m = f.data.motions[k];
+    const TurnedAngle turned = IntegrateTurnedAngle(f.solution.gyro, f.kind, m.t_s, m.raw, m.f,
+                                                    f.data.rule, data.noise_sigma_raw);
+    double variance = turned.noise_variance_rad2;
+    if (result.covariance.size() > 0) {
+      variance += turned.gradient.dot(result.covariance * turned.gradient.transpose());
+    }
+    result.rotations[k].turned_deg = turned.angle_rad * kRadToDeg;
+    result.rotations[k].turned_std_deg = std::sqrt(variance) * kRadToDeg;
+  }
   result.summary.iterations = sum.iterations;
   result.summary.termination = sum.termination;
   result.summary.termination_message = sum.termination_message;

@@ -223,4 +223,55 @@ Mat33 IntegrateCalibratedRate(const GyroParameters& params, GyroModelKind kind,
                                                        J_R_theta, noise_sigma_raw, covariance);
 }
 
+TurnedAngle IntegrateTurnedAngle(const GyroParameters& params, GyroModelKind kind,
+                                 const std::vector<double>& t_s, const std::vector<Vec3>& raw,
+                                 const std::vector<Vec3>& f, RateInterpolation rule,
+                                 const Vec3& noise_sigma_raw) {
+  if (t_s.size() != raw.size() || t_s.size() != f.size() || t_s.empty()) {
+    throw std::invalid_argument("IntegrateTurnedAngle: " + std::to_string(t_s.size()) +
+                                " times for " + std::to_string(raw.size()) + " rates and " +
+                                std::to_string(f.size()) + " specific forces");
+  }
+  const Eigen::PartialPivLU<Mat33> lu(params.K);
+  if (!(lu.determinant() != 0.0) || !std::isfinite(lu.determinant())) {
+    throw std::invalid_argument("IntegrateTurnedAngle: K_g is singular");
+  }
+  const Mat33 K_inverse = lu.inverse();
+  // The weights c_k of the rule, and the sums s = K_g⁻¹ Σ c_k u_k (u_k = ω_raw,k − b_g − G f_k),
+  // Σ c_k, Σ c_k f_k and Σ c_k².
+  const bool trapezoid = rule == RateInterpolation::kTrapezoidal;
+  const std::size_t n = t_s.size();
+  Vec3 u_sum = Vec3::Zero(), f_sum = Vec3::Zero();
+  double c_sum = 0, c_sq = 0;
+  for (std::size_t k = 0; k < n; ++k) {
+    const double before = k > 0 ? t_s[k] - t_s[k - 1] : 0.0;
+    const double after = k + 1 < n ? t_s[k + 1] - t_s[k] : 0.0;
+    if (k + 1 < n && !(after > 0)) {
+      throw std::invalid_argument("IntegrateTurnedAngle: times do not increase at sample " +
+                                  std::to_string(k + 1));
+    }
+    const double c = trapezoid ? 0.5 * (before + after) : after;
+    u_sum += c * (raw[k] - params.bias - params.G * f[k]);
+    f_sum += c * f[k];
+    c_sum += c;
+    c_sq += c * c;
+  }
+  const Vec3 s = K_inverse * u_sum;
+  TurnedAngle out;
+  out.angle_rad = s.norm();
+  out.gradient = Eigen::RowVectorXd::Zero(NumGyroParameters(kind));
+  if (!(out.angle_rad > 0)) return out;  // no turn: no direction to differentiate along
+  const Vec3 a = K_inverse.transpose() * (s / out.angle_rad);
+  const auto& slots = GyroParameterSlots(kind);
+  for (std::size_t p = 0; p < slots.size(); ++p) {
+    const GyroParameterSlot& slot = slots[p];
+    const double value = slot.group == GyroParameterGroup::kK      ? s(slot.col)
+                         : slot.group == GyroParameterGroup::kBias ? c_sum
+                                                                   : f_sum(slot.col);
+    out.gradient(static_cast<Eigen::Index>(p)) = -a(slot.row) * value;
+  }
+  out.noise_variance_rad2 = c_sq * a.cwiseAbs2().dot(noise_sigma_raw.cwiseAbs2());
+  return out;
+}
+
 }  // namespace accelcal

@@ -250,6 +250,8 @@ ordered_json GyroscopeSection(const GyroCalibration& g, const CalibrationFileInf
                          {"last_sample", r.last_sample},
                          {"duration_s", r.duration_s},
                          {"angle_deg", r.angle_deg},
+                         {"turned_deg", r.turned_deg},
+                         {"turned_std_deg", r.turned_std_deg},
                          {"residual_deg", r.residual_deg},
                          {"heldout_deg", Nullable(r.heldout_deg)},
                          {"statistic", Nullable(r.statistic)},

@@ -184,6 +184,84 @@ TEST(GyroModel, PropagatedNoiseCovarianceMatchesMonteCarlo) {
   }
 }
 
+TEST(GyroModel, AFullTurnAboutAFixedAxisTurnsThroughTwoPi) {
+  // The rate about a fixed axis rising and falling linearly in time (a triangle whose corner is a
+  // sample): the trapezoidal sum is the exact integral, 2π, where the rotation's angle |Log R| is
+  // 0.
+  const GyroParameters p = Typical(8);
+  const Vec3 axis = Vec3(0.3, -0.5, 0.8).normalized();
+  const double two_pi = 2 * std::acos(-1.0);
+  const double peak = two_pi;  // a triangle 2 s long and 2π high: area 2π
+  std::vector<double> t;
+  std::vector<Vec3> raw, f;
+  for (int k = 0; k <= 200; ++k) {
+    const double tk = 0.01 * k;
+    const double rate = peak * (tk <= 1.0 ? tk : 2.0 - tk);
+    t.push_back(tk);
+    f.push_back(9.8 * axis);
+    raw.push_back(PredictRate(p, Vec3(rate * axis), f.back()));
+  }
+  const TurnedAngle turned = IntegrateTurnedAngle(p, GyroModelKind::kGSensitive, t, raw, f,
+                                                  RateInterpolation::kTrapezoidal, Vec3::Zero());
+  EXPECT_NEAR(turned.angle_rad, two_pi, 1e-12);
+  EXPECT_LT(so3::Log(IntegrateCalibratedRate(p, GyroModelKind::kGSensitive, t, raw, f,
+                                             RateInterpolation::kTrapezoidal))
+                .norm(),
+            1e-9);
+  EXPECT_EQ(turned.noise_variance_rad2, 0.0);
+}
+
+TEST(GyroModel, TurnedAngleGradientMatchesFiniteDifferences) {
+  const GyroParameters p = Typical(9);
+  const Motion m = Turn(p);
+  for (GyroModelKind kind : {GyroModelKind::kLinear, GyroModelKind::kGSensitive}) {
+    for (RateInterpolation rule :
+         {RateInterpolation::kPiecewiseConstant, RateInterpolation::kTrapezoidal}) {
+      GyroParameters q = p;
+      if (kind == GyroModelKind::kLinear) q.G.setZero();
+      const TurnedAngle turned = IntegrateTurnedAngle(q, kind, m.t, m.raw, m.f, rule, Vec3::Zero());
+      const auto angle = [&](const Eigen::VectorXd& t) -> Eigen::VectorXd {
+        return Eigen::VectorXd::Constant(
+            1, IntegrateTurnedAngle(UnpackGyro(t, kind), kind, m.t, m.raw, m.f, rule, Vec3::Zero())
+                   .angle_rad);
+      };
+      EXPECT_TRUE(testing::JacobianMatches(angle, Pack(q, kind), turned.gradient, 1e-6))
+          << ToString(kind) << " " << static_cast<int>(rule);
+    }
+  }
+}
+
+TEST(GyroModel, TurnedAngleNoiseMatchesMonteCarlo) {
+  // The sample variance of N draws has the standard deviation √(2/N) of the variance; 5 of them.
+  const GyroParameters p = Typical(10);
+  const Motion m = Turn(p);
+  const Vec3 sigma(40, 55, 70);
+  std::mt19937_64 random(11);
+  std::normal_distribution<double> normal;
+  for (RateInterpolation rule :
+       {RateInterpolation::kPiecewiseConstant, RateInterpolation::kTrapezoidal}) {
+    const TurnedAngle stated =
+        IntegrateTurnedAngle(p, GyroModelKind::kGSensitive, m.t, m.raw, m.f, rule, sigma);
+    constexpr int kDraws = 4000;
+    double sum = 0;
+    for (int draw = 0; draw < kDraws; ++draw) {
+      std::vector<Vec3> noisy = m.raw;
+      for (Vec3& r : noisy) {
+        for (int i = 0; i < 3; ++i) r(i) += sigma(i) * normal(random);
+      }
+      const double e =
+          IntegrateTurnedAngle(p, GyroModelKind::kGSensitive, m.t, noisy, m.f, rule, sigma)
+              .angle_rad -
+          stated.angle_rad;
+      sum += e * e;
+    }
+    EXPECT_NEAR(sum / kDraws, stated.noise_variance_rad2,
+                5 * std::sqrt(2.0 / kDraws) * stated.noise_variance_rad2)
+        << static_cast<int>(rule);
+    EXPECT_GT(stated.noise_variance_rad2, 1e-7);  // not vacuous: about 0.05°
+  }
+}
+
 TEST(GyroModel, IntegrationRefusesBadInput) {
   const Motion m = Turn(GyroParameters{});
   std::vector<double> t = m.t;

@@ -452,13 +452,25 @@ int accelcal::cli::RunCommandLine(int argc, char** argv) {
   InstallCleanupHandlers();
   // The command, then stdout checked: a summary that did not reach a full disk is an error too.
   // The file a DataError of the command is about (empty: none, e.g. a simulation).
-  std::string data_subject;
+  std::string& data_subject = DataSubject();
   const auto run = [&]() -> int {
     if (*calibrate) {
       data_subject = cal.input.path;
       for (const char* name :
            {"--method", "--init", "--frame", "--estimator", "--max-iterations"}) {
         if (calibrate->count(name) > 0) cal.gravity_only_options.emplace_back(name);
+      }
+      if (calibrate->count("--gyro") > 0 && cal.gyro.empty()) {
+        throw UsageError("--gyro: the file name is empty");
+      }
+      if (cal.gyro.empty() && cal.gyro_columns.empty()) {
+        for (const char* name : {"--gyro-units", "--gyro-model", "--gyro-estimator"}) {
+          if (calibrate->count(name) > 0) {
+            throw UsageError(std::string(name) +
+                             " applies to the gyroscope: give its rates with --gyro LOG or "
+                             "--gyro-columns");
+          }
+        }
       }
       cal.given_options = GivenOptions(*calibrate, {"output", "report", "json", "date"});
       cal.date_given = calibrate->count("--date") > 0;
@@ -473,6 +485,9 @@ int accelcal::cli::RunCommandLine(int argc, char** argv) {
       return RunCompare(cmp);
     }
     if (*apply_cmd) {
+      if (apply_cmd->count("--gyro") > 0 && apply.gyro.empty()) {
+        throw UsageError("--gyro: the file name is empty");
+      }
       data_subject = apply.input.path;
       return RunApply(apply);
     }
@@ -514,6 +529,9 @@ int accelcal::cli::RunCommandLine(int argc, char** argv) {
   } catch (const accelcal::InputError& e) {
     std::fprintf(stderr, "accelcal: %s\n", WithReaderFlags(e.what()).c_str());
     return kExitBadInput;
+  } catch (const accelcal::NotConvergedError& e) {
+    std::fprintf(stderr, "accelcal: %s: %s; nothing written\n", data_subject.c_str(), e.what());
+    return kExitNotConverged;
   } catch (const accelcal::DataError& e) {
     if (data_subject.empty()) {
       std::fprintf(stderr, "accelcal: %s\n", e.what());

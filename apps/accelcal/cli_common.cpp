@@ -104,8 +104,8 @@ LoadedInput LoadInput(const InputArgs& in) {
   return LoadPositions(paths, options);
 }
 
-InputData ReadGyroLog(const InputArgs& input, const std::string& gyro,
-                      const std::vector<std::string>& gyro_columns, bool fingerprint) {
+void CheckGyroColumns(const InputArgs& input, const std::string& gyro,
+                      const std::vector<std::string>& gyro_columns) {
   if (gyro_columns.size() != 0 && gyro_columns.size() != 3 && gyro_columns.size() != 4) {
     throw UsageError("--gyro-columns takes x,y,z or time,x,y,z");
   }
@@ -115,6 +115,24 @@ InputData ReadGyroLog(const InputArgs& input, const std::string& gyro,
   if (gyro.empty() && input.path == "-") {
     throw UsageError("--gyro-columns reads the log a second time: it cannot be standard input");
   }
+  if (gyro.empty() && input.columns.size() >= 3 && gyro_columns.size() >= 3 &&
+      std::equal(gyro_columns.end() - 3, gyro_columns.end(), input.columns.end() - 3)) {
+    throw UsageError(
+        "--gyro-columns names the accelerometer's columns (--columns): give the rates' own");
+  }
+  for (std::size_t a = 0; a < gyro_columns.size(); ++a) {
+    for (std::size_t b = 0; b < a; ++b) {
+      if (gyro_columns[a] == gyro_columns[b]) {
+        throw UsageError("--gyro-columns names '" + gyro_columns[a] +
+                         "' twice: each rate axis needs its own column");
+      }
+    }
+  }
+}
+
+InputData ReadGyroLog(const InputArgs& input, const std::string& gyro,
+                      const std::vector<std::string>& gyro_columns, bool fingerprint) {
+  CheckGyroColumns(input, gyro, gyro_columns);
   ReadOptions read = MakeReadOptions(input);
   read.kind = InputKind::kRaw;
   read.columns = gyro_columns;
@@ -123,11 +141,23 @@ InputData ReadGyroLog(const InputArgs& input, const std::string& gyro,
   }
   read.fingerprint = fingerprint && !gyro.empty();  // the log itself is hashed already
   const std::string& path = gyro.empty() ? input.path : gyro;
+  // The reader's "columns option" is --gyro-columns here: the rates' columns.
+  const auto gyro_flags = [](const std::string& text) {
+    return WithFlags(text, {{"the columns option's entry", "--gyro-columns entry"},
+                            {"the columns option", "--gyro-columns"}});
+  };
   try {
     return ReadInput(path, read);
+  } catch (const InputError& e) {
+    throw InputError(e.file(), e.line(), gyro_flags(e.reason()));
   } catch (const DataError& e) {
-    throw InputError(path, 0, e.what());
+    throw InputError(path, 0, gyro_flags(e.what()));
   }
+}
+
+std::string& DataSubject() {
+  static std::string subject;
+  return subject;
 }
 
 Gravity ResolveGravity(const GravityArgs& args) {

@@ -62,6 +62,15 @@ DataError NoStaticInterval(const StaticDetectionResult& d);
 
 ReadOptions MakeReadOptions(const InputArgs& in);
 
+/// The file a DataError of the running command is about, for its message (empty: none, e.g. a
+/// simulation); a command may change it while it works on another file (the gyroscope's log).
+std::string& DataSubject();
+
+/// The usage errors of the gyroscope's log and columns (ReadGyroLog checks them too), for a
+/// command to raise before it reads anything.
+void CheckGyroColumns(const InputArgs& input, const std::string& gyro,
+                      const std::vector<std::string>& gyro_columns);
+
 // The input files of a calibration, read, detected and pooled.
 LoadedInput LoadInput(const InputArgs& in);
 /// The gyroscope's log beside the accelerometer's `input`: `gyro` (empty: `input` itself, read

@@ -195,10 +195,13 @@ const char* OptionHint(const Finding& f) {
   return "";
 }
 
-// Warnings and failures on stderr (outliers and still periods not used are told where found).
-void PrintFindings(const Diagnosis& diagnosis, const std::string& path) {
+// Warnings and failures on stderr (outliers and still periods not used are told where found),
+// each under the file it is about: the gyroscope's under its log.
+void PrintFindings(const Diagnosis& diagnosis, const std::string& input_path,
+                   const std::string& gyro_path) {
   for (const Finding& f : diagnosis.findings) {
     if (f.code == "outlier" || f.code == "rejected_period") continue;
+    const std::string& path = f.code.rfind("gyro_", 0) == 0 ? gyro_path : input_path;
     if (f.severity == Severity::kFailure) {
       std::fprintf(stderr, "accelcal: %s: failed check (%s): %s%s\n", path.c_str(), f.code.c_str(),
                    f.message.c_str(), OptionHint(f));
@@ -254,8 +257,11 @@ GyroRun RunGyro(const CalibrateArgs& args, const LoadedInput& in, const Calibrat
   GyroRun run;
   run.path = args.gyro.empty() ? args.input.path : args.gyro;
   run.data = ReadGyroLog(args.input, args.gyro, args.gyro_columns, true);
+  const std::string subject = DataSubject();
+  DataSubject() = run.path;  // what CalibrateGyro refuses is the gyroscope's
   run.calibration =
       CalibrateGyro(in.files.front().data.raw, run.data.raw, in.positions, accel, options);
+  DataSubject() = subject;
   return run;
 }
 
@@ -294,23 +300,14 @@ void PrintGyro(const GyroRun& run, const std::string& raw_unit, const char* forc
     Say("  %5zu %5zu %9.3f %9.2f %9.2f +- %5.2f %10.4f %10.4f\n", r.from + 1, r.to + 1,
         r.duration_s, r.angle_deg, r.turned_deg, r.turned_std_deg, r.residual_deg, r.heldout_deg);
   }
-  Say("rms direction error %.4f deg; held out %.4f deg (each rotation predicted by a fit without "
-      "it)\n",
-      g.rms_deg, g.heldout_rms_deg);
-  Say("solver    %s\n", g.summary.termination_message.c_str());
-}
-
-// The turns the screening flagged, on stderr.
-void WarnFlaggedTurns(const GyroRun& run, const std::string& path) {
-  for (const GyroRotation& r : run.calibration.rotations) {
-    if (!r.flagged) continue;
-    Warn(
-        "%s: the turn from position %zu to %zu (samples %zu-%zu, %.3g s) disagrees with the "
-        "others: its held-out chi^2 %.3g is beyond %.3g (1 %% over all turns); a bump during "
-        "it? It was kept in the fit.\n",
-        path.c_str(), r.from + 1, r.to + 1, r.first_sample + 1, r.last_sample + 1, r.duration_s,
-        r.statistic, r.threshold);
+  if (std::isfinite(g.heldout_rms_deg)) {
+    Say("rms direction error %.4f deg; held out %.4f deg (each rotation predicted by a fit "
+        "without it)\n",
+        g.rms_deg, g.heldout_rms_deg);
+  } else {
+    Say("rms direction error %.4f deg; not held out\n", g.rms_deg);
   }
+  Say("solver    %s\n", g.summary.termination_message.c_str());
 }
 
 // The file's provenance: the options given, every input file (with the orientations) by name, size
@@ -352,6 +349,7 @@ int WriteCalibration(const CalibrateArgs& args, const LoadedInput& in, const Gra
     }
   }
   diagnosis_input.unit = g.unit;
+  if (gyro != nullptr) diagnosis_input.gyroscope = &gyro->calibration;
   for (const LoadedFile& f : in.files) {
     diagnosis_input.positions_by_row_count |= f.data.kind_from_row_count;
   }
@@ -406,8 +404,7 @@ int WriteCalibration(const CalibrateArgs& args, const LoadedInput& in, const Gra
              .c_str(),
          o.excluded ? " It was left out of the fit." : " It was kept in the fit.");
   }
-  PrintFindings(diagnosis, args.input.path);
-  if (gyro != nullptr) WarnFlaggedTurns(*gyro, gyro->path);
+  PrintFindings(diagnosis, args.input.path, gyro != nullptr ? gyro->path : args.input.path);
   if (args.json) {
     WriteFileAtomically("-", json);
   } else {
@@ -486,7 +483,10 @@ int RunCalibrate(const CalibrateArgs& args) {
     inputs.push_back(args.gyro);
     CheckOutputs({{"-o", args.output}, {"--report", args.report}}, inputs);
   }
-  if (GyroWanted(args)) GyroOptions(args);  // usage errors before anything is read
+  if (GyroWanted(args)) {  // usage errors before anything is read
+    GyroOptions(args);
+    CheckGyroColumns(args.input, args.gyro, args.gyro_columns);
+  }
   if (!args.orientations.empty()) return RunCalibrateKnownOrientations(args);
   CalibrationOptions options;
   const bool auto_model = args.model == "auto";

@@ -53,6 +53,22 @@
 ///     `joined_periods` (note): still periods split by a short disturbance that were joined.
 ///   - `time_unit`, `time_gaps`, `coarse_timestamps` (notes), `irregular_sampling` (note beyond
 ///     1 % of the steps, warning beyond 10 %): what the time column was found to be.
+///
+/// The gyroscope's, when it was calibrated too (GyroFindings; gyro_calibration.hpp):
+///   - `gyro_misfit` (failure): the rotations miss the fitted gravity directions by more than
+///     kGyroMisfitFailure_deg (2°) RMS while their scatter ratio is beyond kScatterWarning (the
+///     rate noise does not explain it). The bundled recordings reach 0.07-0.45° (Xsens 0.12°,
+///     T265 joint 0.07°, imucal's Ferraris session 0.45°); the T265's two-stage fit, held to an
+///     accelerometer misalignment the rotations contradict, 2.7° at a ratio of 101; a gyro whose
+///     axes are mapped otherwise than the accelerometer's, 120-130°; a saturated axis or a model
+///     without this gyro's g-sensitivity, 3-11°. 2° over turns of about 90° is a 2 % error, no
+///     better than an uncalibrated MEMS gyro.
+///   - `gyro_scatter_ratio` (note beyond 3, warning beyond kScatterWarning): the still rates or
+///     the rotations scatter R times more than the rate noise explains (the covariance is
+///     inflated by R).
+///   - `gyro_turn_outlier` (warning): a turn the screening flagged (its held-out χ² beyond the 1 %
+///     level over all turns): a bump during it, kept in the fit.
+///   - `gyro_not_validated` (note): no held-out rotation error (validation turned off).
 
 #include <string>
 #include <string_view>
@@ -61,6 +77,7 @@
 
 #include "accelcal/calibrate.hpp"
 #include "accelcal/gravity.hpp"
+#include "accelcal/gyro_calibration.hpp"
 #include "accelcal/log_reader.hpp"
 #include "accelcal/model_selection.hpp"
 #include "accelcal/names.hpp"
@@ -113,6 +130,7 @@ inline constexpr double kScatterNote = 3.0;
 inline constexpr double kScatterWarning = 30.0;
 inline constexpr double kInterleavedCorrelation = -0.5;
 inline constexpr double kRepeatedStepFraction = 0.05;
+inline constexpr double kGyroMisfitFailure_deg = 2.0;  ///< RMS of the rotations' residuals
 
 /// A raw log that gave positions, for the findings about it (LogFindings).
 struct DiagnosedLog {
@@ -135,6 +153,8 @@ struct DiagnosisInput {
   /// The positions were read from a file taken for a positions file by its row count alone
   /// (InputData::kind_from_row_count): `positions_like_samples` checks they are not a raw log.
   bool positions_by_row_count = false;
+  /// The gyroscope calibrated from the same recording, if it was (GyroFindings).
+  const GyroCalibration* gyroscope = nullptr;
 };
 
 Diagnosis Diagnose(const DiagnosisInput& input);
@@ -144,6 +164,8 @@ Diagnosis Diagnose(const DiagnosisInput& input);
 std::vector<Finding> LogFindings(const RawLog* log, const StaticDetectionResult* detection);
 /// The findings about a log's time column (part of LogFindings).
 std::vector<Finding> TimeFindings(const TimeAxis& time);
+/// The findings about the gyroscope's calibration (part of Diagnose); their codes begin "gyro_".
+std::vector<Finding> GyroFindings(const GyroCalibration& gyro);
 /// The findings about still periods that were not used (part of Diagnose).
 std::vector<Finding> RejectedPeriodFindings(const std::vector<RejectedInterval>& rejected);
 

@@ -30,4 +30,11 @@ class DataError : public std::runtime_error {
   using std::runtime_error::runtime_error;
 };
 
+/// A DataError where an estimator that returns no Summary (the gyroscope's, whose failure to
+/// converge leaves nothing to report) did not converge.
+class NotConvergedError : public DataError {
+ public:
+  using DataError::DataError;
+};
+
 }  // namespace accelcal

@@ -139,7 +139,8 @@ void CheckGyroClock(const RawLog& accel, const RawLog& gyro);
 /// `accel_cal` (Calibrate, maximum likelihood). Throws DataError when the streams differ in
 /// length or time, when a position has no interval, when there are too few rotations for the
 /// model, when a rate axis is never turned about (its scale not observable, named), when a turn
-/// is too fast for the sample rate, or when the fit fails.
+/// is too fast for the sample rate, or when the fit fails (NotConvergedError, a DataError, when it
+/// does not converge).
 GyroCalibration CalibrateGyro(const RawLog& accel, const RawLog& gyro,
                               const std::vector<Position>& positions,
                               const CalibrationResult& accel_cal,

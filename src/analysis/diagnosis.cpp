@@ -171,6 +171,59 @@ std::vector<Finding> TimeFindings(const TimeAxis& time) {
   return out;
 }
 
+std::vector<Finding> GyroFindings(const GyroCalibration& g) {
+  std::vector<Finding> out;
+  const double ratio = g.rotation_scatter_ratio;
+  if (g.rms_deg > kGyroMisfitFailure_deg && !(ratio <= kScatterWarning)) {
+    Add(&out, "gyro_misfit", Severity::kFailure,
+        Format("the gyroscope's rotations miss the gravity directions by %.3g deg RMS, %.3g times "
+               "what its rate noise explains, beyond %.0f deg: its calibration does not fit (its "
+               "axes mapped otherwise than the accelerometer's, a rate axis saturated, or a model "
+               "without a term this gyro has%s)",
+               g.rms_deg, ratio, kGyroMisfitFailure_deg,
+               g.estimator == GyroEstimator::kTwoStage
+                   ? "; the accelerometer's calibration was held, and the rotations may contradict "
+                     "it: the joint estimator fits both"
+                   : ""),
+        {{"rms_deg", g.rms_deg}, {"scatter_ratio", ratio}, {"limit_deg", kGyroMisfitFailure_deg}});
+  }
+  const struct {
+    const char* what;
+    double ratio;
+  } groups[] = {{"still rates", g.still_scatter_ratio}, {"rotations", g.rotation_scatter_ratio}};
+  for (const auto& group : groups) {
+    if (!(group.ratio > kScatterNote)) continue;
+    const bool warn = group.ratio > kScatterWarning;
+    Add(&out, "gyro_scatter_ratio", warn ? Severity::kWarning : Severity::kNote,
+        Format("the gyroscope's %s scatter %.3g times more than its rate noise explains%s; its "
+               "uncertainties are inflated by that factor",
+               group.what, group.ratio,
+               warn ? ": something other than noise dominates (a bias drifting, turns not "
+                      "integrated faithfully, a model that does not fit this gyro)"
+                    : ""),
+        {{"scatter_ratio", group.ratio}});
+  }
+  for (const GyroRotation& r : g.rotations) {
+    if (!r.flagged) continue;
+    Add(&out, "gyro_turn_outlier", Severity::kWarning,
+        Format("the turn from position %zu to %zu (samples %zu-%zu, %.3g s) disagrees with the "
+               "others: its held-out chi^2 %.3g is beyond %.3g (1 %% over all turns); a bump "
+               "during it? It was kept in the fit",
+               r.from + 1, r.to + 1, r.first_sample + 1, r.last_sample + 1, r.duration_s,
+               r.statistic, r.threshold),
+        {{"from", static_cast<double>(r.from + 1)},
+         {"to", static_cast<double>(r.to + 1)},
+         {"statistic", r.statistic},
+         {"threshold", r.threshold}});
+  }
+  if (!std::isfinite(g.heldout_rms_deg)) {
+    Add(&out, "gyro_not_validated", Severity::kNote,
+        "the gyroscope's rotations were not held out one by one (validation turned off): no "
+        "held-out error");
+  }
+  return out;
+}
+
 std::vector<Finding> LogFindings(const RawLog* log, const StaticDetectionResult* detection) {
   std::vector<Finding> out;
   if (log && detection && !detection->intervals.empty()) {
@@ -378,6 +431,9 @@ Diagnosis Diagnose(const DiagnosisInput& input) {
                  median),
           {{"median_norm", median}, {"gravity", r.gravity}});
     }
+  }
+  if (input.gyroscope != nullptr) {
+    for (Finding& f : GyroFindings(*input.gyroscope)) out.push_back(std::move(f));
   }
   for (const DiagnosedLog& l : input.logs) {
     for (Finding& f : LogFindings(l.log, l.detection)) {

@@ -4,6 +4,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
+#include <optional>
 #include <sstream>
 #include <stdexcept>
 
@@ -55,6 +57,56 @@ std::vector<double> IntegrationTimes(const RawLog& gyro, const RawLog& accel) {
   std::vector<double> t(log.samples.size());
   for (std::size_t k = 0; k < t.size(); ++k) t[k] = static_cast<double>(k) / *log.rate_hz;
   return t;
+}
+
+// A run of samples at an axis' extreme. On an axis noisier than its resolution q (σ√2 ≥ q, q its
+// smallest step anywhere), consecutive readings of a flat signal repeat a value with probability
+// about p = q/(2√π σ); a saturated axis repeats its rail exactly. So the run is saturation when
+// p^(L−1) ≤ kSaturationFalseAlarm for its length L (three at least): at σ = 2 q, p = 0.14 and L
+// ≥ 9 (seven in a row were seen at the calm peak of a simulated MPU-6050 turn); at the Xsens's
+// σ = 27 counts, L ≥ 4. On a coarser axis, whose smooth peak may hold a value for a while, a run
+// of at least three is saturation when it is entered or left by a step beyond
+// kSaturationSteepness resolution steps (a smooth peak is approached by steps of about one).
+constexpr double kSaturationFalseAlarm = 1e-6;
+constexpr std::size_t kSaturatedRun = 3;
+constexpr double kSaturationSteepness = 3.0;
+
+struct ClippedRun {
+  std::size_t begin = 0, end = 0;  // samples [begin, end)
+  double step = 0;                 // the steeper of its entry and exit steps
+};
+
+// A run of at least `min_run` at the extreme, entered or left by a step beyond `steep` (< 0:
+// any).
+std::optional<ClippedRun> FindClippedRun(const std::vector<Vec3>& samples, std::size_t first,
+                                         std::size_t last, int axis, double lo, double hi,
+                                         std::size_t min_run, double steep) {
+  if (!(hi > lo)) return std::nullopt;
+  const auto at_extreme = [&](std::size_t k) {
+    return samples[k](axis) == lo || samples[k](axis) == hi;
+  };
+  for (std::size_t k = first; k <= last;) {
+    if (!at_extreme(k)) {
+      ++k;
+      continue;
+    }
+    std::size_t end = k;
+    while (end <= last && samples[end](axis) == samples[k](axis)) ++end;
+    if (end - k >= min_run) {
+      double step = 0;
+      if (k > 0) step = std::abs(samples[k](axis) - samples[k - 1](axis));
+      if (end < samples.size()) {
+        step = std::max(step, std::abs(samples[end](axis) - samples[end - 1](axis)));
+      }
+      if (step > steep) return ClippedRun{k, end, step};
+    }
+    k = end;
+  }
+  return std::nullopt;
+}
+
+std::string LineOf(const RawLog& log, std::size_t k) {
+  return std::to_string(log.line.empty() ? k + 1 : log.line[k]);
 }
 
 struct Built {
@@ -126,6 +178,31 @@ Built BuildData(const RawLog& accel, const RawLog& gyro, const std::vector<Posit
     lo = lo.cwiseMin(s);
     hi = hi.cwiseMax(s);
   }
+  // A saturated axis holds its extreme for several samples, entered or left steeply; the peak of
+  // a smooth turn on a quantised axis may repeat its extreme too, but the steps around it are of
+  // the noise's and the resolution's size (the smallest step the axis makes anywhere).
+  Vec3 quantum = Vec3::Constant(std::numeric_limits<double>::infinity());
+  for (std::size_t k = 1; k < gyro.samples.size(); ++k) {
+    for (int a = 0; a < 3; ++a) {
+      const double d = std::abs(gyro.samples[k](a) - gyro.samples[k - 1](a));
+      if (d > 0 && d < quantum(a)) quantum(a) = d;
+    }
+  }
+  // Per axis, the run at the extreme and the step into or out of it that mark saturation.
+  std::size_t min_run[3];
+  Vec3 steep;
+  for (int a = 0; a < 3; ++a) {
+    const double sigma = data.noise_sigma_raw(a);
+    if (!std::isfinite(quantum(a)) || std::sqrt(2.0) * sigma >= quantum(a)) {
+      const double p = std::min(0.5, quantum(a) / (2 * std::sqrt(kPi) * sigma));
+      const double length = 1 + std::log(kSaturationFalseAlarm) / std::log(p);
+      min_run[a] = std::max(kSaturatedRun, static_cast<std::size_t>(std::ceil(length)));
+      steep(a) = -1.0;
+    } else {
+      min_run[a] = kSaturatedRun;
+      steep(a) = kSaturationSteepness * quantum(a);
+    }
+  }
   const double typical_step = gyro.time      ? gyro.time->typical_step_s
                               : accel.time   ? accel.time->typical_step_s
                               : gyro.rate_hz ? 1.0 / *gyro.rate_hz
@@ -137,15 +214,11 @@ Built BuildData(const RawLog& accel, const RawLog& gyro, const std::vector<Posit
     const std::size_t first = positions[i].interval->end - 1;
     const std::size_t last = positions[i + 1].interval->begin;
     Vec3 last_f = accel_cal.gravity * accel_cal.directions[i];
-    int at_limit[3] = {0, 0, 0};
     for (std::size_t k = first; k <= last; ++k) {
       motion.t_s.push_back(t[k]);
       motion.raw.push_back(gyro.samples[k]);
       if (std::optional<Vec3> f = SpecificForce(accel_cal.params, accel.samples[k])) last_f = *f;
       motion.f.push_back(last_f);
-      for (int a = 0; a < 3; ++a) {
-        at_limit[a] += gyro.samples[k](a) == lo(a) || gyro.samples[k](a) == hi(a);
-      }
       if (k > first && typical_step > 0 && t[k] - t[k - 1] > 5 * typical_step) {
         throw DataError("the turn from position " + std::to_string(i + 1) + " to " +
                         std::to_string(i + 2) + " has a gap of " + Num(t[k] - t[k - 1], 4) +
@@ -155,12 +228,15 @@ Built BuildData(const RawLog& accel, const RawLog& gyro, const std::vector<Posit
       }
     }
     for (int a = 0; a < 3; ++a) {
-      if (at_limit[a] >= 3 && hi(a) > lo(a)) {
-        throw DataError("the gyroscope's " + AxisName(a) + " axis reaches the log's extreme (" +
-                        Num(gyro.samples[first](a) < 0.5 * (lo(a) + hi(a)) ? lo(a) : hi(a), 6) +
-                        ") in " + std::to_string(at_limit[a]) +
-                        " samples of the turn from position " + std::to_string(i + 1) + " to " +
-                        std::to_string(i + 2) + ": it saturated, so the turn's angle is wrong");
+      if (const std::optional<ClippedRun> run =
+              FindClippedRun(gyro.samples, first, last, a, lo(a), hi(a), min_run[a], steep(a))) {
+        throw DataError("the gyroscope's " + AxisName(a) + " axis holds the log's extreme (" +
+                        Num(gyro.samples[run->begin](a), 6) + ") for " +
+                        std::to_string(run->end - run->begin) +
+                        " samples in a row during the turn from position " + std::to_string(i + 1) +
+                        " to " + std::to_string(i + 2) + " (lines " + LineOf(gyro, run->begin) +
+                        "-" + LineOf(gyro, run->end - 1) + " of " + gyro.source +
+                        "): it saturated, so the turn's angle is wrong");
       }
     }
     GyroRotation r;
@@ -310,9 +386,10 @@ struct ModelFit {
 
 void RequireConverged(const internal::LeastSquaresSummary& summary) {
   if (!summary.converged()) {
-    throw DataError("the gyroscope's fit did not converge (" + summary.termination_message +
-                    "): are these the gyroscope's rates, recorded through the accelerometer's "
-                    "positions?");
+    throw NotConvergedError(
+        "the gyroscope's fit did not converge (" + summary.termination_message +
+        "): check that these are the gyroscope's rates, recorded through the accelerometer's "
+        "positions");
   }
 }
 

@@ -440,7 +440,9 @@ std::vector<VectorXd> LeaveOneBlockOut(const LeastSquaresProblem& problem,
     const MatrixXd M = MatrixXd::Identity(J[k].rows(), J[k].rows()) - J[k] * U;
     const Eigen::PartialPivLU<MatrixXd> lu(M);
     if (!(std::abs(lu.determinant()) > 1e-12)) {
-      throw std::invalid_argument(Format("LeaveOneBlockOut: without block %d S is singular", b));
+      // The fit cannot do without this block (its leverage is 1): not determined.
+      out.push_back(VectorXd::Constant(state.x.size(), std::numeric_limits<double>::quiet_NaN()));
+      continue;
     }
     out.push_back(problem.PlusGlobal(state.x, U * lu.solve(r[k])));
   }

@@ -118,8 +118,10 @@ LeastSquaresSummary SolveLeastSquares(const LeastSquaresProblem& problem,
 /// `state` (its gradient Σ J_bᵀ r_b zero): for each of `blocks`, x ⊞ δ_k with δ_k = S_k⁻¹ J_kᵀ r_k,
 /// S_k = S − J_kᵀ J_k, one Gauss-Newton step of the problem without block k (S⁻¹ by Woodbury's
 /// identity from one factorisation of S = Σ J_bᵀ J_b). Its error is of second order in the step:
-/// small when one block moves the fit little. Throws std::invalid_argument when the problem has
-/// per-item parameters, a block cannot be evaluated, or S (or some S_k) is singular.
+/// small when one block moves the fit little. A block the fit cannot do without (S_k singular:
+/// its leverage is 1) gets x filled with NaN, its held-out fit not determined. Throws
+/// std::invalid_argument when the problem has per-item parameters, a block cannot be evaluated,
+/// or S is singular.
 /// `information`, when given, is S at `state` (LeastSquaresSummary::information of the solve
 /// that converged there), so that it is not summed again.
 std::vector<Eigen::VectorXd> LeaveOneBlockOut(const LeastSquaresProblem& problem,

@@ -404,6 +404,9 @@ int accelcal::cli::RunCommandLine(int argc, char** argv) {
     export_cmd->add_option("--raw-unit", exp.raw_unit,
                            "unit of the calibrated raw readings, m/s2 or g, when the file's label "
                            "is another (kalibr, px4, ardupilot need readings in m/s2)");
+    export_cmd->add_option("--gyro-raw-unit", exp.gyro_raw_unit,
+                           "unit of the gyroscope's calibrated raw rates, rad/s or deg/s, when the "
+                           "file's label is another (kalibr needs rates in rad/s)");
     export_cmd
         ->add_option("--instance", exp.instance,
                      "accelerometer index: PX4 CAL_ACC<n>, ArduPilot INS_ACC / INS_ACC2 / INS_ACC3")

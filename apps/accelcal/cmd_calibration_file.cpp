@@ -126,6 +126,7 @@ int RunExport(const ExportArgs& args) {
   ExportOptions options;
   options.sensor = args.sensor;
   options.raw_unit = args.raw_unit;
+  options.gyro_raw_unit = args.gyro_raw_unit;
   options.instance = args.instance;
   options.c_prefix = args.c_prefix;
   ExportResult exported;
@@ -137,20 +138,26 @@ int RunExport(const ExportArgs& args) {
                                           {"raw_unit", "--raw-unit"},
                                           {"sensor", "--sensor"}}));
   } catch (const DataError& e) {
-    throw InputError(
-        args.calibration, 0,
-        WithFlags(e.what(), {{"raw_unit", "--raw-unit"}, {"raw_units", "calibrate --raw-units"}}));
+    throw InputError(args.calibration, 0,
+                     WithFlags(e.what(), {{"gyro_raw_unit", "--gyro-raw-unit"},
+                                          {"raw_unit", "--raw-unit"},
+                                          {"raw_units", "calibrate --raw-units"}}));
   }
   // The file (or stdout) gets the export alone; what it means and what it lost goes to the
   // terminal: stdout when the export went to a file, else stderr.
   WriteFileAtomically(args.output.empty() ? "-" : args.output, exported.text);
   if (cal.has_gyroscope() && !exported.gyroscope_included) {
-    Warn(
-        "%s: its gyroscope calibration is not in this export: the %s format holds the "
-        "accelerometer's only%s\n",
-        args.calibration.c_str(), args.format.c_str(),
-        format == ExportFormat::kImuTk ? " (--sensor gyroscope writes the gyroscope's)"
-                                       : ", so far");
+    if (!exported.gyroscope_omitted.empty()) {
+      Warn("%s: its gyroscope calibration is not in this export: %s\n", args.calibration.c_str(),
+           WithFlags(exported.gyroscope_omitted, {{"gyro_raw_unit", "--gyro-raw-unit"}}).c_str());
+    } else {
+      Warn(
+          "%s: its gyroscope calibration is not in this export: the %s format holds the "
+          "accelerometer's only%s\n",
+          args.calibration.c_str(), args.format.c_str(),
+          format == ExportFormat::kImuTk ? " (--sensor gyroscope writes the gyroscope's)"
+                                         : ", so far");
+    }
   }
   std::string note = exported.convention + "\n";
   const ExportLoss& loss = exported.loss;

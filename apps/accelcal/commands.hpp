@@ -134,8 +134,9 @@ struct ReportArgs {
 struct ExportArgs {
   std::string calibration;
   std::string format;
-  std::string output;    // empty: stdout
-  std::string raw_unit;  // overrides the file's units.raw (kalibr, px4, ardupilot)
+  std::string output;         // empty: stdout
+  std::string raw_unit;       // overrides the file's units.raw (kalibr, px4, ardupilot)
+  std::string gyro_raw_unit;  // overrides the gyroscope's units.raw (kalibr)
   int instance = 0;
   std::string c_prefix = "accelcal";
   std::string sensor = "accelerometer";  // imutk: which sensor's triad

@@ -55,6 +55,9 @@ struct ExportOptions {
   /// Overrides the calibration's raw-unit label for the formats that need readings in m/s²
   /// (kalibr, px4, ardupilot): "m/s2" or "g". Empty: the file's `units.raw`.
   std::string raw_unit;
+  /// Overrides the gyroscope's raw-unit label for the formats that need rates in rad/s (kalibr):
+  /// "rad/s" or "deg/s". Empty: the file's `sensors.gyroscope.units.raw`.
+  std::string gyro_raw_unit;
   /// Sensor instance: PX4 CAL_ACC<n> (0-based), ArduPilot INS_ACC / INS_ACC2 / INS_ACC3 (0, 1, 2).
   int instance = 0;
   /// Prefix of the C identifiers (c-header).
@@ -83,6 +86,8 @@ struct ExportResult {
   /// The file's gyroscope calibration (LoadedCalibration::gyroscope) went into the export: false
   /// when the file has none or the format does not hold it (the caller says so).
   bool gyroscope_included = false;
+  /// Why a format that can hold the gyroscope left it out (empty: it did not, or cannot hold it).
+  std::string gyroscope_omitted;
   /// What the gyroscope's export could not hold ("" when exact or not included).
   std::string gyroscope_dropped;
 };

@@ -4,9 +4,11 @@
 #include <algorithm>
 #include <cmath>
 #include <functional>
+#include <optional>
 #include <stdexcept>
 
 #include <Eigen/LU>
+#include <Eigen/QR>
 #include <Eigen/SVD>
 #include <nlohmann/json.hpp>
 
@@ -258,6 +260,60 @@ ExportResult ArduPilot(const LoadedCalibration& cal, const ExportOptions& option
   return out;
 }
 
+// The rad/s of one raw gyro unit, for the formats that read rates in rad/s; std::nullopt, with
+// why in `omitted`, for another unit.
+std::optional<double> RawToRadPerSecond(const LoadedCalibration& cal, const ExportOptions& options,
+                                        std::string_view format, std::string_view why,
+                                        std::string* omitted) {
+  const std::string label =
+      options.gyro_raw_unit.empty() ? cal.gyroscope->raw_unit : options.gyro_raw_unit;
+  if (label == "rad/s") return 1.0;
+  if (label == "deg/s") return 3.14159265358979323846 / 180.0;
+  *omitted = std::string(format) + " reads rates in rad/s (" + std::string(why) +
+             "), and this gyroscope's raw unit is '" + internal::VisibleLine(label) +
+             "': calibrate rates in rad/s or deg/s, or give gyro_raw_unit (rad/s or deg/s) if "
+             "the rates were in one of them";
+  return std::nullopt;
+}
+
+// Kalibr's gyroscope in the scale-misalignment model (IccScaledMisalignedImu, reference IMU):
+//     w_measured = M_g C_gyro_i w + A C_gyro_i a + b_g,
+// M_g lower-triangular, C_gyro_i a rotation, A full [(rad/s)/(m/s²)], w and a in the IMU frame,
+// which is the accelerometer's (the x-first frame of its M). With f_old = Q f_x (ChangeFrame) and s
+// the rad/s of a raw unit, w_measured = s K_g Q w + s G Q a / u + s b_g (u the m/s² of the
+// calibration's force unit): M_g C_gyro_i = s K_g Q (an LQ factorisation: from the QR of its
+// transpose), A = (s/u) G Q C_gyro_iᵀ. Exact: nothing is dropped.
+struct KalibrGyro {
+  Mat33 M, C, A;
+  Vec3 bias_rad_s;
+};
+KalibrGyro KalibrGyroscope(const LoadedCalibration& cal, const Mat33& Q, double rad_s_per_raw) {
+  const LoadedCalibration::Gyroscope& g = *cal.gyroscope;
+  const Mat33 X = rad_s_per_raw * g.params.K * Q;
+  const Eigen::HouseholderQR<Mat33> qr(Mat33(X.transpose()));
+  const Mat33 R = qr.matrixQR().triangularView<Eigen::Upper>();
+  Mat33 L = R.transpose();
+  Mat33 C = Mat33(qr.householderQ()).transpose();
+  // Signs: L's diagonal positive, C a proper rotation (a mirrored gyro keeps a negative z scale).
+  for (int i = 0; i < 3; ++i) {
+    if (L(i, i) < 0) {
+      L.col(i) *= -1;
+      C.row(i) *= -1;
+    }
+  }
+  if (C.determinant() < 0) {
+    L.col(2) *= -1;
+    C.row(2) *= -1;
+  }
+  L.triangularView<Eigen::StrictlyUpper>().setZero();  // exact zeros (no −0 from the signs)
+  KalibrGyro out;
+  out.M = L;
+  out.C = C;
+  out.A = (rad_s_per_raw / ForceToMetersPerSecond2(cal)) * g.params.G * Q * C.transpose();
+  out.bias_rad_s = rad_s_per_raw * g.params.bias;
+  return out;
+}
+
 // Kalibr's scale-misalignment model: a_measured = M a + b, M lower-triangular, m/s².
 ExportResult Kalibr(const LoadedCalibration& cal, const ExportOptions& options) {
   const double raw_ms2 =
@@ -282,6 +338,34 @@ ExportResult Kalibr(const LoadedCalibration& cal, const ExportOptions& options) 
   }
   out.text += "  # accelcal constant bias [m/s2]: [" + Number(bias_ms2(0)) + ", " +
               Number(bias_ms2(1)) + ", " + Number(bias_ms2(2)) + "]\n";
+  const auto rows = [&](const char* indent, const Mat33& A) {
+    for (int i = 0; i < 3; ++i) {
+      out.text += std::string(indent) + "- [" + Number(A(i, 0)) + ", " + Number(A(i, 1)) + ", " +
+                  Number(A(i, 2)) + "]\n";
+    }
+  };
+  std::optional<double> rad_s;
+  if (cal.gyroscope) {
+    rad_s = RawToRadPerSecond(cal, options, "Kalibr", "sensor_msgs/Imu angular_velocity",
+                              &out.gyroscope_omitted);
+  }
+  if (rad_s) {
+    const KalibrGyro g = KalibrGyroscope(cal, change.Q_old_new, *rad_s);
+    out.convention +=
+        "; gyroscope: w_measured = M C_gyro_i w + A C_gyro_i a + b in rad/s, M lower-triangular "
+        "and C_gyro_i a rotation with M C_gyro_i = accelcal's K_g in the accelerometer's x-first "
+        "frame, A its g-sensitivity G [(rad/s)/(m/s2)] (exact; accelcal's constant bias a "
+        "comment)";
+    out.text += "  gyroscopes:\n    M:\n";
+    rows("    ", g.M);
+    out.text += "    A:\n";
+    rows("    ", g.A);
+    out.text += "    C_gyro_i:\n";
+    rows("    ", g.C);
+    out.text += "  # accelcal constant gyro bias [rad/s]: [" + Number(g.bias_rad_s(0)) + ", " +
+                Number(g.bias_rad_s(1)) + ", " + Number(g.bias_rad_s(2)) + "]\n";
+    out.gyroscope_included = true;
+  }
   // Magnitudes are frame-independent, so the loss compares |f|: the rotation Q is not a loss.
   const Mat33 K_x = change.K;
   out.loss = MeasureLoss(

@@ -251,6 +251,65 @@ LoadedCalibration::Gyroscope Gyroscope() {
   return g;
 }
 
+// The three rows "- [a, b, c]" after the line `key` at or after `from` in a YAML text.
+Mat33 YamlRows(const std::string& text, const std::string& from, const std::string& key) {
+  std::size_t at = text.find(from);
+  at = text.find(key + "\n", at);
+  EXPECT_NE(at, std::string::npos) << key;
+  std::istringstream in(text.substr(at + key.size() + 1));
+  Mat33 M;
+  for (int i = 0; i < 3; ++i) {
+    std::string line;
+    std::getline(in, line);
+    for (char& c : line) {
+      if (c == '[' || c == ']' || c == ',') c = ' ';
+    }
+    std::istringstream row(line.substr(line.find('-') + 1));  // after the list's bullet
+    for (int j = 0; j < 3; ++j) row >> M(i, j);
+  }
+  return M;
+}
+
+TEST(Export, KalibrGyroscopeAppliedAsKalibrDoesIsAccelcalsModel) {
+  // Kalibr's reference IMU: w_measured = M C_gyro_i w + A C_gyro_i a + b in rad/s, for w and a in
+  // the IMU frame of its accelerometer's M (accelcal's x-first frame). Read back and applied to
+  // rates and forces in that frame, it gives accelcal's K_g w + b_g + G f (times the rad/s of a
+  // raw unit) for the same vectors in the calibration's own frame, to round-off.
+  for (const Frame frame : {Frame::kXFirst, Frame::kZFirst}) {
+    Fitted f = Fit(ModelKind::kLinear, frame);
+    f.cal.gyroscope = Gyroscope();
+    ExportOptions options;
+    options.gyro_raw_unit = "deg/s";  // the rates as if in deg/s: s = π/180
+    const ExportResult e = ExportCalibration(f.cal, f.json, ExportFormat::kKalibr, options);
+    EXPECT_TRUE(e.gyroscope_included);
+    EXPECT_TRUE(e.loss.dropped.empty());
+    const Mat33 M = YamlRows(e.text, "gyroscopes:", "    M:");
+    const Mat33 A = YamlRows(e.text, "gyroscopes:", "    A:");
+    const Mat33 C = YamlRows(e.text, "gyroscopes:", "    C_gyro_i:");
+    EXPECT_EQ(M(0, 1), 0.0);
+    EXPECT_EQ(M(0, 2), 0.0);
+    EXPECT_EQ(M(1, 2), 0.0);
+    EXPECT_LT((C * C.transpose() - Mat33::Identity()).norm(), 1e-15);
+    EXPECT_NEAR(C.determinant(), 1.0, 1e-15);
+    const Mat33 Q = ChangeFrame(f.cal.params.K, Frame::kXFirst).Q_old_new;
+    const double s = kPi / 180, g0 = kStandardGravity_ms2;  // the calibration's force unit is g
+    const GyroParameters& g = f.cal.gyroscope->params;
+    for (const auto& [w, a] : {std::pair<Vec3, Vec3>{{0.3, -1.2, 0.7}, {1.0, -9.0, 3.5}},
+                               std::pair<Vec3, Vec3>{{-2.0, 0.1, 0.4}, {9.8, 0.2, -0.3}}}) {
+      const Vec3 kalibr = M * C * w + A * C * a;
+      const Vec3 accelcal = s * (g.K * (Q * w) + g.G * (Q * a / g0));
+      EXPECT_LT((kalibr - accelcal).norm(), 1e-12 * accelcal.norm()) << ToString(frame);
+    }
+  }
+  // Rates in counts are left out, saying why and which option says otherwise.
+  Fitted f = Fit(ModelKind::kLinear, Frame::kXFirst);
+  f.cal.gyroscope = Gyroscope();
+  const ExportResult e = ExportCalibration(f.cal, f.json, ExportFormat::kKalibr);
+  EXPECT_FALSE(e.gyroscope_included);
+  EXPECT_EQ(e.text.find("gyroscopes:"), std::string::npos);
+  EXPECT_NE(e.gyroscope_omitted.find("gyro_raw_unit"), std::string::npos) << e.gyroscope_omitted;
+}
+
 TEST(Export, ImuTkGyroscopeAppliedAsImuTkDoesIsAccelcalsCorrectionLessG) {
   Fitted f = Fit(ModelKind::kLinear, Frame::kXFirst);
   f.cal.gyroscope = Gyroscope();

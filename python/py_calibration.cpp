@@ -18,6 +18,7 @@
 #include "accelcal/diagnosis.hpp"
 #include "accelcal/error.hpp"
 #include "accelcal/export.hpp"
+#include "accelcal/gyro_calibration.hpp"
 #include "accelcal/load_positions.hpp"
 #include "accelcal/log_reader.hpp"
 #include "accelcal/model_selection.hpp"
@@ -43,6 +44,12 @@ struct PyCalibration {
   int max_excluded = OutlierOptions{}.max_excluded;
   Diagnosis diagnosis;
   Provenance provenance;  // the function and its arguments, the file read (to_json writes it)
+  // The gyroscope calibrated from the same recording (calibrate_log's gyro options), its log and
+  // the label of its raw unit.
+  std::optional<GyroCalibration> gyroscope;
+  std::string gyro_source, gyro_raw_unit;
+  // What the diagnosis of a log looks at (calibrate_log), kept to diagnose again.
+  const RawLog* log = nullptr;
 };
 
 struct FitSettings {
@@ -110,6 +117,9 @@ CalibrationOptions MakeOptions(const FitSettings& s) {
   return o;
 }
 
+Diagnosis DiagnoseFit(const PyCalibration& c, const RawLog* log,
+                      const StaticDetectionResult* detection);
+
 // Fits as RunCalibrate does (a quadratic fit, asked for or a candidate of "auto", is compared
 // with the linear fit) and diagnoses the result; `log` and `detection` add their findings.
 PyCalibration Fit(std::vector<Position> positions, std::vector<Vec3> sigmas, const FitSettings& s,
@@ -126,6 +136,13 @@ PyCalibration Fit(std::vector<Position> positions, std::vector<Vec3> sigmas, con
   ModelChoice choice = CalibrateChoosingModel(means, options, s.model == "auto");
   c.result = std::move(choice.result);
   c.selection = std::move(choice.selection);
+  c.diagnosis = DiagnoseFit(c, log, detection);
+  return c;
+}
+
+// The diagnosis as RunCalibrate's: the fit, the log and its detection, the gyroscope.
+Diagnosis DiagnoseFit(const PyCalibration& c, const RawLog* log,
+                      const StaticDetectionResult* detection) {
   DiagnosisInput in;
   in.result = &c.result;
   in.positions = &c.positions;
@@ -134,8 +151,53 @@ PyCalibration Fit(std::vector<Position> positions, std::vector<Vec3> sigmas, con
   // One log, so its findings are not prefixed with its name (the command line's for one file).
   if (log || detection) in.logs.push_back({c.source, log, detection});
   in.unit = c.unit;
-  c.diagnosis = Diagnose(in);
-  return c;
+  in.gyroscope = c.gyroscope ? &*c.gyroscope : nullptr;
+  return Diagnose(in);
+}
+
+py::dict GyroDict(const GyroCalibration& g) {
+  py::dict d;
+  d["model"] = std::string(ToString(g.model));
+  d["model_reason"] = g.model_reason;
+  d["estimator"] = std::string(ToString(g.estimator));
+  d["units"] = std::string(ToString(g.unit));
+  d["K"] = Mat33(g.params.K);
+  d["bias"] = Vec3(g.params.bias);
+  d["G"] = Mat33(g.params.G);
+  std::vector<std::string> names;
+  for (const GyroParameterSlot& slot : GyroParameterSlots(g.model)) names.emplace_back(slot.name);
+  d["parameter_names"] = names;
+  if (g.covariance.size() > 0) {
+    d["covariance"] = g.covariance;
+    d["std"] = Eigen::VectorXd(g.covariance.diagonal().cwiseSqrt());
+  } else {
+    d["covariance"] = py::none();
+    d["std"] = py::none();
+  }
+  d["noise_sigma_raw"] = Vec3(g.noise_sigma_raw);
+  d["still_scatter_ratio"] = g.still_scatter_ratio;
+  d["rotation_scatter_ratio"] = g.rotation_scatter_ratio;
+  d["accelerometer_scatter_ratio"] = g.accel_scatter_ratio;
+  py::list rotations;
+  for (const GyroRotation& r : g.rotations) {
+    py::dict t;
+    t["from"] = r.from;
+    t["to"] = r.to;
+    t["first_sample"] = r.first_sample;
+    t["last_sample"] = r.last_sample;
+    t["duration_s"] = r.duration_s;
+    t["angle_deg"] = r.angle_deg;
+    t["turned_deg"] = r.turned_deg;
+    t["turned_std_deg"] = r.turned_std_deg;
+    t["residual_deg"] = r.residual_deg;
+    t["heldout_deg"] = r.heldout_deg;
+    t["flagged"] = r.flagged;
+    rotations.append(t);
+  }
+  d["rotations"] = rotations;
+  d["rms_deg"] = g.rms_deg;
+  d["heldout_rms_deg"] = g.heldout_rms_deg;
+  return d;
 }
 
 }  // namespace
@@ -229,6 +291,17 @@ void BindCalibration(py::module_& m) {
           "With model 'auto' (or 'quadratic' with cross-validation): which model the held-out "
           "errors support and why (model_selection.hpp; positions_used 0-based); else None")
       .def_property_readonly(
+          "gyroscope",
+          [](const PyCalibration& c) -> py::object {
+            if (!c.gyroscope) return py::none();
+            return GyroDict(*c.gyroscope);
+          },
+          "The gyroscope calibrated from the same recording (calibrate_log's gyro options; "
+          "gyro_calibration.hpp), else None: a dict with model, estimator, K [raw per rad/s], "
+          "bias [raw], G [raw per force unit, zeros for the linear model], covariance (in "
+          "parameter_names' order) and std, noise_sigma_raw, scatter ratios, rotations (dicts; "
+          "from and to count positions from 0), rms_deg and heldout_rms_deg")
+      .def_property_readonly(
           "source", [](const PyCalibration& c) { return c.source; }, "The input file, or ''")
       .def(
           "apply",
@@ -260,6 +333,12 @@ void BindCalibration(py::module_& m) {
             // The stored diagnosis is of the fitted positions in the stored unit.
             if (!positions && info.unit == c.unit) info.diagnosis = &c.diagnosis;
             info.provenance = c.provenance;
+            if (c.gyroscope) {
+              info.gyroscope = &*c.gyroscope;
+              info.gyro_source = c.gyro_source;
+              info.gyro_raw_unit =
+                  c.gyroscope->unit == GyroUnit::kRaw ? raw_units : c.gyro_raw_unit;
+            }
             if (date) {
               if (const auto why = CheckProvenanceDate(*date))
                 throw py::value_error("date: " + *why);
@@ -315,7 +394,10 @@ void BindCalibration(py::module_& m) {
          double min_static_s, double threshold_factor, double init_rest_s, bool cross_validate,
          const std::string& outliers, double outlier_probability, int max_outliers,
          std::optional<std::string> units, const std::string& time_unit,
-         std::optional<double> instance, const std::string& input_kind, int max_iterations) {
+         std::optional<double> instance, const std::string& input_kind, int max_iterations,
+         std::optional<std::string> gyro, std::vector<std::string> gyro_columns,
+         const std::string& gyro_units, const std::string& gyro_model,
+         std::optional<std::string> gyro_estimator) {
         const FitSettings s{model,        method,         frame,           gravity,
                             estimator,    cross_validate, outliers,        outlier_probability,
                             max_outliers, max_iterations, std::move(units)};
@@ -325,6 +407,31 @@ void BindCalibration(py::module_& m) {
         const CalibrationOptions options = MakeOptions(s);
         const ReadOptions read =
             MakeReadOptions(input_kind, std::move(columns), rate_hz, time_unit, instance);
+        // The gyroscope's options, checked as the command line's (its flags named as keywords).
+        const bool want_gyro = gyro.has_value() || !gyro_columns.empty();
+        GyroCalibrationOptions gyro_options;
+        if (want_gyro) {
+          if (gyro && gyro->empty()) throw py::value_error("gyro: the file name is empty");
+          if (gyro_columns.size() != 0 && gyro_columns.size() != 3 && gyro_columns.size() != 4) {
+            throw py::value_error("gyro_columns takes x,y,z or time,x,y,z");
+          }
+          gyro_options.unit = Parse(FromName<GyroUnit>(gyro_units), gyro_units, "gyro_units");
+          gyro_options.estimator = gyro_estimator ? Parse(FromName<GyroEstimator>(*gyro_estimator),
+                                                          *gyro_estimator, "gyro_estimator")
+                                                  : GyroEstimator::kJoint;
+          if (gyro_model != "auto") {
+            gyro_options.model =
+                Parse(GyroModelKindFromString(gyro_model), gyro_model, "gyro_model");
+          } else if (!cross_validate) {
+            throw py::value_error(
+                "gyro_model 'auto' decides on held-out rotations: it needs cross_validate=True");
+          }
+          gyro_options.validate = cross_validate;
+        } else if (gyro_units != "raw" || gyro_model != "auto" || gyro_estimator) {
+          throw py::value_error(
+              "gyro_units, gyro_model and gyro_estimator apply to the gyroscope: give its rates "
+              "with gyro=LOG or gyro_columns");
+        }
         LoadOptions load;
         load.read = read;
         load.detection = detection_options;
@@ -351,6 +458,35 @@ void BindCalibration(py::module_& m) {
           o["instance"] = instance ? nlohmann::ordered_json(*instance) : nlohmann::ordered_json();
           o["input_kind"] = input_kind;
           c.provenance.inputs = InputRecords(in);
+          if (want_gyro) {
+            if (data.kind != InputKind::kRaw) {
+              throw py::value_error(
+                  "the gyroscope is calibrated from a raw log (its turns between the positions)");
+            }
+            if (!c.result.summary.converged()) {
+              throw DataError("the solver did not converge: " +
+                              c.result.summary.termination_message);
+            }
+            const std::string gyro_path = gyro ? *gyro : std::string();
+            ReadOptions gyro_read = read;
+            gyro_read.fingerprint = true;
+            const InputData rates = ReadGyroInput(path, gyro_read, gyro_path, gyro_columns);
+            c.gyroscope = CalibrateGyro(data.raw, rates.raw, positions, c.result, gyro_options);
+            c.gyro_source = gyro_path.empty() ? path : gyro_path;
+            c.gyro_raw_unit = gyro_units;
+            // The joint fit's accelerometer is the result's: the rotations refined it.
+            if (c.gyroscope->accelerometer) c.result = *c.gyroscope->accelerometer;
+            c.diagnosis = DiagnoseFit(c, data.kind == InputKind::kRaw ? &data.raw : nullptr,
+                                      detection ? &*detection : nullptr);
+            o["gyro"] = gyro ? nlohmann::ordered_json(*gyro) : nlohmann::ordered_json();
+            o["gyro_columns"] = gyro_columns;
+            o["gyro_units"] = gyro_units;
+            o["gyro_model"] = gyro_model;
+            o["gyro_estimator"] = std::string(ToString(gyro_options.estimator));
+            if (!gyro_path.empty()) {
+              c.provenance.inputs.push_back({gyro_path, rates.bytes, rates.sha256});
+            }
+          }
           return py::make_tuple(std::move(c), ToRows(Means(positions)));
         } catch (const DataError& e) {
           throw DataError(path + ": " + e.what());  // as the command line names the input
@@ -365,7 +501,9 @@ void BindCalibration(py::module_& m) {
       py::arg("outlier_probability") = 1e-3, py::arg("max_outliers") = 3,
       py::arg("units") = std::nullopt, py::arg("time_unit") = "auto",
       py::arg("instance") = std::nullopt, py::arg("input_kind") = "raw",
-      py::arg("max_iterations") = 0,
+      py::arg("max_iterations") = 0, py::arg("gyro") = std::nullopt,
+      py::arg("gyro_columns") = std::vector<std::string>{}, py::arg("gyro_units") = "raw",
+      py::arg("gyro_model") = "auto", py::arg("gyro_estimator") = std::nullopt,
       "What `accelcal calibrate INPUT` does, diagnosis included; returns (result, positions) "
       "(no Python warnings: accelcal.calibrate_log adds them)");
 

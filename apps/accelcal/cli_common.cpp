@@ -134,24 +134,14 @@ InputData ReadGyroLog(const InputArgs& input, const std::string& gyro,
                       const std::vector<std::string>& gyro_columns, bool fingerprint) {
   CheckGyroColumns(input, gyro, gyro_columns);
   ReadOptions read = MakeReadOptions(input);
-  read.kind = InputKind::kRaw;
-  read.columns = gyro_columns;
-  if (gyro.empty() && read.columns.size() == 3 && input.columns.size() == 4) {
-    read.columns.insert(read.columns.begin(), input.columns.front());
-  }
-  read.fingerprint = fingerprint && !gyro.empty();  // the log itself is hashed already
-  const std::string& path = gyro.empty() ? input.path : gyro;
-  // The reader's "columns option" is --gyro-columns here: the rates' columns.
-  const auto gyro_flags = [](const std::string& text) {
-    return WithFlags(text, {{"the columns option's entry", "--gyro-columns entry"},
-                            {"the columns option", "--gyro-columns"}});
-  };
+  read.fingerprint = fingerprint;
   try {
-    return ReadInput(path, read);
+    return ReadGyroInput(input.path, read, gyro, gyro_columns);
   } catch (const InputError& e) {
-    throw InputError(e.file(), e.line(), gyro_flags(e.reason()));
-  } catch (const DataError& e) {
-    throw InputError(path, 0, gyro_flags(e.what()));
+    // The reader's "columns option" is --gyro-columns here: the rates' columns.
+    throw InputError(e.file(), e.line(),
+                     WithFlags(e.reason(), {{"the columns option's entry", "--gyro-columns entry"},
+                                            {"the columns option", "--gyro-columns"}}));
   }
 }
 

@@ -51,4 +51,13 @@ struct LoadOptions {
 /// provenance, InputRecords).
 LoadedInput LoadPositions(const std::vector<std::string>& paths, const LoadOptions& options);
 
+/// The gyroscope's log recorded beside the accelerometer's log `accel_path`, read as the
+/// accelerometer's (`accel_read`: time unit, rate, instance) but as a raw log of the columns
+/// `gyro_columns` (x,y,z or time,x,y,z; empty: the file's default layout): from `gyro_path`, or
+/// from the accelerometer's log itself when it is empty (then its time column, when
+/// `accel_read.columns` names one, is the rates' too, and it is not fingerprinted again). Throws
+/// InputError as ReadInput, a DataError of the reader turned into an InputError naming the file.
+InputData ReadGyroInput(const std::string& accel_path, const ReadOptions& accel_read,
+                        const std::string& gyro_path, const std::vector<std::string>& gyro_columns);
+
 }  // namespace accelcal

@@ -120,7 +120,9 @@ def calibrate_log(path, model="linear", method="joint", frame="x-first", gravity
                   estimator="ml", columns=(), rate_hz=None, window_s=0.5, min_static_s=1.0,
                   threshold_factor=10.0, init_rest_s=0.0, cross_validate=True, *,
                   outliers="exclude", outlier_probability=1e-3, max_outliers=3, units=None,
-                  time_unit="auto", instance=None, input_kind="raw", max_iterations=0):
+                  time_unit="auto", instance=None, input_kind="raw", max_iterations=0,
+                  gyro=None, gyro_columns=(), gyro_units="raw", gyro_model="auto",
+                  gyro_estimator=None):
     """What ``accelcal calibrate LOG`` does: read, detect the static intervals, average them,
     calibrate with each interval's noise and diagnose (the time column, still periods not used,
     interleaved sensors, the fit). Gives exactly the command line's doubles and diagnosis; with
@@ -139,13 +141,23 @@ def calibrate_log(path, model="linear", method="joint", frame="x-first", gravity
     --input-kind), window_s, min_static_s, threshold_factor, init_rest_s (detection),
     max_iterations (--max-iterations). Raises InputError (unreadable or malformed file) or
     DataError (no static interval, too few positions), both naming the file.
+
+    The gyroscope recorded through the same positions (``calibrate --gyro``): ``gyro`` its log
+    on the same clock, or ``gyro_columns`` its columns in this log (or in ``gyro``'s);
+    ``gyro_units`` ("raw", "rad/s", "deg/s"), ``gyro_model`` ("auto", "linear",
+    "g-sensitive"), ``gyro_estimator`` ("joint", the default, or "two-stage"). Then
+    ``result.gyroscope`` is its calibration (a dict; None without), the result's accelerometer
+    is the joint fit's, the diagnosis judges both, and ``result.to_json()`` holds both sensors,
+    as ``accelcal calibrate LOG --gyro ... --json`` writes them.
     """
     result, positions = _accelcal.calibrate_log(
         path, model, method, frame, gravity, estimator, list(columns), rate_hz, window_s,
         min_static_s, threshold_factor, init_rest_s, cross_validate, outliers=outliers,
         outlier_probability=outlier_probability, max_outliers=max_outliers, units=units,
         time_unit=time_unit, instance=instance, input_kind=input_kind,
-        max_iterations=max_iterations)
+        max_iterations=max_iterations,
+        gyro=None if gyro is None else str(gyro), gyro_columns=list(gyro_columns),
+        gyro_units=gyro_units, gyro_model=gyro_model, gyro_estimator=gyro_estimator)
     _emit_diagnosis(result, str(path), stacklevel=2)
     return result, positions
 

@@ -215,3 +215,28 @@ def test_version_1_files_still_load():
         assert loaded.verdict == doc["verdict"]
         np.testing.assert_array_equal(loaded.K, np.array(doc["K"]))
         np.testing.assert_array_equal(loaded.bias, np.array(doc["bias"]))
+
+def test_calibrate_log_with_the_gyroscope_is_the_cli_calibration(tmp_path):
+    # `calibrate --gyro`: the same gyroscope, the joint fit's accelerometer, the same diagnosis and
+    # the same file but its provenance.
+    gyro = XSENS.replace("xsens_acc.mat", "xsens_gyro.mat")
+    status, text = cli_json(XSENS, "--gravity", "9.81744", "--gyro", gyro)
+    assert status == 0
+    result, positions = accelcal.calibrate_log(XSENS, gravity=9.81744, gyro=gyro)
+    g = result.gyroscope
+    doc = json.loads(text)["sensors"]["gyroscope"]
+    assert g["model"] == doc["model"] == "g-sensitive"
+    np.testing.assert_array_equal(g["K"], np.array(doc["K"]))
+    np.testing.assert_array_equal(g["bias"], np.array(doc["bias"]))
+    assert len(g["rotations"]) == len(doc["rotations"]) == 37
+    assert g["rotations"][0]["from"] == 0 and doc["rotations"][0]["from"] == 1
+    assert g["heldout_rms_deg"] == doc["validation"]["heldout_rms_deg"]
+    np.testing.assert_array_equal(result.K, np.array(sensor(text)["K"]))
+    assert result.verdict == sensor(text)["verdict"]
+    assert without_provenance(result.to_json()) == without_provenance(text)
+    # Without a gyroscope there is none; gyro options alone are refused, as the CLI's.
+    assert accelcal.calibrate_log(XSENS, gravity=9.81744)[0].gyroscope is None
+    with pytest.raises(ValueError, match="gyro_units"):
+        accelcal.calibrate_log(XSENS, gyro_units="rad/s")
+    with pytest.raises(ValueError, match="gyro_estimator"):
+        accelcal.calibrate_log(XSENS, gyro=gyro, gyro_estimator="both")

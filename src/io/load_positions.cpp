@@ -54,4 +54,22 @@ LoadedInput LoadPositions(const std::vector<std::string>& paths, const LoadOptio
   return loaded;
 }
 
+InputData ReadGyroInput(const std::string& accel_path, const ReadOptions& accel_read,
+                        const std::string& gyro_path,
+                        const std::vector<std::string>& gyro_columns) {
+  ReadOptions read = accel_read;
+  read.kind = InputKind::kRaw;
+  read.columns = gyro_columns;
+  if (gyro_path.empty() && read.columns.size() == 3 && accel_read.columns.size() == 4) {
+    read.columns.insert(read.columns.begin(), accel_read.columns.front());
+  }
+  read.fingerprint = accel_read.fingerprint && !gyro_path.empty();
+  const std::string& path = gyro_path.empty() ? accel_path : gyro_path;
+  try {
+    return ReadInput(path, read);
+  } catch (const DataError& e) {
+    throw InputError(path, 0, e.what());
+  }
+}
+
 }  // namespace accelcal

@@ -244,6 +244,7 @@ GyroCalibrationOptions GyroOptions(const CalibrateArgs& args) {
         "--no-crossval turns off");
   }
   o.validate = args.cross_validate;
+  o.latitude_deg = args.gravity.latitude_deg;  // the Earth rate's vertical part, taken out
   return o;
 }
 
@@ -286,6 +287,14 @@ void PrintGyro(const GyroRun& run, const std::string& raw_unit, const char* forc
   }
   Say("  scale factor (row norms of K)  %.8g  %.8g  %.8g  %s per rad/s\n", g.params.K.row(0).norm(),
       g.params.K.row(1).norm(), g.params.K.row(2).norm(), raw_unit.c_str());
+  if (g.latitude_deg) {
+    constexpr double kRadSToDegH = 180 / 3.14159265358979323846 * 3600;
+    Say("  Earth rate at latitude %.6g deg: its vertical part %.4g deg/h taken out of the still "
+        "rates; its horizontal part %.4g deg/h, in a heading the recording does not know, "
+        "stays: the bias is not known better than that\n",
+        *g.latitude_deg, g.earth_rate_vertical_rad_s * kRadSToDegH,
+        g.earth_rate_horizontal_rad_s * kRadSToDegH);
+  }
   Say("  rate noise  %.4g  %.4g  %.4g  %s per sample; scatter ratios: stills %.3g, rotations "
       "%.3g%s\n",
       g.noise_sigma_raw(0), g.noise_sigma_raw(1), g.noise_sigma_raw(2), raw_unit.c_str(),

@@ -11,6 +11,8 @@ namespace accelcal {
 
 /// Standard gravity g0 [m/s²] (CGPM 1901), the default gravity magnitude.
 inline constexpr double kStandardGravity_ms2 = 9.80665;
+/// The Earth's rotation rate (WGS-84) [rad/s].
+inline constexpr double kEarthRate_rad_s = 7.2921150e-5;
 
 /// WGS-84 normal gravity on or above the ellipsoid [m/s²].
 /// Somigliana's closed formula for the surface value, then the second-order free-air expansion in

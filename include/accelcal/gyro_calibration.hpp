@@ -75,6 +75,12 @@ struct GyroCalibrationOptions {
   /// Gauss-Newton step from the full fit (the default; within a few percent of the full refit on
   /// the bundled recordings, measured by a test).
   bool heldout_refits = false;
+  /// The site's geodetic latitude [deg]: the Earth rate's vertical part, Ω_E sin φ about each
+  /// still position's up direction, is taken out of its mean rate (else the g-sensitive model's G
+  /// takes it as a rate in proportion to f). Its horizontal part, Ω_E cos φ in a heading the
+  /// recording does not know, stays in: a floor to the bias's accuracy
+  /// (GyroCalibration::earth_rate_horizontal_rad_s).
+  std::optional<double> latitude_deg;
   /// Threads the turns are integrated on (0: one per hardware thread); the result is the same
   /// bits for any count.
   int threads = 0;
@@ -124,6 +130,10 @@ struct GyroCalibration {
   /// fit, √(χ²/(m − P)) (1 at that fit; the turns may pull it above); 1 for the two-stage one.
   double accel_scatter_ratio = 1;
   Summary summary;
+  /// With a latitude: the Earth rate's parts modelled (vertical, Ω_E sin φ) and not (horizontal,
+  /// Ω_E cos φ: the floor of the bias's accuracy, whatever the noise) [rad/s].
+  std::optional<double> latitude_deg;
+  double earth_rate_vertical_rad_s = 0, earth_rate_horizontal_rad_s = 0;
   /// The joint estimator's accelerometer calibration (parameters, covariance and directions
   /// refitted with the rotations); unset for the two-stage one.
   std::optional<CalibrationResult> accelerometer;

@@ -37,12 +37,11 @@
 #include <Eigen/Core>
 
 #include "accelcal/gimbal_platform.hpp"
+#include "accelcal/gravity.hpp"
 #include "accelcal/series_file.hpp"
 #include "accelcal/types.hpp"
 
 namespace accelcal {
-
-inline constexpr double kEarthRate_rad_s = 7.2921150e-5;
 
 /// Residual accelerometer errors after the device-level stages.
 struct ResidualErrors {

@@ -119,6 +119,12 @@ Built BuildData(const RawLog& accel, const RawLog& gyro, const std::vector<Posit
   Built b;
   GyroFitData& data = b.data;
   data.rule = options.rule;
+  if (options.latitude_deg) {
+    if (!(std::abs(*options.latitude_deg) <= 90)) {
+      throw std::invalid_argument("CalibrateGyro: the latitude must lie in [-90, 90] deg");
+    }
+    data.earth_rate_vertical = kEarthRate_rad_s * std::sin(*options.latitude_deg * kPi / 180);
+  }
   const std::size_t m = positions.size();
   if (accel_cal.directions.size() != m) {
     throw std::invalid_argument("CalibrateGyro: " + std::to_string(m) + " positions and " +
@@ -349,9 +355,10 @@ std::pair<double, double> ScatterRatios(const GyroFitData& data, const GyroParam
   double stills = 0, turns = 0;
   for (std::size_t k = 0; k < data.stills.size(); ++k) {
     const GyroStill& st = data.stills[k];
-    stills += st.sigma_mean_raw.cwiseInverse()
-                  .cwiseProduct(st.mean_raw - gyro.bias - gyro.G * (st.f.norm() * directions[k]))
-                  .squaredNorm();
+    stills +=
+        st.sigma_mean_raw.cwiseInverse()
+            .cwiseProduct(st.mean_raw - internal::StillRate(data, gyro, directions[k], st.f.norm()))
+            .squaredNorm();
   }
   for (std::size_t k = 0; k < data.motions.size(); ++k) {
     const GyroMotion& m = data.motions[k];
@@ -620,6 +627,12 @@ GyroCalibration CalibrateGyro(const RawLog& accel, const RawLog& gyro,
   result.model = f.kind;
   result.estimator = options.estimator;
   result.unit = options.unit;
+  if (options.latitude_deg) {
+    result.latitude_deg = options.latitude_deg;
+    result.earth_rate_vertical_rad_s = data.earth_rate_vertical;
+    result.earth_rate_horizontal_rad_s =
+        kEarthRate_rad_s * std::cos(*options.latitude_deg * kPi / 180);
+  }
   result.params = f.solution.gyro;
   result.noise_sigma_raw = data.noise_sigma_raw;
   result.still_scatter_ratio = f.still_ratio;

@@ -260,6 +260,13 @@ ordered_json GyroscopeSection(const GyroCalibration& g, const CalibrationFileInf
                          {"excluded", false}});
   }
   doc["rotations"] = rotations;
+  if (g.latitude_deg) {
+    doc["earth_rate"] = {{"latitude_deg", *g.latitude_deg},
+                         {"vertical_rad_s", g.earth_rate_vertical_rad_s},
+                         {"horizontal_rad_s", g.earth_rate_horizontal_rad_s}};
+  } else {
+    doc["earth_rate"] = nullptr;
+  }
   doc["validation"] = {{"rms_deg", g.rms_deg}, {"heldout_rms_deg", Nullable(g.heldout_rms_deg)}};
   const Summary& s = g.summary;
   doc["solver"] = {{"iterations", s.iterations},

@@ -130,10 +130,11 @@ class TwoStageProblem : public LeastSquaresProblem {
     if (b < data_.stills.size()) {
       const GyroStill& s = data_.stills[b];
       const Vec3 inverse_sigma = (data_.still_scale * s.sigma_mean_raw).cwiseInverse();
-      *residual = inverse_sigma.cwiseProduct(s.mean_raw - params.bias - params.G * s.f);
+      const Vec3 earth = data_.earth_rate_vertical * s.f.normalized();  // Ω_E sin φ c_i
+      *residual = inverse_sigma.cwiseProduct(
+          s.mean_raw - StillRate(data_, params, s.f.normalized(), s.f.norm()));
       if (J_x != nullptr) {
-        *J_x = -(inverse_sigma.asDiagonal() *
-                 GyroJacobianWrtParameters(Vec3::Zero(), s.f, data_.model));
+        *J_x = -(inverse_sigma.asDiagonal() * GyroJacobianWrtParameters(earth, s.f, data_.model));
       }
       return residual->allFinite();
     }

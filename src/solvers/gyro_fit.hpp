@@ -59,12 +59,24 @@ struct GyroFitData {
   /// Each group's noise multiplied by these (its scatter ratio, when the sample noise does not
   /// explain the group's scatter): residuals divided by them.
   double still_scale = 1, motion_scale = 1;
+  /// The Earth rate's vertical part Ω_E sin φ [rad/s] (0: not modelled): at rest the body turns
+  /// at it about the up direction c_i, so each still mean observes b_g + G f_i + K_g (Ω_E sin φ)
+  /// c_i. Its horizontal part, in an unknown heading, is not modelled; neither is the Earth rate
+  /// during the turns (15 °/h: 0.02° over a turn of 4 s).
+  double earth_rate_vertical = 0;
   /// One per motion (WeighMotions): the fits use them as given.
   std::vector<MotionWeight> weights;
   /// false: motion k left out of the fit (its residual block is empty); empty: all used.
   std::vector<bool> motion_used;
   bool used(std::size_t motion) const { return motion_used.empty() || motion_used[motion]; }
 };
+
+/// The mean raw rate a still position with up direction `c` (unit) and specific force `g c`
+/// predicts: b_g + G g c + K_g (Ω_E sin φ) c (GyroFitData::earth_rate_vertical).
+inline Vec3 StillRate(const GyroFitData& data, const GyroParameters& params, const Vec3& c,
+                      double g) {
+  return PredictRate(params, Vec3(data.earth_rate_vertical * c), Vec3(g * c));
+}
 
 /// The weight of motion `m` at `params`; nullopt when its propagated covariance is not positive.
 std::optional<MotionWeight> WeighMotion(const GyroFitData& data, const GyroMotion& m,

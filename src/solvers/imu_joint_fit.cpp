@@ -105,13 +105,14 @@ class JointProblem : public LeastSquaresProblem {
     const Vec3 c = Direction(x, k);
     const Vec3 f = data_.gravity * c;
     const Vec3 w = (data_.gyro.still_scale * s.sigma_mean_raw).cwiseInverse();
-    *residual = w.cwiseProduct(s.mean_raw - params.bias - params.G * f);
+    const double e = data_.gyro.earth_rate_vertical;  // the Earth rate about c: Ω_E sin φ
+    *residual = w.cwiseProduct(s.mean_raw - StillRate(data_.gyro, params, c, data_.gravity));
     if (J_x != nullptr) {
       J_x->setZero(3, n);
       J_x->middleCols(pa_, pg_) =
-          -(w.asDiagonal() * GyroJacobianWrtParameters(Vec3::Zero(), f, data_.gyro.model));
+          -(w.asDiagonal() * GyroJacobianWrtParameters(e * c, f, data_.gyro.model));
       J_x->middleCols<2>(Tangent(k)) =
-          -(w.asDiagonal() * params.G) * data_.gravity * TangentBasis(c);
+          -(w.asDiagonal() * (data_.gravity * params.G + e * params.K)) * TangentBasis(c);
     }
     return residual->allFinite();
   }
@@ -246,8 +247,8 @@ GroupCosts JointGroupCosts(const ImuJointData& data, const ImuJointFit& fit) {
     const GyroStill& s = data.gyro.stills[k];
     costs.stills += (data.gyro.still_scale * s.sigma_mean_raw)
                         .cwiseInverse()
-                        .cwiseProduct(s.mean_raw - fit.gyro.bias -
-                                      fit.gyro.G * (data.gravity * fit.directions[k]))
+                        .cwiseProduct(s.mean_raw - StillRate(data.gyro, fit.gyro, fit.directions[k],
+                                                             data.gravity))
                         .squaredNorm();
   }
   costs.turns = fit.summary.final_cost - costs.accel - costs.stills;

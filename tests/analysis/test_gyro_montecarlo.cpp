@@ -166,4 +166,40 @@ TEST(GyroCalibrationInput, QuantisedPeaksAreNotSaturationButAClippedAxisIs) {
   EXPECT_EQ(calibrated, 6);
 }
 
+TEST(GyroCalibrationInput, EarthRateAtALatitudeIsNotTakenForGSensitivity) {
+  // The Earth's rotation at 48° N adds K_g (Ω_E sin φ) c_i to every still position's rates (c_i
+  // its up direction; the horizontal part Ω_E cos φ, whose heading the recording does not know,
+  // left out here). Without the latitude the g-sensitive model takes it as G + (Ω_E sin φ / g)
+  // K_g; with it, G is the gyro's own. A gyro of 0.5 counts of noise, so that the 0.03 counts per
+  // m/s² it moves G stand out from G's σ (the noise of the accelerometer's 1 count, through the
+  // directions, bounds both fits alike: the tolerance is 4σ of each entry).
+  const double latitude = 48.0, e = kEarthRate_rad_s * std::sin(latitude * std::acos(-1.0) / 180);
+  Recording r = Simulate(3, 0.5);
+  const GyroParameters truth = XsensLikeGyro();
+  for (std::size_t i = 0; i < r.positions.size(); ++i) {
+    const StaticInterval& iv = *r.positions[i].interval;
+    const Vec3 up = r.accel_cal.directions[i];
+    for (std::size_t k = iv.begin; k < iv.end; ++k) r.gyro.samples[k] += truth.K * (e * up);
+  }
+  GyroCalibrationOptions o;
+  o.model = GyroModelKind::kGSensitive;
+  o.validate = false;
+  const GyroCalibration without = CalibrateGyro(r.accel, r.gyro, r.positions, r.accel_cal, o);
+  o.latitude_deg = latitude;
+  const GyroCalibration with = CalibrateGyro(r.accel, r.gyro, r.positions, r.accel_cal, o);
+  const Mat33 absorbed = truth.G + (e / kG) * truth.K;
+  for (int i = 0; i < 3; ++i) {
+    for (int j = 0; j < 3; ++j) {
+      const double sigma = std::sqrt(with.covariance(7 * i + 4 + j, 7 * i + 4 + j));
+      EXPECT_NEAR(with.params.G(i, j), truth.G(i, j), 4 * sigma) << i << j;
+      EXPECT_NEAR(without.params.G(i, j), absorbed(i, j), 4 * sigma) << i << j;
+    }
+    // Not vacuous: the Earth rate moves the diagonal by many σ.
+    EXPECT_GT(std::abs(absorbed(i, i) - truth.G(i, i)),
+              8 * std::sqrt(with.covariance(8 * i + 4, 8 * i + 4)));
+  }
+  EXPECT_NEAR(with.earth_rate_horizontal_rad_s,
+              kEarthRate_rad_s * std::cos(48.0 * std::acos(-1.0) / 180), 1e-18);
+}
+
 }  // namespace accelcal

@@ -66,6 +66,10 @@
 ///   - `gyro_scatter_ratio` (note beyond 3, warning beyond kScatterWarning): the still rates or
 ///     the rotations scatter R times more than the rate noise explains (the covariance is
 ///     inflated by R).
+///   - `gyro_poorly_determined` (warning): a scale factor of K_g known to worse than 1 % (1σ), or
+///     a misalignment (an off-diagonal term over its row's scale) to worse than 0.5°, as the
+///     accelerometer's `poorly_determined`: turns about one axis mostly leave the others' free. A
+///     failure at ten times that (10 % of a scale, 5° of a misalignment): no calibration at all.
 ///   - `gyro_turn_outlier` (warning): a turn the screening flagged (its held-out χ² beyond the 1 %
 ///     level over all turns): a bump during it, kept in the fit.
 ///   - `gyro_not_validated` (note): no held-out rotation error (validation turned off).
@@ -131,6 +135,8 @@ inline constexpr double kScatterWarning = 30.0;
 inline constexpr double kInterleavedCorrelation = -0.5;
 inline constexpr double kRepeatedStepFraction = 0.05;
 inline constexpr double kGyroMisfitFailure_deg = 2.0;  ///< RMS of the rotations' residuals
+inline constexpr double kGyroScaleSigmaLimit = 0.01;   ///< 1σ of a scale, relative
+inline constexpr double kGyroMisalignmentSigmaLimit = 0.5 * 3.14159265358979323846 / 180;
 
 /// A raw log that gave positions, for the findings about it (LogFindings).
 struct DiagnosedLog {

@@ -203,6 +203,34 @@ std::vector<Finding> GyroFindings(const GyroCalibration& g) {
                     : ""),
         {{"scatter_ratio", group.ratio}});
   }
+  // The accelerometer's rule for a calibration worth applying: a scale factor to 1 %, a
+  // misalignment to 0.5° (K_g's off-diagonal terms over their row's scale, in radians).
+  if (g.covariance.size() > 0) {
+    const auto& slots = GyroParameterSlots(g.model);
+    std::string names;
+    double worst = 0;
+    for (std::size_t p = 0; p < slots.size(); ++p) {
+      const GyroParameterSlot& s = slots[p];
+      if (s.group != GyroParameterGroup::kK) continue;
+      const auto i = static_cast<Eigen::Index>(p);
+      const double scale = std::abs(g.params.K(s.row, s.row));
+      const double sigma = std::sqrt(g.covariance(i, i)) / scale;  // relative, or radians
+      const double limit = s.row == s.col ? kGyroScaleSigmaLimit : kGyroMisalignmentSigmaLimit;
+      if (!(sigma <= limit)) {
+        names += (names.empty() ? "" : ", ") + std::string(s.name);
+        worst = std::max(worst, sigma / limit);
+      }
+    }
+    if (!names.empty()) {
+      // Ten times beyond (10 % of a scale, 5° of a misalignment): not a calibration at all.
+      Add(&out, "gyro_poorly_determined", worst > 10 ? Severity::kFailure : Severity::kWarning,
+          Format("the turns barely determine the gyroscope's %s (up to %.3g times the 1 %% of a "
+                 "scale or 0.5 deg of a misalignment a calibration worth applying has): turn "
+                 "about every axis, several times",
+                 names.c_str(), worst),
+          {{"worst_ratio", worst}});
+    }
+  }
   for (const GyroRotation& r : g.rotations) {
     if (!r.flagged) continue;
     Add(&out, "gyro_turn_outlier", Severity::kWarning,

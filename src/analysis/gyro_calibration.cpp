@@ -340,8 +340,16 @@ internal::ImuJointData JointData(const GyroFitData& gyro, const std::vector<Posi
   return joint;
 }
 
+// A held-out fit that is not determined (LeaveOneBlockOut's NaN) or whose K_g is singular (the
+// turn left out was the only one about an axis): its predictions are NaN, not an error.
+bool Determined(const GyroParameters& gyro) {
+  const double det = gyro.K.determinant();
+  return std::isfinite(det) && det != 0 && gyro.bias.allFinite() && gyro.G.allFinite();
+}
+
 double AngleError(const GyroFitData& data, const GyroMotion& m, const GyroParameters& gyro,
                   const std::vector<Vec3>& directions) {
+  if (!Determined(gyro)) return std::nan("");
   const Mat33 R = IntegrateCalibratedRate(gyro, data.model, m.t_s, m.raw, m.f, data.rule);
   const Vec3 v = R.transpose() * directions[m.from];
   const Vec3& c = directions[m.to];
@@ -375,6 +383,7 @@ std::pair<double, double> ScatterRatios(const GyroFitData& data, const GyroParam
 double HeldOutChi2(const GyroFitData& data, std::size_t k, const GyroParameters& gyro,
                    const std::vector<Vec3>& directions) {
   const GyroMotion& m = data.motions[k];
+  if (!Determined(gyro)) return std::nan("");
   return internal::MotionResidual(data, m, data.weights[k], gyro, directions[m.from],
                                   directions[m.to])
              .squaredNorm() /

@@ -202,21 +202,31 @@ Mat33 Integrate(const GyroParameters& params, const Mat33& K_inverse,
 
 }  // namespace
 
-Mat33 IntegrateCalibratedRate(const GyroParameters& params, GyroModelKind kind,
-                              const std::vector<double>& t_s, const std::vector<Vec3>& raw,
-                              const std::vector<Vec3>& f, RateInterpolation rule,
-                              Eigen::MatrixXd* J_R_theta, const Vec3* noise_sigma_raw,
-                              Mat33* covariance) {
+namespace {
+
+// K_g⁻¹ after the checks both integrations make (`who` names the caller in their messages).
+Mat33 CheckedInverse(const char* who, const GyroParameters& params, const std::vector<double>& t_s,
+                     const std::vector<Vec3>& raw, const std::vector<Vec3>& f) {
   if (t_s.size() != raw.size() || t_s.size() != f.size() || t_s.empty()) {
-    throw std::invalid_argument("IntegrateCalibratedRate: " + std::to_string(t_s.size()) +
+    throw std::invalid_argument(std::string(who) + ": " + std::to_string(t_s.size()) +
                                 " times for " + std::to_string(raw.size()) + " rates and " +
                                 std::to_string(f.size()) + " specific forces");
   }
   const Eigen::PartialPivLU<Mat33> lu(params.K);
   if (!(lu.determinant() != 0.0) || !std::isfinite(lu.determinant())) {
-    throw std::invalid_argument("IntegrateCalibratedRate: K_g is singular");
+    throw std::invalid_argument(std::string(who) + ": K_g is singular");
   }
-  const Mat33 K_inverse = lu.inverse();
+  return lu.inverse();
+}
+
+}  // namespace
+
+Mat33 IntegrateCalibratedRate(const GyroParameters& params, GyroModelKind kind,
+                              const std::vector<double>& t_s, const std::vector<Vec3>& raw,
+                              const std::vector<Vec3>& f, RateInterpolation rule,
+                              Eigen::MatrixXd* J_R_theta, const Vec3* noise_sigma_raw,
+                              Mat33* covariance) {
+  const Mat33 K_inverse = CheckedInverse("IntegrateCalibratedRate", params, t_s, raw, f);
   return kind == GyroModelKind::kLinear ? Integrate<4>(params, K_inverse, t_s, raw, f, rule,
                                                        J_R_theta, noise_sigma_raw, covariance)
                                         : Integrate<7>(params, K_inverse, t_s, raw, f, rule,
@@ -227,16 +237,7 @@ TurnedAngle IntegrateTurnedAngle(const GyroParameters& params, GyroModelKind kin
                                  const std::vector<double>& t_s, const std::vector<Vec3>& raw,
                                  const std::vector<Vec3>& f, RateInterpolation rule,
                                  const Vec3& noise_sigma_raw) {
-  if (t_s.size() != raw.size() || t_s.size() != f.size() || t_s.empty()) {
-    throw std::invalid_argument("IntegrateTurnedAngle: " + std::to_string(t_s.size()) +
-                                " times for " + std::to_string(raw.size()) + " rates and " +
-                                std::to_string(f.size()) + " specific forces");
-  }
-  const Eigen::PartialPivLU<Mat33> lu(params.K);
-  if (!(lu.determinant() != 0.0) || !std::isfinite(lu.determinant())) {
-    throw std::invalid_argument("IntegrateTurnedAngle: K_g is singular");
-  }
-  const Mat33 K_inverse = lu.inverse();
+  const Mat33 K_inverse = CheckedInverse("IntegrateTurnedAngle", params, t_s, raw, f);
   // The weights c_k of the rule, and the sums s = K_g⁻¹ Σ c_k u_k (u_k = ω_raw,k − b_g − G f_k),
   // Σ c_k, Σ c_k f_k and Σ c_k².
   const bool trapezoid = rule == RateInterpolation::kTrapezoidal;

@@ -37,23 +37,14 @@ struct Recording {
 
 // Yang's 18 positions held 4 s with 3 s turns at 100 Hz; the accelerometer with 1 count of noise,
 // the gyro with `gyro_sigma` counts (27: the Xsens's).
-Recording Simulate(std::uint64_t seed, double gyro_sigma,
-                   const GyroParameters& truth = XsensLikeGyro()) {
-  RawLogSimulation options;
-  options.static_s = 4.0;
-  options.transition_s = 3.0;
-  options.sigma_raw_per_sample = Vec3::Constant(1.0);
-  options.seed = seed;
-  GyroSimulation gyro;
-  gyro.truth = truth;
-  gyro.sigma_raw_per_sample = Vec3::Constant(gyro_sigma);
-  const SimulatedImuLog log =
-      SimulateImuLog(Yang2012Truth(), kG, Yang18Directions(), options, gyro);
+// The simulated log as the command line takes it: positions detected, the accelerometer's
+// maximum-likelihood fit (not validated) with each position's noise from its samples.
+Recording Recorded(const SimulatedImuLog& log, double rate_hz) {
   Recording r;
   for (RawLog* raw : {&r.accel, &r.gyro}) {
     raw->source = "simulated";
     raw->time_s = log.time_s;
-    raw->rate_hz = options.rate_hz;
+    raw->rate_hz = rate_hz;
     for (std::size_t k = 0; k < log.time_s.size(); ++k) {
       raw->line.push_back(static_cast<std::uint32_t>(k + 1));
     }
@@ -67,6 +58,20 @@ Recording Simulate(std::uint64_t seed, double gyro_sigma,
   o.cross_validate = false;
   r.accel_cal = Calibrate(Means(r.positions), o);
   return r;
+}
+
+Recording Simulate(std::uint64_t seed, double gyro_sigma,
+                   const GyroParameters& truth = XsensLikeGyro()) {
+  RawLogSimulation options;
+  options.static_s = 4.0;
+  options.transition_s = 3.0;
+  options.sigma_raw_per_sample = Vec3::Constant(1.0);
+  options.seed = seed;
+  GyroSimulation gyro;
+  gyro.truth = truth;
+  gyro.sigma_raw_per_sample = Vec3::Constant(gyro_sigma);
+  return Recorded(SimulateImuLog(Yang2012Truth(), kG, Yang18Directions(), options, gyro),
+                  options.rate_hz);
 }
 
 TEST(GyroMonteCarlo, RmsErrorAndCoverageOfEveryGyroParameter) {
@@ -227,20 +232,8 @@ TEST(GyroCalibrationInput, TurnsAboutOneAxisAreRefusedOrFailedNeverAnInternalErr
   GyroSimulation gyro;
   gyro.truth = XsensLikeGyro();
   gyro.sigma_raw_per_sample = Vec3::Constant(27.0);
-  const SimulatedImuLog log = SimulateImuLog(Yang2012Truth(), kG, up, options, gyro);
-  Recording r;
-  for (RawLog* raw : {&r.accel, &r.gyro}) {
-    raw->source = "simulated";
-    raw->time_s = log.time_s;
-    raw->rate_hz = options.rate_hz;
-  }
-  r.accel.samples = log.accel;
-  r.gyro.samples = log.gyro;
-  r.positions = PositionsFromIntervals(DetectStaticIntervals(r.accel, {}).intervals);
-  CalibrationOptions o;
-  o.gravity = kG;
-  o.reading_sigmas = SigmasOfMeans(r.positions);
-  r.accel_cal = Calibrate(Means(r.positions), o);
+  const Recording r =
+      Recorded(SimulateImuLog(Yang2012Truth(), kG, up, options, gyro), options.rate_hz);
   ASSERT_TRUE(r.accel_cal.summary.converged());
   for (GyroEstimator estimator : {GyroEstimator::kJoint, GyroEstimator::kTwoStage}) {
     GyroCalibrationOptions g;

@@ -503,6 +503,13 @@ int RunCalibrate(const CalibrateArgs& args) {
                              : ParseEnum(ModelKindFromString(args.model), args.model, "--model",
                                          (NameList<ModelKind>() + ", auto").c_str());
   options.method = ParseChoice<SolverMethod>(args.method, "--method", kOrientationFreeMethods);
+  if (GyroWanted(args) && !IsMaximumLikelihood(options.method)) {
+    throw UsageError(
+        "--gyro and --gyro-columns need a maximum-likelihood --method (joint, "
+        "two-step or newton-lagrange): the gyroscope's fit weighs the "
+        "accelerometer by the residual of its fit, which " +
+        args.method + " does not estimate");
+  }
   options.initialization = ParseChoice<Initialization>(args.init, "--init", kInitializations);
   if (args.frame == "platform") {
     throw UsageError(

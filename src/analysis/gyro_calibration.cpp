@@ -73,7 +73,6 @@ constexpr double kSaturationSteepness = 3.0;
 
 struct ClippedRun {
   std::size_t begin = 0, end = 0;  // samples [begin, end)
-  double step = 0;                 // the steeper of its entry and exit steps
 };
 
 // A run of at least `min_run` at the extreme, entered or left by a step beyond `steep` (< 0:
@@ -98,7 +97,7 @@ std::optional<ClippedRun> FindClippedRun(const std::vector<Vec3>& samples, std::
       if (end < samples.size()) {
         step = std::max(step, std::abs(samples[end](axis) - samples[end - 1](axis)));
       }
-      if (step > steep) return ClippedRun{k, end, step};
+      if (step > steep) return ClippedRun{k, end};
     }
     k = end;
   }

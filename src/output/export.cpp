@@ -330,20 +330,18 @@ ExportResult Kalibr(const LoadedCalibration& cal, const ExportOptions& options) 
                       : " (converted exactly from the " + std::string(ToString(cal.frame)) +
                             " frame: the body frame turns, corrected magnitudes are unchanged)") +
       "; Kalibr estimates its own time-varying bias b, so accelcal's constant bias is a comment";
-  out.text = "#" + Header(cal) + "\n# " + out.convention +
-             "\nimu0:\n  model: scale-misalignment\n" + "  accelerometers:\n    M:\n";
-  for (int i = 0; i < 3; ++i) {
-    out.text +=
-        "    - [" + Number(M(i, 0)) + ", " + Number(M(i, 1)) + ", " + Number(M(i, 2)) + "]\n";
-  }
-  out.text += "  # accelcal constant bias [m/s2]: [" + Number(bias_ms2(0)) + ", " +
-              Number(bias_ms2(1)) + ", " + Number(bias_ms2(2)) + "]\n";
-  const auto rows = [&](const char* indent, const Mat33& A) {
+  // A 3x3 matrix as Kalibr's YAML lists it under its key: one row per line.
+  const auto rows = [&](const Mat33& A) {
     for (int i = 0; i < 3; ++i) {
-      out.text += std::string(indent) + "- [" + Number(A(i, 0)) + ", " + Number(A(i, 1)) + ", " +
-                  Number(A(i, 2)) + "]\n";
+      out.text +=
+          "    - [" + Number(A(i, 0)) + ", " + Number(A(i, 1)) + ", " + Number(A(i, 2)) + "]\n";
     }
   };
+  out.text = "#" + Header(cal) + "\n# " + out.convention +
+             "\nimu0:\n  model: scale-misalignment\n" + "  accelerometers:\n    M:\n";
+  rows(M);
+  out.text += "  # accelcal constant bias [m/s2]: [" + Number(bias_ms2(0)) + ", " +
+              Number(bias_ms2(1)) + ", " + Number(bias_ms2(2)) + "]\n";
   std::optional<double> rad_s;
   if (cal.gyroscope) {
     rad_s = RawToRadPerSecond(cal, options, "Kalibr", "sensor_msgs/Imu angular_velocity",
@@ -357,11 +355,11 @@ ExportResult Kalibr(const LoadedCalibration& cal, const ExportOptions& options) 
         "frame, A its g-sensitivity G [(rad/s)/(m/s2)] (exact; accelcal's constant bias a "
         "comment)";
     out.text += "  gyroscopes:\n    M:\n";
-    rows("    ", g.M);
+    rows(g.M);
     out.text += "    A:\n";
-    rows("    ", g.A);
+    rows(g.A);
     out.text += "    C_gyro_i:\n";
-    rows("    ", g.C);
+    rows(g.C);
     out.text += "  # accelcal constant gyro bias [rad/s]: [" + Number(g.bias_rad_s(0)) + ", " +
                 Number(g.bias_rad_s(1)) + ", " + Number(g.bias_rad_s(2)) + "]\n";
     out.gyroscope_included = true;

@@ -178,6 +178,16 @@ py::dict GyroDict(const GyroCalibration& g) {
   d["still_scatter_ratio"] = g.still_scatter_ratio;
   d["rotation_scatter_ratio"] = g.rotation_scatter_ratio;
   d["accelerometer_scatter_ratio"] = g.accel_scatter_ratio;
+  py::list stills;
+  for (std::size_t i = 0; i < g.still_mean_raw.size(); ++i) {
+    py::dict st;
+    st["first_sample"] = g.still_spans[i].first_sample;
+    st["last_sample"] = g.still_spans[i].last_sample;
+    st["mean_raw"] = Vec3(g.still_mean_raw[i]);
+    st["turned_outside_deg"] = g.still_spans[i].turned_outside_deg;
+    stills.append(st);
+  }
+  d["stills"] = stills;
   py::list rotations;
   for (const GyroRotation& r : g.rotations) {
     py::dict t;
@@ -299,8 +309,10 @@ void BindCalibration(py::module_& m) {
           "The gyroscope calibrated from the same recording (calibrate_log's gyro options; "
           "gyro_calibration.hpp), else None: a dict with model, estimator, K [raw per rad/s], "
           "bias [raw], G [raw per force unit, zeros for the linear model], covariance (in "
-          "parameter_names' order) and std, noise_sigma_raw, scatter ratios, rotations (dicts; "
-          "from and to count positions from 0), rms_deg and heldout_rms_deg")
+          "parameter_names' order) and std, noise_sigma_raw, scatter ratios, stills (per "
+          "position: the samples where the gyro was still, its mean raw rate there, the angle "
+          "it turned outside them), rotations (dicts; from and to count positions from 0), "
+          "rms_deg and heldout_rms_deg")
       .def_property_readonly(
           "source", [](const PyCalibration& c) { return c.source; }, "The input file, or ''")
       .def(

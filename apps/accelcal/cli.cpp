@@ -435,7 +435,14 @@ int accelcal::cli::RunCommandLine(int argc, char** argv) {
   } catch (const CLI::CallForVersion& e) {
     return app.exit(e);
   } catch (const CLI::ParseError& e) {
-    app.exit(e);
+    // Said as every other usage error is; an option given twice by what it is.
+    std::string what = e.what();
+    const std::string twice = ": At Most 1 required but received ";
+    if (const std::size_t at = what.find(twice); at != std::string::npos) {
+      what =
+          what.substr(0, at) + " given " + what.substr(at + twice.size()) + " times: give it once";
+    }
+    std::fprintf(stderr, "accelcal: usage: %s (see --help)\n", what.c_str());
     return kExitUsage;
   }
 

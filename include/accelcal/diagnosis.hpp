@@ -73,6 +73,13 @@
 ///   - `gyro_turn_outlier` (warning): a turn the screening flagged (its held-out χ² beyond the 1 %
 ///     level over all turns): a bump during it, kept in the fit.
 ///   - `gyro_not_validated` (note): no held-out rotation error (validation turned off).
+///   - `gyro_unit_scale` (warning): a scale of K_g more than kGyroUnitScaleTolerance (10 %) from
+///     the declared unit's: the readings were converted with another range (full-scale) setting
+///     than the sensor's, or are in another unit. The calibration maps the readings as they are.
+///   - `gyro_turned_in_still` (note): the gyro turned by more than kGyroTurnedInStillNote_deg
+///     inside a still position of the accelerometer, outside its own still span (a turn about the
+///     vertical, which the accelerometer cannot see, or the gyro's stream lagging or leading the
+///     accelerometer's): those samples were integrated with the neighbouring turns.
 
 #include <string>
 #include <string_view>
@@ -137,6 +144,9 @@ inline constexpr double kRepeatedStepFraction = 0.05;
 inline constexpr double kGyroMisfitFailure_deg = 2.0;  ///< RMS of the rotations' residuals
 inline constexpr double kGyroScaleSigmaLimit = 0.01;   ///< 1σ of a scale, relative
 inline constexpr double kGyroMisalignmentSigmaLimit = 0.5 * 3.14159265358979323846 / 180;
+/// The angle a gyro may turn inside an accelerometer's still interval, outside its own still
+/// span, before it is noted: the bundled recordings reach 0.22° (the hand settling after a turn).
+inline constexpr double kGyroTurnedInStillNote_deg = 2.0;
 
 /// A raw log that gave positions, for the findings about it (LogFindings).
 struct DiagnosedLog {

@@ -6,6 +6,14 @@
 /// gravity direction of one position into the next, by integrating the calibrated rate sample by
 /// sample (Tedaldi, Pretto, Menegatti, ICRA 2014, for the idea).
 ///
+/// The accelerometer's still intervals are not the gyro's: the accelerometer cannot see a turn
+/// about the vertical, hardly sees the slow ends of a turn, and a gyro stream that lags or leads
+/// it turns inside them. So each position's still rate is averaged where the gyro itself is still
+/// (the longest run of the interval whose 0.1 s means stay within the rate noise, found by the
+/// peak of the motions beyond it), and each turn is integrated from one such span to the next:
+/// what the gyro turned inside the accelerometer's interval is integrated with the turns
+/// (GyroStillSpan::turned_outside_deg, the diagnosis' gyro_turned_in_still).
+///
 /// Two estimators, on the same data:
 ///   - two-stage: the accelerometer's calibration and gravity directions held, the gyroscope's
 ///     parameters fitted to the stills and the turns;
@@ -52,6 +60,11 @@ struct EnumNames<GyroUnit> {
       {GyroUnit::kRaw, "raw"}};
 };
 std::string_view ToString(GyroUnit unit);
+
+/// How far a gyro's scale (a row norm of K_g) may lie from its declared unit's (1 for rad/s,
+/// 180/π for deg/s) and still start the fit, and pass the diagnosis (gyro_unit_scale): MEMS
+/// gyros are specified to ±3 % or better; the bundled rad/s and deg/s gyros fit within 2.7 %.
+inline constexpr double kGyroUnitScaleTolerance = 0.10;
 
 /// Which estimator (see the file comment).
 enum class GyroEstimator { kTwoStage, kJoint };
@@ -108,6 +121,17 @@ struct GyroRotation {
   bool flagged = false;
 };
 
+/// Where the gyroscope was still in one still position of the accelerometer: the samples its
+/// still rate is averaged over, and the turns integrated from and to.
+struct GyroStillSpan {
+  std::size_t first_sample = 0, last_sample = 0;  ///< inclusive
+  /// The angle the calibrated gyro turned through inside the accelerometer's still interval but
+  /// outside this span [deg]: the slow ends of the turns the accelerometer hardly sees (small),
+  /// a turn about the vertical it cannot see, or the gyro's stream lagging or leading the
+  /// accelerometer's.
+  double turned_outside_deg = 0;
+};
+
 /// The gyroscope's calibration.
 struct GyroCalibration {
   GyroModelKind model = GyroModelKind::kLinear;
@@ -119,7 +143,8 @@ struct GyroCalibration {
   /// applied (see the file comment); empty without degrees of freedom.
   Eigen::MatrixXd covariance;
   Vec3 noise_sigma_raw = Vec3::Zero();  ///< white noise of one rate sample, pooled over the stills
-  std::vector<Vec3> still_mean_raw;     ///< each position's mean raw rate
+  std::vector<Vec3> still_mean_raw;     ///< each position's mean raw rate, over its span
+  std::vector<GyroStillSpan> still_spans;  ///< per position (FindGyroStillRuns)
   std::vector<GyroRotation> rotations;
   double rms_deg = 0;  ///< RMS of the rotations' residual_deg
   /// RMS of the rotations' heldout_deg; NaN without validation.

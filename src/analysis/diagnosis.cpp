@@ -5,6 +5,7 @@
 
 #include "accelcal/engineering.hpp"
 #include "accelcal/frame.hpp"
+#include "core/median.hpp"
 #include "core/text_format.hpp"
 
 namespace accelcal {
@@ -50,11 +51,7 @@ std::pair<double, Vec3> LargestGap(const std::vector<Vec3>& directions) {
   return {worst * 180.0 / kPi, where};
 }
 
-double Median(std::vector<double> v) {
-  const auto mid = v.begin() + static_cast<std::ptrdiff_t>(v.size() / 2);
-  std::nth_element(v.begin(), mid, v.end());
-  return *mid;
-}
+using internal::Median;
 
 void Add(std::vector<Finding>* out, const char* code, Severity severity, std::string message,
          std::vector<std::pair<std::string, double>> numbers = {}) {
@@ -243,6 +240,38 @@ std::vector<Finding> GyroFindings(const GyroCalibration& g) {
          {"to", static_cast<double>(r.to + 1)},
          {"statistic", r.statistic},
          {"threshold", r.threshold}});
+  }
+  if (g.unit != GyroUnit::kRaw) {
+    const double nominal = g.unit == GyroUnit::kDegPerSecond ? 180.0 / kPi : 1.0;
+    Vec3 scale;
+    for (int i = 0; i < 3; ++i) scale(i) = g.params.K.row(i).norm() / nominal;
+    if (!((scale.array() - 1).abs() <= kGyroUnitScaleTolerance).all()) {
+      const std::string unit(ToString(g.unit));
+      Add(&out, "gyro_unit_scale", Severity::kWarning,
+          Format("the gyroscope's scales are %.3g, %.3g and %.3g times its declared unit %s "
+                 "(a MEMS gyro's lie within a few percent): its readings were converted with "
+                 "another range setting than the sensor's, or are in another unit; the "
+                 "calibration maps them as they are",
+                 scale(0), scale(1), scale(2), unit.c_str()),
+          {{"scale_x", scale(0)}, {"scale_y", scale(1)}, {"scale_z", scale(2)}});
+    }
+  }
+  std::string turned;
+  double most = 0;
+  for (std::size_t i = 0; i < g.still_spans.size(); ++i) {
+    const double angle = g.still_spans[i].turned_outside_deg;
+    if (!(angle > kGyroTurnedInStillNote_deg)) continue;
+    turned += Format("%s%zu (%.3g deg)", turned.empty() ? "" : ", ", i + 1, angle);
+    most = std::max(most, angle);
+  }
+  if (!turned.empty()) {
+    Add(&out, "gyro_turned_in_still", Severity::kNote,
+        Format("the gyroscope turned while the accelerometer was still, in position %s: a turn "
+               "about the vertical, which the accelerometer cannot see, or the gyro's readings "
+               "lagging or leading the accelerometer's; those samples were integrated with the "
+               "neighbouring turns, not averaged into the still rates",
+               turned.c_str()),
+        {{"largest_deg", most}});
   }
   if (!std::isfinite(g.heldout_rms_deg)) {
     Add(&out, "gyro_not_validated", Severity::kNote,

@@ -15,6 +15,7 @@
 #include "accelcal/error.hpp"
 #include "accelcal/model.hpp"
 #include "core/text_format.hpp"
+#include "io/gyro_still_runs.hpp"
 #include "solvers/gyro_fit.hpp"
 #include "solvers/imu_joint_fit.hpp"
 #include "statistics/student_t.hpp"
@@ -65,7 +66,7 @@ std::vector<double> IntegrationTimes(const RawLog& gyro, const RawLog& accel) {
 // p^(L−1) ≤ kSaturationFalseAlarm for its length L (three at least): at σ = 2 q, p = 0.14 and L
 // ≥ 9 (seven in a row were seen at the calm peak of a simulated MPU-6050 turn); at the Xsens's
 // σ = 27 counts, L ≥ 4. On a coarser axis, whose smooth peak may hold a value for a while, a run
-// of at least three is saturation when it is entered or left by a step beyond
+// of at least three is saturation when one of the two steps into it or out of it is beyond
 // kSaturationSteepness resolution steps (a smooth peak is approached by steps of about one).
 constexpr double kSaturationFalseAlarm = 1e-6;
 constexpr std::size_t kSaturatedRun = 3;
@@ -76,7 +77,7 @@ struct ClippedRun {
 };
 
 // A run of at least `min_run` at the extreme, entered or left by a step beyond `steep` (< 0:
-// any).
+// any) in its two steps before or after.
 std::optional<ClippedRun> FindClippedRun(const std::vector<Vec3>& samples, std::size_t first,
                                          std::size_t last, int axis, double lo, double hi,
                                          std::size_t min_run, double steep) {
@@ -92,11 +93,16 @@ std::optional<ClippedRun> FindClippedRun(const std::vector<Vec3>& samples, std::
     std::size_t end = k;
     while (end <= last && samples[end](axis) == samples[k](axis)) ++end;
     if (end - k >= min_run) {
+      // The two steps into the run and the two out of it: the step onto the rail itself is cut
+      // short by it (a count, when the reading before fell just below it).
+      const auto jump = [&](std::size_t a) {  // from sample a to a + 1
+        return std::abs(samples[a + 1](axis) - samples[a](axis));
+      };
       double step = 0;
-      if (k > 0) step = std::abs(samples[k](axis) - samples[k - 1](axis));
-      if (end < samples.size()) {
-        step = std::max(step, std::abs(samples[end](axis) - samples[end - 1](axis)));
-      }
+      if (k >= 1) step = std::max(step, jump(k - 1));
+      if (k >= 2) step = std::max(step, jump(k - 2));
+      if (end < samples.size()) step = std::max(step, jump(end - 1));
+      if (end + 1 < samples.size()) step = std::max(step, jump(end));
       if (step > steep) return ClippedRun{k, end};
     }
     k = end;
@@ -108,9 +114,26 @@ std::string LineOf(const RawLog& log, std::size_t k) {
   return std::to_string(log.line.empty() ? k + 1 : log.line[k]);
 }
 
+// The samples first..last (inclusive) as a motion: times, raw rates, and the specific force of
+// the calibrated accelerometer at each (the last one it could calibrate, from `f0`).
+GyroMotion SamplesOf(const RawLog& accel, const RawLog& gyro, const std::vector<double>& t,
+                     const ModelParameters& accel_params, Vec3 f0, std::size_t first,
+                     std::size_t last) {
+  GyroMotion motion;
+  for (std::size_t k = first; k <= last; ++k) {
+    motion.t_s.push_back(t[k]);
+    motion.raw.push_back(gyro.samples[k]);
+    if (std::optional<Vec3> f = SpecificForce(accel_params, accel.samples[k])) f0 = *f;
+    motion.f.push_back(f0);
+  }
+  return motion;
+}
+
 struct Built {
   GyroFitData data;
-  std::vector<GyroRotation> rotations;  // one per motion
+  std::vector<GyroRotation> rotations;     // one per motion
+  std::vector<StaticInterval> still_runs;  // per position: where the gyro is still
+  std::vector<double> t;                   // the integration times
 };
 
 Built BuildData(const RawLog& accel, const RawLog& gyro, const std::vector<Position>& positions,
@@ -144,12 +167,41 @@ Built BuildData(const RawLog& accel, const RawLog& gyro, const std::vector<Posit
       throw DataError("position " + std::to_string(i + 1) + " ends beyond the gyroscope's log");
     }
   }
+  // The smallest step each axis makes anywhere (its resolution, when quantised).
+  Vec3 quantum = Vec3::Constant(std::numeric_limits<double>::infinity());
+  for (std::size_t k = 1; k < gyro.samples.size(); ++k) {
+    for (int a = 0; a < 3; ++a) {
+      const double d = std::abs(gyro.samples[k](a) - gyro.samples[k - 1](a));
+      if (d > 0 && d < quantum(a)) quantum(a) = d;
+    }
+  }
+  const double typical_step = gyro.time      ? gyro.time->typical_step_s
+                              : accel.time   ? accel.time->typical_step_s
+                              : gyro.rate_hz ? 1.0 / *gyro.rate_hz
+                                             : 0.0;
+  // Where the gyro is still inside each position's interval (gyro_still_runs.hpp): the still
+  // rates are averaged there, and the turns integrated from one run to the next.
+  std::vector<StaticInterval> intervals;
+  for (const Position& p : positions) intervals.push_back(*p.interval);
+  const internal::GyroStillRuns still =
+      internal::FindGyroStillRuns(gyro.samples, intervals, typical_step, quantum);
+  for (std::size_t i = 0; i < m; ++i) {
+    const StaticInterval& run = still.runs[i];
+    if (run.end - run.begin < 2) {
+      throw DataError("the gyroscope turns throughout still position " + std::to_string(i + 1) +
+                      " (lines " + LineOf(gyro, intervals[i].begin) + "-" +
+                      LineOf(gyro, intervals[i].end - 1) + " of " + gyro.source +
+                      "), where the accelerometer is still: these are not this accelerometer's "
+                      "rates, or the two streams are far out of step");
+    }
+    b.still_runs.push_back(run);
+  }
   // Each position's mean rate and the pooled sample noise.
   Vec3 sum_sq = Vec3::Zero();
   double dof = 0;
   std::vector<std::size_t> counts;
   for (std::size_t i = 0; i < m; ++i) {
-    const StaticInterval& iv = *positions[i].interval;
+    const StaticInterval& iv = still.runs[i];
     Vec3 mean = Vec3::Zero();
     for (std::size_t k = iv.begin; k < iv.end; ++k) mean += gyro.samples[k];
     const auto n = static_cast<double>(iv.end - iv.begin);
@@ -176,8 +228,9 @@ Built BuildData(const RawLog& accel, const RawLog& gyro, const std::vector<Posit
     data.stills[i].sigma_mean_raw =
         data.noise_sigma_raw / std::sqrt(static_cast<double>(counts[i]));
   }
-  // The turns: from the last sample of one interval to the first of the next.
-  const std::vector<double> t = IntegrationTimes(gyro, accel);
+  // The turns: from the last still sample of one position to the first of the next.
+  b.t = IntegrationTimes(gyro, accel);
+  const std::vector<double>& t = b.t;
   Vec3 lo = gyro.samples.front(), hi = lo;
   for (const Vec3& s : gyro.samples) {
     lo = lo.cwiseMin(s);
@@ -185,14 +238,7 @@ Built BuildData(const RawLog& accel, const RawLog& gyro, const std::vector<Posit
   }
   // A saturated axis holds its extreme for several samples, entered or left steeply; the peak of
   // a smooth turn on a quantised axis may repeat its extreme too, but the steps around it are of
-  // the noise's and the resolution's size (the smallest step the axis makes anywhere).
-  Vec3 quantum = Vec3::Constant(std::numeric_limits<double>::infinity());
-  for (std::size_t k = 1; k < gyro.samples.size(); ++k) {
-    for (int a = 0; a < 3; ++a) {
-      const double d = std::abs(gyro.samples[k](a) - gyro.samples[k - 1](a));
-      if (d > 0 && d < quantum(a)) quantum(a) = d;
-    }
-  }
+  // the noise's and the resolution's size.
   // Per axis, the run at the extreme and the step into or out of it that mark saturation.
   std::size_t min_run[3];
   Vec3 steep;
@@ -208,23 +254,15 @@ Built BuildData(const RawLog& accel, const RawLog& gyro, const std::vector<Posit
       steep(a) = kSaturationSteepness * quantum(a);
     }
   }
-  const double typical_step = gyro.time      ? gyro.time->typical_step_s
-                              : accel.time   ? accel.time->typical_step_s
-                              : gyro.rate_hz ? 1.0 / *gyro.rate_hz
-                                             : 0.0;
   for (std::size_t i = 0; i + 1 < m; ++i) {
-    GyroMotion motion;
+    const std::size_t first = still.runs[i].end - 1;
+    const std::size_t last = still.runs[i + 1].begin;
+    GyroMotion motion = SamplesOf(accel, gyro, t, accel_cal.params,
+                                  accel_cal.gravity * accel_cal.directions[i], first, last);
     motion.from = i;
     motion.to = i + 1;
-    const std::size_t first = positions[i].interval->end - 1;
-    const std::size_t last = positions[i + 1].interval->begin;
-    Vec3 last_f = accel_cal.gravity * accel_cal.directions[i];
-    for (std::size_t k = first; k <= last; ++k) {
-      motion.t_s.push_back(t[k]);
-      motion.raw.push_back(gyro.samples[k]);
-      if (std::optional<Vec3> f = SpecificForce(accel_cal.params, accel.samples[k])) last_f = *f;
-      motion.f.push_back(last_f);
-      if (k > first && typical_step > 0 && t[k] - t[k - 1] > 5 * typical_step) {
+    for (std::size_t k = first + 1; k <= last; ++k) {
+      if (typical_step > 0 && t[k] - t[k - 1] > 5 * typical_step) {
         throw DataError("the turn from position " + std::to_string(i + 1) + " to " +
                         std::to_string(i + 2) + " has a gap of " + Num(t[k] - t[k - 1], 4) +
                         " s in its samples (at line " +
@@ -585,7 +623,11 @@ GyroCalibration CalibrateGyro(const RawLog& accel, const RawLog& gyro,
         std::string(ToString(options.unit)).c_str(), turned_scale / *scale,
         std::string(ToString(options.unit)).c_str(), turned_scale));
   }
-  const GyroParameters start = internal::GyroStart(data, scale);
+  // Within that, a declared unit more than 10 % from the turned angles' is no start (a fit
+  // started 1.8 times off lands in another minimum, 87° RMS from the directions): the
+  // closed-form scale is, and the diagnosis doubts the unit (gyro_unit_scale).
+  const bool unit_agrees = scale && std::abs(*scale / turned_scale - 1) <= kGyroUnitScaleTolerance;
+  const GyroParameters start = internal::GyroStart(data, unit_agrees ? scale : std::nullopt);
   // The turns' weights, once, at the start: its scale is within 0.1 % (Xsens) to 2 % (T265) of the
   // fitted one, so the propagated noise is within a few percent, and the turns' scatter ratio
   // sets their overall level anyway.
@@ -722,6 +764,27 @@ GyroCalibration CalibrateGyro(const RawLog& accel, const RawLog& gyro,
     }
     result.rotations[k].turned_deg = turned.angle_rad * kRadToDeg;
     result.rotations[k].turned_std_deg = std::sqrt(variance) * kRadToDeg;
+  }
+  // Where the gyro was still in each position, and the angle it turned outside that but inside
+  // the accelerometer's still interval (a turn about the vertical, the ends of the turns the
+  // accelerometer hardly sees, a lag of the gyro's stream).
+  for (std::size_t i = 0; i < positions.size(); ++i) {
+    const StaticInterval& iv = *positions[i].interval;
+    const StaticInterval& run = built.still_runs[i];
+    GyroStillSpan span;
+    span.first_sample = run.begin;
+    span.last_sample = run.end - 1;
+    const Vec3 f0 = accel_cal.gravity * f.solution.directions[i];
+    for (const auto& [a, b] :
+         {std::pair{iv.begin, run.begin}, std::pair{run.end - 1, iv.end - 1}}) {
+      if (b <= a) continue;
+      const GyroMotion part = SamplesOf(accel, gyro, built.t, accel_cal.params, f0, a, b);
+      span.turned_outside_deg += IntegrateTurnedAngle(f.solution.gyro, f.kind, part.t_s, part.raw,
+                                                      part.f, f.data.rule, data.noise_sigma_raw)
+                                     .angle_rad *
+                                 kRadToDeg;
+    }
+    result.still_spans.push_back(span);
   }
   result.summary.iterations = sum.iterations;
   result.summary.termination = sum.termination;

@@ -240,8 +240,15 @@ ordered_json GyroscopeSection(const GyroCalibration& g, const CalibrationFileInf
                   {"rotation_scatter_ratio", g.rotation_scatter_ratio},
                   {"accelerometer_scatter_ratio", g.accel_scatter_ratio}};
   ordered_json stills = ordered_json::array();
-  for (const Vec3& m : g.still_mean_raw) stills.push_back(ToJson(m));
-  doc["still_mean_raw"] = stills;
+  for (std::size_t i = 0; i < g.still_mean_raw.size(); ++i) {
+    const GyroStillSpan& span = g.still_spans[i];
+    stills.push_back({{"position", i + 1},
+                      {"first_sample", span.first_sample},
+                      {"last_sample", span.last_sample},
+                      {"mean_raw", ToJson(g.still_mean_raw[i])},
+                      {"turned_outside_deg", span.turned_outside_deg}});
+  }
+  doc["stills"] = stills;
   ordered_json rotations = ordered_json::array();
   for (const GyroRotation& r : g.rotations) {
     rotations.push_back({{"from", r.from + 1},

@@ -1,0 +1,120 @@
+// The gyroscope's still run inside each still interval (gyro_still_runs.hpp).
+#include "io/gyro_still_runs.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include "core/median.hpp"
+
+namespace accelcal::internal {
+
+namespace {
+
+// The means of the windows [k, k + w) inside `iv`, less `centre`.
+void WindowMeans(const std::vector<Vec3>& rates, const StaticInterval& iv, std::size_t w,
+                 const Vec3& centre, std::vector<Vec3>* out) {
+  out->clear();
+  if (iv.end - iv.begin < w) return;
+  Vec3 sum = Vec3::Zero();
+  for (std::size_t k = iv.begin; k < iv.begin + w; ++k) sum += rates[k];
+  const double inv = 1.0 / static_cast<double>(w);
+  for (std::size_t k = iv.begin;; ++k) {
+    out->push_back(sum * inv - centre);
+    if (k + w >= iv.end) break;
+    sum += rates[k + w] - rates[k];
+  }
+}
+
+}  // namespace
+
+GyroStillRuns FindGyroStillRuns(const std::vector<Vec3>& rates_raw,
+                                const std::vector<StaticInterval>& intervals, double sample_step_s,
+                                const Vec3& quantum_raw) {
+  GyroStillRuns out;
+  const std::size_t m = intervals.size();
+  if (m == 0) return out;
+  std::size_t shortest = std::numeric_limits<std::size_t>::max();
+  for (const StaticInterval& iv : intervals) shortest = std::min(shortest, iv.end - iv.begin);
+  std::size_t w = 1;
+  if (sample_step_s > 0 && std::isfinite(sample_step_s)) {
+    w = static_cast<std::size_t>(std::max(1.0, std::round(0.1 / sample_step_s)));
+  }
+  out.window = w = std::max<std::size_t>(1, std::min(w, shortest / 4));
+  // First each interval's median, then its run's mean.
+  std::vector<Vec3> centre(m);
+  for (std::size_t i = 0; i < m; ++i) {
+    const StaticInterval& iv = intervals[i];
+    std::vector<double> axis(iv.end - iv.begin);
+    for (int a = 0; a < 3; ++a) {
+      for (std::size_t k = iv.begin; k < iv.end; ++k) axis[k - iv.begin] = rates_raw[k](a);
+      centre[i](a) = axis.empty() ? 0.0 : Median(axis);
+    }
+  }
+  out.runs.assign(m, StaticInterval{});
+  std::vector<std::vector<Vec3>> means(m);
+  for (int pass = 0; pass < 2; ++pass) {
+    std::vector<double> deviation[3];
+    for (std::size_t i = 0; i < m; ++i) {
+      WindowMeans(rates_raw, intervals[i], w, centre[i], &means[i]);
+      for (const Vec3& d : means[i]) {
+        for (int a = 0; a < 3; ++a) deviation[a].push_back(std::abs(d(a)));
+      }
+    }
+    for (int a = 0; a < 3; ++a) {
+      const double floor = std::isfinite(quantum_raw(a))
+                               ? quantum_raw(a) / std::sqrt(12.0 * static_cast<double>(w))
+                               : 0.0;
+      const double mad = deviation[a].empty() ? 0.0 : Median(deviation[a]);
+      out.window_sigma_raw(a) = std::max(1.4826 * mad, floor);
+    }
+    for (std::size_t i = 0; i < m; ++i) {
+      const StaticInterval& iv = intervals[i];
+      // Hysteresis: a stretch of consecutive windows beyond kGyroStillThreshold σ is moving
+      // when one of them is beyond kGyroMotionThreshold σ.
+      const auto sigmas = [&](const Vec3& d) {
+        return d.cwiseAbs().cwiseQuotient(out.window_sigma_raw).maxCoeff();
+      };
+      std::vector<char> moving(iv.end - iv.begin, 0);
+      for (std::size_t j = 0; j < means[i].size();) {
+        if (!(sigmas(means[i][j]) > kGyroStillThreshold)) {
+          ++j;
+          continue;
+        }
+        std::size_t end = j;
+        bool motion = false;
+        while (end < means[i].size() && sigmas(means[i][end]) > kGyroStillThreshold) {
+          motion = motion || sigmas(means[i][end]) > kGyroMotionThreshold;
+          ++end;
+        }
+        if (motion) std::fill(moving.begin() + j, moving.begin() + (end - 1 + w), 1);
+        j = end;
+      }
+      std::size_t best_begin = 0, best_length = 0;
+      for (std::size_t j = 0; j < moving.size();) {
+        if (moving[j]) {
+          ++j;
+          continue;
+        }
+        std::size_t end = j;
+        while (end < moving.size() && !moving[end]) ++end;
+        if (end - j > best_length) best_begin = j, best_length = end - j;
+        j = end;
+      }
+      StaticInterval& run = out.runs[i];
+      run = StaticInterval{};
+      if (best_length >= 2) {
+        run.begin = iv.begin + best_begin;
+        run.end = run.begin + best_length;
+        Vec3 mean = Vec3::Zero();
+        for (std::size_t k = run.begin; k < run.end; ++k) mean += rates_raw[k];
+        centre[i] = mean / static_cast<double>(best_length);
+      } else {
+        run.begin = run.end = iv.begin;
+      }
+    }
+  }
+  return out;
+}
+
+}  // namespace accelcal::internal

@@ -1,0 +1,72 @@
+// The gyroscope's still run inside each of the accelerometer's still intervals
+// (gyro_still_runs.hpp), on synthetic rates with known motions.
+#include <random>
+
+#include <gtest/gtest.h>
+
+#include "io/gyro_still_runs.hpp"
+
+namespace accelcal::internal {
+namespace {
+
+TEST(GyroStillRuns, TrimsTurnsEndsAndSplitsAtMotionsButNotAtANoiseSpike) {
+  // Three intervals of 500 samples at 100 Hz (windows of 10), white noise of 1 count about a
+  // bias of 100: the first begins with a turn's tail (a rate falling linearly from 50 counts to
+  // 0 over 40 samples), the second holds one sample of 22 counts (a window mean of 2.2 = 7σ of
+  // such means: beyond the extent threshold, not the peak's), the third turns in its middle
+  // (samples 150-249 of it at 30 counts).
+  std::mt19937_64 rng(3);
+  std::normal_distribution<double> noise(0.0, 1.0);
+  std::vector<Vec3> rates;
+  std::vector<StaticInterval> intervals;
+  for (int i = 0; i < 3; ++i) {
+    StaticInterval iv;
+    iv.begin = rates.size() + 50;
+    iv.end = iv.begin + 500;
+    intervals.push_back(iv);
+    for (int k = 0; k < 550; ++k) {
+      const double x = noise(rng), y = noise(rng), z = noise(rng);
+      rates.emplace_back(100 + x, 100 + y, 100 + z);
+    }
+  }
+  for (std::size_t k = 0; k < 40; ++k) {
+    rates[intervals[0].begin + k](1) += 50.0 * (1.0 - static_cast<double>(k) / 40.0);
+  }
+  rates[intervals[1].begin + 250](2) += 22.0;
+  for (std::size_t k = 150; k < 250; ++k) rates[intervals[2].begin + k](0) += 30.0;
+  const GyroStillRuns still =
+      FindGyroStillRuns(rates, intervals, 0.01, Vec3::Constant(std::nan("")));
+  ASSERT_EQ(still.window, 10u);
+  ASSERT_EQ(still.runs.size(), 3u);
+  for (int a = 0; a < 3; ++a) EXPECT_NEAR(still.window_sigma_raw(a), 1 / std::sqrt(10.0), 0.05);
+  // The tail is above 5σ of a window mean (1.58 counts) for its first 39 samples less the part
+  // a window averages; the run starts after it, and no more than a window later.
+  EXPECT_GE(still.runs[0].begin, intervals[0].begin + 30);
+  EXPECT_LE(still.runs[0].begin, intervals[0].begin + 50);
+  EXPECT_EQ(still.runs[0].end, intervals[0].end);
+  // The spike stays in.
+  EXPECT_EQ(still.runs[1].begin, intervals[1].begin);
+  EXPECT_EQ(still.runs[1].end, intervals[1].end);
+  // The motion splits the third: its longer part, after the motion, is kept.
+  EXPECT_GE(still.runs[2].begin, intervals[2].begin + 250);
+  EXPECT_LE(still.runs[2].begin, intervals[2].begin + 260);
+  EXPECT_EQ(still.runs[2].end, intervals[2].end);
+}
+
+TEST(GyroStillRuns, AnIntervalTurningThroughoutHasNoRun) {
+  std::vector<Vec3> rates;
+  for (int k = 0; k < 400; ++k) {
+    const double turning = k >= 200 ? 50.0 * std::sin(0.05 * k) + 60 : 0.0;
+    rates.emplace_back(std::sin(1.3 * k), std::cos(0.7 * k) + turning, std::sin(2.1 * k));
+  }
+  std::vector<StaticInterval> intervals(2);
+  intervals[0].begin = 0, intervals[0].end = 200;
+  intervals[1].begin = 200, intervals[1].end = 400;
+  const GyroStillRuns still =
+      FindGyroStillRuns(rates, intervals, 0.01, Vec3::Constant(std::nan("")));
+  EXPECT_GT(still.runs[0].end - still.runs[0].begin, 150u);
+  EXPECT_LT(still.runs[1].end - still.runs[1].begin, 2u);
+}
+
+}  // namespace
+}  // namespace accelcal::internal

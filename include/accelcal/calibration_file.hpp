@@ -142,6 +142,16 @@ struct LoadedCalibration {
     std::string raw_unit;        ///< `units.raw`
     Eigen::MatrixXd covariance;  ///< in GyroParameterSlots(model) order; empty when null
     std::optional<double> heldout_rms_deg;  ///< `validation.heldout_rms_deg`
+    std::optional<double> rms_deg;          ///< `validation.rms_deg`
+    std::string estimator;                  ///< `estimator`, when present
+    /// `rotations[]`, when present: the positions a turn joins (1-based), its residual and
+    /// held-out error, and the angle turned through [deg].
+    struct Rotation {
+      double from = 0, to = 0, residual_deg = 0;
+      std::optional<double> heldout_deg, turned_deg;
+    };
+    std::vector<Rotation> rotations;
+    std::vector<Vec3> still_mean_raw;  ///< `stills[].mean_raw`, when present
   };
   std::optional<Gyroscope> gyroscope;
   bool has_gyroscope() const { return gyroscope.has_value(); }

@@ -356,6 +356,37 @@ LoadedCalibration::Gyroscope ReadGyroscope(const Reader& r, const ordered_json& 
   }
   if (doc.contains("validation") && doc["validation"].is_object()) {
     g.heldout_rms_deg = r.Inside("validation").Nullable(doc["validation"], "heldout_rms_deg");
+    g.rms_deg = r.Inside("validation").Nullable(doc["validation"], "rms_deg");
+  }
+  if (doc.contains("estimator")) g.estimator = r.Text(doc, "estimator");
+  // The records the report plots, when present.
+  const auto array = [&](const char* key) -> const ordered_json* {
+    if (!doc.contains(key)) return nullptr;
+    if (!doc[key].is_array()) r.Fail(r.Key(key) + " must be an array");
+    return &doc[key];
+  };
+  if (const ordered_json* rotations = array("rotations")) {
+    const Reader in = r.Inside("rotations[]");
+    for (const ordered_json& t : *rotations) {
+      if (!t.is_object()) r.Fail(r.Key("rotations") + " must hold objects");
+      LoadedCalibration::Gyroscope::Rotation rotation;
+      for (const auto& [key, value] :
+           {std::pair("from", &rotation.from), std::pair("to", &rotation.to),
+            std::pair("residual_deg", &rotation.residual_deg)}) {
+        if (!t.contains(key)) in.Fail(in.Key(key) + " is missing");
+        *value = in.Number(t[key], in.Key(key));
+      }
+      rotation.heldout_deg = in.Nullable(t, "heldout_deg");
+      rotation.turned_deg = in.Nullable(t, "turned_deg");
+      g.rotations.push_back(rotation);
+    }
+  }
+  if (const ordered_json* stills = array("stills")) {
+    const Reader in = r.Inside("stills[]");
+    for (const ordered_json& st : *stills) {
+      if (!st.is_object()) r.Fail(r.Key("stills") + " must hold objects");
+      g.still_mean_raw.push_back(in.Vector3(st, "mean_raw"));
+    }
   }
   return g;
 }

@@ -9,6 +9,7 @@
 #include "accelcal/diagnosis.hpp"
 #include "accelcal/engineering.hpp"
 #include "accelcal/frame.hpp"
+#include "accelcal/gyro_model.hpp"
 #include "core/text_format.hpp"
 
 namespace accelcal {
@@ -365,6 +366,113 @@ std::string ParameterTable(const Document& d) {
          (std_eng ? "" : "<p>No uncertainties: the fit had no degrees of freedom left.</p>\n");
 }
 
+// The gyroscope's section: its parameters ±1σ, each turn's direction error (fitted and held
+// out), and each still position's mean rate beside the fitted bias and g-sensitivity.
+std::string GyroSection(const Document& d) {
+  const LoadedCalibration::Gyroscope& g = *d.cal.gyroscope;
+  const auto item = [](const std::string& key, const std::string& value) {
+    return "<dt>" + Escape(key) + "</dt><dd>" + Escape(value) + "</dd>\n";
+  };
+  const auto deg = [](const std::optional<double>& v) {
+    return v ? Format("%.3g", *v) + " deg" : std::string("n/a");
+  };
+  std::string html = "<section id=\"gyroscope\"><h2>Gyroscope</h2>\n<dl>\n";
+  html += item("model", std::string(ToString(g.model)) + ", w_raw = K w + b + G f" +
+                            (g.estimator.empty() ? "" : ", " + g.estimator + " fit"));
+  html += item("rotations", std::to_string(g.rotations.size()) + " turns; direction error RMS " +
+                                deg(g.rms_deg) + ", held out " + deg(g.heldout_rms_deg));
+  std::string scales;
+  for (int i = 0; i < 3; ++i) scales += (i ? ", " : "") + Format("%.8g", g.params.K.row(i).norm());
+  html += item("scale factors", scales + " " + g.raw_unit + " per rad/s (row norms of K)");
+  html += "</dl>\n";
+  // The parameters in their file order, ±1σ.
+  const auto& slots = GyroParameterSlots(g.model);
+  const Eigen::VectorXd value = Pack(g.params, g.model);
+  std::string rows;
+  for (std::size_t p = 0; p < slots.size(); ++p) {
+    const auto i = static_cast<Eigen::Index>(p);
+    const std::string unit = slots[p].group == GyroParameterGroup::kK ? g.raw_unit + " per rad/s"
+                             : slots[p].group == GyroParameterGroup::kBias
+                                 ? g.raw_unit
+                                 : g.raw_unit + " per " + d.unit;
+    const std::string name(slots[p].name);
+    if (g.covariance.rows() > i) {
+      const double sigma = std::sqrt(std::max(0.0, g.covariance(i, i)));
+      rows += Row(name, value(i), sigma, unit, "%.8g");
+    } else {
+      rows += Row(name, value(i), std::nullopt, unit, "%.8g");
+    }
+  }
+  html +=
+      "<table id=\"gyro-parameters\"><thead><tr><th>parameter</th><th>value</th><th>1σ</th>"
+      "<th>unit</th></tr></thead><tbody>\n" +
+      rows + "</tbody></table>\n";
+  // Each turn's error: the angle between the direction it predicts and the fitted one.
+  if (!g.rotations.empty()) {
+    const std::size_t n = g.rotations.size();
+    double hi = 0;
+    for (const auto& r : g.rotations) {
+      hi = std::max({hi, r.residual_deg, r.heldout_deg.value_or(0.0)});
+    }
+    const Frame2d f = Padded(0.5, static_cast<double>(n) + 0.5, 0, hi);
+    std::string body = Axes(f, "turn", "direction error [deg]");
+    for (std::size_t k = 0; k < n; ++k) {
+      const auto& r = g.rotations[k];
+      const double x = f.X(static_cast<double>(k + 1));
+      const std::string tip = Format("turn %zu (position %.0f to %.0f)", k + 1, r.from, r.to);
+      if (r.heldout_deg) {
+        body += "<circle class=\"held-out\" cx=\"" + Px(x) + "\" cy=\"" + Px(f.Y(*r.heldout_deg)) +
+                "\" r=\"4.5\"><title>" + tip + " held out: " + Short(*r.heldout_deg) +
+                " deg</title></circle>\n";
+      }
+      body += "<circle class=\"after\" cx=\"" + Px(x) + "\" cy=\"" + Px(f.Y(r.residual_deg)) +
+              "\" r=\"3\"><title>" + tip + ": " + Short(r.residual_deg) +
+              (r.turned_deg ? " deg, turned through " + Short(*r.turned_deg) : std::string()) +
+              " deg</title></circle>\n";
+    }
+    std::vector<std::pair<std::string, std::string>> legend = {{"#1f77b4", "fitted"}};
+    if (g.rotations[0].heldout_deg) legend.push_back({"#ff7f0e", "held out (fit without it)"});
+    body += Legend(f.left + 8, f.Bottom() + 50, legend);
+    html += Svg("gyro-rotations", 300, "direction error of each turn", body);
+  }
+  // Each still position's mean rate less the bias, beside G f of its fitted direction.
+  bool directions = g.still_mean_raw.size() == d.cal.positions.size() && !g.still_mean_raw.empty();
+  for (const FilePosition& p : d.cal.positions) directions = directions && p.direction.has_value();
+  if (directions) {
+    const std::size_t m = g.still_mean_raw.size();
+    std::vector<Vec3> measured, modelled;
+    double lo = 0, hi = 0;
+    for (std::size_t k = 0; k < m; ++k) {
+      measured.push_back(g.still_mean_raw[k] - g.params.bias);
+      modelled.push_back(g.params.G * (d.cal.gravity * *d.cal.positions[k].direction));
+      lo = std::min({lo, measured.back().minCoeff(), modelled.back().minCoeff()});
+      hi = std::max({hi, measured.back().maxCoeff(), modelled.back().maxCoeff()});
+    }
+    const Frame2d f = Padded(0.5, static_cast<double>(m) + 0.5, lo, hi);
+    std::string body = Axes(f, "position", "still rate - bias [" + g.raw_unit + "]");
+    const double dx = std::min(6.0, 0.25 * f.width / static_cast<double>(m));
+    for (std::size_t k = 0; k < m; ++k) {
+      for (int a = 0; a < 3; ++a) {
+        const double x = f.X(static_cast<double>(k + 1)) + (a - 1) * dx;
+        const std::string tip = "position " + std::to_string(k + 1) + " " + kAxisName[a];
+        body += "<circle cx=\"" + Px(x) + "\" cy=\"" + Px(f.Y(modelled[k](a))) +
+                "\" r=\"4.5\" fill=\"none\" stroke=\"" + kAxisColor[a] + "\"><title>" + tip +
+                " G f: " + Short(modelled[k](a)) + "</title></circle>\n";
+        body += "<circle cx=\"" + Px(x) + "\" cy=\"" + Px(f.Y(measured[k](a))) +
+                "\" r=\"2.5\" fill=\"" + kAxisColor[a] + "\"><title>" + tip +
+                " measured: " + Short(measured[k](a)) + "</title></circle>\n";
+      }
+    }
+    body += Legend(f.left + 8, f.Bottom() + 50,
+                   {{kAxisColor[0], "x"}, {kAxisColor[1], "y"}, {kAxisColor[2], "z"}});
+    html +=
+        "<p>Still rates less the fitted bias (dots) beside the fitted g-sensitivity G f "
+        "(rings): what the model leaves is the difference.</p>\n" +
+        Svg("gyro-stills", 300, "still-position rates against bias and g-sensitivity", body);
+  }
+  return html + "</section>\n";
+}
+
 // The calibration file's own diagnosis (diagnosis.hpp), and the still periods not used that the
 // report's log shows, when the file does not list them already. Warnings and failures only; notes
 // are listed apart.
@@ -448,11 +556,6 @@ std::string Render(const ReportInput& input) {
     for (const std::string& n : notes) html += "<li>" + Escape(n) + "</li>\n";
     html += "</ul>\n";
   }
-  if (d.cal.has_gyroscope()) {
-    html +=
-        "<p>The file also holds a gyroscope calibration (<code>sensors.gyroscope</code>); "
-        "this report shows the accelerometer only, so far.</p>\n";
-  }
   html += "</section>\n<section><h2>Parameters</h2>\n" + ParameterTable(d) + "</section>\n";
   html += "<section><h2>Raw signal and static intervals</h2>\n";
   if (input.log != nullptr && !input.log->samples.empty()) {
@@ -463,6 +566,7 @@ std::string Render(const ReportInput& input) {
   html += "</section>\n<section><h2>|f| - g per position</h2>\n" + NormPlot(d) + "</section>\n";
   html += "<section><h2>Coverage of the sphere</h2>\n" + SpherePlot(d) + "</section>\n";
   html += "<section><h2>Residuals per axis</h2>\n" + ResidualPlot(d) + "</section>\n";
+  if (d.cal.has_gyroscope()) html += GyroSection(d);
   html += "<footer><p>accelcal " + Escape(source) + "</p></footer>\n</body>\n</html>\n";
   return html;
 }

@@ -94,6 +94,71 @@ TEST(Report, SelfContainedPageWithEveryPlotAndTheParameterTable) {
   EXPECT_NE(html.find("<p>None.</p>"), std::string::npos);  // a clean recording: no warnings
 }
 
+TEST(Report, ShowsTheGyroscopeItsTurnsAndItsStillRates) {
+  // A gyroscope section added to the file (as calibrate --gyro writes it: the keys the report
+  // reads): its parameters ±1σ, a fitted and a held-out error per turn, and per position the
+  // still rate less the bias beside G f on each axis.
+  const Recording r = Record(Yang18Directions(), ModelKind::kLinear);
+  nlohmann::json doc = nlohmann::json::parse(r.json);
+  nlohmann::json g;
+  g["model"] = "g-sensitive";
+  g["estimator"] = "joint";
+  g["units"] = {{"raw", "counts"}};
+  g["K"] = {{4778, 12, -8}, {-15, 4758, 20}, {9, -11, 4766}};
+  g["bias"] = {32740, 32810, 32650};
+  g["g_sensitivity"] = {{1.5, -0.4, 0.2}, {0.3, -1.1, 0.6}, {-0.2, 0.5, 0.9}};
+  nlohmann::json covariance = nlohmann::json::array();
+  for (int i = 0; i < 21; ++i) {
+    nlohmann::json row = nlohmann::json::array();
+    for (int j = 0; j < 21; ++j) row.push_back(i == j ? 0.25 : 0.0);
+    covariance.push_back(row);
+  }
+  g["covariance"] = covariance;
+  g["rotations"] = nlohmann::json::array();
+  for (int k = 1; k < 18; ++k) {
+    g["rotations"].push_back({{"from", k},
+                              {"to", k + 1},
+                              {"residual_deg", 0.01 * k},
+                              {"heldout_deg", 0.012 * k},
+                              {"turned_deg", 90.0}});
+  }
+  g["stills"] = nlohmann::json::array();
+  for (int k = 1; k <= 18; ++k) {
+    g["stills"].push_back({{"position", k}, {"mean_raw", {32740 + k, 32810 - k, 32650}}});
+  }
+  g["validation"] = {{"rms_deg", 0.1}, {"heldout_rms_deg", 0.12}};
+  doc["sensors"]["gyroscope"] = g;
+  const LoadedCalibration cal = ParseCalibrationJson(doc.dump(), "imu.json");
+  ASSERT_TRUE(cal.has_gyroscope());
+  ASSERT_EQ(cal.gyroscope->rotations.size(), 17u);
+  ASSERT_EQ(cal.gyroscope->still_mean_raw.size(), 18u);
+  ReportInput input{cal, "imu.json", &r.log, r.detection.rejected};
+  const std::string html = RenderReport(input);
+  for (const char* id : {"gyro-rotations", "gyro-stills"}) {
+    EXPECT_EQ(Count(html, std::string("<svg id=\"") + id + "\""), 1u) << id;
+  }
+  EXPECT_EQ(Count(html, "<svg "), Count(html, "</svg>"));
+  // The linear accelerometer's 9 rows and the gyro's 21 (K, b, G per axis), each with its 1σ.
+  EXPECT_EQ(Count(html, "<tr><td>"), 9u + 21u);
+  EXPECT_EQ(Count(html, "&plusmn; 0.5<"), 21u);
+  // Per turn a fitted and a held-out circle beside the accelerometer's 18 of each; per position
+  // and axis a measured dot and a modelled ring.
+  EXPECT_EQ(Count(html, "<circle class=\"after\""), 18u + 17u);
+  EXPECT_EQ(Count(html, "<circle class=\"held-out\""), 18u + 17u);
+  EXPECT_EQ(Count(html, " G f: "), 54u);
+  EXPECT_EQ(Count(html, " measured: "), 54u);
+  EXPECT_NE(html.find("held out 0.12 deg"), std::string::npos);
+  // A rotation record without its residual is refused by name.
+  doc["sensors"]["gyroscope"]["rotations"][3].erase("residual_deg");
+  try {
+    ParseCalibrationJson(doc.dump(), "imu.json");
+    ADD_FAILURE() << "a rotation without its residual was read";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("rotations[].residual_deg"), std::string::npos)
+        << e.what();
+  }
+}
+
 TEST(Report, WarnsAboutAMovedPositionAGapInCoverageAndUnusedStillPeriods) {
   // Position 5's mean pushed by 0.035 g: far beyond the held-out error of the others. The
   // calibration's screening leaves it out, and the report says so (and nothing else).

@@ -187,9 +187,10 @@ int accelcal::cli::RunCommandLine(int argc, char** argv) {
     calibrate->add_option(
         "--gyro-estimator", cal.gyro_estimator,
         "joint (both sensors and every gravity direction in one fit: the rotations "
-        "also calibrate the accelerometer; the default) or two-stage (the "
-        "accelerometer's calibration held; the default and the only choice with "
-        "--orientations, whose directions are known)");
+        "also calibrate the accelerometer; the default), two-stage (the "
+        "accelerometer's calibration held; the default with --orientations, whose "
+        "directions are known), or imutk (imu_tk's method, a baseline: the bias from the "
+        "first still position, K from the turns, no g-sensitivity)");
     calibrate->add_flag("!--no-crossval", cal.cross_validate,
                         "skip the leave-one-position-out validation (one refit per position)");
     calibrate->add_option("--raw-units", cal.raw_units, "label of the raw unit (e.g. counts)")
@@ -230,6 +231,17 @@ int accelcal::cli::RunCommandLine(int argc, char** argv) {
     compare->add_option("--reference", cmp.reference,
                         "a known calibration (JSON): adds paper 001's e_T and e_b per method");
     compare->add_flag("--json", cmp.json, "machine-readable output");
+    compare->add_option("--gyro", cmp.gyro,
+                        "the gyroscope's log on the same clock: compare its estimators too "
+                        "(imu_tk's method, two-stage and joint, linear and g-sensitive)");
+    compare
+        ->add_option("--gyro-columns", cmp.gyro_columns,
+                     "the gyroscope's x,y,z (or time,x,y,z) columns, in INPUT or the --gyro log")
+        ->delimiter(',');
+    compare
+        ->add_option("--gyro-units", cmp.gyro_units,
+                     "the gyro's raw unit, for the start of its fits: rad/s, deg/s, or raw")
+        ->capture_default_str();
   }
 
   DetectArgs det;
@@ -491,6 +503,14 @@ int accelcal::cli::RunCommandLine(int argc, char** argv) {
       return RunDetect(det);
     }
     if (*compare) {
+      if (compare->count("--gyro") > 0 && cmp.gyro.empty()) {
+        throw UsageError("--gyro: the file name is empty");
+      }
+      if (cmp.gyro.empty() && cmp.gyro_columns.empty() && compare->count("--gyro-units") > 0) {
+        throw UsageError(
+            "--gyro-units applies to the gyroscope: give its rates with --gyro LOG or "
+            "--gyro-columns");
+      }
       data_subject = cmp.input.path;
       return RunCompare(cmp);
     }

@@ -243,6 +243,11 @@ GyroCalibrationOptions GyroOptions(const CalibrateArgs& args) {
         "--gyro-model auto decides on held-out rotations: it needs the validation that "
         "--no-crossval turns off");
   }
+  if (o.estimator == GyroEstimator::kImuTk && o.model && *o.model != GyroModelKind::kLinear) {
+    throw UsageError(
+        "--gyro-estimator imutk is imu_tk's method, which has no g-sensitivity: "
+        "--gyro-model linear");
+  }
   o.validate = args.cross_validate;
   o.latitude_deg = args.gravity.latitude_deg;  // the Earth rate's vertical part, taken out
   return o;

@@ -12,10 +12,70 @@
 #include <stdexcept>
 
 #include "accelcal/compare.hpp"
+#include "accelcal/error.hpp"
+#include "accelcal/gyro_calibration.hpp"
 #include "cli_common.hpp"
 #include "output.hpp"
 
 namespace accelcal::cli {
+
+namespace {
+
+// One gyroscope estimator and model on the comparison's accelerometer (compare --gyro).
+struct GyroRow {
+  GyroEstimator estimator;
+  GyroModelKind model;
+  std::optional<GyroCalibration> result;
+  std::string error;
+};
+
+// imu_tk's method beside accelcal's estimators, each held out turn by turn, on the accelerometer
+// of the comparison's first maximum-likelihood fit.
+std::vector<GyroRow> CompareGyro(const CompareArgs& args, const LoadedInput& in,
+                                 const Comparison& comparison) {
+  if (in.files.size() != 1 || in.files.front().data.kind != InputKind::kRaw) {
+    throw UsageError(
+        "the gyroscope is calibrated from one raw log (its turns between the positions): give "
+        "one INPUT that is a raw log");
+  }
+  const MethodComparison* accel = nullptr;
+  for (const MethodComparison& r : comparison.methods) {
+    if (!r.error && IsMaximumLikelihood(r.method)) {
+      accel = &r;
+      break;
+    }
+  }
+  if (accel == nullptr) {
+    throw UsageError(
+        "--gyro needs a maximum-likelihood method among --methods (its gravity directions)");
+  }
+  const InputData gyro = ReadGyroLog(args.input, args.gyro, args.gyro_columns, false);
+  const std::string subject = DataSubject();
+  DataSubject() = args.gyro.empty() ? args.input.path : args.gyro;
+  CheckGyroClock(in.files.front().data.raw, gyro.raw);  // refused once, not in every row
+  std::vector<GyroRow> rows = {{GyroEstimator::kImuTk, GyroModelKind::kLinear, {}, {}},
+                               {GyroEstimator::kTwoStage, GyroModelKind::kLinear, {}, {}},
+                               {GyroEstimator::kTwoStage, GyroModelKind::kGSensitive, {}, {}},
+                               {GyroEstimator::kJoint, GyroModelKind::kLinear, {}, {}},
+                               {GyroEstimator::kJoint, GyroModelKind::kGSensitive, {}, {}}};
+  for (GyroRow& row : rows) {
+    GyroCalibrationOptions o;
+    o.unit = ParseChoice<GyroUnit>(args.gyro_units, "--gyro-units");
+    o.estimator = row.estimator;
+    o.model = row.model;
+    try {
+      row.result =
+          CalibrateGyro(in.files.front().data.raw, gyro.raw, in.positions, accel->result, o);
+    } catch (const DataError& e) {
+      row.error = e.what();
+    }
+  }
+  DataSubject() = subject;
+  return rows;
+}
+
+}  // namespace
+
 int RunCompare(const CompareArgs& args) {
   CompareOptions options;
   options.base.model = ParseChoice<ModelKind>(args.model, "--model");
@@ -39,9 +99,16 @@ int RunCompare(const CompareArgs& args) {
     o.method = m;
     if (auto why = o.Validate()) throw UsageError(*why);
   }
+  const bool gyro_wanted = !args.gyro.empty() || !args.gyro_columns.empty();
+  if (gyro_wanted) {
+    ParseChoice<GyroUnit>(args.gyro_units, "--gyro-units");
+    CheckGyroColumns(args.input, args.gyro, args.gyro_columns);
+  }
   const LoadedInput in = LoadInput(args.input);
   const std::vector<Vec3> means = Means(in.positions);
   const Comparison comparison = CompareMethods(means, options);
+  const std::vector<GyroRow> gyro_rows =
+      gyro_wanted ? CompareGyro(args, in, comparison) : std::vector<GyroRow>();
   const std::vector<MethodComparison>& rows = comparison.methods;
   const char* unit = g.unit == ForceUnit::kMetersPerSecond2 ? "m/s2" : "g";
   // The screening's findings, with |f| - g under the first maximum-likelihood fit (all methods
@@ -116,6 +183,22 @@ int RunCompare(const CompareArgs& args) {
       row["iterations"] = r.result.summary.iterations;
       methods.push_back(std::move(row));
     }
+    if (gyro_wanted) {
+      Json& gyro = doc["gyroscope"] = Json::array();
+      for (const GyroRow& r : gyro_rows) {
+        Json row = {{"estimator", ToString(r.estimator)}, {"model", ToString(r.model)}};
+        if (!r.result) {
+          row["error"] = r.error;
+        } else {
+          row["heldout_rms_deg"] = number(r.result->heldout_rms_deg);
+          row["rms_deg"] = r.result->rms_deg;
+          Json scales = Json::array();
+          for (int i = 0; i < 3; ++i) scales.push_back(r.result->params.K.row(i).norm());
+          row["scale_factors_raw_per_rad_s"] = scales;
+        }
+        gyro.push_back(std::move(row));
+      }
+    }
     out = JsonText(doc);
   } else {
     out += Format("%s: %zu positions, %s model, gravity %.9g %s\n", args.input.path.c_str(),
@@ -174,6 +257,28 @@ int RunCompare(const CompareArgs& args) {
     out +=
         "\nheld-out rms: |f_k| - g with position k predicted by a fit without it;\n"
         "* shared with the first solver that reached the same optimum (same estimator).\n";
+    if (gyro_wanted) {
+      out += Format("\ngyroscope %s: direction error of the turns [deg]\n",
+                    (args.gyro.empty() ? args.input.path : args.gyro).c_str());
+      out += Format("%-10s %-12s %10s %10s   %s\n", "estimator", "model", "held-out", "in fit",
+                    "scale factors (row norms of K)");
+      std::string errors;
+      for (const GyroRow& r : gyro_rows) {
+        const std::string estimator(ToString(r.estimator)), model(ToString(r.model));
+        if (!r.result) {
+          out += Format("%-10s %-12s %10s %10s\n", estimator.c_str(), model.c_str(), "-", "-");
+          errors += estimator + " " + model + ": " + r.error + "\n";
+          continue;
+        }
+        const GyroCalibration& gc = *r.result;
+        out += Format("%-10s %-12s %10.4f %10.4f   %.8g %.8g %.8g\n", estimator.c_str(),
+                      model.c_str(), gc.heldout_rms_deg, gc.rms_deg, gc.params.K.row(0).norm(),
+                      gc.params.K.row(1).norm(), gc.params.K.row(2).norm());
+      }
+      out += errors +
+             "imutk: imu_tk's method (bias from the first still position, K from the turns, "
+             "the accelerometer held);\nheld-out: each turn predicted by a fit without it.\n";
+    }
   }
   WriteFileAtomically("-", out);
   return kExitOk;

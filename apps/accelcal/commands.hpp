@@ -109,6 +109,9 @@ struct CompareArgs {
   std::string reference;  // calibration file: adds paper 001's e_T, e_b
   OutlierArgs outliers;   // screened once, the same positions for every method
   bool json = false;
+  std::string gyro;  // the gyroscope's log (ReadGyroLog): its estimators compared too
+  std::vector<std::string> gyro_columns;
+  std::string gyro_units = "raw";
 };
 
 struct DetectArgs {

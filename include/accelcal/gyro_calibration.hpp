@@ -66,12 +66,18 @@ std::string_view ToString(GyroUnit unit);
 /// gyros are specified to ±3 % or better; the bundled rad/s and deg/s gyros fit within 2.7 %.
 inline constexpr double kGyroUnitScaleTolerance = 0.10;
 
-/// Which estimator (see the file comment).
-enum class GyroEstimator { kTwoStage, kJoint };
+/// Which estimator (see the file comment). kImuTk is imu_tk's method (Tedaldi et al. 2014), the
+/// baseline `compare` sets beside the others: the bias is the first still position's mean rate
+/// (imu_tk's initial rest) and only K_g is fitted, to the turns, with the accelerometer's
+/// directions held; no g-sensitivity (the linear model only). Unlike imu_tk the turns are
+/// weighted by their propagated noise, and integrated with the trapezoidal rule as the others.
+enum class GyroEstimator { kTwoStage, kJoint, kImuTk };
 template <>
 struct EnumNames<GyroEstimator> {
   static constexpr std::pair<GyroEstimator, std::string_view> kTable[] = {
-      {GyroEstimator::kTwoStage, "two-stage"}, {GyroEstimator::kJoint, "joint"}};
+      {GyroEstimator::kTwoStage, "two-stage"},
+      {GyroEstimator::kJoint, "joint"},
+      {GyroEstimator::kImuTk, "imutk"}};
 };
 std::string_view ToString(GyroEstimator estimator);
 

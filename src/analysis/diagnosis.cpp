@@ -178,7 +178,7 @@ std::vector<Finding> GyroFindings(const GyroCalibration& g) {
                "axes mapped otherwise than the accelerometer's, a rate axis saturated, or a model "
                "without a term this gyro has%s)",
                g.rms_deg, ratio, kGyroMisfitFailure_deg,
-               g.estimator == GyroEstimator::kTwoStage
+               g.estimator != GyroEstimator::kJoint
                    ? "; the accelerometer's calibration was held, and the rotations may contradict "
                      "it: the joint estimator fits both"
                    : ""),

@@ -452,6 +452,12 @@ ModelFit FitModel(GyroFitData data, GyroModelKind kind, const std::vector<Positi
   ModelFit out;
   out.kind = kind;
   data.model = kind;
+  if (options.estimator == GyroEstimator::kImuTk) {
+    // imu_tk's bias: the first still position's mean rate, held (its residual weighted 10¹²
+    // times, the others' left out); K_g from the turns alone.
+    data.stills.resize(1);
+    data.stills[0].sigma_mean_raw *= 1e-6;
+  }
   // The two-stage fit under the sample noise (data.weights, the turns' weights); each group's
   // scatter ratio there, and the fit again with each group's noise scaled by its ratio (when
   // above 1).
@@ -598,6 +604,10 @@ GyroCalibration CalibrateGyro(const RawLog& accel, const RawLog& gyro,
   if (!options.model && !options.validate) {
     throw std::invalid_argument("CalibrateGyro: the automatic model choice needs validation");
   }
+  if (options.estimator == GyroEstimator::kImuTk && options.model &&
+      *options.model != GyroModelKind::kLinear) {
+    throw std::invalid_argument("CalibrateGyro: imu_tk's method has no g-sensitivity");
+  }
   CheckGyroClock(accel, gyro);
   Built built = BuildData(accel, gyro, positions, accel_cal, options);
   GyroFitData& data = built.data;
@@ -635,7 +645,9 @@ GyroCalibration CalibrateGyro(const RawLog& accel, const RawLog& gyro,
   CheckExcitation(data, data, start);
 
   std::vector<ModelFit> fits;
-  if (options.model) {
+  if (options.estimator == GyroEstimator::kImuTk) {
+    fits.push_back(FitModel(data, GyroModelKind::kLinear, positions, accel_cal, options, start));
+  } else if (options.model) {
     fits.push_back(FitModel(data, *options.model, positions, accel_cal, options, start));
   } else {
     // The g-sensitive model from the linear one's solution (G = 0): a few steps, where the
@@ -646,7 +658,9 @@ GyroCalibration CalibrateGyro(const RawLog& accel, const RawLog& gyro,
   }
   std::size_t chosen = 0;
   GyroCalibration result;
-  if (options.model) {
+  if (options.estimator == GyroEstimator::kImuTk) {
+    result.model_reason = "imu_tk's method: no g-sensitivity";
+  } else if (options.model) {
     result.model_reason = "given";
   } else {
     // The paired comparison of the held-out errors, turn by turn (as the accelerometer's

@@ -188,6 +188,16 @@ py::dict GyroDict(const GyroCalibration& g) {
     stills.append(st);
   }
   d["stills"] = stills;
+  if (g.time_offset) {
+    py::dict lag;
+    lag["lag_s"] = g.time_offset->lag_s;
+    lag["std_s"] = g.time_offset->std_s;
+    lag["turns"] = g.time_offset->turns;
+    lag["at_limit"] = g.time_offset->at_limit;
+    d["time_offset"] = lag;
+  } else {
+    d["time_offset"] = py::none();
+  }
   py::list rotations;
   for (const GyroRotation& r : g.rotations) {
     py::dict t;
@@ -311,7 +321,8 @@ void BindCalibration(py::module_& m) {
           "bias [raw], G [raw per force unit, zeros for the linear model], covariance (in "
           "parameter_names' order) and std, noise_sigma_raw, scatter ratios, stills (per "
           "position: the samples where the gyro was still, its mean raw rate there, the angle "
-          "it turned outside them), rotations (dicts; from and to count positions from 0), "
+          "it turned outside them), time_offset (the gyro's lag behind the accelerometer, "
+          "lag_s and std_s), rotations (dicts; from and to count positions from 0), "
           "rms_deg and heldout_rms_deg")
       .def_property_readonly(
           "source", [](const PyCalibration& c) { return c.source; }, "The input file, or ''")

@@ -438,6 +438,23 @@ int accelcal::cli::RunCommandLine(int argc, char** argv) {
                "also print diagnostics on stderr (detection thresholds, timings)")
       ->excludes(quiet_flag);
 
+  // A list option given twice would be merged by CLI11 ("--gyro-columns 5 --gyro-columns 6,7"
+  // as 5,6,7): refused as every other option given twice.
+  for (const char* list : {"--columns", "--gyro-columns", "--methods", "--noise"}) {
+    int given = 0;
+    for (int i = 1; i < argc && std::string_view(argv[i]) != "--"; ++i) {
+      const std::string_view arg = argv[i], name = list;
+      given += arg == name || (arg.substr(0, name.size()) == name && arg.size() > name.size() &&
+                               arg[name.size()] == '=');
+    }
+    if (given > 1) {
+      std::fprintf(stderr,
+                   "accelcal: usage: %s given %d times: give it once, its values comma-separated "
+                   "(see --help)\n",
+                   list, given);
+      return kExitUsage;
+    }
+  }
   try {
     app.parse(argc, argv);
   } catch (const CLI::CallForHelp& e) {

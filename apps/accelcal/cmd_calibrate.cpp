@@ -238,10 +238,10 @@ GyroCalibrationOptions GyroOptions(const CalibrateArgs& args) {
   if (args.gyro_model != "auto") {
     o.model = ParseEnum(GyroModelKindFromString(args.gyro_model), args.gyro_model, "--gyro-model",
                         (NameList<GyroModelKind>() + ", auto").c_str());
-  } else if (!args.cross_validate) {
+  } else if (!args.cross_validate && o.estimator != GyroEstimator::kImuTk) {
     throw UsageError(
-        "--gyro-model auto decides on held-out rotations: it needs the validation that "
-        "--no-crossval turns off");
+        "the gyro's model is chosen on held-out rotations (--gyro-model auto, the default), "
+        "which --no-crossval turns off: give --gyro-model linear or g-sensitive");
   }
   if (o.estimator == GyroEstimator::kImuTk && o.model && *o.model != GyroModelKind::kLinear) {
     throw UsageError(
@@ -305,6 +305,12 @@ void PrintGyro(const GyroRun& run, const std::string& raw_unit, const char* forc
       g.noise_sigma_raw(0), g.noise_sigma_raw(1), g.noise_sigma_raw(2), raw_unit.c_str(),
       g.still_scatter_ratio, g.rotation_scatter_ratio,
       g.accelerometer ? Format(", accelerometer %.3g", g.accel_scatter_ratio).c_str() : "");
+  if (const std::optional<GyroTimeOffset>& lag = g.time_offset) {
+    Say("  time offset  the gyro's readings %s the accelerometer's by %.3g +- %.2g ms (from the "
+        "%zu turns%s)\n",
+        lag->lag_s >= 0 ? "lag" : "lead", std::abs(lag->lag_s) * 1e3, lag->std_s * 1e3, lag->turns,
+        lag->at_limit ? "; at the edge of the +-0.5 s searched: at least that" : "");
+  }
   Say("\nrotations (the rotation's angle, the angle turned through +- 1 sigma, and the angle "
       "between "
       "the gravity direction it predicts and the one fitted; deg)\n");

@@ -70,6 +70,9 @@ std::vector<GyroRow> CompareGyro(const CompareArgs& args, const LoadedInput& in,
       row.error = e.what();
     }
   }
+  bool any = false;
+  for (const GyroRow& row : rows) any = any || row.result.has_value();
+  if (!any) throw DataError(rows.front().error);  // as calibrate refuses it
   DataSubject() = subject;
   return rows;
 }

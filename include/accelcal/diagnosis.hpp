@@ -76,6 +76,12 @@
 ///   - `gyro_unit_scale` (warning): a scale of K_g more than kGyroUnitScaleTolerance (10 %) from
 ///     the declared unit's: the readings were converted with another range (full-scale) setting
 ///     than the sensor's, or are in another unit. The calibration maps the readings as they are.
+///   - `gyro_time_offset` (note): the gyro's readings lag or lead the accelerometer's by more than
+///     3σ and half a sample step (GyroCalibration::time_offset): the still spans keep the
+///     calibration right; a filter fusing the two streams needs the lag. A warning when the best
+///     alignment is at the edge of the ±0.5 s searched: the lag may exceed what the still spans
+///     absorb, or the streams do not correlate; a failure when the rotations also miss by more
+///     than kGyroMisfitFailure_deg RMS.
 ///   - `gyro_turned_in_still` (note): the gyro turned by more than kGyroTurnedInStillNote_deg
 ///     inside a still position of the accelerometer, outside its own still span (a turn about the
 ///     vertical, which the accelerometer cannot see, or the gyro's stream lagging or leading the

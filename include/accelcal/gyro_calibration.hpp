@@ -67,10 +67,11 @@ std::string_view ToString(GyroUnit unit);
 inline constexpr double kGyroUnitScaleTolerance = 0.10;
 
 /// Which estimator (see the file comment). kImuTk is imu_tk's method (Tedaldi et al. 2014), the
-/// baseline `compare` sets beside the others: the bias is the first still position's mean rate
-/// (imu_tk's initial rest) and only K_g is fitted, to the turns, with the accelerometer's
-/// directions held; no g-sensitivity (the linear model only). Unlike imu_tk the turns are
-/// weighted by their propagated noise, and integrated with the trapezoidal rule as the others.
+/// baseline `compare` sets beside the others: the bias held at the first still position's mean
+/// rate (imu_tk's initial rest; its σ that mean's), K_g fitted to the turns (its σ given the
+/// bias), the accelerometer's directions held; no g-sensitivity (the linear model only). Unlike
+/// imu_tk the turns are weighted by their propagated noise, and integrated with the trapezoidal
+/// rule as the others.
 enum class GyroEstimator { kTwoStage, kJoint, kImuTk };
 template <>
 struct EnumNames<GyroEstimator> {
@@ -138,6 +139,20 @@ struct GyroStillSpan {
   double turned_outside_deg = 0;
 };
 
+/// The lag of the gyro's readings behind the accelerometer's [s] (> 0: the gyro late), from the
+/// turns: the shift that best aligns the accelerometer's tilt rate with the calibrated gyro's
+/// rate perpendicular to gravity (their cross-correlation's peak), ±1σ by the jackknife over the
+/// turns. The still spans make the calibration hold with a lag (the file comment); an estimator
+/// that fuses the two streams needs it.
+struct GyroTimeOffset {
+  double lag_s = 0, std_s = 0;
+  double step_s = 0;  ///< the sample step the lag was searched in
+  std::size_t turns = 0;
+  /// The peak on the edge of the search (±0.5 s): the lag is at least that, or the streams do
+  /// not correlate.
+  bool at_limit = false;
+};
+
 /// The gyroscope's calibration.
 struct GyroCalibration {
   GyroModelKind model = GyroModelKind::kLinear;
@@ -150,7 +165,8 @@ struct GyroCalibration {
   Eigen::MatrixXd covariance;
   Vec3 noise_sigma_raw = Vec3::Zero();  ///< white noise of one rate sample, pooled over the stills
   std::vector<Vec3> still_mean_raw;     ///< each position's mean raw rate, over its span
-  std::vector<GyroStillSpan> still_spans;  ///< per position (FindGyroStillRuns)
+  std::vector<GyroStillSpan> still_spans;     ///< per position (FindGyroStillRuns)
+  std::optional<GyroTimeOffset> time_offset;  ///< none with fewer than 3 turns
   std::vector<GyroRotation> rotations;
   double rms_deg = 0;  ///< RMS of the rotations' residual_deg
   /// RMS of the rotations' heldout_deg; NaN without validation.
@@ -171,7 +187,8 @@ struct GyroCalibration {
 };
 
 /// Throws DataError unless `gyro` holds a rate sample at each sample of `accel` (the same count,
-/// times within half the typical step): the two streams of one clock.
+/// times within half the typical step): the two streams of one clock; and when its readings are
+/// the accelerometer's (the same columns or file).
 void CheckGyroClock(const RawLog& accel, const RawLog& gyro);
 
 /// Calibrates the gyroscope of `gyro`, recorded beside the accelerometer of `accel` on the same

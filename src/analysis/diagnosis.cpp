@@ -256,6 +256,34 @@ std::vector<Finding> GyroFindings(const GyroCalibration& g) {
           {{"scale_x", scale(0)}, {"scale_y", scale(1)}, {"scale_z", scale(2)}});
     }
   }
+  if (const std::optional<GyroTimeOffset>& lag = g.time_offset) {
+    const bool beyond =
+        std::abs(lag->lag_s) > 3 * lag->std_s && std::abs(lag->lag_s) > 0.5 * lag->step_s;
+    if (lag->at_limit) {
+      // Failed when the rotations miss by more than the misfit's 2° too: the lag is more than
+      // the still spans absorbed (a gyro 2 s early in 3 s stills: K_g 80 % low, 4.7° RMS, its
+      // noise inflated 50 times, so that the misfit's ratio passed).
+      const bool failed = g.rms_deg > kGyroMisfitFailure_deg;
+      Add(&out, "gyro_time_offset", failed ? Severity::kFailure : Severity::kWarning,
+          Format(
+              "the gyroscope's readings and the accelerometer's align best at the edge of the "
+              "+-0.5 s searched (the gyro %s by at least %.3g ms), or do not correlate: the "
+              "still positions may hold the gyro's turns%s; check that the two streams are of "
+              "one sensor and on one clock",
+              lag->lag_s >= 0 ? "late" : "early", std::abs(lag->lag_s) * 1e3,
+              failed ? Format(", and the rotations miss by %.3g deg RMS", g.rms_deg).c_str() : ""),
+          {{"lag_s", lag->lag_s}, {"rms_deg", g.rms_deg}});
+    } else if (beyond) {
+      Add(&out, "gyro_time_offset", Severity::kNote,
+          Format("the gyroscope's readings %s the accelerometer's by %.3g +- %.2g ms (the shift "
+                 "that best aligns its rates with the accelerometer's tilting over the %zu turns): "
+                 "each turn is integrated where the gyro turned, so the calibration holds; a "
+                 "filter fusing the two streams needs that lag",
+                 lag->lag_s >= 0 ? "lag" : "lead", std::abs(lag->lag_s) * 1e3, lag->std_s * 1e3,
+                 lag->turns),
+          {{"lag_s", lag->lag_s}, {"std_s", lag->std_s}});
+    }
+  }
   std::string turned;
   double most = 0;
   for (std::size_t i = 0; i < g.still_spans.size(); ++i) {

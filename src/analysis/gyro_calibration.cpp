@@ -14,6 +14,7 @@
 
 #include "accelcal/error.hpp"
 #include "accelcal/model.hpp"
+#include "analysis/gyro_time_offset.hpp"
 #include "core/text_format.hpp"
 #include "io/gyro_still_runs.hpp"
 #include "solvers/gyro_fit.hpp"
@@ -134,6 +135,7 @@ struct Built {
   std::vector<GyroRotation> rotations;     // one per motion
   std::vector<StaticInterval> still_runs;  // per position: where the gyro is still
   std::vector<double> t;                   // the integration times
+  double step_s = 0;                       // their typical step
 };
 
 Built BuildData(const RawLog& accel, const RawLog& gyro, const std::vector<Position>& positions,
@@ -179,6 +181,7 @@ Built BuildData(const RawLog& accel, const RawLog& gyro, const std::vector<Posit
                               : accel.time   ? accel.time->typical_step_s
                               : gyro.rate_hz ? 1.0 / *gyro.rate_hz
                                              : 0.0;
+  b.step_s = typical_step;
   // Where the gyro is still inside each position's interval (gyro_still_runs.hpp): the still
   // rates are averaged there, and the turns integrated from one run to the next.
   std::vector<StaticInterval> intervals;
@@ -454,7 +457,7 @@ ModelFit FitModel(GyroFitData data, GyroModelKind kind, const std::vector<Positi
   data.model = kind;
   if (options.estimator == GyroEstimator::kImuTk) {
     // imu_tk's bias: the first still position's mean rate, held (its residual weighted 10¹²
-    // times, the others' left out); K_g from the turns alone.
+    // times, the others' left out); K_g from the turns alone. Its σ is that mean's (below).
     data.stills.resize(1);
     data.stills[0].sigma_mean_raw *= 1e-6;
   }
@@ -581,6 +584,11 @@ void CheckGyroClock(const RawLog& accel, const RawLog& gyro) {
                     std::to_string(accel.samples.size()) +
                     ": the two streams must be on one clock, a rate sample at each "
                     "accelerometer sample's time");
+  }
+  if (gyro.samples == accel.samples) {
+    throw DataError("the gyroscope's readings in " + gyro.source +
+                    " are the accelerometer's, value for value: its columns or its file are the "
+                    "accelerometer's");
   }
   if (gyro.time_s.empty() || accel.time_s.empty()) return;  // same rows of one file
   const double step = accel.time ? accel.time->typical_step_s : 0.0;
@@ -766,6 +774,16 @@ GyroCalibration CalibrateGyro(const RawLog& accel, const RawLog& gyro,
       result.accelerometer = std::move(a);
     }
   }
+  if (options.estimator == GyroEstimator::kImuTk && result.covariance.size() > 0) {
+    // The bias held at the first position's mean: its σ that mean's, K_g's σ given it.
+    for (int a = 0; a < 3; ++a) {
+      const int i = 4 * a + 3;  // bg_a in the linear model's order
+      result.covariance.row(i).setZero();
+      result.covariance.col(i).setZero();
+      const double sigma = data.stills[0].sigma_mean_raw(a);
+      result.covariance(i, i) = sigma * sigma;
+    }
+  }
   // The angle each turn turned through, unwrapped, and its σ from the parameters' covariance and
   // the rate noise of its samples (a check of the scale against a turn of known angle).
   for (std::size_t k = 0; k < f.data.motions.size(); ++k) {
@@ -799,6 +817,15 @@ GyroCalibration CalibrateGyro(const RawLog& accel, const RawLog& gyro,
                                  kRadToDeg;
     }
     result.still_spans.push_back(span);
+  }
+  {
+    std::vector<std::pair<std::size_t, std::size_t>> turns;
+    for (const GyroRotation& r : result.rotations)
+      turns.emplace_back(r.first_sample, r.last_sample);
+    const ModelParameters& accel_params =
+        result.accelerometer ? result.accelerometer->params : accel_cal.params;
+    result.time_offset = internal::EstimateGyroLag(accel, gyro, built.t, built.step_s, turns,
+                                                   accel_params, f.solution.gyro);
   }
   result.summary.iterations = sum.iterations;
   result.summary.termination = sum.termination;

@@ -249,6 +249,14 @@ ordered_json GyroscopeSection(const GyroCalibration& g, const CalibrationFileInf
                       {"turned_outside_deg", span.turned_outside_deg}});
   }
   doc["stills"] = stills;
+  if (g.time_offset) {
+    doc["time_offset"] = {{"lag_s", g.time_offset->lag_s},
+                          {"std_s", g.time_offset->std_s},
+                          {"turns", g.time_offset->turns},
+                          {"at_limit", g.time_offset->at_limit}};
+  } else {
+    doc["time_offset"] = nullptr;
+  }
   ordered_json rotations = ordered_json::array();
   for (const GyroRotation& r : g.rotations) {
     rotations.push_back({{"from", r.from + 1},

@@ -250,6 +250,16 @@ TEST(GyroCalibrationInput, AGyroLaggingTheAccelerometerIsIntegratedWhereItTurns)
   for (std::size_t i = 1; i < r.positions.size(); ++i) {
     EXPECT_GT(g.still_spans[i].first_sample, r.positions[i].interval->begin) << i;
   }
+  // The lag itself, measured: 0.3 s within 3σ (and a twentieth of a sample, for the σ's own
+  // error), and noted.
+  ASSERT_TRUE(g.time_offset);
+  EXPECT_FALSE(g.time_offset->at_limit);
+  EXPECT_NEAR(g.time_offset->lag_s, 0.3, 3 * g.time_offset->std_s + 0.0005);
+  EXPECT_LT(g.time_offset->std_s, 0.005);
+  const std::vector<Finding> findings = GyroFindings(g);
+  EXPECT_TRUE(std::any_of(findings.begin(), findings.end(), [](const Finding& f) {
+    return f.code == "gyro_time_offset" && f.severity == Severity::kNote;
+  }));
 }
 
 TEST(GyroCalibrationInput, AFullTurnAboutTheVerticalInsideAStillPositionIsNotAveraged) {
@@ -278,6 +288,9 @@ TEST(GyroCalibrationInput, AFullTurnAboutTheVerticalInsideAStillPositionIsNotAve
   const GyroCalibration g = CalibrateGyro(r.accel, r.gyro, r.positions, r.accel_cal, o);
   ExpectTrueGyro(g, truth, 27.0);
   EXPECT_NEAR(g.still_spans[4].turned_outside_deg, 360.0, 1.0);
+  // No lag here: none found beyond 3σ (and a twentieth of a sample).
+  ASSERT_TRUE(g.time_offset);
+  EXPECT_LT(std::abs(g.time_offset->lag_s), 3 * g.time_offset->std_s + 0.0005);
   // One of the turns into and out of position 5 holds it (the simulated turns are below 180°).
   EXPECT_GT(std::max(g.rotations[3].turned_deg, g.rotations[4].turned_deg), 360.0);
   const std::vector<Finding> findings = GyroFindings(g);

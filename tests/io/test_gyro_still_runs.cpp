@@ -38,18 +38,23 @@ TEST(GyroStillRuns, TrimsTurnsEndsAndSplitsAtMotionsButNotAtANoiseSpike) {
       FindGyroStillRuns(rates, intervals, 0.01, Vec3::Constant(std::nan("")));
   ASSERT_EQ(still.window, 10u);
   ASSERT_EQ(still.runs.size(), 3u);
-  for (int a = 0; a < 3; ++a) EXPECT_NEAR(still.window_sigma_raw(a), 1 / std::sqrt(10.0), 0.05);
-  // The tail is above 5σ of a window mean (1.58 counts) for its first 39 samples less the part
-  // a window averages; the run starts after it, and no more than a window later.
+  // σ of a window mean, 1/√10, from about 150 independent windows per axis by their median
+  // absolute deviation: a relative standard error of 9.5 %, so within 30 %.
+  for (int a = 0; a < 3; ++a) {
+    EXPECT_NEAR(still.window_sigma_raw(a), 1 / std::sqrt(10.0), 0.3 / std::sqrt(10.0));
+  }
+  // The tail is above 2σ of a window mean (0.63 counts) for its first 39 samples; the run starts
+  // after it, and no more than a window later.
   EXPECT_GE(still.runs[0].begin, intervals[0].begin + 30);
   EXPECT_LE(still.runs[0].begin, intervals[0].begin + 50);
   EXPECT_EQ(still.runs[0].end, intervals[0].end);
-  // The spike stays in.
-  EXPECT_EQ(still.runs[1].begin, intervals[1].begin);
-  EXPECT_EQ(still.runs[1].end, intervals[1].end);
-  // The motion splits the third: its longer part, after the motion, is kept.
+  // The spike stays in (a window of noise beyond 2σ at an edge, one in eight, is trimmed).
+  EXPECT_LE(still.runs[1].begin, intervals[1].begin + 20);
+  EXPECT_GE(still.runs[1].end, intervals[1].end - 20);
+  // The motion splits the third: its longer part, after the motion, is kept; the noise next to
+  // it, beyond 2σ one window in eight, may extend the motion by a window or two.
   EXPECT_GE(still.runs[2].begin, intervals[2].begin + 250);
-  EXPECT_LE(still.runs[2].begin, intervals[2].begin + 260);
+  EXPECT_LE(still.runs[2].begin, intervals[2].begin + 270);
   EXPECT_EQ(still.runs[2].end, intervals[2].end);
 }
 

@@ -1,0 +1,103 @@
+// The gyroscope's lag behind the accelerometer (gyro_time_offset.hpp).
+#include "analysis/gyro_time_offset.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+#include <Eigen/Geometry>
+#include <Eigen/LU>
+
+namespace accelcal::internal {
+
+namespace {
+
+// The peak of c over shifts −S..S (index s + S), to a fraction of a step by the vertex of the
+// quadratic fitted to the five values around the largest (smoother in the data than the parabola
+// through three, so that the jackknife's σ holds: on 12 simulated noisy recordings the errors'
+// RMS was 0.94 σ, against 1.7 σ with three), and whether it is on the edge.
+std::pair<double, bool> Peak(const std::vector<double>& c) {
+  const auto best = static_cast<std::size_t>(std::max_element(c.begin(), c.end()) - c.begin());
+  const double S = static_cast<double>(c.size() / 2);
+  if (best < 2 || best + 2 >= c.size()) return {static_cast<double>(best) - S, true};
+  double sxy = 0, sx2y = 0, sy = 0;
+  for (int x = -2; x <= 2; ++x) {
+    const double y = c[static_cast<std::size_t>(static_cast<std::ptrdiff_t>(best) + x)];
+    sxy += x * y, sx2y += x * x * y, sy += y;
+  }
+  const double b = sxy / 10, curvature = (sx2y - 2 * sy) / 14;
+  const double fraction = curvature < 0 ? std::clamp(-b / (2 * curvature), -1.0, 1.0) : 0.0;
+  return {static_cast<double>(best) - S + fraction, false};
+}
+
+}  // namespace
+
+std::optional<GyroTimeOffset> EstimateGyroLag(
+    const RawLog& accel, const RawLog& gyro, const std::vector<double>& t, double step_s,
+    const std::vector<std::pair<std::size_t, std::size_t>>& turns,
+    const ModelParameters& accel_params, const GyroParameters& gyro_params) {
+  const std::size_t n = gyro.samples.size();
+  if (turns.size() < 3 || !(step_s > 0) || n < 3 || accel.samples.size() != n) return std::nullopt;
+  std::size_t shortest = n;
+  for (const auto& [first, last] : turns) shortest = std::min(shortest, last - first + 1);
+  const auto S = std::max<std::size_t>(
+      1, std::min(shortest, static_cast<std::size_t>(std::lround(kGyroLagSearch_s / step_s))));
+  // The accelerometer's tilt rate |ḟ| / |f| by central differences, and the gyro's calibrated
+  // rate perpendicular to f, over every turn's samples widened by S on both sides.
+  std::vector<Vec3> f(n);
+  Vec3 last = Vec3::UnitZ();
+  for (std::size_t k = 0; k < n; ++k) {
+    if (std::optional<Vec3> force = SpecificForce(accel_params, accel.samples[k])) last = *force;
+    f[k] = last;
+  }
+  const Mat33 K_inv = gyro_params.K.inverse();
+  std::vector<double> tilt(n, 0.0), rate(n, 0.0);
+  for (std::size_t k = 1; k + 1 < n; ++k) {
+    const double dt = t[k + 1] - t[k - 1];
+    const double norm = f[k].norm();
+    if (dt > 0 && norm > 0) tilt[k] = (f[k + 1] - f[k - 1]).norm() / (norm * dt);
+    const Vec3 w = K_inv * (gyro.samples[k] - gyro_params.bias - gyro_params.G * f[k]);
+    if (norm > 0) rate[k] = w.cross(f[k] / norm).norm();
+  }
+  // Per turn j, c_j(s) = Σ_k tilt_k rate_{k+s}: the gyro late by s samples aligns its rate with
+  // the accelerometer's tilt at k + s.
+  const std::size_t shifts = 2 * S + 1;
+  std::vector<std::vector<double>> per_turn;
+  std::vector<double> total(shifts, 0.0);
+  for (const auto& [first, last_sample] : turns) {
+    std::vector<double> c(shifts, 0.0);
+    const std::size_t begin = first > S ? first - S : 0;
+    const std::size_t end = std::min(n, last_sample + 1 + S);
+    for (std::size_t k = begin; k < end; ++k) {
+      for (std::size_t i = 0; i < shifts; ++i) {
+        const std::ptrdiff_t j =
+            static_cast<std::ptrdiff_t>(k + i) - static_cast<std::ptrdiff_t>(S);
+        if (j >= 0 && static_cast<std::size_t>(j) < n)
+          c[i] += tilt[k] * rate[static_cast<std::size_t>(j)];
+      }
+    }
+    for (std::size_t i = 0; i < shifts; ++i) total[i] += c[i];
+    per_turn.push_back(std::move(c));
+  }
+  GyroTimeOffset out;
+  const auto [lag, at_limit] = Peak(total);
+  out.lag_s = lag * step_s;
+  out.at_limit = at_limit;
+  out.turns = turns.size();
+  out.step_s = step_s;
+  // Jackknife over the turns.
+  const double J = static_cast<double>(turns.size());
+  std::vector<double> without;
+  for (const std::vector<double>& c : per_turn) {
+    std::vector<double> rest = total;
+    for (std::size_t i = 0; i < shifts; ++i) rest[i] -= c[i];
+    without.push_back(Peak(rest).first);
+  }
+  double mean = 0;
+  for (double v : without) mean += v / J;
+  double sum = 0;
+  for (double v : without) sum += (v - mean) * (v - mean);
+  out.std_s = std::sqrt((J - 1) / J * sum) * step_s;
+  return out;
+}
+
+}  // namespace accelcal::internal

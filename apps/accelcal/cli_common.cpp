@@ -115,6 +115,11 @@ void CheckGyroColumns(const InputArgs& input, const std::string& gyro,
   if (gyro.empty() && input.path == "-") {
     throw UsageError("--gyro-columns reads the log a second time: it cannot be standard input");
   }
+  if (gyro == "-" && input.path == "-") {
+    throw UsageError(
+        "the accelerometer's log and --gyro are both standard input, which can be read once: "
+        "give one of them as a file");
+  }
   if (gyro.empty() && input.columns.size() >= 3 && gyro_columns.size() >= 3 &&
       std::equal(gyro_columns.end() - 3, gyro_columns.end(), input.columns.end() - 3)) {
     throw UsageError(

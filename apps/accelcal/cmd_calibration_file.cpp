@@ -163,7 +163,9 @@ int RunExport(const ExportArgs& args) {
   const ExportLoss& loss = exported.loss;
   const std::string unit_name(ToString(cal.unit));
   const char* unit = unit_name.c_str();
-  note += loss.dropped.empty() ? "exact: nothing of the model is dropped\n"
+  // With a gyroscope beside it, the loss is the accelerometer's (the gyroscope's is said above).
+  const std::string model = cal.has_gyroscope() ? "the accelerometer's model" : "the model";
+  note += loss.dropped.empty() ? "exact: nothing of " + model + " is dropped\n"
                                : "dropped: " + loss.dropped + "\n";
   if (args.sensor == "gyroscope") {  // the loss above is the accelerometer's
     note =

@@ -107,6 +107,18 @@ struct Frame2d {
   double Bottom() const { return top + height; }
 };
 
+// A plot's ranges must be finite: a file's value near the largest double (1e308) reads, but its
+// span overflows and every coordinate would be NaN.
+bool Plottable(double x0, double x1, double y0, double y1) {
+  return std::isfinite(x1 - x0) && std::isfinite(y1 - y0) && std::isfinite(2 * (y1 - y0));
+}
+
+std::string NotPlotted(const std::string& title) {
+  return "<p>" + Escape(title) +
+         ": not plotted, its values span more than a plot can (a value near 1e308 in the "
+         "file?).</p>\n";
+}
+
 Frame2d Padded(double x0, double x1, double y0, double y1) {
   if (!(x1 > x0)) x0 -= 0.5, x1 += 0.5;
   if (!(y1 > y0)) {
@@ -165,6 +177,7 @@ std::string SignalPlot(const Document& d, const ReportInput& input) {
   double lo = log.samples[0].minCoeff(), hi = log.samples[0].maxCoeff();
   for (const Vec3& s : log.samples)
     lo = std::min(lo, s.minCoeff()), hi = std::max(hi, s.maxCoeff());
+  if (!Plottable(t_of(0), t_of(n - 1), lo, hi)) return NotPlotted("raw signal");
   const Frame2d f = Padded(t_of(0), t_of(n - 1), lo, hi);
   std::string body;
   const auto shade = [&](double a, double b, const char* cls, const std::string& tip) {
@@ -226,6 +239,7 @@ std::string NormPlot(const Document& d) {
       if (v) lo = std::min(lo, *v), hi = std::max(hi, *v);
     }
   }
+  if (!Plottable(0, static_cast<double>(m), lo, hi)) return NotPlotted("|f| - g per position");
   const Frame2d f = Padded(0.5, static_cast<double>(m) + 0.5, lo, hi);
   std::string body = Axes(f, "position", "|f| - g [" + d.unit + "]");
   body += "<line class=\"zero\" x1=\"" + Px(f.left) + "\" y1=\"" + Px(f.Y(0)) + "\" x2=\"" +
@@ -278,7 +292,7 @@ std::string SpherePlot(const Document& d) {
             Px(h == 0 ? cy - radius - 4 : cy + radius + 14) + "\">+y</text>\n";
     for (std::size_t k = 0; k < d.positions.size(); ++k) {
       const Vec3 c = d.positions[k].direction.normalized();
-      if ((h == 0) != (c(2) >= 0)) continue;
+      if (!c.allFinite() || (h == 0) != (c(2) >= 0)) continue;
       // Projection about the pole sign·e_z: distance 2 sin(θ/2) = √(2(1 − sign z)); seen from
       // outside the sphere, so the lower disc mirrors y.
       const double s = std::sqrt(2.0 / (1.0 + sign * c(2)));
@@ -297,6 +311,7 @@ std::string ResidualPlot(const Document& d) {
   double lo = 0, hi = 0;
   for (const PositionView& p : d.positions)
     lo = std::min(lo, p.residual.minCoeff()), hi = std::max(hi, p.residual.maxCoeff());
+  if (!Plottable(0, static_cast<double>(m), lo, hi)) return NotPlotted("residuals per axis");
   const Frame2d f = Padded(0.5, static_cast<double>(m) + 0.5, lo, hi);
   std::string body = Axes(f, "position", "residual p - mu [" + d.cal.raw_unit + "]");
   body += "<line class=\"zero\" x1=\"" + Px(f.left) + "\" y1=\"" + Px(f.Y(0)) + "\" x2=\"" +
@@ -410,11 +425,14 @@ std::string GyroSection(const Document& d) {
   // Each turn's error: the angle between the direction it predicts and the fitted one.
   if (!g.rotations.empty()) {
     const std::size_t n = g.rotations.size();
-    double hi = 0;
+    double lo = 0, hi = 0;
     for (const auto& r : g.rotations) {
+      lo = std::min({lo, r.residual_deg, r.heldout_deg.value_or(0.0)});
       hi = std::max({hi, r.residual_deg, r.heldout_deg.value_or(0.0)});
     }
-    const Frame2d f = Padded(0.5, static_cast<double>(n) + 0.5, 0, hi);
+    if (!Plottable(0, static_cast<double>(n), lo, hi))
+      return html + NotPlotted("turns") + "</section>\n";
+    const Frame2d f = Padded(0.5, static_cast<double>(n) + 0.5, lo, hi);
     std::string body = Axes(f, "turn", "direction error [deg]");
     for (std::size_t k = 0; k < n; ++k) {
       const auto& r = g.rotations[k];
@@ -445,8 +463,14 @@ std::string GyroSection(const Document& d) {
     for (std::size_t k = 0; k < m; ++k) {
       measured.push_back(g.still_mean_raw[k] - g.params.bias);
       modelled.push_back(g.params.G * (d.cal.gravity * *d.cal.positions[k].direction));
+      if (!measured.back().allFinite() || !modelled.back().allFinite()) {
+        return html + NotPlotted("still rates") + "</section>\n";
+      }
       lo = std::min({lo, measured.back().minCoeff(), modelled.back().minCoeff()});
       hi = std::max({hi, measured.back().maxCoeff(), modelled.back().maxCoeff()});
+    }
+    if (!Plottable(0, static_cast<double>(m), lo, hi)) {
+      return html + NotPlotted("still rates") + "</section>\n";
     }
     const Frame2d f = Padded(0.5, static_cast<double>(m) + 0.5, lo, hi);
     std::string body = Axes(f, "position", "still rate - bias [" + g.raw_unit + "]");

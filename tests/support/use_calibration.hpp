@@ -4,6 +4,7 @@
 // calibration. Anything else propagates
 // (the test or fuzz harness that calls this reports it). Shared by fuzz/fuzz_calibration_file.cpp,
 // fuzz/fuzz_calibration_keys.cpp and tests/test_calibration_keys.cpp.
+#include <stdexcept>
 #include <string>
 
 #include "accelcal/calibration_file.hpp"
@@ -21,7 +22,14 @@ inline void UseCalibration(const LoadedCalibration& calibration, const std::stri
     } catch (const DataError&) {
     }
   }
-  RenderReport({calibration, source, nullptr, {}});
+  // The report's plots never draw at a coordinate that is not a number (a value near 1e308
+  // overflowed a plot's span, and every point went to "-nan").
+  const std::string html = RenderReport({calibration, source, nullptr, {}});
+  for (const char* bad : {"=\"nan\"", "=\"-nan\"", "=\"inf\"", "=\"-inf\""}) {
+    if (html.find(bad) != std::string::npos) {
+      throw std::runtime_error(std::string("the report drew a coordinate ") + bad);
+    }
+  }
 }
 
 // A calibration file's text as the fuzzers feed it: read, and when the reader accepts it, used.

@@ -42,16 +42,25 @@ std::optional<GyroTimeOffset> EstimateGyroLag(
   const auto S = std::max<std::size_t>(
       1, std::min(shortest, static_cast<std::size_t>(std::lround(kGyroLagSearch_s / step_s))));
   // The accelerometer's tilt rate |ḟ| / |f| by central differences, and the gyro's calibrated
-  // rate perpendicular to f, over every turn's samples widened by S on both sides.
-  std::vector<Vec3> f(n);
+  // rate perpendicular to f, where the correlations reach: every turn's samples widened by S for
+  // the tilt, by 2 S for the rate (a shift of up to S from them).
+  std::vector<char> need(n, 0);
+  for (const auto& [first, last_sample] : turns) {
+    const std::size_t from = first > 2 * S + 1 ? first - 2 * S - 1 : 0;
+    std::fill(need.begin() + static_cast<std::ptrdiff_t>(from),
+              need.begin() + static_cast<std::ptrdiff_t>(std::min(n, last_sample + 2 * S + 2)), 1);
+  }
+  std::vector<Vec3> f(n, Vec3::Zero());
   Vec3 last = Vec3::UnitZ();
   for (std::size_t k = 0; k < n; ++k) {
+    if (!need[k]) continue;
     if (std::optional<Vec3> force = SpecificForce(accel_params, accel.samples[k])) last = *force;
     f[k] = last;
   }
   const Mat33 K_inv = gyro_params.K.inverse();
   std::vector<double> tilt(n, 0.0), rate(n, 0.0);
   for (std::size_t k = 1; k + 1 < n; ++k) {
+    if (!need[k - 1] || !need[k] || !need[k + 1]) continue;
     const double dt = t[k + 1] - t[k - 1];
     const double norm = f[k].norm();
     if (dt > 0 && norm > 0) tilt[k] = (f[k + 1] - f[k - 1]).norm() / (norm * dt);
@@ -68,12 +77,11 @@ std::optional<GyroTimeOffset> EstimateGyroLag(
     const std::size_t begin = first > S ? first - S : 0;
     const std::size_t end = std::min(n, last_sample + 1 + S);
     for (std::size_t k = begin; k < end; ++k) {
-      for (std::size_t i = 0; i < shifts; ++i) {
-        const std::ptrdiff_t j =
-            static_cast<std::ptrdiff_t>(k + i) - static_cast<std::ptrdiff_t>(S);
-        if (j >= 0 && static_cast<std::size_t>(j) < n)
-          c[i] += tilt[k] * rate[static_cast<std::size_t>(j)];
-      }
+      // Shift i − S reads rate[k + i − S]: i within [S − k, n + S − k).
+      const std::size_t i_begin = k < S ? S - k : 0;
+      const std::size_t i_end = std::min(shifts, n + S - k);
+      const double* r = rate.data() + (k + i_begin - S);  // rate[k + i − S] at i = i_begin
+      for (std::size_t i = i_begin; i < i_end; ++i) c[i] += tilt[k] * r[i - i_begin];
     }
     for (std::size_t i = 0; i < shifts; ++i) total[i] += c[i];
     per_turn.push_back(std::move(c));

@@ -445,7 +445,7 @@ void BindCalibration(py::module_& m) {
           if (gyro_model != "auto") {
             gyro_options.model =
                 Parse(GyroModelKindFromString(gyro_model), gyro_model, "gyro_model");
-          } else if (!cross_validate) {
+          } else if (!cross_validate && gyro_options.estimator != GyroEstimator::kImuTk) {
             throw py::value_error(
                 "gyro_model 'auto' decides on held-out rotations: it needs cross_validate=True");
           }

@@ -240,3 +240,7 @@ def test_calibrate_log_with_the_gyroscope_is_the_cli_calibration(tmp_path):
         accelcal.calibrate_log(XSENS, gyro_units="rad/s")
     with pytest.raises(ValueError, match="gyro_estimator"):
         accelcal.calibrate_log(XSENS, gyro=gyro, gyro_estimator="both")
+    # imu_tk's method has one model: no validation needed to choose it.
+    imutk = accelcal.calibrate_log(XSENS, gravity=9.81744, gyro=gyro, gyro_estimator="imutk",
+                                   cross_validate=False)[0].gyroscope
+    assert imutk["model"] == "linear" and imutk["estimator"] == "imutk"

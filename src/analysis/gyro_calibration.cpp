@@ -609,12 +609,14 @@ GyroCalibration CalibrateGyro(const RawLog& accel, const RawLog& gyro,
                               const std::vector<Position>& positions,
                               const CalibrationResult& accel_cal,
                               const GyroCalibrationOptions& options) {
-  if (!options.model && !options.validate) {
-    throw std::invalid_argument("CalibrateGyro: the automatic model choice needs validation");
-  }
-  if (options.estimator == GyroEstimator::kImuTk && options.model &&
-      *options.model != GyroModelKind::kLinear) {
+  const bool imutk = options.estimator == GyroEstimator::kImuTk;
+  if (imutk && options.model && *options.model != GyroModelKind::kLinear) {
     throw std::invalid_argument("CalibrateGyro: imu_tk's method has no g-sensitivity");
+  }
+  // imu_tk's method has one model: nothing to choose, so no validation needed to choose it.
+  const std::optional<GyroModelKind> model = imutk ? GyroModelKind::kLinear : options.model;
+  if (!model && !options.validate) {
+    throw std::invalid_argument("CalibrateGyro: the automatic model choice needs validation");
   }
   CheckGyroClock(accel, gyro);
   Built built = BuildData(accel, gyro, positions, accel_cal, options);
@@ -653,10 +655,8 @@ GyroCalibration CalibrateGyro(const RawLog& accel, const RawLog& gyro,
   CheckExcitation(data, data, start);
 
   std::vector<ModelFit> fits;
-  if (options.estimator == GyroEstimator::kImuTk) {
-    fits.push_back(FitModel(data, GyroModelKind::kLinear, positions, accel_cal, options, start));
-  } else if (options.model) {
-    fits.push_back(FitModel(data, *options.model, positions, accel_cal, options, start));
+  if (model) {
+    fits.push_back(FitModel(data, *model, positions, accel_cal, options, start));
   } else {
     // The g-sensitive model from the linear one's solution (G = 0): a few steps, where the
     // closed-form start takes several more.
@@ -666,10 +666,8 @@ GyroCalibration CalibrateGyro(const RawLog& accel, const RawLog& gyro,
   }
   std::size_t chosen = 0;
   GyroCalibration result;
-  if (options.estimator == GyroEstimator::kImuTk) {
-    result.model_reason = "imu_tk's method: no g-sensitivity";
-  } else if (options.model) {
-    result.model_reason = "given";
+  if (model) {
+    result.model_reason = imutk ? "imu_tk's method: no g-sensitivity" : "given";
   } else {
     // The paired comparison of the held-out errors, turn by turn (as the accelerometer's
     // automatic model choice): d_k = e_lin,k² − e_gs,k², g-sensitive when mean(d) exceeds
@@ -774,7 +772,7 @@ GyroCalibration CalibrateGyro(const RawLog& accel, const RawLog& gyro,
       result.accelerometer = std::move(a);
     }
   }
-  if (options.estimator == GyroEstimator::kImuTk && result.covariance.size() > 0) {
+  if (imutk && result.covariance.size() > 0) {
     // The bias held at the first position's mean: its σ that mean's, K_g's σ given it.
     for (int a = 0; a < 3; ++a) {
       const int i = 4 * a + 3;  // bg_a in the linear model's order

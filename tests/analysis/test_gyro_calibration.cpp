@@ -97,6 +97,9 @@ TEST(GyroCalibration, ImuTkBaselineOnXsensIsTheIssuesPrototype) {
     EXPECT_NEAR(std::sqrt(g.covariance(4 * a + 3, 4 * a + 3)), sigma_mean(a), 1e-9) << a;
   }
   EXPECT_GT(g.heldout_rms_deg, 3 * Calibrated(Xsens(), {}).heldout_rms_deg);
+  // One model, so nothing to choose: it needs no validation (it was an internal error).
+  o.validate = false;
+  EXPECT_EQ(Calibrated(Xsens(), o).model, GyroModelKind::kLinear);
   o.model = GyroModelKind::kGSensitive;
   EXPECT_THROW(Calibrated(Xsens(), o), std::invalid_argument);
 }

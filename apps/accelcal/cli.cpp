@@ -109,6 +109,24 @@ std::string ChosenCommand(int argc, char** argv) {
   return "";
 }
 
+// What a command that reads a gyroscope's log checks of its flags: a --gyro given names a file,
+// and the options that only act on the gyro (`gyro_only`) come with its rates.
+void CheckGyroFlags(const CLI::App& cmd, const std::string& gyro,
+                    const std::vector<std::string>& gyro_columns,
+                    std::initializer_list<const char*> gyro_only) {
+  if (cmd.count("--gyro") > 0 && gyro.empty()) {
+    throw accelcal::cli::UsageError("--gyro: the file name is empty");
+  }
+  if (!gyro.empty() || !gyro_columns.empty()) return;
+  for (const char* name : gyro_only) {
+    if (cmd.count(name) > 0) {
+      throw accelcal::cli::UsageError(std::string(name) +
+                                      " applies to the gyroscope: give its rates with --gyro LOG "
+                                      "or --gyro-columns");
+    }
+  }
+}
+
 }  // namespace
 
 int accelcal::cli::RunCommandLine(int argc, char** argv) {
@@ -499,18 +517,8 @@ int accelcal::cli::RunCommandLine(int argc, char** argv) {
            {"--method", "--init", "--frame", "--estimator", "--max-iterations"}) {
         if (calibrate->count(name) > 0) cal.gravity_only_options.emplace_back(name);
       }
-      if (calibrate->count("--gyro") > 0 && cal.gyro.empty()) {
-        throw UsageError("--gyro: the file name is empty");
-      }
-      if (cal.gyro.empty() && cal.gyro_columns.empty()) {
-        for (const char* name : {"--gyro-units", "--gyro-model", "--gyro-estimator"}) {
-          if (calibrate->count(name) > 0) {
-            throw UsageError(std::string(name) +
-                             " applies to the gyroscope: give its rates with --gyro LOG or "
-                             "--gyro-columns");
-          }
-        }
-      }
+      CheckGyroFlags(*calibrate, cal.gyro, cal.gyro_columns,
+                     {"--gyro-units", "--gyro-model", "--gyro-estimator"});
       cal.given_options = GivenOptions(*calibrate, {"output", "report", "json", "date"});
       cal.date_given = calibrate->count("--date") > 0;
       return RunCalibrate(cal);
@@ -520,21 +528,12 @@ int accelcal::cli::RunCommandLine(int argc, char** argv) {
       return RunDetect(det);
     }
     if (*compare) {
-      if (compare->count("--gyro") > 0 && cmp.gyro.empty()) {
-        throw UsageError("--gyro: the file name is empty");
-      }
-      if (cmp.gyro.empty() && cmp.gyro_columns.empty() && compare->count("--gyro-units") > 0) {
-        throw UsageError(
-            "--gyro-units applies to the gyroscope: give its rates with --gyro LOG or "
-            "--gyro-columns");
-      }
+      CheckGyroFlags(*compare, cmp.gyro, cmp.gyro_columns, {"--gyro-units"});
       data_subject = cmp.input.path;
       return RunCompare(cmp);
     }
     if (*apply_cmd) {
-      if (apply_cmd->count("--gyro") > 0 && apply.gyro.empty()) {
-        throw UsageError("--gyro: the file name is empty");
-      }
+      CheckGyroFlags(*apply_cmd, apply.gyro, apply.gyro_columns, {});
       data_subject = apply.input.path;
       return RunApply(apply);
     }

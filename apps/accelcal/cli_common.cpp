@@ -150,6 +150,15 @@ InputData ReadGyroLog(const InputArgs& input, const std::string& gyro,
   }
 }
 
+const RawLog& TheRawLogForGyro(const LoadedInput& in) {
+  if (in.files.size() != 1 || in.files.front().data.kind != InputKind::kRaw) {
+    throw UsageError(
+        "the gyroscope is calibrated from one raw log (its turns between the positions): give "
+        "one INPUT that is a raw log");
+  }
+  return in.files.front().data.raw;
+}
+
 std::string& DataSubject() {
   static std::string subject;
   return subject;

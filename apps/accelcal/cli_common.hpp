@@ -73,6 +73,9 @@ void CheckGyroColumns(const InputArgs& input, const std::string& gyro,
 
 // The input files of a calibration, read, detected and pooled.
 LoadedInput LoadInput(const InputArgs& in);
+/// The one raw log a gyroscope is calibrated beside (its turns between the positions); a usage
+/// error for several inputs or a positions file.
+const RawLog& TheRawLogForGyro(const LoadedInput& in);
 /// The gyroscope's log beside the accelerometer's `input`: `gyro` (empty: `input` itself, read
 /// again for `gyro_columns`), read with `input`'s options and `gyro_columns` (x,y,z or
 /// time,x,y,z; with 3 in `input` itself, `input`'s time column in front when its columns name

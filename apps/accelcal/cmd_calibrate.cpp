@@ -255,18 +255,13 @@ GyroCalibrationOptions GyroOptions(const CalibrateArgs& args) {
 
 GyroRun RunGyro(const CalibrateArgs& args, const LoadedInput& in, const CalibrationResult& accel) {
   const GyroCalibrationOptions options = GyroOptions(args);
-  if (in.files.size() != 1 || in.files.front().data.kind != InputKind::kRaw) {
-    throw UsageError(
-        "the gyroscope is calibrated from one raw log (its turns between the positions): give "
-        "one INPUT that is a raw log");
-  }
+  const RawLog& accel_log = TheRawLogForGyro(in);
   GyroRun run;
   run.path = args.gyro.empty() ? args.input.path : args.gyro;
   run.data = ReadGyroLog(args.input, args.gyro, args.gyro_columns, true);
   const std::string subject = DataSubject();
   DataSubject() = run.path;  // what CalibrateGyro refuses is the gyroscope's
-  run.calibration =
-      CalibrateGyro(in.files.front().data.raw, run.data.raw, in.positions, accel, options);
+  run.calibration = CalibrateGyro(accel_log, run.data.raw, in.positions, accel, options);
   DataSubject() = subject;
   return run;
 }

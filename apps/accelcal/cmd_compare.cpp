@@ -31,13 +31,9 @@ struct GyroRow {
 
 // imu_tk's method beside accelcal's estimators, each held out turn by turn, on the accelerometer
 // of the comparison's first maximum-likelihood fit.
-std::vector<GyroRow> CompareGyro(const CompareArgs& args, const LoadedInput& in,
+std::vector<GyroRow> CompareGyro(const CompareArgs& args, GyroUnit unit, const LoadedInput& in,
                                  const Comparison& comparison) {
-  if (in.files.size() != 1 || in.files.front().data.kind != InputKind::kRaw) {
-    throw UsageError(
-        "the gyroscope is calibrated from one raw log (its turns between the positions): give "
-        "one INPUT that is a raw log");
-  }
+  const RawLog& accel_log = TheRawLogForGyro(in);
   const MethodComparison* accel = nullptr;
   for (const MethodComparison& r : comparison.methods) {
     if (!r.error && IsMaximumLikelihood(r.method)) {
@@ -52,7 +48,7 @@ std::vector<GyroRow> CompareGyro(const CompareArgs& args, const LoadedInput& in,
   const InputData gyro = ReadGyroLog(args.input, args.gyro, args.gyro_columns, false);
   const std::string subject = DataSubject();
   DataSubject() = args.gyro.empty() ? args.input.path : args.gyro;
-  CheckGyroClock(in.files.front().data.raw, gyro.raw);  // refused once, not in every row
+  CheckGyroClock(accel_log, gyro.raw);  // refused once, not in every row
   std::vector<GyroRow> rows = {{GyroEstimator::kImuTk, GyroModelKind::kLinear, {}, {}},
                                {GyroEstimator::kTwoStage, GyroModelKind::kLinear, {}, {}},
                                {GyroEstimator::kTwoStage, GyroModelKind::kGSensitive, {}, {}},
@@ -60,12 +56,11 @@ std::vector<GyroRow> CompareGyro(const CompareArgs& args, const LoadedInput& in,
                                {GyroEstimator::kJoint, GyroModelKind::kGSensitive, {}, {}}};
   for (GyroRow& row : rows) {
     GyroCalibrationOptions o;
-    o.unit = ParseChoice<GyroUnit>(args.gyro_units, "--gyro-units");
+    o.unit = unit;
     o.estimator = row.estimator;
     o.model = row.model;
     try {
-      row.result =
-          CalibrateGyro(in.files.front().data.raw, gyro.raw, in.positions, accel->result, o);
+      row.result = CalibrateGyro(accel_log, gyro.raw, in.positions, accel->result, o);
     } catch (const DataError& e) {
       row.error = e.what();
     }
@@ -103,15 +98,16 @@ int RunCompare(const CompareArgs& args) {
     if (auto why = o.Validate()) throw UsageError(*why);
   }
   const bool gyro_wanted = !args.gyro.empty() || !args.gyro_columns.empty();
+  GyroUnit gyro_unit = GyroUnit::kRaw;
   if (gyro_wanted) {
-    ParseChoice<GyroUnit>(args.gyro_units, "--gyro-units");
+    gyro_unit = ParseChoice<GyroUnit>(args.gyro_units, "--gyro-units");
     CheckGyroColumns(args.input, args.gyro, args.gyro_columns);
   }
   const LoadedInput in = LoadInput(args.input);
   const std::vector<Vec3> means = Means(in.positions);
   const Comparison comparison = CompareMethods(means, options);
   const std::vector<GyroRow> gyro_rows =
-      gyro_wanted ? CompareGyro(args, in, comparison) : std::vector<GyroRow>();
+      gyro_wanted ? CompareGyro(args, gyro_unit, in, comparison) : std::vector<GyroRow>();
   const std::vector<MethodComparison>& rows = comparison.methods;
   const char* unit = g.unit == ForceUnit::kMetersPerSecond2 ? "m/s2" : "g";
   // The screening's findings, with |f| - g under the first maximum-likelihood fit (all methods

@@ -60,6 +60,8 @@ struct EnumNames<GyroUnit> {
       {GyroUnit::kRaw, "raw"}};
 };
 std::string_view ToString(GyroUnit unit);
+/// The declared unit's scale, raw per rad/s (1 for rad/s, 180/π for deg/s); none for raw counts.
+std::optional<double> RawPerRadPerSecond(GyroUnit unit);
 
 /// How far a gyro's scale (a row norm of K_g) may lie from its declared unit's (1 for rad/s,
 /// 180/π for deg/s) and still start the fit, and pass the diagnosis (gyro_unit_scale): MEMS

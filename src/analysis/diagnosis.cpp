@@ -241,10 +241,9 @@ std::vector<Finding> GyroFindings(const GyroCalibration& g) {
          {"statistic", r.statistic},
          {"threshold", r.threshold}});
   }
-  if (g.unit != GyroUnit::kRaw) {
-    const double nominal = g.unit == GyroUnit::kDegPerSecond ? 180.0 / kPi : 1.0;
+  if (const std::optional<double> nominal = RawPerRadPerSecond(g.unit)) {
     Vec3 scale;
-    for (int i = 0; i < 3; ++i) scale(i) = g.params.K.row(i).norm() / nominal;
+    for (int i = 0; i < 3; ++i) scale(i) = g.params.K.row(i).norm() / *nominal;
     if (!((scale.array() - 1).abs() <= kGyroUnitScaleTolerance).all()) {
       const std::string unit(ToString(g.unit));
       Add(&out, "gyro_unit_scale", Severity::kWarning,

@@ -26,6 +26,12 @@ namespace accelcal {
 std::string_view ToString(GyroUnit unit) { return NameOf(unit); }
 std::string_view ToString(GyroEstimator estimator) { return NameOf(estimator); }
 
+std::optional<double> RawPerRadPerSecond(GyroUnit unit) {
+  if (unit == GyroUnit::kRadPerSecond) return 1.0;
+  if (unit == GyroUnit::kDegPerSecond) return 180.0 / 3.14159265358979323846;
+  return std::nullopt;
+}
+
 namespace {
 
 using internal::GyroFitData;
@@ -628,9 +634,7 @@ GyroCalibration CalibrateGyro(const RawLog& accel, const RawLog& gyro,
                     "each turn) needs at least " +
                     std::to_string(needed));
   }
-  std::optional<double> scale;
-  if (options.unit == GyroUnit::kRadPerSecond) scale = 1.0;
-  if (options.unit == GyroUnit::kDegPerSecond) scale = kRadToDeg;
+  const std::optional<double> scale = RawPerRadPerSecond(options.unit);
   // A declared unit must agree with the angles turned: the closed-form scale (GyroStart) is
   // within 0.1 % of the fitted one on the Xsens recording and 2 % on the T265 one; a declared
   // scale from half to twice it is accepted, where a misread unit is a factor of 57 or more.

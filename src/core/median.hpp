@@ -1,15 +1,20 @@
 #pragma once
-// The median of a sample (the upper one of an even count), by partial sorting.
+// A quantile of a sample, by partial sorting: the element of rank floor(p n) (0-based), so the
+// median is the upper one of an even count.
 #include <algorithm>
 #include <cstddef>
+#include <utility>
 #include <vector>
 
 namespace accelcal::internal {
 
-inline double Median(std::vector<double> v) {
-  const auto mid = v.begin() + static_cast<std::ptrdiff_t>(v.size() / 2);
-  std::nth_element(v.begin(), mid, v.end());
-  return *mid;
+/// p in [0, 1); `v` non-empty.
+inline double Quantile(std::vector<double> v, double p) {
+  const auto at = v.begin() + static_cast<std::ptrdiff_t>(static_cast<double>(v.size()) * p);
+  std::nth_element(v.begin(), at, v.end());
+  return *at;
 }
+
+inline double Median(std::vector<double> v) { return Quantile(std::move(v), 0.5); }
 
 }  // namespace accelcal::internal

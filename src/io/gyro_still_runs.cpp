@@ -76,13 +76,7 @@ GyroStillRuns FindGyroStillRuns(const std::vector<Vec3>& rates_raw,
       // interval). Then, inside the runs, the median, 0.6745 σ: half the quartile's standard
       // error (9 % against 15 % from 150 windows).
       const double p = pass == 0 ? 0.25 : 0.5, quantile = pass == 0 ? 0.3186 : 0.6745;
-      double q = 0;
-      if (!deviation[a].empty()) {
-        std::vector<double>& v = deviation[a];
-        const auto at = v.begin() + static_cast<std::ptrdiff_t>(static_cast<double>(v.size()) * p);
-        std::nth_element(v.begin(), at, v.end());
-        q = *at;
-      }
+      const double q = deviation[a].empty() ? 0.0 : Quantile(std::move(deviation[a]), p);
       out.window_sigma_raw(a) = std::max(q / quantile, floor);
     }
     for (std::size_t i = 0; i < m; ++i) {

@@ -29,8 +29,8 @@ struct GyroStillRuns {
 /// stretch of consecutive windows beyond kGyroStillThreshold σ on an axis is a motion when one of
 /// them is beyond kGyroMotionThreshold σ (hysteresis: the motion is found by its peak, its extent
 /// by its tails), and so is one at the interval's edge (a turn's slow end, its peak beyond the
-/// interval); each interval keeps its longest run of samples in no motion's window. Twice: the
-/// still rate is first each interval's median, then its run's mean.
+/// interval); each interval keeps its longest run of samples in no motion's window. Three
+/// passes: the still rate is first each interval's median, then its run's mean.
 /// `quantum_raw` floors σ at a quantised axis' rounding noise. An interval with no still run left
 /// (fewer than two samples) has an empty run.
 GyroStillRuns FindGyroStillRuns(const std::vector<Vec3>& rates_raw,

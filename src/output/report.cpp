@@ -107,6 +107,11 @@ struct Frame2d {
   double Bottom() const { return top + height; }
 };
 
+// One entry of a summary's definition list.
+std::string Item(const std::string& key, const std::string& value) {
+  return "<dt>" + Escape(key) + "</dt><dd>" + Escape(value) + "</dd>\n";
+}
+
 // A plot's ranges must be finite: a file's value near the largest double (1e308) reads, but its
 // span overflows and every coordinate would be NaN.
 bool Plottable(double x0, double x1, double y0, double y1) {
@@ -385,20 +390,17 @@ std::string ParameterTable(const Document& d) {
 // out), and each still position's mean rate beside the fitted bias and g-sensitivity.
 std::string GyroSection(const Document& d) {
   const LoadedCalibration::Gyroscope& g = *d.cal.gyroscope;
-  const auto item = [](const std::string& key, const std::string& value) {
-    return "<dt>" + Escape(key) + "</dt><dd>" + Escape(value) + "</dd>\n";
-  };
   const auto deg = [](const std::optional<double>& v) {
     return v ? Format("%.3g", *v) + " deg" : std::string("n/a");
   };
   std::string html = "<section id=\"gyroscope\"><h2>Gyroscope</h2>\n<dl>\n";
-  html += item("model", std::string(ToString(g.model)) + ", w_raw = K w + b + G f" +
+  html += Item("model", std::string(ToString(g.model)) + ", w_raw = K w + b + G f" +
                             (g.estimator.empty() ? "" : ", " + g.estimator + " fit"));
-  html += item("rotations", std::to_string(g.rotations.size()) + " turns; direction error RMS " +
+  html += Item("rotations", std::to_string(g.rotations.size()) + " turns; direction error RMS " +
                                 deg(g.rms_deg) + ", held out " + deg(g.heldout_rms_deg));
   std::string scales;
   for (int i = 0; i < 3; ++i) scales += (i ? ", " : "") + Format("%.8g", g.params.K.row(i).norm());
-  html += item("scale factors", scales + " " + g.raw_unit + " per rad/s (row norms of K)");
+  html += Item("scale factors", scales + " " + g.raw_unit + " per rad/s (row norms of K)");
   html += "</dl>\n";
   // The parameters in their file order, ±1σ.
   const auto& slots = GyroParameterSlots(g.model);
@@ -544,22 +546,19 @@ std::string Render(const ReportInput& input) {
       Escape(source) + "</title>\n<style>\n" + kStyle +
       "</style>\n</head>\n<body>\n<h1>Accelerometer calibration: " + Escape(source) + "</h1>\n";
   const SolverRecord& solver = d.cal.solver;
-  const auto item = [](const std::string& key, const std::string& value) {
-    return "<dt>" + Escape(key) + "</dt><dd>" + Escape(value) + "</dd>\n";
-  };
   html += "<section id=\"summary\"><dl>\n";
-  html += item("model", std::string(ToString(d.cal.model)) + ", frame " +
+  html += Item("model", std::string(ToString(d.cal.model)) + ", frame " +
                             std::string(ToString(d.cal.frame)));
-  html += item("method", (solver.method.empty() ? std::string("?") : solver.method) + " (" +
+  html += Item("method", (solver.method.empty() ? std::string("?") : solver.method) + " (" +
                              solver.estimator + "), " +
                              (solver.iterations ? std::to_string(*solver.iterations) : "?") +
                              " iterations, " + (solver.converged ? "converged" : "NOT converged"));
-  html += item("positions", std::to_string(d.positions.size()));
-  html += item("gravity", Format("%.6g", d.cal.gravity) + " " + d.unit);
+  html += Item("positions", std::to_string(d.positions.size()));
+  html += Item("gravity", Format("%.6g", d.cal.gravity) + " " + d.unit);
   const auto rms = [&](const std::optional<double>& value) -> std::string {
     return value ? Short(*value) + " " + d.unit : "n/a";
   };
-  html += item("RMS of |f| - g", "before " + rms(d.cal.gravity_norm_rms_before) + ", after " +
+  html += Item("RMS of |f| - g", "before " + rms(d.cal.gravity_norm_rms_before) + ", after " +
                                      rms(d.cal.gravity_norm_rms_after) + ", held out " +
                                      rms(d.cal.crossval_rms));
   html += "</dl></section>\n";

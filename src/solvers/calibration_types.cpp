@@ -5,6 +5,7 @@
 #include <cmath>
 #include <string>
 
+#include "core/median.hpp"
 #include "core/text_format.hpp"
 #include "solvers/solver_common.hpp"
 
@@ -138,10 +139,7 @@ std::optional<double> GravityNormRmsUncalibrated(const std::vector<Vec3>& readin
   if (readings.empty()) return std::nullopt;
   std::vector<double> norms;
   for (const Vec3& p : readings) norms.push_back(p.norm());
-  std::vector<double> sorted = norms;
-  std::nth_element(sorted.begin(), sorted.begin() + static_cast<std::ptrdiff_t>(sorted.size() / 2),
-                   sorted.end());
-  const double median = sorted[sorted.size() / 2];
+  const double median = internal::Median(norms);
   if (std::abs(median - gravity) > 0.2 * gravity) return std::nullopt;
   for (double& v : norms) v -= gravity;
   return Rms(norms);

@@ -179,12 +179,12 @@ py::dict GyroDict(const GyroCalibration& g) {
   d["rotation_scatter_ratio"] = g.rotation_scatter_ratio;
   d["accelerometer_scatter_ratio"] = g.accel_scatter_ratio;
   py::list stills;
-  for (std::size_t i = 0; i < g.still_mean_raw.size(); ++i) {
+  for (const GyroStillSpan& span : g.still_spans) {
     py::dict st;
-    st["first_sample"] = g.still_spans[i].first_sample;
-    st["last_sample"] = g.still_spans[i].last_sample;
-    st["mean_raw"] = Vec3(g.still_mean_raw[i]);
-    st["turned_outside_deg"] = g.still_spans[i].turned_outside_deg;
+    st["first_sample"] = span.first_sample;
+    st["last_sample"] = span.last_sample;
+    st["mean_raw"] = Vec3(span.mean_raw);
+    st["turned_outside_deg"] = span.turned_outside_deg;
     stills.append(st);
   }
   d["stills"] = stills;

@@ -134,6 +134,7 @@ struct GyroRotation {
 /// still rate is averaged over, and the turns integrated from and to.
 struct GyroStillSpan {
   std::size_t first_sample = 0, last_sample = 0;  ///< inclusive
+  Vec3 mean_raw = Vec3::Zero();                   ///< the mean raw rate over them
   /// The angle the calibrated gyro turned through inside the accelerometer's still interval but
   /// outside this span [deg]: the slow ends of the turns the accelerometer hardly sees (small),
   /// a turn about the vertical it cannot see, or the gyro's stream lagging or leading the
@@ -166,7 +167,6 @@ struct GyroCalibration {
   /// applied (see the file comment); empty without degrees of freedom.
   Eigen::MatrixXd covariance;
   Vec3 noise_sigma_raw = Vec3::Zero();  ///< white noise of one rate sample, pooled over the stills
-  std::vector<Vec3> still_mean_raw;     ///< each position's mean raw rate, over its span
   std::vector<GyroStillSpan> still_spans;     ///< per position (FindGyroStillRuns)
   std::optional<GyroTimeOffset> time_offset;  ///< none with fewer than 3 turns
   std::vector<GyroRotation> rotations;

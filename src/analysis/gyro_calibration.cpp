@@ -712,7 +712,6 @@ GyroCalibration CalibrateGyro(const RawLog& accel, const RawLog& gyro,
   result.still_scatter_ratio = f.still_ratio;
   result.rotation_scatter_ratio = f.turn_ratio;
   result.accel_scatter_ratio = f.accel_ratio;
-  for (const GyroStill& s : data.stills) result.still_mean_raw.push_back(s.mean_raw);
   result.rotations = built.rotations;
   std::vector<double> errors;
   for (std::size_t k = 0; k < f.data.motions.size(); ++k) {
@@ -808,6 +807,7 @@ GyroCalibration CalibrateGyro(const RawLog& accel, const RawLog& gyro,
     GyroStillSpan span;
     span.first_sample = run.begin;
     span.last_sample = run.end - 1;
+    span.mean_raw = data.stills[i].mean_raw;
     const Vec3 f0 = accel_cal.gravity * f.solution.directions[i];
     for (const auto& [a, b] :
          {std::pair{iv.begin, run.begin}, std::pair{run.end - 1, iv.end - 1}}) {

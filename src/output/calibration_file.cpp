@@ -240,12 +240,12 @@ ordered_json GyroscopeSection(const GyroCalibration& g, const CalibrationFileInf
                   {"rotation_scatter_ratio", g.rotation_scatter_ratio},
                   {"accelerometer_scatter_ratio", g.accel_scatter_ratio}};
   ordered_json stills = ordered_json::array();
-  for (std::size_t i = 0; i < g.still_mean_raw.size(); ++i) {
+  for (std::size_t i = 0; i < g.still_spans.size(); ++i) {
     const GyroStillSpan& span = g.still_spans[i];
     stills.push_back({{"position", i + 1},
                       {"first_sample", span.first_sample},
                       {"last_sample", span.last_sample},
-                      {"mean_raw", ToJson(g.still_mean_raw[i])},
+                      {"mean_raw", ToJson(span.mean_raw)},
                       {"turned_outside_deg", span.turned_outside_deg}});
   }
   doc["stills"] = stills;

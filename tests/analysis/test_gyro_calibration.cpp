@@ -93,7 +93,7 @@ TEST(GyroCalibration, ImuTkBaselineOnXsensIsTheIssuesPrototype) {
   // hostile test).
   const Vec3 sigma_mean = g.noise_sigma_raw / std::sqrt(5199.0);
   for (int a = 0; a < 3; ++a) {
-    EXPECT_LT(std::abs(g.params.bias(a) - g.still_mean_raw[0](a)), 1e-3) << a;
+    EXPECT_LT(std::abs(g.params.bias(a) - g.still_spans[0].mean_raw(a)), 1e-3) << a;
     EXPECT_NEAR(std::sqrt(g.covariance(4 * a + 3, 4 * a + 3)), sigma_mean(a), 1e-9) << a;
   }
   EXPECT_GT(g.heldout_rms_deg, 3 * Calibrated(Xsens(), {}).heldout_rms_deg);

@@ -358,6 +358,7 @@ internal::LeastSquaresOptions FitOptions(int threads) {
   ls.function_tolerance = 1e-10;
   ls.threads = threads;
   ls.linearize_trials = true;
+  ls.keep_blocks = true;  // the held-out fits and leverages at the solution evaluate nothing again
   return ls;
 }
 
@@ -393,47 +394,44 @@ bool Determined(const GyroParameters& gyro) {
   return std::isfinite(det) && det != 0 && gyro.bias.allFinite() && gyro.G.allFinite();
 }
 
-double AngleError(const GyroFitData& data, const GyroMotion& m, const GyroParameters& gyro,
-                  const std::vector<Vec3>& directions) {
-  if (!Determined(gyro)) return std::nan("");
+// Turn k under `gyro` and `directions`, from one integration of its rates.
+struct TurnCheck {
+  double error = 0;   // the angle [rad] between the direction it predicts for c_to and c_to
+  double turned = 0;  // the angle of its rotation [rad]
+  // ‖r‖² of its whitened residual (its weight, the turns' scatter ratio): under a fit without
+  // it, about χ² with 2 degrees of freedom for a turn like the others.
+  double chi2 = 0;
+};
+
+TurnCheck CheckTurn(const GyroFitData& data, std::size_t k, const GyroParameters& gyro,
+                    const std::vector<Vec3>& directions) {
+  if (!Determined(gyro)) return {std::nan(""), std::nan(""), std::nan("")};
+  const GyroMotion& m = data.motions[k];
   const Mat33 R = IntegrateCalibratedRate(gyro, data.model, m.t_s, m.raw, m.f, data.rule);
   const Vec3 v = R.transpose() * directions[m.from];
   const Vec3& c = directions[m.to];
-  return std::atan2(v.cross(c).norm(), v.dot(c));
+  return {std::atan2(v.cross(c).norm(), v.dot(c)), so3::Log(R).norm(),
+          internal::RotationResidual(data.weights[k], R, directions[m.from], c).squaredNorm() /
+              (data.motion_scale * data.motion_scale)};
 }
 
 // Scatter ratio sqrt(χ²/n) of the stills and of the turns under the sample noise (data's
-// weights), at `gyro` and `directions`.
-std::pair<double, double> ScatterRatios(const GyroFitData& data, const GyroParameters& gyro,
-                                        const std::vector<Vec3>& directions) {
-  double stills = 0, turns = 0;
-  for (std::size_t k = 0; k < data.stills.size(); ++k) {
-    const GyroStill& st = data.stills[k];
-    stills +=
-        st.sigma_mean_raw.cwiseInverse()
-            .cwiseProduct(st.mean_raw - internal::StillRate(data, gyro, directions[k], st.f.norm()))
-            .squaredNorm();
+// weights), at the two-stage fit whose summary kept its blocks: the stills', then the turns'.
+std::pair<double, double> ScatterRatios(const GyroFitData& data,
+                                        const internal::LeastSquaresSummary& solution) {
+  const std::size_t stills = data.stills.size(), turns = data.motions.size();
+  if (solution.block_residuals.size() != stills + turns) {
+    throw std::logic_error("ScatterRatios: the fit's blocks were not kept");
   }
-  for (std::size_t k = 0; k < data.motions.size(); ++k) {
-    const GyroMotion& m = data.motions[k];
-    turns += internal::MotionResidual(data, m, data.weights[k], gyro, directions[m.from],
-                                      directions[m.to])
-                 .squaredNorm();
+  double chi2_stills = 0, chi2_turns = 0;
+  for (std::size_t k = 0; k < stills; ++k) {
+    chi2_stills += solution.block_residuals[k].squaredNorm();
   }
-  return {std::sqrt(stills / (3.0 * static_cast<double>(data.stills.size()))),
-          std::sqrt(turns / (2.0 * static_cast<double>(data.motions.size())))};
-}
-
-// ‖r‖² of turn k's whitened residual (its weight, the turns' scatter ratio) under a fit without
-// it: about χ² with 2 degrees of freedom for a turn like the others.
-double HeldOutChi2(const GyroFitData& data, std::size_t k, const GyroParameters& gyro,
-                   const std::vector<Vec3>& directions) {
-  const GyroMotion& m = data.motions[k];
-  if (!Determined(gyro)) return std::nan("");
-  return internal::MotionResidual(data, m, data.weights[k], gyro, directions[m.from],
-                                  directions[m.to])
-             .squaredNorm() /
-         (data.motion_scale * data.motion_scale);
+  for (std::size_t k = 0; k < turns; ++k) {
+    chi2_turns += solution.block_residuals[stills + k].squaredNorm();
+  }
+  return {data.still_scale * std::sqrt(chi2_stills / (3.0 * static_cast<double>(stills))),
+          data.motion_scale * std::sqrt(chi2_turns / (2.0 * static_cast<double>(turns)))};
 }
 
 struct ModelFit {
@@ -472,7 +470,7 @@ ModelFit FitModel(GyroFitData data, GyroModelKind kind, const std::vector<Positi
   // above 1).
   const internal::GyroFit two = internal::FitGyro(data, start, FitOptions(options.threads));
   RequireConverged(two.summary);
-  const auto [still_ratio, turn_ratio] = ScatterRatios(data, two.params, data.directions);
+  const auto [still_ratio, turn_ratio] = ScatterRatios(data, two.summary);
   out.still_ratio = still_ratio;
   out.turn_ratio = turn_ratio;
   data.still_scale = std::max(1.0, still_ratio);
@@ -527,15 +525,15 @@ ModelFit FitModel(GyroFitData data, GyroModelKind kind, const std::vector<Positi
         const internal::ImuJointFit held =
             internal::FitImuJoint(without, fit.accel, fit.gyro, FitOptions(options.threads));
         RequireConverged(held.summary);
-        out.heldout.push_back(AngleError(data, data.motions[k], held.gyro, held.directions));
-        out.heldout_chi2.push_back(HeldOutChi2(data, k, held.gyro, held.directions));
+        const TurnCheck check = CheckTurn(data, k, held.gyro, held.directions);
+        out.heldout.push_back(check.error);
+        out.heldout_chi2.push_back(check.chi2);
       }
     } else if (options.validate) {
       for (const internal::ImuJointFit& held : internal::HeldOutMotionFits(joint, fit)) {
-        const GyroMotion& m = data.motions[out.heldout.size()];
-        out.heldout.push_back(AngleError(data, m, held.gyro, held.directions));
-        out.heldout_chi2.push_back(
-            HeldOutChi2(data, out.heldout.size() - 1, held.gyro, held.directions));
+        const TurnCheck check = CheckTurn(data, out.heldout.size(), held.gyro, held.directions);
+        out.heldout.push_back(check.error);
+        out.heldout_chi2.push_back(check.chi2);
       }
     }
     s.gyro = fit.gyro;
@@ -554,16 +552,16 @@ ModelFit FitModel(GyroFitData data, GyroModelKind kind, const std::vector<Positi
         const internal::GyroFit held =
             internal::FitGyro(without, fit.params, FitOptions(options.threads));
         RequireConverged(held.summary);
-        out.heldout.push_back(AngleError(data, data.motions[k], held.params, data.directions));
-        out.heldout_chi2.push_back(HeldOutChi2(data, k, held.params, data.directions));
+        const TurnCheck check = CheckTurn(data, k, held.params, data.directions);
+        out.heldout.push_back(check.error);
+        out.heldout_chi2.push_back(check.chi2);
       }
     } else if (options.validate) {
       for (const GyroParameters& held :
-           internal::HeldOutMotionFits(data, fit.params, &fit.summary.information)) {
-        const GyroMotion& m = data.motions[out.heldout.size()];
-        out.heldout.push_back(AngleError(data, m, held, data.directions));
-        out.heldout_chi2.push_back(
-            HeldOutChi2(data, out.heldout.size() - 1, held, data.directions));
+           internal::HeldOutMotionFits(data, fit.params, &fit.summary)) {
+        const TurnCheck check = CheckTurn(data, out.heldout.size(), held, data.directions);
+        out.heldout.push_back(check.error);
+        out.heldout_chi2.push_back(check.chi2);
       }
     }
     s.gyro = fit.params;
@@ -715,12 +713,10 @@ GyroCalibration CalibrateGyro(const RawLog& accel, const RawLog& gyro,
   result.rotations = built.rotations;
   std::vector<double> errors;
   for (std::size_t k = 0; k < f.data.motions.size(); ++k) {
-    const GyroMotion& m = f.data.motions[k];
-    errors.push_back(AngleError(f.data, m, f.solution.gyro, f.solution.directions));
+    const TurnCheck check = CheckTurn(f.data, k, f.solution.gyro, f.solution.directions);
+    errors.push_back(check.error);
     result.rotations[k].residual_deg = errors.back() * kRadToDeg;
-    const Mat33 R =
-        IntegrateCalibratedRate(f.solution.gyro, f.kind, m.t_s, m.raw, m.f, f.data.rule);
-    result.rotations[k].angle_deg = so3::Log(R).norm() * kRadToDeg;
+    result.rotations[k].angle_deg = check.turned * kRadToDeg;
     if (!f.heldout.empty()) {
       // A turn that disagrees with the others (a bump during it, a slip of the hand): its held-out
       // χ²₂ beyond the level a turn like the others passes with probability 1 % / K (Bonferroni

@@ -54,6 +54,11 @@ Eigen::Vector2d MotionResidual(const GyroFitData& data, const GyroMotion& m,
   return W * v.cross(c_j);
 }
 
+Eigen::Vector2d RotationResidual(const MotionWeight& weight, const Mat33& R, const Vec3& c_i,
+                                 const Vec3& c_j) {
+  return weight.L * weight.B.transpose() * Vec3(R.transpose() * c_i).cross(c_j);
+}
+
 double MotionAngleError(const GyroFitData& data, const GyroMotion& m,
                         const GyroParameters& params) {
   const Mat33 R = IntegrateCalibratedRate(params, data.model, m.t_s, m.raw, m.f, data.rule);
@@ -178,7 +183,7 @@ GyroFit FitGyro(const GyroFitData& data, const GyroParameters& start,
 }
 
 std::vector<GyroParameters> HeldOutMotionFits(const GyroFitData& data, const GyroParameters& params,
-                                              const Eigen::MatrixXd* information) {
+                                              const LeastSquaresSummary* solution) {
   const TwoStageProblem problem(data);
   LeastSquaresState state;
   state.x = Pack(params, data.model);
@@ -188,7 +193,7 @@ std::vector<GyroParameters> HeldOutMotionFits(const GyroFitData& data, const Gyr
     blocks.push_back(static_cast<int>(data.stills.size() + k));
   }
   std::vector<GyroParameters> out;
-  for (const Eigen::VectorXd& x : LeaveOneBlockOut(problem, state, blocks, information)) {
+  for (const Eigen::VectorXd& x : LeaveOneBlockOut(problem, state, blocks, solution)) {
     out.push_back(UnpackGyro(x, data.model));
   }
   return out;

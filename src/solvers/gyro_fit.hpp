@@ -90,6 +90,10 @@ Eigen::Vector2d MotionResidual(const GyroFitData& data, const GyroMotion& m,
                                const Vec3& c_i, const Vec3& c_j, Eigen::MatrixXd* J_theta = nullptr,
                                Eigen::Matrix2d* J_from = nullptr, Eigen::Matrix2d* J_to = nullptr);
 
+/// MotionResidual's r for a rotation R already integrated.
+Eigen::Vector2d RotationResidual(const MotionWeight& weight, const Mat33& R, const Vec3& c_i,
+                                 const Vec3& c_j);
+
 /// The angle [rad] between the direction the motion predicts for position `to` and c_to.
 double MotionAngleError(const GyroFitData& data, const GyroMotion& m, const GyroParameters& params);
 
@@ -111,8 +115,8 @@ GyroFit FitGyro(const GyroFitData& data, const GyroParameters& start,
 /// For each motion k, the parameters of the fit without it, to first order from the converged
 /// fit `params`: one Gauss-Newton step of the problem without block k, δ_k = S_k⁻¹ J_kᵀ r_k with
 /// S_k = S − J_kᵀ J_k (LeaveOneBlockOut, least_squares.hpp).
-/// `information`: the fit's LeastSquaresSummary::information, when at hand.
+/// `solution`: the fit's summary, when at hand (its information and kept blocks are used).
 std::vector<GyroParameters> HeldOutMotionFits(const GyroFitData& data, const GyroParameters& params,
-                                              const Eigen::MatrixXd* information = nullptr);
+                                              const LeastSquaresSummary* solution = nullptr);
 
 }  // namespace accelcal::internal

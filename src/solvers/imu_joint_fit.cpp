@@ -199,9 +199,8 @@ std::vector<ImuJointFit> HeldOutFits(const ImuJointData& data, const ImuJointFit
     for (int k = 0; k < m; ++k) blocks.push_back(k);
   }
   std::vector<ImuJointFit> out;
-  const Eigen::MatrixXd* information =
-      fit.summary.information.rows() > 0 ? &fit.summary.information : nullptr;
-  for (const Eigen::VectorXd& x : LeaveOneBlockOut(problem, state, blocks, information)) {
+  const LeastSquaresSummary* solution = fit.summary.information.rows() > 0 ? &fit.summary : nullptr;
+  for (const Eigen::VectorXd& x : LeaveOneBlockOut(problem, state, blocks, solution)) {
     out.push_back(FromState(data, problem, x));
   }
   return out;
@@ -220,7 +219,7 @@ std::vector<ImuJointFit> HeldOutPositionFits(const ImuJointData& data, const Imu
 GroupCosts JointGroupRedundancy(const ImuJointData& data, const ImuJointFit& fit) {
   const JointProblem problem(data);
   const LeastSquaresState state = StateAt(data, problem, fit);
-  const std::vector<double> h = BlockLeverages(problem, state, fit.summary.information);
+  const std::vector<double> h = BlockLeverages(problem, state, fit.summary);
   const std::size_t m = data.accel_means.size();
   GroupCosts r;
   for (std::size_t k = 0; k < m; ++k) {

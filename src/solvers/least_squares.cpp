@@ -58,6 +58,22 @@ bool EvaluateBlocks(const LeastSquaresProblem& problem, const LeastSquaresState&
   return std::all_of(ok.begin(), ok.end(), [](char v) { return v != 0; });
 }
 
+// A block's Jacobian on its nonzero columns only (a turn touches the gyroscope's parameters and
+// two directions of many): J = J_c E_cᵀ.
+struct SparseColumns {
+  std::vector<Eigen::Index> cols;
+  MatrixXd J_c;
+  explicit SparseColumns(const MatrixXd& J) {
+    for (Eigen::Index c = 0; c < J.cols(); ++c) {
+      if (!J.col(c).isZero(0)) cols.push_back(c);
+    }
+    J_c.resize(J.rows(), static_cast<Eigen::Index>(cols.size()));
+    for (std::size_t c = 0; c < cols.size(); ++c) {
+      J_c.col(static_cast<Eigen::Index>(c)) = J.col(cols[c]);
+    }
+  }
+};
+
 bool Linearize(const LeastSquaresProblem& problem, const LeastSquaresState& state,
                Linearization* lin, int threads) {
   const int n = problem.GlobalSize(), m = problem.NumBlocks();
@@ -73,18 +89,14 @@ bool Linearize(const LeastSquaresProblem& problem, const LeastSquaresState& stat
     if (!lin->r[k].allFinite() || !lin->J_x[k].allFinite()) return false;
     lin->cost += lin->r[k].squaredNorm();
     const MatrixXd& J = lin->J_x[k];
-    // A block that touches few of the global parameters (a turn: the gyroscope's and two
-    // directions of many) adds to A through its nonzero columns only.
-    std::vector<Eigen::Index> cols;
-    for (Eigen::Index c = 0; c < J.cols(); ++c) {
-      if (!J.col(c).isZero(0)) cols.push_back(c);
-    }
+    // A block that touches few of the global parameters adds to A through its nonzero columns
+    // only.
+    const SparseColumns sparse(J);
+    const std::vector<Eigen::Index>& cols = sparse.cols;
     if (J.rows() > 0 && 4 * cols.size() < static_cast<std::size_t>(n)) {
       const auto nc = static_cast<Eigen::Index>(cols.size());
-      MatrixXd Jc(J.rows(), nc);
-      for (Eigen::Index c = 0; c < nc; ++c) Jc.col(c) = J.col(cols[static_cast<std::size_t>(c)]);
-      const MatrixXd Ac = Jc.transpose() * Jc;
-      const VectorXd gc = Jc.transpose() * lin->r[k];
+      const MatrixXd Ac = sparse.J_c.transpose() * sparse.J_c;
+      const VectorXd gc = sparse.J_c.transpose() * lin->r[k];
       for (Eigen::Index a = 0; a < nc; ++a) {
         const Eigen::Index i = cols[static_cast<std::size_t>(a)];
         lin->gx(i) += gc(a);
@@ -123,25 +135,29 @@ double Cost(const LeastSquaresProblem& problem, const LeastSquaresState& state, 
 // The reduced system at a damping, factorised.
 struct ReducedSolve {
   bool ok = false;
-  std::string failure;  // why not
-  int weakest = -1;     // global parameter most in the null direction
-  double rcond = 0;
-  VectorXd scale;  // Jacobi scaling 1/√S_jj
-  Eigen::SelfAdjointEigenSolver<MatrixXd> eig;
+  std::string failure;          // why not
+  int weakest = -1;             // global parameter most in the null direction
+  double rcond = 0;             // min/max eigenvalue of N, or (a step's check) a lower bound on it
+  VectorXd scale;               // Jacobi scaling 1/√S_jj
+  Eigen::LLT<MatrixXd> llt;     // of N = diag(scale) S diag(scale)
   std::vector<MatrixXd> D_inv;  // (D_kλ)⁻¹
   MatrixXd S;
   // S⁻¹ v
   VectorXd Solve(const VectorXd& v) const {
-    return scale.cwiseProduct(eig.eigenvectors() * eig.eigenvalues().cwiseInverse().asDiagonal() *
-                              eig.eigenvectors().transpose() * scale.cwiseProduct(v));
+    return scale.cwiseProduct(llt.solve(scale.cwiseProduct(v)));
   }
   MatrixXd Inverse() const {
-    return scale.asDiagonal() * eig.eigenvectors() * eig.eigenvalues().cwiseInverse().asDiagonal() *
-           eig.eigenvectors().transpose() * scale.asDiagonal();
+    const auto n = scale.size();
+    return scale.asDiagonal() * llt.solve(MatrixXd::Identity(n, n)) * scale.asDiagonal();
   }
 };
 
-void Reduce(const Linearization& lin, double lambda, double min_rcond, ReducedSolve* out) {
+// How Reduce judges the reduced matrix's condition: a step needs only to know that it is above
+// the threshold; the solution's summary states it.
+enum class Condition { kBoundIsEnough, kExact };
+
+void Reduce(const Linearization& lin, double lambda, double min_rcond, Condition condition,
+            ReducedSolve* out) {
   const auto m = static_cast<int>(lin.r.size());
   out->ok = false;
   out->S = lin.A;
@@ -176,11 +192,28 @@ void Reduce(const Linearization& lin, double lambda, double min_rcond, ReducedSo
   }
   out->scale = diagonal.cwiseSqrt().cwiseInverse();
   const MatrixXd N = out->scale.asDiagonal() * out->S * out->scale.asDiagonal();
-  out->eig.compute(N);
-  const VectorXd& ev = out->eig.eigenvalues();  // ascending
+  // N's reciprocal condition λ_min/λ_max is at least 1 / (‖N‖_∞ tr N⁻¹): λ_max is bounded by
+  // any induced norm, and 1/λ_min by the sum of N⁻¹'s eigenvalues, tr N⁻¹ = ‖L⁻¹‖²_F for N = LLᵀ.
+  // When that bound clears the threshold, the Cholesky factor is all a step needs (with L⁻¹,
+  // about a tenth of the work of the eigen-decomposition it replaces). Otherwise, and for the
+  // solution's summary, the eigenvalues; their vectors only to name the weakest parameter.
+  out->llt.compute(N);
+  const bool factored = out->llt.info() == Eigen::Success;
+  if (factored && condition == Condition::kBoundIsEnough) {
+    const MatrixXd L_inverse = out->llt.matrixL().solve(MatrixXd::Identity(n, n));
+    const double bound = 1.0 / (N.cwiseAbs().rowwise().sum().maxCoeff() * L_inverse.squaredNorm());
+    if (bound > min_rcond) {
+      out->rcond = bound;
+      out->ok = true;
+      return;
+    }
+  }
+  const Eigen::SelfAdjointEigenSolver<MatrixXd> values(N, Eigen::EigenvaluesOnly);
+  const VectorXd& ev = values.eigenvalues();  // ascending
   out->rcond = ev(0) / ev(n - 1);
-  if (!(out->rcond > min_rcond)) {
-    out->eig.eigenvectors().col(0).cwiseAbs().maxCoeff(&out->weakest);
+  if (!(out->rcond > min_rcond) || !factored) {
+    const Eigen::SelfAdjointEigenSolver<MatrixXd> eig(N);
+    eig.eigenvectors().col(0).cwiseAbs().maxCoeff(&out->weakest);
     out->failure = internal::Format(
         "the reduced normal matrix is singular: reciprocal condition %.3g <= %.0e (min/max "
         "eigenvalue, Jacobi-scaled), weakest global parameter %d",
@@ -278,7 +311,7 @@ LeastSquaresSummary SolveLeastSquares(const LeastSquaresProblem& problem,
                                                      lin.cost, options.zero_residual_cost);
       break;
     }
-    Reduce(lin, lambda, options.min_reciprocal_condition, &reduced);
+    Reduce(lin, lambda, options.min_reciprocal_condition, Condition::kBoundIsEnough, &reduced);
     if (!reduced.ok) {
       summary.termination = TerminationType::kNoProgress;
       summary.rank_deficient = true;
@@ -357,7 +390,7 @@ LeastSquaresSummary SolveLeastSquares(const LeastSquaresProblem& problem,
   summary.sigma2 = summary.degrees_of_freedom > 0
                        ? lin.cost / static_cast<double>(summary.degrees_of_freedom)
                        : 0.0;
-  Reduce(lin, 0.0, options.min_reciprocal_condition, &reduced);
+  Reduce(lin, 0.0, options.min_reciprocal_condition, Condition::kExact, &reduced);
   summary.information = reduced.S;
   summary.reciprocal_condition = reduced.rcond;
   if (!reduced.ok) {
@@ -366,68 +399,88 @@ LeastSquaresSummary SolveLeastSquares(const LeastSquaresProblem& problem,
       summary.termination = TerminationType::kNoProgress;
       summary.termination_message = reduced.failure;
     }
-  } else if (options.compute_covariance && problem.GlobalSize() > 0) {
-    summary.covariance = summary.sigma2 * reduced.Inverse();
+  } else if ((options.compute_covariance || options.keep_blocks) && problem.GlobalSize() > 0) {
+    summary.information_inverse = reduced.Inverse();
+    if (options.compute_covariance)
+      summary.covariance = summary.sigma2 * summary.information_inverse;
+  }
+  if (options.keep_blocks) {
+    summary.block_residuals = std::move(lin.r);
+    summary.block_jacobians = std::move(lin.J_x);
   }
   return summary;
 }
 
 namespace {
 
-// S⁻¹ through S's Jacobi scaling, S = D Ŝ D with D = diag(S)^(1/2), so that parameters of any unit
-// factor alike: S⁻¹ v = D⁻¹ Ŝ⁻¹ D⁻¹ v. Throws std::invalid_argument (naming `who`) when S is
-// not positive definite.
-class ScaledInverse {
- public:
-  ScaledInverse(const MatrixXd& S, const char* who) {
-    const VectorXd d = S.diagonal().cwiseMax(0.0).cwiseSqrt();
-    if (!(d.minCoeff() > 0)) throw std::invalid_argument(std::string(who) + ": S is singular");
-    d_inverse_ = d.cwiseInverse();
-    ldlt_.compute(d_inverse_.asDiagonal() * S * d_inverse_.asDiagonal());
-    if (ldlt_.info() != Eigen::Success || !(ldlt_.vectorD().minCoeff() > 0)) {
-      throw std::invalid_argument(std::string(who) + ": S is singular");
+// S⁻¹, formed once through S's Jacobi scaling, S = D Ŝ D with D = diag(S)^(1/2), so that
+// parameters of any unit factor alike: S⁻¹ = D⁻¹ Ŝ⁻¹ D⁻¹. Throws std::invalid_argument (naming
+// `who`) when S is not positive definite.
+MatrixXd ScaledInverse(const MatrixXd& S, const char* who) {
+  const VectorXd d = S.diagonal().cwiseMax(0.0).cwiseSqrt();
+  if (!(d.minCoeff() > 0)) throw std::invalid_argument(std::string(who) + ": S is singular");
+  const VectorXd d_inverse = d.cwiseInverse();
+  const Eigen::LDLT<MatrixXd> ldlt(d_inverse.asDiagonal() * S * d_inverse.asDiagonal());
+  if (ldlt.info() != Eigen::Success || !(ldlt.vectorD().minCoeff() > 0)) {
+    throw std::invalid_argument(std::string(who) + ": S is singular");
+  }
+  return d_inverse.asDiagonal() * ldlt.solve(MatrixXd::Identity(S.rows(), S.cols())) *
+         d_inverse.asDiagonal();
+}
+
+// Each block's residual and Jacobian at `state` (`who` names the caller in what it throws): the
+// solution's when it kept them, else evaluated.
+void BlocksAt(const LeastSquaresProblem& problem, const LeastSquaresState& state,
+              const LeastSquaresSummary* solution, const char* who, std::vector<VectorXd>* r,
+              std::vector<MatrixXd>* J) {
+  const auto m = static_cast<std::size_t>(problem.NumBlocks());
+  for (int b = 0; b < problem.NumBlocks(); ++b) {
+    if (problem.LocalSize(b) != 0) {
+      throw std::invalid_argument(std::string(who) + ": a block with its own parameters");
     }
   }
-  MatrixXd Solve(const MatrixXd& v) const {
-    return d_inverse_.asDiagonal() * ldlt_.solve(d_inverse_.asDiagonal() * v);
+  if (solution != nullptr && solution->block_jacobians.size() == m &&
+      solution->block_residuals.size() == m) {
+    *r = solution->block_residuals;
+    *J = solution->block_jacobians;
+    return;
   }
-
- private:
-  VectorXd d_inverse_;
-  Eigen::LDLT<MatrixXd> ldlt_;
-};
+  r->resize(m);
+  J->resize(m);
+  for (int b = 0; b < problem.NumBlocks(); ++b) {
+    const auto k = static_cast<std::size_t>(b);
+    if (!problem.Evaluate(b, state.x, state.y[k], &(*r)[k], &(*J)[k], nullptr)) {
+      throw std::invalid_argument(Format("%s: block %d cannot be evaluated", who, b));
+    }
+  }
+}
 
 }  // namespace
 
 std::vector<VectorXd> LeaveOneBlockOut(const LeastSquaresProblem& problem,
                                        const LeastSquaresState& state,
                                        const std::vector<int>& blocks,
-                                       const MatrixXd* information) {
+                                       const LeastSquaresSummary* solution) {
   const int n = problem.GlobalSize();
-  std::vector<MatrixXd> J(static_cast<std::size_t>(problem.NumBlocks()));
-  std::vector<VectorXd> r(J.size());
-  MatrixXd S = MatrixXd::Zero(n, n);
-  for (int b = 0; b < problem.NumBlocks(); ++b) {
-    const auto k = static_cast<std::size_t>(b);
-    if (problem.LocalSize(b) != 0) {
-      throw std::invalid_argument("LeaveOneBlockOut: a block with its own parameters");
-    }
-    if (!problem.Evaluate(b, state.x, state.y[k], &r[k], &J[k], nullptr)) {
-      throw std::invalid_argument(Format("LeaveOneBlockOut: block %d cannot be evaluated", b));
-    }
-    if (information == nullptr && J[k].rows() > 0) {
-      S.selfadjointView<Eigen::Lower>().rankUpdate(J[k].transpose());
-    }
-  }
-  if (information != nullptr) {
-    if (information->rows() != n || information->cols() != n) {
+  std::vector<MatrixXd> J;
+  std::vector<VectorXd> r;
+  BlocksAt(problem, state, solution, "LeaveOneBlockOut", &r, &J);
+  MatrixXd S;
+  if (solution != nullptr) {
+    if (solution->information.rows() != n || solution->information.cols() != n) {
       throw std::invalid_argument("LeaveOneBlockOut: the information matrix is not n x n");
     }
-    S = *information;
+    S = solution->information;
   } else {
+    S = MatrixXd::Zero(n, n);
+    for (const MatrixXd& Jk : J) {
+      if (Jk.rows() > 0) S.selfadjointView<Eigen::Lower>().rankUpdate(Jk.transpose());
+    }
     S.triangularView<Eigen::StrictlyUpper>() = S.transpose();
   }
-  const ScaledInverse S_inverse(S, "LeaveOneBlockOut");
+  const MatrixXd S_inverse = solution != nullptr && solution->information_inverse.rows() == n
+                                 ? solution->information_inverse
+                                 : ScaledInverse(S, "LeaveOneBlockOut");
   std::vector<VectorXd> out;
   for (int b : blocks) {
     const auto k = static_cast<std::size_t>(b);
@@ -436,7 +489,12 @@ std::vector<VectorXd> LeaveOneBlockOut(const LeastSquaresProblem& problem,
       continue;
     }
     // δ = S_k⁻¹ J_kᵀ r_k = U M⁻¹ r_k with U = S⁻¹ J_kᵀ, M = I − J_k U (Woodbury).
-    const MatrixXd U = S_inverse.Solve(J[k].transpose());
+    const SparseColumns Jk(J[k]);
+    MatrixXd U = MatrixXd::Zero(n, J[k].rows());
+    for (std::size_t c = 0; c < Jk.cols.size(); ++c) {
+      U.noalias() +=
+          S_inverse.col(Jk.cols[c]) * Jk.J_c.col(static_cast<Eigen::Index>(c)).transpose();
+    }
     const MatrixXd M = MatrixXd::Identity(J[k].rows(), J[k].rows()) - J[k] * U;
     const Eigen::PartialPivLU<MatrixXd> lu(M);
     if (!(std::abs(lu.determinant()) > 1e-12)) {
@@ -450,25 +508,34 @@ std::vector<VectorXd> LeaveOneBlockOut(const LeastSquaresProblem& problem,
 }
 
 std::vector<double> BlockLeverages(const LeastSquaresProblem& problem,
-                                   const LeastSquaresState& state, const MatrixXd& information) {
+                                   const LeastSquaresState& state,
+                                   const LeastSquaresSummary& solution) {
   const int n = problem.GlobalSize();
+  const MatrixXd& information = solution.information;
   if (information.rows() != n || information.cols() != n) {
     throw std::invalid_argument("BlockLeverages: the information matrix is not n x n");
   }
-  const ScaledInverse S_inverse(information, "BlockLeverages");
-  std::vector<double> leverage(static_cast<std::size_t>(problem.NumBlocks()), 0.0);
-  for (int b = 0; b < problem.NumBlocks(); ++b) {
-    const auto k = static_cast<std::size_t>(b);
-    if (problem.LocalSize(b) != 0) {
-      throw std::invalid_argument("BlockLeverages: a block with its own parameters");
-    }
-    VectorXd r;
-    MatrixXd J;
-    if (!problem.Evaluate(b, state.x, state.y[k], &r, &J, nullptr)) {
-      throw std::invalid_argument(Format("BlockLeverages: block %d cannot be evaluated", b));
-    }
+  std::vector<MatrixXd> Js;
+  std::vector<VectorXd> r;
+  BlocksAt(problem, state, &solution, "BlockLeverages", &r, &Js);
+  const MatrixXd S_inverse = solution.information_inverse.rows() == n
+                                 ? solution.information_inverse
+                                 : ScaledInverse(information, "BlockLeverages");
+  std::vector<double> leverage(Js.size(), 0.0);
+  for (std::size_t k = 0; k < Js.size(); ++k) {
+    const MatrixXd& J = Js[k];
     if (J.rows() == 0) continue;
-    leverage[k] = (J * S_inverse.Solve(J.transpose())).trace();
+    // tr(J S⁻¹ Jᵀ) over J's nonzero columns c: tr(J_c (S⁻¹)_cc J_cᵀ).
+    const SparseColumns Jk(J);
+    const auto nc = static_cast<Eigen::Index>(Jk.cols.size());
+    MatrixXd S_cc(nc, nc);
+    for (Eigen::Index a = 0; a < nc; ++a) {
+      for (Eigen::Index c = 0; c < nc; ++c) {
+        S_cc(a, c) =
+            S_inverse(Jk.cols[static_cast<std::size_t>(a)], Jk.cols[static_cast<std::size_t>(c)]);
+      }
+    }
+    leverage[k] = (Jk.J_c * S_cc * Jk.J_c.transpose()).trace();
   }
   return leverage;
 }

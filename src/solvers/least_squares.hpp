@@ -83,6 +83,10 @@ struct LeastSquaresOptions {
   /// the step is taken, one wasted Jacobian when it is not): for expensive blocks whose steps
   /// are mostly taken. The iterates are the same either way.
   bool linearize_trials = false;
+  /// The blocks' residuals and Jacobians at the solution are kept in the summary (for a problem
+  /// without per-item parameters), so that LeaveOneBlockOut and BlockLeverages evaluate nothing
+  /// again.
+  bool keep_blocks = false;
 };
 
 struct LeastSquaresSummary {
@@ -104,6 +108,11 @@ struct LeastSquaresSummary {
   double sigma2 = 0;            ///< σ̂² = F / degrees_of_freedom (0 without any)
   Eigen::MatrixXd covariance;   ///< σ̂² S⁻¹ for x (GlobalSize²), when computed
   Eigen::MatrixXd information;  ///< S = JᵀJ reduced to x, at the solution (λ = 0)
+  /// S⁻¹ (with the covariance or the kept blocks; empty when S is singular).
+  Eigen::MatrixXd information_inverse;
+  /// With LeastSquaresOptions::keep_blocks: each block's r_k and ∂r_k/∂x at the solution.
+  std::vector<Eigen::VectorXd> block_residuals;
+  std::vector<Eigen::MatrixXd> block_jacobians;
   bool converged() const {
     return termination != TerminationType::kMaxIterations &&
            termination != TerminationType::kNoProgress;
@@ -122,20 +131,22 @@ LeastSquaresSummary SolveLeastSquares(const LeastSquaresProblem& problem,
 /// its leverage is 1) gets x filled with NaN, its held-out fit not determined. Throws
 /// std::invalid_argument when the problem has per-item parameters, a block cannot be evaluated,
 /// or S is singular.
-/// `information`, when given, is S at `state` (LeastSquaresSummary::information of the solve
-/// that converged there), so that it is not summed again.
+/// `solution`, when given, is the summary of the solve that converged at `state`: its
+/// information S, and its blocks when kept (LeastSquaresOptions::keep_blocks), are taken instead
+/// of being evaluated again.
 std::vector<Eigen::VectorXd> LeaveOneBlockOut(const LeastSquaresProblem& problem,
                                               const LeastSquaresState& state,
                                               const std::vector<int>& blocks,
-                                              const Eigen::MatrixXd* information = nullptr);
+                                              const LeastSquaresSummary* solution = nullptr);
 
 /// Each block's leverage h_k = tr(J_k S⁻¹ J_kᵀ) at `state`, for a problem without per-item
 /// parameters (S the information matrix, as LeaveOneBlockOut's): the share of the parameters
 /// that block k's residuals pay for. Σ h_k = the number of parameters, and a group G of blocks
 /// has n_G − Σ_G h_k degrees of freedom (its redundancy): E[χ²_G] = n_G − Σ_G h_k under the
-/// model. Throws std::invalid_argument as LeaveOneBlockOut.
+/// model. Throws std::invalid_argument as LeaveOneBlockOut. `solution`: the summary of the solve
+/// that converged at `state`, as LeaveOneBlockOut's (its information is required).
 std::vector<double> BlockLeverages(const LeastSquaresProblem& problem,
                                    const LeastSquaresState& state,
-                                   const Eigen::MatrixXd& information);
+                                   const LeastSquaresSummary& solution);
 
 }  // namespace accelcal::internal

@@ -284,6 +284,38 @@ TEST(LeastSquares, TerminationReasons) {
     EXPECT_NE(s.termination_message.find("singular"), std::string::npos) << s.termination_message;
     EXPECT_TRUE(s.covariance.size() == 0);
   }
+  // Two parameters the data can barely tell apart: S is positive definite (its Cholesky factor
+  // exists) but its reciprocal condition, about ε²/4 = 2.5e-15, is below the threshold 1e-12.
+  // A step's cheap check (a lower bound on it) must not pass it: no step is taken.
+  {
+    class NearTwins : public LeastSquaresProblem {
+     public:
+      int GlobalSize() const override { return 2; }
+      int NumBlocks() const override { return 1; }
+      bool Evaluate(int, const VectorXd& x, const VectorXd&, VectorXd* r, MatrixXd* J,
+                    MatrixXd*) const override {
+        const double e = 1e-7;
+        *r = (VectorXd(2) << x(0) + x(1) - 1, x(0) + (1 + e) * x(1) - 2).finished();
+        if (J != nullptr) *J = (MatrixXd(2, 2) << 1, 1, 1, 1 + e).finished();
+        return true;
+      }
+    };
+    LeastSquaresState state{VectorXd::Zero(2), {}};
+    const LeastSquaresSummary s = SolveLeastSquares(NearTwins(), LeastSquaresOptions(), &state);
+    EXPECT_TRUE(s.rank_deficient);
+    EXPECT_EQ(s.iterations, 0);
+    EXPECT_EQ(state.x, VectorXd::Zero(2));
+    EXPECT_GT(s.reciprocal_condition, 0);
+    EXPECT_LT(s.reciprocal_condition, 1e-12);
+    // With the threshold below it, the same problem is solved exactly (square and regular).
+    LeastSquaresOptions loose;
+    loose.min_reciprocal_condition = 1e-16;
+    loose.zero_residual_cost = 1e-20;
+    LeastSquaresState solved{VectorXd::Zero(2), {}};
+    const LeastSquaresSummary t = SolveLeastSquares(NearTwins(), loose, &solved);
+    EXPECT_FALSE(t.rank_deficient) << t.termination_message;
+    EXPECT_GT(t.iterations, 0);
+  }
 }
 
 }  // namespace
@@ -328,9 +360,18 @@ TEST(LeastSquares, LeaveOneBlockOutIsTheRefitOfALinearProblem) {
   LeastSquaresSummary summary;
   const LeastSquaresState full = Solved(TwoRowLine(), &summary);
   const std::vector<int> blocks = {0, 3, 6};
-  const std::vector<const MatrixXd*> informations = {nullptr, &summary.information};
-  for (const MatrixXd* information : informations) {
-    const std::vector<VectorXd> held = LeaveOneBlockOut(TwoRowLine(), full, blocks, information);
+  LeastSquaresSummary kept;
+  LeastSquaresState state{VectorXd::Zero(2), std::vector<VectorXd>(7)};
+  LeastSquaresOptions options;
+  options.step_tolerance = 1e-13;
+  options.keep_blocks = true;
+  kept = SolveLeastSquares(TwoRowLine(), options, &state);
+  ASSERT_EQ(kept.block_jacobians.size(), 7u);
+  EXPECT_EQ(state.x, full.x);
+  // Evaluated, the solution's information, and its blocks kept: the same held-out fits.
+  const std::vector<const LeastSquaresSummary*> solutions = {nullptr, &summary, &kept};
+  for (const LeastSquaresSummary* solution : solutions) {
+    const std::vector<VectorXd> held = LeaveOneBlockOut(TwoRowLine(), full, blocks, solution);
     for (std::size_t i = 0; i < blocks.size(); ++i) {
       std::vector<bool> used(7, true);
       used[static_cast<std::size_t>(blocks[i])] = false;
@@ -344,7 +385,7 @@ TEST(LeastSquares, LeaveOneBlockOutIsTheRefitOfALinearProblem) {
 TEST(LeastSquares, BlockLeveragesSumToTheParameters) {
   LeastSquaresSummary summary;
   const LeastSquaresState full = Solved(TwoRowLine(), &summary);
-  const std::vector<double> h = BlockLeverages(TwoRowLine(), full, summary.information);
+  const std::vector<double> h = BlockLeverages(TwoRowLine(), full, summary);
   double sum = 0;
   for (double v : h) {
     EXPECT_GT(v, 0);

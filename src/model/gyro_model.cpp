@@ -139,7 +139,8 @@ Mat33 Integrate(const GyroParameters& params, const Mat33& K_inverse,
   const bool jacobian = J_R_theta != nullptr;
   // ∂ω_k/∂θ = −K_g⁻¹ ∂ω_raw/∂θ, whose columns of axis i's group are −K_g⁻¹ e_i u_kᵀ with u_k =
   // (ω_k, 1[, f_k]) (GyroJacobianWrtParameters): each step adds to J rank-one blocks −J_r K_g⁻¹ e_i
-  // ūᵀ Δt.
+  // ūᵀ Δt. K_g⁻¹ is the same at every step, so it is applied once at the end: the steps sum
+  // T_b = Σ A_k e_b ūᵀ Δt (A_k = R_{k+1} J_r(φ_k)), and axis i's block is −Σ_b T_b (K_g⁻¹)_bi.
   using Regressor = Eigen::Matrix<double, 1, PerAxis>;
   const auto rate = [&](std::size_t k, Regressor* u) {
     const Vec3 omega = K_inverse * (raw[k] - params.bias - params.G * f[k]);
@@ -159,7 +160,7 @@ Mat33 Integrate(const GyroParameters& params, const Mat33& K_inverse,
             : Mat33::Zero();
   Mat33 S = Mat33::Zero(), C = Mat33::Zero();  // C: sample k's C_m, so far
   Mat33 R = Mat33::Identity();
-  Eigen::Matrix<double, 3, 3 * PerAxis> J = Eigen::Matrix<double, 3, 3 * PerAxis>::Zero();
+  Eigen::Matrix<double, 3, 3 * PerAxis> T = Eigen::Matrix<double, 3, 3 * PerAxis>::Zero();
   Regressor u_this, u_next;
   Vec3 omega_this = rate(0, jacobian ? &u_this : nullptr);
   for (std::size_t k = 0; k + 1 < t_s.size(); ++k) {
@@ -184,15 +185,24 @@ Mat33 Integrate(const GyroParameters& params, const Mat33& K_inverse,
       // recursion's Exp(φ_k)ᵀ cancels (J_n = R_nᵀ W_n).
       const Regressor u =
           trapezoid ? Regressor(0.5 * dt * (u_this + u_next)) : Regressor(dt * u_this);
-      const Mat33 RJK = R * J_r * K_inverse;
-      for (int i = 0; i < 3; ++i) {
-        J.template middleCols<PerAxis>(i * PerAxis).noalias() -= RJK.col(i) * u;
+      const Mat33 A = R * J_r;
+      for (int b = 0; b < 3; ++b) {
+        T.template middleCols<PerAxis>(b * PerAxis).noalias() += A.col(b) * u;
       }
       u_this = u_next;
     }
     omega_this = omega_next;
   }
-  if (jacobian) *J_R_theta = R.transpose() * J;
+  if (jacobian) {
+    Eigen::Matrix<double, 3, 3 * PerAxis> J;
+    for (int i = 0; i < 3; ++i) {
+      J.template middleCols<PerAxis>(i * PerAxis) =
+          -(K_inverse(0, i) * T.template middleCols<PerAxis>(0) +
+            K_inverse(1, i) * T.template middleCols<PerAxis>(PerAxis) +
+            K_inverse(2, i) * T.template middleCols<PerAxis>(2 * PerAxis));
+    }
+    *J_R_theta = R.transpose() * J;
+  }
   if (noise) {
     S += C * Q * C.transpose();  // the last sample (its step before it)
     *covariance = R.transpose() * S * R;

@@ -2,15 +2,45 @@
 // A quantile of a sample, by partial sorting: the element of rank floor(p n) (0-based), so the
 // median is the upper one of an even count.
 #include <algorithm>
+#include <array>
 #include <cstddef>
+#include <cstdint>
+#include <cstring>
 #include <utility>
 #include <vector>
 
 namespace accelcal::internal {
 
-/// p in [0, 1); `v` non-empty.
+/// An unsigned key in the order of the doubles (not NaN): negative values' bits reversed, the
+/// others' sign bit set.
+inline std::uint64_t OrderKey(double x) {
+  std::uint64_t bits;
+  std::memcpy(&bits, &x, sizeof bits);
+  return (bits >> 63) != 0 ? ~bits : bits | (std::uint64_t{1} << 63);
+}
+
+/// p in [0, 1); `v` non-empty, without NaN.
 inline double Quantile(std::vector<double> v, double p) {
-  const auto at = v.begin() + static_cast<std::ptrdiff_t>(static_cast<double>(v.size()) * p);
+  std::size_t rank = static_cast<std::size_t>(static_cast<double>(v.size()) * p);
+  // A long sample is first narrowed by one counting pass over its keys' top 16 bits (sign,
+  // exponent and 4 bits of mantissa: a sixteenth of an octave) to the bucket that holds the
+  // element of that rank; the partial sort then runs on that bucket only. The element is the same;
+  // std::nth_element alone spends several branchy passes over all of them (on 30 000 window
+  // means, most of the gyroscope's still-span search).
+  constexpr std::size_t kNarrowFrom = 4096;
+  if (v.size() >= kNarrowFrom) {
+    std::vector<std::uint32_t> count(std::size_t{1} << 16, 0);
+    for (double x : v) ++count[OrderKey(x) >> 48];
+    std::size_t below = 0, bucket = 0;
+    while (below + count[bucket] <= rank) below += count[bucket++];
+    std::size_t kept = 0;
+    for (double x : v) {
+      if ((OrderKey(x) >> 48) == bucket) v[kept++] = x;
+    }
+    v.resize(kept);
+    rank -= below;
+  }
+  const auto at = v.begin() + static_cast<std::ptrdiff_t>(rank);
   std::nth_element(v.begin(), at, v.end());
   return *at;
 }

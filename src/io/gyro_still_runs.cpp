@@ -47,17 +47,20 @@ GyroStillRuns FindGyroStillRuns(const std::vector<Vec3>& rates_raw,
   std::vector<Vec3> centre(m);
   for (std::size_t i = 0; i < m; ++i) {
     const StaticInterval& iv = intervals[i];
-    std::vector<double> axis(iv.end - iv.begin);
     for (int a = 0; a < 3; ++a) {
+      std::vector<double> axis(iv.end - iv.begin);
       for (std::size_t k = iv.begin; k < iv.end; ++k) axis[k - iv.begin] = rates_raw[k](a);
-      centre[i](a) = axis.empty() ? 0.0 : Median(axis);
+      centre[i](a) = axis.empty() ? 0.0 : Median(std::move(axis));
     }
   }
   out.runs.assign(m, StaticInterval{});
   std::vector<std::vector<Vec3>> means(m);
+  std::vector<double> sigmas;
+  std::vector<char> moving;
   for (int pass = 0; pass < 3; ++pass) {
     // The windows' deviations: all of them at first, then those inside the runs found.
     std::vector<double> deviation[3];
+    for (std::vector<double>& d : deviation) d.reserve(rates_raw.size());
     for (std::size_t i = 0; i < m; ++i) {
       WindowMeans(rates_raw, intervals[i], w, centre[i], &means[i]);
       const StaticInterval& run = out.runs[i];
@@ -83,19 +86,21 @@ GyroStillRuns FindGyroStillRuns(const std::vector<Vec3>& rates_raw,
       const StaticInterval& iv = intervals[i];
       // Hysteresis: a stretch of consecutive windows beyond kGyroStillThreshold σ is moving
       // when one of them is beyond kGyroMotionThreshold σ.
-      const auto sigmas = [&](const Vec3& d) {
-        return d.cwiseAbs().cwiseQuotient(out.window_sigma_raw).maxCoeff();
-      };
-      std::vector<char> moving(iv.end - iv.begin, 0);
-      for (std::size_t j = 0; j < means[i].size();) {
-        if (!(sigmas(means[i][j]) > kGyroStillThreshold)) {
+      // Each window's largest deviation in σ.
+      sigmas.resize(means[i].size());
+      for (std::size_t j = 0; j < means[i].size(); ++j) {
+        sigmas[j] = means[i][j].cwiseAbs().cwiseQuotient(out.window_sigma_raw).maxCoeff();
+      }
+      moving.assign(iv.end - iv.begin, 0);
+      for (std::size_t j = 0; j < sigmas.size();) {
+        if (!(sigmas[j] > kGyroStillThreshold)) {
           ++j;
           continue;
         }
         std::size_t end = j;
         bool motion = false;
-        while (end < means[i].size() && sigmas(means[i][end]) > kGyroStillThreshold) {
-          motion = motion || sigmas(means[i][end]) > kGyroMotionThreshold;
+        while (end < sigmas.size() && sigmas[end] > kGyroStillThreshold) {
+          motion = motion || sigmas[end] > kGyroMotionThreshold;
           ++end;
         }
         // At the interval's edge it is a turn's end, which the accelerometer took for still

@@ -15,6 +15,7 @@
 #include "accelcal/error.hpp"
 #include "accelcal/model.hpp"
 #include "analysis/gyro_time_offset.hpp"
+#include "core/parallel.hpp"
 #include "core/text_format.hpp"
 #include "io/gyro_still_runs.hpp"
 #include "solvers/gyro_fit.hpp"
@@ -660,11 +661,19 @@ GyroCalibration CalibrateGyro(const RawLog& accel, const RawLog& gyro,
   if (model) {
     fits.push_back(FitModel(data, *model, positions, accel_cal, options, start));
   } else {
-    // The g-sensitive model from the linear one's solution (G = 0): a few steps, where the
-    // closed-form start takes several more.
-    fits.push_back(FitModel(data, GyroModelKind::kLinear, positions, accel_cal, options, start));
-    fits.push_back(FitModel(data, GyroModelKind::kGSensitive, positions, accel_cal, options,
-                            fits[0].solution.gyro));
+    // Both models from the same start, side by side: a thread each when there are two, and the
+    // rest of the threads asked for shared between them for the turns. Each fit is the same bits
+    // on any count; an error is the linear model's first, as in turn.
+    const GyroModelKind kinds[2] = {GyroModelKind::kLinear, GyroModelKind::kGSensitive};
+    const int outer = internal::ThreadCount(options.threads, 2);
+    GyroCalibrationOptions each = options;
+    each.threads = std::max(1, internal::ThreadCount(options.threads, 1 << 20) / outer);
+    std::vector<std::optional<ModelFit>> fitted(2);
+    internal::ParallelFor(2, outer, [&](int i) {
+      fitted[static_cast<std::size_t>(i)] =
+          FitModel(data, kinds[i], positions, accel_cal, each, start);
+    });
+    for (std::optional<ModelFit>& f : fitted) fits.push_back(std::move(*f));
   }
   std::size_t chosen = 0;
   GyroCalibration result;
@@ -830,6 +839,7 @@ GyroCalibration CalibrateGyro(const RawLog& accel, const RawLog& gyro,
   result.summary.termination_message = sum.termination_message;
   result.summary.initial_cost = sum.initial_cost;
   result.summary.final_cost = sum.final_cost;
+
   return result;
 }
 

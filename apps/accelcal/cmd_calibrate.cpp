@@ -7,6 +7,8 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <filesystem>
+#include <future>
 #include <iostream>
 #include <sstream>
 #include <stdexcept>
@@ -253,12 +255,39 @@ GyroCalibrationOptions GyroOptions(const CalibrateArgs& args) {
   return o;
 }
 
-GyroRun RunGyro(const CalibrateArgs& args, const LoadedInput& in, const CalibrationResult& accel) {
+// The gyroscope's log, when it is a regular file of its own, read on a thread of its own while
+// the accelerometer's is loaded and fitted: the same data, and what reading it throws is thrown
+// where it was read before, after the accelerometer's fit (whose errors come first). Standard
+// input, a FIFO or a device is read in turn as before: two readers must not share one.
+class GyroLogAhead {
+ public:
+  explicit GyroLogAhead(const CalibrateArgs& args) {
+    std::error_code error;
+    if (!args.gyro.empty() && args.gyro != "-" && args.gyro != args.input.path &&
+        std::filesystem::is_regular_file(args.gyro, error)) {
+      pending_ = std::async(std::launch::async | std::launch::deferred, [&args] {
+        return ReadGyroLog(args.input, args.gyro, args.gyro_columns, true);
+      });
+    }
+  }
+  // The log, read ahead or now.
+  InputData Take(const CalibrateArgs& args) {
+    if (pending_.valid()) return pending_.get();
+    return ReadGyroLog(args.input, args.gyro, args.gyro_columns, true);
+  }
+
+ private:
+  std::future<InputData> pending_;
+};
+
+GyroRun RunGyro(const CalibrateArgs& args, const LoadedInput& in, const CalibrationResult& accel,
+                GyroLogAhead* ahead = nullptr) {
   const GyroCalibrationOptions options = GyroOptions(args);
   const RawLog& accel_log = TheRawLogForGyro(in);
   GyroRun run;
   run.path = args.gyro.empty() ? args.input.path : args.gyro;
-  run.data = ReadGyroLog(args.input, args.gyro, args.gyro_columns, true);
+  run.data = ahead != nullptr ? ahead->Take(args)
+                              : ReadGyroLog(args.input, args.gyro, args.gyro_columns, true);
   const std::string subject = DataSubject();
   DataSubject() = run.path;  // what CalibrateGyro refuses is the gyroscope's
   run.calibration = CalibrateGyro(accel_log, run.data.raw, in.positions, accel, options);
@@ -545,6 +574,8 @@ int RunCalibrate(const CalibrateArgs& args) {
     quadratic.model = ModelKind::kQuadratic;
     if (auto why = quadratic.Validate()) throw UsageError("--model auto: " + *why);
   }
+  std::optional<GyroLogAhead> gyro_ahead;
+  if (GyroWanted(args)) gyro_ahead.emplace(args);
   const LoadedInput in = LoadInput(args.input);
   const std::vector<Vec3> means = Means(in.positions);
   options.reading_sigmas = SigmasOfMeans(in.positions);  // empty: noise from the residuals
@@ -559,7 +590,7 @@ int RunCalibrate(const CalibrateArgs& args) {
     return kExitNotConverged;
   }
   if (GyroWanted(args)) {
-    const GyroRun gyro = RunGyro(args, in, result);
+    const GyroRun gyro = RunGyro(args, in, result, &*gyro_ahead);
     // The joint fit's accelerometer is the file's: the rotations refined it.
     const CalibrationResult& accel =
         gyro.calibration.accelerometer ? *gyro.calibration.accelerometer : result;

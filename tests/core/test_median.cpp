@@ -46,9 +46,9 @@ TEST(Quantile, IsTheElementOfItsRankInTheSortedSample) {
 
 TEST(Quantile, OrdersSignedZerosAndExtremes) {
   // Keys in the doubles' order across zero, the subnormals and the largest values.
-  const std::vector<double> ordered = {-std::numeric_limits<double>::max(), -1.0,
+  const std::vector<double> ordered = {-std::numeric_limits<double>::max(),        -1.0,
                                        -std::numeric_limits<double>::denorm_min(), 0.0,
-                                       std::numeric_limits<double>::denorm_min(), 1.0,
+                                       std::numeric_limits<double>::denorm_min(),  1.0,
                                        std::numeric_limits<double>::infinity()};
   for (std::size_t k = 1; k < ordered.size(); ++k) {
     EXPECT_LT(OrderKey(ordered[k - 1]), OrderKey(ordered[k])) << k;

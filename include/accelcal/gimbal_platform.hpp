@@ -43,8 +43,8 @@ struct PlatformSummary {
   std::string BriefReport() const;
 };
 
-/// Options of the coarse stage. The stopping rule (kParameterTolerance): the Gauss-Newton step δ
-/// just taken changes no predicted output by more than `step_tolerance` of the signal,
+/// Options of the coarse stage. The stopping rule (kParameterTolerance): the next Gauss-Newton
+/// step δ would change no predicted output by more than `step_tolerance` of the signal,
 ///     max_k |(J δ)_k| ≤ step_tolerance · g · max_i s_i,
 /// s_i from the known-orientation start; `max_iterations` steps without it: kMaxIterations.
 struct CoarseCalibrationOptions {
@@ -102,8 +102,8 @@ CoarseCalibrationResult IteratedCoarseCalibration(
     const std::function<std::vector<Vec3>(const std::vector<Vec3>& commanded)>& measure,
     const IteratedCoarseCalibrationOptions& options = {});
 
-/// Options of the fine stage. The stopping rule (kParameterTolerance): the step dx just taken
-/// changes no observation by more than `step_tolerance` of g²,
+/// Options of the fine stage. The stopping rule (kParameterTolerance): the next step dx would
+/// change no observation by more than `step_tolerance` of g²,
 ///     max_j |(A dx)_j| ≤ step_tolerance · g²;
 /// `max_iterations` steps without it: kMaxIterations.
 struct FineCalibrationOptions {

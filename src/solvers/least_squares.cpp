@@ -329,22 +329,16 @@ LeastSquaresSummary SolveLeastSquares(const LeastSquaresProblem& problem,
       nu = 2;
       continue;
     }
-    LeastSquaresState trial = Plus(problem, *state, step);
     if (small) {
-      // The change is below the tolerance and at the level where F's round-off decides
-      // acceptance: the step is taken, and the point is the solution.
-      Linearization next;
-      if (Linearize(problem, trial, &next, options.threads)) {
-        *state = std::move(trial);
-        lin = std::move(next);
-        ++summary.iterations;
-        summary.cost_history.push_back(lin.cost);
-      }
+      // The step would change no residual by more than the tolerance, at the level where F's
+      // round-off decides acceptance: the point is the solution, and the step is not taken (its
+      // evaluation, the most costly part of an iteration, would change nothing of note).
       summary.termination = TerminationType::kParameterTolerance;
       summary.termination_message = internal::Format("max |J dx| = %.3e <= step_tolerance %.3e",
                                                      step.max_change, options.step_tolerance);
       break;
     }
+    LeastSquaresState trial = Plus(problem, *state, step);
     // The trial's cost, and its linearisation when the step is taken: one evaluation with the
     // Jacobians when most steps are taken (linearize_trials), else the cost first.
     Linearization next;

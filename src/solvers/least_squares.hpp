@@ -59,9 +59,10 @@ struct LeastSquaresState {
 struct LeastSquaresOptions {
   /// Cap on accepted steps (kMaxIterations).
   int max_iterations = 50;
-  /// kParameterTolerance: the step just accepted changes no residual by more than this,
-  /// max_i |(J δ)_i| ≤ step_tolerance [residual units], taken with λ ≤ 1e-6 (a nearly
-  /// Gauss-Newton step; a small damped step only retries with less damping). 0 disables.
+  /// kParameterTolerance: the next step would change no residual by more than this,
+  /// max_i |(J δ)_i| ≤ step_tolerance [residual units], with λ ≤ 1e-6 (a nearly Gauss-Newton
+  /// step; a small damped step only retries with less damping): the point is the solution, and
+  /// that step is not taken. 0 disables.
   double step_tolerance = 0;
   /// kFunctionTolerance: an accepted step with |F_before − F_after| ≤ function_tolerance ·
   /// F_before. 0 disables.

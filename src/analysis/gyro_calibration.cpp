@@ -363,16 +363,6 @@ internal::LeastSquaresOptions FitOptions(int threads) {
   return ls;
 }
 
-// The two-stage fit that only starts the final one and gives the groups' first scatter ratios:
-// within 1e-3 of a standard error of its optimum (a χ² within 1e-6 of its own) is close enough,
-// as the final fit moves from there anyway (the joint one frees the directions).
-internal::LeastSquaresOptions StartOptions(int threads) {
-  internal::LeastSquaresOptions ls = FitOptions(threads);
-  ls.step_tolerance = 1e-3;
-  ls.function_tolerance = 1e-6;
-  return ls;
-}
-
 // The joint problem's data: every position's accelerometer mean weighted by the residual σ̂ of
 // the accelerometer's own fit (its scatter about the fitted surface). The positions scatter by
 // model error and drift more than by their samples' noise, and not in proportion to 1/√n: on the
@@ -479,7 +469,7 @@ ModelFit FitModel(GyroFitData data, GyroModelKind kind, const std::vector<Positi
   // The two-stage fit under the sample noise (data.weights, the turns' weights); each group's
   // scatter ratio there, and the fit again with each group's noise scaled by its ratio (when
   // above 1).
-  const internal::GyroFit two = internal::FitGyro(data, start, StartOptions(options.threads));
+  const internal::GyroFit two = internal::FitGyro(data, start, FitOptions(options.threads));
   RequireConverged(two.summary);
   const auto [still_ratio, turn_ratio] = ScatterRatios(data, two.summary);
   out.still_ratio = still_ratio;
@@ -839,10 +829,9 @@ GyroCalibration CalibrateGyro(const RawLog& accel, const RawLog& gyro,
     std::vector<std::pair<std::size_t, std::size_t>> turns;
     for (const GyroRotation& r : result.rotations)
       turns.emplace_back(r.first_sample, r.last_sample);
-    const ModelParameters& accel_params =
-        result.accelerometer ? result.accelerometer->params : accel_cal.params;
+    // The specific force of the accelerometer's own fit, as the turns were integrated with.
     result.time_offset = internal::EstimateGyroLag(accel, gyro, built.t, built.step_s, turns,
-                                                   accel_params, f.solution.gyro);
+                                                   accel_cal.params, f.solution.gyro);
   }
   result.summary.iterations = sum.iterations;
   result.summary.termination = sum.termination;

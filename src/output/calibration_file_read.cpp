@@ -378,6 +378,19 @@ LoadedCalibration::Gyroscope ReadGyroscope(const Reader& r, const ordered_json& 
       }
       rotation.heldout_deg = in.Nullable(t, "heldout_deg");
       rotation.turned_deg = in.Nullable(t, "turned_deg");
+      // Positions are counted from 1; angles and their errors are not negative.
+      for (const auto& [key, value] :
+           {std::pair("from", rotation.from), std::pair("to", rotation.to)}) {
+        if (!(value >= 1 && value == std::floor(value))) {
+          in.Fail(in.Key(key) + " must be a position's number (1, 2, ...)");
+        }
+      }
+      for (const auto& [key, value] :
+           {std::pair("residual_deg", std::optional<double>(rotation.residual_deg)),
+            std::pair("heldout_deg", rotation.heldout_deg),
+            std::pair("turned_deg", rotation.turned_deg)}) {
+        if (value && !(*value >= 0)) in.Fail(in.Key(key) + " must not be negative");
+      }
       g.rotations.push_back(rotation);
     }
   }

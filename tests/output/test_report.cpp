@@ -157,6 +157,22 @@ TEST(Report, ShowsTheGyroscopeItsTurnsAndItsStillRates) {
     EXPECT_NE(std::string(e.what()).find("rotations[].residual_deg"), std::string::npos)
         << e.what();
   }
+  // A position that is not a count from 1, a negative angle: refused by name.
+  doc["sensors"]["gyroscope"]["rotations"][3]["residual_deg"] = 0.03;
+  for (const auto& [key, value] :
+       {std::pair("from", 0.0), std::pair("to", 2.5), std::pair("residual_deg", -0.1),
+        std::pair("heldout_deg", -1.0), std::pair("turned_deg", -90.0)}) {
+    nlohmann::json bad = doc;
+    bad["sensors"]["gyroscope"]["rotations"][3][key] = value;
+    try {
+      ParseCalibrationJson(bad.dump(), "imu.json");
+      ADD_FAILURE() << key << " " << value << " was read";
+    } catch (const InputError& e) {
+      EXPECT_NE(std::string(e.what()).find(std::string("rotations[].") + key), std::string::npos)
+          << e.what();
+    }
+  }
+  EXPECT_NO_THROW(ParseCalibrationJson(doc.dump(), "imu.json"));
 }
 
 TEST(Report, WarnsAboutAMovedPositionAGapInCoverageAndUnusedStillPeriods) {

@@ -128,6 +128,10 @@ GyroMotion SamplesOf(const RawLog& accel, const RawLog& gyro, const std::vector<
                      const ModelParameters& accel_params, Vec3 f0, std::size_t first,
                      std::size_t last) {
   GyroMotion motion;
+  const std::size_t n = last + 1 - first;
+  motion.t_s.reserve(n);
+  motion.raw.reserve(n);
+  motion.f.reserve(n);
   for (std::size_t k = first; k <= last; ++k) {
     motion.t_s.push_back(t[k]);
     motion.raw.push_back(gyro.samples[k]);

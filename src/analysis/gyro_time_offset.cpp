@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <memory>
 
 #include <Eigen/Geometry>
 #include <Eigen/LU>
@@ -50,7 +51,9 @@ std::optional<GyroTimeOffset> EstimateGyroLag(
     std::fill(need.begin() + static_cast<std::ptrdiff_t>(from),
               need.begin() + static_cast<std::ptrdiff_t>(std::min(n, last_sample + 2 * S + 2)), 1);
   }
-  std::vector<Vec3> f(n, Vec3::Zero());
+  // Only the samples needed are written (or read): most of a recording is still, and its pages
+  // are then never touched.
+  const std::unique_ptr<Vec3[]> f(new Vec3[n]);
   Vec3 last = Vec3::UnitZ();
   for (std::size_t k = 0; k < n; ++k) {
     if (!need[k]) continue;
@@ -58,9 +61,11 @@ std::optional<GyroTimeOffset> EstimateGyroLag(
     f[k] = last;
   }
   const Mat33 K_inv = gyro_params.K.inverse();
-  std::vector<double> tilt(n, 0.0), rate(n, 0.0);
-  for (std::size_t k = 1; k + 1 < n; ++k) {
-    if (!need[k - 1] || !need[k] || !need[k + 1]) continue;
+  const std::unique_ptr<double[]> tilt(new double[n]), rate(new double[n]);
+  for (std::size_t k = 0; k < n; ++k) {
+    if (!need[k]) continue;
+    tilt[k] = 0, rate[k] = 0;
+    if (k == 0 || k + 1 == n || !need[k - 1] || !need[k + 1]) continue;
     const double dt = t[k + 1] - t[k - 1];
     const double norm = f[k].norm();
     if (dt > 0 && norm > 0) tilt[k] = (f[k + 1] - f[k - 1]).norm() / (norm * dt);
@@ -80,7 +85,7 @@ std::optional<GyroTimeOffset> EstimateGyroLag(
       // Shift i − S reads rate[k + i − S]: i within [S − k, n + S − k).
       const std::size_t i_begin = k < S ? S - k : 0;
       const std::size_t i_end = std::min(shifts, n + S - k);
-      const double* r = rate.data() + (k + i_begin - S);  // rate[k + i − S] at i = i_begin
+      const double* r = rate.get() + (k + i_begin - S);  // rate[k + i − S] at i = i_begin
       for (std::size_t i = i_begin; i < i_end; ++i) c[i] += tilt[k] * r[i - i_begin];
     }
     for (std::size_t i = 0; i < shifts; ++i) total[i] += c[i];

@@ -16,6 +16,7 @@
 // accelerometer fit's, held fixed: the two-stage fit (the joint one frees them).
 
 #include <cstddef>
+#include <memory>
 #include <optional>
 #include <vector>
 
@@ -42,6 +43,26 @@ struct GyroMotion {
   std::vector<Vec3> f;  ///< specific force at each sample (the calibrated accelerometer)
 };
 
+/// The motions of a fit's data, held once however often the data are copied: each model's fit,
+/// the joint problem and the held-out fits copy the data to change their own fields, never the
+/// samples (on the Xsens recording six copies of 2 MB were the gyro's largest memory cost). Value
+/// semantics: push_back on a shared list copies it first.
+class GyroMotions {
+ public:
+  void push_back(GyroMotion motion) {
+    if (motions_.use_count() > 1) motions_ = std::make_shared<std::vector<GyroMotion>>(*motions_);
+    motions_->push_back(std::move(motion));
+  }
+  std::size_t size() const { return motions_->size(); }
+  bool empty() const { return motions_->empty(); }
+  const GyroMotion& operator[](std::size_t k) const { return (*motions_)[k]; }
+  std::vector<GyroMotion>::const_iterator begin() const { return motions_->cbegin(); }
+  std::vector<GyroMotion>::const_iterator end() const { return motions_->cend(); }
+
+ private:
+  std::shared_ptr<std::vector<GyroMotion>> motions_ = std::make_shared<std::vector<GyroMotion>>();
+};
+
 /// One motion's residual, whitened (2 rows), with the fixed basis and weight of the fit.
 struct MotionWeight {
   Mat32 B;            ///< basis of the plane ⟂ c_j
@@ -52,7 +73,7 @@ struct MotionWeight {
 struct GyroFitData {
   std::vector<GyroStill> stills;  ///< one per position
   std::vector<Vec3> directions;   ///< c_i, unit, one per position
-  std::vector<GyroMotion> motions;
+  GyroMotions motions;
   Vec3 noise_sigma_raw = Vec3::Ones();  ///< white noise of one raw sample, per axis
   GyroModelKind model = GyroModelKind::kLinear;
   RateInterpolation rule = RateInterpolation::kTrapezoidal;

@@ -61,6 +61,28 @@ GyroFitData FromSimulation(const GyroParameters& truth, GyroModelKind model, dou
   return data;
 }
 
+// The motions are shared between copies of the data, yet each copy keeps its own list: a motion
+// added to one after the copy is not in the other.
+TEST(GyroFit, CopiedDataKeepTheirOwnMotions) {
+  GyroFitData a;
+  GyroMotion m;
+  m.from = 0, m.to = 1;
+  m.t_s = {0.0, 0.01};
+  a.motions.push_back(m);
+  const GyroFitData b = a;
+  EXPECT_EQ(&a.motions[0], &b.motions[0]);  // one copy of the samples
+  m.from = 1, m.to = 2;
+  a.motions.push_back(m);
+  ASSERT_EQ(a.motions.size(), 2u);
+  ASSERT_EQ(b.motions.size(), 1u);
+  EXPECT_EQ(b.motions[0].to, 1u);
+  EXPECT_EQ(a.motions[1].to, 2u);
+  GyroFitData c = b;
+  c.motions.push_back(m);
+  EXPECT_EQ(b.motions.size(), 1u);
+  EXPECT_EQ(c.motions.size(), 2u);
+}
+
 TEST(GyroFit, MotionResidualJacobiansMatchFiniteDifferences) {
   for (GyroModelKind model : {GyroModelKind::kLinear, GyroModelKind::kGSensitive}) {
     const GyroParameters truth = XsensLikeGyro(model == GyroModelKind::kGSensitive);

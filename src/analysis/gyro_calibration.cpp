@@ -614,6 +614,120 @@ void CheckGyroClock(const RawLog& accel, const RawLog& gyro) {
   }
 }
 
+// The chosen fit's checks: each turn's residual, held-out error and angle turned, the
+// covariance (the accelerometer's too, when refitted jointly), and the angle the gyro turned in
+// each position outside its still run.
+void CheckFit(const RawLog& accel, const RawLog& gyro, const std::vector<Position>& positions,
+              const CalibrationResult& accel_cal, const GyroCalibrationOptions& options,
+              const Built& built, const ModelFit& f, GyroCalibration* out) {
+  const bool imutk = options.estimator == GyroEstimator::kImuTk;
+  std::vector<double> errors;
+  for (std::size_t k = 0; k < f.data.motions.size(); ++k) {
+    const TurnCheck check = CheckTurn(f.data, k, f.solution.gyro, f.solution.directions);
+    errors.push_back(check.error);
+    out->rotations[k].residual_deg = errors.back() * kRadToDeg;
+    out->rotations[k].angle_deg = check.turned * kRadToDeg;
+    if (!f.heldout.empty()) {
+      // A turn that disagrees with the others (a bump during it, a slip of the hand): its held-out
+      // χ²₂ beyond the level a turn like the others passes with probability 1 % / K (Bonferroni
+      // over the K turns): P(χ²₂ > q) = exp(−q/2), so q > 2 ln(100 K).
+      GyroRotation& r = out->rotations[k];
+      r.heldout_deg = f.heldout[k] * kRadToDeg;
+      r.statistic = f.heldout_chi2[k];
+      r.threshold = 2 * std::log(100.0 * static_cast<double>(f.data.motions.size()));
+      r.flagged = r.statistic > r.threshold;
+    }
+  }
+  out->rms_deg = RmsDeg(errors);
+  if (!f.heldout.empty()) out->heldout_rms_deg = RmsDeg(f.heldout);
+  const internal::LeastSquaresSummary& sum = f.solution.summary;
+  const int pa = f.solution.joint ? f.solution.joint->accel_parameters : 0;
+  const int pg = NumGyroParameters(f.kind);
+  if (sum.information.rows() > 0 && sum.degrees_of_freedom > 0) {
+    const Eigen::MatrixXd C = sum.information.inverse() * std::max(1.0, sum.sigma2);
+    out->covariance = C.block(pa, pa, pg, pg);
+    if (f.solution.joint) {
+      CalibrationResult a = accel_cal;
+      a.params = f.solution.joint->accel;
+      a.directions = f.solution.directions;
+      for (std::size_t k = 0; k < a.residuals.size(); ++k) {
+        a.residuals[k] =
+            positions[k].mean - PredictRaw(a.params, Vec3(a.gravity * a.directions[k]));
+      }
+      a.covariance = C.block(0, 0, pa, pa);
+      a.noise_source = "joint";  // σ̂ of the accelerometer's fit, beside the gyro's groups
+      a.scatter_ratio = std::nan("");
+      // The summary stays the accelerometer's own fit's (its cost is in raw², the joint fit's
+      // is whitened: the gyroscope's summary).
+      a.summary.initialization_note +=
+          std::string(a.summary.initialization_note.empty() ? "" : "; ") +
+          "refitted jointly with the gyroscope's rotations (see its solver)";
+      // Held out as the accelerometer's own fit is: |f_k| − g of each position under the joint
+      // fit without its reading (to first order, LeaveOneBlockOut).
+      a.crossval_errors.clear();
+      a.crossval_rms.reset();
+      if (options.validate) {
+        for (const internal::ImuJointFit& held :
+             internal::HeldOutPositionFits(*f.joint_data, *f.solution.joint)) {
+          const std::size_t k = a.crossval_errors.size();
+          const std::optional<Vec3> force = SpecificForce(held.accel, positions[k].mean);
+          a.crossval_errors.push_back(force ? force->norm() - a.gravity : std::nan(""));
+        }
+        a.crossval_rms = Rms(a.InFit(a.crossval_errors));
+        a.crossval_note.clear();
+      } else {
+        a.crossval_note = "not validated";
+      }
+      out->accelerometer = std::move(a);
+    }
+  }
+  if (imutk && out->covariance.size() > 0) {
+    // The bias held at the first position's mean: its σ that mean's, K_g's σ given it.
+    for (int a = 0; a < 3; ++a) {
+      const int i = 4 * a + 3;  // bg_a in the linear model's order
+      out->covariance.row(i).setZero();
+      out->covariance.col(i).setZero();
+      const double sigma = built.data.stills[0].sigma_mean_raw(a);
+      out->covariance(i, i) = sigma * sigma;
+    }
+  }
+  // The angle each turn turned through, unwrapped, and its σ from the parameters' covariance and
+  // the rate noise of its samples (a check of the scale against a turn of known angle).
+  for (std::size_t k = 0; k < f.data.motions.size(); ++k) {
+    const GyroMotion& m = f.data.motions[k];
+    const TurnedAngle turned = IntegrateTurnedAngle(f.solution.gyro, f.kind, m.t_s, m.raw, m.f,
+                                                    f.data.rule, built.data.noise_sigma_raw);
+    double variance = turned.noise_variance_rad2;
+    if (out->covariance.size() > 0) {
+      variance += turned.gradient.dot(out->covariance * turned.gradient.transpose());
+    }
+    out->rotations[k].turned_deg = turned.angle_rad * kRadToDeg;
+    out->rotations[k].turned_std_deg = std::sqrt(variance) * kRadToDeg;
+  }
+  // Where the gyro was still in each position, and the angle it turned outside that but inside
+  // the accelerometer's still interval (a turn about the vertical, the ends of the turns the
+  // accelerometer hardly sees, a lag of the gyro's stream).
+  for (std::size_t i = 0; i < positions.size(); ++i) {
+    const StaticInterval& iv = *positions[i].interval;
+    const StaticInterval& run = built.still_runs[i];
+    GyroStillSpan span;
+    span.first_sample = run.begin;
+    span.last_sample = run.end - 1;
+    span.mean_raw = built.data.stills[i].mean_raw;
+    const Vec3 f0 = accel_cal.gravity * f.solution.directions[i];
+    for (const auto& [a, b] :
+         {std::pair{iv.begin, run.begin}, std::pair{run.end - 1, iv.end - 1}}) {
+      if (b <= a) continue;
+      const GyroMotion part = SamplesOf(accel, gyro, built.t, accel_cal.params, f0, a, b);
+      span.turned_outside_deg += IntegrateTurnedAngle(f.solution.gyro, f.kind, part.t_s, part.raw,
+                                                      part.f, f.data.rule, built.data.noise_sigma_raw)
+                                     .angle_rad *
+                                 kRadToDeg;
+    }
+    out->still_spans.push_back(span);
+  }
+}
+
 GyroCalibration CalibrateGyro(const RawLog& accel, const RawLog& gyro,
                               const std::vector<Position>& positions,
                               const CalibrationResult& accel_cal,
@@ -724,119 +838,25 @@ GyroCalibration CalibrateGyro(const RawLog& accel, const RawLog& gyro,
   result.rotation_scatter_ratio = f.turn_ratio;
   result.accel_scatter_ratio = f.accel_ratio;
   result.rotations = built.rotations;
-  std::vector<double> errors;
-  for (std::size_t k = 0; k < f.data.motions.size(); ++k) {
-    const TurnCheck check = CheckTurn(f.data, k, f.solution.gyro, f.solution.directions);
-    errors.push_back(check.error);
-    result.rotations[k].residual_deg = errors.back() * kRadToDeg;
-    result.rotations[k].angle_deg = check.turned * kRadToDeg;
-    if (!f.heldout.empty()) {
-      // A turn that disagrees with the others (a bump during it, a slip of the hand): its held-out
-      // χ²₂ beyond the level a turn like the others passes with probability 1 % / K (Bonferroni
-      // over the K turns): P(χ²₂ > q) = exp(−q/2), so q > 2 ln(100 K).
-      GyroRotation& r = result.rotations[k];
-      r.heldout_deg = f.heldout[k] * kRadToDeg;
-      r.statistic = f.heldout_chi2[k];
-      r.threshold = 2 * std::log(100.0 * static_cast<double>(f.data.motions.size()));
-      r.flagged = r.statistic > r.threshold;
-    }
-  }
-  result.rms_deg = RmsDeg(errors);
-  if (!f.heldout.empty()) result.heldout_rms_deg = RmsDeg(f.heldout);
-  const internal::LeastSquaresSummary& sum = f.solution.summary;
-  const int pa = f.solution.joint ? f.solution.joint->accel_parameters : 0;
-  const int pg = NumGyroParameters(f.kind);
-  if (sum.information.rows() > 0 && sum.degrees_of_freedom > 0) {
-    const Eigen::MatrixXd C = sum.information.inverse() * std::max(1.0, sum.sigma2);
-    result.covariance = C.block(pa, pa, pg, pg);
-    if (f.solution.joint) {
-      CalibrationResult a = accel_cal;
-      a.params = f.solution.joint->accel;
-      a.directions = f.solution.directions;
-      for (std::size_t k = 0; k < a.residuals.size(); ++k) {
-        a.residuals[k] =
-            positions[k].mean - PredictRaw(a.params, Vec3(a.gravity * a.directions[k]));
-      }
-      a.covariance = C.block(0, 0, pa, pa);
-      a.noise_source = "joint";  // σ̂ of the accelerometer's fit, beside the gyro's groups
-      a.scatter_ratio = std::nan("");
-      // The summary stays the accelerometer's own fit's (its cost is in raw², the joint fit's
-      // is whitened: the gyroscope's summary).
-      a.summary.initialization_note +=
-          std::string(a.summary.initialization_note.empty() ? "" : "; ") +
-          "refitted jointly with the gyroscope's rotations (see its solver)";
-      // Held out as the accelerometer's own fit is: |f_k| − g of each position under the joint
-      // fit without its reading (to first order, LeaveOneBlockOut).
-      a.crossval_errors.clear();
-      a.crossval_rms.reset();
-      if (options.validate) {
-        for (const internal::ImuJointFit& held :
-             internal::HeldOutPositionFits(*f.joint_data, *f.solution.joint)) {
-          const std::size_t k = a.crossval_errors.size();
-          const std::optional<Vec3> force = SpecificForce(held.accel, positions[k].mean);
-          a.crossval_errors.push_back(force ? force->norm() - a.gravity : std::nan(""));
-        }
-        a.crossval_rms = Rms(a.InFit(a.crossval_errors));
-        a.crossval_note.clear();
-      } else {
-        a.crossval_note = "not validated";
-      }
-      result.accelerometer = std::move(a);
-    }
-  }
-  if (imutk && result.covariance.size() > 0) {
-    // The bias held at the first position's mean: its σ that mean's, K_g's σ given it.
-    for (int a = 0; a < 3; ++a) {
-      const int i = 4 * a + 3;  // bg_a in the linear model's order
-      result.covariance.row(i).setZero();
-      result.covariance.col(i).setZero();
-      const double sigma = data.stills[0].sigma_mean_raw(a);
-      result.covariance(i, i) = sigma * sigma;
-    }
-  }
-  // The angle each turn turned through, unwrapped, and its σ from the parameters' covariance and
-  // the rate noise of its samples (a check of the scale against a turn of known angle).
-  for (std::size_t k = 0; k < f.data.motions.size(); ++k) {
-    const GyroMotion& m = f.data.motions[k];
-    const TurnedAngle turned = IntegrateTurnedAngle(f.solution.gyro, f.kind, m.t_s, m.raw, m.f,
-                                                    f.data.rule, data.noise_sigma_raw);
-    double variance = turned.noise_variance_rad2;
-    if (result.covariance.size() > 0) {
-      variance += turned.gradient.dot(result.covariance * turned.gradient.transpose());
-    }
-    result.rotations[k].turned_deg = turned.angle_rad * kRadToDeg;
-    result.rotations[k].turned_std_deg = std::sqrt(variance) * kRadToDeg;
-  }
-  // Where the gyro was still in each position, and the angle it turned outside that but inside
-  // the accelerometer's still interval (a turn about the vertical, the ends of the turns the
-  // accelerometer hardly sees, a lag of the gyro's stream).
-  for (std::size_t i = 0; i < positions.size(); ++i) {
-    const StaticInterval& iv = *positions[i].interval;
-    const StaticInterval& run = built.still_runs[i];
-    GyroStillSpan span;
-    span.first_sample = run.begin;
-    span.last_sample = run.end - 1;
-    span.mean_raw = data.stills[i].mean_raw;
-    const Vec3 f0 = accel_cal.gravity * f.solution.directions[i];
-    for (const auto& [a, b] :
-         {std::pair{iv.begin, run.begin}, std::pair{run.end - 1, iv.end - 1}}) {
-      if (b <= a) continue;
-      const GyroMotion part = SamplesOf(accel, gyro, built.t, accel_cal.params, f0, a, b);
-      span.turned_outside_deg += IntegrateTurnedAngle(f.solution.gyro, f.kind, part.t_s, part.raw,
-                                                      part.f, f.data.rule, data.noise_sigma_raw)
-                                     .angle_rad *
-                                 kRadToDeg;
-    }
-    result.still_spans.push_back(span);
-  }
-  {
+  // The lag estimate needs only the turns' samples and the chosen fit: on a thread of its own,
+  // beside the checks of each turn and position below.
+  std::optional<GyroTimeOffset> lag;
+  const auto estimate_lag = [&] {
     std::vector<std::pair<std::size_t, std::size_t>> turns;
-    for (const GyroRotation& r : result.rotations)
-      turns.emplace_back(r.first_sample, r.last_sample);
+    for (const GyroRotation& r : built.rotations) turns.emplace_back(r.first_sample, r.last_sample);
     // The specific force of the accelerometer's own fit, as the turns were integrated with.
-    result.time_offset = internal::EstimateGyroLag(accel, gyro, built.t, built.step_s, turns,
-                                                   accel_cal.params, f.solution.gyro);
-  }
+    lag = internal::EstimateGyroLag(accel, gyro, built.t, built.step_s, turns, accel_cal.params,
+                                    f.solution.gyro);
+  };
+  internal::ParallelFor(2, internal::ThreadCount(options.threads, 2), [&](int task) {
+    if (task == 1) {
+      estimate_lag();
+    } else {
+      CheckFit(accel, gyro, positions, accel_cal, options, built, f, &result);
+    }
+  });
+  result.time_offset = lag;
+  const internal::LeastSquaresSummary& sum = f.solution.summary;
   result.summary.iterations = sum.iterations;
   result.summary.termination = sum.termination;
   result.summary.termination_message = sum.termination_message;

@@ -719,10 +719,11 @@ void CheckFit(const RawLog& accel, const RawLog& gyro, const std::vector<Positio
          {std::pair{iv.begin, run.begin}, std::pair{run.end - 1, iv.end - 1}}) {
       if (b <= a) continue;
       const GyroMotion part = SamplesOf(accel, gyro, built.t, accel_cal.params, f0, a, b);
-      span.turned_outside_deg += IntegrateTurnedAngle(f.solution.gyro, f.kind, part.t_s, part.raw,
-                                                      part.f, f.data.rule, built.data.noise_sigma_raw)
-                                     .angle_rad *
-                                 kRadToDeg;
+      span.turned_outside_deg +=
+          IntegrateTurnedAngle(f.solution.gyro, f.kind, part.t_s, part.raw, part.f, f.data.rule,
+                               built.data.noise_sigma_raw)
+              .angle_rad *
+          kRadToDeg;
     }
     out->still_spans.push_back(span);
   }

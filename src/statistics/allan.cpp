@@ -1,0 +1,161 @@
+// The overlapping Allan variance, streamed (allan.hpp).
+#include "accelcal/allan.hpp"
+
+#include <cmath>
+#include <stdexcept>
+#include <string>
+
+#include "statistics/student_t.hpp"
+
+namespace accelcal {
+
+namespace {
+
+constexpr std::uint64_t kMaxFullOverlap = std::uint64_t{1} << 20;
+
+bool PowerOfTwo(std::uint64_t v) { return v != 0 && (v & (v - 1)) == 0; }
+
+int Log2(std::uint64_t v) {
+  int j = 0;
+  while (v > 1) v >>= 1, ++j;
+  return j;
+}
+
+}  // namespace
+
+AllanAccumulator::AllanAccumulator(const AllanOptions& options) : options_(options) {
+  if (!(std::isfinite(options.sample_period_s) && options.sample_period_s > 0)) {
+    throw std::invalid_argument("AllanAccumulator: the sample period must be finite and positive");
+  }
+  const std::uint64_t R = options.full_overlap_up_to;
+  if (!PowerOfTwo(R) || R > kMaxFullOverlap) {
+    throw std::invalid_argument(
+        "AllanAccumulator: the longest fully overlapped average must be a power of two up to "
+        "2^20 samples");
+  }
+  // Level 0 holds every phase point for the averages of 1, 2, …, R samples; level l ≥ 1 every
+  // 2^l-th for the average of R 2^l. Each keeps the last 2R + 1 (a power of two above it: a mask
+  // indexes the ring).
+  Level first;
+  first.m = 1;
+  first.stride = 1;
+  first.ring.assign(4 * R, 0.0);
+  first.count = 1;  // θ_0 = 0
+  levels_.push_back(std::move(first));
+  sums_.assign(static_cast<std::size_t>(Log2(R)) + 1, 0.0);
+  terms_.assign(sums_.size(), 0);
+}
+
+void AllanAccumulator::Add(const double* y, std::size_t count) {
+  const std::uint64_t R = options_.full_overlap_up_to;
+  const std::uint64_t mask = 4 * R - 1;
+  for (std::size_t k = 0; k < count; ++k) {
+    const double v = y[k];
+    if (!std::isfinite(v)) {
+      throw std::invalid_argument("AllanAccumulator: sample " + std::to_string(samples_ + 1) +
+                                  " is not a finite number");
+    }
+    if (samples_ == 0) origin_ = v;
+    theta_ += v - origin_;
+    ++samples_;
+    const std::uint64_t i = samples_;  // the phase point's index
+    // Level 0: every m = 1, 2, 4, …, R with i ≥ 2m.
+    Level& zero = levels_[0];
+    double* ring = zero.ring.data();
+    ring[i & mask] = theta_;
+    zero.count = i + 1;
+    std::size_t j = 0;
+    for (std::uint64_t m = 1; m <= R && 2 * m <= i; m <<= 1, ++j) {
+      const double d = theta_ - 2 * ring[(i - m) & mask] + ring[(i - 2 * m) & mask];
+      sums_[j] += d * d;
+      ++terms_[j];
+    }
+    // Level l ≥ 1 at every index divisible by 2^l; created at its first (i = 2^l), with θ_0.
+    for (std::size_t l = 1; (i & ((std::uint64_t{1} << l) - 1)) == 0; ++l) {
+      if (l == levels_.size()) {
+        Level level;
+        level.stride = std::uint64_t{1} << l;
+        level.m = R * level.stride;
+        level.ring.assign(4 * R, 0.0);
+        level.count = 1;  // θ_0 = 0 at its slot 0
+        levels_.push_back(std::move(level));
+      }
+      Level& level = levels_[l];
+      const std::uint64_t p = level.count++;  // this point's index in the level's sequence
+      level.ring[p & mask] = theta_;
+      if (p >= 2 * R) {
+        const double d = theta_ - 2 * level.ring[(p - R) & mask] + level.ring[(p - 2 * R) & mask];
+        level.sum += d * d;
+        ++level.terms;
+      }
+    }
+  }
+}
+
+std::vector<AllanPoint> AllanAccumulator::Points() const {
+  std::vector<AllanPoint> out;
+  const double tau0 = options_.sample_period_s;
+  const auto add = [&](std::uint64_t m, std::uint64_t stride, double sum, std::uint64_t terms) {
+    if (terms == 0 || 4 * m > samples_) return;
+    AllanPoint p;
+    p.m = m;
+    p.tau_s = static_cast<double>(m) * tau0;
+    p.stride = stride;
+    p.terms = terms;
+    p.phase_points = samples_ + 1;
+    // θ was summed in samples: the second difference in τ₀ units, over 2 (m τ₀)² — τ₀ cancels.
+    p.avar =
+        sum / (2.0 * static_cast<double>(m) * static_cast<double>(m) * static_cast<double>(terms));
+    out.push_back(p);
+  };
+  std::uint64_t m = 1;
+  for (std::size_t j = 0; j < sums_.size(); ++j, m <<= 1) add(m, 1, sums_[j], terms_[j]);
+  for (std::size_t l = 1; l < levels_.size(); ++l) {
+    add(levels_[l].m, levels_[l].stride, levels_[l].sum, levels_[l].terms);
+  }
+  return out;
+}
+
+std::vector<AllanPoint> AllanVariance(const std::vector<double>& y, const AllanOptions& options) {
+  AllanAccumulator accumulator(options);
+  accumulator.Add(y.data(), y.size());
+  return accumulator.Points();
+}
+
+double AllanEdf(PowerLawNoise noise, double N, double m) {
+  switch (noise) {
+    case PowerLawNoise::kQuantization:
+      return (N + 1) * (N - 2 * m) / (2 * (N - m));
+    case PowerLawNoise::kWhite:
+      return (3 * (N - 1) / (2 * m) - 2 * (N - 2) / N) * 4 * m * m / (4 * m * m + 5);
+    case PowerLawNoise::kFlicker:
+      return m == 1 ? 2 * (N - 2) / (2.3 * N - 4.9) : 5 * N * N / (4 * m * (N + 3 * m));
+    case PowerLawNoise::kRandomWalk:
+      return (N - 2) / m * ((N - 1) * (N - 1) - 3 * m * (N - 1) + 4 * m * m) / ((N - 3) * (N - 3));
+  }
+  return 0;
+}
+
+double AllanEdf(PowerLawNoise noise, const AllanPoint& point) {
+  if (point.stride == 0 || point.m % point.stride != 0 || point.phase_points < 1) {
+    throw std::invalid_argument("AllanEdf: a point whose stride does not divide its m");
+  }
+  const std::uint64_t decimated = (point.phase_points - 1) / point.stride + 1;
+  return AllanEdf(noise, static_cast<double>(decimated),
+                  static_cast<double>(point.m / point.stride));
+}
+
+AllanInterval AllanDeviationInterval(double avar, double edf, double confidence) {
+  if (!(confidence > 0 && confidence < 1) || !(edf > 0) || !(avar >= 0)) {
+    throw std::invalid_argument(
+        "AllanDeviationInterval: the confidence must lie in (0, 1), the degrees of freedom be "
+        "positive and the variance not negative");
+  }
+  const double tail = 0.5 * (1 - confidence);
+  AllanInterval out;
+  out.low = std::sqrt(edf * avar / internal::ChiSquareQuantile(tail, edf));
+  out.high = std::sqrt(edf * avar / internal::ChiSquareQuantile(1 - tail, edf));
+  return out;
+}
+
+}  // namespace accelcal

@@ -1,0 +1,71 @@
+// The simulated noise of each IEEE term (noise_simulation.hpp): its mean Allan variance over
+// seeds against the term's (noise_model.hpp).
+#include "accelcal/noise_simulation.hpp"
+
+#include <cmath>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include <gtest/gtest.h>
+
+#include "accelcal/allan.hpp"
+
+namespace accelcal {
+namespace {
+
+TEST(NoiseSimulation, EachTermHasItsAllanVariance) {
+  const double tau0 = 0.01;
+  const std::size_t n = std::size_t{1} << 14;
+  const int runs = 40;
+  const std::array<double, kNoiseTerms> values = {2e-4, 3e-3, 1e-3, 5e-4, 2e-4};
+  for (int t = 0; t < kNoiseTerms; ++t) {
+    std::array<double, kNoiseTerms> terms{};
+    terms[std::size_t(t)] = values[std::size_t(t)];
+    std::array<double, kNoiseTerms> squared{};
+    squared[std::size_t(t)] = values[std::size_t(t)] * values[std::size_t(t)];
+    std::vector<double> mean;
+    std::vector<AllanPoint> points;
+    for (int run = 0; run < runs; ++run) {
+      AllanOptions options;
+      options.sample_period_s = tau0;
+      points = AllanVariance(SimulateNoise(terms, n, tau0, 77 + std::uint64_t(run)), options);
+      mean.resize(points.size(), 0.0);
+      for (std::size_t j = 0; j < points.size(); ++j) mean[j] += points[j].avar / runs;
+    }
+    for (std::size_t j = 0; j < points.size(); ++j) {
+      const AllanPoint& p = points[j];
+      const NoiseTerm term = NoiseTerm(t);
+      // The ramp is exact; the noise means scatter by σ̂²·√(2/edf)/√runs (4 of them allowed).
+      const PowerLawNoise kind = term == NoiseTerm::kQuantization ? PowerLawNoise::kQuantization
+                                 : term == NoiseTerm::kWhite      ? PowerLawNoise::kWhite
+                                 : term == NoiseTerm::kBiasInstability ? PowerLawNoise::kFlicker
+                                                                       : PowerLawNoise::kRandomWalk;
+      double expected = NoiseModelAvar(squared, p.tau_s);
+      // The discrete walk's own white part (noise_simulation.hpp).
+      if (term == NoiseTerm::kRandomWalk) expected += squared[3] * tau0 * tau0 / (6 * p.tau_s);
+      // The discrete flicker is above its floor at the shortest τ: checked from m = 8 on.
+      if (term == NoiseTerm::kBiasInstability && p.m < 8) continue;
+      const double tolerance =
+          term == NoiseTerm::kRateRamp
+              ? 1e-9 * expected
+              : 4 * expected * std::sqrt(2 / AllanEdf(kind, p) / runs) +
+                    (term == NoiseTerm::kBiasInstability ? 0.02 * expected : 0);
+      EXPECT_NEAR(mean[j], expected, tolerance) << ToString(term) << " m " << p.m;
+    }
+  }
+}
+
+TEST(NoiseSimulation, RefusesWhatItCannotSimulate) {
+  for (double bad : {-1.0, std::nan(""), HUGE_VAL}) {
+    EXPECT_THROW(SimulateNoise({0, bad, 0, 0, 0}, 10, 0.01, 1), std::invalid_argument) << bad;
+  }
+  for (double period : {0.0, -0.01, std::nan("")}) {
+    EXPECT_THROW(SimulateNoise({0, 1, 0, 0, 0}, 10, period, 1), std::invalid_argument) << period;
+  }
+  EXPECT_EQ(SimulateNoise({0, 1, 0, 0, 0}, 100, 0.01, 3),
+            SimulateNoise({0, 1, 0, 0, 0}, 100, 0.01, 3));
+}
+
+}  // namespace
+}  // namespace accelcal

@@ -98,9 +98,9 @@ std::vector<std::pair<std::string, std::vector<std::string>>> GivenOptions(
 // The first argument that names a command, or "" when none does (a command missing from this
 // list is only slower to start: every command's options are then set up).
 std::string ChosenCommand(int argc, char** argv) {
-  static constexpr const char* kCommands[] = {"calibrate",  "compare",      "detect", "design",
-                                              "montecarlo", "system-level", "gimbal", "simulate",
-                                              "apply",      "report",       "export"};
+  static constexpr const char* kCommands[] = {"calibrate", "compare",    "detect",       "noise",
+                                              "design",    "montecarlo", "system-level", "gimbal",
+                                              "simulate",  "apply",      "report",       "export"};
   for (int i = 1; i < argc; ++i) {
     for (const char* command : kCommands) {
       if (std::string_view(argv[i]) == command) return command;
@@ -269,6 +269,27 @@ int accelcal::cli::RunCommandLine(int argc, char** argv) {
     AddInputOptions(detect, &det.input, false);
     AddDetectionOptions(detect, &det.input);
     detect->add_flag("--json", det.json, "machine-readable output");
+  }
+
+  NoiseArgs noi;
+  CLI::App* noise = app.add_subcommand(
+      "noise", "the Allan deviation of a still log and its noise terms (IEEE Std 952)");
+  if (Wanted(noise)) {
+    noise->add_option("LOG", noi.input.path, "raw log of the sensor held still")->required();
+    AddInputOptions(noise, &noi.input, false);
+    AddDetectionOptions(noise, &noi.input);
+    noise->add_option(
+        "--calibration", noi.calibration,
+        "calibration file (JSON): the samples calibrated first (else the log's unit)");
+    noise->add_option("--gyro", noi.gyro, "the gyroscope's log on the same clock: its noise too");
+    noise
+        ->add_option("--gyro-columns", noi.gyro_columns,
+                     "the gyroscope's x,y,z (or time,x,y,z) columns, in LOG or the --gyro log")
+        ->delimiter(',');
+    noise->add_flag("--still", noi.still,
+                    "only the longest still interval of the log (a calibration log's rest)");
+    noise->add_flag("--json", noi.json, "machine-readable output");
+    noise->add_option("-o,--output", noi.output, "output file (default: stdout)")->check(kFileName);
   }
 
   DesignArgs des;
@@ -526,6 +547,11 @@ int accelcal::cli::RunCommandLine(int argc, char** argv) {
     if (*detect) {
       data_subject = det.input.path;
       return RunDetect(det);
+    }
+    if (*noise) {
+      CheckGyroFlags(*noise, noi.gyro, noi.gyro_columns, {});
+      data_subject = noi.input.path;
+      return RunNoise(noi);
     }
     if (*compare) {
       CheckGyroFlags(*compare, cmp.gyro, cmp.gyro_columns, {"--gyro-units"});

@@ -119,6 +119,16 @@ struct DetectArgs {
   bool json = false;
 };
 
+struct NoiseArgs {
+  InputArgs input;
+  std::string calibration;  // empty: the log's own unit
+  std::string gyro;         // the gyroscope's log (ReadGyroLog)
+  std::vector<std::string> gyro_columns;
+  bool still = false;  // the longest still interval only
+  bool json = false;
+  std::string output;  // empty: stdout
+};
+
 struct ApplyArgs {
   std::string calibration;
   InputArgs input;
@@ -206,6 +216,7 @@ int RunDesign(const DesignArgs& args);
 int RunDetect(const DetectArgs& args);
 int RunCompare(const CompareArgs& args);
 int RunApply(const ApplyArgs& args);
+int RunNoise(const NoiseArgs& args);
 int RunExport(const ExportArgs& args);
 int RunReport(const ReportArgs& args);
 

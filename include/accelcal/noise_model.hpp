@@ -68,6 +68,12 @@ struct NoiseModelFit {
   std::vector<AllanInterval> intervals;              ///< each point's interval of σ(τ)
   double chi2 = 0;  ///< rᵀ Σ⁻¹ r of the residuals r = σ̂² − model, with the final Σ
   int dof = 0;      ///< points − terms fitted
+  /// P(χ²_dof ≥ chi2): small when the terms do not describe the Allan variance.
+  double chi2_p = 1;
+  /// Terms significantly below 0 (c < −z σ_c): the five terms do not describe this noise (a
+  /// filter before the samples, a vibration, a drift that is not a ramp), and the others'
+  /// values take up what is missing.
+  std::vector<NoiseTerm> below_zero;
   int iterations = 0;
   bool converged = false;
 };

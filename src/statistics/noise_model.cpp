@@ -275,6 +275,7 @@ NoiseModelFit FitNoiseModel(const std::vector<AllanPoint>& points, const NoiseFi
   }
   out.chi2 = chi2;
   out.dof = static_cast<int>(n) - static_cast<int>(p);
+  out.chi2_p = out.dof > 0 ? internal::ChiSquareSurvival(chi2, out.dof) : 1.0;
   std::array<double, kNoiseTerms> squared{};
   for (Eigen::Index j = 0; j < p; ++j) {
     squared[static_cast<std::size_t>(fitted[static_cast<std::size_t>(j)])] = c_scaled(j) / scale(j);
@@ -294,6 +295,8 @@ NoiseModelFit FitNoiseModel(const std::vector<AllanPoint>& points, const NoiseFi
     const double c = c_scaled(j) / scale(j);
     const double sigma_c = std::sqrt(covariance_scaled(j, j)) / scale(j);
     e.fitted = true;
+    if (c < -z * sigma_c)
+      out.below_zero.push_back(static_cast<NoiseTerm>(fitted[static_cast<std::size_t>(j)]));
     e.resolved = c > z * sigma_c;
     e.value = std::sqrt(std::max(0.0, c));
     e.sigma = e.resolved ? sigma_c / (2 * e.value) : 0.0;

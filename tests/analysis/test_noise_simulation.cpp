@@ -10,6 +10,8 @@
 #include <gtest/gtest.h>
 
 #include "accelcal/allan.hpp"
+#include "accelcal/error.hpp"
+#include "accelcal/noise.hpp"
 
 namespace accelcal {
 namespace {
@@ -65,6 +67,45 @@ TEST(NoiseSimulation, RefusesWhatItCannotSimulate) {
   }
   EXPECT_EQ(SimulateNoise({0, 1, 0, 0, 0}, 100, 0.01, 3),
             SimulateNoise({0, 1, 0, 0, 0}, 100, 0.01, 3));
+}
+
+// AnalyseNoise takes each axis on its own: three axes of different white noise and random walk
+// come back each within 4 σ of its own.
+TEST(Noise, EachAxisIsAnalysedOnItsOwn) {
+  const double tau0 = 0.01;
+  const std::size_t n = std::size_t{1} << 16;
+  const std::array<double, 3> white = {1e-3, 2e-3, 4e-3}, walk = {1e-5, 0, 3e-5};
+  std::vector<Vec3> samples(n);
+  for (int a = 0; a < 3; ++a) {
+    const std::vector<double> y = SimulateNoise(
+        {0, white[std::size_t(a)], 0, walk[std::size_t(a)], 0}, n, tau0, 10 + std::uint64_t(a));
+    for (std::size_t k = 0; k < n; ++k) samples[k](a) = 5.0 + y[k];
+  }
+  const NoiseAnalysis noise = AnalyseNoise(samples, tau0);
+  EXPECT_EQ(noise.samples, n);
+  for (int a = 0; a < 3; ++a) {
+    const NoiseModelFit& fit = noise.axes[std::size_t(a)].fit;
+    const NoiseTermEstimate& N = fit.terms[std::size_t(NoiseTerm::kWhite)];
+    EXPECT_TRUE(N.resolved);
+    EXPECT_NEAR(N.value, white[std::size_t(a)], 4 * N.sigma) << "axis " << a;
+    EXPECT_EQ(noise.axes[std::size_t(a)].points.size(), 15u);
+  }
+}
+
+TEST(Noise, RefusesWhatHasNoNoiseToCharacterise) {
+  std::vector<Vec3> samples(127, Vec3(1, 2, 3));
+  for (std::size_t k = 0; k < samples.size(); ++k) samples[k](0) += 1e-3 * double(k % 7);
+  // 127 samples: m = 1 … 16 (5 octaves) for 5 terms.
+  EXPECT_THROW(AnalyseNoise(samples, 0.01), DataError);
+  samples.resize(4096, Vec3(1, 2, 3));
+  for (std::size_t k = 0; k < samples.size(); ++k) samples[k](0) = 1 + 1e-3 * double(k % 7);
+  try {
+    AnalyseNoise(samples, 0.01);
+    FAIL() << "a constant axis was analysed";
+  } catch (const DataError& e) {
+    EXPECT_NE(std::string(e.what()).find("the y axis reads the same value"), std::string::npos)
+        << e.what();
+  }
 }
 
 }  // namespace

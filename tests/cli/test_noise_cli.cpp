@@ -81,5 +81,27 @@ TEST_F(Cli, NoiseRefusesWhatItCannotCharacterise) {
   EXPECT_NE(r.out.find("# the longest still interval: samples 26-999"), std::string::npos) << r.out;
 }
 
+// The README's figures: the Xsens recording's rest, calibrated by its own calibration.
+TEST_F(Cli, NoiseOfTheXsensRestIsTheReadmes) {
+  const std::string data = std::string(ACCELCAL_DATA_DIR) + "/imutk-xsens-mti/";
+  const std::string cal = Path("xsens.json");
+  ASSERT_EQ(Exec("calibrate " + data + "xsens_acc.mat --gravity 9.81744 --gyro " + data +
+                 "xsens_gyro.mat -q -o " + cal)
+                .status,
+            0);
+  const CliRun r = Exec("noise " + data + "xsens_acc.mat --still --calibration " + cal +
+                        " --gyro " + data + "xsens_gyro.mat --json");
+  ASSERT_EQ(r.status, 0) << r.err;
+  const nlohmann::json doc = nlohmann::json::parse(r.out);
+  const double ug = 1e6 / 9.80665, deg = 180 / 3.14159265358979323846;
+  const double accel[3] = {83.6, 91.1, 90.2}, gyro[3] = {0.0350, 0.0350, 0.0354};
+  for (std::size_t a = 0; a < 3; ++a) {
+    const nlohmann::json& w = doc["accelerometer"]["axes"][a]["terms"]["white"];
+    EXPECT_NEAR(w["value"].get<double>() * ug, accel[a], 0.05) << a;  // as the README rounds
+    const nlohmann::json& g = doc["gyroscope"]["axes"][a]["terms"]["white"];
+    EXPECT_NEAR(g["value"].get<double>() * deg, gyro[a], 0.00005) << a;
+  }
+}
+
 }  // namespace
 }  // namespace accelcal

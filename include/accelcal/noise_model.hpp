@@ -56,7 +56,7 @@ struct NoiseFitOptions {
   /// The terms fitted (all by default).
   std::array<bool, kNoiseTerms> terms = {true, true, true, true, true};
   double confidence = 0.95;  ///< of the intervals, two-sided
-  int max_iterations = 50;   ///< of the reweighting
+  int max_iterations = 200;  ///< of the reweighting (71 on the T265 rest's accelerometer y)
 };
 
 struct NoiseModelFit {

@@ -170,6 +170,75 @@ std::string SensorText(const Sensor& s) {
   return out;
 }
 
+int WriteNoise(const NoiseArgs& args, bool calibrated, std::size_t begin, std::size_t end,
+               double rate_hz, const std::vector<Sensor>& sensors) {
+  std::string out;
+  if (args.json) {
+    nlohmann::ordered_json doc;
+    doc["source"] = args.input.path;
+    if (calibrated) doc["calibration"] = args.calibration;
+    doc["first_sample"] = begin + 1;
+    doc["last_sample"] = end;
+    doc["rate_hz"] = rate_hz;
+    doc["model"] =
+        "sigma^2(tau) = 3 Q^2/tau^2 + N^2/tau + (2 ln2/pi) B^2 + K^2 tau/3 + R^2 tau^2/2 "
+        "(IEEE Std 952-1997 Annex C); intervals 95 %";
+    for (const Sensor& s : sensors) doc[s.name] = SensorJson(s);
+    out = JsonText(doc);
+  } else {
+    if (args.still) {
+      out += Format("# the longest still interval: samples %zu-%zu\n", begin + 1, end);
+    }
+    for (const Sensor& s : sensors) out += SensorText(s);
+    out +=
+        "# σ²(τ) = 3Q²/τ² + N²/τ + (2 ln 2/π)B² + K²τ/3 + R²τ²/2 (IEEE Std 952 Annex C) fitted to "
+        "the overlapping Allan variance; ± 1σ; \"< x\": not resolved, 95 % upper bound\n";
+  }
+  WriteFileAtomically(args.output.empty() ? "-" : args.output, out);
+  return kExitOk;
+}
+
+// The whole log, streamed through the accumulators: memory bounded by the reader's blocks.
+int StreamNoise(const NoiseArgs& args, const ReadOptions& read,
+                const std::optional<LoadedCalibration>& cal) {
+  NoiseAccumulator accumulator(1.0);  // the period only scales τ: given at the end
+  std::vector<Vec3> calibrated;
+  const StreamedLog log = StreamRawLog(args.input.path, read, [&](const RawLog& piece) {
+    if (!cal) {
+      accumulator.Add(piece.samples.data(), piece.samples.size());
+      return;
+    }
+    calibrated.resize(piece.samples.size());
+    for (std::size_t k = 0; k < piece.samples.size(); ++k) {
+      const std::optional<Vec3> f = SpecificForce(cal->params, piece.samples[k]);
+      if (!f) {
+        throw InputError(args.input.path, piece.line[k],
+                         "the reading lies outside the range the quadratic model can invert");
+      }
+      calibrated[k] = *f;
+    }
+    accumulator.Add(calibrated.data(), calibrated.size());
+  });
+  if (!log.rate_hz) {
+    throw UsageError(args.input.path +
+                     " has no time column: give the sample rate with --rate (or the columns "
+                     "with --columns time,x,y,z)");
+  }
+  if (!log.gap_lines.empty()) {
+    const TimeGap& gap = log.time->gaps.front();
+    throw InputError(args.input.path, log.gap_lines.front(),
+                     Format("a gap in the samples (%.6g s to %.6g s after the first): the Allan "
+                            "deviation needs one unbroken stream at one rate",
+                            gap.t_before_s, gap.t_after_s));
+  }
+  Sensor accel;
+  accel.name = "accelerometer";
+  accel.source = args.input.path;
+  accel.display = cal ? AccelDisplay(cal->unit) : RawDisplay("raw");
+  accel.noise = accumulator.Finish(1 / *log.rate_hz);
+  return WriteNoise(args, cal.has_value(), 0, log.samples, *log.rate_hz, {accel});
+}
+
 }  // namespace
 
 int RunNoise(const NoiseArgs& args) {
@@ -185,6 +254,9 @@ int RunNoise(const NoiseArgs& args) {
   }
   ReadOptions read = MakeReadOptions(args.input);
   read.kind = InputKind::kRaw;
+  // A still log alone is streamed (a day's log in bounded memory); --still and the gyroscope
+  // need the log whole (detection, the two streams sample by sample).
+  if (!args.still && !gyro) return StreamNoise(args, read, cal);
   const InputData data = ReadInput(args.input.path, read);
   const RawLog& log = data.raw;
   if (!log.rate_hz) {
@@ -268,30 +340,7 @@ int RunNoise(const NoiseArgs& args) {
     g.noise = AnalyseNoise(samples, period);
     sensors.push_back(std::move(g));
   }
-  std::string out;
-  if (args.json) {
-    nlohmann::ordered_json doc;
-    doc["source"] = args.input.path;
-    if (cal) doc["calibration"] = args.calibration;
-    doc["first_sample"] = begin + 1;
-    doc["last_sample"] = end;
-    doc["rate_hz"] = *log.rate_hz;
-    doc["model"] =
-        "sigma^2(tau) = 3 Q^2/tau^2 + N^2/tau + (2 ln2/pi) B^2 + K^2 tau/3 + R^2 tau^2/2 "
-        "(IEEE Std 952-1997 Annex C); intervals 95 %";
-    for (const Sensor& s : sensors) doc[s.name] = SensorJson(s);
-    out = JsonText(doc);
-  } else {
-    if (args.still) {
-      out += Format("# the longest still interval: samples %zu-%zu\n", begin + 1, end);
-    }
-    for (const Sensor& s : sensors) out += SensorText(s);
-    out +=
-        "# σ²(τ) = 3Q²/τ² + N²/τ + (2 ln 2/π)B² + K²τ/3 + R²τ²/2 (IEEE Std 952 Annex C) fitted to "
-        "the overlapping Allan variance; ± 1σ; \"< x\": not resolved, 95 % upper bound\n";
-  }
-  WriteFileAtomically(args.output.empty() ? "-" : args.output, out);
-  return kExitOk;
+  return WriteNoise(args, cal.has_value(), begin, end, *log.rate_hz, sensors);
 }
 
 }  // namespace accelcal::cli

@@ -71,6 +71,9 @@ class AllanAccumulator {
   /// Every octave with 4 m ≤ n (n the samples so far): at m = n/4 the white-noise estimate still
   /// has about 4 degrees of freedom.
   std::vector<AllanPoint> Points() const;
+  /// The same at another sample period (a stream whose rate is known only at its end): the sums
+  /// do not depend on it. Throws std::invalid_argument for one not finite and positive.
+  std::vector<AllanPoint> Points(double sample_period_s) const;
 
  private:
   // Level 0 keeps every phase point (for m = 1, 2, …, R: sums_ and terms_ by log₂ m); level

@@ -108,6 +108,31 @@ InputData ParseInput(std::string_view text, const std::string& source, const Rea
 /// Reads and parses a file; "-" reads standard input (named "<stdin>" in messages). Throws
 /// InputError (unreadable path, parse error).
 InputData ReadInput(const std::string& path, const ReadOptions& options);
+/// What StreamRawLog found in a whole log whose samples went to its sink.
+struct StreamedLog {
+  std::string source;             ///< file name, for messages
+  std::size_t samples = 0;        ///< handed to the sink
+  std::optional<double> rate_hz;  ///< as RawLog::rate_hz, over the whole log
+  /// The time column: its unit, origin and typical step decided on the first kStreamHeadSamples
+  /// samples (as are its resolution and the fractions of repeated and irregular steps), its gaps
+  /// and rate over the whole log. Unset without a time column.
+  std::optional<TimeAxis> time;
+  std::vector<std::uint32_t> gap_lines;  ///< the line of the first sample after each gap
+};
+/// The samples StreamRawLog holds before it decides the time column's unit.
+inline constexpr std::size_t kStreamHeadSamples = 65536;
+
+/// A raw log too long to hold, read block by block (ReadInput's format and options; the kind is
+/// raw): `sink` gets the samples in file order, in pieces (a RawLog whose time_s are seconds from
+/// the first sample, with samples and line), which it may keep or drop, so that memory does not
+/// grow with the log. The time column's unit is decided on the first kStreamHeadSamples samples
+/// (all of a shorter log); a later timestamp that goes back is an InputError, and a step longer
+/// than kGapFactor typical steps a gap. A file with an instance column holding more than one
+/// value needs ReadOptions::instance (InputError at the first row of a second value otherwise).
+/// Not fingerprinted. Throws InputError for what ReadInput refuses.
+StreamedLog StreamRawLog(const std::string& path, const ReadOptions& options,
+                         const std::function<void(const RawLog& piece)>& sink);
+
 /// Calibration, orientation and other small files are refused beyond this size (64 MiB), so a
 /// huge or sparse file given by mistake fails at once instead of filling memory.
 inline constexpr std::size_t kMaxSmallFileBytes = std::size_t{64} << 20;

@@ -30,6 +30,28 @@ struct NoiseAnalysis {
   std::array<AxisNoise, 3> axes;  ///< x, y, z
 };
 
+/// The same, fed in pieces (a log too long to hold, StreamRawLog): memory does not grow with the
+/// samples.
+class NoiseAccumulator {
+ public:
+  /// Throws std::invalid_argument for a period not finite and positive.
+  NoiseAccumulator(double sample_period_s, const NoiseOptions& options = {});
+  /// Appends samples (finite: std::invalid_argument naming the sample otherwise).
+  void Add(const Vec3* samples, std::size_t count);
+  std::size_t samples() const { return samples_; }
+  /// The analysis of everything added (AnalyseNoise's errors).
+  NoiseAnalysis Finish() const { return Finish(sample_period_s_); }
+  /// The same at another sample period (a stream's rate, known at its end).
+  NoiseAnalysis Finish(double sample_period_s) const;
+
+ private:
+  double sample_period_s_;
+  NoiseOptions options_;
+  std::vector<AllanAccumulator> axes_;
+  std::vector<double> buffer_;
+  std::size_t samples_ = 0;
+};
+
 /// Each axis of `samples` (taken every `sample_period_s`, in the unit the terms come out in).
 /// Throws DataError when there are too few samples for the terms fitted (4 m ≤ n must hold for
 /// one more octave than terms: 128 samples for all five), or an axis is constant (no noise to

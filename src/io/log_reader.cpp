@@ -275,8 +275,19 @@ std::string_view PeekRows(internal::TextBlocks& blocks, std::size_t want_rows,
   }
 }
 
+// What a raw log read in blocks hands on after each block: the block's rows (data->raw, and their
+// instance values when the file has an instance column), to be taken and cleared.
+using BlockSink = std::function<void(InputData* data, std::vector<double>* instances)>;
+// The columns a raw log read in blocks was found to have, told before its first block.
+struct BlockColumns {
+  bool time = false;
+  std::string time_name;      // the header's name of the time column ("" without a header)
+  std::string instance_name;  // the instance column's name; "" without one
+};
+
 InputData ParseBlocks(internal::TextBlocks& blocks, const std::string& source,
-                      const ReadOptions& options) {
+                      const ReadOptions& options, const BlockSink* sink = nullptr,
+                      BlockColumns* columns = nullptr) {
   if (options.rate_hz && !(*options.rate_hz > 0 && std::isfinite(*options.rate_hz))) {
     throw InputError(source, 0, "the rate must be a positive number of Hz");
   }
@@ -407,8 +418,11 @@ InputData ParseBlocks(internal::TextBlocks& blocks, const std::string& source,
                          (raw ? ": use the columns option to choose time,x,y,z or x,y,z"
                               : ": a positions file has x,y,z [,n [,sx,sy,sz]]"));
   }
+  if (sink != nullptr && !raw) {
+    throw InputError(source, 0, "a positions file, not a raw log (" + data.kind_reason + ")");
+  }
   // Parse every data row, block by block.
-  if (raw) {
+  if (raw && sink == nullptr) {
     data.raw.samples.reserve(expected_rows);
     data.raw.line.reserve(expected_rows);
     if (layout.column[kTime] >= 0) data.raw.time_s.reserve(expected_rows);
@@ -421,6 +435,15 @@ InputData ParseBlocks(internal::TextBlocks& blocks, const std::string& source,
   } else {
     layout.column[kInstance] = -1;
   }
+  if (columns != nullptr) {
+    columns->time = layout.column[kTime] >= 0;
+    if (columns->time && !header.empty()) {
+      columns->time_name = header[std::size_t(layout.column[kTime])];
+    }
+    if (layout.column[kInstance] >= 0) {
+      columns->instance_name = header[std::size_t(layout.column[kInstance])];
+    }
+  }
   const RowParser parser(source, delim, ncols, layout, raw, options.progress);
   std::vector<double> instances;
   std::string_view block;
@@ -431,7 +454,12 @@ InputData ParseBlocks(internal::TextBlocks& blocks, const std::string& source,
     lines = parser.Parse(block, blocks.block_offset(), blocks.total(), lines, blocks.line_end(),
                          skip_header, &parsed_rows, &data, &instances);
     skip_header = false;
+    if (sink != nullptr) {
+      if (layout.column[kInstance] < 0) instances.clear();
+      (*sink)(&data, &instances);
+    }
   }
+  if (sink != nullptr) return data;
   if (raw ? data.raw.samples.empty() : data.positions.empty()) {
     throw InputError(source, first_line, "a header but no data rows");
   }
@@ -511,6 +539,167 @@ InputData ReadInput(const std::string& path, const ReadOptions& options) {
     data.sha256 = hash.HexDigest();
   }
   return data;
+}
+
+StreamedLog StreamRawLog(const std::string& path, const ReadOptions& options,
+                         const std::function<void(const RawLog& piece)>& sink) {
+  internal::InputFile file(path, options.max_stream_bytes);
+  internal::TextBlocks blocks(&file);
+  ReadOptions read = options;
+  read.kind = InputKind::kRaw;
+  read.fingerprint = false;
+  StreamedLog out;
+  out.source = file.name();
+  const std::string& source = out.source;
+  BlockColumns columns;
+  RawLog head;   // the first samples, their times as written, until the unit is decided
+  RawLog piece;  // what goes to the sink
+  piece.source = source;
+  std::optional<TimeAxis> axis;
+  double raw_t0 = 0, scale = 1, typical = 0;
+  double previous_raw = 0, previous_t = 0;
+  double segment_t0 = 0, spans = 0, counted = 0;
+  std::size_t segment_samples = 0;
+  std::optional<double> instance_seen;
+  std::size_t instance_seen_line = 0;
+  // Converts rows of `rows` (times as written) to seconds, checks them and hands them on.
+  const auto emit = [&](const RawLog& rows) {
+    piece.time_s.clear();
+    piece.samples.clear();
+    piece.line.clear();
+    for (std::size_t k = 0; k < rows.samples.size(); ++k) {
+      if (axis) {
+        const double v = rows.time_s[k];
+        const double t = (v - raw_t0) * scale;
+        if (out.samples > 0) {
+          if (v < previous_raw)
+            throw InputError(source, rows.line[k], TimeBackwards(v, previous_raw));
+          if (t - previous_t > kGapFactor * typical) {
+            if (segment_samples >= 2) {
+              spans += previous_t - segment_t0;
+              counted += static_cast<double>(segment_samples - 1);
+            }
+            axis->gaps.push_back({out.samples, previous_t, t});
+            out.gap_lines.push_back(rows.line[k]);
+            segment_t0 = t;
+            segment_samples = 0;
+          }
+        } else {
+          segment_t0 = t;
+        }
+        previous_raw = v;
+        previous_t = t;
+        ++segment_samples;
+        piece.time_s.push_back(t);
+      }
+      piece.samples.push_back(rows.samples[k]);
+      piece.line.push_back(rows.line[k]);
+      ++out.samples;
+    }
+    if (!piece.samples.empty()) sink(piece);
+  };
+  const auto decide = [&] {
+    if (!columns.time || head.samples.empty()) return;
+    if (head.samples.size() < 2) throw InputError(source, 0, "one sample: a raw log needs more");
+    for (std::size_t i = 1; i < head.time_s.size(); ++i) {
+      if (head.time_s[i] < head.time_s[i - 1]) {
+        throw InputError(source, head.line[i], TimeBackwards(head.time_s[i], head.time_s[i - 1]));
+      }
+    }
+    std::vector<double> times = head.time_s;
+    try {
+      axis = MakeTimeAxis(&times, options.time_unit, columns.time_name);
+    } catch (const DataError& e) {
+      throw InputError(source, 0, e.what());
+    }
+    axis->gaps.clear();  // found again over the whole log
+    raw_t0 = head.time_s.front();
+    scale = SecondsPer(axis->unit);
+    typical = axis->typical_step_s;
+  };
+  bool decided = false;
+  const BlockSink take = [&](InputData* data, std::vector<double>* instances) {
+    RawLog& rows = data->raw;
+    if (!columns.instance_name.empty()) {
+      // The rows of the chosen instance; without a choice, one value throughout.
+      std::size_t kept = 0;
+      for (std::size_t i = 0; i < rows.samples.size(); ++i) {
+        const double v = (*instances)[i];
+        if (options.instance) {
+          if (v != *options.instance) continue;
+        } else if (!instance_seen) {
+          instance_seen = v;
+          instance_seen_line = rows.line[i];
+        } else if (v != *instance_seen) {
+          throw InputError(source, rows.line[i],
+                           "the rows belong to more than one sensor (instance column '" +
+                               columns.instance_name + "': " + ShortNumber(*instance_seen) +
+                               " from line " + std::to_string(instance_seen_line) + ", " +
+                               ShortNumber(v) + " here): choose one instance");
+        }
+        if (!rows.time_s.empty()) rows.time_s[kept] = rows.time_s[i];
+        rows.samples[kept] = rows.samples[i];
+        rows.line[kept] = rows.line[i];
+        ++kept;
+      }
+      if (!rows.time_s.empty()) rows.time_s.resize(kept);
+      rows.samples.resize(kept);
+      rows.line.resize(kept);
+    }
+    if (decided) {
+      emit(rows);
+    } else {
+      head.time_s.insert(head.time_s.end(), rows.time_s.begin(), rows.time_s.end());
+      head.samples.insert(head.samples.end(), rows.samples.begin(), rows.samples.end());
+      head.line.insert(head.line.end(), rows.line.begin(), rows.line.end());
+      if (head.samples.size() >= kStreamHeadSamples) {
+        decide();
+        decided = true;
+        emit(head);
+        head = RawLog();
+      }
+    }
+    rows.time_s.clear();
+    rows.samples.clear();
+    rows.line.clear();
+    instances->clear();
+  };
+  ParseBlocks(blocks, source, read, &take, &columns);
+  if (!decided) {
+    if (head.samples.empty()) {
+      throw InputError(source, 0,
+                       columns.instance_name.empty() || !options.instance
+                           ? "a header but no data rows"
+                           : "no rows of instance " + ShortNumber(*options.instance));
+    }
+    decide();
+    emit(head);
+  }
+  if (axis) {
+    if (segment_samples >= 2) {
+      spans += previous_t - segment_t0;
+      counted += static_cast<double>(segment_samples - 1);
+    }
+    if (!(spans > 0))
+      throw InputError(source, 0, "the timestamps do not advance within any segment");
+    axis->rate_hz = counted / spans;
+    out.rate_hz = axis->rate_hz;
+    if (options.rate_hz) {
+      if (std::abs(*options.rate_hz / axis->rate_hz - 1) > kRateTolerance) {
+        throw InputError(source, 0,
+                         "the given rate " + ShortNumber(*options.rate_hz) +
+                             " Hz contradicts the time column, whose timestamps (" +
+                             std::string(ToString(axis->unit)) + ") come at " +
+                             ShortNumber(axis->rate_hz) + " Hz");
+      }
+      out.rate_hz = options.rate_hz;
+    }
+    out.time = std::move(axis);
+  } else {
+    if (out.samples == 1) throw InputError(source, 0, "one sample: a raw log needs more");
+    out.rate_hz = options.rate_hz;
+  }
+  return out;
 }
 
 }  // namespace accelcal

@@ -93,8 +93,15 @@ void AllanAccumulator::Add(const double* y, std::size_t count) {
 }
 
 std::vector<AllanPoint> AllanAccumulator::Points() const {
+  return Points(options_.sample_period_s);
+}
+
+std::vector<AllanPoint> AllanAccumulator::Points(double sample_period_s) const {
+  if (!(std::isfinite(sample_period_s) && sample_period_s > 0)) {
+    throw std::invalid_argument("AllanAccumulator: the sample period must be finite and positive");
+  }
   std::vector<AllanPoint> out;
-  const double tau0 = options_.sample_period_s;
+  const double tau0 = sample_period_s;
   const auto add = [&](std::uint64_t m, std::uint64_t stride, double sum, std::uint64_t terms) {
     if (terms == 0 || 4 * m > samples_) return;
     AllanPoint p;

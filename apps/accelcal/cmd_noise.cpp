@@ -170,6 +170,40 @@ std::string SensorText(const Sensor& s) {
   return out;
 }
 
+// The rate a noise analysis needs: the time column's or --rate.
+double RequireRate(const std::string& path, const std::optional<double>& rate_hz) {
+  if (!rate_hz) {
+    throw UsageError(path +
+                     " has no time column: give the sample rate with --rate (or the columns "
+                     "with --columns time,x,y,z)");
+  }
+  return *rate_hz;
+}
+
+// The Allan variance of a log joined across a gap is not the sensor's.
+[[noreturn]] void RefuseGap(const std::string& path, std::uint32_t line, const TimeGap& gap) {
+  throw InputError(path, line,
+                   Format("a gap in the samples (%.6g s to %.6g s after the first): the Allan "
+                          "deviation needs one unbroken stream at one rate",
+                          gap.t_before_s, gap.t_after_s));
+}
+
+// The calibrated specific force of `count` raw readings (their lines `line`, for the error).
+std::vector<Vec3> SpecificForces(const LoadedCalibration& cal, const Vec3* raw,
+                                 const std::uint32_t* line, std::size_t count,
+                                 const std::string& path) {
+  std::vector<Vec3> forces(count);
+  for (std::size_t k = 0; k < count; ++k) {
+    const std::optional<Vec3> f = SpecificForce(cal.params, raw[k]);
+    if (!f) {
+      throw InputError(path, line[k],
+                       "the reading lies outside the range the quadratic model can invert");
+    }
+    forces[k] = *f;
+  }
+  return forces;
+}
+
 int WriteNoise(const NoiseArgs& args, bool calibrated, std::size_t begin, std::size_t end,
                double rate_hz, const std::vector<Sensor>& sensors) {
   std::string out;
@@ -202,41 +236,25 @@ int WriteNoise(const NoiseArgs& args, bool calibrated, std::size_t begin, std::s
 int StreamNoise(const NoiseArgs& args, const ReadOptions& read,
                 const std::optional<LoadedCalibration>& cal) {
   NoiseAccumulator accumulator(1.0);  // the period only scales τ: given at the end
-  std::vector<Vec3> calibrated;
   const StreamedLog log = StreamRawLog(args.input.path, read, [&](const RawLog& piece) {
     if (!cal) {
       accumulator.Add(piece.samples.data(), piece.samples.size());
       return;
     }
-    calibrated.resize(piece.samples.size());
-    for (std::size_t k = 0; k < piece.samples.size(); ++k) {
-      const std::optional<Vec3> f = SpecificForce(cal->params, piece.samples[k]);
-      if (!f) {
-        throw InputError(args.input.path, piece.line[k],
-                         "the reading lies outside the range the quadratic model can invert");
-      }
-      calibrated[k] = *f;
-    }
-    accumulator.Add(calibrated.data(), calibrated.size());
+    const std::vector<Vec3> forces = SpecificForces(*cal, piece.samples.data(), piece.line.data(),
+                                                    piece.samples.size(), args.input.path);
+    accumulator.Add(forces.data(), forces.size());
   });
-  if (!log.rate_hz) {
-    throw UsageError(args.input.path +
-                     " has no time column: give the sample rate with --rate (or the columns "
-                     "with --columns time,x,y,z)");
-  }
+  const double rate_hz = RequireRate(args.input.path, log.rate_hz);
   if (!log.gap_lines.empty()) {
-    const TimeGap& gap = log.time->gaps.front();
-    throw InputError(args.input.path, log.gap_lines.front(),
-                     Format("a gap in the samples (%.6g s to %.6g s after the first): the Allan "
-                            "deviation needs one unbroken stream at one rate",
-                            gap.t_before_s, gap.t_after_s));
+    RefuseGap(args.input.path, log.gap_lines.front(), log.time->gaps.front());
   }
   Sensor accel;
   accel.name = "accelerometer";
   accel.source = args.input.path;
   accel.display = cal ? AccelDisplay(cal->unit) : RawDisplay("raw");
-  accel.noise = accumulator.Finish(1 / *log.rate_hz);
-  return WriteNoise(args, cal.has_value(), 0, log.samples, *log.rate_hz, {accel});
+  accel.noise = accumulator.Finish(1 / rate_hz);
+  return WriteNoise(args, cal.has_value(), 0, log.samples, rate_hz, {accel});
 }
 
 }  // namespace
@@ -259,17 +277,10 @@ int RunNoise(const NoiseArgs& args) {
   if (!args.still && !gyro) return StreamNoise(args, read, cal);
   const InputData data = ReadInput(args.input.path, read);
   const RawLog& log = data.raw;
-  if (!log.rate_hz) {
-    throw UsageError(args.input.path +
-                     " has no time column: give the sample rate with --rate (or the columns "
-                     "with --columns time,x,y,z)");
-  }
+  const double rate_hz = RequireRate(args.input.path, log.rate_hz);
   if (log.time && !log.time->gaps.empty()) {
     const TimeGap& gap = log.time->gaps.front();
-    throw InputError(args.input.path, log.line[gap.index],
-                     Format("a gap in the samples (%.6g s to %.6g s after the first): the Allan "
-                            "deviation needs one unbroken stream at one rate",
-                            gap.t_before_s, gap.t_after_s));
+    RefuseGap(args.input.path, log.line[gap.index], gap);
   }
   // The samples analysed: the whole log, or its longest still interval.
   std::size_t begin = 0, end = log.samples.size();
@@ -283,28 +294,24 @@ int RunNoise(const NoiseArgs& args) {
     begin = longest->begin;
     end = longest->end;
   }
-  const double period = 1 / *log.rate_hz;
+  const double period = 1 / rate_hz;
+  const auto count = static_cast<std::size_t>(end - begin);
+  // Calibrated, the accelerometer's specific force, which the gyroscope's g-sensitivity takes too.
+  std::vector<Vec3> forces;
+  if (cal) {
+    forces = SpecificForces(*cal, log.samples.data() + begin, log.line.data() + begin, count,
+                            args.input.path);
+  }
   std::vector<Sensor> sensors;
   {
     Sensor accel;
     accel.name = "accelerometer";
     accel.source = args.input.path;
-    std::vector<Vec3> samples(log.samples.begin() + static_cast<std::ptrdiff_t>(begin),
-                              log.samples.begin() + static_cast<std::ptrdiff_t>(end));
-    if (cal) {
-      for (std::size_t k = 0; k < samples.size(); ++k) {
-        const std::optional<Vec3> f = SpecificForce(cal->params, samples[k]);
-        if (!f) {
-          throw InputError(args.input.path, log.line[begin + k],
-                           "the reading lies outside the range the quadratic model can invert");
-        }
-        samples[k] = *f;
-      }
-      accel.display = AccelDisplay(cal->unit);
-    } else {
-      accel.display = RawDisplay("raw");
-    }
-    accel.noise = AnalyseNoise(samples, period);
+    accel.display = cal ? AccelDisplay(cal->unit) : RawDisplay("raw");
+    accel.noise = cal ? AnalyseNoise(forces, period)
+                      : AnalyseNoise(std::vector<Vec3>(log.samples.begin() + std::ptrdiff_t(begin),
+                                                       log.samples.begin() + std::ptrdiff_t(end)),
+                                     period);
     sensors.push_back(std::move(accel));
   }
   if (gyro) {
@@ -322,12 +329,10 @@ int RunNoise(const NoiseArgs& args) {
     std::vector<Vec3> samples(rates.raw.samples.begin() + static_cast<std::ptrdiff_t>(begin),
                               rates.raw.samples.begin() + static_cast<std::ptrdiff_t>(end));
     if (cal && cal->has_gyroscope()) {
-      // ω = K_g⁻¹ (ω_raw − b_g − G f), f the calibrated specific force of the same sample.
-      const GyroParameters& p = cal->gyroscope->params;
-      const Mat33 K_inverse = p.K.inverse();
       for (std::size_t k = 0; k < samples.size(); ++k) {
-        const Vec3 f = *SpecificForce(cal->params, log.samples[begin + k]);
-        samples[k] = K_inverse * (samples[k] - p.bias - p.G * f);
+        const std::optional<Vec3> w = BodyRate(cal->gyroscope->params, samples[k], forces[k]);
+        if (!w) throw DataError(args.calibration + ": its gyroscope's K_g is singular");
+        samples[k] = *w;
       }
       g.display = GyroDisplay();
     } else {
@@ -340,7 +345,7 @@ int RunNoise(const NoiseArgs& args) {
     g.noise = AnalyseNoise(samples, period);
     sensors.push_back(std::move(g));
   }
-  return WriteNoise(args, cal.has_value(), begin, end, *log.rate_hz, sensors);
+  return WriteNoise(args, cal.has_value(), begin, end, rate_hz, sensors);
 }
 
 }  // namespace accelcal::cli

@@ -184,6 +184,20 @@ std::string TimeBackwards(double now, double before) {
   return buf;
 }
 
+// The rate of a log with a time column: the timestamps', or the one given when it agrees with
+// them within kRateTolerance (InputError otherwise).
+double RateOf(const TimeAxis& time, const std::optional<double>& given, const std::string& source) {
+  if (!given) return time.rate_hz;
+  if (std::abs(*given / time.rate_hz - 1) > kRateTolerance) {
+    throw InputError(source, 0,
+                     "the given rate " + ShortNumber(*given) +
+                         " Hz contradicts the time column, whose timestamps (" +
+                         std::string(ToString(time.unit)) + ") come at " +
+                         ShortNumber(time.rate_hz) + " Hz");
+  }
+  return *given;
+}
+
 // Several sensors in one file (ArduPilot's IMU instances, PX4's device ids): the rows of one, by
 // `chosen`, or an error listing those found. A column with more than 16 distinct values is not
 // an instance column (a sample counter, say) and is left alone.
@@ -490,17 +504,7 @@ InputData ParseBlocks(internal::TextBlocks& blocks, const std::string& source,
       } catch (const DataError& e) {
         throw InputError(source, 0, e.what());
       }
-      log.rate_hz = log.time->rate_hz;
-      if (options.rate_hz) {
-        if (std::abs(*options.rate_hz / log.time->rate_hz - 1) > kRateTolerance) {
-          throw InputError(source, 0,
-                           "the given rate " + ShortNumber(*options.rate_hz) +
-                               " Hz contradicts the time column, whose timestamps (" +
-                               std::string(ToString(log.time->unit)) + ") come at " +
-                               ShortNumber(log.time->rate_hz) + " Hz");
-        }
-        log.rate_hz = options.rate_hz;
-      }
+      log.rate_hz = RateOf(*log.time, options.rate_hz, source);
     } else if (log.time_s.size() == 1) {
       throw InputError(source, 0, "one sample: a raw log needs more");
     } else if (options.rate_hz) {
@@ -683,17 +687,7 @@ StreamedLog StreamRawLog(const std::string& path, const ReadOptions& options,
     if (!(spans > 0))
       throw InputError(source, 0, "the timestamps do not advance within any segment");
     axis->rate_hz = counted / spans;
-    out.rate_hz = axis->rate_hz;
-    if (options.rate_hz) {
-      if (std::abs(*options.rate_hz / axis->rate_hz - 1) > kRateTolerance) {
-        throw InputError(source, 0,
-                         "the given rate " + ShortNumber(*options.rate_hz) +
-                             " Hz contradicts the time column, whose timestamps (" +
-                             std::string(ToString(axis->unit)) + ") come at " +
-                             ShortNumber(axis->rate_hz) + " Hz");
-      }
-      out.rate_hz = options.rate_hz;
-    }
+    out.rate_hz = RateOf(*axis, options.rate_hz, source);
     out.time = std::move(axis);
   } else {
     if (out.samples == 1) throw InputError(source, 0, "one sample: a raw log needs more");

@@ -8,6 +8,7 @@
 #include "accelcal/calibration_file.hpp"
 #include "accelcal/gravity.hpp"
 #include "accelcal/gyro_calibration.hpp"
+#include "accelcal/gyro_model.hpp"
 #include "accelcal/noise.hpp"
 #include "cli_common.hpp"
 #include "core/text_format.hpp"

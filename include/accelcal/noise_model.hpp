@@ -26,7 +26,6 @@
 /// above only, by √(c + z σ_c).
 
 #include <array>
-#include <string>
 #include <vector>
 
 #include "accelcal/allan.hpp"

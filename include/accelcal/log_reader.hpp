@@ -69,6 +69,10 @@ struct ReadOptions {
   /// Also state the input's size and the SHA-256 of its bytes as read (InputData::bytes, sha256):
   /// what a calibration file's provenance records.
   bool fingerprint = false;
+  /// The columns option of another stream read from the same file (the accelerometer's, when
+  /// this read takes the gyroscope's; empty: its default layout): a column both would read is an
+  /// InputError. Unset: no other stream.
+  std::optional<std::vector<std::string>> other_columns = std::nullopt;
 };
 
 /// A given rate may differ from the timestamps' by this fraction (clock error, rounding).
@@ -124,12 +128,13 @@ inline constexpr std::size_t kStreamHeadSamples = 65536;
 
 /// A raw log too long to hold, read block by block (ReadInput's format and options; the kind is
 /// raw): `sink` gets the samples in file order, in pieces (a RawLog whose time_s are seconds from
-/// the first sample, with samples and line), which it may keep or drop, so that memory does not
-/// grow with the log. The time column's unit is decided on the first kStreamHeadSamples samples
-/// (all of a shorter log); a later timestamp that goes back is an InputError, and a step longer
-/// than kGapFactor typical steps a gap. A file with an instance column holding more than one
-/// value needs ReadOptions::instance (InputError at the first row of a second value otherwise).
-/// Not fingerprinted. Throws InputError for what ReadInput refuses.
+/// the first sample, with samples and line, and with a time column its `time`: the unit, origin,
+/// typical step and resolution decided on the head, no gaps), which it may keep or drop, so that
+/// memory does not grow with the log. The time column's unit is decided on the first
+/// kStreamHeadSamples samples (all of a shorter log); a later timestamp that goes back is an
+/// InputError, and a step longer than kGapFactor typical steps a gap. A file with an instance
+/// column holding more than one value needs ReadOptions::instance (InputError at the first row of a
+/// second value otherwise). Not fingerprinted. Throws InputError for what ReadInput refuses.
 StreamedLog StreamRawLog(const std::string& path, const ReadOptions& options,
                          const std::function<void(const RawLog& piece)>& sink);
 

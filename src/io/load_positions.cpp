@@ -63,6 +63,7 @@ InputData ReadGyroInput(const std::string& accel_path, const ReadOptions& accel_
   if (gyro_path.empty() && read.columns.size() == 3 && accel_read.columns.size() == 4) {
     read.columns.insert(read.columns.begin(), accel_read.columns.front());
   }
+  if (gyro_path.empty()) read.other_columns = accel_read.columns;  // the accelerometer's
   read.fingerprint = accel_read.fingerprint && !gyro_path.empty();
   const std::string& path = gyro_path.empty() ? accel_path : gyro_path;
   try {

@@ -299,6 +299,75 @@ struct BlockColumns {
   std::string instance_name;  // the instance column's name; "" without one
 };
 
+constexpr const char* kNoInstanceColumn =
+    "an instance was chosen, but the file has no instance column (i, instance, multi_id, "
+    "device_id, imu, imu_id, sensor_id, id)";
+
+// " ('name')" of column `c` (0-based) when the file has a header, for messages.
+std::string ColumnName(const std::vector<std::string>& header, int c) {
+  if (c < 0 || static_cast<std::size_t>(c) >= header.size()) return "";
+  return " ('" + header[static_cast<std::size_t>(c)] + "')";
+}
+
+// Which column holds what: the columns option's (time,x,y,z or x,y,z, each a number or a
+// header name, no column twice), else the header's names, else the column count's layout.
+Layout ChooseLayout(const std::vector<std::string>& chosen, const std::vector<std::string>& header,
+                    const Layout& named, std::size_t ncols, bool raw, const std::string& source,
+                    std::uint32_t first_line) {
+  Layout layout;
+  std::fill(std::begin(layout.column), std::end(layout.column), -1);
+  if (!chosen.empty()) {
+    const std::size_t n = chosen.size();
+    if (raw ? (n != 3 && n != 4) : n != 3) {
+      throw InputError(source, 0,
+                       raw ? "the columns option takes 3 entries (x,y,z) or 4 (time,x,y,z)"
+                           : "the columns option takes 3 entries (x,y,z) for a positions file");
+    }
+    const int offset = n == 4 ? 1 : 0;
+    if (n == 4) layout.column[kTime] = ResolveColumn(chosen[0], header, ncols, source);
+    for (int a = 0; a < 3; ++a) {
+      layout.column[kX + a] = ResolveColumn(chosen[a + offset], header, ncols, source);
+    }
+    if (!raw) {
+      for (int r = kCount; r < kRoles; ++r) layout.column[r] = named.column[r];
+    }
+  } else if (named.column[kX] >= 0 && named.column[kY] >= 0 && named.column[kZ] >= 0) {
+    layout = named;
+    if (raw) {
+      for (int r = kCount; r < kRoles; ++r) layout.column[r] = -1;
+    } else {
+      layout.column[kTime] = -1;
+    }
+  } else if (raw && ncols == 4) {
+    layout.column[kTime] = 0;
+    layout.column[kX] = 1, layout.column[kY] = 2, layout.column[kZ] = 3;
+  } else if (ncols == 3 || (!raw && (ncols == 4 || ncols == 7))) {
+    layout.column[kX] = 0, layout.column[kY] = 1, layout.column[kZ] = 2;
+    if (!raw && ncols >= 4) layout.column[kCount] = 3;
+    if (!raw && ncols == 7) layout.column[kSx] = 4, layout.column[kSy] = 5, layout.column[kSz] = 6;
+  } else {
+    throw InputError(source, first_line,
+                     std::to_string(ncols) + " columns" +
+                         (raw ? ": use the columns option to choose time,x,y,z or x,y,z"
+                              : ": a positions file has x,y,z [,n [,sx,sy,sz]]"));
+  }
+  if (!chosen.empty()) {
+    static constexpr const char* kRole[] = {"time", "x", "y", "z"};
+    for (int a = kTime; a <= kZ; ++a) {
+      for (int b = kTime; b < a; ++b) {
+        if (layout.column[a] >= 0 && layout.column[a] == layout.column[b]) {
+          throw InputError(source, 0,
+                           "the columns option names column " +
+                               std::to_string(layout.column[a] + 1) +
+                               ColumnName(header, layout.column[a]) + " twice (as " + kRole[b] +
+                               " and " + kRole[a] + "): each needs its own column");
+        }
+      }
+    }
+  }
+  return layout;
+}
+
 InputData ParseBlocks(internal::TextBlocks& blocks, const std::string& source,
                       const ReadOptions& options, const BlockSink* sink = nullptr,
                       BlockColumns* columns = nullptr) {
@@ -395,42 +464,24 @@ InputData ParseBlocks(internal::TextBlocks& blocks, const std::string& source,
                          "): a rate belongs to a raw log");
   }
 
-  Layout layout;
-  std::fill(std::begin(layout.column), std::end(layout.column), -1);
-  if (!options.columns.empty()) {
-    const std::size_t n = options.columns.size();
-    if (raw ? (n != 3 && n != 4) : n != 3) {
-      throw InputError(source, 0,
-                       raw ? "the columns option takes 3 entries (x,y,z) or 4 (time,x,y,z)"
-                           : "the columns option takes 3 entries (x,y,z) for a positions file");
+  Layout layout = ChooseLayout(options.columns, header, named, ncols, raw, source, first_line);
+  if (options.other_columns) {
+    // Another stream of this file (the accelerometer's beside the gyroscope's): no column both.
+    const Layout other =
+        ChooseLayout(*options.other_columns, header, named, ncols, true, source, first_line);
+    for (int a = kX; a <= kZ; ++a) {
+      for (int b = kX; b <= kZ; ++b) {
+        if (layout.column[a] == other.column[b]) {
+          throw InputError(source, 0,
+                           "the columns option reads column " +
+                               std::to_string(layout.column[a] + 1) +
+                               ColumnName(header, layout.column[a]) + " as its " +
+                               std::string(1, "xyz"[a - kX]) +
+                               ", which the other stream of this file reads as its " +
+                               std::string(1, "xyz"[b - kX]) + ": each needs its own columns");
+        }
+      }
     }
-    const int offset = n == 4 ? 1 : 0;
-    if (n == 4) layout.column[kTime] = ResolveColumn(options.columns[0], header, ncols, source);
-    for (int a = 0; a < 3; ++a) {
-      layout.column[kX + a] = ResolveColumn(options.columns[a + offset], header, ncols, source);
-    }
-    if (!raw) {
-      for (int r = kCount; r < kRoles; ++r) layout.column[r] = named.column[r];
-    }
-  } else if (named.column[kX] >= 0 && named.column[kY] >= 0 && named.column[kZ] >= 0) {
-    layout = named;
-    if (raw) {
-      for (int r = kCount; r < kRoles; ++r) layout.column[r] = -1;
-    } else {
-      layout.column[kTime] = -1;
-    }
-  } else if (raw && ncols == 4) {
-    layout.column[kTime] = 0;
-    layout.column[kX] = 1, layout.column[kY] = 2, layout.column[kZ] = 3;
-  } else if (ncols == 3 || (!raw && (ncols == 4 || ncols == 7))) {
-    layout.column[kX] = 0, layout.column[kY] = 1, layout.column[kZ] = 2;
-    if (!raw && ncols >= 4) layout.column[kCount] = 3;
-    if (!raw && ncols == 7) layout.column[kSx] = 4, layout.column[kSy] = 5, layout.column[kSz] = 6;
-  } else {
-    throw InputError(source, first_line,
-                     std::to_string(ncols) + " columns" +
-                         (raw ? ": use the columns option to choose time,x,y,z or x,y,z"
-                              : ": a positions file has x,y,z [,n [,sx,sy,sz]]"));
   }
   if (sink != nullptr && !raw) {
     throw InputError(source, 0, "a positions file, not a raw log (" + data.kind_reason + ")");
@@ -481,9 +532,7 @@ InputData ParseBlocks(internal::TextBlocks& blocks, const std::string& source,
     SelectInstance(instances, header[std::size_t(layout.column[kInstance])], options.instance,
                    source, &data);
   } else if (options.instance) {
-    throw InputError(source, 0,
-                     "an instance was chosen, but the file has no instance column (i, instance, "
-                     "multi_id, device_id, imu, imu_id, sensor_id, id)");
+    throw InputError(source, 0, kNoInstanceColumn);
   }
   if (raw) {
     const std::vector<double>& t = data.raw.time_s;
@@ -617,6 +666,7 @@ StreamedLog StreamRawLog(const std::string& path, const ReadOptions& options,
       throw InputError(source, 0, e.what());
     }
     axis->gaps.clear();  // found again over the whole log
+    piece.time = axis;   // the head's unit, origin, typical step and resolution
     raw_t0 = head.time_s.front();
     scale = SecondsPer(axis->unit);
     typical = axis->typical_step_s;
@@ -624,6 +674,9 @@ StreamedLog StreamRawLog(const std::string& path, const ReadOptions& options,
   bool decided = false;
   const BlockSink take = [&](InputData* data, std::vector<double>* instances) {
     RawLog& rows = data->raw;
+    if (options.instance && columns.instance_name.empty()) {
+      throw InputError(source, 0, kNoInstanceColumn);
+    }
     if (!columns.instance_name.empty()) {
       // The rows of the chosen instance; without a choice, one value throughout.
       std::size_t kept = 0;
@@ -669,6 +722,9 @@ StreamedLog StreamRawLog(const std::string& path, const ReadOptions& options,
     instances->clear();
   };
   ParseBlocks(blocks, source, read, &take, &columns);
+  if (options.instance && columns.instance_name.empty()) {
+    throw InputError(source, 0, kNoInstanceColumn);
+  }
   if (!decided) {
     if (head.samples.empty()) {
       throw InputError(source, 0,

@@ -52,10 +52,13 @@ DataError NoStaticInterval(const StaticDetectionResult& d) {
 ReadOptions MakeReadOptions(const InputArgs& in) {
   ReadOptions options;
   options.kind = ParseChoice<InputKind>(in.input_kind, "--input-kind");
+  if (!in.columns.empty() && in.columns.size() != 3 && in.columns.size() != 4) {
+    throw UsageError("--columns takes x,y,z or time,x,y,z");
+  }
   options.columns = in.columns;
   // A rate that is no rate is a usage error before anything is read (issue 16).
-  if (in.rate_hz && !(*in.rate_hz > 0 && *in.rate_hz <= kMaxRate_hz)) {
-    throw UsageError(Format("--rate must be a number of Hz in (0, %g]", kMaxRate_hz));
+  if (in.rate_hz && !(*in.rate_hz >= kMinRate_hz && *in.rate_hz <= kMaxRate_hz)) {
+    throw UsageError(Format("--rate must be a number of Hz in [%g, %g]", kMinRate_hz, kMaxRate_hz));
   }
   options.rate_hz = in.rate_hz;
   options.time_unit = ParseChoice<TimeUnit>(in.time_unit, "--time-unit");
@@ -144,9 +147,11 @@ InputData ReadGyroLog(const InputArgs& input, const std::string& gyro,
     return ReadGyroInput(input.path, read, gyro, gyro_columns);
   } catch (const InputError& e) {
     // The reader's "columns option" is --gyro-columns here: the rates' columns.
-    throw InputError(e.file(), e.line(),
-                     WithFlags(e.reason(), {{"the columns option's entry", "--gyro-columns entry"},
-                                            {"the columns option", "--gyro-columns"}}));
+    throw InputError(
+        e.file(), e.line(),
+        WithFlags(e.reason(), {{"the columns option's entry", "--gyro-columns entry"},
+                               {"the columns option", "--gyro-columns"},
+                               {"the other stream of this file", "the accelerometer"}}));
   }
 }
 

@@ -24,7 +24,8 @@ namespace accelcal::cli {
 
 // Ranges of the options that take physical quantities (issue 16): beyond them a value is a
 // mistake (a unit slip, a typo), never a calibration.
-constexpr double kMaxRate_hz = 1e6;
+constexpr double kMinRate_hz = kMinLogRate_hz;  // time_axis.hpp
+constexpr double kMaxRate_hz = kMaxLogRate_hz;
 constexpr double kMinGravity_ms2 = 1.0, kMaxGravity_ms2 = 100.0;
 constexpr double kMaxHeight_m = 20000.0;
 

@@ -56,6 +56,10 @@ double SecondsPer(TimeUnit unit);
 /// that) to 20 kHz (beyond the output rate of common MEMS accelerometers).
 inline constexpr double kMinPlausibleRate_hz = 2.0;
 inline constexpr double kMaxPlausibleRate_hz = 20000.0;
+/// Any rate a log may be said to have [Hz] (a given time unit, a given rate): 1 mHz (a sample
+/// every 17 minutes) to 1 MHz; beyond them a value is a slip of unit, never a log.
+inline constexpr double kMinLogRate_hz = 1e-3;
+inline constexpr double kMaxLogRate_hz = 1e6;
 /// A step longer than this many typical steps is a gap.
 inline constexpr double kGapFactor = 10.0;
 

@@ -64,8 +64,9 @@ def test_a_log_in_microseconds_gives_the_same_calibration(tmp_path, xsens):
     assert result.verdict == reference.verdict == "ok"
     time_note = [f for f in result.diagnostics if f["code"] == "time_unit"]
     assert len(time_note) == 1 and "time in us" in time_note[0]["message"]
-    # The unit given overrides the name: in seconds the log is far too slow to detect anything.
-    with pytest.raises(accelcal.DataError, match=str(log)):
+    # The unit given overrides the name: in seconds the log would be 1e-4 Hz, slower than any
+    # log's 1 mHz: refused as the file's.
+    with pytest.raises(accelcal.InputError, match="outside the 0.001 Hz-1 MHz of any log"):
         accelcal.calibrate_log(str(log), gravity=G, time_unit="s")
     same, _ = accelcal.calibrate_log(str(log), gravity=G, time_unit="us")
     np.testing.assert_array_equal(same.K, result.K)

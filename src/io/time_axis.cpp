@@ -147,6 +147,13 @@ TimeAxis MakeTimeAxis(std::vector<double>* time, TimeUnit unit, std::string_view
                                                  : "time column '" + std::string(column_name) + "'";
   const auto rate_in = [&](TimeUnit u) { return 1.0 / (step * SecondsPer(u)); };
   if (unit != TimeUnit::kAuto) {
+    if (!(rate_in(unit) >= kMinLogRate_hz && rate_in(unit) <= kMaxLogRate_hz)) {
+      throw DataError(
+          Format("%s in %s, as given, has a median step of %.6g: %s, outside the "
+                 "%g Hz-%g MHz of any log (another unit?)",
+                 column.c_str(), UnitWord(unit), step, RateText(rate_in(unit)).c_str(),
+                 kMinLogRate_hz, kMaxLogRate_hz / 1e6));
+    }
     axis.unit = unit;
     axis.unit_reason = Format("given: %s", UnitWord(unit));
   } else {

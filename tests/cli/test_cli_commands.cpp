@@ -390,10 +390,10 @@ TEST_F(Cli, UsageErrorsExitWithStatus2) {
               "Earth's surface)\n")
         << g;
   }
-  for (const char* rate : {"0", "nan", "inf", "1e308", "-100"}) {
+  for (const char* rate : {"0", "nan", "inf", "1e308", "-100", "1e-100", "0.0009"}) {
     r = Exec("calibrate " + in + " --rate " + rate);
     EXPECT_EQ(r.status, 2) << rate;
-    EXPECT_EQ(r.err, "accelcal: usage: --rate must be a number of Hz in (0, 1e+06]\n") << rate;
+    EXPECT_EQ(r.err, "accelcal: usage: --rate must be a number of Hz in [0.001, 1e+06]\n") << rate;
   }
   r = Exec("calibrate " + in + " --latitude 45 --height 1e9");
   EXPECT_EQ(r.status, 2);

@@ -154,7 +154,10 @@ double NoiseModelAvar(const std::array<double, kNoiseTerms>& squared, double tau
   return sum;
 }
 
-NoiseModelFit FitNoiseModel(const std::vector<AllanPoint>& points, const NoiseFitOptions& options) {
+namespace {
+
+// The fit of points whose σ² are near 1 (FitNoiseModel scales them there).
+NoiseModelFit FitNear1(const std::vector<AllanPoint>& points, const NoiseFitOptions& options) {
   if (!(options.confidence > 0 && options.confidence < 1) || options.max_iterations < 1) {
     throw std::invalid_argument(
         "FitNoiseModel: the confidence must lie in (0, 1) and the iterations be at least 1");
@@ -303,6 +306,41 @@ NoiseModelFit FitNoiseModel(const std::vector<AllanPoint>& points, const NoiseFi
     e.high = std::sqrt(std::max(0.0, c + z * sigma_c));
   }
   return out;
+}
+
+}  // namespace
+
+NoiseModelFit FitNoiseModel(const std::vector<AllanPoint>& points, const NoiseFitOptions& options) {
+  // Fitted on σ² scaled by a power of 4 to near 1 and scaled back: exact in binary floating
+  // point, so that the fit's weights (σ⁴) and its floors hold for readings of any magnitude in
+  // which σ² itself is a number, and the result is the same as at scale 1.
+  std::vector<double> positive;
+  for (const AllanPoint& p : points) {
+    if (p.avar > 0 && std::isfinite(p.avar)) positive.push_back(p.avar);
+  }
+  int k = 0;  // the scale is 4^k
+  if (!positive.empty()) {
+    auto middle = positive.begin() + static_cast<std::ptrdiff_t>(positive.size() / 2);
+    std::nth_element(positive.begin(), middle, positive.end());
+    k = static_cast<int>(std::lround(std::log2(*middle) / 2));
+  }
+  if (k == 0) return FitNear1(points, options);
+  std::vector<AllanPoint> scaled = points;
+  for (AllanPoint& p : scaled) p.avar = std::ldexp(p.avar, -2 * k);
+  NoiseModelFit fit = FitNear1(scaled, options);
+  fit.points = points;
+  for (NoiseTermEstimate& e : fit.terms) {
+    e.value = std::ldexp(e.value, k);
+    e.sigma = std::ldexp(e.sigma, k);
+    e.low = std::ldexp(e.low, k);
+    e.high = std::ldexp(e.high, k);
+  }
+  for (double& v : fit.model_avar) v = std::ldexp(v, 2 * k);
+  for (AllanInterval& i : fit.intervals) {
+    i.low = std::ldexp(i.low, k);
+    i.high = std::ldexp(i.high, k);
+  }
+  return fit;
 }
 
 }  // namespace accelcal

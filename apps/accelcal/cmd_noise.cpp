@@ -2,6 +2,7 @@
 #include "commands.hpp"
 
 #include <cmath>
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -10,6 +11,7 @@
 #include "accelcal/gyro_calibration.hpp"
 #include "accelcal/gyro_model.hpp"
 #include "accelcal/noise.hpp"
+#include "accelcal/sample_clock.hpp"
 #include "cli_common.hpp"
 #include "core/text_format.hpp"
 #include "output.hpp"
@@ -21,6 +23,12 @@ using internal::VisibleLine;
 namespace {
 
 constexpr double kPi = 3.14159265358979323846;
+// Samples lost beyond this fraction bias the white noise by half of it (the period is then the
+// mean step): refused.
+constexpr double kMaxLostFraction = 1e-3;
+// At rest a calibrated sensor reads its gravity to within its calibration error and the site's
+// difference (≪ 1 %); a calibration 2 % away is another sensor's.
+constexpr double kMaxGravityDeparture = 0.02;
 
 // How one sensor's terms are shown: the unit of its samples and, for the text, a scale to the
 // unit engineers quote each term in.
@@ -65,6 +73,42 @@ std::string TermText(const NoiseTermEstimate& e, double factor) {
   return Format("%.4g ± %.2g", e.value * factor, e.sigma * factor);
 }
 
+// What the terms fitted to one axis do not describe, as notes; `failed` is set when one of them
+// makes the terms unfit to use (the fit did not settle, a term other than quantization below 0).
+std::vector<std::string> AxisNotes(const NoiseModelFit& fit, bool* failed) {
+  std::vector<std::string> notes;
+  if (!fit.converged) {
+    notes.push_back(
+        Format("the fit did not settle in %d rounds: its terms are not a result", fit.iterations));
+    *failed = true;
+  }
+  std::string others;
+  for (NoiseTerm t : fit.below_zero) {
+    if (t == NoiseTerm::kQuantization) {
+      notes.push_back(
+          "the shortest averaging times fall below white noise (quantization comes out below 0): "
+          "the sensor filters its output before it is sampled, so neighbouring samples are "
+          "correlated; the white noise is the level above the filter's time");
+    } else {
+      others += std::string(others.empty() ? "" : ", ") + ToString(t);
+    }
+  }
+  if (!others.empty()) {
+    notes.push_back("the fit puts " + others +
+                    " below 0 beyond its uncertainty: the five terms do not describe this axis' "
+                    "noise (a vibration, a drift that is not a ramp), and the other terms take up "
+                    "what is missing: they are not a result");
+    *failed = true;
+  } else if (fit.chi2_p < 1e-3) {
+    notes.push_back(Format(
+        "the terms leave χ² = %.1f for %d degrees of freedom (p = %.2g): they do not describe "
+        "this axis' noise well (a vibration or a disturbance at some averaging time?): read them "
+        "with care",
+        fit.chi2, fit.dof, fit.chi2_p));
+  }
+  return notes;
+}
+
 nlohmann::ordered_json SensorJson(const Sensor& s) {
   nlohmann::ordered_json j;
   j["source"] = s.source;
@@ -87,6 +131,8 @@ nlohmann::ordered_json SensorJson(const Sensor& s) {
     }
     nlohmann::ordered_json below = nlohmann::ordered_json::array();
     for (NoiseTerm t : axis.fit.below_zero) below.push_back(ToString(t));
+    bool failed = false;
+    ja["notes"] = AxisNotes(axis.fit, &failed);
     ja["fit"] = {{"chi2", axis.fit.chi2},
                  {"dof", axis.fit.dof},
                  {"p", axis.fit.chi2_p},
@@ -137,48 +183,37 @@ std::string SensorText(const Sensor& s) {
                                       s.display.factor[static_cast<std::size_t>(t)])
                                  .c_str());
     }
-    if (!axis.fit.converged) out += "  (the fit did not settle)";
     out += "\n";
   }
   // What the terms do not describe, said where the figures are.
   for (int a = 0; a < 3; ++a) {
-    const NoiseModelFit& fit = n.axes[static_cast<std::size_t>(a)].fit;
-    std::string others;
-    for (NoiseTerm t : fit.below_zero) {
-      if (t == NoiseTerm::kQuantization) {
-        out += Format(
-            "  # %c: the shortest averaging times fall below white noise (quantization comes out "
-            "below 0): the sensor filters its output before it is sampled, so neighbouring "
-            "samples are correlated; the white noise is the level above the filter's time\n",
-            "xyz"[a]);
-      } else {
-        others += std::string(others.empty() ? "" : ", ") + ToString(t);
-      }
-    }
-    if (!others.empty()) {
-      out += Format(
-          "  # %c: the fit puts %s below 0 beyond its uncertainty: the five terms do not describe "
-          "this axis' noise (a vibration, a drift that is not a ramp), and the other terms take "
-          "up what is missing: read them with care\n",
-          "xyz"[a], others.c_str());
-    } else if (fit.chi2_p < 1e-3) {
-      out += Format(
-          "  # %c: the terms leave χ² = %.1f for %d degrees of freedom (p = %.2g): they do not "
-          "describe this axis' noise well (a vibration or a disturbance at some averaging time?)\n",
-          "xyz"[a], fit.chi2, fit.dof, fit.chi2_p);
+    bool failed = false;
+    for (const std::string& note : AxisNotes(n.axes[static_cast<std::size_t>(a)].fit, &failed)) {
+      out += Format("  # %c: %s\n", "xyz"[a], note.c_str());
     }
   }
   return out;
 }
 
-// The rate a noise analysis needs: the time column's or --rate.
-double RequireRate(const std::string& path, const std::optional<double>& rate_hz) {
-  if (!rate_hz) {
-    throw UsageError(path +
-                     " has no time column: give the sample rate with --rate (or the columns "
-                     "with --columns time,x,y,z)");
+// The rate a noise analysis takes: the time column's, else --rate. A given rate that differs
+// from the time column's is said: the density scales with the square root of the rate.
+double RateFor(const std::string& path, const std::optional<TimeAxis>& time,
+               const std::optional<double>& given_hz) {
+  if (!time) {
+    if (!given_hz) {
+      throw UsageError(path +
+                       " has no time column: give the sample rate with --rate (or the columns "
+                       "with --columns time,x,y,z)");
+    }
+    return *given_hz;
   }
-  return *rate_hz;
+  if (given_hz && std::abs(*given_hz / time->rate_hz - 1) > 1e-3) {
+    Warn(
+        "%s: --rate %.6g Hz given, but the time column's samples come at %.6g Hz: its rate is "
+        "taken\n",
+        VisibleLine(path).c_str(), *given_hz, time->rate_hz);
+  }
+  return time->rate_hz;
 }
 
 // The Allan variance of a log joined across a gap is not the sensor's.
@@ -187,6 +222,60 @@ double RequireRate(const std::string& path, const std::optional<double>& rate_hz
                    Format("a gap in the samples (%.6g s to %.6g s after the first): the Allan "
                           "deviation needs one unbroken stream at one rate",
                           gap.t_before_s, gap.t_after_s));
+}
+
+// Samples lost, or a rate that changes, make the Allan variance's τ wrong: refused.
+void RefuseIrregularClock(const std::string& path, const SampleClockReport& clock, double rate_hz) {
+  if (clock.lost_fraction > kMaxLostFraction) {
+    throw InputError(
+        path, clock.first_long_line,
+        Format("%zu samples are missing (%.2g %% of the log, net of %zu steps shorter than "
+               "half the typical one), the first before this line: the Allan deviation takes "
+               "the samples one period apart, and the white noise would come out %.2g %% high",
+               clock.lost, 100 * clock.lost_fraction, clock.short_steps,
+               100 * (std::sqrt(1 + clock.lost_fraction) - 1)));
+  }
+  if (clock.rate_departs()) {
+    throw InputError(
+        path, clock.worst_first_line,
+        Format("the samples of lines %u-%u come at %.6g Hz, %.2g %% away from the log's %.6g Hz "
+               "(beyond the %.2g %% its timestamps explain): the rate changes within the log or "
+               "samples are lost there; the Allan deviation needs one stream at one rate",
+               clock.worst_first_line, clock.worst_last_line, clock.worst_rate_hz,
+               100 * clock.worst_departure, rate_hz, 100 * clock.tolerance));
+  }
+}
+
+// A sensor that moved is refused: its Allan deviation is not its noise. `line_of` gives the line
+// of a sample analysed (0: unknown).
+void RefuseMotion(const std::string& path, const NoiseAnalysis& noise, bool still_option,
+                  const std::function<std::uint32_t(std::size_t)>& line_of) {
+  const Stillness& s = noise.stillness;
+  if (s.still) return;
+  throw InputError(
+      path, line_of(s.at_sample),
+      Format("the sensor moves: the mean of its %c axis over %zu samples changes by %.4g at "
+             "%.6g s after the first sample analysed, %.0f times the typical change %.3g; the "
+             "Allan deviation of a moving sensor is not its noise%s",
+             "xyz"[s.axis], kStillBlockSamples, s.largest_change,
+             static_cast<double>(s.at_sample) * noise.sample_period_s,
+             s.largest_change / s.typical_change, s.typical_change,
+             still_option ? " (the longest still interval holds a knock or a turn)"
+                          : ": give --still to take the longest still interval"));
+}
+
+// A calibration from another sensor (or another unit) shows at rest: |f| is not its gravity.
+void RefuseForeignCalibration(const std::string& path, const std::string& calibration,
+                              const LoadedCalibration& cal, const NoiseAnalysis& noise) {
+  const double norm = noise.mean.norm();
+  if (std::abs(norm / cal.gravity - 1) <= kMaxGravityDeparture) return;
+  throw InputError(
+      path, 0,
+      Format("calibrated by %s, the sensor at rest reads |f| = %.6g %s where that "
+             "calibration's gravity is %.6g %s (%.3g %% away): the calibration is "
+             "not this sensor's, or not for this log's unit",
+             VisibleLine(calibration).c_str(), norm, ToString(cal.unit).data(), cal.gravity,
+             ToString(cal.unit).data(), 100 * std::abs(norm / cal.gravity - 1)));
 }
 
 // The calibrated specific force of `count` raw readings (their lines `line`, for the error).
@@ -207,6 +296,17 @@ std::vector<Vec3> SpecificForces(const LoadedCalibration& cal, const Vec3* raw,
 
 int WriteNoise(const NoiseArgs& args, bool calibrated, std::size_t begin, std::size_t end,
                double rate_hz, const std::vector<Sensor>& sensors) {
+  // The verdict: failed when an axis' terms are not a result (AxisNotes).
+  bool failed = false;
+  std::vector<std::string> reasons;
+  for (const Sensor& s : sensors) {
+    for (int a = 0; a < 3; ++a) {
+      bool axis_failed = false;
+      AxisNotes(s.noise.axes[static_cast<std::size_t>(a)].fit, &axis_failed);
+      if (axis_failed) reasons.push_back(s.name + " " + std::string(1, "xyz"[a]));
+      failed = failed || axis_failed;
+    }
+  }
   std::string out;
   if (args.json) {
     nlohmann::ordered_json doc;
@@ -215,6 +315,8 @@ int WriteNoise(const NoiseArgs& args, bool calibrated, std::size_t begin, std::s
     doc["first_sample"] = begin + 1;
     doc["last_sample"] = end;
     doc["rate_hz"] = rate_hz;
+    doc["verdict"] = failed ? "failed" : "passed";
+    if (failed) doc["failed_axes"] = reasons;
     doc["model"] =
         "sigma^2(tau) = 3 Q^2/tau^2 + N^2/tau + (2 ln2/pi) B^2 + K^2 tau/3 + R^2 tau^2/2 "
         "(IEEE Std 952-1997 Annex C); intervals 95 %";
@@ -228,8 +330,18 @@ int WriteNoise(const NoiseArgs& args, bool calibrated, std::size_t begin, std::s
     out +=
         "# σ²(τ) = 3Q²/τ² + N²/τ + (2 ln 2/π)B² + K²τ/3 + R²τ²/2 (IEEE Std 952 Annex C) fitted to "
         "the overlapping Allan variance; ± 1σ; \"< x\": not resolved, 95 % upper bound\n";
+    if (failed) {
+      std::string list;
+      for (const std::string& r : reasons) list += (list.empty() ? "" : ", ") + r;
+      out += "# verdict: failed: the terms of " + list + " are not a result (see the notes)\n";
+    }
   }
   WriteFileAtomically(args.output.empty() ? "-" : args.output, out);
+  if (failed) {
+    Warn("the noise terms failed their checks (%s): see the notes\n",
+         reasons.empty() ? "" : reasons.front().c_str());
+    return kExitFailedChecks;
+  }
   return kExitOk;
 }
 
@@ -237,7 +349,12 @@ int WriteNoise(const NoiseArgs& args, bool calibrated, std::size_t begin, std::s
 int StreamNoise(const NoiseArgs& args, const ReadOptions& read,
                 const std::optional<LoadedCalibration>& cal) {
   NoiseAccumulator accumulator(1.0);  // the period only scales τ: given at the end
+  std::optional<SampleClockCheck> clock;
   const StreamedLog log = StreamRawLog(args.input.path, read, [&](const RawLog& piece) {
+    if (piece.time) {
+      if (!clock) clock.emplace(*piece.time);
+      clock->Add(piece.time_s.data(), piece.line.data(), piece.time_s.size());
+    }
     if (!cal) {
       accumulator.Add(piece.samples.data(), piece.samples.size());
       return;
@@ -246,15 +363,18 @@ int StreamNoise(const NoiseArgs& args, const ReadOptions& read,
                                                     piece.samples.size(), args.input.path);
     accumulator.Add(forces.data(), forces.size());
   });
-  const double rate_hz = RequireRate(args.input.path, log.rate_hz);
   if (!log.gap_lines.empty()) {
     RefuseGap(args.input.path, log.gap_lines.front(), log.time->gaps.front());
   }
+  const double rate_hz = RateFor(args.input.path, log.time, read.rate_hz);
+  if (clock) RefuseIrregularClock(args.input.path, clock->Finish(rate_hz), rate_hz);
   Sensor accel;
   accel.name = "accelerometer";
   accel.source = args.input.path;
   accel.display = cal ? AccelDisplay(cal->unit) : RawDisplay("raw");
   accel.noise = accumulator.Finish(1 / rate_hz);
+  RefuseMotion(args.input.path, accel.noise, false, [](std::size_t) { return 0u; });
+  if (cal) RefuseForeignCalibration(args.input.path, args.calibration, *cal, accel.noise);
   return WriteNoise(args, cal.has_value(), 0, log.samples, rate_hz, {accel});
 }
 
@@ -278,11 +398,11 @@ int RunNoise(const NoiseArgs& args) {
   if (!args.still && !gyro) return StreamNoise(args, read, cal);
   const InputData data = ReadInput(args.input.path, read);
   const RawLog& log = data.raw;
-  const double rate_hz = RequireRate(args.input.path, log.rate_hz);
   if (log.time && !log.time->gaps.empty()) {
     const TimeGap& gap = log.time->gaps.front();
     RefuseGap(args.input.path, log.line[gap.index], gap);
   }
+  double rate_hz = RateFor(args.input.path, log.time, read.rate_hz);
   // The samples analysed: the whole log, or its longest still interval.
   std::size_t begin = 0, end = log.samples.size();
   if (args.still) {
@@ -295,8 +415,20 @@ int RunNoise(const NoiseArgs& args) {
     begin = longest->begin;
     end = longest->end;
   }
-  const double period = 1 / rate_hz;
   const auto count = static_cast<std::size_t>(end - begin);
+  if (log.time) {
+    // The interval's own rate: the samples analysed are the ones whose clock counts.
+    if (count >= 2 && log.time_s[end - 1] > log.time_s[begin]) {
+      rate_hz = static_cast<double>(count - 1) / (log.time_s[end - 1] - log.time_s[begin]);
+    }
+    SampleClockCheck clock(*log.time);
+    clock.Add(log.time_s.data() + begin, log.line.data() + begin, count);
+    RefuseIrregularClock(args.input.path, clock.Finish(rate_hz), rate_hz);
+  }
+  const double period = 1 / rate_hz;
+  const auto line_of = [&](std::size_t k) {
+    return begin + k < log.line.size() ? log.line[begin + k] : 0u;
+  };
   // Calibrated, the accelerometer's specific force, which the gyroscope's g-sensitivity takes too.
   std::vector<Vec3> forces;
   if (cal) {
@@ -313,6 +445,8 @@ int RunNoise(const NoiseArgs& args) {
                       : AnalyseNoise(std::vector<Vec3>(log.samples.begin() + std::ptrdiff_t(begin),
                                                        log.samples.begin() + std::ptrdiff_t(end)),
                                      period);
+    RefuseMotion(args.input.path, accel.noise, args.still, line_of);
+    if (cal) RefuseForeignCalibration(args.input.path, args.calibration, *cal, accel.noise);
     sensors.push_back(std::move(accel));
   }
   if (gyro) {

@@ -24,10 +24,34 @@ struct AxisNoise {
   NoiseModelFit fit;
 };
 
+/// Whether the sensor stayed still: the means of consecutive blocks of kStillBlockSamples
+/// samples then differ by noise and drift alone, each change about as large as the others (for
+/// white noise, random walk, bias instability alike, the largest of 10⁵ changes is some 7
+/// median ones). A turn or a knock changes the mean by a part of g in one block.
+struct Stillness {
+  bool checked = false;  ///< at least kStillMinBlocks blocks
+  bool still = true;     ///< largest_change ≤ kStillChangeRatio · typical_change on every axis
+  int axis = 0;          ///< the axis of the largest change relative to its typical one
+  double largest_change = 0;  ///< |mean_{j+1} − mean_j| there [sample unit]
+  double typical_change = 0;  ///< the median change there, floored by the quantum / block
+  std::size_t at_sample = 0;  ///< the first sample of the block after the largest change
+};
+inline constexpr std::size_t kStillBlockSamples = 256;
+inline constexpr std::size_t kStillMinBlocks = 8;
+inline constexpr double kStillChangeRatio = 30;
+
+/// Samples whose squares double precision holds (sums of them, in the Allan variance): an axis
+/// whose readings reach beyond kMaxNoiseMagnitude, or vary by less than kMinNoiseSpread, is
+/// refused.
+inline constexpr double kMaxNoiseMagnitude = 1e100;
+inline constexpr double kMinNoiseSpread = 1e-100;
+
 struct NoiseAnalysis {
   std::size_t samples = 0;
   double sample_period_s = 0;
   std::array<AxisNoise, 3> axes;  ///< x, y, z
+  Vec3 mean = Vec3::Zero();       ///< of the samples
+  Stillness stillness;
 };
 
 /// The same, fed in pieces (a log too long to hold, StreamRawLog): memory does not grow with the
@@ -50,13 +74,20 @@ class NoiseAccumulator {
   std::vector<AllanAccumulator> axes_;
   std::vector<double> buffer_;
   std::size_t samples_ = 0;
+  Vec3 sum_ = Vec3::Zero();  // of the samples less the first (their mean, exactly enough)
+  Vec3 first_ = Vec3::Zero();
+  Vec3 previous_ = Vec3::Zero();                   // the last sample of the previous piece
+  Vec3 low_ = Vec3::Zero(), high_ = Vec3::Zero();  // per axis, of the samples
+  Vec3 quantum_ = Vec3::Zero();  // per axis, the smallest nonzero change between samples
+  Vec3 block_sum_ = Vec3::Zero();
+  std::vector<Vec3> block_means_;
 };
 
 /// Each axis of `samples` (taken every `sample_period_s`, in the unit the terms come out in).
 /// Throws DataError when there are too few samples for the terms fitted (4 m ≤ n must hold for
-/// one more octave than terms: 128 samples for all five), or an axis is constant (no noise to
-/// characterise); std::invalid_argument for a period not finite and positive or a sample not
-/// finite.
+/// one more octave than terms: 128 samples for all five), an axis is constant (no noise to
+/// characterise) or beyond the magnitudes above; std::invalid_argument for a period not finite
+/// and positive or a sample not finite.
 NoiseAnalysis AnalyseNoise(const std::vector<Vec3>& samples, double sample_period_s,
                            const NoiseOptions& options = {});
 

@@ -1,10 +1,12 @@
 // A still sensor's noise, axis by axis (noise.hpp).
 #include "accelcal/noise.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <string>
 
 #include "accelcal/error.hpp"
+#include "core/text_format.hpp"
 
 namespace accelcal {
 
@@ -28,10 +30,67 @@ void NoiseAccumulator::Add(const Vec3* samples, std::size_t count) {
   buffer_.resize(count);
   for (int a = 0; a < 3; ++a) {
     for (std::size_t k = 0; k < count; ++k) buffer_[k] = samples[k](a);
-    axes_[static_cast<std::size_t>(a)].Add(buffer_.data(), count);
+    axes_[static_cast<std::size_t>(a)].Add(buffer_.data(), count);  // refuses a sample not finite
   }
-  samples_ += count;
+  for (std::size_t k = 0; k < count; ++k) {
+    const Vec3& x = samples[k];
+    if (samples_ == 0) {
+      first_ = low_ = high_ = x;
+      quantum_.setConstant(INFINITY);
+    } else {
+      const Vec3 change = (x - (k > 0 ? samples[k - 1] : previous_)).cwiseAbs();
+      for (int a = 0; a < 3; ++a) {
+        if (change(a) > 0) quantum_(a) = std::min(quantum_(a), change(a));
+      }
+      low_ = low_.cwiseMin(x);
+      high_ = high_.cwiseMax(x);
+    }
+    sum_ += x - first_;
+    block_sum_ += x - first_;
+    ++samples_;
+    if (samples_ % kStillBlockSamples == 0) {
+      block_means_.push_back(block_sum_ / static_cast<double>(kStillBlockSamples));
+      block_sum_.setZero();
+    }
+  }
+  if (count > 0) previous_ = samples[count - 1];
 }
+
+namespace {
+
+// The largest change of consecutive block means against the typical one, axis by axis.
+Stillness StillnessOf(const std::vector<Vec3>& means, const Vec3& quantum) {
+  Stillness out;
+  if (means.size() < kStillMinBlocks) return out;
+  out.checked = true;
+  double worst_ratio = -1;
+  std::vector<double> changes(means.size() - 1);
+  for (int a = 0; a < 3; ++a) {
+    for (std::size_t j = 0; j + 1 < means.size(); ++j) {
+      changes[j] = std::abs(means[j + 1](a) - means[j](a));
+    }
+    std::vector<double> sorted = changes;
+    const auto middle = sorted.begin() + static_cast<std::ptrdiff_t>(sorted.size() / 2);
+    std::nth_element(sorted.begin(), middle, sorted.end());
+    // A sensor quieter than its quantum reads the same value for whole blocks: a change of one
+    // quantum in a block's mean is then its noise.
+    const double floor = std::isfinite(quantum(a)) ? quantum(a) / kStillBlockSamples : 0;
+    const double typical = std::max(*middle, floor);
+    const auto largest = std::max_element(changes.begin(), changes.end());
+    const double ratio = typical > 0 ? *largest / typical : (*largest > 0 ? INFINITY : 0);
+    if (ratio > worst_ratio) {
+      worst_ratio = ratio;
+      out.axis = a;
+      out.largest_change = *largest;
+      out.typical_change = typical;
+      out.at_sample = static_cast<std::size_t>(largest - changes.begin() + 1) * kStillBlockSamples;
+    }
+  }
+  out.still = worst_ratio <= kStillChangeRatio;
+  return out;
+}
+
+}  // namespace
 
 NoiseAnalysis NoiseAccumulator::Finish(double sample_period_s) const {
   NoiseAnalysis out;
@@ -49,15 +108,24 @@ NoiseAnalysis NoiseAccumulator::Finish(double sample_period_s) const {
           std::to_string(terms) + " noise terms need at least " + std::to_string(terms + 1) + ": " +
           std::to_string(std::size_t{1} << (terms + 2)) + " samples or more");
     }
-    bool constant = true;
-    for (const AllanPoint& p : result.points) constant = constant && p.avar == 0;
-    if (constant) {
-      throw DataError("the " + std::string(1, "xyz"[a]) +
-                      " axis reads the same value throughout: it has no noise to characterise "
+    const std::string axis = "the " + std::string(1, "xyz"[a]) + " axis";
+    if (low_(a) == high_(a)) {
+      throw DataError(axis +
+                      " reads the same value throughout: it has no noise to characterise "
                       "(a constant or missing column?)");
+    }
+    const double magnitude = std::max(std::abs(low_(a)), std::abs(high_(a)));
+    if (magnitude > kMaxNoiseMagnitude || high_(a) - low_(a) < kMinNoiseSpread) {
+      throw DataError(internal::Format(
+          "%s reads values up to %.3g, varying by %.3g: beyond the %g to %g the noise analysis "
+          "holds in double precision (the Allan variance sums their squares): give them in another "
+          "unit",
+          axis.c_str(), magnitude, high_(a) - low_(a), kMinNoiseSpread, kMaxNoiseMagnitude));
     }
     result.fit = FitNoiseModel(result.points, options_.fit);
   }
+  out.mean = first_ + sum_ / static_cast<double>(samples_);
+  out.stillness = StillnessOf(block_means_, quantum_);
   return out;
 }
 

@@ -92,6 +92,42 @@ TEST(Noise, EachAxisIsAnalysedOnItsOwn) {
   }
 }
 
+// Stillness: the largest change of 256-sample means against the median one. Still noise of every
+// kind (white, random walk, bias instability, a ramp, a quantised reading) stays under 30 medians
+// over 2^19 samples (2048 blocks: a Gaussian maximum of some 4.3 σ, 6.4 medians); a turn of 1 %
+// of the signal does not.
+TEST(Noise, StillnessSeesATurnAndNotTheNoise) {
+  const double tau0 = 0.0025;
+  const std::size_t n = std::size_t{1} << 19;
+  const std::array<std::array<double, kNoiseTerms>, 3> terms = {{
+      {0, 1e-3, 0, 1e-4, 0},     // white and random walk
+      {0, 1e-3, 1e-3, 0, 1e-6},  // bias instability and a ramp
+      {0, 1e-3, 0, 0, 0},        // quantised below
+  }};
+  std::vector<Vec3> samples(n);
+  for (int a = 0; a < 3; ++a) {
+    const std::vector<double> y =
+        SimulateNoise(terms[std::size_t(a)], n, tau0, 60 + std::uint64_t(a));
+    for (std::size_t k = 0; k < n; ++k) samples[k](a) = a == 1 ? 9.8 + y[k] : y[k];
+  }
+  for (Vec3& v : samples) v(2) = 0.05 * std::round(v(2) / 0.05);  // a quantum of 2.5 σ
+  NoiseAnalysis noise = AnalyseNoise(samples, tau0);
+  ASSERT_TRUE(noise.stillness.checked);
+  EXPECT_TRUE(noise.stillness.still)
+      << noise.stillness.largest_change / noise.stillness.typical_change;
+  EXPECT_LT(noise.stillness.largest_change, 12 * noise.stillness.typical_change);
+  EXPECT_NEAR(noise.mean(1), 9.8, 0.01);
+  // Turned by 0.6° about x at sample 500000: y and z change by 0.1 (1 % of g).
+  for (std::size_t k = 500000; k < n; ++k) samples[k](2) += 0.1;
+  noise = AnalyseNoise(samples, tau0);
+  EXPECT_FALSE(noise.stillness.still);
+  EXPECT_EQ(noise.stillness.axis, 2);
+  // The turn falls in the block of samples 499968-500223, 224 of them after it: that block's
+  // mean moves by 0.1 × 224/256 from the one before.
+  EXPECT_EQ(noise.stillness.at_sample, 499968u);
+  EXPECT_NEAR(noise.stillness.largest_change, 0.1 * 224 / 256, 0.002);
+}
+
 TEST(Noise, RefusesWhatHasNoNoiseToCharacterise) {
   std::vector<Vec3> samples(127, Vec3(1, 2, 3));
   for (std::size_t k = 0; k < samples.size(); ++k) samples[k](0) += 1e-3 * double(k % 7);

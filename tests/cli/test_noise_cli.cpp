@@ -2,6 +2,7 @@
 #include <cmath>
 #include <cstdio>
 #include <string>
+#include <vector>
 
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
@@ -79,6 +80,147 @@ TEST_F(Cli, NoiseRefusesWhatItCannotCharacterise) {
   r = Exec("noise " + log + " --still");
   EXPECT_EQ(r.status, 0) << r.err;
   EXPECT_NE(r.out.find("# the longest still interval: samples 26-999"), std::string::npos) << r.out;
+}
+
+// A log time,x,y,z of white noise (density 1e-3 per axis around (0, 9.8, 0)) at the times `t`.
+// From sample `turn` on, y and z swap (the sensor turned over).
+std::string LogAt(const std::vector<double>& t, double scale = 1,
+                  std::size_t turn = static_cast<std::size_t>(-1)) {
+  std::vector<std::vector<double>> axes;
+  for (int a = 0; a < 3; ++a) {
+    axes.push_back(SimulateNoise({0, 1e-3, 0, 0, 0}, t.size(), 0.01, 70 + std::uint64_t(a)));
+  }
+  std::string s = "time,x,y,z\n";
+  char line[200];
+  for (std::size_t k = 0; k < t.size(); ++k) {
+    double y = 9.8 + axes[1][k], z = axes[2][k];
+    if (k >= turn) std::swap(y, z);
+    std::snprintf(line, sizeof line, "%.6f,%.17g,%.17g,%.17g\n", t[k], scale * axes[0][k],
+                  scale * y, scale * z);
+    s += line;
+  }
+  return s;
+}
+
+std::vector<double> Times(std::size_t n, double rate_hz) {
+  std::vector<double> t(n);
+  for (std::size_t k = 0; k < n; ++k) t[k] = static_cast<double>(k) / rate_hz;
+  return t;
+}
+
+// What a hostile test found accepted with wrong figures: each refused, naming where.
+TEST_F(Cli, NoiseRefusesLogsThatAreNotOneStillStreamAtOneRate) {
+  // 100 Hz, then 200 Hz: every step within half the first's, the windows' rates show it.
+  std::vector<double> t = Times(8192, 100);
+  for (std::size_t k = 1; k <= 8192; ++k) t.push_back(81.91 + static_cast<double>(k) / 200);
+  const std::string two_rates = Write("two_rates.csv", LogAt(t));
+  for (const char* still : {"", " --still"}) {
+    const CliRun r = Exec("noise " + two_rates + still);
+    EXPECT_EQ(r.status, 3) << still;
+    // The log's rate is 16383 steps over 122.87 s: 133.3 Hz; the second half's departs most.
+    EXPECT_NE(r.err.find("come at 200 Hz, 50 % away from the log's 133."), std::string::npos)
+        << r.err;
+  }
+  // Every 8th sample lost (a 2× step, below a gap's 10×): the period would be 14 % long.
+  t.clear();
+  for (std::size_t k = 0; k < 16384; ++k) {
+    if (k % 8 != 7) t.push_back(static_cast<double>(k) / 100);
+  }
+  const std::string lossy = Write("lossy.csv", LogAt(t));
+  CliRun r = Exec("noise " + lossy);
+  EXPECT_EQ(r.status, 3);
+  // The last sample lost is after the end, not before a step: 2047.
+  EXPECT_NE(r.err.find(lossy + ":9: 2047 samples are missing (14 % of the log"), std::string::npos)
+      << r.err;
+  // Turned over at 40.96 s: y and z swap.
+  const std::string moved = LogAt(Times(8192, 100), 1, 4096);
+  const std::string moving = Write("moving.csv", moved);
+  r = Exec("noise " + moving);
+  EXPECT_EQ(r.status, 3);
+  EXPECT_NE(
+      r.err.find("the sensor moves: the mean of its y axis over 256 samples changes by 9.799 at "
+                 "40.96 s after the first sample analysed"),
+      std::string::npos)
+      << r.err;
+  EXPECT_NE(r.err.find("give --still"), std::string::npos) << r.err;
+  // Readings whose squares double precision cannot hold.
+  for (double scale : {1e101, 1e-101}) {
+    const std::string huge = Write("scaled.csv", LogAt(Times(4096, 100), scale));
+    r = Exec("noise " + huge);
+    EXPECT_EQ(r.status, 3) << scale;
+    EXPECT_NE(r.err.find("beyond the 1e-100 to 1e+100 the noise analysis holds"), std::string::npos)
+        << r.err;
+  }
+  // Inside them, the figures scale with the readings (the fit is scale-free).
+  const CliRun unit = Exec("noise " + Write("unit.csv", LogAt(Times(4096, 100))) + " --json");
+  const CliRun big = Exec("noise " + Write("big.csv", LogAt(Times(4096, 100), 1e90)) + " --json");
+  ASSERT_EQ(unit.status, 0) << unit.err;
+  ASSERT_EQ(big.status, 0) << big.err;
+  const double n1 =
+      nlohmann::json::parse(unit.out)["accelerometer"]["axes"][0]["terms"]["white"]["value"];
+  const double n2 =
+      nlohmann::json::parse(big.out)["accelerometer"]["axes"][0]["terms"]["white"]["value"];
+  EXPECT_NEAR(n2 / 1e90, n1, 1e-9 * n1);
+}
+
+TEST_F(Cli, NoiseRefusesOptionsThatDoNotFitTheLog) {
+  const std::string log = Write("still.csv", LogAt(Times(4096, 100)));
+  // An instance chosen in a log without an instance column, streamed or whole.
+  for (const char* still : {"", " --still"}) {
+    const CliRun r = Exec("noise " + log + " --instance 3" + still);
+    EXPECT_EQ(r.status, 3) << still;
+    EXPECT_NE(r.err.find("an instance was chosen, but the file has no instance column"),
+              std::string::npos)
+        << r.err;
+  }
+  // A column read twice.
+  CliRun r = Exec("noise " + log + " --columns time,x,x,z");
+  EXPECT_EQ(r.status, 3);
+  EXPECT_NE(r.err.find("--columns names column 2 ('x') twice (as x and y)"), std::string::npos)
+      << r.err;
+  // The gyroscope's columns overlapping the accelerometer's.
+  r = Exec("noise " + log + " --gyro-columns time,z,x,y");
+  EXPECT_EQ(r.status, 3);
+  EXPECT_NE(r.err.find("--gyro-columns reads column 4 ('z') as its x, which the accelerometer "
+                       "reads as its z"),
+            std::string::npos)
+      << r.err;
+  // A rate that is no log's.
+  r = Exec("noise " + log + " --rate 1e-100");
+  EXPECT_EQ(r.status, 2);
+  EXPECT_NE(r.err.find("--rate must be a number of Hz in [0.001, 1e+06]"), std::string::npos);
+  r = Exec("noise " + log + " --columns 1,2");
+  EXPECT_EQ(r.status, 2);
+  // A given rate the time column contradicts by 2 %: the column's is taken, and said.
+  r = Exec("noise " + log + " --rate 102 --json");
+  ASSERT_EQ(r.status, 0) << r.err;
+  EXPECT_NEAR(nlohmann::json::parse(r.out)["rate_hz"].get<double>(), 100, 1e-9);
+  EXPECT_NE(r.err.find("--rate 102 Hz given, but the time column's samples come at 100 Hz"),
+            std::string::npos)
+      << r.err;
+}
+
+// A calibration of another sensor (here the Xsens's, on a log in other units) is refused at rest;
+// a fit whose terms are not a result is written, marked failed, with exit status 6.
+TEST_F(Cli, NoiseChecksTheCalibrationAndItsOwnFit) {
+  const std::string data = std::string(ACCELCAL_DATA_DIR) + "/imutk-t265/";
+  const std::string cal = Path("t265.json");
+  ASSERT_EQ(Exec("calibrate " + data + "t265_acc.mat --gravity 9.8016 -q -o " + cal).status, 0);
+  const std::string log = Write("still.csv", LogAt(Times(4096, 100)));
+  CliRun r = Exec("noise " + log + " --calibration " + cal);
+  EXPECT_EQ(r.status, 3);
+  EXPECT_NE(r.err.find("where that calibration's gravity is 9.8016 m/s2"), std::string::npos)
+      << r.err;
+  // The T265's rest: its accelerometer's y axis puts random walk below 0 beyond its uncertainty.
+  const std::string out = Path("noise.json");
+  r = Exec("noise " + data + "t265_acc.mat --still --calibration " + cal + " --json -o " + out);
+  EXPECT_EQ(r.status, 6) << r.err;
+  const nlohmann::json doc = nlohmann::json::parse(test::Slurp(out));
+  EXPECT_EQ(doc["verdict"], "failed");
+  EXPECT_EQ(doc["failed_axes"], nlohmann::json::array({"accelerometer y"}));
+  const std::string note = doc["accelerometer"]["axes"][1]["notes"][1];
+  EXPECT_NE(note.find("the fit puts random_walk below 0"), std::string::npos) << note;
+  EXPECT_EQ(doc["accelerometer"]["axes"][0]["notes"].size(), 2u);  // quantization, χ²
 }
 
 // The README's figures: the Xsens recording's rest, calibrated by its own calibration.

@@ -1,5 +1,6 @@
 // Leave-one-position-out validation in every result, and starting from given parameters.
 #include <cmath>
+#include <cstdio>
 #include <optional>
 #include <stdexcept>
 #include <string>
@@ -332,6 +333,9 @@ TEST(HeldOut, AgreesWithRefitsOnEveryBundledRecording) {
             if (method == SolverMethod::kTwoStep && rec.name.find("24pos") == std::string::npos) {
               continue;
             }
+            // Under the sanitizers (ten times slower) one frame: the other is the same fit
+            // renamed, and the normal build compares both.
+            if (ACCELCAL_TESTS_SANITIZED && frame == Frame::kZFirst) continue;
             CalibrationOptions o;
             o.model = model;
             o.method = method;
@@ -389,7 +393,9 @@ TEST(HeldOut, AgreesWithRefitsOnEveryBundledRecording) {
     }
   }
   // Not vacuous: most held-out errors came from the expansion, and failures were compared too.
-  EXPECT_GT(compared, 4000);
+  std::printf("compared %d held-out errors, %d served without a refit, %d notes\n", compared,
+              served, notes);
+  EXPECT_GT(compared, ACCELCAL_TESTS_SANITIZED ? 2000 : 4000);
   EXPECT_GT(served, 3 * compared / 4);
   EXPECT_GT(notes, 0);
 }

@@ -448,8 +448,18 @@ int accelcal::cli::RunCommandLine(int argc, char** argv) {
     export_cmd->add_option("CAL", exp.calibration, "calibration file (JSON)")->required();
     export_cmd
         ->add_option("--to", exp.format,
-                     "json, yaml, kalibr, px4, ardupilot, c-header or imutk (docs/conventions.md)")
+                     "json, yaml, kalibr, px4, ardupilot, c-header, imutk, kalibr-imu or ros "
+                     "(docs/conventions.md)")
         ->required();
+    export_cmd
+        ->add_option("--noise", exp.noise,
+                     "the sensor's noise (accelcal noise --json, calibrated): kalibr-imu and ros "
+                     "need it, kalibr writes its keys beside the model")
+        ->check(kFileName);
+    export_cmd
+        ->add_option("--rostopic", exp.rostopic,
+                     "the IMU's topic (kalibr-imu, kalibr with --noise)")
+        ->capture_default_str();
     export_cmd->add_option("-o,--output", exp.output, "output file (default: stdout)")
         ->check(kFileName);
     export_cmd->add_option("--raw-unit", exp.raw_unit,

@@ -13,6 +13,7 @@
 
 #include "accelcal/export.hpp"
 #include "accelcal/gyro_calibration.hpp"
+#include "accelcal/noise_file.hpp"
 #include "accelcal/report.hpp"
 #include "cli_common.hpp"
 #include "output.hpp"
@@ -118,7 +119,7 @@ int RunReport(const ReportArgs& args) {
 }
 
 int RunExport(const ExportArgs& args) {
-  CheckOutputs({{"-o", args.output}}, {args.calibration});
+  CheckOutputs({{"-o", args.output}}, {args.calibration, args.noise});
   const ExportFormat format = ParseChoice<ExportFormat>(args.format, "--to");
   const std::string text = ReadFileToString(args.calibration, kMaxSmallFileBytes);
   const LoadedCalibration cal = ParseCalibrationJson(text, args.calibration);
@@ -129,6 +130,15 @@ int RunExport(const ExportArgs& args) {
   options.gyro_raw_unit = args.gyro_raw_unit;
   options.instance = args.instance;
   options.c_prefix = args.c_prefix;
+  options.rostopic = args.rostopic;
+  if (!args.noise.empty()) {
+    options.noise = ParseNoiseJson(ReadFileToString(args.noise, kMaxSmallFileBytes), args.noise);
+  }
+  const bool noise_only = format == ExportFormat::kKalibrImu || format == ExportFormat::kRos;
+  if (!args.noise.empty() && !noise_only && format != ExportFormat::kKalibr) {
+    throw UsageError("--noise goes into kalibr-imu, ros and kalibr; " + args.format +
+                     " holds no noise");
+  }
   ExportResult exported;
   try {
     exported = ExportCalibration(cal, text, format, options);
@@ -138,14 +148,24 @@ int RunExport(const ExportArgs& args) {
                                           {"raw_unit", "--raw-unit"},
                                           {"sensor", "--sensor"}}));
   } catch (const DataError& e) {
-    throw InputError(args.calibration, 0,
-                     WithFlags(e.what(), {{"gyro_raw_unit", "--gyro-raw-unit"},
-                                          {"raw_unit", "--raw-unit"},
-                                          {"raw_units", "calibrate --raw-units"}}));
+    throw InputError(
+        noise_only ? args.noise.empty() ? args.calibration : args.noise : args.calibration, 0,
+        WithFlags(e.what(), {{"gyro_raw_unit", "--gyro-raw-unit"},
+                             {"raw_unit", "--raw-unit"},
+                             {"raw_units", "calibrate --raw-units"}}));
   }
   // The file (or stdout) gets the export alone; what it means and what it lost goes to the
   // terminal: stdout when the export went to a file, else stderr.
   WriteFileAtomically(args.output.empty() ? "-" : args.output, exported.text);
+  if (noise_only) {  // the noise alone: no model to lose
+    if (CurrentVerbosity() != Verbosity::kQuiet) {
+      std::fputs((exported.convention +
+                  "\nthe calibration's model is not in this file (--to kalibr writes Kalibr's)\n")
+                     .c_str(),
+                 args.output.empty() ? stderr : stdout);
+    }
+    return kExitOk;
+  }
   if (cal.has_gyroscope() && !exported.gyroscope_included) {
     if (!exported.gyroscope_omitted.empty()) {
       Warn("%s: its gyroscope calibration is not in this export: %s\n", args.calibration.c_str(),

@@ -153,6 +153,8 @@ struct ExportArgs {
   int instance = 0;
   std::string c_prefix = "accelcal";
   std::string sensor = "accelerometer";  // imutk: which sensor's triad
+  std::string noise;                     // accelcal noise --json output (kalibr-imu, ros, kalibr)
+  std::string rostopic = "/imu0";
 };
 
 struct DesignArgs {

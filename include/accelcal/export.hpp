@@ -26,6 +26,7 @@
 #include <vector>
 
 #include "accelcal/calibration_file.hpp"
+#include "accelcal/noise_file.hpp"
 
 namespace accelcal {
 
@@ -37,16 +38,27 @@ enum class ExportFormat {
   kArduPilot,  ///< "ardupilot": INS_ACC[n]OFFS_{X,Y,Z} and INS_ACC[n]SCAL_{X,Y,Z} (.param)
   kCHeader,    ///< "c-header": constants and an inline correction function for firmware
   kImuTk,      ///< "imutk": imu_tk's CalibratedTriad .calib (misalignment, scale, bias)
+  /// "kalibr-imu": Kalibr's input imu.yaml (kalibr_calibrate_imu_camera --imu): the noise
+  /// densities, random walks, update rate and topic (needs ExportOptions::noise with both sensors)
+  kKalibrImu,
+  /// "ros": sensor_msgs/Imu covariances, each axis' variance of one sample (density² · rate; needs
+  /// ExportOptions::noise)
+  kRos,
 };
 std::string_view ToString(ExportFormat format);
 std::optional<ExportFormat> ExportFormatFromString(std::string_view text);
 template <>
 struct EnumNames<ExportFormat> {
   static constexpr std::pair<ExportFormat, std::string_view> kTable[] = {
-      {ExportFormat::kJson, "json"},           {ExportFormat::kYaml, "yaml"},
-      {ExportFormat::kKalibr, "kalibr"},       {ExportFormat::kPx4, "px4"},
-      {ExportFormat::kArduPilot, "ardupilot"}, {ExportFormat::kCHeader, "c-header"},
-      {ExportFormat::kImuTk, "imutk"}};
+      {ExportFormat::kJson, "json"},
+      {ExportFormat::kYaml, "yaml"},
+      {ExportFormat::kKalibr, "kalibr"},
+      {ExportFormat::kPx4, "px4"},
+      {ExportFormat::kArduPilot, "ardupilot"},
+      {ExportFormat::kCHeader, "c-header"},
+      {ExportFormat::kImuTk, "imutk"},
+      {ExportFormat::kKalibrImu, "kalibr-imu"},
+      {ExportFormat::kRos, "ros"}};
 };
 /// All formats, in the order above (help texts, tests).
 const std::vector<ExportFormat>& AllExportFormats();
@@ -65,6 +77,11 @@ struct ExportOptions {
   /// The sensor a one-sensor format (imutk) holds: "accelerometer" or "gyroscope". The c-header
   /// holds both when the file has both; json and yaml hold the whole file.
   std::string sensor = "accelerometer";
+  /// The sensor's noise (`accelcal noise --json`, ParseNoiseJson): kalibr-imu and ros need it;
+  /// kalibr writes its keys beside the model when given.
+  std::optional<ImuNoise> noise;
+  /// The topic of the IMU's sensor_msgs/Imu messages (kalibr-imu, kalibr's `rostopic`).
+  std::string rostopic = "/imu0";
 };
 
 /// What the target format could not hold, measured on the calibration's own positions (the means

@@ -314,6 +314,117 @@ KalibrGyro KalibrGyroscope(const LoadedCalibration& cal, const Mat33& Q, double 
   return out;
 }
 
+std::string YamlQuoted(std::string_view text);  // below, with the YAML writer
+
+// The noise an export needs, or DataError naming what is missing.
+const ImuNoise& NeedNoise(const ExportOptions& options, const char* format, bool gyroscope) {
+  if (!options.noise) {
+    throw DataError(std::string(format) +
+                    " holds the sensor's noise: give the output of accelcal noise --json");
+  }
+  if (gyroscope && !options.noise->gyroscope) {
+    throw DataError(std::string(format) + " holds the gyroscope's noise too, and " +
+                    internal::VisibleLine(options.noise->source) +
+                    " has none: analyse the log with the gyroscope (accelcal noise --gyro)");
+  }
+  return *options.noise;
+}
+
+// One value for a tool that takes one per sensor: the largest axis' (an estimator that assumes
+// less noise than an axis has trusts that axis too much).
+double Largest(const Vec3& v) { return v.maxCoeff(); }
+
+// "x, y, z" of a vector, for comments.
+std::string Axes(const Vec3& v) { return Number(v(0)) + ", " + Number(v(1)) + ", " + Number(v(2)); }
+
+// Comment lines stating where the noise comes from and what each written value is.
+std::string NoiseComments(const ImuNoise& n, const char* prefix) {
+  std::string t = std::string(prefix) + " noise from " + internal::VisibleLine(n.source) + " (" +
+                  internal::VisibleLine(n.log) + ", " + Number(n.rate_hz) + " Hz, " +
+                  Format("%.0f", n.accelerometer.duration_s) +
+                  " s): continuous-time densities, the largest axis' written\n";
+  const auto sensor = [&](const char* name, const SensorNoiseDensities& s, const char* unit) {
+    t += std::string(prefix) + " " + name + " white noise per axis [" + unit +
+         "/sqrt(Hz)]: " + Axes(s.white) + "\n";
+    bool bound = false;
+    for (bool resolved : s.random_walk_resolved) bound = bound || !resolved;
+    t += std::string(prefix) + " " + name + " random walk per axis [" + unit +
+         "/s/sqrt(Hz)]: " + Axes(s.random_walk) +
+         (bound ? " (where not resolved in this log: its 95 % upper bound)" : "") + "\n";
+  };
+  sensor("accelerometer", n.accelerometer, "m/s2");
+  if (n.gyroscope) sensor("gyroscope", *n.gyroscope, "rad/s");
+  return t;
+}
+
+// Kalibr's noise keys (ConfigReader.ImuParameters), at `indent`.
+std::string KalibrNoiseKeys(const ImuNoise& n, const std::string& rostopic,
+                            const std::string& indent) {
+  std::string t;
+  t += indent + "accelerometer_noise_density: " + Number(Largest(n.accelerometer.white)) + "\n";
+  t += indent + "accelerometer_random_walk: " + Number(Largest(n.accelerometer.random_walk)) + "\n";
+  if (n.gyroscope) {
+    t += indent + "gyroscope_noise_density: " + Number(Largest(n.gyroscope->white)) + "\n";
+    t += indent + "gyroscope_random_walk: " + Number(Largest(n.gyroscope->random_walk)) + "\n";
+  }
+  t += indent + "update_rate: " + Number(n.rate_hz) + "\n";
+  t += indent + "rostopic: " + YamlQuoted(rostopic) + "\n";
+  return t;
+}
+
+// Kalibr's input imu.yaml: a flat mapping of the six keys its ImuParameters reads.
+ExportResult KalibrImu(const LoadedCalibration& cal, const ExportOptions& options) {
+  const ImuNoise& n = NeedNoise(options, "Kalibr's imu.yaml", true);
+  ExportResult out;
+  out.convention =
+      "Kalibr imu.yaml (kalibr_calibrate_imu_camera --imu): continuous-time noise densities "
+      "[m/s2/sqrt(Hz), rad/s/sqrt(Hz)] and bias random walks [m/s3/sqrt(Hz), rad/s2/sqrt(Hz)], "
+      "the largest axis' of each; Kalibr discretises the white noise as density x sqrt(rate)";
+  out.text = "#" + Header(cal) + "\n# " + out.convention + "\n" + NoiseComments(n, "#") +
+             KalibrNoiseKeys(n, options.rostopic, "");
+  out.loss = MeasureLoss(
+      cal, [&](const Vec3& p) { return SpecificForce(cal.params, p); }, "");
+  return out;
+}
+
+// sensor_msgs/Imu: each field's covariance, row-major 3x3, the variance of one sample.
+ExportResult RosCovariance(const LoadedCalibration& cal, const ExportOptions& options) {
+  const ImuNoise& n = NeedNoise(options, "sensor_msgs/Imu covariances", false);
+  ExportResult out;
+  out.convention =
+      "sensor_msgs/Imu covariances, row-major 3x3: each axis' variance of one sample, white noise "
+      "density^2 x rate (as Kalibr, OpenVINS and Basalt discretise the density) [(m/s2)^2, "
+      "(rad/s)^2]; orientation_covariance[0] = -1: no orientation; a gyroscope without a noise "
+      "analysis: all 0, unknown (REP 145)";
+  const auto covariance = [&](const Vec3& density) {
+    std::string t = "[";
+    for (int i = 0; i < 3; ++i) {
+      for (int j = 0; j < 3; ++j) {
+        t += (i || j ? ", " : "") + Number(i == j ? density(i) * density(i) * n.rate_hz : 0.0);
+      }
+    }
+    return t + "]";
+  };
+  out.text = "#" + Header(cal) + "\n# " + out.convention + "\n" + NoiseComments(n, "#");
+  out.text += "linear_acceleration_covariance: " + covariance(n.accelerometer.white) + "\n";
+  out.text +=
+      "angular_velocity_covariance: " +
+      (n.gyroscope ? covariance(n.gyroscope->white) : std::string("[0, 0, 0, 0, 0, 0, 0, 0, 0]")) +
+      "\n";
+  out.text += "orientation_covariance: [-1, 0, 0, 0, 0, 0, 0, 0, 0]\n";
+  // REP 145's driver parameters: the square roots of the diagonals, one per field.
+  out.text += "linear_acceleration_stddev: " +
+              Number(Largest(n.accelerometer.white) * std::sqrt(n.rate_hz)) + "\n";
+  if (n.gyroscope) {
+    out.text +=
+        "angular_velocity_stddev: " + Number(Largest(n.gyroscope->white) * std::sqrt(n.rate_hz)) +
+        "\n";
+  }
+  out.loss = MeasureLoss(
+      cal, [&](const Vec3& p) { return SpecificForce(cal.params, p); }, "");
+  return out;
+}
+
 // Kalibr's scale-misalignment model: a_measured = M a + b, M lower-triangular, m/s².
 ExportResult Kalibr(const LoadedCalibration& cal, const ExportOptions& options) {
   const double raw_ms2 =
@@ -337,8 +448,11 @@ ExportResult Kalibr(const LoadedCalibration& cal, const ExportOptions& options) 
           "    - [" + Number(A(i, 0)) + ", " + Number(A(i, 1)) + ", " + Number(A(i, 2)) + "]\n";
     }
   };
-  out.text = "#" + Header(cal) + "\n# " + out.convention +
-             "\nimu0:\n  model: scale-misalignment\n" + "  accelerometers:\n    M:\n";
+  out.text =
+      "#" + Header(cal) + "\n# " + out.convention + "\n" +
+      (options.noise ? NoiseComments(*options.noise, "#") : std::string()) + "imu0:\n" +
+      (options.noise ? KalibrNoiseKeys(*options.noise, options.rostopic, "  ") : std::string()) +
+      "  model: scale-misalignment\n" + "  accelerometers:\n    M:\n";
   rows(M);
   out.text += "  # accelcal constant bias [m/s2]: [" + Number(bias_ms2(0)) + ", " +
               Number(bias_ms2(1)) + ", " + Number(bias_ms2(2)) + "]\n";
@@ -614,6 +728,10 @@ ExportResult ExportCalibration(const LoadedCalibration& cal, const std::string& 
       return CHeader(cal, options);
     case ExportFormat::kImuTk:
       return options.sensor == "gyroscope" ? ImuTkGyroscope(cal) : ImuTk(cal);
+    case ExportFormat::kKalibrImu:
+      return KalibrImu(cal, options);
+    case ExportFormat::kRos:
+      return RosCovariance(cal, options);
   }
   throw std::invalid_argument("unknown export format");
 }

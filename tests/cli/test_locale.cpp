@@ -25,6 +25,7 @@
 #include "accelcal/series_file.hpp"
 #include "accelcal/simulate.hpp"
 #include "accelcal/static_detection.hpp"
+#include "support/sample_noise.hpp"
 
 namespace accelcal {
 namespace {
@@ -119,8 +120,11 @@ TEST_F(DecimalComma, EveryExportIsTheSameBytes) {
   const LoadedCalibration cal = ParseCalibrationJson(json, "cal.json");
   for (const ExportFormat format : AllExportFormats()) {
     if (format == ExportFormat::kCHeader) continue;  // the quadratic model in x-first: below
-    const ExportResult c = ExportCalibration(cal, json, format);
-    const ExportResult comma = InCommaLocale([&] { return ExportCalibration(cal, json, format); });
+    ExportOptions options;
+    options.noise = test::SampleNoise();  // the noise formats need one
+    const ExportResult c = ExportCalibration(cal, json, format, options);
+    const ExportResult comma =
+        InCommaLocale([&] { return ExportCalibration(cal, json, format, options); });
     EXPECT_EQ(comma.text, c.text) << ToString(format);
     EXPECT_EQ(comma.convention, c.convention) << ToString(format);
     EXPECT_FALSE(HasDecimalComma(c.text)) << ToString(format);

@@ -17,6 +17,7 @@
 #include "accelcal/export.hpp"
 #include "accelcal/frame.hpp"
 #include "accelcal/simulate.hpp"
+#include "support/sample_noise.hpp"
 
 namespace accelcal {
 namespace {
@@ -539,6 +540,7 @@ TEST(Export, LabelsThatAreNoUtf8AreWrittenWithTheReplacementCharacter) {
   for (const ExportFormat format : AllExportFormats()) {
     ExportOptions g;
     g.raw_unit = "g";
+    g.noise = test::SampleNoise("/logs/r\xe4uschen.json");  // the noise formats' comments too
     EXPECT_NE(ExportCalibration(f.cal, f.json, format, g).text, "") << ToString(format);
   }
 }

@@ -49,6 +49,10 @@ struct NoiseTermEstimate {
   /// bound.
   bool resolved = false;
   bool fitted = false;  ///< false: left out of the fit (not asked for)
+  /// The squared coefficient over its standard error, c / σ_c, unconstrained: below −1.96 it is
+  /// in `below_zero`; far below (−3 and less: by chance in 0.13 % of logs) the terms do not
+  /// describe the noise.
+  double z = 0;
 };
 
 struct NoiseFitOptions {

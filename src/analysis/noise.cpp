@@ -41,7 +41,12 @@ void NoiseAccumulator::Add(const Vec3* samples, std::size_t count) {
       const Vec3 change = (x - (k > 0 ? samples[k - 1] : previous_)).cwiseAbs();
       for (int a = 0; a < 3; ++a) {
         if (change(a) > 0) quantum_(a) = std::min(quantum_(a), change(a));
+        if (change(a) > largest_step_(a)) {
+          largest_step_(a) = change(a);
+          largest_step_at_[static_cast<std::size_t>(a)] = samples_;
+        }
       }
+      block_abs_steps_ += change;
       low_ = low_.cwiseMin(x);
       high_ = high_.cwiseMax(x);
     }
@@ -51,6 +56,8 @@ void NoiseAccumulator::Add(const Vec3* samples, std::size_t count) {
     if (samples_ % kStillBlockSamples == 0) {
       block_means_.push_back(block_sum_ / static_cast<double>(kStillBlockSamples));
       block_sum_.setZero();
+      block_mean_abs_steps_.push_back(block_abs_steps_ / static_cast<double>(kStillBlockSamples));
+      block_abs_steps_.setZero();
     }
   }
   if (count > 0) previous_ = samples[count - 1];
@@ -90,6 +97,33 @@ Stillness StillnessOf(const std::vector<Vec3>& means, const Vec3& quantum) {
   return out;
 }
 
+// The largest step between neighbouring samples against the typical one, axis by axis.
+Spikes SpikesOf(const std::vector<Vec3>& block_mean_abs_steps, const Vec3& largest,
+                const std::array<std::size_t, 3>& at, const Vec3& quantum) {
+  Spikes out;
+  if (block_mean_abs_steps.size() < kStillMinBlocks) return out;
+  out.checked = true;
+  double worst_ratio = -1;
+  std::vector<double> typical(block_mean_abs_steps.size());
+  for (int a = 0; a < 3; ++a) {
+    for (std::size_t j = 0; j < typical.size(); ++j) typical[j] = block_mean_abs_steps[j](a);
+    const auto middle = typical.begin() + static_cast<std::ptrdiff_t>(typical.size() / 2);
+    std::nth_element(typical.begin(), middle, typical.end());
+    // A reading quieter than its quantum: a step of one quantum is its noise.
+    const double step = std::max(*middle, std::isfinite(quantum(a)) ? quantum(a) : 0.0);
+    const double ratio = step > 0 ? largest(a) / step : (largest(a) > 0 ? INFINITY : 0);
+    if (ratio > worst_ratio) {
+      worst_ratio = ratio;
+      out.axis = a;
+      out.largest_step = largest(a);
+      out.typical_step = step;
+      out.at_sample = at[static_cast<std::size_t>(a)];
+    }
+  }
+  out.clean = worst_ratio <= kSpikeRatio;
+  return out;
+}
+
 }  // namespace
 
 NoiseAnalysis NoiseAccumulator::Finish(double sample_period_s) const {
@@ -126,6 +160,7 @@ NoiseAnalysis NoiseAccumulator::Finish(double sample_period_s) const {
   }
   out.mean = first_ + sum_ / static_cast<double>(samples_);
   out.stillness = StillnessOf(block_means_, quantum_);
+  out.spikes = SpikesOf(block_mean_abs_steps_, largest_step_, largest_step_at_, quantum_);
   return out;
 }
 

@@ -297,6 +297,7 @@ NoiseModelFit FitNear1(const std::vector<AllanPoint>& points, const NoiseFitOpti
     const double c = c_scaled(j) / scale(j);
     const double sigma_c = std::sqrt(covariance_scaled(j, j)) / scale(j);
     e.fitted = true;
+    e.z = sigma_c > 0 ? c / sigma_c : 0.0;
     if (c < -z * sigma_c)
       out.below_zero.push_back(static_cast<NoiseTerm>(fitted[static_cast<std::size_t>(j)]));
     e.resolved = c > z * sigma_c;

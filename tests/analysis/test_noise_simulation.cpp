@@ -128,6 +128,30 @@ TEST(Noise, StillnessSeesATurnAndNotTheNoise) {
   EXPECT_NEAR(noise.stillness.largest_change, 0.1 * 224 / 256, 0.002);
 }
 
+// Spikes: the largest step between neighbours against the typical one (the median over blocks of
+// their mean |step|, 0.8 σ_Δ). Gaussian white noise and random walk over 2^19 samples: some 7.5
+// (a maximum of about 5.9 σ_Δ); one sample 30 σ off (21 σ_Δ, 27 typical steps) is found.
+TEST(Noise, SpikesAreSingleSampleGlitches) {
+  const std::size_t n = std::size_t{1} << 19;
+  std::vector<Vec3> samples(n);
+  for (int a = 0; a < 3; ++a) {
+    const std::vector<double> y =
+        SimulateNoise({0, 1e-3, 0, a == 1 ? 1e-4 : 0.0, 0}, n, 0.01, 90 + std::uint64_t(a));
+    for (std::size_t k = 0; k < n; ++k) samples[k](a) = y[k];
+  }
+  NoiseAnalysis noise = AnalyseNoise(samples, 0.01);
+  ASSERT_TRUE(noise.spikes.checked);
+  EXPECT_TRUE(noise.spikes.clean);
+  EXPECT_LT(noise.spikes.largest_step, 9 * noise.spikes.typical_step);
+  const double sigma = 1e-3 / std::sqrt(0.01);  // per sample
+  samples[300000](1) += 30 * sigma;
+  noise = AnalyseNoise(samples, 0.01);
+  EXPECT_FALSE(noise.spikes.clean);
+  EXPECT_EQ(noise.spikes.axis, 1);
+  EXPECT_TRUE(noise.spikes.at_sample == 300000 || noise.spikes.at_sample == 300001)
+      << noise.spikes.at_sample;
+}
+
 TEST(Noise, RefusesWhatHasNoNoiseToCharacterise) {
   std::vector<Vec3> samples(127, Vec3(1, 2, 3));
   for (std::size_t k = 0; k < samples.size(); ++k) samples[k](0) += 1e-3 * double(k % 7);

@@ -1,6 +1,7 @@
 // accelcal noise: the Allan deviation of a still log and the IEEE noise terms fitted to it.
 #include "commands.hpp"
 
+#include <array>
 #include <cmath>
 #include <functional>
 #include <string>
@@ -29,6 +30,8 @@ constexpr double kMaxLostFraction = 1e-3;
 // At rest a calibrated sensor reads its gravity to within its calibration error and the site's
 // difference (≪ 1 %); a calibration 2 % away is another sensor's.
 constexpr double kMaxGravityDeparture = 0.02;
+// A term this many σ below 0 is not chance (0.13 % of logs each): the terms are not a result.
+constexpr double kFailZ = 3;
 
 // How one sensor's terms are shown: the unit of its samples and, for the text, a scale to the
 // unit engineers quote each term in.
@@ -82,24 +85,32 @@ std::vector<std::string> AxisNotes(const NoiseModelFit& fit, bool* failed) {
         Format("the fit did not settle in %d rounds: its terms are not a result", fit.iterations));
     *failed = true;
   }
-  std::string others;
+  std::string far, near;  // below 0 by 3σ or more (not chance), by 1.96-3σ (1 log in 10)
   for (NoiseTerm t : fit.below_zero) {
     if (t == NoiseTerm::kQuantization) {
       notes.push_back(
           "the shortest averaging times fall below white noise (quantization comes out below 0): "
           "the sensor filters its output before it is sampled, so neighbouring samples are "
           "correlated; the white noise is the level above the filter's time");
-    } else {
-      others += std::string(others.empty() ? "" : ", ") + ToString(t);
+      continue;
     }
+    const double z = fit.terms[static_cast<std::size_t>(t)].z;
+    std::string& list = z <= -kFailZ ? far : near;
+    list += Format("%s%s (%.1fσ)", list.empty() ? "" : ", ", ToString(t), z);
   }
-  if (!others.empty()) {
-    notes.push_back("the fit puts " + others +
-                    " below 0 beyond its uncertainty: the five terms do not describe this axis' "
-                    "noise (a vibration, a drift that is not a ramp), and the other terms take up "
-                    "what is missing: they are not a result");
+  if (!far.empty()) {
+    notes.push_back("the fit puts " + far +
+                    " below 0, beyond chance: the five terms do not describe this axis' noise (a "
+                    "vibration, a drift that is not a ramp), and the other terms take up what is "
+                    "missing: they are not a result");
     *failed = true;
-  } else if (fit.chi2_p < 1e-3) {
+  }
+  if (!near.empty()) {
+    notes.push_back("the fit puts " + near +
+                    " below 0 beyond its 95 % interval: with four terms that happens by chance in "
+                    "about 1 log in 10; a log that shows it again is not described by the terms");
+  }
+  if (fit.chi2_p < 1e-3) {
     notes.push_back(Format(
         "the terms leave χ² = %.1f for %d degrees of freedom (p = %.2g): they do not describe "
         "this axis' noise well (a vibration or a disturbance at some averaging time?): read them "
@@ -195,11 +206,11 @@ std::string SensorText(const Sensor& s) {
   return out;
 }
 
-// The rate a noise analysis takes: the time column's, else --rate. A given rate that differs
-// from the time column's is said: the density scales with the square root of the rate.
-double RateFor(const std::string& path, const std::optional<TimeAxis>& time,
+// The rate a noise analysis takes: the time column's (its samples over its span), else --rate.
+// A given rate that differs from the time column's is said: the density scales with its root.
+double RateFor(const std::string& path, const std::optional<double>& clock_hz,
                const std::optional<double>& given_hz) {
-  if (!time) {
+  if (!clock_hz) {
     if (!given_hz) {
       throw UsageError(path +
                        " has no time column: give the sample rate with --rate (or the columns "
@@ -207,42 +218,91 @@ double RateFor(const std::string& path, const std::optional<TimeAxis>& time,
     }
     return *given_hz;
   }
-  if (given_hz && std::abs(*given_hz / time->rate_hz - 1) > 1e-3) {
+  if (given_hz && std::abs(*given_hz / *clock_hz - 1) > kRateTolerance) {
+    throw InputError(path, 0,
+                     Format("the given rate %.6g Hz contradicts the time column, whose samples "
+                            "come at %.6g Hz",
+                            *given_hz, *clock_hz));
+  }
+  if (given_hz && std::abs(*given_hz / *clock_hz - 1) > 1e-3) {
     Warn(
         "%s: --rate %.6g Hz given, but the time column's samples come at %.6g Hz: its rate is "
         "taken\n",
-        VisibleLine(path).c_str(), *given_hz, time->rate_hz);
+        VisibleLine(path).c_str(), *given_hz, *clock_hz);
   }
-  return time->rate_hz;
+  return *clock_hz;
 }
 
 // The Allan variance of a log joined across a gap is not the sensor's.
-[[noreturn]] void RefuseGap(const std::string& path, std::uint32_t line, const TimeGap& gap) {
+[[noreturn]] void RefuseGap(const std::string& path, std::uint32_t line, const TimeGap& gap,
+                            double lost) {
   throw InputError(path, line,
-                   Format("a gap in the samples (%.6g s to %.6g s after the first): the Allan "
-                          "deviation needs one unbroken stream at one rate",
-                          gap.t_before_s, gap.t_after_s));
+                   Format("a gap in the samples (%.6g s to %.6g s after the first; %.0f samples "
+                          "lost in all): the Allan deviation needs one unbroken stream at one rate",
+                          gap.t_before_s, gap.t_after_s, lost));
 }
 
-// Samples lost, or a rate that changes, make the Allan variance's τ wrong: refused.
-void RefuseIrregularClock(const std::string& path, const SampleClockReport& clock, double rate_hz) {
-  if (clock.lost_fraction > kMaxLostFraction) {
-    throw InputError(
-        path, clock.first_long_line,
-        Format("%zu samples are missing (%.2g %% of the log, net of %zu steps shorter than "
-               "half the typical one), the first before this line: the Allan deviation takes "
-               "the samples one period apart, and the white noise would come out %.2g %% high",
-               clock.lost, 100 * clock.lost_fraction, clock.short_steps,
-               100 * (std::sqrt(1 + clock.lost_fraction) - 1)));
+// Samples lost (at a gap: said as one), samples beyond the span's room, or a rate that changes
+// make the Allan variance's τ wrong: refused. A jittery clock, or one that delivers samples in
+// bursts, loses none: its samples catch up within the span.
+void RefuseIrregularClock(const std::string& path, const SampleClockReport& clock,
+                          const TimeGap* gap, std::uint32_t gap_line,
+                          const std::optional<double>& given_hz) {
+  if (clock.lost_fraction > kMaxLostFraction && gap != nullptr) {
+    RefuseGap(path, gap_line, *gap, clock.lost);
   }
   if (clock.rate_departs()) {
     throw InputError(
-        path, clock.worst_first_line,
-        Format("the samples of lines %u-%u come at %.6g Hz, %.2g %% away from the log's %.6g Hz "
-               "(beyond the %.2g %% its timestamps explain): the rate changes within the log or "
-               "samples are lost there; the Allan deviation needs one stream at one rate",
-               clock.worst_first_line, clock.worst_last_line, clock.worst_rate_hz,
-               100 * clock.worst_departure, rate_hz, 100 * clock.tolerance));
+        path, clock.first_departing_line,
+        Format("from about this line the samples come at %.6g Hz where the log starts at %.6g "
+               "Hz (%.3g %% away, beyond the %.2g %% its timestamps explain; at most %.3g %% "
+               "away): the rate changes within the log, or samples are lost there; the Allan "
+               "deviation needs one stream at one rate",
+               clock.first_departing_rate_hz, clock.reference_rate_hz,
+               100 * std::abs(clock.first_departing_rate_hz / clock.reference_rate_hz - 1),
+               100 * clock.tolerance, 100 * clock.worst_departure));
+  }
+  if (clock.two_readings()) {
+    // Steps mostly shorter than the span's: samples lost, or timestamps rounded; the rate says.
+    const double lost = clock.span_s / clock.median_step_s - double(clock.samples - 1);
+    const auto near = [&](double period) {
+      return given_hz && std::abs(*given_hz * period - 1) <= 0.01;
+    };
+    if (near(clock.median_step_s)) {
+      throw InputError(path, clock.first_long_line,
+                       Format("%.0f samples are missing from a %.6g Hz stream (%.2g %% of the "
+                              "log), the first before this line: the Allan deviation takes the "
+                              "samples one period apart",
+                              lost, 1 / clock.median_step_s, 100 * lost / double(clock.samples)));
+    }
+    if (!near(clock.period_s)) {
+      throw InputError(
+          path, 0,
+          Format("the steps are mostly %.6g s (%.6g Hz), but the log's %.6g s hold a step every "
+                 "%.6g s (%.6g Hz): either %.0f samples (%.2g %%) of a %.6g Hz stream are lost, or "
+                 "the timestamps are rounded coarser than the samples come; give --rate with "
+                 "the sensor's rate to say which",
+                 clock.median_step_s, 1 / clock.median_step_s, clock.span_s, clock.period_s,
+                 1 / clock.period_s, lost, 100 * lost / double(clock.samples),
+                 1 / clock.median_step_s));
+    }
+  }
+  if (clock.lost_fraction > kMaxLostFraction) {
+    throw InputError(
+        path, clock.first_long_line,
+        Format("%.0f samples are missing (%.2g %% of the log: its %.6g s hold %.0f steps of "
+               "%.6g s, the sampling period), the first step of 1.5 periods or more "
+               "before this line: the Allan deviation takes the samples one period apart, and "
+               "the white noise would come out %.2g %% high",
+               clock.lost, 100 * clock.lost_fraction, clock.span_s, clock.span_s / clock.period_s,
+               clock.period_s, 100 * (std::sqrt(1 + clock.lost_fraction) - 1)));
+  }
+  if (clock.lost_fraction < -kMaxLostFraction) {
+    throw InputError(
+        path, 0,
+        Format("%.0f samples more than the log's %.6g s hold at a sample every %.6g s (the "
+               "sampling period): rows written twice, or two streams interleaved?",
+               -clock.lost, clock.span_s, clock.period_s));
   }
 }
 
@@ -255,13 +315,30 @@ void RefuseMotion(const std::string& path, const NoiseAnalysis& noise, bool stil
   throw InputError(
       path, line_of(s.at_sample),
       Format("the sensor moves: the mean of its %c axis over %zu samples changes by %.4g at "
-             "%.6g s after the first sample analysed, %.0f times the typical change %.3g; the "
+             "%.6g s after the first sample analysed, %.3g times the typical change %.3g; the "
              "Allan deviation of a moving sensor is not its noise%s",
              "xyz"[s.axis], kStillBlockSamples, s.largest_change,
              static_cast<double>(s.at_sample) * noise.sample_period_s,
              s.largest_change / s.typical_change, s.typical_change,
              still_option ? " (the longest still interval holds a knock or a turn)"
                           : ": give --still to take the longest still interval"));
+}
+
+// A glitch (a bus error, a saturated reading) is refused: one step of 70σ among 20000 samples
+// puts the white noise 5 % high, ten of them 50 %.
+void RefuseSpikes(const std::string& path, const NoiseAnalysis& noise,
+                  const std::function<std::uint32_t(std::size_t)>& line_of) {
+  const Spikes& s = noise.spikes;
+  if (s.clean) return;
+  throw InputError(
+      path, line_of(s.at_sample),
+      Format("a spike: the %c axis steps by %.4g from the sample before (%.6g s after the first "
+             "sample analysed), %.3g times the typical step %.3g (for Gaussian noise the largest "
+             "of a day's steps is some 8): a glitch biases the white noise high; remove the "
+             "sample, or analyse the samples either side of it",
+             "xyz"[s.axis], s.largest_step,
+             static_cast<double>(s.at_sample) * noise.sample_period_s,
+             s.largest_step / s.typical_step, s.typical_step));
 }
 
 // A calibration from another sensor (or another unit) shows at rest: |f| is not its gravity.
@@ -347,33 +424,55 @@ int WriteNoise(const NoiseArgs& args, bool calibrated, std::size_t begin, std::s
 
 // The whole log, streamed through the accumulators: memory bounded by the reader's blocks.
 int StreamNoise(const NoiseArgs& args, const ReadOptions& read,
+                const std::optional<double>& given_hz,
                 const std::optional<LoadedCalibration>& cal) {
   NoiseAccumulator accumulator(1.0);  // the period only scales τ: given at the end
   std::optional<SampleClockCheck> clock;
+  // The line of each axis' largest step so far, taken while its piece is at hand.
+  std::array<std::size_t, 3> step_at{};
+  std::array<std::uint32_t, 3> step_line{};
   const StreamedLog log = StreamRawLog(args.input.path, read, [&](const RawLog& piece) {
     if (piece.time) {
       if (!clock) clock.emplace(*piece.time);
       clock->Add(piece.time_s.data(), piece.line.data(), piece.time_s.size());
     }
+    const std::size_t first = accumulator.samples();
     if (!cal) {
       accumulator.Add(piece.samples.data(), piece.samples.size());
-      return;
+    } else {
+      const std::vector<Vec3> forces = SpecificForces(*cal, piece.samples.data(), piece.line.data(),
+                                                      piece.samples.size(), args.input.path);
+      accumulator.Add(forces.data(), forces.size());
     }
-    const std::vector<Vec3> forces = SpecificForces(*cal, piece.samples.data(), piece.line.data(),
-                                                    piece.samples.size(), args.input.path);
-    accumulator.Add(forces.data(), forces.size());
+    for (int a = 0; a < 3; ++a) {
+      const std::size_t at = accumulator.largest_step_sample(a);
+      if (at != step_at[std::size_t(a)] && at >= first) {
+        step_at[std::size_t(a)] = at;
+        step_line[std::size_t(a)] = piece.line[at - first];
+      }
+    }
   });
-  if (!log.gap_lines.empty()) {
-    RefuseGap(args.input.path, log.gap_lines.front(), log.time->gaps.front());
+  std::optional<double> clock_hz;
+  if (clock) {
+    const SampleClockReport report = clock->Finish();
+    RefuseIrregularClock(args.input.path, report,
+                         log.gap_lines.empty() ? nullptr : &log.time->gaps.front(),
+                         log.gap_lines.empty() ? 0 : log.gap_lines.front(), given_hz);
+    clock_hz = report.rate_hz;
   }
-  const double rate_hz = RateFor(args.input.path, log.time, read.rate_hz);
-  if (clock) RefuseIrregularClock(args.input.path, clock->Finish(rate_hz), rate_hz);
+  const double rate_hz = RateFor(args.input.path, clock_hz, given_hz);
   Sensor accel;
   accel.name = "accelerometer";
   accel.source = args.input.path;
   accel.display = cal ? AccelDisplay(cal->unit) : RawDisplay("raw");
   accel.noise = accumulator.Finish(1 / rate_hz);
   RefuseMotion(args.input.path, accel.noise, false, [](std::size_t) { return 0u; });
+  RefuseSpikes(args.input.path, accel.noise, [&](std::size_t k) {
+    for (int a = 0; a < 3; ++a) {
+      if (step_at[std::size_t(a)] == k) return step_line[std::size_t(a)];
+    }
+    return 0u;
+  });
   if (cal) RefuseForeignCalibration(args.input.path, args.calibration, *cal, accel.noise);
   return WriteNoise(args, cal.has_value(), 0, log.samples, rate_hz, {accel});
 }
@@ -393,16 +492,15 @@ int RunNoise(const NoiseArgs& args) {
   }
   ReadOptions read = MakeReadOptions(args.input);
   read.kind = InputKind::kRaw;
+  // The given rate is the noise analysis' own to check against the time column's clock (it tells
+  // lost samples from coarse timestamps, SampleClockReport::two_readings), not the reader's.
+  const std::optional<double> given_hz = read.rate_hz;
+  read.rate_hz.reset();
   // A still log alone is streamed (a day's log in bounded memory); --still and the gyroscope
   // need the log whole (detection, the two streams sample by sample).
-  if (!args.still && !gyro) return StreamNoise(args, read, cal);
+  if (!args.still && !gyro) return StreamNoise(args, read, given_hz, cal);
   const InputData data = ReadInput(args.input.path, read);
   const RawLog& log = data.raw;
-  if (log.time && !log.time->gaps.empty()) {
-    const TimeGap& gap = log.time->gaps.front();
-    RefuseGap(args.input.path, log.line[gap.index], gap);
-  }
-  double rate_hz = RateFor(args.input.path, log.time, read.rate_hz);
   // The samples analysed: the whole log, or its longest still interval.
   std::size_t begin = 0, end = log.samples.size();
   if (args.still) {
@@ -414,17 +512,32 @@ int RunNoise(const NoiseArgs& args) {
     }
     begin = longest->begin;
     end = longest->end;
+    // Less a detection window at each end: the detector's windows blur an interval's edges, and
+    // the first movement of a turn (a step of 27 typical ones 0.3 s before the Xsens rest ends)
+    // is no noise of the sensor at rest.
+    if (end - begin > 4 * d.window_samples) {
+      begin += d.window_samples;
+      end -= d.window_samples;
+    }
   }
   const auto count = static_cast<std::size_t>(end - begin);
+  // The clock of the samples analysed: their rate, over their own span.
+  std::optional<double> clock_hz;
   if (log.time) {
-    // The interval's own rate: the samples analysed are the ones whose clock counts.
-    if (count >= 2 && log.time_s[end - 1] > log.time_s[begin]) {
-      rate_hz = static_cast<double>(count - 1) / (log.time_s[end - 1] - log.time_s[begin]);
-    }
     SampleClockCheck clock(*log.time);
     clock.Add(log.time_s.data() + begin, log.line.data() + begin, count);
-    RefuseIrregularClock(args.input.path, clock.Finish(rate_hz), rate_hz);
+    const SampleClockReport report = clock.Finish();
+    const TimeGap* gap = nullptr;
+    for (const TimeGap& g : log.time->gaps) {
+      if (g.index > begin && g.index < end) {
+        gap = &g;
+        break;
+      }
+    }
+    RefuseIrregularClock(args.input.path, report, gap, gap ? log.line[gap->index] : 0, given_hz);
+    clock_hz = report.rate_hz;
   }
+  const double rate_hz = RateFor(args.input.path, clock_hz, given_hz);
   const double period = 1 / rate_hz;
   const auto line_of = [&](std::size_t k) {
     return begin + k < log.line.size() ? log.line[begin + k] : 0u;
@@ -446,6 +559,7 @@ int RunNoise(const NoiseArgs& args) {
                                                        log.samples.begin() + std::ptrdiff_t(end)),
                                      period);
     RefuseMotion(args.input.path, accel.noise, args.still, line_of);
+    RefuseSpikes(args.input.path, accel.noise, line_of);
     if (cal) RefuseForeignCalibration(args.input.path, args.calibration, *cal, accel.noise);
     sensors.push_back(std::move(accel));
   }
@@ -478,6 +592,12 @@ int RunNoise(const NoiseArgs& args) {
       g.display = RawDisplay("raw");
     }
     g.noise = AnalyseNoise(samples, period);
+    // A turn about the vertical moves the gyroscope, not the accelerometer.
+    const auto rate_line = [&](std::size_t k) {
+      return begin + k < rates.raw.line.size() ? rates.raw.line[begin + k] : 0u;
+    };
+    RefuseMotion(g.source, g.noise, args.still, rate_line);
+    RefuseSpikes(g.source, g.noise, rate_line);
     sensors.push_back(std::move(g));
   }
   return WriteNoise(args, cal.has_value(), begin, end, rate_hz, sensors);

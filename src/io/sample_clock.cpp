@@ -71,7 +71,7 @@ void SampleClockCheck::Add(const double* t_s, const std::uint32_t* line, std::si
     if (first_long_line_ == 0 && t - previous_t_ >= 1.5 * typical_s_) first_long_line_ = line[k];
     window_steps_seen_.push_back(t - previous_t_);
     const double step = (t - previous_t_) / typical_s_ / kStepHigh * kStepBins;
-    const std::size_t step_bin = std::min(kStepBins, static_cast<std::size_t>(std::max(0.0, step)));
+    const std::size_t step_bin = static_cast<std::size_t>(std::clamp(step, 0.0, double(kStepBins)));
     ++step_histogram_[step_bin];
     step_sums_[step_bin] += t - previous_t_;
     previous_t_ = t;
@@ -80,8 +80,9 @@ void SampleClockCheck::Add(const double* t_s, const std::uint32_t* line, std::si
       const double mean_step = (t - b.t0) / static_cast<double>(b.steps) / typical_s_;
       const double position = (mean_step - kLow) / (kHigh - kLow) * kBins;
       const std::size_t bin =
-          position < 0 ? 0
-                       : std::min(kBins + 1, static_cast<std::size_t>(std::floor(position)) + 1);
+          position < 0
+              ? 0
+              : static_cast<std::size_t>(std::min(std::floor(position), double(kBins))) + 1;
       ++b.histogram[bin];
       b.t0 = t;
       b.count = 0;

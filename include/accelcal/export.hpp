@@ -42,7 +42,7 @@ enum class ExportFormat {
   /// densities, random walks, update rate and topic (needs ExportOptions::noise with both sensors)
   kKalibrImu,
   /// "ros": sensor_msgs/Imu covariances, each axis' variance of one sample (density² · rate; needs
-  /// ExportOptions::noise)
+  /// ExportOptions::noise). These two hold the noise alone: their ExportLoss is empty.
   kRos,
 };
 std::string_view ToString(ExportFormat format);

@@ -382,9 +382,7 @@ ExportResult KalibrImu(const LoadedCalibration& cal, const ExportOptions& option
       "the largest axis' of each; Kalibr discretises the white noise as density x sqrt(rate)";
   out.text = "#" + Header(cal) + "\n# " + out.convention + "\n" + NoiseComments(n, "#") +
              KalibrNoiseKeys(n, options.rostopic, "");
-  out.loss = MeasureLoss(
-      cal, [&](const Vec3& p) { return SpecificForce(cal.params, p); }, "");
-  return out;
+  return out;  // the noise alone: no model, no loss
 }
 
 // sensor_msgs/Imu: each field's covariance, row-major 3x3, the variance of one sample.
@@ -420,9 +418,7 @@ ExportResult RosCovariance(const LoadedCalibration& cal, const ExportOptions& op
         "angular_velocity_stddev: " + Number(Largest(n.gyroscope->white) * std::sqrt(n.rate_hz)) +
         "\n";
   }
-  out.loss = MeasureLoss(
-      cal, [&](const Vec3& p) { return SpecificForce(cal.params, p); }, "");
-  return out;
+  return out;  // the noise alone: no model, no loss
 }
 
 // Kalibr's scale-misalignment model: a_measured = M a + b, M lower-triangular, m/s².

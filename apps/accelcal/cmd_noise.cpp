@@ -372,7 +372,8 @@ std::vector<Vec3> SpecificForces(const LoadedCalibration& cal, const Vec3* raw,
 }
 
 int WriteNoise(const NoiseArgs& args, bool calibrated, std::size_t begin, std::size_t end,
-               double rate_hz, const std::vector<Sensor>& sensors) {
+               double rate_hz, const std::optional<TimeAxis>& time,
+               const std::vector<Sensor>& sensors) {
   // The verdict: failed when an axis' terms are not a result (AxisNotes).
   bool failed = false;
   std::vector<std::string> reasons;
@@ -392,6 +393,9 @@ int WriteNoise(const NoiseArgs& args, bool calibrated, std::size_t begin, std::s
     doc["first_sample"] = begin + 1;
     doc["last_sample"] = end;
     doc["rate_hz"] = rate_hz;
+    // How the time column was read (its unit decides the rate: a unit misread is a density
+    // 31.6 times off), or that the rate was given.
+    doc["time_unit"] = time ? time->unit_reason : std::string("none: the rate given");
     doc["verdict"] = failed ? "failed" : "passed";
     if (failed) doc["failed_axes"] = reasons;
     doc["model"] =
@@ -400,6 +404,9 @@ int WriteNoise(const NoiseArgs& args, bool calibrated, std::size_t begin, std::s
     for (const Sensor& s : sensors) doc[s.name] = SensorJson(s);
     out = JsonText(doc);
   } else {
+    out +=
+        "# time: " + (time ? VisibleLine(time->unit_reason) : std::string("none: the rate given")) +
+        "\n";
     if (args.still) {
       out += Format("# the longest still interval: samples %zu-%zu\n", begin + 1, end);
     }
@@ -474,7 +481,7 @@ int StreamNoise(const NoiseArgs& args, const ReadOptions& read,
     return 0u;
   });
   if (cal) RefuseForeignCalibration(args.input.path, args.calibration, *cal, accel.noise);
-  return WriteNoise(args, cal.has_value(), 0, log.samples, rate_hz, {accel});
+  return WriteNoise(args, cal.has_value(), 0, log.samples, rate_hz, log.time, {accel});
 }
 
 }  // namespace
@@ -600,7 +607,7 @@ int RunNoise(const NoiseArgs& args) {
     RefuseSpikes(g.source, g.noise, rate_line);
     sensors.push_back(std::move(g));
   }
-  return WriteNoise(args, cal.has_value(), begin, end, rate_hz, sensors);
+  return WriteNoise(args, cal.has_value(), begin, end, rate_hz, log.time, sensors);
 }
 
 }  // namespace accelcal::cli

@@ -50,8 +50,13 @@ TEST_F(Cli, NoiseGivesTheWhiteNoiseOfEachAxis) {
         << a;
     EXPECT_EQ(axes[std::size_t(a)]["allan"].size(), 13u);  // m = 1 … 4096
   }
+  // How the time column was read is said: a unit misread is a density 31.6 times off.
+  EXPECT_EQ(doc["time_unit"],
+            "time column 'time' read as seconds (suggested by its name; median "
+            "step 0.01: 100 Hz)");
   const CliRun text = Exec("noise " + log);
   ASSERT_EQ(text.status, 0) << text.err;
+  EXPECT_EQ(text.out.rfind("# time: time column 'time' read as seconds", 0), 0u) << text.out;
   EXPECT_NE(text.out.find("accelerometer (" + log + "): 16384 samples at 100 Hz (163.8 s), in raw"),
             std::string::npos)
       << text.out;

@@ -68,6 +68,10 @@ struct Sensor {
   std::string source;
   Display display;
   NoiseAnalysis noise;
+  // Per axis, what the terms do not describe (AxisNotes) and whether they are no result:
+  // written once in WriteNoise, read by the text, the JSON and the verdict.
+  std::array<std::vector<std::string>, 3> notes;
+  std::array<bool, 3> failed{};
 };
 
 std::string TermText(const NoiseTermEstimate& e, double factor) {
@@ -142,8 +146,7 @@ nlohmann::ordered_json SensorJson(const Sensor& s) {
     }
     nlohmann::ordered_json below = nlohmann::ordered_json::array();
     for (NoiseTerm t : axis.fit.below_zero) below.push_back(ToString(t));
-    bool failed = false;
-    ja["notes"] = AxisNotes(axis.fit, &failed);
+    ja["notes"] = s.notes[static_cast<std::size_t>(a)];
     ja["fit"] = {{"chi2", axis.fit.chi2},
                  {"dof", axis.fit.dof},
                  {"p", axis.fit.chi2_p},
@@ -198,8 +201,7 @@ std::string SensorText(const Sensor& s) {
   }
   // What the terms do not describe, said where the figures are.
   for (int a = 0; a < 3; ++a) {
-    bool failed = false;
-    for (const std::string& note : AxisNotes(n.axes[static_cast<std::size_t>(a)].fit, &failed)) {
+    for (const std::string& note : s.notes[static_cast<std::size_t>(a)]) {
       out += Format("  # %c: %s\n", "xyz"[a], note.c_str());
     }
   }
@@ -372,17 +374,15 @@ std::vector<Vec3> SpecificForces(const LoadedCalibration& cal, const Vec3* raw,
 }
 
 int WriteNoise(const NoiseArgs& args, bool calibrated, std::size_t begin, std::size_t end,
-               double rate_hz, const std::optional<TimeAxis>& time,
-               const std::vector<Sensor>& sensors) {
-  // The verdict: failed when an axis' terms are not a result (AxisNotes).
+               double rate_hz, const std::optional<TimeAxis>& time, std::vector<Sensor> sensors) {
+  // Each axis' notes, and the verdict: failed when an axis' terms are not a result.
   bool failed = false;
   std::vector<std::string> reasons;
-  for (const Sensor& s : sensors) {
-    for (int a = 0; a < 3; ++a) {
-      bool axis_failed = false;
-      AxisNotes(s.noise.axes[static_cast<std::size_t>(a)].fit, &axis_failed);
-      if (axis_failed) reasons.push_back(s.name + " " + std::string(1, "xyz"[a]));
-      failed = failed || axis_failed;
+  for (Sensor& s : sensors) {
+    for (std::size_t a = 0; a < 3; ++a) {
+      s.notes[a] = AxisNotes(s.noise.axes[a].fit, &s.failed[a]);
+      if (s.failed[a]) reasons.push_back(s.name + " " + std::string(1, "xyz"[a]));
+      failed = failed || s.failed[a];
     }
   }
   std::string out;
@@ -481,7 +481,7 @@ int StreamNoise(const NoiseArgs& args, const ReadOptions& read,
     return 0u;
   });
   if (cal) RefuseForeignCalibration(args.input.path, args.calibration, *cal, accel.noise);
-  return WriteNoise(args, cal.has_value(), 0, log.samples, rate_hz, log.time, {accel});
+  return WriteNoise(args, cal.has_value(), 0, log.samples, rate_hz, log.time, {std::move(accel)});
 }
 
 }  // namespace
@@ -607,7 +607,7 @@ int RunNoise(const NoiseArgs& args) {
     RefuseSpikes(g.source, g.noise, rate_line);
     sensors.push_back(std::move(g));
   }
-  return WriteNoise(args, cal.has_value(), begin, end, rate_hz, log.time, sensors);
+  return WriteNoise(args, cal.has_value(), begin, end, rate_hz, log.time, std::move(sensors));
 }
 
 }  // namespace accelcal::cli

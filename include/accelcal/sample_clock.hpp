@@ -52,12 +52,11 @@ struct SampleClockReport {
   std::uint32_t first_long_line = 0;  ///< the line after the first step of 1.5 periods or more
   double jitter_s = 0;  ///< the timestamps' scatter about the grid (from the steps' MAD)
   /// The windows: how many, the rate the log starts at (the median of the first five windows'),
-  /// the first beyond the tolerance from it (0: none), and the one furthest from it.
+  /// the first beyond the tolerance from it (0: none), and how far the furthest is.
   std::size_t windows = 0;
   double reference_rate_hz = 0;
   std::uint32_t first_departing_line = 0;
   double first_departing_rate_hz = 0;
-  double worst_rate_hz = 0;
   double worst_departure = 0;  ///< |rate / median − 1| of the furthest window
   double tolerance = 0;
   bool rate_departs() const { return worst_departure > tolerance; }
@@ -70,8 +69,6 @@ class SampleClockCheck {
   explicit SampleClockCheck(const TimeAxis& axis);
   void Add(const double* t_s, const std::uint32_t* line, std::size_t count);
   SampleClockReport Finish() const;
-  /// The steps in one window.
-  std::size_t window_steps() const { return window_steps_; }
 
  private:
   struct Window {

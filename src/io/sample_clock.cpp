@@ -204,10 +204,7 @@ SampleClockReport SampleClockCheck::Finish() const {
   out.reference_rate_hz = *middle;
   for (std::size_t j = 0; j < rates.size(); ++j) {
     const double departure = std::abs(rates[j] / out.reference_rate_hz - 1);
-    if (!(departure <= out.worst_departure)) {  // an infinite rate departs most
-      out.worst_departure = departure;
-      out.worst_rate_hz = rates[j];
-    }
+    if (!(departure <= out.worst_departure)) out.worst_departure = departure;  // ∞ departs most
     if (out.first_departing_line == 0 && !(departure <= out.tolerance)) {
       out.first_departing_line = windows_[j + 1].first_line;
       out.first_departing_rate_hz = rates[j];

@@ -46,7 +46,9 @@ struct NoiseTermEstimate {
   /// The `confidence` interval of the value (of its square, taken to the square root).
   double low = 0, high = 0;
   /// The interval excludes 0: the term is seen in the data. Not resolved, `high` is an upper
-  /// bound.
+  /// bound: for a term the fit puts below 0 beyond its interval (z below −1.96), the Allan
+  /// deviation's own, √(min over τ of σ²(τ)'s upper limit over the term's avar at value 1), each
+  /// limit at 1 − (1 − confidence)/n: every term adds a variance ≥ 0.
   bool resolved = false;
   bool fitted = false;  ///< false: left out of the fit (not asked for)
   /// The squared coefficient over its standard error, c / σ_c, unconstrained: below −1.96 it is

@@ -58,8 +58,9 @@ SensorNoiseDensities ReadSensor(const Reader& top, const ordered_json& doc, cons
     out.random_walk(a) =
         si * (walk["resolved"].get<bool>() ? rk.Number(walk["value"], rk.Key("value"))
                                            : rk.Number(walk["high"], rk.Key("high")));
-    if (!(out.white(a) > 0) || !(out.random_walk(a) >= 0)) {
-      rt.Fail("the white noise must be positive and the random walk not negative");
+    if (!(out.white(a) > 0) || !(out.random_walk(a) > 0)) {
+      // An estimator weighs the bias's change by 1 / K²: a K of 0 pins the bias for ever.
+      rt.Fail("the white noise and the random walk (or its upper bound) must be positive");
     }
   }
   return out;

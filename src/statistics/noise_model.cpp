@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <stdexcept>
 
 #include <Eigen/Dense>
@@ -157,6 +158,25 @@ double NoiseModelAvar(const std::array<double, kNoiseTerms>& squared, double tau
 namespace {
 
 // The fit of points whose σ² are near 1 (FitNoiseModel scales them there).
+// A term's upper bound from the Allan deviation alone, for a term the fit puts below 0 beyond its
+// interval (then the terms do not describe the noise, and c + z σ_c, below 0 too, bounds
+// nothing). Every term adds a variance ≥ 0, so c_j f_j(τ) ≤ σ²(τ) at every τ (f_j the term's
+// avar at c_j = 1), and c_j is at most the least over τ of σ²(τ)'s upper confidence limit over
+// f_j(τ); each limit at 1 − (1 − confidence)/n, so that all n hold together (Bonferroni).
+double EnvelopeBound(const NoiseModelFit& fit, std::size_t term, std::size_t n, double confidence) {
+  std::array<double, kNoiseTerms> unit{};
+  unit[term] = 1;
+  const double each = 1 - (1 - confidence) / static_cast<double>(n);
+  double bound = std::numeric_limits<double>::infinity();
+  for (std::size_t i = 0; i < n; ++i) {
+    const double f = NoiseModelAvar(unit, fit.points[i].tau_s);
+    if (!(f > 0) || !(fit.points[i].avar > 0)) continue;
+    const double high = AllanDeviationInterval(fit.points[i].avar, fit.edf[i], each).high;
+    bound = std::min(bound, high * high / f);
+  }
+  return std::isfinite(bound) ? std::sqrt(bound) : 0.0;
+}
+
 NoiseModelFit FitNear1(const std::vector<AllanPoint>& points, const NoiseFitOptions& options) {
   if (!(options.confidence > 0 && options.confidence < 1) || options.max_iterations < 1) {
     throw std::invalid_argument(
@@ -305,6 +325,10 @@ NoiseModelFit FitNear1(const std::vector<AllanPoint>& points, const NoiseFitOpti
     e.sigma = e.resolved ? sigma_c / (2 * e.value) : 0.0;
     e.low = e.resolved ? std::sqrt(c - z * sigma_c) : 0.0;
     e.high = std::sqrt(std::max(0.0, c + z * sigma_c));
+    if (c < -z * sigma_c) {
+      e.high = EnvelopeBound(out, static_cast<std::size_t>(fitted[static_cast<std::size_t>(j)]), n,
+                             options.confidence);
+    }
   }
   return out;
 }

@@ -113,6 +113,36 @@ TEST(NoiseModel, RefusesWhatItCannotFit) {
   }
 }
 
+TEST(NoiseModel, ATermBelowZeroIsBoundedByTheAllanDeviationAlone) {
+  // White noise whose long averages fall faster than 1/τ (a sensor that filters its output, or
+  // anti-correlated samples): the fit puts the random walk below 0 beyond its interval, where
+  // c + z σ_c is below 0 too and bounds nothing (the T265 rest's accelerometer y wrote an upper
+  // bound of 0, which pins an estimator's bias for ever).
+  std::vector<AllanPoint> points = Octaves(12, 0.01, std::uint64_t{1} << 20);
+  for (AllanPoint& p : points) {
+    p.avar = 1e-6 / p.tau_s * (p.m >= 64 ? 64.0 / static_cast<double>(p.m) : 1.0);
+  }
+  NoiseFitOptions two;  // white noise and random walk: the random walk takes the fall
+  two.terms = {false, true, false, true, false};
+  const NoiseModelFit fit = FitNoiseModel(points, two);
+  const NoiseTermEstimate& k = fit.terms[std::size_t(NoiseTerm::kRandomWalk)];
+  ASSERT_LT(k.z, -1.96);
+  EXPECT_FALSE(k.resolved);
+  // Every term adds a variance >= 0: K² τ/3 <= σ²(τ)'s upper limit at every τ, each limit at
+  // 1 - 0.05/12 so that all twelve hold together.
+  double bound2 = HUGE_VAL;
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    const double high = AllanDeviationInterval(points[i].avar, fit.edf[i], 1 - 0.05 / 12).high;
+    bound2 = std::min(bound2, high * high / (points[i].tau_s / 3));
+  }
+  EXPECT_GT(k.high, 0.0);
+  EXPECT_DOUBLE_EQ(k.high, std::sqrt(bound2));
+  // The same at another scale (the fit's power-of-4 scaling carries the bound exactly).
+  for (AllanPoint& p : points) p.avar *= 1e40;
+  EXPECT_DOUBLE_EQ(FitNoiseModel(points, two).terms[std::size_t(NoiseTerm::kRandomWalk)].high,
+                   k.high * 1e20);
+}
+
 // Over `runs` simulated logs of `truth`, the fraction whose 95 % interval holds each term's true
 // value (0 for a term absent: an interval from 0 holds it).
 std::array<double, kNoiseTerms> Coverage(const std::array<double, kNoiseTerms>& truth,

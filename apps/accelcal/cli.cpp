@@ -448,26 +448,27 @@ int accelcal::cli::RunCommandLine(int argc, char** argv) {
     export_cmd->add_option("CAL", exp.calibration, "calibration file (JSON)")->required();
     export_cmd
         ->add_option("--to", exp.format,
-                     "json, yaml, kalibr, px4, ardupilot, c-header, imutk, kalibr-imu or ros "
-                     "(docs/conventions.md)")
+                     "json, yaml, kalibr, px4, ardupilot, c-header, imutk, kalibr-imu, ros, "
+                     "openvins or basalt (docs/conventions.md)")
         ->required();
     export_cmd
         ->add_option("--noise", exp.noise,
-                     "the sensor's noise (accelcal noise --json, calibrated): kalibr-imu and ros "
-                     "need it, kalibr writes its keys beside the model")
+                     "the sensor's noise (accelcal noise --json, calibrated): kalibr-imu, ros, "
+                     "openvins and basalt need it, kalibr writes its keys beside the model")
         ->check(kFileName);
     export_cmd
         ->add_option("--rostopic", exp.rostopic,
-                     "the IMU's topic (kalibr-imu, kalibr with --noise)")
+                     "the IMU's topic (kalibr-imu, openvins, kalibr with --noise)")
         ->capture_default_str();
     export_cmd->add_option("-o,--output", exp.output, "output file (default: stdout)")
         ->check(kFileName);
     export_cmd->add_option("--raw-unit", exp.raw_unit,
                            "unit of the calibrated raw readings, m/s2 or g, when the file's label "
                            "is another (kalibr, px4, ardupilot need readings in m/s2)");
-    export_cmd->add_option("--gyro-raw-unit", exp.gyro_raw_unit,
-                           "unit of the gyroscope's calibrated raw rates, rad/s or deg/s, when the "
-                           "file's label is another (kalibr needs rates in rad/s)");
+    export_cmd->add_option(
+        "--gyro-raw-unit", exp.gyro_raw_unit,
+        "unit of the gyroscope's calibrated raw rates, rad/s or deg/s, when the "
+        "file's label is another (kalibr, openvins, basalt need rates in rad/s)");
     export_cmd
         ->add_option("--instance", exp.instance,
                      "accelerometer index: PX4 CAL_ACC<n>, ArduPilot INS_ACC / INS_ACC2 / INS_ACC3")

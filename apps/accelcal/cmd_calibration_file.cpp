@@ -135,9 +135,11 @@ int RunExport(const ExportArgs& args) {
     options.noise = ParseNoiseJson(ReadFileToString(args.noise, kMaxSmallFileBytes), args.noise);
   }
   const bool noise_only = format == ExportFormat::kKalibrImu || format == ExportFormat::kRos;
-  if (!args.noise.empty() && !noise_only && format != ExportFormat::kKalibr) {
-    throw UsageError("--noise goes into kalibr-imu, ros and kalibr; " + args.format +
-                     " holds no noise");
+  const bool holds_noise = noise_only || format == ExportFormat::kKalibr ||
+                           format == ExportFormat::kOpenVins || format == ExportFormat::kBasalt;
+  if (!args.noise.empty() && !holds_noise) {
+    throw UsageError("--noise goes into kalibr-imu, ros, kalibr, openvins and basalt; " +
+                     args.format + " holds no noise");
   }
   ExportResult exported;
   try {
@@ -146,6 +148,7 @@ int RunExport(const ExportArgs& args) {
     throw UsageError(WithFlags(e.what(), {{"c_prefix", "--c-prefix"},
                                           {"instance", "--instance"},
                                           {"raw_unit", "--raw-unit"},
+                                          {"rostopic", "--rostopic"},
                                           {"sensor", "--sensor"}}));
   } catch (const DataError& e) {
     throw InputError(
@@ -200,6 +203,11 @@ int RunExport(const ExportArgs& args) {
         loss.norm_rms_full, unit);
   } else if (!loss.dropped.empty()) {
     note += "the file holds no positions to measure the loss on\n";
+  }
+  if (args.sensor != "gyroscope" && exported.gyroscope_included) {
+    note += exported.gyroscope_dropped.empty()
+                ? "exact: nothing of the gyroscope's model is dropped\n"
+                : "dropped from the gyroscope: " + exported.gyroscope_dropped + "\n";
   }
   if (CurrentVerbosity() != Verbosity::kQuiet) {
     std::fputs(note.c_str(), args.output.empty() ? stderr : stdout);

@@ -44,6 +44,12 @@ enum class ExportFormat {
   /// "ros": sensor_msgs/Imu covariances, each axis' variance of one sample (density² · rate; needs
   /// ExportOptions::noise). These two hold the noise alone: their ExportLoss is empty.
   kRos,
+  /// "openvins": OpenVINS' kalibr_imu_chain.yaml (model kalibr): Ta, Tw, R_IMUtoACC, R_IMUtoGYRO,
+  /// Tg and the noise (needs ExportOptions::noise with both sensors)
+  kOpenVins,
+  /// "basalt": Basalt's calib.json IMU fields, calib_accel_bias and calib_gyro_bias (its inverse
+  /// model, biases in calibrated units) and the noise per axis; the camera fields empty
+  kBasalt,
 };
 std::string_view ToString(ExportFormat format);
 std::optional<ExportFormat> ExportFormatFromString(std::string_view text);
@@ -58,7 +64,9 @@ struct EnumNames<ExportFormat> {
       {ExportFormat::kCHeader, "c-header"},
       {ExportFormat::kImuTk, "imutk"},
       {ExportFormat::kKalibrImu, "kalibr-imu"},
-      {ExportFormat::kRos, "ros"}};
+      {ExportFormat::kRos, "ros"},
+      {ExportFormat::kOpenVins, "openvins"},
+      {ExportFormat::kBasalt, "basalt"}};
 };
 /// All formats, in the order above (help texts, tests).
 const std::vector<ExportFormat>& AllExportFormats();
@@ -80,7 +88,8 @@ struct ExportOptions {
   /// The sensor's noise (`accelcal noise --json`, ParseNoiseJson): kalibr-imu and ros need it;
   /// kalibr writes its keys beside the model when given.
   std::optional<ImuNoise> noise;
-  /// The topic of the IMU's sensor_msgs/Imu messages (kalibr-imu, kalibr's `rostopic`).
+  /// The topic of the IMU's sensor_msgs/Imu messages (kalibr-imu, openvins, kalibr's `rostopic`):
+  /// a ROS name (a letter, '/' or '~' first, then letters, digits, '_' and '/').
   std::string rostopic = "/imu0";
 };
 

@@ -421,67 +421,193 @@ ExportResult RosCovariance(const LoadedCalibration& cal, const ExportOptions& op
   return out;  // the noise alone: no model, no loss
 }
 
-// Kalibr's scale-misalignment model: a_measured = M a + b, M lower-triangular, m/s².
-ExportResult Kalibr(const LoadedCalibration& cal, const ExportOptions& options) {
-  const double raw_ms2 =
-      RawToMetersPerSecond2(cal, options, "Kalibr", "sensor_msgs/Imu linear_acceleration");
-  const FrameChange change = ChangeFrame(cal.params.K, Frame::kXFirst);
-  const Mat33 M = (raw_ms2 / ForceToMetersPerSecond2(cal)) * change.K;
-  const Vec3 bias_ms2 = raw_ms2 * cal.params.bias;
-  ExportResult out;
-  out.convention =
-      "Kalibr scale-misalignment IMU (IccScaledMisalignedImu): a_measured = M a + b in m/s2, M "
-      "lower-triangular = accelcal's K in the x-first frame" +
-      std::string(cal.frame == Frame::kXFirst
-                      ? ""
-                      : " (converted exactly from the " + std::string(ToString(cal.frame)) +
-                            " frame: the body frame turns, corrected magnitudes are unchanged)") +
-      "; Kalibr estimates its own time-varying bias b, so accelcal's constant bias is a comment";
-  // A 3x3 matrix as Kalibr's YAML lists it under its key: one row per line.
-  const auto rows = [&](const Mat33& A) {
-    for (int i = 0; i < 3; ++i) {
-      out.text +=
-          "    - [" + Number(A(i, 0)) + ", " + Number(A(i, 1)) + ", " + Number(A(i, 2)) + "]\n";
-    }
-  };
-  out.text =
-      "#" + Header(cal) + "\n# " + out.convention + "\n" +
-      (options.noise ? NoiseComments(*options.noise, "#") : std::string()) + "imu0:\n" +
-      (options.noise ? KalibrNoiseKeys(*options.noise, options.rostopic, "  ") : std::string()) +
-      "  model: scale-misalignment\n" + "  accelerometers:\n    M:\n";
-  rows(M);
-  out.text += "  # accelcal constant bias [m/s2]: [" + Number(bias_ms2(0)) + ", " +
-              Number(bias_ms2(1)) + ", " + Number(bias_ms2(2)) + "]\n";
-  std::optional<double> rad_s;
-  if (cal.gyroscope) {
-    rad_s = RawToRadPerSecond(cal, options, "Kalibr", "sensor_msgs/Imu angular_velocity",
-                              &out.gyroscope_omitted);
-  }
-  if (rad_s) {
-    const KalibrGyro g = KalibrGyroscope(cal, change.Q_old_new, *rad_s);
-    out.convention +=
-        "; gyroscope: w_measured = M C_gyro_i w + A C_gyro_i a + b in rad/s, M lower-triangular "
-        "and C_gyro_i a rotation with M C_gyro_i = accelcal's K_g in the accelerometer's x-first "
-        "frame, A its g-sensitivity G [(rad/s)/(m/s2)] (exact; accelcal's constant bias a "
-        "comment)";
-    out.text += "  gyroscopes:\n    M:\n";
-    rows(g.M);
-    out.text += "    A:\n";
-    rows(g.A);
-    out.text += "    C_gyro_i:\n";
-    rows(g.C);
-    out.text += "  # accelcal constant gyro bias [rad/s]: [" + Number(g.bias_rad_s(0)) + ", " +
-                Number(g.bias_rad_s(1)) + ", " + Number(g.bias_rad_s(2)) + "]\n";
-    out.gyroscope_included = true;
-  }
-  // Magnitudes are frame-independent, so the loss compares |f|: the rotation Q is not a loss.
+// The accelerometer as the forward-model estimators take it (Kalibr, OpenVINS): a_measured = M a
+// + b in m/s², M lower-triangular = accelcal's K in the x-first frame, scaled to m/s² readings
+// and forces. Basalt takes its inverse.
+struct ForwardAccelerometer {
+  FrameChange change;  ///< to the x-first frame: f_old = Q_old_new f_x
+  Mat33 M;
+  Vec3 bias_ms2;
+};
+ForwardAccelerometer XFirstAccelerometer(const LoadedCalibration& cal, double raw_ms2) {
+  ForwardAccelerometer a;
+  a.change = ChangeFrame(cal.params.K, Frame::kXFirst);
+  a.M = (raw_ms2 / ForceToMetersPerSecond2(cal)) * a.change.K;
+  a.bias_ms2 = raw_ms2 * cal.params.bias;
+  return a;
+}
+
+// What a linear correction in the x-first frame loses: the squared terms. Magnitudes are
+// frame-independent, so the loss compares the forces turned back: the rotation Q is not a loss.
+ExportLoss XFirstLoss(const LoadedCalibration& cal, const FrameChange& change) {
   const Mat33 K_x = change.K;
-  out.loss = MeasureLoss(
+  return MeasureLoss(
       cal,
       [&](const Vec3& p) -> std::optional<Vec3> {
         return Vec3(change.Q_old_new * (K_x.inverse() * (p - cal.params.bias)));
       },
       SquaredTermsDropped(cal));
+}
+
+// "the x-first frame" sentence of a convention: how the frame was reached.
+std::string XFirstFrom(const LoadedCalibration& cal) {
+  return cal.frame == Frame::kXFirst
+             ? ""
+             : " (converted exactly from the " + std::string(ToString(cal.frame)) +
+                   " frame: the body frame turns, corrected magnitudes are unchanged)";
+}
+
+// A 3x3 matrix as Kalibr's and OpenVINS' YAML list it under its key: one row per line.
+std::string YamlRows(const Mat33& A) {
+  std::string text;
+  for (int i = 0; i < 3; ++i) {
+    text += "    - [" + Number(A(i, 0)) + ", " + Number(A(i, 1)) + ", " + Number(A(i, 2)) + "]\n";
+  }
+  return text;
+}
+
+// The gyroscope in the x-first frame and rad/s, when the file has one in a unit the format reads;
+// else std::nullopt and, for a unit it cannot read, why in `out->gyroscope_omitted`.
+std::optional<KalibrGyro> XFirstGyroscope(const LoadedCalibration& cal,
+                                          const ExportOptions& options, const FrameChange& change,
+                                          std::string_view format, ExportResult* out) {
+  if (!cal.gyroscope) return std::nullopt;
+  const std::optional<double> rad_s = RawToRadPerSecond(
+      cal, options, format, "sensor_msgs/Imu angular_velocity", &out->gyroscope_omitted);
+  if (!rad_s) return std::nullopt;
+  out->gyroscope_included = true;
+  return KalibrGyroscope(cal, change.Q_old_new, *rad_s);
+}
+
+// Kalibr's scale-misalignment model: a_measured = M a + b, M lower-triangular, m/s².
+ExportResult Kalibr(const LoadedCalibration& cal, const ExportOptions& options) {
+  const double raw_ms2 =
+      RawToMetersPerSecond2(cal, options, "Kalibr", "sensor_msgs/Imu linear_acceleration");
+  const ForwardAccelerometer a = XFirstAccelerometer(cal, raw_ms2);
+  ExportResult out;
+  out.convention =
+      "Kalibr scale-misalignment IMU (IccScaledMisalignedImu): a_measured = M a + b in m/s2, M "
+      "lower-triangular = accelcal's K in the x-first frame" +
+      XFirstFrom(cal) +
+      "; Kalibr estimates its own time-varying bias b, so accelcal's constant bias is a comment";
+  out.text =
+      "#" + Header(cal) + "\n# " + out.convention + "\n" +
+      (options.noise ? NoiseComments(*options.noise, "#") : std::string()) + "imu0:\n" +
+      (options.noise ? KalibrNoiseKeys(*options.noise, options.rostopic, "  ") : std::string()) +
+      "  model: scale-misalignment\n" + "  accelerometers:\n    M:\n" + YamlRows(a.M);
+  out.text += "  # accelcal constant bias [m/s2]: [" + Axes(a.bias_ms2) + "]\n";
+  if (const std::optional<KalibrGyro> g = XFirstGyroscope(cal, options, a.change, "Kalibr", &out)) {
+    out.convention +=
+        "; gyroscope: w_measured = M C_gyro_i w + A C_gyro_i a + b in rad/s, M lower-triangular "
+        "and C_gyro_i a rotation with M C_gyro_i = accelcal's K_g in the accelerometer's x-first "
+        "frame, A its g-sensitivity G [(rad/s)/(m/s2)] (exact; accelcal's constant bias a "
+        "comment)";
+    out.text += "  gyroscopes:\n    M:\n" + YamlRows(g->M) + "    A:\n" + YamlRows(g->A) +
+                "    C_gyro_i:\n" + YamlRows(g->C);
+    out.text += "  # accelcal constant gyro bias [rad/s]: [" + Axes(g->bias_rad_s) + "]\n";
+  }
+  out.loss = XFirstLoss(cal, a.change);
+  return out;
+}
+
+// OpenVINS' kalibr_imu_chain.yaml (ov_msckf VioManagerOptions, model "kalibr"): the forward model
+//     a_m = Ta R_IMUtoACC a + b_a,   w_m = Tw R_IMUtoGYRO w + Tg a + b_g   (m/s², rad/s),
+// applied as a = R_ACCtoIMU Ta⁻¹ (a_m − b_a), w = R_GYROtoIMU Tw⁻¹ (w_m − b_g − Tg a)
+// (Propagator::predict_and_compute), keeping the lower triangles of Ta⁻¹ and Tw⁻¹. Kalibr's
+// model in OpenVINS' names: Ta = M_a, R_IMUtoACC = I, Tw = M_g, R_IMUtoGYRO = C_gyro_i and
+// Tg = A C_gyro_i (A acts on the force in the gyro frame, Tg on the IMU frame's).
+ExportResult OpenVins(const LoadedCalibration& cal, const ExportOptions& options) {
+  const ImuNoise& n = NeedNoise(options, "OpenVINS' kalibr_imu_chain.yaml", true);
+  const double raw_ms2 =
+      RawToMetersPerSecond2(cal, options, "OpenVINS", "sensor_msgs/Imu linear_acceleration");
+  const ForwardAccelerometer a = XFirstAccelerometer(cal, raw_ms2);
+  ExportResult out;
+  const std::optional<KalibrGyro> g = XFirstGyroscope(cal, options, a.change, "OpenVINS", &out);
+  out.convention =
+      "OpenVINS kalibr_imu_chain.yaml (ov_msckf, model kalibr): a_m = Ta R_IMUtoACC a + b_a, w_m "
+      "= Tw R_IMUtoGYRO w + Tg a + b_g in m/s2 and rad/s, the IMU frame the accelerometer's "
+      "x-first frame" +
+      XFirstFrom(cal) + "; Ta lower-triangular = accelcal's K, R_IMUtoACC = I; " +
+      (g ? "Tw lower-triangular and R_IMUtoGYRO a rotation with Tw R_IMUtoGYRO = accelcal's K_g, "
+           "Tg = its g-sensitivity G on the IMU-frame force [(rad/s)/(m/s2)]"
+         : "the gyroscope not calibrated here: Tw = R_IMUtoGYRO = I, Tg = 0 (OpenVINS' "
+           "defaults)") +
+      "; OpenVINS estimates its own biases, so accelcal's constant biases are comments; noise: "
+      "continuous-time densities, the largest axis' of each";
+  const Mat33 I = Mat33::Identity();
+  out.text = "%YAML:1.0\n#" + Header(cal) + "\n# " + out.convention + "\n" + NoiseComments(n, "#") +
+             "imu0:\n" + KalibrNoiseKeys(n, options.rostopic, "  ") +
+             "  time_offset: 0.0\n  model: \"kalibr\"\n";
+  out.text += "  Tw:\n" + YamlRows(g ? g->M : I) + "  R_IMUtoGYRO:\n" + YamlRows(g ? g->C : I) +
+              "  Ta:\n" + YamlRows(a.M) + "  R_IMUtoACC:\n" + YamlRows(I) + "  Tg:\n" +
+              YamlRows(g ? Mat33(g->A * g->C) : Mat33::Zero());
+  out.text += "  # accelcal constant bias [m/s2]: [" + Axes(a.bias_ms2) + "]\n";
+  if (g) out.text += "  # accelcal constant gyro bias [rad/s]: [" + Axes(g->bias_rad_s) + "]\n";
+  out.loss = XFirstLoss(cal, a.change);
+  return out;
+}
+
+// Basalt's calib.json (cereal, basalt/calibration/calib_bias.hpp): the inverse model
+//     a = (I + S_a) a_raw − b_a,   w = (I + S_g) w_raw − b_g   (m/s², rad/s),
+// S_a lower-triangular (its 6 entries column by column), S_g full (9, column-major), the biases
+// in calibrated units; no g-sensitivity. From Kalibr's forward model: I + S_a = M_a⁻¹, b_a =
+// M_a⁻¹ bias, I + S_g = (M_g C_gyro_i)⁻¹, b_g = (M_g C_gyro_i)⁻¹ bias_g.
+ExportResult Basalt(const LoadedCalibration& cal, const ExportOptions& options) {
+  const ImuNoise& n = NeedNoise(options, "Basalt's calib.json", true);
+  const double raw_ms2 =
+      RawToMetersPerSecond2(cal, options, "Basalt", "its IMU readings are in m/s2");
+  const ForwardAccelerometer a = XFirstAccelerometer(cal, raw_ms2);
+  ExportResult out;
+  const std::optional<KalibrGyro> g = XFirstGyroscope(cal, options, a.change, "Basalt", &out);
+  Mat33 Sa = a.M.triangularView<Eigen::Lower>().solve(Mat33::Identity());
+  Sa.triangularView<Eigen::StrictlyUpper>().setZero();
+  const Vec3 ba = Sa * a.bias_ms2;
+  Sa -= Mat33::Identity();
+  ordered_json accel = ordered_json::array({ba(0), ba(1), ba(2)});
+  for (int c = 0; c < 3; ++c) {
+    for (int r = c; r < 3; ++r) accel.push_back(Sa(r, c));
+  }
+  ordered_json gyro = ordered_json::array({0.0, 0.0, 0.0});
+  for (int i = 0; i < 9; ++i) gyro.push_back(0.0);
+  if (g) {
+    const Mat33 MC = g->M * g->C;
+    Mat33 Sg = MC.inverse();
+    const Vec3 bg = Sg * g->bias_rad_s;
+    Sg -= Mat33::Identity();
+    gyro = ordered_json::array({bg(0), bg(1), bg(2)});
+    for (int c = 0; c < 3; ++c) {
+      for (int r = 0; r < 3; ++r) gyro.push_back(Sg(r, c));
+    }
+    out.gyroscope_dropped = GSensitivityDropped(cal);
+  }
+  const auto axes = [](const Vec3& v) { return ordered_json::array({v(0), v(1), v(2)}); };
+  ordered_json value;
+  value["T_imu_cam"] = ordered_json::array();
+  value["intrinsics"] = ordered_json::array();
+  value["resolution"] = ordered_json::array();
+  value["calib_accel_bias"] = accel;
+  value["calib_gyro_bias"] = gyro;
+  value["imu_update_rate"] = n.rate_hz;
+  value["accel_noise_std"] = axes(n.accelerometer.white);
+  value["gyro_noise_std"] = axes(n.gyroscope->white);
+  value["accel_bias_std"] = axes(n.accelerometer.random_walk);
+  value["gyro_bias_std"] = axes(n.gyroscope->random_walk);
+  value["cam_time_offset_ns"] = 0;
+  value["vignette"] = ordered_json::array();
+  out.text = ordered_json{{"value0", value}}.dump(4) + "\n";
+  out.convention =
+      "Basalt calib.json (calib_bias.hpp): a = (I + S_a) a_raw - b_a, w = (I + S_g) w_raw - b_g "
+      "in m/s2 and rad/s, the biases in calibrated units, the IMU frame the accelerometer's "
+      "x-first frame" +
+      XFirstFrom(cal) +
+      "; calib_accel_bias = [b_a, S_a's lower triangle column by column], I + S_a = K^-1; " +
+      (g ? "calib_gyro_bias = [b_g, S_g column-major], I + S_g = K_g^-1 (its rotation to the "
+           "accelerometer's frame included)"
+         : "the gyroscope not calibrated here: calib_gyro_bias all 0") +
+      "; noise per axis, continuous-time (accel_noise_std, gyro_noise_std white noise; "
+      "accel_bias_std, gyro_bias_std random walk); the camera fields empty: merge the IMU fields "
+      "into the calib.json of a camera calibration";
+  out.loss = XFirstLoss(cal, a.change);
   return out;
 }
 
@@ -696,6 +822,15 @@ ExportResult ExportCalibration(const LoadedCalibration& cal, const std::string& 
   if (options.sensor != "accelerometer" && options.sensor != "gyroscope") {
     throw std::invalid_argument("sensor must be \"accelerometer\" or \"gyroscope\"");
   }
+  const auto ros_name_char = [](char c) { return IsIdentifierChar(c) || c == '/'; };
+  if (options.rostopic.empty() ||
+      !(IsAsciiLetter(options.rostopic[0]) || options.rostopic[0] == '/' ||
+        options.rostopic[0] == '~') ||
+      !std::all_of(options.rostopic.begin() + 1, options.rostopic.end(), ros_name_char)) {
+    throw std::invalid_argument(
+        "rostopic must be a ROS name: a letter, '/' or '~' first, then letters, digits, '_' and "
+        "'/'");
+  }
   if (options.sensor == "gyroscope" && format != ExportFormat::kImuTk) {
     throw std::invalid_argument(
         "sensor \"gyroscope\" is for the imutk format (the c-header holds both sensors; json "
@@ -728,6 +863,10 @@ ExportResult ExportCalibration(const LoadedCalibration& cal, const std::string& 
       return KalibrImu(cal, options);
     case ExportFormat::kRos:
       return RosCovariance(cal, options);
+    case ExportFormat::kOpenVins:
+      return OpenVins(cal, options);
+    case ExportFormat::kBasalt:
+      return Basalt(cal, options);
   }
   throw std::invalid_argument("unknown export format");
 }

@@ -9,6 +9,7 @@
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
+#include "accelcal/calibration_file.hpp"
 #include "support/cli_test.hpp"
 
 namespace accelcal {
@@ -187,12 +188,169 @@ TEST_F(ExportNoise, KalibrModelCarriesTheNoiseKeysAndRefusalsNameTheirCause) {
   r = Exec("export " + cal_ + " --to ros --noise " + bad);
   EXPECT_EQ(r.status, 3);
   EXPECT_NE(r.err.find("'verdict' is 'failed'"), std::string::npos) << r.err;
+  // A random walk (or its bound) of 0: an estimator weighs the bias's change by 1/K², and a 0
+  // pins the bias for ever (Basalt's weights would be infinite).
+  nlohmann::json zero = doc_;
+  nlohmann::json& walk = zero["accelerometer"]["axes"][1]["terms"]["random_walk"];
+  walk["resolved"] = false;
+  walk["high"] = 0;
+  r = Exec("export " + cal_ + " --to basalt --noise " + Write("zero.json", zero.dump()));
+  EXPECT_EQ(r.status, 3);
+  EXPECT_NE(r.err.find("the white noise and the random walk (or its upper bound) must be positive"),
+            std::string::npos)
+      << r.err;
   // Only the accelerometer's noise: Kalibr's imu.yaml needs the gyroscope's too.
   nlohmann::json accel_only = doc_;
   accel_only.erase("gyroscope");
   r = Exec("export " + cal_ + " --to kalibr-imu --noise " + Write("accel.json", accel_only.dump()));
   EXPECT_EQ(r.status, 3);
   EXPECT_NE(r.err.find("has none: analyse the log with the gyroscope"), std::string::npos) << r.err;
+}
+
+// The raw readings the estimators' tests correct (one row per position of the Xsens calibration:
+// its accelerometer mean and a rate in a different direction each time), and accelcal's own
+// correction of them: f from the calibration, w = K_g⁻¹ (raw − b_g − G f) in rad/s, without G when
+// `with_g` is false. The Xsens readings are counts; the exports are told they are m/s2 and rad/s
+// (--raw-unit, --gyro-raw-unit) so that its g-sensitive gyroscope can be checked too.
+struct Readings {
+  std::string rows;        // "ax ay az wx wy wz" per line
+  std::vector<Vec3> f, w;  // accelcal's correction
+};
+Readings XsensReadings(const LoadedCalibration& cal, bool with_g) {
+  Readings r;
+  const LoadedCalibration::Gyroscope& g = *cal.gyroscope;
+  for (std::size_t k = 0; k < cal.position_means.size(); ++k) {
+    const Vec3& p = cal.position_means[k];
+    const double t = static_cast<double>(k);
+    const Vec3 raw_w = g.params.bias + 3000 * Vec3(std::cos(t), std::sin(2 * t), std::cos(3 * t));
+    const Vec3 f = *SpecificForce(cal.params, p);
+    r.f.push_back(f);
+    const Vec3 g_f = with_g ? Vec3(g.params.G * f) : Vec3::Zero();
+    r.w.push_back(g.params.K.inverse() * (raw_w - g.params.bias - g_f));
+    std::ostringstream line;
+    line.precision(17);
+    line << p(0) << " " << p(1) << " " << p(2) << " " << raw_w(0) << " " << raw_w(1) << " "
+         << raw_w(2) << "\n";
+    r.rows += line.str();
+  }
+  return r;
+}
+
+// The tool's corrected readings against accelcal's: the frames differ by a rotation (x-first
+// against the calibration's), so the Gram matrix of all the vectors, accelerometer and gyroscope
+// together, is compared: it fixes them up to one common rotation, and a wrong rotation between
+// the two sensors, a transposed matrix or a bias in the wrong units changes it.
+void ExpectSameUpToOneRotation(const std::vector<double>& tool, const Readings& ours,
+                               double force_to_ms2) {
+  std::vector<Vec3> a, b;
+  for (std::size_t k = 0; k < ours.f.size(); ++k) {
+    a.push_back(ours.f[k] * force_to_ms2);
+    a.push_back(ours.w[k]);
+    b.push_back(Vec3(tool[6 * k], tool[6 * k + 1], tool[6 * k + 2]));
+    b.push_back(Vec3(tool[6 * k + 3], tool[6 * k + 4], tool[6 * k + 5]));
+  }
+  ASSERT_EQ(tool.size(), 6 * ours.f.size());
+  for (std::size_t i = 0; i < a.size(); ++i) {
+    for (std::size_t j = i; j < a.size(); ++j) {
+      // Round-off: the files' numbers are exact (shortest round trip); the inverses and products
+      // on ~10 m/s2 and ~1 rad/s vectors leave ~1e-13 relative.
+      EXPECT_NEAR(b[i].dot(b[j]), a[i].dot(a[j]), 1e-9 * a[i].norm() * a[j].norm() + 1e-12)
+          << i << " " << j;
+    }
+  }
+}
+
+// OpenVINS (ov_msckf): the file through OpenCV's FileStorage (the %YAML:1.0 directive, then a
+// YAML mapping under imu0), VioManagerOptions (Dw = Tw⁻¹, Da = Ta⁻¹, model "kalibr" keeps their
+// lower triangles) and Propagator::predict_and_compute's correction with the biases accelcal wrote
+// beside them: a = R_ACCtoIMU Da (a_m − b_a), w = R_GYROtoIMU Dw (w_m − b_g − Tg a).
+constexpr const char* kOpenVinsReader =
+    "import re, sys, yaml, numpy as np\n"
+    "text = open(sys.argv[1]).read()\n"
+    "assert text.startswith(\"%YAML:1.0\\n\"), text[:20]\n"
+    "d = yaml.safe_load(text.split(\"\\n\", 1)[1])[\"imu0\"]\n"
+    "assert d[\"model\"] == \"kalibr\"\n"
+    "for k in (\"accelerometer_noise_density\", \"accelerometer_random_walk\", "
+    "\"gyroscope_noise_density\", \"gyroscope_random_walk\"):\n"
+    "    assert isinstance(d[k], float) and d[k] > 0, k\n"
+    "m = {k: np.array(d[k], dtype=float) for k in (\"Tw\", \"Ta\", \"R_IMUtoGYRO\", "
+    "\"R_IMUtoACC\", \"Tg\")}\n"
+    "for k, v in m.items(): assert v.shape == (3, 3), k\n"
+    "Dw, Da = np.tril(np.linalg.inv(m[\"Tw\"])), np.tril(np.linalg.inv(m[\"Ta\"]))\n"
+    "bias = lambda name: np.array([float(x) for x in re.search(\"# accelcal constant \" + name "
+    "+ r\" \\[[^]]*\\]: \\[([^]]*)\\]\", text).group(1).split(\",\")])\n"
+    "ba, bg = bias(\"bias\"), bias(\"gyro bias\")\n"
+    "for row in open(sys.argv[2]):\n"
+    "    v = np.array([float(x) for x in row.split()])\n"
+    "    a = m[\"R_IMUtoACC\"].T @ Da @ (v[:3] - ba)\n"
+    "    w = m[\"R_IMUtoGYRO\"].T @ Dw @ (v[3:] - bg - m[\"Tg\"] @ a)\n"
+    "    print(\" \".join(repr(float(x)) for x in list(a) + list(w)))\n";
+
+TEST_F(ExportNoise, OpenVinsCorrectsReadingsAsAccelcalDoes) {
+  const LoadedCalibration cal = ParseCalibrationJson(test::Slurp(cal_), cal_);
+  ASSERT_TRUE(cal.gyroscope && !cal.gyroscope->params.G.isZero(0));  // the g-sensitive model
+  const std::string yaml = Path("kalibr_imu_chain.yaml");
+  const CliRun r = Exec("export " + cal_ + " --to openvins --noise " + noise_ +
+                        " --raw-unit m/s2 --gyro-raw-unit rad/s -o " + yaml);
+  ASSERT_EQ(r.status, 0) << r.err;
+  const Readings ours = XsensReadings(cal, true);
+  const std::string rows = Write("readings.txt", ours.rows);
+  ExpectSameUpToOneRotation(Numbers(Python(kOpenVinsReader, yaml + " " + rows)), ours,
+                            cal.unit == ForceUnit::kStandardGravity ? 9.80665 : 1.0);
+  // Nothing of the linear model is dropped, and the noise is the largest axis' (as Kalibr's).
+  EXPECT_NE(r.out.find("exact: nothing of the accelerometer's model is dropped"), std::string::npos)
+      << r.out;
+  EXPECT_NE(test::Slurp(yaml).find("accelerometer_noise_density: " +
+                                   nlohmann::json(Largest("accelerometer", "white")).dump()),
+            std::string::npos);
+}
+
+// Basalt: cereal's JSON (the root "value0", every field of Calibration's serialize present) and
+// CalibAccelBias / CalibGyroBias::getCalibrated: a = (I + S_a) a_r − b_a with S_a's six entries
+// filling the lower triangle column by column, w = (I + S_g) w_r − b_g with S_g column-major.
+constexpr const char* kBasaltReader =
+    "import json, sys, numpy as np\n"
+    "d = json.load(open(sys.argv[1]))\n"
+    "assert list(d) == [\"value0\"], list(d)\n"
+    "c = d[\"value0\"]\n"
+    "need = [\"T_imu_cam\", \"intrinsics\", \"resolution\", \"calib_accel_bias\", "
+    "\"calib_gyro_bias\", \"imu_update_rate\", \"accel_noise_std\", \"gyro_noise_std\", "
+    "\"accel_bias_std\", \"gyro_bias_std\", \"cam_time_offset_ns\", \"vignette\"]\n"
+    "assert sorted(c) == sorted(need), sorted(c)\n"
+    "assert len(c[\"calib_accel_bias\"]) == 9 and len(c[\"calib_gyro_bias\"]) == 12\n"
+    "for k in need[6:10]: assert len(c[k]) == 3 and min(c[k]) > 0, k\n"
+    "assert c[\"imu_update_rate\"] > 0\n"
+    "p, q = np.array(c[\"calib_accel_bias\"]), np.array(c[\"calib_gyro_bias\"])\n"
+    "Sa = np.zeros((3, 3))\n"
+    "Sa[:, 0] = p[3:6]; Sa[1, 1] = p[6]; Sa[2, 1] = p[7]; Sa[2, 2] = p[8]\n"
+    "Sg = np.column_stack([q[3:6], q[6:9], q[9:12]])\n"
+    "for row in open(sys.argv[2]):\n"
+    "    v = np.array([float(x) for x in row.split()])\n"
+    "    a = v[:3] + Sa @ v[:3] - p[:3]\n"
+    "    w = v[3:] + Sg @ v[3:] - q[:3]\n"
+    "    print(\" \".join(repr(float(x)) for x in list(a) + list(w)))\n";
+
+TEST_F(ExportNoise, BasaltCorrectsReadingsAsAccelcalDoesWithoutTheGSensitivity) {
+  const LoadedCalibration cal = ParseCalibrationJson(test::Slurp(cal_), cal_);
+  const std::string json = Path("calib.json");
+  const CliRun r = Exec("export " + cal_ + " --to basalt --noise " + noise_ +
+                        " --raw-unit m/s2 --gyro-raw-unit rad/s -o " + json);
+  ASSERT_EQ(r.status, 0) << r.err;
+  // Basalt has no g-sensitivity: its correction is accelcal's without G, and the export says so.
+  const Readings ours = XsensReadings(cal, false);
+  const std::string rows = Write("readings.txt", ours.rows);
+  ExpectSameUpToOneRotation(Numbers(Python(kBasaltReader, json + " " + rows)), ours,
+                            cal.unit == ForceUnit::kStandardGravity ? 9.80665 : 1.0);
+  EXPECT_NE(r.out.find("dropped from the gyroscope: the g-sensitivity G (a rate error of up to"),
+            std::string::npos)
+      << r.out;
+  // The noise per axis, in SI units, as the noise file has it.
+  const nlohmann::json c = nlohmann::json::parse(test::Slurp(json))["value0"];
+  for (std::size_t a = 0; a < 3; ++a) {
+    EXPECT_EQ(c["accel_noise_std"][a], doc_["accelerometer"]["axes"][a]["terms"]["white"]["value"]);
+    EXPECT_EQ(c["gyro_noise_std"][a], doc_["gyroscope"]["axes"][a]["terms"]["white"]["value"]);
+  }
+  EXPECT_EQ(c["imu_update_rate"], doc_["rate_hz"]);
 }
 
 }  // namespace

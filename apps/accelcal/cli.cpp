@@ -429,6 +429,27 @@ int accelcal::cli::RunCommandLine(int argc, char** argv) {
         ->delimiter(',');
   }
 
+  VerifyArgs ver;
+  CLI::App* verify = app.add_subcommand(
+      "verify", "check a calibration on a new recording of the same unit (exit 6 when it fails)");
+  if (Wanted(verify)) {
+    verify->add_option("CAL", ver.calibration, "calibration file (JSON)")->required();
+    verify->add_option("LOG", ver.input.path, "a new raw log: still positions with turns between")
+        ->required();
+    AddInputOptions(verify, &ver.input, false);
+    AddDetectionOptions(verify, &ver.input);
+    auto* gravity = verify->add_option("--gravity", ver.gravity.gravity_ms2,
+                                       "this site's gravity [m/s2] (default: the calibration's)");
+    auto* latitude = verify->add_option("--latitude", ver.gravity.latitude_deg,
+                                        "this site's latitude [deg]: gravity from WGS-84");
+    gravity->excludes(latitude);
+    verify->add_option("--height", ver.gravity.height_m, "height above the ellipsoid [m]")
+        ->needs(latitude);
+    verify->add_flag("--json", ver.json, "machine-readable output");
+    verify->add_option("-o,--output", ver.output, "output file (default: stdout)")
+        ->check(kFileName);
+  }
+
   ReportArgs rep;
   CLI::App* report_cmd = app.add_subcommand(
       "report", "write the HTML report of a calibration file (and its raw log, when given)");
@@ -577,6 +598,10 @@ int accelcal::cli::RunCommandLine(int argc, char** argv) {
     if (*export_cmd) {
       data_subject = exp.calibration;
       return RunExport(exp);
+    }
+    if (*verify) {
+      data_subject = ver.input.path;
+      return RunVerify(ver);
     }
     if (*report_cmd) {
       data_subject = rep.log.path.empty() ? rep.calibration : rep.log.path;

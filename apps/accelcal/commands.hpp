@@ -138,6 +138,14 @@ struct ApplyArgs {
   std::vector<std::string> gyro_columns;
 };
 
+struct VerifyArgs {
+  std::string calibration;
+  InputArgs input;      // the new recording, and its detection options
+  GravityArgs gravity;  // the site's, when not the calibration's (units: the calibration's)
+  bool json = false;
+  std::string output;  // empty: stdout
+};
+
 struct ReportArgs {
   std::string calibration;
   InputArgs log;       // path empty: no raw-signal plot
@@ -221,5 +229,6 @@ int RunApply(const ApplyArgs& args);
 int RunNoise(const NoiseArgs& args);
 int RunExport(const ExportArgs& args);
 int RunReport(const ReportArgs& args);
+int RunVerify(const VerifyArgs& args);
 
 }  // namespace accelcal::cli

@@ -131,6 +131,9 @@ struct LoadedCalibration {
   /// `covariance` in the order of ParameterSlots(model, frame); empty when the file has null.
   Eigen::MatrixXd covariance;
   std::optional<double> gravity_norm_rms_before, gravity_norm_rms_after, crossval_rms;
+  /// `noise.sigma_raw`: the residual σ̂ of the position means along the fitted surface's normal
+  /// [raw], when present.
+  std::optional<double> noise_sigma_raw;
   SolverRecord solver;
   /// `diagnostics`; none in a file written before diagnoses existed.
   std::optional<std::vector<Finding>> diagnostics;

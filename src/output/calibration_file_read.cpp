@@ -225,6 +225,13 @@ void ReadAccelerometer(const Reader& r, const ordered_json& doc, LoadedCalibrati
   cal.gravity_norm_rms_before = r.Nullable(doc, "gravity_norm_rms_before");
   cal.gravity_norm_rms_after = r.Nullable(doc, "gravity_norm_rms_after");
   cal.crossval_rms = r.Nullable(doc, "crossval_rms");
+  if (doc.contains("noise") && !doc["noise"].is_null()) {
+    const Reader rn = r.Inside("noise");
+    cal.noise_sigma_raw = rn.Nullable(r.Object(doc, "noise"), "sigma_raw");
+    if (cal.noise_sigma_raw && !(*cal.noise_sigma_raw >= 0)) {
+      rn.Fail(rn.Key("sigma_raw") + " must not be negative");
+    }
+  }
   ReadSolver(r, doc, cal);
   ReadDiagnostics(r, doc, cal);
 }

@@ -597,6 +597,10 @@ int accelcal::cli::RunCommandLine(int argc, char** argv) {
     }
     if (*export_cmd) {
       data_subject = exp.calibration;
+      for (const char* name :
+           {"raw-unit", "gyro-raw-unit", "instance", "c-prefix", "sensor", "noise", "rostopic"}) {
+        if (export_cmd->count(std::string("--") + name) > 0) exp.given.push_back(name);
+      }
       return RunExport(exp);
     }
     if (*verify) {

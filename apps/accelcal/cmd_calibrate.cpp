@@ -24,6 +24,14 @@
 namespace accelcal::cli {
 namespace {
 
+// The label of the gyroscope's raw unit: its declared unit (rad/s, deg/s), or for raw counts the
+// accelerometer's raw label when that is a label of counts ("counts", "LSB"), else "raw": an
+// accelerometer read in m/s2 or g says nothing of the gyroscope's unit.
+std::string GyroRawLabel(GyroUnit unit, const CalibrateArgs& args) {
+  if (unit != GyroUnit::kRaw) return args.gyro_units;
+  return ForceUnitFromString(args.raw_units) ? std::string("raw") : args.raw_units;
+}
+
 void PrintInput(const LoadedInput& in) {
   for (const LoadedFile& f : in.files) {
     if (f.data.kind == InputKind::kPositions) {
@@ -417,8 +425,7 @@ int WriteCalibration(const CalibrateArgs& args, const LoadedInput& in, const Gra
   if (gyro != nullptr) {
     info.gyroscope = &gyro->calibration;
     info.gyro_source = gyro->path;
-    info.gyro_raw_unit =
-        gyro->calibration.unit == GyroUnit::kRaw ? args.raw_units : args.gyro_units;
+    info.gyro_raw_unit = GyroRawLabel(gyro->calibration.unit, args);
   }
   const std::string json = CalibrationToJson(result, info);
   // Everything is rendered before anything is written: a failure leaves no file behind.
@@ -457,7 +464,7 @@ int WriteCalibration(const CalibrateArgs& args, const LoadedInput& in, const Gra
     PrintCalibration(result, in.positions, in.position_file, g, args.raw_units);
     if (selection) PrintModelSelection(*selection, args.model == "auto");
     if (gyro != nullptr) {
-      PrintGyro(*gyro, gyro->calibration.unit == GyroUnit::kRaw ? args.raw_units : args.gyro_units,
+      PrintGyro(*gyro, GyroRawLabel(gyro->calibration.unit, args),
                 g.unit == ForceUnit::kMetersPerSecond2 ? "m/s2" : "g");
     }
     for (const Finding& f : diagnosis.findings) {

@@ -118,6 +118,43 @@ int RunReport(const ReportArgs& args) {
   return kExitOk;
 }
 
+namespace {
+
+// An option the chosen format does not use is a mistake (a typo of the format, or an option
+// thought to do something it does not): refused, never silently ignored.
+void RefuseUnusedOptions(ExportFormat format, const ExportArgs& args) {
+  using F = ExportFormat;
+  const auto in = [&](std::initializer_list<F> formats) {
+    return std::find(formats.begin(), formats.end(), format) != formats.end();
+  };
+  struct Use {
+    const char* option;
+    bool used;
+    const char* formats;
+  };
+  const Use uses[] = {
+      {"raw-unit", in({F::kKalibr, F::kOpenVins, F::kBasalt, F::kPx4, F::kArduPilot}),
+       "kalibr, openvins, basalt, px4 and ardupilot"},
+      {"gyro-raw-unit", in({F::kKalibr, F::kOpenVins, F::kBasalt}), "kalibr, openvins and basalt"},
+      {"instance", in({F::kPx4, F::kArduPilot}), "px4 and ardupilot"},
+      {"c-prefix", in({F::kCHeader}), "c-header"},
+      {"sensor", in({F::kImuTk}), "imutk"},
+      {"noise", in({F::kKalibrImu, F::kRos, F::kKalibr, F::kOpenVins, F::kBasalt}),
+       "kalibr-imu, ros, kalibr, openvins and basalt"},
+      {"rostopic", in({F::kKalibrImu, F::kKalibr, F::kOpenVins}),
+       "kalibr-imu, kalibr and openvins"},
+  };
+  for (const Use& use : uses) {
+    if (!use.used &&
+        std::find(args.given.begin(), args.given.end(), use.option) != args.given.end()) {
+      throw UsageError(std::string("--") + use.option + " is for " + use.formats + "; " +
+                       args.format + " has no use for it");
+    }
+  }
+}
+
+}  // namespace
+
 int RunExport(const ExportArgs& args) {
   CheckOutputs({{"-o", args.output}}, {args.calibration, args.noise});
   const ExportFormat format = ParseChoice<ExportFormat>(args.format, "--to");
@@ -135,18 +172,14 @@ int RunExport(const ExportArgs& args) {
     options.noise = ParseNoiseJson(ReadFileToString(args.noise, kMaxSmallFileBytes), args.noise);
   }
   const bool noise_only = format == ExportFormat::kKalibrImu || format == ExportFormat::kRos;
-  const bool holds_noise = noise_only || format == ExportFormat::kKalibr ||
-                           format == ExportFormat::kOpenVins || format == ExportFormat::kBasalt;
-  if (!args.noise.empty() && !holds_noise) {
-    throw UsageError("--noise goes into kalibr-imu, ros, kalibr, openvins and basalt; " +
-                     args.format + " holds no noise");
-  }
+  RefuseUnusedOptions(format, args);
   ExportResult exported;
   try {
     exported = ExportCalibration(cal, text, format, options);
   } catch (const std::invalid_argument& e) {
     throw UsageError(WithFlags(e.what(), {{"c_prefix", "--c-prefix"},
                                           {"instance", "--instance"},
+                                          {"gyro_raw_unit", "--gyro-raw-unit"},
                                           {"raw_unit", "--raw-unit"},
                                           {"rostopic", "--rostopic"},
                                           {"sensor", "--sensor"}}));

@@ -506,7 +506,9 @@ int RunNoise(const NoiseArgs& args) {
   // A still log alone is streamed (a day's log in bounded memory); --still and the gyroscope
   // need the log whole (detection, the two streams sample by sample).
   if (!args.still && !gyro) return StreamNoise(args, read, given_hz, cal);
-  const InputData data = ReadInput(args.input.path, read);
+  InputData data = ReadInput(args.input.path, read);
+  // Without a time column the given rate is the log's (the detection of --still needs one).
+  if (!data.raw.time && given_hz) data.raw.rate_hz = given_hz;
   const RawLog& log = data.raw;
   // The samples analysed: the whole log, or its longest still interval.
   std::size_t begin = 0, end = log.samples.size();

@@ -163,6 +163,9 @@ struct ExportArgs {
   std::string sensor = "accelerometer";  // imutk: which sensor's triad
   std::string noise;                     // accelcal noise --json output (kalibr-imu, ros, kalibr)
   std::string rostopic = "/imu0";
+  /// The options given on the command line (long names without dashes): one the chosen format
+  /// does not use is refused, never silently ignored.
+  std::vector<std::string> given;
 };
 
 struct DesignArgs {

@@ -30,8 +30,48 @@ bool IsAsciiDigit(char c) { return c >= '0' && c <= '9'; }
 bool IsAsciiLetter(char c) { return (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z'); }
 bool IsIdentifierChar(char c) { return IsAsciiLetter(c) || IsAsciiDigit(c) || c == '_'; }
 
+// A ROS name as ROS 2 (rcl's topic validation) and ROS 1 take it: an optional '/' or "~/", then
+// tokens joined by single '/', each starting with a letter or '_', then letters, digits and '_'
+// (no empty token: no "//", no trailing '/').
+bool IsRosName(std::string_view name) {
+  if (name.substr(0, 2) == "~/") {
+    name.remove_prefix(2);
+  } else if (!name.empty() && name[0] == '/') {
+    name.remove_prefix(1);
+  }
+  if (name.empty()) return false;
+  std::size_t start = 0;
+  while (true) {
+    const std::size_t end = std::min(name.find('/', start), name.size());
+    const std::string_view token = name.substr(start, end - start);
+    if (token.empty() || IsAsciiDigit(token[0]) ||
+        !std::all_of(token.begin(), token.end(), IsIdentifierChar)) {
+      return false;
+    }
+    if (end == name.size()) return true;
+    start = end + 1;
+  }
+}
+
+// Every number an export writes is finite: a calibration whose conversion overflows (a K of
+// 1e160 squared, or inverted at 1e-200) cannot be written in any format ("null", "inf").
+double Finite(double value) {
+  if (!std::isfinite(value)) {
+    throw DataError(
+        "the converted calibration has a number that is not finite: its parameters lie outside "
+        "what the format's arithmetic can hold");
+  }
+  return value;
+}
+
 // Shortest text that reads back as the same double (nlohmann's own conversion: no locale).
-std::string Number(double value) { return ordered_json(value).dump(); }
+std::string Number(double value) { return ordered_json(Finite(value)).dump(); }
+
+std::string YamlFlow(const ordered_json& j);  // below, with the YAML writer
+
+// A number for a YAML file: as Number, with a '.' in every float's mantissa, so that YAML 1.1
+// readers (PyYAML, Kalibr's) read 5e-05 as a number, not a string.
+std::string YamlNumber(double value) { return YamlFlow(ordered_json(Finite(value))); }
 
 // Text inside a C block comment: one visible line (VisibleLine) in which no "*/" ends the comment,
 // no "/*" opens a nested one (-Wcomment) and no "??/" trigraph makes a backslash; a space is put
@@ -93,6 +133,12 @@ double RawToMetersPerSecond2(const LoadedCalibration& cal, const ExportOptions& 
                              std::string_view format, std::string_view why) {
   const std::string label = options.raw_unit.empty() ? cal.raw_unit : options.raw_unit;
   const std::optional<ForceUnit> unit = ForceUnitFromString(label);
+  const std::optional<ForceUnit> file_unit = ForceUnitFromString(cal.raw_unit);
+  if (!options.raw_unit.empty() && file_unit && unit && *file_unit != *unit) {
+    throw std::invalid_argument("raw_unit '" + options.raw_unit +
+                                "' contradicts the calibration, whose readings were in '" +
+                                cal.raw_unit + "'");
+  }
   if (!unit) {
     throw DataError(
         std::string(format) + " applies its calibration to readings already in m/s2 (" +
@@ -223,6 +269,7 @@ std::string Header(const LoadedCalibration& cal) {
 ExportResult Px4(const LoadedCalibration& cal, const ExportOptions& options) {
   const double raw_ms2 = RawToMetersPerSecond2(cal, options, "PX4", "its drivers scale the counts");
   const Diagonal d = DiagonalPart(cal, raw_ms2);
+  for (int i = 0; i < 3; ++i) Finite(d.offset_ms2(i)), Finite(d.scale(i));
   ExportResult out;
   out.convention = DiagonalConvention("PX4 (src/lib/sensor_calibration)", cal, raw_ms2);
   const std::string prefix = "CAL_ACC" + std::to_string(options.instance) + "_";
@@ -244,6 +291,7 @@ ExportResult ArduPilot(const LoadedCalibration& cal, const ExportOptions& option
   const double raw_ms2 =
       RawToMetersPerSecond2(cal, options, "ArduPilot", "its drivers scale the counts");
   const Diagonal d = DiagonalPart(cal, raw_ms2);
+  for (int i = 0; i < 3; ++i) Finite(d.offset_ms2(i)), Finite(d.scale(i));
   ExportResult out;
   out.convention = DiagonalConvention("ArduPilot (AP_InertialSensor)", cal, raw_ms2);
   const std::string prefix =
@@ -265,8 +313,14 @@ ExportResult ArduPilot(const LoadedCalibration& cal, const ExportOptions& option
 std::optional<double> RawToRadPerSecond(const LoadedCalibration& cal, const ExportOptions& options,
                                         std::string_view format, std::string_view why,
                                         std::string* omitted) {
-  const std::string label =
-      options.gyro_raw_unit.empty() ? cal.gyroscope->raw_unit : options.gyro_raw_unit;
+  const std::string& file_label = cal.gyroscope->raw_unit;
+  const std::string label = options.gyro_raw_unit.empty() ? file_label : options.gyro_raw_unit;
+  if (!options.gyro_raw_unit.empty() && (file_label == "rad/s" || file_label == "deg/s") &&
+      file_label != options.gyro_raw_unit) {
+    throw std::invalid_argument("gyro_raw_unit '" + options.gyro_raw_unit +
+                                "' contradicts the calibration, whose gyroscope's rates were in '" +
+                                file_label + "'");
+  }
   if (label == "rad/s") return 1.0;
   if (label == "deg/s") return 3.14159265358979323846 / 180.0;
   *omitted = std::string(format) + " reads rates in rad/s (" + std::string(why) +
@@ -337,6 +391,16 @@ double Largest(const Vec3& v) { return v.maxCoeff(); }
 // "x, y, z" of a vector, for comments.
 std::string Axes(const Vec3& v) { return Number(v(0)) + ", " + Number(v(1)) + ", " + Number(v(2)); }
 
+// Some axis' random walk is an upper bound, not resolved in the log.
+bool Unresolved(const ImuNoise& n) {
+  bool any = false;
+  for (bool resolved : n.accelerometer.random_walk_resolved) any = any || !resolved;
+  if (n.gyroscope) {
+    for (bool resolved : n.gyroscope->random_walk_resolved) any = any || !resolved;
+  }
+  return any;
+}
+
 // Comment lines stating where the noise comes from and what each written value is.
 std::string NoiseComments(const ImuNoise& n, const char* prefix) {
   std::string t = std::string(prefix) + " noise from " + internal::VisibleLine(n.source) + " (" +
@@ -361,13 +425,14 @@ std::string NoiseComments(const ImuNoise& n, const char* prefix) {
 std::string KalibrNoiseKeys(const ImuNoise& n, const std::string& rostopic,
                             const std::string& indent) {
   std::string t;
-  t += indent + "accelerometer_noise_density: " + Number(Largest(n.accelerometer.white)) + "\n";
-  t += indent + "accelerometer_random_walk: " + Number(Largest(n.accelerometer.random_walk)) + "\n";
+  t += indent + "accelerometer_noise_density: " + YamlNumber(Largest(n.accelerometer.white)) + "\n";
+  t += indent + "accelerometer_random_walk: " + YamlNumber(Largest(n.accelerometer.random_walk)) +
+       "\n";
   if (n.gyroscope) {
-    t += indent + "gyroscope_noise_density: " + Number(Largest(n.gyroscope->white)) + "\n";
-    t += indent + "gyroscope_random_walk: " + Number(Largest(n.gyroscope->random_walk)) + "\n";
+    t += indent + "gyroscope_noise_density: " + YamlNumber(Largest(n.gyroscope->white)) + "\n";
+    t += indent + "gyroscope_random_walk: " + YamlNumber(Largest(n.gyroscope->random_walk)) + "\n";
   }
-  t += indent + "update_rate: " + Number(n.rate_hz) + "\n";
+  t += indent + "update_rate: " + YamlNumber(n.rate_hz) + "\n";
   t += indent + "rostopic: " + YamlQuoted(rostopic) + "\n";
   return t;
 }
@@ -398,25 +463,24 @@ ExportResult RosCovariance(const LoadedCalibration& cal, const ExportOptions& op
     std::string t = "[";
     for (int i = 0; i < 3; ++i) {
       for (int j = 0; j < 3; ++j) {
-        t += (i || j ? ", " : "") + Number(i == j ? density(i) * density(i) * n.rate_hz : 0.0);
+        t += (i || j ? ", " : "") + YamlNumber(i == j ? density(i) * density(i) * n.rate_hz : 0.0);
       }
     }
     return t + "]";
   };
   out.text = "#" + Header(cal) + "\n# " + out.convention + "\n" + NoiseComments(n, "#");
   out.text += "linear_acceleration_covariance: " + covariance(n.accelerometer.white) + "\n";
-  out.text +=
-      "angular_velocity_covariance: " +
-      (n.gyroscope ? covariance(n.gyroscope->white) : std::string("[0, 0, 0, 0, 0, 0, 0, 0, 0]")) +
-      "\n";
-  out.text += "orientation_covariance: [-1, 0, 0, 0, 0, 0, 0, 0, 0]\n";
+  out.text += "angular_velocity_covariance: " +
+              (n.gyroscope ? covariance(n.gyroscope->white)
+                           : std::string("[0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0]")) +
+              "\n";
+  out.text += "orientation_covariance: [-1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0]\n";
   // REP 145's driver parameters: the square roots of the diagonals, one per field.
   out.text += "linear_acceleration_stddev: " +
-              Number(Largest(n.accelerometer.white) * std::sqrt(n.rate_hz)) + "\n";
+              YamlNumber(Largest(n.accelerometer.white) * std::sqrt(n.rate_hz)) + "\n";
   if (n.gyroscope) {
-    out.text +=
-        "angular_velocity_stddev: " + Number(Largest(n.gyroscope->white) * std::sqrt(n.rate_hz)) +
-        "\n";
+    out.text += "angular_velocity_stddev: " +
+                YamlNumber(Largest(n.gyroscope->white) * std::sqrt(n.rate_hz)) + "\n";
   }
   return out;  // the noise alone: no model, no loss
 }
@@ -461,21 +525,34 @@ std::string XFirstFrom(const LoadedCalibration& cal) {
 std::string YamlRows(const Mat33& A) {
   std::string text;
   for (int i = 0; i < 3; ++i) {
-    text += "    - [" + Number(A(i, 0)) + ", " + Number(A(i, 1)) + ", " + Number(A(i, 2)) + "]\n";
+    text += "    - [" + YamlNumber(A(i, 0)) + ", " + YamlNumber(A(i, 1)) + ", " +
+            YamlNumber(A(i, 2)) + "]\n";
   }
   return text;
 }
 
 // The gyroscope in the x-first frame and rad/s, when the file has one in a unit the format reads;
 // else std::nullopt and, for a unit it cannot read, why in `out->gyroscope_omitted`.
+// A format whose file states the gyroscope's model whether or not it was calibrated (OpenVINS'
+// Tw, Basalt's calib_gyro_bias) is `required` to hold it: the identity in place of a calibrated
+// gyroscope would be a claim, so the unit must be known (DataError).
 std::optional<KalibrGyro> XFirstGyroscope(const LoadedCalibration& cal,
                                           const ExportOptions& options, const FrameChange& change,
-                                          std::string_view format, ExportResult* out) {
+                                          std::string_view format, ExportResult* out,
+                                          bool required = false) {
   if (!cal.gyroscope) return std::nullopt;
   const std::optional<double> rad_s = RawToRadPerSecond(
       cal, options, format, "sensor_msgs/Imu angular_velocity", &out->gyroscope_omitted);
-  if (!rad_s) return std::nullopt;
+  if (!rad_s) {
+    if (required) throw DataError(out->gyroscope_omitted);
+    return std::nullopt;
+  }
   out->gyroscope_included = true;
+  // The accelerometer's squared terms, dropped, reach the rate through the g-sensitivity.
+  if (cal.model == ModelKind::kQuadratic && !cal.gyroscope->params.G.isZero(0)) {
+    out->gyroscope_dropped =
+        "the accelerometer's squared terms k2, which reach the rate through the g-sensitivity G";
+  }
   return KalibrGyroscope(cal, change.Q_old_new, *rad_s);
 }
 
@@ -522,7 +599,8 @@ ExportResult OpenVins(const LoadedCalibration& cal, const ExportOptions& options
       RawToMetersPerSecond2(cal, options, "OpenVINS", "sensor_msgs/Imu linear_acceleration");
   const ForwardAccelerometer a = XFirstAccelerometer(cal, raw_ms2);
   ExportResult out;
-  const std::optional<KalibrGyro> g = XFirstGyroscope(cal, options, a.change, "OpenVINS", &out);
+  const std::optional<KalibrGyro> g =
+      XFirstGyroscope(cal, options, a.change, "OpenVINS", &out, true);
   out.convention =
       "OpenVINS kalibr_imu_chain.yaml (ov_msckf, model kalibr): a_m = Ta R_IMUtoACC a + b_a, w_m "
       "= Tw R_IMUtoGYRO w + Tg a + b_g in m/s2 and rad/s, the IMU frame the accelerometer's "
@@ -530,7 +608,7 @@ ExportResult OpenVins(const LoadedCalibration& cal, const ExportOptions& options
       XFirstFrom(cal) + "; Ta lower-triangular = accelcal's K, R_IMUtoACC = I; " +
       (g ? "Tw lower-triangular and R_IMUtoGYRO a rotation with Tw R_IMUtoGYRO = accelcal's K_g, "
            "Tg = its g-sensitivity G on the IMU-frame force [(rad/s)/(m/s2)]"
-         : "the gyroscope not calibrated here: Tw = R_IMUtoGYRO = I, Tg = 0 (OpenVINS' "
+         : "no gyroscope in the calibration: Tw = R_IMUtoGYRO = I, Tg = 0 (OpenVINS' "
            "defaults)") +
       "; OpenVINS estimates its own biases, so accelcal's constant biases are comments; noise: "
       "continuous-time densities, the largest axis' of each";
@@ -558,7 +636,7 @@ ExportResult Basalt(const LoadedCalibration& cal, const ExportOptions& options) 
       RawToMetersPerSecond2(cal, options, "Basalt", "its IMU readings are in m/s2");
   const ForwardAccelerometer a = XFirstAccelerometer(cal, raw_ms2);
   ExportResult out;
-  const std::optional<KalibrGyro> g = XFirstGyroscope(cal, options, a.change, "Basalt", &out);
+  const std::optional<KalibrGyro> g = XFirstGyroscope(cal, options, a.change, "Basalt", &out, true);
   Mat33 Sa = a.M.triangularView<Eigen::Lower>().solve(Mat33::Identity());
   Sa.triangularView<Eigen::StrictlyUpper>().setZero();
   const Vec3 ba = Sa * a.bias_ms2;
@@ -578,7 +656,7 @@ ExportResult Basalt(const LoadedCalibration& cal, const ExportOptions& options) 
     for (int c = 0; c < 3; ++c) {
       for (int r = 0; r < 3; ++r) gyro.push_back(Sg(r, c));
     }
-    out.gyroscope_dropped = GSensitivityDropped(cal);
+    out.gyroscope_dropped = GSensitivityDropped(cal);  // G gone: k2 no longer reaches the rate
   }
   const auto axes = [](const Vec3& v) { return ordered_json::array({v(0), v(1), v(2)}); };
   ordered_json value;
@@ -594,6 +672,12 @@ ExportResult Basalt(const LoadedCalibration& cal, const ExportOptions& options) 
   value["gyro_bias_std"] = axes(n.gyroscope->random_walk);
   value["cam_time_offset_ns"] = 0;
   value["vignette"] = ordered_json::array();
+  for (const auto& [key, field] : value.items()) {  // every number finite (Finite)
+    if (field.is_number()) Finite(field.get<double>());
+    for (const auto& x : field) {
+      if (x.is_number()) Finite(x.get<double>());
+    }
+  }
   out.text = ordered_json{{"value0", value}}.dump(4) + "\n";
   out.convention =
       "Basalt calib.json (calib_bias.hpp): a = (I + S_a) a_raw - b_a, w = (I + S_g) w_raw - b_g "
@@ -603,10 +687,12 @@ ExportResult Basalt(const LoadedCalibration& cal, const ExportOptions& options) 
       "; calib_accel_bias = [b_a, S_a's lower triangle column by column], I + S_a = K^-1; " +
       (g ? "calib_gyro_bias = [b_g, S_g column-major], I + S_g = K_g^-1 (its rotation to the "
            "accelerometer's frame included)"
-         : "the gyroscope not calibrated here: calib_gyro_bias all 0") +
+         : "no gyroscope in the calibration: calib_gyro_bias all 0") +
       "; noise per axis, continuous-time (accel_noise_std, gyro_noise_std white noise; "
-      "accel_bias_std, gyro_bias_std random walk); the camera fields empty: merge the IMU fields "
-      "into the calib.json of a camera calibration";
+      "accel_bias_std, gyro_bias_std random walk" +
+      (Unresolved(n) ? ", where the log does not resolve it its 95 % upper bound" : "") +
+      "); the camera fields empty: merge the IMU fields into the calib.json of a camera "
+      "calibration";
   out.loss = XFirstLoss(cal, a.change);
   return out;
 }
@@ -822,14 +908,14 @@ ExportResult ExportCalibration(const LoadedCalibration& cal, const std::string& 
   if (options.sensor != "accelerometer" && options.sensor != "gyroscope") {
     throw std::invalid_argument("sensor must be \"accelerometer\" or \"gyroscope\"");
   }
-  const auto ros_name_char = [](char c) { return IsIdentifierChar(c) || c == '/'; };
-  if (options.rostopic.empty() ||
-      !(IsAsciiLetter(options.rostopic[0]) || options.rostopic[0] == '/' ||
-        options.rostopic[0] == '~') ||
-      !std::all_of(options.rostopic.begin() + 1, options.rostopic.end(), ros_name_char)) {
+  if (!options.gyro_raw_unit.empty() && options.gyro_raw_unit != "rad/s" &&
+      options.gyro_raw_unit != "deg/s") {
+    throw std::invalid_argument("gyro_raw_unit must be rad/s or deg/s");
+  }
+  if (!IsRosName(options.rostopic)) {
     throw std::invalid_argument(
-        "rostopic must be a ROS name: a letter, '/' or '~' first, then letters, digits, '_' and "
-        "'/'");
+        "rostopic must be a ROS name: '/' or '~/' (or nothing) first, then tokens joined by '/', "
+        "each a letter or '_' followed by letters, digits and '_'");
   }
   if (options.sensor == "gyroscope" && format != ExportFormat::kImuTk) {
     throw std::invalid_argument(

@@ -39,6 +39,11 @@ SensorNoiseDensities ReadSensor(const Reader& top, const ordered_json& doc, cons
   for (int a = 0; a < 3; ++a) {
     const ordered_json& axis = sensor["axes"][static_cast<std::size_t>(a)];
     const Reader ra = r.Inside("axes[" + std::to_string(a) + "]");
+    // The axes in the order x, y, z: an estimator's per-axis values are written in that order.
+    const std::string expected(1, static_cast<char>('x' + a));
+    if (!axis.is_object() || !axis.contains("axis") || axis["axis"] != expected) {
+      ra.Fail(ra.Key("axis") + " must be \"" + expected + "\" (the axes in the order x, y, z)");
+    }
     const ordered_json& terms = ra.Object(axis, "terms");
     const Reader rt = ra.Inside("terms");
     const auto term = [&](const char* key) -> const ordered_json& { return rt.Object(terms, key); };
@@ -58,9 +63,11 @@ SensorNoiseDensities ReadSensor(const Reader& top, const ordered_json& doc, cons
     out.random_walk(a) =
         si * (walk["resolved"].get<bool>() ? rk.Number(walk["value"], rk.Key("value"))
                                            : rk.Number(walk["high"], rk.Key("high")));
-    if (!(out.white(a) > 0) || !(out.random_walk(a) > 0)) {
+    if (!(out.white(a) > 0)) rw.Fail(rw.Key("value") + " must be positive");
+    if (!(out.random_walk(a) > 0)) {
       // An estimator weighs the bias's change by 1 / K²: a K of 0 pins the bias for ever.
-      rt.Fail("the white noise and the random walk (or its upper bound) must be positive");
+      rk.Fail(rk.Key(walk["resolved"].get<bool>() ? "value" : "high") +
+              " must be positive: the random walk (or its upper bound)");
     }
   }
   return out;
@@ -75,6 +82,9 @@ ImuNoise ParseNoiseJson(const std::string& text, const std::string& source) {
     r.Fail("not the output of accelcal noise --json (no 'model' and 'accelerometer')");
   }
   const std::string verdict = r.Text(doc, "verdict");
+  if (verdict != "passed" && verdict != "failed") {
+    r.Fail(r.Key("verdict") + " must be \"passed\" or \"failed\"");
+  }
   if (verdict != "passed") {
     r.Fail(r.Key("verdict") + " is '" + verdict +
            "': the noise terms failed their checks and are not a result (see the notes there)");

@@ -196,7 +196,7 @@ TEST_F(ExportNoise, KalibrModelCarriesTheNoiseKeysAndRefusalsNameTheirCause) {
   walk["high"] = 0;
   r = Exec("export " + cal_ + " --to basalt --noise " + Write("zero.json", zero.dump()));
   EXPECT_EQ(r.status, 3);
-  EXPECT_NE(r.err.find("the white noise and the random walk (or its upper bound) must be positive"),
+  EXPECT_NE(r.err.find("random_walk.high' must be positive: the random walk (or its upper bound)"),
             std::string::npos)
       << r.err;
   // Only the accelerometer's noise: Kalibr's imu.yaml needs the gyroscope's too.
@@ -205,6 +205,57 @@ TEST_F(ExportNoise, KalibrModelCarriesTheNoiseKeysAndRefusalsNameTheirCause) {
   r = Exec("export " + cal_ + " --to kalibr-imu --noise " + Write("accel.json", accel_only.dump()));
   EXPECT_EQ(r.status, 3);
   EXPECT_NE(r.err.find("has none: analyse the log with the gyroscope"), std::string::npos) << r.err;
+}
+
+TEST_F(ExportNoise, OptionsAFormatDoesNotUseAreRefusedAndNoiseFilesAreChecked) {
+  // An option the format has no use for is a mistake, not silently ignored (exit 2).
+  for (const std::string& args : {std::string("--to basalt --noise ") + noise_ + " --rostopic /x",
+                                  std::string("--to json --raw-unit g"),
+                                  std::string("--to openvins --noise ") + noise_ + " --instance 1",
+                                  std::string("--to px4 --c-prefix imu --raw-unit m/s2")}) {
+    const CliRun r = Exec("export " + cal_ + " " + args);
+    EXPECT_EQ(r.status, 2) << args << "\n" << r.err;
+    EXPECT_NE(r.err.find("has no use for it"), std::string::npos) << r.err;
+  }
+  // A noise file's axes in another order would put one axis' noise on another's.
+  nlohmann::json swapped = doc_;
+  std::swap(swapped["gyroscope"]["axes"][0], swapped["gyroscope"]["axes"][2]);
+  CliRun r = Exec("export " + cal_ + " --to ros --noise " + Write("swapped.json", swapped.dump()));
+  EXPECT_EQ(r.status, 3);
+  EXPECT_NE(r.err.find("'gyroscope.axes[0].axis' must be \"x\""), std::string::npos) << r.err;
+  nlohmann::json banana = doc_;
+  banana["verdict"] = "banana";
+  r = Exec("export " + cal_ + " --to ros --noise " + Write("banana.json", banana.dump()));
+  EXPECT_EQ(r.status, 3);
+  EXPECT_NE(r.err.find("'verdict' must be \"passed\" or \"failed\""), std::string::npos) << r.err;
+}
+
+TEST_F(ExportNoise, AGyroscopeBesideAnAccelerometerInMetersPerSecond2IsLabelledRaw) {
+  // calibrate --raw-units m/s2 names the accelerometer's unit; the gyroscope's counts are not in
+  // m/s2 (its file had said "m/s2", and the exports read it as a unit they cannot take).
+  const std::string data = std::string(ACCELCAL_DATA_DIR) + "/imutk-t265/";
+  const std::string t265 = Path("t265.json");
+  ASSERT_EQ(Exec("calibrate " + data + "t265_acc.mat --gravity 9.8016 --raw-units m/s2 --gyro " +
+                 data + "t265_gyr.mat -q -o " + t265)
+                .status,
+            0);
+  const nlohmann::json doc = nlohmann::json::parse(test::Slurp(t265));
+  EXPECT_EQ(doc["sensors"]["gyroscope"]["units"]["raw"], "raw");
+  // OpenVINS states a gyroscope model in any case: without the rates' unit it refuses (the
+  // identity in place of the calibrated gyroscope would be a claim), and says what to give.
+  CliRun r = Exec("export " + t265 + " --to openvins --noise " + noise_ + " -o " + Path("o.yaml"));
+  EXPECT_EQ(r.status, 3);
+  EXPECT_NE(r.err.find("give --gyro-raw-unit (rad/s or deg/s)"), std::string::npos) << r.err;
+  EXPECT_FALSE(test::fs::exists(Path("o.yaml")));
+  r = Exec("export " + t265 + " --to openvins --noise " + noise_ + " --gyro-raw-unit rad/s");
+  EXPECT_EQ(r.status, 0) << r.err;
+  // A unit that contradicts the file's is refused (exit 2).
+  r = Exec("export " + t265 + " --to openvins --noise " + noise_ +
+           " --raw-unit g --gyro-raw-unit rad/s");
+  EXPECT_EQ(r.status, 2);
+  EXPECT_NE(r.err.find("--raw-unit 'g' contradicts the calibration, whose readings were in 'm/s2'"),
+            std::string::npos)
+      << r.err;
 }
 
 // The raw readings the estimators' tests correct (one row per position of the Xsens calibration:

@@ -1,6 +1,7 @@
 // accelcal noise as a user runs it: a simulated still log's noise terms back, and what it refuses.
 #include <cmath>
 #include <cstdio>
+#include <sstream>
 #include <string>
 #include <vector>
 
@@ -62,6 +63,21 @@ TEST_F(Cli, NoiseGivesTheWhiteNoiseOfEachAxis) {
       << text.out;
   // The same bytes again.
   EXPECT_EQ(Exec("noise " + log + " --json").out, r.out);
+  // Without its time column, at the rate given: the same white noise, with --still too (the
+  // detection had been given no rate: "no time column and no sample rate was given").
+  std::string untimed;
+  std::istringstream rows(test::Slurp(log));
+  for (std::string row; std::getline(rows, row);) untimed += row.substr(row.find(',') + 1) + "\n";
+  const std::string xyz = Write("xyz.csv", untimed);
+  for (const char* still : {"", " --still"}) {
+    const CliRun given = Exec("noise " + xyz + " --rate 100 --json" + still);
+    ASSERT_EQ(given.status, 0) << still << given.err;
+    const nlohmann::json d = nlohmann::json::parse(given.out);
+    EXPECT_EQ(d["rate_hz"], 100.0);
+    EXPECT_NEAR(d["accelerometer"]["axes"][0]["terms"]["white"]["value"].get<double>(), 1e-3,
+                4 * axes[0]["terms"]["white"]["sigma"].get<double>())
+        << still;
+  }
 }
 
 TEST_F(Cli, NoiseRefusesWhatItCannotCharacterise) {

@@ -587,6 +587,111 @@ TEST(Export, VisibleLineEscapesWhatWouldBreakALine) {
   EXPECT_EQ(VisibleLine(printable), printable);
 }
 
+TEST(Export, NeverWritesANumberThatIsNot) {
+  // Parameters at the edge of double arithmetic: every format either writes numbers alone or
+  // refuses (DataError). A K of 1e160 had gone through QR and inversions to "null" in OpenVINS'
+  // Tw and Ta with exit 0, and 1e-200 to nulls in Basalt's calib_accel_bias.
+  for (const double extreme : {1e160, 1e-200, 1e-310, 1e300}) {
+    Fitted f = Fit(ModelKind::kLinear, Frame::kXFirst);
+    f.cal.params.K(0, 0) = extreme;
+    f.cal.gyroscope = Gyroscope();
+    f.cal.gyroscope->raw_unit = "rad/s";
+    f.cal.gyroscope->params.K(1, 1) = extreme;
+    ExportOptions options;
+    options.noise = test::SampleNoise();
+    for (const ExportFormat format : AllExportFormats()) {
+      if (format == ExportFormat::kJson || format == ExportFormat::kYaml) continue;  // the file
+      try {
+        const std::string text = ExportCalibration(f.cal, f.json, format, options).text;
+        for (const char* bad : {"null", "inf", "nan", "NaN", "Inf"}) {
+          EXPECT_EQ(text.find(bad), std::string::npos)
+              << ToString(format) << " at " << extreme << ":\n"
+              << text;
+        }
+      } catch (const DataError& e) {
+        EXPECT_NE(std::string(e.what()).find("not finite"), std::string::npos) << e.what();
+      }
+    }
+  }
+}
+
+TEST(Export, UnitOverridesMayNotContradictTheFile) {
+  // --raw-unit and --gyro-raw-unit name a unit the file does not say ("raw", "counts"); against
+  // one it says they would scale everything by 9.81 or 57.3 without a word.
+  Fitted f = Fit(ModelKind::kLinear, Frame::kXFirst, "m/s2");
+  f.cal.gyroscope = Gyroscope();
+  f.cal.gyroscope->raw_unit = "deg/s";
+  ExportOptions g;
+  g.raw_unit = "g";
+  EXPECT_THROW(ExportCalibration(f.cal, f.json, ExportFormat::kPx4, g), std::invalid_argument);
+  ExportOptions rad;
+  rad.gyro_raw_unit = "rad/s";
+  EXPECT_THROW(ExportCalibration(f.cal, f.json, ExportFormat::kKalibr, rad), std::invalid_argument);
+  rad.gyro_raw_unit = "furlong/s";  // not a unit the gyroscope's formats read
+  EXPECT_THROW(ExportCalibration(f.cal, f.json, ExportFormat::kKalibr, rad), std::invalid_argument);
+  ExportOptions same;  // the file's own units, said again: fine
+  same.raw_unit = "m/s2";
+  same.gyro_raw_unit = "deg/s";
+  EXPECT_TRUE(ExportCalibration(f.cal, f.json, ExportFormat::kKalibr, same).gyroscope_included);
+  // OpenVINS and Basalt state the gyroscope's model in any case: one they cannot convert is
+  // refused, not written as the identity.
+  f.cal.gyroscope->raw_unit = "raw";
+  ExportOptions noise;
+  noise.noise = test::SampleNoise();
+  for (const ExportFormat format : {ExportFormat::kOpenVins, ExportFormat::kBasalt}) {
+    EXPECT_THROW(ExportCalibration(f.cal, f.json, format, noise), DataError) << ToString(format);
+  }
+}
+
+TEST(Export, TopicsAreRosNames) {
+  const Fitted f = Fit(ModelKind::kLinear, Frame::kXFirst);
+  ExportOptions o;
+  o.noise = test::SampleNoise();
+  for (const char* good : {"/imu0", "imu", "~/imu", "/a_b/c1", "_hidden/imu"}) {
+    o.rostopic = good;
+    EXPECT_NO_THROW(ExportCalibration(f.cal, f.json, ExportFormat::kOpenVins, o)) << good;
+  }
+  for (const char* bad : {"", "/", "//imu", "/imu0/", "/0imu", "a b", "~imu", "/imu/~", "/ä"}) {
+    o.rostopic = bad;
+    EXPECT_THROW(ExportCalibration(f.cal, f.json, ExportFormat::kOpenVins, o),
+                 std::invalid_argument)
+        << bad;
+  }
+}
+
+TEST(Export, YamlNumbersAreNumbersToYaml11) {
+  // PyYAML (Kalibr's reader) takes 5e-05 for a string: YAML 1.1's floats need a '.' in the
+  // mantissa. Every number of the YAML formats is read back as a float.
+  const fs::path dir = fs::path(::testing::TempDir()) / "accelcal_yaml_numbers";
+  fs::create_directories(dir);
+  Fitted f = Fit(ModelKind::kLinear, Frame::kXFirst, "m/s2");
+  f.cal.gyroscope = Gyroscope();
+  f.cal.gyroscope->raw_unit = "rad/s";
+  ExportOptions o;
+  o.noise = test::SampleNoise();
+  o.noise->accelerometer.white = Vec3::Constant(5e-05);
+  o.noise->gyroscope->random_walk = Vec3::Constant(1e+300);
+  o.noise->rate_hz = 200;
+  for (const ExportFormat format : {ExportFormat::kKalibr, ExportFormat::kKalibrImu,
+                                    ExportFormat::kRos, ExportFormat::kOpenVins}) {
+    std::string text = ExportCalibration(f.cal, f.json, format, o).text;
+    if (text.rfind("%YAML:1.0\n", 0) == 0) text.erase(0, 10);  // OpenCV's directive
+    const fs::path file = dir / (std::string(ToString(format)) + ".yaml");
+    std::ofstream(file.string()) << text;
+    // Every scalar but the topic and the model's name is a float.
+    EXPECT_EQ(Shell("/usr/bin/python3 -c \"import sys, yaml\n"
+                    "def walk(x, key=''):\n"
+                    "    if isinstance(x, dict): [walk(v, k) for k, v in x.items()]\n"
+                    "    elif isinstance(x, list): [walk(v, key) for v in x]\n"
+                    "    elif key not in ('rostopic', 'model'):\n"
+                    "        assert isinstance(x, float), (key, x)\n"
+                    "walk(yaml.safe_load(open(sys.argv[1])))\" " +
+                    file.string()),
+              0)
+        << text;
+  }
+}
+
 TEST(Export, FormatNamesRoundTrip) {
   for (const ExportFormat format : AllExportFormats()) {
     EXPECT_EQ(ExportFormatFromString(ToString(format)), format);

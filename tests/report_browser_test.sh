@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # The report as a person sees it: headless Chromium renders the page of the bundled Xsens
-# calibration to a PNG; the test fails on any console error (a failed resource load, a script
+# calibration to a PNG (and the noise report of its rest to a DOM); the test fails on any console error (a failed resource load, a script
 # error), on a missing plot in the rendered DOM, or on a blank screenshot.
 # Usage: report_browser_test.sh ACCELCAL_CLI DATA_DIR
 set -euo pipefail
@@ -42,3 +42,19 @@ height=$((16#${png_header:40:8}))
 size=$(stat -c %s "$work/report.png")
 [ "$size" -gt 100000 ] || { echo "FAIL: screenshot of $size bytes looks blank"; exit 1; }
 echo "report rendered: ${width}x${height} PNG of $size bytes, no console message"
+
+# The noise report (accelcal noise --report) of the Xsens rest, both sensors: no console message,
+# both Allan deviation plots with their bands in the rendered DOM.
+"$cli" noise "$data/imutk-xsens-mti/xsens_acc.mat" --still --gyro "$data/imutk-xsens-mti/xsens_gyro.mat" \
+  --report "$work/noise.html" -o "$work/noise.txt"
+timeout 120 "${browser[@]}" --dump-dom "file://$work/noise.html" > "$work/noise-dom.html" 2> "$work/noise-dom.log"
+if grep -h "CONSOLE" "$work/noise-dom.log"; then
+  echo "FAIL: console messages while rendering the noise report"
+  exit 1
+fi
+for id in allan-0 allan-1; do
+  grep -q "<svg id=\"$id\"" "$work/noise-dom.html" || { echo "FAIL: no <svg id=\"$id\"> in the noise report"; exit 1; }
+done
+[ "$(grep -o '<polygon class="band"' "$work/noise-dom.html" | wc -l)" -eq 6 ] ||
+  { echo "FAIL: expected 6 confidence bands (3 axes, 2 sensors)"; exit 1; }
+echo "noise report rendered: 2 plots, 6 bands, no console message"

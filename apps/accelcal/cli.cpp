@@ -289,6 +289,10 @@ int accelcal::cli::RunCommandLine(int argc, char** argv) {
     noise->add_flag("--still", noi.still,
                     "only the longest still interval of the log (a calibration log's rest)");
     noise->add_flag("--json", noi.json, "machine-readable output");
+    noise
+        ->add_option("--report", noi.report,
+                     "HTML report: the Allan deviation plotted with its bands and the fit")
+        ->check(kFileName);
     noise->add_option("-o,--output", noi.output, "output file (default: stdout)")->check(kFileName);
   }
 

@@ -4,6 +4,7 @@
 #include <array>
 #include <cmath>
 #include <functional>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -12,6 +13,7 @@
 #include "accelcal/gyro_calibration.hpp"
 #include "accelcal/gyro_model.hpp"
 #include "accelcal/noise.hpp"
+#include "accelcal/noise_report.hpp"
 #include "accelcal/sample_clock.hpp"
 #include "cli_common.hpp"
 #include "core/text_format.hpp"
@@ -420,7 +422,35 @@ int WriteNoise(const NoiseArgs& args, bool calibrated, std::size_t begin, std::s
       out += "# verdict: failed: the terms of " + list + " are not a result (see the notes)\n";
     }
   }
-  WriteFileAtomically(args.output.empty() ? "-" : args.output, out);
+  std::string report;
+  if (!args.report.empty()) {
+    NoiseReportInput page;
+    page.title = args.input.path;
+    page.time_note = time ? time->unit_reason : std::string("none: the rate given");
+    page.verdict = failed ? "failed: the terms of " + reasons.front() +
+                                (reasons.size() > 1 ? " and others" : "") +
+                                " are not a result (see the notes)"
+                          : "passed";
+    for (const Sensor& s : sensors) {
+      NoiseReportSensor r;
+      r.name = s.name;
+      r.source = s.source;
+      r.sample_unit = s.display.sample_unit;
+      r.term_unit = s.display.unit;
+      r.term_factor = s.display.factor;
+      r.analysis = &s.noise;
+      r.notes = s.notes;
+      page.sensors.push_back(std::move(r));
+    }
+    report = RenderNoiseReport(page);
+  }
+  {  // both files or neither
+    OutputFile file(args.output.empty() ? "-" : args.output);
+    file.Write(out);
+    std::optional<OutputFile> report_file;
+    if (!args.report.empty()) report_file.emplace(args.report).Write(report);
+    CommitAll({&file, report_file ? &*report_file : nullptr});
+  }
   if (failed) {
     Warn("the noise terms failed their checks (%s): see the notes\n",
          reasons.empty() ? "" : reasons.front().c_str());
@@ -487,7 +517,8 @@ int StreamNoise(const NoiseArgs& args, const ReadOptions& read,
 }  // namespace
 
 int RunNoise(const NoiseArgs& args) {
-  CheckOutputs({{"-o", args.output}}, {args.input.path, args.calibration, args.gyro});
+  CheckOutputs({{"-o", args.output}, {"--report", args.report}},
+               {args.input.path, args.calibration, args.gyro});
   if (auto why = args.input.detection.Validate()) throw UsageError(*why);
   const bool gyro = !args.gyro.empty() || !args.gyro_columns.empty();
   if (gyro) CheckGyroColumns(args.input, args.gyro, args.gyro_columns);

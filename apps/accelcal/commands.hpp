@@ -121,6 +121,7 @@ struct DetectArgs {
 
 struct NoiseArgs {
   InputArgs input;
+  std::string report;       // HTML report path (noise_report.hpp); empty: none
   std::string calibration;  // empty: the log's own unit
   std::string gyro;         // the gyroscope's log (ReadGyroLog)
   std::vector<std::string> gyro_columns;

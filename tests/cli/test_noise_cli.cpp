@@ -295,6 +295,35 @@ TEST_F(Cli, NoiseOfTheXsensRestIsTheReadmes) {
     const nlohmann::json& g = doc["gyroscope"]["axes"][a]["terms"]["white"];
     EXPECT_NEAR(g["value"].get<double>() * deg, gyro[a], 0.00005) << a;
   }
+  // The report: both sensors' Allan deviation plotted with a band per axis, the terms as the
+  // text gives them (its table and the text's figures, one formatting), the same bytes twice.
+  const std::string html = Path("noise.html"), text = Path("noise.txt");
+  const std::string args = "noise " + data + "xsens_acc.mat --still --calibration " + cal +
+                           " --gyro " + data + "xsens_gyro.mat";
+  ASSERT_EQ(Exec(args + " --report " + html + " -o " + text).status, 0);
+  const std::string page = test::Slurp(html);
+  for (const char* id : {"<svg id=\"allan-0\"", "<svg id=\"allan-1\""}) {
+    EXPECT_NE(page.find(id), std::string::npos) << id;
+  }
+  std::size_t bands = 0;
+  for (std::size_t at = page.find("class=\"band\""); at != std::string::npos;
+       at = page.find("class=\"band\"", at + 1)) {
+    ++bands;
+  }
+  EXPECT_EQ(bands, 6u);
+  // The white noise of x as the text prints it ("86.0x ± ..."), in the table.
+  const double x_white = doc["accelerometer"]["axes"][0]["terms"]["white"]["value"].get<double>();
+  char figure[32];
+  std::snprintf(figure, sizeof figure, "%.4g &plusmn;", x_white * ug);
+  EXPECT_NE(page.find(figure), std::string::npos) << figure;
+  EXPECT_NE(page.find("<dd>passed</dd>"), std::string::npos);
+  ASSERT_EQ(Exec(args + " --report " + Path("again.html") + " -o " + Path("again.txt")).status, 0);
+  EXPECT_EQ(test::Slurp(Path("again.html")), page);
+  // Both files or neither: an output that cannot be written leaves no report behind.
+  const std::string lone = Path("lone.html");
+  const CliRun bad = Exec(args + " --report " + lone + " -o " + Path("missing/dir/out.txt"));
+  EXPECT_EQ(bad.status, 5) << bad.err;
+  EXPECT_FALSE(test::fs::exists(lone));
 }
 
 }  // namespace

@@ -449,6 +449,12 @@ int accelcal::cli::RunCommandLine(int argc, char** argv) {
     gravity->excludes(latitude);
     verify->add_option("--height", ver.gravity.height_m, "height above the ellipsoid [m]")
         ->needs(latitude);
+    verify->add_option("--gyro", ver.gyro,
+                       "the gyroscope's log on the same clock: its turns verified too");
+    verify
+        ->add_option("--gyro-columns", ver.gyro_columns,
+                     "the gyroscope's x,y,z (or time,x,y,z) columns, in LOG or the --gyro log")
+        ->delimiter(',');
     verify->add_flag("--json", ver.json, "machine-readable output");
     verify->add_option("-o,--output", ver.output, "output file (default: stdout)")
         ->check(kFileName);
@@ -608,6 +614,7 @@ int accelcal::cli::RunCommandLine(int argc, char** argv) {
       return RunExport(exp);
     }
     if (*verify) {
+      CheckGyroFlags(*verify, ver.gyro, ver.gyro_columns, {});
       data_subject = ver.input.path;
       return RunVerify(ver);
     }

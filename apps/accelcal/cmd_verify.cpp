@@ -3,11 +3,13 @@
 #include "commands.hpp"
 
 #include <cmath>
+#include <optional>
 #include <string>
 #include <vector>
 
 #include "accelcal/calibration_file.hpp"
 #include "accelcal/gravity.hpp"
+#include "accelcal/gyro_calibration.hpp"
 #include "accelcal/verify.hpp"
 #include "cli_common.hpp"
 #include "core/text_format.hpp"
@@ -37,6 +39,8 @@ double MisfitSigma(const LoadedCalibration& cal) {
   return std::sqrt(std::max(0.0, *cal.noise_sigma_raw * *cal.noise_sigma_raw - noise2));
 }
 
+std::string VecText(const Vec3& v) { return Format("[%.6g, %.6g, %.6g]", v(0), v(1), v(2)); }
+
 // A number, or null where there is none (a reading the model cannot invert).
 nlohmann::ordered_json NumberOrNull(double v) {
   return std::isfinite(v) ? nlohmann::ordered_json(v) : nlohmann::ordered_json(nullptr);
@@ -45,11 +49,37 @@ nlohmann::ordered_json NumberOrNull(double v) {
 }  // namespace
 
 int RunVerify(const VerifyArgs& args) {
-  CheckOutputs({{"-o", args.output}}, {args.calibration, args.input.path});
+  CheckOutputs({{"-o", args.output}}, {args.calibration, args.input.path, args.gyro});
   if (auto why = args.input.detection.Validate()) throw UsageError(*why);
+  const bool gyro = !args.gyro.empty() || !args.gyro_columns.empty();
+  if (gyro) CheckGyroColumns(args.input, args.gyro, args.gyro_columns);
   const LoadedCalibration cal = ParseCalibrationJson(
       ReadFileToString(args.calibration, kMaxSmallFileBytes), args.calibration);
   RefuseFailed(cal, args.calibration);
+  // The prediction needs the calibration's uncertainty: without it every good calibration of a
+  // real sensor would fail (its parameters taken as exact, its misfit as none).
+  const std::string method = cal.solver.method.empty() ? "?" : cal.solver.method;
+  if (cal.covariance.size() == 0) {
+    throw InputError(args.calibration, 0,
+                     "holds no covariance of its parameters (its method '" + method +
+                         "' gives none): verify predicts the error from it; calibrate with the "
+                         "maximum-likelihood methods (the default)");
+  }
+  if (!cal.noise_sigma_raw) {
+    throw InputError(args.calibration, 0,
+                     "holds no noise.sigma_raw (its positions' residual level): verify predicts "
+                     "the error from it; calibrate again");
+  }
+  if (gyro && !cal.gyroscope) {
+    throw UsageError(args.calibration +
+                     " holds no gyroscope calibration: there is nothing to verify the rates "
+                     "against (leave out --gyro)");
+  }
+  if (gyro && cal.gyroscope->covariance.size() == 0) {
+    throw InputError(args.calibration, 0,
+                     "its gyroscope holds no covariance: verify predicts the turns' error from "
+                     "it; calibrate again");
+  }
   VerifiedCalibration under_test;
   under_test.model = cal.model;
   under_test.frame = cal.frame;
@@ -72,6 +102,20 @@ int RunVerify(const VerifyArgs& args) {
   if (detection.intervals.empty()) throw NoStaticInterval(detection);
   const std::vector<Position> positions = PositionsFromIntervals(detection.intervals);
   const Verification v = VerifyCalibration(under_test, data.raw, positions);
+  std::optional<GyroVerification> gv;
+  if (gyro) {
+    const InputData rates = ReadGyroLog(args.input, args.gyro, args.gyro_columns, false);
+    CheckGyroClock(data.raw, rates.raw);
+    VerifiedGyroscope g;
+    g.model = cal.gyroscope->model;
+    g.params = cal.gyroscope->params;
+    g.covariance = cal.gyroscope->covariance;
+    g.rotation_scatter_ratio = cal.gyroscope->rotation_scatter_ratio.value_or(1.0);
+    gv = VerifyGyroscope(under_test, g, data.raw, rates.raw, positions);
+  }
+  const bool passed = v.passed && (!gv || gv->passed);
+  std::string untested;
+  for (const std::string& name : v.untested) untested += (untested.empty() ? "" : ", ") + name;
 
   const std::string unit(ToString(cal.unit));
   std::string out;
@@ -83,7 +127,8 @@ int RunVerify(const VerifyArgs& args) {
     doc["gravity"] = under_test.gravity;
     doc["gravity_origin"] = gravity_origin;
     doc["misfit_sigma_raw"] = under_test.misfit_sigma_raw;
-    doc["verdict"] = v.passed ? "passed" : "failed";
+    doc["verdict"] = passed ? "passed" : "failed";  // written again below, after the gyroscope
+    doc["accelerometer_verdict"] = v.passed ? "passed" : "failed";
     if (!v.passed) doc["reason"] = v.reason;
     doc["chi2"] = v.chi2;
     doc["dof"] = v.dof;
@@ -110,9 +155,41 @@ int RunVerify(const VerifyArgs& args) {
                       {"z", NumberOrNull(p.z)}});
     }
     doc["positions"] = list;
-    doc["gyroscope"] = cal.has_gyroscope()
-                           ? "not verified: this verification is the accelerometer's"
-                           : "none in the calibration";
+    nlohmann::ordered_json parameters = nlohmann::ordered_json::array();
+    for (const VerifiedParameter& p : v.parameters) {
+      parameters.push_back(
+          {{"name", p.name}, {"detectable", NumberOrNull(p.detectable)}, {"sigma", p.sigma}});
+    }
+    doc["parameters"] = parameters;
+    doc["untested"] = v.untested;
+    if (gv) {
+      nlohmann::ordered_json turns = nlohmann::ordered_json::array();
+      for (const VerifiedTurn& t : gv->turns) {
+        turns.push_back({{"from", t.from + 1},
+                         {"to", t.to + 1},
+                         {"duration_s", t.duration_s},
+                         {"error_deg", t.error_deg},
+                         {"predicted_deg", t.predicted_deg},
+                         {"z", t.z}});
+      }
+      doc["gyroscope"] = {
+          {"verdict", gv->passed ? "passed" : "failed"},
+          {"reason", gv->reason},
+          {"chi2", gv->chi2},
+          {"dof", gv->dof},
+          {"p_value", gv->p_value},
+          {"rms_error_deg", gv->rms_error_deg},
+          {"rms_predicted_deg", gv->rms_predicted_deg},
+          {"session_bias_raw",
+           {gv->session_bias_raw(0), gv->session_bias_raw(1), gv->session_bias_raw(2)}},
+          {"bias_change_raw",
+           {gv->bias_change_raw(0), gv->bias_change_raw(1), gv->bias_change_raw(2)}},
+          {"turns", turns}};
+    } else {
+      doc["gyroscope"] =
+          cal.has_gyroscope() ? "not verified: give its log (--gyro)" : "none in the calibration";
+    }
+    doc["verdict"] = passed ? "passed" : "failed";
     out = JsonText(doc);
   } else {
     out += "# accelcal verify " + VisibleLine(args.calibration) + " on " +
@@ -132,15 +209,44 @@ int RunVerify(const VerifyArgs& args) {
     out += Format(
         "# chi2 = %.4g for %d positions (p = %.3g); RMS of |f| - g %.3g %s, predicted %.3g %s\n",
         v.chi2, v.dof, v.p_value, v.rms_error, unit.c_str(), v.rms_predicted, unit.c_str());
-    if (cal.has_gyroscope()) {
-      out += "# the gyroscope: not verified (this verification is the accelerometer's)\n";
+    if (!untested.empty()) {
+      out +=
+          "# not tested by this log (an error of 10 of the calibration's sigma would go "
+          "unseen): " +
+          untested + "\n";
     }
-    out += v.passed ? std::string("# verdict: passed\n") : "# verdict: failed: " + v.reason + "\n";
+    if (gv) {
+      out += Format("# gyroscope: the session's bias %s raw (%s from the calibration's)\n",
+                    VecText(gv->session_bias_raw).c_str(), VecText(gv->bias_change_raw).c_str());
+      out += "turn  duration_s  error_deg  predicted_deg  z\n";
+      for (const VerifiedTurn& t : gv->turns) {
+        out += Format("%zu-%zu  %.3f  %.4f  %.4f  %.2f\n", t.from + 1, t.to + 1, t.duration_s,
+                      t.error_deg, t.predicted_deg, t.z);
+      }
+      out += Format(
+          "# gyroscope: chi2 = %.4g for %d components of %zu turns (p = %.3g); RMS error %.3g "
+          "deg, predicted %.3g deg\n",
+          gv->chi2, gv->dof, gv->turns.size(), gv->p_value, gv->rms_error_deg,
+          gv->rms_predicted_deg);
+    } else if (cal.has_gyroscope()) {
+      out += "# the gyroscope: not verified (give its log: --gyro)\n";
+    }
+    std::string why = v.reason;
+    if (gv && !gv->passed) why += (why.empty() ? "" : "; ") + ("the gyroscope: " + gv->reason);
+    out += passed ? std::string("# verdict: passed\n") : "# verdict: failed: " + why + "\n";
   }
   WriteFileAtomically(args.output.empty() ? "-" : args.output, out);
-  if (!v.passed) {
+  if (!untested.empty()) {
+    Warn(
+        "%s: this log does not test %s (no position excites them enough): a pass says nothing "
+        "of them\n",
+        args.input.path.c_str(), untested.c_str());
+  }
+  if (!passed) {
+    std::string why = v.reason;
+    if (gv && !gv->passed) why += (why.empty() ? "" : "; ") + ("the gyroscope: " + gv->reason);
     Warn("%s does not hold on %s: %s\n", args.calibration.c_str(), args.input.path.c_str(),
-         v.reason.c_str());
+         why.c_str());
     return kExitFailedChecks;
   }
   return kExitOk;

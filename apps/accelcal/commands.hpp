@@ -141,7 +141,9 @@ struct ApplyArgs {
 
 struct VerifyArgs {
   std::string calibration;
-  InputArgs input;      // the new recording, and its detection options
+  InputArgs input;   // the new recording, and its detection options
+  std::string gyro;  // the gyroscope's log (ReadGyroLog)
+  std::vector<std::string> gyro_columns;
   GravityArgs gravity;  // the site's, when not the calibration's (units: the calibration's)
   bool json = false;
   std::string output;  // empty: stdout

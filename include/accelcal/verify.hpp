@@ -26,6 +26,7 @@
 #include <Eigen/Core>
 
 #include "accelcal/frame.hpp"
+#include "accelcal/gyro_model.hpp"
 #include "accelcal/log_reader.hpp"
 #include "accelcal/model.hpp"
 #include "accelcal/positions.hpp"
@@ -50,6 +51,20 @@ struct VerifyOptions {
   double significance = 0.001;
   /// |z| of one position beyond which it is named as off (a note; the test is the χ²).
   double position_z = 3;
+  /// A parameter whose smallest error the log would notice is beyond this many of the
+  /// calibration's own σ is untested by it (Verification::untested).
+  double untested_sigmas = 10;
+  // (CheckOptions: position_z and untested_sigmas positive, significance in (0, 1).)
+};
+
+/// How well the new recording tests one parameter of the calibration.
+struct VerifiedParameter {
+  std::string name;  ///< ParameterSlot::name
+  /// The error of this parameter alone the test notices in 9 logs of 10 (the noncentral χ² it
+  /// makes reaches the threshold χ²_{1−α}(N) 1.28 of its standard deviations below its mean);
+  /// infinite when no position excites it.
+  double detectable = 0;
+  double sigma = 0;  ///< the calibration's own 1σ of it (0 without a covariance)
 };
 
 struct VerifiedPosition {
@@ -75,7 +90,60 @@ struct Verification {
   std::string reason;
   /// Positions (0-based) beyond VerifyOptions::position_z.
   std::vector<std::size_t> off_positions;
+  std::vector<VerifiedParameter> parameters;  ///< in ParameterSlots(model, frame) order
+  /// The parameters the log cannot test (VerifyOptions::untested_sigmas): a pass says nothing of
+  /// them (positions that excite them are missing).
+  std::vector<std::string> untested;
 };
+
+/// The gyroscope under test (gyro_model.hpp), as its file holds it.
+struct VerifiedGyroscope {
+  GyroModelKind model = GyroModelKind::kLinear;
+  GyroParameters params;
+  /// In GyroParameterSlots(model) order; empty: the parameters are taken as exact.
+  Eigen::MatrixXd covariance;
+  /// Its calibration's turns scattered by this times their rate noise (≥ 1 is used).
+  double rotation_scatter_ratio = 1;
+};
+
+/// One turn of the new recording: the calibrated rates integrated from one still position to the
+/// next must turn the first's gravity direction into the second's.
+struct VerifiedTurn {
+  std::size_t from = 0, to = 0;  ///< positions, 0-based
+  double duration_s = 0;
+  double error_deg = 0;      ///< angle between the predicted and the measured direction of `to`
+  double predicted_deg = 0;  ///< its predicted RMS (rate noise × scatter ratio, parameters)
+  double z = 0;              ///< √(rᵀ C⁻¹ r) of its two components (about 1.2 when it holds)
+};
+
+/// The gyroscope's verification. Its bias is the session's: a MEMS gyro's turn-on bias changes
+/// from one power-up to the next and every estimator estimates it, so the new recording's still
+/// positions give it (their mean rates less G f), and the turns test K_g and G.
+struct GyroVerification {
+  Vec3 session_bias_raw = Vec3::Zero();
+  Vec3 bias_change_raw = Vec3::Zero();  ///< session's − the calibration's
+  std::vector<VerifiedTurn> turns;
+  double chi2 = 0;
+  int dof = 0;  ///< 2 per turn
+  double p_value = 1;
+  double rms_error_deg = 0, rms_predicted_deg = 0;
+  bool passed = false;
+  std::string reason;                  ///< why it failed; "" when it passed
+  std::vector<std::size_t> off_turns;  ///< beyond VerifyOptions::position_z (0-based)
+};
+
+/// The turns between `positions` of `accel_log` (its still intervals), integrated from
+/// `gyro_log` (the same clock), against the rotations of the gravity directions the accelerometer
+/// calibration measures. Each turn's residual (2 components, whitened by its rate noise: the
+/// gyro fit's) has the covariance s² I (s the calibration's rotation scatter ratio, at least 1)
+/// plus its parameters' J Σ Jᵀ (the bias's part the session bias' noise), correlated across
+/// turns through Σ; χ² over all has 2 × turns degrees of freedom. The directions' own noise
+/// (0.002° on the Xsens recording) is left out. Throws DataError for a log the turns cannot be
+/// integrated from (as the calibration), std::invalid_argument for bad options.
+GyroVerification VerifyGyroscope(const VerifiedCalibration& accel, const VerifiedGyroscope& gyro,
+                                 const RawLog& accel_log, const RawLog& gyro_log,
+                                 const std::vector<Position>& positions,
+                                 const VerifyOptions& options = {});
 
 /// `log` and `positions` (its still intervals, PositionsFromIntervals) are the new recording.
 /// Throws std::invalid_argument for options out of range, an empty position list, a position

@@ -14,6 +14,7 @@
 
 #include "accelcal/error.hpp"
 #include "accelcal/model.hpp"
+#include "analysis/gyro_data.hpp"
 #include "analysis/gyro_time_offset.hpp"
 #include "core/parallel.hpp"
 #include "core/text_format.hpp"
@@ -141,13 +142,42 @@ GyroMotion SamplesOf(const RawLog& accel, const RawLog& gyro, const std::vector<
   return motion;
 }
 
-struct Built {
-  GyroFitData data;
-  std::vector<GyroRotation> rotations;     // one per motion
-  std::vector<StaticInterval> still_runs;  // per position: where the gyro is still
-  std::vector<double> t;                   // the integration times
-  double step_s = 0;                       // their typical step
-};
+// The turned angle per step and about each raw axis, with the start's bias and scale: the turn
+// that is too fast for the rate, the axis never turned about.
+void CheckExcitation(const GyroFitData& data, const internal::GyroFitData& /*unused*/,
+                     const GyroParameters& start) {
+  const double k = start.K.diagonal().cwiseAbs().mean();
+  Vec3 turned = Vec3::Zero();
+  for (const GyroMotion& m : data.motions) {
+    for (std::size_t s = 0; s + 1 < m.t_s.size(); ++s) {
+      const Vec3 step =
+          0.5 * (m.raw[s] + m.raw[s + 1] - 2 * start.bias) / k * (m.t_s[s + 1] - m.t_s[s]);
+      turned += step.cwiseAbs();
+      if (step.norm() * kRadToDeg > kMaxDegreesPerStep) {
+        throw DataError("the turn from position " + std::to_string(m.from + 1) + " to " +
+                        std::to_string(m.to + 1) +
+                        " is too fast for the sample rate: " + Num(step.norm() * kRadToDeg, 3) +
+                        "° in one sample step (at "
+                        "most " +
+                        Num(kMaxDegreesPerStep, 3) + "°), so its integration is not exact");
+      }
+    }
+  }
+  const double most = turned.maxCoeff();
+  for (int a = 0; a < 3; ++a) {
+    if (!(turned(a) >= 0.05 * most) || !(turned(a) * kRadToDeg >= 90)) {
+      throw DataError("the gyroscope was hardly turned about its " + AxisName(a) + " axis (" +
+                      Num(turned(a) * kRadToDeg, 3) + "° in all the turns, against " +
+                      Num(most * kRadToDeg, 3) +
+                      "° about the most turned axis): its scale "
+                      "cannot be determined; turn the sensor about every axis between positions");
+    }
+  }
+}
+
+}  // namespace
+
+namespace internal {
 
 Built BuildData(const RawLog& accel, const RawLog& gyro, const std::vector<Position>& positions,
                 const CalibrationResult& accel_cal, const GyroCalibrationOptions& options) {
@@ -308,40 +338,10 @@ Built BuildData(const RawLog& accel, const RawLog& gyro, const std::vector<Posit
   return b;
 }
 
-// The turned angle per step and about each raw axis, with the start's bias and scale: the turn
-// that is too fast for the rate, the axis never turned about.
-void CheckExcitation(const GyroFitData& data, const internal::GyroFitData& /*unused*/,
-                     const GyroParameters& start) {
-  const double k = start.K.diagonal().cwiseAbs().mean();
-  Vec3 turned = Vec3::Zero();
-  for (const GyroMotion& m : data.motions) {
-    for (std::size_t s = 0; s + 1 < m.t_s.size(); ++s) {
-      const Vec3 step =
-          0.5 * (m.raw[s] + m.raw[s + 1] - 2 * start.bias) / k * (m.t_s[s + 1] - m.t_s[s]);
-      turned += step.cwiseAbs();
-      if (step.norm() * kRadToDeg > kMaxDegreesPerStep) {
-        throw DataError("the turn from position " + std::to_string(m.from + 1) + " to " +
-                        std::to_string(m.to + 1) +
-                        " is too fast for the sample rate: " + Num(step.norm() * kRadToDeg, 3) +
-                        "° in one sample step (at "
-                        "most " +
-                        Num(kMaxDegreesPerStep, 3) + "°), so its integration is not exact");
-      }
-    }
-  }
-  const double most = turned.maxCoeff();
-  for (int a = 0; a < 3; ++a) {
-    if (!(turned(a) >= 0.05 * most) || !(turned(a) * kRadToDeg >= 90)) {
-      throw DataError("the gyroscope was hardly turned about its " + AxisName(a) + " axis (" +
-                      Num(turned(a) * kRadToDeg, 3) + "° in all the turns, against " +
-                      Num(most * kRadToDeg, 3) +
-                      "° about the most turned axis): its scale "
-                      "cannot be determined; turn the sensor about every axis between positions");
-    }
-  }
-}
+}  // namespace internal
 
-}  // namespace
+using internal::BuildData;
+using internal::Built;
 
 namespace {
 

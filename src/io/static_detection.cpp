@@ -16,11 +16,22 @@ namespace accelcal {
 using internal::Format;
 
 std::optional<std::string> StaticDetectionOptions::Validate() const {
-  if (!(window_s > 0)) return "the detection window must be positive";
-  if (!(min_duration_s >= 0)) return "the minimum static duration must be >= 0";
-  if (!(threshold_factor > 0)) return "the threshold factor must be positive";
-  if (!(init_rest_s >= 0)) return "the initial rest period must be >= 0";
-  if (!(max_noise_ratio >= 1)) return "the maximum noise ratio must be >= 1";
+  // Finite too: an infinite window or threshold makes the whole log one still interval.
+  if (!(window_s > 0) || !std::isfinite(window_s)) {
+    return "the detection window must be positive and finite";
+  }
+  if (!(min_duration_s >= 0) || !std::isfinite(min_duration_s)) {
+    return "the minimum static duration must be >= 0 and finite";
+  }
+  if (!(threshold_factor > 0) || !std::isfinite(threshold_factor)) {
+    return "the threshold factor must be positive and finite";
+  }
+  if (!(init_rest_s >= 0) || !std::isfinite(init_rest_s)) {
+    return "the initial rest period must be >= 0 and finite";
+  }
+  if (!(max_noise_ratio >= 1) || !std::isfinite(max_noise_ratio)) {
+    return "the maximum noise ratio must be >= 1 and finite";
+  }
   if (!(reference_quantile > 0 && reference_quantile < 1)) {
     return "the reference quantile must lie in (0, 1)";
   }

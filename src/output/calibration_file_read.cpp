@@ -97,6 +97,24 @@ void ReadModel(const Reader& r, const ordered_json& doc, LoadedCalibration& cal)
   }
 }
 
+// A covariance is symmetric with a diagonal >= 0: symmetric to 1e-6 of √(c_ii c_jj), far above
+// the round-off of the inverse it came from (which writes it a few ulps apart) and far below an
+// edit that means something.
+void CheckCovariance(const Reader& r, const Eigen::MatrixXd& c) {
+  for (Eigen::Index i = 0; i < c.rows(); ++i) {
+    if (!(c(i, i) >= 0)) {
+      r.Fail(r.Key("covariance") + internal::Format("[%d][%d]", int(i), int(i)) +
+             " is a variance and may not be negative");
+    }
+    for (Eigen::Index j = 0; j < i; ++j) {
+      if (std::abs(c(i, j) - c(j, i)) > 1e-6 * std::sqrt(c(i, i) * c(j, j))) {
+        r.Fail(r.Key("covariance") + " is not symmetric" +
+               internal::Format(" ([%d][%d] against [%d][%d])", int(i), int(j), int(j), int(i)));
+      }
+    }
+  }
+}
+
 void ReadCovariance(const Reader& r, const ordered_json& doc, LoadedCalibration& cal) {
   if (!doc.contains("covariance") || doc["covariance"].is_null()) return;
   const std::size_t P = ParameterSlots(cal.model, cal.frame).size();
@@ -113,6 +131,7 @@ void ReadCovariance(const Reader& r, const ordered_json& doc, LoadedCalibration&
           r.Number(cov[i][j], "covariance[" + std::to_string(i) + "][" + std::to_string(j) + "]");
     }
   }
+  CheckCovariance(r, cal.covariance);
 }
 
 FilePosition ReadPosition(const Reader& r, const ordered_json& p) {
@@ -285,12 +304,20 @@ LoadedCalibration::Gyroscope ReadGyroscope(const Reader& r, const ordered_json& 
       }
       for (int j = 0; j < P; ++j) g.covariance(i, j) = r.Number(c[i][j], r.Key("covariance"));
     }
+    CheckCovariance(r, g.covariance);
   }
   if (doc.contains("validation") && doc["validation"].is_object()) {
     g.heldout_rms_deg = r.Inside("validation").Nullable(doc["validation"], "heldout_rms_deg");
     g.rms_deg = r.Inside("validation").Nullable(doc["validation"], "rms_deg");
   }
   if (doc.contains("estimator")) g.estimator = r.Text(doc, "estimator");
+  if (doc.contains("noise") && doc["noise"].is_object()) {
+    const Reader rn = r.Inside("noise");
+    g.rotation_scatter_ratio = rn.Nullable(doc["noise"], "rotation_scatter_ratio");
+    if (g.rotation_scatter_ratio && !(*g.rotation_scatter_ratio > 0)) {
+      rn.Fail(rn.Key("rotation_scatter_ratio") + " must be positive");
+    }
+  }
   // The records the report plots, when present.
   const auto array = [&](const char* key) -> const ordered_json* {
     if (!doc.contains(key)) return nullptr;

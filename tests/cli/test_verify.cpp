@@ -1,6 +1,7 @@
 // `accelcal verify` (issue 19): a calibration checked on a new recording of the same unit. The
 // Xsens recording split in two halves (each calibrates, the other verifies), a deliberately wrong
 // calibration, simulated sessions of a known device, and the refusals.
+#include <algorithm>
 #include <fstream>
 #include <sstream>
 #include <string>
@@ -47,7 +48,60 @@ TEST_F(Verify, EachXsensHalfHoldsOnTheOther) {
     // positions: p = 0.96 and 0.40. The test fails at p < 0.001, chi2 = 43.8.
     EXPECT_LT(v["chi2"].get<double>(), 43.8);
     EXPECT_GT(v["chi2"].get<double>(), 5.0);  // p > 0.999 would be a prediction far too loose
+    // Each half tests every parameter to 10 of the other's σ (the joint fit below is sharper).
+    EXPECT_EQ(v["untested"], nlohmann::json::array());
+    EXPECT_EQ(r.err.find("does not test"), std::string::npos) << r.err;
   }
+}
+
+TEST_F(Verify, TheGyroscopeOfEachXsensHalfHoldsOnTheOtherAndAWrongScaleFails) {
+  // The gyroscope's halves, cut at the same line, calibrated with the accelerometer's.
+  std::ifstream in(std::string(ACCELCAL_DATA_DIR) + "/imutk-xsens-mti/xsens_gyro.mat");
+  std::string line, text[2];
+  for (int n = 1; std::getline(in, line); ++n) text[n <= 26386 ? 0 : 1] += line + "\n";
+  std::string gyro[2], cal[2];
+  for (int h = 0; h < 2; ++h) {
+    gyro[h] = Write("gyro" + std::to_string(h) + ".mat", text[h]);
+    cal[h] = Path("imu" + std::to_string(h) + ".json");
+    ASSERT_EQ(
+        Exec("calibrate " + half_[h] + " --gravity 9.81744 --gyro " + gyro[h] + " -q -o " + cal[h])
+            .status,
+        0);
+  }
+  for (int h = 0; h < 2; ++h) {
+    const CliRun r =
+        Exec("verify " + cal[h] + " " + half_[1 - h] + " --gyro " + gyro[1 - h] + " --json");
+    ASSERT_EQ(r.status, 0) << r.err;
+    const nlohmann::json v = nlohmann::json::parse(r.out);
+    const nlohmann::json& g = v["gyroscope"];
+    EXPECT_EQ(g["verdict"], "passed");
+    EXPECT_EQ(g["dof"], 36);  // 18 turns, 2 components each
+    // Measured: chi2 43.3 and 29.4 for 36 (p = 0.19, 0.78); RMS 0.158° and 0.136° against a
+    // predicted 0.163° each. The test fails at p < 0.001, chi2 = 67.99.
+    EXPECT_LT(g["chi2"].get<double>(), 67.99);
+    EXPECT_NEAR(g["rms_error_deg"].get<double>(), g["rms_predicted_deg"].get<double>(),
+                0.5 * g["rms_predicted_deg"].get<double>());
+    // The joint fit's K_zx (sharpened by the turns: 1σ 0.23 against 0.53 alone) is more
+    // than the second half's one position that mixes x and z can test: an error of 10σ would go
+    // unseen there (a hostile test found 8σ passing), and the output says so.
+    EXPECT_EQ(v["untested"], h == 0 ? nlohmann::json::array({"K_zx"}) : nlohmann::json::array());
+    EXPECT_EQ(r.err.find("does not test K_zx") != std::string::npos, h == 0) << r.err;
+  }
+  // One gyro scale factor 0.5 % off: each turn of about 90° is then off by up to 0.45°.
+  nlohmann::ordered_json doc = nlohmann::ordered_json::parse(test::Slurp(cal[0]));
+  auto& K = doc["sensors"]["gyroscope"]["K"];
+  K[0][0] = K[0][0].get<double>() * 1.005;
+  const CliRun r = Exec("verify " + Write("wrong.json", doc.dump()) + " " + half_[1] + " --gyro " +
+                        gyro[1] + " -o " + Path("w.txt"));
+  EXPECT_EQ(r.status, 6) << r.err;
+  EXPECT_NE(r.err.find("the gyroscope: the turns' rotations are further from the "
+                       "accelerometer's directions than the gyroscope's calibration predicts"),
+            std::string::npos)
+      << r.err;
+  // Without the gyroscope's log the output says it was not verified.
+  EXPECT_NE(Exec("verify " + cal[0] + " " + half_[1])
+                .out.find("# the gyroscope: not verified (give its log: --gyro)"),
+            std::string::npos);
 }
 
 TEST_F(Verify, AWrongCalibrationFailsWithExitSixAndSaysWhere) {
@@ -96,6 +150,46 @@ TEST_F(Verify, RefusesWhatItCannotVerify) {
   EXPECT_EQ(r.status, 2) << r.err;
   r = Exec("verify " + cal_[0] + " " + half_[1] + " --gravity 981");
   EXPECT_EQ(r.status, 2) << r.err;
+  r = Exec("verify " + cal_[0] + " " + half_[1] + " --threshold-factor inf");
+  EXPECT_EQ(r.status, 2) << r.err;
+  // A calibration without its uncertainty cannot predict an error: every good one of a real
+  // sensor would fail (an ellipsoid fit's failed at chi2 = 161 for 19).
+  const std::string ellipsoid = Path("ellipsoid.json");
+  ASSERT_EQ(
+      Exec("calibrate " + half_[0] + " --gravity 9.81744 --method ellipsoid -q -o " + ellipsoid)
+          .status,
+      0);
+  r = Exec("verify " + ellipsoid + " " + half_[1]);
+  EXPECT_EQ(r.status, 3) << r.err;
+  EXPECT_NE(r.err.find("holds no covariance of its parameters (its method 'ellipsoid' gives "
+                       "none)"),
+            std::string::npos)
+      << r.err;
+  // A covariance that is none: a negative variance, or not symmetric (the reader refuses it).
+  nlohmann::ordered_json doc = nlohmann::ordered_json::parse(test::Slurp(cal_[0]));
+  auto& c = doc["sensors"]["accelerometer"]["covariance"];
+  c[1][0] = c[1][0].get<double>() * 2 + 1e-3;
+  r = Exec("verify " + Write("asym.json", doc.dump()) + " " + half_[1]);
+  EXPECT_EQ(r.status, 3) << r.err;
+  EXPECT_NE(r.err.find("is not symmetric"), std::string::npos) << r.err;
+}
+
+TEST_F(Verify, ALogOfFewOrientationsSaysWhatItCannotTest) {
+  // Four positions, z up and down: the x and y scale factors and every misalignment go
+  // untested. A hostile test passed K_xx +5 %, K_yy -5 % and K_yx 0.05 on such a log.
+  const std::string directions = Write("z.csv", "0,0,1\n0,0,-1\n0,0,1\n0,0,-1\n");
+  ASSERT_EQ(Exec("simulate --truth " + cal_[0] + " --positions " + directions +
+                 " --noise-density 50 --raw --duration 10 -o " + Path("z.txt"))
+                .status,
+            0);
+  const CliRun r = Exec("verify " + cal_[0] + " " + Path("z.txt") + " --json");
+  ASSERT_EQ(r.status, 0) << r.err;
+  const nlohmann::json v = nlohmann::json::parse(r.out);
+  for (const char* name : {"K_xx", "K_yx", "K_yy", "K_zx", "K_zy", "b_x", "b_y"}) {
+    EXPECT_NE(std::find(v["untested"].begin(), v["untested"].end(), name), v["untested"].end())
+        << name << " " << v["untested"];
+  }
+  EXPECT_NE(r.err.find("a pass says nothing of them"), std::string::npos) << r.err;
 }
 
 // Simulated sessions of one linear device (50 µg/√Hz, Yang's 18 positions, 10 s each): each

@@ -556,6 +556,23 @@ std::optional<KalibrGyro> XFirstGyroscope(const LoadedCalibration& cal,
   return KalibrGyroscope(cal, change.Q_old_new, *rad_s);
 }
 
+// What an estimator's file (OpenVINS', Basalt's) is made of: the noise of both sensors, the
+// accelerometer in the x-first frame and m/s², and the gyroscope there in rad/s when the file has
+// one (required: its unit must be known).
+struct EstimatorImu {
+  const ImuNoise& noise;
+  ForwardAccelerometer accelerometer;
+  std::optional<KalibrGyro> gyroscope;
+};
+EstimatorImu ForEstimator(const LoadedCalibration& cal, const ExportOptions& options,
+                          const char* file, const char* tool, const char* why, ExportResult* out) {
+  const ImuNoise& noise = NeedNoise(options, file, true);
+  const ForwardAccelerometer a =
+      XFirstAccelerometer(cal, RawToMetersPerSecond2(cal, options, tool, why));
+  std::optional<KalibrGyro> g = XFirstGyroscope(cal, options, a.change, tool, out, true);
+  return {noise, a, std::move(g)};
+}
+
 // Kalibr's scale-misalignment model: a_measured = M a + b, M lower-triangular, m/s².
 ExportResult Kalibr(const LoadedCalibration& cal, const ExportOptions& options) {
   const double raw_ms2 =
@@ -594,13 +611,12 @@ ExportResult Kalibr(const LoadedCalibration& cal, const ExportOptions& options) 
 // model in OpenVINS' names: Ta = M_a, R_IMUtoACC = I, Tw = M_g, R_IMUtoGYRO = C_gyro_i and
 // Tg = A C_gyro_i (A acts on the force in the gyro frame, Tg on the IMU frame's).
 ExportResult OpenVins(const LoadedCalibration& cal, const ExportOptions& options) {
-  const ImuNoise& n = NeedNoise(options, "OpenVINS' kalibr_imu_chain.yaml", true);
-  const double raw_ms2 =
-      RawToMetersPerSecond2(cal, options, "OpenVINS", "sensor_msgs/Imu linear_acceleration");
-  const ForwardAccelerometer a = XFirstAccelerometer(cal, raw_ms2);
   ExportResult out;
-  const std::optional<KalibrGyro> g =
-      XFirstGyroscope(cal, options, a.change, "OpenVINS", &out, true);
+  const EstimatorImu imu = ForEstimator(cal, options, "OpenVINS' kalibr_imu_chain.yaml", "OpenVINS",
+                                        "sensor_msgs/Imu linear_acceleration", &out);
+  const ImuNoise& n = imu.noise;
+  const ForwardAccelerometer& a = imu.accelerometer;
+  const std::optional<KalibrGyro>& g = imu.gyroscope;
   out.convention =
       "OpenVINS kalibr_imu_chain.yaml (ov_msckf, model kalibr): a_m = Ta R_IMUtoACC a + b_a, w_m "
       "= Tw R_IMUtoGYRO w + Tg a + b_g in m/s2 and rad/s, the IMU frame the accelerometer's "
@@ -631,12 +647,12 @@ ExportResult OpenVins(const LoadedCalibration& cal, const ExportOptions& options
 // in calibrated units; no g-sensitivity. From Kalibr's forward model: I + S_a = M_a⁻¹, b_a =
 // M_a⁻¹ bias, I + S_g = (M_g C_gyro_i)⁻¹, b_g = (M_g C_gyro_i)⁻¹ bias_g.
 ExportResult Basalt(const LoadedCalibration& cal, const ExportOptions& options) {
-  const ImuNoise& n = NeedNoise(options, "Basalt's calib.json", true);
-  const double raw_ms2 =
-      RawToMetersPerSecond2(cal, options, "Basalt", "its IMU readings are in m/s2");
-  const ForwardAccelerometer a = XFirstAccelerometer(cal, raw_ms2);
   ExportResult out;
-  const std::optional<KalibrGyro> g = XFirstGyroscope(cal, options, a.change, "Basalt", &out, true);
+  const EstimatorImu imu = ForEstimator(cal, options, "Basalt's calib.json", "Basalt",
+                                        "its IMU readings are in m/s2", &out);
+  const ImuNoise& n = imu.noise;
+  const ForwardAccelerometer& a = imu.accelerometer;
+  const std::optional<KalibrGyro>& g = imu.gyroscope;
   Mat33 Sa = a.M.triangularView<Eigen::Lower>().solve(Mat33::Identity());
   Sa.triangularView<Eigen::StrictlyUpper>().setZero();
   const Vec3 ba = Sa * a.bias_ms2;

@@ -94,18 +94,23 @@ inline Frame2d Padded(double x0, double x1, double y0, double y1) {
   return Frame2d{x0, x1, y0 - pad, y1 + pad};
 }
 
-inline std::string Axes(const Frame2d& f, const std::string& x_label, const std::string& y_label) {
+// A frame's rectangle, its grid lines and tick labels at `x_ticks`, `y_ticks` (in its
+// coordinates, labelled by `label`) and its two axis labels.
+template <typename Label>
+std::string FrameAxes(const Frame2d& f, const std::vector<double>& x_ticks,
+                      const std::vector<double>& y_ticks, const Label& label,
+                      const std::string& x_label, const std::string& y_label) {
   std::string s = "<rect class=\"frame\" x=\"" + Px(f.left) + "\" y=\"" + Px(f.top) +
                   "\" width=\"" + Px(f.width) + "\" height=\"" + Px(f.height) + "\"/>\n";
-  for (const double t : NiceTicks(f.x0, f.x1, 8)) {
+  for (const double t : x_ticks) {
     s += "<line class=\"grid\" x1=\"" + Px(f.X(t)) + "\" y1=\"" + Px(f.top) + "\" x2=\"" +
          Px(f.X(t)) + "\" y2=\"" + Px(f.Bottom()) + "\"/><text class=\"tick\" x=\"" + Px(f.X(t)) +
-         "\" y=\"" + Px(f.Bottom() + 14) + "\" text-anchor=\"middle\">" + Short(t) + "</text>\n";
+         "\" y=\"" + Px(f.Bottom() + 14) + "\" text-anchor=\"middle\">" + label(t) + "</text>\n";
   }
-  for (const double t : NiceTicks(f.y0, f.y1, 5)) {
+  for (const double t : y_ticks) {
     s += "<line class=\"grid\" x1=\"" + Px(f.left) + "\" y1=\"" + Px(f.Y(t)) + "\" x2=\"" +
          Px(f.left + f.width) + "\" y2=\"" + Px(f.Y(t)) + "\"/><text class=\"tick\" x=\"" +
-         Px(f.left - 6) + "\" y=\"" + Px(f.Y(t) + 4) + "\" text-anchor=\"end\">" + Short(t) +
+         Px(f.left - 6) + "\" y=\"" + Px(f.Y(t) + 4) + "\" text-anchor=\"end\">" + label(t) +
          "</text>\n";
   }
   s += "<text class=\"label\" x=\"" + Px(f.left + f.width / 2) + "\" y=\"" + Px(f.Bottom() + 32) +
@@ -113,6 +118,10 @@ inline std::string Axes(const Frame2d& f, const std::string& x_label, const std:
   s += "<text class=\"label\" transform=\"translate(14 " + Px(f.top + f.height / 2) +
        ") rotate(-90)\" text-anchor=\"middle\">" + Escape(y_label) + "</text>\n";
   return s;
+}
+
+inline std::string Axes(const Frame2d& f, const std::string& x_label, const std::string& y_label) {
+  return FrameAxes(f, NiceTicks(f.x0, f.x1, 8), NiceTicks(f.y0, f.y1, 5), Short, x_label, y_label);
 }
 
 inline std::string Svg(const std::string& id, double height, const std::string& title,
@@ -157,24 +166,7 @@ inline std::vector<double> DecadeTicks(double lo, double hi) {
 inline std::string LogAxes(const Frame2d& f, const std::string& x_label,
                            const std::string& y_label) {
   const auto label = [](double t) { return Format("%.3g", std::pow(10.0, t)); };
-  std::string s = "<rect class=\"frame\" x=\"" + Px(f.left) + "\" y=\"" + Px(f.top) +
-                  "\" width=\"" + Px(f.width) + "\" height=\"" + Px(f.height) + "\"/>\n";
-  for (const double t : DecadeTicks(f.x0, f.x1)) {
-    s += "<line class=\"grid\" x1=\"" + Px(f.X(t)) + "\" y1=\"" + Px(f.top) + "\" x2=\"" +
-         Px(f.X(t)) + "\" y2=\"" + Px(f.Bottom()) + "\"/><text class=\"tick\" x=\"" + Px(f.X(t)) +
-         "\" y=\"" + Px(f.Bottom() + 14) + "\" text-anchor=\"middle\">" + label(t) + "</text>\n";
-  }
-  for (const double t : DecadeTicks(f.y0, f.y1)) {
-    s += "<line class=\"grid\" x1=\"" + Px(f.left) + "\" y1=\"" + Px(f.Y(t)) + "\" x2=\"" +
-         Px(f.left + f.width) + "\" y2=\"" + Px(f.Y(t)) + "\"/><text class=\"tick\" x=\"" +
-         Px(f.left - 6) + "\" y=\"" + Px(f.Y(t) + 4) + "\" text-anchor=\"end\">" + label(t) +
-         "</text>\n";
-  }
-  s += "<text class=\"label\" x=\"" + Px(f.left + f.width / 2) + "\" y=\"" + Px(f.Bottom() + 32) +
-       "\" text-anchor=\"middle\">" + Escape(x_label) + "</text>\n";
-  s += "<text class=\"label\" transform=\"translate(14 " + Px(f.top + f.height / 2) +
-       ") rotate(-90)\" text-anchor=\"middle\">" + Escape(y_label) + "</text>\n";
-  return s;
+  return FrameAxes(f, DecadeTicks(f.x0, f.x1), DecadeTicks(f.y0, f.y1), label, x_label, y_label);
 }
 
 }  // namespace accelcal::internal::html

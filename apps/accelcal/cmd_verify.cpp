@@ -46,6 +46,15 @@ nlohmann::ordered_json NumberOrNull(double v) {
   return std::isfinite(v) ? nlohmann::ordered_json(v) : nlohmann::ordered_json(nullptr);
 }
 
+nlohmann::ordered_json ParametersJson(const std::vector<VerifiedParameter>& parameters) {
+  nlohmann::ordered_json list = nlohmann::ordered_json::array();
+  for (const VerifiedParameter& p : parameters) {
+    list.push_back(
+        {{"name", p.name}, {"detectable", NumberOrNull(p.detectable)}, {"sigma", p.sigma}});
+  }
+  return list;
+}
+
 }  // namespace
 
 int RunVerify(const VerifyArgs& args) {
@@ -79,6 +88,12 @@ int RunVerify(const VerifyArgs& args) {
     throw InputError(args.calibration, 0,
                      "its gyroscope holds no covariance: verify predicts the turns' error from "
                      "it; calibrate again");
+  }
+  if (gyro && !cal.gyroscope->rotation_scatter_ratio) {
+    throw InputError(args.calibration, 0,
+                     "its gyroscope holds no noise.rotation_scatter_ratio (its turns' scatter "
+                     "over their rate noise): verify predicts the turns' error from it; "
+                     "calibrate again");
   }
   VerifiedCalibration under_test;
   under_test.model = cal.model;
@@ -116,6 +131,11 @@ int RunVerify(const VerifyArgs& args) {
   const bool passed = v.passed && (!gv || gv->passed);
   std::string untested;
   for (const std::string& name : v.untested) untested += (untested.empty() ? "" : ", ") + name;
+  if (gv) {
+    for (const std::string& name : gv->untested) {
+      untested += (untested.empty() ? "" : ", ") + name;
+    }
+  }
 
   const std::string unit(ToString(cal.unit));
   std::string out;
@@ -155,12 +175,7 @@ int RunVerify(const VerifyArgs& args) {
                       {"z", NumberOrNull(p.z)}});
     }
     doc["positions"] = list;
-    nlohmann::ordered_json parameters = nlohmann::ordered_json::array();
-    for (const VerifiedParameter& p : v.parameters) {
-      parameters.push_back(
-          {{"name", p.name}, {"detectable", NumberOrNull(p.detectable)}, {"sigma", p.sigma}});
-    }
-    doc["parameters"] = parameters;
+    doc["parameters"] = ParametersJson(v.parameters);
     doc["untested"] = v.untested;
     if (gv) {
       nlohmann::ordered_json turns = nlohmann::ordered_json::array();
@@ -184,7 +199,9 @@ int RunVerify(const VerifyArgs& args) {
            {gv->session_bias_raw(0), gv->session_bias_raw(1), gv->session_bias_raw(2)}},
           {"bias_change_raw",
            {gv->bias_change_raw(0), gv->bias_change_raw(1), gv->bias_change_raw(2)}},
-          {"turns", turns}};
+          {"turns", turns},
+          {"parameters", ParametersJson(gv->parameters)},
+          {"untested", gv->untested}};
     } else {
       doc["gyroscope"] =
           cal.has_gyroscope() ? "not verified: give its log (--gyro)" : "none in the calibration";
@@ -238,8 +255,8 @@ int RunVerify(const VerifyArgs& args) {
   WriteFileAtomically(args.output.empty() ? "-" : args.output, out);
   if (!untested.empty()) {
     Warn(
-        "%s: this log does not test %s (no position excites them enough): a pass says nothing "
-        "of them\n",
+        "%s: this log does not test %s (its positions and turns do not excite them enough): a "
+        "pass says nothing of them\n",
         args.input.path.c_str(), untested.c_str());
   }
   if (!passed) {

@@ -96,6 +96,14 @@ struct Verification {
   std::vector<std::string> untested;
 };
 
+/// The accelerometer's predicted RMS of |f| − g, as a fraction of g, beyond which its
+/// verification fails whatever its χ²: a covariance or noise that loose verifies nothing.
+inline constexpr double kMaxPredictedNormError = 0.05;
+/// Bounds beyond which a gyroscope's verification fails whatever its χ² (VerifyGyroscope).
+inline constexpr double kMaxPredictedTurnDeg = 2;
+inline constexpr double kMaxTurnErrorDeg = 10;
+inline constexpr double kMaxBiasChangeDegS = 10;
+
 /// The gyroscope under test (gyro_model.hpp), as its file holds it.
 struct VerifiedGyroscope {
   GyroModelKind model = GyroModelKind::kLinear;
@@ -130,6 +138,10 @@ struct GyroVerification {
   bool passed = false;
   std::string reason;                  ///< why it failed; "" when it passed
   std::vector<std::size_t> off_turns;  ///< beyond VerifyOptions::position_z (0-based)
+  /// How well the turns test each of K_g and G (GyroParameterSlots order, the bias left out: it
+  /// is the session's), and those they cannot test (VerifyOptions::untested_sigmas).
+  std::vector<VerifiedParameter> parameters;
+  std::vector<std::string> untested;
 };
 
 /// The turns between `positions` of `accel_log` (its still intervals), integrated from
@@ -138,8 +150,13 @@ struct GyroVerification {
 /// gyro fit's) has the covariance s² I (s the calibration's rotation scatter ratio, at least 1)
 /// plus its parameters' J Σ Jᵀ (the bias's part the session bias' noise), correlated across
 /// turns through Σ; χ² over all has 2 × turns degrees of freedom. The directions' own noise
-/// (0.002° on the Xsens recording) is left out. Throws DataError for a log the turns cannot be
-/// integrated from (as the calibration), std::invalid_argument for bad options.
+/// (0.002° on the Xsens recording) is left out. It also fails, whatever χ², when the
+/// calibration predicts turn errors beyond kMaxPredictedTurnDeg RMS (a covariance or scatter
+/// ratio that loose verifies nothing: another sensor's calibration had passed at 88°), when a
+/// turn is off by more than kMaxTurnErrorDeg, or when the session's bias is kMaxBiasChangeDegS
+/// or more from the calibration's (no MEMS gyro's turn-on bias moves that far: another sensor, or
+/// another unit). Throws DataError for a log the turns cannot be integrated from (as the
+/// calibration), std::invalid_argument for bad options.
 GyroVerification VerifyGyroscope(const VerifiedCalibration& accel, const VerifiedGyroscope& gyro,
                                  const RawLog& accel_log, const RawLog& gyro_log,
                                  const std::vector<Position>& positions,

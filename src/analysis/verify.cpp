@@ -199,7 +199,51 @@ GyroVerification VerifyGyroscope(const VerifiedCalibration& accel, const Verifie
     out.rms_error_deg = std::sqrt(sum_e2 / static_cast<double>(K));
     out.rms_predicted_deg = std::sqrt(sum_p2 / static_cast<double>(K));
   }
-  if (out.p_value < options.significance) {
+  // What the turns can see of K_g and G (as the accelerometer's positions, Verification).
+  if (K > 0) {
+    const auto dof = static_cast<double>(rows);
+    const double T = internal::ChiSquareQuantile(options.significance, dof);
+    double q = T - dof;
+    for (int step = 0; step < 60; ++step) q = T - dof + 1.2816 * std::sqrt(2 * (dof + 2 * q));
+    for (Eigen::Index i = 0; i < P; ++i) {
+      if (slots[std::size_t(i)].group == GyroParameterGroup::kBias) continue;
+      VerifiedParameter v;
+      v.name = std::string(slots[std::size_t(i)].name);
+      const double information = A.col(i).squaredNorm() / s2;
+      v.detectable =
+          information > 0 ? std::sqrt(q / information) : std::numeric_limits<double>::infinity();
+      v.sigma = gyro.covariance.size() > 0 ? std::sqrt(std::max(0.0, gyro.covariance(i, i))) : 0.0;
+      if (!(v.detectable <= options.untested_sigmas * v.sigma)) out.untested.push_back(v.name);
+      out.parameters.push_back(v);
+    }
+  }
+  // Beyond any statistics: a prediction too loose to verify anything, a turn far off, a bias
+  // that moved further than any gyro's turn-on bias does.
+  const double bias_change_deg_s =
+      (gyro.params.K.inverse() * out.bias_change_raw).norm() * kRadToDeg;
+  double worst_turn = 0;
+  for (const VerifiedTurn& t : out.turns) worst_turn = std::max(worst_turn, t.error_deg);
+  if (!std::isfinite(out.chi2) || !std::isfinite(out.rms_predicted_deg)) {
+    out.reason =
+        "the turns' statistic is not finite (the calibration's covariance or turn scatter ratio "
+        "is beyond what arithmetic holds)";
+  } else if (out.rms_predicted_deg > kMaxPredictedTurnDeg) {
+    out.reason = internal::Format(
+        "the calibration predicts turn errors of %.3g deg RMS (its covariance, its turn scatter "
+        "ratio): beyond %g deg it verifies nothing",
+        out.rms_predicted_deg, kMaxPredictedTurnDeg);
+  } else if (!(bias_change_deg_s < kMaxBiasChangeDegS)) {
+    out.reason = internal::Format(
+        "the session's bias is %.3g deg/s from the calibration's (beyond %g deg/s no gyro's "
+        "turn-on bias moves): is the gyroscope's log in the calibration's raw unit, and from "
+        "this sensor?",
+        bias_change_deg_s, kMaxBiasChangeDegS);
+  } else if (worst_turn > kMaxTurnErrorDeg) {
+    out.reason = internal::Format(
+        "a turn is off by %.3g deg (beyond %g deg a calibrated gyroscope does not err): is the "
+        "gyroscope's log in the calibration's raw unit, and from this sensor?",
+        worst_turn, kMaxTurnErrorDeg);
+  } else if (out.p_value < options.significance) {
     out.reason = internal::Format(
         "the turns' rotations are further from the accelerometer's directions than the "
         "gyroscope's calibration predicts: chi2 = %.4g for %d components of %zu turns (p = %.2g "
@@ -340,7 +384,16 @@ Verification VerifyCalibration(const VerifiedCalibration& cal, const RawLog& log
   for (const VerifiedPosition& p : out.positions) z.push_back(p.z);
   const std::string named = Furthest(
       out.off_positions, z, [](std::size_t k) { return "position " + std::to_string(k + 1); });
-  if (!outside.empty()) {
+  if (!std::isfinite(out.chi2) || !std::isfinite(out.rms_predicted)) {
+    out.reason =
+        "the statistic is not finite (the calibration's covariance or noise is beyond what "
+        "arithmetic holds)";
+  } else if (out.rms_predicted > kMaxPredictedNormError * cal.gravity) {
+    out.reason = internal::Format(
+        "the calibration predicts errors of |f| - g of %.3g RMS (%.3g of g: its covariance, its "
+        "noise): beyond %g of g it verifies nothing",
+        out.rms_predicted, out.rms_predicted / cal.gravity, kMaxPredictedNormError);
+  } else if (!outside.empty()) {
     out.reason = internal::Format(
         "%zu of %zu positions read outside the range the model can invert (the first: position "
         "%zu)",

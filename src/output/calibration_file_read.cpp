@@ -5,6 +5,7 @@
 #include <cmath>
 #include <set>
 
+#include <Eigen/SVD>
 #include <nlohmann/json.hpp>
 
 #include "accelcal/calibration_file.hpp"
@@ -281,7 +282,10 @@ LoadedCalibration::Gyroscope ReadGyroscope(const Reader& r, const ordered_json& 
   if (!model) r.Fail(r.Key("model") + " must be \"linear\" or \"g-sensitive\"");
   g.model = *model;
   g.params.K = Matrix3(r, doc, "K");
-  if (!(std::abs(g.params.K.determinant()) > 0)) r.Fail(r.Key("K") + " is singular");
+  {  // singular to the precision of a double: its rates cannot be corrected
+    const Vec3 sv = Eigen::JacobiSVD<Mat33>(g.params.K).singularValues();
+    if (!(sv(2) > 1e-12 * sv(0))) r.Fail(r.Key("K") + " is singular (its rows dependent)");
+  }
   g.params.bias = r.Vector3(doc, "bias");
   if (g.model == GyroModelKind::kGSensitive) {
     g.params.G = Matrix3(r, doc, "g_sensitivity");

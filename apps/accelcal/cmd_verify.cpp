@@ -89,11 +89,13 @@ int RunVerify(const VerifyArgs& args) {
                      "its gyroscope holds no covariance: verify predicts the turns' error from "
                      "it; calibrate again");
   }
-  if (gyro && !cal.gyroscope->rotation_scatter_ratio) {
+  if (gyro && (!cal.gyroscope->rotation_scatter_ratio || !cal.gyroscope->still_scatter_ratio)) {
     throw InputError(args.calibration, 0,
-                     "its gyroscope holds no noise.rotation_scatter_ratio (its turns' scatter "
-                     "over their rate noise): verify predicts the turns' error from it; "
-                     "calibrate again");
+                     std::string("its gyroscope holds no noise.") +
+                         (cal.gyroscope->rotation_scatter_ratio ? "still_scatter_ratio"
+                                                                : "rotation_scatter_ratio") +
+                         " (the scatter of its turns or still rates over their rate noise): "
+                         "verify predicts their error from it; calibrate again");
   }
   VerifiedCalibration under_test;
   under_test.model = cal.model;
@@ -125,7 +127,8 @@ int RunVerify(const VerifyArgs& args) {
     g.model = cal.gyroscope->model;
     g.params = cal.gyroscope->params;
     g.covariance = cal.gyroscope->covariance;
-    g.rotation_scatter_ratio = cal.gyroscope->rotation_scatter_ratio.value_or(1.0);
+    g.rotation_scatter_ratio = *cal.gyroscope->rotation_scatter_ratio;
+    g.still_scatter_ratio = *cal.gyroscope->still_scatter_ratio;
     gv = VerifyGyroscope(under_test, g, data.raw, rates.raw, positions);
   }
   const bool passed = v.passed && (!gv || gv->passed);
@@ -192,6 +195,10 @@ int RunVerify(const VerifyArgs& args) {
           {"reason", gv->reason},
           {"chi2", gv->chi2},
           {"dof", gv->dof},
+          {"turns_chi2", gv->turns_chi2},
+          {"turns_dof", gv->turns_dof},
+          {"stills_chi2", gv->stills_chi2},
+          {"stills_dof", gv->stills_dof},
           {"p_value", gv->p_value},
           {"rms_error_deg", gv->rms_error_deg},
           {"rms_predicted_deg", gv->rms_predicted_deg},
@@ -241,10 +248,10 @@ int RunVerify(const VerifyArgs& args) {
                       t.error_deg, t.predicted_deg, t.z);
       }
       out += Format(
-          "# gyroscope: chi2 = %.4g for %d components of %zu turns (p = %.3g); RMS error %.3g "
-          "deg, predicted %.3g deg\n",
-          gv->chi2, gv->dof, gv->turns.size(), gv->p_value, gv->rms_error_deg,
-          gv->rms_predicted_deg);
+          "# gyroscope: chi2 = %.4g for %d (the %zu turns' %.4g for %d, the still rates' %.4g "
+          "for %d; p = %.3g); turns' RMS error %.3g deg, predicted %.3g deg\n",
+          gv->chi2, gv->dof, gv->turns.size(), gv->turns_chi2, gv->turns_dof, gv->stills_chi2,
+          gv->stills_dof, gv->p_value, gv->rms_error_deg, gv->rms_predicted_deg);
     } else if (cal.has_gyroscope()) {
       out += "# the gyroscope: not verified (give its log: --gyro)\n";
     }

@@ -147,8 +147,9 @@ struct LoadedCalibration {
     std::optional<double> heldout_rms_deg;  ///< `validation.heldout_rms_deg`
     std::optional<double> rms_deg;          ///< `validation.rms_deg`
     std::string estimator;                  ///< `estimator`, when present
-    /// `noise.rotation_scatter_ratio`: its turns' scatter over their rate noise, when present.
-    std::optional<double> rotation_scatter_ratio;
+    /// `noise.rotation_scatter_ratio` and `still_scatter_ratio`: its turns' and its still mean
+    /// rates' scatter over their rate noise, when present.
+    std::optional<double> rotation_scatter_ratio, still_scatter_ratio;
     /// `rotations[]`, when present: the positions a turn joins (1-based), its residual and
     /// held-out error, and the angle turned through [deg].
     struct Rotation {

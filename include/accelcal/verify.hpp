@@ -110,8 +110,9 @@ struct VerifiedGyroscope {
   GyroParameters params;
   /// In GyroParameterSlots(model) order; empty: the parameters are taken as exact.
   Eigen::MatrixXd covariance;
-  /// Its calibration's turns scattered by this times their rate noise (≥ 1 is used).
-  double rotation_scatter_ratio = 1;
+  /// Its calibration's turns, and its still positions' mean rates, scattered by these times
+  /// their rate noise (≥ 1 is used).
+  double rotation_scatter_ratio = 1, still_scatter_ratio = 1;
 };
 
 /// One turn of the new recording: the calibrated rates integrated from one still position to the
@@ -126,13 +127,21 @@ struct VerifiedTurn {
 
 /// The gyroscope's verification. Its bias is the session's: a MEMS gyro's turn-on bias changes
 /// from one power-up to the next and every estimator estimates it, so the new recording's still
-/// positions give it (their mean rates less G f), and the turns test K_g and G.
+/// positions give it (their mean rates less G f, weighted by their noise); the pattern of those
+/// rates over the orientations tests G, and the turns test K_g and G.
 struct GyroVerification {
   Vec3 session_bias_raw = Vec3::Zero();
   Vec3 bias_change_raw = Vec3::Zero();  ///< session's − the calibration's
   std::vector<VerifiedTurn> turns;
+  /// The still positions' mean rates about b + G f with the session's b (the weighted mean):
+  /// they test G. Their χ² has 3 (positions − 1) degrees of freedom.
+  double stills_chi2 = 0;
+  int stills_dof = 0;
+  double turns_chi2 = 0;
+  int turns_dof = 0;  ///< 2 per turn
+  /// Both together: the test.
   double chi2 = 0;
-  int dof = 0;  ///< 2 per turn
+  int dof = 0;
   double p_value = 1;
   double rms_error_deg = 0, rms_predicted_deg = 0;
   bool passed = false;

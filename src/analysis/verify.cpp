@@ -119,45 +119,71 @@ GyroVerification VerifyGyroscope(const VerifiedCalibration& accel, const Verifie
         std::to_string(positions.size()) + " still position");
   }
   // The accelerometer's calibration measures each position's gravity direction.
-  CalibrationResult a;
-  a.params = accel.params;
-  a.gravity = accel.gravity;
+  CalibrationResult accel_cal;
+  accel_cal.params = accel.params;
+  accel_cal.gravity = accel.gravity;
   for (std::size_t k = 0; k < positions.size(); ++k) {
     const std::optional<Vec3> f = SpecificForce(accel.params, positions[k].mean);
     if (!f || !(f->norm() > 0)) {
       throw DataError("still position " + std::to_string(k + 1) +
                       " reads outside the range the accelerometer's model can invert");
     }
-    a.directions.push_back(f->normalized());
+    accel_cal.directions.push_back(f->normalized());
   }
-  internal::Built built = internal::BuildData(accel_log, gyro_log, positions, a, {});
+  internal::Built built = internal::BuildData(accel_log, gyro_log, positions, accel_cal, {});
   internal::GyroFitData& data = built.data;
   data.model = gyro.model;
-  // The session's bias: the still positions' mean rates less G f, and its noise.
   GyroVerification out;
   GyroParameters params = gyro.params;
-  Vec3 sum = Vec3::Zero(), variance = Vec3::Zero();
-  for (const internal::GyroStill& still : data.stills) {
-    sum += still.mean_raw - gyro.params.G * still.f;
-    variance += still.sigma_mean_raw.cwiseAbs2();
-  }
-  const auto M = static_cast<double>(data.stills.size());
-  params.bias = sum / M;
-  out.session_bias_raw = params.bias;
-  out.bias_change_raw = params.bias - gyro.params.bias;
-  // The parameters' covariance with the bias's part the session bias' own.
   const std::vector<GyroParameterSlot>& slots = GyroParameterSlots(gyro.model);
   const auto P = static_cast<Eigen::Index>(slots.size());
   if (gyro.covariance.size() > 0 && (gyro.covariance.rows() != P || gyro.covariance.cols() != P)) {
     throw std::invalid_argument("VerifyGyroscope: the covariance is not P x P");
   }
-  Eigen::MatrixXd sigma =
-      gyro.covariance.size() > 0 ? gyro.covariance : Eigen::MatrixXd::Zero(P, P);
+  // The session's bias, per axis the still positions' mean rates less G f weighted by their
+  // noise (their samples' σ/√n times the calibration's still scatter ratio), and its variance.
+  const double s2_still = std::pow(std::max(1.0, gyro.still_scatter_ratio), 2);
+  const std::size_t Mn = data.stills.size();
+  Vec3 weight_sum = Vec3::Zero(), sum = Vec3::Zero();
+  // Per axis a: Σ w_ia f_i (Eigen's vectors start uninitialised: zeroed here).
+  std::array<Vec3, 3> f_weighted = {Vec3::Zero(), Vec3::Zero(), Vec3::Zero()};
+  for (const internal::GyroStill& still : data.stills) {
+    const Vec3 w = (s2_still * still.sigma_mean_raw.cwiseAbs2()).cwiseInverse();
+    weight_sum += w;
+    sum += w.cwiseProduct(still.mean_raw - gyro.params.G * still.f);
+    for (int a = 0; a < 3; ++a) f_weighted[std::size_t(a)] += w(a) * still.f;
+  }
+  params.bias = sum.cwiseQuotient(weight_sum);
+  out.session_bias_raw = params.bias;
+  out.bias_change_raw = params.bias - gyro.params.bias;
+  // The still rates about it: each component's variance its noise plus G's uncertainty along
+  // its centred force (∂r_ia/∂G_ab = −(f_ib − f̄_b), f̄ the weighted mean of its axis).
+  Eigen::MatrixXd sigma_G = Eigen::MatrixXd::Zero(P, P);
+  if (gyro.covariance.size() > 0) sigma_G = gyro.covariance;
+  std::vector<double> still_information(std::size_t(P), 0.0);
+  for (const internal::GyroStill& still : data.stills) {
+    const Vec3 r = still.mean_raw - params.bias - gyro.params.G * still.f;
+    for (int a = 0; a < 3; ++a) {
+      const Vec3 centred = still.f - f_weighted[std::size_t(a)] / weight_sum(a);
+      Eigen::RowVectorXd d = Eigen::RowVectorXd::Zero(P);
+      for (Eigen::Index i = 0; i < P; ++i) {
+        const GyroParameterSlot& slot = slots[std::size_t(i)];
+        if (slot.group == GyroParameterGroup::kG && slot.row == a) d(i) = -centred(slot.col);
+      }
+      const double noise = s2_still * still.sigma_mean_raw(a) * still.sigma_mean_raw(a);
+      const double variance = noise + double(d * sigma_G * d.transpose());
+      out.stills_chi2 += r(a) * r(a) / variance;
+      for (Eigen::Index i = 0; i < P; ++i) still_information[std::size_t(i)] += d(i) * d(i) / noise;
+    }
+  }
+  out.stills_dof = static_cast<int>(3 * (Mn - 1));
+  // The parameters' covariance with the bias's part the session bias' own.
+  Eigen::MatrixXd sigma = sigma_G;
   for (Eigen::Index i = 0; i < P; ++i) {
     if (slots[std::size_t(i)].group != GyroParameterGroup::kBias) continue;
     sigma.row(i).setZero();
     sigma.col(i).setZero();
-    sigma(i, i) = variance(slots[std::size_t(i)].row) / (M * M);
+    sigma(i, i) = 1 / weight_sum(slots[std::size_t(i)].row);
   }
   data.weights = internal::WeighMotions(data, params);
   const double s2 = std::pow(std::max(1.0, gyro.rotation_scatter_ratio), 2);
@@ -193,15 +219,17 @@ GyroVerification VerifyGyroscope(const VerifiedCalibration& accel, const Verifie
   if (K > 0) {
     const Eigen::MatrixXd C =
         s2 * Eigen::MatrixXd::Identity(rows, rows) + A * sigma * A.transpose();
-    out.chi2 = r.dot(C.ldlt().solve(r));
-    out.dof = static_cast<int>(rows);
+    out.turns_chi2 = r.dot(C.ldlt().solve(r));
+    out.turns_dof = static_cast<int>(rows);
+    out.chi2 = out.turns_chi2 + out.stills_chi2;
+    out.dof = out.turns_dof + out.stills_dof;
     out.p_value = internal::ChiSquareSurvival(out.chi2, out.dof);
     out.rms_error_deg = std::sqrt(sum_e2 / static_cast<double>(K));
     out.rms_predicted_deg = std::sqrt(sum_p2 / static_cast<double>(K));
   }
-  // What the turns can see of K_g and G (as the accelerometer's positions, Verification).
+  // What the turns and stills can see of K_g and G (as the accelerometer's positions).
   if (K > 0) {
-    const auto dof = static_cast<double>(rows);
+    const auto dof = static_cast<double>(out.dof);
     const double T = internal::ChiSquareQuantile(options.significance, dof);
     double q = T - dof;
     for (int step = 0; step < 60; ++step) q = T - dof + 1.2816 * std::sqrt(2 * (dof + 2 * q));
@@ -209,7 +237,7 @@ GyroVerification VerifyGyroscope(const VerifiedCalibration& accel, const Verifie
       if (slots[std::size_t(i)].group == GyroParameterGroup::kBias) continue;
       VerifiedParameter v;
       v.name = std::string(slots[std::size_t(i)].name);
-      const double information = A.col(i).squaredNorm() / s2;
+      const double information = A.col(i).squaredNorm() / s2 + still_information[std::size_t(i)];
       v.detectable =
           information > 0 ? std::sqrt(q / information) : std::numeric_limits<double>::infinity();
       v.sigma = gyro.covariance.size() > 0 ? std::sqrt(std::max(0.0, gyro.covariance(i, i))) : 0.0;
@@ -245,10 +273,11 @@ GyroVerification VerifyGyroscope(const VerifiedCalibration& accel, const Verifie
         worst_turn, kMaxTurnErrorDeg);
   } else if (out.p_value < options.significance) {
     out.reason = internal::Format(
-        "the turns' rotations are further from the accelerometer's directions than the "
-        "gyroscope's calibration predicts: chi2 = %.4g for %d components of %zu turns (p = %.2g "
-        "< %.2g)",
-        out.chi2, out.dof, K, out.p_value, options.significance);
+        "the turns' rotations and the still rates are further from what the gyroscope's "
+        "calibration predicts than its noise and covariance allow: chi2 = %.4g for %d (the %zu "
+        "turns' %.4g for %d, the still rates' %.4g for %d; p = %.2g < %.2g)",
+        out.chi2, out.dof, K, out.turns_chi2, out.turns_dof, out.stills_chi2, out.stills_dof,
+        out.p_value, options.significance);
     const std::string named = Furthest(out.off_turns, z, [&](std::size_t k) {
       return internal::Format("the turn %zu-%zu", out.turns[k].from + 1, out.turns[k].to + 1);
     });

@@ -321,6 +321,10 @@ LoadedCalibration::Gyroscope ReadGyroscope(const Reader& r, const ordered_json& 
     if (g.rotation_scatter_ratio && !(*g.rotation_scatter_ratio > 0)) {
       rn.Fail(rn.Key("rotation_scatter_ratio") + " must be positive");
     }
+    g.still_scatter_ratio = rn.Nullable(doc["noise"], "still_scatter_ratio");
+    if (g.still_scatter_ratio && !(*g.still_scatter_ratio > 0)) {
+      rn.Fail(rn.Key("still_scatter_ratio") + " must be positive");
+    }
   }
   // The records the report plots, when present.
   const auto array = [&](const char* key) -> const ordered_json* {

@@ -2,6 +2,7 @@
 // Xsens recording split in two halves (each calibrates, the other verifies), a deliberately wrong
 // calibration, simulated sessions of a known device, and the refusals.
 #include <algorithm>
+#include <cmath>
 #include <fstream>
 #include <sstream>
 #include <string>
@@ -75,10 +76,13 @@ TEST_F(Verify, TheGyroscopeOfEachXsensHalfHoldsOnTheOtherAndAWrongScaleFails) {
     const nlohmann::json v = nlohmann::json::parse(r.out);
     const nlohmann::json& g = v["gyroscope"];
     EXPECT_EQ(g["verdict"], "passed");
-    EXPECT_EQ(g["dof"], 36);  // 18 turns, 2 components each
-    // Measured: chi2 43.3 and 29.4 for 36 (p = 0.19, 0.78); RMS 0.158° and 0.136° against a
-    // predicted 0.163° each. The test fails at p < 0.001, chi2 = 67.99.
-    EXPECT_LT(g["chi2"].get<double>(), 67.99);
+    EXPECT_EQ(g["turns_dof"], 36);   // 18 turns, 2 components each
+    EXPECT_EQ(g["stills_dof"], 54);  // 19 still positions' 3 rates, less the session's bias
+    EXPECT_EQ(g["dof"], 90);
+    // Measured: chi2 90.0 and 107.6 for 90 (p = 0.48, 0.10; the turns' 42.1 and 29.9 for 36);
+    // RMS turn errors 0.156° and 0.137° against a predicted 0.163° each. The test fails at
+    // p < 0.001, chi2 = 137.2.
+    EXPECT_LT(g["chi2"].get<double>(), 137.2);
     EXPECT_NEAR(g["rms_error_deg"].get<double>(), g["rms_predicted_deg"].get<double>(),
                 0.5 * g["rms_predicted_deg"].get<double>());
     // The joint fit's K_zx (sharpened by the turns: 1σ 0.23 against 0.53 alone) is what the
@@ -106,18 +110,27 @@ TEST_F(Verify, TheGyroscopeOfEachXsensHalfHoldsOnTheOtherAndAWrongScaleFails) {
   const CliRun r = Exec("verify " + Write("wrong.json", doc.dump()) + " " + half_[1] + " --gyro " +
                         gyro[1] + " -o " + Path("w.txt"));
   EXPECT_EQ(r.status, 6) << r.err;
-  EXPECT_NE(r.err.find("the gyroscope: the turns' rotations are further from the "
-                       "accelerometer's directions than the gyroscope's calibration predicts"),
+  EXPECT_NE(r.err.find("the gyroscope: the turns' rotations and the still rates are further "
+                       "from what the gyroscope's calibration predicts"),
             std::string::npos)
       << r.err;
-  // What the turns cannot test is said: the half's 18 turns see an error of G 10 of its σ (the
-  // stills, whose mean rates the session's bias takes, are not part of the test).
+  EXPECT_NE(r.err.find("furthest off: the turn "), std::string::npos) << r.err;
+  // G off by 10 of its σ: the turns alone had passed it (chi2 45.8 for 36); the still rates'
+  // pattern over the orientations finds it (measured: their chi2 137 for 54).
   {
-    const nlohmann::json v = nlohmann::json::parse(
-        Exec("verify " + cal[0] + " " + half_[1] + " --gyro " + gyro[1] + " --json").out);
-    const nlohmann::json& untested = v["gyroscope"]["untested"];
-    EXPECT_NE(std::find(untested.begin(), untested.end(), "G_zz"), untested.end()) << untested;
-    EXPECT_EQ(std::find(untested.begin(), untested.end(), "Kg_xx"), untested.end()) << untested;
+    nlohmann::ordered_json g_doc = nlohmann::ordered_json::parse(test::Slurp(cal[0]));
+    auto& gyro_doc = g_doc["sensors"]["gyroscope"];
+    const auto& order = gyro_doc["parameter_order"];
+    const auto at =
+        static_cast<std::size_t>(std::find(order.begin(), order.end(), "G_zz") - order.begin());
+    const double sigma = std::sqrt(gyro_doc["covariance"][at][at].get<double>());
+    gyro_doc["g_sensitivity"][2][2] = gyro_doc["g_sensitivity"][2][2].get<double>() + 10 * sigma;
+    const CliRun bad = Exec("verify " + Write("g.json", g_doc.dump()) + " " + half_[1] +
+                            " --gyro " + gyro[1] + " --json");
+    EXPECT_EQ(bad.status, 6) << bad.err;
+    const nlohmann::json v = nlohmann::json::parse(bad.out);
+    EXPECT_GT(v["gyroscope"]["stills_chi2"].get<double>(), 100.0);
+    EXPECT_EQ(v["gyroscope"]["untested"], nlohmann::json::array());  // every K_g and G tested
   }
   // Another sensor's gyroscope (the T265's, rad/s, on the Xsens's counts) had passed with turn
   // errors of 88° against a predicted 1290°: a prediction beyond 2° verifies nothing.

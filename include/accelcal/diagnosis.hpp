@@ -49,6 +49,11 @@
 ///     readings' RMS spread about their mean; a positions file turns to a new orientation at
 ///     almost every row: every bundled one has median steps of 40 % or more): a short raw log
 ///     read as positions, one sample each.
+///   - `drifting_rest` (warning): the longest still interval (kDriftMinRest_s or more, less a
+///     detection window at each end) has an Allan deviation that rises with averaging time: a
+///     steady drift (the slope of kDriftBatches batch means, t beyond the two-sided kDriftP level
+///     over the axes) or bias instability, random walk or rate ramp resolved at kDriftZ σ or more
+///     (noise_model.hpp) on some axis. The bias drifts, and the positions' means carry it.
 ///   - `rejected_period` (warning when clipped, note otherwise): a still period not used;
 ///     `joined_periods` (note): still periods split by a short disturbance that were joined.
 ///   - `time_unit`, `time_gaps`, `coarse_timestamps` (notes), `irregular_sampling` (note beyond
@@ -146,6 +151,14 @@ inline constexpr double kMisfitFailure = 0.02;  ///< RMS misfit as a fraction of
 inline constexpr double kScatterNote = 3.0;
 inline constexpr double kScatterWarning = 30.0;
 inline constexpr double kInterleavedCorrelation = -0.5;
+/// `drifting_rest`: the rest analysed is at least this long, and a drift term counts from this
+/// many standard errors above 0 (by chance in 0.13 % of rests per term).
+inline constexpr double kDriftMinRest_s = 20;
+inline constexpr double kDriftZ = 3;
+/// `drifting_rest`'s test of a steady drift: the slope of this many batch means, two-sided at
+/// this level over the three axes.
+inline constexpr std::size_t kDriftBatches = 16;
+inline constexpr double kDriftP = 1e-3;
 inline constexpr double kRepeatedStepFraction = 0.05;
 inline constexpr double kGyroMisfitFailure_deg = 2.0;  ///< RMS of the rotations' residuals
 inline constexpr double kGyroScaleSigmaLimit = 0.01;   ///< 1σ of a scale, relative

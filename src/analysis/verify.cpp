@@ -104,6 +104,19 @@ std::string Furthest(std::vector<std::size_t> off, const std::vector<double>& z,
   return named;
 }
 
+// The noncentrality λ an error must add to χ²'s mean for the test at `significance` with `dof`
+// degrees of freedom to notice it in 9 logs of 10: the noncentral χ² has mean n + λ and variance
+// 2 (n + 2λ), and its mean less 1.28 of its standard deviations reaches the threshold T =
+// χ²_{1−α}(n) when λ = T − n + 1.28 √(2 (n + 2λ)), solved by fixed-point steps (a contraction:
+// the root's slope is below 1).
+double NoticedNoncentrality(double significance, int dof) {
+  const auto n = static_cast<double>(dof);
+  const double T = internal::ChiSquareQuantile(significance, n);
+  double q = T - n;
+  for (int step = 0; step < 60; ++step) q = T - n + 1.2816 * std::sqrt(2 * (n + 2 * q));
+  return q;
+}
+
 constexpr double kRadToDeg = 180 / 3.14159265358979323846;
 
 }  // namespace
@@ -226,13 +239,8 @@ GyroVerification VerifyGyroscope(const VerifiedCalibration& accel, const Verifie
     out.p_value = internal::ChiSquareSurvival(out.chi2, out.dof);
     out.rms_error_deg = std::sqrt(sum_e2 / static_cast<double>(K));
     out.rms_predicted_deg = std::sqrt(sum_p2 / static_cast<double>(K));
-  }
-  // What the turns and stills can see of K_g and G (as the accelerometer's positions).
-  if (K > 0) {
-    const auto dof = static_cast<double>(out.dof);
-    const double T = internal::ChiSquareQuantile(options.significance, dof);
-    double q = T - dof;
-    for (int step = 0; step < 60; ++step) q = T - dof + 1.2816 * std::sqrt(2 * (dof + 2 * q));
+    // What the turns and stills can see of K_g and G (as the accelerometer's positions).
+    const double q = NoticedNoncentrality(options.significance, out.dof);
     for (Eigen::Index i = 0; i < P; ++i) {
       if (slots[std::size_t(i)].group == GyroParameterGroup::kBias) continue;
       VerifiedParameter v;
@@ -326,9 +334,7 @@ Verification VerifyCalibration(const VerifiedCalibration& cal, const RawLog& log
     for (int a = 0; a < 3; ++a) pooled(a) = internal::Median(per_sample[std::size_t(a)]);
   }
   for (std::size_t k = 0; k < N; ++k) {
-    const Position& position = positions[k];
-    if (!position.interval)
-      throw std::invalid_argument("VerifyCalibration: a position without its interval");
+    const Position& position = positions[k];  // its interval checked by the pooling above
     VerifiedPosition v;
     v.mean_raw = position.mean;
     v.samples = position.samples;
@@ -376,15 +382,9 @@ Verification VerifyCalibration(const VerifiedCalibration& cal, const RawLog& log
     if (std::abs(out.positions[k].z) > options.position_z) out.off_positions.push_back(k);
   }
   // What the log can see: an error δ in parameter i alone adds λ = δ² F_ii to χ²'s mean (F =
-  // Aᵀ N⁻¹ A, the information of these positions; the noncentral χ² then has mean n + λ and
-  // variance 2 (n + 2λ)); the test notices it in 9 logs of 10 when the mean less 1.28 of its
-  // standard deviations reaches the threshold T = χ²_{1−α}(n): λ = T − n + 1.28 √(2 (n + 2λ)),
-  // by fixed-point steps (a contraction: the root's slope is below 1).
+  // Aᵀ N⁻¹ A, the information of these positions), noticed from NoticedNoncentrality on.
   if (n > 0) {
-    const auto dof = static_cast<double>(n);
-    const double T = internal::ChiSquareQuantile(options.significance, dof);
-    double q = T - dof;
-    for (int step = 0; step < 60; ++step) q = T - dof + 1.2816 * std::sqrt(2 * (dof + 2 * q));
+    const double q = NoticedNoncentrality(options.significance, static_cast<int>(n));
     for (Eigen::Index i = 0; i < P; ++i) {
       double information = 0;
       for (Eigen::Index k = 0; k < n; ++k) information += A(k, i) * A(k, i) / noise(k);

@@ -25,9 +25,8 @@ namespace {
 // What the calibration's own positions scattered by beyond their noise [raw]: its residual σ̂
 // less the mean noise of its position means (σ²/n per axis: white samples; a filtered sensor's
 // are noisier, which leaves this larger and the test more lenient). All of σ̂ when its positions
-// carry no noise; 0 when the file has no σ̂.
+// carry no noise. The file's σ̂ is there (RunVerify refuses a file without it).
 double MisfitSigma(const LoadedCalibration& cal) {
-  if (!cal.noise_sigma_raw) return 0;
   double sum = 0;
   std::size_t count = 0;
   for (const FilePosition& p : cal.positions) {
@@ -132,6 +131,8 @@ int RunVerify(const VerifyArgs& args) {
     gv = VerifyGyroscope(under_test, g, data.raw, rates.raw, positions);
   }
   const bool passed = v.passed && (!gv || gv->passed);
+  std::string why = v.reason;  // why it failed, both sensors' reasons
+  if (gv && !gv->passed) why += (why.empty() ? "" : "; ") + ("the gyroscope: " + gv->reason);
   std::string untested;
   for (const std::string& name : v.untested) untested += (untested.empty() ? "" : ", ") + name;
   if (gv) {
@@ -255,8 +256,6 @@ int RunVerify(const VerifyArgs& args) {
     } else if (cal.has_gyroscope()) {
       out += "# the gyroscope: not verified (give its log: --gyro)\n";
     }
-    std::string why = v.reason;
-    if (gv && !gv->passed) why += (why.empty() ? "" : "; ") + ("the gyroscope: " + gv->reason);
     out += passed ? std::string("# verdict: passed\n") : "# verdict: failed: " + why + "\n";
   }
   WriteFileAtomically(args.output.empty() ? "-" : args.output, out);
@@ -267,8 +266,6 @@ int RunVerify(const VerifyArgs& args) {
         args.input.path.c_str(), untested.c_str());
   }
   if (!passed) {
-    std::string why = v.reason;
-    if (gv && !gv->passed) why += (why.empty() ? "" : "; ") + ("the gyroscope: " + gv->reason);
     Warn("%s does not hold on %s: %s\n", args.calibration.c_str(), args.input.path.c_str(),
          why.c_str());
     return kExitFailedChecks;

@@ -387,6 +387,9 @@ int WriteNoise(const NoiseArgs& args, bool calibrated, std::size_t begin, std::s
       failed = failed || s.failed[a];
     }
   }
+  // How the time column was read (its unit decides the rate: a unit misread is a density 31.6
+  // times off), or that the rate was given: said in the text, the JSON and the report.
+  const std::string time_note = time ? time->unit_reason : std::string("none: the rate given");
   std::string out;
   if (args.json) {
     nlohmann::ordered_json doc;
@@ -395,9 +398,7 @@ int WriteNoise(const NoiseArgs& args, bool calibrated, std::size_t begin, std::s
     doc["first_sample"] = begin + 1;
     doc["last_sample"] = end;
     doc["rate_hz"] = rate_hz;
-    // How the time column was read (its unit decides the rate: a unit misread is a density
-    // 31.6 times off), or that the rate was given.
-    doc["time_unit"] = time ? time->unit_reason : std::string("none: the rate given");
+    doc["time_unit"] = time_note;
     doc["verdict"] = failed ? "failed" : "passed";
     if (failed) doc["failed_axes"] = reasons;
     doc["model"] =
@@ -406,9 +407,7 @@ int WriteNoise(const NoiseArgs& args, bool calibrated, std::size_t begin, std::s
     for (const Sensor& s : sensors) doc[s.name] = SensorJson(s);
     out = JsonText(doc);
   } else {
-    out +=
-        "# time: " + (time ? VisibleLine(time->unit_reason) : std::string("none: the rate given")) +
-        "\n";
+    out += "# time: " + VisibleLine(time_note) + "\n";
     if (args.still) {
       out += Format("# the longest still interval: samples %zu-%zu\n", begin + 1, end);
     }
@@ -426,7 +425,7 @@ int WriteNoise(const NoiseArgs& args, bool calibrated, std::size_t begin, std::s
   if (!args.report.empty()) {
     NoiseReportInput page;
     page.title = args.input.path;
-    page.time_note = time ? time->unit_reason : std::string("none: the rate given");
+    page.time_note = time_note;
     page.verdict = failed ? "failed: the terms of " + reasons.front() +
                                 (reasons.size() > 1 ? " and others" : "") +
                                 " are not a result (see the notes)"

@@ -23,7 +23,13 @@
 /// from the model's spectrum (AllanCorrelation). Both follow the model (its terms' positive
 /// part), so the fit is iterated until it settles. A term whose interval c ± z σ_c lies above 0
 /// is resolved, and its interval is the square root of that; otherwise the data bound it from
-/// above only, by √(c + z σ_c).
+/// above only. The upper end is raised to the score end where that is higher: the least c' with
+/// c' − c ≥ z σ_c(c'), σ_c(c') the standard error were the term c' and the others fitted again
+/// with it held there. σ_c follows a term that dominates the points it is determined by (a
+/// random walk at the longest τ, a few degrees of freedom each), and a log whose random walk
+/// came out low weighs those points as quiet; c + z σ_c then held the truth in 91 % of simulated
+/// one-hour logs, the score end in 98 %. The score end is sought up to the Allan deviation's own
+/// bound (NoiseTermEstimate::resolved) and is that bound where none lies below it.
 
 #include <array>
 #include <vector>
@@ -43,7 +49,8 @@ struct NoiseTermEstimate {
   double value = 0;  ///< the coefficient (Q, N, B, K or R), ≥ 0
   /// Its standard error (delta method from σ(value²)) when resolved; else 0.
   double sigma = 0;
-  /// The `confidence` interval of the value (of its square, taken to the square root).
+  /// The `confidence` interval of the value (of its square, taken to the square root; the
+  /// upper end the score end where that is higher: see above).
   double low = 0, high = 0;
   /// The interval excludes 0: the term is seen in the data. Not resolved, `high` is an upper
   /// bound: for a term the fit puts below 0 beyond its interval (z below −1.96), the Allan

@@ -22,6 +22,7 @@
 #include "accelcal/load_positions.hpp"
 #include "accelcal/log_reader.hpp"
 #include "accelcal/model_selection.hpp"
+#include "accelcal/position_noise.hpp"
 #include "accelcal/report.hpp"
 #include "accelcal/static_detection.hpp"
 #include "accelcal/time_axis.hpp"
@@ -464,7 +465,7 @@ void BindCalibration(py::module_& m) {
           const std::vector<Position>& positions = in.positions;
           const InputData& data = file.data;
           const std::optional<StaticDetectionResult>& detection = file.detection;
-          std::vector<Vec3> sigmas = SigmasOfMeans(positions);  // empty: from the residuals
+          std::vector<Vec3> sigmas = ReadingSigmas(in);  // empty: from the residuals
           PyCalibration c = Fit(positions, std::move(sigmas), s, options,
                                 data.kind == InputKind::kRaw ? &data.raw : nullptr,
                                 detection ? &*detection : nullptr, path);

@@ -17,6 +17,7 @@
 #include "accelcal/gyro_calibration.hpp"
 #include "accelcal/known_orientation.hpp"
 #include "accelcal/orientation_file.hpp"
+#include "accelcal/position_noise.hpp"
 #include "accelcal/report.hpp"
 #include "cli_common.hpp"
 #include "output.hpp"
@@ -89,7 +90,7 @@ void PrintCalibration(const CalibrationResult& r, const std::vector<Position>& p
       g.origin.c_str());
   const std::string noise =
       r.noise_source == "samples"
-          ? Format("noise of each interval's samples, x %.3g scatter ratio", r.scatter_ratio)
+          ? Format("noise of the positions' means, x %.3g scatter ratio", r.scatter_ratio)
       : r.noise_source == "joint"
           ? std::string(
                 "joint fit with the gyroscope's rotations, each group's noise from its "
@@ -508,7 +509,7 @@ int RunCalibrateKnownOrientations(const CalibrateArgs& args) {
                     " orientations for the " + std::to_string(in.positions.size()) +
                     " positions of " + args.input.path);
   }
-  options.reading_sigmas = SigmasOfMeans(in.positions);
+  options.reading_sigmas = ReadingSigmas(in);
   const CalibrationResult result =
       CalibrateKnownOrientations(Means(in.positions), orientations.directions, options);
   const std::string note = Format("orient.   %s: %zu known orientations\n",
@@ -585,7 +586,7 @@ int RunCalibrate(const CalibrateArgs& args) {
   if (GyroWanted(args)) gyro_ahead.emplace(args);
   const LoadedInput in = LoadInput(args.input);
   const std::vector<Vec3> means = Means(in.positions);
-  options.reading_sigmas = SigmasOfMeans(in.positions);  // empty: noise from the residuals
+  options.reading_sigmas = ReadingSigmas(in);  // empty: noise from the residuals
   // For a quadratic fit (asked for, or a candidate of --model auto) the linear fit is the
   // comparison: both with held-out validation, decided by ModelSelection's rule.
   const ModelChoice choice = CalibrateChoosingModel(means, options, auto_model);

@@ -13,6 +13,7 @@
 
 #include "accelcal/calibration_types.hpp"
 #include "accelcal/error.hpp"
+#include "accelcal/position_noise.hpp"
 #include "analysis/gyro_data.hpp"
 #include "core/median.hpp"
 #include "core/text_format.hpp"
@@ -22,44 +23,6 @@
 namespace accelcal {
 
 namespace {
-
-// Batches the mean's noise is measured over: 16 gives 15 degrees of freedom per axis, and
-// batches of at least 8 samples (shorter ones would not hold a filtered sensor's correlation).
-constexpr std::size_t kBatches = 16;
-constexpr std::size_t kMinBatchSamples = 8;
-
-// The covariance of a position's mean reading (diagonal, raw²): the scatter of its batch means
-// over their count, or σ²/n for a position too short to batch or joined across a disturbance
-// (its samples are not one run).
-Vec3 MeanVariance(const RawLog& log, const Position& position) {
-  const StaticInterval& in = *position.interval;
-  const std::size_t n = in.end - in.begin;
-  const Vec3 std = position.std.value_or(in.std);
-  if (in.averaged > 0 || n < kBatches * kMinBatchSamples) {
-    return std.cwiseProduct(std) / static_cast<double>(std::max<std::size_t>(1, in.count()));
-  }
-  const std::size_t size = n / kBatches;
-  std::vector<Vec3> means(kBatches, Vec3::Zero());
-  for (std::size_t b = 0; b < kBatches; ++b) {
-    for (std::size_t i = 0; i < size; ++i) means[b] += log.samples[in.begin + b * size + i];
-    means[b] /= static_cast<double>(size);
-  }
-  // The batch means' scatter by their median absolute deviation (× 1.4826, σ for normal
-  // scatter): an interval whose ends reach into the turns (a slow turn, a noisy sensor whose
-  // detection runs 0.45 s into it) has one or two end batches far off, which would put the
-  // mean's noise several times high and take the test's power.
-  Vec3 out;
-  for (int a = 0; a < 3; ++a) {
-    std::vector<double> v;
-    for (const Vec3& m : means) v.push_back(m(a));
-    const double median = internal::Median(v);
-    for (double& x : v) x = std::abs(x - median);
-    const double sigma = 1.4826 * internal::Median(v);
-    // The variance of one batch mean over the batches in the whole interval: σ² / kBatches.
-    out(a) = sigma * sigma / static_cast<double>(kBatches);
-  }
-  return out;
-}
 
 // ∂μ/∂θ at f, in the slots' order: K(r, c) moves row r by f_c, b_r by 1, k2_r by f_r².
 Eigen::MatrixXd ModelJacobian(const std::vector<ParameterSlot>& slots, const Vec3& f) {
@@ -317,21 +280,18 @@ Verification VerifyCalibration(const VerifiedCalibration& cal, const RawLog& log
   Eigen::VectorXd e(static_cast<Eigen::Index>(N)), noise(static_cast<Eigen::Index>(N));
   std::vector<std::size_t> outside;
   std::vector<double> ratios;  // |f| / g
-  // The sensor's noise is the same in every position: each position's mean variance times its
-  // samples (a variance per sample, correlation included), pooled by the median over positions,
-  // then divided by each one's samples. One position's batches estimate it with 15 degrees of
-  // freedom (by their MAD, fewer): alone they made 2 correct calibrations in 240 fail.
+  // The sensor's noise is the same in every position (position_noise.hpp): pooled over them. One
+  // position's batches alone made 2 correct calibrations in 240 fail.
   Vec3 pooled;
   {
-    std::array<std::vector<double>, 3> per_sample;
+    std::vector<Vec3> variances;
     for (const Position& position : positions) {
       if (!position.interval) {
         throw std::invalid_argument("VerifyCalibration: a position without its interval");
       }
-      const Vec3 v = MeanVariance(log, position) * static_cast<double>(position.interval->count());
-      for (int a = 0; a < 3; ++a) per_sample[std::size_t(a)].push_back(v(a));
+      variances.push_back(PositionMeanVariance(log, position));
     }
-    for (int a = 0; a < 3; ++a) pooled(a) = internal::Median(per_sample[std::size_t(a)]);
+    pooled = PoolPositionNoise(positions, variances).per_sample_variance;
   }
   for (std::size_t k = 0; k < N; ++k) {
     const Position& position = positions[k];  // its interval checked by the pooling above

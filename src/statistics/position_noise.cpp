@@ -1,0 +1,105 @@
+// The noise of still positions' mean readings (position_noise.hpp).
+#include "accelcal/position_noise.hpp"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <stdexcept>
+
+#include "core/median.hpp"
+
+namespace accelcal {
+
+Vec3 PositionMeanVariance(const RawLog& log, const Position& position) {
+  if (!position.interval) {
+    throw std::invalid_argument("PositionMeanVariance: a position without its interval");
+  }
+  const StaticInterval& in = *position.interval;
+  if (in.begin > in.end || in.end > log.samples.size()) {
+    throw std::invalid_argument("PositionMeanVariance: an interval beyond the log");
+  }
+  const std::size_t n = in.end - in.begin;
+  const Vec3 std = position.std.value_or(in.std);
+  if (in.averaged > 0 || n < kPositionNoiseBatches * kPositionNoiseMinBatchSamples) {
+    return std.cwiseProduct(std) / static_cast<double>(std::max<std::size_t>(1, in.count()));
+  }
+  const std::size_t size = n / kPositionNoiseBatches;
+  std::array<Vec3, kPositionNoiseBatches> means;
+  for (std::size_t b = 0; b < kPositionNoiseBatches; ++b) {
+    means[b] = Vec3::Zero();
+    for (std::size_t i = 0; i < size; ++i) means[b] += log.samples[in.begin + b * size + i];
+    means[b] /= static_cast<double>(size);
+  }
+  // The batch means' scatter by their median absolute deviation (× 1.4826, σ for normal
+  // scatter): an interval whose ends reach into the turns (a slow turn, a noisy sensor whose
+  // detection runs 0.45 s into it) has one or two end batches far off, which would put the
+  // mean's noise several times high.
+  Vec3 out;
+  for (int a = 0; a < 3; ++a) {
+    std::vector<double> v;
+    for (const Vec3& m : means) v.push_back(m(a));
+    const double median = internal::Median(v);
+    for (double& x : v) x = std::abs(x - median);
+    const double sigma = 1.4826 * internal::Median(v);
+    // The variance of one batch mean over the batches in the whole interval: σ² / batches.
+    out(a) = sigma * sigma / static_cast<double>(kPositionNoiseBatches);
+  }
+  return out;
+}
+
+PositionNoise PoolPositionNoise(const std::vector<Position>& positions,
+                                const std::vector<Vec3>& mean_variances) {
+  if (positions.empty() || positions.size() != mean_variances.size()) {
+    throw std::invalid_argument("PoolPositionNoise: one mean variance per position, at least one");
+  }
+  PositionNoise out;
+  std::array<std::vector<double>, 3> per_sample;
+  for (std::size_t k = 0; k < positions.size(); ++k) {
+    const std::size_t count =
+        positions[k].interval ? positions[k].interval->count() : positions[k].samples;
+    const Vec3 v = mean_variances[k] * static_cast<double>(std::max<std::size_t>(1, count));
+    for (int a = 0; a < 3; ++a) per_sample[std::size_t(a)].push_back(v(a));
+    const StaticInterval* in = positions[k].interval ? &*positions[k].interval : nullptr;
+    if (in && in->averaged == 0 &&
+        in->end - in->begin >= kPositionNoiseBatches * kPositionNoiseMinBatchSamples) {
+      ++out.batched;
+    }
+  }
+  for (int a = 0; a < 3; ++a) {
+    out.per_sample_variance(a) = internal::Median(per_sample[std::size_t(a)]);
+  }
+  for (const Position& p : positions) {
+    const std::size_t count = p.interval ? p.interval->count() : p.samples;
+    out.sigmas.push_back(
+        (out.per_sample_variance / static_cast<double>(std::max<std::size_t>(1, count)))
+            .cwiseSqrt());
+  }
+  return out;
+}
+
+std::optional<PositionNoise> MeasurePositionNoise(const LoadedInput& input) {
+  std::vector<Vec3> variances;
+  std::size_t k = 0;
+  for (const LoadedFile& file : input.files) {
+    if (file.data.kind != InputKind::kRaw || !file.detection) return std::nullopt;
+    // The positions of this file: the next ones, one per averaged interval.
+    const std::size_t count = file.detection->intervals.size();
+    for (std::size_t i = 0; i < count; ++i, ++k) {
+      if (k >= input.positions.size() || !input.positions[k].interval) return std::nullopt;
+      variances.push_back(PositionMeanVariance(file.data.raw, input.positions[k]));
+    }
+  }
+  if (k != input.positions.size() || variances.empty()) return std::nullopt;
+  PositionNoise out = PoolPositionNoise(input.positions, variances);
+  if (!(out.per_sample_variance.minCoeff() > 0) || !out.per_sample_variance.allFinite()) {
+    return std::nullopt;
+  }
+  return out;
+}
+
+std::vector<Vec3> ReadingSigmas(const LoadedInput& input) {
+  if (std::optional<PositionNoise> noise = MeasurePositionNoise(input)) return noise->sigmas;
+  return SigmasOfMeans(input.positions);
+}
+
+}  // namespace accelcal

@@ -1,0 +1,107 @@
+// The noise of still positions' means (position_noise.hpp): a filtered sensor's correlated
+// samples, white noise, and the positions too short to batch.
+#include "accelcal/position_noise.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <random>
+#include <vector>
+
+#include <gtest/gtest.h>
+
+namespace accelcal {
+namespace {
+
+// `positions` still positions of `samples` each, one after another; axis a is an AR(1)
+// x_t = ρ_a x_(t−1) + e_t, e_t ~ N(0, 1), started in its stationary distribution: the output of
+// a sensor that low-passes its white noise. The variance of a mean of n samples is then
+// LRV/n less O(1/n²), LRV = 1/(1 − ρ)², while the samples' own variance is 1/(1 − ρ²):
+// σ/√n is low by √((1 + ρ)/(1 − ρ)) (4.4 at ρ = 0.9).
+struct Log {
+  RawLog raw;
+  std::vector<Position> positions;
+};
+
+Log Correlated(const Vec3& rho, int positions, std::size_t samples, std::uint64_t seed) {
+  std::mt19937_64 rng(seed);
+  std::normal_distribution<double> normal;
+  Log log;
+  for (int k = 0; k < positions; ++k) {
+    StaticInterval in;
+    in.begin = log.raw.samples.size();
+    Vec3 x;
+    for (int a = 0; a < 3; ++a) x(a) = normal(rng) / std::sqrt(1 - rho(a) * rho(a));
+    Vec3 sum = Vec3::Zero(), sum2 = Vec3::Zero();
+    for (std::size_t i = 0; i < samples; ++i) {
+      if (i > 0) {
+        for (int a = 0; a < 3; ++a) x(a) = rho(a) * x(a) + normal(rng);
+      }
+      log.raw.samples.push_back(x);
+      sum += x;
+      sum2 += x.cwiseAbs2();
+    }
+    in.end = log.raw.samples.size();
+    const double n = static_cast<double>(samples);
+    in.mean = sum / n;
+    in.std = ((sum2 - n * in.mean.cwiseAbs2()) / (n - 1)).cwiseSqrt();
+    log.positions.push_back(PositionsFromIntervals({in}).front());
+  }
+  return log;
+}
+
+PositionNoise Measure(const Log& log) {
+  std::vector<Vec3> variances;
+  for (const Position& p : log.positions) variances.push_back(PositionMeanVariance(log.raw, p));
+  return PoolPositionNoise(log.positions, variances);
+}
+
+TEST(PositionNoise, ACorrelatedSensorsMeansAreAsNoisyAsTheyScatter) {
+  const Vec3 rho(0.0, 0.5, 0.9);
+  const Log log = Correlated(rho, 64, 4096, 7);
+  const PositionNoise noise = Measure(log);
+  EXPECT_EQ(noise.batched, 64U);
+  ASSERT_EQ(noise.sigmas.size(), 64U);
+  for (int a = 0; a < 3; ++a) {
+    const double lrv = 1 / ((1 - rho(a)) * (1 - rho(a)));
+    // The batch means of 256 samples hold all but 2ρ/(256 (1 − ρ²)) of it (3.7 % at ρ = 0.9).
+    const double expected = lrv * (1 - 2 * rho(a) / (256 * (1 - rho(a) * rho(a))));
+    // One position's (1.4826 MAD)² of 16 batch means scatters by about 60 % (the MAD keeps 37 %
+    // of their 15 degrees of freedom); the median of 64 by 1.25 × 60 % / 8 = 9.4 %: 3σ.
+    EXPECT_NEAR(noise.per_sample_variance(a) / expected, 1, 0.28) << "axis " << a;
+    // The samples' standard deviation over √n would have put it at 1/(1 − ρ²): 1.33 at
+    // ρ = 0.5 against 4, 5.3 at ρ = 0.9 against 100.
+    EXPECT_NEAR(noise.sigmas[5](a), std::sqrt(noise.per_sample_variance(a) / 4096), 1e-15);
+  }
+  // The mean's actual scatter over the positions (64 means: ± 18 % at 2σ of the variance).
+  for (int a = 0; a < 3; ++a) {
+    double s2 = 0, mean = 0;
+    for (const Position& p : log.positions) mean += p.mean(a) / 64;
+    for (const Position& p : log.positions) s2 += std::pow(p.mean(a) - mean, 2) / 63;
+    const double predicted = noise.sigmas[0](a) * noise.sigmas[0](a);
+    EXPECT_NEAR(s2 / predicted, 1, 0.45) << "axis " << a;  // both uncertain: 0.18 and 0.28, 3σ
+  }
+}
+
+TEST(PositionNoise, APositionTooShortToBatchHasItsSamplesNoise) {
+  Log log = Correlated(Vec3::Zero(), 3, 100, 11);  // 100 < 16 batches of 8
+  const PositionNoise noise = Measure(log);
+  EXPECT_EQ(noise.batched, 0U);
+  for (int a = 0; a < 3; ++a) {
+    std::vector<double> per_sample;
+    for (const Position& p : log.positions) per_sample.push_back(std::pow((*p.std)(a), 2));
+    std::sort(per_sample.begin(), per_sample.end());
+    EXPECT_DOUBLE_EQ(noise.per_sample_variance(a), per_sample[1]);  // the median of three
+  }
+  // A position without its interval, or beyond the log, is refused.
+  Position loose;
+  EXPECT_THROW(PositionMeanVariance(log.raw, loose), std::invalid_argument);
+  StaticInterval past = log.positions.back().interval.value();
+  past.end += 1;
+  Position beyond = PositionsFromIntervals({past}).front();
+  EXPECT_THROW(PositionMeanVariance(log.raw, beyond), std::invalid_argument);
+  EXPECT_THROW(PoolPositionNoise(log.positions, {}), std::invalid_argument);
+}
+
+}  // namespace
+}  // namespace accelcal

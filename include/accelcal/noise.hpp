@@ -62,6 +62,12 @@ inline constexpr double kStillChangeRatio = 30;
 inline constexpr double kMaxNoiseMagnitude = 1e100;
 inline constexpr double kMinNoiseSpread = 1e-100;
 
+/// An axis whose reading changes in fewer than this fraction of its steps is refused: it holds
+/// one value nearly throughout (a stuck column with a glitch, or a quantum so coarse that the
+/// noise is below a hundredth of it: white noise of σ changes a reading of quantum q in about
+/// 1.13 σ/q of the steps), and what its Allan variance shows is those few changes, not noise.
+inline constexpr double kMinChangingSteps = 0.01;
+
 struct NoiseAnalysis {
   std::size_t samples = 0;
   double sample_period_s = 0;
@@ -75,7 +81,8 @@ struct NoiseAnalysis {
 /// samples.
 class NoiseAccumulator {
  public:
-  /// Throws std::invalid_argument for a period not finite and positive.
+  /// Throws std::invalid_argument for a period not finite and positive, or fit options out of
+  /// range (FitNoiseModel's).
   NoiseAccumulator(double sample_period_s, const NoiseOptions& options = {});
   /// Appends samples (finite: std::invalid_argument naming the sample otherwise).
   void Add(const Vec3* samples, std::size_t count);
@@ -98,7 +105,8 @@ class NoiseAccumulator {
   Vec3 first_ = Vec3::Zero();
   Vec3 previous_ = Vec3::Zero();                   // the last sample of the previous piece
   Vec3 low_ = Vec3::Zero(), high_ = Vec3::Zero();  // per axis, of the samples
-  Vec3 quantum_ = Vec3::Zero();  // per axis, the smallest nonzero change between samples
+  Vec3 quantum_ = Vec3::Zero();           // per axis, the smallest nonzero change between samples
+  std::array<std::size_t, 3> changes_{};  // per axis, steps with a nonzero change
   Vec3 block_sum_ = Vec3::Zero();
   std::vector<Vec3> block_means_;
   Vec3 largest_step_ = Vec3::Zero();

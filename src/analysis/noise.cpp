@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <stdexcept>
 #include <string>
 
 #include "accelcal/error.hpp"
@@ -23,6 +24,14 @@ AllanOptions AllanOf(double sample_period_s, const NoiseOptions& options) {
 
 NoiseAccumulator::NoiseAccumulator(double sample_period_s, const NoiseOptions& options)
     : sample_period_s_(sample_period_s), options_(options) {
+  // The fit's options checked here, so that what the fit refuses in Finish is the data's.
+  const NoiseFitOptions& fit = options.fit;
+  if (!(fit.confidence > 0 && fit.confidence < 1) || fit.max_iterations < 1 ||
+      std::none_of(fit.terms.begin(), fit.terms.end(), [](bool t) { return t; })) {
+    throw std::invalid_argument(
+        "NoiseAccumulator: the fit's confidence must lie in (0, 1), its iterations be at least 1 "
+        "and one term at least be fitted");
+  }
   for (int a = 0; a < 3; ++a) axes_.emplace_back(AllanOf(sample_period_s, options));
 }
 
@@ -40,7 +49,10 @@ void NoiseAccumulator::Add(const Vec3* samples, std::size_t count) {
     } else {
       const Vec3 change = (x - (k > 0 ? samples[k - 1] : previous_)).cwiseAbs();
       for (int a = 0; a < 3; ++a) {
-        if (change(a) > 0) quantum_(a) = std::min(quantum_(a), change(a));
+        if (change(a) > 0) {
+          quantum_(a) = std::min(quantum_(a), change(a));
+          ++changes_[static_cast<std::size_t>(a)];
+        }
         if (change(a) > largest_step_(a)) {
           largest_step_(a) = change(a);
           largest_step_at_[static_cast<std::size_t>(a)] = samples_;
@@ -148,6 +160,15 @@ NoiseAnalysis NoiseAccumulator::Finish(double sample_period_s) const {
                       " reads the same value throughout: it has no noise to characterise "
                       "(a constant or missing column?)");
     }
+    const std::size_t steps = samples_ - 1;
+    if (static_cast<double>(changes_[static_cast<std::size_t>(a)]) <
+        kMinChangingSteps * static_cast<double>(steps)) {
+      throw DataError(internal::Format(
+          "%s changes in %zu of its %zu steps: it reads one value nearly throughout (a stuck "
+          "column, or readings quantised far coarser than their noise); what its Allan variance "
+          "shows is those changes, not noise",
+          axis.c_str(), changes_[static_cast<std::size_t>(a)], steps));
+    }
     const double magnitude = std::max(std::abs(low_(a)), std::abs(high_(a)));
     if (magnitude > kMaxNoiseMagnitude || high_(a) - low_(a) < kMinNoiseSpread) {
       throw DataError(internal::Format(
@@ -156,7 +177,19 @@ NoiseAnalysis NoiseAccumulator::Finish(double sample_period_s) const {
           "unit",
           axis.c_str(), magnitude, high_(a) - low_(a), kMinNoiseSpread, kMaxNoiseMagnitude));
     }
-    result.fit = FitNoiseModel(result.points, options_.fit);
+    try {
+      result.fit = FitNoiseModel(result.points, options_.fit);
+    } catch (const std::invalid_argument& e) {
+      // Points that do not tell the terms apart: an axis whose Allan variance is 0 beyond its
+      // first averaging time (a reading that alternates between two values, or repeats a
+      // pattern of a few samples) has no noise the terms describe.
+      std::string why = e.what();
+      const std::string prefix = "FitNoiseModel: ";
+      if (why.compare(0, prefix.size(), prefix) == 0) why.erase(0, prefix.size());
+      throw DataError(axis + "'s Allan variance cannot be fitted: " + why +
+                      " (a reading that repeats a pattern of a few samples has no noise the terms "
+                      "describe)");
+    }
   }
   out.mean = first_ + sum_ / static_cast<double>(samples_);
   out.stillness = StillnessOf(block_means_, quantum_);

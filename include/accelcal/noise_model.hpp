@@ -29,7 +29,8 @@
 /// random walk at the longest τ, a few degrees of freedom each), and a log whose random walk
 /// came out low weighs those points as quiet; c + z σ_c then held the truth in 91 % of simulated
 /// one-hour logs, the score end in 98 %. The score end is sought up to the Allan deviation's own
-/// bound (NoiseTermEstimate::resolved) and is that bound where none lies below it.
+/// bound (NoiseTermEstimate::resolved), and is that bound where none lies below it; a term not
+/// resolved has no upper end beyond that bound unless its estimate lies beyond it.
 
 #include <array>
 #include <vector>

@@ -432,8 +432,17 @@ NoiseModelFit FitNear1(const std::vector<AllanPoint>& points, const NoiseFitOpti
         high = hi;
       }
     }
-    e.high = std::sqrt(std::max({0.0, high, c + z * sigma_c}));
+    // The Wald end too. For a term not resolved, an upper bound only, not beyond the Allan
+    // deviation's own bound: a ramp whose c + z σ_c would make σ(τ) 18 times what was measured
+    // at the longest τ (the Xsens rest's x) bounds nothing that bound does not bound better (an
+    // estimate beyond it, other terms below 0 making room, keeps its value). A resolved term's
+    // Wald end is within twice its estimate, and that bound does not hold where the terms do not
+    // describe the noise: the Xsens filters its output, its shortest τ fall below white noise,
+    // and the white noise fitted above them lies beyond the bound the first τ set.
     e.resolved = c > z * sigma_c;
+    const double wald =
+        e.resolved ? c + z * sigma_c : std::min(c + z * sigma_c, std::max(ceiling, c));
+    e.high = std::sqrt(std::max({0.0, high, wald}));
     if (e.resolved) {
       e.low = std::sqrt(c - z * sigma_c);
       e.sigma = sigma_c / (2 * e.value);

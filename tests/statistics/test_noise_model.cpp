@@ -243,5 +243,38 @@ TEST(NoiseModel, AnIntervalEndFollowsTheScatterAtThatEnd) {
   }
 }
 
+TEST(NoiseModel, AnUnresolvedTermIsBoundedNoHigherThanTheAllanDeviationAllows) {
+  // Five-second logs (500 samples at 100 Hz, white noise and a random walk): the terms the log
+  // does not resolve have c + z σ_c up to 2.4 times the bound the Allan deviation sets alone
+  // (each point's upper limit at 1 − 0.05/n over the term's avar at value 1: every term adds a
+  // variance ≥ 0). Their upper end is that bound, or their estimate where it lies beyond.
+  const double g = 9.80665;
+  int capped = 0;
+  for (std::uint64_t seed = 1; seed <= 40; ++seed) {
+    AllanOptions options;
+    options.sample_period_s = 0.01;
+    const std::vector<AllanPoint> points =
+        AllanVariance(SimulateNoise({0, 100e-6 * g, 0, 30e-6 * g, 0}, 500, 0.01, seed), options);
+    const NoiseModelFit fit = FitNoiseModel(points);
+    for (int t = 0; t < kNoiseTerms; ++t) {
+      const NoiseTermEstimate& e = fit.terms[std::size_t(t)];
+      if (e.resolved) continue;
+      std::array<double, kNoiseTerms> unit{};
+      unit[std::size_t(t)] = 1;
+      double bound2 = HUGE_VAL;
+      for (std::size_t i = 0; i < points.size(); ++i) {
+        const double high = AllanDeviationInterval(points[i].avar, fit.edf[i],
+                                                   1 - 0.05 / static_cast<double>(points.size()))
+                                .high;
+        bound2 = std::min(bound2, high * high / NoiseModelAvar(unit, points[i].tau_s));
+      }
+      const double bound = std::max(std::sqrt(bound2), e.value);
+      EXPECT_LE(e.high, bound * (1 + 1e-12)) << "seed " << seed << " " << ToString(NoiseTerm(t));
+      capped += e.high >= bound * (1 - 1e-12);
+    }
+  }
+  EXPECT_GT(capped, 0);  // the bound is reached, not merely respected
+}
+
 }  // namespace
 }  // namespace accelcal

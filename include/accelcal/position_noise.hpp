@@ -50,9 +50,11 @@ struct PositionNoise {
 PositionNoise PoolPositionNoise(const std::vector<Position>& positions,
                                 const std::vector<Vec3>& mean_variances);
 
-/// The noise of every position of `input`, each from its raw log; nullopt when some position is
-/// not from a raw log (a positions file: its own columns give its noise, SigmasOfMeans) or the
-/// pooled noise is not positive on every axis (a quantised sensor that reads one value).
+/// The noise of every position of `input`, each from its raw log, pooled over the positions of
+/// each file (sessions may differ in noise and rate; `per_sample_variance` is the last file's);
+/// nullopt when some position is not from a raw log (a positions file: its own columns give its
+/// noise, SigmasOfMeans) or a file's pooled noise is not positive on every axis (a quantised
+/// sensor that reads one value).
 std::optional<PositionNoise> MeasurePositionNoise(const LoadedInput& input);
 
 /// The 1σ of each position's mean (CalibrationOptions::reading_sigmas): MeasurePositionNoise's,

@@ -78,22 +78,34 @@ PositionNoise PoolPositionNoise(const std::vector<Position>& positions,
 }
 
 std::optional<PositionNoise> MeasurePositionNoise(const LoadedInput& input) {
-  std::vector<Vec3> variances;
+  // Pooled file by file: sessions may differ in noise and in rate (a per-sample variance is the
+  // density² times the rate), and one pool over both weighed the quiet session's positions as
+  // noisy (two sessions, one 10 times noisier: the scatter ratio 5.1 where each alone was 1.1).
+  PositionNoise out;
   std::size_t k = 0;
   for (const LoadedFile& file : input.files) {
     if (file.data.kind != InputKind::kRaw || !file.detection) return std::nullopt;
-    // The positions of this file: the next ones, one per averaged interval.
+    // The positions of this file: the next ones, one per interval.
     const std::size_t count = file.detection->intervals.size();
-    for (std::size_t i = 0; i < count; ++i, ++k) {
-      if (k >= input.positions.size() || !input.positions[k].interval) return std::nullopt;
-      variances.push_back(PositionMeanVariance(file.data.raw, input.positions[k]));
+    if (count == 0 || k + count > input.positions.size()) return std::nullopt;
+    const std::vector<Position> positions(
+        input.positions.begin() + static_cast<std::ptrdiff_t>(k),
+        input.positions.begin() + static_cast<std::ptrdiff_t>(k + count));
+    std::vector<Vec3> variances;
+    for (const Position& p : positions) {
+      if (!p.interval) return std::nullopt;
+      variances.push_back(PositionMeanVariance(file.data.raw, p));
     }
+    const PositionNoise pooled = PoolPositionNoise(positions, variances);
+    if (!(pooled.per_sample_variance.minCoeff() > 0) || !pooled.per_sample_variance.allFinite()) {
+      return std::nullopt;
+    }
+    out.sigmas.insert(out.sigmas.end(), pooled.sigmas.begin(), pooled.sigmas.end());
+    out.batched += pooled.batched;
+    out.per_sample_variance = pooled.per_sample_variance;
+    k += count;
   }
-  if (k != input.positions.size() || variances.empty()) return std::nullopt;
-  PositionNoise out = PoolPositionNoise(input.positions, variances);
-  if (!(out.per_sample_variance.minCoeff() > 0) || !out.per_sample_variance.allFinite()) {
-    return std::nullopt;
-  }
+  if (k != input.positions.size() || k == 0) return std::nullopt;
   return out;
 }
 

@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <optional>
 #include <random>
 #include <vector>
 
@@ -101,6 +102,45 @@ TEST(PositionNoise, APositionTooShortToBatchHasItsSamplesNoise) {
   Position beyond = PositionsFromIntervals({past}).front();
   EXPECT_THROW(PositionMeanVariance(log.raw, beyond), std::invalid_argument);
   EXPECT_THROW(PoolPositionNoise(log.positions, {}), std::invalid_argument);
+}
+
+TEST(PositionNoise, EachSessionIsPooledOnItsOwn) {
+  // Two files of one sensor, the second 10 times noisier (or at another rate: a per-sample
+  // variance is the density² times the rate): one pool over both gave the quiet session's
+  // positions the median's noise, and a scatter ratio of 5.1 where each alone had 1.1.
+  LoadedInput input;
+  for (const double scale : {1.0, 10.0}) {
+    Log log = Correlated(Vec3::Zero(), 8, 2048, scale == 1.0 ? 21 : 22);
+    for (Vec3& x : log.raw.samples) x *= scale;
+    LoadedFile file;
+    file.path = scale == 1.0 ? "quiet.csv" : "noisy.csv";
+    file.data.kind = InputKind::kRaw;
+    file.data.raw = log.raw;
+    file.detection.emplace();
+    for (Position& p : log.positions) {
+      StaticInterval in = *p.interval;
+      in.std *= scale;
+      in.mean *= scale;
+      file.detection->intervals.push_back(in);
+      input.positions.push_back(PositionsFromIntervals({in}).front());
+    }
+    input.files.push_back(file);
+  }
+  const std::optional<PositionNoise> noise = MeasurePositionNoise(input);
+  ASSERT_TRUE(noise.has_value());
+  ASSERT_EQ(noise->sigmas.size(), 16U);
+  EXPECT_EQ(noise->batched, 16U);
+  for (int a = 0; a < 3; ++a) {
+    // White noise of 1 and of 10 a sample: the median of 8 positions' (1.4826 MAD)² of 16 batch
+    // means scatters by 1.25 × 60 % / √8 = 27 %, so within ± 0.8 of it (3σ) on the variance.
+    EXPECT_NEAR(noise->sigmas[0](a) * noise->sigmas[0](a) * 2048, 1, 0.8) << a;
+    EXPECT_NEAR(noise->sigmas[8](a) * noise->sigmas[8](a) * 2048, 100, 80) << a;
+    EXPECT_DOUBLE_EQ(noise->sigmas[0](a), noise->sigmas[7](a));
+    EXPECT_DOUBLE_EQ(noise->sigmas[8](a), noise->sigmas[15](a));
+  }
+  // A positions file among them: its own columns give its noise (SigmasOfMeans).
+  input.files[1].data.kind = InputKind::kPositions;
+  EXPECT_FALSE(MeasurePositionNoise(input).has_value());
 }
 
 }  // namespace

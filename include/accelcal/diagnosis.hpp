@@ -25,6 +25,8 @@
 ///     inflated by R, so the uncertainties stay honest, but beyond 30 something other than noise
 ///     (drift, a model that does not fit, moving positions) dominates. Xsens 4.6, T265 9.9, the
 ///     CK set 4.7, the phone 7.3, imucal's Ferraris holds 62.
+///   - `exactly_determined` (warning): as many positions fitted as parameters (no degrees of
+///     freedom): nothing checks the fit.
 ///   - `exact_fit` (warning): residual degrees of freedom but residuals at round-off (below
 ///     1e-9 of the signal): the positions are not independent noisy readings.
 ///   - `held_out_outlier` (warning): a position whose held-out |f| − g is beyond 5 times the

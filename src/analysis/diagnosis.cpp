@@ -505,6 +505,14 @@ Diagnosis Diagnose(const DiagnosisInput& input) {
                     : ""),
         {{"scatter_ratio", r.scatter_ratio}});
   }
+  // No degrees of freedom: the fit passes through every position, and nothing checks it.
+  if (r.degrees_of_freedom == 0 && r.summary.converged()) {
+    Add(&out, "exactly_determined", Severity::kWarning,
+        Format("%d positions fitted for %d parameters: the fit passes through every one of them, "
+               "so no residual, uncertainty or held-out position checks it; add positions",
+               NumParameters(r.model), NumParameters(r.model)),
+        {{"parameters", static_cast<double>(NumParameters(r.model))}});
+  }
   // Round-off residuals with degrees of freedom left: not independent noisy readings.
   if (r.degrees_of_freedom > 0 && r.summary.converged()) {
     double signal = 0;

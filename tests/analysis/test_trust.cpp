@@ -309,6 +309,26 @@ TEST_F(Trust, AQuantisedLogCalibratesRight) {
 
 // 5. Duplicated rows (a positions file concatenated with itself): refused, not an exact fit with
 // uncertainties of 1e-12.
+// 4b. As many positions as parameters: the fit passes through all of them, so nothing checks it
+// (no residual, no covariance, no held-out position). It had said "ok".
+TEST_F(Trust, AnExactlyDeterminedFitIsNotOk) {
+  RawLogSimulation o;
+  o.rate_hz = 100;
+  o.static_s = 5;
+  o.transition_s = 2;
+  o.sigma_raw_per_sample = Vec3::Constant(0.001);
+  o.seed = 9;
+  const SimulatedLog log = SimulateRawLog(MemsDevice(), kG, RandomDirections(9, 9), o);
+  const CliRun r = Exec("calibrate " + Write("nine.csv", LogText(log, "t,x,y,z", 1, "%.4f", 6)) +
+                        " -o " + Path("nine.json"));
+  ASSERT_EQ(r.status, 0) << r.err;
+  const json doc = Json(Path("nine.json"));
+  EXPECT_EQ(doc.at("positions").size(), 9u);
+  EXPECT_TRUE(Has(doc, "exactly_determined")) << r.err;
+  EXPECT_NE(r.err.find("9 positions fitted for 9 parameters"), std::string::npos) << r.err;
+  EXPECT_EQ(doc.at("verdict"), "warnings");
+}
+
 TEST_F(Trust, RepeatedPositionsAreRefused) {
   const std::string positions =
       Slurp(kData + "/ctu-innalabs-ahrs-m3/measured_accelerations_24pos.csv");

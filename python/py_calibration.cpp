@@ -41,6 +41,7 @@ struct PyCalibration {
   std::string model_requested;
   ForceUnit unit = ForceUnit::kMetersPerSecond2;
   std::vector<Position> positions;  // the fitted positions, in the result's order
+  std::vector<Vec3> mean_sigmas;    // the 1σ of each one's mean as the fit took it (or none)
   std::string source;               // the input file, "" from arrays
   int max_excluded = OutlierOptions{}.max_excluded;
   Diagnosis diagnosis;
@@ -134,6 +135,7 @@ PyCalibration Fit(std::vector<Position> positions, std::vector<Vec3> sigmas, con
   c.max_excluded = s.max_outliers;
   const std::vector<Vec3> means = Means(c.positions);
   options.reading_sigmas = std::move(sigmas);
+  c.mean_sigmas = options.reading_sigmas;
   ModelChoice choice = CalibrateChoosingModel(means, options, s.model == "auto");
   c.result = std::move(choice.result);
   c.selection = std::move(choice.selection);
@@ -351,6 +353,7 @@ void BindCalibration(py::module_& m) {
               info.positions = PositionsOf(*positions);
             } else {
               info.positions = c.positions;
+              info.mean_sigmas = c.mean_sigmas;
             }
             info.model_selection = c.selection ? &*c.selection : nullptr;
             info.model_requested = c.model_requested;

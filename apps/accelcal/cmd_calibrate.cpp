@@ -387,10 +387,11 @@ Provenance MakeProvenance(const CalibrateArgs& args, const LoadedInput& in,
 
 // The end of every calibrate: the file to -o, then the file to stdout (--json) or the summary
 // (`input_note`, when not empty, printed after the input's description).
+// `mean_sigmas`: the 1σ of each position's mean as the fit took it (empty: none).
 int WriteCalibration(const CalibrateArgs& args, const LoadedInput& in, const Gravity& g,
-                     const CalibrationResult& result, const ModelSelection* selection,
-                     const std::string& input_note, const OrientationFile* orientations = nullptr,
-                     const GyroRun* gyro = nullptr) {
+                     const CalibrationResult& result, const std::vector<Vec3>& mean_sigmas,
+                     const ModelSelection* selection, const std::string& input_note,
+                     const OrientationFile* orientations = nullptr, const GyroRun* gyro = nullptr) {
   DiagnosisInput diagnosis_input;
   diagnosis_input.result = &result;
   diagnosis_input.positions = &in.positions;
@@ -419,6 +420,7 @@ int WriteCalibration(const CalibrateArgs& args, const LoadedInput& in, const Gra
     }
   }
   info.positions = in.positions;
+  info.mean_sigmas = mean_sigmas;
   info.model_selection = selection;
   info.model_requested = args.model;
   info.diagnosis = &diagnosis;
@@ -517,9 +519,11 @@ int RunCalibrateKnownOrientations(const CalibrateArgs& args) {
   if (GyroWanted(args)) {
     // The gyroscope on top of the known directions: its K_g maps into the platform frame.
     const GyroRun gyro = RunGyro(args, in, result);
-    return WriteCalibration(args, in, g, result, nullptr, note, &orientations, &gyro);
+    return WriteCalibration(args, in, g, result, options.reading_sigmas, nullptr, note,
+                            &orientations, &gyro);
   }
-  return WriteCalibration(args, in, g, result, nullptr, note, &orientations);
+  return WriteCalibration(args, in, g, result, options.reading_sigmas, nullptr, note,
+                          &orientations);
 }
 
 }  // namespace
@@ -602,10 +606,11 @@ int RunCalibrate(const CalibrateArgs& args) {
     // The joint fit's accelerometer is the file's: the rotations refined it.
     const CalibrationResult& accel =
         gyro.calibration.accelerometer ? *gyro.calibration.accelerometer : result;
-    return WriteCalibration(args, in, g, accel, selection ? &*selection : nullptr, "", nullptr,
-                            &gyro);
+    return WriteCalibration(args, in, g, accel, options.reading_sigmas,
+                            selection ? &*selection : nullptr, "", nullptr, &gyro);
   }
-  return WriteCalibration(args, in, g, result, selection ? &*selection : nullptr, "");
+  return WriteCalibration(args, in, g, result, options.reading_sigmas,
+                          selection ? &*selection : nullptr, "");
 }
 
 }  // namespace accelcal::cli

@@ -23,15 +23,22 @@ using internal::VisibleLine;
 namespace {
 
 // What the calibration's own positions scattered by beyond their noise [raw]: its residual σ̂
-// less the mean noise of its position means (σ²/n per axis: white samples; a filtered sensor's
-// are noisier, which leaves this larger and the test more lenient). All of σ̂ when its positions
-// carry no noise. The file's σ̂ is there (RunVerify refuses a file without it).
+// less the mean noise of its position means: their `mean_sigma` as the fit took them (from batch
+// means, the samples' correlation included), else σ²/n per axis (white samples; a filtered
+// sensor's are noisier, which leaves this larger and the test more lenient). All of σ̂ when its
+// positions carry no noise. The file's σ̂ is there (RunVerify refuses a file without it).
 double MisfitSigma(const LoadedCalibration& cal) {
   double sum = 0;
   std::size_t count = 0;
   for (const FilePosition& p : cal.positions) {
-    if (p.excluded || !p.std || !p.samples || *p.samples == 0) continue;
-    sum += p.std->squaredNorm() / 3 / static_cast<double>(*p.samples);
+    if (p.excluded) continue;
+    if (p.mean_sigma) {
+      sum += p.mean_sigma->squaredNorm() / 3;
+    } else if (p.std && p.samples && *p.samples > 0) {
+      sum += p.std->squaredNorm() / 3 / static_cast<double>(*p.samples);
+    } else {
+      continue;
+    }
     ++count;
   }
   const double noise2 = count > 0 ? sum / static_cast<double>(count) : 0.0;

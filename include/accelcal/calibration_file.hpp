@@ -69,6 +69,9 @@ struct CalibrationFileInfo {
   std::vector<std::string> sources;
   std::vector<int> position_source;
   std::vector<Position> positions;  ///< the positions that were fitted, same order as the result
+  /// The 1σ of each position's mean as the fit took it (CalibrationOptions::reading_sigmas),
+  /// written as `positions[].mean_sigma`; empty: not written (noise from the residuals).
+  std::vector<Vec3> mean_sigmas;
   /// When the linear and quadratic models were compared (model "auto", or "quadratic" with the
   /// linear fit as comparison): written as `model_selection`.
   const ModelSelection* model_selection = nullptr;
@@ -92,7 +95,8 @@ std::string CalibrationToJson(const CalibrationResult& result, const Calibration
 struct FilePosition {
   Vec3 mean = Vec3::Zero();  ///< raw
   std::optional<std::size_t> samples;
-  std::optional<Vec3> std;  ///< raw, per axis, one sample
+  std::optional<Vec3> std;         ///< raw, per axis, one sample
+  std::optional<Vec3> mean_sigma;  ///< raw, per axis, the 1σ of the mean as the fit took it
   /// `interval`: sample indices [begin, end) and times [s], for positions from a raw log.
   struct Interval {
     double begin = 0, end = 0, t_begin = 0, t_end = 0;

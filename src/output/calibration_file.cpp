@@ -111,6 +111,7 @@ ordered_json AccelerometerSection(const CalibrationResult& result, const Calibra
     entry["mean"] = ToJson(p.mean);
     entry["samples"] = p.samples;
     if (p.std) entry["std"] = ToJson(*p.std);
+    if (k < info.mean_sigmas.size()) entry["mean_sigma"] = ToJson(info.mean_sigmas[k]);
     if (p.interval) {
       entry["interval"] = {{"begin", p.interval->begin},
                            {"end", p.interval->end},

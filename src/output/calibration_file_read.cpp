@@ -143,6 +143,10 @@ FilePosition ReadPosition(const Reader& r, const ordered_json& p) {
     position.samples = p["samples"].get<std::size_t>();
   }
   position.std = r.OptionalVector3(p, "std");
+  position.mean_sigma = r.OptionalVector3(p, "mean_sigma");
+  if (position.mean_sigma && !(position.mean_sigma->minCoeff() >= 0)) {
+    r.Fail(r.Key("mean_sigma") + " must not be negative");
+  }
   if (p.contains("interval")) {
     const ordered_json& i = r.Object(p, "interval");
     const Reader in = r.Inside("interval");

@@ -40,15 +40,16 @@ PowerLawNoise NoiseOf(int term) {
 }
 
 // The correlation of the estimates (AllanCorrelation), for one set of points and any terms:
-// I_ij = ∫ A_i A_j S² dν over ln ν, 256 points an octave from ½ down to 10⁻³/m_max. Where
-// sin⁴(π ν m) turns faster than the grid resolves (ν m ≥ 16) it is replaced by its mean over a
-// period, 3/8; for two such octaves k apart the product's mean over the slower one's period is
-// 35/128 (k = 0), 7/64 (k = 1), 9/64 = (3/8)² (k ≥ 2 or not a power of two apart). So
-// I = Aᵀ diag(w) A, with a_i = sin⁴(π ν m_i) / (m_i² sin² π ν) or (3/8) / (m_i² sin² π ν), plus the
-// corrections of k = 0 and 1 where both are fast; A is the same for every S. S = Σ_t c_t s_t(ν)
-// over the four spectral terms (the rate ramp is not a spectrum), so S² and I are quadratic in c:
-// I = Σ_{t,u} c_t c_u I_tu, the ten I_tu computed once, and each S after costs ten n × n sums
-// (the fit's intervals ask for thousands).
+// I_ij = ∫ A_i A_j S² dν over ln ν, 64 points an octave from ½ down to 10⁻³/m_max (8 a period
+// of sin⁴ where it turns fastest; 256 changed no correlation by more than 4e-5, on 11 and 19
+// octaves of each term and a mix). Where sin⁴(π ν m) turns faster than that (ν m ≥ 16) it is
+// replaced by its mean over a period, 3/8; for two such octaves k apart the product's mean over
+// the slower one's period is 35/128 (k = 0), 7/64 (k = 1), 9/64 = (3/8)² (k ≥ 2 or not a power
+// of two apart). So I = Aᵀ diag(w) A, with a_i = sin⁴(π ν m_i) / (m_i² sin² π ν) or
+// (3/8) / (m_i² sin² π ν), plus the corrections of k = 0 and 1 where both are fast; A is the
+// same for every S. S = Σ_t c_t s_t(ν) over the four spectral terms (the rate ramp is not a
+// spectrum), so S² and I are quadratic in c: I = Σ_{t,u} c_t c_u I_tu, the ten I_tu computed
+// once, and each S after costs ten n × n sums (the fit's intervals ask for thousands).
 class EstimateCorrelation {
  public:
   static constexpr int kSpectral = 4;  // Q, N, B, K
@@ -62,7 +63,7 @@ class EstimateCorrelation {
       m.push_back(static_cast<double>(p.m));
       m_max = std::max(m_max, static_cast<double>(p.m));
     }
-    constexpr int kPerOctave = 256;
+    constexpr int kPerOctave = 64;
     const double step = std::log(2.0) / kPerOctave;
     const auto count = static_cast<Eigen::Index>(std::ceil(std::log(0.5 / (1e-3 / m_max)) / step));
     Eigen::MatrixXd A(count, static_cast<Eigen::Index>(n));
@@ -83,16 +84,22 @@ class EstimateCorrelation {
       for (std::size_t i = 0; i < n; ++i) {
         const bool fast = nu * m[i] >= 16;
         if (fast) fast_until[i] = static_cast<std::size_t>(g) + 1;  // ν falls with g
-        const double s4 = fast ? 0.375 : std::pow(std::sin(kPi * nu * m[i]), 4);
+        const double sine = fast ? 0.0 : std::sin(kPi * nu * m[i]);
+        const double s4 = fast ? 0.375 : (sine * sine) * (sine * sine);
         A(g, static_cast<Eigen::Index>(i)) = s4 / (m[i] * m[i] * sin2);
       }
     }
     Eigen::VectorXd w(count);
+    // The corrections where both points are fast run over the grid's first min(fast_until) rows:
+    // a running sum of w / sin⁴ π ν makes each one a lookup.
+    std::vector<double> running(static_cast<std::size_t>(count) + 1);
     for (int t = 0; t < kSpectral; ++t) {
       for (int u = t; u < kSpectral; ++u) {
+        running[0] = 0;
         for (Eigen::Index g = 0; g < count; ++g) {
-          w(g) = (t == u ? 1.0 : 2.0) * spectra(g, t) * spectra(g, u) *
-                 weight[static_cast<std::size_t>(g)];
+          const auto gi = static_cast<std::size_t>(g);
+          w(g) = (t == u ? 1.0 : 2.0) * spectra(g, t) * spectra(g, u) * weight[gi];
+          running[gi + 1] = running[gi] + w(g) / (s2[gi] * s2[gi]);
         }
         Eigen::MatrixXd I = A.transpose() * w.asDiagonal() * A;
         for (std::size_t i = 0; i < n; ++i) {
@@ -103,11 +110,8 @@ class EstimateCorrelation {
               continue;
             }
             const double excess = apart == 0 ? 35.0 / 128 - 9.0 / 64 : 7.0 / 64 - 9.0 / 64;
-            double sum = 0;
-            for (std::size_t g = 0; g < std::min(fast_until[i], fast_until[j]); ++g) {
-              sum += w(static_cast<Eigen::Index>(g)) * excess /
-                     (m[i] * m[i] * m[j] * m[j] * s2[g] * s2[g]);
-            }
+            const double sum = excess * running[std::min(fast_until[i], fast_until[j])] /
+                               (m[i] * m[i] * m[j] * m[j]);
             I(static_cast<Eigen::Index>(i), static_cast<Eigen::Index>(j)) += sum;
             if (i != j) I(static_cast<Eigen::Index>(j), static_cast<Eigen::Index>(i)) += sum;
           }
@@ -175,21 +179,34 @@ double NoiseModelAvar(const std::array<double, kNoiseTerms>& squared, double tau
 namespace {
 
 // The fit of points whose σ² are near 1 (FitNoiseModel scales them there).
-// A term's upper bound from the Allan deviation alone, for a term the fit puts below 0 beyond its
+// A term's upper bound from the Allan deviation alone: for a term the fit puts below 0 beyond its
 // interval (then the terms do not describe the noise, and c + z σ_c, below 0 too, bounds
-// nothing). Every term adds a variance ≥ 0, so c_j f_j(τ) ≤ σ²(τ) at every τ (f_j the term's
-// avar at c_j = 1), and c_j is at most the least over τ of σ²(τ)'s upper confidence limit over
-// f_j(τ); each limit at 1 − (1 − confidence)/n, so that all n hold together (Bonferroni).
-double EnvelopeBound(const NoiseModelFit& fit, std::size_t term, std::size_t n, double confidence) {
+// nothing), and as the ceiling of the others' upper ends. Every term adds a variance ≥ 0, so c_j
+// f_j(τ) ≤ σ²(τ) at every τ (f_j the term's avar at c_j = 1), and c_j is at most the least over τ
+// of σ²(τ)'s upper confidence limit over f_j(τ); each limit at 1 − (1 − confidence)/n, so that all
+// n hold together (Bonferroni). Each point's σ²(τ) upper limit at 1 − (1 − confidence)/n (0 where
+// σ̂² is 0), for every term.
+std::vector<double> EnvelopeLimits(const NoiseModelFit& fit, double confidence) {
+  const std::size_t n = fit.points.size();
+  const double each = 1 - (1 - confidence) / static_cast<double>(n);
+  std::vector<double> limits(n, 0.0);
+  for (std::size_t i = 0; i < n; ++i) {
+    if (!(fit.points[i].avar > 0)) continue;
+    const double high = AllanDeviationInterval(fit.points[i].avar, fit.edf[i], each).high;
+    limits[i] = high * high;
+  }
+  return limits;
+}
+
+double EnvelopeBound(const NoiseModelFit& fit, const std::vector<double>& limits,
+                     std::size_t term) {
   std::array<double, kNoiseTerms> unit{};
   unit[term] = 1;
-  const double each = 1 - (1 - confidence) / static_cast<double>(n);
   double bound = std::numeric_limits<double>::infinity();
-  for (std::size_t i = 0; i < n; ++i) {
+  for (std::size_t i = 0; i < limits.size(); ++i) {
     const double f = NoiseModelAvar(unit, fit.points[i].tau_s);
-    if (!(f > 0) || !(fit.points[i].avar > 0)) continue;
-    const double high = AllanDeviationInterval(fit.points[i].avar, fit.edf[i], each).high;
-    bound = std::min(bound, high * high / f);
+    if (!(f > 0) || !(limits[i] > 0)) continue;
+    bound = std::min(bound, limits[i] / f);
   }
   return std::isfinite(bound) ? std::sqrt(bound) : 0.0;
 }
@@ -388,6 +405,7 @@ NoiseModelFit FitNear1(const std::vector<AllanPoint>& points, const NoiseFitOpti
   // of 0); with no rate ramp, 11 % of ramps lay beyond 1.96 σ_c(0), none beyond 1.96 σ_c.
   // Where the term does not dominate, σ_c hardly moves and the interval is c ± z σ_c.
   const double z = std::sqrt(internal::ChiSquareQuantile(1 - options.confidence, 1));
+  const std::vector<double> limits = EnvelopeLimits(out, options.confidence);
   std::array<double, kNoiseTerms> estimate{};
   for (Eigen::Index j = 0; j < p; ++j) {
     estimate[static_cast<std::size_t>(fitted[static_cast<std::size_t>(j)])] =
@@ -408,14 +426,14 @@ NoiseModelFit FitNear1(const std::vector<AllanPoint>& points, const NoiseFitOpti
     if (c < -z * sigma_c) {
       // Below 0 beyond its interval: the Allan deviation's own bound.
       out.below_zero.push_back(static_cast<NoiseTerm>(term));
-      e.high = EnvelopeBound(out, term, n, options.confidence);
+      e.high = EnvelopeBound(out, limits, term);
       continue;
     }
     // Above (score): the least c' ≥ max(c, 0) with c' − c ≥ z σ_c(c'), bracketed by doubling up
     // to the Allan deviation's own bound, then halved to 10⁻³ of itself (40 halvings at most: a
     // root at 0 is approached by halves). None below that bound (σ_c growing as fast as c'):
     // that bound.
-    const double envelope = EnvelopeBound(out, term, n, options.confidence);
+    const double envelope = EnvelopeBound(out, limits, term);
     const double ceiling = envelope * envelope;
     const auto holds = [&](double c_prime) { return c_prime - c >= z_sigma_at(c_prime); };
     double lo = std::max(c, 0.0), hi = lo, high = ceiling;

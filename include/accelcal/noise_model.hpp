@@ -70,6 +70,10 @@ struct NoiseFitOptions {
   std::array<bool, kNoiseTerms> terms = {true, true, true, true, true};
   double confidence = 0.95;  ///< of the intervals, two-sided
   int max_iterations = 200;  ///< of the reweighting (71 on the T265 rest's accelerometer y)
+  /// false: the estimates, their σ and z alone, for a caller that needs no interval (calibrate's
+  /// check of its rest): each term's `high` is then c + z σ_c (0 for a term below 0), without
+  /// the score end or the Allan deviation's own bound, and NoiseModelFit::intervals is empty.
+  bool intervals = true;
 };
 
 struct NoiseModelFit {

@@ -332,9 +332,11 @@ std::optional<Finding> DriftFinding(const RawLog& log, const StaticDetectionResu
   if (seconds < kDriftMinRest_s) return std::nullopt;
   NoiseAnalysis noise;
   try {
+    NoiseOptions options;
+    options.fit.intervals = false;  // the terms' z alone are looked at
     noise = AnalyseNoise(std::vector<Vec3>(log.samples.begin() + static_cast<std::ptrdiff_t>(begin),
                                            log.samples.begin() + static_cast<std::ptrdiff_t>(end)),
-                         1 / detection.rate_hz);
+                         1 / detection.rate_hz, options);
   } catch (const DataError&) {
     return std::nullopt;  // a constant (quantised) axis: nothing to see
   }

@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <limits>
 #include <stdexcept>
 
@@ -71,9 +72,30 @@ class EstimateCorrelation {
     Eigen::MatrixXd spectra(count, kSpectral);
     std::vector<double> s2(static_cast<std::size_t>(count)), weight(s2.size());
     std::vector<std::size_t> fast_until(n, 0);  // per point: grid indices below are fast
+    // sin(π ν m) for m = 2^k is sin(π ν') at the grid point k octaves up (ν' = ν 2^k): one table
+    // of sin(π ν_h) for h from 5 octaves above ½ (ν m < 16 where it is needed) serves every
+    // point of a power-of-two m, instead of a sine per point and row.
+    constexpr long kAbove = 5 * kPerOctave + 1;
+    const auto nu_at = [&](long h) {
+      return 0.5 * std::exp(-step * (static_cast<double>(h) + 0.5));
+    };
+    std::vector<double> sines(static_cast<std::size_t>(count) + kAbove);
+    for (long h = -kAbove; h < static_cast<long>(count); ++h) {
+      sines[static_cast<std::size_t>(h + kAbove)] = std::sin(kPi * nu_at(h));
+    }
+    std::vector<long> octave(n, -1);  // log2 m, −1 where m is not a power of two
+    for (std::size_t i = 0; i < n; ++i) {
+      const auto whole = static_cast<std::uint64_t>(m[i]);
+      if ((whole & (whole - 1)) == 0) {
+        long k = 0;
+        while ((std::uint64_t{1} << k) < whole) ++k;
+        octave[i] = k;
+      }
+    }
     for (Eigen::Index g = 0; g < count; ++g) {
-      const double nu = 0.5 * std::exp(-step * (static_cast<double>(g) + 0.5));
-      const double sin2 = std::sin(kPi * nu) * std::sin(kPi * nu);
+      const double nu = nu_at(static_cast<long>(g));
+      const double sin2 =
+          sines[static_cast<std::size_t>(g + kAbove)] * sines[static_cast<std::size_t>(g + kAbove)];
       s2[static_cast<std::size_t>(g)] = sin2;
       weight[static_cast<std::size_t>(g)] = nu * step;  // dν = ν d(ln ν)
       const double two_pi_f = 2 * kPi * nu / tau0;
@@ -83,8 +105,12 @@ class EstimateCorrelation {
       spectra(g, 3) = 1 / (two_pi_f * two_pi_f);
       for (std::size_t i = 0; i < n; ++i) {
         const bool fast = nu * m[i] >= 16;
-        if (fast) fast_until[i] = static_cast<std::size_t>(g) + 1;  // ν falls with g
-        const double sine = fast ? 0.0 : std::sin(kPi * nu * m[i]);
+        if (fast) fast_until[i] = static_cast<std::size_t>(g) + 1;      // ν falls with g
+        const long up = static_cast<long>(g) - kPerOctave * octave[i];  // ν' = ν m's grid index
+        const double sine = fast ? 0.0
+                            : octave[i] >= 0 && up >= -kAbove
+                                ? sines[static_cast<std::size_t>(up + kAbove)]
+                                : std::sin(kPi * nu * m[i]);
         const double s4 = fast ? 0.375 : (sine * sine) * (sine * sine);
         A(g, static_cast<Eigen::Index>(i)) = s4 / (m[i] * m[i] * sin2);
       }
@@ -338,7 +364,10 @@ NoiseModelFit FitNear1(const std::vector<AllanPoint>& points, const NoiseFitOpti
   }
   for (std::size_t i = 0; i < n; ++i) {
     out.model_avar.push_back(NoiseModelAvar(squared, points[i].tau_s));
-    out.intervals.push_back(AllanDeviationInterval(points[i].avar, out.edf[i], options.confidence));
+    if (options.intervals) {
+      out.intervals.push_back(
+          AllanDeviationInterval(points[i].avar, out.edf[i], options.confidence));
+    }
   }
   // The points' covariance Σ = D ρ D were the terms' squares `hypothesis` (each ≥ 0): D each
   // point's σ², split by term, times √(2/edf) of each; ρ the correlation of that spectrum.
@@ -405,7 +434,8 @@ NoiseModelFit FitNear1(const std::vector<AllanPoint>& points, const NoiseFitOpti
   // of 0); with no rate ramp, 11 % of ramps lay beyond 1.96 σ_c(0), none beyond 1.96 σ_c.
   // Where the term does not dominate, σ_c hardly moves and the interval is c ± z σ_c.
   const double z = std::sqrt(internal::ChiSquareQuantile(1 - options.confidence, 1));
-  const std::vector<double> limits = EnvelopeLimits(out, options.confidence);
+  const std::vector<double> limits =
+      options.intervals ? EnvelopeLimits(out, options.confidence) : std::vector<double>{};
   std::array<double, kNoiseTerms> estimate{};
   for (Eigen::Index j = 0; j < p; ++j) {
     estimate[static_cast<std::size_t>(fitted[static_cast<std::size_t>(j)])] =
@@ -426,7 +456,16 @@ NoiseModelFit FitNear1(const std::vector<AllanPoint>& points, const NoiseFitOpti
     if (c < -z * sigma_c) {
       // Below 0 beyond its interval: the Allan deviation's own bound.
       out.below_zero.push_back(static_cast<NoiseTerm>(term));
-      e.high = EnvelopeBound(out, limits, term);
+      if (options.intervals) e.high = EnvelopeBound(out, limits, term);
+      continue;
+    }
+    if (!options.intervals) {  // the estimates and their z alone
+      e.resolved = c > z * sigma_c;
+      e.high = std::sqrt(std::max(0.0, c + z * sigma_c));
+      if (e.resolved) {
+        e.low = std::sqrt(c - z * sigma_c);
+        e.sigma = sigma_c / (2 * e.value);
+      }
       continue;
     }
     // Above (score): the least c' ≥ max(c, 0) with c' − c ≥ z σ_c(c'), bracketed by doubling up

@@ -276,5 +276,30 @@ TEST(NoiseModel, AnUnresolvedTermIsBoundedNoHigherThanTheAllanDeviationAllows) {
   EXPECT_GT(capped, 0);  // the bound is reached, not merely respected
 }
 
+TEST(NoiseModel, WithoutIntervalsTheEstimatesAreTheSame) {
+  // calibrate's check of its rest asks for the terms' z alone: the same fit, no interval search.
+  AllanOptions options;
+  options.sample_period_s = 0.01;
+  const double g = 9.80665;
+  const std::vector<AllanPoint> points = AllanVariance(
+      SimulateNoise({0, 100e-6 * g, 20e-6 * g, 30e-6 * g, 0}, 1 << 14, 0.01, 5), options);
+  NoiseFitOptions bare;
+  bare.intervals = false;
+  const NoiseModelFit full = FitNoiseModel(points), fit = FitNoiseModel(points, bare);
+  EXPECT_TRUE(fit.intervals.empty());
+  EXPECT_EQ(full.intervals.size(), points.size());
+  for (int t = 0; t < kNoiseTerms; ++t) {
+    const NoiseTermEstimate &a = full.terms[std::size_t(t)], &b = fit.terms[std::size_t(t)];
+    EXPECT_EQ(a.value, b.value) << t;
+    EXPECT_EQ(a.z, b.z) << t;
+    EXPECT_EQ(a.resolved, b.resolved) << t;
+    EXPECT_EQ(a.low, b.low) << t;
+    if (b.resolved) {  // the Wald end c + z σ_c, σ_c = c / Z
+      const double c = b.value * b.value;
+      EXPECT_NEAR(b.high * b.high / (c * (1 + 1.959963984540054 / b.z)), 1, 1e-12) << t;
+    }
+  }
+}
+
 }  // namespace
 }  // namespace accelcal

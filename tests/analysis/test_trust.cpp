@@ -39,14 +39,14 @@ ModelParameters MemsDevice() {
 }
 
 // A simulated raw log of MemsDevice: 24 random positions, 5 s still each, 2 s turns, 100 Hz.
-SimulatedLog MemsLog(double sigma, std::uint64_t seed = 3) {
+SimulatedLog MemsLog(double sigma, std::uint64_t seed = 3, int positions = 24) {
   RawLogSimulation o;
   o.rate_hz = 100;
   o.static_s = 5;
   o.transition_s = 2;
   o.sigma_raw_per_sample = Vec3::Constant(sigma);
   o.seed = seed;
-  return SimulateRawLog(MemsDevice(), kG, RandomDirections(24, seed), o);
+  return SimulateRawLog(MemsDevice(), kG, RandomDirections(positions, seed), o);
 }
 
 // The log as text: a header, then time (scaled by `time_scale` and printed with `time_format`)
@@ -307,18 +307,10 @@ TEST_F(Trust, AQuantisedLogCalibratesRight) {
   EXPECT_FALSE(Has(doc, "exact_fit"));
 }
 
-// 5. Duplicated rows (a positions file concatenated with itself): refused, not an exact fit with
-// uncertainties of 1e-12.
 // 4b. As many positions as parameters: the fit passes through all of them, so nothing checks it
 // (no residual, no covariance, no held-out position). It had said "ok".
 TEST_F(Trust, AnExactlyDeterminedFitIsNotOk) {
-  RawLogSimulation o;
-  o.rate_hz = 100;
-  o.static_s = 5;
-  o.transition_s = 2;
-  o.sigma_raw_per_sample = Vec3::Constant(0.001);
-  o.seed = 9;
-  const SimulatedLog log = SimulateRawLog(MemsDevice(), kG, RandomDirections(9, 9), o);
+  const SimulatedLog log = MemsLog(0.001, 9, 9);
   const CliRun r = Exec("calibrate " + Write("nine.csv", LogText(log, "t,x,y,z", 1, "%.4f", 6)) +
                         " -o " + Path("nine.json"));
   ASSERT_EQ(r.status, 0) << r.err;
@@ -329,6 +321,8 @@ TEST_F(Trust, AnExactlyDeterminedFitIsNotOk) {
   EXPECT_EQ(doc.at("verdict"), "warnings");
 }
 
+// 5. Duplicated rows (a positions file concatenated with itself): refused, not an exact fit with
+// uncertainties of 1e-12.
 TEST_F(Trust, RepeatedPositionsAreRefused) {
   const std::string positions =
       Slurp(kData + "/ctu-innalabs-ahrs-m3/measured_accelerations_24pos.csv");

@@ -10,6 +10,22 @@
 
 namespace accelcal {
 
+namespace {
+
+// A run of samples long enough for its batch means (not joined across a disturbance).
+bool Batched(const StaticInterval& in) {
+  return in.averaged == 0 &&
+         in.end - in.begin >= kPositionNoiseBatches * kPositionNoiseMinBatchSamples;
+}
+
+// The samples a position's mean averages (at least 1).
+double Averaged(const Position& p) {
+  return static_cast<double>(
+      std::max<std::size_t>(1, p.interval ? p.interval->count() : p.samples));
+}
+
+}  // namespace
+
 Vec3 PositionMeanVariance(const RawLog& log, const Position& position) {
   if (!position.interval) {
     throw std::invalid_argument("PositionMeanVariance: a position without its interval");
@@ -20,9 +36,7 @@ Vec3 PositionMeanVariance(const RawLog& log, const Position& position) {
   }
   const std::size_t n = in.end - in.begin;
   const Vec3 std = position.std.value_or(in.std);
-  if (in.averaged > 0 || n < kPositionNoiseBatches * kPositionNoiseMinBatchSamples) {
-    return std.cwiseProduct(std) / static_cast<double>(std::max<std::size_t>(1, in.count()));
-  }
+  if (!Batched(in)) return std.cwiseProduct(std) / Averaged(position);
   const std::size_t size = n / kPositionNoiseBatches;
   std::array<Vec3, kPositionNoiseBatches> means;
   for (std::size_t b = 0; b < kPositionNoiseBatches; ++b) {
@@ -55,24 +69,15 @@ PositionNoise PoolPositionNoise(const std::vector<Position>& positions,
   PositionNoise out;
   std::array<std::vector<double>, 3> per_sample;
   for (std::size_t k = 0; k < positions.size(); ++k) {
-    const std::size_t count =
-        positions[k].interval ? positions[k].interval->count() : positions[k].samples;
-    const Vec3 v = mean_variances[k] * static_cast<double>(std::max<std::size_t>(1, count));
+    const Vec3 v = mean_variances[k] * Averaged(positions[k]);
     for (int a = 0; a < 3; ++a) per_sample[std::size_t(a)].push_back(v(a));
-    const StaticInterval* in = positions[k].interval ? &*positions[k].interval : nullptr;
-    if (in && in->averaged == 0 &&
-        in->end - in->begin >= kPositionNoiseBatches * kPositionNoiseMinBatchSamples) {
-      ++out.batched;
-    }
+    if (positions[k].interval && Batched(*positions[k].interval)) ++out.batched;
   }
   for (int a = 0; a < 3; ++a) {
     out.per_sample_variance(a) = internal::Median(per_sample[std::size_t(a)]);
   }
   for (const Position& p : positions) {
-    const std::size_t count = p.interval ? p.interval->count() : p.samples;
-    out.sigmas.push_back(
-        (out.per_sample_variance / static_cast<double>(std::max<std::size_t>(1, count)))
-            .cwiseSqrt());
+    out.sigmas.push_back((out.per_sample_variance / Averaged(p)).cwiseSqrt());
   }
   return out;
 }

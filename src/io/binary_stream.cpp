@@ -1,0 +1,57 @@
+#include "io/binary_stream.hpp"
+
+#include <algorithm>
+
+namespace accelcal::internal {
+
+namespace {
+// Read this much at a time: a record is far smaller (a ULog message at most 64 KiB), and the
+// block stays in the core's second-level cache while its records are decoded.
+constexpr std::size_t kBlockBytes = std::size_t{1} << 18;
+}  // namespace
+
+BinaryStream::BinaryStream(InputFile* file, std::string already_read)
+    : file_(file),
+      name_(file->name()),
+      buffer_(already_read.begin(), already_read.end()),
+      end_(already_read.size()) {}
+
+BinaryStream::BinaryStream(std::string bytes, std::string name)
+    : file_(nullptr),
+      name_(std::move(name)),
+      buffer_(bytes.begin(), bytes.end()),
+      end_(bytes.size()),
+      eof_(true) {}
+
+void BinaryStream::Fill(std::size_t n) {
+  // Move what is left to the front, then read whole blocks until n bytes are there.
+  if (begin_ > 0) {
+    // The hash has seen every byte already in the buffer.
+    std::memmove(buffer_.data(), buffer_.data() + begin_, end_ - begin_);
+    end_ -= begin_;
+    begin_ = 0;
+  }
+  while (end_ < n && !eof_) {
+    const std::size_t want = std::max(n - end_, kBlockBytes);
+    if (buffer_.size() < end_ + want) buffer_.resize(end_ + want);
+    const std::size_t got = file_->ReadFully(reinterpret_cast<char*>(buffer_.data() + end_), want);
+    if (hash_ != nullptr) hash_->Update(buffer_.data() + end_, got);
+    end_ += got;
+    if (got < want) eof_ = true;
+  }
+}
+
+bool BinaryStream::Need(std::size_t n) {
+  if (end_ - begin_ < n) Fill(n);
+  return end_ - begin_ >= n;
+}
+
+void BinaryStream::Drain() {
+  while (true) {
+    Skip(end_ - begin_);
+    if (eof_) return;
+    Fill(kBlockBytes);
+  }
+}
+
+}  // namespace accelcal::internal

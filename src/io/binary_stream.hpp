@@ -1,0 +1,68 @@
+#pragma once
+// A binary input read forward in bounded memory (the native log readers: ulog.cpp, ...): an
+// InputFile in blocks, with the bytes a record needs made contiguous, each byte's offset in the
+// input known for messages, and every byte read optionally hashed (a calibration's provenance).
+// Little-endian values are read from the bytes without alignment (memcpy).
+
+#include <cstddef>
+#include <cstdint>
+#include <cstring>
+#include <string>
+#include <vector>
+
+#include "accelcal/sha256.hpp"
+#include "io/input_file.hpp"
+
+namespace accelcal::internal {
+
+class BinaryStream {
+ public:
+  /// Reads from `file` (which must outlive this), after `already_read`: the bytes its caller read
+  /// first (to tell what the file is), which are the input's first.
+  BinaryStream(InputFile* file, std::string already_read);
+  /// The bytes of an input already in memory, named `name` in messages.
+  BinaryStream(std::string bytes, std::string name);
+  /// Every byte from the input's start also goes into `hash`; call before the first Need.
+  void Fingerprint(Sha256* hash) {
+    hash_ = hash;
+    hash_->Update(buffer_.data(), end_);  // the bytes read first
+  }
+
+  /// Makes the next `n` bytes contiguous at data(); false when the input ends first (then
+  /// available() says how many there are).
+  bool Need(std::size_t n);
+  const unsigned char* data() const { return buffer_.data() + begin_; }
+  std::size_t available() const { return end_ - begin_; }
+  /// Consumes `n` bytes (at most available()).
+  void Skip(std::size_t n) {
+    begin_ += n;
+    offset_ += n;
+  }
+  /// The input offset of data()[0].
+  std::uint64_t offset() const { return offset_; }
+  /// Reads and hashes the rest of the input (so that a fingerprint covers every byte), dropping it.
+  void Drain();
+  const std::string& name() const { return name_; }
+
+ private:
+  void Fill(std::size_t n);
+
+  InputFile* file_;  // nullptr: all the input is in the buffer
+  std::string name_;
+  Sha256* hash_ = nullptr;
+  std::vector<unsigned char> buffer_;
+  std::size_t begin_ = 0, end_ = 0;
+  std::uint64_t offset_ = 0;
+  bool eof_ = false;
+};
+
+/// A little-endian value of type T at `p` (any alignment).
+template <typename T>
+T LoadLittle(const unsigned char* p) {
+  static_assert(sizeof(T) <= 8, "scalars only");
+  T v;
+  std::memcpy(&v, p, sizeof(T));  // x86-64 and the ARM builds are little-endian
+  return v;
+}
+
+}  // namespace accelcal::internal

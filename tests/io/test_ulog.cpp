@@ -1,0 +1,158 @@
+// The ULog reader against pyulog's decoding of PX4's own sample log (data/px4-ulog): the same
+// numbers, exactly (pyulog writes each float32 as the double it is).
+#include <cstdio>
+#include <fstream>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include <gtest/gtest.h>
+
+#include "accelcal/error.hpp"
+#include "io/binary_stream.hpp"
+#include "io/input_file.hpp"
+#include "io/ulog.hpp"
+
+namespace accelcal::internal {
+namespace {
+
+const std::string kDir = std::string(ACCELCAL_DATA_DIR) + "/px4-ulog/";
+
+ULogContents Read(const std::string& path,
+                  const std::function<bool(const std::string&, int)>& keep) {
+  InputFile file(path, std::size_t{1} << 30);
+  BinaryStream in(&file, "");
+  return ReadULog(in, keep);
+}
+
+struct Csv {
+  std::vector<std::string> header;
+  std::vector<std::vector<double>> rows;
+};
+Csv ReadCsv(const std::string& path) {
+  std::ifstream f(path);
+  Csv out;
+  std::string line;
+  std::getline(f, line);
+  std::stringstream h(line);
+  for (std::string name; std::getline(h, name, ',');) out.header.push_back(name);
+  while (std::getline(f, line)) {
+    std::stringstream r(line);
+    std::vector<double> row;
+    for (std::string v; std::getline(r, v, ',');) row.push_back(std::stod(v));
+    out.rows.push_back(row);
+  }
+  return out;
+}
+
+const ULogStream* Find(const ULogContents& c, const std::string& topic, int multi_id) {
+  for (const ULogStream& s : c.streams) {
+    if (s.topic == topic && s.multi_id == multi_id) return &s;
+  }
+  return nullptr;
+}
+
+// Every column of pyulog's reference, every message, bit for bit.
+void ExpectSameAsPyulog(const ULogContents& c, const std::string& topic, int multi_id,
+                        const std::string& csv) {
+  SCOPED_TRACE(topic + "." + std::to_string(multi_id));
+  const ULogStream* s = Find(c, topic, multi_id);
+  ASSERT_NE(s, nullptr);
+  ASSERT_TRUE(s->kept);
+  const Csv ref = ReadCsv(csv);
+  ASSERT_EQ(s->messages, ref.rows.size());
+  const std::size_t width = s->columns.size();
+  for (std::size_t j = 0; j < ref.header.size(); ++j) {
+    const auto it = std::find(s->columns.begin(), s->columns.end(), ref.header[j]);
+    ASSERT_NE(it, s->columns.end()) << ref.header[j];
+    const std::size_t col = std::size_t(it - s->columns.begin());
+    for (std::size_t i = 0; i < ref.rows.size(); ++i) {
+      ASSERT_EQ(s->values[i * width + col], ref.rows[i][j]) << ref.header[j] << " row " << i;
+    }
+  }
+  EXPECT_EQ(s->first_us, static_cast<std::uint64_t>(ref.rows.front()[0]));
+  EXPECT_EQ(s->last_us, static_cast<std::uint64_t>(ref.rows.back()[0]));
+}
+
+TEST(ULog, SameNumbersAsPyulogOnPx4SampleLog) {
+  const ULogContents c = Read(kDir + "sample_log_small.ulg", [](const std::string& topic, int) {
+    return topic == "sensor_accel" || topic == "sensor_combined";
+  });
+  EXPECT_FALSE(c.truncated.has_value()) << *c.truncated;
+  for (int i = 0; i < 3; ++i) {
+    ExpectSameAsPyulog(c, "sensor_accel", i,
+                       kDir + "sample_log_small.sensor_accel." + std::to_string(i) + ".pyulog.csv");
+  }
+  ExpectSameAsPyulog(c, "sensor_combined", 0,
+                     kDir + "sample_log_small.sensor_combined.0.pyulog.csv");
+  // Three accelerometers, each with its own device id.
+  ASSERT_NE(Find(c, "sensor_accel", 0)->device_id, std::nullopt);
+  EXPECT_EQ(*Find(c, "sensor_accel", 0)->device_id, 2424842u);
+  // Streams not kept are counted, not stored.
+  const ULogStream* other = Find(c, "sensor_gyro", 0);
+  if (other != nullptr) {
+    EXPECT_FALSE(other->kept);
+    EXPECT_TRUE(other->values.empty());
+  }
+  EXPECT_GT(c.parameters.size(), 100u);
+  EXPECT_EQ(c.info.count("sys_name"), 1u);
+}
+
+std::string Bytes(const std::string& path) {
+  std::ifstream f(path, std::ios::binary);
+  return std::string(std::istreambuf_iterator<char>(f), {});
+}
+
+std::string WriteTemp(const std::string& bytes, const char* name) {
+  const std::string path = ::testing::TempDir() + name;
+  std::ofstream(path, std::ios::binary) << bytes;
+  return path;
+}
+
+// A log cut short (as a crashed vehicle's): what is whole, and where it stopped.
+TEST(ULog, TruncatedLogGivesWhatIsWholeAndSaysWhere) {
+  const std::string all = Bytes(kDir + "sample_log_small.ulg");
+  const auto keep = [](const std::string& t, int) { return t == "sensor_combined"; };
+  const ULogContents whole = Read(kDir + "sample_log_small.ulg", keep);
+  const std::size_t n = whole.streams.empty() ? 0 : Find(whole, "sensor_combined", 0)->messages;
+  const ULogContents cut = Read(WriteTemp(all.substr(0, all.size() / 2 + 7), "cut.ulg"), keep);
+  ASSERT_TRUE(cut.truncated.has_value());
+  EXPECT_NE(cut.truncated->find("ends inside a message"), std::string::npos) << *cut.truncated;
+  const ULogStream* s = Find(cut, "sensor_combined", 0);
+  ASSERT_NE(s, nullptr);
+  EXPECT_GT(s->messages, n / 4);
+  EXPECT_LT(s->messages, n);
+  // The messages read are the whole log's first ones.
+  const ULogStream* w = Find(whole, "sensor_combined", 0);
+  for (std::size_t i = 0; i < s->values.size(); ++i) ASSERT_EQ(s->values[i], w->values[i]);
+}
+
+// Corruption is an error naming the byte, never a silent stop.
+TEST(ULog, CorruptMessageTypeIsAnErrorAtItsByte) {
+  std::string all = Bytes(kDir + "sample_log_small.ulg");
+  // Walk the messages to the 1000th and give it an unknown type.
+  std::size_t at = 16;
+  for (int i = 0; i < 1000; ++i) {
+    at += 3 + static_cast<unsigned char>(all[at]) + 256 * static_cast<unsigned char>(all[at + 1]);
+  }
+  all[at + 2] = 'Z';
+  try {
+    Read(WriteTemp(all, "corrupt.ulg"), [](const std::string&, int) { return false; });
+    FAIL() << "no error";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("byte " + std::to_string(at) + ":"), std::string::npos)
+        << e.what();
+    EXPECT_NE(std::string(e.what()).find("unknown message type"), std::string::npos) << e.what();
+  }
+}
+
+TEST(ULog, NotAULogIsRefused) {
+  EXPECT_THROW(
+      Read(WriteTemp("ULog\x01\x12", "short.ulg"), [](const std::string&, int) { return true; }),
+      InputError);
+  EXPECT_FALSE(IsULog("ULog\x01\x12"));
+  EXPECT_TRUE(IsULog(std::string("ULog\x01\x12\x35\x01", 8)));
+}
+
+}  // namespace
+}  // namespace accelcal::internal

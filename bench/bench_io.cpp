@@ -2,14 +2,19 @@
 // SHA-256 of its bytes that a calibration file's provenance records (on the CPU's SHA extensions
 // when it has them, and the portable block function).
 #include <chrono>
+#include <cmath>
 #include <cstdint>
+#include <cstdio>
 #include <thread>
 
 #include <benchmark/benchmark.h>
 
 #include "accelcal/log_reader.hpp"
+#include "accelcal/native_log.hpp"
 #include "accelcal/sha256.hpp"
+#include "accelcal/simulate.hpp"
 #include "accelcal/static_detection.hpp"
+#include "accelcal/ulog_writer.hpp"
 
 namespace accelcal {
 namespace {
@@ -25,6 +30,57 @@ void BM_ParseXsens(benchmark::State& state) {
   state.SetBytesProcessed(static_cast<int64_t>(state.iterations() * text.size()));
 }
 BENCHMARK(BM_ParseXsens)->Unit(benchmark::kMillisecond);
+
+// A PX4 ULog (issue 20: >= 500 MB/s): PX4's flight log (0.9 MB, 60 topics) parsed in memory,
+// its one IMU stream at 200 Hz kept (argument 1: sensor_combined chosen) or every stream only
+// counted (0: InspectLog's pass, on the file); and a simulated session (5.6 MB, one stream, every
+// message kept), from the file with its SHA-256.
+const std::string kULog = std::string(ACCELCAL_DATA_DIR) + "/px4-ulog/sample_log_small.ulg";
+void BM_ParsePx4ULog(benchmark::State& state) {
+  const std::string bytes = ReadFileToString(kULog);
+  ReadOptions options;
+  options.topic = "sensor_combined";
+  for (auto _ : state) {
+    if (state.range(0) != 0) {
+      const InputData d = ParseInput(bytes, kULog, options);
+      benchmark::DoNotOptimize(d.raw.samples.data());
+    } else {
+      const LogInventory log = InspectLog(kULog);
+      benchmark::DoNotOptimize(log.streams.data());
+    }
+  }
+  state.SetLabel(state.range(0) != 0 ? "sensor_combined kept" : "inspect (file)");
+  state.SetBytesProcessed(static_cast<int64_t>(state.iterations() * bytes.size()));
+}
+BENCHMARK(BM_ParsePx4ULog)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond);
+
+void BM_ReadSimulatedULog(benchmark::State& state) {
+  const std::string path = "/tmp/accelcal_bench_session.ulg";
+  {
+    // yang2012's 18 positions, 60 s each and 4 s turns, at 100 Hz: 115 200 messages.
+    std::FILE* f = std::fopen(path.c_str(), "wb");
+    const ULogAccelWriter writer;
+    const std::string header = writer.Header();
+    std::fwrite(header.data(), 1, header.size(), f);
+    RawLogSimulation sim;
+    SimulateRawLog(Yang2012Truth(), 9.80665, Yang18Directions(), sim, [&](double t, const Vec3& p) {
+      const std::string m = writer.Sample(static_cast<std::uint64_t>(std::llround(t * 1e6)), p);
+      std::fwrite(m.data(), 1, m.size(), f);
+    });
+    std::fclose(f);
+  }
+  ReadOptions options;
+  options.fingerprint = true;
+  std::size_t bytes = 0;
+  for (auto _ : state) {
+    const InputData d = ReadInput(path, options);
+    bytes = d.bytes;
+    benchmark::DoNotOptimize(d.raw.samples.data());
+  }
+  std::remove(path.c_str());
+  state.SetBytesProcessed(static_cast<int64_t>(state.iterations() * bytes));
+}
+BENCHMARK(BM_ReadSimulatedULog)->Unit(benchmark::kMillisecond)->UseRealTime();
 
 // Reading the file as the tool does, in blocks, with the provenance's SHA-256 on a second thread
 // (argument 1) or without it (0): the difference is what the parser waits for the hash. Wall time,

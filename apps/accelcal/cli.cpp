@@ -39,7 +39,10 @@ void AddInputOptions(CLI::App* cmd, InputArgs* in, bool with_kind) {
       ->capture_default_str();
   cmd->add_option("--instance", in->instance,
                   "the sensor to read from a file that interleaves several (its value in the "
-                  "i, instance, multi_id, device_id or imu column)");
+                  "i, instance, multi_id, device_id or imu column; a ULog topic's multi id)");
+  cmd->add_option("--topic", in->topic,
+                  "the stream to read from a binary log (a ULog topic such as sensor_accel; "
+                  "default: its only accelerometer stream)");
 }
 
 void AddDetectionOptions(CLI::App* cmd, InputArgs* in) {
@@ -98,9 +101,9 @@ std::vector<std::pair<std::string, std::vector<std::string>>> GivenOptions(
 // The first argument that names a command, or "" when none does (a command missing from this
 // list is only slower to start: every command's options are then set up).
 std::string ChosenCommand(int argc, char** argv) {
-  static constexpr const char* kCommands[] = {"calibrate", "compare",    "detect",       "noise",
-                                              "design",    "montecarlo", "system-level", "gimbal",
-                                              "simulate",  "apply",      "report",       "export"};
+  static constexpr const char* kCommands[] = {
+      "calibrate",    "compare", "detect",   "inspect", "noise",  "design", "montecarlo",
+      "system-level", "gimbal",  "simulate", "apply",   "report", "export"};
   for (int i = 1; i < argc; ++i) {
     for (const char* command : kCommands) {
       if (std::string_view(argv[i]) == command) return command;
@@ -271,6 +274,14 @@ int accelcal::cli::RunCommandLine(int argc, char** argv) {
     detect->add_flag("--json", det.json, "machine-readable output");
   }
 
+  InspectArgs ins;
+  CLI::App* inspect = app.add_subcommand(
+      "inspect", "what a binary log (PX4 ULog) holds: its topics, instances, rates, parameters");
+  if (Wanted(inspect)) {
+    inspect->add_option("LOG", ins.path, "binary log")->required();
+    inspect->add_flag("--json", ins.json, "machine-readable output");
+  }
+
   NoiseArgs noi;
   CLI::App* noise = app.add_subcommand(
       "noise", "the Allan deviation of a still log and its noise terms (IEEE Std 952)");
@@ -410,6 +421,10 @@ int accelcal::cli::RunCommandLine(int argc, char** argv) {
     simulate->add_flag("--raw", sim.raw, "write a raw log (time,x,y,z) instead of positions");
     simulate->add_flag("!--positions-out", sim.raw,
                        "write a positions file x,y,z,n,sx,sy,sz (the default)");
+    simulate
+        ->add_option("--format", sim.format,
+                     "of a raw log: csv (time,x,y,z) or ulog (PX4's sensor_accel, float32)")
+        ->capture_default_str();
     simulate->add_option("-o,--output", sim.output, "output file (default: stdout)")
         ->check(kFileName);
   }
@@ -589,6 +604,10 @@ int accelcal::cli::RunCommandLine(int argc, char** argv) {
     if (*detect) {
       data_subject = det.input.path;
       return RunDetect(det);
+    }
+    if (*inspect) {
+      data_subject = ins.path;
+      return RunInspect(ins);
     }
     if (*noise) {
       CheckGyroFlags(*noise, noi.gyro, noi.gyro_columns, {});

@@ -66,6 +66,10 @@ ReadOptions MakeReadOptions(const InputArgs& in) {
     throw UsageError("--instance must be a finite number");
   }
   options.instance = in.instance;
+  if (in.topic) {
+    if (in.topic->empty()) throw UsageError("--topic: an empty topic name");
+    options.topic = *in.topic;
+  }
   return options;
 }
 

@@ -13,6 +13,7 @@
 
 #include "accelcal/simulate.hpp"
 #include "accelcal/system_level.hpp"
+#include "accelcal/ulog_writer.hpp"
 #include "cli_common.hpp"
 #include "output.hpp"
 
@@ -57,6 +58,12 @@ void CheckSimulatedSamples(double samples, const char* options) {
 
 int RunSimulate(const SimulateArgs& args) {
   CheckOutputs({{"-o", args.output}}, {args.truth, args.positions});
+  if (args.format != "csv" && args.format != "ulog") {
+    throw UsageError("--format is csv or ulog, not \"" + args.format + "\"");
+  }
+  if (args.format == "ulog" && (!args.raw || args.scenario == "wu2018-system")) {
+    throw UsageError("--format ulog writes a raw log: give --raw (and no wu2018-system scenario)");
+  }
   if (args.scenario == "wu2018-system") {
     if (!args.truth.empty() || !args.positions.empty() || args.noise_density_ug || args.raw) {
       throw UsageError("--scenario wu2018-system takes only --seed, --rate, --duration and -o");
@@ -141,6 +148,15 @@ int RunSimulate(const SimulateArgs& args) {
     CheckSimulatedSamples(SimulatedSampleCount(directions.size(), options),
                           "positions x (--duration + --transition) x --rate");
     OutputFile file(args.output.empty() ? "-" : args.output);  // streamed, never held whole
+    if (args.format == "ulog") {
+      const ULogAccelWriter writer;
+      file.Write(writer.Header());
+      SimulateRawLog(truth, gravity, directions, options, [&](double t, const Vec3& p) {
+        file.Write(writer.Sample(static_cast<std::uint64_t>(std::llround(t * 1e6)), p));
+      });
+      file.Commit();
+      return kExitOk;
+    }
     file.Write("time,x,y,z\n");
     SimulateRawLog(truth, gravity, directions, options, [&](double t, const Vec3& p) {
       file.Write(FormatNumber(t) + "," + FormatNumber(p(0)) + "," + FormatNumber(p(1)) + "," +

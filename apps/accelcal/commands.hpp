@@ -48,8 +48,9 @@ struct InputArgs {
   std::string input_kind = "auto";
   std::vector<std::string> columns;
   std::optional<double> rate_hz;
-  std::string time_unit = "auto";  // TimeUnit
-  std::optional<double> instance;  // ReadOptions::instance
+  std::string time_unit = "auto";    // TimeUnit
+  std::optional<double> instance;    // ReadOptions::instance
+  std::optional<std::string> topic;  // ReadOptions::topic
   StaticDetectionOptions detection;
 };
 
@@ -112,6 +113,11 @@ struct CompareArgs {
   std::string gyro;  // the gyroscope's log (ReadGyroLog): its estimators compared too
   std::vector<std::string> gyro_columns;
   std::string gyro_units = "raw";
+};
+
+struct InspectArgs {
+  std::string path;
+  bool json = false;
 };
 
 struct DetectArgs {
@@ -205,7 +211,8 @@ struct SimulateArgs {
   bool rate_given = false, duration_given = false;  // wu2018-system has its own defaults
   double transition_s = 4;
   std::uint64_t seed = 1;
-  bool raw = false;  // raw log instead of a positions file
+  bool raw = false;            // raw log instead of a positions file
+  std::string format = "csv";  // of a raw log: csv or ulog
   std::string output;
 };
 
@@ -230,6 +237,7 @@ int RunSimulate(const SimulateArgs& args);
 int RunMonteCarlo(const MonteCarloArgs& args);
 int RunDesign(const DesignArgs& args);
 int RunDetect(const DetectArgs& args);
+int RunInspect(const InspectArgs& args);
 int RunCompare(const CompareArgs& args);
 int RunApply(const ApplyArgs& args);
 int RunNoise(const NoiseArgs& args);

@@ -59,6 +59,10 @@ struct ReadOptions {
   /// imu_id, sensor_id, id) may hold several sensors' rows: with more than one value there, the
   /// file is refused (InputError listing them) unless `instance` picks one, whose rows are kept.
   std::optional<double> instance;
+  /// A binary log (native_log.hpp) holds several streams: the topic to read (its instance by
+  /// `instance`). Empty: the log's only accelerometer stream (KnownStreams), an InputError listing
+  /// them when there are several. A text file with a topic given is an InputError.
+  std::string topic{};
   /// An input that is not a regular file (a pipe, standard input, a device such as /dev/zero) is
   /// refused (InputError) beyond this many bytes: it has no size to check first, and the reader
   /// must not read forever. 1 GiB: about 5 hours of a 1 kHz log as text (its samples then take
@@ -84,13 +88,18 @@ struct RawLog {
   /// Seconds from the first sample (time->origin_s is that sample's time); empty when the file
   /// has no time column.
   std::vector<double> time_s;
-  std::vector<Vec3> samples;        ///< raw readings
-  std::vector<std::uint32_t> line;  ///< 1-based source line of each sample
+  std::vector<Vec3> samples;  ///< raw readings
+  /// 1-based source line of each sample; in a binary log, the 1-based number of its message in
+  /// its stream
+  std::vector<std::uint32_t> line;
   /// Sample rate [Hz]: ReadOptions::rate_hz, else the rate of the timestamps' segments
   /// (TimeAxis::rate_hz), else unset.
   std::optional<double> rate_hz;
   /// The time column's unit, origin, gaps and regularity; unset without a time column.
   std::optional<TimeAxis> time;
+  /// What the reader could not read, though the samples above are whole (a binary log cut
+  /// short: where it stopped); empty when it read everything.
+  std::string read_warning;
 };
 
 /// What was read: either a raw log or a table of positions.
@@ -107,7 +116,7 @@ struct InputData {
   std::string sha256;
 };
 
-/// Parses text already in memory; `source` names it in errors.
+/// Parses text already in memory, or a binary log (native_log.hpp); `source` names it in errors.
 InputData ParseInput(std::string_view text, const std::string& source, const ReadOptions& options);
 /// Reads and parses a file; "-" reads standard input (named "<stdin>" in messages). Throws
 /// InputError (unreadable path, parse error).

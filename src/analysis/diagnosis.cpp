@@ -401,6 +401,10 @@ std::optional<Finding> DriftFinding(const RawLog& log, const StaticDetectionResu
 
 std::vector<Finding> LogFindings(const RawLog* log, const StaticDetectionResult* detection) {
   std::vector<Finding> out;
+  if (log && !log->read_warning.empty()) {
+    Add(&out, "log_cut_short", Severity::kWarning,
+        log->read_warning + ": those were used; the rest of the recording, if any, is lost", {});
+  }
   if (log && detection) {
     if (std::optional<Finding> drift = DriftFinding(*log, *detection)) {
       out.push_back(std::move(*drift));

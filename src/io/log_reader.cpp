@@ -11,8 +11,10 @@
 #include <optional>
 
 #include "accelcal/error.hpp"
+#include "accelcal/native_log.hpp"
 #include "core/text_format.hpp"
 #include "io/input_file.hpp"
+#include "io/native_input.hpp"
 #include "io/number_parser.hpp"
 #include "io/row_parser.hpp"
 #include "io/text_lines.hpp"
@@ -535,45 +537,77 @@ InputData ParseBlocks(internal::TextBlocks& blocks, const std::string& source,
     throw InputError(source, 0, kNoInstanceColumn);
   }
   if (raw) {
-    const std::vector<double>& t = data.raw.time_s;
-    for (std::size_t i = 1; i < t.size(); ++i) {
-      if (t[i] < t[i - 1]) {
-        throw InputError(source, data.raw.line[i], TimeBackwards(t[i], t[i - 1]));
-      }
-    }
-  }
-  if (raw) {
-    RawLog& log = data.raw;
-    if (log.time_s.size() >= 2) {
-      try {
-        const int c = layout.column[kTime];
-        log.time = MakeTimeAxis(
-            &log.time_s, options.time_unit,
-            header.empty() ? std::string_view() : std::string_view(header[std::size_t(c)]));
-      } catch (const DataError& e) {
-        throw InputError(source, 0, e.what());
-      }
-      log.rate_hz = RateOf(*log.time, options.rate_hz, source);
-    } else if (log.time_s.size() == 1) {
-      throw InputError(source, 0, "one sample: a raw log needs more");
-    } else if (options.rate_hz) {
-      log.rate_hz = options.rate_hz;
-    }
+    const int c = layout.column[kTime];
+    internal::FinishRawLog(
+        &data.raw, options.time_unit, options.rate_hz,
+        header.empty() || c < 0 ? std::string_view() : std::string_view(header[std::size_t(c)]));
   }
   return data;
 }
 
+// A topic names a stream of a binary log: a text file has none.
+void RefuseTopicOfText(const std::string& source, const ReadOptions& options) {
+  if (!options.topic.empty()) {
+    throw InputError(source, 0,
+                     "a topic was given, but this is a text file (its columns are chosen by "
+                     "the columns option)");
+  }
+}
+
 }  // namespace
 
+void internal::FinishRawLog(RawLog* log, TimeUnit unit, const std::optional<double>& rate_hz,
+                            std::string_view time_name) {
+  const std::string& source = log->source;
+  const std::vector<double>& t = log->time_s;
+  for (std::size_t i = 1; i < t.size(); ++i) {
+    if (t[i] < t[i - 1]) throw InputError(source, log->line[i], TimeBackwards(t[i], t[i - 1]));
+  }
+  if (log->time_s.size() >= 2) {
+    try {
+      log->time = MakeTimeAxis(&log->time_s, unit, time_name);
+    } catch (const DataError& e) {
+      throw InputError(source, 0, e.what());
+    }
+    log->rate_hz = RateOf(*log->time, rate_hz, source);
+  } else if (log->time_s.size() == 1) {
+    throw InputError(source, 0, "one sample: a raw log needs more");
+  } else if (rate_hz) {
+    log->rate_hz = rate_hz;
+  }
+}
+
 InputData ParseInput(std::string_view text, const std::string& source, const ReadOptions& options) {
+  if (DetectLogFormat(text.substr(0, 16)) != LogFormat::kText) {
+    internal::BinaryStream in(std::string(text), source);
+    return internal::ReadNativeLog(in, nullptr, options);
+  }
+  RefuseTopicOfText(source, options);
   internal::TextBlocks blocks(text);
   return ParseBlocks(blocks, source, options);
 }
 
+void internal::RequireUnchanged(const InputFile& file) {
+  if (const std::optional<std::string> how = file.Changed()) {
+    throw InputError(file.name(), 0,
+                     "the file changed while it was read (it " + *how +
+                         "): what was read may mix old and new bytes, and its SHA-256 would "
+                         "not describe them; read it once nothing writes to it (a copy)");
+  }
+}
+
 InputData ReadInput(const std::string& path, const ReadOptions& options) {
   internal::InputFile file(path, options.max_stream_bytes);
+  // The first bytes tell a binary log from text.
+  std::string head(16, '\0');
+  head.resize(file.ReadFully(head.data(), head.size()));
+  if (DetectLogFormat(head) != LogFormat::kText) {
+    internal::BinaryStream in(&file, std::move(head));
+    return internal::ReadNativeLog(in, &file, options);
+  }
+  RefuseTopicOfText(file.name(), options);
   Sha256 hash;
-  internal::TextBlocks blocks(&file);
+  internal::TextBlocks blocks(&file, std::move(head));
   if (options.fingerprint) blocks.Fingerprint(&hash);
   InputData data = ParseBlocks(blocks, file.name(), options);
   if (options.fingerprint) {
@@ -582,12 +616,7 @@ InputData ReadInput(const std::string& path, const ReadOptions& options) {
     blocks.FinishFingerprint();
     // The digest must describe the bytes parsed: a file written to meanwhile may have given the
     // parse some old bytes and some new.
-    if (const std::optional<std::string> how = file.Changed()) {
-      throw InputError(file.name(), 0,
-                       "the file changed while it was read (it " + *how +
-                           "): what was read may mix old and new bytes, and its SHA-256 would "
-                           "not describe them; read it once nothing writes to it (a copy)");
-    }
+    internal::RequireUnchanged(file);
     data.bytes = file.bytes_read();
     data.sha256 = hash.HexDigest();
   }

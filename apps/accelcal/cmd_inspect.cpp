@@ -1,0 +1,74 @@
+// accelcal inspect: what a binary log holds (native_log.hpp).
+#include "commands.hpp"
+
+#include <algorithm>
+#include <string>
+
+#include "accelcal/native_log.hpp"
+#include "cli_common.hpp"
+#include "output.hpp"
+
+namespace accelcal::cli {
+
+using internal::VisibleLine;
+
+int RunInspect(const InspectArgs& args) {
+  const LogInventory log = InspectLog(args.path);
+  std::string out;
+  if (args.json) {
+    nlohmann::ordered_json doc;
+    doc["source"] = log.source;
+    doc["format"] = ToString(log.format);
+    doc["bytes"] = log.bytes;
+    doc["truncated"] = log.truncated ? nlohmann::ordered_json(*log.truncated) : nullptr;
+    doc["info"] = log.info;
+    nlohmann::ordered_json& streams = doc["streams"] = nlohmann::ordered_json::array();
+    for (const LogStreamInfo& s : log.streams) {
+      streams.push_back(
+          {{"topic", s.topic},
+           {"instance", s.instance},
+           {"device_id", s.device_id ? nlohmann::ordered_json(*s.device_id) : nullptr},
+           {"samples", s.samples},
+           {"first_s", s.first_s},
+           {"last_s", s.last_s},
+           {"rate_hz", s.rate_hz > 0 ? nlohmann::ordered_json(s.rate_hz) : nullptr},
+           {"sensors", s.sensors},
+           {"columns", s.columns}});
+    }
+    doc["parameters"] = log.parameters;
+    out = JsonText(doc);
+  } else {
+    out += Format("%s: %s, %llu bytes\n", log.source.c_str(),
+                  log.format == LogFormat::kULog ? "PX4 ULog" : "text",
+                  static_cast<unsigned long long>(log.bytes));
+    for (const char* key : {"sys_name", "ver_hw", "ver_sw", "ver_sw_release"}) {
+      if (const auto it = log.info.find(key); it != log.info.end()) {
+        out += Format("%-10s%s\n", key, VisibleLine(it->second).c_str());
+      }
+    }
+    if (log.truncated) out += "warning   " + VisibleLine(*log.truncated) + "\n";
+    int width = 5;
+    for (const LogStreamInfo& s : log.streams) {
+      width = std::max(width, static_cast<int>(VisibleLine(s.topic).size()));
+    }
+    out += Format("%-*s %8s %10s %9s %10s %21s  %s\n", width, "topic", "instance", "device_id",
+                  "samples", "rate [Hz]", "time [s]", "accelcal reads");
+    for (const LogStreamInfo& s : log.streams) {
+      std::string sensors;
+      for (const std::string& k : s.sensors) sensors += (sensors.empty() ? "" : ", ") + k;
+      out +=
+          Format("%-*s %8d %10s %9zu %10s %10.3f-%10.3f  %s\n", width, VisibleLine(s.topic).c_str(),
+                 s.instance, s.device_id ? std::to_string(*s.device_id).c_str() : "-", s.samples,
+                 s.rate_hz > 0 ? Format("%.4g", s.rate_hz).c_str() : "-", s.first_s, s.last_s,
+                 sensors.empty() ? "-" : sensors.c_str());
+    }
+    out += Format(
+        "%zu streams, %zu parameters. Read one with --topic NAME [--instance N]; one accelcal "
+        "does not read by default with --columns naming its fields (--json lists them)\n",
+        log.streams.size(), log.parameters.size());
+  }
+  WriteFileAtomically("-", out);
+  return kExitOk;
+}
+
+}  // namespace accelcal::cli

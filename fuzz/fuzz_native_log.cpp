@@ -1,0 +1,56 @@
+// libFuzzer harness: binary logs (native_log.hpp) read by ParseInput as every stream choice a user
+// could make (none, a topic, a topic and instance, named columns). The only accepted failure is
+// InputError (the file, the byte or message, the reason); anything else is a finding. What is
+// read must be what a raw log promises: finite samples and times, times from 0 that never go back.
+#include <cmath>
+#include <cstdint>
+#include <cstdlib>
+#include <string>
+#include <string_view>
+
+#include "accelcal/error.hpp"
+#include "accelcal/log_reader.hpp"
+#include "accelcal/native_log.hpp"
+
+namespace {
+
+void Check(const accelcal::InputData& data) {
+  const accelcal::RawLog& log = data.raw;
+  if (data.kind != accelcal::InputKind::kRaw || log.samples.size() != log.line.size() ||
+      (!log.time_s.empty() && log.time_s.size() != log.samples.size())) {
+    std::abort();
+  }
+  for (std::size_t i = 0; i < log.samples.size(); ++i) {
+    if (!log.samples[i].allFinite()) std::abort();
+    if (!log.time_s.empty() &&
+        (!std::isfinite(log.time_s[i]) || (i > 0 && log.time_s[i] < log.time_s[i - 1]))) {
+      std::abort();
+    }
+  }
+}
+
+void Read(std::string_view bytes, const accelcal::ReadOptions& options) {
+  try {
+    Check(accelcal::ParseInput(bytes, "fuzz.ulg", options));
+  } catch (const accelcal::InputError&) {
+  }
+}
+
+}  // namespace
+
+extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
+  const std::string_view bytes(reinterpret_cast<const char*>(data), size);
+  // Text is fuzz_log_reader's.
+  if (accelcal::DetectLogFormat(bytes.substr(0, 16)) == accelcal::LogFormat::kText) return 0;
+  accelcal::ReadOptions options;
+  Read(bytes, options);
+  options.topic = "sensor_accel";
+  Read(bytes, options);
+  options.instance = 0;
+  Read(bytes, options);
+  options.topic = "sensor_combined";
+  options.instance.reset();
+  options.columns = {"timestamp", "gyro_rad[0]", "gyro_rad[1]", "gyro_rad[2]"};
+  Read(bytes, options);
+  return 0;
+}

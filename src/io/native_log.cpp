@@ -1,0 +1,241 @@
+// Binary logs read natively (native_log.hpp): the format told by the first bytes, one stream
+// chosen and made a RawLog as a text log's columns are.
+#include "accelcal/native_log.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+#include "accelcal/error.hpp"
+#include "core/text_format.hpp"
+#include "io/binary_stream.hpp"
+#include "io/native_input.hpp"
+#include "io/ulog.hpp"
+
+namespace accelcal {
+
+std::string_view ToString(LogFormat format) { return NameOf(format); }
+
+LogFormat DetectLogFormat(std::string_view first_bytes) {
+  if (internal::IsULog(first_bytes)) return LogFormat::kULog;
+  return LogFormat::kText;
+}
+
+const std::vector<KnownStream>& KnownStreams() {
+  static const std::vector<KnownStream> kStreams = {
+      {"sensor_accel", "accelerometer", "x", "y", "z", "m/s2", false},
+      {"sensor_combined", "accelerometer", "accelerometer_m_s2[0]", "accelerometer_m_s2[1]",
+       "accelerometer_m_s2[2]", "m/s2", true},
+      {"sensor_gyro", "gyroscope", "x", "y", "z", "rad/s", false},
+      {"sensor_combined", "gyroscope", "gyro_rad[0]", "gyro_rad[1]", "gyro_rad[2]", "rad/s", true},
+  };
+  return kStreams;
+}
+
+namespace {
+
+using internal::Format;
+
+const KnownStream* Known(std::string_view topic, std::string_view sensor) {
+  for (const KnownStream& k : KnownStreams()) {
+    if (k.topic == topic && k.sensor == sensor) return &k;
+  }
+  return nullptr;
+}
+
+LogStreamInfo Describe(const internal::ULogStream& s) {
+  LogStreamInfo info;
+  info.topic = s.topic;
+  info.instance = s.multi_id;
+  info.device_id = s.device_id;
+  info.samples = s.messages;
+  info.first_s = static_cast<double>(s.first_us) / 1e6;
+  info.last_s = static_cast<double>(s.last_us) / 1e6;
+  if (s.messages >= 2 && s.last_us > s.first_us) {
+    info.rate_hz = static_cast<double>(s.messages - 1) / (info.last_s - info.first_s);
+  }
+  info.columns = s.columns;
+  for (const KnownStream& k : KnownStreams()) {
+    if (k.topic == s.topic) info.sensors.emplace_back(k.sensor);
+  }
+  return info;
+}
+
+// "sensor_accel instance 1 (device id 2424842, 1200 samples at 200 Hz)", for lists.
+std::string Line(const internal::ULogStream& s) {
+  std::string out = Format("%s instance %d (", s.topic.c_str(), s.multi_id);
+  if (s.device_id) out += Format("device id %llu, ", static_cast<unsigned long long>(*s.device_id));
+  const LogStreamInfo info = Describe(s);
+  out += Format("%zu samples", s.messages);
+  if (info.rate_hz > 0) out += Format(" at %.4g Hz", info.rate_hz);
+  return out + ")";
+}
+
+// Which column of `s` a columns option's entry names: a field's name, or its 1-based number.
+std::size_t ColumnOf(const internal::ULogStream& s, const std::string& entry,
+                     const std::string& source) {
+  const auto it = std::find(s.columns.begin(), s.columns.end(), entry);
+  if (it != s.columns.end()) return std::size_t(it - s.columns.begin());
+  std::size_t number = 0;
+  bool digits = !entry.empty() && entry.size() < 6;
+  for (char c : entry) {
+    if (c < '0' || c > '9')
+      digits = false;
+    else
+      number = number * 10 + std::size_t(c - '0');
+  }
+  if (digits && number >= 1 && number <= s.columns.size()) return number - 1;
+  std::string fields;
+  for (const std::string& c : s.columns) fields += (fields.empty() ? "" : ", ") + c;
+  throw InputError(source, 0,
+                   "the columns option names \"" + entry + "\", which " + s.topic +
+                       " does not have (its fields: " + fields + ")");
+}
+
+}  // namespace
+
+namespace internal {
+
+InputData ReadNativeLog(BinaryStream& in, InputFile* file, const ReadOptions& options) {
+  const std::string source = in.name();
+  if (options.kind == InputKind::kPositions) {
+    throw InputError(source, 0, "a ULog is a raw log, not a positions file");
+  }
+  if (options.time_unit != TimeUnit::kAuto && options.time_unit != TimeUnit::kMicroseconds) {
+    throw InputError(source, 0,
+                     "a ULog's timestamps are in microseconds by its specification, not in " +
+                         std::string(ToString(options.time_unit)));
+  }
+  Sha256 hash;
+  if (options.fingerprint) in.Fingerprint(&hash);
+  // Keep the topic asked for, or every accelerometer stream accelcal knows.
+  const auto keep = [&](const std::string& topic, int) {
+    return options.topic.empty() ? Known(topic, "accelerometer") != nullptr
+                                 : topic == options.topic;
+  };
+  ULogContents log = ReadULog(in, keep);
+  in.Drain();
+  if (options.fingerprint && file != nullptr) RequireUnchanged(*file);
+  // The stream: the topic's (and instance's) with messages.
+  std::vector<const ULogStream*> candidates;
+  for (const ULogStream& s : log.streams) {
+    if (!s.kept || s.messages == 0) continue;
+    if (options.instance && static_cast<double>(s.multi_id) != *options.instance) continue;
+    candidates.push_back(&s);
+  }
+  if (candidates.size() != 1) {
+    std::string list;
+    for (const ULogStream& s : log.streams) {
+      if (s.messages > 0 && (options.topic.empty() ? Known(s.topic, "accelerometer") != nullptr
+                                                   : s.topic == options.topic)) {
+        list += "; " + Line(s);
+      }
+    }
+    const std::string what =
+        options.topic.empty() ? "accelerometer stream" : "stream of topic " + options.topic;
+    const std::string which =
+        options.instance ? Format(" with instance %g", *options.instance) : std::string();
+    if (candidates.empty()) {
+      std::string topics;
+      for (const ULogStream& s : log.streams) {
+        if (s.messages > 0) topics += (topics.empty() ? "" : ", ") + s.topic;
+      }
+      throw InputError(source, 0,
+                       "no " + what + which + " with samples" +
+                           (list.empty() ? " (its topics: " + topics + ")" : ":" + list.substr(1)));
+    }
+    throw InputError(source, 0,
+                     "several " + what + "s:" + list.substr(1) +
+                         "; choose one with the topic and instance options");
+  }
+  const ULogStream& s = *candidates.front();
+  // Its columns: the option's (x,y,z or time,x,y,z), else the known stream's fields and the
+  // sample time (timestamp_sample when the topic has one: when the sensor sampled, not when the
+  // message was published).
+  std::size_t column[4];
+  const KnownStream* known = Known(s.topic, "accelerometer");
+  if (!options.columns.empty()) {
+    const std::size_t n = options.columns.size();
+    if (n != 3 && n != 4) {
+      throw InputError(source, 0, "the columns option takes 3 entries (x,y,z) or 4 (time,x,y,z)");
+    }
+    if (n == 3) {
+      column[0] = ColumnOf(
+          s,
+          s.columns.end() != std::find(s.columns.begin(), s.columns.end(), "timestamp_sample")
+              ? "timestamp_sample"
+              : "timestamp",
+          source);
+    }
+    for (std::size_t i = 0; i < n; ++i) column[4 - n + i] = ColumnOf(s, options.columns[i], source);
+  } else {
+    if (known == nullptr) {
+      throw InputError(source, 0,
+                       "accelcal does not know which fields of " + s.topic +
+                           " are the readings: name them with the columns option (x,y,z or "
+                           "time,x,y,z)");
+    }
+    const bool sampled =
+        std::find(s.columns.begin(), s.columns.end(), "timestamp_sample") != s.columns.end();
+    column[0] = ColumnOf(s, sampled ? "timestamp_sample" : "timestamp", source);
+    column[1] = ColumnOf(s, std::string(known->x), source);
+    column[2] = ColumnOf(s, std::string(known->y), source);
+    column[3] = ColumnOf(s, std::string(known->z), source);
+  }
+  InputData data;
+  data.kind = InputKind::kRaw;
+  data.kind_reason = "a ULog: " + Line(s);
+  RawLog& raw = data.raw;
+  raw.source = source;
+  const std::size_t width = s.columns.size();
+  raw.time_s.reserve(s.messages);
+  raw.samples.reserve(s.messages);
+  raw.line.reserve(s.messages);
+  for (std::size_t i = 0; i < s.messages; ++i) {
+    const double* row = s.values.data() + i * width;
+    raw.time_s.push_back(row[column[0]]);
+    raw.samples.emplace_back(row[column[1]], row[column[2]], row[column[3]]);
+    raw.line.push_back(static_cast<std::uint32_t>(std::min<std::size_t>(i + 1, UINT32_MAX)));
+  }
+  for (std::size_t i = 0; i < raw.samples.size(); ++i) {
+    if (!raw.samples[i].allFinite() || !std::isfinite(raw.time_s[i])) {
+      throw InputError(
+          source, 0,
+          Format("%s message %zu (byte %llu) holds a value that is not a finite "
+                 "number",
+                 s.topic.c_str(), i + 1, static_cast<unsigned long long>(s.offset[i])));
+    }
+  }
+  if (log.truncated) raw.read_warning = *log.truncated;
+  FinishRawLog(&raw, TimeUnit::kMicroseconds, options.rate_hz, s.columns[column[0]]);
+  if (options.fingerprint) {
+    data.bytes = in.offset();
+    data.sha256 = hash.HexDigest();
+  }
+  return data;
+}
+
+}  // namespace internal
+
+LogInventory InspectLog(const std::string& path) {
+  internal::InputFile file(path, ReadOptions{}.max_stream_bytes);
+  std::string head(16, '\0');
+  head.resize(file.ReadFully(head.data(), head.size()));
+  LogInventory out;
+  out.format = DetectLogFormat(head);
+  out.source = file.name();
+  if (out.format == LogFormat::kText) {
+    throw InputError(file.name(), 0,
+                     "not a binary log (ULog): a text log's columns are its header's");
+  }
+  internal::BinaryStream in(&file, std::move(head));
+  const internal::ULogContents log =
+      internal::ReadULog(in, [](const std::string&, int) { return false; });
+  out.bytes = log.bytes;
+  for (const internal::ULogStream& s : log.streams) out.streams.push_back(Describe(s));
+  out.parameters = log.parameters;
+  out.info = log.info;
+  out.truncated = log.truncated;
+  return out;
+}
+
+}  // namespace accelcal

@@ -1,0 +1,128 @@
+// Binary logs through the command line (issue 20): a simulated session written as a PX4 ULog
+// calibrates to the same bytes as its samples written as CSV; the stream is chosen or the choice
+// refused with the candidates named; a log cut short is used with a warning.
+#include <cstdio>
+#include <string>
+
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+#include "io/binary_stream.hpp"
+#include "io/input_file.hpp"
+#include "io/ulog.hpp"
+#include "support/cli_test.hpp"
+
+namespace accelcal::test {
+namespace {
+
+class NativeLogTest : public CliTest {};
+
+const std::string kSmall = std::string(ACCELCAL_DATA_DIR) + "/px4-ulog/sample_log_small.ulg";
+
+// The ULog's sensor_accel samples as CSV: the times in µs as the integers they are, the float32
+// readings as the doubles they are (17 digits read back exactly).
+std::string AsCsv(const std::string& ulog) {
+  internal::InputFile file(ulog, std::size_t{1} << 30);
+  internal::BinaryStream in(&file, "");
+  const internal::ULogContents c =
+      internal::ReadULog(in, [](const std::string& t, int) { return t == "sensor_accel"; });
+  const internal::ULogStream& s = c.streams.at(0);
+  const auto col = [&](const char* name) {
+    return std::size_t(std::find(s.columns.begin(), s.columns.end(), name) - s.columns.begin());
+  };
+  const std::size_t t = col("timestamp_sample"), x = col("x"), y = col("y"), z = col("z");
+  std::string out = "timestamp_sample,x,y,z\n";
+  char line[160];
+  for (std::size_t i = 0; i < s.messages; ++i) {
+    const double* row = s.values.data() + i * s.columns.size();
+    std::snprintf(line, sizeof line, "%llu,%.17g,%.17g,%.17g\n",
+                  static_cast<unsigned long long>(row[t]), row[x], row[y], row[z]);
+    out += line;
+  }
+  return out;
+}
+
+// The calibration file less the input's name and its provenance (name, size and digest).
+nlohmann::json Calibration(const std::string& path) {
+  nlohmann::json j = nlohmann::json::parse(Slurp(path));
+  j.erase("provenance");
+  j["sensors"]["accelerometer"].erase("source");
+  return j;
+}
+
+TEST_F(NativeLogTest, ULogCalibratesToTheSameBytesAsItsSamplesAsCsv) {
+  ASSERT_EQ(
+      Exec("simulate --scenario yang2012 --raw --format ulog --duration 20 -o " + Path("s.ulg"))
+          .status,
+      0);
+  const std::string csv = Write("s.csv", AsCsv(Path("s.ulg")));
+  const CliRun u = Exec("calibrate " + Path("s.ulg") + " -o " + Path("u.json"));
+  const CliRun c = Exec("calibrate " + csv + " --time-unit us -o " + Path("c.json"));
+  ASSERT_EQ(u.status, 0) << u.err;
+  ASSERT_EQ(c.status, 0) << c.err;
+  EXPECT_EQ(Calibration(Path("u.json")).dump(1), Calibration(Path("c.json")).dump(1));
+  // The samples are PX4's float32: the ULog's own timestamps were read, in µs.
+  EXPECT_NE(u.out.find("time in us"), std::string::npos) << u.out;
+}
+
+TEST_F(NativeLogTest, SeveralStreamsAreListedAndOneIsChosen) {
+  const CliRun several = Exec("calibrate " + kSmall);
+  EXPECT_EQ(several.status, 3) << several.err;  // an input error
+  for (const char* named : {"sensor_combined instance 0 (1298 samples at 199.7 Hz)",
+                            "sensor_accel instance 1 (device id 3670050, 6 samples",
+                            "choose one with the topic and instance options"}) {
+    EXPECT_NE(several.err.find(named), std::string::npos) << several.err;
+  }
+  // One chosen: it is read (six samples at 1 Hz are no calibration session, which is said).
+  const CliRun one = Exec("calibrate " + kSmall + " --topic sensor_accel --instance 1");
+  EXPECT_NE(one.status, 0);
+  EXPECT_EQ(one.err.find("several"), std::string::npos) << one.err;
+  const CliRun none = Exec("calibrate " + kSmall + " --topic vehicle_nothing");
+  EXPECT_NE(none.err.find("no stream of topic vehicle_nothing with samples (its topics: "),
+            std::string::npos)
+      << none.err;
+  const CliRun absent = Exec("calibrate " + kSmall + " --topic sensor_accel --instance 7");
+  EXPECT_NE(absent.err.find("no stream of topic sensor_accel with instance 7 with samples: "),
+            std::string::npos)
+      << absent.err;
+  const CliRun field = Exec("calibrate " + kSmall +
+                            " --topic sensor_combined --columns gyro_rad[0],gyro_rad[1],nope");
+  EXPECT_NE(field.err.find("\"nope\", which sensor_combined does not have (its fields: "),
+            std::string::npos)
+      << field.err;
+  const CliRun unit = Exec("calibrate " + kSmall + " --topic sensor_combined --time-unit s");
+  EXPECT_NE(unit.err.find("timestamps are in microseconds by its specification"), std::string::npos)
+      << unit.err;
+  const CliRun empty = Exec("calibrate " + kSmall + " --topic ''");
+  EXPECT_NE(empty.err.find("--topic: an empty topic name"), std::string::npos) << empty.err;
+}
+
+TEST_F(NativeLogTest, TopicOnATextFileIsRefused) {
+  const std::string csv = Write("p.csv", PositionsCsv(12));
+  const CliRun r = Exec("calibrate " + csv + " --topic sensor_accel");
+  EXPECT_NE(r.status, 0);
+  EXPECT_NE(r.err.find("a topic was given, but this is a text file"), std::string::npos) << r.err;
+}
+
+// A vehicle that crashed leaves its log cut inside a message: the whole messages calibrate, and
+// the calibration says where the log stopped.
+TEST_F(NativeLogTest, LogCutShortIsUsedWithAWarning) {
+  ASSERT_EQ(
+      Exec("simulate --scenario yang2012 --raw --format ulog --duration 20 -o " + Path("s.ulg"))
+          .status,
+      0);
+  const std::string all = Slurp(Path("s.ulg"));
+  const std::string cut = Write("cut.ulg", all.substr(0, all.size() - 17));
+  const CliRun r = Exec("calibrate " + cut + " -o " + Path("cut.json"));
+  ASSERT_EQ(r.status, 0) << r.err;
+  EXPECT_NE(r.err.find("warning: " + cut + ": the log ends inside a message at byte "),
+            std::string::npos)
+      << r.err;
+  EXPECT_NE(r.err.find("after 42786 whole messages: those were used"), std::string::npos) << r.err;
+  const nlohmann::json j = nlohmann::json::parse(Slurp(Path("cut.json")));
+  EXPECT_EQ(j["verdict"], "warnings");  // not a failure
+  EXPECT_NE(j.dump().find("log_cut_short"), std::string::npos);
+}
+
+}  // namespace
+}  // namespace accelcal::test

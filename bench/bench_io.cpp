@@ -59,12 +59,12 @@ void BM_ReadSimulatedULog(benchmark::State& state) {
   {
     // yang2012's 18 positions, 60 s each and 4 s turns, at 100 Hz: 115 200 messages.
     std::FILE* f = std::fopen(path.c_str(), "wb");
-    const ULogAccelWriter writer;
+    const ULogImuWriter writer;
     const std::string header = writer.Header();
     std::fwrite(header.data(), 1, header.size(), f);
     RawLogSimulation sim;
     SimulateRawLog(Yang2012Truth(), 9.80665, Yang18Directions(), sim, [&](double t, const Vec3& p) {
-      const std::string m = writer.Sample(static_cast<std::uint64_t>(std::llround(t * 1e6)), p);
+      const std::string m = writer.Accel(static_cast<std::uint64_t>(std::llround(t * 1e6)), p);
       std::fwrite(m.data(), 1, m.size(), f);
     });
     std::fclose(f);

@@ -45,6 +45,13 @@ void AddInputOptions(CLI::App* cmd, InputArgs* in, bool with_kind) {
                   "default: its only accelerometer stream)");
 }
 
+// The gyroscope's stream in a binary log, for the commands that read its rates (--gyro).
+void AddGyroTopic(CLI::App* cmd, InputArgs* in) {
+  cmd->add_option("--gyro-topic", in->gyro_topic,
+                  "the gyroscope's stream in a binary log (a ULog topic such as sensor_gyro; "
+                  "default: its only gyroscope stream, of --instance when given)");
+}
+
 void AddDetectionOptions(CLI::App* cmd, InputArgs* in) {
   auto& d = in->detection;
   cmd->add_option("--window", d.window_s, "static detection: variance window [s]")
@@ -121,6 +128,10 @@ void CheckGyroFlags(const CLI::App& cmd, const std::string& gyro,
     throw accelcal::cli::UsageError("--gyro: the file name is empty");
   }
   if (!gyro.empty() || !gyro_columns.empty()) return;
+  if (cmd.count("--gyro-topic") > 0) {
+    throw accelcal::cli::UsageError(
+        "--gyro-topic applies to the gyroscope: give its rates with --gyro LOG or --gyro-columns");
+  }
   for (const char* name : gyro_only) {
     if (cmd.count(name) > 0) {
       throw accelcal::cli::UsageError(std::string(name) +
@@ -195,6 +206,7 @@ int accelcal::cli::RunCommandLine(int argc, char** argv) {
                      "the gyroscope's x,y,z (or time,x,y,z) columns, in INPUT itself or in the "
                      "--gyro log: 1-based column numbers or header names")
         ->delimiter(',');
+    AddGyroTopic(calibrate, &cal.input);
     calibrate
         ->add_option("--gyro-units", cal.gyro_units,
                      "the gyro's raw unit, for the start of its fit: rad/s, deg/s, or raw "
@@ -259,6 +271,7 @@ int accelcal::cli::RunCommandLine(int argc, char** argv) {
         ->add_option("--gyro-columns", cmp.gyro_columns,
                      "the gyroscope's x,y,z (or time,x,y,z) columns, in INPUT or the --gyro log")
         ->delimiter(',');
+    AddGyroTopic(compare, &cmp.input);
     compare
         ->add_option("--gyro-units", cmp.gyro_units,
                      "the gyro's raw unit, for the start of its fits: rad/s, deg/s, or raw")
@@ -297,6 +310,7 @@ int accelcal::cli::RunCommandLine(int argc, char** argv) {
         ->add_option("--gyro-columns", noi.gyro_columns,
                      "the gyroscope's x,y,z (or time,x,y,z) columns, in LOG or the --gyro log")
         ->delimiter(',');
+    AddGyroTopic(noise, &noi.input);
     noise->add_flag("--still", noi.still,
                     "only the longest still interval of the log (a calibration log's rest)");
     noise->add_flag("--json", noi.json, "machine-readable output");
@@ -446,6 +460,7 @@ int accelcal::cli::RunCommandLine(int argc, char** argv) {
         ->add_option("--gyro-columns", apply.gyro_columns,
                      "the gyroscope's x,y,z (or time,x,y,z) columns, in LOG or the --gyro log")
         ->delimiter(',');
+    AddGyroTopic(apply_cmd, &apply.input);
   }
 
   VerifyArgs ver;
@@ -470,6 +485,7 @@ int accelcal::cli::RunCommandLine(int argc, char** argv) {
         ->add_option("--gyro-columns", ver.gyro_columns,
                      "the gyroscope's x,y,z (or time,x,y,z) columns, in LOG or the --gyro log")
         ->delimiter(',');
+    AddGyroTopic(verify, &ver.input);
     verify->add_flag("--json", ver.json, "machine-readable output");
     verify->add_option("-o,--output", ver.output, "output file (default: stdout)")
         ->check(kFileName);

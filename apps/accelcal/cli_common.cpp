@@ -147,8 +147,11 @@ InputData ReadGyroLog(const InputArgs& input, const std::string& gyro,
   CheckGyroColumns(input, gyro, gyro_columns);
   ReadOptions read = MakeReadOptions(input);
   read.fingerprint = fingerprint;
+  if (input.gyro_topic && input.gyro_topic->empty()) {
+    throw UsageError("--gyro-topic: an empty topic name");
+  }
   try {
-    return ReadGyroInput(input.path, read, gyro, gyro_columns);
+    return ReadGyroInput(input.path, read, gyro, gyro_columns, input.gyro_topic.value_or(""));
   } catch (const InputError& e) {
     // The reader's "columns option" is --gyro-columns here: the rates' columns.
     throw InputError(

@@ -149,10 +149,10 @@ int RunSimulate(const SimulateArgs& args) {
                           "positions x (--duration + --transition) x --rate");
     OutputFile file(args.output.empty() ? "-" : args.output);  // streamed, never held whole
     if (args.format == "ulog") {
-      const ULogAccelWriter writer;
+      const ULogImuWriter writer;
       file.Write(writer.Header());
       SimulateRawLog(truth, gravity, directions, options, [&](double t, const Vec3& p) {
-        file.Write(writer.Sample(static_cast<std::uint64_t>(std::llround(t * 1e6)), p));
+        file.Write(writer.Accel(static_cast<std::uint64_t>(std::llround(t * 1e6)), p));
       });
       file.Commit();
       return kExitOk;

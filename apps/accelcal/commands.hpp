@@ -51,6 +51,8 @@ struct InputArgs {
   std::string time_unit = "auto";    // TimeUnit
   std::optional<double> instance;    // ReadOptions::instance
   std::optional<std::string> topic;  // ReadOptions::topic
+  /// The gyroscope's topic in a binary log (ReadGyroInput), for the commands that read one.
+  std::optional<std::string> gyro_topic;
   StaticDetectionOptions detection;
 };
 

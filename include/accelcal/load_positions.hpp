@@ -55,9 +55,13 @@ LoadedInput LoadPositions(const std::vector<std::string>& paths, const LoadOptio
 /// accelerometer's (`accel_read`: time unit, rate, instance) but as a raw log of the columns
 /// `gyro_columns` (x,y,z or time,x,y,z; empty: the file's default layout): from `gyro_path`, or
 /// from the accelerometer's log itself when it is empty (then its time column, when
-/// `accel_read.columns` names one, is the rates' too, and it is not fingerprinted again). Throws
-/// InputError as ReadInput, a DataError of the reader turned into an InputError naming the file.
+/// `accel_read.columns` names one, is the rates' too, and it is not fingerprinted again). From a
+/// binary log (native_log.hpp), the stream of `gyro_topic`, or when it is empty the log's
+/// gyroscope stream (ReadOptions::sensor), of the accelerometer's instance when one was chosen.
+/// Throws InputError as ReadInput, a DataError of the reader turned into an InputError naming the
+/// file.
 InputData ReadGyroInput(const std::string& accel_path, const ReadOptions& accel_read,
-                        const std::string& gyro_path, const std::vector<std::string>& gyro_columns);
+                        const std::string& gyro_path, const std::vector<std::string>& gyro_columns,
+                        const std::string& gyro_topic = "");
 
 }  // namespace accelcal

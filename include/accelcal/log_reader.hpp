@@ -38,6 +38,14 @@ struct EnumNames<InputKind> {
       {InputKind::kAuto, "auto"}, {InputKind::kRaw, "raw"}, {InputKind::kPositions, "positions"}};
 };
 
+/// A sensor of an IMU, as a log's streams are told apart.
+enum class SensorKind { kAccelerometer, kGyroscope };
+template <>
+struct EnumNames<SensorKind> {
+  static constexpr std::pair<SensorKind, std::string_view> kTable[] = {
+      {SensorKind::kAccelerometer, "accelerometer"}, {SensorKind::kGyroscope, "gyroscope"}};
+};
+
 struct ReadOptions {
   InputKind kind = InputKind::kAuto;
   /// Column selection for wider logs: 3 entries (x, y, z) or 4 (time, x, y, z), each a 1-based
@@ -60,9 +68,11 @@ struct ReadOptions {
   /// file is refused (InputError listing them) unless `instance` picks one, whose rows are kept.
   std::optional<double> instance;
   /// A binary log (native_log.hpp) holds several streams: the topic to read (its instance by
-  /// `instance`). Empty: the log's only accelerometer stream (KnownStreams), an InputError listing
+  /// `instance`). Empty: the log's only stream of `sensor` (KnownStreams), an InputError listing
   /// them when there are several. A text file with a topic given is an InputError.
   std::string topic{};
+  /// Whose stream a binary log gives when no topic is given (the gyroscope's for its rates).
+  SensorKind sensor = SensorKind::kAccelerometer;
   /// An input that is not a regular file (a pipe, standard input, a device such as /dev/zero) is
   /// refused (InputError) beyond this many bytes: it has no size to check first, and the reader
   /// must not read forever. 1 GiB: about 5 hours of a 1 kHz log as text (its samples then take

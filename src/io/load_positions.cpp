@@ -55,10 +55,12 @@ LoadedInput LoadPositions(const std::vector<std::string>& paths, const LoadOptio
 }
 
 InputData ReadGyroInput(const std::string& accel_path, const ReadOptions& accel_read,
-                        const std::string& gyro_path,
-                        const std::vector<std::string>& gyro_columns) {
+                        const std::string& gyro_path, const std::vector<std::string>& gyro_columns,
+                        const std::string& gyro_topic) {
   ReadOptions read = accel_read;
   read.kind = InputKind::kRaw;
+  read.sensor = SensorKind::kGyroscope;
+  read.topic = gyro_topic;
   read.columns = gyro_columns;
   if (gyro_path.empty() && read.columns.size() == 3 && accel_read.columns.size() == 4) {
     read.columns.insert(read.columns.begin(), accel_read.columns.front());

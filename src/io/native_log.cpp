@@ -107,10 +107,10 @@ InputData ReadNativeLog(BinaryStream& in, InputFile* file, const ReadOptions& op
   }
   Sha256 hash;
   if (options.fingerprint) in.Fingerprint(&hash);
-  // Keep the topic asked for, or every accelerometer stream accelcal knows.
+  // Keep the topic asked for, or every stream of the sensor accelcal knows.
+  const std::string_view sensor = NameOf(options.sensor);
   const auto keep = [&](const std::string& topic, int) {
-    return options.topic.empty() ? Known(topic, "accelerometer") != nullptr
-                                 : topic == options.topic;
+    return options.topic.empty() ? Known(topic, sensor) != nullptr : topic == options.topic;
   };
   ULogContents log = ReadULog(in, keep);
   in.Drain();
@@ -125,13 +125,13 @@ InputData ReadNativeLog(BinaryStream& in, InputFile* file, const ReadOptions& op
   if (candidates.size() != 1) {
     std::string list;
     for (const ULogStream& s : log.streams) {
-      if (s.messages > 0 && (options.topic.empty() ? Known(s.topic, "accelerometer") != nullptr
-                                                   : s.topic == options.topic)) {
+      if (s.messages > 0 &&
+          (options.topic.empty() ? Known(s.topic, sensor) != nullptr : s.topic == options.topic)) {
         list += "; " + Line(s);
       }
     }
-    const std::string what =
-        options.topic.empty() ? "accelerometer stream" : "stream of topic " + options.topic;
+    const std::string what = options.topic.empty() ? std::string(sensor) + " stream"
+                                                   : "stream of topic " + options.topic;
     const std::string which =
         options.instance ? Format(" with instance %g", *options.instance) : std::string();
     if (candidates.empty()) {
@@ -152,7 +152,7 @@ InputData ReadNativeLog(BinaryStream& in, InputFile* file, const ReadOptions& op
   // sample time (timestamp_sample when the topic has one: when the sensor sampled, not when the
   // message was published).
   std::size_t column[4];
-  const KnownStream* known = Known(s.topic, "accelerometer");
+  const KnownStream* known = Known(s.topic, sensor);
   if (!options.columns.empty()) {
     const std::size_t n = options.columns.size();
     if (n != 3 && n != 4) {

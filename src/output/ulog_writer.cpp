@@ -1,4 +1,4 @@
-// A ULog of one accelerometer (ulog_writer.hpp).
+// A ULog of one IMU (ulog_writer.hpp).
 #include "accelcal/ulog_writer.hpp"
 
 #include <cmath>
@@ -10,13 +10,14 @@ namespace accelcal {
 
 namespace {
 
-// The message id the one subscription takes.
-constexpr std::uint16_t kMessageId = 0;
-// sensor_accel's fields as PX4 logs them (the data messages are packed in this order).
-constexpr const char* kFormat =
-    "sensor_accel:uint64_t timestamp;uint64_t timestamp_sample;uint32_t device_id;float x;"
-    "float y;float z;float temperature;uint32_t error_count;uint8_t[3] clip_counter;"
-    "uint8_t samples;uint8_t[4] _padding0;";
+// The message ids of the subscriptions.
+constexpr std::uint16_t kAccelId = 0, kGyroId = 1;
+// The fields of sensor_accel and sensor_gyro as PX4 logs them (the data messages are packed in
+// this order).
+constexpr const char* kFields =
+    ":uint64_t timestamp;uint64_t timestamp_sample;uint32_t device_id;float x;float y;float z;"
+    "float temperature;uint32_t error_count;uint8_t[3] clip_counter;uint8_t samples;"
+    "uint8_t[4] _padding0;";
 
 template <typename T>
 void Put(std::string* out, T value) {
@@ -39,41 +40,56 @@ std::string KeyValue(const std::string& key, const std::string& value) {
   return payload + key + value;
 }
 
-}  // namespace
-
-std::string ULogAccelWriter::Header() const {
-  std::string out = {'U', 'L', 'o', 'g', 0x01, 0x12, 0x35, 0x01};
-  Put<std::uint64_t>(&out, 0);                 // the log's start [µs]
-  out += Message('B', std::string(40, '\0'));  // no flags, no appended data
-  out += Message('F', kFormat);
-  const std::string name = "accelcal simulate";
-  out += Message('I', KeyValue("char[" + std::to_string(name.size()) + "] sys_name", name));
+std::string Subscribe(std::uint16_t id, const std::string& topic) {
   std::string add;
   add.push_back('\0');  // multi id 0
-  Put<std::uint16_t>(&add, kMessageId);
-  out += Message('A', add + "sensor_accel");
-  return out;
+  Put<std::uint16_t>(&add, id);
+  return Message('A', add + topic);
 }
 
-std::string ULogAccelWriter::Sample(std::uint64_t time_us, const Vec3& reading) const {
+std::string Sample(std::uint16_t id, std::uint32_t device_id, std::uint64_t time_us,
+                   const Vec3& v) {
   const double most = std::numeric_limits<float>::max();
-  if (!reading.allFinite() || reading.cwiseAbs().maxCoeff() > most) {
+  if (!v.allFinite() || v.cwiseAbs().maxCoeff() > most) {
     throw std::invalid_argument(
-        "a ULog's readings are float32: a reading is not finite or "
-        "beyond its range");
+        "a ULog's readings are float32: a reading is not finite or beyond its range");
   }
   std::string payload;
-  Put<std::uint16_t>(&payload, kMessageId);
+  Put<std::uint16_t>(&payload, id);
   Put<std::uint64_t>(&payload, time_us);  // timestamp
   Put<std::uint64_t>(&payload, time_us);  // timestamp_sample
-  Put<std::uint32_t>(&payload, device_id_);
-  for (int a = 0; a < 3; ++a) Put<float>(&payload, static_cast<float>(reading(a)));
+  Put<std::uint32_t>(&payload, device_id);
+  for (int a = 0; a < 3; ++a) Put<float>(&payload, static_cast<float>(v(a)));
   Put<float>(&payload, std::numeric_limits<float>::quiet_NaN());  // temperature
   Put<std::uint32_t>(&payload, 0);                                // error_count
   payload.append(3, '\0');                                        // clip_counter
   payload.push_back('\1');                                        // samples
   // PX4's logger leaves the trailing padding out.
   return Message('D', payload);
+}
+
+}  // namespace
+
+std::string ULogImuWriter::Header() const {
+  std::string out = {'U', 'L', 'o', 'g', 0x01, 0x12, 0x35, 0x01};
+  Put<std::uint64_t>(&out, 0);                 // the log's start [µs]
+  out += Message('B', std::string(40, '\0'));  // no flags, no appended data
+  out += Message('F', std::string("sensor_accel") + kFields);
+  if (gyroscope_) out += Message('F', std::string("sensor_gyro") + kFields);
+  const std::string name = "accelcal simulate";
+  out += Message('I', KeyValue("char[" + std::to_string(name.size()) + "] sys_name", name));
+  out += Subscribe(kAccelId, "sensor_accel");
+  if (gyroscope_) out += Subscribe(kGyroId, "sensor_gyro");
+  return out;
+}
+
+std::string ULogImuWriter::Accel(std::uint64_t time_us, const Vec3& reading) const {
+  return Sample(kAccelId, device_id_, time_us, reading);
+}
+
+std::string ULogImuWriter::Gyro(std::uint64_t time_us, const Vec3& rate) const {
+  if (!gyroscope_) throw std::logic_error("ULogImuWriter::Gyro: made without a gyroscope");
+  return Sample(kGyroId, device_id_, time_us, rate);
 }
 
 }  // namespace accelcal

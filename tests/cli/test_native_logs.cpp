@@ -1,12 +1,15 @@
 // Binary logs through the command line (issue 20): a simulated session written as a PX4 ULog
 // calibrates to the same bytes as its samples written as CSV; the stream is chosen or the choice
 // refused with the candidates named; a log cut short is used with a warning.
+#include <cmath>
 #include <cstdio>
 #include <string>
 
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
+#include "accelcal/simulate.hpp"
+#include "accelcal/ulog_writer.hpp"
 #include "io/binary_stream.hpp"
 #include "io/input_file.hpp"
 #include "io/ulog.hpp"
@@ -63,6 +66,66 @@ TEST_F(NativeLogTest, ULogCalibratesToTheSameBytesAsItsSamplesAsCsv) {
   EXPECT_EQ(Calibration(Path("u.json")).dump(1), Calibration(Path("c.json")).dump(1));
   // The samples are PX4's float32: the ULog's own timestamps were read, in µs.
   EXPECT_NE(u.out.find("time in us"), std::string::npos) << u.out;
+}
+
+// The gyroscope too: an IMU session (accelerometer and gyroscope, Xsens-like counts, noise) as a
+// ULog with sensor_accel and sensor_gyro, and as two CSVs of the same float32 samples; the joint
+// calibration from the one and from the others is the same, byte for byte.
+TEST_F(NativeLogTest, ImuULogCalibratesTheGyroscopeToTheSameBytesAsCsv) {
+  RawLogSimulation options;
+  options.static_s = 4.0;
+  options.transition_s = 2.0;
+  options.sigma_raw_per_sample = Vec3(2, 2, 2);
+  GyroSimulation gyro;
+  gyro.truth.K << 4778, 12, -8, -15, 4758, 20, 9, -11, 4766;  // counts per rad/s
+  gyro.truth.bias = Vec3(32740, 32810, 32650);
+  gyro.sigma_raw_per_sample = Vec3(3, 3, 3);
+  ModelParameters accel = Yang2012Truth();
+  accel.bias += Vec3(32768, 32768, 32768);  // counts, as the Xsens
+  const SimulatedImuLog log = SimulateImuLog(accel, 9.81, Yang18Directions(), options, gyro);
+  const ULogImuWriter writer(7, true);
+  std::string ulog = writer.Header(), acc = "time_us,x,y,z\n", rates = acc;
+  char line[160];
+  const auto row = [&](std::string* csv, std::uint64_t t, const Vec3& v) {
+    const auto f = [](double x) { return static_cast<double>(static_cast<float>(x)); };
+    std::snprintf(line, sizeof line, "%llu,%.17g,%.17g,%.17g\n", static_cast<unsigned long long>(t),
+                  f(v(0)), f(v(1)), f(v(2)));
+    *csv += line;
+  };
+  for (std::size_t k = 0; k < log.time_s.size(); ++k) {
+    const auto t = static_cast<std::uint64_t>(std::llround(log.time_s[k] * 1e6));
+    ulog += writer.Accel(t, log.accel[k]);
+    ulog += writer.Gyro(t, log.gyro[k]);
+    row(&acc, t, log.accel[k]);
+    row(&rates, t, log.gyro[k]);
+  }
+  const std::string u = Write("imu.ulg", ulog), a = Write("acc.csv", acc),
+                    g = Write("gyro.csv", rates);
+  const CliRun from_ulog =
+      Exec("calibrate " + u + " --gravity 9.81 --gyro " + u + " -o " + Path("u.json"));
+  const CliRun from_csv = Exec("calibrate " + a + " --gravity 9.81 --time-unit us --gyro " + g +
+                               " -o " + Path("c.json"));
+  ASSERT_EQ(from_ulog.status, 0) << from_ulog.err;
+  ASSERT_EQ(from_csv.status, 0) << from_csv.err;
+  nlohmann::json ju = Calibration(Path("u.json")), jc = Calibration(Path("c.json"));
+  ASSERT_TRUE(ju["sensors"].contains("gyroscope"));
+  ju["sensors"]["gyroscope"].erase("source");
+  jc["sensors"]["gyroscope"].erase("source");
+  EXPECT_EQ(ju.dump(1), jc.dump(1));
+  // The gyroscope's stream by name, and a topic that holds none.
+  EXPECT_EQ(Exec("calibrate " + u + " --gravity 9.81 --gyro " + u +
+                 " --gyro-topic sensor_gyro -q -o " + Path("t.json"))
+                .status,
+            0);
+  const CliRun wrong = Exec("calibrate " + u + " --gravity 9.81 --gyro " + u +
+                            " --gyro-topic sensor_mag -o " + Path("w.json"));
+  EXPECT_NE(wrong.err.find("no stream of topic sensor_mag with samples (its topics: "
+                           "sensor_accel, sensor_gyro)"),
+            std::string::npos)
+      << wrong.err;
+  const CliRun alone = Exec("calibrate " + u + " --gyro-topic sensor_gyro");
+  EXPECT_NE(alone.err.find("--gyro-topic applies to the gyroscope"), std::string::npos)
+      << alone.err;
 }
 
 TEST_F(NativeLogTest, SeveralStreamsAreListedAndOneIsChosen) {

@@ -42,10 +42,10 @@ const KnownStream* Known(std::string_view topic, std::string_view sensor) {
   return nullptr;
 }
 
-LogStreamInfo Describe(const internal::ULogStream& s) {
+LogStreamInfo Describe(const internal::DecodedStream& s) {
   LogStreamInfo info;
   info.topic = s.topic;
-  info.instance = s.multi_id;
+  info.instance = s.instance;
   info.device_id = s.device_id;
   info.samples = s.messages;
   info.first_s = static_cast<double>(s.first_us) / 1e6;
@@ -61,8 +61,8 @@ LogStreamInfo Describe(const internal::ULogStream& s) {
 }
 
 // "sensor_accel instance 1 (device id 2424842, 1200 samples at 200 Hz)", for lists.
-std::string Line(const internal::ULogStream& s) {
-  std::string out = Format("%s instance %d (", s.topic.c_str(), s.multi_id);
+std::string Line(const internal::DecodedStream& s) {
+  std::string out = Format("%s instance %d (", s.topic.c_str(), s.instance);
   if (s.device_id) out += Format("device id %llu, ", static_cast<unsigned long long>(*s.device_id));
   const LogStreamInfo info = Describe(s);
   out += Format("%zu samples", s.messages);
@@ -71,7 +71,7 @@ std::string Line(const internal::ULogStream& s) {
 }
 
 // Which column of `s` a columns option's entry names: a field's name, or its 1-based number.
-std::size_t ColumnOf(const internal::ULogStream& s, const std::string& entry,
+std::size_t ColumnOf(const internal::DecodedStream& s, const std::string& entry,
                      const std::string& source) {
   const auto it = std::find(s.columns.begin(), s.columns.end(), entry);
   if (it != s.columns.end()) return std::size_t(it - s.columns.begin());
@@ -112,19 +112,19 @@ InputData ReadNativeLog(BinaryStream& in, InputFile* file, const ReadOptions& op
   const auto keep = [&](const std::string& topic, int) {
     return options.topic.empty() ? Known(topic, sensor) != nullptr : topic == options.topic;
   };
-  ULogContents log = ReadULog(in, keep);
+  DecodedLog log = ReadULog(in, keep);
   in.Drain();
   if (options.fingerprint && file != nullptr) RequireUnchanged(*file);
   // The stream: the topic's (and instance's) with messages.
-  std::vector<const ULogStream*> candidates;
-  for (const ULogStream& s : log.streams) {
+  std::vector<const DecodedStream*> candidates;
+  for (const DecodedStream& s : log.streams) {
     if (!s.kept || s.messages == 0) continue;
-    if (options.instance && static_cast<double>(s.multi_id) != *options.instance) continue;
+    if (options.instance && static_cast<double>(s.instance) != *options.instance) continue;
     candidates.push_back(&s);
   }
   if (candidates.size() != 1) {
     std::string list;
-    for (const ULogStream& s : log.streams) {
+    for (const DecodedStream& s : log.streams) {
       if (s.messages > 0 &&
           (options.topic.empty() ? Known(s.topic, sensor) != nullptr : s.topic == options.topic)) {
         list += "; " + Line(s);
@@ -136,7 +136,7 @@ InputData ReadNativeLog(BinaryStream& in, InputFile* file, const ReadOptions& op
         options.instance ? Format(" with instance %g", *options.instance) : std::string();
     if (candidates.empty()) {
       std::string topics;
-      for (const ULogStream& s : log.streams) {
+      for (const DecodedStream& s : log.streams) {
         if (s.messages > 0) topics += (topics.empty() ? "" : ", ") + s.topic;
       }
       throw InputError(source, 0,
@@ -147,7 +147,7 @@ InputData ReadNativeLog(BinaryStream& in, InputFile* file, const ReadOptions& op
                      "several " + what + "s:" + list.substr(1) +
                          "; choose one with the topic and instance options");
   }
-  const ULogStream& s = *candidates.front();
+  const DecodedStream& s = *candidates.front();
   // Its columns: the option's (x,y,z or time,x,y,z), else the known stream's fields and the
   // sample time (timestamp_sample when the topic has one: when the sensor sampled, not when the
   // message was published).
@@ -228,10 +228,10 @@ LogInventory InspectLog(const std::string& path) {
                      "not a binary log (ULog): a text log's columns are its header's");
   }
   internal::BinaryStream in(&file, std::move(head));
-  const internal::ULogContents log =
+  const internal::DecodedLog log =
       internal::ReadULog(in, [](const std::string&, int) { return false; });
   out.bytes = log.bytes;
-  for (const internal::ULogStream& s : log.streams) out.streams.push_back(Describe(s));
+  for (const internal::DecodedStream& s : log.streams) out.streams.push_back(Describe(s));
   out.parameters = log.parameters;
   out.info = log.info;
   out.truncated = log.truncated;

@@ -91,10 +91,9 @@ double Decode(Scalar type, const unsigned char* p) {
 
 class Reader {
  public:
-  Reader(BinaryStream& in, const std::function<bool(const std::string&, int)>& keep)
-      : in_(in), keep_(keep), subscribed_(65536, -1) {}
+  Reader(BinaryStream& in, const KeepStream& keep) : in_(in), keep_(keep), subscribed_(65536, -1) {}
 
-  ULogContents Read();
+  DecodedLog Read();
 
  private:
   [[noreturn]] void Fail(std::uint64_t at, const std::string& why) const {
@@ -111,8 +110,8 @@ class Reader {
   void KeyValue(const unsigned char* p, std::size_t size, bool parameter, std::uint64_t at);
 
   BinaryStream& in_;
-  const std::function<bool(const std::string&, int)>& keep_;
-  ULogContents out_;
+  const KeepStream& keep_;
+  DecodedLog out_;
   std::unordered_map<std::string, std::vector<Field>> formats_;
   std::unordered_map<std::string, Layout> layouts_;
   std::vector<int> subscribed_;               // message id -> stream, -1 when none
@@ -218,9 +217,9 @@ void Reader::Subscribe(const unsigned char* p, std::size_t size, std::uint64_t a
   const auto key = std::make_pair(topic, multi_id);
   auto [it, added] = stream_of_.emplace(key, static_cast<int>(out_.streams.size()));
   if (added) {
-    ULogStream s;
+    DecodedStream s;
     s.topic = topic;
-    s.multi_id = multi_id;
+    s.instance = multi_id;
     for (const Leaf& l : layout.leaves) s.columns.push_back(l.name);
     s.kept = keep_(topic, multi_id);
     out_.streams.push_back(std::move(s));
@@ -238,7 +237,7 @@ void Reader::Data(const unsigned char* p, std::size_t size, std::uint64_t at) {
                  ", which no A message "
                  "subscribed");
   }
-  ULogStream& s = out_.streams[std::size_t(index)];
+  DecodedStream& s = out_.streams[std::size_t(index)];
   const Layout& layout = *stream_layout_[std::size_t(index)];
   const std::size_t bytes = size - 2;
   if (bytes < layout.used || bytes > layout.size) {
@@ -290,7 +289,7 @@ void Reader::KeyValue(const unsigned char* p, std::size_t size, bool parameter, 
   }
 }
 
-ULogContents Reader::Read() {
+DecodedLog Reader::Read() {
   if (!in_.Need(16) || !IsULog(std::string_view(reinterpret_cast<const char*>(in_.data()), 16))) {
     Fail(0, "not a ULog file (its header is not \"ULog\" 01 12 35, version, time)");
   }
@@ -405,9 +404,6 @@ ULogContents Reader::Read() {
 
 }  // namespace
 
-ULogContents ReadULog(BinaryStream& in,
-                      const std::function<bool(const std::string& topic, int multi_id)>& keep) {
-  return Reader(in, keep).Read();
-}
+DecodedLog ReadULog(BinaryStream& in, const KeepStream& keep) { return Reader(in, keep).Read(); }
 
 }  // namespace accelcal::internal

@@ -27,9 +27,9 @@ const std::string kSmall = std::string(ACCELCAL_DATA_DIR) + "/px4-ulog/sample_lo
 std::string AsCsv(const std::string& ulog) {
   internal::InputFile file(ulog, std::size_t{1} << 30);
   internal::BinaryStream in(&file, "");
-  const internal::ULogContents c =
+  const internal::DecodedLog c =
       internal::ReadULog(in, [](const std::string& t, int) { return t == "sensor_accel"; });
-  const internal::ULogStream& s = c.streams.at(0);
+  const internal::DecodedStream& s = c.streams.at(0);
   const auto col = [&](const char* name) {
     return std::size_t(std::find(s.columns.begin(), s.columns.end(), name) - s.columns.begin());
   };

@@ -18,8 +18,7 @@ namespace {
 
 const std::string kDir = std::string(ACCELCAL_DATA_DIR) + "/px4-ulog/";
 
-ULogContents Read(const std::string& path,
-                  const std::function<bool(const std::string&, int)>& keep) {
+DecodedLog Read(const std::string& path, const std::function<bool(const std::string&, int)>& keep) {
   InputFile file(path, std::size_t{1} << 30);
   BinaryStream in(&file, "");
   return ReadULog(in, keep);
@@ -45,18 +44,18 @@ Csv ReadCsv(const std::string& path) {
   return out;
 }
 
-const ULogStream* Find(const ULogContents& c, const std::string& topic, int multi_id) {
-  for (const ULogStream& s : c.streams) {
-    if (s.topic == topic && s.multi_id == multi_id) return &s;
+const DecodedStream* Find(const DecodedLog& c, const std::string& topic, int multi_id) {
+  for (const DecodedStream& s : c.streams) {
+    if (s.topic == topic && s.instance == multi_id) return &s;
   }
   return nullptr;
 }
 
 // Every column of pyulog's reference, every message, bit for bit.
-void ExpectSameAsPyulog(const ULogContents& c, const std::string& topic, int multi_id,
+void ExpectSameAsPyulog(const DecodedLog& c, const std::string& topic, int multi_id,
                         const std::string& csv) {
   SCOPED_TRACE(topic + "." + std::to_string(multi_id));
-  const ULogStream* s = Find(c, topic, multi_id);
+  const DecodedStream* s = Find(c, topic, multi_id);
   ASSERT_NE(s, nullptr);
   ASSERT_TRUE(s->kept);
   const Csv ref = ReadCsv(csv);
@@ -75,7 +74,7 @@ void ExpectSameAsPyulog(const ULogContents& c, const std::string& topic, int mul
 }
 
 TEST(ULog, SameNumbersAsPyulogOnPx4SampleLog) {
-  const ULogContents c = Read(kDir + "sample_log_small.ulg", [](const std::string& topic, int) {
+  const DecodedLog c = Read(kDir + "sample_log_small.ulg", [](const std::string& topic, int) {
     return topic == "sensor_accel" || topic == "sensor_combined";
   });
   EXPECT_FALSE(c.truncated.has_value()) << *c.truncated;
@@ -89,7 +88,7 @@ TEST(ULog, SameNumbersAsPyulogOnPx4SampleLog) {
   ASSERT_NE(Find(c, "sensor_accel", 0)->device_id, std::nullopt);
   EXPECT_EQ(*Find(c, "sensor_accel", 0)->device_id, 2424842u);
   // Streams not kept are counted, not stored.
-  const ULogStream* other = Find(c, "sensor_gyro", 0);
+  const DecodedStream* other = Find(c, "sensor_gyro", 0);
   if (other != nullptr) {
     EXPECT_FALSE(other->kept);
     EXPECT_TRUE(other->values.empty());
@@ -113,17 +112,17 @@ std::string WriteTemp(const std::string& bytes, const char* name) {
 TEST(ULog, TruncatedLogGivesWhatIsWholeAndSaysWhere) {
   const std::string all = Bytes(kDir + "sample_log_small.ulg");
   const auto keep = [](const std::string& t, int) { return t == "sensor_combined"; };
-  const ULogContents whole = Read(kDir + "sample_log_small.ulg", keep);
+  const DecodedLog whole = Read(kDir + "sample_log_small.ulg", keep);
   const std::size_t n = whole.streams.empty() ? 0 : Find(whole, "sensor_combined", 0)->messages;
-  const ULogContents cut = Read(WriteTemp(all.substr(0, all.size() / 2 + 7), "cut.ulg"), keep);
+  const DecodedLog cut = Read(WriteTemp(all.substr(0, all.size() / 2 + 7), "cut.ulg"), keep);
   ASSERT_TRUE(cut.truncated.has_value());
   EXPECT_NE(cut.truncated->find("ends inside a message"), std::string::npos) << *cut.truncated;
-  const ULogStream* s = Find(cut, "sensor_combined", 0);
+  const DecodedStream* s = Find(cut, "sensor_combined", 0);
   ASSERT_NE(s, nullptr);
   EXPECT_GT(s->messages, n / 4);
   EXPECT_LT(s->messages, n);
   // The messages read are the whole log's first ones.
-  const ULogStream* w = Find(whole, "sensor_combined", 0);
+  const DecodedStream* w = Find(whole, "sensor_combined", 0);
   for (std::size_t i = 0; i < s->values.size(); ++i) ASSERT_EQ(s->values[i], w->values[i]);
 }
 

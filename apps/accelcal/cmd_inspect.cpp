@@ -39,7 +39,7 @@ int RunInspect(const InspectArgs& args) {
     out = JsonText(doc);
   } else {
     out += Format("%s: %s, %llu bytes\n", log.source.c_str(),
-                  log.format == LogFormat::kULog ? "PX4 ULog" : "text",
+                  log.format == LogFormat::kULog ? "PX4 ULog" : "ArduPilot DataFlash",
                   static_cast<unsigned long long>(log.bytes));
     for (const char* key : {"sys_name", "ver_hw", "ver_sw", "ver_sw_release"}) {
       if (const auto it = log.info.find(key); it != log.info.end()) {

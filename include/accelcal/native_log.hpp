@@ -1,10 +1,10 @@
 #pragma once
 /// @file native_log.hpp
 /// The binary logs accelcal reads as they are recorded, told by their first bytes: PX4 ULog
-/// (`.ulg`). ReadInput (log_reader.hpp) reads one stream of such a log as it reads a text log's
-/// columns: the stream by ReadOptions::topic and ::instance, its fields by ::columns; InspectLog
-/// says what a log holds. A log cut short gives what is whole, with a warning
-/// (RawLog::read_warning); a corrupt one an InputError naming the byte.
+/// (`.ulg`) and ArduPilot DataFlash (`.bin`). ReadInput (log_reader.hpp) reads one stream of such a
+/// log as it reads a text log's columns: the stream by ReadOptions::topic and ::instance, its
+/// fields by ::columns; InspectLog says what a log holds. A log cut short gives what is whole, with
+/// a warning (RawLog::read_warning); a corrupt one an InputError naming the byte.
 
 #include <cstdint>
 #include <map>
@@ -18,13 +18,14 @@
 namespace accelcal {
 
 enum class LogFormat {
-  kText,  ///< delimited text (log_reader.hpp)
-  kULog,  ///< PX4 ULog
+  kText,       ///< delimited text (log_reader.hpp)
+  kULog,       ///< PX4 ULog
+  kDataFlash,  ///< ArduPilot DataFlash
 };
 template <>
 struct EnumNames<LogFormat> {
-  static constexpr std::pair<LogFormat, std::string_view> kTable[] = {{LogFormat::kText, "text"},
-                                                                      {LogFormat::kULog, "ulog"}};
+  static constexpr std::pair<LogFormat, std::string_view> kTable[] = {
+      {LogFormat::kText, "text"}, {LogFormat::kULog, "ulog"}, {LogFormat::kDataFlash, "dataflash"}};
 };
 std::string_view ToString(LogFormat format);
 /// The format of a file that begins with `first_bytes` (16 are enough).
@@ -34,6 +35,7 @@ LogFormat DetectLogFormat(std::string_view first_bytes);
 struct KnownStream {
   std::string_view topic;
   std::string_view sensor;   ///< "accelerometer" or "gyroscope"
+  std::string_view time;     ///< its sample time field [µs]
   std::string_view x, y, z;  ///< its fields
   std::string_view unit;     ///< of those fields
   /// Already corrected by the calibration in force when it was logged (calibrating it finds
@@ -42,13 +44,14 @@ struct KnownStream {
 };
 /// The streams accelcal reads without being told their fields: PX4's sensor_accel (the
 /// driver's output, before the calibration), sensor_combined's accelerometer (after it),
-/// sensor_gyro, sensor_combined's gyro.
+/// sensor_gyro, sensor_combined's gyro; ArduPilot's IMU, ACC and GYR records (after the
+/// calibration in force: INS_ACCOFFS, INS_ACCSCAL).
 const std::vector<KnownStream>& KnownStreams();
 
 /// One stream of a binary log: a topic's instance.
 struct LogStreamInfo {
   std::string topic;
-  int instance = 0;  ///< ULog multi id
+  int instance = 0;  ///< ULog multi id, DataFlash I
   std::optional<std::uint64_t> device_id;
   std::size_t samples = 0;
   double first_s = 0, last_s = 0;    ///< timestamps of the first and last message [s]
@@ -63,7 +66,7 @@ struct LogInventory {
   std::string source;
   std::uint64_t bytes = 0;
   std::vector<LogStreamInfo> streams;
-  std::map<std::string, double> parameters;  ///< PX4 parameters at the log's start
+  std::map<std::string, double> parameters;  ///< the parameters at the log's start
   std::map<std::string, std::string> info;   ///< the log's string information (sys_name, ...)
   std::optional<std::string> truncated;      ///< where a log cut short stopped
 };

@@ -8,6 +8,7 @@
 #include "accelcal/error.hpp"
 #include "core/text_format.hpp"
 #include "io/binary_stream.hpp"
+#include "io/dataflash.hpp"
 #include "io/native_input.hpp"
 #include "io/ulog.hpp"
 
@@ -17,16 +18,24 @@ std::string_view ToString(LogFormat format) { return NameOf(format); }
 
 LogFormat DetectLogFormat(std::string_view first_bytes) {
   if (internal::IsULog(first_bytes)) return LogFormat::kULog;
+  if (internal::IsDataFlash(first_bytes)) return LogFormat::kDataFlash;
   return LogFormat::kText;
 }
 
 const std::vector<KnownStream>& KnownStreams() {
   static const std::vector<KnownStream> kStreams = {
-      {"sensor_accel", "accelerometer", "x", "y", "z", "m/s2", false},
-      {"sensor_combined", "accelerometer", "accelerometer_m_s2[0]", "accelerometer_m_s2[1]",
-       "accelerometer_m_s2[2]", "m/s2", true},
-      {"sensor_gyro", "gyroscope", "x", "y", "z", "rad/s", false},
-      {"sensor_combined", "gyroscope", "gyro_rad[0]", "gyro_rad[1]", "gyro_rad[2]", "rad/s", true},
+      // PX4: sampled at timestamp_sample where the topic has one.
+      {"sensor_accel", "accelerometer", "timestamp_sample", "x", "y", "z", "m/s2", false},
+      {"sensor_combined", "accelerometer", "timestamp", "accelerometer_m_s2[0]",
+       "accelerometer_m_s2[1]", "accelerometer_m_s2[2]", "m/s2", true},
+      {"sensor_gyro", "gyroscope", "timestamp_sample", "x", "y", "z", "rad/s", false},
+      {"sensor_combined", "gyroscope", "timestamp", "gyro_rad[0]", "gyro_rad[1]", "gyro_rad[2]",
+       "rad/s", true},
+      // ArduPilot: ACC and GYR at SampleUS, IMU at TimeUS.
+      {"IMU", "accelerometer", "TimeUS", "AccX", "AccY", "AccZ", "m/s2", true},
+      {"ACC", "accelerometer", "SampleUS", "AccX", "AccY", "AccZ", "m/s2", true},
+      {"IMU", "gyroscope", "TimeUS", "GyrX", "GyrY", "GyrZ", "rad/s", true},
+      {"GYR", "gyroscope", "SampleUS", "GyrX", "GyrY", "GyrZ", "rad/s", true},
   };
   return kStreams;
 }
@@ -95,14 +104,47 @@ std::size_t ColumnOf(const internal::DecodedStream& s, const std::string& entry,
 
 namespace internal {
 
+namespace {
+
+// The format's name for messages.
+const char* FormatName(LogFormat format) {
+  return format == LogFormat::kULog ? "PX4 ULog" : "ArduPilot DataFlash log";
+}
+
+// A binary log's format, from its first bytes in `in`.
+LogFormat FormatOf(BinaryStream& in) {
+  in.Need(16);
+  return DetectLogFormat(std::string_view(reinterpret_cast<const char*>(in.data()),
+                                          std::min<std::size_t>(in.available(), 16)));
+}
+
+DecodedLog Decode(BinaryStream& in, LogFormat format, const KeepStream& keep) {
+  return format == LogFormat::kULog ? ReadULog(in, keep) : ReadDataFlash(in, keep);
+}
+
+// The time field of stream `s` when none is named: the known stream's, else the first of the
+// formats' own that it has.
+std::string DefaultTime(const DecodedStream& s, const KnownStream* known) {
+  if (known != nullptr) return std::string(known->time);
+  for (const char* name : {"timestamp_sample", "timestamp", "SampleUS", "TimeUS"}) {
+    if (std::find(s.columns.begin(), s.columns.end(), name) != s.columns.end()) return name;
+  }
+  return "timestamp";
+}
+
+}  // namespace
+
 InputData ReadNativeLog(BinaryStream& in, InputFile* file, const ReadOptions& options) {
   const std::string source = in.name();
+  const LogFormat format = FormatOf(in);
+  const std::string name = FormatName(format);
   if (options.kind == InputKind::kPositions) {
-    throw InputError(source, 0, "a ULog is a raw log, not a positions file");
+    throw InputError(source, 0, "a " + name + " is a raw log, not a positions file");
   }
   if (options.time_unit != TimeUnit::kAuto && options.time_unit != TimeUnit::kMicroseconds) {
     throw InputError(source, 0,
-                     "a ULog's timestamps are in microseconds by its specification, not in " +
+                     "a " + name +
+                         "'s timestamps are in microseconds by its specification, not in " +
                          std::string(ToString(options.time_unit)));
   }
   Sha256 hash;
@@ -112,7 +154,7 @@ InputData ReadNativeLog(BinaryStream& in, InputFile* file, const ReadOptions& op
   const auto keep = [&](const std::string& topic, int) {
     return options.topic.empty() ? Known(topic, sensor) != nullptr : topic == options.topic;
   };
-  DecodedLog log = ReadULog(in, keep);
+  DecodedLog log = Decode(in, format, keep);
   in.Drain();
   if (options.fingerprint && file != nullptr) RequireUnchanged(*file);
   // The stream: the topic's (and instance's) with messages.
@@ -158,14 +200,7 @@ InputData ReadNativeLog(BinaryStream& in, InputFile* file, const ReadOptions& op
     if (n != 3 && n != 4) {
       throw InputError(source, 0, "the columns option takes 3 entries (x,y,z) or 4 (time,x,y,z)");
     }
-    if (n == 3) {
-      column[0] = ColumnOf(
-          s,
-          s.columns.end() != std::find(s.columns.begin(), s.columns.end(), "timestamp_sample")
-              ? "timestamp_sample"
-              : "timestamp",
-          source);
-    }
+    if (n == 3) column[0] = ColumnOf(s, DefaultTime(s, known), source);
     for (std::size_t i = 0; i < n; ++i) column[4 - n + i] = ColumnOf(s, options.columns[i], source);
   } else {
     if (known == nullptr) {
@@ -174,16 +209,14 @@ InputData ReadNativeLog(BinaryStream& in, InputFile* file, const ReadOptions& op
                            " are the readings: name them with the columns option (x,y,z or "
                            "time,x,y,z)");
     }
-    const bool sampled =
-        std::find(s.columns.begin(), s.columns.end(), "timestamp_sample") != s.columns.end();
-    column[0] = ColumnOf(s, sampled ? "timestamp_sample" : "timestamp", source);
+    column[0] = ColumnOf(s, DefaultTime(s, known), source);
     column[1] = ColumnOf(s, std::string(known->x), source);
     column[2] = ColumnOf(s, std::string(known->y), source);
     column[3] = ColumnOf(s, std::string(known->z), source);
   }
   InputData data;
   data.kind = InputKind::kRaw;
-  data.kind_reason = "a ULog: " + Line(s);
+  data.kind_reason = "a " + name + ": " + Line(s);
   RawLog& raw = data.raw;
   raw.source = source;
   const std::size_t width = s.columns.size();
@@ -225,11 +258,12 @@ LogInventory InspectLog(const std::string& path) {
   out.source = file.name();
   if (out.format == LogFormat::kText) {
     throw InputError(file.name(), 0,
-                     "not a binary log (ULog): a text log's columns are its header's");
+                     "not a binary log (PX4 ULog, ArduPilot DataFlash): a text log's columns "
+                     "are its header's");
   }
   internal::BinaryStream in(&file, std::move(head));
   const internal::DecodedLog log =
-      internal::ReadULog(in, [](const std::string&, int) { return false; });
+      internal::Decode(in, out.format, [](const std::string&, int) { return false; });
   out.bytes = log.bytes;
   for (const internal::DecodedStream& s : log.streams) out.streams.push_back(Describe(s));
   out.parameters = log.parameters;

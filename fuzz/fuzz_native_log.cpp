@@ -1,7 +1,8 @@
-// libFuzzer harness: binary logs (native_log.hpp) read by ParseInput as every stream choice a user
-// could make (none, a topic, a topic and instance, named columns). The only accepted failure is
-// InputError (the file, the byte or message, the reason); anything else is a finding. What is
-// read must be what a raw log promises: finite samples and times, times from 0 that never go back.
+// libFuzzer harness: binary logs (native_log.hpp: PX4 ULog, ArduPilot DataFlash) read by ParseInput
+// as every stream choice a user could make (none, a topic, a topic and instance, named columns).
+// The only accepted failure is InputError (the file, the byte or message, the reason); anything
+// else is a finding. What is read must be what a raw log promises: finite samples and times, times
+// from 0 that never go back.
 #include <cmath>
 #include <cstdint>
 #include <cstdlib>
@@ -48,6 +49,11 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   Read(bytes, options);
   options.instance = 0;
   Read(bytes, options);
+  options.topic = "IMU";
+  options.instance = 1;
+  options.sensor = accelcal::SensorKind::kGyroscope;
+  Read(bytes, options);
+  options.sensor = accelcal::SensorKind::kAccelerometer;
   options.topic = "sensor_combined";
   options.instance.reset();
   options.columns = {"timestamp", "gyro_rad[0]", "gyro_rad[1]", "gyro_rad[2]"};

@@ -3,6 +3,7 @@
 
 #include <array>
 #include <cstring>
+#include <memory>
 
 #include "accelcal/error.hpp"
 #include "core/text_format.hpp"
@@ -28,9 +29,10 @@ struct Type {
   std::string name;
   std::size_t length = 0;
   std::vector<Field> fields;
-  std::vector<std::size_t> numeric;       // indices of the numeric fields: the columns
-  int time = -1, instance = -1;           // the TimeUS and I fields
-  int param_name = -1, param_value = -1;  // a PARM record's Name and Value
+  std::vector<std::size_t> numeric;  // indices of the numeric fields: the columns
+  std::shared_ptr<const std::vector<std::string>> names;  // their labels
+  int time = -1, instance = -1;                           // the TimeUS and I fields
+  int param_name = -1, param_value = -1;                  // a PARM record's Name and Value
 };
 
 // The size of a format character's field (0: unknown).
@@ -113,7 +115,8 @@ std::string Text(const unsigned char* p, std::size_t n) {
 
 class Reader {
  public:
-  Reader(BinaryStream& in, const KeepStream& keep) : in_(in), keep_(keep) {}
+  Reader(BinaryStream& in, const KeepStream& keep, const StoreColumns& store)
+      : in_(in), keep_(keep), store_(store) {}
   DecodedLog Read();
 
  private:
@@ -126,6 +129,7 @@ class Reader {
 
   BinaryStream& in_;
   const KeepStream& keep_;
+  const StoreColumns& store_;
   DecodedLog out_;
   std::array<Type, 256> types_;
   std::map<std::pair<int, int>, std::size_t> stream_of_;  // (type, instance) -> stream
@@ -171,9 +175,17 @@ void Reader::Define(const unsigned char* r, std::uint64_t at) {
     if (names[i] == "I" && (c == 'B' || c == 'b')) t.instance = static_cast<int>(i);
     if (names[i] == "Name" && c == 'N') t.param_name = static_cast<int>(i);
     if (names[i] == "Value" && c == 'f') t.param_value = static_cast<int>(i);
+    for (const Field& before : t.fields) {
+      if (before.label == f.label) {
+        Fail(at, "the FMT of " + t.name + " labels two columns " + f.label);
+      }
+    }
     t.fields.push_back(std::move(f));
     offset += size;
   }
+  auto labels_kept = std::make_shared<std::vector<std::string>>();
+  for (std::size_t i : t.numeric) labels_kept->push_back(t.fields[i].label);
+  t.names = std::move(labels_kept);
   if (offset != length) {
     Fail(at, Format("the FMT of %s says %zu bytes, but its fields (%s) take %zu", t.name.c_str(),
                     length, format.c_str(), offset));
@@ -195,8 +207,15 @@ void Reader::Record(const Type& type, const unsigned char* r, std::uint64_t at) 
     DecodedStream s;
     s.topic = type.name;
     s.instance = instance;
-    for (std::size_t i : type.numeric) s.columns.push_back(type.fields[i].label);
+    s.columns = type.names;
     s.kept = keep_(s.topic, instance);
+    if (s.kept) {
+      if (store_) {
+        s.stored = store_(s);
+      } else {
+        for (std::size_t c = 0; c < type.numeric.size(); ++c) s.stored.push_back(c);
+      }
+    }
     out_.streams.push_back(std::move(s));
   }
   DecodedStream& s = out_.streams[it->second];
@@ -207,8 +226,8 @@ void Reader::Record(const Type& type, const unsigned char* r, std::uint64_t at) 
   s.last_us = t;
   ++s.messages;
   if (s.kept) {
-    for (std::size_t i : type.numeric) {
-      const Field& f = type.fields[i];
+    for (std::size_t c : s.stored) {
+      const Field& f = type.fields[type.numeric.at(c)];
       s.values.push_back(Decode(f.code, r + f.offset));
     }
     s.offset.push_back(at);
@@ -284,8 +303,8 @@ bool IsDataFlash(std::string_view first_bytes) {
          static_cast<unsigned char>(first_bytes[2]) == kFmtType;
 }
 
-DecodedLog ReadDataFlash(BinaryStream& in, const KeepStream& keep) {
-  return Reader(in, keep).Read();
+DecodedLog ReadDataFlash(BinaryStream& in, const KeepStream& keep, const StoreColumns& store) {
+  return Reader(in, keep, store).Read();
 }
 
 }  // namespace accelcal::internal

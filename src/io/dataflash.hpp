@@ -22,6 +22,6 @@ bool IsDataFlash(std::string_view first_bytes);
 /// types (c, C, e, E: hundredths; L: 1e-7 degrees) are given scaled. Throws InputError (the file,
 /// the byte offset, the reason) for a record that does not begin A3 95, a type no FMT defined, a
 /// FMT whose format does not parse or whose length is not its fields'.
-DecodedLog ReadDataFlash(BinaryStream& in, const KeepStream& keep);
+DecodedLog ReadDataFlash(BinaryStream& in, const KeepStream& keep, const StoreColumns& store = {});
 
 }  // namespace accelcal::internal

@@ -5,6 +5,7 @@
 #include <cstdint>
 #include <functional>
 #include <map>
+#include <memory>
 #include <optional>
 #include <string>
 #include <vector>
@@ -18,16 +19,19 @@ struct DecodedStream {
   int instance = 0;
   /// Its numeric fields, flattened as the format's own tools name them (pyulog: `x`,
   /// `gyro_rad[0]`, `a.b`; DataFlash: its column labels), in the format's order; padding and
-  /// text fields left out.
-  std::vector<std::string> columns;
+  /// text fields left out, and those beyond the format's first kMaxFormatColumns. Shared by the
+  /// streams of one format (a log may subscribe one format many times).
+  std::shared_ptr<const std::vector<std::string>> columns;
   std::size_t messages = 0;
   /// The time field [µs] of its first and last message (0 without messages).
   std::uint64_t first_us = 0, last_us = 0;
   /// The `device_id` field of its first message, when it has one.
   std::optional<std::uint64_t> device_id;
-  /// Whether its messages were kept: then `values` holds columns.size() values per message,
-  /// message after message, and `offset` each message's byte offset in the file.
+  /// Whether its messages were kept: then `values` holds the `stored` columns of each message
+  /// (stored.size() values per message, message after message), and `offset` each message's
+  /// byte offset in the file.
   bool kept = false;
+  std::vector<std::size_t> stored;  ///< indices into columns, in the order chosen
   std::vector<double> values;
   std::vector<std::uint64_t> offset;
 };
@@ -47,5 +51,14 @@ struct DecodedLog {
 
 /// Which streams a reader decodes (topic, instance); the others it only counts.
 using KeepStream = std::function<bool(const std::string& topic, int instance)>;
+/// Which columns of a kept stream a reader stores (indices into its columns, in the order
+/// wanted); without one, all of them. Memory then grows with what is kept, not with the log.
+using StoreColumns = std::function<std::vector<std::size_t>(const DecodedStream& stream)>;
+
+/// A format's numeric fields beyond this many are not columns (a huge array, arrays of arrays).
+inline constexpr std::size_t kMaxFormatColumns = 4096;
+/// A log whose formats define more columns than this in all is refused: a small file could
+/// otherwise ask for gigabytes of field names.
+inline constexpr std::size_t kMaxLogColumns = std::size_t{1} << 20;
 
 }  // namespace accelcal::internal

@@ -626,12 +626,28 @@ InputData ReadInput(const std::string& path, const ReadOptions& options) {
 StreamedLog StreamRawLog(const std::string& path, const ReadOptions& options,
                          const std::function<void(const RawLog& piece)>& sink) {
   internal::InputFile file(path, options.max_stream_bytes);
-  internal::TextBlocks blocks(&file);
   ReadOptions read = options;
   read.kind = InputKind::kRaw;
   read.fingerprint = false;
   StreamedLog out;
   out.source = file.name();
+  std::string head_bytes(16, '\0');
+  head_bytes.resize(file.ReadFully(head_bytes.data(), head_bytes.size()));
+  if (DetectLogFormat(head_bytes) != LogFormat::kText) {
+    // A binary log keeps only the stream's samples (4 numbers each): read whole, one piece.
+    internal::BinaryStream in(&file, std::move(head_bytes));
+    const InputData data = internal::ReadNativeLog(in, &file, read);
+    out.samples = data.raw.samples.size();
+    out.rate_hz = data.raw.rate_hz;
+    out.time = data.raw.time;
+    if (out.time) {
+      for (const TimeGap& g : out.time->gaps) out.gap_lines.push_back(data.raw.line[g.index]);
+    }
+    sink(data.raw);
+    return out;
+  }
+  RefuseTopicOfText(out.source, options);
+  internal::TextBlocks blocks(&file, std::move(head_bytes));
   const std::string& source = out.source;
   BlockColumns columns;
   RawLog head;   // the first samples, their times as written, until the unit is decided

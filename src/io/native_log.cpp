@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <stdexcept>
 
 #include "accelcal/error.hpp"
 #include "core/text_format.hpp"
@@ -51,6 +52,9 @@ const KnownStream* Known(std::string_view topic, std::string_view sensor) {
   return nullptr;
 }
 
+// A name from the log, for a message: one line, every character visible.
+std::string Shown(std::string_view name) { return internal::VisibleLine(name); }
+
 LogStreamInfo Describe(const internal::DecodedStream& s) {
   LogStreamInfo info;
   info.topic = s.topic;
@@ -62,7 +66,7 @@ LogStreamInfo Describe(const internal::DecodedStream& s) {
   if (s.messages >= 2 && s.last_us > s.first_us) {
     info.rate_hz = static_cast<double>(s.messages - 1) / (info.last_s - info.first_s);
   }
-  info.columns = s.columns;
+  info.columns = *s.columns;
   for (const KnownStream& k : KnownStreams()) {
     if (k.topic == s.topic) info.sensors.emplace_back(k.sensor);
   }
@@ -71,7 +75,7 @@ LogStreamInfo Describe(const internal::DecodedStream& s) {
 
 // "sensor_accel instance 1 (device id 2424842, 1200 samples at 200 Hz)", for lists.
 std::string Line(const internal::DecodedStream& s) {
-  std::string out = Format("%s instance %d (", s.topic.c_str(), s.instance);
+  std::string out = Shown(s.topic) + Format(" instance %d (", s.instance);
   if (s.device_id) out += Format("device id %llu, ", static_cast<unsigned long long>(*s.device_id));
   const LogStreamInfo info = Describe(s);
   out += Format("%zu samples", s.messages);
@@ -79,25 +83,103 @@ std::string Line(const internal::DecodedStream& s) {
   return out + ")";
 }
 
+// The index of the column `name` of `s`, if it has one.
+std::optional<std::size_t> Find(const internal::DecodedStream& s, std::string_view name) {
+  const auto it = std::find(s.columns->begin(), s.columns->end(), name);
+  if (it == s.columns->end()) return std::nullopt;
+  return std::size_t(it - s.columns->begin());
+}
+
 // Which column of `s` a columns option's entry names: a field's name, or its 1-based number.
 std::size_t ColumnOf(const internal::DecodedStream& s, const std::string& entry,
                      const std::string& source) {
-  const auto it = std::find(s.columns.begin(), s.columns.end(), entry);
-  if (it != s.columns.end()) return std::size_t(it - s.columns.begin());
+  if (const std::optional<std::size_t> c = Find(s, entry)) return *c;
   std::size_t number = 0;
   bool digits = !entry.empty() && entry.size() < 6;
   for (char c : entry) {
-    if (c < '0' || c > '9')
+    if (c < '0' || c > '9') {
       digits = false;
-    else
+    } else {
       number = number * 10 + std::size_t(c - '0');
+    }
   }
-  if (digits && number >= 1 && number <= s.columns.size()) return number - 1;
+  if (digits && number >= 1 && number <= s.columns->size()) return number - 1;
   std::string fields;
-  for (const std::string& c : s.columns) fields += (fields.empty() ? "" : ", ") + c;
+  for (const std::string& c : *s.columns) fields += (fields.empty() ? "" : ", ") + Shown(c);
   throw InputError(source, 0,
-                   "the columns option names \"" + entry + "\", which " + s.topic +
+                   "the columns option names \"" + Shown(entry) + "\", which " + Shown(s.topic) +
                        " does not have (its fields: " + fields + ")");
+}
+
+// The time fields the formats define in µs (ULog's timestamp and timestamp_sample, DataFlash's
+// TimeUS and SampleUS), in the order they are preferred when none is named.
+constexpr const char* kMicrosecondFields[] = {"timestamp_sample", "timestamp", "SampleUS",
+                                              "TimeUS"};
+
+bool IsMicrosecondField(std::string_view name) {
+  return std::find(std::begin(kMicrosecondFields), std::end(kMicrosecondFields), name) !=
+         std::end(kMicrosecondFields);
+}
+
+// The columns a stream's samples come from: its time (if any) and x, y, z.
+struct Chosen {
+  std::optional<std::size_t> time;
+  std::size_t axis[3];
+};
+
+// The columns option's (time,x,y,z, or x,y,z with the stream's own time field when it has one),
+// else the known stream's. Throws InputError naming what is wrong.
+Chosen Choose(const internal::DecodedStream& s, const ReadOptions& options,
+              const KnownStream* known, const std::string& source) {
+  Chosen out;
+  if (!options.columns.empty()) {
+    const std::size_t n = options.columns.size();
+    if (n != 3 && n != 4) {
+      throw InputError(source, 0, "the columns option takes 3 entries (x,y,z) or 4 (time,x,y,z)");
+    }
+    if (n == 4) {
+      out.time = ColumnOf(s, options.columns[0], source);
+    } else if (known != nullptr) {
+      out.time = Find(s, known->time);
+    } else {
+      for (const char* name : kMicrosecondFields) {
+        if ((out.time = Find(s, name))) break;
+      }
+    }
+    for (std::size_t a = 0; a < 3; ++a)
+      out.axis[a] = ColumnOf(s, options.columns[n - 3 + a], source);
+  } else {
+    if (known == nullptr) {
+      throw InputError(source, 0,
+                       "accelcal does not know which fields of " + Shown(s.topic) +
+                           " are the readings: name them with the columns option (x,y,z or "
+                           "time,x,y,z)");
+    }
+    out.time = ColumnOf(s, std::string(known->time), source);
+    out.axis[0] = ColumnOf(s, std::string(known->x), source);
+    out.axis[1] = ColumnOf(s, std::string(known->y), source);
+    out.axis[2] = ColumnOf(s, std::string(known->z), source);
+  }
+  std::vector<std::size_t> all(std::begin(out.axis), std::end(out.axis));
+  if (out.time) all.insert(all.begin(), *out.time);
+  for (std::size_t i = 0; i < all.size(); ++i) {
+    for (std::size_t j = 0; j < i; ++j) {
+      if (all[i] == all[j]) {
+        throw InputError(source, 0,
+                         "the columns option reads the field " + Shown((*s.columns)[all[i]]) +
+                             " twice: each of time, x, y, z needs its own");
+      }
+    }
+  }
+  return out;
+}
+
+// The stored order of a Chosen: time first when there is one.
+std::vector<std::size_t> Stored(const Chosen& c) {
+  std::vector<std::size_t> out;
+  if (c.time) out.push_back(*c.time);
+  out.insert(out.end(), std::begin(c.axis), std::end(c.axis));
+  return out;
 }
 
 }  // namespace
@@ -118,18 +200,9 @@ LogFormat FormatOf(BinaryStream& in) {
                                           std::min<std::size_t>(in.available(), 16)));
 }
 
-DecodedLog Decode(BinaryStream& in, LogFormat format, const KeepStream& keep) {
-  return format == LogFormat::kULog ? ReadULog(in, keep) : ReadDataFlash(in, keep);
-}
-
-// The time field of stream `s` when none is named: the known stream's, else the first of the
-// formats' own that it has.
-std::string DefaultTime(const DecodedStream& s, const KnownStream* known) {
-  if (known != nullptr) return std::string(known->time);
-  for (const char* name : {"timestamp_sample", "timestamp", "SampleUS", "TimeUS"}) {
-    if (std::find(s.columns.begin(), s.columns.end(), name) != s.columns.end()) return name;
-  }
-  return "timestamp";
+DecodedLog Decode(BinaryStream& in, LogFormat format, const KeepStream& keep,
+                  const StoreColumns& store = {}) {
+  return format == LogFormat::kULog ? ReadULog(in, keep, store) : ReadDataFlash(in, keep, store);
 }
 
 }  // namespace
@@ -141,22 +214,25 @@ InputData ReadNativeLog(BinaryStream& in, InputFile* file, const ReadOptions& op
   if (options.kind == InputKind::kPositions) {
     throw InputError(source, 0, "a " + name + " is a raw log, not a positions file");
   }
-  if (options.time_unit != TimeUnit::kAuto && options.time_unit != TimeUnit::kMicroseconds) {
-    throw InputError(source, 0,
-                     "a " + name +
-                         "'s timestamps are in microseconds by its specification, not in " +
-                         std::string(ToString(options.time_unit)));
-  }
   Sha256 hash;
   if (options.fingerprint) in.Fingerprint(&hash);
-  // Keep the topic asked for, or every stream of the sensor accelcal knows.
+  // Keep the topic asked for, or every stream of the sensor accelcal knows; store only the
+  // columns the samples come from (none when they cannot be chosen: the error comes below).
   const std::string_view sensor = NameOf(options.sensor);
   const auto keep = [&](const std::string& topic, int) {
     return options.topic.empty() ? Known(topic, sensor) != nullptr : topic == options.topic;
   };
-  DecodedLog log = Decode(in, format, keep);
+  const auto store = [&](const DecodedStream& s) {
+    try {
+      return Stored(Choose(s, options, Known(s.topic, sensor), source));
+    } catch (const InputError&) {
+      return std::vector<std::size_t>();
+    }
+  };
+  DecodedLog log = Decode(in, format, keep, store);
   in.Drain();
   if (options.fingerprint && file != nullptr) RequireUnchanged(*file);
+  const std::string cut = log.truncated ? "; " + *log.truncated : std::string();
   // The stream: the topic's (and instance's) with messages.
   std::vector<const DecodedStream*> candidates;
   for (const DecodedStream& s : log.streams) {
@@ -173,73 +249,78 @@ InputData ReadNativeLog(BinaryStream& in, InputFile* file, const ReadOptions& op
       }
     }
     const std::string what = options.topic.empty() ? std::string(sensor) + " stream"
-                                                   : "stream of topic " + options.topic;
+                                                   : "stream of topic " + Shown(options.topic);
     const std::string which =
         options.instance ? Format(" with instance %g", *options.instance) : std::string();
     if (candidates.empty()) {
       std::string topics;
       for (const DecodedStream& s : log.streams) {
-        if (s.messages > 0) topics += (topics.empty() ? "" : ", ") + s.topic;
+        if (s.messages > 0) topics += (topics.empty() ? "" : ", ") + Shown(s.topic);
       }
       throw InputError(source, 0,
                        "no " + what + which + " with samples" +
-                           (list.empty() ? " (its topics: " + topics + ")" : ":" + list.substr(1)));
+                           (list.empty() ? " (its topics: " + topics + ")" : ":" + list.substr(1)) +
+                           cut);
     }
     throw InputError(source, 0,
                      "several " + what + "s:" + list.substr(1) +
                          "; choose one with the topic and instance options");
   }
   const DecodedStream& s = *candidates.front();
-  // Its columns: the option's (x,y,z or time,x,y,z), else the known stream's fields and the
-  // sample time (timestamp_sample when the topic has one: when the sensor sampled, not when the
-  // message was published).
-  std::size_t column[4];
-  const KnownStream* known = Known(s.topic, sensor);
-  if (!options.columns.empty()) {
-    const std::size_t n = options.columns.size();
-    if (n != 3 && n != 4) {
-      throw InputError(source, 0, "the columns option takes 3 entries (x,y,z) or 4 (time,x,y,z)");
-    }
-    if (n == 3) column[0] = ColumnOf(s, DefaultTime(s, known), source);
-    for (std::size_t i = 0; i < n; ++i) column[4 - n + i] = ColumnOf(s, options.columns[i], source);
-  } else {
-    if (known == nullptr) {
-      throw InputError(source, 0,
-                       "accelcal does not know which fields of " + s.topic +
-                           " are the readings: name them with the columns option (x,y,z or "
-                           "time,x,y,z)");
-    }
-    column[0] = ColumnOf(s, DefaultTime(s, known), source);
-    column[1] = ColumnOf(s, std::string(known->x), source);
-    column[2] = ColumnOf(s, std::string(known->y), source);
-    column[3] = ColumnOf(s, std::string(known->z), source);
+  const Chosen chosen = Choose(s, options, Known(s.topic, sensor), source);
+  if (s.stored != Stored(chosen)) {
+    throw std::logic_error("ReadNativeLog: the columns stored are not the columns chosen");
+  }
+  // A time field the format defines is in µs; another the user chose is read as a text log's.
+  const bool microseconds = chosen.time && IsMicrosecondField((*s.columns)[*chosen.time]);
+  if (microseconds && options.time_unit != TimeUnit::kAuto &&
+      options.time_unit != TimeUnit::kMicroseconds) {
+    throw InputError(source, 0,
+                     "a " + name + "'s " + (*s.columns)[*chosen.time] +
+                         " is in microseconds by its specification, not in " +
+                         std::string(ToString(options.time_unit)));
   }
   InputData data;
   data.kind = InputKind::kRaw;
   data.kind_reason = "a " + name + ": " + Line(s);
   RawLog& raw = data.raw;
   raw.source = source;
-  const std::size_t width = s.columns.size();
-  raw.time_s.reserve(s.messages);
+  const std::size_t width = s.stored.size(), first = chosen.time ? 1 : 0;
+  if (chosen.time) raw.time_s.reserve(s.messages);
   raw.samples.reserve(s.messages);
   raw.line.reserve(s.messages);
+  // Beyond 2^53 a time in µs is no longer an exact double.
+  constexpr double kExact = 9007199254740992.0;
   for (std::size_t i = 0; i < s.messages; ++i) {
     const double* row = s.values.data() + i * width;
-    raw.time_s.push_back(row[column[0]]);
-    raw.samples.emplace_back(row[column[1]], row[column[2]], row[column[3]]);
+    const Vec3 v(row[first], row[first + 1], row[first + 2]);
+    const auto where = [&] {
+      return Format("%s message %zu (byte %llu)", Shown(s.topic).c_str(), i + 1,
+                    static_cast<unsigned long long>(s.offset[i]));
+    };
+    if (!v.allFinite() || (chosen.time && !std::isfinite(row[0]))) {
+      throw InputError(source, 0, where() + " holds a value that is not a finite number");
+    }
+    if (chosen.time) {
+      if (microseconds && !(std::abs(row[0]) < kExact)) {
+        throw InputError(source, 0,
+                         where() + Format(": its time %.17g us is beyond 2^53, where a time is "
+                                          "no longer exact",
+                                          row[0]));
+      }
+      if (i > 0 && row[0] < raw.time_s.back()) {
+        throw InputError(source, 0,
+                         where() + Format(": time goes backwards (%.17g after %.17g %s)", row[0],
+                                          raw.time_s.back(), microseconds ? "us" : "as read"));
+      }
+      raw.time_s.push_back(row[0]);
+    }
+    raw.samples.push_back(v);
     raw.line.push_back(static_cast<std::uint32_t>(std::min<std::size_t>(i + 1, UINT32_MAX)));
   }
-  for (std::size_t i = 0; i < raw.samples.size(); ++i) {
-    if (!raw.samples[i].allFinite() || !std::isfinite(raw.time_s[i])) {
-      throw InputError(
-          source, 0,
-          Format("%s message %zu (byte %llu) holds a value that is not a finite "
-                 "number",
-                 s.topic.c_str(), i + 1, static_cast<unsigned long long>(s.offset[i])));
-    }
-  }
   if (log.truncated) raw.read_warning = *log.truncated;
-  FinishRawLog(&raw, TimeUnit::kMicroseconds, options.rate_hz, s.columns[column[0]]);
+  FinishRawLog(&raw, microseconds ? TimeUnit::kMicroseconds : options.time_unit, options.rate_hz,
+               chosen.time ? std::string_view((*s.columns)[*chosen.time]) : std::string_view());
   if (options.fingerprint) {
     data.bytes = in.offset();
     data.sha256 = hash.HexDigest();

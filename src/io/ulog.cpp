@@ -3,7 +3,9 @@
 
 #include <algorithm>
 #include <cstring>
+#include <memory>
 #include <unordered_map>
+#include <unordered_set>
 
 #include "accelcal/error.hpp"
 #include "core/text_format.hpp"
@@ -53,11 +55,12 @@ struct Leaf {
 };
 
 struct Layout {
-  std::vector<Leaf> leaves;  // numeric, padding and chars left out
-  std::size_t size = 0;      // all fields, packed
-  std::size_t used = 0;      // the end of the last leaf: trailing padding may be left out
-  int timestamp = -1;        // the leaf `timestamp` (uint64), if any
-  int device_id = -1;        // the leaf `device_id`, if any
+  std::vector<Leaf> leaves;  // numeric, padding and chars left out, at most kMaxFormatColumns
+  std::shared_ptr<const std::vector<std::string>> names;  // the leaves' names
+  std::size_t size = 0;                                   // all fields, packed
+  std::size_t used = 0;  // the end of the last leaf: trailing padding may be left out
+  int timestamp = -1;    // the leaf `timestamp` (uint64), if any
+  int device_id = -1;    // the leaf `device_id`, if any
 };
 
 double Decode(Scalar type, const unsigned char* p) {
@@ -91,7 +94,8 @@ double Decode(Scalar type, const unsigned char* p) {
 
 class Reader {
  public:
-  Reader(BinaryStream& in, const KeepStream& keep) : in_(in), keep_(keep), subscribed_(65536, -1) {}
+  Reader(BinaryStream& in, const KeepStream& keep, const StoreColumns& store)
+      : in_(in), keep_(keep), store_(store), subscribed_(65536, -1) {}
 
   DecodedLog Read();
 
@@ -111,6 +115,8 @@ class Reader {
 
   BinaryStream& in_;
   const KeepStream& keep_;
+  const StoreColumns& store_;
+  std::size_t total_columns_ = 0;
   DecodedLog out_;
   std::unordered_map<std::string, std::vector<Field>> formats_;
   std::unordered_map<std::string, Layout> layouts_;
@@ -127,6 +133,7 @@ void Reader::ParseFormat(std::string_view text, std::uint64_t at) {
   }
   const std::string name(text.substr(0, colon));
   std::vector<Field> fields;
+  std::unordered_set<std::string> seen;
   std::string_view rest = text.substr(colon + 1);
   while (!rest.empty()) {
     const std::size_t end = std::min(rest.find(';'), rest.size());
@@ -159,6 +166,9 @@ void Reader::ParseFormat(std::string_view text, std::uint64_t at) {
       type = type.substr(0, open);
     }
     f.type = std::string(type);
+    if (!seen.insert(f.name).second) {
+      Fail(at, "format " + name + " names the field " + f.name + " twice");
+    }
     fields.push_back(std::move(f));
   }
   if (fields.empty()) Fail(at, "format " + name + " has no fields");
@@ -178,7 +188,8 @@ std::size_t Reader::Flatten(const std::string& format, const std::string& prefix
           prefix + f.name + (f.array ? "[" + std::to_string(i) + "]" : std::string());
       if (const ScalarName* s = FindScalar(f.type)) {
         if (!padding && s->type != Scalar::kChar) {
-          out->leaves.push_back({name, s->type, offset});
+          if (out->leaves.size() < kMaxFormatColumns)
+            out->leaves.push_back({name, s->type, offset});
           out->used = offset + s->size;
         }
         offset += s->size;
@@ -195,12 +206,22 @@ const Layout& Reader::LayoutOf(const std::string& name, std::uint64_t at) {
   if (const auto it = layouts_.find(name); it != layouts_.end()) return it->second;
   Layout layout;
   layout.size = Flatten(name, "", 0, &layout, at, 0);
-  for (std::size_t i = 0; i < layout.leaves.size(); ++i) {
-    if (layout.leaves[i].name == "timestamp" && layout.leaves[i].type == Scalar::kU64) {
-      layout.timestamp = static_cast<int>(i);
-    }
-    if (layout.leaves[i].name == "device_id") layout.device_id = static_cast<int>(i);
+  total_columns_ += layout.leaves.size();
+  if (total_columns_ > kMaxLogColumns) {
+    Fail(at, Format("the formats subscribed define more than %zu numeric fields in all",
+                    kMaxLogColumns));
   }
+  auto names = std::make_shared<std::vector<std::string>>();
+  for (std::size_t i = 0; i < layout.leaves.size(); ++i) {
+    const Leaf& l = layout.leaves[i];
+    names->push_back(l.name);
+    if (l.name == "timestamp" && l.type == Scalar::kU64) layout.timestamp = static_cast<int>(i);
+    // An identifier: an integer type only (a float's NaN is no device).
+    if (l.name == "device_id" && l.type != Scalar::kF32 && l.type != Scalar::kF64) {
+      layout.device_id = static_cast<int>(i);
+    }
+  }
+  layout.names = std::move(names);
   return layouts_.emplace(name, std::move(layout)).first->second;
 }
 
@@ -220,8 +241,18 @@ void Reader::Subscribe(const unsigned char* p, std::size_t size, std::uint64_t a
     DecodedStream s;
     s.topic = topic;
     s.instance = multi_id;
-    for (const Leaf& l : layout.leaves) s.columns.push_back(l.name);
+    s.columns = layout.names;
     s.kept = keep_(topic, multi_id);
+    if (s.kept) {
+      if (store_) {
+        s.stored = store_(s);
+        for (std::size_t c : s.stored) {
+          if (c >= layout.leaves.size()) Fail(at, "internal: a stored column beyond the format's");
+        }
+      } else {
+        for (std::size_t c = 0; c < layout.leaves.size(); ++c) s.stored.push_back(c);
+      }
+    }
     out_.streams.push_back(std::move(s));
     stream_layout_.push_back(&layout);
   }
@@ -259,7 +290,10 @@ void Reader::Data(const unsigned char* p, std::size_t size, std::uint64_t at) {
   s.last_us = t;
   ++s.messages;
   if (s.kept) {
-    for (const Leaf& l : layout.leaves) s.values.push_back(Decode(l.type, d + l.offset));
+    for (std::size_t c : s.stored) {
+      const Leaf& l = layout.leaves[c];
+      s.values.push_back(Decode(l.type, d + l.offset));
+    }
     s.offset.push_back(at);
   }
 }
@@ -304,6 +338,7 @@ DecodedLog Reader::Read() {
       if (in_.available() > 0) {
         out_.truncated = Format("the log ends inside a message header at byte %llu",
                                 static_cast<unsigned long long>(at));
+        in_.Skip(in_.available());
       }
       break;
     }
@@ -404,6 +439,8 @@ DecodedLog Reader::Read() {
 
 }  // namespace
 
-DecodedLog ReadULog(BinaryStream& in, const KeepStream& keep) { return Reader(in, keep).Read(); }
+DecodedLog ReadULog(BinaryStream& in, const KeepStream& keep, const StoreColumns& store) {
+  return Reader(in, keep, store).Read();
+}
 
 }  // namespace accelcal::internal

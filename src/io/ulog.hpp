@@ -30,6 +30,6 @@ bool IsULog(std::string_view first_bytes);
 /// flag this reader does not know.
 /// A subscription's instance is its multi id; its time, the `timestamp` field; its parameters,
 /// the P messages of the definitions; its information, the I messages whose value is a string.
-DecodedLog ReadULog(BinaryStream& in, const KeepStream& keep);
+DecodedLog ReadULog(BinaryStream& in, const KeepStream& keep, const StoreColumns& store = {});
 
 }  // namespace accelcal::internal

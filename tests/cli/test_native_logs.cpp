@@ -3,6 +3,7 @@
 // refused with the candidates named; a log cut short is used with a warning.
 #include <cmath>
 #include <cstdio>
+#include <random>
 #include <string>
 
 #include <gtest/gtest.h>
@@ -31,13 +32,13 @@ std::string AsCsv(const std::string& ulog) {
       internal::ReadULog(in, [](const std::string& t, int) { return t == "sensor_accel"; });
   const internal::DecodedStream& s = c.streams.at(0);
   const auto col = [&](const char* name) {
-    return std::size_t(std::find(s.columns.begin(), s.columns.end(), name) - s.columns.begin());
+    return std::size_t(std::find(s.columns->begin(), s.columns->end(), name) - s.columns->begin());
   };
   const std::size_t t = col("timestamp_sample"), x = col("x"), y = col("y"), z = col("z");
   std::string out = "timestamp_sample,x,y,z\n";
   char line[160];
   for (std::size_t i = 0; i < s.messages; ++i) {
-    const double* row = s.values.data() + i * s.columns.size();
+    const double* row = s.values.data() + i * s.columns->size();
     std::snprintf(line, sizeof line, "%llu,%.17g,%.17g,%.17g\n",
                   static_cast<unsigned long long>(row[t]), row[x], row[y], row[z]);
     out += line;
@@ -128,6 +129,36 @@ TEST_F(NativeLogTest, ImuULogCalibratesTheGyroscopeToTheSameBytesAsCsv) {
       << alone.err;
 }
 
+// noise streams its log: a ULog of a still sensor (white noise) gives the same analysis as its
+// samples written as CSV.
+TEST_F(NativeLogTest, NoiseOfAStillULogIsTheNoiseOfItsSamplesAsCsv) {
+  const ULogImuWriter writer;
+  std::string ulog = writer.Header(), csv = "time_us,x,y,z\n";
+  std::mt19937_64 rng(5);
+  std::normal_distribution<double> n(0.0, 0.02);
+  char line[160];
+  for (int k = 0; k < 60000; ++k) {
+    const auto t = static_cast<std::uint64_t>(k) * 5000;  // 200 Hz
+    const Vec3 v(n(rng), n(rng), 9.81 + n(rng));
+    const auto f = [](double x) { return static_cast<double>(static_cast<float>(x)); };
+    ulog += writer.Accel(t, v);
+    std::snprintf(line, sizeof line, "%llu,%.17g,%.17g,%.17g\n", static_cast<unsigned long long>(t),
+                  f(v(0)), f(v(1)), f(v(2)));
+    csv += line;
+  }
+  const std::string u = Write("still.ulg", ulog), c = Write("still.csv", csv);
+  const CliRun a = Exec("noise " + u + " --json");
+  const CliRun b = Exec("noise " + c + " --time-unit us --json");
+  ASSERT_EQ(a.status, 0) << a.err;
+  ASSERT_EQ(b.status, 0) << b.err;
+  nlohmann::json ja = nlohmann::json::parse(a.out), jb = nlohmann::json::parse(b.out);
+  ja.erase("source");
+  jb.erase("source");
+  ja["accelerometer"].erase("source");
+  jb["accelerometer"].erase("source");
+  EXPECT_EQ(ja.dump(1), jb.dump(1));
+}
+
 TEST_F(NativeLogTest, SeveralStreamsAreListedAndOneIsChosen) {
   const CliRun several = Exec("calibrate " + kSmall);
   EXPECT_EQ(several.status, 3) << several.err;  // an input error
@@ -154,8 +185,13 @@ TEST_F(NativeLogTest, SeveralStreamsAreListedAndOneIsChosen) {
             std::string::npos)
       << field.err;
   const CliRun unit = Exec("calibrate " + kSmall + " --topic sensor_combined --time-unit s");
-  EXPECT_NE(unit.err.find("timestamps are in microseconds by its specification"), std::string::npos)
+  EXPECT_NE(unit.err.find("a PX4 ULog's timestamp is in microseconds by its specification, not "
+                          "in s"),
+            std::string::npos)
       << unit.err;
+  const CliRun twice = Exec("calibrate " + kSmall + " --topic sensor_accel --instance 0 " +
+                            "--columns timestamp,x,x,z");
+  EXPECT_NE(twice.err.find("--columns reads the field x twice"), std::string::npos) << twice.err;
   const CliRun empty = Exec("calibrate " + kSmall + " --topic ''");
   EXPECT_NE(empty.err.find("--topic: an empty topic name"), std::string::npos) << empty.err;
 }

@@ -40,7 +40,7 @@ TEST(DataFlash, ImuRecordsParametersAndTheCut) {
   const std::vector<std::string> columns = {"TimeUS", "I",    "GyrX", "GyrY", "GyrZ",
                                             "AccX",   "AccY", "AccZ", "EG",   "EA",
                                             "T",      "GH",   "AH",   "GHz",  "AHz"};
-  EXPECT_EQ(imu[0]->columns, columns);
+  EXPECT_EQ(*imu[0]->columns, columns);
   // The first record of each instance, and the last of instance 1, as Python decodes them.
   const auto row = [&](const DecodedStream* s, std::size_t k) {
     return std::vector<double>(s->values.begin() + static_cast<std::ptrdiff_t>(k * 15),

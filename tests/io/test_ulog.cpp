@@ -60,11 +60,11 @@ void ExpectSameAsPyulog(const DecodedLog& c, const std::string& topic, int multi
   ASSERT_TRUE(s->kept);
   const Csv ref = ReadCsv(csv);
   ASSERT_EQ(s->messages, ref.rows.size());
-  const std::size_t width = s->columns.size();
+  const std::size_t width = s->columns->size();
   for (std::size_t j = 0; j < ref.header.size(); ++j) {
-    const auto it = std::find(s->columns.begin(), s->columns.end(), ref.header[j]);
-    ASSERT_NE(it, s->columns.end()) << ref.header[j];
-    const std::size_t col = std::size_t(it - s->columns.begin());
+    const auto it = std::find(s->columns->begin(), s->columns->end(), ref.header[j]);
+    ASSERT_NE(it, s->columns->end()) << ref.header[j];
+    const std::size_t col = std::size_t(it - s->columns->begin());
     for (std::size_t i = 0; i < ref.rows.size(); ++i) {
       ASSERT_EQ(s->values[i * width + col], ref.rows[i][j]) << ref.header[j] << " row " << i;
     }
@@ -142,6 +142,70 @@ TEST(ULog, CorruptMessageTypeIsAnErrorAtItsByte) {
     EXPECT_NE(std::string(e.what()).find("byte " + std::to_string(at) + ":"), std::string::npos)
         << e.what();
     EXPECT_NE(std::string(e.what()).find("unknown message type"), std::string::npos) << e.what();
+  }
+}
+
+// A ULog built from messages (uint16 size, uint8 type, payload).
+std::string Message(char type, const std::string& payload) {
+  std::string out(3, '\0');
+  out[0] = static_cast<char>(payload.size() & 0xff);
+  out[1] = static_cast<char>(payload.size() >> 8);
+  out[2] = type;
+  return out + payload;
+}
+std::string Header() {
+  return std::string("ULog\x01\x12\x35\x01", 8) + std::string(8, '\0') +
+         Message('B', std::string(40, '\0'));
+}
+std::string Subscribe(int multi_id, int id, const std::string& topic) {
+  std::string p(3, '\0');
+  p[0] = static_cast<char>(multi_id);
+  p[1] = static_cast<char>(id & 0xff);
+  p[2] = static_cast<char>(id >> 8);
+  return Message('A', p + topic);
+}
+
+// A few bytes must not ask for much memory: 256 subscriptions of a format with a 65000-element
+// array share one list of names, capped at kMaxFormatColumns (it was 532 MB for 1.9 kB).
+TEST(ULog, ManySubscriptionsOfAHugeFormatShareTheirCappedColumns) {
+  std::string log = Header() + Message('F', "t:uint64_t timestamp;uint8_t[65000] a");
+  for (int m = 0; m < 256; ++m) log += Subscribe(m, m, "t");
+  BinaryStream in(log, "bomb.ulg");
+  const DecodedLog c = ReadULog(in, [](const std::string&, int) { return false; });
+  ASSERT_EQ(c.streams.size(), 256u);
+  EXPECT_EQ(c.streams[0].columns->size(), kMaxFormatColumns);
+  for (const DecodedStream& s : c.streams) EXPECT_EQ(s.columns.get(), c.streams[0].columns.get());
+}
+
+// What pyulog would refuse is refused: a format that names a field twice.
+TEST(ULog, AFormatNamingAFieldTwiceIsRefused) {
+  const std::string log =
+      Header() + Message('F', "sensor_accel:uint64_t timestamp;float x;float x;float z");
+  BinaryStream in(log, "twice.ulg");
+  try {
+    ReadULog(in, [](const std::string&, int) { return true; });
+    FAIL() << "no error";
+  } catch (const InputError& e) {
+    EXPECT_EQ(std::string(e.what()),
+              "twice.ulg: byte 59: format sensor_accel names the field x twice");
+  }
+}
+
+// Only the columns asked for are stored: memory grows with what is kept, not with the log.
+TEST(ULog, OnlyTheColumnsAskedForAreStored) {
+  const auto keep = [](const std::string& topic, int) { return topic == "sensor_combined"; };
+  const DecodedLog all = Read(kDir + "sample_log_small.ulg", keep);
+  InputFile file(kDir + "sample_log_small.ulg", std::size_t{1} << 30);
+  BinaryStream in(&file, "");
+  const DecodedLog some = ReadULog(in, keep, [](const DecodedStream&) {
+    return std::vector<std::size_t>{6, 0};  // accelerometer_m_s2[0], timestamp
+  });
+  const DecodedStream& a = *Find(all, "sensor_combined", 0);
+  const DecodedStream& b = *Find(some, "sensor_combined", 0);
+  ASSERT_EQ(b.values.size(), 2 * b.messages);
+  for (std::size_t i = 0; i < b.messages; ++i) {
+    ASSERT_EQ(b.values[2 * i], a.values[i * a.columns->size() + 6]);
+    ASSERT_EQ(b.values[2 * i + 1], a.values[i * a.columns->size()]);
   }
 }
 

@@ -32,9 +32,9 @@ int RunInspect(const InspectArgs& args) {
            {"first_s", s.first_s},
            {"last_s", s.last_s},
            {"rate_hz", s.rate_hz > 0 ? nlohmann::ordered_json(s.rate_hz) : nullptr},
-           {"sensors", s.sensors},
-           {"columns", s.columns}});
+           {"sensors", s.sensors}});
     }
+    doc["fields"] = log.fields;
     doc["parameters"] = log.parameters;
     out = JsonText(doc);
   } else {

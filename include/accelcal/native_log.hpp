@@ -54,9 +54,8 @@ struct LogStreamInfo {
   int instance = 0;  ///< ULog multi id, DataFlash I
   std::optional<std::uint64_t> device_id;
   std::size_t samples = 0;
-  double first_s = 0, last_s = 0;    ///< timestamps of the first and last message [s]
-  double rate_hz = 0;                ///< (samples − 1) / (last − first); 0 when undefined
-  std::vector<std::string> columns;  ///< its numeric fields
+  double first_s = 0, last_s = 0;  ///< timestamps of the first and last message [s]
+  double rate_hz = 0;              ///< (samples − 1) / (last − first); 0 when undefined
   /// The sensors accelcal takes from it by default (KnownStreams), e.g. "accelerometer".
   std::vector<std::string> sensors;
 };
@@ -66,6 +65,8 @@ struct LogInventory {
   std::string source;
   std::uint64_t bytes = 0;
   std::vector<LogStreamInfo> streams;
+  /// Each topic's numeric fields (the names --columns takes), once per topic.
+  std::map<std::string, std::vector<std::string>> fields;
   std::map<std::string, double> parameters;  ///< the parameters at the log's start
   std::map<std::string, std::string> info;   ///< the log's string information (sys_name, ...)
   std::optional<std::string> truncated;      ///< where a log cut short stopped

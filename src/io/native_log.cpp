@@ -66,7 +66,6 @@ LogStreamInfo Describe(const internal::DecodedStream& s) {
   if (s.messages >= 2 && s.last_us > s.first_us) {
     info.rate_hz = static_cast<double>(s.messages - 1) / (info.last_s - info.first_s);
   }
-  info.columns = *s.columns;
   for (const KnownStream& k : KnownStreams()) {
     if (k.topic == s.topic) info.sensors.emplace_back(k.sensor);
   }
@@ -346,7 +345,10 @@ LogInventory InspectLog(const std::string& path) {
   const internal::DecodedLog log =
       internal::Decode(in, out.format, [](const std::string&, int) { return false; });
   out.bytes = log.bytes;
-  for (const internal::DecodedStream& s : log.streams) out.streams.push_back(Describe(s));
+  for (const internal::DecodedStream& s : log.streams) {
+    out.streams.push_back(Describe(s));
+    out.fields.emplace(s.topic, *s.columns);  // the first subscription's: a topic has one format
+  }
   out.parameters = log.parameters;
   out.info = log.info;
   out.truncated = log.truncated;

@@ -437,7 +437,8 @@ int accelcal::cli::RunCommandLine(int argc, char** argv) {
                        "write a positions file x,y,z,n,sx,sy,sz (the default)");
     simulate
         ->add_option("--format", sim.format,
-                     "of a raw log: csv (time,x,y,z) or ulog (PX4's sensor_accel, float32)")
+                     "of a raw log: csv (time,x,y,z), ulog (PX4's sensor_accel) or dataflash "
+                     "(ArduPilot's IMU records), the last two float32")
         ->capture_default_str();
     simulate->add_option("-o,--output", sim.output, "output file (default: stdout)")
         ->check(kFileName);

@@ -11,6 +11,7 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "accelcal/dataflash_writer.hpp"
 #include "accelcal/simulate.hpp"
 #include "accelcal/system_level.hpp"
 #include "accelcal/ulog_writer.hpp"
@@ -58,11 +59,12 @@ void CheckSimulatedSamples(double samples, const char* options) {
 
 int RunSimulate(const SimulateArgs& args) {
   CheckOutputs({{"-o", args.output}}, {args.truth, args.positions});
-  if (args.format != "csv" && args.format != "ulog") {
-    throw UsageError("--format is csv or ulog, not \"" + args.format + "\"");
+  if (args.format != "csv" && args.format != "ulog" && args.format != "dataflash") {
+    throw UsageError("--format is csv, ulog or dataflash, not \"" + args.format + "\"");
   }
-  if (args.format == "ulog" && (!args.raw || args.scenario == "wu2018-system")) {
-    throw UsageError("--format ulog writes a raw log: give --raw (and no wu2018-system scenario)");
+  if (args.format != "csv" && (!args.raw || args.scenario == "wu2018-system")) {
+    throw UsageError("--format " + args.format +
+                     " writes a raw log: give --raw (and no wu2018-system scenario)");
   }
   if (args.scenario == "wu2018-system") {
     if (!args.truth.empty() || !args.positions.empty() || args.noise_density_ug || args.raw) {
@@ -148,6 +150,16 @@ int RunSimulate(const SimulateArgs& args) {
     CheckSimulatedSamples(SimulatedSampleCount(directions.size(), options),
                           "positions x (--duration + --transition) x --rate");
     OutputFile file(args.output.empty() ? "-" : args.output);  // streamed, never held whole
+    if (args.format == "dataflash") {
+      const DataFlashImuWriter writer;
+      file.Write(writer.Header());
+      SimulateRawLog(truth, gravity, directions, options, [&](double t, const Vec3& p) {
+        file.Write(
+            writer.Sample(static_cast<std::uint64_t>(std::llround(t * 1e6)), p, Vec3::Zero()));
+      });
+      file.Commit();
+      return kExitOk;
+    }
     if (args.format == "ulog") {
       const ULogImuWriter writer;
       file.Write(writer.Header());

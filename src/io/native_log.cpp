@@ -282,6 +282,11 @@ InputData ReadNativeLog(BinaryStream& in, InputFile* file, const ReadOptions& op
   InputData data;
   data.kind = InputKind::kRaw;
   data.kind_reason = "a " + name + ": " + Line(s);
+  if (const KnownStream* known = Known(s.topic, sensor); known != nullptr && known->corrected) {
+    data.kind_reason +=
+        ", already corrected by the calibration in force when it was logged: what is calibrated "
+        "is what that calibration left";
+  }
   RawLog& raw = data.raw;
   raw.source = source;
   const std::size_t width = s.stored.size(), first = chosen.time ? 1 : 0;

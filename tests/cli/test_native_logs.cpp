@@ -12,6 +12,7 @@
 #include "accelcal/simulate.hpp"
 #include "accelcal/ulog_writer.hpp"
 #include "io/binary_stream.hpp"
+#include "io/dataflash.hpp"
 #include "io/input_file.hpp"
 #include "io/ulog.hpp"
 #include "support/cli_test.hpp"
@@ -72,6 +73,36 @@ TEST_F(NativeLogTest, ULogCalibratesToTheSameBytesAsItsSamplesAsCsv) {
 // The gyroscope too: an IMU session (accelerometer and gyroscope, Xsens-like counts, noise) as a
 // ULog with sensor_accel and sensor_gyro, and as two CSVs of the same float32 samples; the joint
 // calibration from the one and from the others is the same, byte for byte.
+// A simulated session as ArduPilot logs it (IMU records) calibrates as its samples as CSV.
+TEST_F(NativeLogTest, DataFlashCalibratesToTheSameBytesAsItsSamplesAsCsv) {
+  ASSERT_EQ(Exec("simulate --scenario yang2012 --raw --format dataflash --duration 20 -o " +
+                 Path("s.bin"))
+                .status,
+            0);
+  internal::InputFile file(Path("s.bin"), std::size_t{1} << 30);
+  internal::BinaryStream in(&file, "");
+  const internal::DecodedLog c =
+      internal::ReadDataFlash(in, [](const std::string& t, int) { return t == "IMU"; });
+  const internal::DecodedStream& s = c.streams.at(0);
+  std::string csv = "time_us,x,y,z\n";
+  char line[160];
+  for (std::size_t i = 0; i < s.messages; ++i) {
+    const double* row = s.values.data() + i * s.columns->size();  // TimeUS, I, Gyr, Acc, ...
+    std::snprintf(line, sizeof line, "%llu,%.17g,%.17g,%.17g\n",
+                  static_cast<unsigned long long>(row[0]), row[5], row[6], row[7]);
+    csv += line;
+  }
+  Write("s.csv", csv);
+  const CliRun d = Exec("calibrate " + Path("s.bin") + " -o " + Path("d.json"));
+  const CliRun t = Exec("calibrate " + Path("s.csv") + " --time-unit us -o " + Path("t.json"));
+  ASSERT_EQ(d.status, 0) << d.err;
+  ASSERT_EQ(t.status, 0) << t.err;
+  EXPECT_EQ(Calibration(Path("d.json")).dump(1), Calibration(Path("t.json")).dump(1));
+  // ArduPilot's IMU records are corrected by the calibration in force, which the summary says.
+  EXPECT_NE(d.out.find("already corrected by the calibration in force"), std::string::npos)
+      << d.out;
+}
+
 TEST_F(NativeLogTest, ImuULogCalibratesTheGyroscopeToTheSameBytesAsCsv) {
   RawLogSimulation options;
   options.static_s = 4.0;

@@ -1,0 +1,74 @@
+// A DataFlash log of one IMU (dataflash_writer.hpp).
+#include "accelcal/dataflash_writer.hpp"
+
+#include <cstring>
+#include <limits>
+#include <stdexcept>
+
+namespace accelcal {
+
+namespace {
+
+constexpr unsigned char kFmt = 128, kImu = 163;
+
+template <typename T>
+void Put(std::string* out, T value) {
+  char bytes[sizeof(T)];
+  std::memcpy(bytes, &value, sizeof(T));  // little-endian, as the format is
+  out->append(bytes, sizeof(T));
+}
+
+// A text field of `size` bytes, NUL-padded.
+void PutText(std::string* out, const std::string& text, std::size_t size) {
+  std::string field = text.substr(0, size);
+  field.resize(size, '\0');
+  *out += field;
+}
+
+std::string Head(unsigned char type) {
+  return {static_cast<char>(0xA3), static_cast<char>(0x95), static_cast<char>(type)};
+}
+
+std::string FmtRecord(unsigned char type, unsigned char length, const std::string& name,
+                      const std::string& format, const std::string& labels) {
+  std::string out = Head(kFmt);
+  Put<std::uint8_t>(&out, type);
+  Put<std::uint8_t>(&out, length);
+  PutText(&out, name, 4);
+  PutText(&out, format, 16);
+  PutText(&out, labels, 64);
+  return out;
+}
+
+}  // namespace
+
+std::string DataFlashImuWriter::Header() const {
+  return FmtRecord(kFmt, 89, "FMT", "BBnNZ", "Type,Length,Name,Format,Columns") +
+         FmtRecord(kImu, 54, "IMU", "QBffffffIIfBBHH",
+                   "TimeUS,I,GyrX,GyrY,GyrZ,AccX,AccY,AccZ,EG,EA,T,GH,AH,GHz,AHz");
+}
+
+std::string DataFlashImuWriter::Sample(std::uint64_t time_us, const Vec3& accel,
+                                       const Vec3& gyro) const {
+  const double most = std::numeric_limits<float>::max();
+  if (!accel.allFinite() || !gyro.allFinite() || accel.cwiseAbs().maxCoeff() > most ||
+      gyro.cwiseAbs().maxCoeff() > most) {
+    throw std::invalid_argument(
+        "a DataFlash log's readings are float32: a reading is not finite or beyond its range");
+  }
+  std::string out = Head(kImu);
+  Put<std::uint64_t>(&out, time_us);
+  Put<std::uint8_t>(&out, instance_);
+  for (int a = 0; a < 3; ++a) Put<float>(&out, static_cast<float>(gyro(a)));
+  for (int a = 0; a < 3; ++a) Put<float>(&out, static_cast<float>(accel(a)));
+  Put<std::uint32_t>(&out, 0);                                // EG
+  Put<std::uint32_t>(&out, 0);                                // EA
+  Put<float>(&out, std::numeric_limits<float>::quiet_NaN());  // T
+  Put<std::uint8_t>(&out, 1);                                 // GH
+  Put<std::uint8_t>(&out, 1);                                 // AH
+  Put<std::uint16_t>(&out, 0);                                // GHz
+  Put<std::uint16_t>(&out, 0);                                // AHz
+  return out;
+}
+
+}  // namespace accelcal

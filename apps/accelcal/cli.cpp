@@ -41,8 +41,8 @@ void AddInputOptions(CLI::App* cmd, InputArgs* in, bool with_kind) {
                   "the sensor to read from a file that interleaves several (its value in the "
                   "i, instance, multi_id, device_id or imu column; a ULog topic's multi id)");
   cmd->add_option("--topic", in->topic,
-                  "the stream to read from a binary log (a ULog topic such as sensor_accel; "
-                  "default: its only accelerometer stream)");
+                  "the stream to read from a binary log (a ULog topic such as sensor_accel, a "
+                  "DataFlash message such as IMU; default: its only accelerometer stream)");
 }
 
 // The gyroscope's stream in a binary log, for the commands that read its rates (--gyro).
@@ -289,7 +289,8 @@ int accelcal::cli::RunCommandLine(int argc, char** argv) {
 
   InspectArgs ins;
   CLI::App* inspect = app.add_subcommand(
-      "inspect", "what a binary log (PX4 ULog) holds: its topics, instances, rates, parameters");
+      "inspect",
+      "what a binary log (PX4 ULog, ArduPilot DataFlash) holds: its streams, rates, parameters");
   if (Wanted(inspect)) {
     inspect->add_option("LOG", ins.path, "binary log")->required();
     inspect->add_flag("--json", ins.json, "machine-readable output");

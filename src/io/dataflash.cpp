@@ -31,6 +31,7 @@ struct Type {
   std::vector<Field> fields;
   std::vector<std::size_t> numeric;  // indices of the numeric fields: the columns
   std::shared_ptr<const std::vector<std::string>> names;  // their labels
+  std::string format;                                     // its format characters
   int time = -1, instance = -1;                           // the TimeUS and I fields
   int param_name = -1, param_value = -1;                  // a PARM record's Name and Value
 };
@@ -120,9 +121,10 @@ class Reader {
   DecodedLog Read();
 
  private:
+  // Names from the log reach the message escaped (one line, every character visible).
   [[noreturn]] void Fail(std::uint64_t at, const std::string& why) const {
     throw InputError(in_.name(), 0,
-                     Format("byte %llu: ", static_cast<unsigned long long>(at)) + why);
+                     Format("byte %llu: ", static_cast<unsigned long long>(at)) + VisibleLine(why));
   }
   void Define(const unsigned char* r, std::uint64_t at);
   void Record(const Type& type, const unsigned char* r, std::uint64_t at);
@@ -132,6 +134,7 @@ class Reader {
   const StoreColumns& store_;
   DecodedLog out_;
   std::array<Type, 256> types_;
+  std::array<bool, 256> used_{};                          // a record of the type was read
   std::map<std::pair<int, int>, std::size_t> stream_of_;  // (type, instance) -> stream
 };
 
@@ -171,7 +174,7 @@ void Reader::Define(const unsigned char* r, std::uint64_t at) {
     }
     Field f{c, offset, 1, !(c == 'n' || c == 'N' || c == 'Z' || c == 'a'), names[i]};
     if (f.numeric) t.numeric.push_back(i);
-    if (names[i] == "TimeUS" && (c == 'Q' || c == 'q')) t.time = static_cast<int>(i);
+    if (names[i] == "TimeUS" && c == 'Q') t.time = static_cast<int>(i);
     if (names[i] == "I" && (c == 'B' || c == 'b')) t.instance = static_cast<int>(i);
     if (names[i] == "Name" && c == 'N') t.param_name = static_cast<int>(i);
     if (names[i] == "Value" && c == 'f') t.param_value = static_cast<int>(i);
@@ -191,7 +194,18 @@ void Reader::Define(const unsigned char* r, std::uint64_t at) {
                     length, format.c_str(), offset));
   }
   t.length = length;
-  types_[std::size_t(number)] = std::move(t);
+  Type& before = types_[std::size_t(number)];
+  if (before.defined && used_[std::size_t(number)] &&
+      (before.name != t.name || before.length != t.length || before.format != format ||
+       *before.names != *t.names)) {
+    // Its records so far were read by the old layout, and a stream holds one layout.
+    Fail(at, Format("a FMT record redefines type %d (%s, %s) as %s, %s%s after records of it: "
+                    "the log mixes two layouts of it",
+                    number, before.name.c_str(), before.format.c_str(), t.name.c_str(),
+                    format.c_str(), *before.names != *t.names ? " with other labels" : ""));
+  }
+  t.format = format;
+  before = std::move(t);
 }
 
 void Reader::Record(const Type& type, const unsigned char* r, std::uint64_t at) {
@@ -200,7 +214,11 @@ void Reader::Record(const Type& type, const unsigned char* r, std::uint64_t at) 
     out_.parameters.emplace(
         name, LoadLittle<float>(r + type.fields[std::size_t(type.param_value)].offset));
   }
-  const int instance = type.instance >= 0 ? r[type.fields[std::size_t(type.instance)].offset] : 0;
+  const int instance =
+      type.instance >= 0
+          ? static_cast<int>(Decode(type.fields[std::size_t(type.instance)].code,
+                                    r + type.fields[std::size_t(type.instance)].offset))
+          : 0;
   const int number = r[2];
   auto [it, added] = stream_of_.emplace(std::make_pair(number, instance), out_.streams.size());
   if (added) {
@@ -286,6 +304,7 @@ DecodedLog Reader::Read() {
       Define(in_.data(), at);
     } else {
       Record(types_[std::size_t(number)], in_.data(), at);
+      used_[std::size_t(number)] = true;
     }
     in_.Skip(length);
     ++whole;

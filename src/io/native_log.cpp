@@ -154,10 +154,21 @@ Chosen Choose(const internal::DecodedStream& s, const ReadOptions& options,
                            " are the readings: name them with the columns option (x,y,z or "
                            "time,x,y,z)");
     }
-    out.time = ColumnOf(s, std::string(known->time), source);
-    out.axis[0] = ColumnOf(s, std::string(known->x), source);
-    out.axis[1] = ColumnOf(s, std::string(known->y), source);
-    out.axis[2] = ColumnOf(s, std::string(known->z), source);
+    // A field the known stream should have (an older firmware's log may not).
+    const auto field = [&](std::string_view want) {
+      if (const std::optional<std::size_t> c = Find(s, want)) return *c;
+      std::string fields;
+      for (const std::string& c : *s.columns) fields += (fields.empty() ? "" : ", ") + Shown(c);
+      throw InputError(source, 0,
+                       Shown(s.topic) + " has no field " + std::string(want) +
+                           " (its fields: " + fields +
+                           "): name its time and readings with the columns option "
+                           "(time,x,y,z, or x,y,z and the rate option)");
+    };
+    out.time = field(known->time);
+    out.axis[0] = field(known->x);
+    out.axis[1] = field(known->y);
+    out.axis[2] = field(known->z);
   }
   std::vector<std::size_t> all(std::begin(out.axis), std::end(out.axis));
   if (out.time) all.insert(all.begin(), *out.time);
@@ -187,9 +198,9 @@ namespace internal {
 
 namespace {
 
-// The format's name for messages.
+// The format's name for messages, with its article.
 const char* FormatName(LogFormat format) {
-  return format == LogFormat::kULog ? "PX4 ULog" : "ArduPilot DataFlash log";
+  return format == LogFormat::kULog ? "a PX4 ULog" : "an ArduPilot DataFlash log";
 }
 
 // A binary log's format, from its first bytes in `in`.
@@ -211,7 +222,7 @@ InputData ReadNativeLog(BinaryStream& in, InputFile* file, const ReadOptions& op
   const LogFormat format = FormatOf(in);
   const std::string name = FormatName(format);
   if (options.kind == InputKind::kPositions) {
-    throw InputError(source, 0, "a " + name + " is a raw log, not a positions file");
+    throw InputError(source, 0, name + " is a raw log, not a positions file");
   }
   Sha256 hash;
   if (options.fingerprint) in.Fingerprint(&hash);
@@ -275,13 +286,13 @@ InputData ReadNativeLog(BinaryStream& in, InputFile* file, const ReadOptions& op
   if (microseconds && options.time_unit != TimeUnit::kAuto &&
       options.time_unit != TimeUnit::kMicroseconds) {
     throw InputError(source, 0,
-                     "a " + name + "'s " + (*s.columns)[*chosen.time] +
+                     name + "'s " + (*s.columns)[*chosen.time] +
                          " is in microseconds by its specification, not in " +
                          std::string(ToString(options.time_unit)));
   }
   InputData data;
   data.kind = InputKind::kRaw;
-  data.kind_reason = "a " + name + ": " + Line(s);
+  data.kind_reason = name + ": " + Line(s);
   if (const KnownStream* known = Known(s.topic, sensor); known != nullptr && known->corrected) {
     data.kind_reason +=
         ", already corrected by the calibration in force when it was logged: what is calibrated "

@@ -19,6 +19,12 @@ bool IsULog(std::string_view first_bytes) {
 
 namespace {
 
+// A name in a format (of a field, a type, the format) is at most this long (PX4's are under 64),
+// and all the columns' flattened names of a log at most kMaxLogNameBytes: nested formats repeat
+// their parents' names in every column's.
+constexpr std::size_t kMaxNameBytes = 255;
+constexpr std::size_t kMaxLogNameBytes = std::size_t{64} << 20;
+
 enum class Scalar { kI8, kU8, kI16, kU16, kI32, kU32, kI64, kU64, kF32, kF64, kBool, kChar };
 
 struct ScalarName {
@@ -100,9 +106,10 @@ class Reader {
   DecodedLog Read();
 
  private:
+  // Names from the log reach the message escaped (one line, every character visible).
   [[noreturn]] void Fail(std::uint64_t at, const std::string& why) const {
     throw InputError(in_.name(), 0,
-                     Format("byte %llu: ", static_cast<unsigned long long>(at)) + why);
+                     Format("byte %llu: ", static_cast<unsigned long long>(at)) + VisibleLine(why));
   }
   void ParseFormat(std::string_view text, std::uint64_t at);
   const Layout& LayoutOf(const std::string& name, std::uint64_t at);
@@ -117,6 +124,7 @@ class Reader {
   const KeepStream& keep_;
   const StoreColumns& store_;
   std::size_t total_columns_ = 0;
+  std::size_t name_bytes_ = 0;  // of every column's name, all formats
   DecodedLog out_;
   std::unordered_map<std::string, std::vector<Field>> formats_;
   std::unordered_map<std::string, Layout> layouts_;
@@ -132,6 +140,9 @@ void Reader::ParseFormat(std::string_view text, std::uint64_t at) {
     Fail(at, "a format definition without a name (\"name:type field;...\")");
   }
   const std::string name(text.substr(0, colon));
+  if (name.size() > kMaxNameBytes) {
+    Fail(at, "a format name longer than " + std::to_string(kMaxNameBytes) + " bytes");
+  }
   std::vector<Field> fields;
   std::unordered_set<std::string> seen;
   std::string_view rest = text.substr(colon + 1);
@@ -166,6 +177,10 @@ void Reader::ParseFormat(std::string_view text, std::uint64_t at) {
       type = type.substr(0, open);
     }
     f.type = std::string(type);
+    if (f.name.size() > kMaxNameBytes || f.type.size() > kMaxNameBytes) {
+      Fail(at, "format " + name + ": a field or type name longer than " +
+                   std::to_string(kMaxNameBytes) + " bytes");
+    }
     if (!seen.insert(f.name).second) {
       Fail(at, "format " + name + " names the field " + f.name + " twice");
     }
@@ -184,17 +199,26 @@ std::size_t Reader::Flatten(const std::string& format, const std::string& prefix
   for (const Field& f : it->second) {
     const bool padding = f.name.rfind("_padding", 0) == 0;
     for (std::size_t i = 0; i < f.count; ++i) {
+      // Past the format's last column only the offsets count: no names are made.
+      const bool naming = out->leaves.size() < kMaxFormatColumns;
       const std::string name =
-          prefix + f.name + (f.array ? "[" + std::to_string(i) + "]" : std::string());
+          naming ? prefix + f.name + (f.array ? "[" + std::to_string(i) + "]" : std::string())
+                 : std::string();
       if (const ScalarName* s = FindScalar(f.type)) {
         if (!padding && s->type != Scalar::kChar) {
-          if (out->leaves.size() < kMaxFormatColumns)
+          if (naming) {
             out->leaves.push_back({name, s->type, offset});
+            name_bytes_ += name.size();
+            if (name_bytes_ > kMaxLogNameBytes) {
+              Fail(at, Format("the formats subscribed name their fields in more than %zu bytes",
+                              kMaxLogNameBytes));
+            }
+          }
           out->used = offset + s->size;
         }
         offset += s->size;
       } else {
-        offset = Flatten(f.type, name + ".", offset, out, at, depth + 1);
+        offset = Flatten(f.type, naming ? name + "." : std::string(), offset, out, at, depth + 1);
       }
       if (offset > 65535) Fail(at, "format " + format + " is larger than a message can be");
     }

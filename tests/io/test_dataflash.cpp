@@ -5,6 +5,7 @@
 
 #include <gtest/gtest.h>
 
+#include "accelcal/dataflash_writer.hpp"
 #include "accelcal/error.hpp"
 #include "io/binary_stream.hpp"
 #include "io/dataflash.hpp"
@@ -65,6 +66,41 @@ TEST(DataFlash, ImuRecordsParametersAndTheCut) {
   EXPECT_EQ(log.parameters.at("INS_ACCOFFS_X"), static_cast<double>(-0.0941748321056366f));
   EXPECT_EQ(log.parameters.at("INS_ACCSCAL_Z"), static_cast<double>(0.9905402660369873f));
   EXPECT_EQ(log.parameters.at("INS_ACC_ID"), 2621706);
+}
+
+// A type redefined after records of it would have its later records read by the old layout (or
+// crash on the shorter one): refused, naming the byte of the new FMT. The same FMT again is fine.
+TEST(DataFlash, ATypeRedefinedAfterItsRecordsIsRefused) {
+  const DataFlashImuWriter writer;
+  std::string log = writer.Header();
+  for (int k = 0; k < 3; ++k)
+    log += writer.Sample(1000u * static_cast<unsigned>(k), Vec3(0, 0, 9.8), Vec3::Zero());
+  const std::string again =
+      log + writer.Header().substr(89) + writer.Sample(5000, Vec3(0, 0, 9.8), Vec3::Zero());
+  BinaryStream same(again, "same.bin");
+  EXPECT_EQ(ReadDataFlash(same, [](const std::string&, int) { return true; }).streams[0].messages,
+            4u);
+  // IMU (type 163) redefined as 24 bytes of QBfff.
+  std::string fmt = writer.Header().substr(89);
+  fmt[4] = static_cast<char>(24);
+  std::string format = "QBfff";
+  format.resize(16, '\0');
+  fmt.replace(9, 16, format);
+  std::string labels = "TimeUS,I,AccX,AccY,AccZ";
+  labels.resize(64, '\0');
+  fmt.replace(25, 64, labels);
+  BinaryStream redefined(log + fmt, "redefined.bin");
+  try {
+    ReadDataFlash(redefined, [](const std::string&, int) { return true; });
+    FAIL() << "no error";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("byte " + std::to_string(log.size()) +
+                                         ": a FMT record redefines type 163 (IMU, "
+                                         "QBffffffIIfBBHH) as IMU, QBfff with other labels after "
+                                         "records of it"),
+              std::string::npos)
+        << e.what();
+  }
 }
 
 TEST(DataFlash, CorruptionIsAnErrorAtItsByte) {

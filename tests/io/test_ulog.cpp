@@ -177,6 +177,38 @@ TEST(ULog, ManySubscriptionsOfAHugeFormatShareTheirCappedColumns) {
   for (const DecodedStream& s : c.streams) EXPECT_EQ(s.columns.get(), c.streams[0].columns.get());
 }
 
+// Nested formats repeat their parents' names in each column's: long names at every level had
+// asked for 7.7 GB from 960 kB. A name is at most 255 bytes, and the columns past the cap get none.
+TEST(ULog, LongNestedNamesAreBounded) {
+  std::string log = Header();
+  log += Message('F', "f0:f1 " + std::string(300, 'a') + ";");
+  BinaryStream in(log + Subscribe(0, 0, "f0"), "long.ulg");
+  EXPECT_THROW(ReadULog(in, [](const std::string&, int) { return false; }), InputError);
+  std::string deep = Header();
+  for (int i = 0; i < 15; ++i) {
+    deep += Message('F', "f" + std::to_string(i) + ":f" + std::to_string(i + 1) + " " +
+                             std::string(250, static_cast<char>('a' + i)) + ";");
+  }
+  deep += Message('F', "f15:uint8_t[20000] " + std::string(250, 'z') + ";");
+  deep += Subscribe(0, 0, "f0");
+  BinaryStream in2(deep, "deep.ulg");
+  const DecodedLog c = ReadULog(in2, [](const std::string&, int) { return false; });
+  ASSERT_EQ(c.streams.size(), 1u);
+  EXPECT_EQ(c.streams[0].columns->size(), kMaxFormatColumns);
+}
+
+// A name from the log reaches a message escaped: no terminal control sequence.
+TEST(ULog, NamesInMessagesAreEscaped) {
+  const std::string log = Header() + Message('F', "\x1b[2Jx:float a;float a");
+  BinaryStream in(log, "esc.ulg");
+  try {
+    ReadULog(in, [](const std::string&, int) { return false; });
+    FAIL() << "no error";
+  } catch (const InputError& e) {
+    EXPECT_EQ(std::string(e.what()).find('\x1b'), std::string::npos) << e.what();
+  }
+}
+
 // What pyulog would refuse is refused: a format that names a field twice.
 TEST(ULog, AFormatNamingAFieldTwiceIsRefused) {
   const std::string log =

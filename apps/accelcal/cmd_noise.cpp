@@ -319,11 +319,12 @@ void RefuseMotion(const std::string& path, const NoiseAnalysis& noise, bool stil
   throw InputError(
       path, line_of(s.at_sample),
       Format("the sensor moves: the mean of its %c axis over %zu samples changes by %.4g at "
-             "%.6g s after the first sample analysed, %.3g times the typical change %.3g; the "
+             "%.6g s after the first sample analysed, %.3g times the typical %s %.3g; the "
              "Allan deviation of a moving sensor is not its noise%s",
              "xyz"[s.axis], kStillBlockSamples, s.largest_change,
              static_cast<double>(s.at_sample) * noise.sample_period_s,
-             s.largest_change / s.typical_change, s.typical_change,
+             s.largest_change / s.typical_change,
+             s.beyond_steps ? "step between neighbouring samples" : "change", s.typical_change,
              still_option ? " (the longest still interval holds a knock or a turn)"
                           : ": give --still to take the longest still interval"));
 }

@@ -27,7 +27,12 @@ struct AxisNoise {
 /// Whether the sensor stayed still: the means of consecutive blocks of kStillBlockSamples
 /// samples then differ by noise and drift alone, each change about as large as the others (for
 /// white noise, random walk, bias instability alike, the largest of 10⁵ changes is some 7
-/// median ones). A turn or a knock changes the mean by a part of g in one block.
+/// median ones). A turn or a knock changes the mean by a part of g in one block. A log that
+/// turns all the time (a calibration session of short positions) has no quiet median change to
+/// stand out from: there the largest change is also held against the quietest block's mean step
+/// between neighbouring samples (as Spikes::typical_step), which a block mean of a still sensor
+/// does not reach by kStillStepRatio (white noise: some 0.4 of it; a sensor low-passed to a lag-1
+/// correlation of 0.99: some 50), and a turn of a part of g does by hundreds.
 struct Stillness {
   bool checked = false;  ///< at least kStillMinBlocks blocks
   bool still = true;     ///< largest_change ≤ kStillChangeRatio · typical_change on every axis
@@ -35,6 +40,9 @@ struct Stillness {
   double largest_change = 0;  ///< |mean_{j+1} − mean_j| there [sample unit]
   double typical_change = 0;  ///< the median change there, floored by the quantum / block
   std::size_t at_sample = 0;  ///< the first sample of the block after the largest change
+  /// Refused by the step criterion: typical_change is then the typical step between
+  /// neighbouring samples.
+  bool beyond_steps = false;
 };
 /// Single-sample glitches (a bus error, a saturated reading): a step between neighbouring
 /// samples far beyond the typical one adds its square to every short averaging time's variance
@@ -55,6 +63,7 @@ inline constexpr double kSpikeRatio = 20;
 inline constexpr std::size_t kStillBlockSamples = 256;
 inline constexpr std::size_t kStillMinBlocks = 8;
 inline constexpr double kStillChangeRatio = 30;
+inline constexpr double kStillStepRatio = 100;
 
 /// Samples whose squares double precision holds (sums of them, in the Allan variance): an axis
 /// whose readings reach beyond kMaxNoiseMagnitude, or vary by less than kMinNoiseSpread, is

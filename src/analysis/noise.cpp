@@ -78,7 +78,8 @@ void NoiseAccumulator::Add(const Vec3* samples, std::size_t count) {
 namespace {
 
 // The largest change of consecutive block means against the typical one, axis by axis.
-Stillness StillnessOf(const std::vector<Vec3>& means, const Vec3& quantum) {
+Stillness StillnessOf(const std::vector<Vec3>& means, const std::vector<Vec3>& mean_abs_steps,
+                      const Vec3& quantum) {
   Stillness out;
   if (means.size() < kStillMinBlocks) return out;
   out.checked = true;
@@ -106,6 +107,30 @@ Stillness StillnessOf(const std::vector<Vec3>& means, const Vec3& quantum) {
     }
   }
   out.still = worst_ratio <= kStillChangeRatio;
+  if (!out.still) return out;
+  // Against the typical step between neighbouring samples (Stillness).
+  std::vector<double> steps(mean_abs_steps.size());
+  for (int a = 0; a < 3 && !steps.empty(); ++a) {
+    // The quietest block's: a turn in most blocks (short positions) does not raise it.
+    for (std::size_t j = 0; j < steps.size(); ++j) steps[j] = mean_abs_steps[j](a);
+    const double quietest = *std::min_element(steps.begin(), steps.end());
+    const double step = std::max(quietest, std::isfinite(quantum(a)) ? quantum(a) : 0.0);
+    double largest = 0;
+    std::size_t at = 0;
+    for (std::size_t j = 0; j + 1 < means.size(); ++j) {
+      const double change = std::abs(means[j + 1](a) - means[j](a));
+      if (change > largest) largest = change, at = j + 1;
+    }
+    if (step > 0 && largest > kStillStepRatio * step) {
+      out.still = false;
+      out.beyond_steps = true;
+      out.axis = a;
+      out.largest_change = largest;
+      out.typical_change = step;
+      out.at_sample = at * kStillBlockSamples;
+      return out;
+    }
+  }
   return out;
 }
 
@@ -192,7 +217,7 @@ NoiseAnalysis NoiseAccumulator::Finish(double sample_period_s) const {
     }
   }
   out.mean = first_ + sum_ / static_cast<double>(samples_);
-  out.stillness = StillnessOf(block_means_, quantum_);
+  out.stillness = StillnessOf(block_means_, block_mean_abs_steps_, quantum_);
   out.spikes = SpikesOf(block_mean_abs_steps_, largest_step_, largest_step_at_, quantum_);
   return out;
 }

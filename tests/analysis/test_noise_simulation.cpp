@@ -3,6 +3,7 @@
 #include "accelcal/noise_simulation.hpp"
 
 #include <cmath>
+#include <random>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -12,6 +13,7 @@
 #include "accelcal/allan.hpp"
 #include "accelcal/error.hpp"
 #include "accelcal/noise.hpp"
+#include "accelcal/simulate.hpp"
 
 namespace accelcal {
 namespace {
@@ -126,6 +128,38 @@ TEST(Noise, StillnessSeesATurnAndNotTheNoise) {
   // mean moves by 0.1 × 224/256 from the one before.
   EXPECT_EQ(noise.stillness.at_sample, 499968u);
   EXPECT_NEAR(noise.stillness.largest_change, 0.1 * 224 / 256, 0.002);
+}
+
+// A calibration session of short positions (3 s still, 1 s turning, 14 of them) turns in most
+// blocks: the median change is itself a turn's, and the largest is not 30 of them (the hostile
+// test's session came out as "white noise" 350 times the truth, exit 0). Against the quietest
+// block's step between neighbours it is some 1000: refused. A low-passed still sensor (lag-1
+// correlation 0.99, its steps 7 % of its σ) stays under 100.
+TEST(Noise, StillnessSeesASessionThatTurnsInEveryBlock) {
+  RawLogSimulation sim;
+  sim.static_s = 3.0;
+  sim.transition_s = 1.0;
+  sim.sigma_raw_per_sample = Vec3(0.01, 0.01, 0.01);
+  std::vector<Vec3> directions = Yang18Directions();
+  directions.resize(14);
+  ModelParameters truth;
+  const SimulatedLog log = SimulateRawLog(truth, 9.81, directions, sim);
+  const NoiseAnalysis moving = AnalyseNoise(log.samples, 0.01);
+  ASSERT_TRUE(moving.stillness.checked);
+  EXPECT_FALSE(moving.stillness.still);
+  EXPECT_TRUE(moving.stillness.beyond_steps);
+  // Low-passed white noise, x_k = 0.99 x_(k-1) + e_k: still.
+  std::mt19937_64 rng(7);
+  std::normal_distribution<double> e(0.0, 1.0);
+  std::vector<Vec3> filtered(1 << 16);
+  Vec3 x = Vec3::Zero();
+  for (Vec3& v : filtered) {
+    x = 0.99 * x + Vec3(e(rng), e(rng), e(rng));
+    v = x + Vec3(0, 0, 1000);
+  }
+  const NoiseAnalysis still = AnalyseNoise(filtered, 0.01);
+  EXPECT_TRUE(still.stillness.still)
+      << still.stillness.largest_change << " against " << still.stillness.typical_change;
 }
 
 // Spikes: the largest step between neighbours against the typical one (the median over blocks of

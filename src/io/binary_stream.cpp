@@ -46,6 +46,25 @@ bool BinaryStream::Need(std::size_t n) {
   return end_ - begin_ >= n;
 }
 
+bool BinaryStream::ZerosToEnd(std::uint64_t* nonzero) {
+  while (Need(1)) {
+    const unsigned char* d = data();
+    const std::size_t n = available();
+    const unsigned char* hit = std::find_if(d, d + n, [](unsigned char c) { return c != 0; });
+    Skip(static_cast<std::size_t>(hit - d));
+    if (hit != d + n) {
+      *nonzero = offset();
+      return false;
+    }
+  }
+  return true;
+}
+
+std::string BinaryStream::ZerosMessage(std::uint64_t at) {
+  return "the log ends in zero bytes from byte " + std::to_string(at) +
+         " (space the logger reserved but never wrote)";
+}
+
 void BinaryStream::Drain() {
   while (true) {
     Skip(end_ - begin_);

@@ -40,6 +40,12 @@ class BinaryStream {
   }
   /// The input offset of data()[0].
   std::uint64_t offset() const { return offset_; }
+  /// Whether the rest of the input is zeros (space a logger reserved and never wrote): then it is
+  /// consumed; else `*nonzero` is the offset of its first byte that is not (and what is before it
+  /// consumed).
+  bool ZerosToEnd(std::uint64_t* nonzero);
+  /// The message a reader gives for a log that ends in zeros from `at` (ZerosToEnd).
+  static std::string ZerosMessage(std::uint64_t at);
   /// Reads and hashes the rest of the input (so that a fingerprint covers every byte), dropping it.
   void Drain();
   const std::string& name() const { return name_; }

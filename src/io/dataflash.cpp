@@ -268,20 +268,12 @@ DecodedLog Reader::Read() {
     if (h[0] != kHead1 || h[1] != kHead2) {
       if (h[0] == 0 && h[1] == 0 && h[2] == 0) {
         // Zeros to the end: space the logger had reserved and never wrote.
-        while (in_.Need(1)) {
-          const unsigned char* d = in_.data();
-          for (std::size_t i = 0; i < in_.available(); ++i) {
-            if (d[i] != 0) {
-              Fail(in_.offset() + i, "not zero, after zeros from byte " + std::to_string(at) +
-                                         ": the file is corrupt here");
-            }
-          }
-          in_.Skip(in_.available());
+        std::uint64_t nonzero = 0;
+        if (!in_.ZerosToEnd(&nonzero)) {
+          Fail(nonzero, "not zero, after zeros from byte " + std::to_string(at) +
+                            ": the file is corrupt here");
         }
-        out_.truncated = Format(
-            "the log ends in zero bytes from byte %llu (space the logger "
-            "reserved but never wrote)",
-            static_cast<unsigned long long>(at));
+        out_.truncated = BinaryStream::ZerosMessage(at);
         break;
       }
       Fail(at,

@@ -378,22 +378,13 @@ DecodedLog Reader::Read() {
     }
     if (type == 0 && size == 0) {
       // Zeros to the end: space the logger had reserved and never wrote.
-      while (in_.Need(1)) {
-        const unsigned char* d = in_.data();
-        const std::size_t n = in_.available();
-        for (std::size_t i = 0; i < n; ++i) {
-          if (d[i] != 0) {
-            Fail(at, Format("a message of type 0 where zeros to the end would mean space never "
-                            "written, but byte %llu is not zero: the file is corrupt here",
-                            static_cast<unsigned long long>(in_.offset() + i)));
-          }
-        }
-        in_.Skip(n);
+      std::uint64_t nonzero = 0;
+      if (!in_.ZerosToEnd(&nonzero)) {
+        Fail(at, Format("a message of type 0 where zeros to the end would mean space never "
+                        "written, but byte %llu is not zero: the file is corrupt here",
+                        static_cast<unsigned long long>(nonzero)));
       }
-      out_.truncated = Format(
-          "the log ends in zero bytes from byte %llu (space the logger "
-          "reserved but never wrote)",
-          static_cast<unsigned long long>(at));
+      out_.truncated = BinaryStream::ZerosMessage(at);
       break;
     }
     if (!in_.Need(3 + size)) {

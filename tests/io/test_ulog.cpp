@@ -126,6 +126,28 @@ TEST(ULog, TruncatedLogGivesWhatIsWholeAndSaysWhere) {
   for (std::size_t i = 0; i < s->values.size(); ++i) ASSERT_EQ(s->values[i], w->values[i]);
 }
 
+// Zeros to the end are space the logger reserved: a warning; a byte after them is corruption.
+TEST(ULog, ZerosToTheEndAreAWarningAndAByteAfterThemAnError) {
+  const std::string all = Bytes(kDir + "sample_log_small.ulg");
+  BinaryStream zeros(all + std::string(5000, '\0'), "zeros.ulg");
+  const DecodedLog c = ReadULog(zeros, [](const std::string&, int) { return false; });
+  ASSERT_TRUE(c.truncated.has_value());
+  const std::string said = "the log ends in zero bytes from byte " + std::to_string(all.size()) +
+                           " (space the logger reserved but never wrote), after ";
+  EXPECT_EQ(c.truncated->rfind(said, 0), 0u) << *c.truncated;
+  EXPECT_EQ(c.bytes, all.size() + 5000);
+  BinaryStream after(all + std::string(5000, '\0') + "x", "after.ulg");
+  try {
+    ReadULog(after, [](const std::string&, int) { return false; });
+    FAIL() << "no error";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("but byte " + std::to_string(all.size() + 5000) +
+                                         " is not zero"),
+              std::string::npos)
+        << e.what();
+  }
+}
+
 // Corruption is an error naming the byte, never a silent stop.
 TEST(ULog, CorruptMessageTypeIsAnErrorAtItsByte) {
   std::string all = Bytes(kDir + "sample_log_small.ulg");

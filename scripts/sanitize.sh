@@ -30,7 +30,7 @@ cmake -S . -B build-fuzz "${common[@]}" -DACCELCAL_FUZZ=ON -DACCELCAL_BUILD_TEST
 cmake --build build-fuzz -j"$(nproc)"
 scratch=$(mktemp -d)
 # A finding ends the script: the other harness still running goes with it.
-trap 'kill $(jobs -p) 2> /dev/null || true; rm -rf "$scratch"' EXIT
+trap 'kill $(jobs -p) 2> /dev/null || true; wait; rm -rf "$scratch"' EXIT
 # One harness for FUZZ_SECONDS, its log in the scratch directory; the exit status is the fuzzer's.
 run_harness() {
   local harness=$1

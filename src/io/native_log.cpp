@@ -82,6 +82,13 @@ std::string Line(const internal::DecodedStream& s) {
   return out + ")";
 }
 
+// The fields of `s`, escaped, for a message that lists them.
+std::string Fields(const internal::DecodedStream& s) {
+  std::string out;
+  for (const std::string& c : *s.columns) out += (out.empty() ? "" : ", ") + Shown(c);
+  return out;
+}
+
 // The index of the column `name` of `s`, if it has one.
 std::optional<std::size_t> Find(const internal::DecodedStream& s, std::string_view name) {
   const auto it = std::find(s.columns->begin(), s.columns->end(), name);
@@ -103,11 +110,9 @@ std::size_t ColumnOf(const internal::DecodedStream& s, const std::string& entry,
     }
   }
   if (digits && number >= 1 && number <= s.columns->size()) return number - 1;
-  std::string fields;
-  for (const std::string& c : *s.columns) fields += (fields.empty() ? "" : ", ") + Shown(c);
   throw InputError(source, 0,
                    "the columns option names \"" + Shown(entry) + "\", which " + Shown(s.topic) +
-                       " does not have (its fields: " + fields + ")");
+                       " does not have (its fields: " + Fields(s) + ")");
 }
 
 // The time fields the formats define in µs (ULog's timestamp and timestamp_sample, DataFlash's
@@ -157,11 +162,9 @@ Chosen Choose(const internal::DecodedStream& s, const ReadOptions& options,
     // A field the known stream should have (an older firmware's log may not).
     const auto field = [&](std::string_view want) {
       if (const std::optional<std::size_t> c = Find(s, want)) return *c;
-      std::string fields;
-      for (const std::string& c : *s.columns) fields += (fields.empty() ? "" : ", ") + Shown(c);
       throw InputError(source, 0,
                        Shown(s.topic) + " has no field " + std::string(want) +
-                           " (its fields: " + fields +
+                           " (its fields: " + Fields(s) +
                            "): name its time and readings with the columns option "
                            "(time,x,y,z, or x,y,z and the rate option)");
     };

@@ -1,5 +1,6 @@
-// libFuzzer harness: binary logs (native_log.hpp: PX4 ULog, ArduPilot DataFlash) read by ParseInput
-// as every stream choice a user could make (none, a topic, a topic and instance, named columns).
+// libFuzzer harness: binary logs (native_log.hpp: PX4 ULog, ArduPilot DataFlash, ROS bags) read by
+// ParseInput as every stream choice a user could make (none, a topic, a topic and instance, named
+// columns).
 // The only accepted failure is InputError (the file, the byte or message, the reason); anything
 // else is a finding. What is read must be what a raw log promises: finite samples and times, times
 // from 0 that never go back.
@@ -57,6 +58,10 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   options.topic = "sensor_combined";
   options.instance.reset();
   options.columns = {"timestamp", "gyro_rad[0]", "gyro_rad[1]", "gyro_rad[2]"};
+  Read(bytes, options);
+  options.topic = "/imu";
+  options.columns = {"header.stamp", "angular_velocity.x", "angular_velocity.y",
+                     "angular_velocity.z"};
   Read(bytes, options);
   return 0;
 }

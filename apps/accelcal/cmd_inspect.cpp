@@ -26,6 +26,7 @@ int RunInspect(const InspectArgs& args) {
     for (const LogStreamInfo& s : log.streams) {
       streams.push_back(
           {{"topic", s.topic},
+           {"type", s.type},
            {"instance", s.instance},
            {"device_id", s.device_id ? nlohmann::ordered_json(*s.device_id) : nullptr},
            {"samples", s.samples},
@@ -38,8 +39,10 @@ int RunInspect(const InspectArgs& args) {
     doc["parameters"] = log.parameters;
     out = JsonText(doc);
   } else {
-    out += Format("%s: %s, %llu bytes\n", log.source.c_str(),
-                  log.format == LogFormat::kULog ? "PX4 ULog" : "ArduPilot DataFlash",
+    const char* format = log.format == LogFormat::kULog        ? "PX4 ULog"
+                         : log.format == LogFormat::kDataFlash ? "ArduPilot DataFlash"
+                                                               : "ROS bag";
+    out += Format("%s: %s, %llu bytes\n", log.source.c_str(), format,
                   static_cast<unsigned long long>(log.bytes));
     for (const char* key : {"sys_name", "ver_hw", "ver_sw", "ver_sw_release"}) {
       if (const auto it = log.info.find(key); it != log.info.end()) {
@@ -47,20 +50,27 @@ int RunInspect(const InspectArgs& args) {
       }
     }
     if (log.truncated) out += "warning   " + VisibleLine(*log.truncated) + "\n";
-    int width = 5;
+    // A ROS topic is named by its user, its type by ROS: both are shown.
+    int width = 5, type_width = 0;
     for (const LogStreamInfo& s : log.streams) {
       width = std::max(width, static_cast<int>(VisibleLine(s.topic).size()));
+      if (s.type != s.topic) {
+        type_width = std::max(type_width, static_cast<int>(VisibleLine(s.type).size()));
+      }
     }
-    out += Format("%-*s %8s %10s %9s %10s %21s  %s\n", width, "topic", "instance", "device_id",
+    if (type_width > 0) type_width = std::max(type_width, 4);
+    out += Format("%-*s %-*s%s%8s %10s %9s %10s %21s  %s\n", width, "topic", type_width,
+                  type_width > 0 ? "type" : "", type_width > 0 ? " " : "", "instance", "device_id",
                   "samples", "rate [Hz]", "time [s]", "accelcal reads");
     for (const LogStreamInfo& s : log.streams) {
       std::string sensors;
       for (const std::string& k : s.sensors) sensors += (sensors.empty() ? "" : ", ") + k;
-      out +=
-          Format("%-*s %8d %10s %9zu %10s %10.3f-%10.3f  %s\n", width, VisibleLine(s.topic).c_str(),
-                 s.instance, s.device_id ? std::to_string(*s.device_id).c_str() : "-", s.samples,
-                 s.rate_hz > 0 ? Format("%.4g", s.rate_hz).c_str() : "-", s.first_s, s.last_s,
-                 sensors.empty() ? "-" : sensors.c_str());
+      out += Format("%-*s %-*s%s%8d %10s %9zu %10s %10.3f-%10.3f  %s\n", width,
+                    VisibleLine(s.topic).c_str(), type_width,
+                    type_width > 0 ? VisibleLine(s.type).c_str() : "", type_width > 0 ? " " : "",
+                    s.instance, s.device_id ? std::to_string(*s.device_id).c_str() : "-", s.samples,
+                    s.rate_hz > 0 ? Format("%.4g", s.rate_hz).c_str() : "-", s.first_s, s.last_s,
+                    sensors.empty() ? "-" : sensors.c_str());
     }
     out += Format(
         "%zu streams, %zu parameters. Read one with --topic NAME [--instance N]; one accelcal "

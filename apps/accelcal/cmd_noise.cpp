@@ -459,6 +459,14 @@ int WriteNoise(const NoiseArgs& args, bool calibrated, std::size_t begin, std::s
   return kExitOk;
 }
 
+// A binary log cut short (a crashed vehicle's) is analysed up to where it stops, which is said.
+void WarnCutShort(const std::string& path, const std::string& read_warning) {
+  if (!read_warning.empty()) {
+    Warn("%s: %s: the samples before it were analysed\n", VisibleLine(path).c_str(),
+         VisibleLine(read_warning).c_str());
+  }
+}
+
 // The whole log, streamed through the accumulators: memory bounded by the reader's blocks.
 int StreamNoise(const NoiseArgs& args, const ReadOptions& read,
                 const std::optional<double>& given_hz,
@@ -489,6 +497,7 @@ int StreamNoise(const NoiseArgs& args, const ReadOptions& read,
       }
     }
   });
+  WarnCutShort(args.input.path, log.read_warning);
   std::optional<double> clock_hz;
   if (clock) {
     const SampleClockReport report = clock->Finish();
@@ -538,6 +547,7 @@ int RunNoise(const NoiseArgs& args) {
   // need the log whole (detection, the two streams sample by sample).
   if (!args.still && !gyro) return StreamNoise(args, read, given_hz, cal);
   InputData data = ReadInput(args.input.path, read);
+  WarnCutShort(args.input.path, data.raw.read_warning);
   // Without a time column the given rate is the log's (the detection of --still needs one).
   if (!data.raw.time && given_hz) data.raw.rate_hz = given_hz;
   const RawLog& log = data.raw;
@@ -605,6 +615,7 @@ int RunNoise(const NoiseArgs& args) {
   }
   if (gyro) {
     const InputData rates = ReadGyroLog(args.input, args.gyro, args.gyro_columns, false);
+    if (!args.gyro.empty()) WarnCutShort(args.gyro, rates.raw.read_warning);
     CheckGyroClock(log, rates.raw);
     if (rates.raw.samples.size() != log.samples.size()) {
       throw InputError(args.gyro.empty() ? args.input.path : args.gyro, 0,

@@ -141,6 +141,7 @@ struct StreamedLog {
   /// and rate over the whole log. Unset without a time column.
   std::optional<TimeAxis> time;
   std::vector<std::uint32_t> gap_lines;  ///< the line of the first sample after each gap
+  std::string read_warning;              ///< as RawLog::read_warning (a binary log cut short)
 };
 /// The samples StreamRawLog holds before it decides the time column's unit.
 inline constexpr std::size_t kStreamHeadSamples = 65536;

@@ -1,10 +1,11 @@
 #pragma once
 /// @file native_log.hpp
 /// The binary logs accelcal reads as they are recorded, told by their first bytes: PX4 ULog
-/// (`.ulg`) and ArduPilot DataFlash (`.bin`). ReadInput (log_reader.hpp) reads one stream of such a
-/// log as it reads a text log's columns: the stream by ReadOptions::topic and ::instance, its
-/// fields by ::columns; InspectLog says what a log holds. A log cut short gives what is whole, with
-/// a warning (RawLog::read_warning); a corrupt one an InputError naming the byte.
+/// (`.ulg`), ArduPilot DataFlash (`.bin`) and ROS 1 bags (`.bag`). ReadInput (log_reader.hpp) reads
+/// one stream of such a log as it reads a text log's columns: the stream by ReadOptions::topic and
+/// ::instance, its fields by ::columns; InspectLog says what a log holds. A log cut short gives
+/// what is whole, with a warning (RawLog::read_warning); a corrupt one an InputError naming the
+/// byte.
 
 #include <cstdint>
 #include <map>
@@ -21,11 +22,15 @@ enum class LogFormat {
   kText,       ///< delimited text (log_reader.hpp)
   kULog,       ///< PX4 ULog
   kDataFlash,  ///< ArduPilot DataFlash
+  kRosBag,     ///< ROS 1 bag (format 2.0)
 };
 template <>
 struct EnumNames<LogFormat> {
   static constexpr std::pair<LogFormat, std::string_view> kTable[] = {
-      {LogFormat::kText, "text"}, {LogFormat::kULog, "ulog"}, {LogFormat::kDataFlash, "dataflash"}};
+      {LogFormat::kText, "text"},
+      {LogFormat::kULog, "ulog"},
+      {LogFormat::kDataFlash, "dataflash"},
+      {LogFormat::kRosBag, "rosbag"}};
 };
 std::string_view ToString(LogFormat format);
 /// The format of a file that begins with `first_bytes` (16 are enough).
@@ -33,7 +38,8 @@ LogFormat DetectLogFormat(std::string_view first_bytes);
 
 /// What a sensor stream of a log gives accelcal by default.
 struct KnownStream {
-  std::string_view topic;
+  /// The message type: a PX4 topic, an ArduPilot message, a ROS type (any topic of it).
+  std::string_view type;
   std::string_view sensor;   ///< "accelerometer" or "gyroscope"
   std::string_view time;     ///< its sample time field [µs]
   std::string_view x, y, z;  ///< its fields
@@ -45,13 +51,15 @@ struct KnownStream {
 /// The streams accelcal reads without being told their fields: PX4's sensor_accel (the
 /// driver's output, before the calibration), sensor_combined's accelerometer (after it),
 /// sensor_gyro, sensor_combined's gyro; ArduPilot's IMU, ACC and GYR records (after the
-/// calibration in force: INS_ACCOFFS, INS_ACCSCAL).
+/// calibration in force: INS_ACCOFFS, INS_ACCSCAL); a ROS sensor_msgs/Imu's linear_acceleration
+/// and angular_velocity.
 const std::vector<KnownStream>& KnownStreams();
 
 /// One stream of a binary log: a topic's instance.
 struct LogStreamInfo {
   std::string topic;
-  int instance = 0;  ///< ULog multi id, DataFlash I
+  std::string type;  ///< its message type (a ROS topic's; a PX4 or ArduPilot topic's own name)
+  int instance = 0;  ///< ULog multi id, DataFlash I (0 for a ROS topic)
   std::optional<std::uint64_t> device_id;
   std::size_t samples = 0;
   double first_s = 0, last_s = 0;  ///< timestamps of the first and last message [s]

@@ -32,7 +32,9 @@ void BinaryStream::Fill(std::size_t n) {
     begin_ = 0;
   }
   while (end_ < n && !eof_) {
-    const std::size_t want = std::max(n - end_, kBlockBytes);
+    // At most doubling what is there: a record's length (read from the file) that claims more
+    // bytes than the file has makes the buffer no larger than twice the file.
+    const std::size_t want = std::max(std::min(n - end_, std::max(end_, kBlockBytes)), kBlockBytes);
     if (buffer_.size() < end_ + want) buffer_.resize(end_ + want);
     const std::size_t got = file_->ReadFully(reinterpret_cast<char*>(buffer_.data() + end_), want);
     if (hash_ != nullptr) hash_->Update(buffer_.data() + end_, got);

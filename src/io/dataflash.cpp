@@ -224,9 +224,10 @@ void Reader::Record(const Type& type, const unsigned char* r, std::uint64_t at) 
   if (added) {
     DecodedStream s;
     s.topic = type.name;
+    s.type = type.name;
     s.instance = instance;
     s.columns = type.names;
-    s.kept = keep_(s.topic, instance);
+    s.kept = keep_(s);
     if (s.kept) {
       if (store_) {
         s.stored = store_(s);

@@ -1,6 +1,6 @@
 #pragma once
-// What a binary log reader (ulog.cpp, dataflash.cpp) gives: the log's streams, each a message
-// type's instance with its numeric fields, counted, and decoded when asked for.
+// What a binary log reader (ulog.cpp, dataflash.cpp, rosbag.cpp) gives: the log's streams, each a
+// message type's instance with its numeric fields, counted, and decoded when asked for.
 
 #include <cstdint>
 #include <functional>
@@ -13,9 +13,12 @@
 namespace accelcal::internal {
 
 /// One stream: a ULog topic's subscription (its multi id), a DataFlash message type's instance
-/// (its I field).
+/// (its I field), a ROS topic (instance 0).
 struct DecodedStream {
   std::string topic;
+  /// Its message type: a ULog topic's format and a DataFlash message's name (both the topic
+  /// itself), a ROS topic's type (`sensor_msgs/Imu`).
+  std::string type;
   int instance = 0;
   /// Its numeric fields, flattened as the format's own tools name them (pyulog: `x`,
   /// `gyro_rad[0]`, `a.b`; DataFlash: its column labels), in the format's order; padding and
@@ -49,8 +52,9 @@ struct DecodedLog {
   std::uint64_t bytes = 0;  ///< read, in all
 };
 
-/// Which streams a reader decodes (topic, instance); the others it only counts.
-using KeepStream = std::function<bool(const std::string& topic, int instance)>;
+/// Which streams a reader decodes (given its topic, type, instance and columns); the others it
+/// only counts.
+using KeepStream = std::function<bool(const DecodedStream& stream)>;
 /// Which columns of a kept stream a reader stores (indices into its columns, in the order
 /// wanted); without one, all of them. Memory then grows with what is kept, not with the log.
 using StoreColumns = std::function<std::vector<std::size_t>(const DecodedStream& stream)>;

@@ -640,6 +640,7 @@ StreamedLog StreamRawLog(const std::string& path, const ReadOptions& options,
     out.samples = data.raw.samples.size();
     out.rate_hz = data.raw.rate_hz;
     out.time = data.raw.time;
+    out.read_warning = data.raw.read_warning;
     if (out.time) {
       for (const TimeGap& g : out.time->gaps) out.gap_lines.push_back(data.raw.line[g.index]);
     }

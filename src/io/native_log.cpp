@@ -11,6 +11,7 @@
 #include "io/binary_stream.hpp"
 #include "io/dataflash.hpp"
 #include "io/native_input.hpp"
+#include "io/rosbag.hpp"
 #include "io/ulog.hpp"
 
 namespace accelcal {
@@ -20,6 +21,7 @@ std::string_view ToString(LogFormat format) { return NameOf(format); }
 LogFormat DetectLogFormat(std::string_view first_bytes) {
   if (internal::IsULog(first_bytes)) return LogFormat::kULog;
   if (internal::IsDataFlash(first_bytes)) return LogFormat::kDataFlash;
+  if (internal::IsRosBag(first_bytes)) return LogFormat::kRosBag;
   return LogFormat::kText;
 }
 
@@ -37,6 +39,12 @@ const std::vector<KnownStream>& KnownStreams() {
       {"ACC", "accelerometer", "SampleUS", "AccX", "AccY", "AccZ", "m/s2", true},
       {"IMU", "gyroscope", "TimeUS", "GyrX", "GyrY", "GyrZ", "rad/s", true},
       {"GYR", "gyroscope", "SampleUS", "GyrX", "GyrY", "GyrZ", "rad/s", true},
+      // ROS: a driver's message, stamped when sampled (REP 145 asks for the sensor's own frame,
+      // without the driver's corrections).
+      {"sensor_msgs/Imu", "accelerometer", "header.stamp", "linear_acceleration.x",
+       "linear_acceleration.y", "linear_acceleration.z", "m/s2", false},
+      {"sensor_msgs/Imu", "gyroscope", "header.stamp", "angular_velocity.x", "angular_velocity.y",
+       "angular_velocity.z", "rad/s", false},
   };
   return kStreams;
 }
@@ -45,9 +53,9 @@ namespace {
 
 using internal::Format;
 
-const KnownStream* Known(std::string_view topic, std::string_view sensor) {
+const KnownStream* Known(std::string_view type, std::string_view sensor) {
   for (const KnownStream& k : KnownStreams()) {
-    if (k.topic == topic && k.sensor == sensor) return &k;
+    if (k.type == type && k.sensor == sensor) return &k;
   }
   return nullptr;
 }
@@ -58,6 +66,7 @@ std::string Shown(std::string_view name) { return internal::VisibleLine(name); }
 LogStreamInfo Describe(const internal::DecodedStream& s) {
   LogStreamInfo info;
   info.topic = s.topic;
+  info.type = s.type;
   info.instance = s.instance;
   info.device_id = s.device_id;
   info.samples = s.messages;
@@ -67,7 +76,7 @@ LogStreamInfo Describe(const internal::DecodedStream& s) {
     info.rate_hz = static_cast<double>(s.messages - 1) / (info.last_s - info.first_s);
   }
   for (const KnownStream& k : KnownStreams()) {
-    if (k.topic == s.topic) info.sensors.emplace_back(k.sensor);
+    if (k.type == s.type) info.sensors.emplace_back(k.sensor);
   }
   return info;
 }
@@ -116,9 +125,10 @@ std::size_t ColumnOf(const internal::DecodedStream& s, const std::string& entry,
 }
 
 // The time fields the formats define in µs (ULog's timestamp and timestamp_sample, DataFlash's
-// TimeUS and SampleUS), in the order they are preferred when none is named.
-constexpr const char* kMicrosecondFields[] = {"timestamp_sample", "timestamp", "SampleUS",
-                                              "TimeUS"};
+// TimeUS and SampleUS) or that their reader gives in µs (a ROS message's header.stamp), in the
+// order they are preferred when none is named.
+constexpr const char* kMicrosecondFields[] = {"timestamp_sample", "timestamp", "SampleUS", "TimeUS",
+                                              "header.stamp"};
 
 bool IsMicrosecondField(std::string_view name) {
   return std::find(std::begin(kMicrosecondFields), std::end(kMicrosecondFields), name) !=
@@ -203,7 +213,17 @@ namespace {
 
 // The format's name for messages, with its article.
 const char* FormatName(LogFormat format) {
-  return format == LogFormat::kULog ? "a PX4 ULog" : "an ArduPilot DataFlash log";
+  switch (format) {
+    case LogFormat::kULog:
+      return "a PX4 ULog";
+    case LogFormat::kDataFlash:
+      return "an ArduPilot DataFlash log";
+    case LogFormat::kRosBag:
+      return "a ROS bag";
+    case LogFormat::kText:
+      break;
+  }
+  return "a text log";
 }
 
 // A binary log's format, from its first bytes in `in`.
@@ -215,7 +235,17 @@ LogFormat FormatOf(BinaryStream& in) {
 
 DecodedLog Decode(BinaryStream& in, LogFormat format, const KeepStream& keep,
                   const StoreColumns& store = {}) {
-  return format == LogFormat::kULog ? ReadULog(in, keep, store) : ReadDataFlash(in, keep, store);
+  switch (format) {
+    case LogFormat::kULog:
+      return ReadULog(in, keep, store);
+    case LogFormat::kDataFlash:
+      return ReadDataFlash(in, keep, store);
+    case LogFormat::kRosBag:
+      return ReadRosBag(in, keep, store);
+    case LogFormat::kText:
+      break;
+  }
+  throw std::logic_error("Decode: a text log");
 }
 
 }  // namespace
@@ -232,12 +262,12 @@ InputData ReadNativeLog(BinaryStream& in, InputFile* file, const ReadOptions& op
   // Keep the topic asked for, or every stream of the sensor accelcal knows; store only the
   // columns the samples come from (none when they cannot be chosen: the error comes below).
   const std::string_view sensor = NameOf(options.sensor);
-  const auto keep = [&](const std::string& topic, int) {
-    return options.topic.empty() ? Known(topic, sensor) != nullptr : topic == options.topic;
+  const auto keep = [&](const DecodedStream& s) {
+    return options.topic.empty() ? Known(s.type, sensor) != nullptr : s.topic == options.topic;
   };
   const auto store = [&](const DecodedStream& s) {
     try {
-      return Stored(Choose(s, options, Known(s.topic, sensor), source));
+      return Stored(Choose(s, options, Known(s.type, sensor), source));
     } catch (const InputError&) {
       return std::vector<std::size_t>();
     }
@@ -257,7 +287,7 @@ InputData ReadNativeLog(BinaryStream& in, InputFile* file, const ReadOptions& op
     std::string list;
     for (const DecodedStream& s : log.streams) {
       if (s.messages > 0 &&
-          (options.topic.empty() ? Known(s.topic, sensor) != nullptr : s.topic == options.topic)) {
+          (options.topic.empty() ? Known(s.type, sensor) != nullptr : s.topic == options.topic)) {
         list += "; " + Line(s);
       }
     }
@@ -280,7 +310,7 @@ InputData ReadNativeLog(BinaryStream& in, InputFile* file, const ReadOptions& op
                          "; choose one with the topic and instance options");
   }
   const DecodedStream& s = *candidates.front();
-  const Chosen chosen = Choose(s, options, Known(s.topic, sensor), source);
+  const Chosen chosen = Choose(s, options, Known(s.type, sensor), source);
   if (s.stored != Stored(chosen)) {
     throw std::logic_error("ReadNativeLog: the columns stored are not the columns chosen");
   }
@@ -288,15 +318,20 @@ InputData ReadNativeLog(BinaryStream& in, InputFile* file, const ReadOptions& op
   const bool microseconds = chosen.time && IsMicrosecondField((*s.columns)[*chosen.time]);
   if (microseconds && options.time_unit != TimeUnit::kAuto &&
       options.time_unit != TimeUnit::kMicroseconds) {
-    throw InputError(source, 0,
-                     name + "'s " + (*s.columns)[*chosen.time] +
-                         " is in microseconds by its specification, not in " +
-                         std::string(ToString(options.time_unit)));
+    throw InputError(
+        source, 0,
+        name + "'s " + (*s.columns)[*chosen.time] +
+            (format == LogFormat::kRosBag
+                 ? " is a ROS time (seconds and nanoseconds) by its specification: "
+                   "the time unit option (" +
+                       std::string(ToString(options.time_unit)) + ") does not apply to it"
+                 : " is in microseconds by its specification, not in " +
+                       std::string(ToString(options.time_unit))));
   }
   InputData data;
   data.kind = InputKind::kRaw;
   data.kind_reason = name + ": " + Line(s);
-  if (const KnownStream* known = Known(s.topic, sensor); known != nullptr && known->corrected) {
+  if (const KnownStream* known = Known(s.type, sensor); known != nullptr && known->corrected) {
     data.kind_reason +=
         ", already corrected by the calibration in force when it was logged: what is calibrated "
         "is what that calibration left";
@@ -357,12 +392,12 @@ LogInventory InspectLog(const std::string& path) {
   out.source = file.name();
   if (out.format == LogFormat::kText) {
     throw InputError(file.name(), 0,
-                     "not a binary log (PX4 ULog, ArduPilot DataFlash): a text log's columns "
-                     "are its header's");
+                     "not a binary log (PX4 ULog, ArduPilot DataFlash, ROS bag): a text log's "
+                     "columns are its header's");
   }
   internal::BinaryStream in(&file, std::move(head));
   const internal::DecodedLog log =
-      internal::Decode(in, out.format, [](const std::string&, int) { return false; });
+      internal::Decode(in, out.format, [](const internal::DecodedStream&) { return false; });
   out.bytes = log.bytes;
   for (const internal::DecodedStream& s : log.streams) {
     out.streams.push_back(Describe(s));

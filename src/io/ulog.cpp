@@ -264,9 +264,10 @@ void Reader::Subscribe(const unsigned char* p, std::size_t size, std::uint64_t a
   if (added) {
     DecodedStream s;
     s.topic = topic;
+    s.type = topic;
     s.instance = multi_id;
     s.columns = layout.names;
-    s.kept = keep_(topic, multi_id);
+    s.kept = keep_(s);
     if (s.kept) {
       if (store_) {
         s.stored = store_(s);

@@ -29,8 +29,8 @@ const std::string kSmall = std::string(ACCELCAL_DATA_DIR) + "/px4-ulog/sample_lo
 std::string AsCsv(const std::string& ulog) {
   internal::InputFile file(ulog, std::size_t{1} << 30);
   internal::BinaryStream in(&file, "");
-  const internal::DecodedLog c =
-      internal::ReadULog(in, [](const std::string& t, int) { return t == "sensor_accel"; });
+  const internal::DecodedLog c = internal::ReadULog(
+      in, [](const internal::DecodedStream& s) { return s.topic == "sensor_accel"; });
   const internal::DecodedStream& s = c.streams.at(0);
   const auto col = [&](const char* name) {
     return std::size_t(std::find(s.columns->begin(), s.columns->end(), name) - s.columns->begin());
@@ -81,8 +81,8 @@ TEST_F(NativeLogTest, DataFlashCalibratesToTheSameBytesAsItsSamplesAsCsv) {
             0);
   internal::InputFile file(Path("s.bin"), std::size_t{1} << 30);
   internal::BinaryStream in(&file, "");
-  const internal::DecodedLog c =
-      internal::ReadDataFlash(in, [](const std::string& t, int) { return t == "IMU"; });
+  const internal::DecodedLog c = internal::ReadDataFlash(
+      in, [](const internal::DecodedStream& s) { return s.topic == "IMU"; });
   const internal::DecodedStream& s = c.streams.at(0);
   std::string csv = "time_us,x,y,z\n";
   char line[160];

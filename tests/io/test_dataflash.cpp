@@ -24,7 +24,7 @@ DecodedLog Read(const std::string& path, const KeepStream& keep) {
 }
 
 TEST(DataFlash, ImuRecordsParametersAndTheCut) {
-  const DecodedLog log = Read(kLog, [](const std::string& t, int) { return t == "IMU"; });
+  const DecodedLog log = Read(kLog, [](const DecodedStream& s) { return s.topic == "IMU"; });
   // The last whole record ends at byte 81918 of 81920.
   ASSERT_TRUE(log.truncated.has_value());
   EXPECT_EQ(*log.truncated,
@@ -78,8 +78,7 @@ TEST(DataFlash, ATypeRedefinedAfterItsRecordsIsRefused) {
   const std::string again =
       log + writer.Header().substr(89) + writer.Sample(5000, Vec3(0, 0, 9.8), Vec3::Zero());
   BinaryStream same(again, "same.bin");
-  EXPECT_EQ(ReadDataFlash(same, [](const std::string&, int) { return true; }).streams[0].messages,
-            4u);
+  EXPECT_EQ(ReadDataFlash(same, [](const DecodedStream&) { return true; }).streams[0].messages, 4u);
   // IMU (type 163) redefined as 24 bytes of QBfff.
   std::string fmt = writer.Header().substr(89);
   fmt[4] = static_cast<char>(24);
@@ -91,7 +90,7 @@ TEST(DataFlash, ATypeRedefinedAfterItsRecordsIsRefused) {
   fmt.replace(25, 64, labels);
   BinaryStream redefined(log + fmt, "redefined.bin");
   try {
-    ReadDataFlash(redefined, [](const std::string&, int) { return true; });
+    ReadDataFlash(redefined, [](const DecodedStream&) { return true; });
     FAIL() << "no error";
   } catch (const InputError& e) {
     EXPECT_NE(std::string(e.what()).find("byte " + std::to_string(log.size()) +
@@ -111,7 +110,7 @@ TEST(DataFlash, CorruptionIsAnErrorAtItsByte) {
   bad[25853] = 'x';  // the first IMU record's header
   BinaryStream in(bad, "bad.bin");
   try {
-    ReadDataFlash(in, [](const std::string&, int) { return false; });
+    ReadDataFlash(in, [](const DecodedStream&) { return false; });
     FAIL() << "no error";
   } catch (const InputError& e) {
     EXPECT_EQ(std::string(e.what()),
@@ -120,7 +119,7 @@ TEST(DataFlash, CorruptionIsAnErrorAtItsByte) {
   std::string undefined = bytes;
   undefined[25853 + 2] = static_cast<char>(3);  // a type no FMT defines
   BinaryStream in2(undefined, "undefined.bin");
-  EXPECT_THROW(ReadDataFlash(in2, [](const std::string&, int) { return false; }), InputError);
+  EXPECT_THROW(ReadDataFlash(in2, [](const DecodedStream&) { return false; }), InputError);
   EXPECT_TRUE(IsDataFlash(bytes.substr(0, 3)));
   EXPECT_FALSE(IsDataFlash("\xA3\x95"));
 }

@@ -18,7 +18,7 @@ namespace {
 
 const std::string kDir = std::string(ACCELCAL_DATA_DIR) + "/px4-ulog/";
 
-DecodedLog Read(const std::string& path, const std::function<bool(const std::string&, int)>& keep) {
+DecodedLog Read(const std::string& path, const KeepStream& keep) {
   InputFile file(path, std::size_t{1} << 30);
   BinaryStream in(&file, "");
   return ReadULog(in, keep);
@@ -74,8 +74,8 @@ void ExpectSameAsPyulog(const DecodedLog& c, const std::string& topic, int multi
 }
 
 TEST(ULog, SameNumbersAsPyulogOnPx4SampleLog) {
-  const DecodedLog c = Read(kDir + "sample_log_small.ulg", [](const std::string& topic, int) {
-    return topic == "sensor_accel" || topic == "sensor_combined";
+  const DecodedLog c = Read(kDir + "sample_log_small.ulg", [](const DecodedStream& s) {
+    return s.topic == "sensor_accel" || s.topic == "sensor_combined";
   });
   EXPECT_FALSE(c.truncated.has_value()) << *c.truncated;
   for (int i = 0; i < 3; ++i) {
@@ -111,7 +111,7 @@ std::string WriteTemp(const std::string& bytes, const char* name) {
 // A log cut short (as a crashed vehicle's): what is whole, and where it stopped.
 TEST(ULog, TruncatedLogGivesWhatIsWholeAndSaysWhere) {
   const std::string all = Bytes(kDir + "sample_log_small.ulg");
-  const auto keep = [](const std::string& t, int) { return t == "sensor_combined"; };
+  const auto keep = [](const DecodedStream& s) { return s.topic == "sensor_combined"; };
   const DecodedLog whole = Read(kDir + "sample_log_small.ulg", keep);
   const std::size_t n = whole.streams.empty() ? 0 : Find(whole, "sensor_combined", 0)->messages;
   const DecodedLog cut = Read(WriteTemp(all.substr(0, all.size() / 2 + 7), "cut.ulg"), keep);
@@ -130,7 +130,7 @@ TEST(ULog, TruncatedLogGivesWhatIsWholeAndSaysWhere) {
 TEST(ULog, ZerosToTheEndAreAWarningAndAByteAfterThemAnError) {
   const std::string all = Bytes(kDir + "sample_log_small.ulg");
   BinaryStream zeros(all + std::string(5000, '\0'), "zeros.ulg");
-  const DecodedLog c = ReadULog(zeros, [](const std::string&, int) { return false; });
+  const DecodedLog c = ReadULog(zeros, [](const DecodedStream&) { return false; });
   ASSERT_TRUE(c.truncated.has_value());
   const std::string said = "the log ends in zero bytes from byte " + std::to_string(all.size()) +
                            " (space the logger reserved but never wrote), after ";
@@ -138,7 +138,7 @@ TEST(ULog, ZerosToTheEndAreAWarningAndAByteAfterThemAnError) {
   EXPECT_EQ(c.bytes, all.size() + 5000);
   BinaryStream after(all + std::string(5000, '\0') + "x", "after.ulg");
   try {
-    ReadULog(after, [](const std::string&, int) { return false; });
+    ReadULog(after, [](const DecodedStream&) { return false; });
     FAIL() << "no error";
   } catch (const InputError& e) {
     EXPECT_NE(std::string(e.what()).find("but byte " + std::to_string(all.size() + 5000) +
@@ -158,7 +158,7 @@ TEST(ULog, CorruptMessageTypeIsAnErrorAtItsByte) {
   }
   all[at + 2] = 'Z';
   try {
-    Read(WriteTemp(all, "corrupt.ulg"), [](const std::string&, int) { return false; });
+    Read(WriteTemp(all, "corrupt.ulg"), [](const DecodedStream&) { return false; });
     FAIL() << "no error";
   } catch (const InputError& e) {
     EXPECT_NE(std::string(e.what()).find("byte " + std::to_string(at) + ":"), std::string::npos)
@@ -193,7 +193,7 @@ TEST(ULog, ManySubscriptionsOfAHugeFormatShareTheirCappedColumns) {
   std::string log = Header() + Message('F', "t:uint64_t timestamp;uint8_t[65000] a");
   for (int m = 0; m < 256; ++m) log += Subscribe(m, m, "t");
   BinaryStream in(log, "bomb.ulg");
-  const DecodedLog c = ReadULog(in, [](const std::string&, int) { return false; });
+  const DecodedLog c = ReadULog(in, [](const DecodedStream&) { return false; });
   ASSERT_EQ(c.streams.size(), 256u);
   EXPECT_EQ(c.streams[0].columns->size(), kMaxFormatColumns);
   for (const DecodedStream& s : c.streams) EXPECT_EQ(s.columns.get(), c.streams[0].columns.get());
@@ -205,7 +205,7 @@ TEST(ULog, LongNestedNamesAreBounded) {
   std::string log = Header();
   log += Message('F', "f0:f1 " + std::string(300, 'a') + ";");
   BinaryStream in(log + Subscribe(0, 0, "f0"), "long.ulg");
-  EXPECT_THROW(ReadULog(in, [](const std::string&, int) { return false; }), InputError);
+  EXPECT_THROW(ReadULog(in, [](const DecodedStream&) { return false; }), InputError);
   std::string deep = Header();
   for (int i = 0; i < 15; ++i) {
     deep += Message('F', "f" + std::to_string(i) + ":f" + std::to_string(i + 1) + " " +
@@ -214,7 +214,7 @@ TEST(ULog, LongNestedNamesAreBounded) {
   deep += Message('F', "f15:uint8_t[20000] " + std::string(250, 'z') + ";");
   deep += Subscribe(0, 0, "f0");
   BinaryStream in2(deep, "deep.ulg");
-  const DecodedLog c = ReadULog(in2, [](const std::string&, int) { return false; });
+  const DecodedLog c = ReadULog(in2, [](const DecodedStream&) { return false; });
   ASSERT_EQ(c.streams.size(), 1u);
   EXPECT_EQ(c.streams[0].columns->size(), kMaxFormatColumns);
 }
@@ -224,7 +224,7 @@ TEST(ULog, NamesInMessagesAreEscaped) {
   const std::string log = Header() + Message('F', "\x1b[2Jx:float a;float a");
   BinaryStream in(log, "esc.ulg");
   try {
-    ReadULog(in, [](const std::string&, int) { return false; });
+    ReadULog(in, [](const DecodedStream&) { return false; });
     FAIL() << "no error";
   } catch (const InputError& e) {
     EXPECT_EQ(std::string(e.what()).find('\x1b'), std::string::npos) << e.what();
@@ -237,7 +237,7 @@ TEST(ULog, AFormatNamingAFieldTwiceIsRefused) {
       Header() + Message('F', "sensor_accel:uint64_t timestamp;float x;float x;float z");
   BinaryStream in(log, "twice.ulg");
   try {
-    ReadULog(in, [](const std::string&, int) { return true; });
+    ReadULog(in, [](const DecodedStream&) { return true; });
     FAIL() << "no error";
   } catch (const InputError& e) {
     EXPECT_EQ(std::string(e.what()),
@@ -247,7 +247,7 @@ TEST(ULog, AFormatNamingAFieldTwiceIsRefused) {
 
 // Only the columns asked for are stored: memory grows with what is kept, not with the log.
 TEST(ULog, OnlyTheColumnsAskedForAreStored) {
-  const auto keep = [](const std::string& topic, int) { return topic == "sensor_combined"; };
+  const auto keep = [](const DecodedStream& s) { return s.topic == "sensor_combined"; };
   const DecodedLog all = Read(kDir + "sample_log_small.ulg", keep);
   InputFile file(kDir + "sample_log_small.ulg", std::size_t{1} << 30);
   BinaryStream in(&file, "");
@@ -265,7 +265,7 @@ TEST(ULog, OnlyTheColumnsAskedForAreStored) {
 
 TEST(ULog, NotAULogIsRefused) {
   EXPECT_THROW(
-      Read(WriteTemp("ULog\x01\x12", "short.ulg"), [](const std::string&, int) { return true; }),
+      Read(WriteTemp("ULog\x01\x12", "short.ulg"), [](const DecodedStream&) { return true; }),
       InputError);
   EXPECT_FALSE(IsULog("ULog\x01\x12"));
   EXPECT_TRUE(IsULog(std::string("ULog\x01\x12\x35\x01", 8)));

@@ -1,0 +1,414 @@
+// ROS message types from their definitions, and ROS 1 serialisation (ros_message.hpp).
+#include "io/ros_message.hpp"
+
+#include <algorithm>
+#include <map>
+#include <set>
+
+#include "accelcal/error.hpp"
+#include "core/text_format.hpp"
+#include "io/binary_stream.hpp"
+#include "io/decoded_log.hpp"
+
+namespace accelcal::internal {
+
+namespace {
+
+enum class Kind {
+  kBool,
+  kI8,
+  kU8,
+  kI16,
+  kU16,
+  kI32,
+  kU32,
+  kI64,
+  kU64,
+  kF32,
+  kF64,
+  kString,
+  kTime,
+  kDuration,
+  kStruct
+};
+
+struct Builtin {
+  const char* name;
+  Kind kind;
+  std::size_t size;  // serialised; a string's least (its count)
+};
+// ROS 1's built-in types; byte and char are its deprecated aliases of int8 and uint8.
+constexpr Builtin kBuiltins[] = {
+    {"bool", Kind::kBool, 1},        {"int8", Kind::kI8, 1},       {"byte", Kind::kI8, 1},
+    {"uint8", Kind::kU8, 1},         {"char", Kind::kU8, 1},       {"int16", Kind::kI16, 2},
+    {"uint16", Kind::kU16, 2},       {"int32", Kind::kI32, 4},     {"uint32", Kind::kU32, 4},
+    {"int64", Kind::kI64, 8},        {"uint64", Kind::kU64, 8},    {"float32", Kind::kF32, 4},
+    {"float64", Kind::kF64, 8},      {"string", Kind::kString, 4}, {"time", Kind::kTime, 8},
+    {"duration", Kind::kDuration, 8}};
+
+// Nesting deeper than this is refused (a real message nests a handful of levels).
+constexpr int kMaxDepth = 32;
+// A count that saturates: a type's least size and its number of columns, which a hostile
+// definition could make overflow with nested fixed arrays.
+constexpr std::size_t kHuge = std::size_t{1} << 40;
+std::size_t Times(std::size_t a, std::size_t b) {
+  if (a == 0 || b == 0) return 0;
+  return a > kHuge / b ? kHuge : a * b;
+}
+std::size_t Plus(std::size_t a, std::size_t b) { return std::min(kHuge, a + b); }
+
+enum class Array { kNone, kFixed, kVariable };
+
+struct Member {
+  Kind kind;
+  int type = -1;  // kStruct: index of its type
+  std::string name;
+  Array array = Array::kNone;
+  std::size_t count = 1;  // kFixed
+};
+
+struct Type {
+  std::string name;
+  std::vector<Member> members;
+  std::size_t least = 0;    // bytes of its smallest message
+  std::size_t columns = 0;  // its columns, saturating
+};
+
+std::string_view Trim(std::string_view s) {
+  while (!s.empty() && (s.front() == ' ' || s.front() == '\t' || s.front() == '\r')) {
+    s.remove_prefix(1);
+  }
+  while (!s.empty() && (s.back() == ' ' || s.back() == '\t' || s.back() == '\r')) {
+    s.remove_suffix(1);
+  }
+  return s;
+}
+
+bool IsName(std::string_view s, bool slash) {
+  if (s.empty()) return false;
+  for (char c : s) {
+    const bool ok = (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || (c >= '0' && c <= '9') ||
+                    c == '_' || (slash && c == '/');
+    if (!ok) return false;
+  }
+  return true;
+}
+
+}  // namespace
+
+struct RosMessageType::Impl {
+  std::vector<Type> types;  // [0] the message's own
+  std::shared_ptr<const std::vector<std::string>> columns;
+  std::optional<std::size_t> stamp;
+
+  std::map<std::string, std::string_view> sections;  // a used type's definition text
+
+  int Resolve(const std::string& name, std::vector<std::string>* stack);
+  void Name(const Type& t, const std::string& prefix, std::vector<std::string>* out) const;
+  bool Walk(const Type& t, const unsigned char*& p, const unsigned char* end, double* values,
+            std::size_t& column, std::size_t columns_left) const;
+  bool Element(const Member& m, const unsigned char*& p, const unsigned char* end, double* values,
+               std::size_t& column, std::size_t columns_left) const;
+};
+
+// The index of type `name`'s resolved Type, parsed from its section (recursively).
+int RosMessageType::Impl::Resolve(const std::string& name, std::vector<std::string>* stack) {
+  for (std::size_t i = 0; i < types.size(); ++i) {
+    if (types[i].name == name) return static_cast<int>(i);
+  }
+  if (std::find(stack->begin(), stack->end(), name) != stack->end()) {
+    throw DataError("the message type " + name + " contains itself");
+  }
+  if (stack->size() >= std::size_t(kMaxDepth)) {
+    throw DataError(Format("message types nested more than %d deep", kMaxDepth));
+  }
+  const auto section = sections.find(name);
+  if (section == sections.end()) {
+    throw DataError("the definition does not define the type " + name + " it uses");
+  }
+  const std::string package = name.substr(0, name.rfind('/') + 1);  // "pkg/" or ""
+  stack->push_back(name);
+  Type t;
+  t.name = name;
+  std::set<std::string> fields;
+  std::string_view text = section->second;
+  while (!text.empty()) {
+    const std::size_t eol = text.find('\n');
+    std::string_view line = text.substr(0, eol);
+    text.remove_prefix(eol == std::string_view::npos ? text.size() : eol + 1);
+    line = Trim(line.substr(0, line.find('#')));
+    if (line.empty()) continue;
+    const std::size_t space = line.find_first_of(" \t");
+    if (space == std::string_view::npos) {
+      throw DataError("the definition of " + name + " has the line \"" + std::string(line) +
+                      "\", not a type and a name");
+    }
+    std::string_view type_text = line.substr(0, space);
+    const std::string_view rest = Trim(line.substr(space));
+    if (rest.find('=') != std::string_view::npos) continue;  // a constant
+    const std::string_view field = rest.substr(0, rest.find_first_of(" \t"));
+    if (!IsName(field, false)) {
+      throw DataError("the definition of " + name + " names a field \"" + std::string(field) +
+                      "\"");
+    }
+    Member m;
+    m.name = std::string(field);
+    if (const std::size_t bracket = type_text.find('['); bracket != std::string_view::npos) {
+      const std::string_view inside = type_text.substr(bracket + 1);
+      if (inside.empty() || inside.back() != ']') {
+        throw DataError("the definition of " + name + " has the type \"" + std::string(type_text) +
+                        "\"");
+      }
+      const std::string_view count = inside.substr(0, inside.size() - 1);
+      if (count.empty()) {
+        m.array = Array::kVariable;
+      } else {
+        m.array = Array::kFixed;
+        std::size_t n = 0;
+        for (char c : count) {
+          if (c < '0' || c > '9' || n > kHuge) {
+            throw DataError("the definition of " + name + " has the array type \"" +
+                            std::string(type_text) + "\"");
+          }
+          n = n * 10 + std::size_t(c - '0');
+        }
+        m.count = n;
+      }
+      type_text = type_text.substr(0, bracket);
+    }
+    const Builtin* builtin = nullptr;
+    for (const Builtin& b : kBuiltins) {
+      if (type_text == b.name) builtin = &b;
+    }
+    std::size_t least = 0, width = 0;
+    if (builtin != nullptr) {
+      m.kind = builtin->kind;
+      least = builtin->size;
+      width = m.kind == Kind::kString ? 0 : 1;
+    } else {
+      if (!IsName(type_text, true)) {
+        throw DataError("the definition of " + name + " uses the type \"" + std::string(type_text) +
+                        "\"");
+      }
+      std::string full = type_text == "Header" ? "std_msgs/Header"
+                         : type_text.find('/') != std::string_view::npos
+                             ? std::string(type_text)
+                             : package + std::string(type_text);
+      m.kind = Kind::kStruct;
+      m.type = Resolve(full, stack);
+      least = types[std::size_t(m.type)].least;
+      width = types[std::size_t(m.type)].columns;
+    }
+    if (m.array == Array::kVariable) {
+      t.least = Plus(t.least, 4);
+    } else if (m.array == Array::kFixed) {
+      t.least = Plus(t.least, Times(least, m.count));
+      t.columns = Plus(t.columns, Times(width, m.count));
+    } else {
+      t.least = Plus(t.least, least);
+      t.columns = Plus(t.columns, width);
+    }
+    if (!fields.insert(m.name).second) {
+      throw DataError("the definition of " + name + " has two fields " + m.name);
+    }
+    t.members.push_back(std::move(m));
+  }
+  stack->pop_back();
+  types.push_back(std::move(t));
+  return static_cast<int>(types.size() - 1);
+}
+
+// The columns' names of `t` after `prefix`, up to kMaxFormatColumns in all.
+void RosMessageType::Impl::Name(const Type& t, const std::string& prefix,
+                                std::vector<std::string>* out) const {
+  for (const Member& m : t.members) {
+    if (out->size() >= kMaxFormatColumns) return;
+    if (m.kind == Kind::kString || m.array == Array::kVariable) continue;
+    const std::string base = prefix + m.name;
+    const std::size_t n = m.array == Array::kFixed ? m.count : 1;
+    if (m.kind == Kind::kStruct && types[std::size_t(m.type)].columns == 0) continue;
+    for (std::size_t i = 0; i < n && out->size() < kMaxFormatColumns; ++i) {
+      const std::string name = m.array == Array::kFixed ? base + Format("[%zu]", i) : base;
+      if (m.kind == Kind::kStruct) {
+        Name(types[std::size_t(m.type)], name + ".", out);
+      } else {
+        out->push_back(name);
+      }
+    }
+  }
+}
+
+namespace {
+
+double Scalar(Kind kind, const unsigned char* p) {
+  switch (kind) {
+    case Kind::kBool:
+    case Kind::kU8:
+      return LoadLittle<std::uint8_t>(p);
+    case Kind::kI8:
+      return LoadLittle<std::int8_t>(p);
+    case Kind::kI16:
+      return LoadLittle<std::int16_t>(p);
+    case Kind::kU16:
+      return LoadLittle<std::uint16_t>(p);
+    case Kind::kI32:
+      return LoadLittle<std::int32_t>(p);
+    case Kind::kU32:
+      return LoadLittle<std::uint32_t>(p);
+    case Kind::kI64:
+      return static_cast<double>(LoadLittle<std::int64_t>(p));
+    case Kind::kU64:
+      return static_cast<double>(LoadLittle<std::uint64_t>(p));
+    case Kind::kF32:
+      return LoadLittle<float>(p);
+    case Kind::kF64:
+      return LoadLittle<double>(p);
+    case Kind::kTime:  // seconds and nanoseconds, in µs
+      return static_cast<double>(LoadLittle<std::uint32_t>(p)) * 1e6 +
+             static_cast<double>(LoadLittle<std::uint32_t>(p + 4)) * 1e-3;
+    case Kind::kDuration:
+      return static_cast<double>(LoadLittle<std::int32_t>(p)) * 1e6 +
+             static_cast<double>(LoadLittle<std::int32_t>(p + 4)) * 1e-3;
+    default:
+      return 0;
+  }
+}
+
+std::size_t SizeOf(Kind kind) {
+  for (const Builtin& b : kBuiltins) {
+    if (b.kind == kind) return b.size;
+  }
+  return 0;
+}
+
+}  // namespace
+
+// One element of member `m` (a scalar, a string, a struct) at p; values beyond `columns_left`
+// (or with `values` null: inside a variable-length array) are not stored.
+bool RosMessageType::Impl::Element(const Member& m, const unsigned char*& p,
+                                   const unsigned char* end, double* values, std::size_t& column,
+                                   std::size_t columns_left) const {
+  if (m.kind == Kind::kStruct) {
+    return Walk(types[std::size_t(m.type)], p, end, values, column, columns_left);
+  }
+  if (m.kind == Kind::kString) {
+    if (end - p < 4) return false;
+    const std::uint32_t n = LoadLittle<std::uint32_t>(p);
+    if (std::size_t(end - p) - 4 < n) return false;
+    p += 4 + n;
+    return true;
+  }
+  const std::size_t size = SizeOf(m.kind);
+  if (std::size_t(end - p) < size) return false;
+  if (values != nullptr && column < columns_left) values[column] = Scalar(m.kind, p);
+  if (values != nullptr) ++column;
+  p += size;
+  return true;
+}
+
+bool RosMessageType::Impl::Walk(const Type& t, const unsigned char*& p, const unsigned char* end,
+                                double* values, std::size_t& column,
+                                std::size_t columns_left) const {
+  for (const Member& m : t.members) {
+    const std::size_t least =
+        m.kind == Kind::kStruct ? types[std::size_t(m.type)].least : SizeOf(m.kind);
+    if (m.array == Array::kNone) {
+      if (!Element(m, p, end, values, column, columns_left)) return false;
+      continue;
+    }
+    std::size_t n = m.count;
+    double* into = values;
+    if (m.array == Array::kVariable) {
+      if (end - p < 4) return false;
+      n = LoadLittle<std::uint32_t>(p);
+      p += 4;
+      into = nullptr;  // not columns
+    }
+    if (least == 0) continue;  // elements of nothing (an empty type)
+    if (n > std::size_t(end - p) / least) return false;
+    if (m.kind != Kind::kStruct && m.kind != Kind::kString && into == nullptr) {
+      p += n * least;  // fixed-size scalars, skipped whole
+      continue;
+    }
+    for (std::size_t i = 0; i < n; ++i) {
+      if (!Element(m, p, end, into, column, columns_left)) return false;
+    }
+  }
+  return true;
+}
+
+RosMessageType::RosMessageType(std::string_view type, std::string_view definition)
+    : impl_(std::make_unique<Impl>()) {
+  // Sections: the type's own, then one per "MSG: name" after a line of '='.
+  std::string current(type);
+  std::size_t begin = 0;
+  bool separator = false;
+  for (std::size_t at = 0; at <= definition.size();) {
+    const std::size_t eol = std::min(definition.find('\n', at), definition.size());
+    const std::string_view line = Trim(definition.substr(at, eol - at));
+    const bool rule = line.size() >= 3 && line.find_first_not_of('=') == std::string_view::npos;
+    if (rule || eol == definition.size()) {
+      const std::size_t stop = rule ? at : definition.size();
+      if (!separator) impl_->sections.emplace(current, definition.substr(begin, stop - begin));
+      separator = rule;
+    } else if (separator && line.substr(0, 4) == "MSG:") {
+      current = std::string(Trim(line.substr(4)));
+      begin = eol + 1;
+      separator = false;
+    } else if (separator && !line.empty()) {
+      throw DataError("the definition of " + std::string(type) +
+                      " has a section that does not begin \"MSG: package/Type\"");
+    }
+    at = eol + 1;
+  }
+  std::vector<std::string> stack;
+  impl_->types.reserve(16);
+  const int own = impl_->Resolve(std::string(type), &stack);
+  // The message's own type first: Resolve appends each type after those it uses.
+  std::swap(impl_->types[0], impl_->types[std::size_t(own)]);
+  for (Type& t : impl_->types) {
+    for (Member& m : t.members) {
+      if (m.type == 0) {
+        m.type = own;
+      } else if (m.type == own) {
+        m.type = 0;
+      }
+    }
+  }
+  auto names = std::make_shared<std::vector<std::string>>();
+  impl_->Name(impl_->types[0], "", names.get());
+  const auto stamp = std::find(names->begin(), names->end(), "header.stamp");
+  const Type& own_type = impl_->types[0];
+  if (stamp != names->end() && !own_type.members.empty() && own_type.members[0].name == "header" &&
+      own_type.members[0].kind == Kind::kStruct &&
+      impl_->types[std::size_t(own_type.members[0].type)].name == "std_msgs/Header") {
+    impl_->stamp = std::size_t(stamp - names->begin());
+  }
+  impl_->columns = std::move(names);
+  impl_->sections.clear();
+}
+
+RosMessageType::~RosMessageType() = default;
+RosMessageType::RosMessageType(RosMessageType&&) noexcept = default;
+
+const std::string& RosMessageType::name() const { return impl_->types[0].name; }
+const std::shared_ptr<const std::vector<std::string>>& RosMessageType::columns() const {
+  return impl_->columns;
+}
+std::optional<std::size_t> RosMessageType::stamp() const { return impl_->stamp; }
+
+std::optional<std::string> RosMessageType::Decode(const unsigned char* p, std::size_t n,
+                                                  double* values) const {
+  const unsigned char* at = p;
+  std::size_t column = 0;
+  if (!impl_->Walk(impl_->types[0], at, p + n, values, column, impl_->columns->size())) {
+    return Format("a %zu-byte message, shorter than its fields", n);
+  }
+  if (at != p + n) {
+    return Format("a %zu-byte message whose fields end after %zu bytes", n,
+                  static_cast<std::size_t>(at - p));
+  }
+  return std::nullopt;
+}
+
+}  // namespace accelcal::internal

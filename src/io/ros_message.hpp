@@ -1,0 +1,43 @@
+#pragma once
+// A ROS message type read from its definition text, as a bag carries it (ROS 1 bag connection
+// headers' message_definition: the type's own fields, then each type it uses after a line of
+// '=' and "MSG: package/Type"), and its messages decoded from ROS 1 serialisation (ROS wiki,
+// "msg" and "roslib/Serialization": little-endian, packed, strings and variable-length arrays
+// preceded by a uint32 count, time and duration as two 32-bit integers).
+
+#include <cstddef>
+#include <memory>
+#include <optional>
+#include <string>
+#include <string_view>
+#include <vector>
+
+namespace accelcal::internal {
+
+class RosMessageType {
+ public:
+  /// Parses the definition of `type` ("sensor_msgs/Imu"). Throws DataError (the reason) for a
+  /// definition that does not parse, uses a type it does not define, or nests a type in itself.
+  RosMessageType(std::string_view type, std::string_view definition);
+  ~RosMessageType();
+  RosMessageType(RosMessageType&&) noexcept;
+
+  const std::string& name() const;
+  /// Its numeric fields flattened as rosbag's tools name them (`header.stamp`,
+  /// `linear_acceleration.x`, `orientation_covariance[0]`): scalars, time and duration, and the
+  /// elements of fixed-length arrays; strings and variable-length arrays are not columns, nor what
+  /// lies beyond the first kMaxFormatColumns.
+  const std::shared_ptr<const std::vector<std::string>>& columns() const;
+  /// The column `header.stamp` (a std_msgs/Header first), if it has one.
+  std::optional<std::size_t> stamp() const;
+
+  /// Decodes one message of `n` bytes at `p` into `values` (one per column; time and duration
+  /// in µs). Returns the reason when its bytes are not one such message (too few, too many).
+  std::optional<std::string> Decode(const unsigned char* p, std::size_t n, double* values) const;
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace accelcal::internal

@@ -1,0 +1,395 @@
+// ROS 1 bag reader (rosbag.hpp).
+#include "io/rosbag.hpp"
+
+#include <array>
+#include <cstring>
+#include <map>
+#include <memory>
+#include <unordered_map>
+
+#include "accelcal/error.hpp"
+#include "core/text_format.hpp"
+#include "io/decompress.hpp"
+#include "io/ros_message.hpp"
+
+namespace accelcal::internal {
+
+namespace {
+
+constexpr char kMagic[] = "#ROSBAG V";
+constexpr char kMagic20[] = "#ROSBAG V2.0\n";
+constexpr std::size_t kMagic20Size = sizeof(kMagic20) - 1;
+
+enum Op : unsigned char {
+  kMessage = 0x02,
+  kBagHeader = 0x03,
+  kIndex = 0x04,
+  kChunk = 0x05,
+  kChunkInfo = 0x06,
+  kConnection = 0x07,
+};
+
+// A record's header is small (a connection's is its topic); its data at most a chunk.
+constexpr std::size_t kMaxHeaderBytes = std::size_t{1} << 20;
+constexpr std::size_t kMaxDataBytes = kMaxDecompressedBytes + (std::size_t{1} << 20);
+
+// A record header's fields, as views into its bytes (a few: a message's are op, conn, time).
+class Fields {
+ public:
+  static constexpr std::size_t kMax = 32;
+  bool Add(std::string_view name, std::string_view value) {
+    for (std::size_t i = 0; i < n_; ++i) {
+      if (field_[i].first == name) {
+        field_[i].second = value;
+        return true;
+      }
+    }
+    if (n_ == kMax) return false;
+    field_[n_++] = {name, value};
+    return true;
+  }
+  const std::string_view* Find(std::string_view name) const {
+    for (std::size_t i = 0; i < n_; ++i) {
+      if (field_[i].first == name) return &field_[i].second;
+    }
+    return nullptr;
+  }
+
+ private:
+  std::array<std::pair<std::string_view, std::string_view>, kMax> field_;
+  std::size_t n_ = 0;
+};
+
+// A connection: a topic's publisher, with its type.
+struct Connection {
+  std::string topic;
+  std::size_t stream = 0;
+};
+
+class Reader {
+ public:
+  Reader(BinaryStream& in, const KeepStream& keep, const StoreColumns& store)
+      : in_(in), keep_(keep), store_(store) {}
+  DecodedLog Read();
+
+ private:
+  [[noreturn]] void Fail(std::uint64_t at, const std::string& why) const {
+    throw InputError(in_.name(), 0,
+                     Format("byte %llu: ", static_cast<unsigned long long>(at)) + VisibleLine(why));
+  }
+  // The fields of the header of `n` bytes at p (a record's header or a connection's data).
+  Fields Parse(const unsigned char* p, std::size_t n, std::uint64_t at) const;
+  // A field of exactly sizeof(T) bytes.
+  template <typename T>
+  T Number(const Fields& f, std::string_view name, std::uint64_t at) const {
+    const std::string_view* v = f.Find(name);
+    if (v == nullptr || v->size() != sizeof(T)) {
+      Fail(at, Format("a record without its %zu-byte field %.*s", sizeof(T),
+                      static_cast<int>(name.size()), name.data()));
+    }
+    return LoadLittle<T>(reinterpret_cast<const unsigned char*>(v->data()));
+  }
+  std::string_view Text(const Fields& f, std::string_view name, std::uint64_t at) const {
+    const std::string_view* v = f.Find(name);
+    if (v == nullptr) Fail(at, "a record without its field " + std::string(name));
+    return *v;
+  }
+  // One record of the bag, or of a chunk (`in_chunk`): `at` its offset for messages, `message_at`
+  // the offset its messages are reported at.
+  void Record(const Fields& header, const unsigned char* data, std::size_t n, std::uint64_t at,
+              bool in_chunk);
+  // The records of a chunk's data (decompressed): whole ones only when `partial` (the file ends
+  // inside it), at `base` in the file when it was not compressed (else at the chunk's offset).
+  std::size_t Records(const unsigned char* p, std::size_t n, std::uint64_t chunk_at, bool exact,
+                      bool partial);
+  void Connect(const Fields& header, const unsigned char* data, std::size_t n, std::uint64_t at);
+  void Message(const Fields& header, const unsigned char* data, std::size_t n, std::uint64_t at);
+
+  BinaryStream& in_;
+  const KeepStream& keep_;
+  const StoreColumns& store_;
+  DecodedLog out_;
+  std::unordered_map<std::uint32_t, Connection> connections_;
+  std::map<std::string, std::size_t> stream_of_;  // topic -> stream
+  // Each stream's type (null when its definition does not parse: then `unreadable` says why).
+  std::vector<std::shared_ptr<const RosMessageType>> types_;
+  std::vector<std::string> type_names_, unreadable_;
+  // Types parsed, by name and definition (a bag repeats a connection's in its index).
+  std::map<std::pair<std::string, std::string>, std::shared_ptr<const RosMessageType>> parsed_;
+  std::vector<unsigned char> chunk_;
+  std::vector<double> scratch_;
+  std::size_t whole_ = 0;  // messages read whole
+};
+
+Fields Reader::Parse(const unsigned char* p, std::size_t n, std::uint64_t at) const {
+  Fields out;
+  for (std::size_t i = 0; i < n;) {
+    if (n - i < 4) Fail(at, "a record header whose last field is cut");
+    const std::uint32_t len = LoadLittle<std::uint32_t>(p + i);
+    if (len > n - i - 4) Fail(at, "a record header field that runs past the header's end");
+    const std::string_view field(reinterpret_cast<const char*>(p + i + 4), len);
+    const std::size_t eq = field.find('=');
+    if (eq == std::string_view::npos) Fail(at, "a record header field without '='");
+    if (!out.Add(field.substr(0, eq), field.substr(eq + 1))) {
+      Fail(at, Format("a record header of more than %zu fields", Fields::kMax));
+    }
+    i += 4 + len;
+  }
+  return out;
+}
+
+void Reader::Connect(const Fields& header, const unsigned char* data, std::size_t n,
+                     std::uint64_t at) {
+  const std::uint32_t id = Number<std::uint32_t>(header, "conn", at);
+  const std::string topic(Text(header, "topic", at));
+  if (const auto known = connections_.find(id); known != connections_.end()) {
+    // The index repeats each connection after the chunks.
+    if (known->second.topic != topic) {
+      Fail(at, Format("connection %u is %s here, %s before", id, topic.c_str(),
+                      known->second.topic.c_str()));
+    }
+    return;
+  }
+  const Fields c = Parse(data, n, at);
+  const std::string type(Text(c, "type", at));
+  const std::string definition(Text(c, "message_definition", at));
+  auto [it, added] = stream_of_.emplace(topic, out_.streams.size());
+  if (!added) {
+    // Another publisher of the topic: it must publish the same type.
+    if (type_names_[it->second] != type) {
+      Fail(at, "the topic " + topic + " is published as " + type_names_[it->second] + " and as " +
+                   type);
+    }
+  } else {
+    std::shared_ptr<const RosMessageType>& parsed = parsed_[{type, definition}];
+    std::string why;
+    if (!parsed) {
+      try {
+        parsed = std::make_shared<const RosMessageType>(type, definition);
+      } catch (const DataError& e) {
+        why = e.what();
+      }
+    }
+    DecodedStream s;
+    s.topic = topic;
+    s.type = type;
+    s.columns = parsed ? parsed->columns() : std::make_shared<const std::vector<std::string>>();
+    s.kept = keep_(s);
+    if (s.kept && !parsed) {
+      Fail(at, "the definition of " + type + " (topic " + topic + ") does not parse: " + why);
+    }
+    if (s.kept) {
+      if (store_) {
+        s.stored = store_(s);
+        for (std::size_t col : s.stored) {
+          if (col >= s.columns->size()) Fail(at, "internal: a stored column beyond the type's");
+        }
+      } else {
+        for (std::size_t col = 0; col < s.columns->size(); ++col) s.stored.push_back(col);
+      }
+    }
+    out_.streams.push_back(std::move(s));
+    types_.push_back(parsed);
+    type_names_.push_back(type);
+    unreadable_.push_back(why);
+  }
+  connections_.emplace(id, Connection{topic, it->second});
+}
+
+void Reader::Message(const Fields& header, const unsigned char* data, std::size_t n,
+                     std::uint64_t at) {
+  const std::uint32_t id = Number<std::uint32_t>(header, "conn", at);
+  const std::uint64_t time = Number<std::uint64_t>(header, "time", at);
+  const auto c = connections_.find(id);
+  if (c == connections_.end()) {
+    Fail(at,
+         Format("a message of connection %u, which no connection record defined before it", id));
+  }
+  const std::size_t index = c->second.stream;
+  DecodedStream& s = out_.streams[index];
+  // The record's time: seconds and nanoseconds, in µs.
+  const std::uint64_t t_us = (time & 0xffffffffu) * 1000000u + (time >> 32) / 1000u;
+  if (s.messages == 0) s.first_us = t_us;
+  s.last_us = t_us;
+  ++s.messages;
+  ++whole_;
+  if (!s.kept) return;
+  const RosMessageType& type = *types_[index];
+  scratch_.resize(s.columns->size());
+  if (const std::optional<std::string> why = type.Decode(data, n, scratch_.data())) {
+    Fail(at, "a message of " + s.topic + " (" + type.name() + "): " + *why);
+  }
+  for (std::size_t col : s.stored) s.values.push_back(scratch_[col]);
+  s.offset.push_back(at);
+}
+
+void Reader::Record(const Fields& header, const unsigned char* data, std::size_t n,
+                    std::uint64_t at, bool in_chunk) {
+  const std::string_view op = Text(header, "op", at);
+  if (op.size() != 1) Fail(at, "a record whose op is not one byte");
+  switch (static_cast<unsigned char>(op[0])) {
+    case kConnection:
+      Connect(header, data, n, at);
+      break;
+    case kMessage:
+      Message(header, data, n, at);
+      break;
+    case kBagHeader:
+    case kIndex:
+    case kChunkInfo:
+      if (in_chunk) Fail(at, Format("a chunk holds a record of op 0x%02x", op[0]));
+      break;
+    default:
+      Fail(at, Format("a record of op 0x%02x, which ROS bag 2.0 does not define",
+                      static_cast<unsigned char>(op[0])));
+  }
+}
+
+std::size_t Reader::Records(const unsigned char* p, std::size_t n, std::uint64_t chunk_at,
+                            bool exact, bool partial) {
+  std::size_t i = 0;
+  while (i < n) {
+    const std::uint64_t at = exact ? chunk_at + i : chunk_at;
+    if (n - i < 4) break;
+    const std::uint32_t header_len = LoadLittle<std::uint32_t>(p + i);
+    if (header_len > n - i - 4 || n - i - 4 - header_len < 4) break;
+    const std::uint32_t data_len = LoadLittle<std::uint32_t>(p + i + 4 + header_len);
+    if (data_len > n - i - 8 - header_len) break;
+    const Fields header = Parse(p + i + 4, header_len, at);
+    const std::string_view op = Text(header, "op", at);
+    if (op.size() == 1 && op[0] == kChunk) Fail(at, "a chunk inside a chunk");
+    Record(header, p + i + 8 + header_len, data_len, at, true);
+    i += 8 + header_len + data_len;
+  }
+  if (i != n && !partial) {
+    Fail(exact ? chunk_at + i : chunk_at,
+         Format("a chunk whose records do not fill it (a record runs past its end, %zu bytes "
+                "into its %zu)",
+                i, n));
+  }
+  return i;
+}
+
+DecodedLog Reader::Read() {
+  if (!in_.Need(kMagic20Size) || std::memcmp(in_.data(), kMagic20, kMagic20Size) != 0) {
+    std::string version;
+    for (std::size_t i = sizeof(kMagic) - 1; i < in_.available() && in_.data()[i] != '\n'; ++i) {
+      version += static_cast<char>(in_.data()[i]);
+      if (version.size() > 8) break;
+    }
+    Fail(0, "a ROS bag of version " + version +
+                ": accelcal reads version 2.0, which ROS 1 writes since 2010 (rosbag fix "
+                "migrates an older one)");
+  }
+  in_.Skip(kMagic20Size);
+  while (true) {
+    const std::uint64_t at = in_.offset();
+    if (!in_.Need(4)) {
+      if (in_.available() > 0) {
+        out_.truncated = Format("the bag ends inside a record at byte %llu",
+                                static_cast<unsigned long long>(at));
+        in_.Skip(in_.available());
+      }
+      break;
+    }
+    const std::uint32_t header_len = LoadLittle<std::uint32_t>(in_.data());
+    if (header_len == 0) {
+      // Zeros to the end: space never written (a recorder killed, a disk full).
+      std::uint64_t nonzero = 0;
+      if (!in_.ZerosToEnd(&nonzero)) {
+        Fail(at, Format("a record with an empty header where zeros to the end would mean space "
+                        "never written, but byte %llu is not zero: the file is corrupt here",
+                        static_cast<unsigned long long>(nonzero)));
+      }
+      out_.truncated = BinaryStream::ZerosMessage(at);
+      break;
+    }
+    if (header_len > kMaxHeaderBytes) {
+      Fail(at, Format("a record header of %u bytes: the file is corrupt here", header_len));
+    }
+    if (!in_.Need(8 + std::size_t(header_len))) {
+      out_.truncated = Format("the bag ends inside a record header at byte %llu",
+                              static_cast<unsigned long long>(at));
+      in_.Skip(in_.available());
+      break;
+    }
+    bool chunk = false;
+    {
+      const Fields header = Parse(in_.data() + 4, header_len, at);
+      const std::string_view op = Text(header, "op", at);
+      chunk = op.size() == 1 && op[0] == kChunk;
+    }  // its views end here: Need below may move the bytes
+    const std::size_t data_len = LoadLittle<std::uint32_t>(in_.data() + 4 + header_len);
+    if (data_len > kMaxDataBytes) {
+      Fail(at, Format("a record of %zu bytes, more than the %zu MiB accelcal reads in one",
+                      data_len, kMaxDataBytes >> 20));
+    }
+    const std::size_t length = 8 + header_len + data_len;
+    const bool whole = in_.Need(length);
+    if (!whole && !chunk) {
+      out_.truncated = Format(
+          "the bag ends inside a record at byte %llu (%zu of its %zu bytes "
+          "there)",
+          static_cast<unsigned long long>(at), in_.available(), length);
+      in_.Skip(in_.available());
+      break;
+    }
+    const Fields fields = Parse(in_.data() + 4, header_len, at);
+    const unsigned char* data = in_.data() + 8 + header_len;
+    if (chunk) {
+      const std::string_view compression = Text(fields, "compression", at);
+      const std::size_t size = Number<std::uint32_t>(fields, "size", at);
+      Compression c = Compression::kNone;
+      if (compression == "bz2") {
+        c = Compression::kBz2;
+      } else if (compression == "lz4") {
+        c = Compression::kLz4Frame;
+      } else if (compression != "none") {
+        Fail(at, "a chunk compressed as " + std::string(compression) +
+                     ", which ROS bags do not use (none, bz2, lz4)");
+      }
+      if (!whole) {
+        // The bag ends inside it: an uncompressed chunk's whole records are read.
+        const std::size_t there = in_.available() - (8 + header_len);
+        const std::size_t read =
+            c == Compression::kNone ? Records(data, there, at + 8 + header_len, true, true) : 0;
+        out_.truncated = Format(
+            "the bag ends inside a chunk at byte %llu (%zu of its %zu bytes "
+            "there%s)",
+            static_cast<unsigned long long>(at), there, data_len,
+            c == Compression::kNone ? Format("; its first %zu bytes of records read", read).c_str()
+                                    : ", compressed: none of its messages read");
+        in_.Skip(in_.available());
+        break;
+      }
+      if (c == Compression::kNone) {
+        if (size != data_len)
+          Fail(at, Format("an uncompressed chunk of %zu bytes that says %zu", data_len, size));
+        Records(data, data_len, at + 8 + header_len, true, false);
+      } else {
+        if (const std::optional<std::string> why = Decompress(c, data, data_len, size, &chunk_)) {
+          Fail(at, "a chunk that does not decompress: " + *why);
+        }
+        Records(chunk_.data(), chunk_.size(), at, false, false);
+      }
+    } else {
+      Record(fields, data, data_len, at, false);
+    }
+    in_.Skip(length);
+  }
+  if (out_.truncated) *out_.truncated += Format(", after %zu whole messages", whole_);
+  out_.bytes = in_.offset();
+  return std::move(out_);
+}
+
+}  // namespace
+
+bool IsRosBag(std::string_view first_bytes) {
+  return first_bytes.substr(0, sizeof(kMagic) - 1) == kMagic;
+}
+
+DecodedLog ReadRosBag(BinaryStream& in, const KeepStream& keep, const StoreColumns& store) {
+  return Reader(in, keep, store).Read();
+}
+
+}  // namespace accelcal::internal

@@ -1,0 +1,391 @@
+// ROS 1 bags at the byte level (rosbag.hpp, ros_message.hpp, decompress.hpp): message definitions
+// flattened and decoded with known answers; bags built record by record here, as the
+// specification ("Bags/Format/2.0") lays them out, read whole, cut, killed and corrupt. The bags
+// of ROS's own writer are tests/rosbag_test.py's.
+#include <bzlib.h>
+#include <lz4frame.h>
+
+#include <cstring>
+#include <string>
+#include <vector>
+
+#include <gtest/gtest.h>
+
+#include "accelcal/error.hpp"
+#include "io/binary_stream.hpp"
+#include "io/decompress.hpp"
+#include "io/ros_message.hpp"
+#include "io/rosbag.hpp"
+
+namespace accelcal::internal {
+namespace {
+
+// --- message definitions -----------------------------------------------------------------------
+
+// A type with what a definition may hold: comments, constants, a Header, nested types of the same
+// package and of another, fixed and variable arrays, strings, time and duration.
+const char kDefinition[] =
+    "# a test message\n"
+    "uint8 MODE_A=1   # a constant\n"
+    "string NAME=x # y\n"
+    "Header header\n"
+    "Pair[2] pairs\n"
+    "float32[] ignored   # variable: not columns\n"
+    "string label\n"
+    "geometry_msgs/Vector3 v\n"
+    "int16 small\n"
+    "duration span\n"
+    "bool flag\n"
+    "================================================================================\n"
+    "MSG: std_msgs/Header\n"
+    "uint32 seq\n"
+    "time stamp\n"
+    "string frame_id\n"
+    "================================================================================\n"
+    "MSG: test_msgs/Pair\n"
+    "int8 a\n"
+    "uint64 b\n"
+    "================================================================================\n"
+    "MSG: geometry_msgs/Vector3\n"
+    "float64 x\n"
+    "float64 y\n"
+    "float64 z\n";
+
+template <typename T>
+void Put(std::string* out, T v) {
+  char b[sizeof(T)];
+  std::memcpy(b, &v, sizeof(T));
+  out->append(b, sizeof(T));
+}
+void PutString(std::string* out, const std::string& s) {
+  Put<std::uint32_t>(out, static_cast<std::uint32_t>(s.size()));
+  *out += s;
+}
+
+// One message of kDefinition, serialised as ROS 1 does.
+std::string TestMessage() {
+  std::string m;
+  Put<std::uint32_t>(&m, 7);           // header.seq
+  Put<std::uint32_t>(&m, 1700000000);  // header.stamp: seconds
+  Put<std::uint32_t>(&m, 250000500);   //   and nanoseconds
+  PutString(&m, "imu_link");
+  Put<std::int8_t>(&m, -3);  // pairs[0]
+  Put<std::uint64_t>(&m, 40);
+  Put<std::int8_t>(&m, 5);  // pairs[1]
+  Put<std::uint64_t>(&m, 41);
+  Put<std::uint32_t>(&m, 2);  // ignored: two float32
+  Put<float>(&m, 1.5f);
+  Put<float>(&m, 2.5f);
+  PutString(&m, "");
+  Put<double>(&m, 0.1);  // v
+  Put<double>(&m, -9.81);
+  Put<double>(&m, 3);
+  Put<std::int16_t>(&m, -300);
+  Put<std::int32_t>(&m, -2);  // span: -2 s + 500 ns
+  Put<std::int32_t>(&m, 500);
+  Put<std::uint8_t>(&m, 1);
+  return m;
+}
+
+TEST(RosMessage, FlattensAndDecodesEveryKindOfField) {
+  const RosMessageType type("test_msgs/Test", kDefinition);
+  EXPECT_EQ(type.name(), "test_msgs/Test");
+  const std::vector<std::string> want = {"header.seq", "header.stamp", "pairs[0].a", "pairs[0].b",
+                                         "pairs[1].a", "pairs[1].b",   "v.x",        "v.y",
+                                         "v.z",        "small",        "span",       "flag"};
+  EXPECT_EQ(*type.columns(), want);
+  ASSERT_TRUE(type.stamp().has_value());
+  EXPECT_EQ(*type.stamp(), 1u);
+  const std::string m = TestMessage();
+  std::vector<double> v(want.size());
+  const auto* p = reinterpret_cast<const unsigned char*>(m.data());
+  ASSERT_FALSE(type.Decode(p, m.size(), v.data()).has_value());
+  // Times in µs: 1700000000 s and 250000500 ns; -2 s and 500 ns.
+  EXPECT_EQ(v, (std::vector<double>{7, 1700000000250000.5, -3, 40, 5, 41, 0.1, -9.81, 3, -300,
+                                    -1999999.5, 1}));
+  // A byte short, a byte long: each named.
+  EXPECT_EQ(*type.Decode(p, m.size() - 1, v.data()), "a 92-byte message, shorter than its fields");
+  const std::string longer = m + "x";
+  EXPECT_EQ(
+      *type.Decode(reinterpret_cast<const unsigned char*>(longer.data()), longer.size(), v.data()),
+      "a 94-byte message whose fields end after 93 bytes");
+  // A variable array whose count runs past the message.
+  std::string lying = m;
+  const std::size_t count_at = 4 + 8 + 4 + 8 + 2 * 9;
+  lying[count_at] = '\x7f';
+  EXPECT_TRUE(
+      type.Decode(reinterpret_cast<const unsigned char*>(lying.data()), lying.size(), v.data())
+          .has_value());
+}
+
+TEST(RosMessage, RefusesDefinitionsThatDoNotHold) {
+  const auto why = [](const char* type, const char* definition) {
+    try {
+      RosMessageType t(type, definition);
+    } catch (const DataError& e) {
+      return std::string(e.what());
+    }
+    return std::string("accepted");
+  };
+  EXPECT_EQ(why("a/B", "float64 x\nVector3 v\n"),
+            "the definition does not define the type a/Vector3 it uses");
+  EXPECT_EQ(why("a/B", "a/B inner\n"), "the message type a/B contains itself");
+  EXPECT_EQ(why("a/B", "a/C c\n===\nMSG: a/C\na/B back\n"), "the message type a/B contains itself");
+  EXPECT_EQ(why("a/B", "float64 x\nint8 x\n"), "the definition of a/B has two fields x");
+  EXPECT_EQ(why("a/B", "float64\n"),
+            "the definition of a/B has the line \"float64\", not a type "
+            "and a name");
+  EXPECT_EQ(why("a/B", "float64[3x] v\n"),
+            "the definition of a/B has the array type \"float64[3x]\"");
+  EXPECT_EQ(why("a/B", "float64 x\n===\nfloat64 y\n"),
+            "the definition of a/B has a section that does not begin \"MSG: package/Type\"");
+  EXPECT_EQ(why("a/B", "float64 x-y\n"), "the definition of a/B names a field \"x-y\"");
+}
+
+// A huge fixed array is columns up to the cap; the message is still walked whole.
+TEST(RosMessage, CapsTheColumnsOfAHugeArray) {
+  const RosMessageType type("a/Big", "float32[5000] v\nuint8 last\n");
+  EXPECT_EQ(type.columns()->size(), kMaxFormatColumns);
+  EXPECT_EQ(type.columns()->back(), "v[4095]");
+  std::string m(5000 * 4, '\0');
+  m += '\x09';
+  std::vector<double> v(type.columns()->size());
+  EXPECT_FALSE(type.Decode(reinterpret_cast<const unsigned char*>(m.data()), m.size(), v.data())
+                   .has_value());
+  // Nested fixed arrays that would overflow a count are bounded too, and walk no further than
+  // the message's bytes.
+  const RosMessageType nested(
+      "a/N", "a/M[4000000000] m\n===\nMSG: a/M\na/L[4000000000] l\n===\nMSG: a/L\nfloat64 x\n");
+  EXPECT_EQ(nested.columns()->size(), kMaxFormatColumns);
+  EXPECT_TRUE(nested.Decode(reinterpret_cast<const unsigned char*>(m.data()), m.size(), v.data())
+                  .has_value());
+}
+
+// --- bags, record by record --------------------------------------------------------------------
+
+std::string Field(const std::string& name, const std::string& value) {
+  std::string f;
+  PutString(&f, name + "=" + value);
+  return f;
+}
+template <typename T>
+std::string Bytes(T v) {
+  std::string s;
+  Put<T>(&s, v);
+  return s;
+}
+std::string Record(const std::string& header, const std::string& data) {
+  std::string r;
+  PutString(&r, header);
+  PutString(&r, data);
+  return r;
+}
+std::string Op(char op) { return Field("op", std::string(1, op)); }
+
+const char kVector3[] = "float64 x\nfloat64 y\nfloat64 z\n";
+
+std::string Connection(std::uint32_t id, const std::string& topic) {
+  return Record(Op(0x07) + Field("conn", Bytes<std::uint32_t>(id)) + Field("topic", topic),
+                Field("topic", topic) + Field("type", "geometry_msgs/Vector3") +
+                    Field("md5sum", "4a842b65f413084dc2b10fb484ea7f17") +
+                    Field("message_definition", kVector3));
+}
+std::string Message(std::uint32_t id, std::uint32_t sec, std::uint32_t nsec, double x) {
+  std::string data;
+  Put<double>(&data, x);
+  Put<double>(&data, 2 * x);
+  Put<double>(&data, 3 * x);
+  return Record(Op(0x02) + Field("conn", Bytes<std::uint32_t>(id)) +
+                    Field("time", Bytes<std::uint32_t>(sec) + Bytes<std::uint32_t>(nsec)),
+                data);
+}
+std::string Chunk(const std::string& records, const std::string& compression = "none") {
+  std::string data = records;
+  if (compression == "bz2") {
+    std::vector<char> out(records.size() + records.size() / 100 + 700);
+    unsigned n = static_cast<unsigned>(out.size());
+    EXPECT_EQ(BZ2_bzBuffToBuffCompress(out.data(), &n, const_cast<char*>(records.data()),
+                                       static_cast<unsigned>(records.size()), 9, 0, 0),
+              BZ_OK);
+    data.assign(out.data(), n);
+  } else if (compression == "lz4") {
+    std::vector<char> out(LZ4F_compressFrameBound(records.size(), nullptr));
+    const std::size_t n =
+        LZ4F_compressFrame(out.data(), out.size(), records.data(), records.size(), nullptr);
+    data.assign(out.data(), n);
+  }
+  return Record(Op(0x05) + Field("compression", compression) +
+                    Field("size", Bytes<std::uint32_t>(static_cast<std::uint32_t>(records.size()))),
+                data);
+}
+std::string BagHeader() {
+  std::string header = Op(0x03) + Field("index_pos", Bytes<std::uint64_t>(0)) +
+                       Field("conn_count", Bytes<std::uint32_t>(0)) +
+                       Field("chunk_count", Bytes<std::uint32_t>(0));
+  return "#ROSBAG V2.0\n" + Record(header, std::string(64, ' '));
+}
+
+DecodedLog Read(const std::string& bag) {
+  BinaryStream in(bag, "test.bag");
+  return ReadRosBag(in, [](const DecodedStream&) { return true; });
+}
+std::string Why(const std::string& bag) {
+  try {
+    Read(bag);
+  } catch (const InputError& e) {
+    return e.reason();
+  }
+  return "read";
+}
+
+// Two topics, a message each in every chunk compression.
+std::string TwoTopics(const std::string& compression) {
+  return BagHeader() +
+         Chunk(Connection(0, "/a") + Message(0, 10, 5000, 1.0) + Connection(3, "/b") +
+                   Message(3, 10, 6000, 4.0) + Message(0, 11, 0, 2.0),
+               compression) +
+         Chunk(Message(0, 12, 999, 8.0), compression);
+}
+
+TEST(RosBag, ReadsEveryChunkCompression) {
+  for (const char* compression : {"none", "bz2", "lz4"}) {
+    const DecodedLog log = Read(TwoTopics(compression));
+    ASSERT_EQ(log.streams.size(), 2u) << compression;
+    const DecodedStream& a = log.streams[0];
+    EXPECT_EQ(a.topic, "/a");
+    EXPECT_EQ(a.type, "geometry_msgs/Vector3");
+    EXPECT_EQ(a.instance, 0);
+    EXPECT_EQ(*a.columns, (std::vector<std::string>{"x", "y", "z"}));
+    EXPECT_EQ(a.messages, 3u);
+    EXPECT_EQ(a.values, (std::vector<double>{1, 2, 3, 2, 4, 6, 8, 16, 24}));
+    // Record times in µs (10 s + 5000 ns, 12 s + 999 ns).
+    EXPECT_EQ(a.first_us, 10000005u);
+    EXPECT_EQ(a.last_us, 12000000u);
+    EXPECT_EQ(log.streams[1].values, (std::vector<double>{4, 8, 12}));
+    EXPECT_FALSE(log.truncated.has_value());
+  }
+}
+
+TEST(RosBag, NamesTheByteOfWhatIsWrong) {
+  const std::string head = BagHeader();
+  const std::size_t at = head.size();
+  EXPECT_EQ(Why("#ROSBAG V1.2\n..."),
+            "byte 0: a ROS bag of version 1.2: accelcal reads version 2.0, which ROS 1 writes "
+            "since 2010 (rosbag fix migrates an older one)");
+  // In an uncompressed chunk, a record's own byte; in a compressed one, the chunk's.
+  const std::string orphan = Message(4, 1, 0, 1.0);
+  EXPECT_EQ(Why(head + Chunk(orphan)),
+            "byte " + std::to_string(at + Chunk(orphan).size() - orphan.size()) +
+                ": a message of connection 4, which no connection record defined before it");
+  EXPECT_EQ(Why(head + Chunk(orphan, "bz2")),
+            "byte " + std::to_string(at) +
+                ": a message of connection 4, which no connection record defined before it");
+  EXPECT_EQ(
+      Why(head + Record(Op(0x09), "")),
+      "byte " + std::to_string(at) + ": a record of op 0x09, which ROS bag 2.0 does not define");
+  const std::size_t inner = at + Chunk(Chunk("")).size() - Chunk("").size();
+  EXPECT_EQ(Why(head + Chunk(Chunk(""))),
+            "byte " + std::to_string(inner) + ": a chunk inside a chunk");
+  EXPECT_EQ(Why(head + Record(Op(0x05) + Field("compression", "zstd") +
+                                  Field("size", Bytes<std::uint32_t>(0)),
+                              "")),
+            "byte " + std::to_string(at) +
+                ": a chunk compressed as zstd, which ROS bags do not use (none, bz2, lz4)");
+  // A chunk whose size is not what it holds, compressed and not.
+  std::string wrong = Chunk(Connection(0, "/a"), "lz4");
+  const std::size_t size_at = wrong.find("size=") + 5;
+  wrong[size_at] = static_cast<char>(wrong[size_at] + 1);
+  EXPECT_NE(Why(head + wrong).find("a chunk that does not decompress: the lz4 frame holds"),
+            std::string::npos)
+      << Why(head + wrong);
+  // A message whose bytes are not its type's.
+  std::string bad = Connection(0, "/a") + Message(0, 1, 0, 1.0);
+  bad.erase(bad.size() - 1);
+  const std::size_t data_len_at = bad.size() - 23 - 4;
+  bad[data_len_at] = 23;
+  EXPECT_NE(Why(head + Chunk(bad))
+                .find("a message of /a (geometry_msgs/Vector3): a 23-byte "
+                      "message, shorter than its fields"),
+            std::string::npos)
+      << Why(head + Chunk(bad));
+  // A record length beyond any chunk's is refused before it is read.
+  std::string huge = head;
+  Put<std::uint32_t>(&huge, 8);
+  Put<std::uint32_t>(&huge, 4);
+  huge += "op=\x05";
+  Put<std::uint32_t>(&huge, 0xfffffff0u);
+  EXPECT_NE(Why(huge).find("more than the 257 MiB accelcal reads in one"), std::string::npos)
+      << Why(huge);
+}
+
+// A recorder killed leaves its open chunk with no length (0) and its records after it; a bag cut
+// short keeps what is whole; zeros at the end are space never written.
+TEST(RosBag, ReadsWhatAKilledOrCutRecordingLeft) {
+  const std::string killed =
+      BagHeader() + Chunk(Connection(0, "/a") + Message(0, 1, 0, 1.0)) +
+      Record(Op(0x05) + Field("compression", "none") + Field("size", Bytes<std::uint32_t>(0)), "") +
+      Message(0, 2, 0, 2.0) + Message(0, 3, 0, 3.0);
+  DecodedLog log = Read(killed);
+  ASSERT_EQ(log.streams.size(), 1u);
+  EXPECT_EQ(log.streams[0].messages, 3u);
+  EXPECT_FALSE(log.truncated.has_value());
+
+  const std::string whole = TwoTopics("none");
+  const std::string cut = whole.substr(0, whole.size() - 10);
+  log = Read(cut);
+  ASSERT_TRUE(log.truncated.has_value());
+  EXPECT_NE(log.truncated->find("the bag ends inside a chunk at byte"), std::string::npos)
+      << *log.truncated;
+  EXPECT_EQ(log.streams[0].messages, 2u);  // the last chunk's message is lost
+
+  // The cut inside the first, uncompressed chunk: its whole records are read.
+  const std::string first_cut =
+      BagHeader() + Chunk(Connection(0, "/a") + Message(0, 1, 0, 1.0) + Message(0, 2, 0, 2.0));
+  log = Read(first_cut.substr(0, first_cut.size() - 5));
+  ASSERT_TRUE(log.truncated.has_value());
+  EXPECT_NE(log.truncated->find("after 1 whole messages"), std::string::npos) << *log.truncated;
+  EXPECT_EQ(log.streams[0].values, (std::vector<double>{1, 2, 3}));
+
+  const std::string zeros = whole + std::string(5000, '\0');
+  log = Read(zeros);
+  ASSERT_TRUE(log.truncated.has_value());
+  EXPECT_EQ(log.streams[0].messages, 3u);
+  std::string not_zeros = zeros;
+  not_zeros[whole.size() + 4000] = 1;
+  EXPECT_NE(Why(not_zeros).find("is not zero: the file is corrupt here"), std::string::npos);
+}
+
+// --- decompression -----------------------------------------------------------------------------
+
+TEST(Decompress, ExactlyTheSizeSaid) {
+  std::string text;
+  for (int i = 0; i < 5000; ++i) text += "imu sample " + std::to_string(i) + "\n";
+  for (const char* compression : {"bz2", "lz4"}) {
+    // The chunk record's data: the compressed bytes.
+    const std::string chunk = Chunk(text, compression);
+    const std::size_t header_len =
+        LoadLittle<std::uint32_t>(reinterpret_cast<const unsigned char*>(chunk.data()));
+    const std::string data = chunk.substr(8 + header_len);
+    const auto* p = reinterpret_cast<const unsigned char*>(data.data());
+    const Compression c =
+        std::string(compression) == "bz2" ? Compression::kBz2 : Compression::kLz4Frame;
+    std::vector<unsigned char> out;
+    ASSERT_FALSE(Decompress(c, p, data.size(), text.size(), &out).has_value()) << compression;
+    EXPECT_EQ(std::string(out.begin(), out.end()), text);
+    // Said longer or shorter than it is, followed by a byte, cut: each refused.
+    EXPECT_TRUE(Decompress(c, p, data.size(), text.size() + 1, &out).has_value());
+    EXPECT_TRUE(Decompress(c, p, data.size(), text.size() - 1, &out).has_value());
+    const std::string more = data + "x";
+    EXPECT_TRUE(Decompress(c, reinterpret_cast<const unsigned char*>(more.data()), more.size(),
+                           text.size(), &out)
+                    .has_value());
+    EXPECT_TRUE(Decompress(c, p, data.size() - 3, text.size(), &out).has_value());
+    // More than a block may hold, before anything is allocated.
+    EXPECT_EQ(*Decompress(c, p, data.size(), kMaxDecompressedBytes + 1, &out),
+              "a block of 268435457 bytes once decompressed, more than the 256 MiB accelcal "
+              "reads in one");
+  }
+}
+
+}  // namespace
+}  // namespace accelcal::internal

@@ -13,6 +13,7 @@ packages=(
   clang libclang-rt-14-dev llvm-14  # sanitizers, libFuzzer and the symbolizer (scripts/sanitize.sh)
   libbz2-dev liblz4-dev  # ROS bag chunks (bz2, lz4)
   python3-rosbag python3-sensor-msgs  # ROS's own writer makes the bags the tests read
+  libmatio-dev python3-scipy  # MATLAB MAT-files; SciPy writes those the tests read
   locales       # the locale tests write numbers under de_DE.UTF-8 (decimal comma), generated below
 )
 missing=()

@@ -42,7 +42,8 @@ void AddInputOptions(CLI::App* cmd, InputArgs* in, bool with_kind) {
                   "i, instance, multi_id, device_id or imu column; a ULog topic's multi id)");
   cmd->add_option("--topic", in->topic,
                   "the stream to read from a binary log (a ULog topic such as sensor_accel, a "
-                  "DataFlash message such as IMU; default: its only accelerometer stream)");
+                  "DataFlash message such as IMU, a ROS bag's topic; default: its only "
+                  "accelerometer stream), or a MAT-file's variable (default: its only matrix)");
 }
 
 // The gyroscope's stream in a binary log, for the commands that read its rates (--gyro).
@@ -290,7 +291,8 @@ int accelcal::cli::RunCommandLine(int argc, char** argv) {
   InspectArgs ins;
   CLI::App* inspect = app.add_subcommand(
       "inspect",
-      "what a binary log (PX4 ULog, ArduPilot DataFlash) holds: its streams, rates, parameters");
+      "what a binary log (PX4 ULog, ArduPilot DataFlash, ROS bag, MAT-file) holds: its streams, "
+      "rates, parameters");
   if (Wanted(inspect)) {
     inspect->add_option("LOG", ins.path, "binary log")->required();
     inspect->add_flag("--json", ins.json, "machine-readable output");

@@ -158,6 +158,10 @@ InputData ReadGyroLog(const InputArgs& input, const std::string& gyro,
         e.file(), e.line(),
         WithFlags(e.reason(), {{"the columns option's entry", "--gyro-columns entry"},
                                {"the columns option", "--gyro-columns"},
+                               {"the topic and instance options", "--gyro-topic and --instance"},
+                               {"the topic option", "--gyro-topic"},
+                               {"the time unit option", "--time-unit"},
+                               {"the rate option", "--rate"},
                                {"the other stream of this file", "the accelerometer"}}));
   }
 }
@@ -284,6 +288,10 @@ std::string WithFlags(std::string message,
 std::string WithReaderFlags(const std::string& message) {
   return WithFlags(message, {{"the columns option's entry", "--columns entry"},
                              {"the columns option", "--columns"},
+                             {"the topic and instance options", "--topic and --instance"},
+                             {"the topic option", "--topic"},
+                             {"the time unit option", "--time-unit"},
+                             {"the rate option", "--rate"},
                              {"input kind \"raw\"", "--input-kind raw"}});
 }
 

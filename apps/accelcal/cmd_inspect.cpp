@@ -41,7 +41,8 @@ int RunInspect(const InspectArgs& args) {
   } else {
     const char* format = log.format == LogFormat::kULog        ? "PX4 ULog"
                          : log.format == LogFormat::kDataFlash ? "ArduPilot DataFlash"
-                                                               : "ROS bag";
+                         : log.format == LogFormat::kRosBag    ? "ROS bag"
+                                                               : "MATLAB MAT-file";
     out += Format("%s: %s, %llu bytes\n", log.source.c_str(), format,
                   static_cast<unsigned long long>(log.bytes));
     for (const char* key : {"sys_name", "ver_hw", "ver_sw", "ver_sw_release"}) {
@@ -50,6 +51,27 @@ int RunInspect(const InspectArgs& args) {
       }
     }
     if (log.truncated) out += "warning   " + VisibleLine(*log.truncated) + "\n";
+    if (log.format == LogFormat::kMat) {
+      // A MAT-file's variables; a numeric matrix is read as a text table.
+      int width = 8;
+      for (const LogStreamInfo& s : log.streams) {
+        width = std::max(width, static_cast<int>(VisibleLine(s.topic).size()));
+      }
+      out += Format("%-*s %s\n", width, "variable", "size and class");
+      std::size_t matrices = 0;
+      for (const LogStreamInfo& s : log.streams) {
+        out +=
+            Format("%-*s %s%s\n", width, VisibleLine(s.topic).c_str(), VisibleLine(s.type).c_str(),
+                   s.samples > 0 ? Format(" (%zu rows read)", s.samples).c_str() : "");
+        if (s.samples > 0) ++matrices;
+      }
+      out += Format(
+          "%zu variables, %zu numeric matrices. A matrix is read as a text log's columns "
+          "(--columns, --time-unit)%s\n",
+          log.streams.size(), matrices, matrices > 1 ? "; choose one with --topic NAME" : "");
+      WriteFileAtomically("-", out);
+      return kExitOk;
+    }
     // A ROS topic is named by its user, its type by ROS: both are shown.
     int width = 5, type_width = 0;
     for (const LogStreamInfo& s : log.streams) {

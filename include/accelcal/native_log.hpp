@@ -1,8 +1,10 @@
 #pragma once
 /// @file native_log.hpp
 /// The binary logs accelcal reads as they are recorded, told by their first bytes: PX4 ULog
-/// (`.ulg`), ArduPilot DataFlash (`.bin`) and ROS 1 bags (`.bag`). ReadInput (log_reader.hpp) reads
-/// one stream of such a log as it reads a text log's columns: the stream by ReadOptions::topic and
+/// (`.ulg`), ArduPilot DataFlash (`.bin`) and ROS 1 bags (`.bag`); and MATLAB MAT-files, whose
+/// numeric matrix (ReadOptions::topic names the variable) is read as its numbers as text. ReadInput
+/// (log_reader.hpp) reads one stream of such a log as it reads a text log's columns: the stream by
+/// ReadOptions::topic and
 /// ::instance, its fields by ::columns; InspectLog says what a log holds. A log cut short gives
 /// what is whole, with a warning (RawLog::read_warning); a corrupt one an InputError naming the
 /// byte.
@@ -23,6 +25,7 @@ enum class LogFormat {
   kULog,       ///< PX4 ULog
   kDataFlash,  ///< ArduPilot DataFlash
   kRosBag,     ///< ROS 1 bag (format 2.0)
+  kMat,        ///< MATLAB MAT-file (level 5, 7.3): a numeric matrix read as a text table
 };
 template <>
 struct EnumNames<LogFormat> {
@@ -30,7 +33,8 @@ struct EnumNames<LogFormat> {
       {LogFormat::kText, "text"},
       {LogFormat::kULog, "ulog"},
       {LogFormat::kDataFlash, "dataflash"},
-      {LogFormat::kRosBag, "rosbag"}};
+      {LogFormat::kRosBag, "rosbag"},
+      {LogFormat::kMat, "mat"}};
 };
 std::string_view ToString(LogFormat format);
 /// The format of a file that begins with `first_bytes` (16 are enough).

@@ -205,6 +205,9 @@ TextBlocks::TextBlocks(std::string_view text)
   started_ = true;
 }
 
+TextBlocks::TextBlocks(Source source, std::size_t total)
+    : source_(std::move(source)), total_(total) {}
+
 TextBlocks::~TextBlocks() = default;
 
 void TextBlocks::Fingerprint(Sha256* hash) {
@@ -217,7 +220,7 @@ void TextBlocks::FinishFingerprint() {
 }
 
 void TextBlocks::Fill(std::size_t min_bytes) {
-  if (file_ == nullptr) return;
+  if (file_ == nullptr && !source_) return;
   while (!eof_ && end_ - begin_ < min_bytes) {
     if (hash_) {
       // The next bytes go into the other buffer, after the unconsumed text, while this one's last
@@ -249,7 +252,8 @@ void TextBlocks::Fill(std::size_t min_bytes) {
         capacity_ = capacity;
       }
     }
-    const std::size_t got = file_->Read(buffer_.get() + end_, capacity_ - end_);
+    const std::size_t got = file_ != nullptr ? file_->Read(buffer_.get() + end_, capacity_ - end_)
+                                             : source_(buffer_.get() + end_, capacity_ - end_);
     if (hash_ && got > 0) hash_->Add(buffer_.get() + end_, got);
     if (got == 0) eof_ = true;
     end_ += got;

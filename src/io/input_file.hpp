@@ -7,6 +7,7 @@
 // text on in blocks of whole lines, so a parser holds one block at a time, never the file.
 
 #include <cstddef>
+#include <functional>
 #include <memory>
 #include <optional>
 #include <string>
@@ -68,6 +69,10 @@ class TextBlocks {
   explicit TextBlocks(InputFile* file, std::string already_read = {});
   /// One block: the whole of `text` (which must outlive this).
   explicit TextBlocks(std::string_view text);
+  /// Text made as it is read (a MAT file's matrix as rows): `source` writes up to `n` bytes to
+  /// `out` and says how many, 0 at the end; `total` its size when known (else 0).
+  using Source = std::function<std::size_t(char* out, std::size_t n)>;
+  TextBlocks(Source source, std::size_t total);
   ~TextBlocks();
   TextBlocks(const TextBlocks&) = delete;
   TextBlocks& operator=(const TextBlocks&) = delete;
@@ -99,6 +104,7 @@ class TextBlocks {
   std::string_view WholeLines() const;
 
   InputFile* file_ = nullptr;
+  Source source_;
   // The block buffer, not zero-filled (every byte used is read into it first), and with a hash
   // the other it alternates with (one is read while the other's block is hashed).
   std::unique_ptr<char[]> buffer_, spare_;

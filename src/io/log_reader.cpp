@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cctype>
+#include <charconv>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
@@ -14,6 +15,7 @@
 #include "accelcal/native_log.hpp"
 #include "core/text_format.hpp"
 #include "io/input_file.hpp"
+#include "io/mat_file.hpp"
 #include "io/native_input.hpp"
 #include "io/number_parser.hpp"
 #include "io/row_parser.hpp"
@@ -554,6 +556,69 @@ void RefuseTopicOfText(const std::string& source, const ReadOptions& options) {
   }
 }
 
+// A MAT-file's matrix, read as the same numbers written as text would be (its rows the lines,
+// each value in its shortest exact decimal form): every rule of a text log holds for it.
+InputData ReadMat(internal::InputFile& file, const std::string& path, std::string head,
+                  const ReadOptions& options) {
+  if (!file.regular()) {
+    throw InputError(file.name(), 0,
+                     "a MAT-file is read from a regular file (libmatio opens it by its path), "
+                     "not from a pipe or a device");
+  }
+  const internal::MatTable table = internal::ReadMatTable(path, options.topic);
+  std::size_t row = 0, column = 0;
+  std::string pending;  // what of the current value did not fit
+  internal::TextBlocks blocks(
+      [&](char* out, std::size_t n) {
+        std::size_t done = 0;
+        while (done < n) {
+          if (pending.empty()) {
+            if (row == table.rows) break;
+            char value[32];
+            const auto end = std::to_chars(value, value + sizeof value,
+                                           table.values[row * table.columns + column])
+                                 .ptr;
+            pending.assign(value, end);
+            pending += ++column == table.columns ? '\n' : ',';
+            if (column == table.columns) column = 0, ++row;
+          }
+          const std::size_t take = std::min(pending.size(), n - done);
+          std::memcpy(out + done, pending.data(), take);
+          pending.erase(0, take);
+          done += take;
+        }
+        return done;
+      },
+      0);
+  ReadOptions read = options;
+  read.topic.clear();
+  InputData data = ParseBlocks(blocks, file.name(), read);
+  data.kind_reason = internal::Format(
+      "MAT-file variable %s (%zu x %zu%s); %s", table.variable.c_str(),
+      table.transposed ? table.columns : table.rows, table.transposed ? table.rows : table.columns,
+      table.transposed ? ", its samples as columns: read turned" : "", data.kind_reason.c_str());
+  if (options.fingerprint) {
+    // The file's own bytes, as for any input.
+    Sha256 hash;
+    internal::BinaryStream in(&file, std::move(head));
+    in.Fingerprint(&hash);
+    in.Drain();
+    internal::RequireUnchanged(file);
+    data.bytes = in.offset();
+    data.sha256 = hash.HexDigest();
+  }
+  return data;
+}
+
+// A binary input: a MAT-file's matrix, or a log's stream (ReadNativeLog).
+InputData ReadBinary(internal::InputFile& file, const std::string& path, std::string head,
+                     const ReadOptions& options) {
+  if (DetectLogFormat(head) == LogFormat::kMat)
+    return ReadMat(file, path, std::move(head), options);
+  internal::BinaryStream in(&file, std::move(head));
+  return internal::ReadNativeLog(in, &file, options);
+}
+
 }  // namespace
 
 void internal::FinishRawLog(RawLog* log, TimeUnit unit, const std::optional<double>& rate_hz,
@@ -578,6 +643,11 @@ void internal::FinishRawLog(RawLog* log, TimeUnit unit, const std::optional<doub
 }
 
 InputData ParseInput(std::string_view text, const std::string& source, const ReadOptions& options) {
+  if (DetectLogFormat(text.substr(0, 16)) == LogFormat::kMat) {
+    throw InputError(source, 0,
+                     "a MAT-file is read from its file (libmatio opens it by its path), not from "
+                     "memory");
+  }
   if (DetectLogFormat(text.substr(0, 16)) != LogFormat::kText) {
     internal::BinaryStream in(std::string(text), source);
     return internal::ReadNativeLog(in, nullptr, options);
@@ -601,10 +671,8 @@ InputData ReadInput(const std::string& path, const ReadOptions& options) {
   // The first bytes tell a binary log from text.
   std::string head(16, '\0');
   head.resize(file.ReadFully(head.data(), head.size()));
-  if (DetectLogFormat(head) != LogFormat::kText) {
-    internal::BinaryStream in(&file, std::move(head));
-    return internal::ReadNativeLog(in, &file, options);
-  }
+  if (DetectLogFormat(head) != LogFormat::kText)
+    return ReadBinary(file, path, std::move(head), options);
   RefuseTopicOfText(file.name(), options);
   Sha256 hash;
   internal::TextBlocks blocks(&file, std::move(head));
@@ -635,8 +703,7 @@ StreamedLog StreamRawLog(const std::string& path, const ReadOptions& options,
   head_bytes.resize(file.ReadFully(head_bytes.data(), head_bytes.size()));
   if (DetectLogFormat(head_bytes) != LogFormat::kText) {
     // A binary log keeps only the stream's samples (4 numbers each): read whole, one piece.
-    internal::BinaryStream in(&file, std::move(head_bytes));
-    const InputData data = internal::ReadNativeLog(in, &file, read);
+    const InputData data = ReadBinary(file, path, std::move(head_bytes), read);
     out.samples = data.raw.samples.size();
     out.rate_hz = data.raw.rate_hz;
     out.time = data.raw.time;

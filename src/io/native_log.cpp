@@ -10,6 +10,7 @@
 #include "core/text_format.hpp"
 #include "io/binary_stream.hpp"
 #include "io/dataflash.hpp"
+#include "io/mat_file.hpp"
 #include "io/native_input.hpp"
 #include "io/rosbag.hpp"
 #include "io/ulog.hpp"
@@ -22,6 +23,7 @@ LogFormat DetectLogFormat(std::string_view first_bytes) {
   if (internal::IsULog(first_bytes)) return LogFormat::kULog;
   if (internal::IsDataFlash(first_bytes)) return LogFormat::kDataFlash;
   if (internal::IsRosBag(first_bytes)) return LogFormat::kRosBag;
+  if (internal::IsMatFile(first_bytes)) return LogFormat::kMat;
   return LogFormat::kText;
 }
 
@@ -220,6 +222,7 @@ const char* FormatName(LogFormat format) {
       return "an ArduPilot DataFlash log";
     case LogFormat::kRosBag:
       return "a ROS bag";
+    case LogFormat::kMat:
     case LogFormat::kText:
       break;
   }
@@ -242,10 +245,11 @@ DecodedLog Decode(BinaryStream& in, LogFormat format, const KeepStream& keep,
       return ReadDataFlash(in, keep, store);
     case LogFormat::kRosBag:
       return ReadRosBag(in, keep, store);
+    case LogFormat::kMat:
     case LogFormat::kText:
       break;
   }
-  throw std::logic_error("Decode: a text log");
+  throw std::logic_error("Decode: not a log of streams");
 }
 
 }  // namespace
@@ -391,9 +395,30 @@ LogInventory InspectLog(const std::string& path) {
   out.format = DetectLogFormat(head);
   out.source = file.name();
   if (out.format == LogFormat::kText) {
-    throw InputError(file.name(), 0,
-                     "not a binary log (PX4 ULog, ArduPilot DataFlash, ROS bag): a text log's "
-                     "columns are its header's");
+    throw InputError(
+        file.name(), 0,
+        "not a binary log (PX4 ULog, ArduPilot DataFlash, ROS bag, MAT-file): a text log's "
+        "columns are its header's");
+  }
+  if (out.format == LogFormat::kMat) {
+    // Its variables, as streams: a matrix's rows are its samples.
+    if (!file.regular()) {
+      throw InputError(file.name(), 0, "a MAT-file is read from a regular file, not a pipe");
+    }
+    for (const internal::MatVariable& v : internal::ListMatVariables(path)) {
+      LogStreamInfo info;
+      info.topic = v.name;
+      for (std::size_t d : v.dims) info.type += (info.type.empty() ? "" : "x") + std::to_string(d);
+      info.type += " " + v.type;
+      if (v.numeric_matrix) {
+        const bool turned = v.dims[1] > 16 && v.dims[0] <= 16;  // as ReadMatTable reads it
+        info.samples = turned ? v.dims[1] : v.dims[0];
+        if (turned) info.type += ", its samples as columns: read turned";
+      }
+      out.streams.push_back(std::move(info));
+    }
+    out.bytes = file.size();
+    return out;
   }
   internal::BinaryStream in(&file, std::move(head));
   const internal::DecodedLog log =

@@ -195,7 +195,7 @@ TEST_F(NativeLogTest, SeveralStreamsAreListedAndOneIsChosen) {
   EXPECT_EQ(several.status, 3) << several.err;  // an input error
   for (const char* named : {"sensor_combined instance 0 (1298 samples at 199.7 Hz)",
                             "sensor_accel instance 1 (device id 3670050, 6 samples",
-                            "choose one with the topic and instance options"}) {
+                            "choose one with --topic and --instance"}) {
     EXPECT_NE(several.err.find(named), std::string::npos) << several.err;
   }
   // One chosen: it is read (six samples at 1 Hz are no calibration session, which is said).

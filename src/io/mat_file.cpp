@@ -1,0 +1,257 @@
+// MAT-files through libmatio (mat_file.hpp).
+#include "io/mat_file.hpp"
+
+#include <matio.h>
+
+#include <algorithm>
+#include <cstdint>
+#include <cstring>
+#include <memory>
+#include <mutex>
+
+#include "accelcal/error.hpp"
+#include "core/text_format.hpp"
+
+namespace accelcal::internal {
+
+namespace {
+
+// libmatio logs its errors through a function it calls; the library never prints, so they are
+// kept here (the last one, per thread) for the error accelcal raises.
+thread_local std::string last_matio_message;
+void KeepMessage(int /*level*/, char* message) {
+  last_matio_message = message != nullptr ? message : "";
+}
+void QuietMatio() {
+  static std::once_flag once;
+  std::call_once(once, [] { Mat_LogInitFunc("accelcal", KeepMessage); });
+}
+
+// The largest matrix read: 2^28 values (2 GiB as doubles); more is no IMU session.
+constexpr std::size_t kMaxValues = std::size_t{1} << 28;
+// A matrix with more columns than this and at most this many rows is stored turned.
+constexpr std::size_t kMaxFields = 16;
+
+const char* ClassName(matio_classes c) {
+  switch (c) {
+    case MAT_C_DOUBLE:
+      return "double";
+    case MAT_C_SINGLE:
+      return "single";
+    case MAT_C_INT8:
+      return "int8";
+    case MAT_C_UINT8:
+      return "uint8";
+    case MAT_C_INT16:
+      return "int16";
+    case MAT_C_UINT16:
+      return "uint16";
+    case MAT_C_INT32:
+      return "int32";
+    case MAT_C_UINT32:
+      return "uint32";
+    case MAT_C_INT64:
+      return "int64";
+    case MAT_C_UINT64:
+      return "uint64";
+    case MAT_C_CHAR:
+      return "char";
+    case MAT_C_STRUCT:
+      return "struct";
+    case MAT_C_CELL:
+      return "cell";
+    case MAT_C_SPARSE:
+      return "sparse";
+    case MAT_C_OBJECT:
+      return "object";
+    case MAT_C_FUNCTION:
+      return "function";
+    default:
+      return "unknown";
+  }
+}
+
+bool Numeric(const matvar_t& v) {
+  switch (v.class_type) {
+    case MAT_C_DOUBLE:
+    case MAT_C_SINGLE:
+    case MAT_C_INT8:
+    case MAT_C_UINT8:
+    case MAT_C_INT16:
+    case MAT_C_UINT16:
+    case MAT_C_INT32:
+    case MAT_C_UINT32:
+    case MAT_C_INT64:
+    case MAT_C_UINT64:
+      return v.rank == 2 && v.isComplex == 0 && v.isLogical == 0;
+    default:
+      return false;
+  }
+}
+
+double ValueAt(const matvar_t& v, std::size_t i) {
+  switch (v.class_type) {
+    case MAT_C_DOUBLE:
+      return static_cast<const double*>(v.data)[i];
+    case MAT_C_SINGLE:
+      return static_cast<const float*>(v.data)[i];
+    case MAT_C_INT8:
+      return static_cast<const std::int8_t*>(v.data)[i];
+    case MAT_C_UINT8:
+      return static_cast<const std::uint8_t*>(v.data)[i];
+    case MAT_C_INT16:
+      return static_cast<const std::int16_t*>(v.data)[i];
+    case MAT_C_UINT16:
+      return static_cast<const std::uint16_t*>(v.data)[i];
+    case MAT_C_INT32:
+      return static_cast<const std::int32_t*>(v.data)[i];
+    case MAT_C_UINT32:
+      return static_cast<const std::uint32_t*>(v.data)[i];
+    case MAT_C_INT64:
+      return static_cast<double>(static_cast<const std::int64_t*>(v.data)[i]);
+    case MAT_C_UINT64:
+      return static_cast<double>(static_cast<const std::uint64_t*>(v.data)[i]);
+    default:
+      return 0;
+  }
+}
+
+std::size_t SizeOfClass(matio_classes c) {
+  switch (c) {
+    case MAT_C_DOUBLE:
+    case MAT_C_INT64:
+    case MAT_C_UINT64:
+      return 8;
+    case MAT_C_SINGLE:
+    case MAT_C_INT32:
+    case MAT_C_UINT32:
+      return 4;
+    case MAT_C_INT16:
+    case MAT_C_UINT16:
+      return 2;
+    default:
+      return 1;
+  }
+}
+
+struct CloseMat {
+  void operator()(mat_t* m) const { Mat_Close(m); }
+};
+struct FreeVar {
+  void operator()(matvar_t* v) const { Mat_VarFree(v); }
+};
+using MatFile = std::unique_ptr<mat_t, CloseMat>;
+using MatVar = std::unique_ptr<matvar_t, FreeVar>;
+
+[[noreturn]] void Fail(const std::string& path, const std::string& why) {
+  throw InputError(path, 0, VisibleLine(why));
+}
+
+std::string Matio() {
+  return last_matio_message.empty() ? std::string() : " (libmatio: " + last_matio_message + ")";
+}
+
+MatFile Open(const std::string& path) {
+  QuietMatio();
+  last_matio_message.clear();
+  MatFile mat(Mat_Open(path.c_str(), MAT_ACC_RDONLY));
+  if (!mat) Fail(path, "a MAT-file libmatio cannot open" + Matio());
+  return mat;
+}
+
+MatVariable Describe(const matvar_t& v) {
+  MatVariable out;
+  out.name = v.name != nullptr ? v.name : "";
+  out.type = ClassName(v.class_type);
+  if (v.isComplex != 0) out.type = "complex " + out.type;
+  if (v.isLogical != 0) out.type = "logical";
+  for (int d = 0; d < v.rank && v.dims != nullptr; ++d) out.dims.push_back(v.dims[d]);
+  out.numeric_matrix = Numeric(v);
+  return out;
+}
+
+std::string Shape(const MatVariable& v) {
+  std::string out;
+  for (std::size_t d : v.dims) out += (out.empty() ? "" : "x") + std::to_string(d);
+  return out + " " + v.type;
+}
+
+}  // namespace
+
+bool IsMatFile(std::string_view first_bytes) {
+  return first_bytes.substr(0, 16) == "MATLAB 5.0 MAT-f" ||
+         first_bytes.substr(0, 16) == "MATLAB 7.3 MAT-f";
+}
+
+std::vector<MatVariable> ListMatVariables(const std::string& path) {
+  const MatFile mat = Open(path);
+  std::vector<MatVariable> out;
+  while (true) {
+    last_matio_message.clear();
+    const MatVar v(Mat_VarReadNextInfo(mat.get()));
+    if (!v) break;
+    out.push_back(Describe(*v));
+  }
+  if (!last_matio_message.empty()) Fail(path, "a MAT-file libmatio cannot read" + Matio());
+  return out;
+}
+
+MatTable ReadMatTable(const std::string& path, const std::string& name) {
+  const std::vector<MatVariable> all = ListMatVariables(path);
+  std::string list;
+  for (const MatVariable& v : all)
+    list += (list.empty() ? "" : ", ") + v.name + " (" + Shape(v) + ")";
+  if (list.empty()) list = "none";
+  std::string chosen = name;
+  if (chosen.empty()) {
+    std::vector<const MatVariable*> numeric;
+    for (const MatVariable& v : all) {
+      if (v.numeric_matrix) numeric.push_back(&v);
+    }
+    if (numeric.size() != 1) {
+      Fail(path, (numeric.empty() ? "no numeric matrix among its variables: " + list
+                                  : "several numeric matrices: " + list +
+                                        "; choose one with the topic option (its name)"));
+    }
+    chosen = numeric.front()->name;
+  }
+  const auto it =
+      std::find_if(all.begin(), all.end(), [&](const MatVariable& v) { return v.name == chosen; });
+  if (it == all.end()) Fail(path, "no variable " + chosen + " (its variables: " + list + ")");
+  if (!it->numeric_matrix) {
+    Fail(path, "the variable " + chosen + " is " + Shape(*it) +
+                   ", not a real numeric matrix (rows of samples)");
+  }
+  const std::size_t rows = it->dims[0], columns = it->dims[1];
+  if (rows != 0 && columns > kMaxValues / rows) {
+    Fail(path, Format("the variable %s has %zu x %zu values, more than the %zu accelcal reads",
+                      chosen.c_str(), rows, columns, kMaxValues));
+  }
+  const MatFile mat = Open(path);
+  last_matio_message.clear();
+  const MatVar v(Mat_VarRead(mat.get(), chosen.c_str()));
+  if (!v || v->data == nullptr || !Numeric(*v) || v->dims[0] != rows || v->dims[1] != columns ||
+      v->nbytes < rows * columns * SizeOfClass(v->class_type)) {
+    Fail(path, "the variable " + chosen + " cannot be read" + Matio());
+  }
+  MatTable out;
+  out.variable = chosen;
+  out.transposed = columns > kMaxFields && rows <= kMaxFields;
+  out.rows = out.transposed ? columns : rows;
+  out.columns = out.transposed ? rows : columns;
+  out.values.resize(rows * columns);
+  // MATLAB stores a matrix column after column.
+  for (std::size_t c = 0; c < columns; ++c) {
+    for (std::size_t r = 0; r < rows; ++r) {
+      const double x = ValueAt(*v, c * rows + r);
+      if (out.transposed) {
+        out.values[c * rows + r] = x;  // sample c, field r
+      } else {
+        out.values[r * columns + c] = x;
+      }
+    }
+  }
+  return out;
+}
+
+}  // namespace accelcal::internal

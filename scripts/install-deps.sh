@@ -11,7 +11,7 @@ packages=(
   chromium      # the report test renders the page as a person would see it
   pybind11-dev python3-dev python3-numpy python3-pytest python3-matplotlib  # Python bindings
   clang libclang-rt-14-dev llvm-14  # sanitizers, libFuzzer and the symbolizer (scripts/sanitize.sh)
-  libbz2-dev liblz4-dev  # ROS bag chunks (bz2, lz4)
+  libbz2-dev liblz4-dev libzstd-dev  # ROS bag and MCAP chunks (bz2, lz4, zstd)
   python3-rosbag python3-sensor-msgs  # ROS's own writer makes the bags the tests read
   libmatio-dev python3-scipy  # MATLAB MAT-files; SciPy writes those the tests read
   locales       # the locale tests write numbers under de_DE.UTF-8 (decimal comma), generated below

@@ -40,10 +40,11 @@ void AddInputOptions(CLI::App* cmd, InputArgs* in, bool with_kind) {
   cmd->add_option("--instance", in->instance,
                   "the sensor to read from a file that interleaves several (its value in the "
                   "i, instance, multi_id, device_id or imu column; a ULog topic's multi id)");
-  cmd->add_option("--topic", in->topic,
-                  "the stream to read from a binary log (a ULog topic such as sensor_accel, a "
-                  "DataFlash message such as IMU, a ROS bag's topic; default: its only "
-                  "accelerometer stream), or a MAT-file's variable (default: its only matrix)");
+  cmd->add_option(
+      "--topic", in->topic,
+      "the stream to read from a binary log (a ULog topic such as sensor_accel, a "
+      "DataFlash message such as IMU, a ROS bag's or MCAP file's topic; default: its only "
+      "accelerometer stream), or a MAT-file's variable (default: its only matrix)");
 }
 
 // The gyroscope's stream in a binary log, for the commands that read its rates (--gyro).
@@ -291,8 +292,8 @@ int accelcal::cli::RunCommandLine(int argc, char** argv) {
   InspectArgs ins;
   CLI::App* inspect = app.add_subcommand(
       "inspect",
-      "what a binary log (PX4 ULog, ArduPilot DataFlash, ROS bag, MAT-file) holds: its streams, "
-      "rates, parameters");
+      "what a binary log (PX4 ULog, ArduPilot DataFlash, ROS bag, MCAP, MAT-file) holds: its "
+      "streams, rates, parameters");
   if (Wanted(inspect)) {
     inspect->add_option("LOG", ins.path, "binary log")->required();
     inspect->add_flag("--json", ins.json, "machine-readable output");
@@ -440,8 +441,9 @@ int accelcal::cli::RunCommandLine(int argc, char** argv) {
                        "write a positions file x,y,z,n,sx,sy,sz (the default)");
     simulate
         ->add_option("--format", sim.format,
-                     "of a raw log: csv (time,x,y,z), ulog (PX4's sensor_accel) or dataflash "
-                     "(ArduPilot's IMU records), the last two float32")
+                     "of a raw log: csv (time,x,y,z), ulog (PX4's sensor_accel), dataflash "
+                     "(ArduPilot's IMU records), both float32, or mcap (ROS 2's "
+                     "sensor_msgs/msg/Imu, zstd chunks)")
         ->capture_default_str();
     simulate->add_option("-o,--output", sim.output, "output file (default: stdout)")
         ->check(kFileName);

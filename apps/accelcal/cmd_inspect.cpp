@@ -42,6 +42,7 @@ int RunInspect(const InspectArgs& args) {
     const char* format = log.format == LogFormat::kULog        ? "PX4 ULog"
                          : log.format == LogFormat::kDataFlash ? "ArduPilot DataFlash"
                          : log.format == LogFormat::kRosBag    ? "ROS bag"
+                         : log.format == LogFormat::kMcap      ? "MCAP"
                                                                : "MATLAB MAT-file";
     out += Format("%s: %s, %llu bytes\n", log.source.c_str(), format,
                   static_cast<unsigned long long>(log.bytes));

@@ -12,6 +12,7 @@
 #include <stdexcept>
 
 #include "accelcal/dataflash_writer.hpp"
+#include "accelcal/mcap_writer.hpp"
 #include "accelcal/simulate.hpp"
 #include "accelcal/system_level.hpp"
 #include "accelcal/ulog_writer.hpp"
@@ -59,8 +60,9 @@ void CheckSimulatedSamples(double samples, const char* options) {
 
 int RunSimulate(const SimulateArgs& args) {
   CheckOutputs({{"-o", args.output}}, {args.truth, args.positions});
-  if (args.format != "csv" && args.format != "ulog" && args.format != "dataflash") {
-    throw UsageError("--format is csv, ulog or dataflash, not \"" + args.format + "\"");
+  if (args.format != "csv" && args.format != "ulog" && args.format != "dataflash" &&
+      args.format != "mcap") {
+    throw UsageError("--format is csv, ulog, dataflash or mcap, not \"" + args.format + "\"");
   }
   if (args.format != "csv" && (!args.raw || args.scenario == "wu2018-system")) {
     throw UsageError("--format " + args.format +
@@ -157,6 +159,17 @@ int RunSimulate(const SimulateArgs& args) {
         file.Write(
             writer.Sample(static_cast<std::uint64_t>(std::llround(t * 1e6)), p, Vec3::Zero()));
       });
+      file.Commit();
+      return kExitOk;
+    }
+    if (args.format == "mcap") {
+      McapImuWriter writer;
+      file.Write(writer.Header());
+      SimulateRawLog(truth, gravity, directions, options, [&](double t, const Vec3& p) {
+        file.Write(
+            writer.Sample(static_cast<std::uint64_t>(std::llround(t * 1e9)), p, Vec3::Zero()));
+      });
+      file.Write(writer.Finish());
       file.Commit();
       return kExitOk;
     }

@@ -1,7 +1,8 @@
 #pragma once
 /// @file native_log.hpp
 /// The binary logs accelcal reads as they are recorded, told by their first bytes: PX4 ULog
-/// (`.ulg`), ArduPilot DataFlash (`.bin`) and ROS 1 bags (`.bag`); and MATLAB MAT-files, whose
+/// (`.ulg`), ArduPilot DataFlash (`.bin`), ROS 1 bags (`.bag`) and MCAP (`.mcap`, ROS 2); and
+/// MATLAB MAT-files, whose
 /// numeric matrix (ReadOptions::topic names the variable) is read as its numbers as text. ReadInput
 /// (log_reader.hpp) reads one stream of such a log as it reads a text log's columns: the stream by
 /// ReadOptions::topic and
@@ -25,16 +26,15 @@ enum class LogFormat {
   kULog,       ///< PX4 ULog
   kDataFlash,  ///< ArduPilot DataFlash
   kRosBag,     ///< ROS 1 bag (format 2.0)
+  kMcap,       ///< MCAP (ROS 2's bags; ROS 1 messages too)
   kMat,        ///< MATLAB MAT-file (level 5, 7.3): a numeric matrix read as a text table
 };
 template <>
 struct EnumNames<LogFormat> {
   static constexpr std::pair<LogFormat, std::string_view> kTable[] = {
-      {LogFormat::kText, "text"},
-      {LogFormat::kULog, "ulog"},
-      {LogFormat::kDataFlash, "dataflash"},
-      {LogFormat::kRosBag, "rosbag"},
-      {LogFormat::kMat, "mat"}};
+      {LogFormat::kText, "text"},           {LogFormat::kULog, "ulog"},
+      {LogFormat::kDataFlash, "dataflash"}, {LogFormat::kRosBag, "rosbag"},
+      {LogFormat::kMcap, "mcap"},           {LogFormat::kMat, "mat"}};
 };
 std::string_view ToString(LogFormat format);
 /// The format of a file that begins with `first_bytes` (16 are enough).

@@ -67,6 +67,16 @@ std::string BinaryStream::ZerosMessage(std::uint64_t at) {
          " (space the logger reserved but never wrote)";
 }
 
+bool BinaryStream::SkipAhead(std::uint64_t n) {
+  while (n > 0) {
+    if (!Need(1)) return false;
+    const std::size_t take = static_cast<std::size_t>(std::min<std::uint64_t>(n, available()));
+    Skip(take);
+    n -= take;
+  }
+  return true;
+}
+
 void BinaryStream::Drain() {
   while (true) {
     Skip(end_ - begin_);

@@ -48,6 +48,9 @@ class BinaryStream {
   static std::string ZerosMessage(std::uint64_t at);
   /// Reads and hashes the rest of the input (so that a fingerprint covers every byte), dropping it.
   void Drain();
+  /// Consumes the next `n` bytes without holding them (a record a reader does not need, however
+  /// large); false when the input ends first (then all of it is consumed).
+  bool SkipAhead(std::uint64_t n);
   const std::string& name() const { return name_; }
 
  private:

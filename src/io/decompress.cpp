@@ -3,6 +3,7 @@
 
 #include <bzlib.h>
 #include <lz4frame.h>
+#include <zstd.h>
 
 #include <algorithm>
 #include <climits>
@@ -103,6 +104,38 @@ std::optional<std::string> Lz4Frame(const unsigned char* data, std::size_t n, st
   return std::nullopt;
 }
 
+std::optional<std::string> Zstd(const unsigned char* data, std::size_t n, std::size_t size,
+                                std::vector<unsigned char>* out) {
+  const std::unique_ptr<ZSTD_DStream, std::size_t (*)(ZSTD_DStream*)> stream(ZSTD_createDStream(),
+                                                                             ZSTD_freeDStream);
+  if (!stream || ZSTD_isError(ZSTD_initDStream(stream.get()))) {
+    return std::string("zstd could not start");
+  }
+  Output o(out, size);
+  ZSTD_inBuffer in{data, n, 0};
+  std::size_t written = 0;
+  while (true) {
+    const std::size_t room = o.RoomAfter(written);
+    unsigned char extra = 0;
+    ZSTD_outBuffer to{room > 0 ? o.At(written) : &extra, room > 0 ? room : 1, 0};
+    const std::size_t left = ZSTD_decompressStream(stream.get(), &to, &in);
+    if (ZSTD_isError(left)) {
+      return Format("the zstd frame is corrupt (%s)", ZSTD_getErrorName(left));
+    }
+    written += to.pos;
+    if (written > size) return Format("the zstd frame holds more than the %zu bytes it says", size);
+    if (left == 0) break;  // the frame's end, all of it out
+    if (in.pos == in.size && to.pos < to.size) {
+      return Format("the zstd frame ends after %zu of the %zu bytes it says", written, size);
+    }
+  }
+  if (written != size) {
+    return Format("the zstd frame holds %zu bytes, not the %zu it says", written, size);
+  }
+  if (in.pos != n) return Format("%zu bytes follow the zstd frame's end", n - in.pos);
+  return std::nullopt;
+}
+
 }  // namespace
 
 std::optional<std::string> Decompress(Compression compression, const unsigned char* data,
@@ -124,7 +157,7 @@ std::optional<std::string> Decompress(Compression compression, const unsigned ch
     case Compression::kLz4Frame:
       return Lz4Frame(data, n, size, out);
     case Compression::kZstd:
-      return std::string("zstd is not read yet");
+      return Zstd(data, n, size, out);
   }
   return std::string("an unknown compression");
 }

@@ -11,6 +11,7 @@
 #include "io/binary_stream.hpp"
 #include "io/dataflash.hpp"
 #include "io/mat_file.hpp"
+#include "io/mcap.hpp"
 #include "io/native_input.hpp"
 #include "io/rosbag.hpp"
 #include "io/ulog.hpp"
@@ -23,6 +24,7 @@ LogFormat DetectLogFormat(std::string_view first_bytes) {
   if (internal::IsULog(first_bytes)) return LogFormat::kULog;
   if (internal::IsDataFlash(first_bytes)) return LogFormat::kDataFlash;
   if (internal::IsRosBag(first_bytes)) return LogFormat::kRosBag;
+  if (internal::IsMcap(first_bytes)) return LogFormat::kMcap;
   if (internal::IsMatFile(first_bytes)) return LogFormat::kMat;
   return LogFormat::kText;
 }
@@ -47,6 +49,11 @@ const std::vector<KnownStream>& KnownStreams() {
        "linear_acceleration.y", "linear_acceleration.z", "m/s2", false},
       {"sensor_msgs/Imu", "gyroscope", "header.stamp", "angular_velocity.x", "angular_velocity.y",
        "angular_velocity.z", "rad/s", false},
+      // ROS 2 names it with its "msg" folder.
+      {"sensor_msgs/msg/Imu", "accelerometer", "header.stamp", "linear_acceleration.x",
+       "linear_acceleration.y", "linear_acceleration.z", "m/s2", false},
+      {"sensor_msgs/msg/Imu", "gyroscope", "header.stamp", "angular_velocity.x",
+       "angular_velocity.y", "angular_velocity.z", "rad/s", false},
   };
   return kStreams;
 }
@@ -222,6 +229,8 @@ const char* FormatName(LogFormat format) {
       return "an ArduPilot DataFlash log";
     case LogFormat::kRosBag:
       return "a ROS bag";
+    case LogFormat::kMcap:
+      return "an MCAP file";
     case LogFormat::kMat:
     case LogFormat::kText:
       break;
@@ -245,6 +254,8 @@ DecodedLog Decode(BinaryStream& in, LogFormat format, const KeepStream& keep,
       return ReadDataFlash(in, keep, store);
     case LogFormat::kRosBag:
       return ReadRosBag(in, keep, store);
+    case LogFormat::kMcap:
+      return ReadMcap(in, keep, store);
     case LogFormat::kMat:
     case LogFormat::kText:
       break;
@@ -325,7 +336,7 @@ InputData ReadNativeLog(BinaryStream& in, InputFile* file, const ReadOptions& op
     throw InputError(
         source, 0,
         name + "'s " + (*s.columns)[*chosen.time] +
-            (format == LogFormat::kRosBag
+            (format == LogFormat::kRosBag || format == LogFormat::kMcap
                  ? " is a ROS time (seconds and nanoseconds) by its specification: "
                    "the time unit option (" +
                        std::string(ToString(options.time_unit)) + ") does not apply to it"
@@ -397,7 +408,8 @@ LogInventory InspectLog(const std::string& path) {
   if (out.format == LogFormat::kText) {
     throw InputError(
         file.name(), 0,
-        "not a binary log (PX4 ULog, ArduPilot DataFlash, ROS bag, MAT-file): a text log's "
+        "not a binary log (PX4 ULog, ArduPilot DataFlash, ROS bag, MCAP, MAT-file): a text "
+        "log's "
         "columns are its header's");
   }
   if (out.format == LogFormat::kMat) {

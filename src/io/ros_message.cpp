@@ -27,8 +27,9 @@ enum class Kind {
   kF32,
   kF64,
   kString,
-  kTime,
-  kDuration,
+  kTime,      // ROS 1 time: uint32 seconds, uint32 nanoseconds
+  kDuration,  // ROS 1 duration: int32, int32
+  kStamp2,    // ROS 2 builtin_interfaces/Time and Duration: int32 sec, uint32 nanosec
   kStruct
 };
 
@@ -38,13 +39,37 @@ struct Builtin {
   std::size_t size;  // serialised; a string's least (its count)
 };
 // ROS 1's built-in types; byte and char are its deprecated aliases of int8 and uint8.
-constexpr Builtin kBuiltins[] = {
+constexpr Builtin kBuiltins1[] = {
     {"bool", Kind::kBool, 1},        {"int8", Kind::kI8, 1},       {"byte", Kind::kI8, 1},
     {"uint8", Kind::kU8, 1},         {"char", Kind::kU8, 1},       {"int16", Kind::kI16, 2},
     {"uint16", Kind::kU16, 2},       {"int32", Kind::kI32, 4},     {"uint32", Kind::kU32, 4},
     {"int64", Kind::kI64, 8},        {"uint64", Kind::kU64, 8},    {"float32", Kind::kF32, 4},
     {"float64", Kind::kF64, 8},      {"string", Kind::kString, 4}, {"time", Kind::kTime, 8},
     {"duration", Kind::kDuration, 8}};
+// ROS 2's (byte and char are octets there); its times are the builtin_interfaces types.
+constexpr Builtin kBuiltins2[] = {{"bool", Kind::kBool, 1},
+                                  {"byte", Kind::kU8, 1},
+                                  {"char", Kind::kU8, 1},
+                                  {"int8", Kind::kI8, 1},
+                                  {"uint8", Kind::kU8, 1},
+                                  {"int16", Kind::kI16, 2},
+                                  {"uint16", Kind::kU16, 2},
+                                  {"int32", Kind::kI32, 4},
+                                  {"uint32", Kind::kU32, 4},
+                                  {"int64", Kind::kI64, 8},
+                                  {"uint64", Kind::kU64, 8},
+                                  {"float32", Kind::kF32, 4},
+                                  {"float64", Kind::kF64, 8},
+                                  {"string", Kind::kString, 4},
+                                  {"builtin_interfaces/Time", Kind::kStamp2, 8},
+                                  {"builtin_interfaces/Duration", Kind::kStamp2, 8}};
+
+// A type's name without ROS 2's "/msg/" ("sensor_msgs/msg/Imu" is "sensor_msgs/Imu").
+std::string Normal(std::string_view name) {
+  std::string out(name);
+  if (const std::size_t at = out.find("/msg/"); at != std::string::npos) out.erase(at, 4);
+  return out;
+}
 
 // Nesting deeper than this is refused (a real message nests a handful of levels).
 constexpr int kMaxDepth = 32;
@@ -96,7 +121,26 @@ bool IsName(std::string_view s, bool slash) {
 
 }  // namespace
 
+// Where a message is being read: its bytes, and for CDR the origin its alignment counts from.
+struct Cursor {
+  const unsigned char* p;
+  const unsigned char* end;
+  const unsigned char* origin;
+  bool cdr;
+  std::size_t column = 0;  // the next column's index
+  std::size_t columns;     // how many are stored
+  // Skips CDR's padding before a value of `size` bytes (its alignment, at most 8).
+  bool Align(std::size_t size) {
+    if (!cdr || size <= 1) return true;
+    const std::size_t pad = (size - std::size_t(p - origin) % size) % size;
+    if (std::size_t(end - p) < pad) return false;
+    p += pad;
+    return true;
+  }
+};
+
 struct RosMessageType::Impl {
+  RosVersion version = RosVersion::kRos1;
   std::vector<Type> types;  // [0] the message's own
   std::shared_ptr<const std::vector<std::string>> columns;
   std::optional<std::size_t> stamp;
@@ -105,10 +149,9 @@ struct RosMessageType::Impl {
 
   int Resolve(const std::string& name, std::vector<std::string>* stack);
   void Name(const Type& t, const std::string& prefix, std::vector<std::string>* out) const;
-  bool Walk(const Type& t, const unsigned char*& p, const unsigned char* end, double* values,
-            std::size_t& column, std::size_t columns_left) const;
-  bool Element(const Member& m, const unsigned char*& p, const unsigned char* end, double* values,
-               std::size_t& column, std::size_t columns_left) const;
+  // Reads a `t` at c (values into `values` when not null: outside variable-length arrays).
+  bool Walk(const Type& t, Cursor& c, double* values) const;
+  bool Element(const Member& m, Cursor& c, double* values) const;
 };
 
 // The index of type `name`'s resolved Type, parsed from its section (recursively).
@@ -145,8 +188,10 @@ int RosMessageType::Impl::Resolve(const std::string& name, std::vector<std::stri
     }
     std::string_view type_text = line.substr(0, space);
     const std::string_view rest = Trim(line.substr(space));
-    if (rest.find('=') != std::string_view::npos) continue;  // a constant
-    const std::string_view field = rest.substr(0, rest.find_first_of(" \t"));
+    // "type NAME=value" (or "NAME = value") is a constant; ROS 2's "type name value" a field
+    // with its default.
+    const std::string_view field = rest.substr(0, rest.find_first_of(" \t="));
+    if (Trim(rest.substr(field.size())).substr(0, 1) == "=") continue;
     if (!IsName(field, false)) {
       throw DataError("the definition of " + name + " names a field \"" + std::string(field) +
                       "\"");
@@ -160,7 +205,8 @@ int RosMessageType::Impl::Resolve(const std::string& name, std::vector<std::stri
                         "\"");
       }
       const std::string_view count = inside.substr(0, inside.size() - 1);
-      if (count.empty()) {
+      if (count.empty() || (version == RosVersion::kRos2 && count.substr(0, 2) == "<=")) {
+        // ROS 2's bounded sequence "T[<=N]" is serialised as an unbounded one.
         m.array = Array::kVariable;
       } else {
         m.array = Array::kFixed;
@@ -176,9 +222,24 @@ int RosMessageType::Impl::Resolve(const std::string& name, std::vector<std::stri
       }
       type_text = type_text.substr(0, bracket);
     }
+    if (version == RosVersion::kRos2) {
+      // ROS 2's bounded string "string<=N" is serialised as a string.
+      type_text = type_text.substr(0, type_text.find("<="));
+      if (type_text == "wstring") {
+        throw DataError("the definition of " + name + " has a wstring field " + m.name +
+                        ", which accelcal does not read");
+      }
+    }
+    const std::string normal = Normal(type_text);
     const Builtin* builtin = nullptr;
-    for (const Builtin& b : kBuiltins) {
-      if (type_text == b.name) builtin = &b;
+    if (version == RosVersion::kRos1) {
+      for (const Builtin& b : kBuiltins1) {
+        if (normal == b.name) builtin = &b;
+      }
+    } else {
+      for (const Builtin& b : kBuiltins2) {
+        if (normal == b.name) builtin = &b;
+      }
     }
     std::size_t least = 0, width = 0;
     if (builtin != nullptr) {
@@ -190,10 +251,9 @@ int RosMessageType::Impl::Resolve(const std::string& name, std::vector<std::stri
         throw DataError("the definition of " + name + " uses the type \"" + std::string(type_text) +
                         "\"");
       }
-      std::string full = type_text == "Header" ? "std_msgs/Header"
-                         : type_text.find('/') != std::string_view::npos
-                             ? std::string(type_text)
-                             : package + std::string(type_text);
+      std::string full = normal == "Header"                      ? "std_msgs/Header"
+                         : normal.find('/') != std::string::npos ? normal
+                                                                 : package + normal;
       m.kind = Kind::kStruct;
       m.type = Resolve(full, stack);
       least = types[std::size_t(m.type)].least;
@@ -269,78 +329,88 @@ double Scalar(Kind kind, const unsigned char* p) {
     case Kind::kDuration:
       return static_cast<double>(LoadLittle<std::int32_t>(p)) * 1e6 +
              static_cast<double>(LoadLittle<std::int32_t>(p + 4)) * 1e-3;
+    case Kind::kStamp2:
+      return static_cast<double>(LoadLittle<std::int32_t>(p)) * 1e6 +
+             static_cast<double>(LoadLittle<std::uint32_t>(p + 4)) * 1e-3;
     default:
       return 0;
   }
 }
 
+// A scalar's serialised size; a string's least.
 std::size_t SizeOf(Kind kind) {
-  for (const Builtin& b : kBuiltins) {
+  for (const Builtin& b : kBuiltins2) {
     if (b.kind == kind) return b.size;
   }
-  return 0;
+  return kind == Kind::kTime || kind == Kind::kDuration ? 8 : 1;
+}
+
+// Its CDR alignment: its size, a time's fields' (4).
+std::size_t AlignmentOf(Kind kind) {
+  return kind == Kind::kTime || kind == Kind::kDuration || kind == Kind::kStamp2 ? 4 : SizeOf(kind);
 }
 
 }  // namespace
 
-// One element of member `m` (a scalar, a string, a struct) at p; values beyond `columns_left`
-// (or with `values` null: inside a variable-length array) are not stored.
-bool RosMessageType::Impl::Element(const Member& m, const unsigned char*& p,
-                                   const unsigned char* end, double* values, std::size_t& column,
-                                   std::size_t columns_left) const {
-  if (m.kind == Kind::kStruct) {
-    return Walk(types[std::size_t(m.type)], p, end, values, column, columns_left);
-  }
+// One element of member `m` (a scalar, a string, a struct) at the cursor; values beyond the
+// cursor's columns (or with `values` null: inside a variable-length array) are not stored.
+bool RosMessageType::Impl::Element(const Member& m, Cursor& c, double* values) const {
+  if (m.kind == Kind::kStruct) return Walk(types[std::size_t(m.type)], c, values);
   if (m.kind == Kind::kString) {
-    if (end - p < 4) return false;
-    const std::uint32_t n = LoadLittle<std::uint32_t>(p);
-    if (std::size_t(end - p) - 4 < n) return false;
-    p += 4 + n;
+    if (!c.Align(4) || c.end - c.p < 4) return false;
+    const std::uint32_t n = LoadLittle<std::uint32_t>(c.p);
+    if (std::size_t(c.end - c.p) - 4 < n) return false;
+    c.p += 4 + n;
     return true;
   }
   const std::size_t size = SizeOf(m.kind);
-  if (std::size_t(end - p) < size) return false;
-  if (values != nullptr && column < columns_left) values[column] = Scalar(m.kind, p);
-  if (values != nullptr) ++column;
-  p += size;
+  if (!c.Align(AlignmentOf(m.kind)) || std::size_t(c.end - c.p) < size) return false;
+  if (values != nullptr) {
+    if (c.column < c.columns) values[c.column] = Scalar(m.kind, c.p);
+    ++c.column;
+  }
+  c.p += size;
   return true;
 }
 
-bool RosMessageType::Impl::Walk(const Type& t, const unsigned char*& p, const unsigned char* end,
-                                double* values, std::size_t& column,
-                                std::size_t columns_left) const {
+bool RosMessageType::Impl::Walk(const Type& t, Cursor& c, double* values) const {
   for (const Member& m : t.members) {
     const std::size_t least =
         m.kind == Kind::kStruct ? types[std::size_t(m.type)].least : SizeOf(m.kind);
     if (m.array == Array::kNone) {
-      if (!Element(m, p, end, values, column, columns_left)) return false;
+      if (!Element(m, c, values)) return false;
       continue;
     }
     std::size_t n = m.count;
     double* into = values;
     if (m.array == Array::kVariable) {
-      if (end - p < 4) return false;
-      n = LoadLittle<std::uint32_t>(p);
-      p += 4;
+      if (!c.Align(4) || c.end - c.p < 4) return false;
+      n = LoadLittle<std::uint32_t>(c.p);
+      c.p += 4;
       into = nullptr;  // not columns
     }
     if (least == 0) continue;  // elements of nothing (an empty type)
-    if (n > std::size_t(end - p) / least) return false;
+    if (n > std::size_t(c.end - c.p) / least) return false;
     if (m.kind != Kind::kStruct && m.kind != Kind::kString && into == nullptr) {
-      p += n * least;  // fixed-size scalars, skipped whole
+      // Fixed-size scalars, skipped whole (aligned as their first).
+      if (n > 0 && !c.Align(AlignmentOf(m.kind))) return false;
+      if (n > std::size_t(c.end - c.p) / least) return false;
+      c.p += n * least;
       continue;
     }
     for (std::size_t i = 0; i < n; ++i) {
-      if (!Element(m, p, end, into, column, columns_left)) return false;
+      if (!Element(m, c, into)) return false;
     }
   }
   return true;
 }
 
-RosMessageType::RosMessageType(std::string_view type, std::string_view definition)
+RosMessageType::RosMessageType(std::string_view type, std::string_view definition,
+                               RosVersion version)
     : impl_(std::make_unique<Impl>()) {
+  impl_->version = version;
   // Sections: the type's own, then one per "MSG: name" after a line of '='.
-  std::string current(type);
+  std::string current = Normal(type);
   std::size_t begin = 0;
   bool separator = false;
   for (std::size_t at = 0; at <= definition.size();) {
@@ -352,7 +422,7 @@ RosMessageType::RosMessageType(std::string_view type, std::string_view definitio
       if (!separator) impl_->sections.emplace(current, definition.substr(begin, stop - begin));
       separator = rule;
     } else if (separator && line.substr(0, 4) == "MSG:") {
-      current = std::string(Trim(line.substr(4)));
+      current = Normal(Trim(line.substr(4)));
       begin = eol + 1;
       separator = false;
     } else if (separator && !line.empty()) {
@@ -363,7 +433,7 @@ RosMessageType::RosMessageType(std::string_view type, std::string_view definitio
   }
   std::vector<std::string> stack;
   impl_->types.reserve(16);
-  const int own = impl_->Resolve(std::string(type), &stack);
+  const int own = impl_->Resolve(Normal(type), &stack);
   // The message's own type first: Resolve appends each type after those it uses.
   std::swap(impl_->types[0], impl_->types[std::size_t(own)]);
   for (Type& t : impl_->types) {
@@ -399,14 +469,28 @@ std::optional<std::size_t> RosMessageType::stamp() const { return impl_->stamp; 
 
 std::optional<std::string> RosMessageType::Decode(const unsigned char* p, std::size_t n,
                                                   double* values) const {
-  const unsigned char* at = p;
-  std::size_t column = 0;
-  if (!impl_->Walk(impl_->types[0], at, p + n, values, column, impl_->columns->size())) {
+  Cursor c{p, p + n, p, false, 0, impl_->columns->size()};
+  std::size_t padding = 0;  // bytes a whole message may end with after its fields
+  if (impl_->version == RosVersion::kRos2) {
+    // The RTPS encapsulation: a representation identifier and options; ROS 2 writes CDR,
+    // little-endian (00 01), its alignment counted from after these 4 bytes.
+    if (n < 4) return Format("a %zu-byte message, shorter than its CDR encapsulation", n);
+    if (p[0] != 0 || p[1] != 1) {
+      return Format(
+          "a message encoded as %02x %02x, not little-endian CDR (00 01), which "
+          "accelcal reads",
+          p[0], p[1]);
+    }
+    c.p = c.origin = p + 4;
+    c.cdr = true;
+    padding = 3;  // CDR pads a message to 4 bytes
+  }
+  if (!impl_->Walk(impl_->types[0], c, values)) {
     return Format("a %zu-byte message, shorter than its fields", n);
   }
-  if (at != p + n) {
+  if (std::size_t(c.end - c.p) > padding) {
     return Format("a %zu-byte message whose fields end after %zu bytes", n,
-                  static_cast<std::size_t>(at - p));
+                  static_cast<std::size_t>(c.p - p));
   }
   return std::nullopt;
 }

@@ -1,9 +1,11 @@
 #pragma once
 // A ROS message type read from its definition text, as a bag carries it (ROS 1 bag connection
-// headers' message_definition: the type's own fields, then each type it uses after a line of
-// '=' and "MSG: package/Type"), and its messages decoded from ROS 1 serialisation (ROS wiki,
-// "msg" and "roslib/Serialization": little-endian, packed, strings and variable-length arrays
-// preceded by a uint32 count, time and duration as two 32-bit integers).
+// headers' message_definition, MCAP's ros1msg and ros2msg schemas: the type's own fields, then
+// each type it uses after a line of '=' and "MSG: package/Type"), and its messages decoded from
+// ROS 1 serialisation (ROS wiki, "msg" and "roslib/Serialization": little-endian, packed,
+// strings and variable-length arrays preceded by a uint32 count, time and duration as two 32-bit
+// integers) or ROS 2's CDR (OMG CDR, little-endian: each value aligned to its size from the
+// message's start after the encapsulation, strings with their terminating NUL counted).
 
 #include <cstddef>
 #include <memory>
@@ -14,11 +16,18 @@
 
 namespace accelcal::internal {
 
+/// ROS 1 (.msg of ROS 1, its serialisation) or ROS 2 (.msg of ROS 2, "ros2msg": bounded strings
+/// and sequences, defaults, builtin_interfaces/Time; messages in CDR, little-endian, after the
+/// 4-byte RTPS encapsulation).
+enum class RosVersion { kRos1, kRos2 };
+
 class RosMessageType {
  public:
-  /// Parses the definition of `type` ("sensor_msgs/Imu"). Throws DataError (the reason) for a
-  /// definition that does not parse, uses a type it does not define, or nests a type in itself.
-  RosMessageType(std::string_view type, std::string_view definition);
+  /// Parses the definition of `type` ("sensor_msgs/Imu"; ROS 2's "sensor_msgs/msg/Imu" is the
+  /// same name). Throws DataError (the reason) for a definition that does not parse, uses a type
+  /// it does not define, or nests a type in itself.
+  RosMessageType(std::string_view type, std::string_view definition,
+                 RosVersion version = RosVersion::kRos1);
   ~RosMessageType();
   RosMessageType(RosMessageType&&) noexcept;
 
@@ -32,7 +41,8 @@ class RosMessageType {
   std::optional<std::size_t> stamp() const;
 
   /// Decodes one message of `n` bytes at `p` into `values` (one per column; time and duration
-  /// in µs). Returns the reason when its bytes are not one such message (too few, too many).
+  /// in µs). Returns the reason when its bytes are not one such message (too few, too many, not
+  /// little-endian CDR).
   std::optional<std::string> Decode(const unsigned char* p, std::size_t n, double* values) const;
 
  private:

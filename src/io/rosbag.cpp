@@ -10,7 +10,7 @@
 #include "accelcal/error.hpp"
 #include "core/text_format.hpp"
 #include "io/decompress.hpp"
-#include "io/ros_message.hpp"
+#include "io/ros_topics.hpp"
 
 namespace accelcal::internal {
 
@@ -110,14 +110,8 @@ class Reader {
   const StoreColumns& store_;
   DecodedLog out_;
   std::unordered_map<std::uint32_t, Connection> connections_;
-  std::map<std::string, std::size_t> stream_of_;  // topic -> stream
-  // Each stream's type (null when its definition does not parse: then `unreadable` says why).
-  std::vector<std::shared_ptr<const RosMessageType>> types_;
-  std::vector<std::string> type_names_, unreadable_;
-  // Types parsed, by name and definition (a bag repeats a connection's in its index).
-  std::map<std::pair<std::string, std::string>, std::shared_ptr<const RosMessageType>> parsed_;
+  RosTopics topics_{&out_, keep_, store_};
   std::vector<unsigned char> chunk_;
-  std::vector<double> scratch_;
   std::size_t whole_ = 0;  // messages read whole
 };
 
@@ -152,48 +146,11 @@ void Reader::Connect(const Fields& header, const unsigned char* data, std::size_
   }
   const Fields c = Parse(data, n, at);
   const std::string type(Text(c, "type", at));
-  const std::string definition(Text(c, "message_definition", at));
-  auto [it, added] = stream_of_.emplace(topic, out_.streams.size());
-  if (!added) {
-    // Another publisher of the topic: it must publish the same type.
-    if (type_names_[it->second] != type) {
-      Fail(at, "the topic " + topic + " is published as " + type_names_[it->second] + " and as " +
-                   type);
-    }
-  } else {
-    std::shared_ptr<const RosMessageType>& parsed = parsed_[{type, definition}];
-    std::string why;
-    if (!parsed) {
-      try {
-        parsed = std::make_shared<const RosMessageType>(type, definition);
-      } catch (const DataError& e) {
-        why = e.what();
-      }
-    }
-    DecodedStream s;
-    s.topic = topic;
-    s.type = type;
-    s.columns = parsed ? parsed->columns() : std::make_shared<const std::vector<std::string>>();
-    s.kept = keep_(s);
-    if (s.kept && !parsed) {
-      Fail(at, "the definition of " + type + " (topic " + topic + ") does not parse: " + why);
-    }
-    if (s.kept) {
-      if (store_) {
-        s.stored = store_(s);
-        for (std::size_t col : s.stored) {
-          if (col >= s.columns->size()) Fail(at, "internal: a stored column beyond the type's");
-        }
-      } else {
-        for (std::size_t col = 0; col < s.columns->size(); ++col) s.stored.push_back(col);
-      }
-    }
-    out_.streams.push_back(std::move(s));
-    types_.push_back(parsed);
-    type_names_.push_back(type);
-    unreadable_.push_back(why);
-  }
-  connections_.emplace(id, Connection{topic, it->second});
+  std::string error;
+  const std::size_t stream = topics_.Add(
+      topic, type, std::string(Text(c, "message_definition", at)), RosVersion::kRos1, "", &error);
+  if (!error.empty()) Fail(at, error);
+  connections_.emplace(id, Connection{topic, stream});
 }
 
 void Reader::Message(const Fields& header, const unsigned char* data, std::size_t n,
@@ -205,22 +162,12 @@ void Reader::Message(const Fields& header, const unsigned char* data, std::size_
     Fail(at,
          Format("a message of connection %u, which no connection record defined before it", id));
   }
-  const std::size_t index = c->second.stream;
-  DecodedStream& s = out_.streams[index];
   // The record's time: seconds and nanoseconds, in µs.
   const std::uint64_t t_us = (time & 0xffffffffu) * 1000000u + (time >> 32) / 1000u;
-  if (s.messages == 0) s.first_us = t_us;
-  s.last_us = t_us;
-  ++s.messages;
   ++whole_;
-  if (!s.kept) return;
-  const RosMessageType& type = *types_[index];
-  scratch_.resize(s.columns->size());
-  if (const std::optional<std::string> why = type.Decode(data, n, scratch_.data())) {
-    Fail(at, "a message of " + s.topic + " (" + type.name() + "): " + *why);
+  if (const std::optional<std::string> why = topics_.Message(c->second.stream, t_us, data, n, at)) {
+    Fail(at, *why);
   }
-  for (std::size_t col : s.stored) s.values.push_back(scratch_[col]);
-  s.offset.push_back(at);
 }
 
 void Reader::Record(const Fields& header, const unsigned char* data, std::size_t n,

@@ -9,6 +9,7 @@
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
+#include "accelcal/mcap_writer.hpp"
 #include "accelcal/simulate.hpp"
 #include "accelcal/ulog_writer.hpp"
 #include "io/binary_stream.hpp"
@@ -158,6 +159,62 @@ TEST_F(NativeLogTest, ImuULogCalibratesTheGyroscopeToTheSameBytesAsCsv) {
   const CliRun alone = Exec("calibrate " + u + " --gyro-topic sensor_gyro");
   EXPECT_NE(alone.err.find("--gyro-topic applies to the gyroscope"), std::string::npos)
       << alone.err;
+}
+
+// ROS 2: an IMU session (accelerometer and gyroscope) as an MCAP file of sensor_msgs/msg/Imu, its
+// chunks uncompressed, lz4 and zstd, and as two CSVs of the same float64 samples: the joint
+// calibration from each MCAP file is the one from the CSVs, byte for byte.
+TEST_F(NativeLogTest, McapCalibratesToTheSameBytesAsItsSamplesAsCsv) {
+  RawLogSimulation options;
+  options.static_s = 4.0;
+  options.transition_s = 2.0;
+  options.sigma_raw_per_sample = Vec3(2, 2, 2);
+  GyroSimulation gyro;
+  gyro.truth.K << 4778, 12, -8, -15, 4758, 20, 9, -11, 4766;
+  gyro.truth.bias = Vec3(32740, 32810, 32650);
+  gyro.sigma_raw_per_sample = Vec3(3, 3, 3);
+  ModelParameters accel = Yang2012Truth();
+  accel.bias += Vec3(32768, 32768, 32768);
+  const SimulatedImuLog log = SimulateImuLog(accel, 9.81, Yang18Directions(), options, gyro);
+  std::string acc = "time_us,x,y,z\n", rates = acc;
+  char line[160];
+  const auto row = [&](std::string* csv, std::uint64_t t_us, const Vec3& v) {
+    std::snprintf(line, sizeof line, "%llu,%.17g,%.17g,%.17g\n",
+                  static_cast<unsigned long long>(t_us), v(0), v(1), v(2));
+    *csv += line;
+  };
+  // Stamped from 1.7e9 s, as a live recording; in whole µs, which the CSVs hold exactly.
+  const std::uint64_t t0_us = 1700000000000000u;
+  for (std::size_t k = 0; k < log.time_s.size(); ++k) {
+    const auto t = t0_us + static_cast<std::uint64_t>(std::llround(log.time_s[k] * 1e6));
+    row(&acc, t, log.accel[k]);
+    row(&rates, t, log.gyro[k]);
+  }
+  const std::string a = Write("acc.csv", acc), g = Write("gyro.csv", rates);
+  const CliRun from_csv = Exec("calibrate " + a + " --gravity 9.81 --time-unit us --gyro " + g +
+                               " -o " + Path("c.json"));
+  ASSERT_EQ(from_csv.status, 0) << from_csv.err;
+  nlohmann::json jc = Calibration(Path("c.json"));
+  jc["sensors"]["gyroscope"].erase("source");
+  for (const McapCompression compression :
+       {McapCompression::kNone, McapCompression::kLz4, McapCompression::kZstd}) {
+    McapImuWriter writer(compression);
+    std::string mcap = writer.Header();
+    for (std::size_t k = 0; k < log.time_s.size(); ++k) {
+      const auto t = t0_us + static_cast<std::uint64_t>(std::llround(log.time_s[k] * 1e6));
+      mcap += writer.Sample(t * 1000, log.accel[k], log.gyro[k]);
+    }
+    mcap += writer.Finish();
+    const std::string m = Write("imu.mcap", mcap);
+    const CliRun from_mcap =
+        Exec("calibrate " + m + " --gravity 9.81 --gyro " + m + " -o " + Path("m.json"));
+    ASSERT_EQ(from_mcap.status, 0) << from_mcap.err;
+    nlohmann::json jm = Calibration(Path("m.json"));
+    ASSERT_TRUE(jm["sensors"].contains("gyroscope"));
+    jm["sensors"]["gyroscope"].erase("source");
+    EXPECT_EQ(jm.dump(1), jc.dump(1)) << static_cast<int>(compression);
+    EXPECT_NE(from_mcap.out.find("an MCAP file: /imu/data"), std::string::npos) << from_mcap.out;
+  }
 }
 
 // noise streams its log: a ULog of a still sensor (white noise) gives the same analysis as its

@@ -4,6 +4,7 @@
 // of ROS's own writer are tests/rosbag_test.py's.
 #include <bzlib.h>
 #include <lz4frame.h>
+#include <zstd.h>
 
 #include <cstring>
 #include <string>
@@ -140,6 +141,72 @@ TEST(RosMessage, RefusesDefinitionsThatDoNotHold) {
   EXPECT_EQ(why("a/B", "float64 x\n===\nfloat64 y\n"),
             "the definition of a/B has a section that does not begin \"MSG: package/Type\"");
   EXPECT_EQ(why("a/B", "float64 x-y\n"), "the definition of a/B names a field \"x-y\"");
+}
+
+// ROS 2: a ros2msg definition (bounded strings and sequences, defaults, builtin_interfaces/Time)
+// and a CDR message, every value aligned to its size from after the encapsulation.
+TEST(RosMessage, DecodesRos2Cdr) {
+  const char definition[] =
+      "std_msgs/Header header\n"
+      "uint8 flag 1   # a default value\n"
+      "int32 LIMIT = 7\n"
+      "float64 value\n"
+      "string<=8 label\n"
+      "uint16 small\n"
+      "float32[<=4] bounded\n"
+      "int16[2] pair\n"
+      "builtin_interfaces/Duration span\n"
+      "================================================================================\n"
+      "MSG: std_msgs/Header\n"
+      "builtin_interfaces/Time stamp\n"
+      "string frame_id\n"
+      "================================================================================\n"
+      "MSG: builtin_interfaces/Time\n"
+      "int32 sec\n"
+      "uint32 nanosec\n";
+  const RosMessageType type("test_msgs/msg/Test", definition, RosVersion::kRos2);
+  EXPECT_EQ(type.name(), "test_msgs/Test");
+  const std::vector<std::string> want = {"header.stamp", "flag",    "value", "small",
+                                         "pair[0]",      "pair[1]", "span"};
+  EXPECT_EQ(*type.columns(), want);
+  ASSERT_TRUE(type.stamp().has_value());
+  std::string m = std::string("\x00\x01\x00\x00", 4);  // CDR, little-endian
+  Put<std::int32_t>(&m, 1700000000);                   // offset 0: stamp.sec
+  Put<std::uint32_t>(&m, 5000);                        // 4: stamp.nanosec
+  PutString(&m, std::string("imu\0", 4));              // 8: length 4, "imu\0"
+  Put<std::uint8_t>(&m, 9);                            // 16: flag
+  m += std::string(7, '\xee');                         // 17: padding to 24
+  Put<double>(&m, -9.81);                              // 24: value
+  PutString(&m, std::string("ab\0", 3));               // 32: label (length 3), to 39
+  m += '\xee';                                         // 39: padding to 40
+  Put<std::uint16_t>(&m, 65535);                       // 40: small
+  m += std::string(2, '\xee');                         // 42: padding to 44
+  Put<std::uint32_t>(&m, 2);                           // 44: bounded: 2 float32
+  Put<float>(&m, 1.5f);
+  Put<float>(&m, 2.5f);
+  Put<std::int16_t>(&m, -1);  // 56: pair
+  Put<std::int16_t>(&m, 2);
+  Put<std::int32_t>(&m, -3);  // 60: span
+  Put<std::uint32_t>(&m, 500);
+  std::vector<double> v(want.size());
+  const auto* p = reinterpret_cast<const unsigned char*>(m.data());
+  ASSERT_FALSE(type.Decode(p, m.size(), v.data()).has_value())
+      << *type.Decode(p, m.size(), v.data());
+  EXPECT_EQ(v, (std::vector<double>{1700000000000005.0, 9, -9.81, 65535, -1, 2, -2999999.5}));
+  // Up to 3 bytes of padding may end a message; a fourth is not padding.
+  const std::string padded = m + std::string(3, '\0');
+  EXPECT_FALSE(
+      type.Decode(reinterpret_cast<const unsigned char*>(padded.data()), padded.size(), v.data())
+          .has_value());
+  const std::string longer = m + std::string(4, '\0');
+  EXPECT_TRUE(
+      type.Decode(reinterpret_cast<const unsigned char*>(longer.data()), longer.size(), v.data())
+          .has_value());
+  // Big-endian CDR is named, not misread.
+  std::string big = m;
+  big[1] = 0;
+  EXPECT_EQ(*type.Decode(reinterpret_cast<const unsigned char*>(big.data()), big.size(), v.data()),
+            "a message encoded as 00 00, not little-endian CDR (00 01), which accelcal reads");
 }
 
 // A huge fixed array is columns up to the cap; the message is still walked whole.
@@ -360,15 +427,22 @@ TEST(RosBag, ReadsWhatAKilledOrCutRecordingLeft) {
 TEST(Decompress, ExactlyTheSizeSaid) {
   std::string text;
   for (int i = 0; i < 5000; ++i) text += "imu sample " + std::to_string(i) + "\n";
-  for (const char* compression : {"bz2", "lz4"}) {
-    // The chunk record's data: the compressed bytes.
-    const std::string chunk = Chunk(text, compression);
-    const std::size_t header_len =
-        LoadLittle<std::uint32_t>(reinterpret_cast<const unsigned char*>(chunk.data()));
-    const std::string data = chunk.substr(8 + header_len);
+  for (const char* compression : {"bz2", "lz4", "zstd"}) {
+    // The compressed bytes: a bag chunk's data (bz2, lz4), a zstd frame.
+    std::string data;
+    if (std::string(compression) == "zstd") {
+      data.resize(ZSTD_compressBound(text.size()));
+      data.resize(ZSTD_compress(data.data(), data.size(), text.data(), text.size(), 3));
+    } else {
+      const std::string chunk = Chunk(text, compression);
+      const std::size_t header_len =
+          LoadLittle<std::uint32_t>(reinterpret_cast<const unsigned char*>(chunk.data()));
+      data = chunk.substr(8 + header_len);
+    }
     const auto* p = reinterpret_cast<const unsigned char*>(data.data());
-    const Compression c =
-        std::string(compression) == "bz2" ? Compression::kBz2 : Compression::kLz4Frame;
+    const Compression c = std::string(compression) == "bz2"   ? Compression::kBz2
+                          : std::string(compression) == "lz4" ? Compression::kLz4Frame
+                                                              : Compression::kZstd;
     std::vector<unsigned char> out;
     ASSERT_FALSE(Decompress(c, p, data.size(), text.size(), &out).has_value()) << compression;
     EXPECT_EQ(std::string(out.begin(), out.end()), text);

@@ -131,7 +131,7 @@ def main():
     t = threading.Thread(target=feed, daemon=True)
     t.start()
     r = run("calibrate", fifo, "-o", p("x.json"), expect=3)
-    check("read from a regular file" in r.stderr, f"a FIFO: {r.stderr}")
+    check("read from its file" in r.stderr, f"a FIFO: {r.stderr}")
 
     # Cut short: libmatio's reason, no crash, nothing written.
     with open(p("v7.mat"), "rb") as f:

@@ -40,11 +40,10 @@ void AddInputOptions(CLI::App* cmd, InputArgs* in, bool with_kind) {
   cmd->add_option("--instance", in->instance,
                   "the sensor to read from a file that interleaves several (its value in the "
                   "i, instance, multi_id, device_id or imu column; a ULog topic's multi id)");
-  cmd->add_option(
-      "--topic", in->topic,
-      "the stream to read from a binary log (a ULog topic such as sensor_accel, a "
-      "DataFlash message such as IMU, a ROS bag's or MCAP file's topic; default: its only "
-      "accelerometer stream), or a MAT-file's variable (default: its only matrix)");
+  cmd->add_option("--topic", in->topic,
+                  "the stream to read from a binary log (a ULog topic such as sensor_accel, a "
+                  "DataFlash message such as IMU, a ROS 1 or 2 bag's topic; default: its only "
+                  "accelerometer stream), or a MAT-file's variable (default: its only matrix)");
 }
 
 // The gyroscope's stream in a binary log, for the commands that read its rates (--gyro).
@@ -292,7 +291,7 @@ int accelcal::cli::RunCommandLine(int argc, char** argv) {
   InspectArgs ins;
   CLI::App* inspect = app.add_subcommand(
       "inspect",
-      "what a binary log (PX4 ULog, ArduPilot DataFlash, ROS bag, MCAP, MAT-file) holds: its "
+      "what a binary log (PX4 ULog, ArduPilot DataFlash, ROS 1 or 2 bag, MAT-file) holds: its "
       "streams, rates, parameters");
   if (Wanted(inspect)) {
     inspect->add_option("LOG", ins.path, "binary log")->required();

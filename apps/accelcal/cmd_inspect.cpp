@@ -39,11 +39,12 @@ int RunInspect(const InspectArgs& args) {
     doc["parameters"] = log.parameters;
     out = JsonText(doc);
   } else {
-    const char* format = log.format == LogFormat::kULog        ? "PX4 ULog"
-                         : log.format == LogFormat::kDataFlash ? "ArduPilot DataFlash"
-                         : log.format == LogFormat::kRosBag    ? "ROS bag"
-                         : log.format == LogFormat::kMcap      ? "MCAP"
-                                                               : "MATLAB MAT-file";
+    const char* format = log.format == LogFormat::kULog            ? "PX4 ULog"
+                         : log.format == LogFormat::kDataFlash     ? "ArduPilot DataFlash"
+                         : log.format == LogFormat::kRosBag        ? "ROS bag"
+                         : log.format == LogFormat::kMcap          ? "MCAP"
+                         : log.format == LogFormat::kRosbag2Sqlite ? "ROS 2 bag (SQLite)"
+                                                                   : "MATLAB MAT-file";
     out += Format("%s: %s, %llu bytes\n", log.source.c_str(), format,
                   static_cast<unsigned long long>(log.bytes));
     for (const char* key : {"sys_name", "ver_hw", "ver_sw", "ver_sw_release"}) {

@@ -22,19 +22,24 @@
 namespace accelcal {
 
 enum class LogFormat {
-  kText,       ///< delimited text (log_reader.hpp)
-  kULog,       ///< PX4 ULog
-  kDataFlash,  ///< ArduPilot DataFlash
-  kRosBag,     ///< ROS 1 bag (format 2.0)
-  kMcap,       ///< MCAP (ROS 2's bags; ROS 1 messages too)
-  kMat,        ///< MATLAB MAT-file (level 5, 7.3): a numeric matrix read as a text table
+  kText,           ///< delimited text (log_reader.hpp)
+  kULog,           ///< PX4 ULog
+  kDataFlash,      ///< ArduPilot DataFlash
+  kRosBag,         ///< ROS 1 bag (format 2.0)
+  kMcap,           ///< MCAP (ROS 2's bags; ROS 1 messages too)
+  kRosbag2Sqlite,  ///< ROS 2 bag in SQLite (rosbag2's .db3)
+  kMat,            ///< MATLAB MAT-file (level 5, 7.3): a numeric matrix read as a text table
 };
 template <>
 struct EnumNames<LogFormat> {
   static constexpr std::pair<LogFormat, std::string_view> kTable[] = {
-      {LogFormat::kText, "text"},           {LogFormat::kULog, "ulog"},
-      {LogFormat::kDataFlash, "dataflash"}, {LogFormat::kRosBag, "rosbag"},
-      {LogFormat::kMcap, "mcap"},           {LogFormat::kMat, "mat"}};
+      {LogFormat::kText, "text"},
+      {LogFormat::kULog, "ulog"},
+      {LogFormat::kDataFlash, "dataflash"},
+      {LogFormat::kRosBag, "rosbag"},
+      {LogFormat::kMcap, "mcap"},
+      {LogFormat::kRosbag2Sqlite, "db3"},
+      {LogFormat::kMat, "mat"}};
 };
 std::string_view ToString(LogFormat format);
 /// The format of a file that begins with `first_bytes` (16 are enough).

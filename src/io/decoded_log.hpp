@@ -50,6 +50,8 @@ struct DecodedLog {
   /// read whole before it.
   std::optional<std::string> truncated;
   std::uint64_t bytes = 0;  ///< read, in all
+  /// What DecodedStream::offset counts: the message's byte in the file, or (a database) its row.
+  std::string offset_name = "byte";
 };
 
 /// Which streams a reader decodes (given its topic, type, instance and columns); the others it

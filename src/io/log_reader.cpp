@@ -560,10 +560,10 @@ void RefuseTopicOfText(const std::string& source, const ReadOptions& options) {
 // each value in its shortest exact decimal form): every rule of a text log holds for it.
 InputData ReadMat(internal::InputFile& file, const std::string& path, std::string head,
                   const ReadOptions& options) {
-  if (!file.regular()) {
+  if (!file.regular() || path == "-") {
     throw InputError(file.name(), 0,
-                     "a MAT-file is read from a regular file (libmatio opens it by its path), "
-                     "not from a pipe or a device");
+                     "a MAT-file is read from its file (libmatio opens it by its path), not from "
+                     "standard input, a pipe or a device");
   }
   const internal::MatTable table = internal::ReadMatTable(path, options.topic);
   std::size_t row = 0, column = 0;
@@ -616,7 +616,7 @@ InputData ReadBinary(internal::InputFile& file, const std::string& path, std::st
   if (DetectLogFormat(head) == LogFormat::kMat)
     return ReadMat(file, path, std::move(head), options);
   internal::BinaryStream in(&file, std::move(head));
-  return internal::ReadNativeLog(in, &file, options);
+  return internal::ReadNativeLog(in, &file, options, &path);
 }
 
 }  // namespace

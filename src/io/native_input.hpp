@@ -25,7 +25,8 @@ void RequireUnchanged(const InputFile& file);
 
 /// Reads a binary log (native_log.hpp) from `in`, as ReadInput reads a text log; `file` (may be
 /// null: the log was in memory) is the file `in` reads, whose size and digest are the input's
-/// fingerprint (ReadOptions::fingerprint).
-InputData ReadNativeLog(BinaryStream& in, InputFile* file, const ReadOptions& options);
+/// fingerprint (ReadOptions::fingerprint), and `path` its path (a database is opened by it).
+InputData ReadNativeLog(BinaryStream& in, InputFile* file, const ReadOptions& options,
+                        const std::string* path = nullptr);
 
 }  // namespace accelcal::internal

@@ -14,6 +14,7 @@
 #include "io/mcap.hpp"
 #include "io/native_input.hpp"
 #include "io/rosbag.hpp"
+#include "io/rosbag2_sqlite.hpp"
 #include "io/ulog.hpp"
 
 namespace accelcal {
@@ -26,6 +27,7 @@ LogFormat DetectLogFormat(std::string_view first_bytes) {
   if (internal::IsRosBag(first_bytes)) return LogFormat::kRosBag;
   if (internal::IsMcap(first_bytes)) return LogFormat::kMcap;
   if (internal::IsMatFile(first_bytes)) return LogFormat::kMat;
+  if (internal::IsSqlite(first_bytes)) return LogFormat::kRosbag2Sqlite;
   return LogFormat::kText;
 }
 
@@ -231,6 +233,8 @@ const char* FormatName(LogFormat format) {
       return "a ROS bag";
     case LogFormat::kMcap:
       return "an MCAP file";
+    case LogFormat::kRosbag2Sqlite:
+      return "a ROS 2 bag (SQLite)";
     case LogFormat::kMat:
     case LogFormat::kText:
       break;
@@ -246,7 +250,7 @@ LogFormat FormatOf(BinaryStream& in) {
 }
 
 DecodedLog Decode(BinaryStream& in, LogFormat format, const KeepStream& keep,
-                  const StoreColumns& store = {}) {
+                  const StoreColumns& store, const std::string* path) {
   switch (format) {
     case LogFormat::kULog:
       return ReadULog(in, keep, store);
@@ -256,6 +260,14 @@ DecodedLog Decode(BinaryStream& in, LogFormat format, const KeepStream& keep,
       return ReadRosBag(in, keep, store);
     case LogFormat::kMcap:
       return ReadMcap(in, keep, store);
+    case LogFormat::kRosbag2Sqlite:
+      // A database is opened by its path (libsqlite3), read-only and immutable.
+      if (path == nullptr) {
+        throw InputError(in.name(), 0,
+                         "a ROS 2 bag in SQLite is read from its file (libsqlite3 opens it by its "
+                         "path), not from memory or a pipe");
+      }
+      return ReadRosbag2Sqlite(*path, in.name(), keep, store);
     case LogFormat::kMat:
     case LogFormat::kText:
       break;
@@ -265,7 +277,8 @@ DecodedLog Decode(BinaryStream& in, LogFormat format, const KeepStream& keep,
 
 }  // namespace
 
-InputData ReadNativeLog(BinaryStream& in, InputFile* file, const ReadOptions& options) {
+InputData ReadNativeLog(BinaryStream& in, InputFile* file, const ReadOptions& options,
+                        const std::string* path) {
   const std::string source = in.name();
   const LogFormat format = FormatOf(in);
   const std::string name = FormatName(format);
@@ -287,7 +300,9 @@ InputData ReadNativeLog(BinaryStream& in, InputFile* file, const ReadOptions& op
       return std::vector<std::size_t>();
     }
   };
-  DecodedLog log = Decode(in, format, keep, store);
+  // (Standard input, even redirected from a file, has no path to open.)
+  if (file == nullptr || !file->regular() || (path != nullptr && *path == "-")) path = nullptr;
+  DecodedLog log = Decode(in, format, keep, store, path);
   in.Drain();
   if (options.fingerprint && file != nullptr) RequireUnchanged(*file);
   const std::string cut = log.truncated ? "; " + *log.truncated : std::string();
@@ -336,7 +351,8 @@ InputData ReadNativeLog(BinaryStream& in, InputFile* file, const ReadOptions& op
     throw InputError(
         source, 0,
         name + "'s " + (*s.columns)[*chosen.time] +
-            (format == LogFormat::kRosBag || format == LogFormat::kMcap
+            (format == LogFormat::kRosBag || format == LogFormat::kMcap ||
+                     format == LogFormat::kRosbag2Sqlite
                  ? " is a ROS time (seconds and nanoseconds) by its specification: "
                    "the time unit option (" +
                        std::string(ToString(options.time_unit)) + ") does not apply to it"
@@ -363,8 +379,8 @@ InputData ReadNativeLog(BinaryStream& in, InputFile* file, const ReadOptions& op
     const double* row = s.values.data() + i * width;
     const Vec3 v(row[first], row[first + 1], row[first + 2]);
     const auto where = [&] {
-      return Format("%s message %zu (byte %llu)", Shown(s.topic).c_str(), i + 1,
-                    static_cast<unsigned long long>(s.offset[i]));
+      return Format("%s message %zu (%s %llu)", Shown(s.topic).c_str(), i + 1,
+                    log.offset_name.c_str(), static_cast<unsigned long long>(s.offset[i]));
     };
     if (!v.allFinite() || (chosen.time && !std::isfinite(row[0]))) {
       throw InputError(source, 0, where() + " holds a value that is not a finite number");
@@ -408,14 +424,16 @@ LogInventory InspectLog(const std::string& path) {
   if (out.format == LogFormat::kText) {
     throw InputError(
         file.name(), 0,
-        "not a binary log (PX4 ULog, ArduPilot DataFlash, ROS bag, MCAP, MAT-file): a text "
+        "not a binary log (PX4 ULog, ArduPilot DataFlash, ROS bag, MCAP, ROS 2 SQLite bag, "
+        "MAT-file): a text "
         "log's "
         "columns are its header's");
   }
   if (out.format == LogFormat::kMat) {
     // Its variables, as streams: a matrix's rows are its samples.
-    if (!file.regular()) {
-      throw InputError(file.name(), 0, "a MAT-file is read from a regular file, not a pipe");
+    if (!file.regular() || path == "-") {
+      throw InputError(file.name(), 0,
+                       "a MAT-file is read from its file, not from standard input or a pipe");
     }
     for (const internal::MatVariable& v : internal::ListMatVariables(path)) {
       LogStreamInfo info;
@@ -433,8 +451,9 @@ LogInventory InspectLog(const std::string& path) {
     return out;
   }
   internal::BinaryStream in(&file, std::move(head));
-  const internal::DecodedLog log =
-      internal::Decode(in, out.format, [](const internal::DecodedStream&) { return false; });
+  const internal::DecodedLog log = internal::Decode(
+      in, out.format, [](const internal::DecodedStream&) { return false; }, {},
+      file.regular() && path != "-" ? &path : nullptr);
   out.bytes = log.bytes;
   for (const internal::DecodedStream& s : log.streams) {
     out.streams.push_back(Describe(s));

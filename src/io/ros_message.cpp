@@ -405,6 +405,56 @@ bool RosMessageType::Impl::Walk(const Type& t, Cursor& c, double* values) const 
   return true;
 }
 
+std::string_view KnownRos2Definition(std::string_view type) {
+#define ACCELCAL_RULE \
+  "================================================================================\n"
+  // The types they use, as ROS 2 writes them after a rule.
+  static constexpr char kHeader[] = ACCELCAL_RULE
+      "MSG: std_msgs/Header\n"
+      "builtin_interfaces/Time stamp\n"
+      "string frame_id\n" ACCELCAL_RULE
+      "MSG: builtin_interfaces/Time\n"
+      "int32 sec\n"
+      "uint32 nanosec\n";
+  static constexpr char kVector3[] = ACCELCAL_RULE
+      "MSG: geometry_msgs/Vector3\n"
+      "float64 x\n"
+      "float64 y\n"
+      "float64 z\n";
+  static const std::string kImu = std::string(
+                                      "std_msgs/Header header\n"
+                                      "geometry_msgs/Quaternion orientation\n"
+                                      "float64[9] orientation_covariance\n"
+                                      "geometry_msgs/Vector3 angular_velocity\n"
+                                      "float64[9] angular_velocity_covariance\n"
+                                      "geometry_msgs/Vector3 linear_acceleration\n"
+                                      "float64[9] linear_acceleration_covariance\n") +
+                                  kHeader +
+                                  ACCELCAL_RULE
+                                  "MSG: geometry_msgs/Quaternion\n"
+                                  "float64 x 0\n"
+                                  "float64 y 0\n"
+                                  "float64 z 0\n"
+                                  "float64 w 1\n" +
+                                  kVector3;
+  static const std::string kTemperature = std::string(
+                                              "std_msgs/Header header\n"
+                                              "float64 temperature\n"
+                                              "float64 variance\n") +
+                                          kHeader;
+  static const std::string kMagneticField = std::string(
+                                                "std_msgs/Header header\n"
+                                                "geometry_msgs/Vector3 magnetic_field\n"
+                                                "float64[9] magnetic_field_covariance\n") +
+                                            kHeader + kVector3;
+#undef ACCELCAL_RULE
+  const std::string name = Normal(type);
+  if (name == "sensor_msgs/Imu") return kImu;
+  if (name == "sensor_msgs/Temperature") return kTemperature;
+  if (name == "sensor_msgs/MagneticField") return kMagneticField;
+  return {};
+}
+
 RosMessageType::RosMessageType(std::string_view type, std::string_view definition,
                                RosVersion version)
     : impl_(std::make_unique<Impl>()) {

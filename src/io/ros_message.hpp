@@ -21,6 +21,11 @@ namespace accelcal::internal {
 /// 4-byte RTPS encapsulation).
 enum class RosVersion { kRos1, kRos2 };
 
+/// The ros2msg definitions (with the types they use) of the sensor types accelcal knows, for a
+/// bag that does not carry its own (rosbag2's SQLite storage before Iron): sensor_msgs/msg/Imu,
+/// Temperature and MagneticField. Empty for another type.
+std::string_view KnownRos2Definition(std::string_view type);
+
 class RosMessageType {
  public:
   /// Parses the definition of `type` ("sensor_msgs/Imu"; ROS 2's "sensor_msgs/msg/Imu" is the

@@ -9,6 +9,7 @@
 #include <stdexcept>
 
 #include "core/crc32.hpp"
+#include "io/ros_message.hpp"
 
 namespace accelcal {
 
@@ -17,35 +18,6 @@ namespace {
 constexpr char kMagic[8] = {'\x89', 'M', 'C', 'A', 'P', '0', '\r', '\n'};
 constexpr std::size_t kChunkBytes = 768 * 1024;  // MCAP's writers' default
 constexpr std::uint16_t kSchemaId = 1, kChannelId = 1;
-
-// sensor_msgs/msg/Imu and the types it uses, as ROS 2 writes a ros2msg schema.
-constexpr char kImuDefinition[] =
-    "std_msgs/Header header\n"
-    "geometry_msgs/Quaternion orientation\n"
-    "float64[9] orientation_covariance\n"
-    "geometry_msgs/Vector3 angular_velocity\n"
-    "float64[9] angular_velocity_covariance\n"
-    "geometry_msgs/Vector3 linear_acceleration\n"
-    "float64[9] linear_acceleration_covariance\n"
-    "================================================================================\n"
-    "MSG: std_msgs/Header\n"
-    "builtin_interfaces/Time stamp\n"
-    "string frame_id\n"
-    "================================================================================\n"
-    "MSG: builtin_interfaces/Time\n"
-    "int32 sec\n"
-    "uint32 nanosec\n"
-    "================================================================================\n"
-    "MSG: geometry_msgs/Quaternion\n"
-    "float64 x 0\n"
-    "float64 y 0\n"
-    "float64 z 0\n"
-    "float64 w 1\n"
-    "================================================================================\n"
-    "MSG: geometry_msgs/Vector3\n"
-    "float64 x\n"
-    "float64 y\n"
-    "float64 z\n";
 
 template <typename T>
 void Put(std::string* out, T v) {
@@ -114,7 +86,7 @@ std::string McapImuWriter::Header() const {
   Put<std::uint16_t>(&schema, kSchemaId);
   PutString(&schema, "sensor_msgs/msg/Imu");
   PutString(&schema, "ros2msg");
-  PutString(&schema, kImuDefinition);
+  PutString(&schema, std::string(internal::KnownRos2Definition("sensor_msgs/msg/Imu")));
   out += Record(0x03, schema);
   std::string channel;
   Put<std::uint16_t>(&channel, kChannelId);

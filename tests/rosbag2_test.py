@@ -1,0 +1,232 @@
+#!/usr/bin/env python3
+"""ROS 2 bags in SQLite (rosbag2's .db3), read by accelcal (issue 20).
+
+A simulated session is written as rosbag2's SQLite storage lays it out (its `topics` and
+`messages` tables; with and without the `message_definitions` table that rosbag2 has since
+Iron), each sensor_msgs/msg/Imu message serialised here in CDR (independently of accelcal's
+writer), beside a Temperature topic and a topic of a type accelcal cannot know. The calibration
+from each bag is the one from its samples as CSV, byte for byte; the gyroscope's noise comes from
+its angular_velocity; the bag is opened without a byte written beside it or in it. Then what goes
+wrong: a topic whose definition the bag does not carry, a bag given through a pipe, a truncated
+database, an SQLite database that is not a bag.
+
+Usage: rosbag2_test.py ACCELCAL WORKDIR
+"""
+import hashlib
+import json
+import os
+import random
+import shutil
+import sqlite3
+import struct
+import subprocess
+import sys
+
+failures = []
+T0_NS = 1_700_000_000 * 10**9  # a live recording's stamps
+
+
+def check(condition, what):
+    if not condition:
+        failures.append(what)
+        print("FAIL:", what)
+
+
+def run(accelcal, *args, expect=0, stdin=None):
+    p = subprocess.run([accelcal, *args], capture_output=True, text=True, stdin=stdin)
+    if expect is not None and p.returncode != expect:
+        check(False, f"accelcal {' '.join(args)}: exit {p.returncode}, wanted {expect}\n"
+                     f"{p.stdout}{p.stderr}")
+    return p
+
+
+class Cdr:
+    """CDR, little-endian, as ROS 2 serialises: each value aligned to its size from the start
+    after the 4-byte encapsulation."""
+
+    def __init__(self):
+        self.body = bytearray()
+
+    def put(self, fmt, value):
+        size = struct.calcsize(fmt)
+        self.body += b"\0" * (-len(self.body) % size)
+        self.body += struct.pack("<" + fmt, value)
+
+    def string(self, s):
+        b = s.encode() + b"\0"
+        self.put("I", len(b))
+        self.body += b
+
+    def bytes(self):
+        return b"\x00\x01\x00\x00" + bytes(self.body)
+
+
+def imu_message(t_ns, accel, gyro):
+    m = Cdr()
+    m.put("i", t_ns // 10**9)
+    m.put("I", t_ns % 10**9)
+    m.string("imu_link")
+    for q in (0.0, 0.0, 0.0, 1.0):
+        m.put("d", q)
+    for i in range(9):
+        m.put("d", -1.0 if i == 0 else 0.0)
+    for v in gyro:
+        m.put("d", v)
+    for _ in range(9):
+        m.put("d", 0.0)
+    for v in accel:
+        m.put("d", v)
+    for _ in range(9):
+        m.put("d", 0.0)
+    return m.bytes()
+
+
+def temperature_message(t_ns, celsius):
+    m = Cdr()
+    m.put("i", t_ns // 10**9)
+    m.put("I", t_ns % 10**9)
+    m.string("imu_link")
+    m.put("d", celsius)
+    m.put("d", 0.0)
+    return m.bytes()
+
+
+IMU_DEFINITION = (
+    "std_msgs/Header header\ngeometry_msgs/Quaternion orientation\n"
+    "float64[9] orientation_covariance\ngeometry_msgs/Vector3 angular_velocity\n"
+    "float64[9] angular_velocity_covariance\ngeometry_msgs/Vector3 linear_acceleration\n"
+    "float64[9] linear_acceleration_covariance\n" + "=" * 80 + "\nMSG: std_msgs/Header\n"
+    "builtin_interfaces/Time stamp\nstring frame_id\n" + "=" * 80 +
+    "\nMSG: builtin_interfaces/Time\nint32 sec\nuint32 nanosec\n" + "=" * 80 +
+    "\nMSG: geometry_msgs/Quaternion\nfloat64 x 0\nfloat64 y 0\nfloat64 z 0\nfloat64 w 1\n" +
+    "=" * 80 + "\nMSG: geometry_msgs/Vector3\nfloat64 x\nfloat64 y\nfloat64 z\n")
+
+
+def write_db3(path, rows, iron):
+    """rosbag2's SQLite storage: Humble's tables, and Iron's message_definitions when `iron`."""
+    if os.path.exists(path):
+        os.remove(path)
+    db = sqlite3.connect(path)
+    db.execute("CREATE TABLE schema(schema_version INTEGER PRIMARY KEY, ros_distro TEXT NOT NULL)")
+    db.execute("CREATE TABLE metadata(id INTEGER PRIMARY KEY, metadata_version INTEGER NOT NULL,"
+               " metadata TEXT NOT NULL)")
+    db.execute("CREATE TABLE topics(id INTEGER PRIMARY KEY, name TEXT NOT NULL, type TEXT NOT NULL,"
+               " serialization_format TEXT NOT NULL, offered_qos_profiles TEXT NOT NULL)")
+    db.execute("CREATE TABLE messages(id INTEGER PRIMARY KEY, topic_id INTEGER NOT NULL,"
+               " timestamp INTEGER NOT NULL, data BLOB NOT NULL)")
+    db.execute("CREATE INDEX timestamp_idx ON messages (timestamp ASC)")
+    topics = [(1, "/imu/data", "sensor_msgs/msg/Imu"), (2, "/imu/temperature",
+                                                        "sensor_msgs/msg/Temperature"),
+              (3, "/vendor/status", "vendor_msgs/msg/Status")]
+    for id_, name, type_ in topics:
+        db.execute("INSERT INTO topics VALUES (?, ?, ?, 'cdr', '')", (id_, name, type_))
+    if iron:
+        db.execute("CREATE TABLE message_definitions(id INTEGER PRIMARY KEY, topic_type TEXT NOT"
+                   " NULL, encoding TEXT NOT NULL, encoded_message_definition TEXT NOT NULL,"
+                   " type_description_hash TEXT NOT NULL)")
+        db.execute("INSERT INTO message_definitions VALUES (1, 'sensor_msgs/msg/Imu', 'ros2msg',"
+                   " ?, '')", (IMU_DEFINITION,))
+    gyro = random.Random(7)
+    for i, (t_us, x, y, z) in enumerate(rows):
+        t_ns = T0_NS + t_us * 1000
+        w = [gyro.gauss(0, 1e-3) for _ in range(3)]
+        db.execute("INSERT INTO messages (topic_id, timestamp, data) VALUES (1, ?, ?)",
+                   (t_ns, imu_message(t_ns, (x, y, z), w)))
+        if i % 10 == 0:
+            db.execute("INSERT INTO messages (topic_id, timestamp, data) VALUES (2, ?, ?)",
+                       (t_ns, temperature_message(t_ns, 25.0)))
+            db.execute("INSERT INTO messages (topic_id, timestamp, data) VALUES (3, ?, ?)",
+                       (t_ns, b"\x00\x01\x00\x00\x07\x00\x00\x00"))
+    db.commit()
+    db.close()
+
+
+def calibration(path):
+    with open(path) as f:
+        j = json.load(f)
+    j.pop("provenance", None)
+    j["sensors"]["accelerometer"].pop("source", None)
+    return json.dumps(j, indent=1, sort_keys=True)
+
+
+def main():
+    accelcal, work = sys.argv[1], sys.argv[2]
+    shutil.rmtree(work, ignore_errors=True)
+    os.makedirs(work)
+    p = lambda name: os.path.join(work, name)  # noqa: E731
+
+    run(accelcal, "simulate", "--scenario", "yang2012", "--raw", "--duration", "20", "-o",
+        p("sim.csv"))
+    rows = []
+    with open(p("sim.csv")) as f:
+        next(f)
+        for line in f:
+            t, x, y, z = line.split(",")
+            rows.append((round(float(t) * 1e6), float(x), float(y), float(z)))
+    with open(p("same.csv"), "w") as f:
+        f.write("time_us,x,y,z\n")
+        for t_us, x, y, z in rows:
+            f.write(f"{T0_NS // 1000 + t_us},{x!r},{y!r},{z!r}\n")
+    run(accelcal, "calibrate", p("same.csv"), "--time-unit", "us", "-o", p("csv.json"))
+    want = calibration(p("csv.json"))
+
+    for iron in (False, True):
+        name = "iron" if iron else "humble"
+        bag = p(f"{name}.db3")
+        write_db3(bag, rows, iron)
+        before = hashlib.sha256(open(bag, "rb").read()).hexdigest()
+        listing = sorted(os.listdir(work))
+        r = run(accelcal, "calibrate", bag, "-o", p(f"{name}.json"))
+        check(r.returncode == 0 and calibration(p(f"{name}.json")) == want,
+              f"the {name} bag calibrates as its samples as CSV")
+        check("a ROS 2 bag (SQLite): /imu/data" in r.stdout, f"the summary:\n{r.stdout}")
+        check(hashlib.sha256(open(bag, "rb").read()).hexdigest() == before and
+              sorted(os.listdir(work)) == sorted(listing + [f"{name}.json"]),
+              f"the {name} bag is read without a byte written in or beside it: "
+              f"{sorted(os.listdir(work))}")
+        doc = json.loads(run(accelcal, "inspect", bag, "--json").stdout)
+        streams = {s["topic"]: s for s in doc["streams"]}
+        check(doc["format"] == "db3" and streams["/imu/data"]["samples"] == len(rows) and
+              streams["/imu/data"]["sensors"] == ["accelerometer", "gyroscope"] and
+              streams["/imu/temperature"]["samples"] == (len(rows) + 9) // 10 and
+              "temperature" in doc["fields"]["/imu/temperature"] and
+              doc["fields"]["/vendor/status"] == [],
+              f"inspect of the {name} bag: {doc['streams']}")
+        r = run(accelcal, "noise", bag, "--gyro", bag, "--still", "--json")
+        for axis in json.loads(r.stdout)["gyroscope"]["axes"]:
+            white = axis["terms"]["white"]
+            check(abs(white["value"] - 1e-4) < 4 * white["sigma"],
+                  f"the gyroscope's white noise from the {name} bag: {white}")
+        # A topic whose definition the bag does not carry: said, not guessed.
+        r = run(accelcal, "calibrate", bag, "--topic", "/vendor/status", "--columns", "1,2,3",
+                "-o", p("x.json"), expect=3)
+        check("does not carry its definition" in r.stderr, f"an unknown type: {r.stderr}")
+
+    # Through a pipe, a database cannot be opened: said.
+    with open(p("iron.db3"), "rb") as f:
+        r = run(accelcal, "calibrate", "-", "-o", p("x.json"), expect=3, stdin=f)
+    check("read from its file" in r.stderr, f"a bag through a pipe: {r.stderr}")
+    # A truncated database: SQLite's reason, no crash, nothing written.
+    with open(p("iron.db3"), "rb") as f:
+        data = f.read()
+    with open(p("cut.db3"), "wb") as f:
+        f.write(data[: len(data) // 2])
+    r = run(accelcal, "calibrate", p("cut.db3"), "-o", p("cut.json"), expect=3)
+    check("SQLite" in r.stderr and not os.path.exists(p("cut.json")),
+          f"a truncated database: {r.stderr}")
+    # An SQLite database that is not a bag.
+    db = sqlite3.connect(p("other.db3"))
+    db.execute("CREATE TABLE things(a)")
+    db.commit()
+    db.close()
+    r = run(accelcal, "inspect", p("other.db3"), expect=3)
+    check("not a ROS 2 bag" in r.stderr, f"another database: {r.stderr}")
+
+    if failures:
+        print(f"{len(failures)} failure(s)")
+        sys.exit(1)
+    print("rosbag2 sqlite: all checks passed")
+
+
+if __name__ == "__main__":
+    main()

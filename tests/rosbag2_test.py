@@ -167,7 +167,8 @@ def main():
         f.write("time_us,x,y,z\n")
         for t_us, x, y, z in rows:
             f.write(f"{T0_NS // 1000 + t_us},{x!r},{y!r},{z!r}\n")
-    run(accelcal, "calibrate", p("same.csv"), "--time-unit", "us", "-o", p("csv.json"))
+    run(accelcal, "calibrate", p("same.csv"), "--time-unit", "us", "--raw-units", "m/s2", "-o",
+        p("csv.json"))
     want = calibration(p("csv.json"))
 
     for iron in (False, True):

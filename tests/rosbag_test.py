@@ -108,7 +108,8 @@ def main():
         f.write("time_us,x,y,z\n")
         for t_us, x, y, z in rows:  # stamped from 1.7e9 s as in the bags
             f.write(f"{T0_S * 1_000_000 + t_us},{x!r},{y!r},{z!r}\n")
-    run("calibrate", p("same.csv"), "--time-unit", "us", "-o", p("csv.json"))
+    run("calibrate", p("same.csv"), "--time-unit", "us", "--raw-units", "m/s2", "-o",
+        p("csv.json"))
     want = calibration(p("csv.json"))
 
     # Every chunk compression ROS writes: the same calibration.

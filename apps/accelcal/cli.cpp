@@ -540,6 +540,15 @@ int accelcal::cli::RunCommandLine(int argc, char** argv) {
         ->add_option("--instance", exp.instance,
                      "accelerometer index: PX4 CAL_ACC<n>, ArduPilot INS_ACC / INS_ACC2 / INS_ACC3")
         ->capture_default_str();
+    export_cmd->add_option("--device-id", exp.device_id,
+                           "px4: the sensor's device id for CAL_ACC<n>_ID (default: the one "
+                           "of the ULog stream calibrated)");
+    export_cmd
+        ->add_option("--current-params", exp.current_params,
+                     "ardupilot: the parameters in force when the log was recorded (.param "
+                     "file), composed with a calibration of IMU or ACC records (default: the "
+                     "log's PARM values)")
+        ->check(kFileName);
     export_cmd->add_option("--c-prefix", exp.c_prefix, "prefix of the C identifiers (c-header)")
         ->capture_default_str();
     export_cmd
@@ -647,8 +656,8 @@ int accelcal::cli::RunCommandLine(int argc, char** argv) {
     }
     if (*export_cmd) {
       data_subject = exp.calibration;
-      for (const char* name :
-           {"raw-unit", "gyro-raw-unit", "instance", "c-prefix", "sensor", "noise", "rostopic"}) {
+      for (const char* name : {"raw-unit", "gyro-raw-unit", "instance", "c-prefix", "sensor",
+                               "noise", "rostopic", "device-id", "current-params"}) {
         if (export_cmd->count(std::string("--") + name) > 0) exp.given.push_back(name);
       }
       return RunExport(exp);

@@ -379,7 +379,8 @@ Provenance MakeProvenance(const CalibrateArgs& args, const LoadedInput& in,
     provenance.inputs.push_back({args.orientations, orientations->bytes, orientations->sha256});
   }
   if (gyro != nullptr && !args.gyro.empty()) {
-    provenance.inputs.push_back({gyro->path, gyro->data.bytes, gyro->data.sha256});
+    provenance.inputs.push_back(
+        {gyro->path, gyro->data.bytes, gyro->data.sha256, gyro->data.stream});
   }
   provenance.date = args.date;
   return provenance;
@@ -388,10 +389,27 @@ Provenance MakeProvenance(const CalibrateArgs& args, const LoadedInput& in,
 // The end of every calibrate: the file to -o, then the file to stdout (--json) or the summary
 // (`input_note`, when not empty, printed after the input's description).
 // `mean_sigmas`: the 1σ of each position's mean as the fit took it (empty: none).
-int WriteCalibration(const CalibrateArgs& args, const LoadedInput& in, const Gravity& g,
+// The raw unit's label: --raw-units when given, else the unit every input's binary-log stream
+// has by its specification (PX4's sensor_accel, ArduPilot's IMU, a ROS Imu: m/s2), else "raw".
+std::string RawUnitLabel(const CalibrateArgs& args, const LoadedInput& in) {
+  for (const auto& [name, values] : args.given_options) {
+    if (name == "raw-units") return args.raw_units;
+  }
+  std::string unit;
+  for (const LoadedFile& f : in.files) {
+    if (!f.data.stream || f.data.stream->unit.empty()) return args.raw_units;
+    if (!unit.empty() && unit != f.data.stream->unit) return args.raw_units;
+    unit = f.data.stream->unit;
+  }
+  return unit.empty() ? args.raw_units : unit;
+}
+
+int WriteCalibration(const CalibrateArgs& given, const LoadedInput& in, const Gravity& g,
                      const CalibrationResult& result, const std::vector<Vec3>& mean_sigmas,
                      const ModelSelection* selection, const std::string& input_note,
                      const OrientationFile* orientations = nullptr, const GyroRun* gyro = nullptr) {
+  CalibrateArgs args = given;
+  args.raw_units = RawUnitLabel(given, in);
   DiagnosisInput diagnosis_input;
   diagnosis_input.result = &result;
   diagnosis_input.positions = &in.positions;

@@ -14,6 +14,7 @@
 #include "accelcal/export.hpp"
 #include "accelcal/gyro_calibration.hpp"
 #include "accelcal/noise_file.hpp"
+#include "accelcal/parameter_file.hpp"
 #include "accelcal/report.hpp"
 #include "cli_common.hpp"
 #include "output.hpp"
@@ -143,6 +144,8 @@ void RefuseUnusedOptions(ExportFormat format, const ExportArgs& args) {
        "kalibr-imu, ros, kalibr, openvins and basalt"},
       {"rostopic", in({F::kKalibrImu, F::kKalibr, F::kOpenVins}),
        "kalibr-imu, kalibr and openvins"},
+      {"device-id", in({F::kPx4}), "px4"},
+      {"current-params", in({F::kArduPilot}), "ardupilot"},
   };
   for (const Use& use : uses) {
     if (!use.used &&
@@ -171,6 +174,11 @@ int RunExport(const ExportArgs& args) {
   if (!args.noise.empty()) {
     options.noise = ParseNoiseJson(ReadFileToString(args.noise, kMaxSmallFileBytes), args.noise);
   }
+  options.device_id = args.device_id;
+  if (!args.current_params.empty()) {
+    options.current_params = ParseParameterFile(
+        ReadFileToString(args.current_params, kMaxSmallFileBytes), args.current_params);
+  }
   const bool noise_only = format == ExportFormat::kKalibrImu || format == ExportFormat::kRos;
   RefuseUnusedOptions(format, args);
   ExportResult exported;
@@ -188,7 +196,8 @@ int RunExport(const ExportArgs& args) {
         noise_only ? args.noise.empty() ? args.calibration : args.noise : args.calibration, 0,
         WithFlags(e.what(), {{"gyro_raw_unit", "--gyro-raw-unit"},
                              {"raw_unit", "--raw-unit"},
-                             {"raw_units", "calibrate --raw-units"}}));
+                             {"raw_units", "calibrate --raw-units"},
+                             {"current_params", "--current-params FILE.param"}}));
   }
   // The file (or stdout) gets the export alone; what it means and what it lost goes to the
   // terminal: stdout when the export went to a file, else stderr.

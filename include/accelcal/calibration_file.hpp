@@ -21,6 +21,7 @@
 #include "accelcal/gyro_calibration.hpp"
 #include "accelcal/load_positions.hpp"
 #include "accelcal/model_selection.hpp"
+#include "accelcal/native_log.hpp"
 #include "accelcal/positions.hpp"
 
 namespace accelcal {
@@ -34,6 +35,8 @@ struct InputRecord {
   std::string name;
   std::uint64_t bytes = 0;
   std::string sha256;  ///< 64 lowercase hexadecimal digits; empty when not hashed (not written)
+  /// The stream of a binary log it was read from (written as `stream`), when it was one.
+  std::optional<SourceStream> stream{};
 };
 
 /// Where a calibration came from: written as `provenance`.

@@ -16,8 +16,10 @@ class DataFlashImuWriter {
  public:
   /// `instance`: the I field of every record.
   explicit DataFlashImuWriter(std::uint8_t instance = 0) : instance_(instance) {}
-  /// The FMT records of FMT itself and of IMU.
+  /// The FMT records of FMT itself, of PARM and of IMU.
   std::string Header() const;
+  /// One PARM record (TimeUS, Name, Value: "QNf"), as ArduPilot logs each parameter at the start.
+  std::string Parameter(std::uint64_t time_us, const std::string& name, float value) const;
   /// One IMU record at `time_us` [µs]: the accelerometer's reading and the gyroscope's rate as
   /// float32, temperature NaN. Throws std::invalid_argument for a value that is not finite or
   /// beyond float32's range.

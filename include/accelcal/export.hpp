@@ -20,6 +20,7 @@
 /// The conventions (ExportResult::convention) hold the label the same way. Every number is
 /// written the same in every locale (a host program's setlocale(LC_NUMERIC, ...) changes none).
 
+#include <map>
 #include <optional>
 #include <string>
 #include <string_view>
@@ -80,6 +81,14 @@ struct ExportOptions {
   std::string gyro_raw_unit;
   /// Sensor instance: PX4 CAL_ACC<n> (0-based), ArduPilot INS_ACC / INS_ACC2 / INS_ACC3 (0, 1, 2).
   int instance = 0;
+  /// PX4: the CAL_ACC<n>_ID to write (the sensor's device id, by which PX4 matches a calibration
+  /// to its sensor). Unset: the device id of the ULog stream the calibration was made from (its
+  /// provenance), else none is written and the export says PX4 will not apply it.
+  std::optional<std::uint64_t> device_id;
+  /// ArduPilot: the parameters in force when the log was recorded (a .param file's names and
+  /// values), for a calibration of data they had already corrected (IMU, ACC records). Unset:
+  /// the log's own PARM values, which the calibration file's provenance records.
+  std::optional<std::map<std::string, double>> current_params;
   /// Prefix of the C identifiers (c-header).
   std::string c_prefix = "accelcal";
   /// The sensor a one-sensor format (imutk) holds: "accelerometer" or "gyroscope". The c-header

@@ -18,6 +18,7 @@
 #include <string_view>
 #include <vector>
 
+#include "accelcal/native_log.hpp"
 #include "accelcal/positions.hpp"
 #include "accelcal/time_axis.hpp"
 #include "accelcal/types.hpp"
@@ -124,6 +125,8 @@ struct InputData {
   /// With ReadOptions::fingerprint (ReadInput): the bytes read and their SHA-256 (hexadecimal).
   std::uint64_t bytes = 0;
   std::string sha256;
+  /// A raw log read from a binary log's stream: which, and the calibration in force.
+  std::optional<SourceStream> stream;
 };
 
 /// Parses text already in memory, or a binary log (native_log.hpp); `source` names it in errors.

@@ -64,6 +64,25 @@ struct KnownStream {
 /// and angular_velocity.
 const std::vector<KnownStream>& KnownStreams();
 
+/// The stream of a binary log a raw log was read from, as a calibration file's provenance records
+/// it (`inputs[].stream`): what the parameters exported from the calibration are for.
+struct SourceStream {
+  std::string format;  ///< ToString(LogFormat): "ulog", "dataflash", "rosbag", "mcap", "db3"
+  std::string topic;
+  std::string type;  ///< its message type (a ROS type; a PX4 or ArduPilot topic's own name)
+  int instance = 0;  ///< ULog multi id, DataFlash I
+  std::optional<std::uint64_t> device_id;
+  /// The readings' unit by the format's specification ("m/s2", "rad/s": a known stream's,
+  /// KnownStream::unit); empty for fields the user chose.
+  std::string unit;
+  /// Already corrected by the calibration in force when it was logged (KnownStream::corrected):
+  /// a calibration of it is a correction on top of that one.
+  bool corrected = false;
+  /// The log's parameters that make the sensors' calibration in force (PX4's CAL_ACC*, CAL_GYRO*,
+  /// SENS_BOARD_*; ArduPilot's INS_ACC*, INS_GYR*, AHRS_ORIENTATION), at the log's start.
+  std::map<std::string, double> calibration_in_force;
+};
+
 /// One stream of a binary log: a topic's instance.
 struct LogStreamInfo {
   std::string topic;

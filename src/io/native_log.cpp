@@ -403,6 +403,21 @@ InputData ReadNativeLog(BinaryStream& in, InputFile* file, const ReadOptions& op
     raw.line.push_back(static_cast<std::uint32_t>(std::min<std::size_t>(i + 1, UINT32_MAX)));
   }
   if (log.truncated) raw.read_warning = *log.truncated;
+  SourceStream& stream = data.stream.emplace();
+  stream.format = std::string(ToString(format));
+  stream.topic = s.topic;
+  stream.type = s.type;
+  stream.instance = s.instance;
+  stream.device_id = s.device_id;
+  const KnownStream* known = Known(s.type, sensor);
+  stream.corrected = known != nullptr && known->corrected;
+  if (known != nullptr && options.columns.empty()) stream.unit = std::string(known->unit);
+  for (const auto& [parameter, value] : log.parameters) {
+    for (const char* prefix :
+         {"CAL_ACC", "CAL_GYRO", "SENS_BOARD_", "INS_ACC", "INS_GYR", "AHRS_ORIENTATION"}) {
+      if (parameter.rfind(prefix, 0) == 0) stream.calibration_in_force[parameter] = value;
+    }
+  }
   FinishRawLog(&raw, microseconds ? TimeUnit::kMicroseconds : options.time_unit, options.rate_hz,
                chosen.time ? std::string_view((*s.columns)[*chosen.time]) : std::string_view());
   if (options.fingerprint) {

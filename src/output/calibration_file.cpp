@@ -304,6 +304,18 @@ ordered_json ProvenanceSection(const Provenance& provenance) {
   for (const InputRecord& input : provenance.inputs) {
     ordered_json entry = {{"name", input.name}, {"bytes", input.bytes}};
     if (!input.sha256.empty()) entry["sha256"] = input.sha256;
+    if (const std::optional<SourceStream>& s = input.stream) {
+      ordered_json parameters = ordered_json::object();
+      for (const auto& [name, value] : s->calibration_in_force) parameters[name] = value;
+      entry["stream"] = {{"format", s->format},
+                         {"topic", s->topic},
+                         {"type", s->type},
+                         {"instance", s->instance},
+                         {"device_id", s->device_id ? ordered_json(*s->device_id) : ordered_json()},
+                         {"unit", s->unit},
+                         {"corrected", s->corrected},
+                         {"calibration_in_force", parameters}};
+    }
     inputs.push_back(entry);
   }
   doc["inputs"] = inputs;
@@ -361,7 +373,7 @@ bool Digits(const std::string& text, std::size_t at, std::size_t count, int low,
 std::vector<InputRecord> InputRecords(const LoadedInput& input) {
   std::vector<InputRecord> records;
   for (const LoadedFile& f : input.files) {
-    records.push_back({f.path, f.data.bytes, f.data.sha256});
+    records.push_back({f.path, f.data.bytes, f.data.sha256, f.data.stream});
   }
   return records;
 }

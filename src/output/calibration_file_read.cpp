@@ -375,6 +375,41 @@ LoadedCalibration::Gyroscope ReadGyroscope(const Reader& r, const ordered_json& 
   return g;
 }
 
+// A binary log's stream (InputRecord::stream).
+SourceStream ReadSourceStream(const ordered_json& s, const Reader& r) {
+  if (!s.is_object()) r.Fail(r.Key("") + " must be an object");
+  const auto text = [&](const char* key) {
+    if (!s.contains(key)) r.Fail(r.Key(key) + " is missing");
+    return r.Text(s, key);
+  };
+  SourceStream stream;
+  stream.format = text("format");
+  stream.topic = text("topic");
+  stream.type = text("type");
+  if (!s.contains("instance") || !s["instance"].is_number_integer()) {
+    r.Fail(r.Key("instance") + " must be an integer");
+  }
+  stream.instance = s["instance"].get<int>();
+  if (s.contains("device_id") && !s["device_id"].is_null()) {
+    if (!s["device_id"].is_number_unsigned()) r.Fail(r.Key("device_id") + " must be a count");
+    stream.device_id = s["device_id"].get<std::uint64_t>();
+  }
+  if (!s.contains("corrected") || !s["corrected"].is_boolean()) {
+    r.Fail(r.Key("corrected") + " must be true or false");
+  }
+  stream.corrected = s["corrected"].get<bool>();
+  if (s.contains("unit")) stream.unit = r.Text(s, "unit");
+  if (s.contains("calibration_in_force")) {
+    const ordered_json& parameters = s["calibration_in_force"];
+    if (!parameters.is_object()) r.Fail(r.Key("calibration_in_force") + " must be an object");
+    for (const auto& [parameter, value] : parameters.items()) {
+      stream.calibration_in_force[parameter] =
+          r.Number(value, r.Key("calibration_in_force." + parameter));
+    }
+  }
+  return stream;
+}
+
 void ReadProvenance(const Reader& r, const ordered_json& doc, Provenance& provenance) {
   if (!doc.contains("provenance")) return;
   const ordered_json& p = r.Object(doc, "provenance");
@@ -407,6 +442,7 @@ void ReadProvenance(const Reader& r, const ordered_json& doc, Provenance& proven
                        input.sha256.find_first_not_of("0123456789abcdef") == std::string::npos;
       if (!hex) f.Fail(f.Key("sha256") + " must be 64 lowercase hexadecimal digits");
     }
+    if (i.contains("stream")) input.stream = ReadSourceStream(i["stream"], f.Inside("stream"));
     provenance.inputs.push_back(std::move(input));
   }
 }

@@ -9,7 +9,7 @@ namespace accelcal {
 
 namespace {
 
-constexpr unsigned char kFmt = 128, kImu = 163;
+constexpr unsigned char kFmt = 128, kImu = 163, kParm = 64;
 
 template <typename T>
 void Put(std::string* out, T value) {
@@ -44,8 +44,21 @@ std::string FmtRecord(unsigned char type, unsigned char length, const std::strin
 
 std::string DataFlashImuWriter::Header() const {
   return FmtRecord(kFmt, 89, "FMT", "BBnNZ", "Type,Length,Name,Format,Columns") +
+         FmtRecord(kParm, 31, "PARM", "QNf", "TimeUS,Name,Value") +
          FmtRecord(kImu, 54, "IMU", "QBffffffIIfBBHH",
                    "TimeUS,I,GyrX,GyrY,GyrZ,AccX,AccY,AccZ,EG,EA,T,GH,AH,GHz,AHz");
+}
+
+std::string DataFlashImuWriter::Parameter(std::uint64_t time_us, const std::string& name,
+                                          float value) const {
+  if (name.empty() || name.size() > 16) {
+    throw std::invalid_argument("a DataFlash parameter's name has 1 to 16 characters");
+  }
+  std::string out = Head(kParm);
+  Put<std::uint64_t>(&out, time_us);
+  PutText(&out, name, 16);
+  Put<float>(&out, value);
+  return out;
 }
 
 std::string DataFlashImuWriter::Sample(std::uint64_t time_us, const Vec3& accel,

@@ -266,15 +266,58 @@ std::string Header(const LoadedCalibration& cal) {
   return text + " (" + std::string(ToString(cal.model)) + " model)";
 }
 
+// The binary log's stream the accelerometer was calibrated from, as the provenance records it.
+const SourceStream* AccelerometerStream(const LoadedCalibration& cal) {
+  for (const InputRecord& input : cal.provenance.inputs) {
+    if (input.stream && (cal.source.empty() || input.name == cal.source)) return &*input.stream;
+  }
+  return nullptr;
+}
+
 ExportResult Px4(const LoadedCalibration& cal, const ExportOptions& options) {
+  const SourceStream* stream = AccelerometerStream(cal);
+  if (stream != nullptr && stream->corrected) {
+    // sensor_combined: the output of the calibration in force, whose slot is not in the log.
+    throw DataError("this calibration is of " + internal::VisibleLine(stream->topic) +
+                    ", which the calibration in force had already corrected; PX4's CAL_ACC "
+                    "parameters correct the driver's output: calibrate sensor_accel (logged at "
+                    "the sensor's rate) and export that");
+  }
   const double raw_ms2 = RawToMetersPerSecond2(cal, options, "PX4", "its drivers scale the counts");
   const Diagonal d = DiagonalPart(cal, raw_ms2);
   for (int i = 0; i < 3; ++i) Finite(d.offset_ms2(i)), Finite(d.scale(i));
+  std::optional<std::uint64_t> id = options.device_id;
+  if (!id && stream != nullptr) id = stream->device_id;
+  if (id && *id > 0xFFFFFFFFu) {
+    throw std::invalid_argument(
+        Format("device id %llu: PX4's are 32-bit", static_cast<unsigned long long>(*id)));
+  }
   ExportResult out;
   out.convention = DiagonalConvention("PX4 (src/lib/sensor_calibration)", cal, raw_ms2);
   const std::string prefix = "CAL_ACC" + std::to_string(options.instance) + "_";
+  std::string which = "# " + prefix.substr(0, prefix.size() - 1) + ": ";
+  if (stream != nullptr) {
+    which += Format("%s instance %d of the log", internal::VisibleLine(stream->topic).c_str(),
+                    stream->instance);
+  } else {
+    which += "the calibrated sensor";
+  }
+  if (id) {
+    which += Format(", device id %llu", static_cast<unsigned long long>(*id));
+  } else {
+    which += "; its device id is unknown: " + prefix +
+             "ID is not written, and PX4 applies a calibration only to the sensor of its ID "
+             "(give the device id: PX4's `listener sensor_accel` shows it)";
+    out.convention += "; " + prefix + "ID not written (no device id known)";
+  }
   out.text = "# Onboard parameters for Vehicle 1\n#\n#" + Header(cal) + "\n# " + out.convention +
-             "\n#\n# Vehicle-Id Component-Id Name Value Type\n";
+             "\n" + which + "\n#\n# Vehicle-Id Component-Id Name Value Type\n";
+  // PX4 reads a parameter's value by its MAVLink type: 6 int32, 9 float.
+  if (id) {
+    out.text += Format("1\t1\t%sID\t%d\t6\n", prefix.c_str(),
+                       static_cast<std::int32_t>(static_cast<std::uint32_t>(*id)));
+    out.text += Format("1\t1\t%sPRIO\t50\t6\n", prefix.c_str());  // PX4's default priority
+  }
   const char axes[3] = {'X', 'Y', 'Z'};
   for (int i = 0; i < 3; ++i) {
     out.text += Format("1\t1\t%s%cOFF\t%.9g\t9\n", prefix.c_str(), axes[i], d.offset_ms2(i));
@@ -290,20 +333,76 @@ ExportResult ArduPilot(const LoadedCalibration& cal, const ExportOptions& option
   if (options.instance > 2) throw std::invalid_argument("ArduPilot has accelerometers 0, 1 and 2");
   const double raw_ms2 =
       RawToMetersPerSecond2(cal, options, "ArduPilot", "its drivers scale the counts");
-  const Diagonal d = DiagonalPart(cal, raw_ms2);
+  Diagonal d = DiagonalPart(cal, raw_ms2);
   for (int i = 0; i < 3; ++i) Finite(d.offset_ms2(i)), Finite(d.scale(i));
   ExportResult out;
   out.convention = DiagonalConvention("ArduPilot (AP_InertialSensor)", cal, raw_ms2);
   const std::string prefix =
       options.instance == 0 ? "INS_ACC" : "INS_ACC" + std::to_string(options.instance + 1);
-  out.text = "#" + Header(cal) + "\n# " + out.convention + "\n";
   const char axes[3] = {'X', 'Y', 'Z'};
+  std::string composed;
+  const SourceStream* stream = AccelerometerStream(cal);
+  if (stream != nullptr && stream->corrected) {
+    // The IMU and ACC records are a = (p - o_old) .* s_old, rotated by AHRS_ORIENTATION; the
+    // calibration of them, f = (a - o) .* s, is then f = (p - (o_old + o ./ s_old)) .* (s_old .*
+    // s): the parameters for the sensor's own readings (AHRS_ORIENTATION 0: no rotation between).
+    const std::map<std::string, double>& in_force =
+        options.current_params ? *options.current_params : stream->calibration_in_force;
+    const char* from = options.current_params ? "the parameters given" : "the log's PARM records";
+    const auto value = [&](const std::string& name) {
+      const auto it = in_force.find(name);
+      if (it == in_force.end()) {
+        throw DataError("this calibration is of ArduPilot's " +
+                        internal::VisibleLine(stream->topic) +
+                        " records, already corrected by the calibration in force, and " + from +
+                        " do not hold " + name +
+                        ": give the parameters in force when the log was recorded "
+                        "(current_params)");
+      }
+      return it->second;
+    };
+    if (const auto it = in_force.find("AHRS_ORIENTATION");
+        it != in_force.end() && it->second != 0) {
+      throw DataError(
+          Format("AHRS_ORIENTATION is %g in %s: the logged records are rotated to the "
+                 "vehicle after the correction, and accelcal composes a calibration "
+                 "with the one in force only without that rotation (0)",
+                 it->second, from));
+    }
+    if (stream->instance != options.instance) {
+      throw DataError(
+          Format("the calibration is of instance %d's records and the export is for "
+                 "instance %d: the calibration in force is another sensor's",
+                 stream->instance, options.instance));
+    }
+    Vec3 o_old, s_old;
+    for (int i = 0; i < 3; ++i) {
+      o_old(i) = value(prefix + "OFFS_" + axes[i]);
+      s_old(i) = value(prefix + "SCAL_" + axes[i]);
+      if (!(s_old(i) > 0) || !std::isfinite(o_old(i))) {
+        throw DataError(
+            Format("%sSCAL_%c is %g in %s: not a scale", prefix.c_str(), axes[i], s_old(i), from));
+      }
+    }
+    d.offset_ms2 = o_old + d.offset_ms2.cwiseQuotient(s_old);
+    d.scale = s_old.cwiseProduct(d.scale);
+    for (int i = 0; i < 3; ++i) Finite(d.offset_ms2(i)), Finite(d.scale(i));
+    composed = Format(
+        "# composed with the calibration in force when %s was logged (%s: %sOFFS = %.9g, %.9g, "
+        "%.9g; %sSCAL = %.9g, %.9g, %.9g), so that these apply to the sensor's own readings",
+        internal::VisibleLine(stream->topic).c_str(), from, prefix.c_str(), o_old(0), o_old(1),
+        o_old(2), prefix.c_str(), s_old(0), s_old(1), s_old(2));
+    out.convention += "; composed with the calibration in force (" + std::string(from) + ")";
+  }
+  out.text = "#" + Header(cal) + "\n# " + out.convention + "\n";
+  if (!composed.empty()) out.text += composed + "\n";
   for (int i = 0; i < 3; ++i) {
     out.text += Format("%sOFFS_%c,%.9g\n", prefix.c_str(), axes[i], d.offset_ms2(i));
   }
   for (int i = 0; i < 3; ++i) {
     out.text += Format("%sSCAL_%c,%.9g\n", prefix.c_str(), axes[i], d.scale(i));
   }
+  // The loss is the diagonal model's against the full one, on the data calibrated.
   out.loss = MeasureLoss(cal, d.correction, d.dropped);
   return out;
 }

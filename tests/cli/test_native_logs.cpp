@@ -3,12 +3,15 @@
 // refused with the candidates named; a log cut short is used with a warning.
 #include <cmath>
 #include <cstdio>
+#include <map>
 #include <random>
+#include <sstream>
 #include <string>
 
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
+#include "accelcal/dataflash_writer.hpp"
 #include "accelcal/mcap_writer.hpp"
 #include "accelcal/simulate.hpp"
 #include "accelcal/ulog_writer.hpp"
@@ -63,7 +66,9 @@ TEST_F(NativeLogTest, ULogCalibratesToTheSameBytesAsItsSamplesAsCsv) {
       0);
   const std::string csv = Write("s.csv", AsCsv(Path("s.ulg")));
   const CliRun u = Exec("calibrate " + Path("s.ulg") + " -o " + Path("u.json"));
-  const CliRun c = Exec("calibrate " + csv + " --time-unit us -o " + Path("c.json"));
+  // sensor_accel is in m/s2 by PX4's definition, which the calibration's raw unit says.
+  const CliRun c =
+      Exec("calibrate " + csv + " --time-unit us --raw-units m/s2 -o " + Path("c.json"));
   ASSERT_EQ(u.status, 0) << u.err;
   ASSERT_EQ(c.status, 0) << c.err;
   EXPECT_EQ(Calibration(Path("u.json")).dump(1), Calibration(Path("c.json")).dump(1));
@@ -95,7 +100,8 @@ TEST_F(NativeLogTest, DataFlashCalibratesToTheSameBytesAsItsSamplesAsCsv) {
   }
   Write("s.csv", csv);
   const CliRun d = Exec("calibrate " + Path("s.bin") + " -o " + Path("d.json"));
-  const CliRun t = Exec("calibrate " + Path("s.csv") + " --time-unit us -o " + Path("t.json"));
+  const CliRun t =
+      Exec("calibrate " + Path("s.csv") + " --time-unit us --raw-units m/s2 -o " + Path("t.json"));
   ASSERT_EQ(d.status, 0) << d.err;
   ASSERT_EQ(t.status, 0) << t.err;
   EXPECT_EQ(Calibration(Path("d.json")).dump(1), Calibration(Path("t.json")).dump(1));
@@ -136,8 +142,9 @@ TEST_F(NativeLogTest, ImuULogCalibratesTheGyroscopeToTheSameBytesAsCsv) {
                     g = Write("gyro.csv", rates);
   const CliRun from_ulog =
       Exec("calibrate " + u + " --gravity 9.81 --gyro " + u + " -o " + Path("u.json"));
-  const CliRun from_csv = Exec("calibrate " + a + " --gravity 9.81 --time-unit us --gyro " + g +
-                               " -o " + Path("c.json"));
+  const CliRun from_csv =
+      Exec("calibrate " + a + " --gravity 9.81 --time-unit us --raw-units m/s2 --gyro " + g +
+           " -o " + Path("c.json"));
   ASSERT_EQ(from_ulog.status, 0) << from_ulog.err;
   ASSERT_EQ(from_csv.status, 0) << from_csv.err;
   nlohmann::json ju = Calibration(Path("u.json")), jc = Calibration(Path("c.json"));
@@ -191,8 +198,9 @@ TEST_F(NativeLogTest, McapCalibratesToTheSameBytesAsItsSamplesAsCsv) {
     row(&rates, t, log.gyro[k]);
   }
   const std::string a = Write("acc.csv", acc), g = Write("gyro.csv", rates);
-  const CliRun from_csv = Exec("calibrate " + a + " --gravity 9.81 --time-unit us --gyro " + g +
-                               " -o " + Path("c.json"));
+  const CliRun from_csv =
+      Exec("calibrate " + a + " --gravity 9.81 --time-unit us --raw-units m/s2 --gyro " + g +
+           " -o " + Path("c.json"));
   ASSERT_EQ(from_csv.status, 0) << from_csv.err;
   nlohmann::json jc = Calibration(Path("c.json"));
   jc["sensors"]["gyroscope"].erase("source");
@@ -215,6 +223,133 @@ TEST_F(NativeLogTest, McapCalibratesToTheSameBytesAsItsSamplesAsCsv) {
     EXPECT_EQ(jm.dump(1), jc.dump(1)) << static_cast<int>(compression);
     EXPECT_NE(from_mcap.out.find("an MCAP file: /imu/data"), std::string::npos) << from_mcap.out;
   }
+}
+
+// ArduPilot logs its IMU records corrected by the calibration in force: a = (p - o_old) .* s_old,
+// p the sensor's reading. A session simulated through a known sensor (f = (p - o) .* s, diagonal
+// as ArduPilot models it) and a known, wrong calibration in force (its PARM records, or a .param
+// file): the export composes the two, and gives the sensor's own o and s back.
+TEST_F(NativeLogTest, ArduPilotExportComposesWithTheCalibrationInForce) {
+  const Vec3 o_true(0.35, -0.21, 0.48), s_true(1.012, 0.991, 1.004);  // m/s², unitless
+  const Vec3 o_old(0.10, 0.05, -0.30), s_old(0.995, 1.006, 0.998);
+  // What accelcal sees: a = f .* (s_old ./ s_true) + (o_true - o_old) .* s_old.
+  ModelParameters seen;
+  seen.K = s_old.cwiseQuotient(s_true).asDiagonal();
+  seen.bias = (o_true - o_old).cwiseProduct(s_old);
+  RawLogSimulation options;
+  options.static_s = 4.0;
+  options.transition_s = 2.0;
+  options.sigma_raw_per_sample = Vec3(1e-3, 1e-3, 1e-3);  // m/s² per sample
+  const double g = 9.80665;
+  const DataFlashImuWriter writer;
+  const char axes[3] = {'X', 'Y', 'Z'};
+  std::string with_parm = writer.Header(), without = writer.Header();
+  for (int i = 0; i < 3; ++i) {
+    with_parm +=
+        writer.Parameter(0, std::string("INS_ACCOFFS_") + axes[i], static_cast<float>(o_old(i)));
+    with_parm +=
+        writer.Parameter(0, std::string("INS_ACCSCAL_") + axes[i], static_cast<float>(s_old(i)));
+  }
+  SimulateRawLog(seen, g, Yang18Directions(), options, [&](double t, const Vec3& a) {
+    const std::string r =
+        writer.Sample(static_cast<std::uint64_t>(std::llround(t * 1e6)), a, Vec3::Zero());
+    with_parm += r;
+    without += r;
+  });
+  std::string param_file = "# the calibration in force, as Mission Planner saves it\n";
+  for (int i = 0; i < 3; ++i) {
+    param_file += std::string("INS_ACCOFFS_") + axes[i] + "," + std::to_string(o_old(i)) + "\n";
+    param_file += std::string("INS_ACCSCAL_") + axes[i] + "," + std::to_string(s_old(i)) + "\n";
+  }
+  Write("old.param", param_file);
+  Write("parm.bin", with_parm);
+  Write("bare.bin", without);
+  ASSERT_EQ(
+      Exec("calibrate " + Path("parm.bin") + " --gravity 9.80665 -q -o " + Path("p.json")).status,
+      0);
+  ASSERT_EQ(
+      Exec("calibrate " + Path("bare.bin") + " --gravity 9.80665 -q -o " + Path("b.json")).status,
+      0);
+  // The export's INS_ACCOFFS and INS_ACCSCAL.
+  const auto exported = [&](const CliRun& run) {
+    std::map<std::string, double> out;
+    std::istringstream lines(Slurp(Path("e.param")));
+    for (std::string line; std::getline(lines, line);) {
+      if (line.empty() || line[0] == '#') continue;
+      out[line.substr(0, line.find(','))] = std::stod(line.substr(line.find(',') + 1));
+    }
+    EXPECT_EQ(run.status, 0) << run.err;
+    return out;
+  };
+  // The composition is exact; what is left is the estimate's noise (σ ≈ 3e-5 m/s² on an offset,
+  // 3e-6 on a scale, from 1e-3 m/s² per sample over 18 positions of 400 samples) and the records'
+  // float32 rounding (6e-8 relative): 5e-4 and 5e-5 are more than ten σ, and the uncomposed
+  // values are off by 0.25-0.78 m/s² and 0.7-1.7 %.
+  for (const std::string& how :
+       {std::string("p.json"), std::string("b.json --current-params ") + Path("old.param")}) {
+    const std::map<std::string, double> p =
+        exported(Exec("export " + Path(how) + " --to ardupilot -o " + Path("e.param")));
+    for (int i = 0; i < 3; ++i) {
+      EXPECT_NEAR(p.at(std::string("INS_ACCOFFS_") + axes[i]), o_true(i), 5e-4) << how;
+      EXPECT_NEAR(p.at(std::string("INS_ACCSCAL_") + axes[i]), s_true(i), 5e-5) << how;
+    }
+    EXPECT_NE(Slurp(Path("e.param")).find("# composed with the calibration in force"),
+              std::string::npos);
+  }
+  // Without the calibration in force, no export: it would be wrong for the sensor.
+  const CliRun missing = Exec("export " + Path("b.json") + " --to ardupilot");
+  EXPECT_EQ(missing.status, 3);
+  EXPECT_NE(missing.err.find("do not hold INS_ACCOFFS_X: give the parameters in force when the log "
+                             "was recorded (--current-params FILE.param)"),
+            std::string::npos)
+      << missing.err;
+  // A board rotated by AHRS_ORIENTATION: the records are rotated after the correction.
+  Write("rotated.param", param_file + "AHRS_ORIENTATION,2\n");
+  const CliRun rotated = Exec("export " + Path("b.json") + " --to ardupilot --current-params " +
+                              Path("rotated.param"));
+  EXPECT_NE(rotated.err.find("AHRS_ORIENTATION is 2"), std::string::npos) << rotated.err;
+  // --current-params is ArduPilot's.
+  EXPECT_EQ(
+      Exec("export " + Path("b.json") + " --to px4 --current-params " + Path("old.param")).status,
+      2);
+}
+
+// PX4 matches a calibration to its sensor by device id: the export writes CAL_ACC<n>_ID from the
+// ULog's sensor_accel (or --device-id) and PX4's default priority, and refuses a calibration of
+// sensor_combined, which the calibration in force had corrected.
+TEST_F(NativeLogTest, Px4ExportNamesTheSensorByItsDeviceId) {
+  ASSERT_EQ(
+      Exec("simulate --scenario yang2012 --raw --format ulog --duration 20 -o " + Path("s.ulg"))
+          .status,
+      0);
+  ASSERT_EQ(Exec("calibrate " + Path("s.ulg") + " -q -o " + Path("u.json")).status, 0);
+  const nlohmann::json cal = nlohmann::json::parse(Slurp(Path("u.json")));
+  const nlohmann::json& stream = cal["provenance"]["inputs"][0]["stream"];
+  EXPECT_EQ(stream["format"], "ulog");
+  EXPECT_EQ(stream["topic"], "sensor_accel");
+  EXPECT_EQ(stream["device_id"], 1);  // ULogImuWriter's default
+  EXPECT_EQ(stream["corrected"], false);
+  // The simulated counts are not m/s²: --raw-unit says what PX4 would have had.
+  CliRun e = Exec("export " + Path("u.json") + " --to px4 --raw-unit m/s2");
+  ASSERT_EQ(e.status, 0) << e.err;
+  EXPECT_NE(e.out.find("1\t1\tCAL_ACC0_ID\t1\t6\n1\t1\tCAL_ACC0_PRIO\t50\t6\n"), std::string::npos)
+      << e.out;
+  EXPECT_NE(e.out.find("# CAL_ACC0: sensor_accel instance 0 of the log, device id 1"),
+            std::string::npos);
+  e = Exec("export " + Path("u.json") +
+           " --to px4 --raw-unit m/s2 --device-id 3670050 "
+           "--instance 2");
+  EXPECT_NE(e.out.find("1\t1\tCAL_ACC2_ID\t3670050\t6\n"), std::string::npos) << e.out;
+  // A calibration of sensor_combined (its record edited so): refused, with what to do.
+  nlohmann::json combined = cal;
+  combined["provenance"]["inputs"][0]["stream"]["topic"] = "sensor_combined";
+  combined["provenance"]["inputs"][0]["stream"]["corrected"] = true;
+  Write("c.json", combined.dump());
+  e = Exec("export " + Path("c.json") + " --to px4 --raw-unit m/s2");
+  EXPECT_EQ(e.status, 3);
+  EXPECT_NE(e.err.find("calibrate sensor_accel"), std::string::npos) << e.err;
+  // --device-id is PX4's.
+  EXPECT_EQ(Exec("export " + Path("u.json") + " --to ardupilot --device-id 5").status, 2);
 }
 
 // noise streams its log: a ULog of a still sensor (white noise) gives the same analysis as its

@@ -411,7 +411,11 @@ InputData ReadNativeLog(BinaryStream& in, InputFile* file, const ReadOptions& op
   stream.device_id = s.device_id;
   const KnownStream* known = Known(s.type, sensor);
   stream.corrected = known != nullptr && known->corrected;
-  if (known != nullptr && options.columns.empty()) stream.unit = std::string(known->unit);
+  // The unit of a known stream's readings, when they are what was read (by default, or named).
+  if (known != nullptr && (*s.columns)[chosen.axis[0]] == known->x &&
+      (*s.columns)[chosen.axis[1]] == known->y && (*s.columns)[chosen.axis[2]] == known->z) {
+    stream.unit = std::string(known->unit);
+  }
   for (const auto& [parameter, value] : log.parameters) {
     for (const char* prefix :
          {"CAL_ACC", "CAL_GYRO", "SENS_BOARD_", "INS_ACC", "INS_GYR", "AHRS_ORIENTATION"}) {

@@ -75,12 +75,13 @@ TEST(DataFlash, ATypeRedefinedAfterItsRecordsIsRefused) {
   std::string log = writer.Header();
   for (int k = 0; k < 3; ++k)
     log += writer.Sample(1000u * static_cast<unsigned>(k), Vec3(0, 0, 9.8), Vec3::Zero());
+  // (The header: the FMT records of FMT, PARM and IMU, 89 bytes each.)
   const std::string again =
-      log + writer.Header().substr(89) + writer.Sample(5000, Vec3(0, 0, 9.8), Vec3::Zero());
+      log + writer.Header().substr(2 * 89) + writer.Sample(5000, Vec3(0, 0, 9.8), Vec3::Zero());
   BinaryStream same(again, "same.bin");
   EXPECT_EQ(ReadDataFlash(same, [](const DecodedStream&) { return true; }).streams[0].messages, 4u);
   // IMU (type 163) redefined as 24 bytes of QBfff.
-  std::string fmt = writer.Header().substr(89);
+  std::string fmt = writer.Header().substr(2 * 89);
   fmt[4] = static_cast<char>(24);
   std::string format = "QBfff";
   format.resize(16, '\0');

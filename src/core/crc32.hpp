@@ -1,7 +1,7 @@
 #pragma once
 // CRC-32 as zlib, PNG and MCAP define it (ISO-HDLC: polynomial 0x04C11DB7, reflected, initial
-// value and final XOR 0xFFFFFFFF; "123456789" gives 0xCBF43926), eight bytes a step (the
-// slicing-by-8 tables): an MCAP chunk is checked at memory speed.
+// value and final XOR 0xFFFFFFFF; "123456789" gives 0xCBF43926), sixteen bytes a step (the
+// slicing-by-16 tables): an MCAP chunk is checked at memory speed.
 
 #include <cstddef>
 #include <cstdint>

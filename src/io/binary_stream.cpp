@@ -17,13 +17,20 @@ BinaryStream::BinaryStream(InputFile* file, std::string already_read)
       end_(already_read.size()) {}
 
 BinaryStream::BinaryStream(std::string bytes, std::string name)
+    : file_(nullptr), name_(std::move(name)), owned_(std::move(bytes)), eof_(true) {
+  view_ = reinterpret_cast<const unsigned char*>(owned_.data());
+  end_ = owned_.size();
+}
+
+BinaryStream::BinaryStream(std::string_view bytes, std::string name, Borrowed)
     : file_(nullptr),
       name_(std::move(name)),
-      buffer_(bytes.begin(), bytes.end()),
+      view_(reinterpret_cast<const unsigned char*>(bytes.data())),
       end_(bytes.size()),
       eof_(true) {}
 
 void BinaryStream::Fill(std::size_t n) {
+  if (file_ == nullptr) return;  // all the input is there already
   // Move what is left to the front, then read whole blocks until n bytes are there.
   if (begin_ > 0) {
     // The hash has seen every byte already in the buffer.

@@ -8,6 +8,7 @@
 #include <cstdint>
 #include <cstring>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "accelcal/sha256.hpp"
@@ -22,16 +23,19 @@ class BinaryStream {
   BinaryStream(InputFile* file, std::string already_read);
   /// The bytes of an input already in memory, named `name` in messages.
   BinaryStream(std::string bytes, std::string name);
+  /// The bytes of an input in memory that outlives this, read where they are (not copied).
+  struct Borrowed {};
+  BinaryStream(std::string_view bytes, std::string name, Borrowed);
   /// Every byte from the input's start also goes into `hash`; call before the first Need.
   void Fingerprint(Sha256* hash) {
     hash_ = hash;
-    hash_->Update(buffer_.data(), end_);  // the bytes read first
+    hash_->Update(base(), end_);  // the bytes read first
   }
 
   /// Makes the next `n` bytes contiguous at data(); false when the input ends first (then
   /// available() says how many there are).
   bool Need(std::size_t n);
-  const unsigned char* data() const { return buffer_.data() + begin_; }
+  const unsigned char* data() const { return base() + begin_; }
   std::size_t available() const { return end_ - begin_; }
   /// Consumes `n` bytes (at most available()).
   void Skip(std::size_t n) {
@@ -59,7 +63,11 @@ class BinaryStream {
   InputFile* file_;  // nullptr: all the input is in the buffer
   std::string name_;
   Sha256* hash_ = nullptr;
+  const unsigned char* base() const { return view_ != nullptr ? view_ : buffer_.data(); }
+
   std::vector<unsigned char> buffer_;
+  std::string owned_;                    // an input in memory, owned
+  const unsigned char* view_ = nullptr;  // an input in memory: its bytes
   std::size_t begin_ = 0, end_ = 0;
   std::uint64_t offset_ = 0;
   bool eof_ = false;

@@ -649,7 +649,7 @@ InputData ParseInput(std::string_view text, const std::string& source, const Rea
                      "memory");
   }
   if (DetectLogFormat(text.substr(0, 16)) != LogFormat::kText) {
-    internal::BinaryStream in(std::string(text), source);
+    internal::BinaryStream in(text, source, internal::BinaryStream::Borrowed{});
     return internal::ReadNativeLog(in, nullptr, options);
   }
   RefuseTopicOfText(source, options);

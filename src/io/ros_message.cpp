@@ -90,6 +90,8 @@ struct Member {
   std::string name;
   Array array = Array::kNone;
   std::size_t count = 1;  // kFixed
+  // A scalar's serialised size (a string's least: its count) and CDR alignment, looked up once.
+  std::size_t size = 0, align = 1;
 };
 
 struct Type {
@@ -245,6 +247,11 @@ int RosMessageType::Impl::Resolve(const std::string& name, std::vector<std::stri
     if (builtin != nullptr) {
       m.kind = builtin->kind;
       least = builtin->size;
+      m.size = builtin->size;
+      m.align = m.kind == Kind::kTime || m.kind == Kind::kDuration || m.kind == Kind::kStamp2 ||
+                        m.kind == Kind::kString
+                    ? 4
+                    : builtin->size;
       width = m.kind == Kind::kString ? 0 : 1;
     } else {
       if (!IsName(type_text, true)) {
@@ -337,19 +344,6 @@ double Scalar(Kind kind, const unsigned char* p) {
   }
 }
 
-// A scalar's serialised size; a string's least.
-std::size_t SizeOf(Kind kind) {
-  for (const Builtin& b : kBuiltins2) {
-    if (b.kind == kind) return b.size;
-  }
-  return kind == Kind::kTime || kind == Kind::kDuration ? 8 : 1;
-}
-
-// Its CDR alignment: its size, a time's fields' (4).
-std::size_t AlignmentOf(Kind kind) {
-  return kind == Kind::kTime || kind == Kind::kDuration || kind == Kind::kStamp2 ? 4 : SizeOf(kind);
-}
-
 }  // namespace
 
 // One element of member `m` (a scalar, a string, a struct) at the cursor; values beyond the
@@ -363,20 +357,18 @@ bool RosMessageType::Impl::Element(const Member& m, Cursor& c, double* values) c
     c.p += 4 + n;
     return true;
   }
-  const std::size_t size = SizeOf(m.kind);
-  if (!c.Align(AlignmentOf(m.kind)) || std::size_t(c.end - c.p) < size) return false;
+  if (!c.Align(m.align) || std::size_t(c.end - c.p) < m.size) return false;
   if (values != nullptr) {
     if (c.column < c.columns) values[c.column] = Scalar(m.kind, c.p);
     ++c.column;
   }
-  c.p += size;
+  c.p += m.size;
   return true;
 }
 
 bool RosMessageType::Impl::Walk(const Type& t, Cursor& c, double* values) const {
   for (const Member& m : t.members) {
-    const std::size_t least =
-        m.kind == Kind::kStruct ? types[std::size_t(m.type)].least : SizeOf(m.kind);
+    const std::size_t least = m.kind == Kind::kStruct ? types[std::size_t(m.type)].least : m.size;
     if (m.array == Array::kNone) {
       if (!Element(m, c, values)) return false;
       continue;
@@ -391,10 +383,16 @@ bool RosMessageType::Impl::Walk(const Type& t, Cursor& c, double* values) const 
     }
     if (least == 0) continue;  // elements of nothing (an empty type)
     if (n > std::size_t(c.end - c.p) / least) return false;
-    if (m.kind != Kind::kStruct && m.kind != Kind::kString && into == nullptr) {
-      // Fixed-size scalars, skipped whole (aligned as their first).
-      if (n > 0 && !c.Align(AlignmentOf(m.kind))) return false;
+    if (m.kind != Kind::kStruct && m.kind != Kind::kString) {
+      // Fixed-size scalars: aligned as their first, then packed (their size is their alignment's
+      // multiple); skipped whole inside a variable-length array, else each a column.
+      if (n > 0 && !c.Align(m.align)) return false;
       if (n > std::size_t(c.end - c.p) / least) return false;
+      if (into != nullptr) {
+        for (std::size_t i = 0; i < n; ++i, ++c.column) {
+          if (c.column < c.columns) into[c.column] = Scalar(m.kind, c.p + i * least);
+        }
+      }
       c.p += n * least;
       continue;
     }

@@ -11,11 +11,11 @@
 #include <benchmark/benchmark.h>
 
 #include "accelcal/log_reader.hpp"
+#include "accelcal/mcap_writer.hpp"
 #include "accelcal/native_log.hpp"
 #include "accelcal/sha256.hpp"
 #include "accelcal/simulate.hpp"
 #include "accelcal/static_detection.hpp"
-#include "accelcal/mcap_writer.hpp"
 #include "accelcal/ulog_writer.hpp"
 
 namespace accelcal {
@@ -223,7 +223,10 @@ void BM_ReadSimulatedRosBag(benchmark::State& state) {
       flush);
   ReadSession(state, path);
 }
-BENCHMARK(BM_ReadSimulatedRosBag)->ArgsProduct({{0}, {0, 1}})->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_ReadSimulatedRosBag)
+    ->ArgsProduct({{0}, {0, 1}})
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime();
 
 // Reading the file as the tool does, in blocks, with the provenance's SHA-256 on a second thread
 // (argument 1) or without it (0): the difference is what the parser waits for the hash. Wall time,

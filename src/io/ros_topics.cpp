@@ -4,27 +4,53 @@
 #include <tuple>
 
 #include "accelcal/error.hpp"
+#include "accelcal/sha256.hpp"
+#include "core/text_format.hpp"
 
 namespace accelcal::internal {
 
+namespace {
+// A log's message definitions are read up to this many bytes in all (a real log's are kilobytes):
+// past it, a small compressed file could take minutes to parse.
+constexpr std::size_t kMaxDefinitionBytes = std::size_t{64} << 20;
+}  // namespace
+
 std::size_t RosTopics::Add(const std::string& topic, const std::string& type,
                            const std::optional<std::string>& definition, RosVersion version,
-                           const std::string& why, std::string* error) {
+                           const std::string& why, std::string* error,
+                           const std::string& publisher) {
+  const std::string digest = definition ? Sha256Hex(*definition) : std::string();
   auto [it, added] = stream_of_.emplace(topic, out_->streams.size());
   if (!added) {
-    // Another publisher of the topic: it must publish the same type.
-    if (type_names_[it->second] != type) {
-      *error =
-          "the topic " + topic + " is published as " + type_names_[it->second] + " and as " + type;
+    const std::size_t s = it->second;
+    // Another connection of the topic: the same type, defined the same, from the same publisher,
+    // else its stream cannot be read as one.
+    std::string conflict;
+    if (type_names_[s] != type) {
+      conflict = "is published as " + type_names_[s] + " and as " + type;
+    } else if (definition_digests_[s] != digest) {
+      conflict = "is published with two different definitions of " + type;
+    } else if (!publisher.empty() && !publishers_[s].empty() && publisher != publishers_[s]) {
+      conflict = "has two publishers, " + publishers_[s] + " and " + publisher +
+                 ", whose messages would be mixed in one stream";
     }
-    return it->second;
+    if (!conflict.empty() && out_->streams[s].kept) {
+      *error = "the topic " + topic + " " + conflict + ": record one publisher of one type";
+    }
+    return s;
   }
   std::shared_ptr<const RosMessageType> parsed;
   std::string unreadable = why;
   if (definition) {
     std::shared_ptr<const RosMessageType>& known =
-        parsed_[std::make_tuple(type, static_cast<int>(version), *definition)];
+        parsed_[std::make_tuple(type, static_cast<int>(version), digest)];
     if (!known) {
+      definition_bytes_ += definition->size();
+      if (definition_bytes_ > kMaxDefinitionBytes) {
+        *error = Format("the log's message definitions hold more than %zu MiB",
+                        kMaxDefinitionBytes >> 20);
+        return 0;
+      }
       try {
         known = std::make_shared<const RosMessageType>(type, *definition, version);
       } catch (const DataError& e) {
@@ -37,6 +63,11 @@ std::size_t RosTopics::Add(const std::string& topic, const std::string& type,
   s.topic = topic;
   s.type = type;
   s.columns = parsed ? parsed->columns() : std::make_shared<const std::vector<std::string>>();
+  columns_ += s.columns->size();
+  if (columns_ > kMaxLogColumns) {
+    *error = Format("the log's topics have more than %zu numeric fields in all", kMaxLogColumns);
+    return 0;
+  }
   s.kept = keep_(s);
   if (s.kept && !parsed) {
     *error = "accelcal cannot decode the topic " + topic + " (" + type + "): " + unreadable;
@@ -54,6 +85,8 @@ std::size_t RosTopics::Add(const std::string& topic, const std::string& type,
   out_->streams.push_back(std::move(s));
   types_.push_back(parsed);
   type_names_.push_back(type);
+  definition_digests_.push_back(digest);
+  publishers_.push_back(publisher);
   return it->second;
 }
 

@@ -24,9 +24,14 @@ class RosTopics {
   /// `version`'s syntax); nullopt definition: a type accelcal cannot decode, for `why` (its
   /// messages are counted; keeping the stream is an error). Returns the stream's index, or the
   /// reason in `*error` when the topic had another type.
+  /// `publisher`: the connection's publisher (a ROS 1 callerid; empty when the format has none).
+  /// A topic published with two types or two definitions, or by two publishers, is an error when
+  /// its stream is kept (its messages would be decoded by another's layout, or mixed); a
+  /// definition that would make the log's definitions or columns exceed their bounds too.
   std::size_t Add(const std::string& topic, const std::string& type,
                   const std::optional<std::string>& definition, RosVersion version,
-                  const std::string& why, std::string* error);
+                  const std::string& why, std::string* error,
+                  const std::string& publisher = std::string());
 
   /// One message of stream `stream`, recorded at `time_us`, its bytes `data` (n), at byte `at`
   /// of the file. Returns the reason when it does not decode.
@@ -37,12 +42,16 @@ class RosTopics {
   DecodedLog* out_;
   const KeepStream& keep_;
   const StoreColumns& store_;
-  std::map<std::string, std::size_t> stream_of_;              // topic -> stream
-  std::vector<std::shared_ptr<const RosMessageType>> types_;  // per stream (null: undecodable)
-  std::vector<std::string> type_names_;
-  // Types parsed, by name, version and definition (a file repeats them).
+  std::map<std::string, std::size_t> stream_of_;  // topic -> stream
+  // Per stream: its type (null: undecodable), its type's name, its definition's SHA-256, its
+  // first publisher.
+  std::vector<std::shared_ptr<const RosMessageType>> types_;
+  std::vector<std::string> type_names_, definition_digests_, publishers_;
+  // Types parsed, by name, version and their definition's SHA-256 (a file repeats them).
   std::map<std::tuple<std::string, int, std::string>, std::shared_ptr<const RosMessageType>>
       parsed_;
+  std::size_t definition_bytes_ = 0;  // parsed, in all
+  std::size_t columns_ = 0;           // of every stream, in all
   std::vector<double> scratch_;
 };
 

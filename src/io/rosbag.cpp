@@ -29,6 +29,9 @@ enum Op : unsigned char {
   kConnection = 0x07,
 };
 
+// A connection's header (its topic, type and the type's definition with the types it uses) is
+// small: ROS's largest definitions are tens of kilobytes.
+constexpr std::size_t kMaxConnectionBytes = std::size_t{1} << 20;
 // A record's header is small (a connection's is its topic); its data at most a chunk.
 constexpr std::size_t kMaxHeaderBytes = std::size_t{1} << 20;
 constexpr std::size_t kMaxDataBytes = kMaxDecompressedBytes + (std::size_t{1} << 20);
@@ -113,6 +116,7 @@ class Reader {
   RosTopics topics_{&out_, keep_, store_};
   std::vector<unsigned char> chunk_;
   std::size_t whole_ = 0;  // messages read whole
+  std::uint64_t index_pos_ = 0;
 };
 
 Fields Reader::Parse(const unsigned char* p, std::size_t n, std::uint64_t at) const {
@@ -144,11 +148,16 @@ void Reader::Connect(const Fields& header, const unsigned char* data, std::size_
     }
     return;
   }
+  if (n > kMaxConnectionBytes) {
+    Fail(at, Format("a connection header of %zu bytes: no message definition is that long", n));
+  }
   const Fields c = Parse(data, n, at);
   const std::string type(Text(c, "type", at));
   std::string error;
-  const std::size_t stream = topics_.Add(
-      topic, type, std::string(Text(c, "message_definition", at)), RosVersion::kRos1, "", &error);
+  const std::string_view* callerid = c.Find("callerid");
+  const std::size_t stream =
+      topics_.Add(topic, type, std::string(Text(c, "message_definition", at)), RosVersion::kRos1,
+                  "", &error, callerid != nullptr ? std::string(*callerid) : std::string());
   if (!error.empty()) Fail(at, error);
   connections_.emplace(id, Connection{topic, stream});
 }
@@ -182,6 +191,13 @@ void Reader::Record(const Fields& header, const unsigned char* data, std::size_t
       Message(header, data, n, at);
       break;
     case kBagHeader:
+      if (!in_chunk) {
+        // Where the index begins: a closed bag's chunks all end before it (0: never closed).
+        if (const std::string_view* v = header.Find("index_pos"); v != nullptr && v->size() == 8) {
+          index_pos_ = LoadLittle<std::uint64_t>(reinterpret_cast<const unsigned char*>(v->data()));
+        }
+      }
+      break;
     case kIndex:
     case kChunkInfo:
       if (in_chunk) Fail(at, Format("a chunk holds a record of op 0x%02x", op[0]));
@@ -295,6 +311,16 @@ DecodedLog Reader::Read() {
         Fail(at, "a chunk compressed as " + std::string(compression) +
                      ", which ROS bags do not use (none, bz2, lz4)");
       }
+      if (c != Compression::kNone && data_len == 0 && size == 0) {
+        // A compressed chunk its recorder opened and never closed (killed): the header's lengths
+        // are still the placeholders, and what follows cannot be delimited.
+        out_.truncated = Format(
+            "the bag ends with a compressed chunk its recorder never closed "
+            "(at byte %llu): its messages are not read",
+            static_cast<unsigned long long>(at));
+        in_.Skip(in_.available());
+        break;
+      }
       if (!whole) {
         // The bag ends inside it: an uncompressed chunk's whole records are read.
         const std::size_t there = in_.available() - (8 + header_len);
@@ -323,6 +349,13 @@ DecodedLog Reader::Read() {
       Record(fields, data, data_len, at, false);
     }
     in_.Skip(length);
+  }
+  if (!out_.truncated && index_pos_ > in_.offset()) {
+    // Cut where a chunk ended: nothing is cut inside a record, but the index is missing.
+    out_.truncated = Format(
+        "the bag ends at byte %llu, before its index at byte %llu: a bag cut "
+        "short",
+        static_cast<unsigned long long>(in_.offset()), static_cast<unsigned long long>(index_pos_));
   }
   if (out_.truncated) *out_.truncated += Format(", after %zu whole messages", whole_);
   out_.bytes = in_.offset();

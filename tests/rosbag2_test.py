@@ -19,25 +19,11 @@ import random
 import shutil
 import sqlite3
 import struct
-import subprocess
 import sys
 
-failures = []
+from log_test_support import Checks, calibration
+
 T0_NS = 1_700_000_000 * 10**9  # a live recording's stamps
-
-
-def check(condition, what):
-    if not condition:
-        failures.append(what)
-        print("FAIL:", what)
-
-
-def run(accelcal, *args, expect=0, stdin=None):
-    p = subprocess.run([accelcal, *args], capture_output=True, text=True, stdin=stdin)
-    if expect is not None and p.returncode != expect:
-        check(False, f"accelcal {' '.join(args)}: exit {p.returncode}, wanted {expect}\n"
-                     f"{p.stdout}{p.stderr}")
-    return p
 
 
 class Cdr:
@@ -141,21 +127,14 @@ def write_db3(path, rows, iron):
     db.close()
 
 
-def calibration(path):
-    with open(path) as f:
-        j = json.load(f)
-    j.pop("provenance", None)
-    j["sensors"]["accelerometer"].pop("source", None)
-    return json.dumps(j, indent=1, sort_keys=True)
-
-
 def main():
     accelcal, work = sys.argv[1], sys.argv[2]
+    ck = Checks(accelcal)
     shutil.rmtree(work, ignore_errors=True)
     os.makedirs(work)
     p = lambda name: os.path.join(work, name)  # noqa: E731
 
-    run(accelcal, "simulate", "--scenario", "yang2012", "--raw", "--duration", "20", "-o",
+    ck.run("simulate", "--scenario", "yang2012", "--raw", "--duration", "20", "-o",
         p("sim.csv"))
     rows = []
     with open(p("sim.csv")) as f:
@@ -167,7 +146,7 @@ def main():
         f.write("time_us,x,y,z\n")
         for t_us, x, y, z in rows:
             f.write(f"{T0_NS // 1000 + t_us},{x!r},{y!r},{z!r}\n")
-    run(accelcal, "calibrate", p("same.csv"), "--time-unit", "us", "--raw-units", "m/s2", "-o",
+    ck.run("calibrate", p("same.csv"), "--time-unit", "us", "--raw-units", "m/s2", "-o",
         p("csv.json"))
     want = calibration(p("csv.json"))
 
@@ -177,56 +156,53 @@ def main():
         write_db3(bag, rows, iron)
         before = hashlib.sha256(open(bag, "rb").read()).hexdigest()
         listing = sorted(os.listdir(work))
-        r = run(accelcal, "calibrate", bag, "-o", p(f"{name}.json"))
-        check(r.returncode == 0 and calibration(p(f"{name}.json")) == want,
+        r = ck.run("calibrate", bag, "-o", p(f"{name}.json"))
+        ck.check(r.returncode == 0 and calibration(p(f"{name}.json")) == want,
               f"the {name} bag calibrates as its samples as CSV")
-        check("a ROS 2 bag (SQLite): /imu/data" in r.stdout, f"the summary:\n{r.stdout}")
-        check(hashlib.sha256(open(bag, "rb").read()).hexdigest() == before and
+        ck.check("a ROS 2 bag (SQLite): /imu/data" in r.stdout, f"the summary:\n{r.stdout}")
+        ck.check(hashlib.sha256(open(bag, "rb").read()).hexdigest() == before and
               sorted(os.listdir(work)) == sorted(listing + [f"{name}.json"]),
               f"the {name} bag is read without a byte written in or beside it: "
               f"{sorted(os.listdir(work))}")
-        doc = json.loads(run(accelcal, "inspect", bag, "--json").stdout)
+        doc = json.loads(ck.run("inspect", bag, "--json").stdout)
         streams = {s["topic"]: s for s in doc["streams"]}
-        check(doc["format"] == "db3" and streams["/imu/data"]["samples"] == len(rows) and
+        ck.check(doc["format"] == "db3" and streams["/imu/data"]["samples"] == len(rows) and
               streams["/imu/data"]["sensors"] == ["accelerometer", "gyroscope"] and
               streams["/imu/temperature"]["samples"] == (len(rows) + 9) // 10 and
               "temperature" in doc["fields"]["/imu/temperature"] and
               doc["fields"]["/vendor/status"] == [],
               f"inspect of the {name} bag: {doc['streams']}")
-        r = run(accelcal, "noise", bag, "--gyro", bag, "--still", "--json")
+        r = ck.run("noise", bag, "--gyro", bag, "--still", "--json")
         for axis in json.loads(r.stdout)["gyroscope"]["axes"]:
             white = axis["terms"]["white"]
-            check(abs(white["value"] - 1e-4) < 4 * white["sigma"],
+            ck.check(abs(white["value"] - 1e-4) < 4 * white["sigma"],
                   f"the gyroscope's white noise from the {name} bag: {white}")
         # A topic whose definition the bag does not carry: said, not guessed.
-        r = run(accelcal, "calibrate", bag, "--topic", "/vendor/status", "--columns", "1,2,3",
+        r = ck.run("calibrate", bag, "--topic", "/vendor/status", "--columns", "1,2,3",
                 "-o", p("x.json"), expect=3)
-        check("does not carry its definition" in r.stderr, f"an unknown type: {r.stderr}")
+        ck.check("does not carry its definition" in r.stderr, f"an unknown type: {r.stderr}")
 
     # Through a pipe, a database cannot be opened: said.
     with open(p("iron.db3"), "rb") as f:
-        r = run(accelcal, "calibrate", "-", "-o", p("x.json"), expect=3, stdin=f)
-    check("read from its file" in r.stderr, f"a bag through a pipe: {r.stderr}")
+        r = ck.run("calibrate", "-", "-o", p("x.json"), expect=3, stdin=f)
+    ck.check("read from its file" in r.stderr, f"a bag through a pipe: {r.stderr}")
     # A truncated database: SQLite's reason, no crash, nothing written.
     with open(p("iron.db3"), "rb") as f:
         data = f.read()
     with open(p("cut.db3"), "wb") as f:
         f.write(data[: len(data) // 2])
-    r = run(accelcal, "calibrate", p("cut.db3"), "-o", p("cut.json"), expect=3)
-    check("SQLite" in r.stderr and not os.path.exists(p("cut.json")),
+    r = ck.run("calibrate", p("cut.db3"), "-o", p("cut.json"), expect=3)
+    ck.check("SQLite" in r.stderr and not os.path.exists(p("cut.json")),
           f"a truncated database: {r.stderr}")
     # An SQLite database that is not a bag.
     db = sqlite3.connect(p("other.db3"))
     db.execute("CREATE TABLE things(a)")
     db.commit()
     db.close()
-    r = run(accelcal, "inspect", p("other.db3"), expect=3)
-    check("not a ROS 2 bag" in r.stderr, f"another database: {r.stderr}")
+    r = ck.run("inspect", p("other.db3"), expect=3)
+    ck.check("not a ROS 2 bag" in r.stderr, f"another database: {r.stderr}")
 
-    if failures:
-        print(f"{len(failures)} failure(s)")
-        sys.exit(1)
-    print("rosbag2 sqlite: all checks passed")
+    ck.finish("rosbag2 sqlite")
 
 
 if __name__ == "__main__":

@@ -14,48 +14,13 @@ import json
 import os
 import random
 import shutil
-import subprocess
 import sys
 
 import rosbag
 import rospy
 from sensor_msgs.msg import Imu, MagneticField, Temperature
 
-failures = []
-
-
-def check(condition, what):
-    if not condition:
-        failures.append(what)
-        print("FAIL:", what)
-
-
-def run(*args, expect=0):
-    p = subprocess.run([ACCELCAL, *args], capture_output=True, text=True)
-    if expect is not None and p.returncode != expect:
-        check(False, f"accelcal {' '.join(args)}: exit {p.returncode}, wanted {expect}\n"
-                     f"{p.stdout}{p.stderr}")
-    return p
-
-
-def calibration(path):
-    """The calibration file less the input's name and its provenance."""
-    with open(path) as f:
-        j = json.load(f)
-    j.pop("provenance", None)
-    j["sensors"]["accelerometer"].pop("source", None)
-    return json.dumps(j, indent=1, sort_keys=True)
-
-
-def read_simulated(path):
-    """(time in integer µs, x, y, z) of a simulated CSV."""
-    rows = []
-    with open(path) as f:
-        next(f)
-        for line in f:
-            t, x, y, z = line.split(",")
-            rows.append((round(float(t) * 1e6), float(x), float(y), float(z)))
-    return rows
+from log_test_support import Checks, calibration, simulated_rows
 
 
 T0_S = 1_700_000_000  # the bags' first stamp [s], a time of 2023 as a live recording has
@@ -96,19 +61,19 @@ def write_bag(path, rows, compression, close=True, t0_s=T0_S):
 
 
 def main():
-    global ACCELCAL
-    ACCELCAL, work = sys.argv[1], sys.argv[2]
+    accelcal, work = sys.argv[1], sys.argv[2]
+    ck = Checks(accelcal)
     shutil.rmtree(work, ignore_errors=True)
     os.makedirs(work)
     p = lambda name: os.path.join(work, name)  # noqa: E731
 
-    run("simulate", "--scenario", "yang2012", "--raw", "--duration", "20", "-o", p("sim.csv"))
-    rows = read_simulated(p("sim.csv"))
+    ck.run("simulate", "--scenario", "yang2012", "--raw", "--duration", "20", "-o", p("sim.csv"))
+    rows = simulated_rows(p("sim.csv"))
     with open(p("same.csv"), "w") as f:
         f.write("time_us,x,y,z\n")
         for t_us, x, y, z in rows:  # stamped from 1.7e9 s as in the bags
             f.write(f"{T0_S * 1_000_000 + t_us},{x!r},{y!r},{z!r}\n")
-    run("calibrate", p("same.csv"), "--time-unit", "us", "--raw-units", "m/s2", "-o",
+    ck.run("calibrate", p("same.csv"), "--time-unit", "us", "--raw-units", "m/s2", "-o",
         p("csv.json"))
     want = calibration(p("csv.json"))
 
@@ -116,58 +81,58 @@ def main():
     for compression in ("none", "bz2", "lz4"):
         bag = p(f"s_{compression}.bag")
         write_bag(bag, rows, compression)
-        r = run("calibrate", bag, "-o", p(f"{compression}.json"))
-        check(r.returncode == 0 and calibration(p(f"{compression}.json")) == want,
+        r = ck.run("calibrate", bag, "-o", p(f"{compression}.json"))
+        ck.check(r.returncode == 0 and calibration(p(f"{compression}.json")) == want,
               f"the {compression} bag calibrates as its samples as CSV")
-        check("sensor_msgs/Imu" in r.stdout or "/imu/data" in r.stdout,
+        ck.check("sensor_msgs/Imu" in r.stdout or "/imu/data" in r.stdout,
               f"the {compression} bag's summary names the topic read:\n{r.stdout}")
 
     # inspect: the topics, their types, what accelcal reads from them.
-    r = run("inspect", p("s_lz4.bag"), "--json")
+    r = ck.run("inspect", p("s_lz4.bag"), "--json")
     doc = json.loads(r.stdout)
     streams = {s["topic"]: s for s in doc["streams"]}
-    check(doc["format"] == "rosbag", "inspect says the format")
-    check(streams["/imu/data"]["type"] == "sensor_msgs/Imu" and
+    ck.check(doc["format"] == "rosbag", "inspect says the format")
+    ck.check(streams["/imu/data"]["type"] == "sensor_msgs/Imu" and
           streams["/imu/data"]["samples"] == len(rows) and
           streams["/imu/data"]["sensors"] == ["accelerometer", "gyroscope"],
           f"inspect lists the IMU topic: {streams.get('/imu/data')}")
-    check(streams["/imu/temperature"]["type"] == "sensor_msgs/Temperature" and
+    ck.check(streams["/imu/temperature"]["type"] == "sensor_msgs/Temperature" and
           streams["/imu/temperature"]["samples"] == (len(rows) + 9) // 10,
           "inspect lists the temperature topic")
-    check("linear_acceleration.x" in doc["fields"]["/imu/data"] and
+    ck.check("linear_acceleration.x" in doc["fields"]["/imu/data"] and
           "temperature" in doc["fields"]["/imu/temperature"] and
           "magnetic_field.z" in doc["fields"]["/imu/mag"],
           "inspect lists each topic's fields")
 
     # A topic accelcal does not know the fields of: the error says to name them; named, read.
-    r = run("calibrate", p("s_none.bag"), "--topic", "/imu/mag", "-o", p("x.json"), expect=3)
-    check("name them with --columns" in r.stderr, f"unknown fields: {r.stderr}")
-    r = run("calibrate", p("s_none.bag"), "--topic", "/imu/data", "--columns",
+    r = ck.run("calibrate", p("s_none.bag"), "--topic", "/imu/mag", "-o", p("x.json"), expect=3)
+    ck.check("name them with --columns" in r.stderr, f"unknown fields: {r.stderr}")
+    r = ck.run("calibrate", p("s_none.bag"), "--topic", "/imu/data", "--columns",
             "linear_acceleration.x,linear_acceleration.y,linear_acceleration.z",
             "-o", p("named.json"))
-    check(calibration(p("named.json")) == want, "the fields named by --columns read the same")
+    ck.check(calibration(p("named.json")) == want, "the fields named by --columns read the same")
     # A ROS stamp is a time by specification: another time unit is refused.
-    r = run("calibrate", p("s_none.bag"), "--time-unit", "ms", "-o", p("x.json"), expect=3)
-    check("does not apply" in r.stderr, f"--time-unit on a stamp: {r.stderr}")
+    r = ck.run("calibrate", p("s_none.bag"), "--time-unit", "ms", "-o", p("x.json"), expect=3)
+    ck.check("does not apply" in r.stderr, f"--time-unit on a stamp: {r.stderr}")
     # The gyroscope of the same messages: --gyro the same bag reads angular_velocity.
-    r = run("inspect", p("s_none.bag"))
-    check("accelerometer, gyroscope" in r.stdout, f"inspect text:\n{r.stdout}")
-    r = run("noise", p("s_none.bag"), "--gyro", p("s_none.bag"), "--still", "--json")
+    r = ck.run("inspect", p("s_none.bag"))
+    ck.check("accelerometer, gyroscope" in r.stdout, f"inspect text:\n{r.stdout}")
+    r = ck.run("noise", p("s_none.bag"), "--gyro", p("s_none.bag"), "--still", "--json")
     # Written as 1 mrad/s per sample at 100 Hz: a white noise of 1e-4 rad/s/sqrt(Hz), within 4σ
     # of the fit's own uncertainty.
     for axis in json.loads(r.stdout)["gyroscope"]["axes"]:
         white = axis["terms"]["white"]
-        check(abs(white["value"] - 1e-4) < 4 * white["sigma"],
+        ck.check(abs(white["value"] - 1e-4) < 4 * white["sigma"],
               f"the gyroscope's white noise from angular_velocity: {white}")
 
     # A recorder killed before it closed the bag: no index, the last chunk open. What it wrote is
     # read, as the same calibration (the chunks the writer had flushed hold every sample).
     write_bag(p("killed.bag"), rows, "none", close=False)
-    r = run("calibrate", p("killed.bag"), "-o", p("killed.json"), expect=None)
+    r = ck.run("calibrate", p("killed.bag"), "-o", p("killed.json"), expect=None)
     # The writer may still hold the last chunk in memory: the samples flushed are a prefix.
-    r = run("inspect", p("killed.bag"), "--json")
+    r = ck.run("inspect", p("killed.bag"), "--json")
     killed = {s["topic"]: s for s in json.loads(r.stdout)["streams"]}
-    check(0 < killed["/imu/data"]["samples"] <= len(rows), f"the killed bag reads: {killed}")
+    ck.check(0 < killed["/imu/data"]["samples"] <= len(rows), f"the killed bag reads: {killed}")
 
     # Cut short inside a chunk: an uncompressed chunk's whole messages are read, with a warning
     # naming where it stopped; a compressed chunk is lost whole, with a warning.
@@ -178,14 +143,14 @@ def main():
             data = f.read()
         with open(p(f"cut_{compression}.bag"), "wb") as f:
             f.write(data[: len(data) * 3 // 5])
-        r = run("inspect", p(f"cut_{compression}.bag"), "--json")
+        r = ck.run("inspect", p(f"cut_{compression}.bag"), "--json")
         doc = json.loads(r.stdout)
-        check(doc["truncated"] and "ends inside a chunk" in doc["truncated"],
+        ck.check(doc["truncated"] and "ends inside a chunk" in doc["truncated"],
               f"the cut {compression} bag says where it stopped: {doc['truncated']}")
         n = {s["topic"]: s for s in doc["streams"]}["/imu/data"]["samples"]
-        check(0 < n < len(rows), f"the cut {compression} bag gives its whole messages: {n}")
-        r = run("noise", p(f"cut_{compression}.bag"), "--still", expect=None)
-        check("cut short" in r.stdout + r.stderr or "ends inside a chunk" in r.stdout + r.stderr,
+        ck.check(0 < n < len(rows), f"the cut {compression} bag gives its whole messages: {n}")
+        r = ck.run("noise", p(f"cut_{compression}.bag"), "--still", expect=None)
+        ck.check("cut short" in r.stdout + r.stderr or "ends inside a chunk" in r.stdout + r.stderr,
               f"the cut {compression} bag warns when read:\n{r.stdout}{r.stderr}")
 
     # A corrupt compressed chunk: an error naming the byte.
@@ -195,14 +160,11 @@ def main():
     data[at + 100] ^= 0x55
     with open(p("corrupt.bag"), "wb") as f:
         f.write(data)
-    r = run("calibrate", p("corrupt.bag"), "-o", p("x.json"), expect=3)
-    check("does not decompress" in r.stderr and "byte " in r.stderr,
+    r = ck.run("calibrate", p("corrupt.bag"), "-o", p("x.json"), expect=3)
+    ck.check("does not decompress" in r.stderr and "byte " in r.stderr,
           f"a corrupt chunk is named: {r.stderr}")
 
-    if failures:
-        print(f"{len(failures)} failure(s)")
-        sys.exit(1)
-    print("rosbag: all checks passed")
+    ck.finish("rosbag")
 
 
 if __name__ == "__main__":

@@ -2,6 +2,9 @@
 
 #include <algorithm>
 
+#include "accelcal/error.hpp"
+#include "core/text_format.hpp"
+
 namespace accelcal::internal {
 
 namespace {
@@ -72,6 +75,11 @@ bool BinaryStream::ZerosToEnd(std::uint64_t* nonzero) {
 std::string BinaryStream::ZerosMessage(std::uint64_t at) {
   return "the log ends in zero bytes from byte " + std::to_string(at) +
          " (space the logger reserved but never wrote)";
+}
+
+void BinaryStream::Fail(std::uint64_t at, const std::string& why) const {
+  throw InputError(name_, 0,
+                   Format("byte %llu: ", static_cast<unsigned long long>(at)) + VisibleLine(why));
 }
 
 bool BinaryStream::SkipAhead(std::uint64_t n) {

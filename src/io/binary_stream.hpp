@@ -56,6 +56,9 @@ class BinaryStream {
   /// large); false when the input ends first (then all of it is consumed).
   bool SkipAhead(std::uint64_t n);
   const std::string& name() const { return name_; }
+  /// The error every binary reader raises: InputError naming the input and byte `at`, the
+  /// reason escaped (names from the log reach it: one line, every character visible).
+  [[noreturn]] void Fail(std::uint64_t at, const std::string& why) const;
 
  private:
   void Fill(std::size_t n);

@@ -121,11 +121,7 @@ class Reader {
   DecodedLog Read();
 
  private:
-  // Names from the log reach the message escaped (one line, every character visible).
-  [[noreturn]] void Fail(std::uint64_t at, const std::string& why) const {
-    throw InputError(in_.name(), 0,
-                     Format("byte %llu: ", static_cast<unsigned long long>(at)) + VisibleLine(why));
-  }
+  [[noreturn]] void Fail(std::uint64_t at, const std::string& why) const { in_.Fail(at, why); }
   void Define(const unsigned char* r, std::uint64_t at);
   void Record(const Type& type, const unsigned char* r, std::uint64_t at);
 

@@ -75,10 +75,7 @@ class Reader {
   DecodedLog Read();
 
  private:
-  [[noreturn]] void Fail(std::uint64_t at, const std::string& why) const {
-    throw InputError(in_.name(), 0,
-                     Format("byte %llu: ", static_cast<unsigned long long>(at)) + VisibleLine(why));
-  }
+  [[noreturn]] void Fail(std::uint64_t at, const std::string& why) const { in_.Fail(at, why); }
   // A record of `op` with `n` bytes of content at p, at byte `at` of the file (a record in a
   // compressed chunk: the chunk's).
   void Record(unsigned char op, const unsigned char* p, std::size_t n, std::uint64_t at,

@@ -76,10 +76,7 @@ class Reader {
   DecodedLog Read();
 
  private:
-  [[noreturn]] void Fail(std::uint64_t at, const std::string& why) const {
-    throw InputError(in_.name(), 0,
-                     Format("byte %llu: ", static_cast<unsigned long long>(at)) + VisibleLine(why));
-  }
+  [[noreturn]] void Fail(std::uint64_t at, const std::string& why) const { in_.Fail(at, why); }
   // The fields of the header of `n` bytes at p (a record's header or a connection's data).
   Fields Parse(const unsigned char* p, std::size_t n, std::uint64_t at) const;
   // A field of exactly sizeof(T) bytes.

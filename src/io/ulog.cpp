@@ -106,11 +106,7 @@ class Reader {
   DecodedLog Read();
 
  private:
-  // Names from the log reach the message escaped (one line, every character visible).
-  [[noreturn]] void Fail(std::uint64_t at, const std::string& why) const {
-    throw InputError(in_.name(), 0,
-                     Format("byte %llu: ", static_cast<unsigned long long>(at)) + VisibleLine(why));
-  }
+  [[noreturn]] void Fail(std::uint64_t at, const std::string& why) const { in_.Fail(at, why); }
   void ParseFormat(std::string_view text, std::uint64_t at);
   const Layout& LayoutOf(const std::string& name, std::uint64_t at);
   // Appends the leaves of `format` at `base` (names after `prefix`) to `out`; its end offset.

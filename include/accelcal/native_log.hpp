@@ -56,12 +56,25 @@ struct KnownStream {
   /// Already corrected by the calibration in force when it was logged (calibrating it finds
   /// what that calibration left, not the sensor's own).
   bool corrected = false;
+  /// How a message holds its readings.
+  enum class Packing {
+    kSample,  ///< one sample: x, y, z
+    /// a sum over an interval: x, y, z divided by the field `interval` [µs] (PX4's vehicle_imu:
+    /// delta_velocity over delta_velocity_dt)
+    kDelta,
+    /// several samples: the arrays x[i], y[i], z[i] times the field `scale`, the first `samples`
+    /// of them, `dt` [µs] apart, the last at the time field (PX4's sensor_accel_fifo)
+    kFifo,
+  };
+  Packing packing = Packing::kSample;
+  std::string_view interval{};  ///< kDelta: the interval's field
 };
 /// The streams accelcal reads without being told their fields: PX4's sensor_accel (the
 /// driver's output, before the calibration), sensor_combined's accelerometer (after it),
-/// sensor_gyro, sensor_combined's gyro; ArduPilot's IMU, ACC and GYR records (after the
-/// calibration in force: INS_ACCOFFS, INS_ACCSCAL); a ROS sensor_msgs/Imu's linear_acceleration
-/// and angular_velocity.
+/// sensor_gyro, sensor_combined's gyro, sensor_accel_fifo and sensor_gyro_fifo (the driver's
+/// every sample), vehicle_imu (integrated, after the calibration); ArduPilot's IMU, ACC and GYR
+/// records (after the calibration in force: INS_ACCOFFS, INS_ACCSCAL); a ROS sensor_msgs/Imu's
+/// linear_acceleration and angular_velocity.
 const std::vector<KnownStream>& KnownStreams();
 
 /// The stream of a binary log a raw log was read from, as a calibration file's provenance records

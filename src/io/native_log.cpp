@@ -40,6 +40,16 @@ const std::vector<KnownStream>& KnownStreams() {
       {"sensor_gyro", "gyroscope", "timestamp_sample", "x", "y", "z", "rad/s", false},
       {"sensor_combined", "gyroscope", "timestamp", "gyro_rad[0]", "gyro_rad[1]", "gyro_rad[2]",
        "rad/s", true},
+      // PX4's FIFO topics: the driver's every sample, packed (SDLOG_PROFILE's raw FIFO bits).
+      {"sensor_accel_fifo", "accelerometer", "timestamp_sample", "x", "y", "z", "m/s2", false,
+       KnownStream::Packing::kFifo},
+      {"sensor_gyro_fifo", "gyroscope", "timestamp_sample", "x", "y", "z", "rad/s", false,
+       KnownStream::Packing::kFifo},
+      // vehicle_imu: integrated over its interval, after the calibration in force.
+      {"vehicle_imu", "accelerometer", "timestamp_sample", "delta_velocity[0]", "delta_velocity[1]",
+       "delta_velocity[2]", "m/s2", true, KnownStream::Packing::kDelta, "delta_velocity_dt"},
+      {"vehicle_imu", "gyroscope", "timestamp_sample", "delta_angle[0]", "delta_angle[1]",
+       "delta_angle[2]", "rad/s", true, KnownStream::Packing::kDelta, "delta_angle_dt"},
       // ArduPilot: ACC and GYR at SampleUS, IMU at TimeUS.
       {"IMU", "accelerometer", "TimeUS", "AccX", "AccY", "AccZ", "m/s2", true},
       {"ACC", "accelerometer", "SampleUS", "AccX", "AccY", "AccZ", "m/s2", true},
@@ -150,6 +160,11 @@ bool IsMicrosecondField(std::string_view name) {
 struct Chosen {
   std::optional<std::size_t> time;
   std::size_t axis[3];
+  KnownStream::Packing packing = KnownStream::Packing::kSample;
+  // kDelta: the interval's column. kFifo: dt, scale, samples, then x[1..], y[1..], z[1..] (x[0],
+  // y[0], z[0] being the axes): `fifo` samples a message at most.
+  std::vector<std::size_t> extra;
+  std::size_t fifo = 1;
 };
 
 // The columns option's (time,x,y,z, or x,y,z with the stream's own time field when it has one),
@@ -190,9 +205,29 @@ Chosen Choose(const internal::DecodedStream& s, const ReadOptions& options,
                            "(time,x,y,z, or x,y,z and the rate option)");
     };
     out.time = field(known->time);
-    out.axis[0] = field(known->x);
-    out.axis[1] = field(known->y);
-    out.axis[2] = field(known->z);
+    out.packing = known->packing;
+    if (known->packing == KnownStream::Packing::kFifo) {
+      // The arrays x[i], y[i], z[i]: as long as the log's format has them.
+      const auto element = [&](std::string_view base, std::size_t i) {
+        return std::string(base) + "[" + std::to_string(i) + "]";
+      };
+      out.axis[0] = field(element(known->x, 0));
+      out.axis[1] = field(element(known->y, 0));
+      out.axis[2] = field(element(known->z, 0));
+      out.extra = {field("dt"), field("scale"), field("samples")};
+      while (Find(s, element(known->x, out.fifo)) && Find(s, element(known->y, out.fifo)) &&
+             Find(s, element(known->z, out.fifo))) {
+        ++out.fifo;
+      }
+      for (std::string_view base : {known->x, known->y, known->z}) {
+        for (std::size_t i = 1; i < out.fifo; ++i) out.extra.push_back(field(element(base, i)));
+      }
+    } else {
+      out.axis[0] = field(known->x);
+      out.axis[1] = field(known->y);
+      out.axis[2] = field(known->z);
+      if (known->packing == KnownStream::Packing::kDelta) out.extra = {field(known->interval)};
+    }
   }
   std::vector<std::size_t> all(std::begin(out.axis), std::end(out.axis));
   if (out.time) all.insert(all.begin(), *out.time);
@@ -213,6 +248,7 @@ std::vector<std::size_t> Stored(const Chosen& c) {
   std::vector<std::size_t> out;
   if (c.time) out.push_back(*c.time);
   out.insert(out.end(), std::begin(c.axis), std::end(c.axis));
+  out.insert(out.end(), c.extra.begin(), c.extra.end());
   return out;
 }
 
@@ -375,32 +411,69 @@ InputData ReadNativeLog(BinaryStream& in, InputFile* file, const ReadOptions& op
   raw.line.reserve(s.messages);
   // Beyond 2^53 a time in µs is no longer an exact double.
   constexpr double kExact = 9007199254740992.0;
+  using Packing = KnownStream::Packing;
   for (std::size_t i = 0; i < s.messages; ++i) {
     const double* row = s.values.data() + i * width;
-    const Vec3 v(row[first], row[first + 1], row[first + 2]);
     const auto where = [&] {
       return Format("%s message %zu (%s %llu)", Shown(s.topic).c_str(), i + 1,
                     log.offset_name.c_str(), static_cast<unsigned long long>(s.offset[i]));
     };
-    if (!v.allFinite() || (chosen.time && !std::isfinite(row[0]))) {
-      throw InputError(source, 0, where() + " holds a value that is not a finite number");
+    if (chosen.time && !std::isfinite(row[0])) {
+      throw InputError(source, 0, where() + " holds a time that is not a finite number");
     }
-    if (chosen.time) {
-      if (microseconds && !(std::abs(row[0]) < kExact)) {
-        throw InputError(source, 0,
-                         where() + Format(": its time %.17g us is beyond 2^53, where a time is "
-                                          "no longer exact",
-                                          row[0]));
-      }
-      if (i > 0 && row[0] < raw.time_s.back()) {
-        throw InputError(source, 0,
-                         where() + Format(": time goes backwards (%.17g after %.17g %s)", row[0],
-                                          raw.time_s.back(), microseconds ? "us" : "as read"));
-      }
-      raw.time_s.push_back(row[0]);
+    if (chosen.time && microseconds && !(std::abs(row[0]) < kExact)) {
+      throw InputError(source, 0,
+                       where() + Format(": its time %.17g us is beyond 2^53, where a time is "
+                                        "no longer exact",
+                                        row[0]));
     }
-    raw.samples.push_back(v);
-    raw.line.push_back(static_cast<std::uint32_t>(std::min<std::size_t>(i + 1, UINT32_MAX)));
+    // The message's samples: one, or a FIFO's (the last at the message's time, dt apart).
+    const double* extra = row + first + 3;
+    std::size_t n = 1;
+    double dt_us = 0, scale = 1;
+    if (chosen.packing == Packing::kFifo) {
+      dt_us = extra[0], scale = extra[1];
+      const double samples = extra[2];
+      if (!(samples >= 1 && samples <= static_cast<double>(chosen.fifo)) ||
+          samples != std::floor(samples) || !(dt_us > 0) || !std::isfinite(dt_us) ||
+          !std::isfinite(scale)) {
+        throw InputError(source, 0,
+                         where() + Format(": a FIFO message of %g samples %g us apart (at most "
+                                          "%zu, more than 0 us apart)",
+                                          samples, dt_us, chosen.fifo));
+      }
+      n = static_cast<std::size_t>(samples);
+    }
+    for (std::size_t k = 0; k < n; ++k) {
+      Vec3 v(row[first], row[first + 1], row[first + 2]);
+      if (chosen.packing == Packing::kFifo && k > 0) {
+        const std::size_t f = chosen.fifo - 1;
+        v = Vec3(extra[3 + (k - 1)], extra[3 + f + (k - 1)], extra[3 + 2 * f + (k - 1)]);
+      }
+      if (chosen.packing == Packing::kFifo) v *= scale;
+      if (chosen.packing == Packing::kDelta) {
+        if (!(extra[0] > 0)) {
+          throw InputError(
+              source, 0,
+              where() + Format(": an interval of %g us, over which the sum was taken", extra[0]));
+        }
+        v /= extra[0] * 1e-6;
+      }
+      if (!v.allFinite()) {
+        throw InputError(source, 0, where() + " holds a value that is not a finite number");
+      }
+      if (chosen.time) {
+        const double t = row[0] - static_cast<double>(n - 1 - k) * dt_us;
+        if (!raw.time_s.empty() && t < raw.time_s.back()) {
+          throw InputError(source, 0,
+                           where() + Format(": time goes backwards (%.17g after %.17g %s)", t,
+                                            raw.time_s.back(), microseconds ? "us" : "as read"));
+        }
+        raw.time_s.push_back(t);
+      }
+      raw.samples.push_back(v);
+      raw.line.push_back(static_cast<std::uint32_t>(std::min<std::size_t>(i + 1, UINT32_MAX)));
+    }
   }
   if (log.truncated) raw.read_warning = *log.truncated;
   SourceStream& stream = data.stream.emplace();
@@ -412,8 +485,10 @@ InputData ReadNativeLog(BinaryStream& in, InputFile* file, const ReadOptions& op
   const KnownStream* known = Known(s.type, sensor);
   stream.corrected = known != nullptr && known->corrected;
   // The unit of a known stream's readings, when they are what was read (by default, or named).
-  if (known != nullptr && (*s.columns)[chosen.axis[0]] == known->x &&
-      (*s.columns)[chosen.axis[1]] == known->y && (*s.columns)[chosen.axis[2]] == known->z) {
+  if (known != nullptr &&
+      (chosen.packing != Packing::kSample ||
+       ((*s.columns)[chosen.axis[0]] == known->x && (*s.columns)[chosen.axis[1]] == known->y &&
+        (*s.columns)[chosen.axis[2]] == known->z))) {
     stream.unit = std::string(known->unit);
   }
   for (const auto& [parameter, value] : log.parameters) {

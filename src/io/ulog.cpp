@@ -241,6 +241,13 @@ const Layout& Reader::LayoutOf(const std::string& name, std::uint64_t at) {
       layout.device_id = static_cast<int>(i);
     }
   }
+  // vehicle_imu names its accelerometer's id accel_device_id.
+  for (std::size_t i = 0; i < layout.leaves.size() && layout.device_id < 0; ++i) {
+    const Leaf& l = layout.leaves[i];
+    if (l.name == "accel_device_id" && l.type != Scalar::kF32 && l.type != Scalar::kF64) {
+      layout.device_id = static_cast<int>(i);
+    }
+  }
   layout.names = std::move(names);
   return layouts_.emplace(name, std::move(layout)).first->second;
 }

@@ -352,6 +352,139 @@ TEST_F(NativeLogTest, Px4ExportNamesTheSensorByItsDeviceId) {
   EXPECT_EQ(Exec("export " + Path("u.json") + " --to ardupilot --device-id 5").status, 2);
 }
 
+// PX4's other accelerometer topics, written here as PX4 lays them out (ULog specification):
+// sensor_accel_fifo (the driver's every sample, int16 times a scale, up to 32 a message, the last
+// at timestamp_sample, dt apart) and vehicle_imu (delta_velocity integrated over
+// delta_velocity_dt). A simulated session in each calibrates to the same bytes as the samples they
+// hold, written as CSV.
+namespace px4 {
+template <typename T>
+void Put(std::string* out, T v) {
+  out->append(reinterpret_cast<const char*>(&v), sizeof(T));
+}
+std::string Message(char type, const std::string& payload) {
+  std::string out;
+  Put<std::uint16_t>(&out, static_cast<std::uint16_t>(payload.size()));
+  return out + type + payload;
+}
+// A log of one topic of `format` ("name:fields"), subscribed as message id 0.
+std::string Header(const std::string& format) {
+  std::string out = {'U', 'L', 'o', 'g', 0x01, 0x12, 0x35, 0x01};
+  Put<std::uint64_t>(&out, 0);
+  out += Message('B', std::string(40, '\0'));
+  out += Message('F', format);
+  std::string add(1, '\0');
+  Put<std::uint16_t>(&add, 0);
+  return out + Message('A', add + format.substr(0, format.find(':')));
+}
+}  // namespace px4
+
+TEST_F(NativeLogTest, Px4FifoAndVehicleImuCalibrateAsTheirSamples) {
+  ModelParameters truth;  // m/s², as PX4's drivers give them
+  truth.K << 1.004, 0, 0, 0.002, 0.996, 0, -0.001, 0.003, 1.002;
+  truth.bias = Vec3(0.12, -0.08, 0.2);
+  RawLogSimulation options;
+  options.rate_hz = 1000;
+  options.static_s = 3.0;
+  options.transition_s = 1.5;
+  options.sigma_raw_per_sample = Vec3(0.02, 0.02, 0.02);
+  const SimulatedLog log = SimulateRawLog(truth, 9.80665, Yang18Directions(), options);
+  // sensor_accel_fifo: 4 samples a message, 1000 us apart, in counts of 16 g / 32768.
+  const float scale = static_cast<float>(9.80665 * 16 / 32768), dt = 1000.0f;
+  std::string fifo = px4::Header(
+      "sensor_accel_fifo:uint64_t timestamp;uint64_t timestamp_sample;uint32_t device_id;"
+      "float dt;float scale;uint8_t samples;int16_t[32] x;int16_t[32] y;int16_t[32] z;");
+  std::string fifo_csv = "time_us,x,y,z\n";
+  char line[160];
+  const std::size_t n = log.samples.size() / 4 * 4;
+  for (std::size_t m = 0; m < n; m += 4) {
+    const auto last_us = static_cast<std::uint64_t>(std::llround(log.time_s[m + 3] * 1e6));
+    std::string d;
+    px4::Put<std::uint16_t>(&d, 0);
+    px4::Put<std::uint64_t>(&d, last_us);
+    px4::Put<std::uint64_t>(&d, last_us);
+    px4::Put<std::uint32_t>(&d, 4325386);
+    px4::Put<float>(&d, dt);
+    px4::Put<float>(&d, scale);
+    px4::Put<std::uint8_t>(&d, 4);
+    std::int16_t counts[3][32] = {};
+    for (int k = 0; k < 4; ++k) {
+      for (int a = 0; a < 3; ++a) {
+        counts[a][k] = static_cast<std::int16_t>(std::lround(log.samples[m + k](a) / scale));
+      }
+      std::snprintf(line, sizeof line, "%.17g,%.17g,%.17g,%.17g\n",
+                    static_cast<double>(last_us) - (3 - k) * static_cast<double>(dt),
+                    counts[0][k] * static_cast<double>(scale),
+                    counts[1][k] * static_cast<double>(scale),
+                    counts[2][k] * static_cast<double>(scale));
+      fifo_csv += line;
+    }
+    d.append(reinterpret_cast<const char*>(counts), sizeof counts);
+    fifo += px4::Message('D', d);
+  }
+  // vehicle_imu: each sample's velocity change over 1000 us, float32.
+  std::string imu = px4::Header(
+      "vehicle_imu:uint64_t timestamp;uint64_t timestamp_sample;uint32_t accel_device_id;"
+      "uint32_t gyro_device_id;float[3] delta_angle;float[3] delta_velocity;"
+      "uint16_t delta_angle_dt;uint16_t delta_velocity_dt;uint8_t delta_angle_clipping;"
+      "uint8_t delta_velocity_clipping;uint8_t accel_calibration_count;"
+      "uint8_t gyro_calibration_count;");
+  std::string imu_csv = "time_us,x,y,z\n";
+  for (std::size_t k = 0; k < log.samples.size(); ++k) {
+    const auto t_us = static_cast<std::uint64_t>(std::llround(log.time_s[k] * 1e6));
+    std::string d;
+    px4::Put<std::uint16_t>(&d, 0);
+    px4::Put<std::uint64_t>(&d, t_us);
+    px4::Put<std::uint64_t>(&d, t_us);
+    px4::Put<std::uint32_t>(&d, 4325386);
+    px4::Put<std::uint32_t>(&d, 2293786);
+    for (int a = 0; a < 3; ++a) px4::Put<float>(&d, 0.0f);
+    float dv[3];
+    for (int a = 0; a < 3; ++a) {
+      dv[a] = static_cast<float>(log.samples[k](a) * 0.001);
+      px4::Put<float>(&d, dv[a]);
+    }
+    px4::Put<std::uint16_t>(&d, 1000);
+    px4::Put<std::uint16_t>(&d, 1000);
+    d.append(4, '\0');
+    imu += px4::Message('D', d);
+    const double interval_s = 1000 * 1e-6;
+    std::snprintf(line, sizeof line, "%llu,%.17g,%.17g,%.17g\n",
+                  static_cast<unsigned long long>(t_us), dv[0] / interval_s, dv[1] / interval_s,
+                  dv[2] / interval_s);
+    imu_csv += line;
+  }
+  struct Case {
+    const char* name;
+    const std::string* log;
+    const std::string* csv;
+  };
+  for (const Case& c : {Case{"fifo", &fifo, &fifo_csv}, Case{"vehicle_imu", &imu, &imu_csv}}) {
+    const std::string u = Write(std::string(c.name) + ".ulg", *c.log);
+    const std::string v = Write(std::string(c.name) + ".csv", *c.csv);
+    const CliRun a = Exec("calibrate " + u + " -o " + Path("a.json"));
+    const CliRun b =
+        Exec("calibrate " + v + " --time-unit us --raw-units m/s2 -o " + Path("b.json"));
+    ASSERT_EQ(a.status, 0) << c.name << a.err;
+    ASSERT_EQ(b.status, 0) << c.name << b.err;
+    EXPECT_EQ(Calibration(Path("a.json")).dump(1), Calibration(Path("b.json")).dump(1)) << c.name;
+    const nlohmann::json stream =
+        nlohmann::json::parse(Slurp(Path("a.json")))["provenance"]["inputs"][0]["stream"];
+    EXPECT_EQ(stream["device_id"], 4325386) << c.name;
+    EXPECT_EQ(stream["corrected"], std::string(c.name) == "vehicle_imu") << c.name;
+  }
+  // A FIFO message that says more samples than its arrays hold: named.
+  std::string bad = fifo;
+  // (The last message's payload: msg id, two times, device id, dt, scale, samples, the arrays.)
+  const std::size_t payload = 2 + 8 + 8 + 4 + 4 + 4 + 1 + 3 * 64;
+  const std::size_t samples_at = fifo.size() - payload + (2 + 8 + 8 + 4 + 4 + 4);
+  bad[samples_at] = 40;
+  const CliRun refused = Exec("calibrate " + Write("bad.ulg", bad) + " -o " + Path("x.json"));
+  EXPECT_NE(refused.err.find("a FIFO message of 40 samples 1000 us apart (at most 32"),
+            std::string::npos)
+      << refused.err;
+}
+
 // noise streams its log: a ULog of a still sensor (white noise) gives the same analysis as its
 // samples written as CSV.
 TEST_F(NativeLogTest, NoiseOfAStillULogIsTheNoiseOfItsSamplesAsCsv) {

@@ -2,6 +2,7 @@
 mat_test.py): the checks they count, accelcal run as a user runs it, a calibration file compared
 less its input's name and digest, and a simulated session's samples."""
 import json
+import os
 import subprocess
 import sys
 
@@ -49,3 +50,18 @@ def simulated_rows(path):
             t, x, y, z = line.split(",")
             rows.append((round(float(t) * 1e6), float(x), float(y), float(z)))
     return rows
+
+
+def simulated_session(ck, work, t0_us):
+    """A simulated session (`accelcal simulate --raw`, yang2012, 20 s positions) in `work`: its
+    rows (simulated_rows), and the calibration of its samples written as CSV with their times in
+    µs from `t0_us` (a live recording's stamps) in m/s2, which each log format must give."""
+    sim, same, cal = (os.path.join(work, n) for n in ("sim.csv", "same.csv", "csv.json"))
+    ck.run("simulate", "--scenario", "yang2012", "--raw", "--duration", "20", "-o", sim)
+    rows = simulated_rows(sim)
+    with open(same, "w") as f:
+        f.write("time_us,x,y,z\n")
+        for t_us, x, y, z in rows:
+            f.write(f"{t0_us + t_us},{x!r},{y!r},{z!r}\n")
+    ck.run("calibrate", same, "--time-unit", "us", "--raw-units", "m/s2", "-o", cal)
+    return rows, calibration(cal)

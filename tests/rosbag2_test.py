@@ -21,7 +21,7 @@ import sqlite3
 import struct
 import sys
 
-from log_test_support import Checks, calibration
+from log_test_support import Checks, calibration, simulated_session
 
 T0_NS = 1_700_000_000 * 10**9  # a live recording's stamps
 
@@ -134,21 +134,7 @@ def main():
     os.makedirs(work)
     p = lambda name: os.path.join(work, name)  # noqa: E731
 
-    ck.run("simulate", "--scenario", "yang2012", "--raw", "--duration", "20", "-o",
-        p("sim.csv"))
-    rows = []
-    with open(p("sim.csv")) as f:
-        next(f)
-        for line in f:
-            t, x, y, z = line.split(",")
-            rows.append((round(float(t) * 1e6), float(x), float(y), float(z)))
-    with open(p("same.csv"), "w") as f:
-        f.write("time_us,x,y,z\n")
-        for t_us, x, y, z in rows:
-            f.write(f"{T0_NS // 1000 + t_us},{x!r},{y!r},{z!r}\n")
-    ck.run("calibrate", p("same.csv"), "--time-unit", "us", "--raw-units", "m/s2", "-o",
-        p("csv.json"))
-    want = calibration(p("csv.json"))
+    rows, want = simulated_session(ck, work, T0_NS // 1000)
 
     for iron in (False, True):
         name = "iron" if iron else "humble"

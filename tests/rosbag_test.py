@@ -20,7 +20,7 @@ import rosbag
 import rospy
 from sensor_msgs.msg import Imu, MagneticField, Temperature
 
-from log_test_support import Checks, calibration, simulated_rows
+from log_test_support import Checks, calibration, simulated_session
 
 
 T0_S = 1_700_000_000  # the bags' first stamp [s], a time of 2023 as a live recording has
@@ -67,15 +67,7 @@ def main():
     os.makedirs(work)
     p = lambda name: os.path.join(work, name)  # noqa: E731
 
-    ck.run("simulate", "--scenario", "yang2012", "--raw", "--duration", "20", "-o", p("sim.csv"))
-    rows = simulated_rows(p("sim.csv"))
-    with open(p("same.csv"), "w") as f:
-        f.write("time_us,x,y,z\n")
-        for t_us, x, y, z in rows:  # stamped from 1.7e9 s as in the bags
-            f.write(f"{T0_S * 1_000_000 + t_us},{x!r},{y!r},{z!r}\n")
-    ck.run("calibrate", p("same.csv"), "--time-unit", "us", "--raw-units", "m/s2", "-o",
-        p("csv.json"))
-    want = calibration(p("csv.json"))
+    rows, want = simulated_session(ck, work, T0_S * 1_000_000)  # stamped as in the bags
 
     # Every chunk compression ROS writes: the same calibration.
     for compression in ("none", "bz2", "lz4"):

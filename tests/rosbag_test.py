@@ -156,6 +156,24 @@ def main():
     ck.check("does not decompress" in r.stderr and "byte " in r.stderr,
           f"a corrupt chunk is named: {r.stderr}")
 
+    # accelcal's own writer (simulate --format rosbag), read by ROS's reader: its index (message
+    # count, chunks), its type's MD5, every stamp and reading the simulation's.
+    ck.run("simulate", "--scenario", "yang2012", "--raw", "--duration", "20", "--format", "rosbag",
+           "-o", p("sim.bag"))
+    with rosbag.Bag(p("sim.bag")) as bag:
+        info = bag.get_type_and_topic_info()
+        ck.check(bag.get_message_count() == len(rows) and
+                 info.msg_types == {"sensor_msgs/Imu": Imu._md5sum} and
+                 info.topics["/imu/data"].message_count == len(rows),
+                 f"ROS reads accelcal's bag's index: {bag.get_message_count()}, {info}")
+        same = True
+        for k, (_, msg, t) in enumerate(bag.read_messages()):
+            t_us, x, y, z = rows[k]
+            a = msg.linear_acceleration
+            same = same and (msg.header.stamp.to_nsec() == t.to_nsec() == t_us * 1000 and
+                             (a.x, a.y, a.z) == (x, y, z) and msg.header.seq == k)
+        ck.check(same and k + 1 == len(rows), "ROS reads accelcal's bag as the simulation's samples")
+
     ck.finish("rosbag")
 
 

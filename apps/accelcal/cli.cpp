@@ -441,8 +441,10 @@ int accelcal::cli::RunCommandLine(int argc, char** argv) {
     simulate
         ->add_option("--format", sim.format,
                      "of a raw log: csv (time,x,y,z), ulog (PX4's sensor_accel), dataflash "
-                     "(ArduPilot's IMU records), both float32, or mcap (ROS 2's "
-                     "sensor_msgs/msg/Imu, zstd chunks)")
+                     "(ArduPilot's IMU records), both float32; rosbag (ROS 1 bag, "
+                     "sensor_msgs/Imu), mcap (ROS 2, zstd chunks) or db3 (ROS 2 SQLite), each "
+                     "/imu/data stamped from 0 s; or mat (MATLAB v5: a 4 x N matrix imu of "
+                     "time, x, y, z per column)")
         ->capture_default_str();
     simulate->add_option("-o,--output", sim.output, "output file (default: stdout)")
         ->check(kFileName);

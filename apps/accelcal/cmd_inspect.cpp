@@ -97,9 +97,11 @@ int RunInspect(const InspectArgs& args) {
                     sensors.empty() ? "-" : sensors.c_str());
     }
     out += Format(
-        "%zu streams, %zu parameters. Read one with --topic NAME [--instance N]; one accelcal "
-        "does not read by default with --columns naming its fields (--json lists them)\n",
-        log.streams.size(), log.parameters.size());
+        "%zu stream%s, %zu parameter%s. Read one with --topic NAME [--instance N]; one "
+        "accelcal does not read by default with --columns naming its fields (--json lists "
+        "them)\n",
+        log.streams.size(), log.streams.size() == 1 ? "" : "s", log.parameters.size(),
+        log.parameters.size() == 1 ? "" : "s");
   }
   WriteFileAtomically("-", out);
   return kExitOk;

@@ -12,7 +12,10 @@
 #include <stdexcept>
 
 #include "accelcal/dataflash_writer.hpp"
+#include "accelcal/mat_writer.hpp"
 #include "accelcal/mcap_writer.hpp"
+#include "accelcal/rosbag2_writer.hpp"
+#include "accelcal/rosbag_writer.hpp"
 #include "accelcal/simulate.hpp"
 #include "accelcal/system_level.hpp"
 #include "accelcal/ulog_writer.hpp"
@@ -61,8 +64,10 @@ void CheckSimulatedSamples(double samples, const char* options) {
 int RunSimulate(const SimulateArgs& args) {
   CheckOutputs({{"-o", args.output}}, {args.truth, args.positions});
   if (args.format != "csv" && args.format != "ulog" && args.format != "dataflash" &&
-      args.format != "mcap") {
-    throw UsageError("--format is csv, ulog, dataflash or mcap, not \"" + args.format + "\"");
+      args.format != "mcap" && args.format != "rosbag" && args.format != "db3" &&
+      args.format != "mat") {
+    throw UsageError("--format is csv, ulog, dataflash, rosbag, mcap, db3 or mat, not \"" +
+                     args.format + "\"");
   }
   if (args.format != "csv" && (!args.raw || args.scenario == "wu2018-system")) {
     throw UsageError("--format " + args.format +
@@ -162,12 +167,56 @@ int RunSimulate(const SimulateArgs& args) {
       file.Commit();
       return kExitOk;
     }
+    // ROS stamps in ns from 0 s.
+    const auto ns = [](double t) { return static_cast<std::uint64_t>(std::llround(t * 1e9)); };
+    if (args.format == "rosbag" || args.format == "db3") {
+      // A bag's header is completed at its end, and SQLite writes a file by its name: both need
+      // the file that will replace the output, not a stream.
+      if (file.temporary().empty()) {
+        throw UsageError("--format " + args.format +
+                         " writes a file completed at its end: give -o FILE, a file to create "
+                         "or replace (not stdout, a device or a FIFO)");
+      }
+    }
+    if (args.format == "rosbag") {
+      RosBagImuWriter writer;
+      file.Write(writer.Header());
+      SimulateRawLog(truth, gravity, directions, options, [&](double t, const Vec3& p) {
+        file.Write(writer.Sample(ns(t), p, Vec3::Zero()));
+      });
+      file.Write(writer.Finish());
+      file.Rewrite(RosBagImuWriter::kHeaderOffset, writer.IndexedHeader());
+      file.Commit();
+      return kExitOk;
+    }
+    if (args.format == "db3") {
+      const std::size_t slash = args.output.rfind('/');
+      Rosbag2SqliteImuWriter writer(file.temporary(), "/imu/data",
+                                    args.output.substr(slash == std::string::npos ? 0 : slash + 1));
+      SimulateRawLog(truth, gravity, directions, options,
+                     [&](double t, const Vec3& p) { writer.Sample(ns(t), p, Vec3::Zero()); });
+      writer.Finish();
+      file.Commit();
+      return kExitOk;
+    }
+    if (args.format == "mat") {
+      // A 4 x N matrix "imu" (time [s], x, y, z per column), its sample count known first.
+      MatMatrixWriter writer(
+          "imu", 4, static_cast<std::uint64_t>(SimulatedSampleCount(directions.size(), options)));
+      file.Write(writer.Header());
+      SimulateRawLog(truth, gravity, directions, options, [&](double t, const Vec3& p) {
+        const double column[4] = {t, p(0), p(1), p(2)};
+        file.Write(writer.Column(column));
+      });
+      file.Write(writer.Finish());
+      file.Commit();
+      return kExitOk;
+    }
     if (args.format == "mcap") {
       McapImuWriter writer;
       file.Write(writer.Header());
       SimulateRawLog(truth, gravity, directions, options, [&](double t, const Vec3& p) {
-        file.Write(
-            writer.Sample(static_cast<std::uint64_t>(std::llround(t * 1e9)), p, Vec3::Zero()));
+        file.Write(writer.Sample(ns(t), p, Vec3::Zero()));
       });
       file.Write(writer.Finish());
       file.Commit();

@@ -235,6 +235,21 @@ void OutputFile::Flush() {
   buffer_.clear();
 }
 
+void OutputFile::Rewrite(std::uint64_t offset, std::string_view bytes) {
+  if (temp_.empty() || finished_) {
+    throw OutputError(path_ + ": cannot be written back into (not a regular file)");
+  }
+  Flush();
+  std::size_t done = 0;
+  while (done < bytes.size()) {
+    const ssize_t n =
+        ::pwrite(fd_, bytes.data() + done, bytes.size() - done, static_cast<off_t>(offset + done));
+    if (n < 0 && errno == EINTR) continue;
+    if (n <= 0) throw OutputError(Why(path_, "cannot write"));
+    done += static_cast<std::size_t>(n);
+  }
+}
+
 void OutputFile::Finish() {
   if (finished_) return;
   if (to_stdout_) {

@@ -2,6 +2,7 @@
 // Output helpers of the command-line tool.
 
 #include <cstddef>
+#include <cstdint>
 #include <functional>
 #include <initializer_list>
 #include <string>
@@ -50,6 +51,12 @@ class OutputFile {
   /// Finish, then the temporary file replaces the target.
   void Commit();
   const std::string& path() const { return path_; }
+  /// `bytes` written again at byte `offset` (a header completed at the end, as a ROS bag's index
+  /// position). Only a file being replaced can be; OutputError for stdout, a device or a FIFO.
+  void Rewrite(std::uint64_t offset, std::string_view bytes);
+  /// The temporary file that will replace the target, for a library that writes a file by its
+  /// name (SQLite): empty for stdout, a device or a FIFO, which are written as they are.
+  const std::string& temporary() const { return temp_; }
 
  private:
   void Flush();

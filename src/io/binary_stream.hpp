@@ -2,7 +2,7 @@
 // A binary input read forward in bounded memory (the native log readers: ulog.cpp, ...): an
 // InputFile in blocks, with the bytes a record needs made contiguous, each byte's offset in the
 // input known for messages, and every byte read optionally hashed (a calibration's provenance).
-// Little-endian values are read from the bytes without alignment (memcpy).
+// Little-endian values are read from the bytes with core/little_endian.hpp.
 
 #include <cstddef>
 #include <cstdint>
@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "accelcal/sha256.hpp"
+#include "core/little_endian.hpp"
 #include "io/input_file.hpp"
 
 namespace accelcal::internal {
@@ -75,14 +76,5 @@ class BinaryStream {
   std::uint64_t offset_ = 0;
   bool eof_ = false;
 };
-
-/// A little-endian value of type T at `p` (any alignment).
-template <typename T>
-T LoadLittle(const unsigned char* p) {
-  static_assert(sizeof(T) <= 8, "scalars only");
-  T v;
-  std::memcpy(&v, p, sizeof(T));  // x86-64 and the ARM builds are little-endian
-  return v;
-}
 
 }  // namespace accelcal::internal

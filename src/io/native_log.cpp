@@ -548,7 +548,8 @@ LogInventory InspectLog(const std::string& path) {
   const internal::DecodedLog log = internal::Decode(
       in, out.format, [](const internal::DecodedStream&) { return false; }, {},
       file.regular() && path != "-" ? &path : nullptr);
-  out.bytes = log.bytes;
+  // A database is read by SQLite, not through the stream: its size is the file's.
+  out.bytes = out.format == LogFormat::kRosbag2Sqlite ? file.size() : log.bytes;
   for (const internal::DecodedStream& s : log.streams) {
     out.streams.push_back(Describe(s));
     out.fields.emplace(s.topic, *s.columns);  // the first subscription's: a topic has one format

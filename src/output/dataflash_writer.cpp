@@ -5,18 +5,15 @@
 #include <limits>
 #include <stdexcept>
 
+#include "core/little_endian.hpp"
+
 namespace accelcal {
 
 namespace {
 
-constexpr unsigned char kFmt = 128, kImu = 163, kParm = 64;
+using internal::PutLittle;
 
-template <typename T>
-void Put(std::string* out, T value) {
-  char bytes[sizeof(T)];
-  std::memcpy(bytes, &value, sizeof(T));  // little-endian, as the format is
-  out->append(bytes, sizeof(T));
-}
+constexpr unsigned char kFmt = 128, kImu = 163, kParm = 64;
 
 // A text field of `size` bytes, NUL-padded.
 void PutText(std::string* out, const std::string& text, std::size_t size) {
@@ -32,8 +29,8 @@ std::string Head(unsigned char type) {
 std::string FmtRecord(unsigned char type, unsigned char length, const std::string& name,
                       const std::string& format, const std::string& labels) {
   std::string out = Head(kFmt);
-  Put<std::uint8_t>(&out, type);
-  Put<std::uint8_t>(&out, length);
+  PutLittle<std::uint8_t>(&out, type);
+  PutLittle<std::uint8_t>(&out, length);
   PutText(&out, name, 4);
   PutText(&out, format, 16);
   PutText(&out, labels, 64);
@@ -55,9 +52,9 @@ std::string DataFlashImuWriter::Parameter(std::uint64_t time_us, const std::stri
     throw std::invalid_argument("a DataFlash parameter's name has 1 to 16 characters");
   }
   std::string out = Head(kParm);
-  Put<std::uint64_t>(&out, time_us);
+  PutLittle<std::uint64_t>(&out, time_us);
   PutText(&out, name, 16);
-  Put<float>(&out, value);
+  PutLittle<float>(&out, value);
   return out;
 }
 
@@ -70,17 +67,17 @@ std::string DataFlashImuWriter::Sample(std::uint64_t time_us, const Vec3& accel,
         "a DataFlash log's readings are float32: a reading is not finite or beyond its range");
   }
   std::string out = Head(kImu);
-  Put<std::uint64_t>(&out, time_us);
-  Put<std::uint8_t>(&out, instance_);
-  for (int a = 0; a < 3; ++a) Put<float>(&out, static_cast<float>(gyro(a)));
-  for (int a = 0; a < 3; ++a) Put<float>(&out, static_cast<float>(accel(a)));
-  Put<std::uint32_t>(&out, 0);                                // EG
-  Put<std::uint32_t>(&out, 0);                                // EA
-  Put<float>(&out, std::numeric_limits<float>::quiet_NaN());  // T
-  Put<std::uint8_t>(&out, 1);                                 // GH
-  Put<std::uint8_t>(&out, 1);                                 // AH
-  Put<std::uint16_t>(&out, 0);                                // GHz
-  Put<std::uint16_t>(&out, 0);                                // AHz
+  PutLittle<std::uint64_t>(&out, time_us);
+  PutLittle<std::uint8_t>(&out, instance_);
+  for (int a = 0; a < 3; ++a) PutLittle<float>(&out, static_cast<float>(gyro(a)));
+  for (int a = 0; a < 3; ++a) PutLittle<float>(&out, static_cast<float>(accel(a)));
+  PutLittle<std::uint32_t>(&out, 0);                                // EG
+  PutLittle<std::uint32_t>(&out, 0);                                // EA
+  PutLittle<float>(&out, std::numeric_limits<float>::quiet_NaN());  // T
+  PutLittle<std::uint8_t>(&out, 1);                                 // GH
+  PutLittle<std::uint8_t>(&out, 1);                                 // AH
+  PutLittle<std::uint16_t>(&out, 0);                                // GHz
+  PutLittle<std::uint16_t>(&out, 0);                                // AHz
   return out;
 }
 

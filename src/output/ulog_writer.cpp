@@ -6,9 +6,13 @@
 #include <limits>
 #include <stdexcept>
 
+#include "core/little_endian.hpp"
+
 namespace accelcal {
 
 namespace {
+
+using internal::PutLittle;
 
 // The message ids of the subscriptions.
 constexpr std::uint16_t kAccelId = 0, kGyroId = 1;
@@ -19,17 +23,10 @@ constexpr const char* kFields =
     "float temperature;uint32_t error_count;uint8_t[3] clip_counter;uint8_t samples;"
     "uint8_t[4] _padding0;";
 
-template <typename T>
-void Put(std::string* out, T value) {
-  char bytes[sizeof(T)];
-  std::memcpy(bytes, &value, sizeof(T));  // little-endian, as the format is
-  out->append(bytes, sizeof(T));
-}
-
 // A message: uint16 size, uint8 type, then the payload.
 std::string Message(char type, const std::string& payload) {
   std::string out;
-  Put<std::uint16_t>(&out, static_cast<std::uint16_t>(payload.size()));
+  PutLittle<std::uint16_t>(&out, static_cast<std::uint16_t>(payload.size()));
   out.push_back(type);
   return out + payload;
 }
@@ -43,7 +40,7 @@ std::string KeyValue(const std::string& key, const std::string& value) {
 std::string Subscribe(std::uint16_t id, const std::string& topic) {
   std::string add;
   add.push_back('\0');  // multi id 0
-  Put<std::uint16_t>(&add, id);
+  PutLittle<std::uint16_t>(&add, id);
   return Message('A', add + topic);
 }
 
@@ -55,15 +52,15 @@ std::string Sample(std::uint16_t id, std::uint32_t device_id, std::uint64_t time
         "a ULog's readings are float32: a reading is not finite or beyond its range");
   }
   std::string payload;
-  Put<std::uint16_t>(&payload, id);
-  Put<std::uint64_t>(&payload, time_us);  // timestamp
-  Put<std::uint64_t>(&payload, time_us);  // timestamp_sample
-  Put<std::uint32_t>(&payload, device_id);
-  for (int a = 0; a < 3; ++a) Put<float>(&payload, static_cast<float>(v(a)));
-  Put<float>(&payload, std::numeric_limits<float>::quiet_NaN());  // temperature
-  Put<std::uint32_t>(&payload, 0);                                // error_count
-  payload.append(3, '\0');                                        // clip_counter
-  payload.push_back('\1');                                        // samples
+  PutLittle<std::uint16_t>(&payload, id);
+  PutLittle<std::uint64_t>(&payload, time_us);  // timestamp
+  PutLittle<std::uint64_t>(&payload, time_us);  // timestamp_sample
+  PutLittle<std::uint32_t>(&payload, device_id);
+  for (int a = 0; a < 3; ++a) PutLittle<float>(&payload, static_cast<float>(v(a)));
+  PutLittle<float>(&payload, std::numeric_limits<float>::quiet_NaN());  // temperature
+  PutLittle<std::uint32_t>(&payload, 0);                                // error_count
+  payload.append(3, '\0');                                              // clip_counter
+  payload.push_back('\1');                                              // samples
   // PX4's logger leaves the trailing padding out.
   return Message('D', payload);
 }
@@ -72,7 +69,7 @@ std::string Sample(std::uint16_t id, std::uint32_t device_id, std::uint64_t time
 
 std::string ULogImuWriter::Header() const {
   std::string out = {'U', 'L', 'o', 'g', 0x01, 0x12, 0x35, 0x01};
-  Put<std::uint64_t>(&out, 0);                 // the log's start [µs]
+  PutLittle<std::uint64_t>(&out, 0);           // the log's start [µs]
   out += Message('B', std::string(40, '\0'));  // no flags, no appended data
   out += Message('F', std::string("sensor_accel") + kFields);
   if (gyroscope_) out += Message('F', std::string("sensor_gyro") + kFields);

@@ -13,6 +13,8 @@
 
 #include "accelcal/dataflash_writer.hpp"
 #include "accelcal/mcap_writer.hpp"
+#include "accelcal/rosbag2_writer.hpp"
+#include "accelcal/rosbag_writer.hpp"
 #include "accelcal/simulate.hpp"
 #include "accelcal/ulog_writer.hpp"
 #include "io/binary_stream.hpp"
@@ -223,6 +225,91 @@ TEST_F(NativeLogTest, McapCalibratesToTheSameBytesAsItsSamplesAsCsv) {
     EXPECT_EQ(jm.dump(1), jc.dump(1)) << static_cast<int>(compression);
     EXPECT_NE(from_mcap.out.find("an MCAP file: /imu/data"), std::string::npos) << from_mcap.out;
   }
+  // The same session as a ROS 1 bag (each chunk compression) and a ROS 2 SQLite bag.
+  const auto same = [&](const std::string& bag, const std::string& what) {
+    const CliRun run =
+        Exec("calibrate " + bag + " --gravity 9.81 --gyro " + bag + " -o " + Path("b.json"));
+    ASSERT_EQ(run.status, 0) << what << run.err;
+    nlohmann::json jb = Calibration(Path("b.json"));
+    ASSERT_TRUE(jb["sensors"].contains("gyroscope")) << what;
+    jb["sensors"]["gyroscope"].erase("source");
+    EXPECT_EQ(jb.dump(1), jc.dump(1)) << what;
+  };
+  for (const RosBagCompression compression :
+       {RosBagCompression::kNone, RosBagCompression::kBz2, RosBagCompression::kLz4}) {
+    RosBagImuWriter writer(compression);
+    std::string bag = writer.Header();
+    for (std::size_t k = 0; k < log.time_s.size(); ++k) {
+      const auto t = t0_us + static_cast<std::uint64_t>(std::llround(log.time_s[k] * 1e6));
+      bag += writer.Sample(t * 1000, log.accel[k], log.gyro[k]);
+    }
+    bag += writer.Finish();
+    const std::string indexed = writer.IndexedHeader();
+    ASSERT_EQ(indexed.size() + RosBagImuWriter::kHeaderOffset, writer.Header().size());
+    bag.replace(RosBagImuWriter::kHeaderOffset, indexed.size(), indexed);
+    same(Write("imu.bag", bag), "ROS bag " + std::to_string(static_cast<int>(compression)));
+  }
+  {
+    std::remove(Path("imu.db3").c_str());
+    Rosbag2SqliteImuWriter writer(Path("imu.db3"));
+    for (std::size_t k = 0; k < log.time_s.size(); ++k) {
+      const auto t = t0_us + static_cast<std::uint64_t>(std::llround(log.time_s[k] * 1e6));
+      writer.Sample(t * 1000, log.accel[k], log.gyro[k]);
+    }
+    writer.Finish();
+    same(Path("imu.db3"), "db3");
+  }
+}
+
+// `simulate --format` writes a session in every format, each calibrating as its samples as text:
+// the MAT-file's 4 x N matrix as the CSV's rows without their header line (the same doubles; the
+// time column found the same way), the bags as the samples with their ns stamps in us.
+TEST_F(NativeLogTest, EverySimulatedFormatCalibratesAsItsSamples) {
+  const std::string sim = "simulate --scenario yang2012 --raw --duration 10 --format ";
+  ASSERT_EQ(Exec(sim + "csv -o " + Path("s.csv")).status, 0);
+  const std::string csv = Slurp(Path("s.csv"));
+  const std::string rows = Write("rows.txt", csv.substr(csv.find('\n') + 1));
+  ASSERT_EQ(Exec(sim + "mat -o " + Path("s.mat")).status, 0);
+  const CliRun text = Exec("calibrate " + rows + " -o " + Path("t.json"));
+  const CliRun mat = Exec("calibrate " + Path("s.mat") + " -o " + Path("m.json"));
+  ASSERT_EQ(text.status, 0) << text.err;
+  ASSERT_EQ(mat.status, 0) << mat.err;
+  EXPECT_EQ(Calibration(Path("m.json")).dump(1), Calibration(Path("t.json")).dump(1));
+  // The bags: times in whole ns from 0 s, which as us are the CSV's times to 1e-3 us.
+  std::string us = "time_us,x,y,z\n";
+  {
+    std::istringstream in(csv.substr(csv.find('\n') + 1));
+    std::string line;
+    while (std::getline(in, line)) {
+      const std::size_t comma = line.find(',');
+      const double t_s = std::stod(line.substr(0, comma));
+      char t_us[40];
+      std::snprintf(t_us, sizeof t_us, "%.17g", static_cast<double>(std::llround(t_s * 1e9)) / 1e3);
+      us += t_us + line.substr(comma) + "\n";
+    }
+  }
+  const CliRun from_us = Exec("calibrate " + Write("us.csv", us) +
+                              " --time-unit us --raw-units m/s2 -o " + Path("u.json"));
+  ASSERT_EQ(from_us.status, 0) << from_us.err;
+  for (const char* format : {"rosbag", "db3", "mcap"}) {
+    const std::string bag = Path(std::string("s.") + format);
+    ASSERT_EQ(Exec(sim + format + " -o " + bag).status, 0) << format;
+    const CliRun run = Exec("calibrate " + bag + " -o " + Path("b.json"));
+    ASSERT_EQ(run.status, 0) << format << run.err;
+    EXPECT_EQ(Calibration(Path("b.json")).dump(1), Calibration(Path("u.json")).dump(1)) << format;
+    // inspect gives the file's size (a database is read by SQLite, not as a stream).
+    const std::string first = Slurp(bag);
+    const CliRun inspect = Exec("inspect --json " + bag);
+    ASSERT_EQ(inspect.status, 0) << format << inspect.err;
+    EXPECT_EQ(nlohmann::json::parse(inspect.out)["bytes"], first.size()) << format;
+    // The same simulation writes the same bytes.
+    ASSERT_EQ(Exec(sim + format + " -o " + bag).status, 0) << format;
+    EXPECT_EQ(Slurp(bag), first) << format;
+  }
+  // A bag completed at its end, or a database, is not written to stdout.
+  const CliRun piped = Exec(sim + "rosbag");
+  EXPECT_EQ(piped.status, 2);
+  EXPECT_NE(piped.err.find("give -o FILE"), std::string::npos) << piped.err;
 }
 
 // ArduPilot logs its IMU records corrected by the calibration in force: a = (p - o_old) .* s_old,

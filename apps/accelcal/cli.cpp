@@ -545,6 +545,9 @@ int accelcal::cli::RunCommandLine(int argc, char** argv) {
     export_cmd->add_option("--device-id", exp.device_id,
                            "px4: the sensor's device id for CAL_ACC<n>_ID (default: the one "
                            "of the ULog stream calibrated)");
+    export_cmd->add_option("--gyro-device-id", exp.gyro_device_id,
+                           "px4: the gyroscope's device id for CAL_GYRO<n>_ID (default: the "
+                           "one of the ULog stream calibrated)");
     export_cmd
         ->add_option("--current-params", exp.current_params,
                      "ardupilot: the parameters in force when the log was recorded (.param "
@@ -658,8 +661,9 @@ int accelcal::cli::RunCommandLine(int argc, char** argv) {
     }
     if (*export_cmd) {
       data_subject = exp.calibration;
-      for (const char* name : {"raw-unit", "gyro-raw-unit", "instance", "c-prefix", "sensor",
-                               "noise", "rostopic", "device-id", "current-params"}) {
+      for (const char* name :
+           {"raw-unit", "gyro-raw-unit", "instance", "c-prefix", "sensor", "noise", "rostopic",
+            "device-id", "gyro-device-id", "current-params"}) {
         if (export_cmd->count(std::string("--") + name) > 0) exp.given.push_back(name);
       }
       return RunExport(exp);

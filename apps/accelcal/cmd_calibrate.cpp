@@ -28,10 +28,6 @@ namespace {
 // The label of the gyroscope's raw unit: its declared unit (rad/s, deg/s), or for raw counts the
 // accelerometer's raw label when that is a label of counts ("counts", "LSB"), else "raw": an
 // accelerometer read in m/s2 or g says nothing of the gyroscope's unit.
-std::string GyroRawLabel(GyroUnit unit, const CalibrateArgs& args) {
-  if (unit != GyroUnit::kRaw) return args.gyro_units;
-  return ForceUnitFromString(args.raw_units) ? std::string("raw") : args.raw_units;
-}
 
 void PrintInput(const LoadedInput& in) {
   for (const LoadedFile& f : in.files) {
@@ -228,6 +224,15 @@ struct GyroRun {
   InputData data;
   GyroCalibration calibration;
 };
+
+// The gyroscope's raw-unit label: --gyro-units when its rates were in a unit, else the unit its
+// binary-log stream has by its specification (PX4's sensor_gyro, a ROS Imu's angular_velocity:
+// rad/s), else --raw-units unless that names a force unit.
+std::string GyroRawLabel(const GyroRun& gyro, const CalibrateArgs& args) {
+  if (gyro.calibration.unit != GyroUnit::kRaw) return args.gyro_units;
+  if (gyro.data.stream && !gyro.data.stream->unit.empty()) return gyro.data.stream->unit;
+  return ForceUnitFromString(args.raw_units) ? std::string("raw") : args.raw_units;
+}
 
 bool GyroWanted(const CalibrateArgs& args) {
   return !args.gyro.empty() || !args.gyro_columns.empty();
@@ -446,7 +451,7 @@ int WriteCalibration(const CalibrateArgs& given, const LoadedInput& in, const Gr
   if (gyro != nullptr) {
     info.gyroscope = &gyro->calibration;
     info.gyro_source = gyro->path;
-    info.gyro_raw_unit = GyroRawLabel(gyro->calibration.unit, args);
+    info.gyro_raw_unit = GyroRawLabel(*gyro, args);
   }
   const std::string json = CalibrationToJson(result, info);
   // Everything is rendered before anything is written: a failure leaves no file behind.
@@ -485,7 +490,7 @@ int WriteCalibration(const CalibrateArgs& given, const LoadedInput& in, const Gr
     PrintCalibration(result, in.positions, in.position_file, g, args.raw_units);
     if (selection) PrintModelSelection(*selection, args.model == "auto");
     if (gyro != nullptr) {
-      PrintGyro(*gyro, GyroRawLabel(gyro->calibration.unit, args),
+      PrintGyro(*gyro, GyroRawLabel(*gyro, args),
                 g.unit == ForceUnit::kMetersPerSecond2 ? "m/s2" : "g");
     }
     for (const Finding& f : diagnosis.findings) {

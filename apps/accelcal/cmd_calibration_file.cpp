@@ -145,6 +145,7 @@ void RefuseUnusedOptions(ExportFormat format, const ExportArgs& args) {
       {"rostopic", in({F::kKalibrImu, F::kKalibr, F::kOpenVins}),
        "kalibr-imu, kalibr and openvins"},
       {"device-id", in({F::kPx4}), "px4"},
+      {"gyro-device-id", in({F::kPx4}), "px4"},
       {"current-params", in({F::kArduPilot}), "ardupilot"},
   };
   for (const Use& use : uses) {
@@ -175,6 +176,7 @@ int RunExport(const ExportArgs& args) {
     options.noise = ParseNoiseJson(ReadFileToString(args.noise, kMaxSmallFileBytes), args.noise);
   }
   options.device_id = args.device_id;
+  options.gyro_device_id = args.gyro_device_id;
   if (!args.current_params.empty()) {
     options.current_params = ParseParameterFile(
         ReadFileToString(args.current_params, kMaxSmallFileBytes), args.current_params);

@@ -150,6 +150,7 @@ struct LoadedCalibration {
     GyroModelKind model = GyroModelKind::kLinear;
     GyroParameters params;       ///< K [raw per rad/s], bias [raw], G [raw per specific-force unit]
     std::string raw_unit;        ///< `units.raw`
+    std::string source;          ///< `source`: the gyroscope's input's name, when present
     Eigen::MatrixXd covariance;  ///< in GyroParameterSlots(model) order; empty when null
     std::optional<double> heldout_rms_deg;  ///< `validation.heldout_rms_deg`
     std::optional<double> rms_deg;          ///< `validation.rms_deg`

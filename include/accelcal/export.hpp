@@ -32,10 +32,12 @@
 namespace accelcal {
 
 enum class ExportFormat {
-  kJson,       ///< "json": the native calibration file, unchanged
-  kYaml,       ///< "yaml": the same document in YAML
-  kKalibr,     ///< "kalibr": Kalibr's imu.yaml with the scale-misalignment intrinsics
-  kPx4,        ///< "px4": CAL_ACCn_{X,Y,Z}OFF and CAL_ACCn_{X,Y,Z}SCALE (QGroundControl .params)
+  kJson,    ///< "json": the native calibration file, unchanged
+  kYaml,    ///< "yaml": the same document in YAML
+  kKalibr,  ///< "kalibr": Kalibr's imu.yaml with the scale-misalignment intrinsics
+  /// "px4": CAL_ACCn_{X,Y,Z}OFF and CAL_ACCn_{X,Y,Z}SCALE (QGroundControl .params), with
+  /// CAL_GYROn_{X,Y,Z}OFF when the file has a gyroscope (PX4 holds a gyroscope's offsets only)
+  kPx4,
   kArduPilot,  ///< "ardupilot": INS_ACC[n]OFFS_{X,Y,Z} and INS_ACC[n]SCAL_{X,Y,Z} (.param)
   kCHeader,    ///< "c-header": constants and an inline correction function for firmware
   kImuTk,      ///< "imutk": imu_tk's CalibratedTriad .calib (misalignment, scale, bias)
@@ -85,6 +87,9 @@ struct ExportOptions {
   /// to its sensor). Unset: the device id of the ULog stream the calibration was made from (its
   /// provenance), else none is written and the export says PX4 will not apply it.
   std::optional<std::uint64_t> device_id;
+  /// PX4: the CAL_GYRO<n>_ID to write, as device_id for the gyroscope (unset: the device id of
+  /// the gyroscope's ULog stream, else none is written).
+  std::optional<std::uint64_t> gyro_device_id;
   /// ArduPilot: the parameters in force when the log was recorded (a .param file's names and
   /// values), for a calibration of data they had already corrected (IMU, ACC records). Unset:
   /// the log's own PARM values, which the calibration file's provenance records.

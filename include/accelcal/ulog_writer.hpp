@@ -14,9 +14,11 @@ namespace accelcal {
 
 class ULogImuWriter {
  public:
-  /// `device_id`: the device_id field of every message; `gyroscope`: a sensor_gyro stream too.
-  explicit ULogImuWriter(std::uint32_t device_id = 1, bool gyroscope = false)
-      : device_id_(device_id), gyroscope_(gyroscope) {}
+  /// `device_id`: the device_id field of every sensor_accel message; `gyroscope`: a sensor_gyro
+  /// stream too, its device_id `gyro_device_id` (each sensor has its own on PX4).
+  explicit ULogImuWriter(std::uint32_t device_id = 1, bool gyroscope = false,
+                         std::uint32_t gyro_device_id = 2)
+      : device_id_(device_id), gyro_device_id_(gyro_device_id), gyroscope_(gyroscope) {}
   /// The header, flag bits, the formats, the log's information and the subscriptions (multi id
   /// 0: sensor_accel, then sensor_gyro).
   std::string Header() const;
@@ -28,7 +30,7 @@ class ULogImuWriter {
   std::string Gyro(std::uint64_t time_us, const Vec3& rate) const;
 
  private:
-  std::uint32_t device_id_;
+  std::uint32_t device_id_, gyro_device_id_;
   bool gyroscope_;
 };
 

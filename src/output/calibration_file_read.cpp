@@ -299,6 +299,9 @@ LoadedCalibration::Gyroscope ReadGyroscope(const Reader& r, const ordered_json& 
   if (doc.contains("units") && doc["units"].is_object() && doc["units"].contains("raw")) {
     g.raw_unit = r.Inside("units").Text(doc["units"], "raw");
   }
+  if (doc.contains("source") && doc["source"].is_string()) {
+    g.source = doc["source"].get<std::string>();
+  }
   if (doc.contains("covariance") && !doc["covariance"].is_null()) {
     const int P = NumGyroParameters(g.model);
     const auto& c = doc["covariance"];

@@ -274,6 +274,105 @@ const SourceStream* AccelerometerStream(const LoadedCalibration& cal) {
   return nullptr;
 }
 
+// The binary log's stream the gyroscope was calibrated from: the last input of its name with a
+// stream (the gyroscope's input follows the accelerometer's, even from the same log).
+const SourceStream* GyroscopeStream(const LoadedCalibration& cal) {
+  const SourceStream* found = nullptr;
+  for (const InputRecord& input : cal.provenance.inputs) {
+    if (input.stream && input.name == cal.gyroscope->source) found = &*input.stream;
+  }
+  return found;
+}
+
+// A PX4 device id: 32-bit.
+std::optional<std::uint64_t> Px4DeviceId(std::optional<std::uint64_t> given,
+                                         const SourceStream* stream) {
+  std::optional<std::uint64_t> id = given;
+  if (!id && stream != nullptr) id = stream->device_id;
+  if (id && *id > 0xFFFFFFFFu) {
+    throw std::invalid_argument(
+        Format("device id %llu: PX4's are 32-bit", static_cast<unsigned long long>(*id)));
+  }
+  return id;
+}
+
+// A PX4 calibration slot's comment (which sensor it is for) and its ID and PRIO lines.
+struct Px4Slot {
+  std::string comment, lines, convention;
+};
+Px4Slot Px4SlotFor(const std::string& prefix, const SourceStream* stream,
+                   std::optional<std::uint64_t> id, const char* listener) {
+  Px4Slot out;
+  out.comment = "# " + prefix.substr(0, prefix.size() - 1) + ": ";
+  if (stream != nullptr) {
+    out.comment += Format("%s instance %d of the log", internal::VisibleLine(stream->topic).c_str(),
+                          stream->instance);
+  } else {
+    out.comment += "the calibrated sensor";
+  }
+  if (id) {
+    out.comment += Format(", device id %llu", static_cast<unsigned long long>(*id));
+    // PX4 reads a parameter's value by its MAVLink type: 6 int32, 9 float.
+    out.lines = Format("1\t1\t%sID\t%d\t6\n", prefix.c_str(),
+                       static_cast<std::int32_t>(static_cast<std::uint32_t>(*id)));
+    out.lines += Format("1\t1\t%sPRIO\t50\t6\n", prefix.c_str());  // PX4's default priority
+  } else {
+    out.comment += "; its device id is unknown: " + prefix +
+                   "ID is not written, and PX4 applies a calibration only to the sensor of its "
+                   "ID (give the device id: PX4's `listener " +
+                   listener + "` shows it)";
+    out.convention = "; " + prefix + "ID not written (no device id known)";
+  }
+  out.comment += "\n";
+  return out;
+}
+
+std::optional<double> RawToRadPerSecond(const LoadedCalibration& cal, const ExportOptions& options,
+                                        std::string_view format, std::string_view why,
+                                        std::string* omitted);  // below, with the estimators'
+
+// PX4's gyroscope calibration (src/lib/sensor_calibration/Gyroscope): w = raw - offset in rad/s,
+// after its driver's scaling; no scale. offset = b (the still rate), so the scale and
+// misalignment K_g and the g-sensitivity are dropped, and said.
+std::optional<Px4Slot> Px4Gyroscope(const LoadedCalibration& cal, const ExportOptions& options,
+                                    ExportResult* out) {
+  if (!cal.gyroscope) return std::nullopt;
+  const LoadedCalibration::Gyroscope& g = *cal.gyroscope;
+  const SourceStream* stream = GyroscopeStream(cal);
+  if (stream != nullptr && stream->corrected) {
+    out->gyroscope_omitted = "its rates are " + internal::VisibleLine(stream->topic) +
+                             "'s, which the calibration in force had already corrected, and "
+                             "PX4's CAL_GYRO offsets correct the driver's output: calibrate "
+                             "sensor_gyro for them";
+    return std::nullopt;
+  }
+  const std::optional<double> rad_s = RawToRadPerSecond(
+      cal, options, "PX4", "its drivers scale the rates", &out->gyroscope_omitted);
+  if (!rad_s) return std::nullopt;
+  const Vec3 offset_rad_s = *rad_s * g.params.bias;
+  for (int i = 0; i < 3; ++i) Finite(offset_rad_s(i));
+  const std::string prefix = "CAL_GYRO" + std::to_string(options.instance) + "_";
+  Px4Slot slot =
+      Px4SlotFor(prefix, stream, Px4DeviceId(options.gyro_device_id, stream), "sensor_gyro");
+  const char axes[3] = {'X', 'Y', 'Z'};
+  for (int i = 0; i < 3; ++i) {
+    slot.lines += Format("1\t1\t%s%cOFF\t%.9g\t9\n", prefix.c_str(), axes[i], offset_rad_s(i));
+  }
+  // PX4's rate (raw - b) against the calibrated one K_g^-1 (raw - b): (s K_g - I) w, at most the
+  // largest singular value of s K_g - I times |w|.
+  const double largest =
+      Eigen::JacobiSVD<Mat33>(Mat33(*rad_s * g.params.K - Mat33::Identity())).singularValues()(0);
+  out->gyroscope_included = true;
+  out->gyroscope_dropped =
+      Join(Format("the scale and misalignment K_g, which PX4 does not hold (a rate error of up to "
+                  "%.3g %% of the rate)",
+                  100 * largest),
+           GSensitivityDropped(cal));
+  slot.convention += "; gyroscope: w = raw - offset in rad/s, offset = b_g * " +
+                     Format("%.6g", *rad_s) + " (PX4 holds no gyroscope scale)";
+  return slot;
+}
+
 ExportResult Px4(const LoadedCalibration& cal, const ExportOptions& options) {
   const SourceStream* stream = AccelerometerStream(cal);
   if (stream != nullptr && stream->corrected) {
@@ -286,38 +385,16 @@ ExportResult Px4(const LoadedCalibration& cal, const ExportOptions& options) {
   const double raw_ms2 = RawToMetersPerSecond2(cal, options, "PX4", "its drivers scale the counts");
   const Diagonal d = DiagonalPart(cal, raw_ms2);
   for (int i = 0; i < 3; ++i) Finite(d.offset_ms2(i)), Finite(d.scale(i));
-  std::optional<std::uint64_t> id = options.device_id;
-  if (!id && stream != nullptr) id = stream->device_id;
-  if (id && *id > 0xFFFFFFFFu) {
-    throw std::invalid_argument(
-        Format("device id %llu: PX4's are 32-bit", static_cast<unsigned long long>(*id)));
-  }
   ExportResult out;
   out.convention = DiagonalConvention("PX4 (src/lib/sensor_calibration)", cal, raw_ms2);
   const std::string prefix = "CAL_ACC" + std::to_string(options.instance) + "_";
-  std::string which = "# " + prefix.substr(0, prefix.size() - 1) + ": ";
-  if (stream != nullptr) {
-    which += Format("%s instance %d of the log", internal::VisibleLine(stream->topic).c_str(),
-                    stream->instance);
-  } else {
-    which += "the calibrated sensor";
-  }
-  if (id) {
-    which += Format(", device id %llu", static_cast<unsigned long long>(*id));
-  } else {
-    which += "; its device id is unknown: " + prefix +
-             "ID is not written, and PX4 applies a calibration only to the sensor of its ID "
-             "(give the device id: PX4's `listener sensor_accel` shows it)";
-    out.convention += "; " + prefix + "ID not written (no device id known)";
-  }
+  const Px4Slot slot =
+      Px4SlotFor(prefix, stream, Px4DeviceId(options.device_id, stream), "sensor_accel");
+  const std::optional<Px4Slot> gyro = Px4Gyroscope(cal, options, &out);
+  out.convention += slot.convention + (gyro ? gyro->convention : "");
   out.text = "# Onboard parameters for Vehicle 1\n#\n#" + Header(cal) + "\n# " + out.convention +
-             "\n" + which + "\n#\n# Vehicle-Id Component-Id Name Value Type\n";
-  // PX4 reads a parameter's value by its MAVLink type: 6 int32, 9 float.
-  if (id) {
-    out.text += Format("1\t1\t%sID\t%d\t6\n", prefix.c_str(),
-                       static_cast<std::int32_t>(static_cast<std::uint32_t>(*id)));
-    out.text += Format("1\t1\t%sPRIO\t50\t6\n", prefix.c_str());  // PX4's default priority
-  }
+             "\n" + slot.comment + (gyro ? gyro->comment : "") +
+             "#\n# Vehicle-Id Component-Id Name Value Type\n" + slot.lines;
   const char axes[3] = {'X', 'Y', 'Z'};
   for (int i = 0; i < 3; ++i) {
     out.text += Format("1\t1\t%s%cOFF\t%.9g\t9\n", prefix.c_str(), axes[i], d.offset_ms2(i));
@@ -325,6 +402,7 @@ ExportResult Px4(const LoadedCalibration& cal, const ExportOptions& options) {
   for (int i = 0; i < 3; ++i) {
     out.text += Format("1\t1\t%s%cSCALE\t%.9g\t9\n", prefix.c_str(), axes[i], d.scale(i));
   }
+  if (gyro) out.text += gyro->lines;
   out.loss = MeasureLoss(cal, d.correction, d.dropped);
   return out;
 }

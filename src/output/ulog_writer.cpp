@@ -86,7 +86,7 @@ std::string ULogImuWriter::Accel(std::uint64_t time_us, const Vec3& reading) con
 
 std::string ULogImuWriter::Gyro(std::uint64_t time_us, const Vec3& rate) const {
   if (!gyroscope_) throw std::logic_error("ULogImuWriter::Gyro: made without a gyroscope");
-  return Sample(kGyroId, device_id_, time_us, rate);
+  return Sample(kGyroId, gyro_device_id_, time_us, rate);
 }
 
 }  // namespace accelcal

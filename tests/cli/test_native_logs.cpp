@@ -9,6 +9,7 @@
 #include <string>
 
 #include <gtest/gtest.h>
+#include <Eigen/SVD>
 #include <nlohmann/json.hpp>
 
 #include "accelcal/dataflash_writer.hpp"
@@ -151,8 +152,13 @@ TEST_F(NativeLogTest, ImuULogCalibratesTheGyroscopeToTheSameBytesAsCsv) {
   ASSERT_EQ(from_csv.status, 0) << from_csv.err;
   nlohmann::json ju = Calibration(Path("u.json")), jc = Calibration(Path("c.json"));
   ASSERT_TRUE(ju["sensors"].contains("gyroscope"));
-  ju["sensors"]["gyroscope"].erase("source");
-  jc["sensors"]["gyroscope"].erase("source");
+  // The raw unit labelled by sensor_gyro's definition (the CSV's rates are unlabelled "raw").
+  EXPECT_EQ(ju["sensors"]["gyroscope"]["units"]["raw"], "rad/s");
+  EXPECT_EQ(jc["sensors"]["gyroscope"]["units"]["raw"], "raw");
+  for (nlohmann::json* j : {&ju, &jc}) {
+    (*j)["sensors"]["gyroscope"].erase("source");
+    (*j)["sensors"]["gyroscope"]["units"].erase("raw");
+  }
   EXPECT_EQ(ju.dump(1), jc.dump(1));
   // The gyroscope's stream by name, and a topic that holds none.
   EXPECT_EQ(Exec("calibrate " + u + " --gravity 9.81 --gyro " + u +
@@ -206,6 +212,7 @@ TEST_F(NativeLogTest, McapCalibratesToTheSameBytesAsItsSamplesAsCsv) {
   ASSERT_EQ(from_csv.status, 0) << from_csv.err;
   nlohmann::json jc = Calibration(Path("c.json"));
   jc["sensors"]["gyroscope"].erase("source");
+  jc["sensors"]["gyroscope"]["units"].erase("raw");  // a ROS Imu's rates are labelled rad/s
   for (const McapCompression compression :
        {McapCompression::kNone, McapCompression::kLz4, McapCompression::kZstd}) {
     McapImuWriter writer(compression);
@@ -222,6 +229,8 @@ TEST_F(NativeLogTest, McapCalibratesToTheSameBytesAsItsSamplesAsCsv) {
     nlohmann::json jm = Calibration(Path("m.json"));
     ASSERT_TRUE(jm["sensors"].contains("gyroscope"));
     jm["sensors"]["gyroscope"].erase("source");
+    EXPECT_EQ(jm["sensors"]["gyroscope"]["units"]["raw"], "rad/s");
+    jm["sensors"]["gyroscope"]["units"].erase("raw");
     EXPECT_EQ(jm.dump(1), jc.dump(1)) << static_cast<int>(compression);
     EXPECT_NE(from_mcap.out.find("an MCAP file: /imu/data"), std::string::npos) << from_mcap.out;
   }
@@ -233,6 +242,8 @@ TEST_F(NativeLogTest, McapCalibratesToTheSameBytesAsItsSamplesAsCsv) {
     nlohmann::json jb = Calibration(Path("b.json"));
     ASSERT_TRUE(jb["sensors"].contains("gyroscope")) << what;
     jb["sensors"]["gyroscope"].erase("source");
+    EXPECT_EQ(jb["sensors"]["gyroscope"]["units"]["raw"], "rad/s") << what;
+    jb["sensors"]["gyroscope"]["units"].erase("raw");
     EXPECT_EQ(jb.dump(1), jc.dump(1)) << what;
   };
   for (const RosBagCompression compression :
@@ -454,6 +465,73 @@ std::string Message(char type, const std::string& payload) {
   Put<std::uint16_t>(&out, static_cast<std::uint16_t>(payload.size()));
   return out + type + payload;
 }
+// The gyroscope's block of the PX4 export: CAL_GYRO<n>_ID from the sensor_gyro stream's own
+// device id (or --gyro-device-id), PRIO, and the offsets, which are the calibrated still rate b_g
+// in rad/s (sensor_gyro's unit, which labels the raw unit); PX4 holds no gyroscope scale, and the
+// export says what dropping it costs.
+TEST_F(NativeLogTest, Px4ExportHoldsTheGyroscopeOffsets) {
+  RawLogSimulation options;
+  options.static_s = 4.0;
+  options.transition_s = 2.0;
+  options.sigma_raw_per_sample = Vec3(0.02, 0.02, 0.02);
+  GyroSimulation gyro;  // rad/s, as PX4's drivers scale them: 0.2-0.3 % scale errors
+  gyro.truth.K << 1.002, 0.001, -0.002, 0.0, 0.997, 0.001, 0.0, 0.0, 1.003;
+  gyro.truth.bias = Vec3(0.012, -0.008, 0.005);
+  gyro.sigma_raw_per_sample = Vec3(1e-3, 1e-3, 1e-3);
+  ModelParameters accel;  // m/s², PX4's sensor_accel
+  accel.K = Vec3(1.001, 0.999, 1.002).asDiagonal();
+  accel.bias = Vec3(0.05, -0.03, 0.08);
+  const SimulatedImuLog log = SimulateImuLog(accel, 9.81, Yang18Directions(), options, gyro);
+  const ULogImuWriter writer(7, true, 9);
+  std::string ulog = writer.Header();
+  for (std::size_t k = 0; k < log.time_s.size(); ++k) {
+    const auto t = static_cast<std::uint64_t>(std::llround(log.time_s[k] * 1e6));
+    ulog += writer.Accel(t, log.accel[k]);
+    ulog += writer.Gyro(t, log.gyro[k]);
+  }
+  const std::string u = Write("imu.ulg", ulog);
+  const CliRun run =
+      Exec("calibrate " + u + " --gravity 9.81 --gyro " + u + " -q -o " + Path("u.json"));
+  ASSERT_EQ(run.status, 0) << run.err;
+  const nlohmann::json cal = nlohmann::json::parse(Slurp(Path("u.json")));
+  const nlohmann::json& g = cal["sensors"]["gyroscope"];
+  EXPECT_EQ(g["units"]["raw"], "rad/s");  // sensor_gyro's unit by its definition
+  CliRun e = Exec("export " + Path("u.json") + " --to px4");
+  ASSERT_EQ(e.status, 0) << e.err;
+  EXPECT_NE(e.out.find("1\t1\tCAL_ACC0_ID\t7\t6\n"), std::string::npos) << e.out;
+  std::string block = "1\t1\tCAL_GYRO0_ID\t9\t6\n1\t1\tCAL_GYRO0_PRIO\t50\t6\n";
+  const char axes[3] = {'X', 'Y', 'Z'};
+  for (int i = 0; i < 3; ++i) {
+    const double b = g["bias"][i];
+    // The estimate's σ is about 1e-5 rad/s (1e-3 per sample over 400 still samples a position):
+    // 2e-4 is 20 σ, and a tenth of the smallest offset.
+    EXPECT_NEAR(b, gyro.truth.bias(i), 2e-4) << i;
+    char line[80];
+    std::snprintf(line, sizeof line, "1\t1\tCAL_GYRO0_%cOFF\t%.9g\t9\n", axes[i], b);
+    block += line;
+  }
+  EXPECT_NE(e.out.find(block), std::string::npos) << e.out;
+  EXPECT_NE(e.out.find("# CAL_GYRO0: sensor_gyro instance 0 of the log, device id 9"),
+            std::string::npos)
+      << e.out;
+  // The scale PX4 cannot hold: the rate error (K_g - I) w, at most the largest singular value
+  // of the estimated K_g - I (the truth's is 0.433 %) times |w|.
+  Mat33 K_g;
+  for (int r = 0; r < 3; ++r) {
+    for (int c = 0; c < 3; ++c) K_g(r, c) = g["K"][r][c];
+  }
+  char dropped[200];
+  std::snprintf(dropped, sizeof dropped,
+                "dropped from the gyroscope: the scale and misalignment K_g, which PX4 does not "
+                "hold (a rate error of up to %.3g %% of the rate)",
+                100 * Eigen::JacobiSVD<Mat33>(Mat33(K_g - Mat33::Identity())).singularValues()(0));
+  EXPECT_NE(e.err.find(dropped), std::string::npos) << dropped << "\n" << e.err;
+  e = Exec("export " + Path("u.json") + " --to px4 --gyro-device-id 11 --instance 1");
+  EXPECT_NE(e.out.find("1\t1\tCAL_GYRO1_ID\t11\t6\n"), std::string::npos) << e.out;
+  EXPECT_NE(e.out.find("1\t1\tCAL_ACC1_ID\t7\t6\n"), std::string::npos) << e.out;
+  EXPECT_EQ(Exec("export " + Path("u.json") + " --to kalibr --gyro-device-id 5").status, 2);
+}
+
 // A log of one topic of `format` ("name:fields"), subscribed as message id 0.
 std::string Header(const std::string& format) {
   std::string out = {'U', 'L', 'o', 'g', 0x01, 0x12, 0x35, 0x01};

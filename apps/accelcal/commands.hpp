@@ -174,9 +174,9 @@ struct ExportArgs {
   std::string sensor = "accelerometer";  // imutk: which sensor's triad
   std::string noise;                     // accelcal noise --json output (kalibr-imu, ros, kalibr)
   std::string rostopic = "/imu0";
-  std::optional<std::uint64_t> device_id;  // px4: CAL_ACC<n>_ID
+  std::optional<std::uint64_t> device_id;       // px4: CAL_ACC<n>_ID
   std::optional<std::uint64_t> gyro_device_id;  // px4: CAL_GYRO<n>_ID
-  std::string current_params;              // ardupilot: the .param file in force when logged
+  std::string current_params;                   // ardupilot: the .param file in force when logged
   /// The options given on the command line (long names without dashes): one the chosen format
   /// does not use is refused, never silently ignored.
   std::vector<std::string> given;

@@ -14,6 +14,7 @@ packages=(
   libbz2-dev liblz4-dev libzstd-dev  # ROS bag and MCAP chunks (bz2, lz4, zstd)
   python3-rosbag python3-sensor-msgs  # ROS's own writer makes the bags the tests read
   libmatio-dev python3-scipy  # MATLAB MAT-files; SciPy writes those the tests read
+  zlib1g-dev    # a MAT-file's compressed variables, inflated to check their sizes
   libsqlite3-dev  # ROS 2 bags in SQLite (.db3)
   locales       # the locale tests write numbers under de_DE.UTF-8 (decimal comma), generated below
 )

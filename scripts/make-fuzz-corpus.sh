@@ -5,7 +5,9 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 cli=${1:-build}/accelcal
 c=fuzz/corpus
-rm -rf "$c" && mkdir -p "$c"/{log_reader,orientations,calibration_file,series,calibrate}
+# Its seeds are (re)written; the seeds added by hand or by tests (native_log, calibration_keys,
+# cli_options, the *_v2.json and printf_* ones) are kept, never deleted.
+mkdir -p "$c"/{log_reader,orientations,calibration_file,series,calibrate,file_log}
 # Logs and positions files: heads of the real recordings (seeds stay under 16 KB).
 head -c 12000 data/imutk-xsens-mti/xsens_acc.mat | sed '$d' > "$c/log_reader/xsens_head.mat"
 head -c 12000 data/imutk-t265/t265_acc.mat | sed '$d' > "$c/log_reader/t265_head.mat"
@@ -41,4 +43,32 @@ values = b"".join(struct.pack("<3d", *map(float, r)) for r in rows)
 for control in range(24):
     open(f"{sys.argv[2]}/yang18_{control:02d}", "wb").write(bytes([control]) + values)
 PY
-ls -R "$c" | head -40
+# Logs read from their file (fuzz_file_log): MAT-files (accelcal's 4 x N, SciPy's v5, v7
+# compressed with a char and a struct, turned beside another matrix) and ROS 2 SQLite bags
+# (Humble's and Iron's tables, as tests/rosbag2_test.py writes them, in 512-byte pages).
+"$cli" simulate --scenario yang2012 --raw --duration 0.05 --transition 0.02 --format mat \
+  -o "$c/file_log/simulated_4xN.mat"
+/usr/bin/python3 - "$c/file_log" <<'PY'
+import os, sqlite3, sys
+import numpy as np
+import scipy.io as sio
+out = sys.argv[1]
+sys.path.insert(0, "tests")
+import rosbag2_test
+x = np.loadtxt("data/imutk-xsens-mti/xsens_acc.mat")[:150]
+sio.savemat(f"{out}/xsens_head_v5.mat", {"acc": x})
+sio.savemat(f"{out}/xsens_head_v7_compressed.mat", {"acc": x, "note": "Xsens",
+            "meta": {"rate": 100.0}}, do_compression=True)
+sio.savemat(f"{out}/xsens_turned_two.mat", {"acc": np.ascontiguousarray(x[:60].T),
+                                            "gyr": x[:5, :3]})
+connect = sqlite3.connect
+def small_pages(path, *args, **kwargs):
+    db = connect(path, *args, **kwargs)
+    db.execute("PRAGMA page_size=512")
+    return db
+sqlite3.connect = small_pages
+rows = [(i * 10000, 9.8 * (i % 3 == 0), 0.1 * i, -0.2) for i in range(12)]
+rosbag2_test.write_db3(f"{out}/ros2_iron.db3", rows, True)
+rosbag2_test.write_db3(f"{out}/ros2_humble.db3", rows, False)
+PY
+ls -R "$c" | head -60

@@ -11,6 +11,7 @@
 
 #include "accelcal/error.hpp"
 #include "core/text_format.hpp"
+#include "io/mat_structure.hpp"
 
 namespace accelcal::internal {
 
@@ -184,6 +185,9 @@ bool IsMatFile(std::string_view first_bytes) {
 }
 
 std::vector<MatVariable> ListMatVariables(const std::string& path) {
+  if (const std::optional<std::string> why = CheckMatStructure(path)) {
+    Fail(path, "a MAT-file that is corrupt or cut short: " + *why);
+  }
   const MatFile mat = Open(path);
   std::vector<MatVariable> out;
   while (true) {
@@ -223,6 +227,9 @@ MatTable ReadMatTable(const std::string& path, const std::string& name) {
                    ", not a real numeric matrix (rows of samples)");
   }
   const std::size_t rows = it->dims[0], columns = it->dims[1];
+  if (rows == 0 || columns == 0) {
+    Fail(path, "the variable " + chosen + " is " + Shape(*it) + ": it holds no values");
+  }
   if (rows != 0 && columns > kMaxValues / rows) {
     Fail(path, Format("the variable %s has %zu x %zu values, more than the %zu accelcal reads",
                       chosen.c_str(), rows, columns, kMaxValues));

@@ -1,0 +1,140 @@
+// The sizes a Level 5 MAT-file claims, checked before libmatio reads it (mat_structure.hpp): a
+// file of accelcal's writer and the same variable compressed pass and are read; a name, a
+// dimension or a compressed variable claiming more than the file holds is refused, naming where,
+// as are the inputs the fuzzer found (fuzz/regressions/file_log: libmatio took 4.2 GB for one).
+#include <zlib.h>
+
+#include <cstdint>
+#include <cstring>
+#include <fstream>
+#include <string>
+
+#include <gtest/gtest.h>
+
+#include "accelcal/error.hpp"
+#include "accelcal/mat_writer.hpp"
+#include "io/mat_file.hpp"
+#include "io/mat_structure.hpp"
+
+namespace accelcal::internal {
+namespace {
+
+std::string Write(const std::string& name, const std::string& bytes) {
+  const std::string path = ::testing::TempDir() + "/" + name;
+  std::ofstream(path, std::ios::binary) << bytes;
+  return path;
+}
+
+// A 4 x 100 matrix "imu" (time, x, y, z per column), as simulate writes it.
+std::string Matrix() {
+  MatMatrixWriter writer("imu", 4, 100);
+  std::string out = writer.Header();
+  for (int k = 0; k < 100; ++k) {
+    const double column[4] = {0.01 * k, 0.1 * k, -0.2, 9.81};
+    out += writer.Column(column);
+  }
+  return out + writer.Finish();
+}
+
+void PutU32(std::string* bytes, std::size_t at, std::uint32_t v) {
+  std::memcpy(&(*bytes)[at], &v, 4);
+}
+
+// The same file with its variable compressed (MATLAB 7's miCOMPRESSED: a zlib stream of the
+// element), its inflated size `claim` bytes when given instead of the element's own.
+std::string Compressed(std::uint32_t claim = 0) {
+  std::string file = Matrix();
+  std::string element = file.substr(128);
+  if (claim != 0) PutU32(&element, 4, claim);
+  uLongf n = compressBound(element.size());
+  std::string z(n, '\0');
+  EXPECT_EQ(compress(reinterpret_cast<Bytef*>(z.data()), &n,
+                     reinterpret_cast<const Bytef*>(element.data()), element.size()),
+            Z_OK);
+  z.resize(n);
+  std::string out = file.substr(0, 128);
+  out += std::string("\x0f\x00\x00\x00", 4);
+  out += std::string(4, '\0');
+  PutU32(&out, 132, static_cast<std::uint32_t>(z.size()));
+  return out + z;
+}
+
+TEST(MatStructure, WellFormedFilesPassAndAreRead) {
+  for (const auto& [name, bytes] :
+       {std::pair<std::string, std::string>{"plain.mat", Matrix()}, {"z.mat", Compressed()}}) {
+    const std::string path = Write(name, bytes);
+    EXPECT_EQ(CheckMatStructure(path), std::nullopt) << name;
+    const MatTable t = ReadMatTable(path, "");
+    EXPECT_EQ(t.rows, 100u) << name;
+    EXPECT_TRUE(t.transposed) << name;
+    EXPECT_EQ(t.values[4 * 99 + 1], 0.1 * 99) << name;
+  }
+}
+
+TEST(MatStructure, ClaimsBeyondTheFileAreRefusedWhereTheyAre) {
+  // The matrix's tag (8 bytes at 128), flags (16), dimensions (16), then the name's tag at 168.
+  std::string name = Matrix();
+  PutU32(&name, 172, 0xffff0003u);
+  std::optional<std::string> why = CheckMatStructure(Write("name.mat", name));
+  ASSERT_TRUE(why);
+  EXPECT_NE(why->find("an element of 4294901763 bytes where its matrix holds"), std::string::npos)
+      << *why;
+  EXPECT_NE(why->find("(at byte 168)"), std::string::npos) << *why;
+  // One more column claimed than the data holds.
+  std::string dims = Matrix();
+  PutU32(&dims, 164, 101);
+  why = CheckMatStructure(Write("dims.mat", dims));
+  ASSERT_TRUE(why);
+  EXPECT_NE(why->find("a matrix of 404 values whose data holds 3200 bytes of type 9"),
+            std::string::npos)
+      << *why;
+  // The file cut inside its data.
+  why = CheckMatStructure(Write("cut.mat", Matrix().substr(0, 1000)));
+  ASSERT_TRUE(why);
+  EXPECT_NE(why->find("cut short"), std::string::npos) << *why;
+  // A compressed variable whose element claims 10 MB it does not inflate to.
+  why = CheckMatStructure(Write("claim.mat", Compressed(10u << 20)));
+  ASSERT_TRUE(why);
+  EXPECT_NE(why->find("inflated"), std::string::npos) << *why;
+  // A compressed variable damaged: its stream's check fails.
+  std::string damaged = Compressed();
+  damaged[damaged.size() - 40] ^= 0x55;
+  why = CheckMatStructure(Write("damaged.mat", damaged));
+  ASSERT_TRUE(why);
+  EXPECT_NE(why->find("compressed variable"), std::string::npos) << *why;
+  // Through the reader: an InputError naming the file.
+  try {
+    ListMatVariables(Write("name.mat", name));
+    ADD_FAILURE() << "read";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("corrupt or cut short"), std::string::npos) << e.what();
+  }
+}
+
+TEST(MatStructure, AnEmptyMatrixIsRefusedByName) {
+  // Found by the fuzzer: a 262294 x 0 matrix was read as rows of nothing (the first value of an
+  // empty vector).
+  MatMatrixWriter writer("imu", 4, 0);
+  const std::string path = Write("empty.mat", writer.Header() + writer.Finish());
+  EXPECT_EQ(CheckMatStructure(path), std::nullopt);
+  try {
+    ReadMatTable(path, "");
+    ADD_FAILURE() << "read";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("the variable imu is 4x0 double: it holds no values"),
+              std::string::npos)
+        << e.what();
+  }
+}
+
+TEST(MatStructure, TheFuzzersFindingsAreRefused) {
+  for (const char* name : {"dims-claim-4gb.mat", "name-claim-4gb.mat"}) {
+    const std::optional<std::string> why =
+        CheckMatStructure(std::string(ACCELCAL_SOURCE_DIR) + "/fuzz/regressions/file_log/" + name);
+    ASSERT_TRUE(why) << name;
+    EXPECT_NE(why->find("where its matrix holds"), std::string::npos) << *why;
+  }
+}
+
+}  // namespace
+}  // namespace accelcal::internal

@@ -25,6 +25,10 @@ struct DecodedStream {
   /// text fields left out, and those beyond the format's first kMaxFormatColumns. Shared by the
   /// streams of one format (a log may subscribe one format many times).
   std::shared_ptr<const std::vector<std::string>> columns;
+  /// The columns its reader gives in µs by their type (a ROS message's time and duration fields,
+  /// and `log_time`); null where they are known by name (ULog's timestamp and
+  /// timestamp_sample, DataFlash's TimeUS and SampleUS).
+  std::shared_ptr<const std::vector<std::size_t>> microseconds;
   std::size_t messages = 0;
   /// The time field [µs] of its first and last message (0 without messages).
   std::uint64_t first_us = 0, last_us = 0;

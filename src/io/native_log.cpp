@@ -13,6 +13,7 @@
 #include "io/mat_file.hpp"
 #include "io/mcap.hpp"
 #include "io/native_input.hpp"
+#include "io/ros_topics.hpp"
 #include "io/rosbag.hpp"
 #include "io/rosbag2_sqlite.hpp"
 #include "io/ulog.hpp"
@@ -145,13 +146,19 @@ std::size_t ColumnOf(const internal::DecodedStream& s, const std::string& entry,
                        " does not have (its fields: " + Fields(s) + ")");
 }
 
-// The time fields the formats define in µs (ULog's timestamp and timestamp_sample, DataFlash's
-// TimeUS and SampleUS) or that their reader gives in µs (a ROS message's header.stamp), in the
-// order they are preferred when none is named.
-constexpr const char* kMicrosecondFields[] = {"timestamp_sample", "timestamp", "SampleUS", "TimeUS",
-                                              "header.stamp"};
+// The time fields the formats define in µs by name (ULog's timestamp and timestamp_sample,
+// DataFlash's TimeUS and SampleUS), in the order they are preferred when none is named. A ROS
+// message's are known by their type (DecodedStream::microseconds): header.stamp is preferred,
+// then log_time.
+constexpr const char* kMicrosecondFields[] = {"timestamp_sample", "timestamp", "SampleUS",
+                                              "TimeUS"};
 
-bool IsMicrosecondField(std::string_view name) {
+// Whether column `c` of `s` is a time its format or reader gives in µs.
+bool IsMicrosecondColumn(const internal::DecodedStream& s, std::size_t c) {
+  if (s.microseconds) {
+    return std::find(s.microseconds->begin(), s.microseconds->end(), c) != s.microseconds->end();
+  }
+  const std::string& name = (*s.columns)[c];
   return std::find(std::begin(kMicrosecondFields), std::end(kMicrosecondFields), name) !=
          std::end(kMicrosecondFields);
 }
@@ -181,6 +188,11 @@ Chosen Choose(const internal::DecodedStream& s, const ReadOptions& options,
       out.time = ColumnOf(s, options.columns[0], source);
     } else if (known != nullptr) {
       out.time = Find(s, known->time);
+    } else if (s.microseconds) {
+      for (const char* name : {"header.stamp", internal::kLogTime}) {
+        if ((out.time = Find(s, name)) && IsMicrosecondColumn(s, *out.time)) break;
+        out.time.reset();
+      }
     } else {
       for (const char* name : kMicrosecondFields) {
         if ((out.time = Find(s, name))) break;
@@ -381,7 +393,7 @@ InputData ReadNativeLog(BinaryStream& in, InputFile* file, const ReadOptions& op
     throw std::logic_error("ReadNativeLog: the columns stored are not the columns chosen");
   }
   // A time field the format defines is in µs; another the user chose is read as a text log's.
-  const bool microseconds = chosen.time && IsMicrosecondField((*s.columns)[*chosen.time]);
+  const bool microseconds = chosen.time && IsMicrosecondColumn(s, *chosen.time);
   if (microseconds && options.time_unit != TimeUnit::kAuto &&
       options.time_unit != TimeUnit::kMicroseconds) {
     throw InputError(
@@ -496,6 +508,19 @@ InputData ReadNativeLog(BinaryStream& in, InputFile* file, const ReadOptions& op
          {"CAL_ACC", "CAL_GYRO", "SENS_BOARD_", "INS_ACC", "INS_GYR", "AHRS_ORIENTATION"}) {
       if (parameter.rfind(prefix, 0) == 0) stream.calibration_in_force[parameter] = value;
     }
+  }
+  if (s.microseconds && chosen.time && (*s.columns)[*chosen.time] != internal::kLogTime &&
+      raw.time_s.size() >= 2 && raw.time_s.front() == raw.time_s.back() &&
+      std::is_sorted(raw.time_s.begin(), raw.time_s.end())) {
+    // A driver that does not stamp its messages: the time they were logged is the one there is.
+    throw InputError(
+        source, 0,
+        Format("%s's %s is the same in every message (%.17g us): its publisher does not stamp "
+               "them; read the time the recorder logged each with the columns option (%s,%s,%s,"
+               "%s)",
+               Shown(s.topic).c_str(), (*s.columns)[*chosen.time].c_str(), raw.time_s.front(),
+               internal::kLogTime, (*s.columns)[chosen.axis[0]].c_str(),
+               (*s.columns)[chosen.axis[1]].c_str(), (*s.columns)[chosen.axis[2]].c_str()));
   }
   FinishRawLog(&raw, microseconds ? TimeUnit::kMicroseconds : options.time_unit, options.rate_hz,
                chosen.time ? std::string_view((*s.columns)[*chosen.time]) : std::string_view());

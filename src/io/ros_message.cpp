@@ -145,12 +145,13 @@ struct RosMessageType::Impl {
   RosVersion version = RosVersion::kRos1;
   std::vector<Type> types;  // [0] the message's own
   std::shared_ptr<const std::vector<std::string>> columns;
+  std::vector<std::size_t> microseconds;  // the time and duration columns
   std::optional<std::size_t> stamp;
 
   std::map<std::string, std::string_view> sections;  // a used type's definition text
 
   int Resolve(const std::string& name, std::vector<std::string>* stack);
-  void Name(const Type& t, const std::string& prefix, std::vector<std::string>* out) const;
+  void Name(const Type& t, const std::string& prefix, std::vector<std::string>* out);
   // Reads a `t` at c (values into `values` when not null: outside variable-length arrays).
   bool Walk(const Type& t, Cursor& c, double* values) const;
   bool Element(const Member& m, Cursor& c, double* values) const;
@@ -287,7 +288,7 @@ int RosMessageType::Impl::Resolve(const std::string& name, std::vector<std::stri
 
 // The columns' names of `t` after `prefix`, up to kMaxFormatColumns in all.
 void RosMessageType::Impl::Name(const Type& t, const std::string& prefix,
-                                std::vector<std::string>* out) const {
+                                std::vector<std::string>* out) {
   for (const Member& m : t.members) {
     if (out->size() >= kMaxFormatColumns) return;
     if (m.kind == Kind::kString || m.array == Array::kVariable) continue;
@@ -299,6 +300,9 @@ void RosMessageType::Impl::Name(const Type& t, const std::string& prefix,
       if (m.kind == Kind::kStruct) {
         Name(types[std::size_t(m.type)], name + ".", out);
       } else {
+        if (m.kind == Kind::kTime || m.kind == Kind::kDuration || m.kind == Kind::kStamp2) {
+          microseconds.push_back(out->size());
+        }
         out->push_back(name);
       }
     }
@@ -514,6 +518,7 @@ const std::shared_ptr<const std::vector<std::string>>& RosMessageType::columns()
   return impl_->columns;
 }
 std::optional<std::size_t> RosMessageType::stamp() const { return impl_->stamp; }
+const std::vector<std::size_t>& RosMessageType::microseconds() const { return impl_->microseconds; }
 
 std::optional<std::string> RosMessageType::Decode(const unsigned char* p, std::size_t n,
                                                   double* values) const {

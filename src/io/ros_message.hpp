@@ -44,6 +44,9 @@ class RosMessageType {
   const std::shared_ptr<const std::vector<std::string>>& columns() const;
   /// The column `header.stamp` (a std_msgs/Header first), if it has one.
   std::optional<std::size_t> stamp() const;
+  /// Its columns of ROS time and duration types (time, duration, builtin_interfaces/Time and
+  /// Duration), which Decode gives in µs; the others are the numbers the message holds.
+  const std::vector<std::size_t>& microseconds() const;
 
   /// Decodes one message of `n` bytes at `p` into `values` (one per column; time and duration
   /// in µs). Returns the reason when its bytes are not one such message (too few, too many, not

@@ -62,7 +62,20 @@ std::size_t RosTopics::Add(const std::string& topic, const std::string& type,
   DecodedStream s;
   s.topic = topic;
   s.type = type;
-  s.columns = parsed ? parsed->columns() : std::make_shared<const std::vector<std::string>>();
+  if (parsed) {
+    Layout& layout = layouts_[parsed.get()];
+    if (!layout.columns) {
+      auto columns = std::make_shared<std::vector<std::string>>(*parsed->columns());
+      auto microseconds = std::make_shared<std::vector<std::size_t>>(parsed->microseconds());
+      microseconds->push_back(columns->size());
+      columns->push_back(kLogTime);
+      layout = {std::move(columns), std::move(microseconds)};
+    }
+    s.columns = layout.columns;
+    s.microseconds = layout.microseconds;
+  } else {
+    s.columns = std::make_shared<const std::vector<std::string>>();
+  }
   columns_ += s.columns->size();
   if (columns_ > kMaxLogColumns) {
     *error = Format("the log's topics have more than %zu numeric fields in all", kMaxLogColumns);
@@ -103,6 +116,7 @@ std::optional<std::string> RosTopics::Message(std::size_t stream, std::uint64_t 
   if (const std::optional<std::string> why = type.Decode(data, n, scratch_.data())) {
     return "a message of " + s.topic + " (" + s.type + "): " + *why;
   }
+  scratch_.back() = static_cast<double>(time_us);  // log_time
   for (std::size_t col : s.stored) s.values.push_back(scratch_[col]);
   s.offset.push_back(at);
   return std::nullopt;

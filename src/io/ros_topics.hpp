@@ -2,6 +2,8 @@
 // The topics of a ROS recording as streams (rosbag.cpp, mcap.cpp): a topic becomes a stream at
 // its first connection (a ROS 1 bag) or channel (MCAP), with the type its definition describes;
 // its messages are counted, and decoded when the stream is kept. One piece for every ROS format.
+// A stream's columns are its type's numeric fields, then `log_time`: the time the recorder logged
+// the message (a ROS 1 record's time, MCAP's log_time, rosbag2's timestamp), in µs.
 
 #include <cstdint>
 #include <map>
@@ -14,6 +16,9 @@
 #include "io/ros_message.hpp"
 
 namespace accelcal::internal {
+
+/// The column of the time a message was logged.
+inline constexpr char kLogTime[] = "log_time";
 
 class RosTopics {
  public:
@@ -33,8 +38,8 @@ class RosTopics {
                   const std::string& why, std::string* error,
                   const std::string& publisher = std::string());
 
-  /// One message of stream `stream`, recorded at `time_us`, its bytes `data` (n), at byte `at`
-  /// of the file. Returns the reason when it does not decode.
+  /// One message of stream `stream`, recorded at `time_us` (its column `log_time`), its bytes
+  /// `data` (n), at byte `at` of the file. Returns the reason when it does not decode.
   std::optional<std::string> Message(std::size_t stream, std::uint64_t time_us,
                                      const unsigned char* data, std::size_t n, std::uint64_t at);
 
@@ -50,6 +55,13 @@ class RosTopics {
   // Types parsed, by name, version and their definition's SHA-256 (a file repeats them).
   std::map<std::tuple<std::string, int, std::string>, std::shared_ptr<const RosMessageType>>
       parsed_;
+  // A parsed type's columns as streams have them: its fields, then `log_time` (the time the
+  // recorder logged each message); and those given in µs.
+  struct Layout {
+    std::shared_ptr<const std::vector<std::string>> columns;
+    std::shared_ptr<const std::vector<std::size_t>> microseconds;
+  };
+  std::map<const RosMessageType*, Layout> layouts_;
   std::size_t definition_bytes_ = 0;  // parsed, in all
   std::size_t columns_ = 0;           // of every stream, in all
   std::vector<double> scratch_;

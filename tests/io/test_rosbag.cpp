@@ -13,6 +13,7 @@
 #include <gtest/gtest.h>
 
 #include "accelcal/error.hpp"
+#include "accelcal/log_reader.hpp"
 #include "io/binary_stream.hpp"
 #include "io/decompress.hpp"
 #include "io/ros_message.hpp"
@@ -97,6 +98,8 @@ TEST(RosMessage, FlattensAndDecodesEveryKindOfField) {
   EXPECT_EQ(*type.columns(), want);
   ASSERT_TRUE(type.stamp().has_value());
   EXPECT_EQ(*type.stamp(), 1u);
+  // The time and the duration are given in µs; the other fields are their numbers.
+  EXPECT_EQ(type.microseconds(), (std::vector<std::size_t>{1, 10}));
   const std::string m = TestMessage();
   std::vector<double> v(want.size());
   const auto* p = reinterpret_cast<const unsigned char*>(m.data());
@@ -170,18 +173,19 @@ TEST(RosMessage, DecodesRos2Cdr) {
                                          "pair[0]",      "pair[1]", "span"};
   EXPECT_EQ(*type.columns(), want);
   ASSERT_TRUE(type.stamp().has_value());
-  std::string m = std::string("\x00\x01\x00\x00", 4);  // CDR, little-endian
-  Put<std::int32_t>(&m, 1700000000);                   // offset 0: stamp.sec
-  Put<std::uint32_t>(&m, 5000);                        // 4: stamp.nanosec
-  PutString(&m, std::string("imu\0", 4));              // 8: length 4, "imu\0"
-  Put<std::uint8_t>(&m, 9);                            // 16: flag
-  m += std::string(7, '\xee');                         // 17: padding to 24
-  Put<double>(&m, -9.81);                              // 24: value
-  PutString(&m, std::string("ab\0", 3));               // 32: label (length 3), to 39
-  m += '\xee';                                         // 39: padding to 40
-  Put<std::uint16_t>(&m, 65535);                       // 40: small
-  m += std::string(2, '\xee');                         // 42: padding to 44
-  Put<std::uint32_t>(&m, 2);                           // 44: bounded: 2 float32
+  EXPECT_EQ(type.microseconds(), (std::vector<std::size_t>{0, 6}));  // Time, Duration
+  std::string m = std::string("\x00\x01\x00\x00", 4);                // CDR, little-endian
+  Put<std::int32_t>(&m, 1700000000);                                 // offset 0: stamp.sec
+  Put<std::uint32_t>(&m, 5000);                                      // 4: stamp.nanosec
+  PutString(&m, std::string("imu\0", 4));                            // 8: length 4, "imu\0"
+  Put<std::uint8_t>(&m, 9);                                          // 16: flag
+  m += std::string(7, '\xee');                                       // 17: padding to 24
+  Put<double>(&m, -9.81);                                            // 24: value
+  PutString(&m, std::string("ab\0", 3));                             // 32: label (length 3), to 39
+  m += '\xee';                                                       // 39: padding to 40
+  Put<std::uint16_t>(&m, 65535);                                     // 40: small
+  m += std::string(2, '\xee');                                       // 42: padding to 44
+  Put<std::uint32_t>(&m, 2);                                         // 44: bounded: 2 float32
   Put<float>(&m, 1.5f);
   Put<float>(&m, 2.5f);
   Put<std::int16_t>(&m, -1);  // 56: pair
@@ -322,13 +326,16 @@ TEST(RosBag, ReadsEveryChunkCompression) {
     EXPECT_EQ(a.topic, "/a");
     EXPECT_EQ(a.type, "geometry_msgs/Vector3");
     EXPECT_EQ(a.instance, 0);
-    EXPECT_EQ(*a.columns, (std::vector<std::string>{"x", "y", "z"}));
+    // Its fields, then the time each message was logged (the record's, in µs).
+    EXPECT_EQ(*a.columns, (std::vector<std::string>{"x", "y", "z", "log_time"}));
+    EXPECT_EQ(*a.microseconds, (std::vector<std::size_t>{3}));
     EXPECT_EQ(a.messages, 3u);
-    EXPECT_EQ(a.values, (std::vector<double>{1, 2, 3, 2, 4, 6, 8, 16, 24}));
+    EXPECT_EQ(a.values,
+              (std::vector<double>{1, 2, 3, 10000005, 2, 4, 6, 11000000, 8, 16, 24, 12000000}));
     // Record times in µs (10 s + 5000 ns, 12 s + 999 ns).
     EXPECT_EQ(a.first_us, 10000005u);
     EXPECT_EQ(a.last_us, 12000000u);
-    EXPECT_EQ(log.streams[1].values, (std::vector<double>{4, 8, 12}));
+    EXPECT_EQ(log.streams[1].values, (std::vector<double>{4, 8, 12, 10000006}));
     EXPECT_FALSE(log.truncated.has_value());
   }
 }
@@ -411,7 +418,7 @@ TEST(RosBag, ReadsWhatAKilledOrCutRecordingLeft) {
   log = Read(first_cut.substr(0, first_cut.size() - 5));
   ASSERT_TRUE(log.truncated.has_value());
   EXPECT_NE(log.truncated->find("after 1 whole messages"), std::string::npos) << *log.truncated;
-  EXPECT_EQ(log.streams[0].values, (std::vector<double>{1, 2, 3}));
+  EXPECT_EQ(log.streams[0].values, (std::vector<double>{1, 2, 3, 1e6}));
 
   const std::string zeros = whole + std::string(5000, '\0');
   log = Read(zeros);
@@ -481,7 +488,7 @@ TEST(RosBag, RefusesATopicOfTwoDefinitionsOrTwoPublishers) {
   BinaryStream in(two_definitions + Chunk(Connection(5, "/b") + Message(5, 3, 0, 3.0)), "b.bag");
   const DecodedLog log = ReadRosBag(in, [](const DecodedStream& s) { return s.topic == "/b"; });
   ASSERT_EQ(log.streams.size(), 2u);
-  EXPECT_EQ(log.streams[1].values, (std::vector<double>{3, 6, 9}));
+  EXPECT_EQ(log.streams[1].values, (std::vector<double>{3, 6, 9, 3e6}));
 }
 
 // --- decompression -----------------------------------------------------------------------------
@@ -521,6 +528,87 @@ TEST(Decompress, ExactlyTheSizeSaid) {
               "a block of 268435457 bytes once decompressed, more than the 256 MiB accelcal "
               "reads in one");
   }
+}
+
+// A time is known by its ROS type, not its name: a custom message's float64 `timestamp` (seconds)
+// is read as a text log's column (its unit from its step, or the time unit option), where it was
+// taken as µs; without a time named, the time each message was logged (log_time) is the time.
+TEST(RosBag, OnlyTimeTypesAreMicroseconds) {
+  std::string records = Record(
+      Op(0x07) + Field("conn", Bytes<std::uint32_t>(0)) + Field("topic", "/c"),
+      Field("topic", "/c") + Field("type", "custom/Sample") + Field("md5sum", "*") +
+          Field("message_definition", "float64 timestamp\nfloat64 x\nfloat64 y\nfloat64 z\n"));
+  for (std::uint32_t k = 0; k < 300; ++k) {
+    std::string data;
+    Put<double>(&data, 0.01 * k);  // seconds
+    for (double v : {0.1, 0.2, 9.8}) Put<double>(&data, v + 1e-3 * (k % 7));
+    records += Record(Op(0x02) + Field("conn", Bytes<std::uint32_t>(0)) +
+                          Field("time", Bytes<std::uint32_t>(100 + k / 100) +
+                                            Bytes<std::uint32_t>(k % 100 * 10000000u)),
+                      data);
+  }
+  const std::string bag = BagHeader() + Chunk(records);
+  ReadOptions options;
+  options.topic = "/c";
+  options.columns = {"timestamp", "x", "y", "z"};
+  InputData data = ParseInput(bag, "c.bag", options);
+  ASSERT_TRUE(data.raw.time.has_value());
+  EXPECT_EQ(data.raw.time->unit, TimeUnit::kSeconds) << data.raw.time->unit_reason;
+  EXPECT_DOUBLE_EQ(data.raw.time->rate_hz, 100.0);
+  options.time_unit = TimeUnit::kSeconds;  // not refused: the field is the message's number
+  EXPECT_EQ(ParseInput(bag, "c.bag", options).raw.time->unit, TimeUnit::kSeconds);
+  options.time_unit = TimeUnit::kAuto;
+  options.columns = {"x", "y", "z"};
+  data = ParseInput(bag, "c.bag", options);
+  ASSERT_TRUE(data.raw.time.has_value());
+  EXPECT_EQ(data.raw.time->unit, TimeUnit::kMicroseconds);
+  EXPECT_DOUBLE_EQ(data.raw.time->origin_s, 100.0);  // the records' times
+  EXPECT_DOUBLE_EQ(data.raw.time->rate_hz, 100.0);
+}
+
+// A publisher that does not stamp its messages (header.stamp 0 in every one): said, naming the
+// field and the columns that read the time each was logged instead, which then read.
+TEST(RosBag, AnUnstampedTopicIsNamedAndItsLogTimeOffered) {
+  const char definition[] =
+      "Header header\nfloat64 x\nfloat64 y\nfloat64 z\n"
+      "================================================================================\n"
+      "MSG: std_msgs/Header\nuint32 seq\ntime stamp\nstring frame_id\n";
+  std::string records =
+      Record(Op(0x07) + Field("conn", Bytes<std::uint32_t>(0)) + Field("topic", "/imu"),
+             Field("topic", "/imu") + Field("type", "custom/Accel") + Field("md5sum", "*") +
+                 Field("message_definition", definition));
+  for (std::uint32_t k = 0; k < 300; ++k) {
+    std::string data;
+    Put<std::uint32_t>(&data, k);  // seq
+    Put<std::uint32_t>(&data, 0);  // stamp: never set
+    Put<std::uint32_t>(&data, 0);
+    PutString(&data, "imu");
+    for (double v : {0.1, 0.2, 9.8}) Put<double>(&data, v + 1e-3 * (k % 7));
+    records += Record(Op(0x02) + Field("conn", Bytes<std::uint32_t>(0)) +
+                          Field("time", Bytes<std::uint32_t>(100 + k / 100) +
+                                            Bytes<std::uint32_t>(k % 100 * 10000000u)),
+                      data);
+  }
+  const std::string bag = BagHeader() + Chunk(records);
+  ReadOptions options;
+  options.topic = "/imu";
+  options.columns = {"x", "y", "z"};
+  try {
+    ParseInput(bag, "u.bag", options);
+    ADD_FAILURE() << "read";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find(
+                  "/imu's header.stamp is the same in every message (0 us): its publisher does "
+                  "not stamp them; read the time the recorder logged each with the columns "
+                  "option (log_time,x,y,z)"),
+              std::string::npos)
+        << e.what();
+  }
+  options.columns = {"log_time", "x", "y", "z"};
+  const InputData data = ParseInput(bag, "u.bag", options);
+  ASSERT_TRUE(data.raw.time.has_value());
+  EXPECT_DOUBLE_EQ(data.raw.time->rate_hz, 100.0);
+  EXPECT_EQ(data.raw.samples.size(), 300u);
 }
 
 }  // namespace

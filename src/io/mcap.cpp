@@ -212,7 +212,8 @@ void Reader::Chunk(const unsigned char* p, std::size_t n, std::uint64_t at) {
     }
     if (size > kMaxDecompressedBytes) {
       Fail(at, Format("a chunk of %llu bytes once decompressed, more than the %zu MiB accelcal "
-                      "reads in one",
+                      "reads in one (ROS 2 writes 768 kB to 4 MiB chunks; the mcap tool's "
+                      "compress --chunk-size rewrites a file recorded with larger ones)",
                       static_cast<unsigned long long>(size), kMaxDecompressedBytes >> 20));
     }
     if (const std::optional<std::string> why =

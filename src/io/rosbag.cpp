@@ -76,6 +76,8 @@ class Reader {
   DecodedLog Read();
 
  private:
+  // One record at the input's position: false at the end of what can be read.
+  bool Next();
   [[noreturn]] void Fail(std::uint64_t at, const std::string& why) const { in_.Fail(at, why); }
   // The fields of the header of `n` bytes at p (a record's header or a connection's data).
   Fields Parse(const unsigned char* p, std::size_t n, std::uint64_t at) const;
@@ -230,6 +232,115 @@ std::size_t Reader::Records(const unsigned char* p, std::size_t n, std::uint64_t
   return i;
 }
 
+bool Reader::Next() {
+  const std::uint64_t at = in_.offset();
+  if (!in_.Need(4)) {
+    if (in_.available() > 0) {
+      out_.truncated =
+          Format("the bag ends inside a record at byte %llu", static_cast<unsigned long long>(at));
+      in_.Skip(in_.available());
+    }
+    return false;
+  }
+  const std::uint32_t header_len = LoadLittle<std::uint32_t>(in_.data());
+  if (header_len == 0) {
+    // Zeros to the end: space never written (a recorder killed, a disk full).
+    std::uint64_t nonzero = 0;
+    if (!in_.ZerosToEnd(&nonzero)) {
+      Fail(at, Format("a record with an empty header where zeros to the end would mean space "
+                      "never written, but byte %llu is not zero: the file is corrupt here",
+                      static_cast<unsigned long long>(nonzero)));
+    }
+    out_.truncated = BinaryStream::ZerosMessage(at);
+    return false;
+  }
+  if (header_len > kMaxHeaderBytes) {
+    Fail(at, Format("a record header of %u bytes: the file is corrupt here", header_len));
+  }
+  if (!in_.Need(8 + std::size_t(header_len))) {
+    out_.truncated = Format("the bag ends inside a record header at byte %llu",
+                            static_cast<unsigned long long>(at));
+    in_.Skip(in_.available());
+    return false;
+  }
+  bool chunk = false;
+  {
+    const Fields header = Parse(in_.data() + 4, header_len, at);
+    const std::string_view op = Text(header, "op", at);
+    chunk = op.size() == 1 && op[0] == kChunk;
+  }  // its views end here: Need below may move the bytes
+  const std::size_t data_len = LoadLittle<std::uint32_t>(in_.data() + 4 + header_len);
+  if (data_len > kMaxDataBytes) {
+    Fail(at, Format("a record of %zu bytes, more than the %zu MiB accelcal reads in one "
+                    "(rosbag writes 768 kB chunks; `rosbag filter IN.bag OUT.bag True` rewrites "
+                    "a bag recorded with larger ones)",
+                    data_len, kMaxDataBytes >> 20));
+  }
+  const std::size_t length = 8 + header_len + data_len;
+  const bool whole = in_.Need(length);
+  if (!whole && !chunk) {
+    out_.truncated = Format(
+        "the bag ends inside a record at byte %llu (%zu of its %zu bytes "
+        "there)",
+        static_cast<unsigned long long>(at), in_.available(), length);
+    in_.Skip(in_.available());
+    return false;
+  }
+  const Fields fields = Parse(in_.data() + 4, header_len, at);
+  const unsigned char* data = in_.data() + 8 + header_len;
+  if (chunk) {
+    const std::string_view compression = Text(fields, "compression", at);
+    const std::size_t size = Number<std::uint32_t>(fields, "size", at);
+    Compression c = Compression::kNone;
+    if (compression == "bz2") {
+      c = Compression::kBz2;
+    } else if (compression == "lz4") {
+      c = Compression::kLz4Frame;
+    } else if (compression != "none") {
+      Fail(at, "a chunk compressed as " + std::string(compression) +
+                   ", which ROS bags do not use (none, bz2, lz4)");
+    }
+    if (c != Compression::kNone && data_len == 0 && size == 0) {
+      // A compressed chunk its recorder opened and never closed (killed): the header's lengths
+      // are still the placeholders, and what follows cannot be delimited.
+      out_.truncated = Format(
+          "the bag ends with a compressed chunk its recorder never closed "
+          "(at byte %llu): its messages are not read",
+          static_cast<unsigned long long>(at));
+      in_.Skip(in_.available());
+      return false;
+    }
+    if (!whole) {
+      // The bag ends inside it: an uncompressed chunk's whole records are read.
+      const std::size_t there = in_.available() - (8 + header_len);
+      const std::size_t read =
+          c == Compression::kNone ? Records(data, there, at + 8 + header_len, true, true) : 0;
+      out_.truncated = Format(
+          "the bag ends inside a chunk at byte %llu (%zu of its %zu bytes "
+          "there%s)",
+          static_cast<unsigned long long>(at), there, data_len,
+          c == Compression::kNone ? Format("; its first %zu bytes of records read", read).c_str()
+                                  : ", compressed: none of its messages read");
+      in_.Skip(in_.available());
+      return false;
+    }
+    if (c == Compression::kNone) {
+      if (size != data_len)
+        Fail(at, Format("an uncompressed chunk of %zu bytes that says %zu", data_len, size));
+      Records(data, data_len, at + 8 + header_len, true, false);
+    } else {
+      if (const std::optional<std::string> why = Decompress(c, data, data_len, size, &chunk_)) {
+        Fail(at, "a chunk that does not decompress: " + *why);
+      }
+      Records(chunk_.data(), chunk_.size(), at, false, false);
+    }
+  } else {
+    Record(fields, data, data_len, at, false);
+  }
+  in_.Skip(length);
+  return true;
+}
+
 DecodedLog Reader::Read() {
   if (!in_.Need(kMagic20Size) || std::memcmp(in_.data(), kMagic20, kMagic20Size) != 0) {
     std::string version;
@@ -244,108 +355,20 @@ DecodedLog Reader::Read() {
   in_.Skip(kMagic20Size);
   while (true) {
     const std::uint64_t at = in_.offset();
-    if (!in_.Need(4)) {
-      if (in_.available() > 0) {
-        out_.truncated = Format("the bag ends inside a record at byte %llu",
-                                static_cast<unsigned long long>(at));
-        in_.Skip(in_.available());
-      }
-      break;
+    if (index_pos_ == 0 || at < index_pos_) {
+      if (!Next()) break;
+      continue;
     }
-    const std::uint32_t header_len = LoadLittle<std::uint32_t>(in_.data());
-    if (header_len == 0) {
-      // Zeros to the end: space never written (a recorder killed, a disk full).
-      std::uint64_t nonzero = 0;
-      if (!in_.ZerosToEnd(&nonzero)) {
-        Fail(at, Format("a record with an empty header where zeros to the end would mean space "
-                        "never written, but byte %llu is not zero: the file is corrupt here",
-                        static_cast<unsigned long long>(nonzero)));
-      }
-      out_.truncated = BinaryStream::ZerosMessage(at);
-      break;
-    }
-    if (header_len > kMaxHeaderBytes) {
-      Fail(at, Format("a record header of %u bytes: the file is corrupt here", header_len));
-    }
-    if (!in_.Need(8 + std::size_t(header_len))) {
-      out_.truncated = Format("the bag ends inside a record header at byte %llu",
-                              static_cast<unsigned long long>(at));
+    // The index after the chunks (connections, chunk infos): every message has been read, so
+    // an index that cannot be read ends the reading with a warning, not an error.
+    try {
+      if (!Next()) break;
+    } catch (const InputError& e) {
+      out_.truncated = Format("the bag's index (from byte %llu) cannot be read: %s",
+                              static_cast<unsigned long long>(index_pos_), e.reason().c_str());
       in_.Skip(in_.available());
       break;
     }
-    bool chunk = false;
-    {
-      const Fields header = Parse(in_.data() + 4, header_len, at);
-      const std::string_view op = Text(header, "op", at);
-      chunk = op.size() == 1 && op[0] == kChunk;
-    }  // its views end here: Need below may move the bytes
-    const std::size_t data_len = LoadLittle<std::uint32_t>(in_.data() + 4 + header_len);
-    if (data_len > kMaxDataBytes) {
-      Fail(at, Format("a record of %zu bytes, more than the %zu MiB accelcal reads in one",
-                      data_len, kMaxDataBytes >> 20));
-    }
-    const std::size_t length = 8 + header_len + data_len;
-    const bool whole = in_.Need(length);
-    if (!whole && !chunk) {
-      out_.truncated = Format(
-          "the bag ends inside a record at byte %llu (%zu of its %zu bytes "
-          "there)",
-          static_cast<unsigned long long>(at), in_.available(), length);
-      in_.Skip(in_.available());
-      break;
-    }
-    const Fields fields = Parse(in_.data() + 4, header_len, at);
-    const unsigned char* data = in_.data() + 8 + header_len;
-    if (chunk) {
-      const std::string_view compression = Text(fields, "compression", at);
-      const std::size_t size = Number<std::uint32_t>(fields, "size", at);
-      Compression c = Compression::kNone;
-      if (compression == "bz2") {
-        c = Compression::kBz2;
-      } else if (compression == "lz4") {
-        c = Compression::kLz4Frame;
-      } else if (compression != "none") {
-        Fail(at, "a chunk compressed as " + std::string(compression) +
-                     ", which ROS bags do not use (none, bz2, lz4)");
-      }
-      if (c != Compression::kNone && data_len == 0 && size == 0) {
-        // A compressed chunk its recorder opened and never closed (killed): the header's lengths
-        // are still the placeholders, and what follows cannot be delimited.
-        out_.truncated = Format(
-            "the bag ends with a compressed chunk its recorder never closed "
-            "(at byte %llu): its messages are not read",
-            static_cast<unsigned long long>(at));
-        in_.Skip(in_.available());
-        break;
-      }
-      if (!whole) {
-        // The bag ends inside it: an uncompressed chunk's whole records are read.
-        const std::size_t there = in_.available() - (8 + header_len);
-        const std::size_t read =
-            c == Compression::kNone ? Records(data, there, at + 8 + header_len, true, true) : 0;
-        out_.truncated = Format(
-            "the bag ends inside a chunk at byte %llu (%zu of its %zu bytes "
-            "there%s)",
-            static_cast<unsigned long long>(at), there, data_len,
-            c == Compression::kNone ? Format("; its first %zu bytes of records read", read).c_str()
-                                    : ", compressed: none of its messages read");
-        in_.Skip(in_.available());
-        break;
-      }
-      if (c == Compression::kNone) {
-        if (size != data_len)
-          Fail(at, Format("an uncompressed chunk of %zu bytes that says %zu", data_len, size));
-        Records(data, data_len, at + 8 + header_len, true, false);
-      } else {
-        if (const std::optional<std::string> why = Decompress(c, data, data_len, size, &chunk_)) {
-          Fail(at, "a chunk that does not decompress: " + *why);
-        }
-        Records(chunk_.data(), chunk_.size(), at, false, false);
-      }
-    } else {
-      Record(fields, data, data_len, at, false);
-    }
-    in_.Skip(length);
   }
   if (!out_.truncated && index_pos_ > in_.offset()) {
     // Cut where a chunk ended: nothing is cut inside a record, but the index is missing.

@@ -14,6 +14,7 @@
 
 #include "accelcal/error.hpp"
 #include "accelcal/log_reader.hpp"
+#include "accelcal/rosbag_writer.hpp"
 #include "io/binary_stream.hpp"
 #include "io/decompress.hpp"
 #include "io/ros_message.hpp"
@@ -609,6 +610,40 @@ TEST(RosBag, AnUnstampedTopicIsNamedAndItsLogTimeOffered) {
   ASSERT_TRUE(data.raw.time.has_value());
   EXPECT_DOUBLE_EQ(data.raw.time->rate_hz, 100.0);
   EXPECT_EQ(data.raw.samples.size(), 300u);
+}
+
+// accelcal's writer (rosbag_writer.hpp) read back; then its index (after every chunk) damaged:
+// every message was read before it, so that is a warning naming where the index begins.
+TEST(RosBag, ReadsItsOwnWriterAndTakesACorruptIndexAsAWarning) {
+  RosBagImuWriter writer(RosBagCompression::kLz4);
+  std::string bag = writer.Header();
+  for (int k = 0; k < 5000; ++k) {  // three chunks
+    bag += writer.Sample(1700000000000000000ull + 10000000ull * std::uint64_t(k),
+                         Vec3(0.1, 0.2, 9.8 + 1e-4 * k), Vec3(0.01, 0.02, 0.03));
+  }
+  bag += writer.Finish();
+  const std::string indexed = writer.IndexedHeader();
+  bag.replace(RosBagImuWriter::kHeaderOffset, indexed.size(), indexed);
+  DecodedLog log = Read(bag);
+  ASSERT_EQ(log.streams.size(), 1u);
+  EXPECT_EQ(log.streams[0].messages, 5000u);
+  EXPECT_FALSE(log.truncated.has_value()) << *log.truncated;
+  // The index position, from the header record's index_pos field.
+  const std::size_t field = bag.find("index_pos=") + 10;
+  std::uint64_t index_pos = 0;
+  std::memcpy(&index_pos, bag.data() + field, 8);
+  ASSERT_GT(index_pos, 4096u);
+  ASSERT_LT(index_pos, bag.size());
+  std::string damaged = bag;
+  const std::uint32_t huge = 0x7ffffff0u;  // the first index record's header length
+  std::memcpy(&damaged[index_pos], &huge, 4);
+  log = Read(damaged);
+  EXPECT_EQ(log.streams[0].messages, 5000u);
+  ASSERT_TRUE(log.truncated.has_value());
+  EXPECT_NE(log.truncated->find("the bag's index (from byte " + std::to_string(index_pos) +
+                                ") cannot be read"),
+            std::string::npos)
+      << *log.truncated;
 }
 
 }  // namespace

@@ -13,6 +13,7 @@
 #include "accelcal/log_reader.hpp"
 #include "accelcal/mcap_writer.hpp"
 #include "accelcal/native_log.hpp"
+#include "accelcal/rosbag_writer.hpp"
 #include "accelcal/sha256.hpp"
 #include "accelcal/simulate.hpp"
 #include "accelcal/static_detection.hpp"
@@ -152,75 +153,22 @@ BENCHMARK(BM_ReadSimulatedMcap)
     ->Unit(benchmark::kMillisecond)
     ->UseRealTime();
 
-// A ROS 1 bag: its records (4-byte lengths, "name=value" header fields), one connection, chunks of
-// about 768 kB uncompressed, no index (a reader in record order needs none).
-template <typename T>
-void Put(std::string* out, T v) {
-  out->append(reinterpret_cast<const char*>(&v), sizeof(T));
-}
-std::string Field(const std::string& name, const std::string& value) {
-  std::string f;
-  Put<std::uint32_t>(&f, static_cast<std::uint32_t>(name.size() + 1 + value.size()));
-  return f + name + "=" + value;
-}
-std::string Record(const std::string& header, const std::string& data) {
-  std::string r;
-  Put<std::uint32_t>(&r, static_cast<std::uint32_t>(header.size()));
-  r += header;
-  Put<std::uint32_t>(&r, static_cast<std::uint32_t>(data.size()));
-  return r + data;
-}
-std::string Le32(std::uint32_t v) { return std::string(reinterpret_cast<const char*>(&v), 4); }
-
+// A ROS 1 bag as accelcal's writer (and rosbag) writes it: uncompressed chunks of about 768 kB,
+// each followed by its index, then the connections and chunk infos (their position written into
+// the header at the end: the file is rewritten there, as the CLI does).
 void BM_ReadSimulatedRosBag(benchmark::State& state) {
-  const std::string definition =
-      "Header header\ngeometry_msgs/Quaternion orientation\nfloat64[9] orientation_covariance\n"
-      "geometry_msgs/Vector3 angular_velocity\nfloat64[9] angular_velocity_covariance\n"
-      "geometry_msgs/Vector3 linear_acceleration\nfloat64[9] linear_acceleration_covariance\n"
-      "===\nMSG: std_msgs/Header\nuint32 seq\ntime stamp\nstring frame_id\n"
-      "===\nMSG: geometry_msgs/Quaternion\nfloat64 x\nfloat64 y\nfloat64 z\nfloat64 w\n"
-      "===\nMSG: geometry_msgs/Vector3\nfloat64 x\nfloat64 y\nfloat64 z\n";
-  const std::string connection =
-      Record(Field("op", "\x07") + Field("conn", Le32(0)) + Field("topic", "/imu/data"),
-             Field("topic", "/imu/data") + Field("type", "sensor_msgs/Imu") +
-                 Field("md5sum", "6a62c6daae103f4ff57a132d6f95cec2") +
-                 Field("message_definition", definition));
-  std::string chunk;
-  std::uint32_t seq = 0;
-  const auto flush = [&] {
-    if (chunk.empty()) return std::string();
-    const std::string r = Record(Field("op", "\x05") + Field("compression", "none") +
-                                     Field("size", Le32(static_cast<std::uint32_t>(chunk.size()))),
-                                 chunk);
-    chunk.clear();
-    return r;
-  };
+  RosBagImuWriter writer;
   const std::string path = WriteSession(
       "/tmp/accelcal_bench_session.bag",
-      [&](std::uint64_t ns, const Vec3& a) {
-        std::string m;
-        Put<std::uint32_t>(&m, seq++);
-        Put<std::uint32_t>(&m, static_cast<std::uint32_t>(ns / 1000000000u));
-        Put<std::uint32_t>(&m, static_cast<std::uint32_t>(ns % 1000000000u));
-        Put<std::uint32_t>(&m, 3);
-        m += "imu";
-        for (int i = 0; i < 4 + 9 + 3 + 9; ++i) Put<double>(&m, 0.0);
-        for (int i = 0; i < 3; ++i) Put<double>(&m, a(i));
-        for (int i = 0; i < 9; ++i) Put<double>(&m, 0.0);
-        std::string time;
-        Put<std::uint32_t>(&time, static_cast<std::uint32_t>(ns / 1000000000u));
-        Put<std::uint32_t>(&time, static_cast<std::uint32_t>(ns % 1000000000u));
-        chunk += Record(Field("op", "\x02") + Field("conn", Le32(0)) + Field("time", time), m);
-        return chunk.size() >= 768 * 1024 ? flush() : std::string();
-      },
-      "#ROSBAG V2.0\n" +
-          Record(Field("op", "\x03") + Field("index_pos", std::string(8, '\0')) +
-                     Field("conn_count", Le32(1)) + Field("chunk_count", Le32(0)),
-                 std::string(4000, ' ')) +
-          Record(Field("op", "\x05") + Field("compression", "none") +
-                     Field("size", Le32(static_cast<std::uint32_t>(connection.size()))),
-                 connection),
-      flush);
+      [&](std::uint64_t ns, const Vec3& a) { return writer.Sample(ns, a, Vec3::Zero()); },
+      writer.Header(), [&] { return writer.Finish(); });
+  {
+    const std::string header = writer.IndexedHeader();
+    std::FILE* f = std::fopen(path.c_str(), "r+b");
+    std::fseek(f, static_cast<long>(RosBagImuWriter::kHeaderOffset), SEEK_SET);
+    std::fwrite(header.data(), 1, header.size(), f);
+    std::fclose(f);
+  }
   ReadSession(state, path);
 }
 BENCHMARK(BM_ReadSimulatedRosBag)

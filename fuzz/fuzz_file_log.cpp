@@ -16,29 +16,9 @@
 #include "accelcal/error.hpp"
 #include "accelcal/log_reader.hpp"
 #include "accelcal/native_log.hpp"
+#include "input_check.hpp"
 
 namespace {
-
-void Check(const accelcal::InputData& data) {
-  const accelcal::RawLog& log = data.raw;
-  if (data.kind == accelcal::InputKind::kPositions) {
-    for (const accelcal::Position& p : data.positions) {
-      if (!p.mean.allFinite()) std::abort();
-    }
-    return;
-  }
-  if (log.samples.size() != log.line.size() ||
-      (!log.time_s.empty() && log.time_s.size() != log.samples.size())) {
-    std::abort();
-  }
-  for (std::size_t i = 0; i < log.samples.size(); ++i) {
-    if (!log.samples[i].allFinite()) std::abort();
-    if (!log.time_s.empty() &&
-        (!std::isfinite(log.time_s[i]) || (i > 0 && log.time_s[i] < log.time_s[i - 1]))) {
-      std::abort();
-    }
-  }
-}
 
 // One file for the whole run, rewritten for each input.
 const std::string& Path() {
@@ -57,7 +37,7 @@ const std::string& Path() {
 
 void Read(const accelcal::ReadOptions& options) {
   try {
-    Check(accelcal::ReadInput(Path(), options));
+    accelcal::fuzz::CheckInput(accelcal::ReadInput(Path(), options), true);
   } catch (const accelcal::InputError&) {
   }
 }

@@ -13,27 +13,13 @@
 #include "accelcal/error.hpp"
 #include "accelcal/log_reader.hpp"
 #include "accelcal/native_log.hpp"
+#include "input_check.hpp"
 
 namespace {
 
-void Check(const accelcal::InputData& data) {
-  const accelcal::RawLog& log = data.raw;
-  if (data.kind != accelcal::InputKind::kRaw || log.samples.size() != log.line.size() ||
-      (!log.time_s.empty() && log.time_s.size() != log.samples.size())) {
-    std::abort();
-  }
-  for (std::size_t i = 0; i < log.samples.size(); ++i) {
-    if (!log.samples[i].allFinite()) std::abort();
-    if (!log.time_s.empty() &&
-        (!std::isfinite(log.time_s[i]) || (i > 0 && log.time_s[i] < log.time_s[i - 1]))) {
-      std::abort();
-    }
-  }
-}
-
 void Read(std::string_view bytes, const accelcal::ReadOptions& options) {
   try {
-    Check(accelcal::ParseInput(bytes, "fuzz.ulg", options));
+    accelcal::fuzz::CheckInput(accelcal::ParseInput(bytes, "fuzz.ulg", options));
   } catch (const accelcal::InputError&) {
   }
 }

@@ -7,6 +7,7 @@
 #include <zstd.h>
 
 #include <cstring>
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -534,21 +535,38 @@ TEST(Decompress, ExactlyTheSizeSaid) {
 // A time is known by its ROS type, not its name: a custom message's float64 `timestamp` (seconds)
 // is read as a text log's column (its unit from its step, or the time unit option), where it was
 // taken as µs; without a time named, the time each message was logged (log_time) is the time.
-TEST(RosBag, OnlyTimeTypesAreMicroseconds) {
-  std::string records = Record(
-      Op(0x07) + Field("conn", Bytes<std::uint32_t>(0)) + Field("topic", "/c"),
-      Field("topic", "/c") + Field("type", "custom/Sample") + Field("md5sum", "*") +
-          Field("message_definition", "float64 timestamp\nfloat64 x\nfloat64 y\nfloat64 z\n"));
+// A bag of one topic of a custom type: 300 messages, `message(k)` the k-th's bytes, logged at
+// 100 Hz from 100 s.
+std::string CustomBag(const std::string& topic, const std::string& type,
+                      const std::string& definition,
+                      const std::function<std::string(std::uint32_t k)>& message) {
+  std::string records =
+      Record(Op(0x07) + Field("conn", Bytes<std::uint32_t>(0)) + Field("topic", topic),
+             Field("topic", topic) + Field("type", type) + Field("md5sum", "*") +
+                 Field("message_definition", definition));
   for (std::uint32_t k = 0; k < 300; ++k) {
-    std::string data;
-    Put<double>(&data, 0.01 * k);  // seconds
-    for (double v : {0.1, 0.2, 9.8}) Put<double>(&data, v + 1e-3 * (k % 7));
     records += Record(Op(0x02) + Field("conn", Bytes<std::uint32_t>(0)) +
                           Field("time", Bytes<std::uint32_t>(100 + k / 100) +
                                             Bytes<std::uint32_t>(k % 100 * 10000000u)),
-                      data);
+                      message(k));
   }
-  const std::string bag = BagHeader() + Chunk(records);
+  return BagHeader() + Chunk(records);
+}
+
+// Readings near gravity, varying a little.
+void PutReadings(std::string* data, std::uint32_t k) {
+  for (double v : {0.1, 0.2, 9.8}) Put<double>(data, v + 1e-3 * (k % 7));
+}
+
+TEST(RosBag, OnlyTimeTypesAreMicroseconds) {
+  const std::string bag =
+      CustomBag("/c", "custom/Sample", "float64 timestamp\nfloat64 x\nfloat64 y\nfloat64 z\n",
+                [](std::uint32_t k) {
+                  std::string data;
+                  Put<double>(&data, 0.01 * k);  // seconds
+                  PutReadings(&data, k);
+                  return data;
+                });
   ReadOptions options;
   options.topic = "/c";
   options.columns = {"timestamp", "x", "y", "z"};
@@ -574,23 +592,15 @@ TEST(RosBag, AnUnstampedTopicIsNamedAndItsLogTimeOffered) {
       "Header header\nfloat64 x\nfloat64 y\nfloat64 z\n"
       "================================================================================\n"
       "MSG: std_msgs/Header\nuint32 seq\ntime stamp\nstring frame_id\n";
-  std::string records =
-      Record(Op(0x07) + Field("conn", Bytes<std::uint32_t>(0)) + Field("topic", "/imu"),
-             Field("topic", "/imu") + Field("type", "custom/Accel") + Field("md5sum", "*") +
-                 Field("message_definition", definition));
-  for (std::uint32_t k = 0; k < 300; ++k) {
+  const std::string bag = CustomBag("/imu", "custom/Accel", definition, [](std::uint32_t k) {
     std::string data;
     Put<std::uint32_t>(&data, k);  // seq
     Put<std::uint32_t>(&data, 0);  // stamp: never set
     Put<std::uint32_t>(&data, 0);
     PutString(&data, "imu");
-    for (double v : {0.1, 0.2, 9.8}) Put<double>(&data, v + 1e-3 * (k % 7));
-    records += Record(Op(0x02) + Field("conn", Bytes<std::uint32_t>(0)) +
-                          Field("time", Bytes<std::uint32_t>(100 + k / 100) +
-                                            Bytes<std::uint32_t>(k % 100 * 10000000u)),
-                      data);
-  }
-  const std::string bag = BagHeader() + Chunk(records);
+    PutReadings(&data, k);
+    return data;
+  });
   ReadOptions options;
   options.topic = "/imu";
   options.columns = {"x", "y", "z"};

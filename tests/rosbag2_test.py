@@ -21,6 +21,8 @@ import sqlite3
 import struct
 import sys
 
+import yaml
+
 from log_test_support import Checks, calibration, simulated_session
 
 T0_NS = 1_700_000_000 * 10**9  # a live recording's stamps
@@ -47,7 +49,8 @@ class Cdr:
         return b"\x00\x01\x00\x00" + bytes(self.body)
 
 
-def imu_message(t_ns, accel, gyro):
+def imu_message(t_ns, accel, gyro=None):
+    """The CDR bytes; `gyro` None: no rates (angular_velocity_covariance[0] = -1, REP 145)."""
     m = Cdr()
     m.put("i", t_ns // 10**9)
     m.put("I", t_ns % 10**9)
@@ -56,10 +59,10 @@ def imu_message(t_ns, accel, gyro):
         m.put("d", q)
     for i in range(9):
         m.put("d", -1.0 if i == 0 else 0.0)
-    for v in gyro:
+    for v in gyro if gyro is not None else (0.0, 0.0, 0.0):
         m.put("d", v)
-    for _ in range(9):
-        m.put("d", 0.0)
+    for i in range(9):
+        m.put("d", -1.0 if i == 0 and gyro is None else 0.0)
     for v in accel:
         m.put("d", v)
     for _ in range(9):
@@ -200,12 +203,25 @@ def main():
              [("sensor_msgs/msg/Imu", "ros2msg")] and
              "message_count: %d" % len(rows) in db.execute("SELECT metadata FROM metadata")
              .fetchone()[0], "accelcal's bag has rosbag2's tables")
-    # Each message the bytes this script's own CDR encoder gives (simulate writes no rotation).
+    # Each message the bytes this script's own CDR encoder gives (simulate writes no rates).
     stored = db.execute("SELECT timestamp, data FROM messages ORDER BY id").fetchall()
-    same = all(t_ns == t_us * 1000 and data == imu_message(t_ns, (x, y, z), (0.0, 0.0, 0.0))
+    same = all(t_ns == t_us * 1000 and data == imu_message(t_ns, (x, y, z))
                for (t_ns, data), (t_us, x, y, z) in zip(stored, rows))
     db.close()
     ck.check(same and len(stored) == len(rows), "accelcal's bag holds the simulation's samples")
+
+    # Any file name reads back from the metadata's YAML as itself (quoted).
+    odd = p("odd: name #1.db3")
+    ck.run("simulate", "--scenario", "yang2012", "--raw", "--duration", "1", "--format", "db3",
+           "-o", odd)
+    db = sqlite3.connect(odd)
+    meta = yaml.safe_load(db.execute("SELECT metadata FROM metadata").fetchone()[0])
+    db.close()
+    info = meta["rosbag2_bagfile_information"]
+    ck.check(info["relative_file_paths"] == ["odd: name #1.db3"] and
+             info["files"][0]["path"] == "odd: name #1.db3" and
+             info["topics_with_message_count"][0]["topic_metadata"]["name"] == "/imu/data",
+             f"the metadata names the file: {info}")
 
     ck.finish("rosbag2 sqlite")
 

@@ -23,6 +23,18 @@ const CLI::Validator kFileName(
     [](std::string& name) { return name.empty() ? std::string("an empty file name") : ""; },
     "FILE");
 
+// A PX4 device id: a decimal integer from 1 to 2^32 - 1, as written ("-1" wrapped to 2^64 - 1).
+const CLI::Validator kDeviceId(
+    [](std::string& text) {
+      const bool digits = !text.empty() && text.size() <= 10 &&
+                          text.find_first_not_of("0123456789") == std::string::npos;
+      if (digits && std::stoull(text) >= 1 && std::stoull(text) <= 0xFFFFFFFFull)
+        return std::string();
+      return "a device id is an integer from 1 to 4294967295 (PX4's are 32-bit), not \"" + text +
+             "\"";
+    },
+    "ID");
+
 void AddInputOptions(CLI::App* cmd, InputArgs* in, bool with_kind) {
   if (with_kind) {
     cmd->add_option("--input-kind", in->input_kind,
@@ -542,12 +554,16 @@ int accelcal::cli::RunCommandLine(int argc, char** argv) {
         ->add_option("--instance", exp.instance,
                      "accelerometer index: PX4 CAL_ACC<n>, ArduPilot INS_ACC / INS_ACC2 / INS_ACC3")
         ->capture_default_str();
-    export_cmd->add_option("--device-id", exp.device_id,
-                           "px4: the sensor's device id for CAL_ACC<n>_ID (default: the one "
-                           "of the ULog stream calibrated)");
-    export_cmd->add_option("--gyro-device-id", exp.gyro_device_id,
-                           "px4: the gyroscope's device id for CAL_GYRO<n>_ID (default: the "
-                           "one of the ULog stream calibrated)");
+    export_cmd
+        ->add_option("--device-id", exp.device_id,
+                     "px4: the sensor's device id for CAL_ACC<n>_ID (default: the one of the "
+                     "ULog stream calibrated)")
+        ->check(kDeviceId);
+    export_cmd
+        ->add_option("--gyro-device-id", exp.gyro_device_id,
+                     "px4: the gyroscope's device id for CAL_GYRO<n>_ID (default: the one of the "
+                     "ULog stream calibrated)")
+        ->check(kDeviceId);
     export_cmd
         ->add_option("--current-params", exp.current_params,
                      "ardupilot: the parameters in force when the log was recorded (.param "

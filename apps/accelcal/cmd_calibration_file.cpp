@@ -136,7 +136,8 @@ void RefuseUnusedOptions(ExportFormat format, const ExportArgs& args) {
   const Use uses[] = {
       {"raw-unit", in({F::kKalibr, F::kOpenVins, F::kBasalt, F::kPx4, F::kArduPilot}),
        "kalibr, openvins, basalt, px4 and ardupilot"},
-      {"gyro-raw-unit", in({F::kKalibr, F::kOpenVins, F::kBasalt}), "kalibr, openvins and basalt"},
+      {"gyro-raw-unit", in({F::kKalibr, F::kOpenVins, F::kBasalt, F::kPx4}),
+       "kalibr, openvins, basalt and px4"},
       {"instance", in({F::kPx4, F::kArduPilot}), "px4 and ardupilot"},
       {"c-prefix", in({F::kCHeader}), "c-header"},
       {"sensor", in({F::kImuTk}), "imutk"},

@@ -1,6 +1,8 @@
 // accelcal simulate: recordings of a known device.
 #include "commands.hpp"
 
+#include <sys/stat.h>
+
 #include <algorithm>
 #include <charconv>
 #include <chrono>
@@ -156,6 +158,16 @@ int RunSimulate(const SimulateArgs& args) {
     options.seed = args.seed;
     CheckSimulatedSamples(SimulatedSampleCount(directions.size(), options),
                           "positions x (--duration + --transition) x --rate");
+    // A ROS time holds its seconds in 32 bits: ROS 1 unsigned (to 2106), ROS 2 signed (2038).
+    const double last_s = (SimulatedSampleCount(directions.size(), options) - 1) / args.rate_hz;
+    const double most_s = args.format == "rosbag" ? 4294967295.0 : 2147483647.0;
+    if ((args.format == "rosbag" || args.format == "mcap" || args.format == "db3") &&
+        !(last_s <= most_s)) {
+      throw UsageError(
+          Format("--format %s stamps its messages from 0 s in ROS time, at most %.10g "
+                 "s; this session lasts %.4g s",
+                 args.format.c_str(), most_s, last_s));
+    }
     OutputFile file(args.output.empty() ? "-" : args.output);  // streamed, never held whole
     if (args.format == "dataflash") {
       const DataFlashImuWriter writer;
@@ -181,21 +193,38 @@ int RunSimulate(const SimulateArgs& args) {
     if (args.format == "rosbag") {
       RosBagImuWriter writer;
       file.Write(writer.Header());
-      SimulateRawLog(truth, gravity, directions, options, [&](double t, const Vec3& p) {
-        file.Write(writer.Sample(ns(t), p, Vec3::Zero()));
-      });
+      SimulateRawLog(truth, gravity, directions, options,
+                     [&](double t, const Vec3& p) { file.Write(writer.Sample(ns(t), p)); });
       file.Write(writer.Finish());
       file.Rewrite(RosBagImuWriter::kHeaderOffset, writer.IndexedHeader());
       file.Commit();
       return kExitOk;
     }
     if (args.format == "db3") {
-      const std::size_t slash = args.output.rfind('/');
-      Rosbag2SqliteImuWriter writer(file.temporary(), "/imu/data",
-                                    args.output.substr(slash == std::string::npos ? 0 : slash + 1));
-      SimulateRawLog(truth, gravity, directions, options,
-                     [&](double t, const Vec3& p) { writer.Sample(ns(t), p, Vec3::Zero()); });
-      writer.Finish();
+      // An SQLite journal beside the file replaced belongs to the old database, and the next
+      // SQLite reader would apply it to the new one (rolled back onto it, or its pages read).
+      for (const char* suffix : {"-journal", "-wal", "-shm"}) {
+        struct stat st;
+        if (::lstat((file.target() + suffix).c_str(), &st) == 0) {
+          throw OutputError(args.output + ": " + file.target() + suffix +
+                            " exists beside it: the journal of the database it would replace, "
+                            "which SQLite would apply to the new bag; remove it first, or write "
+                            "another file");
+        }
+      }
+      const std::size_t slash = file.target().rfind('/');
+      const std::string name = file.target().substr(slash == std::string::npos ? 0 : slash + 1);
+      try {
+        Rosbag2SqliteImuWriter writer(file.temporary(), "/imu/data", name);
+        SimulateRawLog(truth, gravity, directions, options,
+                       [&](double t, const Vec3& p) { writer.Sample(ns(t), p); });
+        writer.Finish();
+      } catch (const std::runtime_error& e) {
+        // SQLite's reason, for the file the user named (not the temporary one).
+        std::string why = e.what();
+        if (why.rfind(file.temporary() + ": ", 0) == 0) why.erase(0, file.temporary().size() + 2);
+        throw OutputError(args.output + ": " + why);
+      }
       file.Commit();
       return kExitOk;
     }
@@ -215,9 +244,8 @@ int RunSimulate(const SimulateArgs& args) {
     if (args.format == "mcap") {
       McapImuWriter writer;
       file.Write(writer.Header());
-      SimulateRawLog(truth, gravity, directions, options, [&](double t, const Vec3& p) {
-        file.Write(writer.Sample(ns(t), p, Vec3::Zero()));
-      });
+      SimulateRawLog(truth, gravity, directions, options,
+                     [&](double t, const Vec3& p) { file.Write(writer.Sample(ns(t), p)); });
       file.Write(writer.Finish());
       file.Commit();
       return kExitOk;

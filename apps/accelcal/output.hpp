@@ -57,6 +57,8 @@ class OutputFile {
   /// The temporary file that will replace the target, for a library that writes a file by its
   /// name (SQLite): empty for stdout, a device or a FIFO, which are written as they are.
   const std::string& temporary() const { return temp_; }
+  /// The file replaced: the path given, or the file a symbolic link given names.
+  const std::string& target() const { return target_; }
 
  private:
   void Flush();

@@ -27,11 +27,15 @@ class McapImuWriter {
   /// exact), no orientation (covariance[0] = -1, as REP 145 asks). Returns what is to be written
   /// now: a chunk and its message index when one is full, else nothing.
   std::string Sample(std::uint64_t time_ns, const Vec3& accel, const Vec3& gyro);
+  /// One message of an accelerometer alone: angular_velocity zero, and its covariance[0] = -1,
+  /// which marks (REP 145) a field the sensor does not measure.
+  std::string Sample(std::uint64_t time_ns, const Vec3& accel);
   /// The last chunk, the Data End record, the Footer and the closing magic.
   std::string Finish();
 
  private:
   std::string Flush();  // the chunk so far, compressed, and its message index
+  std::string Message(std::uint64_t time_ns, const Vec3& accel, const Vec3* gyro);  // a Sample
 
   McapCompression compression_;
   std::string topic_;

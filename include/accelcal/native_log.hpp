@@ -68,6 +68,9 @@ struct KnownStream {
   };
   Packing packing = Packing::kSample;
   std::string_view interval{};  ///< kDelta: the interval's field
+  /// A field whose value -1 in every message says the readings are not measured (REP 145: a ROS
+  /// Imu's covariance[0]); empty when the type has none.
+  std::string_view unmeasured{};
 };
 /// The streams accelcal reads without being told their fields: PX4's sensor_accel (the
 /// driver's output, before the calibration), sensor_combined's accelerometer (after it),

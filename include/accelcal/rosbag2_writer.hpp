@@ -33,6 +33,9 @@ class Rosbag2SqliteImuWriter {
   /// exact), no orientation. Throws std::invalid_argument for a value not finite or a time past
   /// 2^31 s, std::runtime_error when SQLite fails (a full disk).
   void Sample(std::uint64_t time_ns, const Vec3& accel, const Vec3& gyro);
+  /// One message of an accelerometer alone: angular_velocity zero, and its covariance[0] = -1,
+  /// which marks (REP 145) a field the sensor does not measure.
+  void Sample(std::uint64_t time_ns, const Vec3& accel);
   /// The bag's metadata (rosbag2's metadata.yaml, version 8, as rosbag2 stores it in the
   /// database), then the transaction committed and the database closed.
   void Finish();

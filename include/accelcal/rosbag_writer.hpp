@@ -34,6 +34,9 @@ class RosBagImuWriter {
   /// now: a chunk and its index record when one is full, else nothing. Throws
   /// std::invalid_argument for a value not finite or a time past 2^32 s.
   std::string Sample(std::uint64_t time_ns, const Vec3& accel, const Vec3& gyro);
+  /// One message of an accelerometer alone: angular_velocity zero, and its covariance[0] = -1,
+  /// which marks (REP 145) a field the sensor does not measure.
+  std::string Sample(std::uint64_t time_ns, const Vec3& accel);
   /// The last chunk, then the index section: the connection record and each chunk's info record.
   std::string Finish();
   /// After Finish: the bag header record (the same length as Header()'s) with the index position
@@ -46,6 +49,7 @@ class RosBagImuWriter {
     std::uint32_t messages = 0;
   };
   std::string Flush();  // the chunk so far and its index record
+  std::string Message(std::uint64_t time_ns, const Vec3& accel, const Vec3* gyro);  // a Sample
 
   RosBagCompression compression_;
   std::string topic_;

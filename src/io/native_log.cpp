@@ -58,15 +58,52 @@ const std::vector<KnownStream>& KnownStreams() {
       {"GYR", "gyroscope", "SampleUS", "GyrX", "GyrY", "GyrZ", "rad/s", true},
       // ROS: a driver's message, stamped when sampled (REP 145 asks for the sensor's own frame,
       // without the driver's corrections).
-      {"sensor_msgs/Imu", "accelerometer", "header.stamp", "linear_acceleration.x",
-       "linear_acceleration.y", "linear_acceleration.z", "m/s2", false},
-      {"sensor_msgs/Imu", "gyroscope", "header.stamp", "angular_velocity.x", "angular_velocity.y",
-       "angular_velocity.z", "rad/s", false},
+      // A field's covariance[0] = -1 marks it not measured.
+      {"sensor_msgs/Imu",
+       "accelerometer",
+       "header.stamp",
+       "linear_acceleration.x",
+       "linear_acceleration.y",
+       "linear_acceleration.z",
+       "m/s2",
+       false,
+       KnownStream::Packing::kSample,
+       {},
+       "linear_acceleration_covariance[0]"},
+      {"sensor_msgs/Imu",
+       "gyroscope",
+       "header.stamp",
+       "angular_velocity.x",
+       "angular_velocity.y",
+       "angular_velocity.z",
+       "rad/s",
+       false,
+       KnownStream::Packing::kSample,
+       {},
+       "angular_velocity_covariance[0]"},
       // ROS 2 names it with its "msg" folder.
-      {"sensor_msgs/msg/Imu", "accelerometer", "header.stamp", "linear_acceleration.x",
-       "linear_acceleration.y", "linear_acceleration.z", "m/s2", false},
-      {"sensor_msgs/msg/Imu", "gyroscope", "header.stamp", "angular_velocity.x",
-       "angular_velocity.y", "angular_velocity.z", "rad/s", false},
+      {"sensor_msgs/msg/Imu",
+       "accelerometer",
+       "header.stamp",
+       "linear_acceleration.x",
+       "linear_acceleration.y",
+       "linear_acceleration.z",
+       "m/s2",
+       false,
+       KnownStream::Packing::kSample,
+       {},
+       "linear_acceleration_covariance[0]"},
+      {"sensor_msgs/msg/Imu",
+       "gyroscope",
+       "header.stamp",
+       "angular_velocity.x",
+       "angular_velocity.y",
+       "angular_velocity.z",
+       "rad/s",
+       false,
+       KnownStream::Packing::kSample,
+       {},
+       "angular_velocity_covariance[0]"},
   };
   return kStreams;
 }
@@ -172,6 +209,7 @@ struct Chosen {
   // y[0], z[0] being the axes): `fifo` samples a message at most.
   std::vector<std::size_t> extra;
   std::size_t fifo = 1;
+  std::optional<std::size_t> unmeasured;  // KnownStream::unmeasured's column, stored last
 };
 
 // The columns option's (time,x,y,z, or x,y,z with the stream's own time field when it has one),
@@ -239,6 +277,7 @@ Chosen Choose(const internal::DecodedStream& s, const ReadOptions& options,
       out.axis[1] = field(known->y);
       out.axis[2] = field(known->z);
       if (known->packing == KnownStream::Packing::kDelta) out.extra = {field(known->interval)};
+      if (!known->unmeasured.empty()) out.unmeasured = Find(s, known->unmeasured);
     }
   }
   std::vector<std::size_t> all(std::begin(out.axis), std::end(out.axis));
@@ -261,6 +300,7 @@ std::vector<std::size_t> Stored(const Chosen& c) {
   if (c.time) out.push_back(*c.time);
   out.insert(out.end(), std::begin(c.axis), std::end(c.axis));
   out.insert(out.end(), c.extra.begin(), c.extra.end());
+  if (c.unmeasured) out.push_back(*c.unmeasured);
   return out;
 }
 
@@ -424,6 +464,19 @@ InputData ReadNativeLog(BinaryStream& in, InputFile* file, const ReadOptions& op
   // Beyond 2^53 a time in µs is no longer an exact double.
   constexpr double kExact = 9007199254740992.0;
   using Packing = KnownStream::Packing;
+  if (chosen.unmeasured && s.messages > 0) {
+    bool all = true;
+    for (std::size_t i = 0; i < s.messages && all; ++i) all = s.values[i * width + width - 1] == -1;
+    if (all) {
+      // REP 145: the publisher has no such readings (an IMU without a gyroscope, say).
+      const std::string& x = (*s.columns)[chosen.axis[0]];
+      throw InputError(source, 0,
+                       Format("%s's %s is -1 in every message, which marks (REP 145) its %s as "
+                              "not measured: the topic has no %s readings",
+                              Shown(s.topic).c_str(), (*s.columns)[*chosen.unmeasured].c_str(),
+                              x.substr(0, x.rfind('.')).c_str(), std::string(sensor).c_str()));
+    }
+  }
   for (std::size_t i = 0; i < s.messages; ++i) {
     const double* row = s.values.data() + i * width;
     const auto where = [&] {

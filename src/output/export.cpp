@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cmath>
 #include <functional>
+#include <limits>
 #include <optional>
 #include <stdexcept>
 
@@ -65,6 +66,17 @@ double Finite(double value) {
 }
 
 // Shortest text that reads back as the same double (nlohmann's own conversion: no locale).
+// A value for a float32 parameter (PX4's and ArduPilot's): finite and within float32's range.
+double Float32(double value) {
+  if (!(std::abs(Finite(value)) <= std::numeric_limits<float>::max())) {
+    throw DataError(
+        Format("the converted calibration has %.6g, beyond a float32 parameter's "
+               "range: its parameters are not a sensor's",
+               value));
+  }
+  return value;
+}
+
 std::string Number(double value) { return ordered_json(Finite(value)).dump(); }
 
 std::string YamlFlow(const ordered_json& j);  // below, with the YAML writer
@@ -284,11 +296,40 @@ const SourceStream* GyroscopeStream(const LoadedCalibration& cal) {
   return found;
 }
 
+// The largest relative scale error a sensor's calibration may have before its readings are taken
+// for another unit than their label's: MEMS sensitivities are within a few % of nominal, and the
+// units readings are mistaken for are 9.8, 57 or thousands of times apart.
+constexpr double kMostPlausibleScaleError = 0.5;
+
+// The scales a diagonal target (PX4, ArduPilot) writes, when the raw unit is the file's label (not
+// one given with the export): scales far from 1 are readings in another unit (counts labelled
+// m/s2), which the target would apply as written.
+void PlausibleScales(const Vec3& scale, const LoadedCalibration& cal, const ExportOptions& options,
+                     const char* tool) {
+  if (!options.raw_unit.empty()) return;  // the caller's word for the unit
+  for (int i = 0; i < 3; ++i) {
+    if (!(scale(i) >= 1 / (1 + kMostPlausibleScaleError) &&
+          scale(i) <= 1 + kMostPlausibleScaleError)) {
+      throw DataError(Format(
+          "%s would apply scales of %.6g, %.6g, %.6g: a sensor's readings in '%s' have scales "
+          "near 1, so these readings were not in '%s' (counts?); calibrate them with their "
+          "unit, or give the raw unit option if they were in it",
+          tool, scale(0), scale(1), scale(2), internal::VisibleLine(cal.raw_unit).c_str(),
+          internal::VisibleLine(cal.raw_unit).c_str()));
+    }
+  }
+}
+
 // A PX4 device id: 32-bit.
 std::optional<std::uint64_t> Px4DeviceId(std::optional<std::uint64_t> given,
                                          const SourceStream* stream) {
+  if (given && *given == 0) {
+    throw std::invalid_argument("device id 0 is no sensor's: PX4 gives each sensor a nonzero id");
+  }
   std::optional<std::uint64_t> id = given;
-  if (!id && stream != nullptr) id = stream->device_id;
+  if (!id && stream != nullptr && stream->device_id != std::optional<std::uint64_t>(0)) {
+    id = stream->device_id;  // 0: a log that does not say
+  }
   if (id && *id > 0xFFFFFFFFu) {
     throw std::invalid_argument(
         Format("device id %llu: PX4's are 32-bit", static_cast<unsigned long long>(*id)));
@@ -350,7 +391,7 @@ std::optional<Px4Slot> Px4Gyroscope(const LoadedCalibration& cal, const ExportOp
       cal, options, "PX4", "its drivers scale the rates", &out->gyroscope_omitted);
   if (!rad_s) return std::nullopt;
   const Vec3 offset_rad_s = *rad_s * g.params.bias;
-  for (int i = 0; i < 3; ++i) Finite(offset_rad_s(i));
+  for (int i = 0; i < 3; ++i) Float32(offset_rad_s(i));
   const std::string prefix = "CAL_GYRO" + std::to_string(options.instance) + "_";
   Px4Slot slot =
       Px4SlotFor(prefix, stream, Px4DeviceId(options.gyro_device_id, stream), "sensor_gyro");
@@ -362,6 +403,17 @@ std::optional<Px4Slot> Px4Gyroscope(const LoadedCalibration& cal, const ExportOp
   // largest singular value of s K_g - I times |w|.
   const double largest =
       Eigen::JacobiSVD<Mat33>(Mat33(*rad_s * g.params.K - Mat33::Identity())).singularValues()(0);
+  if (options.gyro_raw_unit.empty() && !(largest <= kMostPlausibleScaleError)) {
+    // Rates that are not in the unit their label says (counts labelled rad/s): PX4 would apply
+    // the offsets to rates of another scale.
+    out->gyroscope_omitted = Format(
+        "PX4 holds a gyroscope's offsets only, and these rates, labelled '%s', differ from the "
+        "calibrated ones by up to %.3g %% (a gyroscope's scale is near 1): they are not in "
+        "'%s'; give gyro_raw_unit if they were",
+        internal::VisibleLine(g.raw_unit).c_str(), 100 * largest,
+        internal::VisibleLine(g.raw_unit).c_str());
+    return std::nullopt;
+  }
   out->gyroscope_included = true;
   out->gyroscope_dropped =
       Join(Format("the scale and misalignment K_g, which PX4 does not hold (a rate error of up to "
@@ -382,9 +434,17 @@ ExportResult Px4(const LoadedCalibration& cal, const ExportOptions& options) {
                     "parameters correct the driver's output: calibrate sensor_accel (logged at "
                     "the sensor's rate) and export that");
   }
+  if (options.instance < 0 || options.instance > 3) {
+    throw std::invalid_argument("PX4 has calibration slots 0 to 3 (CAL_ACC0 to CAL_ACC3)");
+  }
+  if (options.gyro_device_id && !cal.gyroscope) {
+    throw std::invalid_argument(
+        "a gyroscope's device id for a calibration without a gyroscope (nothing to apply it to)");
+  }
   const double raw_ms2 = RawToMetersPerSecond2(cal, options, "PX4", "its drivers scale the counts");
   const Diagonal d = DiagonalPart(cal, raw_ms2);
-  for (int i = 0; i < 3; ++i) Finite(d.offset_ms2(i)), Finite(d.scale(i));
+  for (int i = 0; i < 3; ++i) Float32(d.offset_ms2(i)), Float32(d.scale(i));
+  PlausibleScales(d.scale, cal, options, "PX4");
   ExportResult out;
   out.convention = DiagonalConvention("PX4 (src/lib/sensor_calibration)", cal, raw_ms2);
   const std::string prefix = "CAL_ACC" + std::to_string(options.instance) + "_";
@@ -412,7 +472,8 @@ ExportResult ArduPilot(const LoadedCalibration& cal, const ExportOptions& option
   const double raw_ms2 =
       RawToMetersPerSecond2(cal, options, "ArduPilot", "its drivers scale the counts");
   Diagonal d = DiagonalPart(cal, raw_ms2);
-  for (int i = 0; i < 3; ++i) Finite(d.offset_ms2(i)), Finite(d.scale(i));
+  for (int i = 0; i < 3; ++i) Float32(d.offset_ms2(i)), Float32(d.scale(i));
+  PlausibleScales(d.scale, cal, options, "ArduPilot");
   ExportResult out;
   out.convention = DiagonalConvention("ArduPilot (AP_InertialSensor)", cal, raw_ms2);
   const std::string prefix =

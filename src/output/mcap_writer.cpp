@@ -60,6 +60,14 @@ std::string McapImuWriter::Header() const {
 }
 
 std::string McapImuWriter::Sample(std::uint64_t time_ns, const Vec3& accel, const Vec3& gyro) {
+  return Message(time_ns, accel, &gyro);
+}
+
+std::string McapImuWriter::Sample(std::uint64_t time_ns, const Vec3& accel) {
+  return Message(time_ns, accel, nullptr);
+}
+
+std::string McapImuWriter::Message(std::uint64_t time_ns, const Vec3& accel, const Vec3* gyro) {
   std::string message;
   PutLittle<std::uint16_t>(&message, kChannelId);
   PutLittle<std::uint32_t>(&message, sequence_++);

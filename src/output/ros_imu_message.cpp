@@ -14,14 +14,14 @@ constexpr char kFrame[] = "imu_link";
 // The body after the header, shared by both: orientation (none), angular velocity, linear
 // acceleration, each with its covariance (float64, 8-aligned in CDR as they fall).
 template <typename PutDouble>
-void Body(const Vec3& accel, const Vec3& gyro, PutDouble put) {
-  if (!accel.allFinite() || !gyro.allFinite()) {
+void Body(const Vec3& accel, const Vec3* gyro, PutDouble put) {
+  if (!accel.allFinite() || (gyro != nullptr && !gyro->allFinite())) {
     throw std::invalid_argument("a sensor_msgs/Imu reading that is not finite");
   }
   for (double q : {0.0, 0.0, 0.0, 1.0}) put(q);
   for (int i = 0; i < 9; ++i) put(i == 0 ? -1.0 : 0.0);  // no orientation
-  for (int a = 0; a < 3; ++a) put(gyro(a));
-  for (int i = 0; i < 9; ++i) put(0.0);
+  for (int a = 0; a < 3; ++a) put(gyro != nullptr ? (*gyro)(a) : 0.0);
+  for (int i = 0; i < 9; ++i) put(i == 0 && gyro == nullptr ? -1.0 : 0.0);  // no rates
   for (int a = 0; a < 3; ++a) put(accel(a));
   for (int i = 0; i < 9; ++i) put(0.0);
 }
@@ -57,7 +57,7 @@ std::string_view Ros1ImuDefinition() {
 }
 
 std::string Ros1ImuMessage(std::uint32_t seq, std::uint64_t time_ns, const Vec3& accel,
-                           const Vec3& gyro) {
+                           const Vec3* gyro) {
   if (time_ns / 1000000000u > 0xffffffffu) {
     throw std::invalid_argument("a ROS 1 time is at most 2^32 - 1 s (the year 2106)");
   }
@@ -72,7 +72,7 @@ std::string Ros1ImuMessage(std::uint32_t seq, std::uint64_t time_ns, const Vec3&
   return out;
 }
 
-std::string Ros2ImuMessage(std::uint64_t time_ns, const Vec3& accel, const Vec3& gyro) {
+std::string Ros2ImuMessage(std::uint64_t time_ns, const Vec3& accel, const Vec3* gyro) {
   if (time_ns / 1000000000u > 0x7fffffffu) {
     throw std::invalid_argument("a ROS 2 time is at most 2^31 - 1 s (the year 2038)");
   }

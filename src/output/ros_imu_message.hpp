@@ -22,10 +22,12 @@ namespace accelcal::internal {
 std::string_view Ros1ImuDefinition();
 inline constexpr char kRos1ImuMd5[] = "6a62c6daae103f4ff57a132d6f95cec2";
 
-/// The message in ROS 1 serialisation, its header's seq `seq`.
+/// The message in ROS 1 serialisation, its header's seq `seq`. `gyro` null: no rates
+/// (angular_velocity zero and angular_velocity_covariance[0] = -1, as REP 145 marks a field the
+/// sensor does not measure).
 std::string Ros1ImuMessage(std::uint32_t seq, std::uint64_t time_ns, const Vec3& accel,
-                           const Vec3& gyro);
+                           const Vec3* gyro);
 /// The message in CDR (ROS 2: no seq).
-std::string Ros2ImuMessage(std::uint64_t time_ns, const Vec3& accel, const Vec3& gyro);
+std::string Ros2ImuMessage(std::uint64_t time_ns, const Vec3& accel, const Vec3* gyro);
 
 }  // namespace accelcal::internal

@@ -34,6 +34,7 @@ struct Rosbag2SqliteImuWriter::Impl {
       Fail("cannot write the bag");
     }
   }
+  void Insert(std::uint64_t time_ns, const std::string& message);
   void Close() {
     sqlite3_finalize(insert);
     insert = nullptr;
@@ -114,22 +115,33 @@ Rosbag2SqliteImuWriter::Rosbag2SqliteImuWriter(const std::string& path, std::str
 Rosbag2SqliteImuWriter::~Rosbag2SqliteImuWriter() { impl_->Close(); }
 
 void Rosbag2SqliteImuWriter::Sample(std::uint64_t time_ns, const Vec3& accel, const Vec3& gyro) {
-  if (impl_->db == nullptr) throw std::logic_error("Rosbag2SqliteImuWriter: a sample after Finish");
-  const std::string message = internal::Ros2ImuMessage(time_ns, accel, gyro);
-  sqlite3_stmt* s = impl_->insert;
+  impl_->Insert(time_ns, internal::Ros2ImuMessage(time_ns, accel, &gyro));
+}
+
+void Rosbag2SqliteImuWriter::Sample(std::uint64_t time_ns, const Vec3& accel) {
+  impl_->Insert(time_ns, internal::Ros2ImuMessage(time_ns, accel, nullptr));
+}
+
+void Rosbag2SqliteImuWriter::Impl::Insert(std::uint64_t time_ns, const std::string& message) {
+  if (db == nullptr) throw std::logic_error("Rosbag2SqliteImuWriter: a sample after Finish");
+  sqlite3_stmt* s = insert;
   sqlite3_reset(s);
   sqlite3_bind_int64(s, 1, static_cast<sqlite3_int64>(time_ns));
   sqlite3_bind_blob(s, 2, message.data(), static_cast<int>(message.size()), SQLITE_STATIC);
-  if (sqlite3_step(s) != SQLITE_DONE) impl_->Fail("cannot write a message");
-  if (impl_->messages == 0) impl_->first_ns = time_ns;
-  impl_->first_ns = std::min(impl_->first_ns, time_ns);
-  impl_->last_ns = std::max(impl_->last_ns, time_ns);
-  ++impl_->messages;
+  if (sqlite3_step(s) != SQLITE_DONE) Fail("cannot write a message");
+  if (messages == 0) first_ns = time_ns;
+  first_ns = std::min(first_ns, time_ns);
+  last_ns = std::max(last_ns, time_ns);
+  ++messages;
 }
 
 void Rosbag2SqliteImuWriter::Finish() {
   if (impl_->db == nullptr) throw std::logic_error("Rosbag2SqliteImuWriter: Finish twice");
-  const std::string& file = impl_->file;
+  // Names as YAML double-quoted scalars: any file or topic name reads back as itself.
+  const auto quoted = [](const std::string& text) {
+    return "\"" + internal::EscapeText(text, internal::Escaping::kYamlDoubleQuoted) + "\"";
+  };
+  const std::string file = quoted(impl_->file), topic = quoted(impl_->topic);
   const unsigned long long n = impl_->messages;
   const unsigned long long start = n > 0 ? impl_->first_ns : 0;
   const unsigned long long duration = n > 0 ? impl_->last_ns - impl_->first_ns : 0;
@@ -164,8 +176,7 @@ void Rosbag2SqliteImuWriter::Finish() {
       "      message_count: %llu\n"
       "  custom_data: ~\n"
       "  ros_distro: iron\n",
-      duration, start, n, impl_->topic.c_str(), kType, n, file.c_str(), file.c_str(), start,
-      duration, n);
+      duration, start, n, topic.c_str(), kType, n, file.c_str(), file.c_str(), start, duration, n);
   sqlite3_stmt* s = nullptr;
   if (sqlite3_prepare_v2(impl_->db, "INSERT INTO metadata VALUES (1, 8, ?)", -1, &s, nullptr) !=
       SQLITE_OK) {

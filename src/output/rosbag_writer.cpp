@@ -90,6 +90,14 @@ std::string RosBagImuWriter::Header() const {
 }
 
 std::string RosBagImuWriter::Sample(std::uint64_t time_ns, const Vec3& accel, const Vec3& gyro) {
+  return Message(time_ns, accel, &gyro);
+}
+
+std::string RosBagImuWriter::Sample(std::uint64_t time_ns, const Vec3& accel) {
+  return Message(time_ns, accel, nullptr);
+}
+
+std::string RosBagImuWriter::Message(std::uint64_t time_ns, const Vec3& accel, const Vec3* gyro) {
   if (finished_) throw std::logic_error("RosBagImuWriter: a sample after Finish");
   if (position_ == 0) position_ = Header().size();
   const std::string message = internal::Ros1ImuMessage(sequence_, time_ns, accel, gyro);

@@ -321,6 +321,29 @@ TEST_F(NativeLogTest, EverySimulatedFormatCalibratesAsItsSamples) {
   const CliRun piped = Exec(sim + "rosbag");
   EXPECT_EQ(piped.status, 2);
   EXPECT_NE(piped.err.find("give -o FILE"), std::string::npos) << piped.err;
+  // The simulator's bags hold no rates, and say so (REP 145): no gyroscope read from them.
+  const CliRun gyro = Exec("calibrate " + Path("s.rosbag") + " --gyro " + Path("s.rosbag"));
+  EXPECT_EQ(gyro.status, 3);
+  EXPECT_NE(gyro.err.find("/imu/data's angular_velocity_covariance[0] is -1 in every message, "
+                          "which marks (REP 145) its angular_velocity as not measured"),
+            std::string::npos)
+      << gyro.err;
+  // A session longer than ROS time holds: refused before anything is written.
+  const CliRun late = Exec(
+      "simulate --scenario yang2012 --raw --positions six --rate 1e-6 "
+      "--duration 1e9 --format db3 -o " +
+      Path("late.db3"));
+  EXPECT_EQ(late.status, 2);
+  EXPECT_NE(late.err.find("stamps its messages from 0 s in ROS time, at most 2147483647 s"),
+            std::string::npos)
+      << late.err;
+  // An SQLite journal beside the bag replaced would be applied to the new one: refused.
+  Write("s.db3-wal", "stale");
+  const std::string before = Slurp(Path("s.db3"));
+  const CliRun stale = Exec(sim + "db3 -o " + Path("s.db3"));
+  EXPECT_EQ(stale.status, 5);
+  EXPECT_NE(stale.err.find("s.db3-wal exists beside it"), std::string::npos) << stale.err;
+  EXPECT_EQ(Slurp(Path("s.db3")), before);
 }
 
 // ArduPilot logs its IMU records corrected by the calibration in force: a = (p - o_old) .* s_old,
@@ -448,6 +471,26 @@ TEST_F(NativeLogTest, Px4ExportNamesTheSensorByItsDeviceId) {
   EXPECT_NE(e.err.find("calibrate sensor_accel"), std::string::npos) << e.err;
   // --device-id is PX4's.
   EXPECT_EQ(Exec("export " + Path("u.json") + " --to ardupilot --device-id 5").status, 2);
+  // The simulated counts under the stream's label m/s2 (no --raw-unit to vouch for them): scales
+  // of 0.0002 are no sensor's, and PX4 would apply them as written.
+  e = Exec("export " + Path("u.json") + " --to px4");
+  EXPECT_EQ(e.status, 3);
+  EXPECT_NE(e.err.find("PX4 would apply scales of 0.000"), std::string::npos) << e.err;
+  EXPECT_NE(e.err.find("these readings were not in 'm/s2' (counts?)"), std::string::npos) << e.err;
+  // PX4's slots are 0 to 3; a device id is 1 to 2^32 - 1; a gyroscope's needs a gyroscope.
+  const std::string px4 = "export " + Path("u.json") + " --to px4 --raw-unit m/s2 ";
+  e = Exec(px4 + "--instance 4");
+  EXPECT_EQ(e.status, 2);
+  EXPECT_NE(e.err.find("PX4 has calibration slots 0 to 3"), std::string::npos) << e.err;
+  for (const char* id : {"0", "-1", "4294967296", "1e3"}) {
+    e = Exec(px4 + "--device-id " + id);
+    EXPECT_EQ(e.status, 2) << id;
+    EXPECT_NE(e.err.find("a device id is an integer from 1 to 4294967295"), std::string::npos)
+        << e.err;
+  }
+  e = Exec(px4 + "--gyro-device-id 5");
+  EXPECT_EQ(e.status, 2);
+  EXPECT_NE(e.err.find("a calibration without a gyroscope"), std::string::npos) << e.err;
 }
 
 // PX4's other accelerometer topics, written here as PX4 lays them out (ULog specification):
@@ -530,6 +573,19 @@ TEST_F(NativeLogTest, Px4ExportHoldsTheGyroscopeOffsets) {
   EXPECT_NE(e.out.find("1\t1\tCAL_GYRO1_ID\t11\t6\n"), std::string::npos) << e.out;
   EXPECT_NE(e.out.find("1\t1\tCAL_ACC1_ID\t7\t6\n"), std::string::npos) << e.out;
   EXPECT_EQ(Exec("export " + Path("u.json") + " --to kalibr --gyro-device-id 5").status, 2);
+  // The rates' unit vouched for with --gyro-raw-unit: the same block.
+  e = Exec("export " + Path("u.json") + " --to px4 --gyro-raw-unit rad/s");
+  ASSERT_EQ(e.status, 0) << e.err;
+  EXPECT_NE(e.out.find(block), std::string::npos) << e.out;
+  // Rates labelled deg/s that are rad/s (K_g 57 times the unit's): no offsets PX4 would apply to
+  // rates of another scale; the rest is exported, and the reason said.
+  nlohmann::json mislabelled = cal;
+  mislabelled["sensors"]["gyroscope"]["units"]["raw"] = "deg/s";
+  Write("deg.json", mislabelled.dump());
+  e = Exec("export " + Path("deg.json") + " --to px4");
+  ASSERT_EQ(e.status, 0) << e.err;
+  EXPECT_EQ(e.out.find("CAL_GYRO0_"), std::string::npos) << e.out;
+  EXPECT_NE(e.err.find("they are not in 'deg/s'"), std::string::npos) << e.err;
 }
 
 // A log of one topic of `format` ("name:fields"), subscribed as message id 0.

@@ -56,8 +56,8 @@ constexpr double kMaxSimulatedSamples = 1e8;
 
 void CheckSimulatedSamples(double samples, const char* options) {
   if (!(samples <= kMaxSimulatedSamples)) {
-    throw UsageError(Format("%s asks for %.3g samples; at most %g are simulated", options, samples,
-                            kMaxSimulatedSamples));
+    throw UsageError(Format("%s asks for %.0f samples; at most %.0f are simulated", options,
+                            samples, kMaxSimulatedSamples));
   }
 }
 

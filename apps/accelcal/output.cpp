@@ -147,7 +147,8 @@ std::string Why(const std::string& path, const char* what) {
 }  // namespace
 
 void InstallCleanupHandlers() {
-  for (int sig : {SIGINT, SIGTERM, SIGHUP, SIGPIPE, SIGQUIT}) {
+  // SIGXFSZ: a file-size limit (ulimit -f) reached while writing.
+  for (int sig : {SIGINT, SIGTERM, SIGHUP, SIGPIPE, SIGQUIT, SIGXFSZ}) {
     struct sigaction action {};
     action.sa_handler = RemoveTemporariesAndDie;
     sigemptyset(&action.sa_mask);
@@ -163,6 +164,15 @@ OutputFile::OutputFile(const std::string& path) : path_(path), target_(path) {
   if (path.empty()) throw OutputError("an output file name is empty");
   struct stat st;
   if (::lstat(path.c_str(), &st) == 0 && S_ISLNK(st.st_mode)) {
+    struct stat to;
+    if (::stat(path.c_str(), &to) == 0 && !S_ISREG(to.st_mode) && !S_ISDIR(to.st_mode) &&
+        !S_ISSOCK(to.st_mode)) {
+      // A link to a pipe, a FIFO or a device (/dev/stdout when it is a pipe, whose target
+      // "pipe:[n]" has no path): written through the link, as it is.
+      fd_ = ::open(path.c_str(), O_WRONLY | O_NOCTTY | O_CLOEXEC);
+      if (fd_ < 0) throw OutputError(Why(path, "cannot open"));
+      return;
+    }
     char* real = ::realpath(path.c_str(), nullptr);
     if (real == nullptr) throw OutputError(Why(path, "a symbolic link that does not resolve"));
     target_ = real;

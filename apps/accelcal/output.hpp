@@ -84,8 +84,8 @@ void WriteFileAtomically(const std::string& path, const std::string& content);
 void CheckOutputs(const std::vector<std::pair<std::string, std::string>>& outputs,
                   const std::vector<std::string>& inputs);
 
-/// SIGINT, SIGTERM, SIGHUP, SIGPIPE and SIGQUIT remove the temporary files being written, then
-/// end the process as the signal would have.
+/// SIGINT, SIGTERM, SIGHUP, SIGPIPE, SIGQUIT and SIGXFSZ remove the temporary files being
+/// written, then end the process as the signal would have.
 void InstallCleanupHandlers();
 
 /// stdout flushed and checked (a summary to a full disk is an error too): OutputError.

@@ -51,6 +51,10 @@ struct EnumNames<TimeUnit> {
 };
 /// Seconds per unit (1, 1e-3, 1e-6, 1e-9); kAuto has none (0).
 double SecondsPer(TimeUnit unit);
+/// Units per second, exactly (1, 1e3, 1e6, 1e9; kAuto 0): a time in seconds is the time in the
+/// unit divided by it, the double nearest what the same time written in seconds reads as
+/// (64180000 us: 64.18 s; times 1e-6 gave 64.17999999999999).
+double UnitsPerSecond(TimeUnit unit);
 
 /// A rate an IMU log can plausibly have [Hz]: 2 Hz (a window of 0.5 s holds one sample below
 /// that) to 20 kHz (beyond the output rate of common MEMS accelerometers).

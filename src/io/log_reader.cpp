@@ -722,7 +722,7 @@ StreamedLog StreamRawLog(const std::string& path, const ReadOptions& options,
   RawLog piece;  // what goes to the sink
   piece.source = source;
   std::optional<TimeAxis> axis;
-  double raw_t0 = 0, scale = 1, typical = 0;
+  double raw_t0 = 0, per_second = 1, typical = 0;
   double previous_raw = 0, previous_t = 0;
   double segment_t0 = 0, spans = 0, counted = 0;
   std::size_t segment_samples = 0;
@@ -736,7 +736,7 @@ StreamedLog StreamRawLog(const std::string& path, const ReadOptions& options,
     for (std::size_t k = 0; k < rows.samples.size(); ++k) {
       if (axis) {
         const double v = rows.time_s[k];
-        const double t = (v - raw_t0) * scale;
+        const double t = (v - raw_t0) / per_second;  // as MakeTimeAxis converts
         if (out.samples > 0) {
           if (v < previous_raw)
             throw InputError(source, rows.line[k], TimeBackwards(v, previous_raw));
@@ -781,7 +781,7 @@ StreamedLog StreamRawLog(const std::string& path, const ReadOptions& options,
     axis->gaps.clear();  // found again over the whole log
     piece.time = axis;   // the head's unit, origin, typical step and resolution
     raw_t0 = head.time_s.front();
-    scale = SecondsPer(axis->unit);
+    per_second = UnitsPerSecond(axis->unit);
     typical = axis->typical_step_s;
   };
   bool decided = false;

@@ -32,6 +32,22 @@ double SecondsPer(TimeUnit unit) {
   return 1e-9;
 }
 
+double UnitsPerSecond(TimeUnit unit) {
+  switch (unit) {
+    case TimeUnit::kAuto:
+      return 0;
+    case TimeUnit::kSeconds:
+      return 1;
+    case TimeUnit::kMilliseconds:
+      return 1e3;
+    case TimeUnit::kMicroseconds:
+      return 1e6;
+    case TimeUnit::kNanoseconds:
+      break;
+  }
+  return 1e9;
+}
+
 std::vector<std::size_t> SegmentStarts(const std::vector<TimeGap>& gaps) {
   std::vector<std::size_t> starts{0};
   for (const TimeGap& g : gaps) starts.push_back(g.index);
@@ -193,12 +209,13 @@ TimeAxis MakeTimeAxis(std::vector<double>* time, TimeUnit unit, std::string_view
                                 UnitWord(axis.unit), step, RateText(rate_in(axis.unit)).c_str());
     }
   }
-  const double scale = SecondsPer(axis.unit);
-  axis.origin_s = t.front() * scale;
-  axis.typical_step_s = step * scale;
+  // Divided by the unit's count per second (UnitsPerSecond: exact).
+  const double per_second = UnitsPerSecond(axis.unit);
+  axis.origin_s = t.front() / per_second;
+  axis.typical_step_s = step / per_second;
   // Seconds from the first sample; the subtraction first, exact for nearby large values.
   const double t0 = t.front();
-  for (double& v : t) v = (v - t0) * scale;
+  for (double& v : t) v = (v - t0) / per_second;
 
   double resolution = INFINITY, spans = 0, counted = 0;
   std::size_t irregular = 0, repeated = 0, segment_begin = 0;

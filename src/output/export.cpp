@@ -16,6 +16,7 @@
 #include "accelcal/error.hpp"
 #include "accelcal/frame.hpp"
 #include "accelcal/gravity.hpp"
+#include "accelcal/native_log.hpp"
 #include "core/text_format.hpp"
 
 namespace accelcal {
@@ -278,10 +279,26 @@ std::string Header(const LoadedCalibration& cal) {
   return text + " (" + std::string(ToString(cal.model)) + " model)";
 }
 
+// Whether a stream can hold `sensor`'s readings: a type accelcal knows for it, or one it does
+// not know at all (fields the user named). A provenance edited by hand (a gyroscope's record
+// removed, leaving the accelerometer's of the same file) is not taken for another sensor's.
+bool CanHold(const SourceStream& stream, std::string_view sensor) {
+  bool known = false;
+  for (const KnownStream& k : KnownStreams()) {
+    if (k.type != stream.type && k.type != stream.topic) continue;
+    if (k.sensor == sensor) return true;
+    known = true;
+  }
+  return !known;
+}
+
 // The binary log's stream the accelerometer was calibrated from, as the provenance records it.
 const SourceStream* AccelerometerStream(const LoadedCalibration& cal) {
   for (const InputRecord& input : cal.provenance.inputs) {
-    if (input.stream && (cal.source.empty() || input.name == cal.source)) return &*input.stream;
+    if (input.stream && (cal.source.empty() || input.name == cal.source) &&
+        CanHold(*input.stream, "accelerometer")) {
+      return &*input.stream;
+    }
   }
   return nullptr;
 }
@@ -291,7 +308,10 @@ const SourceStream* AccelerometerStream(const LoadedCalibration& cal) {
 const SourceStream* GyroscopeStream(const LoadedCalibration& cal) {
   const SourceStream* found = nullptr;
   for (const InputRecord& input : cal.provenance.inputs) {
-    if (input.stream && input.name == cal.gyroscope->source) found = &*input.stream;
+    if (input.stream && input.name == cal.gyroscope->source &&
+        CanHold(*input.stream, "gyroscope")) {
+      found = &*input.stream;
+    }
   }
   return found;
 }

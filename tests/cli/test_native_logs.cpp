@@ -573,6 +573,17 @@ TEST_F(NativeLogTest, Px4ExportHoldsTheGyroscopeOffsets) {
   EXPECT_NE(e.out.find("1\t1\tCAL_GYRO1_ID\t11\t6\n"), std::string::npos) << e.out;
   EXPECT_NE(e.out.find("1\t1\tCAL_ACC1_ID\t7\t6\n"), std::string::npos) << e.out;
   EXPECT_EQ(Exec("export " + Path("u.json") + " --to kalibr --gyro-device-id 5").status, 2);
+  // The gyroscope's input record removed by hand: the accelerometer's record of the same file
+  // (sensor_accel, device id 7) is not taken for the gyroscope's.
+  nlohmann::json edited = cal;
+  edited["provenance"]["inputs"].erase(edited["provenance"]["inputs"].size() - 1);
+  Write("edited.json", edited.dump());
+  e = Exec("export " + Path("edited.json") + " --to px4");
+  ASSERT_EQ(e.status, 0) << e.err;
+  EXPECT_NE(e.out.find("# CAL_GYRO0: the calibrated sensor; its device id is unknown"),
+            std::string::npos)
+      << e.out;
+  EXPECT_EQ(e.out.find("\tCAL_GYRO0_ID\t"), std::string::npos) << e.out;
   // The rates' unit vouched for with --gyro-raw-unit: the same block.
   e = Exec("export " + Path("u.json") + " --to px4 --gyro-raw-unit rad/s");
   ASSERT_EQ(e.status, 0) << e.err;

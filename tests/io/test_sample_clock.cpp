@@ -132,3 +132,27 @@ TEST(SampleClock, ARateThatChangesDepartsWhereItChanges) {
 
 }  // namespace
 }  // namespace accelcal
+
+namespace accelcal {
+namespace {
+
+// A time in ms, µs or ns becomes the double nearest the same time written in seconds: 64180000 us
+// is 64.18 s, as "64.18" reads (times 1e-6 gave 64.17999999999999, so a log's intervals differed
+// from the same log's in seconds in the last digit).
+TEST(TimeAxis, AUnitIsDividedOutExactly) {
+  for (const auto& [unit, per_second] : {std::pair<TimeUnit, double>{TimeUnit::kMilliseconds, 1e3},
+                                         {TimeUnit::kMicroseconds, 1e6},
+                                         {TimeUnit::kNanoseconds, 1e9}}) {
+    EXPECT_EQ(UnitsPerSecond(unit), per_second);
+    std::vector<double> t;
+    for (int k = 0; k <= 6418; ++k) t.push_back(k * 10 * per_second / 1e3);  // 10 ms steps
+    const TimeAxis axis = MakeTimeAxis(&t, unit, "t");
+    for (int k = 0; k <= 6418; ++k) {
+      ASSERT_EQ(t[static_cast<std::size_t>(k)], std::stod(std::to_string(k * 10) + "e-3")) << k;
+    }
+    EXPECT_EQ(axis.typical_step_s, 0.01);
+  }
+}
+
+}  // namespace
+}  // namespace accelcal

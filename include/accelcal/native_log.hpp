@@ -79,6 +79,9 @@ struct KnownStream {
 /// records (after the calibration in force: INS_ACCOFFS, INS_ACCSCAL); a ROS sensor_msgs/Imu's
 /// linear_acceleration and angular_velocity.
 const std::vector<KnownStream>& KnownStreams();
+/// The sensors accelcal reads from a stream of `type` by default (ROS 2's "pkg/msg/Type" is ROS
+/// 1's "pkg/Type"): empty for a type it does not know.
+std::vector<std::string_view> KnownSensors(std::string_view type);
 
 /// The stream of a binary log a raw log was read from, as a calibration file's provenance records
 /// it (`inputs[].stream`): what the parameters exported from the calibration are for.

@@ -32,6 +32,17 @@ LogFormat DetectLogFormat(std::string_view first_bytes) {
   return LogFormat::kText;
 }
 
+namespace {
+
+// A type's name as the table holds it: ROS 2's "sensor_msgs/msg/Imu" is ROS 1's "sensor_msgs/Imu".
+std::string TableName(std::string_view type) {
+  std::string name(type);
+  if (const std::size_t msg = name.find("/msg/"); msg != std::string::npos) name.erase(msg, 4);
+  return name;
+}
+
+}  // namespace
+
 const std::vector<KnownStream>& KnownStreams() {
   static const std::vector<KnownStream> kStreams = {
       // PX4: sampled at timestamp_sample where the topic has one.
@@ -81,31 +92,17 @@ const std::vector<KnownStream>& KnownStreams() {
        KnownStream::Packing::kSample,
        {},
        "angular_velocity_covariance[0]"},
-      // ROS 2 names it with its "msg" folder.
-      {"sensor_msgs/msg/Imu",
-       "accelerometer",
-       "header.stamp",
-       "linear_acceleration.x",
-       "linear_acceleration.y",
-       "linear_acceleration.z",
-       "m/s2",
-       false,
-       KnownStream::Packing::kSample,
-       {},
-       "linear_acceleration_covariance[0]"},
-      {"sensor_msgs/msg/Imu",
-       "gyroscope",
-       "header.stamp",
-       "angular_velocity.x",
-       "angular_velocity.y",
-       "angular_velocity.z",
-       "rad/s",
-       false,
-       KnownStream::Packing::kSample,
-       {},
-       "angular_velocity_covariance[0]"},
   };
   return kStreams;
+}
+
+std::vector<std::string_view> KnownSensors(std::string_view type) {
+  const std::string name = TableName(type);
+  std::vector<std::string_view> out;
+  for (const KnownStream& k : KnownStreams()) {
+    if (k.type == name) out.push_back(k.sensor);
+  }
+  return out;
 }
 
 namespace {
@@ -113,8 +110,9 @@ namespace {
 using internal::Format;
 
 const KnownStream* Known(std::string_view type, std::string_view sensor) {
+  const std::string name = TableName(type);
   for (const KnownStream& k : KnownStreams()) {
-    if (k.type == type && k.sensor == sensor) return &k;
+    if (k.type == name && k.sensor == sensor) return &k;
   }
   return nullptr;
 }
@@ -134,9 +132,7 @@ LogStreamInfo Describe(const internal::DecodedStream& s) {
   if (s.messages >= 2 && s.last_us > s.first_us) {
     info.rate_hz = static_cast<double>(s.messages - 1) / (info.last_s - info.first_s);
   }
-  for (const KnownStream& k : KnownStreams()) {
-    if (k.type == s.type) info.sensors.emplace_back(k.sensor);
-  }
+  for (std::string_view sensor : KnownSensors(s.type)) info.sensors.emplace_back(sensor);
   return info;
 }
 

@@ -16,22 +16,6 @@ std::optional<TimeUnit> TimeUnitFromString(std::string_view text) {
   return FromName<TimeUnit>(text);
 }
 
-double SecondsPer(TimeUnit unit) {
-  switch (unit) {
-    case TimeUnit::kAuto:
-      return 0;
-    case TimeUnit::kSeconds:
-      return 1;
-    case TimeUnit::kMilliseconds:
-      return 1e-3;
-    case TimeUnit::kMicroseconds:
-      return 1e-6;
-    case TimeUnit::kNanoseconds:
-      break;
-  }
-  return 1e-9;
-}
-
 double UnitsPerSecond(TimeUnit unit) {
   switch (unit) {
     case TimeUnit::kAuto:
@@ -46,6 +30,11 @@ double UnitsPerSecond(TimeUnit unit) {
       break;
   }
   return 1e9;
+}
+
+double SecondsPer(TimeUnit unit) {
+  // 1 / 1e3 is the double nearest 1e-3 (a division is correctly rounded): the same constants.
+  return unit == TimeUnit::kAuto ? 0 : 1 / UnitsPerSecond(unit);
 }
 
 std::vector<std::size_t> SegmentStarts(const std::vector<TimeGap>& gaps) {

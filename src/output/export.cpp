@@ -283,13 +283,9 @@ std::string Header(const LoadedCalibration& cal) {
 // not know at all (fields the user named). A provenance edited by hand (a gyroscope's record
 // removed, leaving the accelerometer's of the same file) is not taken for another sensor's.
 bool CanHold(const SourceStream& stream, std::string_view sensor) {
-  bool known = false;
-  for (const KnownStream& k : KnownStreams()) {
-    if (k.type != stream.type && k.type != stream.topic) continue;
-    if (k.sensor == sensor) return true;
-    known = true;
-  }
-  return !known;
+  std::vector<std::string_view> sensors = KnownSensors(stream.type);
+  if (sensors.empty()) sensors = KnownSensors(stream.topic);  // PX4's and ArduPilot's: the topic
+  return sensors.empty() || std::find(sensors.begin(), sensors.end(), sensor) != sensors.end();
 }
 
 // The binary log's stream the accelerometer was calibrated from, as the provenance records it.

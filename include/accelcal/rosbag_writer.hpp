@@ -57,7 +57,7 @@ class RosBagImuWriter {
   std::string index_;    // its index entries: (time, offset) of each message
   ChunkInfo chunk_;      // the chunk being filled
   std::vector<ChunkInfo> chunks_;
-  std::uint64_t position_ = 0;  // bytes handed out so far
+  std::uint64_t position_;  // bytes handed out so far (the header's from the start)
   std::uint64_t index_position_ = 0;
   std::uint32_t sequence_ = 0;
   bool connected_ = false, finished_ = false;

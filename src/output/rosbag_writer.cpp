@@ -82,12 +82,9 @@ std::string ConnectionRecord(const std::string& topic) {
 }  // namespace
 
 RosBagImuWriter::RosBagImuWriter(RosBagCompression compression, std::string topic)
-    : compression_(compression), topic_(std::move(topic)) {}
+    : compression_(compression), topic_(std::move(topic)), position_(Header().size()) {}
 
-std::string RosBagImuWriter::Header() const {
-  std::string out = kVersion + BagHeader(0, 0, 0);
-  return out;
-}
+std::string RosBagImuWriter::Header() const { return kVersion + BagHeader(0, 0, 0); }
 
 std::string RosBagImuWriter::Sample(std::uint64_t time_ns, const Vec3& accel, const Vec3& gyro) {
   return Message(time_ns, accel, &gyro);
@@ -99,7 +96,6 @@ std::string RosBagImuWriter::Sample(std::uint64_t time_ns, const Vec3& accel) {
 
 std::string RosBagImuWriter::Message(std::uint64_t time_ns, const Vec3& accel, const Vec3* gyro) {
   if (finished_) throw std::logic_error("RosBagImuWriter: a sample after Finish");
-  if (position_ == 0) position_ = Header().size();
   const std::string message = internal::Ros1ImuMessage(sequence_, time_ns, accel, gyro);
   if (records_.empty()) chunk_ = ChunkInfo{position_, time_ns, time_ns, 0};
   if (!connected_) {  // the connection's record precedes its first message, in its chunk
@@ -149,7 +145,6 @@ std::string RosBagImuWriter::Flush() {
 
 std::string RosBagImuWriter::Finish() {
   if (finished_) throw std::logic_error("RosBagImuWriter: Finish twice");
-  if (position_ == 0) position_ = Header().size();
   std::string out = Flush();
   finished_ = true;
   index_position_ = position_;

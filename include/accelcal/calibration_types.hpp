@@ -12,6 +12,7 @@
 
 #include <Eigen/Core>
 
+#include "accelcal/bias_drift.hpp"
 #include "accelcal/frame.hpp"
 #include "accelcal/gravity.hpp"
 #include "accelcal/model.hpp"
@@ -227,6 +228,17 @@ struct CalibrationOptions {
   OutlierOptions outliers;
   /// Maximum-likelihood methods only.
   Estimator estimator = Estimator::kMaximumLikelihood;
+  /// The bias as a function of time within the session (bias_drift.hpp): constant by default.
+  /// Any other model is fitted jointly with the rest by the joint method (kJoint) and the
+  /// maximum-likelihood estimator, and needs position_times_s.
+  BiasModel bias_model;
+  /// The time of each reading [s], the middle of its still interval: one per reading, required
+  /// when bias_model is not constant (and then used only then).
+  std::vector<double> position_times_s;
+  /// The drift's basis; empty: BiasTimeBasis::For(bias_model, position_times_s). A fit of some
+  /// of the positions (screening, held-out) is given the full set's, so that its knots and
+  /// reference time are the same.
+  std::optional<BiasTimeBasis> bias_basis;
 
   /// Estimator::kBiasCorrected: refit until no reading's shift changes by more than
   /// `tolerance` times its noise along the normal (then the parameters are settled far below
@@ -326,8 +338,14 @@ struct CalibrationResult {
   /// With reading_sigmas: R = sqrt(χ² / (m − P)), 1 when the per-position noise explains the
   /// scatter of the positions; NaN otherwise. The covariance is multiplied by R² when R > 1.
   double scatter_ratio = std::nan("");
-  int degrees_of_freedom = 0;  ///< m − P
+  int degrees_of_freedom = 0;  ///< m − P (m − P − 3J with a drifting bias)
   Summary summary;
+  /// With a bias model that is not constant (CalibrationOptions::bias_model): the fitted drift.
+  /// `params.bias` is then the bias at its reference time, `residuals` are p_k − μ_k − D φ(t_k),
+  /// `covariance` is the model's block of the drift's joint covariance (its uncertainty includes
+  /// the drift's), and DriftOffsets gives what to take from each reading before the model is
+  /// inverted (|f_k| − g).
+  std::optional<BiasDrift> drift;
   /// With CalibrationOptions::cross_validate: the RMS of |f_k| − g with each position k corrected
   /// by a fit without it (paper 000 verifies on held-out positions), and the per-position errors.
   /// Absent when some fit without a position fails; crossval_note then says which and why.
@@ -352,6 +370,9 @@ struct CalibrationResult {
     return false;
   }
   int positions_used() const;
+  /// D φ(t_k) of each reading [raw] (zeros for a constant bias): the reading less this is the
+  /// reading the model of `params` describes.
+  std::vector<Vec3> DriftOffsets(std::size_t readings) const;
   /// The entries of a per-position list (one per reading) at the positions in the fit, in order.
   std::vector<double> InFit(const std::vector<double>& per_position) const;
 };
@@ -359,6 +380,11 @@ struct CalibrationResult {
 /// |f_k| − g for each reading under `params` (NaN where the model cannot be inverted).
 std::vector<double> GravityNormErrors(const ModelParameters& params,
                                       const std::vector<Vec3>& readings, double gravity);
+/// |f_k| − g for each reading under a result: its parameters, each reading less its drift offset
+/// when the result has a drifting bias (CalibrationResult::DriftOffsets; `readings` are then the
+/// fit's, one per position time).
+std::vector<double> GravityNormErrors(const CalibrationResult& result,
+                                      const std::vector<Vec3>& readings);
 /// RMS of |p_k| − g with the raw readings taken as specific force (no calibration), or
 /// std::nullopt when the readings are evidently not in the specific-force unit (median |p_k| more
 /// than 20 % away from g, e.g. raw counts).

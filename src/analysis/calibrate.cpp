@@ -16,6 +16,10 @@ void CrossValidate(const std::vector<Vec3>& readings, const CalibrationOptions& 
                    CalibrationResult* result) {
   if (auto why = options.Validate()) throw std::invalid_argument(*why);
   const CalibrationResult& full = *result;
+  if (full.drift) {  // the expansion is the constant bias's: refits
+    internal::CrossValidateByRefits(readings, options, result);
+    return;
+  }
   internal::HeldOutErrors(
       readings, options,
       [&](std::size_t k) { return internal::RefitWithout(readings, options, full, k); }, result);

@@ -119,7 +119,7 @@ Comparison CompareMethods(const std::vector<Vec3>& all_readings, const CompareOp
     std::vector<double> errors;
     if (!c.error) {
       // The result over all positions, as Calibrate gives it: the screened-out ones marked.
-      internal::SpreadOverAllPositions(all_readings, comparison.positions_used, &c.result);
+      internal::SpreadOverAllPositions(all_readings, comparison.positions_used, {}, &c.result);
       c.result.outliers = comparison.outliers;
       c.result.outlier_note = comparison.outlier_note;
       errors = GravityNormErrors(c.result.params, readings, o.gravity);

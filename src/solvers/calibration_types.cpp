@@ -37,6 +37,19 @@ std::optional<OutlierPolicy> OutlierPolicyFromString(std::string_view text) {
   return FromName<OutlierPolicy>(text);
 }
 
+std::vector<Vec3> CalibrationResult::DriftOffsets(std::size_t readings) const {
+  std::vector<Vec3> offsets(readings, Vec3::Zero());
+  if (!drift) return offsets;
+  if (drift->times_s.size() != readings) {
+    throw std::invalid_argument("the drift has " + std::to_string(drift->times_s.size()) +
+                                " position times for " + std::to_string(readings) + " readings");
+  }
+  for (std::size_t k = 0; k < readings; ++k) {
+    offsets[k] = drift->Offset(drift->times_s[k]);
+  }
+  return offsets;
+}
+
 int CalibrationResult::positions_used() const {
   int used = static_cast<int>(directions.size());
   for (const OutlierFinding& o : outliers) used -= o.excluded ? 1 : 0;
@@ -106,6 +119,23 @@ std::optional<std::string> CalibrationOptions::Validate() const {
       model != ModelKind::kLinear) {
     return "the " + std::string(ToString(method)) + " method fits the linear model only";
   }
+  if (!bias_model.constant()) {
+    const std::string name = ToString(bias_model);
+    if (bias_model.kind == BiasModelKind::kSpline &&
+        (bias_model.knots < 2 || bias_model.knots > kMaxBiasKnots)) {
+      return "a spline bias has 2 to " + std::to_string(kMaxBiasKnots) + " knots";
+    }
+    if (method != SolverMethod::kJoint) {
+      return "a " + name + " bias is fitted by the joint method only, not " +
+             std::string(ToString(method));
+    }
+    if (estimator != Estimator::kMaximumLikelihood) {
+      return "a " + name + " bias is fitted by maximum likelihood only";
+    }
+  }
+  if (bias_basis && bias_basis->model != bias_model) {
+    return "bias_basis is the basis of another bias model";
+  }
   return std::nullopt;
 }
 
@@ -132,6 +162,15 @@ std::vector<double> GravityNormErrors(const ModelParameters& params,
     errors.push_back(f ? f->norm() - gravity : std::nan(""));
   }
   return errors;
+}
+
+std::vector<double> GravityNormErrors(const CalibrationResult& result,
+                                      const std::vector<Vec3>& readings) {
+  if (!result.drift) return GravityNormErrors(result.params, readings, result.gravity);
+  const std::vector<Vec3> offsets = result.DriftOffsets(readings.size());
+  std::vector<Vec3> corrected(readings.size());
+  for (std::size_t k = 0; k < readings.size(); ++k) corrected[k] = readings[k] - offsets[k];
+  return GravityNormErrors(result.params, corrected, result.gravity);
 }
 
 std::optional<double> GravityNormRmsUncalibrated(const std::vector<Vec3>& readings,

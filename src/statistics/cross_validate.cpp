@@ -23,6 +23,7 @@ CalibrationOptions HeldOutOptions(const CalibrationOptions& options,
     held_out.initialization = Initialization::kGiven;
     held_out.initial_params = result.params;
   }
+  if (result.drift) held_out.bias_basis = result.drift->basis;  // the same knots and t_ref
   return held_out;
 }
 
@@ -31,11 +32,15 @@ CalibrationOptions HeldOutOptions(const CalibrationOptions& options,
 // Position k's held-out error from a fit of the other positions in the fit, or why there is none.
 HeldOutRefit RefitWithout(const std::vector<Vec3>& readings, const CalibrationOptions& options,
                           const CalibrationResult& result, std::size_t k) {
-  const CalibrationOptions held_out = HeldOutOptions(options, result);
+  CalibrationOptions held_out = HeldOutOptions(options, result);
+  held_out.position_times_s.clear();
   std::vector<Vec3> subset;
   subset.reserve(readings.size());
   for (std::size_t j = 0; j < readings.size(); ++j) {
-    if (j != k && !result.excluded(j)) subset.push_back(readings[j]);
+    if (j != k && !result.excluded(j)) {
+      subset.push_back(readings[j]);
+      if (result.drift) held_out.position_times_s.push_back(options.position_times_s[j]);
+    }
   }
   const std::string without = "without position " + std::to_string(k + 1) + ": ";
   CalibrationResult fit;
@@ -47,7 +52,8 @@ HeldOutRefit RefitWithout(const std::vector<Vec3>& readings, const CalibrationOp
   if (!fit.summary.converged()) {
     return {0.0, without + "did not converge: " + fit.summary.termination_message};
   }
-  return HeldOutErrorUnder(fit.params, readings[k], options.gravity, k);
+  const Vec3 offset = fit.drift ? fit.drift->Offset(options.position_times_s[k]) : Vec3::Zero();
+  return HeldOutErrorUnder(fit.params, readings[k] - offset, options.gravity, k);
 }
 
 HeldOutRefit HeldOutErrorUnder(const ModelParameters& without, const Vec3& reading, double gravity,
@@ -76,7 +82,9 @@ void LeaveOneOut(const std::vector<Vec3>& readings, double gravity,
   std::vector<double> errors;
   for (std::size_t k = 0; k < readings.size(); ++k) {
     if (result->excluded(k)) {
-      errors.push_back(GravityNormErrors(result->params, {readings[k]}, gravity)[0]);
+      errors.push_back(result->drift
+                           ? GravityNormErrors(*result, readings)[k]
+                           : GravityNormErrors(result->params, {readings[k]}, gravity)[0]);
       continue;
     }
     const HeldOutRefit refit = refit_without(k);

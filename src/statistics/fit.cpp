@@ -8,33 +8,94 @@
 #include "accelcal/error.hpp"
 #include "accelcal/frame.hpp"
 #include "core/text_format.hpp"
+#include "solvers/drift_fit.hpp"
 #include "solvers/solve.hpp"
 
 namespace accelcal::internal {
 
 namespace {
 
-// The sandwich covariance with per-position noise, inflated by the scatter ratio (calibrate.hpp).
-internal::Mat12 SampleNoiseCovariance(const Problem& problem, const internal::SolverOutput& out,
-                                      const internal::InformationRows& rows,
-                                      const internal::Mat12& S_inverse,
+// The sandwich covariance with per-position noise, inflated by the scatter ratio (calibrate.hpp):
+// the rows u_k of S = Σ u_k u_kᵀ, the unit normals n_k, the residuals r_k and S⁻¹.
+template <typename RowsU, typename InverseS>
+Eigen::MatrixXd SampleNoiseCovariance(const RowsU& U, const std::vector<Vec3>& normals,
+                                      const std::vector<Vec3>& residuals, const InverseS& S_inverse,
                                       const std::vector<Vec3>& sigmas, CalibrationResult* result) {
-  const int m = problem.positions();
+  const auto m = static_cast<Eigen::Index>(normals.size());
   Eigen::VectorXd variance(m);
   double chi2 = 0;
-  for (int k = 0; k < m; ++k) {
+  for (Eigen::Index k = 0; k < m; ++k) {
     const auto i = static_cast<std::size_t>(k);
-    const Vec3& n = rows.normals[i];
+    const Vec3& n = normals[i];
     variance(k) = n.cwiseAbs2().dot(sigmas[i].cwiseAbs2());
-    const Vec3 residual =
-        problem.readings[i] - PredictRaw(out.params, Vec3(problem.gravity * out.dirs[i]));
-    chi2 += std::pow(n.dot(residual), 2) / variance(k);
+    chi2 += std::pow(n.dot(residuals[i]), 2) / variance(k);
   }
-  const internal::Mat12 meat = rows.U.transpose() * variance.asDiagonal() * rows.U;
+  const Eigen::MatrixXd meat = U.transpose() * variance.asDiagonal() * U;
   const double ratio2 = chi2 / result->degrees_of_freedom;
   result->noise_source = "samples";
   result->scatter_ratio = std::sqrt(ratio2);
   return std::max(1.0, ratio2) * S_inverse * meat * S_inverse;
+}
+
+// The bias drift's fit from the constant-bias solution `out` (drift_fit.hpp) and its statistics:
+// fills `fit` (parameters, residuals, covariance, screening) and returns its summary.
+Summary FitDrift(const Problem& problem, const std::vector<Vec3>& readings,
+                 const CalibrationOptions& options, const SolverOutput& out, Fit* fit) {
+  const BiasTimeBasis basis =
+      options.bias_basis ? *options.bias_basis
+                         : BiasTimeBasis::For(options.bias_model, options.position_times_s);
+  const DriftFit drift =
+      SolveDrift(problem, basis, options.position_times_s, out.params, out.dirs, options.joint);
+  if (drift.summary.rank_deficient) {
+    throw DataError(internal::Format(
+        "the positions' times do not determine a %s bias (reciprocal condition %.2g): spread the "
+        "orientations over the session, each visited early and late",
+        ToString(options.bias_model).c_str(), drift.summary.reciprocal_condition));
+  }
+  CalibrationResult& result = fit->result;
+  const int P = NumParameters(options.model), J = basis.size();
+  const int n = P + 3 * J;
+  result.params = drift.params;
+  result.directions = drift.dirs;
+  result.residuals = DriftResiduals(Problem{readings, problem.gravity, problem.model}, basis,
+                                    options.position_times_s, drift.params, drift.D, drift.dirs);
+  result.degrees_of_freedom = static_cast<int>(readings.size()) - n;
+  BiasDrift& d = result.drift.emplace();
+  d.basis = basis;
+  d.D = drift.D;
+  d.times_s = options.position_times_s;
+
+  Summary summary = out.summary;
+  summary.iterations += drift.summary.iterations;
+  summary.termination = drift.summary.termination;
+  summary.termination_message =
+      ToString(options.bias_model) + " bias: " + drift.summary.termination_message;
+  summary.final_cost = drift.summary.final_cost;
+  const bool invertible = drift.S_inverse.rows() == n;
+  if (options.outliers.policy != OutlierPolicy::kOff && summary.converged() && invertible) {
+    std::vector<double> leverages(readings.size());
+    for (std::size_t k = 0; k < readings.size(); ++k) {
+      const Eigen::VectorXd u = drift.U.row(static_cast<Eigen::Index>(k)).transpose();
+      leverages[k] = u.dot(drift.S_inverse * u);
+    }
+    fit->screening =
+        ScreenWithLeverages(drift.normals, leverages, n,
+                            "the " + std::string(ToString(options.model)) + " model with a " +
+                                ToString(options.bias_model) + " bias",
+                            result.residuals, SignalAmplitude(drift.params, options.gravity),
+                            options.outliers.false_alarm_probability);
+  }
+  if (result.degrees_of_freedom > 0 && invertible) {
+    const double sigma2 = summary.final_cost / result.degrees_of_freedom;
+    result.residual_sigma = std::sqrt(sigma2);
+    d.covariance = sigma2 * drift.S_inverse;
+    if (!options.reading_sigmas.empty()) {
+      d.covariance = SampleNoiseCovariance(drift.U, drift.normals, result.residuals,
+                                           drift.S_inverse, options.reading_sigmas, &result);
+    }
+    result.covariance = d.covariance.topLeftCorner(P, P);
+  }
+  return summary;
 }
 
 // The fit in the x-first gauge; `frame` only names parameters in messages (the z-first fit runs
@@ -72,6 +133,7 @@ Fit CalibrateXFirst(const std::vector<Vec3>& readings, const CalibrationOptions&
   }
   const Problem problem{fit_readings.empty() ? readings : fit_readings, options.gravity,
                         options.model};
+  const bool drifting = !options.bias_model.constant() && out.summary.converged();
   out.summary.initialization = start.used;
   out.summary.initialization_note = start.note;
 
@@ -104,6 +166,12 @@ Fit CalibrateXFirst(const std::vector<Vec3>& readings, const CalibrationOptions&
     result.residuals.push_back(readings[k] -
                                PredictRaw(out.params, Vec3(options.gravity * out.dirs[k])));
   }
+  if (drifting) {
+    result.summary = FitDrift(problem, readings, options, out, &fit);
+    result.summary.time_s =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    return fit;
+  }
   const int P = NumParameters(options.model);
   result.degrees_of_freedom = static_cast<int>(readings.size()) - P;
   const bool screen = options.outliers.policy != OutlierPolicy::kOff && out.summary.converged();
@@ -122,8 +190,14 @@ Fit CalibrateXFirst(const std::vector<Vec3>& readings, const CalibrationOptions&
     result.residual_sigma = std::sqrt(sigma2);
     internal::Mat12 covariance = sigma2 * inverse;
     if (!options.reading_sigmas.empty()) {
-      covariance =
-          SampleNoiseCovariance(problem, out, rows, inverse, options.reading_sigmas, &result);
+      std::vector<Vec3> residuals;
+      residuals.reserve(problem.readings.size());
+      for (std::size_t k = 0; k < problem.readings.size(); ++k) {
+        residuals.push_back(problem.readings[k] -
+                            PredictRaw(out.params, Vec3(options.gravity * out.dirs[k])));
+      }
+      covariance = SampleNoiseCovariance(rows.U, rows.normals, residuals, inverse,
+                                         options.reading_sigmas, &result);
     }
     const std::vector<int>& cols = ActiveColumns(options.model);
     result.covariance.resize(P, P);
@@ -142,6 +216,12 @@ Fit CalibrateXFirst(const std::vector<Vec3>& readings, const CalibrationOptions&
 // The fit in the requested frame (frame.hpp): z-first is the x-first fit of the mirrored readings
 // (the outlier statistics do not depend on the gauge).
 Fit CalibrateInFrame(const std::vector<Vec3>& readings, const CalibrationOptions& options) {
+  if (!options.bias_model.constant() && options.position_times_s.size() != readings.size()) {
+    throw std::invalid_argument("a " + ToString(options.bias_model) + " bias needs one time per " +
+                                "reading: position_times_s has " +
+                                std::to_string(options.position_times_s.size()) + " for " +
+                                std::to_string(readings.size()) + " readings");
+  }
   if (options.frame == Frame::kXFirst) return CalibrateXFirst(readings, options, Frame::kXFirst);
   std::vector<Vec3> mirrored;
   mirrored.reserve(readings.size());
@@ -158,6 +238,24 @@ Fit CalibrateInFrame(const std::vector<Vec3>& readings, const CalibrationOptions
   if (result.covariance.size() > 0) {
     const Eigen::VectorXd d = MirrorSigns(options.model);
     result.covariance = d.asDiagonal() * result.covariance * d.asDiagonal();
+  }
+  if (result.drift) {
+    // D = P D_mirrored row by row (P v = (v_z, −v_y, v_x)), and its entries in the joint
+    // covariance likewise.
+    BiasDrift& drift = *result.drift;
+    const Eigen::Index J = drift.D.cols(), P = NumParameters(options.model);
+    const Eigen::Matrix<double, 3, Eigen::Dynamic> D = drift.D;
+    const int from[3] = {2, 1, 0};
+    const double sign[3] = {1.0, -1.0, 1.0};
+    for (int i = 0; i < 3; ++i) drift.D.row(i) = sign[i] * D.row(from[i]);
+    if (drift.covariance.size() > 0) {
+      Eigen::MatrixXd M = Eigen::MatrixXd::Zero(P + 3 * J, P + 3 * J);
+      M.topLeftCorner(P, P) = MirrorSigns(options.model).asDiagonal();
+      for (int i = 0; i < 3; ++i) {
+        for (Eigen::Index j = 0; j < J; ++j) M(P + i * J + j, P + from[i] * J + j) = sign[i];
+      }
+      drift.covariance = M * drift.covariance * M.transpose();
+    }
   }
   return fit;
 }
@@ -203,8 +301,26 @@ void CheckReadingSigmas(const std::vector<Vec3>& sigmas, std::size_t readings) {
   }
 }
 
+CalibrationOptions OptionsForPositions(const CalibrationOptions& options,
+                                       const std::vector<int>& keep) {
+  CalibrationOptions subset = options;
+  if (!options.reading_sigmas.empty()) {
+    subset.reading_sigmas.clear();
+    for (int k : keep) subset.reading_sigmas.push_back(options.reading_sigmas[std::size_t(k)]);
+  }
+  if (!options.bias_model.constant()) {
+    if (!options.bias_basis) {
+      subset.bias_basis = BiasTimeBasis::For(options.bias_model, options.position_times_s);
+    }
+    subset.position_times_s.clear();
+    for (int k : keep) subset.position_times_s.push_back(options.position_times_s[std::size_t(k)]);
+  }
+  return subset;
+}
+
 void SpreadOverAllPositions(const std::vector<Vec3>& readings, const std::vector<int>& keep,
-                            CalibrationResult* fit) {
+                            const std::vector<double>& times_s, CalibrationResult* fit) {
+  if (fit->drift) fit->drift->times_s = times_s;
   std::vector<Vec3> directions(readings.size()), residuals(readings.size());
   std::vector<bool> kept(readings.size(), false);
   for (std::size_t i = 0; i < keep.size(); ++i) {
@@ -215,9 +331,10 @@ void SpreadOverAllPositions(const std::vector<Vec3>& readings, const std::vector
   }
   for (std::size_t k = 0; k < readings.size(); ++k) {
     if (kept[k]) continue;
-    const std::optional<Vec3> f = SpecificForce(fit->params, readings[k]);
+    const Vec3 reading = readings[k] - (fit->drift ? fit->drift->Offset(times_s[k]) : Vec3::Zero());
+    const std::optional<Vec3> f = SpecificForce(fit->params, reading);
     directions[k] = f && f->norm() > 0 ? Vec3(f->normalized()) : Vec3::UnitZ();
-    residuals[k] = readings[k] - PredictRaw(fit->params, Vec3(fit->gravity * directions[k]));
+    residuals[k] = reading - PredictRaw(fit->params, Vec3(fit->gravity * directions[k]));
   }
   fit->directions = std::move(directions);
   fit->residuals = std::move(residuals);

@@ -27,9 +27,15 @@ void CheckReadingSigmas(const std::vector<Vec3>& sigmas, std::size_t readings);
 /// rows, a file concatenated with itself): the degrees of freedom count distinct positions.
 void CheckDistinctReadings(const std::vector<Vec3>& readings);
 
+/// `options` for the readings at indices `keep` only: their reading_sigmas and position times, and
+/// the bias drift's basis of all the positions (the same knots and reference time).
+CalibrationOptions OptionsForPositions(const CalibrationOptions& options,
+                                       const std::vector<int>& keep);
+
 /// `fit`, of the readings at indices `keep`, spread back over all `readings`: a left-out position
-/// gets its direction and residual under the fit.
+/// gets its direction and residual under the fit. `times_s`: every reading's time, for a fit with
+/// a drifting bias (its drift then lists them all).
 void SpreadOverAllPositions(const std::vector<Vec3>& readings, const std::vector<int>& keep,
-                            CalibrationResult* fit);
+                            const std::vector<double>& times_s, CalibrationResult* fit);
 
 }  // namespace accelcal::internal

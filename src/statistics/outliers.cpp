@@ -52,20 +52,37 @@ std::vector<double> Leverages(const InformationRows& rows, const Mat12& S_invers
 Screening ScreenPositions(const InformationRows& rows, const Mat12& S_inverse, ModelKind model,
                           const std::vector<Vec3>& residuals, double signal,
                           double false_alarm_probability) {
-  Screening out;
   const int m = static_cast<int>(residuals.size());
   const int P = NumParameters(model);
+  const std::string what = "the " + std::string(ToString(model)) + " model";
+  if (m - P < 2) {
+    return ScreenWithLeverages(rows.normals, {}, P, what, residuals, signal,
+                               false_alarm_probability);
+  }
+  const std::vector<int>& cols = ActiveColumns(model);
+  return ScreenWithLeverages(
+      rows.normals,
+      cols.size() == 9 ? Leverages<9>(rows, S_inverse, cols) : Leverages<12>(rows, S_inverse, cols),
+      P, what, residuals, signal, false_alarm_probability);
+}
+
+Screening ScreenWithLeverages(const std::vector<Vec3>& normals,
+                              const std::vector<double>& leverages, int P, const std::string& what,
+                              const std::vector<Vec3>& residuals, double signal,
+                              double false_alarm_probability) {
+  Screening out;
+  const int m = static_cast<int>(residuals.size());
   const int nu = m - P;
   if (nu < 2) {
-    out.note = "outlier screening needs at least " + std::to_string(P + 2) + " positions for the " +
-               std::string(ToString(model)) + " model, got " + std::to_string(m);
+    out.note = "outlier screening needs at least " + std::to_string(P + 2) + " positions for " +
+               what + ", got " + std::to_string(m);
     return out;
   }
   out.e.resize(static_cast<std::size_t>(m));
   double sum2 = 0;
   for (int k = 0; k < m; ++k) {
     const auto i = static_cast<std::size_t>(k);
-    out.e[i] = residuals[i].dot(rows.normals[i]);
+    out.e[i] = residuals[i].dot(normals[i]);
     sum2 += out.e[i] * out.e[i];
   }
   const double s2 = sum2 / nu;
@@ -78,9 +95,6 @@ Screening ScreenPositions(const InformationRows& rows, const Mat12& S_inverse, M
   const double round_off = 64 * std::numeric_limits<double>::epsilon() * signal;
   if (!(s2 > round_off * round_off)) return out;
 
-  const std::vector<int>& cols = ActiveColumns(model);
-  const std::vector<double> leverages =
-      cols.size() == 9 ? Leverages<9>(rows, S_inverse, cols) : Leverages<12>(rows, S_inverse, cols);
   std::vector<int> untested;
   std::vector<double> scaled;  // |e_k| / √(1 − h_k), for the robust scale
   for (int k = 0; k < m; ++k) {
@@ -124,12 +138,8 @@ namespace {
 // The readings (and their sigmas) of the positions in `keep`.
 CalibrationOptions SubsetOptions(const CalibrationOptions& options, const std::vector<int>& keep,
                                  const ModelParameters& start) {
-  CalibrationOptions subset = options;
+  CalibrationOptions subset = OptionsForPositions(options, keep);
   subset.cross_validate = false;
-  if (!options.reading_sigmas.empty()) {
-    subset.reading_sigmas.clear();
-    for (int k : keep) subset.reading_sigmas.push_back(options.reading_sigmas[std::size_t(k)]);
-  }
   if (options.method != SolverMethod::kEllipsoid) {
     subset.initialization = Initialization::kGiven;
     subset.initial_params = start;
@@ -209,7 +219,8 @@ CalibrationResult CalibrateScreened(const std::vector<Vec3>& readings,
   const std::size_t excluded = outcome.excluded;
   CalibrationResult result = excluded > 0 ? std::move(fits[excluded - 1]) : std::move(full);
   if (excluded > 0) {
-    internal::SpreadOverAllPositions(readings, keeps[excluded - 1], &result);
+    internal::SpreadOverAllPositions(readings, keeps[excluded - 1], options.position_times_s,
+                                     &result);
     // The summary tells the whole solve: where it started, every fit's iterations and time.
     Summary& summary = result.summary;
     summary.initialization = full.summary.initialization;

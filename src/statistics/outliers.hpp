@@ -38,6 +38,13 @@ Screening ScreenPositions(const InformationRows& rows, const Mat12& S_inverse, M
                           const std::vector<Vec3>& residuals, double signal,
                           double false_alarm_probability);
 
+/// The same test on any fit whose positions' information rows give the leverages h_k = u_kᵀ S⁻¹ u_k
+/// (P parameters in all; `what` names the model in the note when there are too few positions).
+Screening ScreenWithLeverages(const std::vector<Vec3>& normals,
+                              const std::vector<double>& leverages, int P, const std::string& what,
+                              const std::vector<Vec3>& residuals, double signal,
+                              double false_alarm_probability);
+
 /// Calibrate's fit with the screening of OutlierOptions (Rosner's generalised ESD, calibrate.cpp
 /// documents the policy): without cross-validation.
 CalibrationResult CalibrateScreened(const std::vector<Vec3>& readings,

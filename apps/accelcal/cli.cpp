@@ -188,6 +188,12 @@ int accelcal::cli::RunCommandLine(int argc, char** argv) {
                      "better)")
         ->capture_default_str();
     calibrate
+        ->add_option("--bias-model", cal.bias_model,
+                     "the bias over the session: constant, linear (a drift), spline:K (K knots "
+                     "over the session), or auto (the one that predicts held-out positions "
+                     "best); each position at the middle of its still interval")
+        ->capture_default_str();
+    calibrate
         ->add_option("--method", cal.method,
                      "joint, two-step, newton-lagrange, modulus, modulus-norm or ellipsoid")
         ->capture_default_str();
@@ -643,7 +649,7 @@ int accelcal::cli::RunCommandLine(int argc, char** argv) {
     if (*calibrate) {
       data_subject = cal.input.path;
       for (const char* name :
-           {"--method", "--init", "--frame", "--estimator", "--max-iterations"}) {
+           {"--method", "--init", "--frame", "--estimator", "--max-iterations", "--bias-model"}) {
         if (calibrate->count(name) > 0) cal.gravity_only_options.emplace_back(name);
       }
       CheckGyroFlags(*calibrate, cal.gyro, cal.gyro_columns,

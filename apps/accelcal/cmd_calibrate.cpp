@@ -75,6 +75,36 @@ void PrintStrongestCorrelations(const Eigen::MatrixXd& covariance,
   Say("\n");
 }
 
+// The fitted bias drift (bias_drift.hpp): its basis and D ± 1σ per axis.
+void PrintDrift(const BiasDrift& drift, ModelKind model, const std::string& raw_unit) {
+  const BiasTimeBasis& basis = drift.basis;
+  const Eigen::Index J = drift.D.cols();
+  const Eigen::Index P = NumParameters(model);
+  const bool have_std = drift.covariance.rows() == P + 3 * J;
+  if (basis.model.kind == BiasModelKind::kLinear) {
+    Say("\nbias drift linear: b(t) = b + D (t - t_ref), t_ref %.6g s (the positions' mean time), D "
+        "in %s per minute%s\n",
+        basis.t_ref_s, raw_unit.c_str(), have_std ? " +- 1 sigma" : "");
+  } else {
+    std::string knots;
+    for (double t : basis.knots_s) knots += Format(" %.6g", t);
+    Say("\nbias drift %s: b(t) linear between knots at%s s, held outside; t_ref %.6g s (the "
+        "positions' mean time); D_j = bias at knot j less bias at the first knot, in %s%s\n",
+        ToString(basis.model).c_str(), knots.c_str(), basis.t_ref_s, raw_unit.c_str(),
+        have_std ? " +- 1 sigma" : "");
+  }
+  const char* axes = "xyz";
+  for (int i = 0; i < 3; ++i) {
+    std::string row;
+    for (Eigen::Index j = 0; j < J; ++j) {
+      const Eigen::Index index = P + i * J + j;
+      row += Format(" %14.6g", drift.D(i, j));
+      if (have_std) row += Format(" +- %-9.2g", std::sqrt(drift.covariance(index, index)));
+    }
+    Say("  D_%c %s\n", axes[i], row.c_str());
+  }
+}
+
 void PrintCalibration(const CalibrationResult& r, const std::vector<Position>& positions,
                       const std::vector<std::string>& position_file, const Gravity& g,
                       const std::string& raw_unit) {
@@ -146,8 +176,9 @@ void PrintCalibration(const CalibrationResult& r, const std::vector<Position>& p
     Say("  squared coeff.   %s  g/g^2\n",
         pm(e.k2_g_per_g2, sd_of(&EngineeringStd::k2_g_per_g2), 1.0, "%.4g").c_str());
   }
+  if (r.drift) PrintDrift(*r.drift, r.model, raw_unit);
   const std::vector<Vec3> means = Means(positions);
-  const std::vector<double> errors = GravityNormErrors(r.params, means, r.gravity);
+  const std::vector<double> errors = GravityNormErrors(r, means);
   Say("\npositions (|f|-g in %s, residual p - mu in %s)\n", u, raw_unit.c_str());
   Say("  %3s %8s %42s %12s %36s\n", "#", "samples", "mean", "|f|-g", "residual");
   for (std::size_t k = 0; k < positions.size(); ++k) {
@@ -197,6 +228,9 @@ const char* OptionHint(const Finding& f) {
                                                                  : " (--units m/s2)";
   }
   if (f.code == "outlier_limit") return " (--max-outliers)";
+  if (f.code == "drifting_rest" && f.severity == Severity::kWarning) {
+    return " (--bias-model auto fits a bias that follows time)";
+  }
   if (f.code == "time_unit") return " (--time-unit)";
   if (f.code == "positions_like_samples") return " (--input-kind raw)";
   return "";
@@ -409,10 +443,31 @@ std::string RawUnitLabel(const CalibrateArgs& args, const LoadedInput& in) {
   return unit.empty() ? args.raw_units : unit;
 }
 
+// The middle time of each position's still interval [s], or why the positions have none: a
+// positions file holds means only, and the clocks of several files are not one time.
+std::vector<double> PositionTimes(const LoadedInput& in, std::string* why) {
+  if (in.files.size() > 1) {
+    *why = "the positions come from " + std::to_string(in.files.size()) +
+           " files, whose times are not one clock";
+    return {};
+  }
+  std::vector<double> times;
+  for (const Position& p : in.positions) {
+    if (!p.interval) {
+      *why = in.files.front().path +
+             " holds the positions' means without their times (a raw log gives them)";
+      return {};
+    }
+    times.push_back(0.5 * (p.interval->t_begin_s + p.interval->t_end_s));
+  }
+  return times;
+}
+
 int WriteCalibration(const CalibrateArgs& given, const LoadedInput& in, const Gravity& g,
                      const CalibrationResult& result, const std::vector<Vec3>& mean_sigmas,
-                     const ModelSelection* selection, const std::string& input_note,
-                     const OrientationFile* orientations = nullptr, const GyroRun* gyro = nullptr) {
+                     const ModelSelection* selection, const BiasModelSelection* bias_selection,
+                     const std::string& input_note, const OrientationFile* orientations = nullptr,
+                     const GyroRun* gyro = nullptr) {
   CalibrateArgs args = given;
   args.raw_units = RawUnitLabel(given, in);
   DiagnosisInput diagnosis_input;
@@ -446,6 +501,7 @@ int WriteCalibration(const CalibrateArgs& given, const LoadedInput& in, const Gr
   info.mean_sigmas = mean_sigmas;
   info.model_selection = selection;
   info.model_requested = args.model;
+  info.bias_model_selection = bias_selection;
   info.diagnosis = &diagnosis;
   info.provenance = MakeProvenance(args, in, orientations, gyro);
   if (gyro != nullptr) {
@@ -472,8 +528,7 @@ int WriteCalibration(const CalibrateArgs& given, const LoadedInput& in, const Gr
     if (!args.report.empty()) report_file.emplace(args.report).Write(report);
     CommitAll({file ? &*file : nullptr, report_file ? &*report_file : nullptr});
   }
-  const std::vector<double> errors =
-      GravityNormErrors(result.params, Means(in.positions), result.gravity);
+  const std::vector<double> errors = GravityNormErrors(result, Means(in.positions));
   for (const OutlierFinding& o : result.outliers) {
     Warn("%s: %s%s\n", args.input.path.c_str(),
          OutlierMessage(o, in.positions, errors,
@@ -489,6 +544,10 @@ int WriteCalibration(const CalibrateArgs& given, const LoadedInput& in, const Gr
     Say("%s", input_note.c_str());
     PrintCalibration(result, in.positions, in.position_file, g, args.raw_units);
     if (selection) PrintModelSelection(*selection, args.model == "auto");
+    if (bias_selection) {
+      Say("bias      auto -> %s: %s\n", ToString(bias_selection->chosen).c_str(),
+          bias_selection->reason.c_str());
+    }
     if (gyro != nullptr) {
       PrintGyro(*gyro, GyroRawLabel(*gyro, args),
                 g.unit == ForceUnit::kMetersPerSecond2 ? "m/s2" : "g");
@@ -542,10 +601,10 @@ int RunCalibrateKnownOrientations(const CalibrateArgs& args) {
   if (GyroWanted(args)) {
     // The gyroscope on top of the known directions: its K_g maps into the platform frame.
     const GyroRun gyro = RunGyro(args, in, result);
-    return WriteCalibration(args, in, g, result, options.reading_sigmas, nullptr, note,
+    return WriteCalibration(args, in, g, result, options.reading_sigmas, nullptr, nullptr, note,
                             &orientations, &gyro);
   }
-  return WriteCalibration(args, in, g, result, options.reading_sigmas, nullptr, note,
+  return WriteCalibration(args, in, g, result, options.reading_sigmas, nullptr, nullptr, note,
                           &orientations);
 }
 
@@ -588,8 +647,23 @@ int RunCalibrate(const CalibrateArgs& args) {
   }
   options.frame = ParseChoice<Frame>(args.frame, "--frame", {Frame::kXFirst, Frame::kZFirst});
   options.estimator = ParseChoice<Estimator>(args.estimator, "--estimator");
+  const bool auto_bias = args.bias_model == "auto";
+  if (!auto_bias) {
+    const std::optional<BiasModel> bias = BiasModelFromString(args.bias_model);
+    if (!bias) {
+      throw UsageError("--bias-model: '" + args.bias_model +
+                       "' is none of constant, linear, spline:K (K from 2 to " +
+                       std::to_string(kMaxBiasKnots) + ") or auto");
+    }
+    options.bias_model = *bias;
+  }
   options.outliers = ParseOutlierOptions(args.outliers);
   options.cross_validate = args.cross_validate;
+  if (auto_bias && !args.cross_validate) {
+    throw UsageError(
+        "--bias-model auto decides on held-out error: it needs the cross-validation that "
+        "--no-crossval turns off");
+  }
   if (auto_model && !args.cross_validate) {
     throw UsageError(
         "--model auto decides on held-out error: it needs the cross-validation that "
@@ -614,6 +688,20 @@ int RunCalibrate(const CalibrateArgs& args) {
   const LoadedInput in = LoadInput(args.input);
   const std::vector<Vec3> means = Means(in.positions);
   options.reading_sigmas = ReadingSigmas(in);  // empty: noise from the residuals
+  std::optional<BiasModelSelection> bias_selection;
+  if (!options.bias_model.constant() || auto_bias) {
+    std::string why;
+    options.position_times_s = PositionTimes(in, &why);
+    if (!why.empty() && !auto_bias) {
+      throw DataError("--bias-model " + args.bias_model + " needs each position's time: " + why);
+    }
+    if (auto_bias) {
+      bias_selection = SelectBiasModel(means, options);
+      if (!why.empty()) bias_selection->reason = "no position has a time: " + why;
+      options.bias_model = bias_selection->chosen;
+      if (options.bias_model.constant()) options.position_times_s.clear();
+    }
+  }
   // For a quadratic fit (asked for, or a candidate of --model auto) the linear fit is the
   // comparison: both with held-out validation, decided by ModelSelection's rule.
   const ModelChoice choice = CalibrateChoosingModel(means, options, auto_model);
@@ -630,10 +718,12 @@ int RunCalibrate(const CalibrateArgs& args) {
     const CalibrationResult& accel =
         gyro.calibration.accelerometer ? *gyro.calibration.accelerometer : result;
     return WriteCalibration(args, in, g, accel, options.reading_sigmas,
-                            selection ? &*selection : nullptr, "", nullptr, &gyro);
+                            selection ? &*selection : nullptr,
+                            bias_selection ? &*bias_selection : nullptr, "", nullptr, &gyro);
   }
   return WriteCalibration(args, in, g, result, options.reading_sigmas,
-                          selection ? &*selection : nullptr, "");
+                          selection ? &*selection : nullptr,
+                          bias_selection ? &*bias_selection : nullptr, "");
 }
 
 }  // namespace accelcal::cli

@@ -78,6 +78,7 @@ struct CalibrateArgs {
   std::string init = "auto";
   std::string frame = "x-first";
   std::string estimator = "ml";
+  std::string bias_model = "constant";  // BiasModel, or auto
   OutlierArgs outliers;
   std::string orientations;  // known orientations (orientation_file.hpp): platform-frame fit
   // The gyroscope (gyro_calibration.hpp): its log (empty: INPUT itself when gyro_columns are

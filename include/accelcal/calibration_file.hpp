@@ -79,6 +79,8 @@ struct CalibrationFileInfo {
   /// linear fit as comparison): written as `model_selection`.
   const ModelSelection* model_selection = nullptr;
   std::string model_requested;  ///< "linear", "quadratic" or "auto"
+  /// When the bias model was chosen (bias model "auto"): written as `bias_model_selection`.
+  const BiasModelSelection* bias_model_selection = nullptr;
   /// Written as `verdict` and `diagnostics`; when null, Diagnose() of the result, the positions
   /// and the model selection (without the log's findings).
   const Diagnosis* diagnosis = nullptr;

@@ -91,6 +91,56 @@ struct ModelSelection {
 /// Throws as Calibrate() does when the linear model cannot be fitted.
 ModelSelection SelectModel(const std::vector<Vec3>& readings, CalibrationOptions options);
 
+/// One step of SelectBiasModel: a richer bias model against the one chosen so far.
+struct BiasModelStep {
+  BiasModel simpler, richer;
+  /// Why the richer model was not compared (it cannot be fitted, validated, or converge); empty
+  /// when it was.
+  std::string error;
+  /// Positions of the comparison (0-based): those the richer model's screening kept.
+  std::vector<int> positions_used;
+  /// Held-out rms |f| − g of each over positions_used, and the paired comparison of SelectModel:
+  /// mean of d_k = e_simpler,k² − e_richer,k², its standard error and the threshold it must pass.
+  double simpler_rms = std::nan(""), richer_rms = std::nan("");
+  double improvement = std::nan(""), improvement_se = std::nan("");
+  double improvement_threshold = std::nan("");
+  /// The Wald statistic of what the richer model adds (W = (A d)ᵀ (A C Aᵀ)⁻¹ (A d), d its drift
+  /// coefficients, C their covariance): against the constant bias, A = I (any drift); against
+  /// a linear or spline bias, A the second differences of the knot biases (a bias that is not
+  /// linear in time). Its threshold is χ²_dof(1 − kBiasDriftAlpha).
+  double wald = std::nan("");
+  double wald_threshold = std::nan("");
+  int wald_dof = 0;
+  bool accepted = false;
+};
+
+/// Probability, for the Wald test of SelectBiasModel, that a bias without the richer model's
+/// change passes it by noise alone.
+inline constexpr double kBiasDriftAlpha = 0.05;
+
+struct BiasModelSelection {
+  BiasModel chosen;
+  std::string reason;        ///< why `chosen`, with the numbers of the step that decided
+  CalibrationResult result;  ///< the chosen model's fit (screened and validated as Calibrate's)
+  std::vector<BiasModelStep> steps;
+};
+
+/// The bias models SelectBiasModel tries, in order: constant, linear, then spline:3, spline:4 …
+/// up to spline:6 while the fit keeps at least 10 degrees of freedom (m − P − 3J ≥ 10).
+std::vector<BiasModel> BiasModelCandidates(int positions, ModelKind model);
+
+/// Which bias model do the data support? Forward selection over BiasModelCandidates with the rule
+/// of SelectModel: from the constant bias, each richer model is fitted with its screening and
+/// validation, the model chosen so far is fitted to the positions it kept, and the richer one is
+/// chosen only when both
+///   - its held-out error is lower beyond sampling error (the paired one-sided test of
+///     SelectModel at kHeldOutImprovementAlpha), and
+///   - what it adds is significant: W > χ²_dof(1 − kBiasDriftAlpha) (BiasModelStep::wald).
+/// The first richer model that fails either ends the search. options.bias_model is ignored;
+/// without position_times_s (or with a single position time) the constant bias is kept and the
+/// reason says why. Throws as Calibrate() does when the constant bias cannot be fitted.
+BiasModelSelection SelectBiasModel(const std::vector<Vec3>& readings, CalibrationOptions options);
+
 /// A calibration with the model asked for, and the comparison that goes with it.
 struct ModelChoice {
   CalibrationResult result;

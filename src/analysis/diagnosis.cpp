@@ -74,7 +74,7 @@ double MisfitFraction(const CalibrationResult& r, const std::vector<Vec3>& means
     }
     return m > 0 ? std::sqrt(sum / m) / r.gravity : 0.0;
   }
-  return Rms(r.InFit(GravityNormErrors(r.params, means, r.gravity))) / r.gravity;
+  return Rms(r.InFit(GravityNormErrors(r, means))) / r.gravity;
 }
 
 void PoorlyDetermined(const CalibrationResult& r, std::vector<Finding>* out) {
@@ -630,6 +630,15 @@ Diagnosis Diagnose(const DiagnosisInput& input) {
   for (const DiagnosedLog& l : input.logs) {
     for (Finding& f : LogFindings(l.log, l.detection)) {
       if (input.logs.size() > 1) f.message = l.name + ": " + f.message;
+      const std::string constant_bias =
+          ", which a constant bias does not explain (the held-out error shows its cost)";
+      const std::size_t at = f.message.find(constant_bias);
+      if (f.code == "drifting_rest" && r.drift && at != std::string::npos) {
+        // The fit's bias follows time: the drift is modelled, not a defect of the result.
+        f.severity = Severity::kNote;
+        f.message.replace(at, constant_bias.size(),
+                          ", which the fit's " + ToString(r.drift->basis.model) + " bias follows");
+      }
       out.push_back(std::move(f));
     }
   }

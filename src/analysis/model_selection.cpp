@@ -1,6 +1,9 @@
 #include "accelcal/model_selection.hpp"
 
 #include <cmath>
+#include <tuple>
+
+#include <Eigen/Cholesky>
 
 #include "accelcal/error.hpp"
 #include "accelcal/frame.hpp"
@@ -52,18 +55,16 @@ std::vector<int> PositionsInFit(const CalibrationResult& result, std::size_t rea
 CalibrationResult FitOnPositions(const std::vector<Vec3>& readings,
                                  const CalibrationOptions& options, const std::vector<int>& keep,
                                  const CalibrationResult& screened) {
-  CalibrationOptions subset = options;
+  CalibrationOptions subset = internal::OptionsForPositions(options, keep);
   subset.cross_validate = false;
   subset.outliers.policy = OutlierPolicy::kOff;
   std::vector<Vec3> kept;
   kept.reserve(keep.size());
   for (int k : keep) kept.push_back(readings[std::size_t(k)]);
-  if (!options.reading_sigmas.empty()) {
-    subset.reading_sigmas.clear();
-    for (int k : keep) subset.reading_sigmas.push_back(options.reading_sigmas[std::size_t(k)]);
-  }
   CalibrationResult result = Calibrate(kept, subset);
-  if (keep.size() < readings.size()) internal::SpreadOverAllPositions(readings, keep, &result);
+  if (keep.size() < readings.size()) {
+    internal::SpreadOverAllPositions(readings, keep, options.position_times_s, &result);
+  }
   result.outliers = screened.outliers;
   result.outlier_note = screened.outlier_note;
   result.screening = screened.screening;
@@ -206,6 +207,156 @@ ModelSelection SelectModel(const std::vector<Vec3>& readings, CalibrationOptions
         "it predicts held-out positions better beyond sampling error and a squared coefficient "
         "is significant: " +
         numbers;
+  }
+  return selection;
+}
+
+}  // namespace accelcal
+
+namespace accelcal {
+
+namespace {
+
+// The Wald statistic of what `richer` adds to a `simpler` bias model (BiasModelStep::wald) and its
+// degrees of freedom; NaN without a covariance or when the constraint's covariance is singular.
+std::pair<double, int> DriftWald(const CalibrationResult& richer, const BiasModel& simpler) {
+  const BiasDrift& drift = *richer.drift;
+  const Eigen::Index J = drift.D.cols();
+  const Eigen::Index P = drift.covariance.rows() - 3 * J;
+  // The constraints on one axis' coefficients d_1 … d_J (d_0 = 0: the first knot's bias less
+  // itself): all zero, or zero second differences of the knot biases (equally spaced knots).
+  Eigen::MatrixXd A1;
+  if (simpler.constant()) {
+    A1 = Eigen::MatrixXd::Identity(J, J);
+  } else {
+    A1 = Eigen::MatrixXd::Zero(J - 1, J);
+    for (Eigen::Index r = 0; r + 1 < J; ++r) {  // d_r − 2 d_{r+1} + d_{r+2}, d_0 = 0
+      if (r > 0) A1(r, r - 1) = 1.0;
+      A1(r, r) = -2.0;
+      A1(r, r + 1) = 1.0;
+    }
+  }
+  const auto q = static_cast<int>(3 * A1.rows());
+  if (drift.covariance.size() == 0 || q == 0) return {std::nan(""), q};
+  Eigen::MatrixXd A = Eigen::MatrixXd::Zero(q, P + 3 * J);
+  Eigen::VectorXd d(3 * J);
+  for (int i = 0; i < 3; ++i) {
+    A.block(i * A1.rows(), P + i * J, A1.rows(), J) = A1;
+    d.segment(i * J, J) = drift.D.row(i).transpose();
+  }
+  const Eigen::VectorXd a = A.rightCols(3 * J) * d;
+  const Eigen::MatrixXd V = A * drift.covariance * A.transpose();
+  const Eigen::LDLT<Eigen::MatrixXd> ldlt(V);
+  if (ldlt.info() != Eigen::Success || !(ldlt.vectorD().minCoeff() > 0)) {
+    return {std::nan(""), q};
+  }
+  return {a.dot(ldlt.solve(a)), q};
+}
+
+}  // namespace
+
+std::vector<BiasModel> BiasModelCandidates(int positions, ModelKind model) {
+  std::vector<BiasModel> candidates = {BiasModel{}, BiasModel{BiasModelKind::kLinear, 0}};
+  const int P = NumParameters(model);
+  for (int K = 3; K <= 6 && positions - P - 3 * (K - 1) >= 10; ++K) {
+    candidates.push_back(BiasModel{BiasModelKind::kSpline, K});
+  }
+  return candidates;
+}
+
+BiasModelSelection SelectBiasModel(const std::vector<Vec3>& readings, CalibrationOptions options) {
+  BiasModelSelection selection;
+  options.cross_validate = true;
+  options.bias_basis.reset();
+  CalibrationOptions current = options;
+  current.bias_model = BiasModel{};
+  selection.result = Calibrate(readings, current);
+  if (!selection.result.summary.converged()) {
+    selection.reason = "the fit with a constant bias did not converge";
+    return selection;
+  }
+  if (options.position_times_s.size() != readings.size()) {
+    selection.reason = "the positions have no times";
+    return selection;
+  }
+  const std::vector<BiasModel> candidates =
+      BiasModelCandidates(static_cast<int>(readings.size()), options.model);
+  selection.reason = "no richer bias model was tried";
+  for (std::size_t c = 1; c < candidates.size(); ++c) {
+    BiasModelStep& step = selection.steps.emplace_back();
+    step.simpler = current.bias_model;
+    step.richer = candidates[c];
+    const std::string richer_name = ToString(step.richer), simpler_name = ToString(step.simpler);
+    CalibrationOptions richer_options = options;
+    richer_options.bias_model = step.richer;
+    std::optional<CalibrationResult> richer;
+    try {
+      richer = Calibrate(readings, richer_options);
+    } catch (const DataError& e) {
+      step.error = e.what();
+    }
+    if (richer && !richer->summary.converged()) {
+      step.error = "did not converge: " + richer->summary.termination_message;
+    } else if (richer && !richer->crossval_rms) {
+      step.error = "cannot be validated: " + richer->crossval_note;
+    }
+    if (!step.error.empty()) {
+      selection.reason = "a " + richer_name + " bias cannot be compared (" + step.error + ")";
+      break;
+    }
+    step.positions_used = PositionsInFit(*richer, readings.size());
+    const CalibrationResult simpler =
+        FitOnPositions(readings, current, step.positions_used, *richer);
+    if (!simpler.summary.converged() || !simpler.crossval_rms) {
+      step.error = "the " + simpler_name + " bias on its positions " +
+                   (simpler.summary.converged() ? "cannot be validated: " + simpler.crossval_note
+                                                : std::string("did not converge"));
+      selection.reason = step.error;
+      break;
+    }
+    const Paired paired =
+        PairedImprovement(simpler.crossval_errors, richer->crossval_errors, step.positions_used);
+    const auto n = static_cast<int>(step.positions_used.size());
+    step.simpler_rms = Rms(simpler.InFit(simpler.crossval_errors));
+    step.richer_rms = *richer->crossval_rms;
+    step.improvement = paired.mean;
+    step.improvement_se = paired.se;
+    const double z = internal::StudentTTwoSidedQuantile(2 * kHeldOutImprovementAlpha, n - 1);
+    step.improvement_threshold = z * paired.se;
+    std::tie(step.wald, step.wald_dof) = DriftWald(*richer, step.simpler);
+    step.wald_threshold = internal::ChiSquareQuantile(kBiasDriftAlpha, step.wald_dof);
+    const bool improves = step.improvement > step.improvement_threshold;
+    const bool significant = step.wald > step.wald_threshold;
+    step.accepted = improves && significant;
+    const std::string numbers =
+        Format(
+            "held-out rms |f|-g %.4g (%s) against %.4g (%s) over %d positions; paired mean "
+            "square improvement %.3g +/- %.3g (needs > %.3g, %.3g standard errors); ",
+            step.richer_rms, richer_name.c_str(), step.simpler_rms, simpler_name.c_str(), n,
+            paired.mean, paired.se, step.improvement_threshold, z) +
+        (std::isnan(step.wald) ? std::string("its drift has no covariance")
+                               : Format("Wald %.3g on %d degrees of freedom (needs > %.3g)",
+                                        step.wald, step.wald_dof, step.wald_threshold));
+    if (!step.accepted) {
+      selection.reason =
+          "a " + richer_name + " bias " +
+          (!improves ? std::string("does not predict held-out positions better beyond sampling "
+                                   "error")
+                     : std::string(step.simpler.constant()
+                                       ? "has no significant drift"
+                                       : "does not depart significantly from a linear drift")) +
+          ": " + numbers;
+      break;
+    }
+    selection.chosen = step.richer;
+    selection.result = std::move(*richer);
+    current.bias_model = step.richer;
+    selection.reason = "a " + richer_name +
+                       " bias predicts held-out positions better beyond "
+                       "sampling error and " +
+                       (step.simpler.constant() ? "its drift is significant: "
+                                                : "departs significantly from a linear drift: ") +
+                       numbers;
   }
   return selection;
 }

@@ -43,6 +43,52 @@ std::string Equation(Frame frame) {
   return common + "(the platform frame of the known orientations), K full";
 }
 
+// `bias_drift`: the basis, D and the joint covariance of the model's parameters and D.
+ordered_json DriftSection(const BiasDrift& drift) {
+  ordered_json doc;
+  doc["model"] = ToString(drift.basis.model);
+  doc["t_ref"] = drift.basis.t_ref_s;
+  if (drift.basis.model.kind == BiasModelKind::kLinear) {
+    doc["basis"] = "b(t) = b + D (t - t_ref) / 60 s: D in raw per minute";
+  } else {
+    doc["basis"] =
+        "b(t) = b + D (B(t) - B(t_ref)), B the hat functions of the knots but the first: D in "
+        "raw, the bias at each knot less the bias at the first";
+    doc["knots"] = drift.basis.knots_s;
+  }
+  ordered_json D = ordered_json::array(), sd = ordered_json::array();
+  const Eigen::Index J = drift.D.cols();
+  const Eigen::Index P = drift.covariance.rows() - 3 * J;
+  for (int i = 0; i < 3; ++i) {
+    ordered_json row = ordered_json::array(), row_sd = ordered_json::array();
+    for (Eigen::Index j = 0; j < J; ++j) {
+      row.push_back(drift.D(i, j));
+      if (drift.covariance.size() > 0) {
+        const Eigen::Index index = P + i * J + j;
+        row_sd.push_back(std::sqrt(std::max(0.0, drift.covariance(index, index))));
+      }
+    }
+    D.push_back(row);
+    sd.push_back(row_sd);
+  }
+  doc["D"] = D;
+  if (drift.covariance.size() > 0) {
+    doc["D_std"] = sd;
+    ordered_json cov = ordered_json::array();
+    for (Eigen::Index i = 0; i < drift.covariance.rows(); ++i) {
+      ordered_json row = ordered_json::array();
+      for (Eigen::Index j = 0; j < drift.covariance.cols(); ++j)
+        row.push_back(drift.covariance(i, j));
+      cov.push_back(row);
+    }
+    doc["covariance"] = cov;
+  } else {
+    doc["D_std"] = nullptr;
+    doc["covariance"] = nullptr;
+  }
+  return doc;
+}
+
 // The accelerometer's section: every key of a version-1 file but `format` and `version`.
 ordered_json AccelerometerSection(const CalibrationResult& result, const CalibrationFileInfo& info,
                                   const Diagnosis& diagnosis) {
@@ -103,7 +149,9 @@ ordered_json AccelerometerSection(const CalibrationResult& result, const Calibra
                         {"bias_specific_force", ToJson(eng.bias_force)},
                         {"k2_g_per_g2", ToJson(eng.k2_g_per_g2)}};
 
-  const std::vector<double> errors = GravityNormErrors(result.params, means, result.gravity);
+  if (result.drift) doc["bias_drift"] = DriftSection(*result.drift);
+  const std::vector<double> errors = GravityNormErrors(result, means);
+  const std::vector<Vec3> offsets = result.DriftOffsets(info.positions.size());
   ordered_json positions = ordered_json::array();
   for (std::size_t k = 0; k < info.positions.size(); ++k) {
     const Position& p = info.positions[k];
@@ -117,6 +165,10 @@ ordered_json AccelerometerSection(const CalibrationResult& result, const Calibra
                            {"end", p.interval->end},
                            {"t_begin", p.interval->t_begin_s},
                            {"t_end", p.interval->t_end_s}};
+    }
+    if (result.drift) {
+      entry["time"] = result.drift->times_s[k];
+      entry["drift_offset"] = ToJson(offsets[k]);
     }
     entry["direction"] = ToJson(result.directions[k]);
     entry["residual"] = ToJson(result.residuals[k]);
@@ -162,6 +214,33 @@ ordered_json AccelerometerSection(const CalibrationResult& result, const Calibra
     selection["positions_compared"] = s->positions_used.size();
     if (!s->quadratic_error.empty()) selection["quadratic_error"] = s->quadratic_error;
     doc["model_selection"] = selection;
+  }
+  if (const BiasModelSelection* s = info.bias_model_selection) {
+    ordered_json steps = ordered_json::array();
+    for (const BiasModelStep& step : s->steps) {
+      ordered_json entry;
+      entry["simpler"] = ToString(step.simpler);
+      entry["richer"] = ToString(step.richer);
+      if (!step.error.empty()) {
+        entry["error"] = step.error;
+      } else {
+        entry["positions_compared"] = step.positions_used.size();
+        entry["simpler_crossval_rms"] = Nullable(step.simpler_rms);
+        entry["richer_crossval_rms"] = Nullable(step.richer_rms);
+        entry["improvement"] = Nullable(step.improvement);
+        entry["improvement_se"] = Nullable(step.improvement_se);
+        entry["improvement_threshold"] = Nullable(step.improvement_threshold);
+        entry["wald"] = Nullable(step.wald);
+        entry["wald_degrees_of_freedom"] = step.wald_dof;
+        entry["wald_threshold"] = Nullable(step.wald_threshold);
+        entry["accepted"] = step.accepted;
+      }
+      steps.push_back(entry);
+    }
+    doc["bias_model_selection"] = {{"requested", "auto"},
+                                   {"chosen", ToString(s->chosen)},
+                                   {"reason", s->reason},
+                                   {"steps", steps}};
   }
   const Summary& s = result.summary;
   doc["solver"] = {{"method", std::string(ToString(s.method))},

@@ -304,6 +304,14 @@ void RefuseFailed(const LoadedCalibration& cal, const std::string& path) {
   }
 }
 
+void WarnDriftNotUsed(const LoadedCalibration& cal, const std::string& path, const char* use) {
+  if (!cal.drift) return;
+  Warn(
+      "%s: its bias drifted within its session (a %s bias); it is %s with one bias, the "
+      "value at t = %.6g s of that session (its positions' mean time), not the drift\n",
+      path.c_str(), ToString(cal.drift->basis.model).c_str(), use, cal.drift->basis.t_ref_s);
+}
+
 // Planned directions: a named scheme, or a file with one unit vector per row.
 std::vector<Vec3> PlannedDirections(const std::string& spec) {
   if (std::optional<std::vector<Vec3>> scheme = SchemeDirections(spec)) return *scheme;

@@ -123,6 +123,9 @@ std::string WithReaderFlags(const std::string& message);
 
 // A calibration that failed its checks is written so that its reasons can be read, never used.
 void RefuseFailed(const LoadedCalibration& cal, const std::string& path);
+/// Warns that a calibration whose bias drifted within its session is used with one bias, its
+/// value at the drift's reference time (`use`: what the command does with it, e.g. "applied").
+void WarnDriftNotUsed(const LoadedCalibration& cal, const std::string& path, const char* use);
 
 // Planned directions: a named scheme, or a file with one unit vector per row.
 std::vector<Vec3> PlannedDirections(const std::string& spec);

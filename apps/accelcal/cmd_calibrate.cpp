@@ -659,6 +659,11 @@ int RunCalibrate(const CalibrateArgs& args) {
   }
   options.outliers = ParseOutlierOptions(args.outliers);
   options.cross_validate = args.cross_validate;
+  if (args.bias_model != "constant" && GyroWanted(args)) {
+    throw UsageError("--bias-model " + args.bias_model +
+                     " does not apply with the gyroscope: the joint fit with its rotations "
+                     "takes the accelerometer's bias as constant");
+  }
   if (auto_bias && !args.cross_validate) {
     throw UsageError(
         "--bias-model auto decides on held-out error: it needs the cross-validation that "
@@ -678,6 +683,11 @@ int RunCalibrate(const CalibrateArgs& args) {
     options.newton_lagrange.max_iterations = args.max_iterations;
   }
   if (auto why = options.Validate()) throw UsageError(*why);
+  if (auto_bias) {  // its candidates must be fittable as the options stand
+    CalibrationOptions drifting = options;
+    drifting.bias_model = BiasModel{BiasModelKind::kLinear, 0};
+    if (auto why = drifting.Validate()) throw UsageError("--bias-model auto: " + *why);
+  }
   if (auto_model) {
     CalibrationOptions quadratic = options;
     quadratic.model = ModelKind::kQuadratic;
@@ -696,7 +706,18 @@ int RunCalibrate(const CalibrateArgs& args) {
       throw DataError("--bias-model " + args.bias_model + " needs each position's time: " + why);
     }
     if (auto_bias) {
-      bias_selection = SelectBiasModel(means, options);
+      // With --model auto the bias is chosen under the quadratic model, which holds whichever
+      // model is true (so that squared terms are not taken for a drift), then the model under
+      // that bias; the linear model when the quadratic one cannot be fitted.
+      if (auto_model) {
+        CalibrationOptions quadratic = options;
+        quadratic.model = ModelKind::kQuadratic;
+        try {
+          bias_selection = SelectBiasModel(means, quadratic);
+        } catch (const DataError&) {  // too few positions for it: the linear model decides
+        }
+      }
+      if (!bias_selection) bias_selection = SelectBiasModel(means, options);
       if (!why.empty()) bias_selection->reason = "no position has a time: " + why;
       options.bias_model = bias_selection->chosen;
       if (options.bias_model.constant()) options.position_times_s.clear();

@@ -25,6 +25,7 @@ int RunApply(const ApplyArgs& args) {
   const LoadedCalibration cal = ParseCalibrationJson(
       ReadFileToString(args.calibration, kMaxSmallFileBytes), args.calibration);
   RefuseFailed(cal, args.calibration);
+  WarnDriftNotUsed(cal, args.calibration, "applied");
   const bool gyro = !args.gyro.empty() || !args.gyro_columns.empty();
   if (gyro && !cal.has_gyroscope()) {
     throw UsageError(args.calibration +

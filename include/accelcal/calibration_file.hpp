@@ -110,6 +110,9 @@ struct FilePosition {
   std::optional<Vec3> direction;  ///< estimated (or known) unit gravity direction
   std::optional<Vec3> residual;   ///< p − μ, raw
   std::optional<double> gravity_norm_error, crossval_error;
+  /// `time` and `drift_offset`: the position's time [s] and D φ(t) [raw], with a drifting bias.
+  std::optional<double> time;
+  std::optional<Vec3> drift_offset;
   bool excluded = false;
   std::optional<int> file;  ///< index into `sources`
 };
@@ -139,6 +142,9 @@ struct LoadedCalibration {
   std::string verdict;
   /// `covariance` in the order of ParameterSlots(model, frame); empty when the file has null.
   Eigen::MatrixXd covariance;
+  /// `bias_drift`, when the bias was fitted as a function of time (bias_drift.hpp): `params.bias`
+  /// is then the bias at its reference time; its times are the positions' `time`.
+  std::optional<BiasDrift> drift;
   std::optional<double> gravity_norm_rms_before, gravity_norm_rms_after, crossval_rms;
   /// `noise.sigma_raw`: the residual σ̂ of the position means along the fitted surface's normal
   /// [raw], when present.

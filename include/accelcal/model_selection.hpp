@@ -136,7 +136,10 @@ std::vector<BiasModel> BiasModelCandidates(int positions, ModelKind model);
 ///   - its held-out error is lower beyond sampling error (the paired one-sided test of
 ///     SelectModel at kHeldOutImprovementAlpha), and
 ///   - what it adds is significant: W > χ²_dof(1 − kBiasDriftAlpha) (BiasModelStep::wald).
-/// The first richer model that fails either ends the search. options.bias_model is ignored;
+/// A richer model that fails either is passed over and the next compared with the model chosen
+/// so far (a spline can follow a warm-up that levels off, which no straight line does). The
+/// reason names the chosen model's evidence and every candidate passed over with why.
+/// options.bias_model is ignored;
 /// without position_times_s (or with a single position time) the constant bias is kept and the
 /// reason says why. Throws as Calibrate() does when the constant bias cannot be fitted.
 BiasModelSelection SelectBiasModel(const std::vector<Vec3>& readings, CalibrationOptions options);

@@ -513,11 +513,13 @@ Diagnosis Diagnose(const DiagnosisInput& input) {
   }
   // No degrees of freedom: the fit passes through every position, and nothing checks it.
   if (r.degrees_of_freedom == 0 && r.summary.converged()) {
+    const int parameters =
+        NumParameters(r.model) + (r.drift ? 3 * static_cast<int>(r.drift->D.cols()) : 0);
     Add(&out, "exactly_determined", Severity::kWarning,
         Format("%d positions fitted for %d parameters: the fit passes through every one of them, "
                "so no residual, uncertainty or held-out position checks it; add positions",
-               NumParameters(r.model), NumParameters(r.model)),
-        {{"parameters", static_cast<double>(NumParameters(r.model))}});
+               r.positions_used(), parameters),
+        {{"parameters", static_cast<double>(parameters)}});
   }
   // Round-off residuals with degrees of freedom left: not independent noisy readings.
   if (r.degrees_of_freedom > 0 && r.summary.converged()) {

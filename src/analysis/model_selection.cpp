@@ -282,11 +282,15 @@ BiasModelSelection SelectBiasModel(const std::vector<Vec3>& readings, Calibratio
   const std::vector<BiasModel> candidates =
       BiasModelCandidates(static_cast<int>(readings.size()), options.model);
   selection.reason = "no richer bias model was tried";
+  std::string tried;  // each rejected candidate and why, for the reason
   for (std::size_t c = 1; c < candidates.size(); ++c) {
     BiasModelStep& step = selection.steps.emplace_back();
     step.simpler = current.bias_model;
     step.richer = candidates[c];
     const std::string richer_name = ToString(step.richer), simpler_name = ToString(step.simpler);
+    const auto reject = [&](const std::string& why) {
+      tried += (tried.empty() ? "" : "; ") + richer_name + " " + why;
+    };
     CalibrationOptions richer_options = options;
     richer_options.bias_model = step.richer;
     std::optional<CalibrationResult> richer;
@@ -301,8 +305,8 @@ BiasModelSelection SelectBiasModel(const std::vector<Vec3>& readings, Calibratio
       step.error = "cannot be validated: " + richer->crossval_note;
     }
     if (!step.error.empty()) {
-      selection.reason = "a " + richer_name + " bias cannot be compared (" + step.error + ")";
-      break;
+      reject("cannot be compared (" + step.error + ")");
+      continue;
     }
     step.positions_used = PositionsInFit(*richer, readings.size());
     const CalibrationResult simpler =
@@ -311,8 +315,8 @@ BiasModelSelection SelectBiasModel(const std::vector<Vec3>& readings, Calibratio
       step.error = "the " + simpler_name + " bias on its positions " +
                    (simpler.summary.converged() ? "cannot be validated: " + simpler.crossval_note
                                                 : std::string("did not converge"));
-      selection.reason = step.error;
-      break;
+      reject("cannot be compared (" + step.error + ")");
+      continue;
     }
     const Paired paired =
         PairedImprovement(simpler.crossval_errors, richer->crossval_errors, step.positions_used);
@@ -338,25 +342,28 @@ BiasModelSelection SelectBiasModel(const std::vector<Vec3>& readings, Calibratio
                                : Format("Wald %.3g on %d degrees of freedom (needs > %.3g)",
                                         step.wald, step.wald_dof, step.wald_threshold));
     if (!step.accepted) {
-      selection.reason =
-          "a " + richer_name + " bias " +
-          (!improves ? std::string("does not predict held-out positions better beyond sampling "
-                                   "error")
-                     : std::string(step.simpler.constant()
-                                       ? "has no significant drift"
-                                       : "does not depart significantly from a linear drift")) +
-          ": " + numbers;
-      break;
+      reject(!improves ? Format("does not predict held-out positions better than %s beyond "
+                                "sampling error (%.3g against %.3g)",
+                                simpler_name.c_str(), step.richer_rms, step.simpler_rms)
+                       : std::string(step.simpler.constant()
+                                         ? "has no significant drift"
+                                         : "does not depart significantly from a linear drift") +
+                             Format(" (Wald %.3g, needs > %.3g)", step.wald, step.wald_threshold));
+      continue;
     }
     selection.chosen = step.richer;
     selection.result = std::move(*richer);
     current.bias_model = step.richer;
-    selection.reason = "a " + richer_name +
-                       " bias predicts held-out positions better beyond "
-                       "sampling error and " +
+    selection.reason = "a " + richer_name + " bias predicts held-out positions better than " +
+                       simpler_name + " beyond sampling error and " +
                        (step.simpler.constant() ? "its drift is significant: "
                                                 : "departs significantly from a linear drift: ") +
                        numbers;
+  }
+  if (selection.chosen.constant()) {
+    selection.reason = "no bias model that follows time passes the evidence rule: " + tried;
+  } else if (!tried.empty()) {
+    selection.reason += "; not " + tried;
   }
   return selection;
 }

@@ -66,8 +66,8 @@ BiasTimeBasis BiasTimeBasis::For(const BiasModel& model, const std::vector<doubl
   if (!(*hi > *lo)) {
     throw std::invalid_argument("the positions' times span no time: a drift cannot be told");
   }
-  basis.t_ref_s = std::accumulate(times_s.begin(), times_s.end(), 0.0) /
-                  static_cast<double>(times_s.size());
+  basis.t_ref_s =
+      std::accumulate(times_s.begin(), times_s.end(), 0.0) / static_cast<double>(times_s.size());
   if (model.kind == BiasModelKind::kSpline) {
     const int K = model.knots;
     for (int j = 0; j < K; ++j) {

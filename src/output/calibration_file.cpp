@@ -233,8 +233,8 @@ ordered_json AccelerometerSection(const CalibrationResult& result, const Calibra
         entry["wald"] = Nullable(step.wald);
         entry["wald_degrees_of_freedom"] = step.wald_dof;
         entry["wald_threshold"] = Nullable(step.wald_threshold);
-        entry["accepted"] = step.accepted;
       }
+      entry["accepted"] = step.accepted;
       steps.push_back(entry);
     }
     doc["bias_model_selection"] = {{"requested", "auto"},

@@ -163,6 +163,8 @@ FilePosition ReadPosition(const Reader& r, const ordered_json& p) {
   position.residual = r.OptionalVector3(p, "residual");
   position.gravity_norm_error = r.Nullable(p, "gravity_norm_error");
   position.crossval_error = r.Nullable(p, "crossval_error");
+  position.time = r.Nullable(p, "time");
+  position.drift_offset = r.OptionalVector3(p, "drift_offset");
   if (p.contains("excluded")) {
     if (!p["excluded"].is_boolean()) r.Fail(r.Key("excluded") + " must be true or false");
     position.excluded = p["excluded"].get<bool>();
@@ -186,6 +188,69 @@ void ReadPositions(const Reader& r, const ordered_json& doc, LoadedCalibration& 
     cal.positions.push_back(ReadPosition(r.Inside(name), p));
     cal.position_means.push_back(cal.positions.back().mean);
   }
+}
+
+// `bias_drift` (bias_drift.hpp), checked against the model and the positions' times.
+void ReadDrift(const Reader& r, const ordered_json& doc, LoadedCalibration& cal) {
+  if (!doc.contains("bias_drift")) return;
+  const ordered_json& d = r.Object(doc, "bias_drift");
+  const Reader in = r.Inside("bias_drift");
+  const std::string name = in.Text(d, "model");
+  const std::optional<BiasModel> model = BiasModelFromString(name);
+  if (!model || model->constant()) {
+    in.Fail(in.Key("model") + " must be linear or spline:K, not '" + name + "'");
+  }
+  BiasDrift drift;
+  drift.basis.model = *model;
+  if (!d.contains("t_ref")) in.Fail(in.Key("t_ref") + " is missing");
+  drift.basis.t_ref_s = in.Number(d["t_ref"], in.Key("t_ref"));
+  const auto J = static_cast<std::size_t>(model->functions());
+  if (model->kind == BiasModelKind::kSpline) {
+    const std::string shape =
+        in.Key("knots") + " must be " + std::to_string(J + 1) + " increasing times";
+    if (!d.contains("knots") || !d["knots"].is_array() || d["knots"].size() != J + 1) {
+      in.Fail(shape);
+    }
+    for (std::size_t j = 0; j <= J; ++j) {
+      drift.basis.knots_s.push_back(in.Number(d["knots"][j], in.Key("knots")));
+      if (j > 0 && !(drift.basis.knots_s[j] > drift.basis.knots_s[j - 1])) in.Fail(shape);
+    }
+  }
+  const std::string shape = in.Key("D") + " must be 3 arrays of " + std::to_string(J) +
+                            " numbers (the " + name + " bias)";
+  if (!d.contains("D") || !d["D"].is_array() || d["D"].size() != 3) in.Fail(shape);
+  drift.D.resize(3, static_cast<Eigen::Index>(J));
+  for (std::size_t i = 0; i < 3; ++i) {
+    if (!d["D"][i].is_array() || d["D"][i].size() != J) in.Fail(shape);
+    for (std::size_t j = 0; j < J; ++j) {
+      drift.D(static_cast<Eigen::Index>(i), static_cast<Eigen::Index>(j)) =
+          in.Number(d["D"][i][j], in.Key("D"));
+    }
+  }
+  if (d.contains("covariance") && !d["covariance"].is_null()) {
+    const std::size_t n = ParameterSlots(cal.model, cal.frame).size() + 3 * J;
+    const ordered_json& cov = d["covariance"];
+    const std::string cov_shape = in.Key("covariance") + " must be null or a " + std::to_string(n) +
+                                  "x" + std::to_string(n) + " array";
+    if (!cov.is_array() || cov.size() != n) in.Fail(cov_shape);
+    drift.covariance.resize(static_cast<Eigen::Index>(n), static_cast<Eigen::Index>(n));
+    for (std::size_t i = 0; i < n; ++i) {
+      if (!cov[i].is_array() || cov[i].size() != n) in.Fail(cov_shape);
+      for (std::size_t j = 0; j < n; ++j) {
+        drift.covariance(static_cast<Eigen::Index>(i), static_cast<Eigen::Index>(j)) =
+            in.Number(cov[i][j], in.Key("covariance"));
+      }
+    }
+    CheckCovariance(in, drift.covariance);
+  }
+  for (std::size_t k = 0; k < cal.positions.size(); ++k) {
+    if (!cal.positions[k].time) {
+      r.Fail(r.Key("positions") + "[" + std::to_string(k) +
+             "] has no 'time', which a drifting bias needs");
+    }
+    drift.times_s.push_back(*cal.positions[k].time);
+  }
+  cal.drift = std::move(drift);
 }
 
 void ReadSolver(const Reader& r, const ordered_json& doc, LoadedCalibration& cal) {
@@ -246,6 +311,7 @@ void ReadAccelerometer(const Reader& r, const ordered_json& doc, LoadedCalibrati
   }
   ReadCovariance(r, doc, cal);
   ReadPositions(r, doc, cal);
+  ReadDrift(r, doc, cal);
   cal.gravity_norm_rms_before = r.Nullable(doc, "gravity_norm_rms_before");
   cal.gravity_norm_rms_after = r.Nullable(doc, "gravity_norm_rms_after");
   cal.crossval_rms = r.Nullable(doc, "crossval_rms");

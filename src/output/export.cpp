@@ -107,14 +107,29 @@ std::string CCommentText(std::string_view text) {
 // A correction f(p) in the calibration's specific-force unit, or nullopt where it has none.
 using Correction = std::function<std::optional<Vec3>(const Vec3&)>;
 
+std::string Join(const std::string& a, const std::string& b);
+
+// With a drifting bias the full model takes each position's drift offset from its reading; every
+// format but accelcal's own file (`holds_drift`) holds one bias, its value at the drift's
+// reference time (the session's mean time).
 ExportLoss MeasureLoss(const LoadedCalibration& cal, const Correction& exported,
-                       std::string dropped) {
+                       std::string dropped, bool holds_drift = false) {
   ExportLoss loss;
+  if (cal.drift && !holds_drift) {
+    dropped =
+        Join(dropped, Format("the bias drift within the session (%s; the bias exported is "
+                             "its value at t = %.6g s, the positions' mean time)",
+                             ToString(cal.drift->basis.model).c_str(), cal.drift->basis.t_ref_s));
+  }
   loss.dropped = std::move(dropped);
   double sum_error2 = 0, sum_full2 = 0, sum_export2 = 0;
-  for (const Vec3& p : cal.position_means) {
-    const std::optional<Vec3> full = SpecificForce(cal.params, p);
-    const std::optional<Vec3> approx = exported(p);
+  for (std::size_t k = 0; k < cal.position_means.size(); ++k) {
+    const Vec3& p = cal.position_means[k];
+    const Vec3 offset = cal.drift && k < cal.drift->times_s.size()
+                            ? cal.drift->Offset(cal.drift->times_s[k])
+                            : Vec3::Zero();
+    const std::optional<Vec3> full = SpecificForce(cal.params, Vec3(p - offset));
+    const std::optional<Vec3> approx = exported(holds_drift ? Vec3(p - offset) : p);
     if (!full || !approx) continue;
     const double error = (*approx - *full).norm();
     loss.max_error = std::max(loss.max_error, error);
@@ -1202,7 +1217,7 @@ ExportResult ExportCalibration(const LoadedCalibration& cal, const std::string& 
           ".* f^2, " +
           DescribeUnits(cal) + ", " + std::string(ToString(cal.frame)) + " body frame";
       out.loss = MeasureLoss(
-          cal, [&](const Vec3& p) { return SpecificForce(cal.params, p); }, "");
+          cal, [&](const Vec3& p) { return SpecificForce(cal.params, p); }, "", true);
       out.gyroscope_included = cal.has_gyroscope();
       return out;
     case ExportFormat::kKalibr:

@@ -216,6 +216,90 @@ std::string ResidualPlot(const Document& d) {
   return Svg("residuals", 300, "residuals per axis", body);
 }
 
+// Each position's residual against its time, per axis, with the fitted drift added back (what a
+// constant bias leaves: the drift made visible), and with a drifting bias the fitted curve
+// D φ(t) and its band ±1σ of b(t). An axis' points are the positions that see its bias, gravity
+// within 60° of it (|c_i| > 0.5): a position sees a bias change only along gravity, so the
+// others' residual on that axis is near zero whatever the drift. Empty when the positions have
+// no times, or come from several files (each its own clock).
+std::string DriftPlot(const Document& d) {
+  const LoadedCalibration& cal = d.cal;
+  std::vector<std::pair<double, Vec3>> points;
+  std::vector<Vec3> directions;
+  for (const FilePosition& p : cal.positions) {
+    if (p.file.value_or(0) != cal.positions.front().file.value_or(0)) return "";  // two clocks
+    directions.push_back(p.direction.value_or(Vec3::Ones()));
+    const std::optional<double> t =
+        p.time       ? p.time
+        : p.interval ? std::optional<double>(0.5 * (p.interval->t_begin + p.interval->t_end))
+                     : std::nullopt;
+    if (!t || !p.residual) return "";
+    points.push_back({*t, *p.residual + p.drift_offset.value_or(Vec3::Zero())});
+  }
+  if (points.size() < 2) return "";
+  double t0 = points.front().first, t1 = t0, lo = 0, hi = 0;
+  for (const auto& [t, v] : points) {
+    t0 = std::min(t0, t), t1 = std::max(t1, t);
+    lo = std::min(lo, v.minCoeff()), hi = std::max(hi, v.maxCoeff());
+  }
+  // The curve and its band at 200 times over the session.
+  std::vector<double> times;
+  std::vector<Vec3> curve, sigma;
+  if (cal.drift) {
+    int bias_slots[3] = {0, 0, 0};
+    const auto& slots = ParameterSlots(cal.model, cal.frame);
+    for (std::size_t s = 0; s < slots.size(); ++s) {
+      if (slots[s].group == ParameterGroup::kBias) bias_slots[slots[s].row] = static_cast<int>(s);
+    }
+    for (int i = 0; i <= 200; ++i) {
+      const double t = t0 + (t1 - t0) * i / 200.0;
+      times.push_back(t);
+      curve.push_back(cal.drift->Offset(t));
+      const Vec3 s = cal.drift->BiasSigma(t, bias_slots);
+      sigma.push_back(s.allFinite() ? s : Vec3::Zero());
+      lo = std::min(lo, (curve.back() - sigma.back()).minCoeff());
+      hi = std::max(hi, (curve.back() + sigma.back()).maxCoeff());
+    }
+  }
+  if (!Plottable(t0, t1, lo, hi) || !(t1 > t0)) return NotPlotted("bias over the session");
+  const Frame2d f = Padded(t0, t1, lo, hi);
+  std::string body =
+      Axes(f, "time [s]", (cal.drift ? "residual + drift [" : "residual [") + cal.raw_unit + "]");
+  body += "<line class=\"zero\" x1=\"" + Px(f.left) + "\" y1=\"" + Px(f.Y(0)) + "\" x2=\"" +
+          Px(f.left + f.width) + "\" y2=\"" + Px(f.Y(0)) + "\"/>\n";
+  for (int a = 0; a < 3 && !times.empty(); ++a) {
+    std::string band, line;
+    for (std::size_t i = 0; i < times.size(); ++i) {
+      band += Px(f.X(times[i])) + "," + Px(f.Y(curve[i](a) + sigma[i](a))) + " ";
+      line += Px(f.X(times[i])) + "," + Px(f.Y(curve[i](a))) + " ";
+    }
+    for (std::size_t i = times.size(); i-- > 0;) {
+      band += Px(f.X(times[i])) + "," + Px(f.Y(curve[i](a) - sigma[i](a))) + " ";
+    }
+    body += "<polygon points=\"" + band + "\" fill=\"" + kAxisColor[a] +
+            "\" fill-opacity=\"0.15\" stroke=\"none\"/>\n";
+    body += "<polyline class=\"trace\" stroke=\"" + std::string(kAxisColor[a]) + "\" points=\"" +
+            line + "\"/>\n";
+  }
+  for (std::size_t k = 0; k < points.size(); ++k) {
+    for (int a = 0; a < 3; ++a) {
+      if (!(std::abs(directions[k](a)) > 0.5)) continue;
+      body += "<circle cx=\"" + Px(f.X(points[k].first)) + "\" cy=\"" +
+              Px(f.Y(points[k].second(a))) + "\" r=\"2.5\" fill=\"" + kAxisColor[a] +
+              "\"><title>position " + std::to_string(k + 1) + " " + kAxisName[a] + " at " +
+              Short(points[k].first) + " s: " + Short(points[k].second(a)) + "</title></circle>\n";
+    }
+  }
+  body += Legend(f.left + 8, f.Bottom() + 50,
+                 {{kAxisColor[0], "x"}, {kAxisColor[1], "y"}, {kAxisColor[2], "z"}});
+  const std::string title =
+      cal.drift ? "residuals with the fitted drift added back, and the drift D phi(t) +- 1 sigma "
+                  "of the bias b(t) (" +
+                      ToString(cal.drift->basis.model) + " bias)"
+                : "residuals against time (a constant bias: a trend is a drift it leaves)";
+  return Svg("drift", 300, title, body);
+}
+
 std::string Row(const std::string& quantity, double value, std::optional<double> sigma,
                 const std::string& unit, const char* format = "%.6g") {
   return "<tr><td>" + Escape(quantity) + "</td><td class=\"num\">" + Format(format, value) +
@@ -458,6 +542,9 @@ std::string Render(const ReportInput& input) {
   html += "</section>\n<section><h2>|f| - g per position</h2>\n" + NormPlot(d) + "</section>\n";
   html += "<section><h2>Coverage of the sphere</h2>\n" + SpherePlot(d) + "</section>\n";
   html += "<section><h2>Residuals per axis</h2>\n" + ResidualPlot(d) + "</section>\n";
+  if (const std::string drift = DriftPlot(d); !drift.empty()) {
+    html += "<section><h2>Bias over the session</h2>\n" + drift + "</section>\n";
+  }
   if (d.cal.has_gyroscope()) html += GyroSection(d);
   html += "<footer><p>accelcal " + Escape(source) + "</p></footer>\n</body>\n</html>\n";
   return html;

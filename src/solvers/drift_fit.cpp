@@ -7,7 +7,6 @@
 
 namespace accelcal::internal {
 
-
 std::vector<Vec3> DriftResiduals(const Problem& problem, const BiasTimeBasis& basis,
                                  const std::vector<double>& times_s, const ModelParameters& params,
                                  const Eigen::Matrix<double, 3, Eigen::Dynamic>& D,

@@ -88,7 +88,6 @@ class DriftProblem : public LeastSquaresProblem {
   std::vector<Eigen::VectorXd> phi_;
 };
 
-
 struct DriftFit {
   ModelParameters params;
   Eigen::Matrix<double, 3, Eigen::Dynamic> D;

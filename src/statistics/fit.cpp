@@ -50,7 +50,7 @@ Summary FitDrift(const Problem& problem, const std::vector<Vec3>& readings,
     throw DataError(internal::Format(
         "the positions' times do not determine a %s bias (reciprocal condition %.2g): spread the "
         "orientations over the session, each visited early and late",
-        ToString(options.bias_model).c_str(), drift.summary.reciprocal_condition));
+        ToString(options.bias_model).c_str(), std::max(0.0, drift.summary.reciprocal_condition)));
   }
   CalibrationResult& result = fit->result;
   const int P = NumParameters(options.model), J = basis.size();

@@ -76,21 +76,37 @@ TEST(BiasModelSelection, T265DriftsAndALinearBiasHalvesTheHeldOutError) {
   EXPECT_NEAR(x_mg_per_min, -0.665, 0.01);
 }
 
+// The Xsens session warms up: its first rest drifts by 24 mg in 52 s and levels off. No straight
+// line follows that (the linear bias predicts held-out positions worse, 0.149 against 0.143 mg),
+// a spline over 3 knots does: 0.102 mg.
+TEST(BiasModelSelection, XsensWarmUpIsFollowedByASplineNotALine) {
+  const double g = 9.81744;
+  const TimedPositions xsens = FromLog(kData + "/imutk-xsens-mti/xsens_acc.mat");
+  const BiasModelSelection s = SelectBiasModel(xsens.means, Options(g, xsens.times));
+  EXPECT_EQ(ToString(s.chosen), "spline:3") << s.reason;
+  ASSERT_GE(s.steps.size(), 2u);
+  EXPECT_FALSE(s.steps[0].accepted);  // linear
+  EXPECT_GT(s.steps[0].simpler_rms, 0.99 * s.steps[0].richer_rms * 0.96);
+  EXPECT_TRUE(s.steps[1].accepted);  // spline:3 against the constant bias
+  EXPECT_NEAR(s.steps[1].simpler_rms / g * 1e3, 0.143, 0.001);
+  EXPECT_NEAR(*s.result.crossval_rms / g * 1e3, 0.102, 0.001);
+  for (std::size_t i = 2; i < s.steps.size(); ++i) EXPECT_FALSE(s.steps[i].accepted) << i;
+}
+
 // Recordings without a drift the data can show keep the constant bias, their held-out error
-// unchanged: the Xsens session (its rest drifts, its positions do not show it), the CTU sets and
-// the CK blocks (rows in recorded order, a second apart).
+// unchanged: the CTU sets and the CK blocks (rows in recorded order, a second apart).
 TEST(BiasModelSelection, RecordingsWithoutADriftKeepTheConstantBias) {
   struct Set {
     TimedPositions positions;
     double gravity;
   };
   std::vector<Set> sets;
-  sets.push_back({FromLog(kData + "/imutk-xsens-mti/xsens_acc.mat"), 9.81744});
   for (const char* file : {"measured_accelerations_24pos.csv", "measured_accelerations_49pos.csv",
                            "hassan_subset_31pos.csv"}) {
     sets.push_back({FromRows(kData + "/ctu-innalabs-ahrs-m3/" + file), 1.0});
   }
-  sets.push_back({FromRows(kData + "/ckexplorer-160blocks/derived_block_means_rows10to89.csv"), 1.0});
+  sets.push_back(
+      {FromRows(kData + "/ckexplorer-160blocks/derived_block_means_rows10to89.csv"), 1.0});
   for (const Set& set : sets) {
     const CalibrationOptions o = Options(set.gravity, set.positions.times);
     const BiasModelSelection s = SelectBiasModel(set.positions.means, o);
@@ -98,7 +114,10 @@ TEST(BiasModelSelection, RecordingsWithoutADriftKeepTheConstantBias) {
     EXPECT_FALSE(s.result.drift);
     ASSERT_FALSE(s.steps.empty());
     EXPECT_FALSE(s.steps.front().accepted);
-    EXPECT_TRUE(StartsWith(s.reason, "a linear bias ")) << s.reason;
+    EXPECT_TRUE(StartsWith(s.reason,
+                           "no bias model that follows time passes the evidence rule: "
+                           "linear does not"))
+        << s.reason;
     CalibrationOptions constant = o;
     constant.position_times_s.clear();
     const CalibrationResult c = Calibrate(set.positions.means, constant);
@@ -109,9 +128,9 @@ TEST(BiasModelSelection, RecordingsWithoutADriftKeepTheConstantBias) {
 
 // Without times there is nothing to choose from; with one time for all positions neither.
 TEST(BiasModelSelection, PositionsWithoutTimesKeepTheConstantBias) {
-  const std::vector<Vec3> readings = SimulatePositions(
-      Yang2012Truth(), kYang2012Gravity_ms2, RandomDirections(24, 3),
-      Yang2012SigmaRaw(Yang2012Truth()), 3);
+  const std::vector<Vec3> readings =
+      SimulatePositions(Yang2012Truth(), kYang2012Gravity_ms2, RandomDirections(24, 3),
+                        Yang2012SigmaRaw(Yang2012Truth()), 3);
   CalibrationOptions o = Options(kYang2012Gravity_ms2, {});
   o.model = ModelKind::kQuadratic;
   const BiasModelSelection s = SelectBiasModel(readings, o);
@@ -135,7 +154,8 @@ TEST(BiasModelSelection, SimulatedDriftIsFoundAndNoDriftIsNotInvented) {
     const auto seed = static_cast<std::uint64_t>(run);
     const std::vector<Vec3> dirs = RandomDirections(m, 300 + seed);
     std::vector<Vec3> readings = SimulatePositions(device, kYang2012Gravity_ms2, dirs, sigma, seed);
-    const BiasModelSelection quiet = SelectBiasModel(readings, Options(kYang2012Gravity_ms2, times));
+    const BiasModelSelection quiet =
+        SelectBiasModel(readings, Options(kYang2012Gravity_ms2, times));
     drift_invented += quiet.chosen.constant() ? 0 : 1;
     for (int k = 0; k < m; ++k) {
       readings[std::size_t(k)] += 20.0 * sigma * (times[std::size_t(k)] - 295.0) / 580.0;

@@ -576,5 +576,73 @@ TEST_F(Cli, KnownOrientationsScreenAPositionSetInAnotherOrientation) {
   EXPECT_EQ(Exec(args + " --estimator bias-corrected").status, 2);
 }
 
+// --bias-model: the T265 session drifts, and the linear bias that auto chooses halves the held-out
+// error; what it needs (times, the joint fit, no gyroscope) is said when missing.
+TEST_F(Cli, BiasModelFollowsTheT265Drift) {
+  const std::string t265 = kData + "/imutk-t265/t265_acc.mat";
+  const CliRun r = Exec("calibrate " + t265 + " --bias-model auto --json");
+  ASSERT_EQ(r.status, 0) << r.err;
+  const nlohmann::json doc = AccelerometerKeys(r.out);
+  EXPECT_EQ(doc["bias_model_selection"]["chosen"], "linear");
+  const auto& steps = doc["bias_model_selection"]["steps"];
+  ASSERT_EQ(steps.size(), 5u);  // linear accepted, spline:3 … spline:6 not
+  EXPECT_TRUE(steps[0]["accepted"].get<bool>());
+  for (std::size_t i = 1; i < 5; ++i) EXPECT_FALSE(steps[i]["accepted"].get<bool>()) << i;
+  EXPECT_LT(doc["crossval_rms"].get<double>(), 0.40e-3 * 9.80665);
+  const auto& drift = doc["bias_drift"];
+  EXPECT_EQ(drift["model"], "linear");
+  EXPECT_NEAR(drift["D"][0][0].get<double>(), -0.00652, 0.0001);  // m/s2 per minute
+  EXPECT_EQ(drift["covariance"].size(), 12u);                     // 9 parameters and D
+  EXPECT_TRUE(doc["positions"][0].contains("time"));
+  EXPECT_TRUE(doc["positions"][0].contains("drift_offset"));
+  // The rest's drift is a note once the fit's bias follows it.
+  EXPECT_EQ(r.err.find("drifts"), std::string::npos) << r.err;
+  const CliRun text = Exec("calibrate " + t265 + " --bias-model linear -o " + Path("l.json") +
+                           " --report " + Path("l.html"));
+  ASSERT_EQ(text.status, 0) << text.err;
+  // The report shows the drift; the file reads back with it, and its report again.
+  const std::string html = Slurp(Path("l.html"));
+  EXPECT_NE(html.find("<h2>Bias over the session</h2>"), std::string::npos);
+  EXPECT_NE(html.find("linear bias)"), std::string::npos);
+  EXPECT_EQ(html.find("nan"), std::string::npos);
+  const CliRun again = Exec("report " + Path("l.json") + " -o " + Path("again.html"));
+  ASSERT_EQ(again.status, 0) << again.err;
+  EXPECT_NE(Slurp(Path("again.html")).find("<polygon"), std::string::npos);
+  EXPECT_NE(text.out.find("bias drift linear: b(t) = b + D (t - t_ref)"), std::string::npos);
+  EXPECT_NE(text.out.find("note      the longest still interval"), std::string::npos);
+  const CliRun constant = Exec("calibrate " + t265);
+  EXPECT_NE(constant.err.find("(--bias-model auto fits a bias that follows time)"),
+            std::string::npos)
+      << constant.err;
+
+  for (const char* bad : {"spline:1", "spline:33", "spline", "linear:2", "quadratic", ""}) {
+    const CliRun b = Exec("calibrate " + t265 + " --bias-model '" + bad + "'");
+    EXPECT_EQ(b.status, 2) << bad;
+    EXPECT_NE(b.err.find("--bias-model"), std::string::npos) << bad << ": " << b.err;
+  }
+  const CliRun means =
+      Exec("calibrate " + kData + "/imutk-t265/derived_static_means.csv --bias-model linear");
+  EXPECT_EQ(means.status, 3) << means.err;
+  EXPECT_NE(means.err.find("holds the positions' means without their times"), std::string::npos)
+      << means.err;
+  const CliRun auto_means =
+      Exec("calibrate " + kData + "/imutk-t265/derived_static_means.csv --bias-model auto");
+  EXPECT_EQ(auto_means.status, 0) << auto_means.err;
+  EXPECT_NE(auto_means.out.find("bias      auto -> constant: no position has a time"),
+            std::string::npos)
+      << auto_means.out;
+  for (const std::string& other :
+       {std::string("--method two-step"), std::string("--estimator bias-corrected"),
+        std::string("--no-crossval"), "--gyro " + kData + "/imutk-t265/t265_gyr.mat"}) {
+    const CliRun b = Exec("calibrate " + t265 + " --bias-model auto " + other);
+    EXPECT_EQ(b.status, 2) << other << ": " << b.err;
+  }
+  const CliRun known =
+      Exec("calibrate " + kData + "/imucal-ferraris/ferraris_raw_means.csv --orientations " +
+           kData + "/imucal-ferraris/ferraris_orientations.csv --bias-model linear");
+  EXPECT_EQ(known.status, 2) << known.err;
+  EXPECT_NE(known.err.find("--bias-model"), std::string::npos) << known.err;
+}
+
 }  // namespace
 }  // namespace accelcal

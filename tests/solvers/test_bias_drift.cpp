@@ -174,8 +174,7 @@ TEST(BiasDrift, NoiseFreeReadingsGiveTheTruth) {
     const ModelParameters expected = frame == Frame::kZFirst ? MirrorAxes(truth) : truth;
     EXPECT_LT((r.params.K - expected.K).cwiseAbs().maxCoeff(), 1e-9 * 5000);
     EXPECT_LT((r.params.bias - expected.bias).cwiseAbs().maxCoeff(), 1e-7);
-    const Vec3 expected_drift =
-        frame == Frame::kZFirst ? MirrorAxes(per_minute) : per_minute;
+    const Vec3 expected_drift = frame == Frame::kZFirst ? MirrorAxes(per_minute) : per_minute;
     EXPECT_LT((Vec3(r.drift->D.col(0)) - expected_drift).cwiseAbs().maxCoeff(), 1e-8)
         << r.drift->D.transpose();
   }
@@ -190,7 +189,8 @@ TEST(BiasDrift, NoiseFreeReadingsGiveTheTruth) {
   const CalibrationResult r = Calibrate(readings, o);
   ASSERT_TRUE(r.summary.converged()) << r.summary.termination_message;
   EXPECT_LT((r.drift->D - D).cwiseAbs().maxCoeff(), 1e-8)
-      << r.drift->D << "\n" << r.summary.termination_message << " J " << r.summary.final_cost;
+      << r.drift->D << "\n"
+      << r.summary.termination_message << " J " << r.summary.final_cost;
   EXPECT_LT((r.params.bias - truth.bias).cwiseAbs().maxCoeff(), 1e-7);
 }
 
@@ -294,8 +294,8 @@ TEST(BiasDrift, HeldOutErrorsAreThoseOfRefits) {
 }
 
 TEST(BiasDrift, OptionsOutOfPlaceAreRefused) {
-  const std::vector<Vec3> readings = SimulatePositions(
-      Yang2012Truth(), kG, RandomDirections(20, 2), Yang2012SigmaRaw(Yang2012Truth()), 2);
+  const std::vector<Vec3> readings = SimulatePositions(Yang2012Truth(), kG, RandomDirections(20, 2),
+                                                       Yang2012SigmaRaw(Yang2012Truth()), 2);
   CalibrationOptions o = Options(Linear(), Times(19));  // one time short
   EXPECT_THROW(Calibrate(readings, o), std::invalid_argument);
   o.position_times_s = Times(20);

@@ -364,6 +364,11 @@ int accelcal::cli::RunCommandLine(int argc, char** argv) {
     design->add_option("--duration", des.duration_s,
                        "still time per position [s], with --noise-density");
     design->add_option("--model", des.model, "linear or quadratic (default: the device's)");
+    design
+        ->add_option("--bias-model", des.bias_model,
+                     "linear or spline:K: what fitting a drifting bias costs the positions, "
+                     "recorded in the order given, one a minute")
+        ->capture_default_str();
     design->add_option(
         "--choose", des.choose,
         "choose this many of the positions (the candidates) by --criterion; compared "

@@ -79,6 +79,48 @@ int RunDesign(const DesignArgs& args) {
     if (!design.summary.converged) chosen_note += "; " + design.summary.termination_message;
   }
   const auto& slots = ParameterSlots(model, planned.frame);
+  // A drift to plan for: each parameter's 1σ with it over without it, and advice when the order
+  // lets the drift take up a parameter.
+  std::optional<PlannedDriftCost> drift;
+  std::string drift_text;
+  if (args.bias_model != "constant") {
+    const std::optional<BiasModel> bias = BiasModelFromString(args.bias_model);
+    if (!bias) {
+      throw UsageError("--bias-model: '" + args.bias_model + "' is none of constant, linear, " +
+                       "spline:K (K from 2 to " + std::to_string(kMaxBiasKnots) + ")");
+    }
+    if (planned.observable) {
+      drift = PredictDriftCost(device.params, model, device.gravity, directions, sigma, *bias);
+      if (!drift->observable) {
+        drift_text = Format(
+            "drift     a %s bias is NOT determined by these positions in this order: record the "
+            "orientations again later in the session (each axis up and down early and late)\n",
+            args.bias_model.c_str());
+      } else {
+        const double worst = drift->inflation(drift->worst);
+        drift_text = Format(
+            "drift     with a %s bias (positions in the order given, one a minute): each "
+            "parameter's 1 sigma grows by the factor\n",
+            args.bias_model.c_str());
+        for (std::size_t i = 0; i < slots.size(); ++i) {
+          drift_text += Format("  %-5s x%.3f\n", std::string(slots[i].name).c_str(),
+                               drift->inflation(static_cast<Eigen::Index>(i)));
+        }
+        drift_text +=
+            worst > 1.5
+                ? Format(
+                      "advice    the order lets the drift take up %s (x%.2f): visit every "
+                      "orientation early and late, each up followed by its down (go through "
+                      "the positions, then back through them in reverse, ending where you "
+                      "began)\n",
+                      std::string(slots[std::size_t(drift->worst)].name).c_str(), worst)
+                : Format(
+                      "advice    the order keeps the drift apart from the parameters (largest "
+                      "factor %.2f, %s)\n",
+                      worst, std::string(slots[std::size_t(drift->worst)].name).c_str());
+      }
+    }
+  }
   std::string out;
   if (args.json) {
     using Json = nlohmann::ordered_json;
@@ -114,6 +156,18 @@ int RunDesign(const DesignArgs& args) {
       doc["std"] = nullptr;
       doc["crlb"] = nullptr;
     }
+    if (drift) {
+      Json& d = doc["drift"];
+      d["bias_model"] = ToString(drift->bias_model);
+      d["observable"] = drift->observable;
+      if (drift->observable) {
+        d["inflation"] = Json::array();
+        for (Eigen::Index i = 0; i < drift->inflation.size(); ++i) {
+          d["inflation"].push_back(drift->inflation(i));
+        }
+        d["worst"] = std::string(slots[std::size_t(drift->worst)].name);
+      }
+    }
     out = JsonText(doc);
   } else {
     out += Format(
@@ -141,6 +195,7 @@ int RunDesign(const DesignArgs& args) {
         out += Format("poorly determined: %s (reciprocal condition %.2g)\n",
                       planned.weakest.c_str(), planned.rcond);
       }
+      out += drift_text;
     }
   }
   WriteFileAtomically("-", out);

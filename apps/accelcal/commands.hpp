@@ -193,6 +193,7 @@ struct DesignArgs {
   std::optional<double> noise_density_ug;  // instead of noise_raw, with rate and duration
   std::optional<double> rate_hz;
   std::optional<double> duration_s;
+  std::string bias_model = "constant";  // a drift to plan for (bias_drift.hpp)
   bool json = false;
 };
 

@@ -18,6 +18,7 @@
 
 #include <Eigen/Core>
 
+#include "accelcal/bias_drift.hpp"
 #include "accelcal/frame.hpp"
 #include "accelcal/model.hpp"
 #include "accelcal/names.hpp"
@@ -41,6 +42,24 @@ struct PlannedUncertainty {
 PlannedUncertainty PredictUncertainty(const ModelParameters& device, ModelKind model,
                                       double gravity, const std::vector<Vec3>& directions,
                                       const Vec3& sigma_raw);
+
+/// What a drifting bias (bias_drift.hpp) costs a plan: the positions recorded in the order given,
+/// evenly spaced in time, and the bias of `bias_model` fitted with the rest (CRLB of θ and D with
+/// the directions as nuisance parameters, as PredictUncertainty's).
+struct PlannedDriftCost {
+  BiasModel bias_model;
+  bool observable = false;  ///< the drift and the parameters are determined together
+  /// Per flat parameter of the device's frame: 1σ with the drift fitted over 1σ with a constant
+  /// bias (≥ 1: the part of each parameter the drift could take up).
+  Eigen::VectorXd inflation;
+  int worst = -1;  ///< the flat index of the largest inflation
+  /// 1σ of D [raw] (3 × J; linear: per minute with one position a minute).
+  Eigen::MatrixXd drift_sigma;
+};
+/// Throws as PredictUncertainty; a constant bias_model is refused (std::invalid_argument).
+PlannedDriftCost PredictDriftCost(const ModelParameters& device, ModelKind model, double gravity,
+                                  const std::vector<Vec3>& directions, const Vec3& sigma_raw,
+                                  const BiasModel& bias_model);
 
 /// D-optimal choice of `count` distinct positions out of `candidates`: maximises det I (the
 /// volume of the CRLB's confidence ellipsoid shrinks with it; invariant to the parameters' units).

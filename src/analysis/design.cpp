@@ -11,6 +11,7 @@
 
 #include "accelcal/error.hpp"
 #include "accelcal/simulate.hpp"
+#include "solvers/drift_fit.hpp"
 #include "solvers/solver_common.hpp"
 
 namespace accelcal {
@@ -333,6 +334,56 @@ PlannedUncertainty PredictUncertainty(const ModelParameters& device, ModelKind m
     out.crlb = d.asDiagonal() * out.crlb * d.asDiagonal();
   }
   out.std = Unpack(out.crlb.diagonal().cwiseMax(0.0).cwiseSqrt(), ParameterSlots(model, out.frame));
+  return out;
+}
+
+PlannedDriftCost PredictDriftCost(const ModelParameters& device, ModelKind model, double gravity,
+                                  const std::vector<Vec3>& directions, const Vec3& sigma_raw,
+                                  const BiasModel& bias_model) {
+  if (bias_model.constant()) throw std::invalid_argument("a constant bias does not drift");
+  const PlannedUncertainty constant =
+      PredictUncertainty(device, model, gravity, directions, sigma_raw);
+  const Plan plan(device, model, gravity, directions, sigma_raw);
+  std::vector<double> times;  // one position a minute
+  for (std::size_t k = 0; k < directions.size(); ++k) times.push_back(60.0 * double(k));
+  PlannedDriftCost out;
+  out.bias_model = bias_model;
+  const BiasTimeBasis basis = BiasTimeBasis::For(bias_model, times);
+  const internal::DriftProblem lsq(plan.problem, basis, times);
+  const int P = NumParameters(model), J = basis.size(), n = P + 3 * J;
+  Eigen::VectorXd x = Eigen::VectorXd::Zero(n);
+  x.head(P) = Pack(plan.device, model);
+  Eigen::MatrixXd information = Eigen::MatrixXd::Zero(n, n);
+  for (std::size_t k = 0; k < directions.size(); ++k) {
+    Vec3 normal;
+    const Eigen::VectorXd u =
+        internal::DriftInformationRow(lsq, x, static_cast<int>(k), plan.directions[k], &normal);
+    information += u * u.transpose() / normal.cwiseAbs2().dot(plan.sigma.cwiseAbs2());
+  }
+  // Jacobi-scaled, as the observability test of calibrate.
+  const Eigen::VectorXd scale = information.diagonal().cwiseMax(1e-300).cwiseSqrt().cwiseInverse();
+  const Eigen::MatrixXd scaled = scale.asDiagonal() * information * scale.asDiagonal();
+  const Eigen::LDLT<Eigen::MatrixXd> ldlt(scaled);
+  const Eigen::VectorXd d = ldlt.vectorD();
+  out.observable = constant.observable && ldlt.info() == Eigen::Success &&
+                   d.minCoeff() > internal::kMinInformationRcond * d.maxCoeff();
+  if (!out.observable) return out;
+  const Eigen::MatrixXd crlb =
+      scale.asDiagonal() * ldlt.solve(Eigen::MatrixXd::Identity(n, n)) * scale.asDiagonal();
+  out.inflation.resize(P);
+  for (int i = 0; i < P; ++i) {
+    // Slot i of the mirrored x-first problem is slot i of the device's frame (frame.hpp).
+    out.inflation(i) = std::sqrt(crlb(i, i) / constant.crlb(i, i));
+    if (out.worst < 0 || out.inflation(i) > out.inflation(out.worst)) out.worst = i;
+  }
+  out.drift_sigma.resize(3, J);
+  const int from[3] = {2, 1, 0};
+  for (int i = 0; i < 3; ++i) {
+    const int row = plan.frame == Frame::kZFirst ? from[i] : i;  // D mirrored row by row
+    for (int j = 0; j < J; ++j) {
+      out.drift_sigma(i, j) = std::sqrt(crlb(P + row * J + j, P + row * J + j));
+    }
+  }
   return out;
 }
 

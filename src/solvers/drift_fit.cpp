@@ -7,6 +7,15 @@
 
 namespace accelcal::internal {
 
+Eigen::VectorXd DriftInformationRow(const DriftProblem& problem, const Eigen::VectorXd& x, int k,
+                                    const Vec3& c, Vec3* normal) {
+  Eigen::VectorXd r;
+  Eigen::MatrixXd J_x, J_y;
+  problem.Evaluate(k, x, c, &r, &J_x, &J_y);
+  *normal = Vec3(J_y.col(0)).cross(Vec3(J_y.col(1))).normalized();
+  return J_x.transpose() * *normal;
+}
+
 std::vector<Vec3> DriftResiduals(const Problem& problem, const BiasTimeBasis& basis,
                                  const std::vector<double>& times_s, const ModelParameters& params,
                                  const Eigen::Matrix<double, 3, Eigen::Dynamic>& D,
@@ -51,13 +60,7 @@ DriftFit SolveDrift(const Problem& problem, const BiasTimeBasis& basis,
   fit.normals.resize(static_cast<std::size_t>(m));
   for (int k = 0; k < m; ++k) {
     const auto i = static_cast<std::size_t>(k);
-    Eigen::VectorXd r;
-    Eigen::MatrixXd J_x, J_y;
-    lsq.Evaluate(k, state.x, state.y[i], &r, &J_x, &J_y);
-    const Vec3 a = J_y.col(0), b = J_y.col(1);
-    const Vec3 normal = a.cross(b).normalized();
-    fit.normals[i] = normal;
-    fit.U.row(k) = (J_x.transpose() * normal).transpose();
+    fit.U.row(k) = DriftInformationRow(lsq, state.x, k, state.y[i], &fit.normals[i]).transpose();
   }
   return fit;
 }

@@ -88,6 +88,11 @@ class DriftProblem : public LeastSquaresProblem {
   std::vector<Eigen::VectorXd> phi_;
 };
 
+/// Position k's row of the reduced information at (x, c): u = J_xᵀ n, n the unit normal of the
+/// fitted surface at g c (⟂ the columns of J_y), written to `normal`.
+Eigen::VectorXd DriftInformationRow(const DriftProblem& problem, const Eigen::VectorXd& x, int k,
+                                    const Vec3& c, Vec3* normal);
+
 struct DriftFit {
   ModelParameters params;
   Eigen::Matrix<double, 3, Eigen::Dynamic> D;

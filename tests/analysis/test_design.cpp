@@ -311,3 +311,69 @@ TEST(Design, DOptimalEighteenOutOfFiveHundredRivalsPaper000sScheme) {
 
 }  // namespace
 }  // namespace accelcal
+
+namespace accelcal {
+namespace {
+
+// A drift within the session costs a plan what its order lets the drift take up: the 18 face and
+// edge directions with every +x position first and every −x last leave K_xx to be told from a
+// drift by the other axes alone (its 1σ ×6.2 with a linear bias). Each up followed by its down is
+// not enough when an axis is visited early only: its bias at the session's middle is then an
+// extrapolation (b_x ×4.2). Going through the pairs and back through them in reverse visits each
+// orientation early and late and loses almost nothing.
+TEST(DesignDrift, AnOrderWithEachAxisUpThenDownLetsTheDriftTakeUpItsScale) {
+  std::vector<Vec3> grouped, interleaved;
+  for (int x = -1; x <= 1; ++x) {
+    for (int y = -1; y <= 1; ++y) {
+      for (int z = -1; z <= 1; ++z) {
+        const int nonzero = (x != 0) + (y != 0) + (z != 0);
+        if (nonzero == 1 || nonzero == 2) grouped.push_back(Vec3(x, y, z).normalized());
+      }
+    }
+  }
+  // Grouped: +x first, then x = 0, then −x (the loops above give −x first: reverse them).
+  std::stable_sort(grouped.begin(), grouped.end(),
+                   [](const Vec3& a, const Vec3& b) { return a(0) > b(0) + 0.5; });
+  // Interleaved: each direction followed by its opposite.
+  for (const Vec3& c : grouped) {
+    if (c(0) > 0 || (c(0) == 0 && (c(1) > 0 || (c(1) == 0 && c(2) > 0)))) {
+      interleaved.push_back(c);
+      interleaved.push_back(-c);
+    }
+  }
+  ASSERT_EQ(grouped.size(), 18u);
+  ASSERT_EQ(interleaved.size(), 18u);
+  std::vector<Vec3> there_and_back = interleaved;
+  there_and_back.insert(there_and_back.end(), interleaved.rbegin(), interleaved.rend());
+  const ModelParameters device = Yang2012Truth();
+  const Vec3 sigma = Yang2012SigmaRaw(device);
+  const BiasModel linear{BiasModelKind::kLinear, 0};
+  const PlannedDriftCost bad =
+      PredictDriftCost(device, ModelKind::kLinear, kYang2012Gravity_ms2, grouped, sigma, linear);
+  const PlannedDriftCost early = PredictDriftCost(device, ModelKind::kLinear, kYang2012Gravity_ms2,
+                                                  interleaved, sigma, linear);
+  const PlannedDriftCost good = PredictDriftCost(device, ModelKind::kLinear, kYang2012Gravity_ms2,
+                                                 there_and_back, sigma, linear);
+  ASSERT_TRUE(bad.observable && early.observable && good.observable);
+  EXPECT_GT(bad.inflation(0), 5.0);    // K_xx
+  EXPECT_GT(early.inflation(1), 3.0);  // b_x
+  EXPECT_LT(good.inflation.maxCoeff(), 1.5) << good.inflation.transpose();
+  EXPECT_GE(good.inflation.minCoeff(), 1.0 - 1e-9);  // a drift never helps
+  // The same plan in the z-first frame costs the same (the mirrored problem, slot by slot).
+  const PlannedDriftCost mirrored = PredictDriftCost(
+      MirrorAxes(device), ModelKind::kLinear, kYang2012Gravity_ms2,
+      [&] {
+        std::vector<Vec3> m;
+        for (const Vec3& c : grouped) m.push_back(MirrorAxes(c));
+        return m;
+      }(),
+      Vec3(MirrorAxes(sigma).cwiseAbs()), linear);
+  ASSERT_TRUE(mirrored.observable);
+  EXPECT_NEAR((mirrored.inflation - bad.inflation).cwiseAbs().maxCoeff(), 0.0, 1e-6);
+  EXPECT_THROW(PredictDriftCost(device, ModelKind::kLinear, kYang2012Gravity_ms2, grouped, sigma,
+                                BiasModel{}),
+               std::invalid_argument);
+}
+
+}  // namespace
+}  // namespace accelcal

@@ -25,6 +25,16 @@ ordered_json ToJson(const Mat33& m) {
   return rows;
 }
 
+ordered_json ToJson(const Eigen::MatrixXd& m) {
+  ordered_json rows = ordered_json::array();
+  for (Eigen::Index i = 0; i < m.rows(); ++i) {
+    ordered_json row = ordered_json::array();
+    for (Eigen::Index j = 0; j < m.cols(); ++j) row.push_back(m(i, j));
+    rows.push_back(row);
+  }
+  return rows;
+}
+
 ordered_json Nullable(const std::optional<double>& v) {
   return v && std::isfinite(*v) ? ordered_json(*v) : ordered_json(nullptr);
 }
@@ -74,14 +84,7 @@ ordered_json DriftSection(const BiasDrift& drift) {
   doc["D"] = D;
   if (drift.covariance.size() > 0) {
     doc["D_std"] = sd;
-    ordered_json cov = ordered_json::array();
-    for (Eigen::Index i = 0; i < drift.covariance.rows(); ++i) {
-      ordered_json row = ordered_json::array();
-      for (Eigen::Index j = 0; j < drift.covariance.cols(); ++j)
-        row.push_back(drift.covariance(i, j));
-      cov.push_back(row);
-    }
-    doc["covariance"] = cov;
+    doc["covariance"] = ToJson(drift.covariance);
   } else {
     doc["D_std"] = nullptr;
     doc["covariance"] = nullptr;
@@ -109,13 +112,7 @@ ordered_json AccelerometerSection(const CalibrationResult& result, const Calibra
   for (const auto& s : slots) order.push_back(std::string(s.name));
   doc["parameter_order"] = order;
   if (result.covariance.size() > 0) {
-    ordered_json cov = ordered_json::array();
-    for (Eigen::Index i = 0; i < result.covariance.rows(); ++i) {
-      ordered_json row = ordered_json::array();
-      for (Eigen::Index j = 0; j < result.covariance.cols(); ++j)
-        row.push_back(result.covariance(i, j));
-      cov.push_back(row);
-    }
+    const ordered_json cov = ToJson(result.covariance);
     const ModelParameters std_params =
         Unpack(result.covariance.diagonal().cwiseMax(0.0).cwiseSqrt(), slots);
     doc["std"] = {{"K", ToJson(std_params.K)},
@@ -267,16 +264,6 @@ ordered_json AccelerometerSection(const CalibrationResult& result, const Calibra
   doc["source"] = info.source;
   if (!info.sources.empty()) doc["sources"] = info.sources;
   return doc;
-}
-
-ordered_json ToJson(const Eigen::MatrixXd& m) {
-  ordered_json rows = ordered_json::array();
-  for (Eigen::Index i = 0; i < m.rows(); ++i) {
-    ordered_json row = ordered_json::array();
-    for (Eigen::Index j = 0; j < m.cols(); ++j) row.push_back(m(i, j));
-    rows.push_back(row);
-  }
-  return rows;
 }
 
 // The gyroscope's section (issue 18): its model, parameters, their uncertainty, the rotations.

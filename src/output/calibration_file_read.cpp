@@ -116,23 +116,31 @@ void CheckCovariance(const Reader& r, const Eigen::MatrixXd& c) {
   }
 }
 
-void ReadCovariance(const Reader& r, const ordered_json& doc, LoadedCalibration& cal) {
-  if (!doc.contains("covariance") || doc["covariance"].is_null()) return;
-  const std::size_t P = ParameterSlots(cal.model, cal.frame).size();
+// `doc`'s `covariance`: n × n numbers, symmetric with a diagonal ≥ 0 (`what` names its
+// parameters in the error).
+Eigen::MatrixXd ReadSquareCovariance(const Reader& r, const ordered_json& doc, std::size_t n,
+                                     const std::string& what) {
   const ordered_json& cov = doc["covariance"];
-  const std::string shape = r.Key("covariance") + " must be null or a " + std::to_string(P) + "x" +
-                            std::to_string(P) + " array (the " + std::string(ToString(cal.model)) +
-                            " model in frame " + std::string(ToString(cal.frame)) + ")";
-  if (!cov.is_array() || cov.size() != P) r.Fail(shape);
-  cal.covariance.resize(static_cast<Eigen::Index>(P), static_cast<Eigen::Index>(P));
-  for (std::size_t i = 0; i < P; ++i) {
-    if (!cov[i].is_array() || cov[i].size() != P) r.Fail(shape);
-    for (std::size_t j = 0; j < P; ++j) {
-      cal.covariance(static_cast<Eigen::Index>(i), static_cast<Eigen::Index>(j)) =
+  const std::string shape = r.Key("covariance") + " must be null or a " + std::to_string(n) + "x" +
+                            std::to_string(n) + " array (" + what + ")";
+  if (!cov.is_array() || cov.size() != n) r.Fail(shape);
+  Eigen::MatrixXd c(static_cast<Eigen::Index>(n), static_cast<Eigen::Index>(n));
+  for (std::size_t i = 0; i < n; ++i) {
+    if (!cov[i].is_array() || cov[i].size() != n) r.Fail(shape);
+    for (std::size_t j = 0; j < n; ++j) {
+      c(static_cast<Eigen::Index>(i), static_cast<Eigen::Index>(j)) =
           r.Number(cov[i][j], "covariance[" + std::to_string(i) + "][" + std::to_string(j) + "]");
     }
   }
-  CheckCovariance(r, cal.covariance);
+  CheckCovariance(r, c);
+  return c;
+}
+
+void ReadCovariance(const Reader& r, const ordered_json& doc, LoadedCalibration& cal) {
+  if (!doc.contains("covariance") || doc["covariance"].is_null()) return;
+  cal.covariance = ReadSquareCovariance(r, doc, ParameterSlots(cal.model, cal.frame).size(),
+                                        "the " + std::string(ToString(cal.model)) +
+                                            " model in frame " + std::string(ToString(cal.frame)));
 }
 
 FilePosition ReadPosition(const Reader& r, const ordered_json& p) {
@@ -228,20 +236,8 @@ void ReadDrift(const Reader& r, const ordered_json& doc, LoadedCalibration& cal)
     }
   }
   if (d.contains("covariance") && !d["covariance"].is_null()) {
-    const std::size_t n = ParameterSlots(cal.model, cal.frame).size() + 3 * J;
-    const ordered_json& cov = d["covariance"];
-    const std::string cov_shape = in.Key("covariance") + " must be null or a " + std::to_string(n) +
-                                  "x" + std::to_string(n) + " array";
-    if (!cov.is_array() || cov.size() != n) in.Fail(cov_shape);
-    drift.covariance.resize(static_cast<Eigen::Index>(n), static_cast<Eigen::Index>(n));
-    for (std::size_t i = 0; i < n; ++i) {
-      if (!cov[i].is_array() || cov[i].size() != n) in.Fail(cov_shape);
-      for (std::size_t j = 0; j < n; ++j) {
-        drift.covariance(static_cast<Eigen::Index>(i), static_cast<Eigen::Index>(j)) =
-            in.Number(cov[i][j], in.Key("covariance"));
-      }
-    }
-    CheckCovariance(in, drift.covariance);
+    drift.covariance = ReadSquareCovariance(
+        in, d, ParameterSlots(cal.model, cal.frame).size() + 3 * J, "the model's parameters and D");
   }
   for (std::size_t k = 0; k < cal.positions.size(); ++k) {
     if (!cal.positions[k].time) {
@@ -369,19 +365,9 @@ LoadedCalibration::Gyroscope ReadGyroscope(const Reader& r, const ordered_json& 
     g.source = doc["source"].get<std::string>();
   }
   if (doc.contains("covariance") && !doc["covariance"].is_null()) {
-    const int P = NumGyroParameters(g.model);
-    const auto& c = doc["covariance"];
-    if (!c.is_array() || static_cast<int>(c.size()) != P) {
-      r.Fail(r.Key("covariance") + " must be " + std::to_string(P) + "x" + std::to_string(P));
-    }
-    g.covariance.resize(P, P);
-    for (int i = 0; i < P; ++i) {
-      if (!c[i].is_array() || static_cast<int>(c[i].size()) != P) {
-        r.Fail(r.Key("covariance") + " must be " + std::to_string(P) + "x" + std::to_string(P));
-      }
-      for (int j = 0; j < P; ++j) g.covariance(i, j) = r.Number(c[i][j], r.Key("covariance"));
-    }
-    CheckCovariance(r, g.covariance);
+    g.covariance =
+        ReadSquareCovariance(r, doc, static_cast<std::size_t>(NumGyroParameters(g.model)),
+                             "the " + std::string(ToString(g.model)) + " gyroscope model");
   }
   if (doc.contains("validation") && doc["validation"].is_object()) {
     g.heldout_rms_deg = r.Inside("validation").Nullable(doc["validation"], "heldout_rms_deg");

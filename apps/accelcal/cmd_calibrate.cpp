@@ -463,6 +463,31 @@ std::vector<double> PositionTimes(const LoadedInput& in, std::string* why) {
   return times;
 }
 
+// The longest pause between two positions when it is over 5 times the median pause and a minute:
+// a drift is fitted straight (or between knots) across it, which nothing between them checks.
+void WarnDriftAcrossGap(const std::string& path, const std::vector<double>& times,
+                        const BiasModel& model) {
+  if (model.constant() || times.size() < 3) return;
+  std::vector<double> sorted = times;
+  std::sort(sorted.begin(), sorted.end());
+  std::vector<double> pauses;
+  std::size_t longest = 0;
+  for (std::size_t k = 1; k < sorted.size(); ++k) {
+    pauses.push_back(sorted[k] - sorted[k - 1]);
+    if (pauses.back() > pauses[longest]) longest = pauses.size() - 1;
+  }
+  std::vector<double> ordered = pauses;
+  std::nth_element(ordered.begin(), ordered.begin() + ordered.size() / 2, ordered.end());
+  const double median = ordered[ordered.size() / 2];
+  if (pauses[longest] > 5 * median && pauses[longest] > 60) {
+    Warn(
+        "%s: no position between %.6g s and %.6g s (%.0f s, %.0f times the median pause): the %s "
+        "bias is fitted across that time as if it drifted as it did around it\n",
+        path.c_str(), sorted[longest], sorted[longest + 1], pauses[longest],
+        pauses[longest] / median, ToString(model).c_str());
+  }
+}
+
 int WriteCalibration(const CalibrateArgs& given, const LoadedInput& in, const Gravity& g,
                      const CalibrationResult& result, const std::vector<Vec3>& mean_sigmas,
                      const ModelSelection* selection, const BiasModelSelection* bias_selection,
@@ -728,6 +753,7 @@ int RunCalibrate(const CalibrateArgs& args) {
   const ModelChoice choice = CalibrateChoosingModel(means, options, auto_model);
   const CalibrationResult& result = choice.result;
   const std::optional<ModelSelection>& selection = choice.selection;
+  if (result.drift) WarnDriftAcrossGap(args.input.path, result.drift->times_s, options.bias_model);
   if (!result.summary.converged()) {
     std::fprintf(stderr, "accelcal: %s: the solver did not converge: %s; nothing written\n",
                  args.input.path.c_str(), result.summary.termination_message.c_str());

@@ -637,6 +637,31 @@ TEST_F(Cli, BiasModelFollowsTheT265Drift) {
     const CliRun b = Exec("calibrate " + t265 + " --bias-model auto " + other);
     EXPECT_EQ(b.status, 2) << other << ": " << b.err;
   }
+  // A pause of 1000 s in the session: the drift is fitted across it, and the tool says so.
+  {
+    std::istringstream in(Slurp(t265));
+    std::ofstream out(Path("gap.txt"));
+    std::string line;
+    for (int row = 0; std::getline(in, line); ++row) {
+      if (row >= 32000) {
+        std::istringstream fields(line);
+        double t = 0;
+        fields >> t;
+        std::string rest;
+        std::getline(fields, rest);
+        char time[64];
+        std::snprintf(time, sizeof time, "%.6f", t + 1000.0);
+        line = time + rest;
+      }
+      out << line << "\n";
+    }
+  }
+  const CliRun gap = Exec("calibrate " + Path("gap.txt") + " --bias-model linear");
+  EXPECT_EQ(gap.status, 0) << gap.err;
+  EXPECT_NE(gap.err.find("(1010 s, 171 times the median pause): the linear bias is fitted across"),
+            std::string::npos)
+      << gap.err;
+  EXPECT_EQ(text.err.find("median pause"), std::string::npos) << text.err;
   const CliRun known =
       Exec("calibrate " + kData + "/imucal-ferraris/ferraris_raw_means.csv --orientations " +
            kData + "/imucal-ferraris/ferraris_orientations.csv --bias-model linear");

@@ -245,6 +245,14 @@ void ReadDrift(const Reader& r, const ordered_json& doc, LoadedCalibration& cal)
              "] has no 'time', which a drifting bias needs");
     }
     drift.times_s.push_back(*cal.positions[k].time);
+    // The drift must be one the model can take from its own positions' readings.
+    const std::optional<Vec3> f =
+        SpecificForce(cal.params, Vec3(cal.positions[k].mean - drift.Offset(drift.times_s[k])));
+    if (!f || !std::isfinite(f->norm())) {
+      r.Fail(r.Key("bias_drift") + " at the time of positions[" + std::to_string(k) +
+             "] leaves a reading the model cannot invert: its 'D' and 't_ref' are not a drift "
+             "of this session");
+    }
   }
   cal.drift = std::move(drift);
 }

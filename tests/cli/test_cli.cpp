@@ -608,6 +608,18 @@ TEST_F(Cli, BiasModelFollowsTheT265Drift) {
   const CliRun again = Exec("report " + Path("l.json") + " -o " + Path("again.html"));
   ASSERT_EQ(again.status, 0) << again.err;
   EXPECT_NE(Slurp(Path("again.html")).find("<polygon"), std::string::npos);
+  // A hand-edited drift that no reading survives is refused when read, not reported as inf.
+  {
+    nlohmann::json edited = nlohmann::json::parse(Slurp(Path("l.json")));
+    edited["sensors"]["accelerometer"]["bias_drift"]["D"][0][0] = 1e300;
+    std::ofstream(Path("edited.json")) << edited.dump();
+    const CliRun refused = Exec("export " + Path("edited.json") + " --to imutk");
+    EXPECT_EQ(refused.status, 3) << refused.err;
+    EXPECT_NE(refused.err.find("bias_drift' at the time of positions[0] leaves a reading the "
+                               "model cannot invert"),
+              std::string::npos)
+        << refused.err;
+  }
   EXPECT_NE(text.out.find("bias drift linear: b(t) = b + D (t - t_ref)"), std::string::npos);
   EXPECT_NE(text.out.find("note      the longest still interval"), std::string::npos);
   const CliRun constant = Exec("calibrate " + t265);

@@ -35,6 +35,7 @@
 
 #include <Eigen/Core>
 
+#include "accelcal/model.hpp"
 #include "accelcal/names.hpp"
 #include "accelcal/types.hpp"
 
@@ -107,5 +108,10 @@ struct BiasDrift {
   /// NaN without a covariance. `bias_slots`: the flat indices of b_x, b_y, b_z.
   Vec3 BiasSigma(double t_s, const int bias_slots[3]) const;
 };
+
+/// MirrorAxes for a drift (frame.hpp): the rows of D mapped by P (D = P D_mirrored, column by
+/// column), and the joint covariance of `model`'s flat parameters and D by the matching signed
+/// permutation (MirrorSigns for the parameters). An involution, as MirrorAxes.
+BiasDrift MirrorAxes(const BiasDrift& drift, ModelKind model);
 
 }  // namespace accelcal

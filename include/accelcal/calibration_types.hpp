@@ -239,6 +239,11 @@ struct CalibrationOptions {
   /// of the positions (screening, held-out) is given the full set's, so that its knots and
   /// reference time are the same.
   std::optional<BiasTimeBasis> bias_basis;
+  /// The random walk of the bias, q per axis [raw/√s] (the Allan deviation's K, noise_model.hpp):
+  /// with a spline bias, the knot biases' increments are given the prior N(0, q² Δτ), so that
+  /// many knots follow a wandering bias without fitting the noise (drift_fit.hpp). Ignored by the
+  /// other bias models; finite and positive.
+  std::optional<Vec3> bias_random_walk;
 
   /// Estimator::kBiasCorrected: refit until no reading's shift changes by more than
   /// `tolerance` times its noise along the normal (then the parameters are settled far below

@@ -376,12 +376,15 @@ PlannedDriftCost PredictDriftCost(const ModelParameters& device, ModelKind model
     out.inflation(i) = std::sqrt(crlb(i, i) / constant.crlb(i, i));
     if (out.worst < 0 || out.inflation(i) > out.inflation(out.worst)) out.worst = i;
   }
+  BiasDrift planned;  // the drift's CRLB, in the device's frame
+  planned.basis = basis;
+  planned.D = Eigen::MatrixXd::Zero(3, J);
+  planned.covariance = crlb;
+  if (plan.frame == Frame::kZFirst) planned = MirrorAxes(planned, model);
   out.drift_sigma.resize(3, J);
-  const int from[3] = {2, 1, 0};
   for (int i = 0; i < 3; ++i) {
-    const int row = plan.frame == Frame::kZFirst ? from[i] : i;  // D mirrored row by row
     for (int j = 0; j < J; ++j) {
-      out.drift_sigma(i, j) = std::sqrt(crlb(P + row * J + j, P + row * J + j));
+      out.drift_sigma(i, j) = std::sqrt(planned.covariance(P + i * J + j, P + i * J + j));
     }
   }
   return out;

@@ -327,7 +327,7 @@ CalibrationResult CalibrateKnownOrientations(const std::vector<Vec3>& readings,
 
   if (options.cross_validate) {
     internal::LeaveOneOut(
-        readings, options.gravity,
+        readings,
         [&](std::size_t k) -> internal::HeldOutRefit {
           std::vector<Vec3> held_out = weights;
           held_out[k].setZero();

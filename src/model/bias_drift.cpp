@@ -6,6 +6,8 @@
 #include <numeric>
 #include <stdexcept>
 
+#include "accelcal/frame.hpp"
+
 namespace accelcal {
 
 namespace {
@@ -113,6 +115,24 @@ Vec3 BiasDrift::BiasSigma(double t_s, const int bias_slots[3]) const {
     sigma(i) = std::sqrt(std::max(0.0, w.dot(covariance * w)));
   }
   return sigma;
+}
+
+BiasDrift MirrorAxes(const BiasDrift& drift, ModelKind model) {
+  // P v = (v_z, −v_y, v_x): row i of the result is sign[i] times row from[i].
+  constexpr int kFrom[3] = {2, 1, 0};
+  constexpr double kSign[3] = {1.0, -1.0, 1.0};
+  BiasDrift out = drift;
+  const Eigen::Index J = drift.D.cols();
+  for (int i = 0; i < 3; ++i) out.D.row(i) = kSign[i] * drift.D.row(kFrom[i]);
+  if (drift.covariance.size() == 0) return out;
+  const Eigen::Index P = NumParameters(model);
+  Eigen::MatrixXd M = Eigen::MatrixXd::Zero(P + 3 * J, P + 3 * J);
+  M.topLeftCorner(P, P) = MirrorSigns(model).asDiagonal();
+  for (int i = 0; i < 3; ++i) {
+    for (Eigen::Index j = 0; j < J; ++j) M(P + i * J + j, P + kFrom[i] * J + j) = kSign[i];
+  }
+  out.covariance = M * drift.covariance * M.transpose();
+  return out;
 }
 
 }  // namespace accelcal

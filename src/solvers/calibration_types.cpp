@@ -133,6 +133,12 @@ std::optional<std::string> CalibrationOptions::Validate() const {
       return "a " + name + " bias is fitted by maximum likelihood only";
     }
   }
+  if (bias_random_walk && !(bias_random_walk->allFinite() && bias_random_walk->minCoeff() > 0)) {
+    return "bias_random_walk must be finite and positive";
+  }
+  if (bias_random_walk && bias_model.kind == BiasModelKind::kSpline && reading_sigmas.empty()) {
+    return "a random walk of the bias weighs the readings by their noise: it needs reading_sigmas";
+  }
   if (bias_basis && bias_basis->model != bias_model) {
     return "bias_basis is the basis of another bias model";
   }

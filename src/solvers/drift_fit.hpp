@@ -7,6 +7,7 @@
 // calibrate.hpp: position k adds u_k u_kᵀ, u_k = −J_xᵀ n_k with n_k the unit normal of the fitted
 // surface at g c_k (the direction of p_k's residual that no direction change can take up).
 
+#include <optional>
 #include <vector>
 
 #include <Eigen/Core>
@@ -18,80 +19,55 @@
 
 namespace accelcal::internal {
 
-/// The problem for the least-squares driver: x = (θ, D), each block one position with its
-/// direction c_k (stored 3, moved in 2).
+/// A random-walk prior on a spline bias (bias_drift.hpp): the knot biases' increments
+/// β_{j+1} − β_j of axis i are N(0, q_i² Δτ_j), Δτ_j = τ_{j+1} − τ_j. With it every residual is
+/// whitened: position k's axis i is divided by √(s_ki² + q_i² v_k), s_ki the 1σ of its reading
+/// (CalibrationOptions::reading_sigmas) and v_k = (t_k − τ_j)(τ_{j+1} − t_k)/Δτ_j the variance of a
+/// random walk about the straight line between the knots around t_k (a Brownian bridge), and the
+/// prior enters as (β_{j+1} − β_j) / (q_i √Δτ_j). The sum of squares is then the negative
+/// log-posterior, and the inverse of its Gauss-Newton Hessian the posterior covariance.
+struct RandomWalkPrior {
+  Vec3 q_raw_per_sqrt_s = Vec3::Zero();
+  std::vector<Vec3> reading_sigmas;  ///< one per position [raw]
+};
+
+/// The problem for the least-squares driver: x = (θ, D), each of the first m blocks one position
+/// with its direction c_k (stored 3, moved in 2), and with a prior one more block of x alone.
 class DriftProblem : public LeastSquaresProblem {
  public:
   DriftProblem(const Problem& problem, const BiasTimeBasis& basis,
-               const std::vector<double>& times_s)
-      : problem_(problem),
-        slots_(ParameterSlots(problem.model)),
-        P_(static_cast<int>(slots_.size())),
-        J_(basis.size()) {
-    phi_.reserve(times_s.size());
-    for (double t : times_s) phi_.push_back(basis.Evaluate(t));
-  }
+               const std::vector<double>& times_s,
+               const std::optional<RandomWalkPrior>& prior = std::nullopt);
   int GlobalSize() const override { return P_ + 3 * J_; }
-  int NumBlocks() const override { return problem_.positions(); }
-  int LocalSize(int /*block*/) const override { return 2; }
-  Eigen::VectorXd PlusLocal(int /*block*/, const Eigen::VectorXd& y,
-                            const Eigen::VectorXd& delta) const override {
-    const Vec3 c = y;
-    return Retract(c, TangentBasis(c), Eigen::Vector2d(delta));
-  }
+  int NumBlocks() const override { return problem_.positions() + (prior_rows_.rows() > 0); }
+  int LocalSize(int block) const override { return block < problem_.positions() ? 2 : 0; }
+  Eigen::VectorXd PlusLocal(int block, const Eigen::VectorXd& y,
+                            const Eigen::VectorXd& delta) const override;
   bool Evaluate(int block, const Eigen::VectorXd& x, const Eigen::VectorXd& y,
                 Eigen::VectorXd* residual, Eigen::MatrixXd* J_x,
-                Eigen::MatrixXd* J_y) const override {
-    const auto k = static_cast<std::size_t>(block);
-    const ModelParameters params = Params(x);
-    const Vec3 c = y;
-    const Vec3 f = problem_.gravity * c;
-    const Eigen::VectorXd& phi = phi_[k];
-    Mat33 J_f;
-    Vec3 offset = Vec3::Zero();
-    for (int i = 0; i < 3; ++i) {
-      for (int j = 0; j < J_; ++j) offset(i) += x(P_ + i * J_ + j) * phi(j);
-    }
-    *residual = problem_.readings[k] - PredictRaw(params, f, &J_f) - offset;
-    if (J_x != nullptr) {
-      J_x->setZero(3, GlobalSize());
-      for (int s = 0; s < P_; ++s) {
-        const ParameterSlot& slot = slots_[static_cast<std::size_t>(s)];
-        const double d = slot.group == ParameterGroup::kK      ? f(slot.col)
-                         : slot.group == ParameterGroup::kBias ? 1.0
-                                                               : f(slot.row) * f(slot.row);
-        (*J_x)(slot.row, s) = -d;
-      }
-      for (int i = 0; i < 3; ++i) {
-        for (int j = 0; j < J_; ++j) (*J_x)(i, P_ + i * J_ + j) = -phi(j);
-      }
-    }
-    if (J_y != nullptr) *J_y = -(J_f * problem_.gravity) * TangentBasis(c);
-    return residual->allFinite();
-  }
+                Eigen::MatrixXd* J_y) const override;
 
-  ModelParameters Params(const Eigen::VectorXd& x) const {
-    return Unpack(Eigen::VectorXd(x.head(P_)), slots_);
+  /// Position k's whitening, 1/√(s² + q² v) per axis with a prior, else ones.
+  Vec3 Weight(int k) const {
+    return weights_.empty() ? Vec3::Ones() : weights_[static_cast<std::size_t>(k)];
   }
-  Eigen::Matrix<double, 3, Eigen::Dynamic> Drift(const Eigen::VectorXd& x) const {
-    Eigen::Matrix<double, 3, Eigen::Dynamic> D(3, J_);
-    for (int i = 0; i < 3; ++i) {
-      for (int j = 0; j < J_; ++j) D(i, j) = x(P_ + i * J_ + j);
-    }
-    return D;
-  }
+  ModelParameters Params(const Eigen::VectorXd& x) const;
+  Eigen::Matrix<double, 3, Eigen::Dynamic> Drift(const Eigen::VectorXd& x) const;
 
  private:
   const Problem& problem_;
   const std::vector<ParameterSlot>& slots_;
   int P_, J_;
   std::vector<Eigen::VectorXd> phi_;
+  std::vector<Vec3> weights_;   ///< with the prior: each position's whitening, 1/√(s² + q² v)
+  Eigen::MatrixXd prior_rows_;  ///< the prior's residual = prior_rows_ · D's entries
 };
 
 /// Position k's row of the reduced information at (x, c): u = J_xᵀ n, n the unit normal of the
-/// fitted surface at g c (⟂ the columns of J_y), written to `normal`.
+/// fitted surface at g c (⟂ the columns of J_y), written to `normal`; the problem's (whitened)
+/// residual to `residual` unless null.
 Eigen::VectorXd DriftInformationRow(const DriftProblem& problem, const Eigen::VectorXd& x, int k,
-                                    const Vec3& c, Vec3* normal);
+                                    const Vec3& c, Vec3* normal, Vec3* residual = nullptr);
 
 struct DriftFit {
   ModelParameters params;
@@ -103,19 +79,20 @@ struct DriftFit {
   Eigen::MatrixXd U;
   std::vector<Vec3> normals;
   Eigen::MatrixXd S_inverse;
+  /// Each position's p_k − μ(θ, g c_k) − D φ(t_k) [raw], and the same as the problem weighs it
+  /// (divided by √(s² + q² v) with a random-walk prior, else the same).
+  std::vector<Vec3> residuals, whitened;
 };
-
-/// p_k − μ(θ, g c_k) − D φ(t_k) for each position.
-std::vector<Vec3> DriftResiduals(const Problem& problem, const BiasTimeBasis& basis,
-                                 const std::vector<double>& times_s, const ModelParameters& params,
-                                 const Eigen::Matrix<double, 3, Eigen::Dynamic>& D,
-                                 const std::vector<Vec3>& dirs);
 
 /// Solves from the constant-bias fit (`start`, `dirs`) with D = 0, by the joint method's limits
 /// (CalibrationOptions::Joint: iterations, damping; steps stop at parameter_tolerance times the
-/// signal amplitude in raw units).
+/// signal amplitude in raw units; with the prior, whitened: at parameter_tolerance). With a
+/// random-walk prior on a spline bias the problem is RandomWalkPrior's: DriftFit::U holds the
+/// readings' whitened rows and normals, S includes the prior, and the summary's cost is the
+/// whitened sum with the prior's part.
 DriftFit SolveDrift(const Problem& problem, const BiasTimeBasis& basis,
                     const std::vector<double>& times_s, const ModelParameters& start,
-                    const std::vector<Vec3>& dirs, const CalibrationOptions::Joint& joint);
+                    const std::vector<Vec3>& dirs, const CalibrationOptions::Joint& joint,
+                    const std::optional<RandomWalkPrior>& prior = std::nullopt);
 
 }  // namespace accelcal::internal

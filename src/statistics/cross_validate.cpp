@@ -73,18 +73,16 @@ void CrossValidateByRefits(const std::vector<Vec3>& readings, const CalibrationO
                            CalibrationResult* result) {
   if (auto why = options.Validate()) throw std::invalid_argument(*why);
   LeaveOneOut(
-      readings, options.gravity,
-      [&](std::size_t k) { return RefitWithout(readings, options, *result, k); }, result);
+      readings, [&](std::size_t k) { return RefitWithout(readings, options, *result, k); }, result);
 }
 
-void LeaveOneOut(const std::vector<Vec3>& readings, double gravity,
-                 const HeldOutRefitFunction& refit_without, CalibrationResult* result) {
+void LeaveOneOut(const std::vector<Vec3>& readings, const HeldOutRefitFunction& refit_without,
+                 CalibrationResult* result) {
+  const std::vector<double> under_result = GravityNormErrors(*result, readings);
   std::vector<double> errors;
   for (std::size_t k = 0; k < readings.size(); ++k) {
     if (result->excluded(k)) {
-      errors.push_back(result->drift
-                           ? GravityNormErrors(*result, readings)[k]
-                           : GravityNormErrors(result->params, {readings[k]}, gravity)[0]);
+      errors.push_back(under_result[k]);
       continue;
     }
     const HeldOutRefit refit = refit_without(k);

@@ -39,13 +39,16 @@ Eigen::MatrixXd SampleNoiseCovariance(const RowsU& U, const std::vector<Vec3>& n
 
 // The bias drift's fit from the constant-bias solution `out` (drift_fit.hpp) and its statistics:
 // fills `fit` (parameters, residuals, covariance, screening) and returns its summary.
-Summary FitDrift(const Problem& problem, const std::vector<Vec3>& readings,
-                 const CalibrationOptions& options, const SolverOutput& out, Fit* fit) {
+Summary FitDrift(const Problem& problem, const CalibrationOptions& options, const SolverOutput& out,
+                 Fit* fit) {
   const BiasTimeBasis basis =
       options.bias_basis ? *options.bias_basis
                          : BiasTimeBasis::For(options.bias_model, options.position_times_s);
-  const DriftFit drift =
-      SolveDrift(problem, basis, options.position_times_s, out.params, out.dirs, options.joint);
+  const bool prior = options.bias_random_walk && basis.model.kind == BiasModelKind::kSpline;
+  std::optional<RandomWalkPrior> random_walk;
+  if (prior) random_walk = RandomWalkPrior{*options.bias_random_walk, options.reading_sigmas};
+  const DriftFit drift = SolveDrift(problem, basis, options.position_times_s, out.params, out.dirs,
+                                    options.joint, random_walk);
   if (drift.summary.rank_deficient) {
     throw DataError(internal::Format(
         "the positions' times do not determine a %s bias (reciprocal condition %.2g): spread the "
@@ -57,9 +60,8 @@ Summary FitDrift(const Problem& problem, const std::vector<Vec3>& readings,
   const int n = P + 3 * J;
   result.params = drift.params;
   result.directions = drift.dirs;
-  result.residuals = DriftResiduals(Problem{readings, problem.gravity, problem.model}, basis,
-                                    options.position_times_s, drift.params, drift.D, drift.dirs);
-  result.degrees_of_freedom = static_cast<int>(readings.size()) - n;
+  result.residuals = drift.residuals;
+  const int m = problem.positions();
   BiasDrift& d = result.drift.emplace();
   d.basis = basis;
   d.D = drift.D;
@@ -72,20 +74,39 @@ Summary FitDrift(const Problem& problem, const std::vector<Vec3>& readings,
       ToString(options.bias_model) + " bias: " + drift.summary.termination_message;
   summary.final_cost = drift.summary.final_cost;
   const bool invertible = drift.S_inverse.rows() == n;
-  if (options.outliers.policy != OutlierPolicy::kOff && summary.converged() && invertible) {
-    std::vector<double> leverages(readings.size());
-    for (std::size_t k = 0; k < readings.size(); ++k) {
+  // The parameters the readings pay for: P + 3J, or with the prior Σ h_k (the prior pays for the
+  // rest), rounded up.
+  std::vector<double> leverages(static_cast<std::size_t>(m), 0.0);
+  double used = n;
+  if (invertible) {
+    used = 0;
+    for (std::size_t k = 0; k < leverages.size(); ++k) {
       const Eigen::VectorXd u = drift.U.row(static_cast<Eigen::Index>(k)).transpose();
       leverages[k] = u.dot(drift.S_inverse * u);
+      used += leverages[k];
     }
+  }
+  const int spent = prior ? static_cast<int>(std::ceil(used - 1e-9)) : n;
+  result.degrees_of_freedom = m - spent;
+  // With the prior the rows and normals are the whitened problem's: so are the residuals tested.
+  if (options.outliers.policy != OutlierPolicy::kOff && summary.converged() && invertible) {
     fit->screening =
-        ScreenWithLeverages(drift.normals, leverages, n,
+        ScreenWithLeverages(drift.normals, leverages, spent,
                             "the " + std::string(ToString(options.model)) + " model with a " +
                                 ToString(options.bias_model) + " bias",
-                            result.residuals, SignalAmplitude(drift.params, options.gravity),
+                            drift.whitened, SignalAmplitude(drift.params, options.gravity),
                             options.outliers.false_alarm_probability);
   }
-  if (result.degrees_of_freedom > 0 && invertible) {
+  if (prior && invertible && m > P) {
+    // The whitened sum with the prior's part has E J = m − P at the optimum (its residual count
+    // less its parameters): the posterior covariance S⁻¹, widened by the scatter ratio when the
+    // noise and the random walk do not explain the positions.
+    const double ratio2 = summary.final_cost / (m - P);
+    result.noise_source = "samples";
+    result.scatter_ratio = std::sqrt(ratio2);
+    d.covariance = std::max(1.0, ratio2) * drift.S_inverse;
+    result.covariance = d.covariance.topLeftCorner(P, P);
+  } else if (result.degrees_of_freedom > 0 && invertible) {
     const double sigma2 = summary.final_cost / result.degrees_of_freedom;
     result.residual_sigma = std::sqrt(sigma2);
     d.covariance = sigma2 * drift.S_inverse;
@@ -161,16 +182,16 @@ Fit CalibrateXFirst(const std::vector<Vec3>& readings, const CalibrationOptions&
   result.gravity = options.gravity;
   result.params = out.params;
   result.directions = out.dirs;
+  if (drifting) {
+    result.summary = FitDrift(problem, options, out, &fit);
+    result.summary.time_s =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    return fit;
+  }
   result.residuals.reserve(readings.size());
   for (std::size_t k = 0; k < readings.size(); ++k) {
     result.residuals.push_back(readings[k] -
                                PredictRaw(out.params, Vec3(options.gravity * out.dirs[k])));
-  }
-  if (drifting) {
-    result.summary = FitDrift(problem, readings, options, out, &fit);
-    result.summary.time_s =
-        std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-    return fit;
   }
   const int P = NumParameters(options.model);
   result.degrees_of_freedom = static_cast<int>(readings.size()) - P;
@@ -239,24 +260,7 @@ Fit CalibrateInFrame(const std::vector<Vec3>& readings, const CalibrationOptions
     const Eigen::VectorXd d = MirrorSigns(options.model);
     result.covariance = d.asDiagonal() * result.covariance * d.asDiagonal();
   }
-  if (result.drift) {
-    // D = P D_mirrored row by row (P v = (v_z, −v_y, v_x)), and its entries in the joint
-    // covariance likewise.
-    BiasDrift& drift = *result.drift;
-    const Eigen::Index J = drift.D.cols(), P = NumParameters(options.model);
-    const Eigen::Matrix<double, 3, Eigen::Dynamic> D = drift.D;
-    const int from[3] = {2, 1, 0};
-    const double sign[3] = {1.0, -1.0, 1.0};
-    for (int i = 0; i < 3; ++i) drift.D.row(i) = sign[i] * D.row(from[i]);
-    if (drift.covariance.size() > 0) {
-      Eigen::MatrixXd M = Eigen::MatrixXd::Zero(P + 3 * J, P + 3 * J);
-      M.topLeftCorner(P, P) = MirrorSigns(options.model).asDiagonal();
-      for (int i = 0; i < 3; ++i) {
-        for (Eigen::Index j = 0; j < J; ++j) M(P + i * J + j, P + from[i] * J + j) = sign[i];
-      }
-      drift.covariance = M * drift.covariance * M.transpose();
-    }
-  }
+  if (result.drift) result.drift = MirrorAxes(*result.drift, options.model);
   return fit;
 }
 

@@ -92,8 +92,8 @@ void CrossValidateByRefits(const std::vector<Vec3>& readings, const CalibrationO
 /// positions' under the result itself (they are held out of every fit already); the first note
 /// ends it as result->crossval_note, else result->crossval_rms (over the positions in the fit) and
 /// crossval_errors.
-void LeaveOneOut(const std::vector<Vec3>& readings, double gravity,
-                 const HeldOutRefitFunction& refit_without, CalibrationResult* result);
+void LeaveOneOut(const std::vector<Vec3>& readings, const HeldOutRefitFunction& refit_without,
+                 CalibrationResult* result);
 
 /// Position k's held-out error |f| − g under `without` (a fit of the others), or the note that
 /// the reading is outside that fit's range.

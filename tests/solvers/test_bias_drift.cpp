@@ -118,10 +118,18 @@ TEST(DriftProblem, JacobiansMatchFiniteDifferences) {
   ModelParameters truth = Yang2012Truth();
   const std::vector<Vec3> readings = SimulatePositions(truth, kG, dirs, Vec3::Ones(), 5);
   for (ModelKind model : {ModelKind::kLinear, ModelKind::kQuadratic}) {
-    for (const BiasModel& bias : {Linear(), Spline(4)}) {
+    for (const auto& [bias, with_prior] :
+         {std::pair{Linear(), false}, std::pair{Spline(4), false}, std::pair{Spline(4), true}}) {
       const internal::Problem problem{readings, kG, model};
       const BiasTimeBasis basis = BiasTimeBasis::For(bias, times);
-      const internal::DriftProblem lsq(problem, basis, times);
+      std::optional<internal::RandomWalkPrior> prior;
+      if (with_prior) {
+        prior = internal::RandomWalkPrior{Vec3(0.2, 0.3, 0.5), {}};
+        for (std::size_t k = 0; k < times.size(); ++k) {
+          prior->reading_sigmas.push_back(Vec3(1.0, 2.0, 0.5) * (1.0 + 0.1 * double(k)));
+        }
+      }
+      const internal::DriftProblem lsq(problem, basis, times, prior);
       Eigen::VectorXd x(lsq.GlobalSize());
       x.head(NumParameters(model)) = Pack(truth, model);
       for (Eigen::Index i = NumParameters(model); i < x.size(); ++i) x(i) = 0.3 * double(i % 5);
@@ -144,6 +152,18 @@ TEST(DriftProblem, JacobiansMatchFiniteDifferences) {
         EXPECT_TRUE(testing::JacobianMatches(of_delta, Eigen::Vector2d::Zero(), J_y))
             << ToString(bias);
       }
+      if (!with_prior) continue;
+      // The prior's block: residuals linear in D, no direction.
+      ASSERT_EQ(lsq.NumBlocks(), 13);
+      Eigen::VectorXd r;
+      Eigen::MatrixXd J_x;
+      ASSERT_TRUE(lsq.Evaluate(12, x, Eigen::VectorXd(), &r, &J_x, nullptr));
+      const auto of_x = [&](const Eigen::VectorXd& xx) {
+        Eigen::VectorXd rr;
+        lsq.Evaluate(12, xx, Eigen::VectorXd(), &rr, nullptr, nullptr);
+        return rr;
+      };
+      EXPECT_TRUE(testing::JacobianMatches(of_x, x, J_x));
     }
   }
 }
@@ -232,6 +252,72 @@ TEST(BiasDrift, CovarianceMatchesTheScatterOfLinearDriftFits) {
   const double coverage = static_cast<double>(inside) / count;
   EXPECT_NEAR(rms, std::sqrt(1.125), 0.08) << "coverage " << coverage;
   EXPECT_NEAR(coverage, 0.670, 0.04) << "rms " << rms;
+}
+
+// A bias that wanders as a random walk (steps every second, q per √s) is followed by a spline of
+// many knots with the random-walk prior (drift_fit.hpp, RandomWalkPrior), and the posterior
+// covariance covers the truth as a 1σ interval should: the issue's 68 ± 3 %. Without the prior a
+// few knots take the walk's wiggles between them for noise and cover less (rms z above 1).
+TEST(BiasDrift, RandomWalkPriorCoversARandomWalkingBias) {
+  const int m = 36, runs = 200;
+  const ModelParameters truth = LinearDevice();
+  const Vec3 sigma = Yang2012SigmaRaw(truth);
+  const std::vector<double> times = Times(m);
+  const Vec3 q = 2.0 * sigma / std::sqrt(60.0);  // 2 σ per √minute: ~11 σ over the session
+  const auto coverage_of = [&](const BiasModel& model, bool prior, double* rms) {
+    int inside = 0, count = 0;
+    double sum2 = 0;
+    for (int run = 1; run <= runs; ++run) {
+      const auto seed = static_cast<std::uint64_t>(run);
+      std::mt19937_64 rng(seed * 7919);
+      std::normal_distribution<double> normal;
+      std::vector<Vec3> walk(static_cast<std::size_t>(times.back()) + 2, Vec3::Zero());
+      for (std::size_t i = 1; i < walk.size(); ++i) {
+        for (int a = 0; a < 3; ++a) walk[i](a) = walk[i - 1](a) + q(a) * normal(rng);
+      }
+      // The truth's bias is the walk's mean over the positions' times: t_ref's bias for the fit
+      // is not a parameter of the walk, so b is compared where both are defined, at each time.
+      const auto drift = [&](double t) { return walk[static_cast<std::size_t>(t)]; };
+      const std::vector<Vec3> dirs = RandomDirections(m, 5000 + seed);
+      const std::vector<Vec3> readings = DriftingReadings(truth, dirs, times, drift, sigma, seed);
+      CalibrationOptions o = Options(model, times);
+      o.outliers.policy = OutlierPolicy::kOff;
+      o.reading_sigmas.assign(std::size_t(m), sigma);
+      if (prior) o.bias_random_walk = q;
+      const CalibrationResult r = Calibrate(readings, o);
+      EXPECT_TRUE(r.summary.converged()) << "run " << run;
+      if (r.covariance.rows() != 9) {
+        ADD_FAILURE() << "run " << run << ": no covariance";
+        continue;
+      }
+      // K from the fit; the truth's bias is b at t_ref plus the walk there (the fitted b is the
+      // bias at t_ref, which the walk moves): compare K's six entries, and b(t_ref).
+      ModelParameters expected = truth;
+      expected.bias += drift(r.drift->basis.t_ref_s);
+      const Eigen::VectorXd e = Pack(r.params, ModelKind::kLinear) - Pack(expected, ModelKind::kLinear);
+      for (Eigen::Index i = 0; i < 9; ++i) {
+        const double z = e(i) / std::sqrt(r.covariance(i, i));
+        sum2 += z * z;
+        inside += std::abs(z) < 1.0 ? 1 : 0;
+        ++count;
+      }
+    }
+    *rms = std::sqrt(sum2 / count);
+    return static_cast<double>(inside) / count;
+  };
+  // 1800 values per case (9 per run, correlated within a run): the standard error of a fraction
+  // is at most 0.019 even if only 600 were independent; the issue asks 0.68 ± 0.03. Measured:
+  // 0.674 (rms z 1.054) with 12 knots, 0.689 (0.998) with 32.
+  for (int knots : {12, kMaxBiasKnots}) {
+    double rms = 0;
+    const double coverage = coverage_of(Spline(knots), true, &rms);
+    EXPECT_NEAR(coverage, 0.68, 0.03) << knots << " knots, rms z " << rms;
+    EXPECT_NEAR(rms, 1.0, 0.08) << knots << " knots, coverage " << coverage;
+  }
+  // Without the prior a line takes the walk's wanderings for noise: 0.541 (rms z 1.90), far
+  // outside 0.68 ± 3 standard errors. (Free splines of 3-8 knots: 0.57-0.67, rms z 1.10-1.42.)
+  double rms = 0;
+  EXPECT_LT(coverage_of(Linear(), false, &rms), 0.62) << "rms z " << rms;
 }
 
 // A position knocked during its interval is found and excluded under a drifting bias, and the

@@ -193,6 +193,20 @@ int accelcal::cli::RunCommandLine(int argc, char** argv) {
                      "over the session), or auto (the one that predicts held-out positions "
                      "best); each position at the middle of its still interval")
         ->capture_default_str();
+    CLI::Option* random_walk =
+        calibrate
+            ->add_option("--bias-random-walk", cal.bias_random_walk,
+                         "a spline bias's random walk [m/s^2/sqrt(s)], one value or x,y,z: the "
+                         "prior that lets many knots follow a wandering bias")
+            ->expected(1, 3)
+            ->delimiter(',')
+            ->type_name("Q[,Q,Q]");
+    calibrate
+        ->add_option("--noise", cal.noise,
+                     "instead of --bias-random-walk: the accelerometer's random walk from "
+                     "`accelcal noise --json` (calibrated)")
+        ->type_name("FILE")
+        ->excludes(random_walk);
     calibrate
         ->add_option("--method", cal.method,
                      "joint, two-step, newton-lagrange, modulus, modulus-norm or ellipsoid")
@@ -598,7 +612,8 @@ int accelcal::cli::RunCommandLine(int argc, char** argv) {
 
   // A list option given twice would be merged by CLI11 ("--gyro-columns 5 --gyro-columns 6,7"
   // as 5,6,7): refused as every other option given twice.
-  for (const char* list : {"--columns", "--gyro-columns", "--methods", "--noise"}) {
+  for (const char* list :
+       {"--columns", "--gyro-columns", "--methods", "--noise", "--bias-random-walk"}) {
     int given = 0;
     for (int i = 1; i < argc && std::string_view(argv[i]) != "--"; ++i) {
       const std::string_view arg = argv[i], name = list;
@@ -653,8 +668,8 @@ int accelcal::cli::RunCommandLine(int argc, char** argv) {
   const auto run = [&]() -> int {
     if (*calibrate) {
       data_subject = cal.input.path;
-      for (const char* name :
-           {"--method", "--init", "--frame", "--estimator", "--max-iterations", "--bias-model"}) {
+      for (const char* name : {"--method", "--init", "--frame", "--estimator", "--max-iterations",
+                               "--bias-model", "--bias-random-walk", "--noise"}) {
         if (calibrate->count(name) > 0) cal.gravity_only_options.emplace_back(name);
       }
       CheckGyroFlags(*calibrate, cal.gyro, cal.gyro_columns,

@@ -16,6 +16,8 @@
 #include "accelcal/engineering.hpp"
 #include "accelcal/gyro_calibration.hpp"
 #include "accelcal/known_orientation.hpp"
+#include "accelcal/log_reader.hpp"
+#include "accelcal/noise_file.hpp"
 #include "accelcal/orientation_file.hpp"
 #include "accelcal/position_noise.hpp"
 #include "accelcal/report.hpp"
@@ -594,6 +596,77 @@ int WriteCalibration(const CalibrateArgs& given, const LoadedInput& in, const Gr
   return kExitOk;
 }
 
+// --bias-random-walk or --noise: the bias's random walk q [m/s²/√s] per axis, and where it is from.
+struct RandomWalkArg {
+  Vec3 q_ms2 = Vec3::Zero();
+  std::string source;  // empty: not given
+  bool upper_bound = false;
+  bool given() const { return !source.empty(); }
+};
+
+// Usage errors before anything is read; the noise file read (small). `spline`: the bias model
+// asked for can take the prior (spline:K, or auto with its spline candidates).
+RandomWalkArg ParseRandomWalk(const CalibrateArgs& args, bool spline) {
+  RandomWalkArg out;
+  const std::vector<double>& v = args.bias_random_walk;
+  if (v.empty() && args.noise.empty()) return out;
+  const std::string flag = args.noise.empty() ? "--bias-random-walk" : "--noise";
+  if (!spline) {
+    throw UsageError(flag + " is the random-walk prior of a spline bias: give --bias-model " +
+                     "spline:K or auto with it, not " + args.bias_model);
+  }
+  if (!args.noise.empty()) {
+    const ImuNoise noise =
+        ParseNoiseJson(ReadFileToString(args.noise, kMaxSmallFileBytes), args.noise);
+    out.q_ms2 = noise.accelerometer.random_walk;
+    for (bool resolved : noise.accelerometer.random_walk_resolved) {
+      out.upper_bound = out.upper_bound || !resolved;
+    }
+    out.source = args.noise;
+    return out;
+  }
+  if (v.size() != 1 && v.size() != 3) {
+    throw UsageError("--bias-random-walk takes one value or three (x,y,z), not " +
+                     std::to_string(v.size()));
+  }
+  for (std::size_t i = 0; i < 3; ++i) {
+    const double q = v.size() == 1 ? v[0] : v[i];
+    if (!(std::isfinite(q) && q > 0)) {
+      throw UsageError("--bias-random-walk must be positive and finite [m/s^2/sqrt(s)], not " +
+                       Format("%g", q));
+    }
+    out.q_ms2(static_cast<Eigen::Index>(i)) = q;
+  }
+  out.source = "--bias-random-walk";
+  return out;
+}
+
+// q in raw units per √s: K q per axis (the walk of specific force w shows as K w in the readings),
+// K from a constant-bias fit of the positions; its line of the summary appended to `note`.
+Vec3 RandomWalkInRaw(const RandomWalkArg& walk, const std::vector<Vec3>& means,
+                     const CalibrationOptions& options, const Gravity& g, const std::string& path,
+                     std::string* note) {
+  if (options.reading_sigmas.empty()) {
+    throw DataError("a random walk of the bias weighs each position by the noise of its samples: " +
+                    path + " has positions without samples (give the raw log)");
+  }
+  CalibrationOptions constant = options;
+  constant.model = ModelKind::kLinear;
+  constant.bias_model = BiasModel{};
+  constant.position_times_s.clear();
+  constant.cross_validate = false;
+  constant.reading_sigmas.clear();
+  const CalibrationResult fit = Calibrate(means, constant);
+  const Vec3 q_unit = walk.q_ms2 * (g.in_unit / g.ms2);
+  const Vec3 q_raw = (fit.params.K.cwiseAbs2() * q_unit.cwiseAbs2()).cwiseSqrt();
+  *note +=
+      Format("prior     bias random walk %s m/s^2/sqrt(s) (%s%s): %s raw/sqrt(s)\n",
+             Vec(walk.q_ms2, " %.3g").c_str() + 1, walk.source.c_str(),
+             walk.upper_bound ? ", its 95% upper bound: the noise log does not resolve it" : "",
+             Vec(q_raw, " %.3g").c_str() + 1);
+  return q_raw;
+}
+
 // calibrate --orientations: the platform-frame least squares of known_orientation.hpp.
 int RunCalibrateKnownOrientations(const CalibrateArgs& args) {
   if (!args.gravity_only_options.empty()) {
@@ -644,6 +717,7 @@ int RunCalibrate(const CalibrateArgs& args) {
     inputs.push_back(args.input.path);
     inputs.push_back(args.orientations);
     inputs.push_back(args.gyro);
+    inputs.push_back(args.noise);
     CheckOutputs({{"-o", args.output}, {"--report", args.report}}, inputs);
   }
   if (GyroWanted(args)) {  // usage errors before anything is read
@@ -684,6 +758,8 @@ int RunCalibrate(const CalibrateArgs& args) {
   }
   options.outliers = ParseOutlierOptions(args.outliers);
   options.cross_validate = args.cross_validate;
+  const RandomWalkArg random_walk =
+      ParseRandomWalk(args, auto_bias || options.bias_model.kind == BiasModelKind::kSpline);
   if (args.bias_model != "constant" && GyroWanted(args)) {
     throw UsageError("--bias-model " + args.bias_model +
                      " does not apply with the gyroscope: the joint fit with its rotations "
@@ -723,6 +799,11 @@ int RunCalibrate(const CalibrateArgs& args) {
   const LoadedInput in = LoadInput(args.input);
   const std::vector<Vec3> means = Means(in.positions);
   options.reading_sigmas = ReadingSigmas(in);  // empty: noise from the residuals
+  std::string note;
+  if (random_walk.given()) {
+    options.bias_random_walk =
+        RandomWalkInRaw(random_walk, means, options, g, args.input.path, &note);
+  }
   std::optional<BiasModelSelection> bias_selection;
   if (!options.bias_model.constant() || auto_bias) {
     std::string why;
@@ -754,6 +835,10 @@ int RunCalibrate(const CalibrateArgs& args) {
   const CalibrationResult& result = choice.result;
   const std::optional<ModelSelection>& selection = choice.selection;
   if (result.drift) WarnDriftAcrossGap(args.input.path, result.drift->times_s, options.bias_model);
+  if (random_walk.given() && !(result.drift && result.drift->random_walk)) {
+    note += "          unused: the bias chosen is " + ToString(options.bias_model) +
+            ", and the prior is a spline's\n";
+  }
   if (!result.summary.converged()) {
     std::fprintf(stderr, "accelcal: %s: the solver did not converge: %s; nothing written\n",
                  args.input.path.c_str(), result.summary.termination_message.c_str());
@@ -766,11 +851,11 @@ int RunCalibrate(const CalibrateArgs& args) {
         gyro.calibration.accelerometer ? *gyro.calibration.accelerometer : result;
     return WriteCalibration(args, in, g, accel, options.reading_sigmas,
                             selection ? &*selection : nullptr,
-                            bias_selection ? &*bias_selection : nullptr, "", nullptr, &gyro);
+                            bias_selection ? &*bias_selection : nullptr, note, nullptr, &gyro);
   }
   return WriteCalibration(args, in, g, result, options.reading_sigmas,
                           selection ? &*selection : nullptr,
-                          bias_selection ? &*bias_selection : nullptr, "");
+                          bias_selection ? &*bias_selection : nullptr, note);
 }
 
 }  // namespace accelcal::cli

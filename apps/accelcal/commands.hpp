@@ -79,6 +79,10 @@ struct CalibrateArgs {
   std::string frame = "x-first";
   std::string estimator = "ml";
   std::string bias_model = "constant";  // BiasModel, or auto
+  // The spline bias's random-walk prior: q [m/s^2/sqrt(s)], one value or one per axis, or the
+  // accelerometer's random walk of an `accelcal noise --json` file.
+  std::vector<double> bias_random_walk;
+  std::string noise;
   OutlierArgs outliers;
   std::string orientations;  // known orientations (orientation_file.hpp): platform-frame fit
   // The gyroscope (gyro_calibration.hpp): its log (empty: INPUT itself when gyro_columns are

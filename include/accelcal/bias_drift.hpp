@@ -101,6 +101,9 @@ struct BiasDrift {
   Eigen::MatrixXd covariance;
   /// The position times the fit used, one per reading [s].
   std::vector<double> times_s;
+  /// The random walk q per axis [raw/√s] whose prior the fit had (a spline bias with
+  /// CalibrationOptions::bias_random_walk), else none.
+  std::optional<Vec3> random_walk;
 
   /// D φ(t) [raw]: the bias at t less the bias at t_ref.
   Vec3 Offset(double t_s) const;

@@ -124,6 +124,7 @@ BiasDrift MirrorAxes(const BiasDrift& drift, ModelKind model) {
   BiasDrift out = drift;
   const Eigen::Index J = drift.D.cols();
   for (int i = 0; i < 3; ++i) out.D.row(i) = kSign[i] * drift.D.row(kFrom[i]);
+  if (drift.random_walk) out.random_walk = MirrorAxes(*drift.random_walk).cwiseAbs();
   if (drift.covariance.size() == 0) return out;
   const Eigen::Index P = NumParameters(model);
   Eigen::MatrixXd M = Eigen::MatrixXd::Zero(P + 3 * J, P + 3 * J);

@@ -82,6 +82,11 @@ ordered_json DriftSection(const BiasDrift& drift) {
     sd.push_back(row_sd);
   }
   doc["D"] = D;
+  if (drift.random_walk) {
+    doc["random_walk"] = ToJson(*drift.random_walk);
+    doc["random_walk_note"] =
+        "the prior of the knots' increments: N(0, q^2 dt) per axis, q in raw per sqrt(s)";
+  }
   if (drift.covariance.size() > 0) {
     doc["D_std"] = sd;
     doc["covariance"] = ToJson(drift.covariance);

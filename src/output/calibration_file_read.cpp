@@ -235,6 +235,13 @@ void ReadDrift(const Reader& r, const ordered_json& doc, LoadedCalibration& cal)
           in.Number(d["D"][i][j], in.Key("D"));
     }
   }
+  drift.random_walk = in.OptionalVector3(d, "random_walk");
+  if (drift.random_walk && !(drift.random_walk->minCoeff() > 0)) {
+    in.Fail(in.Key("random_walk") + " must be positive, one q per axis");
+  }
+  if (drift.random_walk && model->kind != BiasModelKind::kSpline) {
+    in.Fail(in.Key("random_walk") + " is the prior of a spline bias, not of a " + name + " one");
+  }
   if (d.contains("covariance") && !d["covariance"].is_null()) {
     drift.covariance = ReadSquareCovariance(
         in, d, ParameterSlots(cal.model, cal.frame).size() + 3 * J, "the model's parameters and D");

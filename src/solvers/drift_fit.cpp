@@ -1,6 +1,8 @@
 // The joint fit with a drifting bias (drift_fit.hpp).
 #include "solvers/drift_fit.hpp"
 
+#include <stdexcept>
+
 #include <cmath>
 
 #include <Eigen/Geometry>  // cross
@@ -17,6 +19,9 @@ DriftProblem::DriftProblem(const Problem& problem, const BiasTimeBasis& basis,
   phi_.reserve(times_s.size());
   for (double t : times_s) phi_.push_back(basis.Evaluate(t));
   if (!prior || basis.model.kind != BiasModelKind::kSpline) return;
+  if (prior->reading_sigmas.size() != times_s.size()) {
+    throw std::invalid_argument("a random-walk prior needs one reading sigma per position");
+  }
   const std::vector<double>& knots = basis.knots_s;
   for (std::size_t k = 0; k < times_s.size(); ++k) {
     const double t = std::clamp(times_s[k], knots.front(), knots.back());

@@ -17,8 +17,10 @@ CalibrationOptions HeldOutOptions(const CalibrationOptions& options,
                                   const CalibrationResult& result) {
   CalibrationOptions held_out = options;
   held_out.cross_validate = false;
-  held_out.outliers.policy = OutlierPolicy::kOff;    // the same positions as the full fit
-  held_out.reading_sigmas.clear();                   // no covariance needed from the held-out fits
+  held_out.outliers.policy = OutlierPolicy::kOff;  // the same positions as the full fit
+  // No covariance is needed from the held-out fits, but a random-walk prior weighs the readings
+  // by their noise.
+  if (!options.bias_random_walk) held_out.reading_sigmas.clear();
   if (options.method != SolverMethod::kEllipsoid) {  // closed form: nothing to start from
     held_out.initialization = Initialization::kGiven;
     held_out.initial_params = result.params;
@@ -32,16 +34,15 @@ CalibrationOptions HeldOutOptions(const CalibrationOptions& options,
 // Position k's held-out error from a fit of the other positions in the fit, or why there is none.
 HeldOutRefit RefitWithout(const std::vector<Vec3>& readings, const CalibrationOptions& options,
                           const CalibrationResult& result, std::size_t k) {
-  CalibrationOptions held_out = HeldOutOptions(options, result);
-  held_out.position_times_s.clear();
+  std::vector<int> keep;
   std::vector<Vec3> subset;
-  subset.reserve(readings.size());
   for (std::size_t j = 0; j < readings.size(); ++j) {
     if (j != k && !result.excluded(j)) {
+      keep.push_back(static_cast<int>(j));
       subset.push_back(readings[j]);
-      if (result.drift) held_out.position_times_s.push_back(options.position_times_s[j]);
     }
   }
+  const CalibrationOptions held_out = OptionsForPositions(HeldOutOptions(options, result), keep);
   const std::string without = "without position " + std::to_string(k + 1) + ": ";
   CalibrationResult fit;
   try {

@@ -66,6 +66,7 @@ Summary FitDrift(const Problem& problem, const CalibrationOptions& options, cons
   d.basis = basis;
   d.D = drift.D;
   d.times_s = options.position_times_s;
+  if (prior) d.random_walk = options.bias_random_walk;
 
   Summary summary = out.summary;
   summary.iterations += drift.summary.iterations;
@@ -102,6 +103,13 @@ Summary FitDrift(const Problem& problem, const CalibrationOptions& options, cons
     // less its parameters): the posterior covariance S⁻¹, widened by the scatter ratio when the
     // noise and the random walk do not explain the positions.
     const double ratio2 = summary.final_cost / (m - P);
+    // σ̂ [raw] as without the prior (the unweighted sum of squares over the degrees of freedom
+    // the readings keep): a figure of the scatter, not the covariance's.
+    double sum2 = 0;
+    for (const Vec3& r : drift.residuals) sum2 += r.squaredNorm();
+    if (result.degrees_of_freedom > 0) {
+      result.residual_sigma = std::sqrt(sum2 / result.degrees_of_freedom);
+    }
     result.noise_source = "samples";
     result.scatter_ratio = std::sqrt(ratio2);
     d.covariance = std::max(1.0, ratio2) * drift.S_inverse;
@@ -250,6 +258,9 @@ Fit CalibrateInFrame(const std::vector<Vec3>& readings, const CalibrationOptions
   CalibrationOptions mirrored_options = options;
   if (options.initial_params) mirrored_options.initial_params = MirrorAxes(*options.initial_params);
   for (Vec3& s : mirrored_options.reading_sigmas) s = MirrorAxes(s).cwiseAbs();
+  if (options.bias_random_walk) {
+    mirrored_options.bias_random_walk = MirrorAxes(*options.bias_random_walk).cwiseAbs();
+  }
   Fit fit = CalibrateXFirst(mirrored, mirrored_options, Frame::kZFirst);
   CalibrationResult& result = fit.result;
   result.frame = Frame::kZFirst;

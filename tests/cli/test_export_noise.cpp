@@ -337,6 +337,30 @@ constexpr const char* kOpenVinsReader =
     "    w = m[\"R_IMUtoGYRO\"].T @ Dw @ (v[3:] - bg - m[\"Tg\"] @ a)\n"
     "    print(\" \".join(repr(float(x)) for x in list(a) + list(w)))\n";
 
+// calibrate --noise: the accelerometer's random walk of the noise file is the spline bias's prior,
+// converted to raw units through K, its source named in the summary.
+TEST_F(ExportNoise, CalibrateTakesTheBiasRandomWalkFromIt) {
+  const std::string acc = std::string(ACCELCAL_DATA_DIR) + "/imutk-xsens-mti/xsens_acc.mat";
+  const CliRun r = Exec("calibrate " + acc + " --gravity 9.81744 --bias-model spline:6 --noise " +
+                        noise_ + " --json");
+  ASSERT_EQ(r.status, 0) << r.err;
+  const nlohmann::json doc = nlohmann::json::parse(r.out)["sensors"]["accelerometer"];
+  ASSERT_EQ(doc["bias_drift"]["random_walk"].size(), 3u);
+  // raw = K f + b: the walk of f shows as K q in the readings, q from the file per axis.
+  const auto& K = doc["K"];
+  for (int i = 0; i < 3; ++i) {
+    double expected2 = 0;
+    for (int j = 0; j < 3; ++j) {
+      const auto& term = doc_["accelerometer"]["axes"][j]["terms"]["random_walk"];
+      const double q = term[term["resolved"].get<bool>() ? "value" : "high"].get<double>();
+      expected2 += std::pow(K[i][j].get<double>() * q, 2);
+    }
+    EXPECT_NEAR(doc["bias_drift"]["random_walk"][i].get<double>(), std::sqrt(expected2),
+                1e-3 * std::sqrt(expected2))
+        << i;
+  }
+}
+
 TEST_F(ExportNoise, OpenVinsCorrectsReadingsAsAccelcalDoes) {
   const LoadedCalibration cal = ParseCalibrationJson(test::Slurp(cal_), cal_);
   ASSERT_TRUE(cal.gyroscope && !cal.gyroscope->params.G.isZero(0));  // the g-sensitive model

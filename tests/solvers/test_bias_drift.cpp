@@ -294,7 +294,8 @@ TEST(BiasDrift, RandomWalkPriorCoversARandomWalkingBias) {
       // bias at t_ref, which the walk moves): compare K's six entries, and b(t_ref).
       ModelParameters expected = truth;
       expected.bias += drift(r.drift->basis.t_ref_s);
-      const Eigen::VectorXd e = Pack(r.params, ModelKind::kLinear) - Pack(expected, ModelKind::kLinear);
+      const Eigen::VectorXd e =
+          Pack(r.params, ModelKind::kLinear) - Pack(expected, ModelKind::kLinear);
       for (Eigen::Index i = 0; i < 9; ++i) {
         const double z = e(i) / std::sqrt(r.covariance(i, i));
         sum2 += z * z;

@@ -357,7 +357,7 @@ PlannedDriftCost PredictDriftCost(const ModelParameters& device, ModelKind model
   for (std::size_t k = 0; k < directions.size(); ++k) {
     Vec3 normal;
     const Eigen::VectorXd u =
-        internal::DriftInformationRow(lsq, x, static_cast<int>(k), plan.directions[k], &normal);
+        internal::InformationRow(lsq, x, static_cast<int>(k), plan.directions[k], &normal);
     information += u * u.transpose() / normal.cwiseAbs2().dot(plan.sigma.cwiseAbs2());
   }
   // Jacobi-scaled, as the observability test of calibrate.

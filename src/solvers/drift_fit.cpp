@@ -1,11 +1,8 @@
 // The joint fit with a drifting bias (drift_fit.hpp).
 #include "solvers/drift_fit.hpp"
 
-#include <stdexcept>
-
 #include <cmath>
-
-#include <Eigen/Geometry>  // cross
+#include <stdexcept>
 
 namespace accelcal::internal {
 
@@ -104,16 +101,6 @@ Eigen::Matrix<double, 3, Eigen::Dynamic> DriftProblem::Drift(const Eigen::Vector
   return D;
 }
 
-Eigen::VectorXd DriftInformationRow(const DriftProblem& problem, const Eigen::VectorXd& x, int k,
-                                    const Vec3& c, Vec3* normal, Vec3* residual) {
-  Eigen::VectorXd r;
-  Eigen::MatrixXd J_x, J_y;
-  problem.Evaluate(k, x, c, &r, &J_x, &J_y);
-  *normal = Vec3(J_y.col(0)).cross(Vec3(J_y.col(1))).normalized();
-  if (residual != nullptr) *residual = r;
-  return J_x.transpose() * *normal;
-}
-
 DriftFit SolveDrift(const Problem& problem, const BiasTimeBasis& basis,
                     const std::vector<double>& times_s, const ModelParameters& start,
                     const std::vector<Vec3>& dirs, const CalibrationOptions::Joint& joint,
@@ -157,8 +144,7 @@ DriftFit SolveDrift(const Problem& problem, const BiasTimeBasis& basis,
   for (int k = 0; k < m; ++k) {
     const auto i = static_cast<std::size_t>(k);
     fit.U.row(k) =
-        DriftInformationRow(lsq, state.x, k, state.y[i], &fit.normals[i], &fit.whitened[i])
-            .transpose();
+        InformationRow(lsq, state.x, k, state.y[i], &fit.normals[i], &fit.whitened[i]).transpose();
     fit.residuals.push_back(fit.whitened[i].cwiseQuotient(lsq.Weight(k)));
   }
   return fit;

@@ -14,6 +14,7 @@
 
 #include "accelcal/bias_drift.hpp"
 #include "accelcal/calibration_types.hpp"
+#include "solvers/information_row.hpp"
 #include "solvers/least_squares.hpp"
 #include "solvers/solver_common.hpp"
 
@@ -62,12 +63,6 @@ class DriftProblem : public LeastSquaresProblem {
   std::vector<Vec3> weights_;   ///< with the prior: each position's whitening, 1/√(s² + q² v)
   Eigen::MatrixXd prior_rows_;  ///< the prior's residual = prior_rows_ · D's entries
 };
-
-/// Position k's row of the reduced information at (x, c): u = J_xᵀ n, n the unit normal of the
-/// fitted surface at g c (⟂ the columns of J_y), written to `normal`; the problem's (whitened)
-/// residual to `residual` unless null.
-Eigen::VectorXd DriftInformationRow(const DriftProblem& problem, const Eigen::VectorXd& x, int k,
-                                    const Vec3& c, Vec3* normal, Vec3* residual = nullptr);
 
 struct DriftFit {
   ModelParameters params;

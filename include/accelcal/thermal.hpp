@@ -1,0 +1,70 @@
+#pragma once
+/// @file thermal.hpp
+/// Parameters that follow temperature (issue 21): the model of model.hpp with each parameter
+/// group a polynomial in the temperature's difference from a reference,
+///     θ(T) = Σ_{d=0}^{D} θ_d ΔT^d,   ΔT = T − T_ref [K],
+///     p = K(T) f + b(T) + k2(T) ∘ f²,
+/// the degree D_g chosen per group g (K: scale factors and misalignments; b; k2). θ_0 is the
+/// calibration at T_ref in model.hpp's units; θ_d is in those units per K^d. K(T) keeps the
+/// gauge of K (lower-triangular, x-first): a rotation of the sensor that changed with temperature
+/// would be taken up by the positions' free directions, so only the triangular part is observable.
+///
+/// Flat order: θ_0 in the model's order (NumParameters), then for d = 1 … D the model's slots of
+/// the groups whose degree is at least d, in the model's order (ThermalSlots).
+
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "accelcal/model.hpp"
+#include "accelcal/types.hpp"
+
+namespace accelcal {
+
+/// The polynomial degree of each parameter group in ΔT (0: constant over temperature).
+struct ThermalDegrees {
+  int K = 0;     ///< scale factors and misalignments
+  int bias = 0;  ///< b
+  int k2 = 0;    ///< squared coefficients (the quadratic model only)
+
+  int Of(ParameterGroup group) const;
+  int Max() const;
+  /// "K1 b1 k2_0" style: each group and its degree.
+  std::string ToString() const;
+  friend bool operator==(const ThermalDegrees& a, const ThermalDegrees& b) {
+    return a.K == b.K && a.bias == b.bias && a.k2 == b.k2;
+  }
+};
+
+/// Largest degree a group may have: a cubic in temperature is already more than a few
+/// temperatures can support.
+inline constexpr int kMaxThermalDegree = 3;
+
+/// A slot of the thermal flat vector: the model's slot and the power of ΔT it multiplies.
+struct ThermalSlot {
+  ParameterSlot slot;
+  int degree = 0;
+};
+
+/// The flat vector's slots for `model` and `degrees` (file comment's order).
+std::vector<ThermalSlot> ThermalSlots(ModelKind model, const ThermalDegrees& degrees);
+
+struct ThermalParameters {
+  double t_ref_c = 0;  ///< T_ref [°C]
+  ThermalDegrees degrees;
+  /// θ_d for d = 0 … degrees.Max(): [model units per K^d]; a group's entries above its degree
+  /// are zero.
+  std::vector<ModelParameters> coefficients;
+
+  /// θ(T) [model units].
+  ModelParameters At(double t_c) const;
+};
+
+/// The flat vector of `params` (ThermalSlots order), and back. Unpack zeroes what the slots do
+/// not hold.
+Eigen::VectorXd Pack(const ThermalParameters& params, ModelKind model);
+ThermalParameters UnpackThermal(const Eigen::VectorXd& x, ModelKind model,
+                                const ThermalDegrees& degrees, double t_ref_c);
+
+}  // namespace accelcal

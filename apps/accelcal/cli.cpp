@@ -196,15 +196,17 @@ int accelcal::cli::RunCommandLine(int argc, char** argv) {
     CLI::Option* random_walk =
         calibrate
             ->add_option("--bias-random-walk", cal.bias_random_walk,
-                         "a spline bias's random walk [m/s^2/sqrt(s)], one value or x,y,z: the "
-                         "prior that lets many knots follow a wandering bias")
+                         "with --bias-model spline:K or auto: the bias's random walk "
+                         "[m/s^2/sqrt(s)], one value or x,y,z, the prior that lets many knots "
+                         "follow a wandering bias")
             ->expected(1, 3)
             ->delimiter(',')
             ->type_name("Q[,Q,Q]");
     calibrate
         ->add_option("--noise", cal.noise,
                      "instead of --bias-random-walk: the accelerometer's random walk from "
-                     "`accelcal noise --json` (calibrated)")
+                     "`accelcal noise --json` (calibrated; its 95% upper bound where the log "
+                     "does not resolve it)")
         ->type_name("FILE")
         ->excludes(random_walk);
     calibrate
@@ -622,8 +624,8 @@ int accelcal::cli::RunCommandLine(int argc, char** argv) {
     }
     if (given > 1) {
       std::fprintf(stderr,
-                   "accelcal: usage: %s given %d times: give it once, its values comma-separated "
-                   "(see --help)\n",
+                   "accelcal: usage: %s given %d times: give it once (a list's values "
+                   "comma-separated; see --help)\n",
                    list, given);
       return kExitUsage;
     }

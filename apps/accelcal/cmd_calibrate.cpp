@@ -2,6 +2,7 @@
 #include "commands.hpp"
 
 #include <algorithm>
+#include <array>
 #include <charconv>
 #include <chrono>
 #include <cmath>
@@ -599,10 +600,14 @@ int WriteCalibration(const CalibrateArgs& given, const LoadedInput& in, const Gr
 // --bias-random-walk or --noise: the bias's random walk q [m/s²/√s] per axis, and where it is from.
 struct RandomWalkArg {
   Vec3 q_ms2 = Vec3::Zero();
-  std::string source;  // empty: not given
-  bool upper_bound = false;
+  std::string source;                                       // empty: not given
+  std::array<bool, 3> upper_bound = {false, false, false};  // the noise file's 95 % upper bound
   bool given() const { return !source.empty(); }
 };
+
+// A bias random walk below 1e-12 m/s²/√s is none (1 ng after a day); above 1e3 it would move the
+// bias by a hundred g in a second.
+constexpr double kMinRandomWalk = 1e-12, kMaxRandomWalk = 1e3;
 
 // Usage errors before anything is read; the noise file read (small). `spline`: the bias model
 // asked for can take the prior (spline:K, or auto with its spline candidates).
@@ -619,21 +624,28 @@ RandomWalkArg ParseRandomWalk(const CalibrateArgs& args, bool spline) {
     const ImuNoise noise =
         ParseNoiseJson(ReadFileToString(args.noise, kMaxSmallFileBytes), args.noise);
     out.q_ms2 = noise.accelerometer.random_walk;
-    for (bool resolved : noise.accelerometer.random_walk_resolved) {
-      out.upper_bound = out.upper_bound || !resolved;
+    for (std::size_t a = 0; a < 3; ++a) {
+      out.upper_bound[a] = !noise.accelerometer.random_walk_resolved[a];
+      const double q = out.q_ms2(static_cast<Eigen::Index>(a));
+      if (!(q >= kMinRandomWalk && q <= kMaxRandomWalk)) {
+        throw DataError(
+            Format("%s: the accelerometer's random walk on %c, %g m/s^2/sqrt(s), is "
+                   "outside %g to %g: not a bias's random walk",
+                   args.noise.c_str(), "xyz"[a], q, kMinRandomWalk, kMaxRandomWalk));
+      }
     }
     out.source = args.noise;
     return out;
   }
   if (v.size() != 1 && v.size() != 3) {
     throw UsageError("--bias-random-walk takes one value or three (x,y,z), not " +
-                     std::to_string(v.size()));
+                     std::to_string(v.size()) + " (the decimal point is '.')");
   }
   for (std::size_t i = 0; i < 3; ++i) {
     const double q = v.size() == 1 ? v[0] : v[i];
-    if (!(std::isfinite(q) && q > 0)) {
-      throw UsageError("--bias-random-walk must be positive and finite [m/s^2/sqrt(s)], not " +
-                       Format("%g", q));
+    if (!(q >= kMinRandomWalk && q <= kMaxRandomWalk)) {
+      throw UsageError(Format("--bias-random-walk must be from %g to %g m/s^2/sqrt(s), not %g",
+                              kMinRandomWalk, kMaxRandomWalk, q));
     }
     out.q_ms2(static_cast<Eigen::Index>(i)) = q;
   }
@@ -659,11 +671,23 @@ Vec3 RandomWalkInRaw(const RandomWalkArg& walk, const std::vector<Vec3>& means,
   const CalibrationResult fit = Calibrate(means, constant);
   const Vec3 q_unit = walk.q_ms2 * (g.in_unit / g.ms2);
   const Vec3 q_raw = (fit.params.K.cwiseAbs2() * q_unit.cwiseAbs2()).cwiseSqrt();
-  *note +=
-      Format("prior     bias random walk %s m/s^2/sqrt(s) (%s%s): %s raw/sqrt(s)\n",
-             Vec(walk.q_ms2, " %.3g").c_str() + 1, walk.source.c_str(),
-             walk.upper_bound ? ", its 95% upper bound: the noise log does not resolve it" : "",
-             Vec(q_raw, " %.3g").c_str() + 1);
+  std::string bounds;
+  for (std::size_t a = 0; a < 3; ++a) {
+    if (walk.upper_bound[a]) bounds += std::string(bounds.empty() ? "" : ", ") + "xyz"[a];
+  }
+  if (!bounds.empty()) {
+    bounds = "; " + bounds + ": its 95% upper bound, the noise log does not resolve " +
+             (bounds.size() > 1 ? "them" : "it");
+  }
+  *note += Format("prior     bias random walk %s m/s^2/sqrt(s) (%s%s): %s raw/sqrt(s)\n",
+                  Vec(walk.q_ms2, " %.3g").c_str() + 1, walk.source.c_str(), bounds.c_str(),
+                  Vec(q_raw, " %.3g").c_str() + 1);
+  if (!(q_raw.allFinite() && q_raw.minCoeff() > 0)) {
+    throw DataError(
+        Format("the bias random walk %s m/s^2/sqrt(s) is %s raw/sqrt(s) through K: "
+               "outside what this sensor's readings can hold",
+               Vec(walk.q_ms2, " %.3g").c_str() + 1, Vec(q_raw, " %.3g").c_str() + 1));
+  }
   return q_raw;
 }
 

@@ -25,6 +25,10 @@
 ///     inflated by R, so the uncertainties stay honest, but beyond 30 something other than noise
 ///     (drift, a model that does not fit, moving positions) dominates. Xsens 4.6, T265 9.9, the
 ///     CK set 4.7, the phone 7.3, imucal's Ferraris holds 62.
+///   - `loose_random_walk` (warning): with a random-walk prior on the bias (bias_drift.hpp), the
+///     positions scatter so much less than q and the samples' noise predict (χ² lower tail below
+///     kPriorContradictionProbability) that q is larger than the bias wanders: the posterior's
+///     uncertainties are then the prior's, too wide.
 ///   - `exactly_determined` (warning): as many positions fitted as parameters (no degrees of
 ///     freedom): nothing checks the fit.
 ///   - `exact_fit` (warning): residual degrees of freedom but residuals at round-off (below
@@ -152,6 +156,9 @@ struct Diagnosis {
 inline constexpr double kMisfitFailure = 0.02;  ///< RMS misfit as a fraction of g
 inline constexpr double kScatterNote = 3.0;
 inline constexpr double kScatterWarning = 30.0;
+/// `loose_random_walk`: the whitened sum of a fit with a random-walk prior below its χ² quantile
+/// of this lower-tail probability.
+inline constexpr double kPriorContradictionProbability = 1e-3;
 inline constexpr double kInterleavedCorrelation = -0.5;
 /// `drifting_rest`: the rest analysed is at least this long, and a drift term counts from this
 /// many standard errors above 0 (by chance in 0.13 % of rests per term).

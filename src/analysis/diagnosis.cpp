@@ -511,8 +511,25 @@ Diagnosis Diagnose(const DiagnosisInput& input) {
                     : ""),
         {{"scatter_ratio", r.scatter_ratio}});
   }
-  // No degrees of freedom: the fit passes through every position, and nothing checks it.
-  if (r.degrees_of_freedom == 0 && r.summary.converged()) {
+  // A random-walk prior that the positions contradict: their whitened sum far below its
+  // expectation m − P (χ² lower tail beyond 0.1 %) means q is far larger than this bias's walk,
+  // and the posterior's uncertainties are widened by the prior, not by the data.
+  if (r.drift && r.drift->random_walk && std::isfinite(r.scatter_ratio) && r.summary.converged()) {
+    const double dof = static_cast<double>(r.positions_used() - NumParameters(r.model));
+    if (dof > 0 && r.scatter_ratio * r.scatter_ratio * dof <
+                       internal::ChiSquareQuantile(1.0 - kPriorContradictionProbability, dof)) {
+      Add(&out, "loose_random_walk", Severity::kWarning,
+          Format("the positions scatter %.3g times what the bias's random walk q and the samples' "
+                 "noise predict: q is larger than this bias wanders, and the uncertainties are "
+                 "widened by the prior rather than the data; give the random walk measured for "
+                 "this sensor, or a constant, linear or spline bias without one",
+                 r.scatter_ratio),
+          {{"scatter_ratio", r.scatter_ratio}});
+    }
+  }
+  // No degrees of freedom: the fit passes through every position, and nothing checks it (a
+  // posterior with a random-walk prior never passes through them all).
+  if (r.degrees_of_freedom == 0 && r.summary.converged() && !(r.drift && r.drift->random_walk)) {
     const int parameters =
         NumParameters(r.model) + (r.drift ? 3 * static_cast<int>(r.drift->D.cols()) : 0);
     Add(&out, "exactly_determined", Severity::kWarning,

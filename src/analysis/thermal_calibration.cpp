@@ -17,7 +17,8 @@ namespace accelcal {
 
 std::optional<std::string> ThermalOptions::Validate() const {
   if (auto why = base.Validate()) return why;
-  if (base.method != SolverMethod::kJoint) return "a thermal calibration is fitted by the joint method";
+  if (base.method != SolverMethod::kJoint)
+    return "a thermal calibration is fitted by the joint method";
   if (base.frame != Frame::kXFirst) return "a thermal calibration is fitted in the x-first frame";
   if (base.estimator != Estimator::kMaximumLikelihood) {
     return "a thermal calibration is fitted by maximum likelihood";
@@ -109,8 +110,8 @@ ThermalResult CalibrateThermal(const std::vector<Vec3>& readings, const ThermalO
   constant.reading_sigmas.clear();
   const CalibrationResult constant_fit = Calibrate(readings, constant);
   ThermalParameters start = UnpackThermal(
-      Eigen::VectorXd::Zero(static_cast<Eigen::Index>(
-          ThermalSlots(options.base.model, options.degrees).size())),
+      Eigen::VectorXd::Zero(
+          static_cast<Eigen::Index>(ThermalSlots(options.base.model, options.degrees).size())),
       options.base.model, options.degrees, t_ref);
   start.coefficients[0] = constant_fit.params;
 

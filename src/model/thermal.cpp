@@ -29,8 +29,7 @@ std::vector<ThermalSlot> ThermalSlots(ModelKind model, const ThermalDegrees& deg
   for (int d : {degrees.K, degrees.bias, degrees.k2}) {
     if (d < 0 || d > kMaxThermalDegree) {
       throw std::invalid_argument("a thermal degree must be from 0 to " +
-                                  std::to_string(kMaxThermalDegree) + ", not " +
-                                  std::to_string(d));
+                                  std::to_string(kMaxThermalDegree) + ", not " + std::to_string(d));
     }
   }
   if (model == ModelKind::kLinear && degrees.k2 > 0) {

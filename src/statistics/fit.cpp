@@ -51,9 +51,11 @@ Summary FitDrift(const Problem& problem, const CalibrationOptions& options, cons
                                     options.joint, random_walk);
   if (drift.summary.rank_deficient) {
     throw DataError(internal::Format(
-        "the positions' times do not determine a %s bias (reciprocal condition %.2g): spread the "
-        "orientations over the session, each visited early and late",
-        ToString(options.bias_model).c_str(), std::max(0.0, drift.summary.reciprocal_condition)));
+        "the positions' times do not determine a %s bias (reciprocal condition %.2g): %s",
+        ToString(options.bias_model).c_str(), std::max(0.0, drift.summary.reciprocal_condition),
+        prior ? "its random walk q is so large that the knots are left to the positions alone; "
+                "give a smaller q, or fewer knots"
+              : "spread the orientations over the session, each visited early and late"));
   }
   CalibrationResult& result = fit->result;
   const int P = NumParameters(options.model), J = basis.size();
@@ -73,6 +75,8 @@ Summary FitDrift(const Problem& problem, const CalibrationOptions& options, cons
   summary.termination = drift.summary.termination;
   summary.termination_message =
       ToString(options.bias_model) + " bias: " + drift.summary.termination_message;
+  // J of the drift's own problem (with a prior, whitened) from its start to its solution.
+  summary.initial_cost = drift.summary.initial_cost;
   summary.final_cost = drift.summary.final_cost;
   const bool invertible = drift.S_inverse.rows() == n;
   // The parameters the readings pay for: P + 3J, or with the prior Σ h_k (the prior pays for the
@@ -90,7 +94,13 @@ Summary FitDrift(const Problem& problem, const CalibrationOptions& options, cons
   const int spent = prior ? static_cast<int>(std::ceil(used - 1e-9)) : n;
   result.degrees_of_freedom = m - spent;
   // With the prior the rows and normals are the whitened problem's: so are the residuals tested.
-  if (options.outliers.policy != OutlierPolicy::kOff && summary.converged() && invertible) {
+  if (prior && options.outliers.policy != OutlierPolicy::kOff) {
+    // The test's studentized residuals are least-squares ones; a posterior's are shrunk by the
+    // prior, and their t would be meaningless (a leverage sum near m made it ±inf).
+    fit->screening.note =
+        "outlier screening does not run with a random-walk prior (its residuals are shrunk by "
+        "the prior, not least-squares ones): the held-out errors show a discordant position";
+  } else if (options.outliers.policy != OutlierPolicy::kOff && summary.converged() && invertible) {
     fit->screening =
         ScreenWithLeverages(drift.normals, leverages, spent,
                             "the " + std::string(ToString(options.model)) + " model with a " +

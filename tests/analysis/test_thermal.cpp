@@ -162,8 +162,8 @@ TEST(ThermalCalibration, OneTemperatureDoesNotDetermineASlope) {
 // σ_n² = Σ n_i² σ_i² the noise along position k's normal.
 Eigen::MatrixXd Crlb(const ThermalParameters& truth, ModelKind model, const Schedule& schedule,
                      const Vec3& sigma) {
-  const std::vector<Vec3> readings = SimulateThermalPositions(
-      truth, kG, schedule.dirs, schedule.temps, Vec3::Constant(1e-300), 1);
+  const std::vector<Vec3> readings =
+      SimulateThermalPositions(truth, kG, schedule.dirs, schedule.temps, Vec3::Constant(1e-300), 1);
   const internal::Problem problem{readings, kG, model};
   const internal::ThermalProblem lsq(problem, truth.degrees, truth.t_ref_c, schedule.temps);
   const Eigen::VectorXd x = Pack(truth, model);
@@ -178,8 +178,9 @@ Eigen::MatrixXd Crlb(const ThermalParameters& truth, ModelKind model, const Sche
 }
 
 // Monte Carlo over 200 noise draws of a chamber schedule (5 temperatures, 12 orientations at
-// each): the estimates within 4σ of the truth (as often as Student's t allows), the RMSE of every coefficient within 10 %
-// of its Cramér-Rao bound, and 1σ intervals covering as Student's t predicts.
+// each): the estimates within 4σ of the truth (as often as Student's t allows), the RMSE of every
+// coefficient within 10 % of its Cramér-Rao bound, and 1σ intervals covering as Student's t
+// predicts.
 TEST(ThermalCalibration, MonteCarloMeetsTheCramerRaoBound) {
   const ModelKind model = ModelKind::kLinear;
   const ThermalDegrees degrees{1, 1, 0};
@@ -193,8 +194,8 @@ TEST(ThermalCalibration, MonteCarloMeetsTheCramerRaoBound) {
   int inside = 0, count = 0, beyond4 = 0;
   double z2 = 0;
   for (int run = 1; run <= runs; ++run) {
-    const std::vector<Vec3> readings = SimulateThermalPositions(
-        truth, kG, s.dirs, s.temps, sigma, static_cast<std::uint64_t>(run));
+    const std::vector<Vec3> readings = SimulateThermalPositions(truth, kG, s.dirs, s.temps, sigma,
+                                                                static_cast<std::uint64_t>(run));
     const ThermalResult r = CalibrateThermal(readings, Options(model, degrees, s.temps));
     ASSERT_TRUE(r.summary.converged()) << run << ": " << r.summary.termination_message;
     ASSERT_EQ(r.covariance.rows(), n);

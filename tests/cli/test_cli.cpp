@@ -618,6 +618,8 @@ TEST_F(Cli, BiasRandomWalkPriorOnTheT265) {
         std::string("--bias-model spline:4 --bias-random-walk -1e-4"),
         std::string("--bias-model spline:4 --bias-random-walk nan"),
         std::string("--bias-model spline:4 --bias-random-walk inf"),
+        std::string("--bias-model spline:4 --bias-random-walk 1e300"),
+        std::string("--bias-model spline:4 --bias-random-walk 1e-4,1e-200,1e-4"),
         std::string("--bias-model spline:4 --bias-random-walk 1e-4,2e-4"),
         std::string("--bias-model spline:4 --bias-random-walk 1e-4 --bias-random-walk 2e-4"),
         std::string("--bias-model spline:4 --bias-random-walk 1e-4 --noise x.json"),
@@ -625,6 +627,13 @@ TEST_F(Cli, BiasRandomWalkPriorOnTheT265) {
     const CliRun b = Exec("calibrate " + t265 + " " + bad);
     EXPECT_EQ(b.status, 2) << bad << ": " << b.err;
   }
+  // A q far larger than the bias wanders widens every uncertainty: said, not passed silently.
+  const CliRun loose =
+      Exec("calibrate " + t265 + " --bias-model spline:8 --bias-random-walk 0.1 -o " +
+           Path("loose.json"));
+  EXPECT_EQ(loose.status, 0) << loose.err;
+  EXPECT_NE(loose.err.find("q is larger than this bias wanders"), std::string::npos) << loose.err;
+  EXPECT_EQ(loose.out.find("inf"), std::string::npos) << loose.out;
   // Positions without samples have no noise to weigh them by.
   const CliRun means = Exec("calibrate " + kData +
                             "/imutk-t265/derived_static_means.csv --bias-model spline:4 "

@@ -59,6 +59,38 @@ struct ThermalResult {
 /// coefficients (too few temperatures for a degree, or orientations not repeated across them).
 ThermalResult CalibrateThermal(const std::vector<Vec3>& readings, const ThermalOptions& options);
 
+/// One step of SelectThermalDegrees: a group's degree raised by one, against the degrees chosen so
+/// far.
+struct ThermalDegreeStep {
+  ThermalDegrees simpler, richer;
+  double simpler_rms = 0, richer_rms = 0;  ///< held-out rms |f| − g
+  /// Paired held-out evidence as model_selection.hpp's (kHeldOutImprovementAlpha).
+  double improvement = 0, improvement_se = 0, improvement_threshold = 0;
+  /// Wald test of the added coefficients against 0 (χ² at kThermalAlpha).
+  double wald = 0, wald_threshold = 0;
+  int wald_dof = 0;
+  bool accepted = false;
+  std::string error;  ///< why the richer fit could not be compared
+};
+
+struct ThermalDegreeSelection {
+  ThermalDegrees chosen;
+  ThermalResult result;  ///< the chosen degrees' fit, with held-out errors
+  std::vector<ThermalDegreeStep> steps;
+  std::string reason;
+};
+
+/// Significance of a group's added temperature coefficients.
+inline constexpr double kThermalAlpha = 0.05;
+
+/// The degrees chosen by held-out error (issue 21): from all zero, each round raises by one the
+/// degree of each group in turn (K, b, and k2 for the quadratic model), up to `max_degree`, and
+/// keeps the candidate with the largest paired held-out improvement among those that improve
+/// beyond sampling error and whose added coefficients are significant; it stops when none does.
+/// options.degrees is ignored; cross-validation is always on.
+ThermalDegreeSelection SelectThermalDegrees(const std::vector<Vec3>& readings,
+                                            ThermalOptions options, int max_degree = 2);
+
 /// |f| − g of each reading under θ(T_k) (NaN where a reading is outside the model's range).
 std::vector<double> ThermalGravityNormErrors(const ThermalParameters& params,
                                              const std::vector<Vec3>& readings,

@@ -9,6 +9,7 @@
 #include "accelcal/frame.hpp"
 #include "core/text_format.hpp"
 #include "statistics/fit.hpp"
+#include "statistics/held_out.hpp"
 #include "statistics/outliers.hpp"
 #include "statistics/student_t.hpp"
 
@@ -70,28 +71,6 @@ CalibrationResult FitOnPositions(const std::vector<Vec3>& readings,
   result.screening = screened.screening;
   if (result.summary.converged()) CrossValidate(readings, options, &result);
   return result;
-}
-
-// Mean and standard error of d_k = e_lin,k² − e_quad,k² over `positions`.
-struct Paired {
-  double mean = 0;
-  double se = 0;
-};
-Paired PairedImprovement(const std::vector<double>& linear, const std::vector<double>& quadratic,
-                         const std::vector<int>& positions) {
-  const auto n = static_cast<double>(positions.size());
-  std::vector<double> d;
-  d.reserve(positions.size());
-  for (int k : positions) {
-    const auto i = std::size_t(k);
-    d.push_back(linear[i] * linear[i] - quadratic[i] * quadratic[i]);
-  }
-  Paired p;
-  for (double x : d) p.mean += x / n;
-  double ss = 0;
-  for (double x : d) ss += (x - p.mean) * (x - p.mean);
-  p.se = std::sqrt(ss / (n - 1) / n);
-  return p;
 }
 
 }  // namespace
@@ -173,8 +152,8 @@ ModelSelection SelectModel(const std::vector<Vec3>& readings, CalibrationOptions
     return selection;
   }
 
-  const Paired paired = PairedImprovement(selection.linear.crossval_errors,
-                                          quadratic.crossval_errors, selection.positions_used);
+  const internal::Paired paired = internal::PairedImprovement(
+      selection.linear.crossval_errors, quadratic.crossval_errors, selection.positions_used);
   const auto n = static_cast<int>(selection.positions_used.size());
   selection.improvement = paired.mean;
   selection.improvement_se = paired.se;
@@ -318,8 +297,8 @@ BiasModelSelection SelectBiasModel(const std::vector<Vec3>& readings, Calibratio
       reject("cannot be compared (" + step.error + ")");
       continue;
     }
-    const Paired paired =
-        PairedImprovement(simpler.crossval_errors, richer->crossval_errors, step.positions_used);
+    const internal::Paired paired = internal::PairedImprovement(
+        simpler.crossval_errors, richer->crossval_errors, step.positions_used);
     const auto n = static_cast<int>(step.positions_used.size());
     step.simpler_rms = Rms(simpler.InFit(simpler.crossval_errors));
     step.richer_rms = *richer->crossval_rms;

@@ -6,12 +6,16 @@
 #include <numeric>
 #include <stdexcept>
 
+#include <Eigen/Cholesky>
+
 #include "accelcal/calibrate.hpp"
 #include "accelcal/error.hpp"
+#include "accelcal/model_selection.hpp"
 #include "accelcal/simulate.hpp"
 #include "core/text_format.hpp"
 #include "solvers/thermal_fit.hpp"
 #include "statistics/held_out.hpp"
+#include "statistics/student_t.hpp"
 
 namespace accelcal {
 
@@ -173,6 +177,116 @@ ThermalResult CalibrateThermal(const std::vector<Vec3>& readings, const ThermalO
   result.crossval_rms = shim.crossval_rms;
   result.crossval_note = shim.crossval_note;
   return result;
+}
+
+ThermalDegreeSelection SelectThermalDegrees(const std::vector<Vec3>& readings,
+                                            ThermalOptions options, int max_degree) {
+  if (max_degree < 0 || max_degree > kMaxThermalDegree) {
+    throw std::invalid_argument("max_degree must be from 0 to " +
+                                std::to_string(kMaxThermalDegree));
+  }
+  options.cross_validate = true;
+  options.degrees = ThermalDegrees{};
+  ThermalDegreeSelection selection;
+  selection.result = CalibrateThermal(readings, options);
+  if (!selection.result.crossval_rms) {
+    selection.reason = "no temperature terms: the constant fit cannot be validated (" +
+                       selection.result.crossval_note + ")";
+    return selection;
+  }
+  std::vector<int> all(readings.size());
+  std::iota(all.begin(), all.end(), 0);
+  std::vector<std::string> passed_over;
+  for (;;) {
+    const ThermalDegrees current = selection.chosen;
+    std::vector<ThermalDegrees> candidates;
+    for (int g = 0; g < 3; ++g) {
+      if (g == 2 && options.base.model != ModelKind::kQuadratic) continue;
+      ThermalDegrees d = current;
+      int& degree = g == 0 ? d.K : g == 1 ? d.bias : d.k2;
+      if (degree >= max_degree) continue;
+      ++degree;
+      candidates.push_back(d);
+    }
+    int best = -1;
+    ThermalResult best_result;
+    for (const ThermalDegrees& d : candidates) {
+      ThermalDegreeStep step;
+      step.simpler = current;
+      step.richer = d;
+      step.simpler_rms = *selection.result.crossval_rms;
+      ThermalOptions o = options;
+      o.degrees = d;
+      ThermalResult richer;
+      try {
+        richer = CalibrateThermal(readings, o);
+        if (!richer.crossval_rms) step.error = "cannot be validated: " + richer.crossval_note;
+      } catch (const DataError& e) {
+        step.error = e.what();
+      }
+      if (step.error.empty()) {
+        const internal::Paired paired = internal::PairedImprovement(
+            selection.result.crossval_errors, richer.crossval_errors, all);
+        const auto n = static_cast<int>(all.size());
+        step.richer_rms = *richer.crossval_rms;
+        step.improvement = paired.mean;
+        step.improvement_se = paired.se;
+        step.improvement_threshold =
+            internal::StudentTTwoSidedQuantile(2 * kHeldOutImprovementAlpha, n - 1) * paired.se;
+        // The coefficients the step adds: its group's slots at its new degree.
+        const std::vector<ThermalSlot> slots = ThermalSlots(options.base.model, d);
+        std::vector<Eigen::Index> added;
+        for (std::size_t i = 0; i < slots.size(); ++i) {
+          if (slots[i].degree == d.Of(slots[i].slot.group) && slots[i].degree > 0 &&
+              d.Of(slots[i].slot.group) != current.Of(slots[i].slot.group)) {
+            added.push_back(static_cast<Eigen::Index>(i));
+          }
+        }
+        step.wald_dof = static_cast<int>(added.size());
+        step.wald_threshold = internal::ChiSquareQuantile(kThermalAlpha, step.wald_dof);
+        if (richer.covariance.rows() > 0) {
+          const Eigen::VectorXd x = Pack(richer.params, options.base.model);
+          Eigen::VectorXd e(step.wald_dof);
+          Eigen::MatrixXd C(step.wald_dof, step.wald_dof);
+          for (int i = 0; i < step.wald_dof; ++i) {
+            e(i) = x(added[std::size_t(i)]);
+            for (int j = 0; j < step.wald_dof; ++j) {
+              C(i, j) = richer.covariance(added[std::size_t(i)], added[std::size_t(j)]);
+            }
+          }
+          step.wald = e.dot(C.ldlt().solve(e));
+        } else {
+          step.wald = std::nan("");
+        }
+        step.accepted =
+            step.improvement > step.improvement_threshold && step.wald > step.wald_threshold;
+      }
+      if (!step.accepted) {
+        passed_over.push_back(d.ToString() +
+                              (step.error.empty()
+                                   ? internal::Format(" (held-out %.4g against %.4g, "
+                                                      "Wald %.3g)",
+                                                      step.richer_rms, step.simpler_rms, step.wald)
+                                   : " (" + step.error + ")"));
+      } else if (best < 0 || step.improvement > selection.steps[std::size_t(best)].improvement) {
+        best = static_cast<int>(selection.steps.size());
+        best_result = std::move(richer);
+      }
+      selection.steps.push_back(step);
+    }
+    if (best < 0) break;
+    selection.chosen = selection.steps[std::size_t(best)].richer;
+    selection.result = std::move(best_result);
+  }
+  selection.reason = "degrees " + selection.chosen.ToString() +
+                     ": each raised while it predicted held-out positions better beyond sampling "
+                     "error with significant coefficients";
+  if (!passed_over.empty()) {
+    selection.reason += "; passed over:";
+    for (const std::string& p : passed_over) selection.reason += " " + p + ";";
+    selection.reason.pop_back();
+  }
+  return selection;
 }
 
 }  // namespace accelcal

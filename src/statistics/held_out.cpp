@@ -538,4 +538,21 @@ void HeldOutErrors(const std::vector<Vec3>& readings, const CalibrationOptions& 
   result->crossval_errors = std::move(errors);
 }
 
+Paired PairedImprovement(const std::vector<double>& simpler, const std::vector<double>& richer,
+                         const std::vector<int>& positions) {
+  const auto n = static_cast<double>(positions.size());
+  std::vector<double> d;
+  d.reserve(positions.size());
+  for (int k : positions) {
+    const auto i = static_cast<std::size_t>(k);
+    d.push_back(simpler[i] * simpler[i] - richer[i] * richer[i]);
+  }
+  Paired p;
+  for (double x : d) p.mean += x / n;
+  double ss = 0;
+  for (double x : d) ss += (x - p.mean) * (x - p.mean);
+  p.se = std::sqrt(ss / (n - 1) / n);
+  return p;
+}
+
 }  // namespace accelcal::internal

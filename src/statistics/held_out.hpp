@@ -127,4 +127,13 @@ struct ModulusTerm {
 ModulusTerm ModulusPosition(const ModelParameters& params, double gravity, bool squared,
                             const Vec3& reading, bool with_hessian);
 
+/// The held-out evidence of a richer fit over a simpler one (model_selection.hpp): the mean and
+/// standard error of d_k = e_simpler,k² − e_richer,k² over `positions` (indices into both).
+struct Paired {
+  double mean = 0;
+  double se = 0;
+};
+Paired PairedImprovement(const std::vector<double>& simpler, const std::vector<double>& richer,
+                         const std::vector<int>& positions);
+
 }  // namespace accelcal::internal

@@ -263,5 +263,23 @@ TEST(ThermalCalibration, HeldOutBeatsOffsetOnlyCompensation) {
   }
 }
 
+// Held-out error chooses each group's degree: the truth's degrees are found, and a device whose
+// parameters do not change with temperature keeps none.
+TEST(ThermalCalibration, HeldOutChoosesTheDegrees) {
+  const ModelKind model = ModelKind::kLinear;
+  const Schedule s = Chamber({-10, 5, 20, 35, 50}, 10, 9);
+  for (const ThermalDegrees& truth_degrees :
+       {ThermalDegrees{1, 1, 0}, ThermalDegrees{0, 1, 0}, ThermalDegrees{0, 0, 0}}) {
+    ThermalParameters truth = Device(model, truth_degrees);
+    const std::vector<Vec3> readings =
+        SimulateThermalPositions(truth, kG, s.dirs, s.temps, Sigma(truth), 13);
+    const ThermalDegreeSelection selection =
+        SelectThermalDegrees(readings, Options(model, ThermalDegrees{}, s.temps));
+    EXPECT_EQ(selection.chosen, truth_degrees)
+        << truth_degrees.ToString() << ": " << selection.reason;
+    EXPECT_EQ(selection.result.params.degrees, truth_degrees);
+  }
+}
+
 }  // namespace
 }  // namespace accelcal

@@ -91,6 +91,9 @@ struct ModelParametersT {
 };
 using ModelParameters = ModelParametersT<double>;
 
+/// The entry of `p` that slot `s` names.
+double& SlotRef(ModelParameters& p, const ParameterSlot& s);
+
 /// Flat vector (eq. (8) order) from parameters; k2 is dropped for the linear model.
 Eigen::VectorXd Pack(const ModelParameters& params, ModelKind kind);
 /// Parameters from a flat vector of size NumParameters(kind); k2 = 0 for the linear model.

@@ -30,7 +30,6 @@ const std::vector<int>& ActiveColumns(ModelKind kind) {
   return kind == ModelKind::kLinear ? linear : quadratic;
 }
 
-namespace {
 double& SlotRef(ModelParameters& p, const ParameterSlot& s) {
   switch (s.group) {
     case ParameterGroup::kK:
@@ -42,7 +41,6 @@ double& SlotRef(ModelParameters& p, const ParameterSlot& s) {
   }
   return p.k2(s.row);
 }
-}  // namespace
 
 Eigen::VectorXd Pack(const ModelParameters& params, ModelKind kind) {
   return Pack(params, ParameterSlots(kind));

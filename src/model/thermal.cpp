@@ -57,28 +57,12 @@ ModelParameters ThermalParameters::At(double t_c) const {
   return out;
 }
 
-namespace {
-
-double& Entry(ModelParameters& p, const ParameterSlot& s) {
-  switch (s.group) {
-    case ParameterGroup::kK:
-      return p.K(s.row, s.col);
-    case ParameterGroup::kBias:
-      return p.bias(s.row);
-    case ParameterGroup::kK2:
-      return p.k2(s.row);
-  }
-  return p.bias(s.row);
-}
-
-}  // namespace
-
 Eigen::VectorXd Pack(const ThermalParameters& params, ModelKind model) {
   const std::vector<ThermalSlot> slots = ThermalSlots(model, params.degrees);
   Eigen::VectorXd x(static_cast<Eigen::Index>(slots.size()));
   for (std::size_t i = 0; i < slots.size(); ++i) {
     ModelParameters p = params.coefficients.at(static_cast<std::size_t>(slots[i].degree));
-    x(static_cast<Eigen::Index>(i)) = Entry(p, slots[i].slot);
+    x(static_cast<Eigen::Index>(i)) = SlotRef(p, slots[i].slot);
   }
   return x;
 }
@@ -97,7 +81,7 @@ ThermalParameters UnpackThermal(const Eigen::VectorXd& x, ModelKind model,
   zero.K.setZero();
   out.coefficients.assign(static_cast<std::size_t>(degrees.Max() + 1), zero);
   for (std::size_t i = 0; i < slots.size(); ++i) {
-    Entry(out.coefficients[static_cast<std::size_t>(slots[i].degree)], slots[i].slot) =
+    SlotRef(out.coefficients[static_cast<std::size_t>(slots[i].degree)], slots[i].slot) =
         x(static_cast<Eigen::Index>(i));
   }
   return out;

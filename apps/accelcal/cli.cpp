@@ -374,6 +374,18 @@ int accelcal::cli::RunCommandLine(int argc, char** argv) {
                      "1 sigma of one averaged reading in raw units: one value or three (x,y,z)")
         ->delimiter(',')
         ->expected(1, 3);
+    design
+        ->add_option("--temperatures", des.temperatures_c,
+                     "plan a temperature schedule: the positions recorded at each of these "
+                     "temperatures [degC], comma-separated")
+        ->delimiter(',');
+    design
+        ->add_option("--thermal-degrees", des.thermal_degrees,
+                     "with --temperatures: the degrees in T - T_ref of K and b (and k2 for the "
+                     "quadratic model), e.g. 1,1")
+        ->delimiter(',')
+        ->expected(2, 3)
+        ->capture_default_str();
     design->add_option("--noise-density", des.noise_density_ug,
                        "instead of --noise: white noise [ug/sqrt(Hz)], with --rate and --duration");
     design->add_option("--rate", des.rate_hz, "sample rate [Hz], with --noise-density");
@@ -723,6 +735,7 @@ int accelcal::cli::RunCommandLine(int argc, char** argv) {
     }
     if (*design) {
       data_subject = des.positions;
+      des.thermal_degrees_given = design->count("--thermal-degrees") > 0;
       return RunDesign(des);
     }
     if (*montecarlo) return RunMonteCarlo(mc);

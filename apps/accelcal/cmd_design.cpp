@@ -121,6 +121,65 @@ int RunDesign(const DesignArgs& args) {
       }
     }
   }
+  // A temperature schedule: each temperature coefficient's 1σ, in engineering units per K^d.
+  std::optional<PlannedThermal> thermal;
+  std::string thermal_text;
+  if (args.thermal_degrees_given && args.temperatures_c.empty()) {
+    throw UsageError("--thermal-degrees plans a temperature schedule: give --temperatures too");
+  }
+  if (!args.temperatures_c.empty() && !planned.observable) {
+    thermal_text =
+        "thermal   not planned: the positions do not determine the parameters at one "
+        "temperature\n";
+  } else if (!args.temperatures_c.empty()) {
+    ThermalDegrees degrees;
+    degrees.K = args.thermal_degrees[0];
+    degrees.bias = args.thermal_degrees[1];
+    degrees.k2 = args.thermal_degrees.size() > 2 ? args.thermal_degrees[2] : 0;
+    for (double t : args.temperatures_c) {
+      if (!(std::isfinite(t) && t >= -273.15 && t < 1000)) {
+        throw UsageError(Format("--temperatures: %g degC is not a temperature", t));
+      }
+    }
+    try {
+      (void)ThermalSlots(model, degrees);
+    } catch (const std::invalid_argument& e) {
+      throw UsageError(std::string("--thermal-degrees: ") + e.what());
+    }
+    thermal = PredictThermalUncertainty(device.params, model, device.gravity, directions,
+                                        args.temperatures_c, sigma, degrees);
+    if (!thermal->observable) {
+      thermal_text = Format(
+          "thermal   NOT determined: these temperatures cannot separate degrees %s; record the "
+          "orientations at %d distinct temperatures or more\n",
+          degrees.ToString().c_str(), degrees.Max() + 1);
+    } else {
+      thermal_text = Format(
+          "thermal   %zu positions at each of %zu temperatures (T_ref %.4g degC), degrees %s: "
+          "1 sigma of each coefficient (x-first; per K^d)\n",
+          directions.size(), args.temperatures_c.size(), thermal->t_ref_c,
+          degrees.ToString().c_str());
+      const std::vector<ThermalSlot> tslots = ThermalSlots(model, degrees);
+      const Mat33 K = ChangeFrame(device.params.K, Frame::kXFirst).K;
+      for (std::size_t i = 0; i < tslots.size(); ++i) {
+        if (tslots[i].degree == 0) continue;
+        const ParameterSlot& s = tslots[i].slot;
+        const double sd = thermal->sigma(static_cast<Eigen::Index>(i));
+        const double kii = std::abs(K(s.row, s.row));
+        const std::string unit = tslots[i].degree == 1 ? "/K" : Format("/K^%d", tslots[i].degree);
+        const std::string engineering =
+            s.group == ParameterGroup::kK
+                ? (s.row == s.col ? Format("%.3g ppm%s of scale", 1e6 * sd / kii, unit.c_str())
+                                  : Format("%.3g urad%s", 1e6 * sd / kii, unit.c_str()))
+            : s.group == ParameterGroup::kBias
+                ? Format("%.3g mg%s", 1e3 * sd / kii / device.gravity, unit.c_str())
+                : Format("%.3g raw%s", sd, unit.c_str());
+        thermal_text +=
+            Format("  %-5s d%d  %.4g raw  (%s)\n", std::string(tslots[i].slot.name).c_str(),
+                   tslots[i].degree, sd, engineering.c_str());
+      }
+    }
+  }
   std::string out;
   if (args.json) {
     using Json = nlohmann::ordered_json;
@@ -168,6 +227,25 @@ int RunDesign(const DesignArgs& args) {
         d["worst"] = std::string(slots[std::size_t(drift->worst)].name);
       }
     }
+    if (thermal) {
+      Json& t = doc["thermal"];
+      t["temperatures"] = args.temperatures_c;
+      t["t_ref"] = thermal->t_ref_c;
+      t["degrees"] = {
+          {"K", thermal->degrees.K}, {"bias", thermal->degrees.bias}, {"k2", thermal->degrees.k2}};
+      t["observable"] = thermal->observable;
+      if (thermal->observable) {
+        Json& coefficients = t["order"] = Json::array();
+        for (const ThermalSlot& s : ThermalSlots(model, thermal->degrees)) {
+          coefficients.push_back(std::string(s.slot.name) +
+                                 (s.degree > 0 ? Format("*dT^%d", s.degree) : std::string()));
+        }
+        t["std"] = Json::array();
+        for (Eigen::Index i = 0; i < thermal->sigma.size(); ++i) {
+          t["std"].push_back(thermal->sigma(i));
+        }
+      }
+    }
     out = JsonText(doc);
   } else {
     out += Format(
@@ -197,6 +275,7 @@ int RunDesign(const DesignArgs& args) {
       }
       out += drift_text;
     }
+    out += thermal_text;
   }
   WriteFileAtomically("-", out);
   return planned.observable ? kExitOk : kExitBadInput;

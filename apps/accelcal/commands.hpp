@@ -198,6 +198,11 @@ struct DesignArgs {
   std::optional<double> rate_hz;
   std::optional<double> duration_s;
   std::string bias_model = "constant";  // a drift to plan for (bias_drift.hpp)
+  // A temperature schedule (thermal.hpp): the positions at each temperature [°C], and the
+  // degrees of K, b (and k2) in T − T_ref.
+  std::vector<double> temperatures_c;
+  std::vector<int> thermal_degrees = {1, 1};
+  bool thermal_degrees_given = false;
   bool json = false;
 };
 

@@ -22,6 +22,7 @@
 #include "accelcal/frame.hpp"
 #include "accelcal/model.hpp"
 #include "accelcal/names.hpp"
+#include "accelcal/thermal.hpp"
 
 namespace accelcal {
 
@@ -60,6 +61,26 @@ struct PlannedDriftCost {
 PlannedDriftCost PredictDriftCost(const ModelParameters& device, ModelKind model, double gravity,
                                   const std::vector<Vec3>& directions, const Vec3& sigma_raw,
                                   const BiasModel& bias_model);
+
+/// What a temperature schedule determines (thermal.hpp): `directions` recorded at each of
+/// `temperatures_c` (the same orientations at every temperature), the parameters of `degrees` in
+/// T − T_ref (T_ref the temperatures' mean) fitted with the directions as nuisance parameters.
+/// The device is taken in the x-first frame (ChangeFrame), with temperature coefficients of 0:
+/// the bound depends on them only through the small change of K they make.
+struct PlannedThermal {
+  ThermalDegrees degrees;
+  double t_ref_c = 0;
+  bool observable = false;  ///< the temperatures and orientations determine every coefficient
+  /// CRLB of the thermal flat vector (ThermalSlots order, x-first) and its 1σ [raw units per K^d].
+  Eigen::MatrixXd crlb;
+  Eigen::VectorXd sigma;
+};
+/// Throws std::invalid_argument for fewer than 1 temperature, a non-finite one, or degrees the
+/// model cannot take.
+PlannedThermal PredictThermalUncertainty(const ModelParameters& device, ModelKind model,
+                                         double gravity, const std::vector<Vec3>& directions,
+                                         const std::vector<double>& temperatures_c,
+                                         const Vec3& sigma_raw, const ThermalDegrees& degrees);
 
 /// D-optimal choice of `count` distinct positions out of `candidates`: maximises det I (the
 /// volume of the CRLB's confidence ellipsoid shrinks with it; invariant to the parameters' units).

@@ -13,6 +13,7 @@
 #include "accelcal/simulate.hpp"
 #include "solvers/drift_fit.hpp"
 #include "solvers/solver_common.hpp"
+#include "solvers/thermal_fit.hpp"
 
 namespace accelcal {
 
@@ -387,6 +388,59 @@ PlannedDriftCost PredictDriftCost(const ModelParameters& device, ModelKind model
       out.drift_sigma(i, j) = std::sqrt(planned.covariance(P + i * J + j, P + i * J + j));
     }
   }
+  return out;
+}
+
+PlannedThermal PredictThermalUncertainty(const ModelParameters& device, ModelKind model,
+                                         double gravity, const std::vector<Vec3>& directions,
+                                         const std::vector<double>& temperatures_c,
+                                         const Vec3& sigma_raw, const ThermalDegrees& degrees) {
+  if (temperatures_c.empty()) throw std::invalid_argument("a schedule needs a temperature");
+  double sum = 0;
+  for (double t : temperatures_c) {
+    if (!std::isfinite(t)) throw std::invalid_argument("temperatures must be finite");
+    sum += t;
+  }
+  PlannedThermal out;
+  out.degrees = degrees;
+  out.t_ref_c = sum / static_cast<double>(temperatures_c.size());
+  // The device and its directions in the x-first frame the thermal model is written in.
+  const FrameChange change = ChangeFrame(device.K, Frame::kXFirst);
+  ThermalParameters thermal = UnpackThermal(
+      Eigen::VectorXd::Zero(static_cast<Eigen::Index>(ThermalSlots(model, degrees).size())), model,
+      degrees, out.t_ref_c);
+  thermal.coefficients[0] = device;
+  thermal.coefficients[0].K = change.K;
+  if (model == ModelKind::kLinear) thermal.coefficients[0].k2.setZero();
+  std::vector<Vec3> dirs;
+  std::vector<double> temps;
+  for (double t : temperatures_c) {
+    for (const Vec3& c : directions) {
+      dirs.push_back(Vec3(change.Q_old_new.transpose() * c.normalized()));
+      temps.push_back(t);
+    }
+  }
+  const std::vector<Vec3> no_readings(dirs.size());
+  const internal::Problem problem{no_readings, gravity, model};
+  const internal::ThermalProblem lsq(problem, degrees, out.t_ref_c, temps);
+  const Eigen::VectorXd x = Pack(thermal, model);
+  const auto n = x.size();
+  Eigen::MatrixXd information = Eigen::MatrixXd::Zero(n, n);
+  for (std::size_t k = 0; k < dirs.size(); ++k) {
+    Vec3 normal;
+    const Eigen::VectorXd u =
+        internal::InformationRow(lsq, x, static_cast<int>(k), dirs[k], &normal);
+    information += u * u.transpose() / normal.cwiseAbs2().dot(sigma_raw.cwiseAbs2());
+  }
+  // Jacobi-scaled, as the observability test of calibrate.
+  const Eigen::VectorXd scale = information.diagonal().cwiseMax(1e-300).cwiseSqrt().cwiseInverse();
+  const Eigen::LDLT<Eigen::MatrixXd> ldlt(scale.asDiagonal() * information * scale.asDiagonal());
+  const Eigen::VectorXd d = ldlt.vectorD();
+  out.observable =
+      ldlt.info() == Eigen::Success && d.minCoeff() > internal::kMinInformationRcond * d.maxCoeff();
+  if (!out.observable) return out;
+  out.crlb = scale.asDiagonal() * ldlt.solve(Eigen::MatrixXd::Identity(n, n)) * scale.asDiagonal();
+  out.sigma = out.crlb.diagonal().cwiseMax(0.0).cwiseSqrt();
   return out;
 }
 

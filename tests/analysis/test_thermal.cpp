@@ -8,6 +8,7 @@
 #include <gtest/gtest.h>
 
 #include "accelcal/calibrate.hpp"
+#include "accelcal/design.hpp"
 #include "accelcal/error.hpp"
 #include "accelcal/simulate.hpp"
 #include "accelcal/thermal.hpp"
@@ -279,6 +280,44 @@ TEST(ThermalCalibration, HeldOutChoosesTheDegrees) {
         << truth_degrees.ToString() << ": " << selection.reason;
     EXPECT_EQ(selection.result.params.degrees, truth_degrees);
   }
+}
+
+// design's bound for a temperature schedule is the Cramér-Rao bound the Monte Carlo test meets,
+// and it says when the temperatures cannot determine a degree.
+TEST(ThermalDesign, PlannedBoundIsTheScheduleCramerRaoBound) {
+  const ModelKind model = ModelKind::kLinear;
+  const ThermalDegrees degrees{1, 2, 0};
+  const ThermalParameters truth = Device(model, ThermalDegrees{});
+  const Vec3 sigma = Sigma(truth);
+  const std::vector<double> temperatures = {-10, 5, 20, 35, 50};
+  const std::vector<Vec3> orientations = Yang18Directions();
+  Schedule s;
+  for (double t : temperatures) {
+    for (const Vec3& c : orientations) {
+      s.dirs.push_back(c);
+      s.temps.push_back(t);
+    }
+  }
+  ThermalParameters at_zero = UnpackThermal(
+      Eigen::VectorXd::Zero(static_cast<Eigen::Index>(ThermalSlots(model, degrees).size())), model,
+      degrees, 20);
+  at_zero.coefficients[0] = truth.coefficients[0];
+  const Eigen::MatrixXd expected = Crlb(at_zero, model, s, sigma);
+  const PlannedThermal planned = PredictThermalUncertainty(
+      truth.coefficients[0], model, kG, orientations, temperatures, sigma, degrees);
+  ASSERT_TRUE(planned.observable);
+  EXPECT_DOUBLE_EQ(planned.t_ref_c, 20);
+  ASSERT_EQ(planned.sigma.size(), expected.rows());
+  for (Eigen::Index i = 0; i < expected.rows(); ++i) {
+    EXPECT_NEAR(planned.sigma(i), std::sqrt(expected(i, i)), 1e-8 * std::sqrt(expected(i, i))) << i;
+  }
+  // Two temperatures cannot determine a quadratic bias; three can.
+  EXPECT_FALSE(PredictThermalUncertainty(truth.coefficients[0], model, kG, orientations, {0, 40},
+                                         sigma, degrees)
+                   .observable);
+  EXPECT_TRUE(PredictThermalUncertainty(truth.coefficients[0], model, kG, orientations, {0, 20, 40},
+                                        sigma, degrees)
+                  .observable);
 }
 
 }  // namespace

@@ -192,6 +192,44 @@ TEST_F(Cli, ModelAutoChoosesOnHeldOutError) {
   EXPECT_NE(bad.err.find("--model auto decides on held-out error"), std::string::npos) << bad.err;
 }
 
+// design --temperatures: the schedule's bound on each temperature coefficient, the same as the
+// library's PredictThermalUncertainty (tested against the Cramér-Rao bound in test_thermal.cpp);
+// its 1σ shrinks as 1/√(temperatures) at a fixed span, and too few temperatures are said.
+TEST_F(Cli, DesignPlansATemperatureSchedule) {
+  ASSERT_EQ(Exec("calibrate " + kData + "/imutk-t265/t265_acc.mat -q --no-crossval -o " +
+                 Path("device.json"))
+                .status,
+            0);
+  const std::string base =
+      "design --positions yang18 --noise 0.002 --json --device " + Path("device.json");
+  const CliRun three = Exec(base + " --temperatures 0,25,50");
+  const CliRun five = Exec(base + " --temperatures=0,12.5,25,37.5,50 --thermal-degrees 1,1");
+  ASSERT_EQ(three.status, 0) << three.err;
+  ASSERT_EQ(five.status, 0) << five.err;
+  const auto t3 = nlohmann::json::parse(three.out)["thermal"];
+  const auto t5 = nlohmann::json::parse(five.out)["thermal"];
+  EXPECT_TRUE(t3["observable"].get<bool>());
+  EXPECT_EQ(t3["t_ref"].get<double>(), 25.0);
+  ASSERT_EQ(t3["std"].size(), 18u);  // 9 at T_ref, 9 per K
+  EXPECT_EQ(t3["order"][9], "K_xx*dT^1");
+  // Σ ΔT² over the temperatures: 3·(2/3)·25² against 5·(1/2)·25²: ratio √(1250/1562.5).
+  EXPECT_NEAR(t5["std"][9].get<double>() / t3["std"][9].get<double>(), std::sqrt(1250.0 / 1562.5),
+              1e-6);
+  const CliRun text = Exec("design --positions yang18 --noise 0.002 --device " +
+                           Path("device.json") + " --temperatures 20,40 --thermal-degrees 1,2");
+  ASSERT_EQ(text.status, 0) << text.err;
+  EXPECT_NE(text.out.find("thermal   NOT determined: these temperatures cannot separate degrees "
+                          "K1 b2 k2_0; record the orientations at 3 distinct temperatures"),
+            std::string::npos)
+      << text.out;
+  for (const std::string& bad : {std::string("--temperatures nan"),
+                                 std::string("--temperatures 20,30 --thermal-degrees 1,1,1"),
+                                 std::string("--temperatures 20,30 --thermal-degrees 4,1"),
+                                 std::string("--thermal-degrees 1,1")}) {
+    EXPECT_EQ(Exec(base + " " + bad).status, 2) << bad;
+  }
+}
+
 TEST_F(Cli, DesignPredictsTheBoundBeforeRecording) {
   // The nominal device: the Xsens calibration. Paper 000's 18 positions determine it; the six
   // axis-aligned ones (orientations unknown) do not, and the command says so with status 3.

@@ -385,6 +385,7 @@ int accelcal::cli::RunCommandLine(int argc, char** argv) {
                      "quadratic model), e.g. 1,1")
         ->delimiter(',')
         ->expected(2, 3)
+        ->type_name("K,B[,K2]")
         ->capture_default_str();
     design->add_option("--noise-density", des.noise_density_ug,
                        "instead of --noise: white noise [ug/sqrt(Hz)], with --rate and --duration");
@@ -626,8 +627,8 @@ int accelcal::cli::RunCommandLine(int argc, char** argv) {
 
   // A list option given twice would be merged by CLI11 ("--gyro-columns 5 --gyro-columns 6,7"
   // as 5,6,7): refused as every other option given twice.
-  for (const char* list :
-       {"--columns", "--gyro-columns", "--methods", "--noise", "--bias-random-walk"}) {
+  for (const char* list : {"--columns", "--gyro-columns", "--methods", "--noise",
+                           "--bias-random-walk", "--temperatures", "--thermal-degrees"}) {
     int given = 0;
     for (int i = 1; i < argc && std::string_view(argv[i]) != "--"; ++i) {
       const std::string_view arg = argv[i], name = list;

@@ -122,61 +122,80 @@ int RunDesign(const DesignArgs& args) {
     }
   }
   // A temperature schedule: each temperature coefficient's 1σ, in engineering units per K^d.
+  // Its options are checked whatever the positions determine.
   std::optional<PlannedThermal> thermal;
-  std::string thermal_text;
+  std::optional<ThermalDegrees> degrees;
+  std::string thermal_text, thermal_reason;
+  struct Engineering {
+    double value;
+    std::string unit;
+  };
+  std::vector<Engineering> engineering;
   if (args.thermal_degrees_given && args.temperatures_c.empty()) {
     throw UsageError("--thermal-degrees plans a temperature schedule: give --temperatures too");
   }
-  if (!args.temperatures_c.empty() && !planned.observable) {
-    thermal_text =
-        "thermal   not planned: the positions do not determine the parameters at one "
-        "temperature\n";
-  } else if (!args.temperatures_c.empty()) {
-    ThermalDegrees degrees;
-    degrees.K = args.thermal_degrees[0];
-    degrees.bias = args.thermal_degrees[1];
-    degrees.k2 = args.thermal_degrees.size() > 2 ? args.thermal_degrees[2] : 0;
+  if (!args.temperatures_c.empty()) {
+    degrees.emplace();
+    degrees->K = args.thermal_degrees[0];
+    degrees->bias = args.thermal_degrees[1];
+    degrees->k2 = args.thermal_degrees.size() > 2 ? args.thermal_degrees[2] : 0;
     for (double t : args.temperatures_c) {
       if (!(std::isfinite(t) && t >= -273.15 && t < 1000)) {
-        throw UsageError(Format("--temperatures: %g degC is not a temperature", t));
+        throw UsageError(Format("--temperatures: %g degC is outside -273.15 to 1000 degC", t));
       }
     }
     try {
-      (void)ThermalSlots(model, degrees);
+      (void)ThermalSlots(model, *degrees);
     } catch (const std::invalid_argument& e) {
       throw UsageError(std::string("--thermal-degrees: ") + e.what());
     }
+    if (degrees->Max() == 0) {
+      throw UsageError("--thermal-degrees " + degrees->ToString() +
+                       " has no temperature coefficient to plan");
+    }
+    if (args.bias_model != "constant") {
+      throw UsageError(
+          "--temperatures plans a bias constant in time: give it without "
+          "--bias-model");
+    }
+  }
+  if (degrees && !planned.observable) {
+    thermal_reason = "the positions do not determine the parameters at one temperature";
+    thermal_text = "thermal   not planned: " + thermal_reason + "\n";
+  } else if (degrees) {
     thermal = PredictThermalUncertainty(device.params, model, device.gravity, directions,
-                                        args.temperatures_c, sigma, degrees);
+                                        args.temperatures_c, sigma, *degrees);
     if (!thermal->observable) {
-      thermal_text = Format(
-          "thermal   NOT determined: these temperatures cannot separate degrees %s; record the "
-          "orientations at %d distinct temperatures or more\n",
-          degrees.ToString().c_str(), degrees.Max() + 1);
+      thermal_reason = Format(
+          "these temperatures cannot separate degrees %s: record the orientations at %d "
+          "temperatures or more, at least %g K apart",
+          degrees->ToString().c_str(), degrees->Max() + 1, kMinThermalSeparation_K);
+      thermal_text = "thermal   NOT determined: " + thermal_reason + "\n";
     } else {
+      const double t_ref = std::abs(thermal->t_ref_c) < 1e-9 ? 0.0 : thermal->t_ref_c;
       thermal_text = Format(
-          "thermal   %zu positions at each of %zu temperatures (T_ref %.4g degC), degrees %s: "
-          "1 sigma of each coefficient (x-first; per K^d)\n",
-          directions.size(), args.temperatures_c.size(), thermal->t_ref_c,
-          degrees.ToString().c_str());
-      const std::vector<ThermalSlot> tslots = ThermalSlots(model, degrees);
+          "thermal   %zu positions at each of %zu temperature%s (T_ref %.4g degC), degrees %s: "
+          "1 sigma of each coefficient (x-first frame; per K^d)\n",
+          directions.size(), args.temperatures_c.size(), args.temperatures_c.size() == 1 ? "" : "s",
+          t_ref, degrees->ToString().c_str());
+      const std::vector<ThermalSlot> tslots = ThermalSlots(model, *degrees);
       const Mat33 K = ChangeFrame(device.params.K, Frame::kXFirst).K;
       for (std::size_t i = 0; i < tslots.size(); ++i) {
         if (tslots[i].degree == 0) continue;
         const ParameterSlot& s = tslots[i].slot;
         const double sd = thermal->sigma(static_cast<Eigen::Index>(i));
         const double kii = std::abs(K(s.row, s.row));
-        const std::string unit = tslots[i].degree == 1 ? "/K" : Format("/K^%d", tslots[i].degree);
-        const std::string engineering =
-            s.group == ParameterGroup::kK
-                ? (s.row == s.col ? Format("%.3g ppm%s of scale", 1e6 * sd / kii, unit.c_str())
-                                  : Format("%.3g urad%s", 1e6 * sd / kii, unit.c_str()))
-            : s.group == ParameterGroup::kBias
-                ? Format("%.3g mg%s", 1e3 * sd / kii / device.gravity, unit.c_str())
-                : Format("%.3g raw%s", sd, unit.c_str());
-        thermal_text +=
-            Format("  %-5s d%d  %.4g raw  (%s)\n", std::string(tslots[i].slot.name).c_str(),
-                   tslots[i].degree, sd, engineering.c_str());
+        const std::string per = tslots[i].degree == 1 ? "/K" : Format("/K^%d", tslots[i].degree);
+        // Scale in ppm of itself, misalignment in µrad, bias in mg, k2 in µg/g² (engineering.hpp).
+        const Engineering e = s.group == ParameterGroup::kK
+                                  ? (s.row == s.col ? Engineering{1e6 * sd / kii, "ppm" + per}
+                                                    : Engineering{1e6 * sd / kii, "urad" + per})
+                              : s.group == ParameterGroup::kBias
+                                  ? Engineering{1e3 * sd / kii / device.gravity, "mg" + per}
+                                  : Engineering{1e6 * sd * device.gravity / kii, "ug/g^2" + per};
+        engineering.push_back(e);
+        thermal_text += Format("  %-5s d%d  %.4g raw  (%.3g %s)\n", std::string(s.name).c_str(),
+                               tslots[i].degree, sd, e.value, e.unit.c_str());
       }
     }
   }
@@ -227,14 +246,15 @@ int RunDesign(const DesignArgs& args) {
         d["worst"] = std::string(slots[std::size_t(drift->worst)].name);
       }
     }
-    if (thermal) {
+    if (degrees) {
       Json& t = doc["thermal"];
       t["temperatures"] = args.temperatures_c;
-      t["t_ref"] = thermal->t_ref_c;
-      t["degrees"] = {
-          {"K", thermal->degrees.K}, {"bias", thermal->degrees.bias}, {"k2", thermal->degrees.k2}};
-      t["observable"] = thermal->observable;
-      if (thermal->observable) {
+      t["frame"] = "x-first";
+      t["degrees"] = {{"K", degrees->K}, {"bias", degrees->bias}, {"k2", degrees->k2}};
+      t["observable"] = thermal && thermal->observable;
+      if (!thermal_reason.empty()) t["reason"] = thermal_reason;
+      if (thermal) t["t_ref"] = std::abs(thermal->t_ref_c) < 1e-9 ? 0.0 : thermal->t_ref_c;
+      if (thermal && thermal->observable) {
         Json& coefficients = t["order"] = Json::array();
         for (const ThermalSlot& s : ThermalSlots(model, thermal->degrees)) {
           coefficients.push_back(std::string(s.slot.name) +
@@ -244,6 +264,9 @@ int RunDesign(const DesignArgs& args) {
         for (Eigen::Index i = 0; i < thermal->sigma.size(); ++i) {
           t["std"].push_back(thermal->sigma(i));
         }
+        Json& e = t["std_engineering"] = Json::array();
+        for (const Engineering& x : engineering)
+          e.push_back({{"value", x.value}, {"unit", x.unit}});
       }
     }
     out = JsonText(doc);
@@ -278,7 +301,8 @@ int RunDesign(const DesignArgs& args) {
     out += thermal_text;
   }
   WriteFileAtomically("-", out);
-  return planned.observable ? kExitOk : kExitBadInput;
+  return planned.observable && (!degrees || (thermal && thermal->observable)) ? kExitOk
+                                                                              : kExitBadInput;
 }
 
 int RunMonteCarlo(const MonteCarloArgs& args) {

@@ -75,8 +75,13 @@ struct PlannedThermal {
   Eigen::MatrixXd crlb;
   Eigen::VectorXd sigma;
 };
+/// Temperatures closer than this count as one in a schedule: a degree d needs d + 1 of them (a
+/// difference at a temperature sensor's resolution determines no slope, however exact the
+/// arithmetic).
+inline constexpr double kMinThermalSeparation_K = 0.1;
 /// Throws std::invalid_argument for fewer than 1 temperature, a non-finite one, or degrees the
-/// model cannot take.
+/// model cannot take. Not observable with fewer than degrees.Max() + 1 temperatures
+/// kMinThermalSeparation_K apart.
 PlannedThermal PredictThermalUncertainty(const ModelParameters& device, ModelKind model,
                                          double gravity, const std::vector<Vec3>& directions,
                                          const std::vector<double>& temperatures_c,

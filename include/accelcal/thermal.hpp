@@ -30,7 +30,7 @@ struct ThermalDegrees {
 
   int Of(ParameterGroup group) const;
   int Max() const;
-  /// "K1 b1 k2_0" style: each group and its degree.
+  /// "K:1 b:2" ("k2:d" added when k2 varies): each group and its degree.
   std::string ToString() const;
   friend bool operator==(const ThermalDegrees& a, const ThermalDegrees& b) {
     return a.K == b.K && a.bias == b.bias && a.k2 == b.k2;

@@ -1,5 +1,6 @@
 #include "accelcal/design.hpp"
 
+#include <algorithm>
 #include <charconv>
 #include <cmath>
 #include <limits>
@@ -404,6 +405,16 @@ PlannedThermal PredictThermalUncertainty(const ModelParameters& device, ModelKin
   PlannedThermal out;
   out.degrees = degrees;
   out.t_ref_c = sum / static_cast<double>(temperatures_c.size());
+  std::vector<double> sorted = temperatures_c;
+  std::sort(sorted.begin(), sorted.end());
+  int distinct = 1;
+  for (std::size_t i = 1, first = 0; i < sorted.size(); ++i) {
+    if (sorted[i] - sorted[first] >= kMinThermalSeparation_K) ++distinct, first = i;
+  }
+  if (distinct < degrees.Max() + 1) {
+    (void)ThermalSlots(model, degrees);  // degrees the model cannot take still throw
+    return out;
+  }
   // The device and its directions in the x-first frame the thermal model is written in.
   const FrameChange change = ChangeFrame(device.K, Frame::kXFirst);
   ThermalParameters thermal = UnpackThermal(

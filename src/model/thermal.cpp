@@ -22,7 +22,8 @@ int ThermalDegrees::Of(ParameterGroup group) const {
 int ThermalDegrees::Max() const { return std::max(K, std::max(bias, k2)); }
 
 std::string ThermalDegrees::ToString() const {
-  return "K" + std::to_string(K) + " b" + std::to_string(bias) + " k2_" + std::to_string(k2);
+  return "K:" + std::to_string(K) + " b:" + std::to_string(bias) +
+         (k2 > 0 ? " k2:" + std::to_string(k2) : std::string());
 }
 
 std::vector<ThermalSlot> ThermalSlots(ModelKind model, const ThermalDegrees& degrees) {

@@ -318,6 +318,10 @@ TEST(ThermalDesign, PlannedBoundIsTheScheduleCramerRaoBound) {
   EXPECT_TRUE(PredictThermalUncertainty(truth.coefficients[0], model, kG, orientations, {0, 20, 40},
                                         sigma, degrees)
                   .observable);
+  // Temperatures closer than a sensor's resolution are one (kMinThermalSeparation_K).
+  EXPECT_FALSE(PredictThermalUncertainty(truth.coefficients[0], model, kG, orientations,
+                                         {0, 20, 20.05}, sigma, degrees)
+                   .observable);
 }
 
 }  // namespace

@@ -217,16 +217,38 @@ TEST_F(Cli, DesignPlansATemperatureSchedule) {
               1e-6);
   const CliRun text = Exec("design --positions yang18 --noise 0.002 --device " +
                            Path("device.json") + " --temperatures 20,40 --thermal-degrees 1,2");
-  ASSERT_EQ(text.status, 0) << text.err;
+  EXPECT_EQ(text.status, 3) << text.err;  // as positions that do not determine the device
   EXPECT_NE(text.out.find("thermal   NOT determined: these temperatures cannot separate degrees "
-                          "K1 b2 k2_0; record the orientations at 3 distinct temperatures"),
+                          "K:1 b:2: record the orientations at 3 temperatures or more"),
             std::string::npos)
       << text.out;
-  for (const std::string& bad : {std::string("--temperatures nan"),
-                                 std::string("--temperatures 20,30 --thermal-degrees 1,1,1"),
-                                 std::string("--temperatures 20,30 --thermal-degrees 4,1"),
-                                 std::string("--thermal-degrees 1,1")}) {
+  EXPECT_EQ(t3["frame"], "x-first");
+  ASSERT_EQ(t3["std_engineering"].size(), 9u);
+  EXPECT_EQ(t3["std_engineering"][0]["unit"], "ppm/K");
+  // Temperatures a sensor's resolution apart determine no slope.
+  const CliRun close = Exec(base + " --temperatures 20,20.01");
+  EXPECT_EQ(close.status, 3);
+  EXPECT_FALSE(nlohmann::json::parse(close.out)["thermal"]["observable"].get<bool>());
+  // Positions that do not determine the device: the section says why, in JSON too.
+  const CliRun six = Exec("design --positions six --noise 0.002 --json --device " +
+                          Path("device.json") + " --temperatures 0,40");
+  EXPECT_EQ(six.status, 3);
+  EXPECT_EQ(nlohmann::json::parse(six.out)["thermal"]["reason"],
+            "the positions do not determine the parameters at one temperature");
+  for (const std::string& bad :
+       {std::string("--temperatures nan"),
+        std::string("--temperatures 20,30 --thermal-degrees 1,1,1"),
+        std::string("--temperatures 20,30 --thermal-degrees 4,1"),
+        std::string("--temperatures 20,30 --thermal-degrees 0,0"),
+        std::string("--temperatures 20,30 --bias-model linear"),
+        std::string("--temperatures 20 --temperatures 30"), std::string("--thermal-degrees 1,1")}) {
     EXPECT_EQ(Exec(base + " " + bad).status, 2) << bad;
+    // Checked whatever the positions determine.
+    EXPECT_EQ(
+        Exec("design --positions six --noise 0.002 --device " + Path("device.json") + " " + bad)
+            .status,
+        2)
+        << bad;
   }
 }
 

@@ -93,6 +93,9 @@ using ModelParameters = ModelParametersT<double>;
 
 /// The entry of `p` that slot `s` names.
 double& SlotRef(ModelParameters& p, const ParameterSlot& s);
+/// ∂μ_row/∂θ_s at specific force f (μ is linear in θ): K's entry (row, col) moves axis `row` by
+/// f_col, b_row by 1, k2_row by f_row².
+double SlotRegressor(const ParameterSlot& s, const Vec3& f);
 
 /// Flat vector (eq. (8) order) from parameters; k2 is dropped for the linear model.
 Eigen::VectorXd Pack(const ModelParameters& params, ModelKind kind);

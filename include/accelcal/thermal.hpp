@@ -66,5 +66,9 @@ struct ThermalParameters {
 Eigen::VectorXd Pack(const ThermalParameters& params, ModelKind model);
 ThermalParameters UnpackThermal(const Eigen::VectorXd& x, ModelKind model,
                                 const ThermalDegrees& degrees, double t_ref_c);
+/// `at_ref` (x-first) at every temperature: θ_0 its entries that `model` holds, the temperature
+/// coefficients of `degrees` zero (a thermal fit's start, a plan's device).
+ThermalParameters ConstantOverTemperature(const ModelParameters& at_ref, ModelKind model,
+                                          const ThermalDegrees& degrees, double t_ref_c);
 
 }  // namespace accelcal

@@ -417,12 +417,9 @@ PlannedThermal PredictThermalUncertainty(const ModelParameters& device, ModelKin
   }
   // The device and its directions in the x-first frame the thermal model is written in.
   const FrameChange change = ChangeFrame(device.K, Frame::kXFirst);
-  ThermalParameters thermal = UnpackThermal(
-      Eigen::VectorXd::Zero(static_cast<Eigen::Index>(ThermalSlots(model, degrees).size())), model,
-      degrees, out.t_ref_c);
-  thermal.coefficients[0] = device;
-  thermal.coefficients[0].K = change.K;
-  if (model == ModelKind::kLinear) thermal.coefficients[0].k2.setZero();
+  ModelParameters x_first = device;
+  x_first.K = change.K;
+  const ThermalParameters thermal = ConstantOverTemperature(x_first, model, degrees, out.t_ref_c);
   std::vector<Vec3> dirs;
   std::vector<double> temps;
   for (double t : temperatures_c) {

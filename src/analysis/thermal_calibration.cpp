@@ -113,11 +113,8 @@ ThermalResult CalibrateThermal(const std::vector<Vec3>& readings, const ThermalO
   constant.outliers.policy = OutlierPolicy::kOff;
   constant.reading_sigmas.clear();
   const CalibrationResult constant_fit = Calibrate(readings, constant);
-  ThermalParameters start = UnpackThermal(
-      Eigen::VectorXd::Zero(
-          static_cast<Eigen::Index>(ThermalSlots(options.base.model, options.degrees).size())),
-      options.base.model, options.degrees, t_ref);
-  start.coefficients[0] = constant_fit.params;
+  const ThermalParameters start =
+      ConstantOverTemperature(constant_fit.params, options.base.model, options.degrees, t_ref);
 
   const internal::ThermalFit fit = Fit(readings, options, temps, start, constant_fit.directions);
   ThermalResult result;

@@ -28,19 +28,7 @@ namespace {
 Eigen::MatrixXd ModelJacobian(const std::vector<ParameterSlot>& slots, const Vec3& f) {
   Eigen::MatrixXd J = Eigen::MatrixXd::Zero(3, static_cast<Eigen::Index>(slots.size()));
   for (std::size_t s = 0; s < slots.size(); ++s) {
-    const ParameterSlot& slot = slots[s];
-    const auto col = static_cast<Eigen::Index>(s);
-    switch (slot.group) {
-      case ParameterGroup::kK:
-        J(slot.row, col) = f(slot.col);
-        break;
-      case ParameterGroup::kBias:
-        J(slot.row, col) = 1;
-        break;
-      case ParameterGroup::kK2:
-        J(slot.row, col) = f(slot.row) * f(slot.row);
-        break;
-    }
+    J(slots[s].row, static_cast<Eigen::Index>(s)) = SlotRegressor(slots[s], f);
   }
   return J;
 }

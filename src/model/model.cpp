@@ -30,6 +30,18 @@ const std::vector<int>& ActiveColumns(ModelKind kind) {
   return kind == ModelKind::kLinear ? linear : quadratic;
 }
 
+double SlotRegressor(const ParameterSlot& s, const Vec3& f) {
+  switch (s.group) {
+    case ParameterGroup::kK:
+      return f(s.col);
+    case ParameterGroup::kBias:
+      return 1.0;
+    case ParameterGroup::kK2:
+      break;
+  }
+  return f(s.row) * f(s.row);
+}
+
 double& SlotRef(ModelParameters& p, const ParameterSlot& s) {
   switch (s.group) {
     case ParameterGroup::kK:

@@ -88,4 +88,12 @@ ThermalParameters UnpackThermal(const Eigen::VectorXd& x, ModelKind model,
   return out;
 }
 
+ThermalParameters ConstantOverTemperature(const ModelParameters& at_ref, ModelKind model,
+                                          const ThermalDegrees& degrees, double t_ref_c) {
+  Eigen::VectorXd x =
+      Eigen::VectorXd::Zero(static_cast<Eigen::Index>(ThermalSlots(model, degrees).size()));
+  x.head(NumParameters(model)) = Pack(at_ref, model);
+  return UnpackThermal(x, model, degrees, t_ref_c);
+}
+
 }  // namespace accelcal

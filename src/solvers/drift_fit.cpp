@@ -15,7 +15,10 @@ DriftProblem::DriftProblem(const Problem& problem, const BiasTimeBasis& basis,
       J_(basis.size()) {
   phi_.reserve(times_s.size());
   for (double t : times_s) phi_.push_back(basis.Evaluate(t));
-  if (!prior || basis.model.kind != BiasModelKind::kSpline) return;
+  if (!prior) return;
+  if (basis.model.kind != BiasModelKind::kSpline) {
+    throw std::invalid_argument("a random-walk prior is on a spline bias's knots");
+  }
   if (prior->reading_sigmas.size() != times_s.size()) {
     throw std::invalid_argument("a random-walk prior needs one reading sigma per position");
   }
@@ -75,10 +78,7 @@ bool DriftProblem::Evaluate(int block, const Eigen::VectorXd& x, const Eigen::Ve
     J_x->setZero(3, GlobalSize());
     for (int s = 0; s < P_; ++s) {
       const ParameterSlot& slot = slots_[static_cast<std::size_t>(s)];
-      const double d = slot.group == ParameterGroup::kK      ? f(slot.col)
-                       : slot.group == ParameterGroup::kBias ? 1.0
-                                                             : f(slot.row) * f(slot.row);
-      (*J_x)(slot.row, s) = -d;
+      (*J_x)(slot.row, s) = -SlotRegressor(slot, f);
     }
     for (int i = 0; i < 3; ++i) {
       for (int j = 0; j < J_; ++j) (*J_x)(i, P_ + i * J_ + j) = -phi(j);
@@ -104,9 +104,8 @@ Eigen::Matrix<double, 3, Eigen::Dynamic> DriftProblem::Drift(const Eigen::Vector
 DriftFit SolveDrift(const Problem& problem, const BiasTimeBasis& basis,
                     const std::vector<double>& times_s, const ModelParameters& start,
                     const std::vector<Vec3>& dirs, const CalibrationOptions::Joint& joint,
-                    const std::optional<RandomWalkPrior>& random_walk) {
-  const bool with_prior = random_walk && basis.model.kind == BiasModelKind::kSpline;
-  const std::optional<RandomWalkPrior>& prior = with_prior ? random_walk : std::nullopt;
+                    const std::optional<RandomWalkPrior>& prior) {
+  const bool with_prior = prior.has_value();
   const DriftProblem lsq(problem, basis, times_s, prior);
   const int P = NumParameters(problem.model), m = problem.positions();
   LeastSquaresState state;
@@ -137,15 +136,15 @@ DriftFit SolveDrift(const Problem& problem, const BiasTimeBasis& basis,
   fit.S_inverse = fit.summary.information_inverse;
 
   // The rows of the reduced information: u_k = J_xᵀ n_k, n_k ⟂ the columns of J_y; and the
-  // residuals, whitened as the problem's and in raw units.
+  // residuals, unweighted (the problem's, with a prior, are divided by Weight).
   fit.U.resize(m, lsq.GlobalSize());
   fit.normals.resize(static_cast<std::size_t>(m));
-  fit.whitened.resize(static_cast<std::size_t>(m));
   for (int k = 0; k < m; ++k) {
     const auto i = static_cast<std::size_t>(k);
+    Vec3 weighted;
     fit.U.row(k) =
-        InformationRow(lsq, state.x, k, state.y[i], &fit.normals[i], &fit.whitened[i]).transpose();
-    fit.residuals.push_back(fit.whitened[i].cwiseQuotient(lsq.Weight(k)));
+        InformationRow(lsq, state.x, k, state.y[i], &fit.normals[i], &weighted).transpose();
+    fit.residuals.push_back(weighted.cwiseQuotient(lsq.Weight(k)));
   }
   return fit;
 }

@@ -74,17 +74,16 @@ struct DriftFit {
   Eigen::MatrixXd U;
   std::vector<Vec3> normals;
   Eigen::MatrixXd S_inverse;
-  /// Each position's p_k − μ(θ, g c_k) − D φ(t_k) [raw], and the same as the problem weighs it
-  /// (divided by √(s² + q² v) with a random-walk prior, else the same).
-  std::vector<Vec3> residuals, whitened;
+  /// Each position's p_k − μ(θ, g c_k) − D φ(t_k) [raw].
+  std::vector<Vec3> residuals;
 };
 
 /// Solves from the constant-bias fit (`start`, `dirs`) with D = 0, by the joint method's limits
 /// (CalibrationOptions::Joint: iterations, damping; steps stop at parameter_tolerance times the
 /// signal amplitude in raw units; with the prior, whitened: at parameter_tolerance). With a
-/// random-walk prior on a spline bias the problem is RandomWalkPrior's: DriftFit::U holds the
-/// readings' whitened rows and normals, S includes the prior, and the summary's cost is the
-/// whitened sum with the prior's part.
+/// random-walk prior (a spline basis only: std::invalid_argument otherwise) the problem is
+/// RandomWalkPrior's: DriftFit::U holds the readings' whitened rows and normals, S includes the
+/// prior, and the summary's cost is the whitened sum with the prior's part.
 DriftFit SolveDrift(const Problem& problem, const BiasTimeBasis& basis,
                     const std::vector<double>& times_s, const ModelParameters& start,
                     const std::vector<Vec3>& dirs, const CalibrationOptions::Joint& joint,

@@ -88,10 +88,7 @@ class JointProblem : public LeastSquaresProblem {
       J_x->setZero(3, n);
       for (int s = 0; s < pa_; ++s) {
         const ParameterSlot& slot = slots_[static_cast<std::size_t>(s)];
-        const double d = slot.group == ParameterGroup::kK      ? f(slot.col)
-                         : slot.group == ParameterGroup::kBias ? 1.0
-                                                               : f(slot.row) * f(slot.row);
-        (*J_x)(slot.row, s) = -w(slot.row) * d;
+        (*J_x)(slot.row, s) = -w(slot.row) * SlotRegressor(slot, f);
       }
       J_x->middleCols<2>(Tangent(k)) = -(w.asDiagonal() * J_f) * data_.gravity * TangentBasis(c);
     }

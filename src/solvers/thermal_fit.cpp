@@ -34,14 +34,12 @@ bool ThermalProblem::Evaluate(int block, const Eigen::VectorXd& x, const Eigen::
   Mat33 J_f;
   *residual = problem_.readings[k] - PredictRaw(params, f, &J_f);
   if (J_x != nullptr) {
-    // ∂μ/∂θ_d = ΔT^d ∂μ/∂θ: K's entry (r, c) moves axis r by f_c, b_r by 1, k2_r by f_r².
+    // ∂μ/∂θ_d = ΔT^d ∂μ/∂θ.
     J_x->setZero(3, GlobalSize());
     for (std::size_t s = 0; s < slots_.size(); ++s) {
       const ParameterSlot& slot = slots_[s].slot;
-      const double d = slot.group == ParameterGroup::kK      ? f(slot.col)
-                       : slot.group == ParameterGroup::kBias ? 1.0
-                                                             : f(slot.row) * f(slot.row);
-      (*J_x)(slot.row, static_cast<Eigen::Index>(s)) = -d * std::pow(dT_[k], slots_[s].degree);
+      (*J_x)(slot.row, static_cast<Eigen::Index>(s)) =
+          -SlotRegressor(slot, f) * std::pow(dT_[k], slots_[s].degree);
     }
   }
   if (J_y != nullptr) *J_y = -(J_f * problem_.gravity) * TangentBasis(c);

@@ -93,7 +93,6 @@ Summary FitDrift(const Problem& problem, const CalibrationOptions& options, cons
   }
   const int spent = prior ? static_cast<int>(std::ceil(used - 1e-9)) : n;
   result.degrees_of_freedom = m - spent;
-  // With the prior the rows and normals are the whitened problem's: so are the residuals tested.
   if (prior && options.outliers.policy != OutlierPolicy::kOff) {
     // The test's studentized residuals are least-squares ones; a posterior's are shrunk by the
     // prior, and their t would be meaningless (a leverage sum near m made it ±inf).
@@ -105,7 +104,7 @@ Summary FitDrift(const Problem& problem, const CalibrationOptions& options, cons
         ScreenWithLeverages(drift.normals, leverages, spent,
                             "the " + std::string(ToString(options.model)) + " model with a " +
                                 ToString(options.bias_model) + " bias",
-                            drift.whitened, SignalAmplitude(drift.params, options.gravity),
+                            drift.residuals, SignalAmplitude(drift.params, options.gravity),
                             options.outliers.false_alarm_probability);
   }
   if (prior && invertible && m > P) {

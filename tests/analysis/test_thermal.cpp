@@ -298,10 +298,8 @@ TEST(ThermalDesign, PlannedBoundIsTheScheduleCramerRaoBound) {
       s.temps.push_back(t);
     }
   }
-  ThermalParameters at_zero = UnpackThermal(
-      Eigen::VectorXd::Zero(static_cast<Eigen::Index>(ThermalSlots(model, degrees).size())), model,
-      degrees, 20);
-  at_zero.coefficients[0] = truth.coefficients[0];
+  const ThermalParameters at_zero =
+      ConstantOverTemperature(truth.coefficients[0], model, degrees, 20);
   const Eigen::MatrixXd expected = Crlb(at_zero, model, s, sigma);
   const PlannedThermal planned = PredictThermalUncertainty(
       truth.coefficients[0], model, kG, orientations, temperatures, sigma, degrees);

@@ -293,10 +293,18 @@ std::optional<std::string> CheckMatStructure(const std::string& path) {
   if (std::fread(header, 1, sizeof header, f.get()) != sizeof header) {
     return std::string("a MAT-file shorter than its 128-byte header");
   }
-  if (std::memcmp(header, "MATLAB 7.3", 10) == 0) return std::nullopt;  // HDF5: its library's
   const bool little = header[126] == 'I' && header[127] == 'M';
   if (!little && !(header[126] == 'M' && header[127] == 'I')) {
     return std::string("a MAT-file whose header has no endian indicator (IM or MI at byte 126)");
+  }
+  // libmatio reads the file as its version field says, whatever its text: 0x0200 is HDF5 (7.3,
+  // its own library's to check), 0x0100 Level 5 (walked here). A "MATLAB 7.3" text over a
+  // Level 5 version had let libmatio size an allocation from unchecked dimensions (8 TB).
+  const unsigned version =
+      little ? header[124] | (header[125] << 8) : (header[124] << 8) | header[125];
+  if (version == 0x0200) return std::nullopt;
+  if (version != 0x0100) {
+    return Format("a MAT-file of version 0x%04x (0x0100: Level 5; 0x0200: 7.3)", version);
   }
   if (std::fseek(f.get(), 0, SEEK_END) != 0) return std::string("a MAT-file that cannot be read");
   const long size = std::ftell(f.get());

@@ -12,6 +12,7 @@
 #include <gtest/gtest.h>
 
 #include "accelcal/error.hpp"
+#include "accelcal/log_reader.hpp"
 #include "accelcal/mat_writer.hpp"
 #include "io/mat_file.hpp"
 #include "io/mat_structure.hpp"
@@ -134,6 +135,22 @@ TEST(MatStructure, TheFuzzersFindingsAreRefused) {
     ASSERT_TRUE(why) << name;
     EXPECT_NE(why->find("where its matrix holds"), std::string::npos) << *why;
   }
+}
+
+TEST(MatStructure, TheVersionFieldNotTheTextSaysHowItIsRead) {
+  // Found by the fuzzer (CI, 2026-11-28): "MATLAB 7.3" as text over a Level 5 version field.
+  // libmatio read it as Level 5 while the check took it for HDF5 and let it pass, and libmatio
+  // then asked for 4 GB (8 TB in another input) from its dimensions.
+  const std::string dir = std::string(ACCELCAL_SOURCE_DIR) + "/fuzz/regressions/file_log/";
+  const std::optional<std::string> why = CheckMatStructure(dir + "text-7.3-version-5.mat");
+  ASSERT_TRUE(why);
+  EXPECT_NE(why->find("where its matrix holds"), std::string::npos) << *why;
+  // A version that is neither Level 5 nor 7.3.
+  std::string bytes = ReadFileToString(dir + "text-7.3-version-5.mat");
+  bytes[124] = 3;
+  const std::string path = Write("version-3.mat", bytes);
+  EXPECT_EQ(CheckMatStructure(path).value_or(""),
+            "a MAT-file of version 0x0103 (0x0100: Level 5; 0x0200: 7.3)");
 }
 
 }  // namespace

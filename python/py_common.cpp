@@ -42,7 +42,7 @@ Rows ToRows(const std::vector<Vec3>& v) {
 std::vector<Position> PositionsOf(const Rows& rows) {
   std::vector<Position> positions;
   for (const Vec3& p : ToVectors(rows))
-    positions.push_back(Position{p, 1, std::nullopt, std::nullopt});
+    positions.push_back(Position{p, 1, std::nullopt, std::nullopt, std::nullopt});
   return positions;
 }
 

@@ -70,6 +70,10 @@ ReadOptions MakeReadOptions(const InputArgs& in) {
     if (in.topic->empty()) throw UsageError("--topic: an empty topic name");
     options.topic = *in.topic;
   }
+  if (in.temperature_column) {
+    if (in.temperature_column->empty()) throw UsageError("--temperature-column: an empty name");
+    options.temperature = *in.temperature_column;
+  }
   return options;
 }
 
@@ -290,6 +294,8 @@ std::string WithReaderFlags(const std::string& message) {
                              {"the columns option", "--columns"},
                              {"the topic and instance options", "--topic and --instance"},
                              {"the topic option", "--topic"},
+                             {"the temperature column", "--temperature-column"},
+                             {"the temperature option", "--temperature-column"},
                              {"the time unit option", "--time-unit"},
                              {"the rate option", "--rate"},
                              {"input kind \"raw\"", "--input-kind raw"}});

@@ -37,6 +37,7 @@ int RunDetect(const DetectArgs& args) {
       doc["time"] = {
           {"unit", ToString(t->unit)}, {"origin_s", t->origin_s}, {"gaps", t->gaps.size()}};
     }
+    if (!data.raw.temperature_source.empty()) doc["temperature"] = data.raw.temperature_source;
     nlohmann::ordered_json& intervals = doc["intervals"] = nlohmann::ordered_json::array();
     for (const StaticInterval& s : d.intervals) {
       intervals.push_back({{"begin", s.begin},
@@ -46,6 +47,7 @@ int RunDetect(const DetectArgs& args) {
                            {"t_end", s.t_end_s},
                            {"mean", JsonArray(s.mean)},
                            {"std", JsonArray(s.std)}});
+      if (s.temperature_c) intervals.back()["temperature"] = *s.temperature_c;
     }
     out = JsonText(doc);
   } else {
@@ -56,13 +58,17 @@ int RunDetect(const DetectArgs& args) {
         d.noise_reference);
     // What the time column was found to be, and the still periods not used (diagnosis.hpp).
     for (const Finding& f : LogFindings(&data.raw, &d)) out += "# " + VisibleLine(f.message) + "\n";
-    out += Format("%3s %9s %9s %11s %11s %8s %40s %33s\n", "#", "begin", "end", "t_begin", "t_end",
-                  "samples", "mean", "std");
+    const bool temperature = !data.raw.temperature_source.empty();
+    if (temperature) out += "# temperature [degC]: " + data.raw.temperature_source + "\n";
+    out += Format("%3s %9s %9s %11s %11s %8s %40s %33s%s\n", "#", "begin", "end", "t_begin",
+                  "t_end", "samples", "mean", "std", temperature ? "  T[degC]" : "");
     for (std::size_t i = 0; i < d.intervals.size(); ++i) {
       const StaticInterval& s = d.intervals[i];
-      out += Format("%3zu %9zu %9zu %11.4f %11.4f %8zu %s %s\n", i + 1, s.begin, s.end, s.t_begin_s,
+      out += Format("%3zu %9zu %9zu %11.4f %11.4f %8zu %s %s", i + 1, s.begin, s.end, s.t_begin_s,
                     s.t_end_s, s.count(), Vec(s.mean, "%13.7g ").c_str(),
                     Vec(s.std, "%10.4g ").c_str());
+      if (temperature) out += s.temperature_c ? Format(" %8.3f", *s.temperature_c) : "       -";
+      out += "\n";
     }
     out += Format("%zu static intervals\n", d.intervals.size());
   }

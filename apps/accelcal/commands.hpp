@@ -48,9 +48,10 @@ struct InputArgs {
   std::string input_kind = "auto";
   std::vector<std::string> columns;
   std::optional<double> rate_hz;
-  std::string time_unit = "auto";    // TimeUnit
-  std::optional<double> instance;    // ReadOptions::instance
-  std::optional<std::string> topic;  // ReadOptions::topic
+  std::string time_unit = "auto";                 // TimeUnit
+  std::optional<double> instance;                 // ReadOptions::instance
+  std::optional<std::string> topic;               // ReadOptions::topic
+  std::optional<std::string> temperature_column;  // ReadOptions::temperature
   /// The gyroscope's topic in a binary log (ReadGyroInput), for the commands that read one.
   std::optional<std::string> gyro_topic;
   StaticDetectionOptions detection;

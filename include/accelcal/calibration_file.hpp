@@ -113,6 +113,7 @@ struct FilePosition {
   /// `time` and `drift_offset`: the position's time [s] and D φ(t) [raw], with a drifting bias.
   std::optional<double> time;
   std::optional<Vec3> drift_offset;
+  std::optional<double> temperature;  ///< the sensor's mean temperature [°C], when read
   bool excluded = false;
   std::optional<int> file;  ///< index into `sources`
 };

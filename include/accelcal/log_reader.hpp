@@ -88,7 +88,22 @@ struct ReadOptions {
   /// this read takes the gyroscope's; empty: its default layout): a column both would read is an
   /// InputError. Unset: no other stream.
   std::optional<std::vector<std::string>> other_columns = std::nullopt;
+  /// The sensor's temperature [°C] with each sample (a raw log) or position (a positions file): a
+  /// column (a 1-based number or a header name) of a text log or MAT-file, a field of a binary
+  /// log's stream. Empty: a header column named as kTemperatureColumnNames says, or the known
+  /// stream's field (KnownStream::temperature); none is not an error then. "none": not read.
+  /// Values outside kTemperatureRange_C are an InputError naming the line (kelvin, raw counts or
+  /// the wrong column). Not read by StreamRawLog.
+  std::string temperature{};
 };
+
+/// The header names a temperature column is found by when none is given.
+inline constexpr const char* kTemperatureColumnNames[] = {
+    "temperature",    "temp",           "temperature_c",    "temp_c",
+    "temperature[c]", "temperature(c)", "temperature_degc", "temp_degc"};
+/// A temperature [°C] outside this range is not an IMU's: a column in kelvin or raw counts, or
+/// not a temperature at all (-80 °C to 150 °C: beyond any MEMS part's rating).
+inline constexpr double kTemperatureRange_C[2] = {-80.0, 150.0};
 
 /// A given rate may differ from the timestamps' by this fraction (clock error, rounding).
 inline constexpr double kRateTolerance = 0.05;
@@ -108,6 +123,11 @@ struct RawLog {
   std::optional<double> rate_hz;
   /// The time column's unit, origin, gaps and regularity; unset without a time column.
   std::optional<TimeAxis> time;
+  /// The sensor's temperature [°C] at each sample (ReadOptions::temperature), NaN where a binary
+  /// log's message gives none; empty when the log has none.
+  std::vector<double> temperature_c;
+  /// Where it came from ("column 5 ('temperature')", "sensor_accel.temperature"); empty: none.
+  std::string temperature_source;
   /// What the reader could not read, though the samples above are whole (a binary log cut
   /// short: where it stopped); empty when it read everything.
   std::string read_warning;

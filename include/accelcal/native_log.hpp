@@ -71,6 +71,8 @@ struct KnownStream {
   /// A field whose value -1 in every message says the readings are not measured (REP 145: a ROS
   /// Imu's covariance[0]); empty when the type has none.
   std::string_view unmeasured{};
+  /// The sensor's temperature field [°C] (ReadOptions::temperature); empty when the type has none.
+  std::string_view temperature{};
 };
 /// The streams accelcal reads without being told their fields: PX4's sensor_accel (the
 /// driver's output, before the calibration), sensor_combined's accelerometer (after it),

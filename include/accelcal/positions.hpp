@@ -23,6 +23,9 @@ struct StaticInterval {
   std::size_t averaged = 0;
   /// Samples averaged.
   std::size_t count() const { return averaged > 0 ? averaged : end - begin; }
+  /// The mean temperature [°C] of its samples that have one (RawLog::temperature_c); unset when
+  /// none has.
+  std::optional<double> temperature_c;
 };
 
 /// One static position: the averaged raw reading.
@@ -31,6 +34,7 @@ struct Position {
   std::size_t samples = 1;                 ///< number of samples averaged (1 when unknown)
   std::optional<Vec3> std;                 ///< per-axis sample standard deviation, raw, when known
   std::optional<StaticInterval> interval;  ///< where it came from, for positions from a raw log
+  std::optional<double> temperature_c;     ///< the sensor's mean temperature [°C], when known
 };
 
 std::vector<Position> PositionsFromIntervals(const std::vector<StaticInterval>& intervals);

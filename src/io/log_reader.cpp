@@ -61,7 +61,8 @@ using internal::RowParser;
 using internal::Split;
 // The column roles.
 using internal::kCount, internal::kInstance, internal::kRoles, internal::kSx, internal::kSy,
-    internal::kSz, internal::kTime, internal::kX, internal::kY, internal::kZ;
+    internal::kSz, internal::kTemperature, internal::kTime, internal::kX, internal::kY,
+    internal::kZ;
 
 // The header of a positions file with counts and standard deviations, as accelcal simulate writes
 // it: columns named n, sx, sy and sz. ("samples" alone is not enough: raw logs carry sample
@@ -147,17 +148,24 @@ Layout NamedLayout(const std::vector<std::string>& h) {
   // A column naming the sensor of each row: ArduPilot's I, PX4's device_id and multi_id, ...
   l.column[kInstance] =
       FindColumn(h, {"i", "instance", "multi_id", "device_id", "imu", "imu_id", "sensor_id", "id"});
+  l.column[kTemperature] = -1;
+  for (std::size_t i = 0; i < h.size() && l.column[kTemperature] < 0; ++i) {
+    for (const char* n : kTemperatureColumnNames) {
+      if (h[i] == n) l.column[kTemperature] = static_cast<int>(i);
+    }
+  }
   return l;
 }
 
 int ResolveColumn(const std::string& spec, const std::vector<std::string>& header,
-                  std::size_t columns, const std::string& source) {
+                  std::size_t columns, const std::string& source,
+                  const char* what = "the columns option's entry") {
   double number = 0;
   if (ParseNumber(spec, &number)) {
     if (number < 1 || number > static_cast<double>(columns) || number != std::floor(number)) {
       throw InputError(source, 0,
-                       "the columns option's entry '" + spec +
-                           "' is not a column number between 1 and " + std::to_string(columns));
+                       std::string(what) + " '" + spec + "' is not a column number between 1 and " +
+                           std::to_string(columns));
     }
     return static_cast<int>(number) - 1;
   }
@@ -166,7 +174,7 @@ int ResolveColumn(const std::string& spec, const std::vector<std::string>& heade
     if (header[i] == want) return static_cast<int>(i);
   }
   throw InputError(source, 0,
-                   "the columns option's entry '" + spec + "' names no column" +
+                   std::string(what) + " '" + spec + "' names no column" +
                        (header.empty() ? std::string(" (the file has no header)") : std::string()));
 }
 
@@ -249,6 +257,7 @@ void SelectInstance(const std::vector<double>& instances, const std::string& col
     if (data->kind == InputKind::kRaw) {
       RawLog& log = data->raw;
       if (!log.time_s.empty()) log.time_s[kept] = log.time_s[i];
+      if (!log.temperature_c.empty()) log.temperature_c[kept] = log.temperature_c[i];
       log.samples[kept] = log.samples[i];
       log.line[kept] = log.line[i];
     } else {
@@ -259,6 +268,7 @@ void SelectInstance(const std::vector<double>& instances, const std::string& col
   if (data->kind == InputKind::kRaw) {
     RawLog& log = data->raw;
     if (!log.time_s.empty()) log.time_s.resize(kept);
+    if (!log.temperature_c.empty()) log.temperature_c.resize(kept);
     log.samples.resize(kept);
     log.line.resize(kept);
   } else {
@@ -370,6 +380,28 @@ Layout ChooseLayout(const std::vector<std::string>& chosen, const std::vector<st
     }
   }
   return layout;
+}
+
+// The temperature column (ReadOptions::temperature): the one named, else the header's (when no
+// other role reads it), else none (-1).
+int TemperatureColumn(const std::string& given, const std::vector<std::string>& header,
+                      const Layout& named, const Layout& layout, std::size_t ncols,
+                      const std::string& source) {
+  if (given == "none") return -1;
+  const int c = given.empty()
+                    ? named.column[kTemperature]
+                    : ResolveColumn(given, header, ncols, source, "the temperature column");
+  if (c < 0) return -1;
+  for (int r = 0; r < kTemperature; ++r) {
+    if (layout.column[r] != c) continue;
+    if (given.empty()) return -1;
+    static constexpr const char* kRole[] = {"time", "x",  "y",  "z",       "sample count",
+                                            "sx",   "sy", "sz", "instance"};
+    throw InputError(source, 0,
+                     "the temperature column " + std::to_string(c + 1) + ColumnName(header, c) +
+                         " is read as the " + kRole[r] + ": each needs its own column");
+  }
+  return c;
 }
 
 InputData ParseBlocks(internal::TextBlocks& blocks, const std::string& source,
@@ -503,6 +535,13 @@ InputData ParseBlocks(internal::TextBlocks& blocks, const std::string& source,
     layout.column[kInstance] = named.column[kInstance];
   } else {
     layout.column[kInstance] = -1;
+  }
+  layout.column[kTemperature] = sink != nullptr ? -1
+                                                : TemperatureColumn(options.temperature, header,
+                                                                    named, layout, ncols, source);
+  if (raw && layout.column[kTemperature] >= 0) {
+    data.raw.temperature_source = "column " + std::to_string(layout.column[kTemperature] + 1) +
+                                  ColumnName(header, layout.column[kTemperature]);
   }
   if (columns != nullptr) {
     columns->time = layout.column[kTime] >= 0;

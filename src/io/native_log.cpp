@@ -46,10 +46,32 @@ std::string TableName(std::string_view type) {
 const std::vector<KnownStream>& KnownStreams() {
   static const std::vector<KnownStream> kStreams = {
       // PX4: sampled at timestamp_sample where the topic has one.
-      {"sensor_accel", "accelerometer", "timestamp_sample", "x", "y", "z", "m/s2", false},
+      {"sensor_accel",
+       "accelerometer",
+       "timestamp_sample",
+       "x",
+       "y",
+       "z",
+       "m/s2",
+       false,
+       KnownStream::Packing::kSample,
+       {},
+       {},
+       "temperature"},
       {"sensor_combined", "accelerometer", "timestamp", "accelerometer_m_s2[0]",
        "accelerometer_m_s2[1]", "accelerometer_m_s2[2]", "m/s2", true},
-      {"sensor_gyro", "gyroscope", "timestamp_sample", "x", "y", "z", "rad/s", false},
+      {"sensor_gyro",
+       "gyroscope",
+       "timestamp_sample",
+       "x",
+       "y",
+       "z",
+       "rad/s",
+       false,
+       KnownStream::Packing::kSample,
+       {},
+       {},
+       "temperature"},
       {"sensor_combined", "gyroscope", "timestamp", "gyro_rad[0]", "gyro_rad[1]", "gyro_rad[2]",
        "rad/s", true},
       // PX4's FIFO topics: the driver's every sample, packed (SDLOG_PROFILE's raw FIFO bits).
@@ -63,9 +85,31 @@ const std::vector<KnownStream>& KnownStreams() {
       {"vehicle_imu", "gyroscope", "timestamp_sample", "delta_angle[0]", "delta_angle[1]",
        "delta_angle[2]", "rad/s", true, KnownStream::Packing::kDelta, "delta_angle_dt"},
       // ArduPilot: ACC and GYR at SampleUS, IMU at TimeUS.
-      {"IMU", "accelerometer", "TimeUS", "AccX", "AccY", "AccZ", "m/s2", true},
+      {"IMU",
+       "accelerometer",
+       "TimeUS",
+       "AccX",
+       "AccY",
+       "AccZ",
+       "m/s2",
+       true,
+       KnownStream::Packing::kSample,
+       {},
+       {},
+       "T"},
       {"ACC", "accelerometer", "SampleUS", "AccX", "AccY", "AccZ", "m/s2", true},
-      {"IMU", "gyroscope", "TimeUS", "GyrX", "GyrY", "GyrZ", "rad/s", true},
+      {"IMU",
+       "gyroscope",
+       "TimeUS",
+       "GyrX",
+       "GyrY",
+       "GyrZ",
+       "rad/s",
+       true,
+       KnownStream::Packing::kSample,
+       {},
+       {},
+       "T"},
       {"GYR", "gyroscope", "SampleUS", "GyrX", "GyrY", "GyrZ", "rad/s", true},
       // ROS: a driver's message, stamped when sampled (REP 145 asks for the sensor's own frame,
       // without the driver's corrections).
@@ -162,7 +206,7 @@ std::optional<std::size_t> Find(const internal::DecodedStream& s, std::string_vi
 
 // Which column of `s` a columns option's entry names: a field's name, or its 1-based number.
 std::size_t ColumnOf(const internal::DecodedStream& s, const std::string& entry,
-                     const std::string& source) {
+                     const std::string& source, const char* option = "the columns option") {
   if (const std::optional<std::size_t> c = Find(s, entry)) return *c;
   std::size_t number = 0;
   bool digits = !entry.empty() && entry.size() < 6;
@@ -175,8 +219,8 @@ std::size_t ColumnOf(const internal::DecodedStream& s, const std::string& entry,
   }
   if (digits && number >= 1 && number <= s.columns->size()) return number - 1;
   throw InputError(source, 0,
-                   "the columns option names \"" + Shown(entry) + "\", which " + Shown(s.topic) +
-                       " does not have (its fields: " + Fields(s) + ")");
+                   std::string(option) + " names \"" + Shown(entry) + "\", which " +
+                       Shown(s.topic) + " does not have (its fields: " + Fields(s) + ")");
 }
 
 // The time fields the formats define in µs by name (ULog's timestamp and timestamp_sample,
@@ -205,7 +249,8 @@ struct Chosen {
   // y[0], z[0] being the axes): `fifo` samples a message at most.
   std::vector<std::size_t> extra;
   std::size_t fifo = 1;
-  std::optional<std::size_t> unmeasured;  // KnownStream::unmeasured's column, stored last
+  std::optional<std::size_t> temperature;  // ReadOptions::temperature's, or the known stream's
+  std::optional<std::size_t> unmeasured;   // KnownStream::unmeasured's column, stored last
 };
 
 // The columns option's (time,x,y,z, or x,y,z with the stream's own time field when it has one),
@@ -276,8 +321,15 @@ Chosen Choose(const internal::DecodedStream& s, const ReadOptions& options,
       if (!known->unmeasured.empty()) out.unmeasured = Find(s, known->unmeasured);
     }
   }
+  if (options.temperature.empty()) {
+    if (known != nullptr && !known->temperature.empty())
+      out.temperature = Find(s, known->temperature);
+  } else if (options.temperature != "none") {
+    out.temperature = ColumnOf(s, options.temperature, source, "the temperature option");
+  }
   std::vector<std::size_t> all(std::begin(out.axis), std::end(out.axis));
   if (out.time) all.insert(all.begin(), *out.time);
+
   for (std::size_t i = 0; i < all.size(); ++i) {
     for (std::size_t j = 0; j < i; ++j) {
       if (all[i] == all[j]) {
@@ -285,6 +337,16 @@ Chosen Choose(const internal::DecodedStream& s, const ReadOptions& options,
                          "the columns option reads the field " + Shown((*s.columns)[all[i]]) +
                              " twice: each of time, x, y, z needs its own");
       }
+    }
+  }
+  if (out.temperature && std::find(all.begin(), all.end(), *out.temperature) != all.end()) {
+    if (options.temperature.empty()) {
+      out.temperature.reset();  // the known field, chosen as a reading: no temperature
+    } else {
+      throw InputError(source, 0,
+                       "the temperature option names the field " +
+                           Shown((*s.columns)[*out.temperature]) +
+                           ", which the columns option reads: each needs its own");
     }
   }
   return out;
@@ -296,6 +358,7 @@ std::vector<std::size_t> Stored(const Chosen& c) {
   if (c.time) out.push_back(*c.time);
   out.insert(out.end(), std::begin(c.axis), std::end(c.axis));
   out.insert(out.end(), c.extra.begin(), c.extra.end());
+  if (c.temperature) out.push_back(*c.temperature);
   if (c.unmeasured) out.push_back(*c.unmeasured);
   return out;
 }
@@ -473,12 +536,24 @@ InputData ReadNativeLog(BinaryStream& in, InputFile* file, const ReadOptions& op
                               x.substr(0, x.rfind('.')).c_str(), std::string(sensor).c_str()));
     }
   }
+  // The temperature's place in a stored row: before the unmeasured marker, which is last.
+  const std::size_t temperature_at = width - 1 - (chosen.unmeasured ? 1 : 0);
+  if (chosen.temperature) raw.temperature_c.reserve(s.messages);
   for (std::size_t i = 0; i < s.messages; ++i) {
     const double* row = s.values.data() + i * width;
     const auto where = [&] {
       return Format("%s message %zu (%s %llu)", Shown(s.topic).c_str(), i + 1,
                     log.offset_name.c_str(), static_cast<unsigned long long>(s.offset[i]));
     };
+    // NaN: the driver did not measure it (PX4's default); any other value must be a sensor's.
+    const double t_c = chosen.temperature ? row[temperature_at] : 0.0;
+    if (chosen.temperature && !std::isnan(t_c) &&
+        !(t_c >= kTemperatureRange_C[0] && t_c <= kTemperatureRange_C[1])) {
+      throw InputError(source, 0,
+                       where() + Format(": its temperature %s is %.9g, outside %g to %g degC",
+                                        (*s.columns)[*chosen.temperature].c_str(), t_c,
+                                        kTemperatureRange_C[0], kTemperatureRange_C[1]));
+    }
     if (chosen.time && !std::isfinite(row[0])) {
       throw InputError(source, 0, where() + " holds a time that is not a finite number");
     }
@@ -534,9 +609,21 @@ InputData ReadNativeLog(BinaryStream& in, InputFile* file, const ReadOptions& op
       }
       raw.samples.push_back(v);
       raw.line.push_back(static_cast<std::uint32_t>(std::min<std::size_t>(i + 1, UINT32_MAX)));
+      if (chosen.temperature) raw.temperature_c.push_back(t_c);
     }
   }
   if (log.truncated) raw.read_warning = *log.truncated;
+  if (std::all_of(raw.temperature_c.begin(), raw.temperature_c.end(),
+                  [](double t) { return std::isnan(t); })) {
+    if (chosen.temperature && !options.temperature.empty() && !raw.temperature_c.empty()) {
+      throw InputError(source, 0,
+                       Shown(s.topic) + "'s " + (*s.columns)[*chosen.temperature] +
+                           ", the temperature asked for, is NaN (not measured) in every message");
+    }
+    raw.temperature_c.clear();  // a driver that measures none
+  } else {
+    raw.temperature_source = s.topic + "." + (*s.columns)[*chosen.temperature];
+  }
   SourceStream& stream = data.stream.emplace();
   stream.format = std::string(ToString(format));
   stream.topic = s.topic;

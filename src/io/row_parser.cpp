@@ -4,6 +4,7 @@
 #include <cmath>
 
 #include "accelcal/error.hpp"
+#include "core/text_format.hpp"
 #include "io/number_parser.hpp"
 
 namespace accelcal::internal {
@@ -33,6 +34,7 @@ std::uint32_t RowParser::Parse(std::string_view block, std::size_t block_offset,
                                std::vector<double>* instances) const {
   // Per-row tests as locals: the vectors' stores could otherwise change them for the compiler.
   const bool has_time = layout_.column[kTime] >= 0, has_instance = layout_.column[kInstance] >= 0;
+  const bool has_temperature = layout_.column[kTemperature] >= 0;
   const bool raw = raw_, report = static_cast<bool>(progress_);
   std::size_t rows_read = *rows;
   RawLog& log = data->raw;
@@ -47,8 +49,10 @@ std::uint32_t RowParser::Parse(std::string_view block, std::size_t block_offset,
     }
     const Vec3 xyz(v[kX], v[kY], v[kZ]);
     if (has_instance) instances->push_back(v[kInstance]);
+    if (has_temperature) CheckTemperature(v[kTemperature], number);
     if (raw) {
       if (has_time) log.time_s.push_back(v[kTime]);
+      if (has_temperature) log.temperature_c.push_back(v[kTemperature]);
       log.samples.push_back(xyz);
       log.line.push_back(number);
     } else {
@@ -272,6 +276,17 @@ void RowParser::ParseField(const Line& line, std::size_t column, const char* fie
   }
 }
 
+void RowParser::CheckTemperature(double t_c, std::uint32_t line_number) const {
+  if (!(t_c >= kTemperatureRange_C[0] && t_c <= kTemperatureRange_C[1])) {
+    throw InputError(
+        source_, line_number,
+        Format("column %d: the temperature %.9g is outside %g to %g degC (kelvin, raw counts, or "
+               "not the temperature column?)",
+               layout_.column[kTemperature] + 1, t_c, kTemperatureRange_C[0],
+               kTemperatureRange_C[1]));
+  }
+}
+
 Position RowParser::MakePosition(const Vec3& xyz, const double* values,
                                  std::uint32_t line_number) const {
   Position position;
@@ -291,6 +306,7 @@ Position RowParser::MakePosition(const Vec3& xyz, const double* values,
       throw InputError(source_, line_number, "a standard deviation is negative");
     }
   }
+  if (layout_.column[kTemperature] >= 0) position.temperature_c = values[kTemperature];
   return position;
 }
 

@@ -16,8 +16,8 @@
 
 namespace accelcal::internal {
 
-/// Column roles: time, x, y, z, count, sx, sy, sz, instance.
-enum Role { kTime, kX, kY, kZ, kCount, kSx, kSy, kSz, kInstance, kRoles };
+/// Column roles: time, x, y, z, count, sx, sy, sz, instance, temperature.
+enum Role { kTime, kX, kY, kZ, kCount, kSx, kSy, kSz, kInstance, kTemperature, kRoles };
 
 /// The column of each role; -1 = absent.
 struct Layout {
@@ -45,6 +45,8 @@ class RowParser {
   void ParseField(const Line& line, std::size_t column, const char* field_begin,
                   const char* field_end, double* value) const;
   Position MakePosition(const Vec3& xyz, const double* values, std::uint32_t line_number) const;
+  // Throws InputError for a temperature outside kTemperatureRange_C.
+  void CheckTemperature(double t_c, std::uint32_t line_number) const;
 
   const std::string& source_;
   Delimiter delim_;

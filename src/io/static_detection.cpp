@@ -472,6 +472,17 @@ StaticDetectionResult DetectStaticIntervals(const RawLog& log,
     joined.push_back(cur);
   }
   result.intervals = std::move(joined);
+  // Each interval's temperature: the mean of its samples' that have one.
+  if (log.temperature_c.size() == log.samples.size()) {
+    for (StaticInterval& interval : result.intervals) {
+      double sum = 0;
+      std::size_t known = 0;
+      for (std::size_t i = interval.begin; i < interval.end; ++i) {
+        if (!std::isnan(log.temperature_c[i])) sum += log.temperature_c[i], ++known;
+      }
+      if (known > 0) interval.temperature_c = sum / static_cast<double>(known);
+    }
+  }
   return result;
 }
 

@@ -13,6 +13,7 @@ std::vector<Position> PositionsFromIntervals(const std::vector<StaticInterval>& 
     p.samples = interval.count();
     p.std = interval.std;
     p.interval = interval;
+    p.temperature_c = interval.temperature_c;
     positions.push_back(p);
   }
   return positions;

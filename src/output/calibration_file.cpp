@@ -168,6 +168,7 @@ ordered_json AccelerometerSection(const CalibrationResult& result, const Calibra
                            {"t_begin", p.interval->t_begin_s},
                            {"t_end", p.interval->t_end_s}};
     }
+    if (p.temperature_c) entry["temperature"] = *p.temperature_c;
     if (result.drift) {
       entry["time"] = result.drift->times_s[k];
       entry["drift_offset"] = ToJson(offsets[k]);

@@ -11,6 +11,7 @@
 #include "accelcal/calibration_file.hpp"
 #include "accelcal/error.hpp"
 #include "accelcal/frame.hpp"
+#include "accelcal/log_reader.hpp"
 #include "core/text_format.hpp"
 #include "output/json_reader.hpp"
 
@@ -173,6 +174,12 @@ FilePosition ReadPosition(const Reader& r, const ordered_json& p) {
   position.crossval_error = r.Nullable(p, "crossval_error");
   position.time = r.Nullable(p, "time");
   position.drift_offset = r.OptionalVector3(p, "drift_offset");
+  position.temperature = r.Nullable(p, "temperature");
+  if (position.temperature && !(*position.temperature >= kTemperatureRange_C[0] &&
+                                *position.temperature <= kTemperatureRange_C[1])) {
+    r.Fail(r.Key("temperature") + internal::Format(" must be from %g to %g degC",
+                                                   kTemperatureRange_C[0], kTemperatureRange_C[1]));
+  }
   if (p.contains("excluded")) {
     if (!p["excluded"].is_boolean()) r.Fail(r.Key("excluded") + " must be true or false");
     position.excluded = p["excluded"].get<bool>();

@@ -100,7 +100,7 @@ Simulated Simulate() {
                                          Vec3::Constant(1e-3), 8)) {
     // Samples' noise 10 times too small for the positions' scatter: a `scatter_ratio` finding
     // (6.92).
-    s.positions.push_back(Position{p, 400, Vec3::Constant(2e-3), std::nullopt});
+    s.positions.push_back(Position{p, 400, Vec3::Constant(2e-3), std::nullopt, std::nullopt});
   }
   CalibrationOptions options;
   options.model = ModelKind::kQuadratic;

@@ -48,7 +48,7 @@ Fitted Fit(ModelKind model, Frame frame, const std::string& raw_unit = "g",
   info.raw_unit = raw_unit;
   info.source = source;
   for (const Vec3& p : readings)
-    info.positions.push_back(Position{p, 1, std::nullopt, std::nullopt});
+    info.positions.push_back(Position{p, 1, std::nullopt, std::nullopt, std::nullopt});
   Fitted fitted;
   fitted.json = CalibrationToJson(result, info);
   fitted.cal = ParseCalibrationJson(fitted.json, "cal.json");

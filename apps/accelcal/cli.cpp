@@ -214,6 +214,18 @@ int accelcal::cli::RunCommandLine(int argc, char** argv) {
         ->type_name("FILE")
         ->excludes(random_walk);
     calibrate
+        ->add_option("--thermal", cal.thermal,
+                     "parameters that follow temperature: the degrees in T - T_ref of K and b "
+                     "(and k2 for the quadratic model), e.g. 1,1, or auto (chosen by held-out "
+                     "error); from several files at different temperatures or one ramp")
+        ->type_name("K,B[,K2]|auto");
+    calibrate
+        ->add_option("--temperatures", cal.temperatures_c,
+                     "with --thermal: one temperature [degC] per input file, for logs without "
+                     "their own (see --temperature-column)")
+        ->delimiter(',')
+        ->type_name("T[,T...]");
+    calibrate
         ->add_option("--method", cal.method,
                      "joint, two-step, newton-lagrange, modulus, modulus-norm or ellipsoid")
         ->capture_default_str();

@@ -310,7 +310,27 @@ void RefuseFailed(const LoadedCalibration& cal, const std::string& path) {
   }
 }
 
-void WarnDriftNotUsed(const LoadedCalibration& cal, const std::string& path, const char* use) {
+EngineeringValue ThermalEngineering(const ThermalSlot& slot, double raw, const Mat33& K_x_first,
+                                    double gravity) {
+  const ParameterSlot& s = slot.slot;
+  const double kii = std::abs(K_x_first(s.row, s.row));
+  const std::string per = slot.degree == 1 ? "/K" : Format("/K^%d", slot.degree);
+  if (s.group == ParameterGroup::kK) {
+    return s.row == s.col ? EngineeringValue{1e6 * raw / kii, "ppm" + per}
+                          : EngineeringValue{1e6 * raw / kii, "urad" + per};
+  }
+  if (s.group == ParameterGroup::kBias) return {1e3 * raw / kii / gravity, "mg" + per};
+  return {1e6 * raw * gravity / kii, "ug/g^2" + per};
+}
+
+void WarnVaryingNotUsed(const LoadedCalibration& cal, const std::string& path, const char* use) {
+  if (cal.thermal) {
+    Warn(
+        "%s: its parameters follow temperature (degrees %s); they are %s at one temperature, "
+        "T_ref = %.6g degC, not at the temperature of each reading\n",
+        path.c_str(), cal.thermal->params.degrees.ToString().c_str(), use,
+        cal.thermal->params.t_ref_c);
+  }
   if (!cal.drift) return;
   Warn(
       "%s: its bias drifted within its session (a %s bias); it is %s with one bias, the "

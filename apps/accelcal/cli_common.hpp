@@ -124,8 +124,19 @@ std::string WithReaderFlags(const std::string& message);
 // A calibration that failed its checks is written so that its reasons can be read, never used.
 void RefuseFailed(const LoadedCalibration& cal, const std::string& path);
 /// Warns that a calibration whose bias drifted within its session is used with one bias, its
-/// value at the drift's reference time (`use`: what the command does with it, e.g. "applied").
-void WarnDriftNotUsed(const LoadedCalibration& cal, const std::string& path, const char* use);
+/// value at the drift's reference time, and one whose parameters follow temperature with its
+/// parameters at T_ref (`use`: what the command does with it, e.g. "applied").
+void WarnVaryingNotUsed(const LoadedCalibration& cal, const std::string& path, const char* use);
+
+// A temperature coefficient (raw units per K^d) in engineering units per K^d: scale in ppm of
+// itself, misalignment in µrad, bias in mg, k2 in µg/g² (engineering.hpp), through K's diagonal
+// (x-first) and gravity.
+struct EngineeringValue {
+  double value;
+  std::string unit;
+};
+EngineeringValue ThermalEngineering(const ThermalSlot& slot, double raw, const Mat33& K_x_first,
+                                    double gravity);
 
 // Planned directions: a named scheme, or a file with one unit vector per row.
 std::vector<Vec3> PlannedDirections(const std::string& spec);

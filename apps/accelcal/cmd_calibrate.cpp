@@ -22,6 +22,7 @@
 #include "accelcal/orientation_file.hpp"
 #include "accelcal/position_noise.hpp"
 #include "accelcal/report.hpp"
+#include "accelcal/thermal_calibration.hpp"
 #include "cli_common.hpp"
 #include "output.hpp"
 
@@ -495,7 +496,7 @@ int WriteCalibration(const CalibrateArgs& given, const LoadedInput& in, const Gr
                      const CalibrationResult& result, const std::vector<Vec3>& mean_sigmas,
                      const ModelSelection* selection, const BiasModelSelection* bias_selection,
                      const std::string& input_note, const OrientationFile* orientations = nullptr,
-                     const GyroRun* gyro = nullptr) {
+                     const GyroRun* gyro = nullptr, const std::string& thermal_text = "") {
   CalibrateArgs args = given;
   args.raw_units = RawUnitLabel(given, in);
   DiagnosisInput diagnosis_input;
@@ -571,6 +572,7 @@ int WriteCalibration(const CalibrateArgs& given, const LoadedInput& in, const Gr
     PrintInput(in);
     Say("%s", input_note.c_str());
     PrintCalibration(result, in.positions, in.position_file, g, args.raw_units);
+    Say("%s", thermal_text.c_str());
     if (selection) PrintModelSelection(*selection, args.model == "auto");
     if (bias_selection) {
       Say("bias      auto -> %s: %s\n", ToString(bias_selection->chosen).c_str(),
@@ -732,6 +734,146 @@ int RunCalibrateKnownOrientations(const CalibrateArgs& args) {
 
 }  // namespace
 
+// --thermal: "auto" (nothing), or the degrees K,B[,K2] of `model`. Usage errors before anything is
+// read.
+std::optional<ThermalDegrees> ParseThermal(const CalibrateArgs& args, ModelKind model) {
+  if (args.thermal == "auto") return std::nullopt;
+  std::vector<int> d;
+  std::stringstream list(args.thermal);
+  for (std::string item; std::getline(list, item, ',');) {
+    if (item.size() != 1 || item[0] < '0' || item[0] > '9') {
+      throw UsageError("--thermal: '" + args.thermal +
+                       "' is neither auto nor the degrees K,B[,K2] (whole numbers from 0 to " +
+                       std::to_string(kMaxThermalDegree) + ")");
+    }
+    d.push_back(item[0] - '0');
+  }
+  if (d.size() < 2 || d.size() > 3 || args.thermal.back() == ',') {
+    throw UsageError("--thermal: '" + args.thermal +
+                     "' is neither auto nor the degrees K,B[,K2] (e.g. 1,1)");
+  }
+  const ThermalDegrees degrees{d[0], d[1], d.size() > 2 ? d[2] : 0};
+  try {
+    (void)ThermalSlots(model, degrees);
+  } catch (const std::invalid_argument& e) {
+    throw UsageError(std::string("--thermal: ") + e.what());
+  }
+  if (degrees.Max() == 0) {
+    throw UsageError("--thermal " + args.thermal +
+                     " has no temperature term: leave --thermal out for parameters constant over "
+                     "temperature");
+  }
+  return degrees;
+}
+
+// Each position's temperature: its file's from --temperatures, else its own (read with its log).
+std::vector<double> PositionTemperatures(const CalibrateArgs& args, LoadedInput* in,
+                                         std::string* note) {
+  std::vector<double> temps;
+  if (!args.temperatures_c.empty()) {
+    bool own = false;
+    for (std::size_t k = 0; k < in->positions.size(); ++k) {
+      const std::string& file = in->position_file.empty() ? args.input.path : in->position_file[k];
+      std::size_t i = 0;
+      while (i < in->files.size() && in->files[i].path != file) ++i;
+      own |= in->positions[k].temperature_c.has_value();
+      in->positions[k].temperature_c = args.temperatures_c.at(i);
+      temps.push_back(args.temperatures_c.at(i));
+    }
+    if (own) {
+      *note += "          temperatures: --temperatures, one per file, not the logs' own readings\n";
+    }
+    return temps;
+  }
+  for (std::size_t k = 0; k < in->positions.size(); ++k) {
+    const Position& p = in->positions[k];
+    if (!p.temperature_c) {
+      const std::string& file = in->position_file.empty() ? args.input.path : in->position_file[k];
+      throw InputError(
+          file, 0,
+          "--thermal needs each position's temperature, and position " + std::to_string(k + 1) +
+              " has none: give the log's temperature column (--temperature-column) or one "
+              "temperature per file (--temperatures)");
+    }
+    temps.push_back(*p.temperature_c);
+  }
+  return temps;
+}
+
+// The temperature terms fitted, each in engineering units per K^d (x-first frame).
+std::string ThermalText(const CalibrationResult& r, const ThermalDegreeSelection* selection,
+                        const Gravity& g, const std::string& raw_unit) {
+  const ThermalTerms& t = *r.thermal;
+  const auto [lo, hi] = std::minmax_element(t.temperatures_c.begin(), t.temperatures_c.end());
+  std::string out = Format(
+      "\nthermal   degrees %s%s, T_ref %.4g degC (the parameters above are at T_ref), positions "
+      "from %.4g to %.4g degC\n",
+      t.params.degrees.ToString().c_str(), selection != nullptr ? " (auto)" : "", t.params.t_ref_c,
+      *lo, *hi);
+  if (selection != nullptr) out += "          auto: " + selection->reason + "\n";
+  out += Format("          coefficients per K^d (K in %s per %s, b in %s; +- 1 sigma)\n",
+                raw_unit.c_str(), g.unit == ForceUnit::kMetersPerSecond2 ? "m/s2" : "g",
+                raw_unit.c_str());
+  const std::vector<ThermalSlot> slots = ThermalSlots(r.model, t.params.degrees);
+  const Eigen::VectorXd x = Pack(t.params, r.model);
+  const bool have_std = t.covariance.rows() == x.size();
+  for (std::size_t i = 0; i < slots.size(); ++i) {
+    if (slots[i].degree == 0) continue;
+    const auto idx = static_cast<Eigen::Index>(i);
+    const EngineeringValue e = ThermalEngineering(slots[i], x(idx), r.params.K, r.gravity);
+    out += Format("  %-5s d%d %14.6g", std::string(slots[i].slot.name).c_str(), slots[i].degree,
+                  x(idx));
+    if (have_std) {
+      const double sd = std::sqrt(t.covariance(idx, idx));
+      out += Format(" +- %-9.2g (%.4g +- %.2g %s)\n", sd, e.value,
+                    ThermalEngineering(slots[i], sd, r.params.K, r.gravity).value, e.unit.c_str());
+    } else {
+      out += Format(" (%.4g %s)\n", e.value, e.unit.c_str());
+    }
+  }
+  return out;
+}
+
+// calibrate --thermal: the joint fit with parameters that follow temperature, from positions at
+// several temperatures (several files, or one ramp).
+int RunCalibrateThermal(const CalibrateArgs& args, const CalibrationOptions& options,
+                        const std::optional<ThermalDegrees>& degrees, const Gravity& g) {
+  LoadedInput in = LoadInput(args.input);
+  std::string note;
+  ThermalOptions thermal;
+  thermal.base = options;
+  thermal.temperatures_c = PositionTemperatures(args, &in, &note);
+  thermal.cross_validate = args.cross_validate;
+  if (options.outliers.policy != OutlierPolicy::kOff) {
+    note +=
+        "          outliers: not screened with --thermal (a discordant position shows in "
+        "its held-out error)\n";
+  }
+  const std::vector<Vec3> means = Means(in.positions);
+  std::optional<ThermalDegreeSelection> selection;
+  ThermalResult fit;
+  try {
+    if (degrees) {
+      thermal.degrees = *degrees;
+      fit = CalibrateThermal(means, thermal);
+    } else {
+      selection = SelectThermalDegrees(means, thermal);
+      fit = selection->result;
+    }
+  } catch (const DataError& e) {
+    throw DataError(std::string("--thermal: ") + e.what());
+  }
+  const CalibrationResult result = AsCalibrationResult(fit, thermal.temperatures_c);
+  if (!result.summary.converged()) {
+    std::fprintf(stderr, "accelcal: %s: the solver did not converge: %s; nothing written\n",
+                 args.input.path.c_str(), result.summary.termination_message.c_str());
+    return kExitNotConverged;
+  }
+  return WriteCalibration(
+      args, in, g, result, {}, nullptr, nullptr, note, nullptr, nullptr,
+      ThermalText(result, selection ? &*selection : nullptr, g, RawUnitLabel(args, in)));
+}
+
 int RunCalibrate(const CalibrateArgs& args) {
   if (args.date_given) {
     if (const auto why = CheckProvenanceDate(args.date)) throw UsageError("--date: " + *why);
@@ -747,6 +889,44 @@ int RunCalibrate(const CalibrateArgs& args) {
   if (GyroWanted(args)) {  // usage errors before anything is read
     GyroOptions(args);
     CheckGyroColumns(args.input, args.gyro, args.gyro_columns);
+  }
+  const bool thermal = !args.thermal.empty();
+  if (!args.temperatures_c.empty()) {
+    if (!thermal) throw UsageError("--temperatures are for --thermal: give it too");
+    const std::size_t files = 1 + args.input.more_paths.size();
+    if (args.temperatures_c.size() != files) {
+      throw UsageError(Format("--temperatures: %zu given for %zu input file%s: one per file",
+                              args.temperatures_c.size(), files, files == 1 ? "" : "s"));
+    }
+    for (double t : args.temperatures_c) {
+      if (!(t >= kTemperatureRange_C[0] && t <= kTemperatureRange_C[1])) {
+        throw UsageError(Format("--temperatures: %g is outside %g to %g degC", t,
+                                kTemperatureRange_C[0], kTemperatureRange_C[1]));
+      }
+    }
+  }
+  if (thermal) {
+    const char* with = !args.orientations.empty()       ? "--orientations"
+                       : GyroWanted(args)               ? "--gyro"
+                       : args.bias_model != "constant"  ? "--bias-model"
+                       : args.model == "auto"           ? "--model auto"
+                       : args.method != "joint"         ? "--method"
+                       : args.frame != "x-first"        ? "--frame"
+                       : args.estimator != "ml"         ? "--estimator"
+                       : !args.bias_random_walk.empty() ? "--bias-random-walk"
+                       : !args.noise.empty()            ? "--noise"
+                                                        : nullptr;
+    if (with != nullptr) {
+      throw UsageError(std::string("--thermal is the joint maximum-likelihood fit (--method joint, "
+                                   "--estimator ml, --frame x-first) of a model chosen by --model "
+                                   "linear or quadratic, with a bias constant in time: not with ") +
+                       with);
+    }
+    if (args.thermal == "auto" && !args.cross_validate) {
+      throw UsageError(
+          "--thermal auto decides on held-out error: it needs the cross-validation that "
+          "--no-crossval turns off");
+    }
   }
   if (!args.orientations.empty()) return RunCalibrateKnownOrientations(args);
   CalibrationOptions options;
@@ -818,6 +998,7 @@ int RunCalibrate(const CalibrateArgs& args) {
     quadratic.model = ModelKind::kQuadratic;
     if (auto why = quadratic.Validate()) throw UsageError("--model auto: " + *why);
   }
+  if (thermal) return RunCalibrateThermal(args, options, ParseThermal(args, options.model), g);
   std::optional<GyroLogAhead> gyro_ahead;
   if (GyroWanted(args)) gyro_ahead.emplace(args);
   const LoadedInput in = LoadInput(args.input);

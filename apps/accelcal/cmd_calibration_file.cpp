@@ -25,7 +25,7 @@ int RunApply(const ApplyArgs& args) {
   const LoadedCalibration cal = ParseCalibrationJson(
       ReadFileToString(args.calibration, kMaxSmallFileBytes), args.calibration);
   RefuseFailed(cal, args.calibration);
-  WarnDriftNotUsed(cal, args.calibration, "applied");
+  WarnVaryingNotUsed(cal, args.calibration, "applied");
   const bool gyro = !args.gyro.empty() || !args.gyro_columns.empty();
   if (gyro && !cal.has_gyroscope()) {
     throw UsageError(args.calibration +
@@ -167,6 +167,7 @@ int RunExport(const ExportArgs& args) {
   const std::string text = ReadFileToString(args.calibration, kMaxSmallFileBytes);
   const LoadedCalibration cal = ParseCalibrationJson(text, args.calibration);
   RefuseFailed(cal, args.calibration);
+  WarnVaryingNotUsed(cal, args.calibration, "exported");
   ExportOptions options;
   options.sensor = args.sensor;
   options.raw_unit = args.raw_unit;

@@ -126,11 +126,7 @@ int RunDesign(const DesignArgs& args) {
   std::optional<PlannedThermal> thermal;
   std::optional<ThermalDegrees> degrees;
   std::string thermal_text, thermal_reason;
-  struct Engineering {
-    double value;
-    std::string unit;
-  };
-  std::vector<Engineering> engineering;
+  std::vector<EngineeringValue> engineering;
   if (args.thermal_degrees_given && args.temperatures_c.empty()) {
     throw UsageError("--thermal-degrees plans a temperature schedule: give --temperatures too");
   }
@@ -184,15 +180,7 @@ int RunDesign(const DesignArgs& args) {
         if (tslots[i].degree == 0) continue;
         const ParameterSlot& s = tslots[i].slot;
         const double sd = thermal->sigma(static_cast<Eigen::Index>(i));
-        const double kii = std::abs(K(s.row, s.row));
-        const std::string per = tslots[i].degree == 1 ? "/K" : Format("/K^%d", tslots[i].degree);
-        // Scale in ppm of itself, misalignment in µrad, bias in mg, k2 in µg/g² (engineering.hpp).
-        const Engineering e = s.group == ParameterGroup::kK
-                                  ? (s.row == s.col ? Engineering{1e6 * sd / kii, "ppm" + per}
-                                                    : Engineering{1e6 * sd / kii, "urad" + per})
-                              : s.group == ParameterGroup::kBias
-                                  ? Engineering{1e3 * sd / kii / device.gravity, "mg" + per}
-                                  : Engineering{1e6 * sd * device.gravity / kii, "ug/g^2" + per};
+        const EngineeringValue e = ThermalEngineering(tslots[i], sd, K, device.gravity);
         engineering.push_back(e);
         thermal_text += Format("  %-5s d%d  %.4g raw  (%.3g %s)\n", std::string(s.name).c_str(),
                                tslots[i].degree, sd, e.value, e.unit.c_str());
@@ -257,15 +245,14 @@ int RunDesign(const DesignArgs& args) {
       if (thermal && thermal->observable) {
         Json& coefficients = t["order"] = Json::array();
         for (const ThermalSlot& s : ThermalSlots(model, thermal->degrees)) {
-          coefficients.push_back(std::string(s.slot.name) +
-                                 (s.degree > 0 ? Format("*dT^%d", s.degree) : std::string()));
+          coefficients.push_back(ThermalSlotName(s));
         }
         t["std"] = Json::array();
         for (Eigen::Index i = 0; i < thermal->sigma.size(); ++i) {
           t["std"].push_back(thermal->sigma(i));
         }
         Json& e = t["std_engineering"] = Json::array();
-        for (const Engineering& x : engineering)
+        for (const EngineeringValue& x : engineering)
           e.push_back({{"value", x.value}, {"unit", x.unit}});
       }
     }

@@ -124,7 +124,7 @@ int RunSimulate(const SimulateArgs& args) {
     if (args.truth.empty()) throw UsageError("give --scenario or --truth");
     const LoadedCalibration cal =
         ParseCalibrationJson(ReadFileToString(args.truth, kMaxSmallFileBytes), args.truth);
-    WarnDriftNotUsed(cal, args.truth, "simulated");
+    WarnVaryingNotUsed(cal, args.truth, "simulated");
     truth = cal.params;
     gravity = cal.gravity;
     if (positions.empty()) throw UsageError("--positions is required with --truth");

@@ -71,7 +71,7 @@ int RunVerify(const VerifyArgs& args) {
   const LoadedCalibration cal = ParseCalibrationJson(
       ReadFileToString(args.calibration, kMaxSmallFileBytes), args.calibration);
   RefuseFailed(cal, args.calibration);
-  WarnDriftNotUsed(cal, args.calibration, "verified");
+  WarnVaryingNotUsed(cal, args.calibration, "verified");
   // The prediction needs the calibration's uncertainty: without it every good calibration of a
   // real sensor would fail (its parameters taken as exact, its misfit as none).
   const std::string method = cal.solver.method.empty() ? "?" : cal.solver.method;

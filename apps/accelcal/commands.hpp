@@ -84,6 +84,10 @@ struct CalibrateArgs {
   // accelerometer's random walk of an `accelcal noise --json` file.
   std::vector<double> bias_random_walk;
   std::string noise;
+  // Parameters that follow temperature (thermal_calibration.hpp): "K,B[,K2]" degrees or "auto"
+  // (empty: none), and one temperature [°C] per input file (empty: the logs' own).
+  std::string thermal;
+  std::vector<double> temperatures_c;
   OutlierArgs outliers;
   std::string orientations;  // known orientations (orientation_file.hpp): platform-frame fit
   // The gyroscope (gyro_calibration.hpp): its log (empty: INPUT itself when gyro_columns are

@@ -146,6 +146,11 @@ struct LoadedCalibration {
   /// `bias_drift`, when the bias was fitted as a function of time (bias_drift.hpp): `params.bias`
   /// is then the bias at its reference time; its times are the positions' `time`.
   std::optional<BiasDrift> drift;
+  /// `thermal`, when the parameters follow temperature (thermal.hpp): `params` is θ(T_ref) and
+  /// `covariance` its block; temperatures_c are the positions' `temperature`.
+  std::optional<ThermalTerms> thermal;
+  /// `thermal.temperature_range`: the temperatures [°C] its fit spans.
+  std::optional<std::pair<double, double>> thermal_range_c;
   std::optional<double> gravity_norm_rms_before, gravity_norm_rms_after, crossval_rms;
   /// `noise.sigma_raw`: the residual σ̂ of the position means along the fitted surface's normal
   /// [raw], when present.

@@ -17,6 +17,7 @@
 #include "accelcal/gravity.hpp"
 #include "accelcal/model.hpp"
 #include "accelcal/names.hpp"
+#include "accelcal/thermal.hpp"
 
 namespace accelcal {
 
@@ -318,6 +319,15 @@ struct Summary {
 };
 
 /// Result of a calibration.
+/// The temperature terms of a calibration whose parameters follow temperature
+/// (thermal_calibration.hpp), in the x-first frame.
+struct ThermalTerms {
+  ThermalParameters params;
+  /// Of the thermal flat vector (ThermalSlots order), σ̂² S⁻¹; empty without degrees of freedom.
+  Eigen::MatrixXd covariance;
+  std::vector<double> temperatures_c;  ///< T_k of each reading [°C]
+};
+
 struct CalibrationResult {
   ModelKind model = ModelKind::kLinear;
   Frame frame = Frame::kXFirst;           ///< K lower-triangular (x-first) or upper (z-first)
@@ -351,6 +361,10 @@ struct CalibrationResult {
   /// the drift's), and DriftOffsets gives what to take from each reading before the model is
   /// inverted (|f_k| − g).
   std::optional<BiasDrift> drift;
+  /// With parameters that follow temperature: `params` is θ(T_ref), `covariance` its block of the
+  /// thermal covariance, `residuals` p_k − μ(θ(T_k), g c_k), and GravityNormErrors takes each
+  /// reading under θ(T_k).
+  std::optional<ThermalTerms> thermal;
   /// With CalibrationOptions::cross_validate: the RMS of |f_k| − g with each position k corrected
   /// by a fit without it (paper 000 verifies on held-out positions), and the per-position errors.
   /// Absent when some fit without a position fails; crossval_note then says which and why.
@@ -387,7 +401,7 @@ std::vector<double> GravityNormErrors(const ModelParameters& params,
                                       const std::vector<Vec3>& readings, double gravity);
 /// |f_k| − g for each reading under a result: its parameters, each reading less its drift offset
 /// when the result has a drifting bias (CalibrationResult::DriftOffsets; `readings` are then the
-/// fit's, one per position time).
+/// fit's, one per position time), each under θ(T_k) when its parameters follow temperature.
 std::vector<double> GravityNormErrors(const CalibrationResult& result,
                                       const std::vector<Vec3>& readings);
 /// RMS of |p_k| − g with the raw readings taken as specific force (no calibration), or

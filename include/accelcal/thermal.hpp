@@ -49,6 +49,8 @@ struct ThermalSlot {
 
 /// The flat vector's slots for `model` and `degrees` (file comment's order).
 std::vector<ThermalSlot> ThermalSlots(ModelKind model, const ThermalDegrees& degrees);
+/// A slot's name in files and plans: the model's ("K_xx") with "*dT^d" for degree d > 0.
+std::string ThermalSlotName(const ThermalSlot& slot);
 
 struct ThermalParameters {
   double t_ref_c = 0;  ///< T_ref [°C]

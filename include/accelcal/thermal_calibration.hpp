@@ -97,6 +97,12 @@ std::vector<double> ThermalGravityNormErrors(const ThermalParameters& params,
                                              const std::vector<double>& temperatures_c,
                                              double gravity);
 
+/// The thermal fit as a calibration (CalibrationResult::thermal): its parameters θ(T_ref) with
+/// their block of the covariance, the directions, residuals, held-out errors and summary, and
+/// the temperature terms with `temperatures_c` (one per reading).
+CalibrationResult AsCalibrationResult(const ThermalResult& thermal,
+                                      const std::vector<double>& temperatures_c);
+
 /// Averaged readings p_k = μ(θ(T_k), g c_k) + v_k, v_k ~ N(0, diag(sigma_raw²)), deterministic in
 /// seed (the noise of SimulatePositions with the same seed).
 std::vector<Vec3> SimulateThermalPositions(const ThermalParameters& truth, double gravity,

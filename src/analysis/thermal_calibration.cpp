@@ -2,6 +2,7 @@
 #include "accelcal/thermal_calibration.hpp"
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <numeric>
 #include <stdexcept>
@@ -48,12 +49,34 @@ std::vector<double> ThermalGravityNormErrors(const ThermalParameters& params,
                                              const std::vector<Vec3>& readings,
                                              const std::vector<double>& temperatures_c,
                                              double gravity) {
-  std::vector<double> errors;
-  errors.reserve(readings.size());
-  for (std::size_t k = 0; k < readings.size(); ++k) {
-    errors.push_back(GravityNormErrors(params.At(temperatures_c.at(k)), {readings[k]}, gravity)[0]);
+  CalibrationResult result;
+  result.gravity = gravity;
+  result.thermal = ThermalTerms{params, {}, temperatures_c};
+  return GravityNormErrors(result, readings);
+}
+
+CalibrationResult AsCalibrationResult(const ThermalResult& thermal,
+                                      const std::vector<double>& temperatures_c) {
+  if (temperatures_c.size() != thermal.residuals.size()) {
+    throw std::invalid_argument("AsCalibrationResult: one temperature per reading is needed");
   }
-  return errors;
+  CalibrationResult r;
+  r.model = thermal.model;
+  r.frame = Frame::kXFirst;
+  r.gravity = thermal.gravity;
+  r.params = thermal.params.At(thermal.params.t_ref_c);
+  r.directions = thermal.directions;
+  r.residuals = thermal.residuals;
+  const auto n = static_cast<Eigen::Index>(NumParameters(thermal.model));
+  if (thermal.covariance.rows() >= n) r.covariance = thermal.covariance.topLeftCorner(n, n);
+  r.residual_sigma = thermal.residual_sigma;
+  r.degrees_of_freedom = thermal.degrees_of_freedom;
+  r.summary = thermal.summary;
+  r.crossval_rms = thermal.crossval_rms;
+  r.crossval_errors = thermal.crossval_errors;
+  r.crossval_note = thermal.crossval_note;
+  r.thermal = ThermalTerms{thermal.params, thermal.covariance, temperatures_c};
+  return r;
 }
 
 std::vector<Vec3> SimulateThermalPositions(const ThermalParameters& truth, double gravity,
@@ -97,6 +120,7 @@ internal::ThermalFit Fit(const std::vector<Vec3>& readings, const ThermalOptions
 
 ThermalResult CalibrateThermal(const std::vector<Vec3>& readings, const ThermalOptions& options) {
   if (auto why = options.Validate()) throw std::invalid_argument(*why);
+  const auto start_time = std::chrono::steady_clock::now();
   if (options.temperatures_c.size() != readings.size()) {
     throw std::invalid_argument("temperatures_c has " +
                                 std::to_string(options.temperatures_c.size()) + " for " +
@@ -133,6 +157,7 @@ ThermalResult CalibrateThermal(const std::vector<Vec3>& readings, const ThermalO
       "thermal " + options.degrees.ToString() + ": " + fit.summary.termination_message;
   s.initial_cost = fit.summary.initial_cost;
   s.final_cost = fit.summary.final_cost;
+  s.time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start_time).count();
   if (result.degrees_of_freedom > 0 && fit.S_inverse.rows() == n) {
     const double sigma2 = fit.summary.final_cost / result.degrees_of_freedom;
     result.residual_sigma = std::sqrt(sigma2);

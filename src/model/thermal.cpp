@@ -26,6 +26,11 @@ std::string ThermalDegrees::ToString() const {
          (k2 > 0 ? " k2:" + std::to_string(k2) : std::string());
 }
 
+std::string ThermalSlotName(const ThermalSlot& slot) {
+  return std::string(slot.slot.name) +
+         (slot.degree > 0 ? "*dT^" + std::to_string(slot.degree) : std::string());
+}
+
 std::vector<ThermalSlot> ThermalSlots(ModelKind model, const ThermalDegrees& degrees) {
   for (int d : {degrees.K, degrees.bias, degrees.k2}) {
     if (d < 0 || d > kMaxThermalDegree) {

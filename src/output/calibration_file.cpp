@@ -97,6 +97,37 @@ ordered_json DriftSection(const BiasDrift& drift) {
   return doc;
 }
 
+// `thermal` (thermal.hpp): T_ref, the degrees, the flat vector's slots and coefficients (x-first),
+// their σ and covariance, and the temperatures the fit spans.
+ordered_json ThermalSection(const ThermalTerms& t, ModelKind model) {
+  ordered_json doc;
+  doc["basis"] =
+      "theta(T) = sum over d of theta_d (T - t_ref)^d, each group to its degree: theta_d in the "
+      "parameters' units per K^d, frame x-first";
+  doc["frame"] = ToString(Frame::kXFirst);
+  doc["t_ref"] = t.params.t_ref_c;
+  doc["degrees"] = {
+      {"K", t.params.degrees.K}, {"bias", t.params.degrees.bias}, {"k2", t.params.degrees.k2}};
+  const auto [lo, hi] = std::minmax_element(t.temperatures_c.begin(), t.temperatures_c.end());
+  if (lo != t.temperatures_c.end()) doc["temperature_range"] = {*lo, *hi};
+  const std::vector<ThermalSlot> slots = ThermalSlots(model, t.params.degrees);
+  const Eigen::VectorXd x = Pack(t.params, model);
+  ordered_json names = ordered_json::array(), values = ordered_json::array(),
+               sd = ordered_json::array();
+  const bool have_std = t.covariance.rows() == x.size();
+  for (std::size_t i = 0; i < slots.size(); ++i) {
+    const auto idx = static_cast<Eigen::Index>(i);
+    names.push_back(ThermalSlotName(slots[i]));
+    values.push_back(x(idx));
+    if (have_std) sd.push_back(std::sqrt(std::max(0.0, t.covariance(idx, idx))));
+  }
+  doc["order"] = names;
+  doc["coefficients"] = values;
+  doc["std"] = have_std ? sd : ordered_json(nullptr);
+  doc["covariance"] = have_std ? ToJson(t.covariance) : ordered_json(nullptr);
+  return doc;
+}
+
 // The accelerometer's section: every key of a version-1 file but `format` and `version`.
 ordered_json AccelerometerSection(const CalibrationResult& result, const CalibrationFileInfo& info,
                                   const Diagnosis& diagnosis) {
@@ -152,6 +183,7 @@ ordered_json AccelerometerSection(const CalibrationResult& result, const Calibra
                         {"k2_g_per_g2", ToJson(eng.k2_g_per_g2)}};
 
   if (result.drift) doc["bias_drift"] = DriftSection(*result.drift);
+  if (result.thermal) doc["thermal"] = ThermalSection(*result.thermal, result.model);
   const std::vector<double> errors = GravityNormErrors(result, means);
   const std::vector<Vec3> offsets = result.DriftOffsets(info.positions.size());
   ordered_json positions = ordered_json::array();

@@ -319,6 +319,91 @@ void ReadDiagnostics(const Reader& r, const ordered_json& doc, LoadedCalibration
   cal.diagnostics = std::move(findings);
 }
 
+// `thermal` (thermal.hpp), checked against the model, its parameters and the positions.
+void ReadThermal(const Reader& r, const ordered_json& doc, LoadedCalibration& cal) {
+  if (!doc.contains("thermal")) return;
+  const ordered_json& t = r.Object(doc, "thermal");
+  const Reader in = r.Inside("thermal");
+  if (cal.drift) in.Fail("a bias that drifts in time and parameters that follow temperature");
+  if (cal.frame != Frame::kXFirst || in.Text(t, "frame") != ToString(Frame::kXFirst)) {
+    in.Fail(in.Key("frame") + " and the parameters' frame must be x-first");
+  }
+  ThermalTerms terms;
+  if (!t.contains("t_ref")) in.Fail(in.Key("t_ref") + " is missing");
+  terms.params.t_ref_c = in.Number(t["t_ref"], in.Key("t_ref"));
+  if (!(terms.params.t_ref_c >= kTemperatureRange_C[0] &&
+        terms.params.t_ref_c <= kTemperatureRange_C[1])) {
+    in.Fail(in.Key("t_ref") + internal::Format(" must be from %g to %g degC",
+                                               kTemperatureRange_C[0], kTemperatureRange_C[1]));
+  }
+  const ordered_json& d = in.Object(t, "degrees");
+  const Reader din = in.Inside("degrees");
+  for (const auto& [key, value] :
+       {std::pair("K", &terms.params.degrees.K), std::pair("bias", &terms.params.degrees.bias),
+        std::pair("k2", &terms.params.degrees.k2)}) {
+    if (!d.contains(key)) continue;
+    if (!d[key].is_number_unsigned() || d[key].get<std::uint64_t>() > kMaxThermalDegree) {
+      din.Fail(din.Key(key) + " must be a whole number from 0 to " +
+               std::to_string(kMaxThermalDegree));
+    }
+    *value = d[key].get<int>();
+  }
+  std::vector<ThermalSlot> slots;
+  try {
+    slots = ThermalSlots(cal.model, terms.params.degrees);
+  } catch (const std::invalid_argument& e) {
+    din.Fail(e.what());
+  }
+  if (terms.params.degrees.Max() == 0) din.Fail("no degree above 0: not a thermal model");
+  const std::size_t n = slots.size();
+  const std::string shape = " must be an array of " + std::to_string(n) + " (degrees " +
+                            terms.params.degrees.ToString() + ")";
+  for (const char* key : {"order", "coefficients"}) {
+    if (!t.contains(key) || !t[key].is_array() || t[key].size() != n) in.Fail(in.Key(key) + shape);
+  }
+  Eigen::VectorXd x(static_cast<Eigen::Index>(n));
+  for (std::size_t i = 0; i < n; ++i) {
+    if (t["order"][i] != ThermalSlotName(slots[i])) {
+      in.Fail(in.Key("order") + " must be the slots of degrees " + terms.params.degrees.ToString() +
+              " in order");
+    }
+    x(static_cast<Eigen::Index>(i)) = in.Number(t["coefficients"][i], in.Key("coefficients"));
+  }
+  terms.params = UnpackThermal(x, cal.model, terms.params.degrees, terms.params.t_ref_c);
+  // θ_0 is the file's parameters.
+  const Eigen::VectorXd at_ref = Pack(cal.params, ParameterSlots(cal.model, cal.frame));
+  if ((x.head(at_ref.size()) - at_ref).norm() > 1e-9 * (1 + at_ref.norm())) {
+    in.Fail(in.Key("coefficients") +
+            " of degree 0 differ from the parameters: they must be the "
+            "parameters at t_ref");
+  }
+  if (t.contains("covariance") && !t["covariance"].is_null()) {
+    terms.covariance = ReadSquareCovariance(in, t, n, "the thermal coefficients");
+  }
+  if (t.contains("temperature_range")) {
+    const ordered_json& range = t["temperature_range"];
+    if (!range.is_array() || range.size() != 2) {
+      in.Fail(in.Key("temperature_range") + " must be 2 temperatures");
+    }
+    const double lo = in.Number(range[0], in.Key("temperature_range")),
+                 hi = in.Number(range[1], in.Key("temperature_range"));
+    if (!(lo <= hi && lo >= kTemperatureRange_C[0] && hi <= kTemperatureRange_C[1])) {
+      in.Fail(in.Key("temperature_range") +
+              internal::Format(" must be from %g to %g degC, low first", kTemperatureRange_C[0],
+                               kTemperatureRange_C[1]));
+    }
+    cal.thermal_range_c = std::pair(lo, hi);
+  }
+  for (std::size_t k = 0; k < cal.positions.size(); ++k) {
+    if (!cal.positions[k].temperature) {
+      r.Fail(r.Key("positions[" + std::to_string(k) + "]") +
+             " has no 'temperature', which parameters that follow temperature need");
+    }
+    terms.temperatures_c.push_back(*cal.positions[k].temperature);
+  }
+  cal.thermal = std::move(terms);
+}
+
 // The accelerometer's keys: a version-1 document's top level, a version-2 document's
 // `sensors.accelerometer`.
 void ReadAccelerometer(const Reader& r, const ordered_json& doc, LoadedCalibration& cal) {
@@ -330,6 +415,7 @@ void ReadAccelerometer(const Reader& r, const ordered_json& doc, LoadedCalibrati
   ReadCovariance(r, doc, cal);
   ReadPositions(r, doc, cal);
   ReadDrift(r, doc, cal);
+  ReadThermal(r, doc, cal);
   cal.gravity_norm_rms_before = r.Nullable(doc, "gravity_norm_rms_before");
   cal.gravity_norm_rms_after = r.Nullable(doc, "gravity_norm_rms_after");
   cal.crossval_rms = r.Nullable(doc, "crossval_rms");

@@ -172,6 +172,19 @@ std::vector<double> GravityNormErrors(const ModelParameters& params,
 
 std::vector<double> GravityNormErrors(const CalibrationResult& result,
                                       const std::vector<Vec3>& readings) {
+  if (result.thermal) {
+    const ThermalTerms& t = *result.thermal;
+    if (t.temperatures_c.size() != readings.size()) {
+      throw std::invalid_argument("GravityNormErrors: one temperature per reading is needed");
+    }
+    std::vector<double> errors;
+    errors.reserve(readings.size());
+    for (std::size_t k = 0; k < readings.size(); ++k) {
+      errors.push_back(
+          GravityNormErrors(t.params.At(t.temperatures_c[k]), {readings[k]}, result.gravity)[0]);
+    }
+    return errors;
+  }
   if (!result.drift) return GravityNormErrors(result.params, readings, result.gravity);
   const std::vector<Vec3> offsets = result.DriftOffsets(readings.size());
   std::vector<Vec3> corrected(readings.size());

@@ -93,8 +93,8 @@ TEST(TemperatureInput, ArduPilotImuT) {
   ReadOptions options;
   options.topic = "IMU";
   options.instance = 0;
-  const InputData data =
-      ReadInput(std::string(ACCELCAL_DATA_DIR) + "/ardupilot-dataflash/backend_log_80k.bin", options);
+  const InputData data = ReadInput(
+      std::string(ACCELCAL_DATA_DIR) + "/ardupilot-dataflash/backend_log_80k.bin", options);
   ASSERT_EQ(data.raw.temperature_c.size(), data.raw.samples.size());
   EXPECT_EQ(data.raw.temperature_source, "IMU.T");
   for (double t : data.raw.temperature_c) {

@@ -5,6 +5,7 @@
 /// sessions (`accelcal simulate --raw --format dataflash`) and the tests of the reader
 /// (native_log.hpp). Streamed: the FMT records once, then one record per sample.
 
+#include <cmath>
 #include <cstdint>
 #include <string>
 
@@ -21,9 +22,10 @@ class DataFlashImuWriter {
   /// One PARM record (TimeUS, Name, Value: "QNf"), as ArduPilot logs each parameter at the start.
   std::string Parameter(std::uint64_t time_us, const std::string& name, float value) const;
   /// One IMU record at `time_us` [µs]: the accelerometer's reading and the gyroscope's rate as
-  /// float32, temperature NaN. Throws std::invalid_argument for a value that is not finite or
-  /// beyond float32's range.
-  std::string Sample(std::uint64_t time_us, const Vec3& accel, const Vec3& gyro) const;
+  /// float32, and the temperature T [°C] (NaN: not measured). Throws std::invalid_argument for a
+  /// value that is not finite or beyond float32's range.
+  std::string Sample(std::uint64_t time_us, const Vec3& accel, const Vec3& gyro,
+                     double temperature_c = std::nan("")) const;
 
  private:
   std::uint8_t instance_;

@@ -5,6 +5,7 @@
 /// simulate --raw --format ulog`) and the tests of the reader (native_log.hpp). Streamed: the
 /// header once, then one message per sample, never the whole log held.
 
+#include <cmath>
 #include <cstdint>
 #include <string>
 
@@ -23,9 +24,10 @@ class ULogImuWriter {
   /// 0: sensor_accel, then sensor_gyro).
   std::string Header() const;
   /// One sensor_accel message: timestamp and timestamp_sample `time_us` [µs], the reading as
-  /// float32 (x, y, z), temperature NaN. Throws std::invalid_argument for a reading that is not
-  /// finite or beyond float32's range.
-  std::string Accel(std::uint64_t time_us, const Vec3& reading) const;
+  /// float32 (x, y, z), the temperature [°C] (NaN: not measured, as PX4's drivers without one).
+  /// Throws std::invalid_argument for a reading that is not finite or beyond float32's range.
+  std::string Accel(std::uint64_t time_us, const Vec3& reading,
+                    double temperature_c = std::nan("")) const;
   /// One sensor_gyro message, as Accel (with a gyroscope only: std::logic_error otherwise).
   std::string Gyro(std::uint64_t time_us, const Vec3& rate) const;
 

@@ -58,8 +58,8 @@ std::string DataFlashImuWriter::Parameter(std::uint64_t time_us, const std::stri
   return out;
 }
 
-std::string DataFlashImuWriter::Sample(std::uint64_t time_us, const Vec3& accel,
-                                       const Vec3& gyro) const {
+std::string DataFlashImuWriter::Sample(std::uint64_t time_us, const Vec3& accel, const Vec3& gyro,
+                                       double temperature_c) const {
   const double most = std::numeric_limits<float>::max();
   if (!accel.allFinite() || !gyro.allFinite() || accel.cwiseAbs().maxCoeff() > most ||
       gyro.cwiseAbs().maxCoeff() > most) {
@@ -71,13 +71,13 @@ std::string DataFlashImuWriter::Sample(std::uint64_t time_us, const Vec3& accel,
   PutLittle<std::uint8_t>(&out, instance_);
   for (int a = 0; a < 3; ++a) PutLittle<float>(&out, static_cast<float>(gyro(a)));
   for (int a = 0; a < 3; ++a) PutLittle<float>(&out, static_cast<float>(accel(a)));
-  PutLittle<std::uint32_t>(&out, 0);                                // EG
-  PutLittle<std::uint32_t>(&out, 0);                                // EA
-  PutLittle<float>(&out, std::numeric_limits<float>::quiet_NaN());  // T
-  PutLittle<std::uint8_t>(&out, 1);                                 // GH
-  PutLittle<std::uint8_t>(&out, 1);                                 // AH
-  PutLittle<std::uint16_t>(&out, 0);                                // GHz
-  PutLittle<std::uint16_t>(&out, 0);                                // AHz
+  PutLittle<std::uint32_t>(&out, 0);                          // EG
+  PutLittle<std::uint32_t>(&out, 0);                          // EA
+  PutLittle<float>(&out, static_cast<float>(temperature_c));  // T
+  PutLittle<std::uint8_t>(&out, 1);                           // GH
+  PutLittle<std::uint8_t>(&out, 1);                           // AH
+  PutLittle<std::uint16_t>(&out, 0);                          // GHz
+  PutLittle<std::uint16_t>(&out, 0);                          // AHz
   return out;
 }
 

@@ -109,13 +109,37 @@ using Correction = std::function<std::optional<Vec3>(const Vec3&)>;
 
 std::string Join(const std::string& a, const std::string& b);
 
+// A raw offset at a temperature [°C]: what a target's temperature compensation takes from a
+// reading before its correction.
+using ThermalOffset = std::function<Vec3(double)>;
+
 // With a drifting bias the full model takes each position's drift offset from its reading; every
-// format but accelcal's own file (`holds_drift`) holds one bias, its value at the drift's
-// reference time (the session's mean time).
+// format but accelcal's own file (`holds_all`) holds one bias, its value at the drift's
+// reference time (the session's mean time). With parameters that follow temperature the full
+// model is θ(T_k) at each position's temperature; a format holds them at T_ref, with, where it
+// compensates temperature (`thermal_offset`), an offset polynomial taken from the reading first.
 ExportLoss MeasureLoss(const LoadedCalibration& cal, const Correction& exported,
-                       std::string dropped, bool holds_drift = false) {
+                       std::string dropped, bool holds_all = false,
+                       const ThermalOffset& thermal_offset = nullptr) {
   ExportLoss loss;
-  if (cal.drift && !holds_drift) {
+  if (cal.thermal && !holds_all) {
+    const ThermalDegrees& d = cal.thermal->params.degrees;
+    const std::string range = cal.thermal_range_c
+                                  ? Format(" over %.4g to %.4g degC", cal.thermal_range_c->first,
+                                           cal.thermal_range_c->second)
+                                  : std::string();
+    if (!thermal_offset) {
+      dropped =
+          Join(dropped, Format("the temperature terms (degrees %s%s; the parameters "
+                               "exported are at T_ref = %.6g degC)",
+                               d.ToString().c_str(), range.c_str(), cal.thermal->params.t_ref_c));
+    } else if (d.K > 0 || d.k2 > 0) {
+      dropped = Join(dropped, Format("the scale and misalignment temperature terms (degrees %s%s: "
+                                     "only the offsets follow temperature there)",
+                                     d.ToString().c_str(), range.c_str()));
+    }
+  }
+  if (cal.drift && !holds_all) {
     dropped =
         Join(dropped, Format("the bias drift within the session (%s; the bias exported is "
                              "its value at t = %.6g s, the positions' mean time)",
@@ -128,8 +152,14 @@ ExportLoss MeasureLoss(const LoadedCalibration& cal, const Correction& exported,
     const Vec3 offset = cal.drift && k < cal.drift->times_s.size()
                             ? cal.drift->Offset(cal.drift->times_s[k])
                             : Vec3::Zero();
-    const std::optional<Vec3> full = SpecificForce(cal.params, Vec3(p - offset));
-    const std::optional<Vec3> approx = exported(holds_drift ? Vec3(p - offset) : p);
+    const bool thermal = cal.thermal && k < cal.thermal->temperatures_c.size();
+    const double t_c = thermal ? cal.thermal->temperatures_c[k] : 0.0;
+    const std::optional<Vec3> full =
+        SpecificForce(thermal ? cal.thermal->params.At(t_c) : cal.params, Vec3(p - offset));
+    const std::optional<Vec3> approx = holds_all ? full
+                                       : thermal && thermal_offset
+                                           ? exported(Vec3(p - thermal_offset(t_c)))
+                                           : exported(p);
     if (!full || !approx) continue;
     const double error = (*approx - *full).norm();
     loss.max_error = std::max(loss.max_error, error);

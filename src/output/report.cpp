@@ -507,6 +507,15 @@ std::string Render(const ReportInput& input) {
                              (solver.iterations ? std::to_string(*solver.iterations) : "?") +
                              " iterations, " + (solver.converged ? "converged" : "NOT converged"));
   html += Item("positions", std::to_string(d.positions.size()));
+  if (const std::optional<ThermalTerms>& t = d.cal.thermal) {
+    std::string text = "degrees " + t->params.degrees.ToString() +
+                       Format(", the parameters below at T_ref = %.6g degC", t->params.t_ref_c);
+    if (d.cal.thermal_range_c) {
+      text += Format("; positions from %.4g to %.4g degC", d.cal.thermal_range_c->first,
+                     d.cal.thermal_range_c->second);
+    }
+    html += Item("temperature", text + " (the coefficients: the file's thermal section)");
+  }
   html += Item("gravity", Format("%.6g", d.cal.gravity) + " " + d.unit);
   const auto rms = [&](const std::optional<double>& value) -> std::string {
     return value ? Short(*value) + " " + d.unit : "n/a";

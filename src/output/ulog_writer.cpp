@@ -44,8 +44,8 @@ std::string Subscribe(std::uint16_t id, const std::string& topic) {
   return Message('A', add + topic);
 }
 
-std::string Sample(std::uint16_t id, std::uint32_t device_id, std::uint64_t time_us,
-                   const Vec3& v) {
+std::string Sample(std::uint16_t id, std::uint32_t device_id, std::uint64_t time_us, const Vec3& v,
+                   double temperature_c) {
   const double most = std::numeric_limits<float>::max();
   if (!v.allFinite() || v.cwiseAbs().maxCoeff() > most) {
     throw std::invalid_argument(
@@ -57,10 +57,10 @@ std::string Sample(std::uint16_t id, std::uint32_t device_id, std::uint64_t time
   PutLittle<std::uint64_t>(&payload, time_us);  // timestamp_sample
   PutLittle<std::uint32_t>(&payload, device_id);
   for (int a = 0; a < 3; ++a) PutLittle<float>(&payload, static_cast<float>(v(a)));
-  PutLittle<float>(&payload, std::numeric_limits<float>::quiet_NaN());  // temperature
-  PutLittle<std::uint32_t>(&payload, 0);                                // error_count
-  payload.append(3, '\0');                                              // clip_counter
-  payload.push_back('\1');                                              // samples
+  PutLittle<float>(&payload, static_cast<float>(temperature_c));  // temperature
+  PutLittle<std::uint32_t>(&payload, 0);                          // error_count
+  payload.append(3, '\0');                                        // clip_counter
+  payload.push_back('\1');                                        // samples
   // PX4's logger leaves the trailing padding out.
   return Message('D', payload);
 }
@@ -80,13 +80,14 @@ std::string ULogImuWriter::Header() const {
   return out;
 }
 
-std::string ULogImuWriter::Accel(std::uint64_t time_us, const Vec3& reading) const {
-  return Sample(kAccelId, device_id_, time_us, reading);
+std::string ULogImuWriter::Accel(std::uint64_t time_us, const Vec3& reading,
+                                 double temperature_c) const {
+  return Sample(kAccelId, device_id_, time_us, reading, temperature_c);
 }
 
 std::string ULogImuWriter::Gyro(std::uint64_t time_us, const Vec3& rate) const {
   if (!gyroscope_) throw std::logic_error("ULogImuWriter::Gyro: made without a gyroscope");
-  return Sample(kGyroId, gyro_device_id_, time_us, rate);
+  return Sample(kGyroId, gyro_device_id_, time_us, rate, std::nan(""));
 }
 
 }  // namespace accelcal

@@ -8,8 +8,10 @@
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
+#include "accelcal/dataflash_writer.hpp"
 #include "accelcal/simulate.hpp"
 #include "accelcal/thermal_calibration.hpp"
+#include "accelcal/ulog_writer.hpp"
 #include "core/text_format.hpp"
 #include "support/cli_test.hpp"
 
@@ -55,13 +57,13 @@ TEST_F(ThermalCli, ThreeFilesAtThreeTemperatures) {
   const std::vector<Vec3> dirs = RandomDirections(14, 7);
   std::string files;
   for (double t : {0.0, 25.0, 50.0}) {
-    const std::vector<Vec3> p = SimulateThermalPositions(
-        truth, kStandardGravity_ms2, dirs, std::vector<double>(dirs.size(), t), kSigma,
-        static_cast<std::uint64_t>(t) + 1);
+    const std::vector<Vec3> p = SimulateThermalPositions(truth, kStandardGravity_ms2, dirs,
+                                                         std::vector<double>(dirs.size(), t),
+                                                         kSigma, static_cast<std::uint64_t>(t) + 1);
     files += " " + Write(Format("p%g.csv", t), ThermalCsv(p, {}));
   }
-  const test::CliRun run = Exec("calibrate" + files + " --thermal 1,1 --temperatures 0,25,50 -o " +
-                          Path("cal.json"));
+  const test::CliRun run =
+      Exec("calibrate" + files + " --thermal 1,1 --temperatures 0,25,50 -o " + Path("cal.json"));
   ASSERT_EQ(run.status, 0) << run.err;
   EXPECT_NE(run.out.find("thermal   degrees K:1 b:1, T_ref 25 degC"), std::string::npos) << run.out;
   EXPECT_NE(run.out.find("  K_xx  d1 "), std::string::npos) << run.out;
@@ -86,10 +88,12 @@ TEST_F(ThermalCli, ThreeFilesAtThreeTemperatures) {
   const test::CliRun constant = Exec("calibrate" + files + " --json");
   ASSERT_EQ(constant.status, 0) << constant.err;
   const double held_out = doc["crossval_rms"].get<double>();
-  EXPECT_LT(100 * held_out, nlohmann::json::parse(constant.out)["sensors"]["accelerometer"]["crossval_rms"].get<double>());
+  EXPECT_LT(100 * held_out,
+            nlohmann::json::parse(constant.out)["sensors"]["accelerometer"]["crossval_rms"]
+                .get<double>());
   // Read back; a consumer that uses one set of parameters says it is at T_ref.
-  const test::CliRun apply = Exec("apply " + Path("cal.json") + " " + Path("p0.csv") + " -o " +
-                            Path("applied.csv"));
+  const test::CliRun apply =
+      Exec("apply " + Path("cal.json") + " " + Path("p0.csv") + " -o " + Path("applied.csv"));
   EXPECT_EQ(apply.status, 0) << apply.err;
   EXPECT_NE(apply.err.find("its parameters follow temperature (degrees K:1 b:1); they are "
                            "applied at one temperature, T_ref = 25 degC"),
@@ -123,8 +127,7 @@ TEST_F(ThermalCli, OneRampWithItsTemperaturesAndAuto) {
   const test::CliRun run = Exec("calibrate " + ramp + " --thermal auto --json");
   ASSERT_EQ(run.status, 0) << run.err;
   const auto doc = nlohmann::json::parse(run.out)["sensors"]["accelerometer"];
-  EXPECT_EQ(doc["thermal"]["degrees"],
-            nlohmann::json::parse(R"({"K": 1, "bias": 1, "k2": 0})"));
+  EXPECT_EQ(doc["thermal"]["degrees"], nlohmann::json::parse(R"({"K": 1, "bias": 1, "k2": 0})"));
   // Without the temperature column, nothing to fit: said, with the options that give one.
   const std::string bare = Write("bare.csv", ThermalCsv(p, {}));
   const test::CliRun none = Exec("calibrate " + bare + " --thermal 1,1");
@@ -138,6 +141,59 @@ TEST_F(ThermalCli, OneRampWithItsTemperaturesAndAuto) {
   const test::CliRun flat = Exec("calibrate " + bare + " --thermal 1,1 --temperatures 25");
   EXPECT_NE(flat.status, 0);
   EXPECT_NE(flat.err.find("--thermal: "), std::string::npos) << flat.err;
+}
+
+// The whole path from real formats: three PX4 logs recorded at 0, 25 and 50 °C (sensor_accel with
+// its temperature, as a driver publishes it), calibrated with the temperatures the logs carry; an
+// ArduPilot log's IMU.T reaches its positions.
+TEST_F(ThermalCli, LogsCarryTheirTemperature) {
+  const ThermalParameters truth = Device();
+  const std::vector<Vec3> dirs = RandomDirections(14, 5);
+  RawLogSimulation sim;
+  sim.static_s = 4;
+  sim.transition_s = 1.5;
+  sim.sigma_raw_per_sample = Vec3::Constant(0.02);
+  std::string files;
+  for (double t : {0.0, 25.0, 50.0}) {
+    sim.seed = static_cast<std::uint64_t>(t) + 1;
+    const SimulatedLog log = SimulateRawLog(truth.At(t), kStandardGravity_ms2, dirs, sim);
+    const ULogImuWriter writer(2424842);
+    std::string bytes = writer.Header();
+    for (std::size_t i = 0; i < log.samples.size(); ++i) {
+      // The die warms a little as it turns: ±0.2 K about the chamber's temperature.
+      bytes += writer.Accel(static_cast<std::uint64_t>(1e6 * log.time_s[i]) + 1000, log.samples[i],
+                            t + 0.2 * std::sin(0.01 * static_cast<double>(i)));
+    }
+    files += " " + Write(Format("t%g.ulg", t), bytes);
+  }
+  const test::CliRun run = Exec("calibrate" + files + " --thermal 1,1 --json");
+  ASSERT_EQ(run.status, 0) << run.err;
+  const auto doc = nlohmann::json::parse(run.out)["sensors"]["accelerometer"];
+  const auto& t = doc["thermal"];
+  const Eigen::VectorXd want = Pack(truth, ModelKind::kLinear);
+  for (std::size_t i = 9; i < static_cast<std::size_t>(want.size());
+       ++i) {  // the coefficients per K
+    EXPECT_LT(std::abs(t["coefficients"][i].get<double>() - want(static_cast<Eigen::Index>(i))),
+              4 * t["std"][i].get<double>())
+        << t["order"][i];
+  }
+  EXPECT_NEAR(doc["positions"][0]["temperature"].get<double>(), 0.0, 0.2);
+  EXPECT_NEAR(doc["positions"][41]["temperature"].get<double>(), 50.0, 0.2);
+  // ArduPilot: the IMU records' T, each interval's mean.
+  const DataFlashImuWriter df;
+  sim.seed = 9;
+  const SimulatedLog log = SimulateRawLog(truth.At(40), kStandardGravity_ms2, dirs, sim);
+  std::string bytes = df.Header();
+  for (std::size_t i = 0; i < log.samples.size(); ++i) {
+    bytes += df.Sample(static_cast<std::uint64_t>(1e6 * log.time_s[i]) + 1000, log.samples[i],
+                       Vec3::Zero(), 40.0);
+  }
+  const test::CliRun detect = Exec("detect " + Write("ap.bin", bytes) + " --json");
+  ASSERT_EQ(detect.status, 0) << detect.err;
+  const auto d = nlohmann::json::parse(detect.out);
+  EXPECT_EQ(d["temperature"], "IMU.T");
+  ASSERT_EQ(d["intervals"].size(), 14u);
+  EXPECT_EQ(d["intervals"][3]["temperature"].get<double>(), 40.0);
 }
 
 TEST_F(ThermalCli, WhatItRefuses) {

@@ -167,7 +167,6 @@ int RunExport(const ExportArgs& args) {
   const std::string text = ReadFileToString(args.calibration, kMaxSmallFileBytes);
   const LoadedCalibration cal = ParseCalibrationJson(text, args.calibration);
   RefuseFailed(cal, args.calibration);
-  WarnVaryingNotUsed(cal, args.calibration, "exported");
   ExportOptions options;
   options.sensor = args.sensor;
   options.raw_unit = args.raw_unit;

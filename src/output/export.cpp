@@ -2,6 +2,7 @@
 #include "accelcal/export.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <functional>
 #include <limits>
@@ -134,9 +135,30 @@ ExportLoss MeasureLoss(const LoadedCalibration& cal, const Correction& exported,
                                "exported are at T_ref = %.6g degC)",
                                d.ToString().c_str(), range.c_str(), cal.thermal->params.t_ref_c));
     } else if (d.K > 0 || d.k2 > 0) {
-      dropped = Join(dropped, Format("the scale and misalignment temperature terms (degrees %s%s: "
-                                     "only the offsets follow temperature there)",
-                                     d.ToString().c_str(), range.c_str()));
+      // What that alone costs: θ(T_k) against θ(T_ref) with the offset b(T_k).
+      double most = 0, sum2 = 0;
+      int n = 0;
+      for (std::size_t k = 0; k < cal.position_means.size(); ++k) {
+        if (k >= cal.thermal->temperatures_c.size()) break;
+        const double t_c = cal.thermal->temperatures_c[k];
+        ModelParameters offsets_only = cal.thermal->params.At(cal.thermal->params.t_ref_c);
+        offsets_only.bias = cal.thermal->params.At(t_c).bias;
+        const std::optional<Vec3> full =
+            SpecificForce(cal.thermal->params.At(t_c), cal.position_means[k]);
+        const std::optional<Vec3> approx = SpecificForce(offsets_only, cal.position_means[k]);
+        if (!full || !approx) continue;
+        const double e = (*full - *approx).norm();
+        most = std::max(most, e);
+        sum2 += e * e;
+        ++n;
+      }
+      dropped = Join(
+          dropped,
+          Format("the scale and misalignment temperature terms (degrees %s%s: only the "
+                 "offsets follow temperature there), which alone cost %.3g %s max, "
+                 "%.3g %s RMS on the positions",
+                 d.ToString().c_str(), range.c_str(), most, std::string(ToString(cal.unit)).c_str(),
+                 n > 0 ? std::sqrt(sum2 / n) : 0.0, std::string(ToString(cal.unit)).c_str()));
     }
   }
   if (cal.drift && !holds_all) {
@@ -281,6 +303,31 @@ ExportResult ImuTkGyroscope(const LoadedCalibration& cal) {
       " body frame of the accelerometer)";
   out.gyroscope_included = true;
   out.gyroscope_dropped = GSensitivityDropped(cal);
+  return out;
+}
+
+// The offsets' temperature terms of a thermal calibration: b_d [raw per K^d], d = 1 … 3 (zero
+// above the bias's degree), and the raw offset b(T) − b(T_ref) they add at T, with T held to the
+// fitted range as the autopilots hold it to their TMIN…TMAX.
+struct OffsetPolynomial {
+  double t_ref_c = 0, t_min_c = 0, t_max_c = 0;
+  std::array<Vec3, 4> b;  // b[d], b[0] unused
+  Vec3 At(double t_c) const {
+    const double dt = std::clamp(t_c, t_min_c, t_max_c) - t_ref_c;
+    return b[1] * dt + b[2] * dt * dt + b[3] * dt * dt * dt;
+  }
+};
+OffsetPolynomial OffsetsOverTemperature(const LoadedCalibration& cal) {
+  const ThermalParameters& p = cal.thermal->params;
+  OffsetPolynomial out;
+  out.t_ref_c = p.t_ref_c;
+  out.t_min_c = cal.thermal_range_c ? cal.thermal_range_c->first : kTemperatureRange_C[0];
+  out.t_max_c = cal.thermal_range_c ? cal.thermal_range_c->second : kTemperatureRange_C[1];
+  for (int d = 1; d <= 3; ++d) {
+    out.b[static_cast<std::size_t>(d)] = d < static_cast<int>(p.coefficients.size())
+                                             ? p.coefficients[static_cast<std::size_t>(d)].bias
+                                             : Vec3::Zero();
+  }
   return out;
 }
 
@@ -524,7 +571,38 @@ ExportResult Px4(const LoadedCalibration& cal, const ExportOptions& options) {
     out.text += Format("1\t1\t%s%cSCALE\t%.9g\t9\n", prefix.c_str(), axes[i], d.scale(i));
   }
   if (gyro) out.text += gyro->lines;
-  out.loss = MeasureLoss(cal, d.correction, d.dropped);
+  if (!cal.thermal) {
+    out.loss = MeasureLoss(cal, d.correction, d.dropped);
+    return out;
+  }
+  // Temperature: TC_A<n>, the offsets' polynomial in T - TREF taken from the reading before
+  // CAL_ACC's offset (TemperatureCompensation.cpp, sensor_calibration/Accelerometer.hpp), zero at
+  // TREF so that CAL_ACC holds the offset at T_ref; PX4 matches it to the sensor by TC_A<n>_ID.
+  const OffsetPolynomial poly = OffsetsOverTemperature(cal);
+  const std::string tc = "TC_A" + std::to_string(options.instance) + "_";
+  const std::optional<std::uint64_t> id = Px4DeviceId(options.device_id, stream);
+  out.text += "1\t1\tTC_A_ENABLE\t1\t6\n";
+  if (id) {
+    out.text += Format("1\t1\t%sID\t%d\t6\n", tc.c_str(),
+                       static_cast<std::int32_t>(static_cast<std::uint32_t>(*id)));
+  }
+  out.text += Format("1\t1\t%sTREF\t%.9g\t9\n1\t1\t%sTMIN\t%.9g\t9\n1\t1\t%sTMAX\t%.9g\t9\n",
+                     tc.c_str(), Float32(poly.t_ref_c), tc.c_str(), Float32(poly.t_min_c),
+                     tc.c_str(), Float32(poly.t_max_c));
+  for (int k = 0; k <= 3; ++k) {
+    for (int i = 0; i < 3; ++i) {
+      const double x = k == 0 ? 0.0 : raw_ms2 * poly.b[static_cast<std::size_t>(k)](i);
+      out.text += Format("1\t1\t%sX%d_%d\t%.9g\t9\n", tc.c_str(), k, i, Float32(x));
+    }
+  }
+  out.convention += Format(
+      "; TC_A%d: offset(T) = sum_k X_k (T - TREF)^k in m/s2, T held to TMIN..TMAX, taken from "
+      "the reading before CAL_ACC%d's offset and scale; X0 = 0 and TREF = T_ref, so that CAL_ACC "
+      "holds the calibration at T_ref%s",
+      options.instance, options.instance,
+      id ? "" : "; TC_A_ID not written (no device id known): PX4 does not apply it");
+  out.loss =
+      MeasureLoss(cal, d.correction, d.dropped, false, [poly](double t_c) { return poly.At(t_c); });
   return out;
 }
 
@@ -541,6 +619,7 @@ ExportResult ArduPilot(const LoadedCalibration& cal, const ExportOptions& option
       options.instance == 0 ? "INS_ACC" : "INS_ACC" + std::to_string(options.instance + 1);
   const char axes[3] = {'X', 'Y', 'Z'};
   std::string composed;
+  Vec3 s_in_force = Vec3::Ones();  // the scale of the calibration in force, composed with
   const SourceStream* stream = AccelerometerStream(cal);
   if (stream != nullptr && stream->corrected) {
     // The IMU and ACC records are a = (p - o_old) .* s_old, rotated by AHRS_ORIENTATION; the
@@ -584,6 +663,7 @@ ExportResult ArduPilot(const LoadedCalibration& cal, const ExportOptions& option
             Format("%sSCAL_%c is %g in %s: not a scale", prefix.c_str(), axes[i], s_old(i), from));
       }
     }
+    s_in_force = s_old;
     d.offset_ms2 = o_old + d.offset_ms2.cwiseQuotient(s_old);
     d.scale = s_old.cwiseProduct(d.scale);
     for (int i = 0; i < 3; ++i) Finite(d.offset_ms2(i)), Finite(d.scale(i));
@@ -602,8 +682,52 @@ ExportResult ArduPilot(const LoadedCalibration& cal, const ExportOptions& option
   for (int i = 0; i < 3; ++i) {
     out.text += Format("%sSCAL_%c,%.9g\n", prefix.c_str(), axes[i], d.scale(i));
   }
-  // The loss is the diagonal model's against the full one, on the data calibrated.
-  out.loss = MeasureLoss(cal, d.correction, d.dropped);
+  if (!cal.thermal) {
+    // The loss is the diagonal model's against the full one, on the data calibrated.
+    out.loss = MeasureLoss(cal, d.correction, d.dropped);
+    return out;
+  }
+  // Temperature: INS_TCAL<n>, a <- a - P(T - 35) + P(CALTEMP - 35) before INS_ACCOFFS and
+  // INS_ACCSCAL (AP_InertialSensor_tempcal.cpp), P(u) = 1e-6 (c1 u + c2 u^2 + c3 u^3), with
+  // CALTEMP = T_ref: P(u) - P(delta) = sum_d b_d (u - delta)^d for delta = T_ref - 35, expanded
+  // in powers of u.
+  const OffsetPolynomial poly = OffsetsOverTemperature(cal);
+  if (stream != nullptr && stream->corrected) {
+    const std::map<std::string, double>& in_force =
+        options.current_params ? *options.current_params : stream->calibration_in_force;
+    const auto enabled = in_force.find(Format("INS_TCAL%d_ENABLE", options.instance + 1));
+    if (enabled != in_force.end() && enabled->second == 1) {
+      throw DataError(Format(
+          "this calibration is of records a temperature calibration in force (INS_TCAL%d_ENABLE "
+          "1) had already corrected, and accelcal does not compose one with it: record with "
+          "INS_TCAL%d_ENABLE 0 and calibrate that",
+          options.instance + 1, options.instance + 1));
+    }
+  }
+  constexpr double kReference_C = 35.0, kScale = 1e6;
+  const double delta = poly.t_ref_c - kReference_C;
+  const std::array<Vec3, 4>& b = poly.b;
+  const std::array<Vec3, 3> c = {b[1] - 2 * delta * b[2] + 3 * delta * delta * b[3],
+                                 b[2] - 3 * delta * b[3], b[3]};
+  const int n = options.instance + 1;
+  out.text += Format("INS_TCAL%d_ENABLE,1\nINS_TCAL%d_TMIN,%.9g\nINS_TCAL%d_TMAX,%.9g\n", n, n,
+                     Float32(poly.t_min_c), n, Float32(poly.t_max_c));
+  for (int k = 0; k < 3; ++k) {
+    for (int i = 0; i < 3; ++i) {
+      out.text +=
+          Format("INS_TCAL%d_ACC%d_%c,%.9g\n", n, k + 1, axes[i],
+                 // Composed with the scale in force, as the offsets are.
+                 Float32(kScale * raw_ms2 * c[static_cast<std::size_t>(k)](i) / s_in_force(i)));
+    }
+  }
+  out.text += Format("INS_ACC%d_CALTEMP,%.9g\n", n, Float32(poly.t_ref_c));
+  out.convention += Format(
+      "; INS_TCAL%d: a <- a - P(T - 35) + P(INS_ACC%d_CALTEMP - 35) before the offset and scale, "
+      "P(u) = 1e-6 (ACC1 u + ACC2 u^2 + ACC3 u^3) in m/s2, T held to TMIN..TMAX, CALTEMP = T_ref "
+      "so that the offsets and scales above are those at T_ref",
+      n, n);
+  out.loss =
+      MeasureLoss(cal, d.correction, d.dropped, false, [poly](double t_c) { return poly.At(t_c); });
   return out;
 }
 

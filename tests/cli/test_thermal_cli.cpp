@@ -1,7 +1,11 @@
 // calibrate --thermal (issue 21): parameters that follow temperature, from files recorded at
 // three temperatures and from one ramp whose positions carry their temperature; the file's
 // `thermal` section read back; what the option refuses.
+#include <algorithm>
+#include <array>
 #include <cmath>
+#include <map>
+#include <sstream>
 #include <string>
 #include <vector>
 
@@ -194,6 +198,122 @@ TEST_F(ThermalCli, LogsCarryTheirTemperature) {
   EXPECT_EQ(d["temperature"], "IMU.T");
   ASSERT_EQ(d["intervals"].size(), 14u);
   EXPECT_EQ(d["intervals"][3]["temperature"].get<double>(), 40.0);
+}
+
+// The parameters of a file's exports, by name.
+std::map<std::string, double> Params(const std::string& text, char separator, int name_field) {
+  std::map<std::string, double> out;
+  std::stringstream lines(text);
+  for (std::string line; std::getline(lines, line);) {
+    if (line.empty() || line[0] == '#') continue;
+    std::vector<std::string> f;
+    std::stringstream fields(line);
+    for (std::string x; std::getline(fields, x, separator);) f.push_back(x);
+    out[f.at(static_cast<std::size_t>(name_field))] =
+        std::stod(f.at(static_cast<std::size_t>(name_field + 1)));
+  }
+  return out;
+}
+
+// PX4's TC_A and ArduPilot's INS_TCAL, each applied as its firmware does (the formulas of
+// TemperatureCompensation.cpp with sensor_calibration/Accelerometer.hpp, and of
+// AP_InertialSensor_tempcal.cpp with the backend's offsets and scales), give the calibration's own
+// offsets-only correction at every temperature: f_i = (p_i - b_i(T)) / K_ii, T held to the fitted
+// range. A cubic bias and T_ref away from ArduPilot's 35 degC exercise every term of the
+// expansion.
+TEST_F(ThermalCli, Px4AndArduPilotApplyTheOffsetsOverTemperature) {
+  ThermalParameters truth = Device();
+  truth.degrees = ThermalDegrees{1, 3, 0};
+  ModelParameters p2, p3;
+  p2.K.setZero();
+  p3.K.setZero();
+  p2.bias = Vec3(2e-5, -1e-5, 3e-5);
+  p3.bias = Vec3(-4e-7, 2e-7, 1e-7);
+  truth.coefficients.push_back(p2);
+  truth.coefficients.push_back(p3);
+  const std::vector<Vec3> dirs = RandomDirections(14, 3);
+  std::string files, temps;
+  for (double t : {-10.0, 5.0, 20.0, 35.0, 50.0}) {
+    const std::vector<Vec3> p = SimulateThermalPositions(
+        truth, kStandardGravity_ms2, dirs, std::vector<double>(dirs.size(), t), kSigma,
+        static_cast<std::uint64_t>(t + 20));
+    files += " " + Write(Format("p%g.csv", t), ThermalCsv(p, {}));
+    temps += (temps.empty() ? "" : ",") + Format("%g", t);
+  }
+  ASSERT_EQ(Exec("calibrate" + files + " --raw-units m/s2 --thermal 1,3 --temperatures " + temps +
+                 " -o " + Path("cal.json"))
+                .status,
+            0);
+  const auto a = nlohmann::json::parse(test::Slurp(Path("cal.json")))["sensors"]["accelerometer"];
+  const double t_ref = a["thermal"]["t_ref"].get<double>();
+  EXPECT_EQ(t_ref, 20.0);
+  // The calibration's offsets-only correction, from its file.
+  Vec3 K_diag, b0;
+  std::array<Vec3, 4> b;
+  for (int i = 0; i < 3; ++i) {
+    K_diag(i) = a["K"][i][i].get<double>();
+    b0(i) = a["bias"][i].get<double>();
+  }
+  const auto& order = a["thermal"]["order"];
+  for (int d = 1; d <= 3; ++d) {
+    for (int i = 0; i < 3; ++i) {
+      const std::string name = std::string("b_") + "xyz"[i] + Format("*dT^%d", d);
+      for (std::size_t j = 0; j < order.size(); ++j) {
+        if (order[j] == name) b[static_cast<std::size_t>(d)](i) = a["thermal"]["coefficients"][j];
+      }
+    }
+  }
+  const auto expected = [&](const Vec3& p, double t) {
+    const double dt = std::clamp(t, -10.0, 50.0) - t_ref;
+    const Vec3 bias = b0 + b[1] * dt + b[2] * dt * dt + b[3] * dt * dt * dt;
+    return Vec3((p - bias).cwiseQuotient(K_diag));
+  };
+  const test::CliRun px4 = Exec("export " + Path("cal.json") + " --to px4 --device-id 7");
+  const test::CliRun ap = Exec("export " + Path("cal.json") + " --to ardupilot");
+  ASSERT_EQ(px4.status, 0) << px4.err;
+  ASSERT_EQ(ap.status, 0) << ap.err;
+  EXPECT_NE(px4.err.find("which alone cost"), std::string::npos) << px4.err;
+  const std::map<std::string, double> x = Params(px4.out, '\t', 2), y = Params(ap.out, ',', 0);
+  EXPECT_EQ(x.at("TC_A_ENABLE"), 1);
+  EXPECT_EQ(x.at("TC_A0_ID"), 7);
+  EXPECT_EQ(y.at("INS_TCAL1_ENABLE"), 1);
+  EXPECT_EQ(y.at("INS_ACC1_CALTEMP"), t_ref);
+  const char axes[3] = {'X', 'Y', 'Z'};
+  for (double t : {-30.0, -10.0, 0.0, 12.5, 20.0, 41.0, 50.0, 80.0}) {
+    for (const Vec3& c : dirs) {
+      const Vec3 p = kStandardGravity_ms2 * c + Vec3(0.05, -0.03, 0.08);
+      const Vec3 want = expected(p, t);
+      Vec3 f_px4, f_ap;
+      for (int i = 0; i < 3; ++i) {
+        // PX4: (p - offset(T) - CAL_OFF) * CAL_SCALE, offset = sum_k X_k dT^k, dT clamped.
+        const double tc = std::clamp(t, x.at("TC_A0_TMIN"), x.at("TC_A0_TMAX"));
+        const double dt = tc - x.at("TC_A0_TREF");
+        double offset = 0;
+        for (int k = 0; k <= 3; ++k) {
+          offset += x.at(Format("TC_A0_X%d_%d", k, i)) * std::pow(dt, k);
+        }
+        f_px4(i) = (p(i) - offset - x.at(Format("CAL_ACC0_%cOFF", axes[i]))) *
+                   x.at(Format("CAL_ACC0_%cSCALE", axes[i]));
+        // ArduPilot: a - P(T' - 35) + P(CALTEMP' - 35), then (a - OFFS) * SCAL.
+        const auto P = [&](double u) {
+          double s = 0;
+          for (int k = 1; k <= 3; ++k) {
+            s += y.at(Format("INS_TCAL1_ACC%d_%c", k, axes[i])) * std::pow(u, k);
+          }
+          return 1e-6 * s;
+        };
+        const auto held = [&](double v) {
+          return std::clamp(v, y.at("INS_TCAL1_TMIN"), y.at("INS_TCAL1_TMAX"));
+        };
+        const double corrected = p(i) - P(held(t) - 35) + P(held(y.at("INS_ACC1_CALTEMP")) - 35);
+        f_ap(i) = (corrected - y.at(Format("INS_ACCOFFS_%c", axes[i]))) *
+                  y.at(Format("INS_ACCSCAL_%c", axes[i]));
+      }
+      // float32 parameters: within a few parts in 1e7 of g.
+      EXPECT_LT((f_px4 - want).norm(), 2e-6 * kStandardGravity_ms2) << t;
+      EXPECT_LT((f_ap - want).norm(), 2e-6 * kStandardGravity_ms2) << t;
+    }
+  }
 }
 
 TEST_F(ThermalCli, WhatItRefuses) {

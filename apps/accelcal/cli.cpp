@@ -403,6 +403,14 @@ int accelcal::cli::RunCommandLine(int argc, char** argv) {
         ->expected(2, 3)
         ->type_name("K,B[,K2]")
         ->capture_default_str();
+    design
+        ->add_option("--thermal-target", des.thermal_target,
+                     "with --temperatures: 1 sigma targets of the coefficients per K, of K in "
+                     "ppm/K (urad/K off the diagonal) and of b in mg/K; says how many "
+                     "temperatures over the same span reach them")
+        ->delimiter(',')
+        ->expected(1, 2)
+        ->type_name("S[,B]");
     design->add_option("--noise-density", des.noise_density_ug,
                        "instead of --noise: white noise [ug/sqrt(Hz)], with --rate and --duration");
     design->add_option("--rate", des.rate_hz, "sample rate [Hz], with --noise-density");
@@ -643,8 +651,9 @@ int accelcal::cli::RunCommandLine(int argc, char** argv) {
 
   // A list option given twice would be merged by CLI11 ("--gyro-columns 5 --gyro-columns 6,7"
   // as 5,6,7): refused as every other option given twice.
-  for (const char* list : {"--columns", "--gyro-columns", "--methods", "--noise",
-                           "--bias-random-walk", "--temperatures", "--thermal-degrees"}) {
+  for (const char* list :
+       {"--columns", "--gyro-columns", "--methods", "--noise", "--bias-random-walk",
+        "--temperatures", "--thermal-degrees", "--thermal-target"}) {
     int given = 0;
     for (int i = 1; i < argc && std::string_view(argv[i]) != "--"; ++i) {
       const std::string_view arg = argv[i], name = list;

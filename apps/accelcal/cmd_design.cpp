@@ -18,6 +18,9 @@
 #include "output.hpp"
 
 namespace accelcal::cli {
+// --thermal-target looks for a schedule of at most this many temperatures.
+constexpr int kMaxTargetTemperatures = 50;
+
 int RunDesign(const DesignArgs& args) {
   const bool from_density = args.noise_density_ug.has_value();
   if (from_density == !args.noise_raw.empty()) {
@@ -187,6 +190,71 @@ int RunDesign(const DesignArgs& args) {
       }
     }
   }
+  // --thermal-target: the fewest temperatures, evenly spaced over the schedule's span, whose
+  // coefficients per K reach the targets (K's in ppm/K or µrad/K, b's in mg/K).
+  std::optional<std::vector<double>> target_schedule;
+  std::string target_text;
+  if (!args.thermal_target.empty()) {
+    if (!degrees) {
+      throw UsageError("--thermal-target plans a temperature schedule: give --temperatures too");
+    }
+    for (double x : args.thermal_target) {
+      if (!(x > 0 && std::isfinite(x))) {
+        throw UsageError(Format("--thermal-target: %g is not a positive 1 sigma", x));
+      }
+    }
+    const auto [lo, hi] =
+        std::minmax_element(args.temperatures_c.begin(), args.temperatures_c.end());
+    if (*hi - *lo < kMinThermalSeparation_K) {
+      throw UsageError(
+          Format("--thermal-target spreads temperatures over the span of "
+                 "--temperatures: give two at least %g K apart",
+                 kMinThermalSeparation_K));
+    }
+    const double target_K = args.thermal_target[0];
+    const std::optional<double> target_b = args.thermal_target.size() > 1
+                                               ? std::optional<double>(args.thermal_target[1])
+                                               : std::nullopt;
+    const std::string wanted = Format("1 sigma per K <= %g ppm/K (urad/K) on K", target_K) +
+                               (target_b ? Format(", <= %g mg/K on b", *target_b) : std::string());
+    if (thermal && thermal->observable) {
+      const std::vector<ThermalSlot> tslots = ThermalSlots(model, *degrees);
+      const Mat33 K = ChangeFrame(device.params.K, Frame::kXFirst).K;
+      for (int n = std::max(2, degrees->Max() + 1); n <= kMaxTargetTemperatures && !target_schedule;
+           ++n) {
+        std::vector<double> temps;
+        for (int i = 0; i < n; ++i) temps.push_back(*lo + (*hi - *lo) * i / (n - 1));
+        const PlannedThermal p = PredictThermalUncertainty(device.params, model, device.gravity,
+                                                           directions, temps, sigma, *degrees);
+        bool reached = p.observable;
+        for (std::size_t i = 0; i < tslots.size() && reached; ++i) {
+          if (tslots[i].degree != 1) continue;
+          const ParameterGroup g = tslots[i].slot.group;
+          const std::optional<double> target = g == ParameterGroup::kK      ? target_K
+                                               : g == ParameterGroup::kBias ? target_b
+                                                                            : std::nullopt;
+          const double sd = p.sigma(static_cast<Eigen::Index>(i));
+          if (target && ThermalEngineering(tslots[i], sd, K, device.gravity).value > *target) {
+            reached = false;
+          }
+        }
+        if (reached) target_schedule = temps;
+      }
+      if (target_schedule) {
+        std::string list;
+        for (double t : *target_schedule) list += (list.empty() ? "" : ", ") + Format("%.4g", t);
+        target_text = Format(
+            "target    %s: %zu temperatures evenly spaced from %.4g to %.4g degC (%s), each with "
+            "these positions\n",
+            wanted.c_str(), target_schedule->size(), *lo, *hi, list.c_str());
+      } else {
+        target_text = Format(
+            "target    %s: NOT reached with %d temperatures from %.4g to %.4g degC; widen the "
+            "span, add positions or average each longer\n",
+            wanted.c_str(), kMaxTargetTemperatures, *lo, *hi);
+      }
+    }
+  }
   std::string out;
   if (args.json) {
     using Json = nlohmann::ordered_json;
@@ -237,6 +305,12 @@ int RunDesign(const DesignArgs& args) {
     if (degrees) {
       Json& t = doc["thermal"];
       t["temperatures"] = args.temperatures_c;
+      if (!args.thermal_target.empty()) {
+        Json& target = t["target"];
+        target["K_ppm_per_K"] = args.thermal_target[0];
+        if (args.thermal_target.size() > 1) target["b_mg_per_K"] = args.thermal_target[1];
+        target["schedule"] = target_schedule ? Json(*target_schedule) : Json(nullptr);
+      }
       t["frame"] = "x-first";
       t["degrees"] = {{"K", degrees->K}, {"bias", degrees->bias}, {"k2", degrees->k2}};
       t["observable"] = thermal && thermal->observable;
@@ -286,6 +360,7 @@ int RunDesign(const DesignArgs& args) {
       out += drift_text;
     }
     out += thermal_text;
+    out += target_text;
   }
   WriteFileAtomically("-", out);
   return planned.observable && (!degrees || (thermal && thermal->observable)) ? kExitOk

@@ -208,6 +208,8 @@ struct DesignArgs {
   std::vector<double> temperatures_c;
   std::vector<int> thermal_degrees = {1, 1};
   bool thermal_degrees_given = false;
+  // 1σ targets of the degree-1 coefficients: K's in ppm/K (µrad/K), and b's in mg/K.
+  std::vector<double> thermal_target;
   bool json = false;
 };
 

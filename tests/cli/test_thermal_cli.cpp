@@ -316,6 +316,47 @@ TEST_F(ThermalCli, Px4AndArduPilotApplyTheOffsetsOverTemperature) {
   }
 }
 
+// design --thermal-target: the fewest evenly spaced temperatures over the span that reach the
+// target, checked against the plan of that schedule and of one temperature fewer.
+TEST_F(ThermalCli, DesignFindsTheTemperaturesForATarget) {
+  const std::string device = Path("device.json");
+  ASSERT_EQ(Exec("calibrate " + std::string(ACCELCAL_DATA_DIR) +
+                 "/imutk-t265/t265_acc.mat -q --no-crossval -o " + device)
+                .status,
+            0);
+  const std::string base = "design --positions yang18 --noise 0.002 --json --device " + device;
+  const test::CliRun run = Exec(base + " --temperatures 0,50 --thermal-target 3");
+  ASSERT_EQ(run.status, 0) << run.err;
+  const auto schedule = nlohmann::json::parse(run.out)["thermal"]["target"]["schedule"];
+  ASSERT_TRUE(schedule.is_array());
+  const std::size_t n = schedule.size();
+  EXPECT_GT(n, 2u);
+  // The largest K coefficient's 1σ per K, in ppm/K or µrad/K, of n temperatures over 0..50.
+  const auto worst_K = [&](std::size_t count) {
+    std::string temps;
+    for (std::size_t i = 0; i < count; ++i) {
+      temps += (i == 0 ? "" : ",") +
+               Format("%.17g", 50.0 * static_cast<double>(i) / static_cast<double>(count - 1));
+    }
+    const auto t = nlohmann::json::parse(Exec(base + " --temperatures " + temps).out)["thermal"];
+    double worst = 0;
+    for (const auto& e : t["std_engineering"]) {
+      const std::string unit = e["unit"];
+      if (unit != "mg/K") worst = std::max(worst, e["value"].get<double>());
+    }
+    return worst;
+  };
+  EXPECT_LE(worst_K(n), 3.0);
+  EXPECT_GT(worst_K(n - 1), 3.0);
+  const test::CliRun none = Exec(base + " --temperatures 0,50 --thermal-target 0.01");
+  EXPECT_TRUE(nlohmann::json::parse(none.out)["thermal"]["target"]["schedule"].is_null());
+  for (const std::string& bad :
+       {std::string(" --thermal-target 3"), std::string(" --temperatures 20 --thermal-target 3"),
+        std::string(" --temperatures 0,50 --thermal-target -1")}) {
+    EXPECT_EQ(Exec(base + bad).status, 2) << bad;
+  }
+}
+
 TEST_F(ThermalCli, WhatItRefuses) {
   const std::string f = std::string(ACCELCAL_DATA_DIR) + "/imutk-xsens-mti/xsens_acc.mat";
   for (const auto& [options, message] : std::vector<std::pair<std::string, std::string>>{

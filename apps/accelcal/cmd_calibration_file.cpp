@@ -25,7 +25,6 @@ int RunApply(const ApplyArgs& args) {
   const LoadedCalibration cal = ParseCalibrationJson(
       ReadFileToString(args.calibration, kMaxSmallFileBytes), args.calibration);
   RefuseFailed(cal, args.calibration);
-  WarnVaryingNotUsed(cal, args.calibration, "applied");
   const bool gyro = !args.gyro.empty() || !args.gyro_columns.empty();
   if (gyro && !cal.has_gyroscope()) {
     throw UsageError(args.calibration +
@@ -54,6 +53,29 @@ int RunApply(const ApplyArgs& args) {
   bar.Finish();
   const RawLog& log = data.raw;
   const bool has_time = !log.time_s.empty();
+  // Parameters that follow temperature: each reading at its own temperature when the log has
+  // them, held to the range the calibration was fitted over (a polynomial is not extrapolated).
+  const bool thermal = cal.thermal && log.temperature_c.size() == log.samples.size();
+  {
+    LoadedCalibration said = cal;
+    if (thermal) said.thermal.reset();
+    WarnVaryingNotUsed(said, args.calibration, "applied");
+  }
+  double t_min = kTemperatureRange_C[0], t_max = kTemperatureRange_C[1];
+  if (thermal && cal.thermal_range_c) std::tie(t_min, t_max) = *cal.thermal_range_c;
+  std::size_t held = 0;
+  auto params_at = [&, last_t = std::nan(""), last = cal.params](std::size_t i) mutable {
+    if (!thermal) return cal.params;
+    const double t = log.temperature_c[i];
+    if (std::isnan(t)) {
+      throw InputError(args.input.path, log.line[i],
+                       "the reading has no temperature (" + log.temperature_source +
+                           "), which the calibration's parameters follow");
+    }
+    const double t_held = std::clamp(t, t_min, t_max);
+    if (t_held != last_t) last = cal.thermal->params.At(t_held), last_t = t_held;
+    return last;
+  };
   InputData rates;
   if (gyro) {
     rates = ReadGyroLog(args.input, args.gyro, args.gyro_columns, false);
@@ -61,7 +83,10 @@ int RunApply(const ApplyArgs& args) {
   }
   // Every reading is checked before anything is written; the output is then streamed.
   for (std::size_t i = 0; i < log.samples.size(); ++i) {
-    if (!SpecificForce(cal.params, log.samples[i])) {
+    // Said beyond 1 K: the range is the positions' mean temperatures, which single readings
+    // straddle by their own scatter.
+    if (thermal) held += log.temperature_c[i] < t_min - 1 || log.temperature_c[i] > t_max + 1;
+    if (!SpecificForce(params_at(i), log.samples[i])) {
       throw InputError(args.input.path, log.line[i],
                        "the reading lies outside the range the quadratic model can invert");
     }
@@ -73,11 +98,22 @@ int RunApply(const ApplyArgs& args) {
     file.Write("# time: seconds from the first sample, at " + FormatNumber(log.time->origin_s) +
                " s on the log's clock (read in " + std::string(ToString(log.time->unit)) + ")\n");
   }
+  if (thermal) {
+    file.Write("# temperature: each reading corrected at its own (" +
+               VisibleLine(log.temperature_source) + "), held to " + FormatNumber(t_min) + " .. " +
+               FormatNumber(t_max) + " degC\n");
+  }
+  if (held > 0) {
+    Warn(
+        "%s: %zu readings were recorded more than 1 K outside %g .. %g degC, the range the "
+        "calibration was fitted over: corrected at the nearest end\n",
+        args.input.path.c_str(), held, t_min, t_max);
+  }
   file.Write(std::string(has_time ? "time,x,y,z" : "x,y,z") + (gyro ? ",wx,wy,wz\n" : "\n"));
   const Mat33 gyro_K_inverse = gyro ? Mat33(cal.gyroscope->params.K.inverse()) : Mat33::Zero();
   char row[256];
   for (std::size_t i = 0; i < log.samples.size(); ++i) {
-    const Vec3 f = *SpecificForce(cal.params, log.samples[i]);
+    const Vec3 f = *SpecificForce(params_at(i), log.samples[i]);
     char* p = row;
     const auto number = [&](double v, char end) {
       p = std::to_chars(p, row + sizeof row, v).ptr;

@@ -734,6 +734,10 @@ int RunCalibrateKnownOrientations(const CalibrateArgs& args) {
 
 }  // namespace
 
+// Positions whose temperatures span this much get a note suggesting --thermal: a MEMS part's
+// scale moves by 100-300 ppm/K, 0.1-0.3 % over 10 K.
+constexpr double kTemperatureSpanNote_K = 10;
+
 // --thermal: "auto" (nothing), or the degrees K,B[,K2] of `model`. Usage errors before anything is
 // read.
 std::optional<ThermalDegrees> ParseThermal(const CalibrateArgs& args, ModelKind model) {
@@ -1005,6 +1009,18 @@ int RunCalibrate(const CalibrateArgs& args) {
   const std::vector<Vec3> means = Means(in.positions);
   options.reading_sigmas = ReadingSigmas(in);  // empty: noise from the residuals
   std::string note;
+  {  // positions recorded over a span of temperature, calibrated as if it did not matter
+    double lo = kTemperatureRange_C[1], hi = kTemperatureRange_C[0];
+    for (const Position& p : in.positions) {
+      if (p.temperature_c) lo = std::min(lo, *p.temperature_c), hi = std::max(hi, *p.temperature_c);
+    }
+    if (hi - lo >= kTemperatureSpanNote_K) {
+      note += Format(
+          "          temperature: the positions span %.3g K (%.4g to %.4g degC); parameters that "
+          "follow it (--thermal auto) may describe them better\n",
+          hi - lo, lo, hi);
+    }
+  }
   if (random_walk.given()) {
     options.bias_random_walk =
         RandomWalkInRaw(random_walk, means, options, g, args.input.path, &note);

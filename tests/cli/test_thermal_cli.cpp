@@ -133,6 +133,12 @@ TEST_F(ThermalCli, OneRampWithItsTemperaturesAndAuto) {
   ASSERT_EQ(run.status, 0) << run.err;
   const auto doc = nlohmann::json::parse(run.out)["sensors"]["accelerometer"];
   EXPECT_EQ(doc["thermal"]["degrees"], nlohmann::json::parse(R"({"K": 1, "bias": 1, "k2": 0})"));
+  // Calibrated as if temperature did not matter, the span is pointed out.
+  const test::CliRun constant = Exec("calibrate " + ramp);
+  EXPECT_NE(constant.out.find("temperature: the positions span 35 K (10 to 45 degC); parameters "
+                              "that follow it (--thermal auto) may describe them better"),
+            std::string::npos)
+      << constant.out;
   // Without the temperature column, nothing to fit: said, with the options that give one.
   const std::string bare = Write("bare.csv", ThermalCsv(p, {}));
   const test::CliRun none = Exec("calibrate " + bare + " --thermal 1,1");

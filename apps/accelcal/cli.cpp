@@ -35,6 +35,18 @@ const CLI::Validator kDeviceId(
     },
     "ID");
 
+// A decimal number, as a log's columns hold them: CLI11 would also take hex ("0x10"), binary and
+// an empty list item.
+const CLI::Validator kDecimal(
+    [](std::string& text) {
+      std::size_t i = text.find_first_not_of("+-");
+      const bool digits = i <= 1 && i < text.size() &&
+                          text.find_first_not_of("0123456789.eE+-") == std::string::npos &&
+                          text.find_first_of("0123456789") != std::string::npos;
+      return digits ? std::string() : "'" + text + "' is not a decimal number";
+    },
+    "");
+
 void AddInputOptions(CLI::App* cmd, InputArgs* in, bool with_kind) {
   if (with_kind) {
     cmd->add_option("--input-kind", in->input_kind,
@@ -224,6 +236,7 @@ int accelcal::cli::RunCommandLine(int argc, char** argv) {
                      "with --thermal: one temperature [degC] per input file, for logs without "
                      "their own (see --temperature-column)")
         ->delimiter(',')
+        ->check(kDecimal)
         ->type_name("T[,T...]");
     calibrate
         ->add_option("--method", cal.method,
@@ -394,7 +407,8 @@ int accelcal::cli::RunCommandLine(int argc, char** argv) {
         ->add_option("--temperatures", des.temperatures_c,
                      "plan a temperature schedule: the positions recorded at each of these "
                      "temperatures [degC], comma-separated")
-        ->delimiter(',');
+        ->delimiter(',')
+        ->check(kDecimal);
     design
         ->add_option("--thermal-degrees", des.thermal_degrees,
                      "with --temperatures: the degrees in T - T_ref of K and b (and k2 for the "

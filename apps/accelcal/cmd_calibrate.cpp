@@ -781,8 +781,9 @@ std::vector<double> PositionTemperatures(const CalibrateArgs& args, LoadedInput*
       std::size_t i = 0;
       while (i < in->files.size() && in->files[i].path != file) ++i;
       own |= in->positions[k].temperature_c.has_value();
-      in->positions[k].temperature_c = args.temperatures_c.at(i);
-      temps.push_back(args.temperatures_c.at(i));
+      const double t = args.temperatures_c.at(i) + 0.0;  // -0 written as 0
+      in->positions[k].temperature_c = t;
+      temps.push_back(t);
     }
     if (own) {
       *note += "          temperatures: --temperatures, one per file, not the logs' own readings\n";

@@ -59,7 +59,9 @@ int RunDetect(const DetectArgs& args) {
     // What the time column was found to be, and the still periods not used (diagnosis.hpp).
     for (const Finding& f : LogFindings(&data.raw, &d)) out += "# " + VisibleLine(f.message) + "\n";
     const bool temperature = !data.raw.temperature_source.empty();
-    if (temperature) out += "# temperature [degC]: " + data.raw.temperature_source + "\n";
+    if (temperature) {
+      out += "# temperature [degC]: " + VisibleLine(data.raw.temperature_source) + "\n";
+    }
     out += Format("%3s %9s %9s %11s %11s %8s %40s %33s%s\n", "#", "begin", "end", "t_begin",
                   "t_end", "samples", "mean", "std", temperature ? "  T[degC]" : "");
     for (std::size_t i = 0; i < d.intervals.size(); ++i) {
@@ -67,7 +69,8 @@ int RunDetect(const DetectArgs& args) {
       out += Format("%3zu %9zu %9zu %11.4f %11.4f %8zu %s %s", i + 1, s.begin, s.end, s.t_begin_s,
                     s.t_end_s, s.count(), Vec(s.mean, "%13.7g ").c_str(),
                     Vec(s.std, "%10.4g ").c_str());
-      if (temperature) out += s.temperature_c ? Format(" %8.3f", *s.temperature_c) : "       -";
+      if (temperature)
+        out += s.temperature_c ? Format(" %8.3f", *s.temperature_c) : Format(" %8s", "-");
       out += "\n";
     }
     out += Format("%zu static intervals\n", d.intervals.size());

@@ -71,6 +71,16 @@ int RunVerify(const VerifyArgs& args) {
   const LoadedCalibration cal = ParseCalibrationJson(
       ReadFileToString(args.calibration, kMaxSmallFileBytes), args.calibration);
   RefuseFailed(cal, args.calibration);
+  if (cal.thermal) {
+    // One set of parameters judged against a log recorded at another temperature would fail a
+    // good calibration (or pass a bad one at T_ref): not done until verify follows temperature.
+    throw InputError(
+        args.calibration, 0,
+        Format("its parameters follow temperature (degrees %s, T_ref %.6g degC): "
+               "verify checks one set of parameters against the log, and does not "
+               "yet take each position at its own temperature",
+               cal.thermal->params.degrees.ToString().c_str(), cal.thermal->params.t_ref_c));
+  }
   WarnVaryingNotUsed(cal, args.calibration, "verified");
   // The prediction needs the calibration's uncertainty: without it every good calibration of a
   // real sensor would fail (its parameters taken as exact, its misfit as none).

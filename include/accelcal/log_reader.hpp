@@ -93,7 +93,8 @@ struct ReadOptions {
   /// log's stream. Empty: a header column named as kTemperatureColumnNames says, or the known
   /// stream's field (KnownStream::temperature); none is not an error then. "none": not read.
   /// Values outside kTemperatureRange_C are an InputError naming the line (kelvin, raw counts or
-  /// the wrong column). Not read by StreamRawLog.
+  /// the wrong column) when the column was asked for; one found by its name has them left out
+  /// (NaN, RawLog::temperature_note). Not read by StreamRawLog.
   std::string temperature{};
 };
 
@@ -128,6 +129,9 @@ struct RawLog {
   std::vector<double> temperature_c;
   /// Where it came from ("column 5 ('temperature')", "sensor_accel.temperature"); empty: none.
   std::string temperature_source;
+  /// A column found by its name (not asked for) whose values were no temperature: which were
+  /// left out (NaN; all of them: no temperature); empty otherwise.
+  std::string temperature_note;
   /// What the reader could not read, though the samples above are whole (a binary log cut
   /// short: where it stopped); empty when it read everything.
   std::string read_warning;

@@ -405,6 +405,9 @@ std::vector<Finding> LogFindings(const RawLog* log, const StaticDetectionResult*
     Add(&out, "log_cut_short", Severity::kWarning,
         log->read_warning + ": those were used; the rest of the recording, if any, is lost", {});
   }
+  if (log && !log->temperature_note.empty()) {
+    Add(&out, "temperature_left_out", Severity::kNote, log->temperature_note, {});
+  }
   if (log && detection) {
     if (std::optional<Finding> drift = DriftFinding(*log, *detection)) {
       out.push_back(std::move(*drift));

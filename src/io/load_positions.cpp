@@ -62,6 +62,7 @@ InputData ReadGyroInput(const std::string& accel_path, const ReadOptions& accel_
   read.sensor = SensorKind::kGyroscope;
   read.topic = gyro_topic;
   read.columns = gyro_columns;
+  read.temperature = "none";  // the temperature option names the accelerometer log's column
   if (gyro_path.empty() && read.columns.size() == 3 && accel_read.columns.size() == 4) {
     read.columns.insert(read.columns.begin(), accel_read.columns.front());
   }

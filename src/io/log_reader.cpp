@@ -552,7 +552,8 @@ InputData ParseBlocks(internal::TextBlocks& blocks, const std::string& source,
       columns->instance_name = header[std::size_t(layout.column[kInstance])];
     }
   }
-  const RowParser parser(source, delim, ncols, layout, raw, options.progress);
+  RowParser parser(source, delim, ncols, layout, raw, options.progress);
+  if (options.temperature.empty()) parser.LenientTemperature();  // found by its name
   std::vector<double> instances;
   std::string_view block;
   std::uint32_t lines = 0;
@@ -570,6 +571,27 @@ InputData ParseBlocks(internal::TextBlocks& blocks, const std::string& source,
   if (sink != nullptr) return data;
   if (raw ? data.raw.samples.empty() : data.positions.empty()) {
     throw InputError(source, first_line, "a header but no data rows");
+  }
+  if (parser.temperatures_left_out() > 0) {
+    // A column named like a temperature that holds something else: said, not an error, since
+    // it was not asked for.
+    const int c = layout.column[kTemperature];
+    const std::string note = internal::Format(
+        "column %d%s: %zu value%s no temperature in degC (from %g to %g; the first, %s, at "
+        "line %u): left out",
+        c + 1, ColumnName(header, c).c_str(), parser.temperatures_left_out(),
+        parser.temperatures_left_out() == 1 ? " is" : "s are", kTemperatureRange_C[0],
+        kTemperatureRange_C[1], parser.first_left_out().c_str(), parser.first_left_out_line());
+    if (raw) {
+      data.raw.temperature_note = note;
+    } else {
+      data.kind_reason += "; " + note;
+    }
+  }
+  if (raw && std::none_of(data.raw.temperature_c.begin(), data.raw.temperature_c.end(),
+                          [](double t) { return !std::isnan(t); })) {
+    data.raw.temperature_c.clear();
+    data.raw.temperature_source.clear();
   }
   if (layout.column[kInstance] >= 0) {
     SelectInstance(instances, header[std::size_t(layout.column[kInstance])], options.instance,

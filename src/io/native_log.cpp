@@ -346,7 +346,7 @@ Chosen Choose(const internal::DecodedStream& s, const ReadOptions& options,
       throw InputError(source, 0,
                        "the temperature option names the field " +
                            Shown((*s.columns)[*out.temperature]) +
-                           ", which the columns option reads: each needs its own");
+                           ", which is read as the time or a reading: each needs its own");
     }
   }
   return out;
@@ -549,10 +549,11 @@ InputData ReadNativeLog(BinaryStream& in, InputFile* file, const ReadOptions& op
     const double t_c = chosen.temperature ? row[temperature_at] : 0.0;
     if (chosen.temperature && !std::isnan(t_c) &&
         !(t_c >= kTemperatureRange_C[0] && t_c <= kTemperatureRange_C[1])) {
-      throw InputError(source, 0,
-                       where() + Format(": its temperature %s is %.9g, outside %g to %g degC",
-                                        (*s.columns)[*chosen.temperature].c_str(), t_c,
-                                        kTemperatureRange_C[0], kTemperatureRange_C[1]));
+      throw InputError(
+          source, 0,
+          where() + Format(": its temperature (field %s) is %.9g, outside %g to %g degC",
+                           (*s.columns)[*chosen.temperature].c_str(), t_c, kTemperatureRange_C[0],
+                           kTemperatureRange_C[1]));
     }
     if (chosen.time && !std::isfinite(row[0])) {
       throw InputError(source, 0, where() + " holds a time that is not a finite number");

@@ -49,14 +49,15 @@ std::uint32_t RowParser::Parse(std::string_view block, std::size_t block_offset,
     }
     const Vec3 xyz(v[kX], v[kY], v[kZ]);
     if (has_instance) instances->push_back(v[kInstance]);
-    if (has_temperature) CheckTemperature(v[kTemperature], number);
+    const double t_c = has_temperature ? CheckTemperature(v[kTemperature], number) : 0.0;
     if (raw) {
       if (has_time) log.time_s.push_back(v[kTime]);
-      if (has_temperature) log.temperature_c.push_back(v[kTemperature]);
+      if (has_temperature) log.temperature_c.push_back(t_c);
       log.samples.push_back(xyz);
       log.line.push_back(number);
     } else {
       data->positions.push_back(MakePosition(xyz, v, number));
+      if (has_temperature && std::isnan(t_c)) data->positions.back().temperature_c.reset();
     }
   };
   // The fast path reads lines ending in '\n' (a '\r' before it is blank); others, and any line
@@ -255,6 +256,12 @@ void RowParser::ParseFields(const Line& line, double* values) const {
 // The slow path for one field: fast_float, and the error messages.
 void RowParser::ParseField(const Line& line, std::size_t column, const char* field_begin,
                            const char* field_end, double* value) const {
+  if (lenient_temperature_ && role_of_column_[column] == kTemperature &&
+      !(ParseNumber(field_begin, field_end, value) && std::isfinite(*value))) {
+    LeaveOut(line.number, "'" + std::string(field_begin, field_end) + "'");
+    *value = std::nan("");
+    return;
+  }
   if (!ParseNumber(field_begin, field_end, value)) {
     if (delim_ == Delimiter::kWhitespace && std::find(field_begin, field_end, ',') != field_end) {
       throw InputError(source_, line.number,
@@ -276,15 +283,25 @@ void RowParser::ParseField(const Line& line, std::size_t column, const char* fie
   }
 }
 
-void RowParser::CheckTemperature(double t_c, std::uint32_t line_number) const {
+void RowParser::LeaveOut(std::uint32_t line_number, const std::string& text) const {
+  if (left_out_++ == 0) first_left_out_line_ = line_number, first_left_out_ = text;
+}
+
+double RowParser::CheckTemperature(double t_c, std::uint32_t line_number) const {
+  if (std::isnan(t_c) && lenient_temperature_) return t_c;  // left out as it was read
   if (!(t_c >= kTemperatureRange_C[0] && t_c <= kTemperatureRange_C[1])) {
+    if (lenient_temperature_) {
+      LeaveOut(line_number, Format("%.9g", t_c));
+      return std::nan("");
+    }
     throw InputError(
         source_, line_number,
         Format("column %d: the temperature %.9g is outside %g to %g degC (kelvin, raw counts, or "
-               "not the temperature column?)",
+               "not a temperature?)",
                layout_.column[kTemperature] + 1, t_c, kTemperatureRange_C[0],
                kTemperatureRange_C[1]));
   }
+  return t_c;
 }
 
 Position RowParser::MakePosition(const Vec3& xyz, const double* values,

@@ -30,6 +30,13 @@ class RowParser {
   /// `raw`: rows are samples (else positions). The references must outlive this.
   RowParser(const std::string& source, Delimiter delim, std::size_t ncols, const Layout& layout,
             bool raw, const std::function<void(std::size_t, std::size_t)>& progress);
+  /// The temperature column was found by its header, not asked for: a value that is no
+  /// temperature in °C is left out (NaN) and counted, not an error.
+  void LenientTemperature() { lenient_temperature_ = true; }
+  /// With LenientTemperature: the values left out, and the first one's line and text.
+  std::size_t temperatures_left_out() const { return left_out_; }
+  std::uint32_t first_left_out_line() const { return first_left_out_line_; }
+  const std::string& first_left_out() const { return first_left_out_; }
 
   /// Parses one block of whole lines (TextBlocks) into `data` (and the instance column's values
   /// into `instances`); returns the lines read so far. `skip_first`: the block's first line is
@@ -45,8 +52,9 @@ class RowParser {
   void ParseField(const Line& line, std::size_t column, const char* field_begin,
                   const char* field_end, double* value) const;
   Position MakePosition(const Vec3& xyz, const double* values, std::uint32_t line_number) const;
-  // Throws InputError for a temperature outside kTemperatureRange_C.
-  void CheckTemperature(double t_c, std::uint32_t line_number) const;
+  // Throws InputError for a temperature outside kTemperatureRange_C (lenient: NaN, counted).
+  double CheckTemperature(double t_c, std::uint32_t line_number) const;
+  void LeaveOut(std::uint32_t line_number, const std::string& text) const;
 
   const std::string& source_;
   Delimiter delim_;
@@ -56,6 +64,10 @@ class RowParser {
   const std::function<void(std::size_t, std::size_t)>& progress_;
   int role_of_column_[kMaxFields];
   bool every_column_read_ = false;  // every column has a role (a row template may hold them)
+  bool lenient_temperature_ = false;
+  mutable std::size_t left_out_ = 0;
+  mutable std::uint32_t first_left_out_line_ = 0;
+  mutable std::string first_left_out_;
 };
 
 }  // namespace accelcal::internal

@@ -380,7 +380,12 @@ void ReadThermal(const Reader& r, const ordered_json& doc, LoadedCalibration& ca
   if (t.contains("covariance") && !t["covariance"].is_null()) {
     terms.covariance = ReadSquareCovariance(in, t, n, "the thermal coefficients");
   }
-  if (t.contains("temperature_range")) {
+  if (!t.contains("temperature_range")) {
+    in.Fail(in.Key("temperature_range") +
+            " is missing: the temperatures the fit spans, to which "
+            "its polynomials are held");
+  }
+  {
     const ordered_json& range = t["temperature_range"];
     if (!range.is_array() || range.size() != 2) {
       in.Fail(in.Key("temperature_range") + " must be 2 temperatures");
@@ -393,6 +398,17 @@ void ReadThermal(const Reader& r, const ordered_json& doc, LoadedCalibration& ca
                                kTemperatureRange_C[1]));
     }
     cal.thermal_range_c = std::pair(lo, hi);
+    if (!(terms.params.t_ref_c >= lo && terms.params.t_ref_c <= hi)) {
+      in.Fail(in.Key("t_ref") + " must be within " + in.Key("temperature_range"));
+    }
+  }
+  if (t.contains("std") && !t["std"].is_null()) {
+    if (!t["std"].is_array() || t["std"].size() != n) in.Fail(in.Key("std") + shape);
+    for (std::size_t i = 0; i < n; ++i) {
+      if (!(in.Number(t["std"][i], in.Key("std")) >= 0)) {
+        in.Fail(in.Key("std") + " must not be negative");
+      }
+    }
   }
   for (std::size_t k = 0; k < cal.positions.size(); ++k) {
     if (!cal.positions[k].temperature) {
@@ -400,6 +416,13 @@ void ReadThermal(const Reader& r, const ordered_json& doc, LoadedCalibration& ca
              " has no 'temperature', which parameters that follow temperature need");
     }
     terms.temperatures_c.push_back(*cal.positions[k].temperature);
+    // The range is the positions' (a few ulps of a mean aside).
+    const double slack = 1e-9 * (1 + std::abs(*cal.positions[k].temperature));
+    if (*cal.positions[k].temperature < cal.thermal_range_c->first - slack ||
+        *cal.positions[k].temperature > cal.thermal_range_c->second + slack) {
+      r.Fail(r.Key("positions[" + std::to_string(k) + "].temperature") + " is outside " +
+             in.Key("temperature_range"));
+    }
   }
   cal.thermal = std::move(terms);
 }

@@ -571,7 +571,9 @@ ExportResult Px4(const LoadedCalibration& cal, const ExportOptions& options) {
     out.text += Format("1\t1\t%s%cSCALE\t%.9g\t9\n", prefix.c_str(), axes[i], d.scale(i));
   }
   if (gyro) out.text += gyro->lines;
-  if (!cal.thermal) {
+  // Without a bias that follows temperature there is nothing for TC_A to hold: enabling it empty
+  // would replace a thermal calibration already on the board with none.
+  if (!cal.thermal || cal.thermal->params.degrees.bias == 0) {
     out.loss = MeasureLoss(cal, d.correction, d.dropped);
     return out;
   }
@@ -598,9 +600,17 @@ ExportResult Px4(const LoadedCalibration& cal, const ExportOptions& options) {
   out.convention += Format(
       "; TC_A%d: offset(T) = sum_k X_k (T - TREF)^k in m/s2, T held to TMIN..TMAX, taken from "
       "the reading before CAL_ACC%d's offset and scale; X0 = 0 and TREF = T_ref, so that CAL_ACC "
-      "holds the calibration at T_ref%s",
-      options.instance, options.instance,
-      id ? "" : "; TC_A_ID not written (no device id known): PX4 does not apply it");
+      "holds the calibration at T_ref",
+      options.instance, options.instance);
+  if (!id) {
+    const std::string said = Format(
+        "# TC_A%d: TC_A%d_ID is not written (no device id known): PX4 applies these temperature "
+        "terms to no sensor until it is set\n",
+        options.instance, options.instance);
+    out.text.insert(out.text.find("#\n# Vehicle-Id"), said);
+    out.convention += Format("; TC_A%d_ID not written (no device id known): PX4 does not apply it",
+                             options.instance);
+  }
   out.loss =
       MeasureLoss(cal, d.correction, d.dropped, false, [poly](double t_c) { return poly.At(t_c); });
   return out;
@@ -682,7 +692,7 @@ ExportResult ArduPilot(const LoadedCalibration& cal, const ExportOptions& option
   for (int i = 0; i < 3; ++i) {
     out.text += Format("%sSCAL_%c,%.9g\n", prefix.c_str(), axes[i], d.scale(i));
   }
-  if (!cal.thermal) {
+  if (!cal.thermal || cal.thermal->params.degrees.bias == 0) {  // nothing for INS_TCAL to hold
     // The loss is the diagonal model's against the full one, on the data calibrated.
     out.loss = MeasureLoss(cal, d.correction, d.dropped);
     return out;

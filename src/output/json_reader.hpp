@@ -48,7 +48,7 @@ class Reader {
     return Vector3(doc, key);
   }
   std::string Text(const ordered_json& doc, const char* key) const {
-    if (!doc[key].is_string()) Fail(Key(key) + " must be text");
+    if (!doc.contains(key) || !doc[key].is_string()) Fail(Key(key) + " must be text");
     return doc[key].get<std::string>();
   }
   const ordered_json& Object(const ordered_json& doc, const char* key) const {

@@ -5,6 +5,7 @@
 #include <array>
 #include <cmath>
 #include <cstdio>
+#include <functional>
 #include <map>
 #include <sstream>
 #include <string>
@@ -118,6 +119,43 @@ TEST_F(ThermalCli, ThreeFilesAtThreeTemperatures) {
   Write("bad.json", bad.dump());
   const test::CliRun no_t = Exec("report " + Path("bad.json") + " -o " + Path("r.html"));
   EXPECT_NE(no_t.err.find("positions[3]' has no 'temperature'"), std::string::npos) << no_t.err;
+  // Found by a hostile test: an empty section crashed every reader (a missing key read as text);
+  // a range that is missing, excludes T_ref or a position, and a negative std were accepted.
+  const auto refused = [&](const std::function<void(nlohmann::json&)>& edit, const char* why) {
+    auto edited = file;
+    edit(edited["sensors"]["accelerometer"]);
+    Write("bad.json", edited.dump());
+    const test::CliRun r = Exec("apply " + Path("bad.json") + " " + Path("p0.csv"));
+    EXPECT_EQ(r.status, 3) << why;
+    EXPECT_NE(r.err.find(why), std::string::npos) << r.err;
+  };
+  refused([](auto& a) { a["thermal"] = nlohmann::json::object(); }, "thermal.frame' must be text");
+  refused([](auto& a) { a["thermal"].erase("temperature_range"); },
+          "thermal.temperature_range' is missing");
+  refused([](auto& a) { a["thermal"]["t_ref"] = 60.0; },
+          "thermal.t_ref' must be within 'sensors.accelerometer.thermal.temperature_range'");
+  refused(
+      [](auto& a) {
+        a["thermal"]["temperature_range"] = {0.0, 40.0};
+      },
+      "positions[28].temperature' is outside");
+  refused([](auto& a) { a["thermal"]["std"][3] = -1.0; }, "thermal.std' must not be negative");
+  // verify judges one set of parameters: refused rather than failing a good calibration.
+  const test::CliRun verify = Exec("verify " + Path("cal.json") + " " + Path("p50.csv"));
+  EXPECT_EQ(verify.status, 3);
+  EXPECT_NE(verify.err.find("its parameters follow temperature (degrees K:1 b:1, T_ref 25 degC)"),
+            std::string::npos)
+      << verify.err;
+  // Scale terms only: nothing for TC_A or INS_TCAL to hold, so neither is enabled empty.
+  ASSERT_EQ(
+      Exec("calibrate" + files + " --thermal 1,0 --temperatures 0,25,50 -o " + Path("k_only.json"))
+          .status,
+      0);
+  const test::CliRun px4 = Exec("export " + Path("k_only.json") + " --to px4 --raw-unit m/s2");
+  EXPECT_EQ(px4.out.find("TC_A"), std::string::npos) << px4.out;
+  EXPECT_NE(px4.err.find("the temperature terms (degrees K:1 b:0 over 0 to 50 degC"),
+            std::string::npos)
+      << px4.err;
 }
 
 // One ramp from 10 to 45 °C, each position's temperature in its file: auto finds K:1 b:1.
@@ -396,6 +434,7 @@ TEST_F(ThermalCli, WhatItRefuses) {
            {"--thermal 1", "--thermal: '1' is neither auto nor the degrees K,B[,K2] (e.g. 1,1)"},
            {"--thermal 1,1,1", "--thermal: "},
            {"--thermal warm", "--thermal: 'warm' is neither auto nor the degrees"},
+           {"--thermal 1,1 --temperatures 0x10", "'0x10' is not a decimal number"},
            {"--thermal 1,1 --bias-model linear", "not with --bias-model"},
            {"--thermal 1,1 --method two-step", "not with --method"},
            {"--thermal 1,1 --frame z-first", "not with --frame"},

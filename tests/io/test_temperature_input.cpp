@@ -110,12 +110,24 @@ TEST(TemperatureInput, TextColumnChecks) {
   options.kind = InputKind::kRaw;
   const InputData data = ParseInput(text, "t.csv", options);
   EXPECT_EQ(data.raw.temperature_c, (std::vector<double>{25.5, 25.6, 25.7, 25.8}));
-  // Kelvin, or the wrong column: refused at its line.
+  // Kelvin, or the wrong column: found by its name, the value is left out and said; asked for,
+  // refused at its line.
   std::string kelvin = text;
   kelvin.replace(kelvin.find("25.7"), 4, "298.85");
+  const InputData found = ParseInput(kelvin, "t.csv", options);
+  ASSERT_EQ(found.raw.temperature_c.size(), 4u);
+  EXPECT_TRUE(std::isnan(found.raw.temperature_c[2]));
+  EXPECT_EQ(found.raw.temperature_note,
+            "column 5 ('temp'): 1 value is no temperature in degC (from -80 to 150; the first, "
+            "298.85, at line 4): left out");
+  std::string empty = text;
+  empty.replace(empty.find("25.7"), 4, "");
+  EXPECT_TRUE(std::isnan(ParseInput(empty, "t.csv", options).raw.temperature_c[2]));
+  options.temperature = "temp";
+  EXPECT_EQ(ErrorOf(empty, options), "t.csv:4: column 5: '' is not a number");
   EXPECT_EQ(ErrorOf(kelvin, options),
             "t.csv:4: column 5: the temperature 298.85 is outside -80 to 150 degC (kelvin, raw "
-            "counts, or not the temperature column?)");
+            "counts, or not a temperature?)");
   // A column already read as something else.
   options.temperature = "x";
   EXPECT_EQ(ErrorOf(text, options),

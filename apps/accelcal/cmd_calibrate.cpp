@@ -904,7 +904,7 @@ int RunCalibrate(const CalibrateArgs& args) {
                               args.temperatures_c.size(), files, files == 1 ? "" : "s"));
     }
     for (double t : args.temperatures_c) {
-      if (!(t >= kTemperatureRange_C[0] && t <= kTemperatureRange_C[1])) {
+      if (!InTemperatureRange(t)) {
         throw UsageError(Format("--temperatures: %g is outside %g to %g degC", t,
                                 kTemperatureRange_C[0], kTemperatureRange_C[1]));
       }

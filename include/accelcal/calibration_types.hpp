@@ -318,7 +318,6 @@ struct Summary {
   std::string BriefReport() const;
 };
 
-/// Result of a calibration.
 /// The temperature terms of a calibration whose parameters follow temperature
 /// (thermal_calibration.hpp), in the x-first frame.
 struct ThermalTerms {
@@ -328,6 +327,7 @@ struct ThermalTerms {
   std::vector<double> temperatures_c;  ///< T_k of each reading [°C]
 };
 
+/// Result of a calibration.
 struct CalibrationResult {
   ModelKind model = ModelKind::kLinear;
   Frame frame = Frame::kXFirst;           ///< K lower-triangular (x-first) or upper (z-first)

@@ -105,6 +105,10 @@ inline constexpr const char* kTemperatureColumnNames[] = {
 /// A temperature [°C] outside this range is not an IMU's: a column in kelvin or raw counts, or
 /// not a temperature at all (-80 °C to 150 °C: beyond any MEMS part's rating).
 inline constexpr double kTemperatureRange_C[2] = {-80.0, 150.0};
+/// Whether `t_c` is within kTemperatureRange_C (NaN is not).
+inline bool InTemperatureRange(double t_c) {
+  return t_c >= kTemperatureRange_C[0] && t_c <= kTemperatureRange_C[1];
+}
 
 /// A given rate may differ from the timestamps' by this fraction (clock error, rounding).
 inline constexpr double kRateTolerance = 0.05;

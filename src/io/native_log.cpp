@@ -547,8 +547,7 @@ InputData ReadNativeLog(BinaryStream& in, InputFile* file, const ReadOptions& op
     };
     // NaN: the driver did not measure it (PX4's default); any other value must be a sensor's.
     const double t_c = chosen.temperature ? row[temperature_at] : 0.0;
-    if (chosen.temperature && !std::isnan(t_c) &&
-        !(t_c >= kTemperatureRange_C[0] && t_c <= kTemperatureRange_C[1])) {
+    if (chosen.temperature && !std::isnan(t_c) && !InTemperatureRange(t_c)) {
       throw InputError(
           source, 0,
           where() + Format(": its temperature (field %s) is %.9g, outside %g to %g degC",

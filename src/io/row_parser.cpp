@@ -289,7 +289,7 @@ void RowParser::LeaveOut(std::uint32_t line_number, const std::string& text) con
 
 double RowParser::CheckTemperature(double t_c, std::uint32_t line_number) const {
   if (std::isnan(t_c) && lenient_temperature_) return t_c;  // left out as it was read
-  if (!(t_c >= kTemperatureRange_C[0] && t_c <= kTemperatureRange_C[1])) {
+  if (!InTemperatureRange(t_c)) {
     if (lenient_temperature_) {
       LeaveOut(line_number, Format("%.9g", t_c));
       return std::nan("");

@@ -175,8 +175,7 @@ FilePosition ReadPosition(const Reader& r, const ordered_json& p) {
   position.time = r.Nullable(p, "time");
   position.drift_offset = r.OptionalVector3(p, "drift_offset");
   position.temperature = r.Nullable(p, "temperature");
-  if (position.temperature && !(*position.temperature >= kTemperatureRange_C[0] &&
-                                *position.temperature <= kTemperatureRange_C[1])) {
+  if (position.temperature && !InTemperatureRange(*position.temperature)) {
     r.Fail(r.Key("temperature") + internal::Format(" must be from %g to %g degC",
                                                    kTemperatureRange_C[0], kTemperatureRange_C[1]));
   }
@@ -331,8 +330,7 @@ void ReadThermal(const Reader& r, const ordered_json& doc, LoadedCalibration& ca
   ThermalTerms terms;
   if (!t.contains("t_ref")) in.Fail(in.Key("t_ref") + " is missing");
   terms.params.t_ref_c = in.Number(t["t_ref"], in.Key("t_ref"));
-  if (!(terms.params.t_ref_c >= kTemperatureRange_C[0] &&
-        terms.params.t_ref_c <= kTemperatureRange_C[1])) {
+  if (!InTemperatureRange(terms.params.t_ref_c)) {
     in.Fail(in.Key("t_ref") + internal::Format(" must be from %g to %g degC",
                                                kTemperatureRange_C[0], kTemperatureRange_C[1]));
   }
@@ -392,7 +390,7 @@ void ReadThermal(const Reader& r, const ordered_json& doc, LoadedCalibration& ca
     }
     const double lo = in.Number(range[0], in.Key("temperature_range")),
                  hi = in.Number(range[1], in.Key("temperature_range"));
-    if (!(lo <= hi && lo >= kTemperatureRange_C[0] && hi <= kTemperatureRange_C[1])) {
+    if (!(lo <= hi && InTemperatureRange(lo) && InTemperatureRange(hi))) {
       in.Fail(in.Key("temperature_range") +
               internal::Format(" must be from %g to %g degC, low first", kTemperatureRange_C[0],
                                kTemperatureRange_C[1]));

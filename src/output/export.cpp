@@ -135,16 +135,15 @@ ExportLoss MeasureLoss(const LoadedCalibration& cal, const Correction& exported,
                                "exported are at T_ref = %.6g degC)",
                                d.ToString().c_str(), range.c_str(), cal.thermal->params.t_ref_c));
     } else if (d.K > 0 || d.k2 > 0) {
-      // What that alone costs: θ(T_k) against θ(T_ref) with the offset b(T_k).
+      // What that alone costs: θ(T_k) against the parameters (θ(T_ref)) with the offset b(T_k).
       double most = 0, sum2 = 0;
       int n = 0;
       for (std::size_t k = 0; k < cal.position_means.size(); ++k) {
         if (k >= cal.thermal->temperatures_c.size()) break;
-        const double t_c = cal.thermal->temperatures_c[k];
-        ModelParameters offsets_only = cal.thermal->params.At(cal.thermal->params.t_ref_c);
-        offsets_only.bias = cal.thermal->params.At(t_c).bias;
-        const std::optional<Vec3> full =
-            SpecificForce(cal.thermal->params.At(t_c), cal.position_means[k]);
+        const ModelParameters at_k = cal.thermal->params.At(cal.thermal->temperatures_c[k]);
+        ModelParameters offsets_only = cal.params;
+        offsets_only.bias = at_k.bias;
+        const std::optional<Vec3> full = SpecificForce(at_k, cal.position_means[k]);
         const std::optional<Vec3> approx = SpecificForce(offsets_only, cal.position_means[k]);
         if (!full || !approx) continue;
         const double e = (*full - *approx).norm();

@@ -286,8 +286,14 @@ int accelcal::cli::RunCommandLine(int argc, char** argv) {
         "joint (both sensors and every gravity direction in one fit: the rotations "
         "also calibrate the accelerometer; the default), two-stage (the "
         "accelerometer's calibration held; the default with --orientations, whose "
-        "directions are known), or imutk (imu_tk's method, a baseline: the bias from the "
+        "directions are known, and with --thermal), or imutk (imu_tk's method, a baseline: the "
+        "bias from the "
         "first still position, K from the turns, no g-sensitivity)");
+    calibrate
+        ->add_option("--gyro-thermal", cal.gyro_thermal,
+                     "with --thermal: the degree in T - T_ref of the gyroscope's offsets (0 to 3), "
+                     "or auto (chosen by the still positions' held-out rates; the default)")
+        ->type_name("D|auto");
     calibrate->add_flag("!--no-crossval", cal.cross_validate,
                         "skip the leave-one-position-out validation (one refit per position)");
     calibrate->add_option("--raw-units", cal.raw_units, "label of the raw unit (e.g. counts)")
@@ -727,7 +733,7 @@ int accelcal::cli::RunCommandLine(int argc, char** argv) {
         if (calibrate->count(name) > 0) cal.gravity_only_options.emplace_back(name);
       }
       CheckGyroFlags(*calibrate, cal.gyro, cal.gyro_columns,
-                     {"--gyro-units", "--gyro-model", "--gyro-estimator"});
+                     {"--gyro-units", "--gyro-model", "--gyro-estimator", "--gyro-thermal"});
       cal.given_options = GivenOptions(*calibrate, {"output", "report", "json", "date"});
       cal.date_given = calibrate->count("--date") > 0;
       return RunCalibrate(cal);

@@ -331,6 +331,12 @@ void WarnVaryingNotUsed(const LoadedCalibration& cal, const std::string& path, c
         path.c_str(), cal.thermal->params.degrees.ToString().c_str(), use,
         cal.thermal->params.t_ref_c);
   }
+  if (cal.gyroscope && cal.gyroscope->thermal && cal.gyroscope->thermal->degree() > 0) {
+    Warn(
+        "%s: its gyroscope's offsets follow temperature (degree %d); they are %s at one "
+        "temperature, T_ref = %.6g degC, not at the temperature of each reading\n",
+        path.c_str(), cal.gyroscope->thermal->degree(), use, cal.gyroscope->thermal->t_ref_c);
+  }
   if (!cal.drift) return;
   Warn(
       "%s: its bias drifted within its session (a %s bias); it is %s with one bias, the "

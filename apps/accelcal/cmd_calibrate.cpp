@@ -280,14 +280,37 @@ GyroCalibrationOptions GyroOptions(const CalibrateArgs& args) {
   GyroCalibrationOptions o;
   o.unit = ParseChoice<GyroUnit>(args.gyro_units, "--gyro-units");
   const bool known = !args.orientations.empty();
+  const bool thermal = !args.thermal.empty();
   o.estimator = args.gyro_estimator.empty()
-                    ? (known ? GyroEstimator::kTwoStage : GyroEstimator::kJoint)
+                    ? (known || thermal ? GyroEstimator::kTwoStage : GyroEstimator::kJoint)
                     : ParseChoice<GyroEstimator>(args.gyro_estimator, "--gyro-estimator");
   if (known && o.estimator == GyroEstimator::kJoint) {
     throw UsageError(
         "--gyro-estimator joint fits every position's gravity direction, which --orientations "
         "gives: the gyroscope is fitted on top of the known-orientation calibration "
         "(two-stage)");
+  }
+  if (thermal && o.estimator == GyroEstimator::kJoint) {
+    throw UsageError(
+        "--gyro-estimator joint refits the accelerometer's parameters as constants, which "
+        "--thermal's are not: the gyroscope is fitted on top of the calibration over "
+        "temperature (two-stage, the default with --thermal)");
+  }
+  if (!args.gyro_thermal.empty() && !thermal) {
+    throw UsageError(
+        "--gyro-thermal is the gyroscope's offsets over temperature, fitted with --thermal: give "
+        "it too");
+  }
+  if (thermal) {
+    o.thermal.emplace();  // T_ref is the accelerometer's, set when it is fitted
+    if (!args.gyro_thermal.empty() && args.gyro_thermal != "auto") {
+      const std::string& d = args.gyro_thermal;
+      if (d.size() != 1 || d[0] < '0' || d[0] > '0' + kMaxThermalDegree) {
+        throw UsageError("--gyro-thermal: '" + d + "' is neither auto nor a degree from 0 to " +
+                         std::to_string(kMaxThermalDegree));
+      }
+      o.thermal->degree = d[0] - '0';
+    }
   }
   if (args.gyro_model != "auto") {
     o.model = ParseEnum(GyroModelKindFromString(args.gyro_model), args.gyro_model, "--gyro-model",
@@ -334,7 +357,8 @@ class GyroLogAhead {
 
 GyroRun RunGyro(const CalibrateArgs& args, const LoadedInput& in, const CalibrationResult& accel,
                 GyroLogAhead* ahead = nullptr) {
-  const GyroCalibrationOptions options = GyroOptions(args);
+  GyroCalibrationOptions options = GyroOptions(args);
+  if (options.thermal && accel.thermal) options.thermal->t_ref_c = accel.thermal->params.t_ref_c;
   const RawLog& accel_log = TheRawLogForGyro(in);
   GyroRun run;
   run.path = args.gyro.empty() ? args.input.path : args.gyro;
@@ -381,6 +405,23 @@ void PrintGyro(const GyroRun& run, const std::string& raw_unit, const char* forc
       g.noise_sigma_raw(0), g.noise_sigma_raw(1), g.noise_sigma_raw(2), raw_unit.c_str(),
       g.still_scatter_ratio, g.rotation_scatter_ratio,
       g.accelerometer ? Format(", accelerometer %.3g", g.accel_scatter_ratio).c_str() : "");
+  if (const std::optional<GyroThermal>& t = g.thermal) {
+    Say("  offsets over temperature  b(T) = b + sum_d b_d (T - T_ref)^d, T_ref %.6g degC, "
+        "positions at %.4g to %.4g degC: degree %d (%s)\n",
+        t->bias.t_ref_c, t->range_c.first, t->range_c.second, t->bias.degree(), t->reason.c_str());
+    for (int d = 1; d <= t->bias.degree(); ++d) {
+      const Vec3& b = t->bias.coefficients[static_cast<std::size_t>(d - 1)];
+      std::string line = Format("    b_%d ", d);
+      for (int a = 0; a < 3; ++a) {
+        const auto i = static_cast<Eigen::Index>(3 * (d - 1) + a);
+        line += Format(" %c %.6g +- %.2g", "xyz"[a], b(a), std::sqrt(t->bias.covariance(i, i)));
+      }
+      Say("%s  %s per K^%d\n", line.c_str(), raw_unit.c_str(), d);
+    }
+    Say("    the still rates' scatter about it %.3g times their noise; the rest of the gyroscope's "
+        "calibration is at T_ref, from the rates with these offsets taken out\n",
+        t->scatter_ratio);
+  }
   if (const std::optional<GyroTimeOffset>& lag = g.time_offset) {
     Say("  time offset  the gyro's readings %s the accelerometer's by %.3g +- %.2g ms (from the "
         "%zu turns%s)\n",
@@ -843,6 +884,8 @@ std::string ThermalText(const CalibrationResult& r, const ThermalDegreeSelection
 // several temperatures (several files, or one ramp).
 int RunCalibrateThermal(const CalibrateArgs& args, const CalibrationOptions& options,
                         const std::optional<ThermalDegrees>& degrees, const Gravity& g) {
+  std::optional<GyroLogAhead> gyro_ahead;
+  if (GyroWanted(args)) gyro_ahead.emplace(args);
   LoadedInput in = LoadInput(args.input);
   std::string note;
   ThermalOptions thermal;
@@ -874,8 +917,10 @@ int RunCalibrateThermal(const CalibrateArgs& args, const CalibrationOptions& opt
                  args.input.path.c_str(), result.summary.termination_message.c_str());
     return kExitNotConverged;
   }
+  std::optional<GyroRun> gyro;
+  if (gyro_ahead) gyro = RunGyro(args, in, result, &*gyro_ahead);
   return WriteCalibration(
-      args, in, g, result, {}, nullptr, nullptr, note, nullptr, nullptr,
+      args, in, g, result, {}, nullptr, nullptr, note, nullptr, gyro ? &*gyro : nullptr,
       ThermalText(result, selection ? &*selection : nullptr, g, RawUnitLabel(args, in)));
 }
 
@@ -912,7 +957,6 @@ int RunCalibrate(const CalibrateArgs& args) {
   }
   if (thermal) {
     const char* with = !args.orientations.empty()       ? "--orientations"
-                       : GyroWanted(args)               ? "--gyro"
                        : args.bias_model != "constant"  ? "--bias-model"
                        : args.model == "auto"           ? "--model auto"
                        : args.method != "joint"         ? "--method"
@@ -926,6 +970,11 @@ int RunCalibrate(const CalibrateArgs& args) {
                                    "--estimator ml, --frame x-first) of a model chosen by --model "
                                    "linear or quadratic, with a bias constant in time: not with ") +
                        with);
+    }
+    if (GyroWanted(args) && !args.input.more_paths.empty()) {
+      throw UsageError(
+          "--thermal with --gyro calibrates the gyroscope from one recording through the "
+          "temperatures (a ramp, its turns between the positions): give one INPUT");
     }
     if (args.thermal == "auto" && !args.cross_validate) {
       throw UsageError(

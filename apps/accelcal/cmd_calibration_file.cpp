@@ -56,11 +56,34 @@ int RunApply(const ApplyArgs& args) {
   // Parameters that follow temperature: each reading at its own temperature when the log has
   // them, held to the range the calibration was fitted over (a polynomial is not extrapolated).
   const bool thermal = cal.thermal && log.temperature_c.size() == log.samples.size();
+  InputData rates;
+  if (gyro) {
+    rates = ReadGyroLog(args.input, args.gyro, args.gyro_columns, false);
+    CheckGyroClock(log, rates.raw);
+  }
+  // The gyroscope's offsets over temperature: each rate at the gyro log's temperature, else the
+  // accelerometer's at the same sample.
+  const std::optional<GyroThermalBias>& gyro_bias =
+      gyro ? cal.gyroscope->thermal : std::optional<GyroThermalBias>();
+  const bool gyro_own_t = gyro && rates.raw.temperature_c.size() == rates.raw.samples.size();
+  const bool gyro_thermal = gyro_bias && gyro_bias->degree() > 0 &&
+                            (gyro_own_t || log.temperature_c.size() == log.samples.size());
   {
     LoadedCalibration said = cal;
     if (thermal) said.thermal.reset();
+    if (gyro_thermal || !gyro) said.gyroscope.reset();
     WarnVaryingNotUsed(said, args.calibration, "applied");
   }
+  const auto gyro_t_at = [&](std::size_t i) {
+    double t = gyro_own_t ? rates.raw.temperature_c[i] : std::nan("");
+    if (std::isnan(t) && log.temperature_c.size() == log.samples.size()) t = log.temperature_c[i];
+    if (std::isnan(t)) {
+      throw InputError(gyro_own_t ? rates.raw.source : args.input.path,
+                       rates.raw.line.empty() ? i + 1 : rates.raw.line[i],
+                       "the rate has no temperature, which the gyroscope's offsets follow");
+    }
+    return t;
+  };
   double t_min = kTemperatureRange_C[0], t_max = kTemperatureRange_C[1];
   if (thermal && cal.thermal_range_c) std::tie(t_min, t_max) = *cal.thermal_range_c;
   std::size_t held = 0;
@@ -76,11 +99,7 @@ int RunApply(const ApplyArgs& args) {
     if (t_held != last_t) last = cal.thermal->params.At(t_held), last_t = t_held;
     return last;
   };
-  InputData rates;
-  if (gyro) {
-    rates = ReadGyroLog(args.input, args.gyro, args.gyro_columns, false);
-    CheckGyroClock(log, rates.raw);
-  }
+  std::size_t gyro_held = 0;
   // Every reading is checked before anything is written; the output is then streamed.
   for (std::size_t i = 0; i < log.samples.size(); ++i) {
     // Said beyond 1 K: the range is the positions' mean temperatures, which single readings
@@ -89,6 +108,11 @@ int RunApply(const ApplyArgs& args) {
     if (!SpecificForce(params_at(i), log.samples[i])) {
       throw InputError(args.input.path, log.line[i],
                        "the reading lies outside the range the quadratic model can invert");
+    }
+    if (gyro_thermal) {
+      const double t = gyro_t_at(i);
+      gyro_held += t < cal.gyroscope->thermal_range_c.first - 1 ||
+                   t > cal.gyroscope->thermal_range_c.second + 1;
     }
   }
   OutputFile file(args.output.empty() ? "-" : args.output);  // buffers: one Write per row
@@ -102,6 +126,19 @@ int RunApply(const ApplyArgs& args) {
     file.Write("# temperature: each reading corrected at its own (" +
                VisibleLine(log.temperature_source) + "), held to " + FormatNumber(t_min) + " .. " +
                FormatNumber(t_max) + " degC\n");
+  }
+  if (gyro_thermal) {
+    file.Write("# gyroscope temperature: each rate's offsets at its own (" +
+               VisibleLine(gyro_own_t ? rates.raw.temperature_source : log.temperature_source) +
+               "), held to " + FormatNumber(cal.gyroscope->thermal_range_c.first) + " .. " +
+               FormatNumber(cal.gyroscope->thermal_range_c.second) + " degC\n");
+  }
+  if (gyro_held > 0) {
+    Warn(
+        "%s: %zu rates were recorded more than 1 K outside %g .. %g degC, the range the "
+        "gyroscope's offsets were fitted over: corrected at the nearest end\n",
+        args.input.path.c_str(), gyro_held, cal.gyroscope->thermal_range_c.first,
+        cal.gyroscope->thermal_range_c.second);
   }
   if (held > 0) {
     Warn(
@@ -121,9 +158,14 @@ int RunApply(const ApplyArgs& args) {
     };
     if (has_time) number(log.time_s[i], ',');
     for (int a = 0; a < 3; ++a) number(f(a) * factor, a < 2 || gyro ? ',' : '\n');
-    if (gyro) {  // w = K_g⁻¹ (raw − b_g − G f), f in the calibration's unit
+    if (gyro) {  // w = K_g⁻¹ (raw − b_g(T) − G f), f in the calibration's unit
       const GyroParameters& g = cal.gyroscope->params;
-      const Vec3 w = gyro_K_inverse * (rates.raw.samples[i] - g.bias - g.G * f);
+      Vec3 b = g.bias;
+      if (gyro_thermal) {
+        b += gyro_bias->OffsetChange(std::clamp(gyro_t_at(i), cal.gyroscope->thermal_range_c.first,
+                                                cal.gyroscope->thermal_range_c.second));
+      }
+      const Vec3 w = gyro_K_inverse * (rates.raw.samples[i] - b - g.G * f);
       for (int a = 0; a < 3; ++a) number(w(a), a < 2 ? ',' : '\n');
     }
     file.Write(std::string_view(row, static_cast<std::size_t>(p - row)));

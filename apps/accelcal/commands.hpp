@@ -96,7 +96,9 @@ struct CalibrateArgs {
   std::vector<std::string> gyro_columns;
   std::string gyro_units = "raw";
   std::string gyro_model = "auto";
-  std::string gyro_estimator;  // empty: joint, or two-stage with known orientations
+  std::string gyro_estimator;  // empty: joint, or two-stage with known orientations or --thermal
+  // With --thermal: the degree of the gyroscope's offsets over temperature, or auto (empty: auto).
+  std::string gyro_thermal;
   /// Options that a known-orientation fit does not take, when given explicitly.
   std::vector<std::string> gravity_only_options;
   bool cross_validate = true;

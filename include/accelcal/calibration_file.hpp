@@ -180,6 +180,10 @@ struct LoadedCalibration {
     };
     std::vector<Rotation> rotations;
     std::vector<Vec3> still_mean_raw;  ///< `stills[].mean_raw`, when present
+    /// `thermal`: the offsets over temperature (degree 0: asked for, none found), and the
+    /// temperatures they were fitted over, to which they are held.
+    std::optional<GyroThermalBias> thermal;
+    std::pair<double, double> thermal_range_c{0, 0};
   };
   std::optional<Gyroscope> gyroscope;
   bool has_gyroscope() const { return gyroscope.has_value(); }

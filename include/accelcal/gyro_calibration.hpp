@@ -30,9 +30,11 @@
 /// fit, which is refitted until they settle (variance components, as in geodesy's adjustment of
 /// heterogeneous observations).
 
+#include <cmath>
 #include <optional>
 #include <string>
 #include <string_view>
+#include <utility>
 #include <vector>
 
 #include <Eigen/Core>
@@ -43,6 +45,7 @@
 #include "accelcal/names.hpp"
 #include "accelcal/positions.hpp"
 #include "accelcal/rotations.hpp"
+#include "accelcal/thermal.hpp"
 
 namespace accelcal {
 
@@ -84,6 +87,15 @@ struct EnumNames<GyroEstimator> {
 };
 std::string_view ToString(GyroEstimator estimator);
 
+/// The gyroscope's offsets over temperature (GyroThermalBias), fitted with its calibration.
+struct GyroThermalOptions {
+  /// The degree D of b_g(T) (0 … kMaxThermalDegree; 0: constant); std::nullopt chooses it from 0 up
+  /// by the still positions' held-out mean rates, as SelectThermalDegrees chooses the
+  /// accelerometer's.
+  std::optional<int> degree;
+  double t_ref_c = 0;  ///< T_ref [°C]: the accelerometer's, so that one file has one
+};
+
 struct GyroCalibrationOptions {
   /// The model; std::nullopt chooses by the leave-one-rotation-out error (g-sensitive when it
   /// lowers it, as the accelerometer's automatic model choice).
@@ -106,6 +118,13 @@ struct GyroCalibrationOptions {
   /// Threads the turns are integrated on (0: one per hardware thread); the result is the same
   /// bits for any count.
   int threads = 0;
+  /// The offsets over temperature: each still position's mean rate at its mean temperature
+  /// (the gyro log's temperature at each sample, else the accelerometer's) determines the b_d, by
+  /// weighted least squares beside a constant b_g and, unless the model is linear, G; every rate
+  /// sample then has b_d taken out at its temperature, and the gyroscope is calibrated from those
+  /// rates as without (two-stage or imu_tk: the joint estimator refits the accelerometer's
+  /// parameters as constants, which a calibration over temperature is not).
+  std::optional<GyroThermalOptions> thermal;
 };
 
 /// One turn between consecutive still positions.
@@ -156,6 +175,21 @@ struct GyroTimeOffset {
   bool at_limit = false;
 };
 
+/// The gyroscope's offsets over temperature as fitted (GyroCalibrationOptions::thermal).
+struct GyroThermal {
+  GyroThermalBias bias;                ///< degree 0 (no coefficients) when chosen so
+  std::vector<double> temperatures_c;  ///< each still position's mean temperature [°C]
+  std::pair<double, double> range_c;   ///< the still positions' lowest and highest [°C]
+  /// Why this degree ("given", or each step's held-out and Wald evidence).
+  std::string reason;
+  /// The still means' scatter about the polynomial over their sample noise, √(χ²/(3(n − p)))
+  /// (the covariance is multiplied by it when above 1).
+  double scatter_ratio = 1;
+  /// Each still position's whitened held-out mean rate under the chosen degree, ‖e‖ over its
+  /// three axes (leave one position out, exact for least squares); RMS [gyro raw] at the end.
+  double heldout_rms_raw = std::nan("");
+};
+
 /// The gyroscope's calibration.
 struct GyroCalibration {
   GyroModelKind model = GyroModelKind::kLinear;
@@ -186,6 +220,9 @@ struct GyroCalibration {
   /// The joint estimator's accelerometer calibration (parameters, covariance and directions
   /// refitted with the rotations); unset for the two-stage one.
   std::optional<CalibrationResult> accelerometer;
+  /// The offsets over temperature, when asked for (GyroCalibrationOptions::thermal): the rest of
+  /// this calibration is at its T_ref, and still_spans' mean_raw have them taken out.
+  std::optional<GyroThermal> thermal;
 };
 
 /// Throws DataError unless `gyro` holds a rate sample at each sample of `accel` (the same count,

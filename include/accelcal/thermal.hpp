@@ -17,6 +17,7 @@
 
 #include <Eigen/Core>
 
+#include "accelcal/gyro_model.hpp"
 #include "accelcal/model.hpp"
 #include "accelcal/types.hpp"
 
@@ -72,5 +73,24 @@ ThermalParameters UnpackThermal(const Eigen::VectorXd& x, ModelKind model,
 /// coefficients of `degrees` zero (a thermal fit's start, a plan's device).
 ThermalParameters ConstantOverTemperature(const ModelParameters& at_ref, ModelKind model,
                                           const ThermalDegrees& degrees, double t_ref_c);
+
+/// The gyroscope's offsets over temperature, beside the accelerometer's model above: the bias of
+/// gyro_model.hpp as a polynomial in ΔT = T − T_ref, the rest of the gyroscope's model constant,
+///     b_g(T) = b_g + Σ_{d=1}^{D} b_d ΔT^d,
+/// b_g the calibration's bias (at T_ref), b_d [gyro raw per K^d]. This is what PX4's TC_G and
+/// ArduPilot's INS_TCALn_GYR hold; a gyroscope's scale moves too little with temperature to be
+/// seen by the turns of a tumble (MEMS: 0.01-0.03 %/K, against a turn's 0.1 % resolution).
+struct GyroThermalBias {
+  double t_ref_c = 0;  ///< T_ref [°C]
+  /// b_d for d = 1 … D [gyro raw per K^d]; empty: the offsets do not follow temperature.
+  std::vector<Vec3> coefficients;
+  /// Covariance of (b_1x, b_1y, b_1z, b_2x, …), 3D x 3D.
+  Eigen::MatrixXd covariance;
+
+  int degree() const { return static_cast<int>(coefficients.size()); }
+  /// Σ_{d≥1} b_d (T − T_ref)^d: how far the offset at `t_c` lies from the calibration's b_g
+  /// [gyro raw].
+  Vec3 OffsetChange(double t_c) const;
+};
 
 }  // namespace accelcal

@@ -29,7 +29,8 @@ class ULogImuWriter {
   std::string Accel(std::uint64_t time_us, const Vec3& reading,
                     double temperature_c = std::nan("")) const;
   /// One sensor_gyro message, as Accel (with a gyroscope only: std::logic_error otherwise).
-  std::string Gyro(std::uint64_t time_us, const Vec3& rate) const;
+  std::string Gyro(std::uint64_t time_us, const Vec3& rate,
+                   double temperature_c = std::nan("")) const;
 
  private:
   std::uint32_t device_id_, gyro_device_id_;

@@ -15,6 +15,7 @@
 #include "accelcal/error.hpp"
 #include "accelcal/model.hpp"
 #include "analysis/gyro_data.hpp"
+#include "analysis/gyro_thermal.hpp"
 #include "analysis/gyro_time_offset.hpp"
 #include "core/parallel.hpp"
 #include "core/text_format.hpp"
@@ -729,7 +730,7 @@ void CheckFit(const RawLog& accel, const RawLog& gyro, const std::vector<Positio
   }
 }
 
-GyroCalibration CalibrateGyro(const RawLog& accel, const RawLog& gyro,
+GyroCalibration CalibrateGyro(const RawLog& accel, const RawLog& raw_gyro,
                               const std::vector<Position>& positions,
                               const CalibrationResult& accel_cal,
                               const GyroCalibrationOptions& options) {
@@ -742,7 +743,33 @@ GyroCalibration CalibrateGyro(const RawLog& accel, const RawLog& gyro,
   if (!model && !options.validate) {
     throw std::invalid_argument("CalibrateGyro: the automatic model choice needs validation");
   }
-  CheckGyroClock(accel, gyro);
+  CheckGyroClock(accel, raw_gyro);
+  // The offsets over temperature first, from the still means of the rates as read; then every
+  // rate sample with them taken out at its temperature, and the calibration as without.
+  std::optional<GyroThermal> thermal;
+  RawLog corrected;
+  if (options.thermal) {
+    if (options.estimator == GyroEstimator::kJoint) {
+      throw std::invalid_argument(
+          "CalibrateGyro: the joint estimator refits the accelerometer's parameters as "
+          "constants; with the offsets over temperature use the two-stage one");
+    }
+    const Built as_read = BuildData(accel, raw_gyro, positions, accel_cal, options);
+    const std::vector<double> t_c = internal::SampleTemperatures(raw_gyro, accel);
+    std::vector<double> position_t_c;
+    for (const StaticInterval& run : as_read.still_runs) {
+      double sum = 0;
+      for (std::size_t k = run.begin; k < run.end; ++k) sum += t_c[k];
+      position_t_c.push_back(sum / static_cast<double>(run.end - run.begin));
+    }
+    thermal = internal::FitGyroThermal(as_read.data.stills, position_t_c, *options.thermal,
+                                       model != GyroModelKind::kLinear);
+    corrected = raw_gyro;
+    for (std::size_t k = 0; k < corrected.samples.size(); ++k) {
+      corrected.samples[k] -= thermal->bias.OffsetChange(t_c[k]);
+    }
+  }
+  const RawLog& gyro = options.thermal ? corrected : raw_gyro;
   Built built = BuildData(accel, gyro, positions, accel_cal, options);
   GyroFitData& data = built.data;
   const std::size_t needed = 6;
@@ -857,6 +884,7 @@ GyroCalibration CalibrateGyro(const RawLog& accel, const RawLog& gyro,
     }
   });
   result.time_offset = lag;
+  result.thermal = std::move(thermal);
   const internal::LeastSquaresSummary& sum = f.solution.summary;
   result.summary.iterations = sum.iterations;
   result.summary.termination = sum.termination;

@@ -62,7 +62,11 @@ InputData ReadGyroInput(const std::string& accel_path, const ReadOptions& accel_
   read.sensor = SensorKind::kGyroscope;
   read.topic = gyro_topic;
   read.columns = gyro_columns;
-  read.temperature = "none";  // the temperature option names the accelerometer log's column
+  // The temperature option names a column of the accelerometer's log: the gyroscope's takes it
+  // from the same file; from a file of its own, its temperature is found as without one (a
+  // column named for it, PX4's sensor_gyro.temperature), unless the option is "none".
+  const bool same_file = gyro_path.empty() || gyro_path == accel_path;
+  if (!same_file && accel_read.temperature != "none") read.temperature.clear();
   if (gyro_path.empty() && read.columns.size() == 3 && accel_read.columns.size() == 4) {
     read.columns.insert(read.columns.begin(), accel_read.columns.front());
   }

@@ -50,6 +50,17 @@ std::vector<ThermalSlot> ThermalSlots(ModelKind model, const ThermalDegrees& deg
   return slots;
 }
 
+Vec3 GyroThermalBias::OffsetChange(double t_c) const {
+  const double dT = t_c - t_ref_c;
+  Vec3 out = Vec3::Zero();
+  double power = 1;
+  for (const Vec3& b : coefficients) {
+    power *= dT;
+    out += power * b;
+  }
+  return out;
+}
+
 ModelParameters ThermalParameters::At(double t_c) const {
   const double dT = t_c - t_ref_c;
   ModelParameters out = coefficients.at(0);

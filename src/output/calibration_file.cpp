@@ -354,6 +354,35 @@ ordered_json GyroscopeSection(const GyroCalibration& g, const CalibrationFileInf
                       {"turned_outside_deg", span.turned_outside_deg}});
   }
   doc["stills"] = stills;
+  if (g.thermal) {
+    const GyroThermal& t = *g.thermal;
+    const int degree = t.bias.degree();
+    ordered_json coefficients = ordered_json::array(), sd = ordered_json::array();
+    for (int d = 0; d < degree; ++d) {
+      coefficients.push_back(ToJson(t.bias.coefficients[static_cast<std::size_t>(d)]));
+      Vec3 s;
+      for (int a = 0; a < 3; ++a)
+        s(a) = std::sqrt(std::max(0.0, t.bias.covariance(3 * d + a, 3 * d + a)));
+      sd.push_back(ToJson(s));
+    }
+    ordered_json temperatures = ordered_json::array();
+    for (double x : t.temperatures_c) temperatures.push_back(x);
+    doc["thermal"] = {
+        {"equation",
+         "b(T) = bias + sum_d coefficients[d-1] (T - t_ref)^d, T in degC: the offsets over "
+         "temperature, the rest of the model at t_ref; coefficients[d-1] in raw per K^d, T held "
+         "to temperature_range"},
+        {"t_ref", t.bias.t_ref_c},
+        {"degree", degree},
+        {"degree_reason", t.reason},
+        {"temperature_range", {t.range_c.first, t.range_c.second}},
+        {"coefficients", coefficients},
+        {"std", sd},
+        {"covariance", degree > 0 ? ToJson(t.bias.covariance) : ordered_json(nullptr)},
+        {"scatter_ratio", t.scatter_ratio},
+        {"heldout_rms_raw", Nullable(t.heldout_rms_raw)},
+        {"temperatures", temperatures}};
+  }
   if (g.time_offset) {
     doc["time_offset"] = {{"lag_s", g.time_offset->lag_s},
                           {"std_s", g.time_offset->std_s},

@@ -467,6 +467,64 @@ Mat33 Matrix3(const Reader& r, const ordered_json& doc, const char* key) {
   return m;
 }
 
+// The gyroscope's `thermal`: its offsets over temperature (thermal.hpp's GyroThermalBias).
+void ReadGyroThermal(const Reader& r, const ordered_json& doc, LoadedCalibration::Gyroscope& g) {
+  const ordered_json& t = r.Object(doc, "thermal");
+  const Reader in = r.Inside("thermal");
+  GyroThermalBias bias;
+  if (!t.contains("t_ref")) in.Fail(in.Key("t_ref") + " is missing");
+  bias.t_ref_c = in.Number(t["t_ref"], in.Key("t_ref"));
+  if (!t.contains("degree") || !t["degree"].is_number_unsigned() ||
+      t["degree"].get<std::uint64_t>() > kMaxThermalDegree) {
+    in.Fail(in.Key("degree") + " must be a whole number from 0 to " +
+            std::to_string(kMaxThermalDegree));
+  }
+  const auto degree = t["degree"].get<std::size_t>();
+  const std::string shape =
+      " must be an array of " + std::to_string(degree) + " arrays of 3 numbers (its degree)";
+  for (const char* key : {"coefficients", "std"}) {
+    if (!t.contains(key) || !t[key].is_array() || t[key].size() != degree) {
+      in.Fail(in.Key(key) + shape);
+    }
+    for (std::size_t d = 0; d < degree; ++d) {
+      if (!t[key][d].is_array() || t[key][d].size() != 3) in.Fail(in.Key(key) + shape);
+      for (int a = 0; a < 3; ++a) {
+        const double v = in.Number(t[key][d][a], in.Key(key));
+        if (key[0] == 'c') {
+          if (a == 0) bias.coefficients.emplace_back(Vec3::Zero());
+          bias.coefficients.back()(a) = v;
+        } else if (!(v >= 0)) {
+          in.Fail(in.Key(key) + " must not be negative");
+        }
+      }
+    }
+  }
+  if (t.contains("covariance") && !t["covariance"].is_null()) {
+    if (degree == 0) in.Fail(in.Key("covariance") + " must be null for degree 0");
+    bias.covariance = ReadSquareCovariance(in, t, 3 * degree, "the offsets' coefficients");
+  }
+  if (!t.contains("temperature_range")) {
+    in.Fail(in.Key("temperature_range") +
+            " is missing: the temperatures the fit spans, to which the offsets are held");
+  }
+  const ordered_json& range = t["temperature_range"];
+  if (!range.is_array() || range.size() != 2) {
+    in.Fail(in.Key("temperature_range") + " must be 2 temperatures");
+  }
+  const double lo = in.Number(range[0], in.Key("temperature_range")),
+               hi = in.Number(range[1], in.Key("temperature_range"));
+  if (!(lo <= hi && InTemperatureRange(lo) && InTemperatureRange(hi))) {
+    in.Fail(in.Key("temperature_range") + internal::Format(" must be from %g to %g degC, low first",
+                                                           kTemperatureRange_C[0],
+                                                           kTemperatureRange_C[1]));
+  }
+  if (!(bias.t_ref_c >= lo && bias.t_ref_c <= hi)) {
+    in.Fail(in.Key("t_ref") + " must be within " + in.Key("temperature_range"));
+  }
+  g.thermal = std::move(bias);
+  g.thermal_range_c = {lo, hi};
+}
+
 // `sensors.gyroscope`: the model and its parameters (the rest is a record for people).
 LoadedCalibration::Gyroscope ReadGyroscope(const Reader& r, const ordered_json& doc) {
   LoadedCalibration::Gyroscope g;
@@ -556,6 +614,7 @@ LoadedCalibration::Gyroscope ReadGyroscope(const Reader& r, const ordered_json& 
       g.still_mean_raw.push_back(in.Vector3(st, "mean_raw"));
     }
   }
+  if (doc.contains("thermal")) ReadGyroThermal(r, doc, g);
   return g;
 }
 

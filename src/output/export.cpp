@@ -521,6 +521,43 @@ std::optional<Px4Slot> Px4Gyroscope(const LoadedCalibration& cal, const ExportOp
         internal::VisibleLine(g.raw_unit).c_str());
     return std::nullopt;
   }
+  if (g.thermal && g.thermal->degree() > 0) {
+    // TC_G<n>: the offsets' polynomial in T - TREF taken from the rate before CAL_GYRO's offset
+    // (TemperatureCompensation.cpp, sensor_calibration/Gyroscope.hpp), as TC_A: X0 = 0 and TREF
+    // = T_ref, so that CAL_GYRO holds the offset at T_ref; T held to TMIN..TMAX.
+    const std::string tc = "TC_G" + std::to_string(options.instance) + "_";
+    const std::optional<std::uint64_t> id = Px4DeviceId(options.gyro_device_id, stream);
+    slot.lines += "1\t1\tTC_G_ENABLE\t1\t6\n";
+    if (id) {
+      slot.lines += Format("1\t1\t%sID\t%d\t6\n", tc.c_str(),
+                           static_cast<std::int32_t>(static_cast<std::uint32_t>(*id)));
+    }
+    slot.lines +=
+        Format("1\t1\t%sTREF\t%.9g\t9\n1\t1\t%sTMIN\t%.9g\t9\n1\t1\t%sTMAX\t%.9g\t9\n", tc.c_str(),
+               Float32(g.thermal->t_ref_c), tc.c_str(), Float32(g.thermal_range_c.first),
+               tc.c_str(), Float32(g.thermal_range_c.second));
+    for (int k = 0; k <= 3; ++k) {
+      for (int i = 0; i < 3; ++i) {
+        const double x = k == 0 || k > g.thermal->degree()
+                             ? 0.0
+                             : *rad_s * g.thermal->coefficients[static_cast<std::size_t>(k - 1)](i);
+        slot.lines += Format("1\t1\t%sX%d_%d\t%.9g\t9\n", tc.c_str(), k, i, Float32(x));
+      }
+    }
+    slot.convention += Format(
+        "; TC_G%d: offset(T) = sum_k X_k (T - TREF)^k in rad/s, T held to TMIN..TMAX, taken from "
+        "the rate before CAL_GYRO%d's offset; X0 = 0 and TREF = T_ref, so that CAL_GYRO holds "
+        "the offset at T_ref",
+        options.instance, options.instance);
+    if (!id) {
+      slot.comment += Format(
+          "# TC_G%d: TC_G%d_ID is not written (no device id known): PX4 applies these temperature "
+          "terms to no sensor until it is set\n",
+          options.instance, options.instance);
+      slot.convention += Format(
+          "; TC_G%d_ID not written (no device id known): PX4 does not apply it", options.instance);
+    }
+  }
   out->gyroscope_included = true;
   out->gyroscope_dropped =
       Join(Format("the scale and misalignment K_g, which PX4 does not hold (a rate error of up to "
@@ -1350,8 +1387,31 @@ std::string JsonToYaml(const std::string& json_text) {
   return out;
 }
 
+namespace {
+ExportResult ExportFormatted(const LoadedCalibration& cal, const std::string& native_json,
+                             ExportFormat format, const ExportOptions& options);
+}  // namespace
+
 ExportResult ExportCalibration(const LoadedCalibration& cal, const std::string& native_json,
                                ExportFormat format, const ExportOptions& options) {
+  ExportResult out = ExportFormatted(cal, native_json, format, options);
+  // The gyroscope's offsets over temperature: only accelcal's own file and PX4's TC_G hold them.
+  const bool holds = format == ExportFormat::kJson || format == ExportFormat::kYaml ||
+                     format == ExportFormat::kPx4;
+  if (out.gyroscope_included && !holds && cal.gyroscope->thermal &&
+      cal.gyroscope->thermal->degree() > 0) {
+    out.gyroscope_dropped =
+        Join(out.gyroscope_dropped,
+             Format("the offsets' change with temperature (degree %d about T_ref = %.4g degC): the "
+                    "offsets are those at T_ref",
+                    cal.gyroscope->thermal->degree(), cal.gyroscope->thermal->t_ref_c));
+  }
+  return out;
+}
+
+namespace {
+ExportResult ExportFormatted(const LoadedCalibration& cal, const std::string& native_json,
+                             ExportFormat format, const ExportOptions& options) {
   if (options.instance < 0) throw std::invalid_argument("instance must be >= 0");
   if (options.sensor != "accelerometer" && options.sensor != "gyroscope") {
     throw std::invalid_argument("sensor must be \"accelerometer\" or \"gyroscope\"");
@@ -1404,5 +1464,6 @@ ExportResult ExportCalibration(const LoadedCalibration& cal, const std::string& 
   }
   throw std::invalid_argument("unknown export format");
 }
+}  // namespace
 
 }  // namespace accelcal

@@ -85,9 +85,10 @@ std::string ULogImuWriter::Accel(std::uint64_t time_us, const Vec3& reading,
   return Sample(kAccelId, device_id_, time_us, reading, temperature_c);
 }
 
-std::string ULogImuWriter::Gyro(std::uint64_t time_us, const Vec3& rate) const {
+std::string ULogImuWriter::Gyro(std::uint64_t time_us, const Vec3& rate,
+                                double temperature_c) const {
   if (!gyroscope_) throw std::logic_error("ULogImuWriter::Gyro: made without a gyroscope");
-  return Sample(kGyroId, gyro_device_id_, time_us, rate, std::nan(""));
+  return Sample(kGyroId, gyro_device_id_, time_us, rate, temperature_c);
 }
 
 }  // namespace accelcal

@@ -39,8 +39,8 @@ const std::vector<double>* Temperatures(const RawLog& log) {
 // [1, u, …, u^D, (f)], u = ΔT / scale.
 struct DegreeFit {
   int degree = 0;
-  std::vector<Vec3> b;         // b_1 … b_D [raw per K^d]
-  Eigen::MatrixXd covariance;  // of b, 3D x 3D, under the sample noise
+  std::vector<Vec3> b;                   // b_1 … b_D [raw per K^d]
+  Eigen::MatrixXd covariance;            // of b, 3D x 3D, under the sample noise
   std::vector<double> heldout_whitened;  // per still: ‖e_loo‖ over its axes, whitened
   std::vector<double> heldout_raw;       // the same in raw units
   bool validated = true;                 // every still's held-out error defined
@@ -183,18 +183,19 @@ GyroThermal FitGyroThermal(const std::vector<GyroStill>& stills,
     scale = std::max(scale, std::abs(dT.back()));
   }
   const double span = *hi - *lo;
-  const std::string what =
-      Format("the gyroscope's %zu still positions, whose temperatures span %.3g K (%.4g to %.4g "
-             "degC)",
-             stills.size(), span, *lo, *hi);
+  const std::string what = Format(
+      "the gyroscope's %zu still positions, whose temperatures span %.3g K (%.4g to %.4g "
+      "degC)",
+      stills.size(), span, *lo, *hi);
   if (!(span >= kMinSpan_K) || options.degree == 0) {
     if (options.degree == 0) {
       out.reason = "given";
       return out;
     }
     if (options.degree) {
-      throw DataError(what + ", cannot determine how its offsets change with temperature: they "
-                             "need " +
+      throw DataError(what +
+                      ", cannot determine how its offsets change with temperature: they "
+                      "need " +
                       Format("%.3g", kMinSpan_K) + " K at least");
     }
     out.reason = what + Format(": too narrow a span to see a change (under %.3g K)", kMinSpan_K);
@@ -214,7 +215,8 @@ GyroThermal FitGyroThermal(const std::vector<GyroStill>& stills,
       throw DataError(what + Format(", do not determine a polynomial of degree %d in "
                                     "temperature%s: it needs more positions or more distinct "
                                     "temperatures",
-                                    *options.degree, g_sensitivity ? " beside the g-sensitivity" : ""));
+                                    *options.degree,
+                                    g_sensitivity ? " beside the g-sensitivity" : ""));
     }
     set(*fit);
     out.reason = "given";
@@ -236,10 +238,9 @@ GyroThermal FitGyroThermal(const std::vector<GyroStill>& stills,
     }
     const Paired paired =
         PairedImprovement(current->heldout_whitened, richer->heldout_whitened, all);
-    const double threshold =
-        StudentTTwoSidedQuantile(2 * kHeldOutImprovementAlpha,
-                                 static_cast<double>(stills.size()) - 1) *
-        paired.se;
+    const double threshold = StudentTTwoSidedQuantile(2 * kHeldOutImprovementAlpha,
+                                                      static_cast<double>(stills.size()) - 1) *
+                             paired.se;
     // The Wald statistic of the added b_D (its three axes independent).
     const Vec3& added = richer->b.back();
     const double inflate = std::max(1.0, richer->dof > 0 ? richer->chi2 / richer->dof : 1.0);
@@ -254,15 +255,15 @@ GyroThermal FitGyroThermal(const std::vector<GyroStill>& stills,
         "; degree %d: held-out RMS %.3g against %.3g (raw), paired improvement %.3g %s %.3g, "
         "Wald %.3g %s %.3g",
         degree, Rms(richer->heldout_raw), Rms(current->heldout_raw), paired.mean,
-        paired.mean > threshold ? ">" : "<=", threshold, wald, wald > wald_threshold ? ">" : "<=",
-        wald_threshold);
+        paired.mean > threshold ? ">" : "<=", threshold, wald,
+        wald > wald_threshold ? ">" : "<=", wald_threshold);
     if (!accepted) break;
     current = richer;
   }
   set(*current);
-  out.reason = Format("degree %d chosen by the still positions' held-out mean rates",
-                      current->degree) +
-               steps;
+  out.reason =
+      Format("degree %d chosen by the still positions' held-out mean rates", current->degree) +
+      steps;
   return out;
 }
 

@@ -318,6 +318,31 @@ void ReadDiagnostics(const Reader& r, const ordered_json& doc, LoadedCalibration
   cal.diagnostics = std::move(findings);
 }
 
+// A thermal section's `temperature_range`: the temperatures its fit spans, to which its
+// polynomials are held; T_ref within them.
+std::pair<double, double> ReadTemperatureRange(const Reader& in, const ordered_json& t,
+                                               double t_ref_c) {
+  if (!t.contains("temperature_range")) {
+    in.Fail(in.Key("temperature_range") +
+            " is missing: the temperatures the fit spans, to which its polynomials are held");
+  }
+  const ordered_json& range = t["temperature_range"];
+  if (!range.is_array() || range.size() != 2) {
+    in.Fail(in.Key("temperature_range") + " must be 2 temperatures");
+  }
+  const double lo = in.Number(range[0], in.Key("temperature_range")),
+               hi = in.Number(range[1], in.Key("temperature_range"));
+  if (!(lo <= hi && InTemperatureRange(lo) && InTemperatureRange(hi))) {
+    in.Fail(in.Key("temperature_range") + internal::Format(" must be from %g to %g degC, low first",
+                                                           kTemperatureRange_C[0],
+                                                           kTemperatureRange_C[1]));
+  }
+  if (!(t_ref_c >= lo && t_ref_c <= hi)) {
+    in.Fail(in.Key("t_ref") + " must be within " + in.Key("temperature_range"));
+  }
+  return {lo, hi};
+}
+
 // `thermal` (thermal.hpp), checked against the model, its parameters and the positions.
 void ReadThermal(const Reader& r, const ordered_json& doc, LoadedCalibration& cal) {
   if (!doc.contains("thermal")) return;
@@ -378,28 +403,7 @@ void ReadThermal(const Reader& r, const ordered_json& doc, LoadedCalibration& ca
   if (t.contains("covariance") && !t["covariance"].is_null()) {
     terms.covariance = ReadSquareCovariance(in, t, n, "the thermal coefficients");
   }
-  if (!t.contains("temperature_range")) {
-    in.Fail(in.Key("temperature_range") +
-            " is missing: the temperatures the fit spans, to which "
-            "its polynomials are held");
-  }
-  {
-    const ordered_json& range = t["temperature_range"];
-    if (!range.is_array() || range.size() != 2) {
-      in.Fail(in.Key("temperature_range") + " must be 2 temperatures");
-    }
-    const double lo = in.Number(range[0], in.Key("temperature_range")),
-                 hi = in.Number(range[1], in.Key("temperature_range"));
-    if (!(lo <= hi && InTemperatureRange(lo) && InTemperatureRange(hi))) {
-      in.Fail(in.Key("temperature_range") +
-              internal::Format(" must be from %g to %g degC, low first", kTemperatureRange_C[0],
-                               kTemperatureRange_C[1]));
-    }
-    cal.thermal_range_c = std::pair(lo, hi);
-    if (!(terms.params.t_ref_c >= lo && terms.params.t_ref_c <= hi)) {
-      in.Fail(in.Key("t_ref") + " must be within " + in.Key("temperature_range"));
-    }
-  }
+  cal.thermal_range_c = ReadTemperatureRange(in, t, terms.params.t_ref_c);
   if (t.contains("std") && !t["std"].is_null()) {
     if (!t["std"].is_array() || t["std"].size() != n) in.Fail(in.Key("std") + shape);
     for (std::size_t i = 0; i < n; ++i) {
@@ -503,26 +507,8 @@ void ReadGyroThermal(const Reader& r, const ordered_json& doc, LoadedCalibration
     if (degree == 0) in.Fail(in.Key("covariance") + " must be null for degree 0");
     bias.covariance = ReadSquareCovariance(in, t, 3 * degree, "the offsets' coefficients");
   }
-  if (!t.contains("temperature_range")) {
-    in.Fail(in.Key("temperature_range") +
-            " is missing: the temperatures the fit spans, to which the offsets are held");
-  }
-  const ordered_json& range = t["temperature_range"];
-  if (!range.is_array() || range.size() != 2) {
-    in.Fail(in.Key("temperature_range") + " must be 2 temperatures");
-  }
-  const double lo = in.Number(range[0], in.Key("temperature_range")),
-               hi = in.Number(range[1], in.Key("temperature_range"));
-  if (!(lo <= hi && InTemperatureRange(lo) && InTemperatureRange(hi))) {
-    in.Fail(in.Key("temperature_range") + internal::Format(" must be from %g to %g degC, low first",
-                                                           kTemperatureRange_C[0],
-                                                           kTemperatureRange_C[1]));
-  }
-  if (!(bias.t_ref_c >= lo && bias.t_ref_c <= hi)) {
-    in.Fail(in.Key("t_ref") + " must be within " + in.Key("temperature_range"));
-  }
+  g.thermal_range_c = ReadTemperatureRange(in, t, bias.t_ref_c);
   g.thermal = std::move(bias);
-  g.thermal_range_c = {lo, hi};
 }
 
 // `sensors.gyroscope`: the model and its parameters (the rest is a record for people).

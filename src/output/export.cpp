@@ -479,6 +479,52 @@ std::optional<double> RawToRadPerSecond(const LoadedCalibration& cal, const Expo
                                         std::string_view format, std::string_view why,
                                         std::string* omitted);  // below, with the estimators'
 
+// PX4's temperature compensation of one sensor, TC_A<n> or TC_G<n> (TemperatureCompensation.cpp
+// with sensor_calibration/Accelerometer.hpp and Gyroscope.hpp): the offsets' polynomial in
+// T - TREF, T held to TMIN..TMAX, taken from the reading before the calibration's offset. X0 = 0
+// and TREF = T_ref, so that the calibration (CAL_ACC, CAL_GYRO) holds the offset at T_ref;
+// X1..X3 = `per_K` in `unit`; PX4 matches the terms to the sensor by TC_<s><n>_ID.
+struct Px4TemperatureTerms {
+  std::string lines, convention, comment;
+};
+Px4TemperatureTerms Px4Temperature(char sensor, int instance, std::optional<std::uint64_t> id,
+                                   double t_ref_c, std::pair<double, double> range_c,
+                                   const std::array<Vec3, 3>& per_K, const char* unit,
+                                   const char* taken_from, const char* calibration) {
+  Px4TemperatureTerms out;
+  const std::string tc = Format("TC_%c%d_", sensor, instance);
+  out.lines = Format("1\t1\tTC_%c_ENABLE\t1\t6\n", sensor);
+  if (id) {
+    out.lines += Format("1\t1\t%sID\t%d\t6\n", tc.c_str(),
+                        static_cast<std::int32_t>(static_cast<std::uint32_t>(*id)));
+  }
+  out.lines += Format("1\t1\t%sTREF\t%.9g\t9\n1\t1\t%sTMIN\t%.9g\t9\n1\t1\t%sTMAX\t%.9g\t9\n",
+                      tc.c_str(), Float32(t_ref_c), tc.c_str(), Float32(range_c.first), tc.c_str(),
+                      Float32(range_c.second));
+  for (int k = 0; k <= 3; ++k) {
+    for (int i = 0; i < 3; ++i) {
+      const double x = k == 0 ? 0.0 : per_K[static_cast<std::size_t>(k - 1)](i);
+      out.lines += Format("1\t1\t%sX%d_%d\t%.9g\t9\n", tc.c_str(), k, i, Float32(x));
+    }
+  }
+  out.convention = Format(
+                       "; TC_%c%d: offset(T) = sum_k X_k (T - TREF)^k in %s, T held to "
+                       "TMIN..TMAX, taken from ",
+                       sensor, instance, unit) +
+                   Format(taken_from, instance) +
+                   Format("; X0 = 0 and TREF = T_ref, so that %s%d holds the calibration at T_ref",
+                          calibration, instance);
+  if (!id) {
+    out.comment = Format(
+        "# TC_%c%d: TC_%c%d_ID is not written (no device id known): PX4 applies these "
+        "temperature terms to no sensor until it is set\n",
+        sensor, instance, sensor, instance);
+    out.convention += Format("; TC_%c%d_ID not written (no device id known): PX4 does not apply it",
+                             sensor, instance);
+  }
+  return out;
+}
+
 // PX4's gyroscope calibration (src/lib/sensor_calibration/Gyroscope): w = raw - offset in rad/s,
 // after its driver's scaling; no scale. offset = b (the still rate), so the scale and
 // misalignment K_g and the g-sensitivity are dropped, and said.
@@ -525,38 +571,17 @@ std::optional<Px4Slot> Px4Gyroscope(const LoadedCalibration& cal, const ExportOp
     // TC_G<n>: the offsets' polynomial in T - TREF taken from the rate before CAL_GYRO's offset
     // (TemperatureCompensation.cpp, sensor_calibration/Gyroscope.hpp), as TC_A: X0 = 0 and TREF
     // = T_ref, so that CAL_GYRO holds the offset at T_ref; T held to TMIN..TMAX.
-    const std::string tc = "TC_G" + std::to_string(options.instance) + "_";
-    const std::optional<std::uint64_t> id = Px4DeviceId(options.gyro_device_id, stream);
-    slot.lines += "1\t1\tTC_G_ENABLE\t1\t6\n";
-    if (id) {
-      slot.lines += Format("1\t1\t%sID\t%d\t6\n", tc.c_str(),
-                           static_cast<std::int32_t>(static_cast<std::uint32_t>(*id)));
+    std::array<Vec3, 3> per_K{Vec3::Zero(), Vec3::Zero(), Vec3::Zero()};
+    for (int k = 1; k <= g.thermal->degree(); ++k) {
+      per_K[static_cast<std::size_t>(k - 1)] =
+          *rad_s * g.thermal->coefficients[static_cast<std::size_t>(k - 1)];
     }
-    slot.lines +=
-        Format("1\t1\t%sTREF\t%.9g\t9\n1\t1\t%sTMIN\t%.9g\t9\n1\t1\t%sTMAX\t%.9g\t9\n", tc.c_str(),
-               Float32(g.thermal->t_ref_c), tc.c_str(), Float32(g.thermal_range_c.first),
-               tc.c_str(), Float32(g.thermal_range_c.second));
-    for (int k = 0; k <= 3; ++k) {
-      for (int i = 0; i < 3; ++i) {
-        const double x = k == 0 || k > g.thermal->degree()
-                             ? 0.0
-                             : *rad_s * g.thermal->coefficients[static_cast<std::size_t>(k - 1)](i);
-        slot.lines += Format("1\t1\t%sX%d_%d\t%.9g\t9\n", tc.c_str(), k, i, Float32(x));
-      }
-    }
-    slot.convention += Format(
-        "; TC_G%d: offset(T) = sum_k X_k (T - TREF)^k in rad/s, T held to TMIN..TMAX, taken from "
-        "the rate before CAL_GYRO%d's offset; X0 = 0 and TREF = T_ref, so that CAL_GYRO holds "
-        "the offset at T_ref",
-        options.instance, options.instance);
-    if (!id) {
-      slot.comment += Format(
-          "# TC_G%d: TC_G%d_ID is not written (no device id known): PX4 applies these temperature "
-          "terms to no sensor until it is set\n",
-          options.instance, options.instance);
-      slot.convention += Format(
-          "; TC_G%d_ID not written (no device id known): PX4 does not apply it", options.instance);
-    }
+    const Px4TemperatureTerms tc = Px4Temperature(
+        'G', options.instance, Px4DeviceId(options.gyro_device_id, stream), g.thermal->t_ref_c,
+        g.thermal_range_c, per_K, "rad/s", "the rate before CAL_GYRO%d's offset", "CAL_GYRO");
+    slot.lines += tc.lines;
+    slot.convention += tc.convention;
+    slot.comment += tc.comment;
   }
   out->gyroscope_included = true;
   out->gyroscope_dropped =
@@ -617,36 +642,13 @@ ExportResult Px4(const LoadedCalibration& cal, const ExportOptions& options) {
   // CAL_ACC's offset (TemperatureCompensation.cpp, sensor_calibration/Accelerometer.hpp), zero at
   // TREF so that CAL_ACC holds the offset at T_ref; PX4 matches it to the sensor by TC_A<n>_ID.
   const OffsetPolynomial poly = OffsetsOverTemperature(cal);
-  const std::string tc = "TC_A" + std::to_string(options.instance) + "_";
-  const std::optional<std::uint64_t> id = Px4DeviceId(options.device_id, stream);
-  out.text += "1\t1\tTC_A_ENABLE\t1\t6\n";
-  if (id) {
-    out.text += Format("1\t1\t%sID\t%d\t6\n", tc.c_str(),
-                       static_cast<std::int32_t>(static_cast<std::uint32_t>(*id)));
-  }
-  out.text += Format("1\t1\t%sTREF\t%.9g\t9\n1\t1\t%sTMIN\t%.9g\t9\n1\t1\t%sTMAX\t%.9g\t9\n",
-                     tc.c_str(), Float32(poly.t_ref_c), tc.c_str(), Float32(poly.t_min_c),
-                     tc.c_str(), Float32(poly.t_max_c));
-  for (int k = 0; k <= 3; ++k) {
-    for (int i = 0; i < 3; ++i) {
-      const double x = k == 0 ? 0.0 : raw_ms2 * poly.b[static_cast<std::size_t>(k)](i);
-      out.text += Format("1\t1\t%sX%d_%d\t%.9g\t9\n", tc.c_str(), k, i, Float32(x));
-    }
-  }
-  out.convention += Format(
-      "; TC_A%d: offset(T) = sum_k X_k (T - TREF)^k in m/s2, T held to TMIN..TMAX, taken from "
-      "the reading before CAL_ACC%d's offset and scale; X0 = 0 and TREF = T_ref, so that CAL_ACC "
-      "holds the calibration at T_ref",
-      options.instance, options.instance);
-  if (!id) {
-    const std::string said = Format(
-        "# TC_A%d: TC_A%d_ID is not written (no device id known): PX4 applies these temperature "
-        "terms to no sensor until it is set\n",
-        options.instance, options.instance);
-    out.text.insert(out.text.find("#\n# Vehicle-Id"), said);
-    out.convention += Format("; TC_A%d_ID not written (no device id known): PX4 does not apply it",
-                             options.instance);
-  }
+  const Px4TemperatureTerms tc = Px4Temperature(
+      'A', options.instance, Px4DeviceId(options.device_id, stream), poly.t_ref_c,
+      {poly.t_min_c, poly.t_max_c}, {raw_ms2 * poly.b[1], raw_ms2 * poly.b[2], raw_ms2 * poly.b[3]},
+      "m/s2", "the reading before CAL_ACC%d's offset and scale", "CAL_ACC");
+  out.text += tc.lines;
+  out.convention += tc.convention;
+  if (!tc.comment.empty()) out.text.insert(out.text.find("#\n# Vehicle-Id"), tc.comment);
   out.loss =
       MeasureLoss(cal, d.correction, d.dropped, false, [poly](double t_c) { return poly.At(t_c); });
   return out;

@@ -734,6 +734,10 @@ int accelcal::cli::RunCommandLine(int argc, char** argv) {
       }
       CheckGyroFlags(*calibrate, cal.gyro, cal.gyro_columns,
                      {"--gyro-units", "--gyro-model", "--gyro-estimator", "--gyro-thermal"});
+      if (calibrate->count("--gyro-thermal") > 0 && cal.gyro_thermal.empty()) {
+        throw accelcal::cli::UsageError(
+            "--gyro-thermal: '' is neither auto nor a degree from 0 to 3");
+      }
       cal.given_options = GivenOptions(*calibrate, {"output", "report", "json", "date"});
       cal.date_given = calibrate->count("--date") > 0;
       return RunCalibrate(cal);

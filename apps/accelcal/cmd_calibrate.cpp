@@ -310,6 +310,10 @@ GyroCalibrationOptions GyroOptions(const CalibrateArgs& args) {
                          std::to_string(kMaxThermalDegree));
       }
       o.thermal->degree = d[0] - '0';
+    } else if (!args.cross_validate) {
+      throw UsageError(
+          "--gyro-thermal auto (the default with --thermal) decides on held-out error: it needs "
+          "the cross-validation that --no-crossval turns off; give --gyro-thermal 0 to 3");
     }
   }
   if (args.gyro_model != "auto") {
@@ -407,8 +411,9 @@ void PrintGyro(const GyroRun& run, const std::string& raw_unit, const char* forc
       g.accelerometer ? Format(", accelerometer %.3g", g.accel_scatter_ratio).c_str() : "");
   if (const std::optional<GyroThermal>& t = g.thermal) {
     Say("  offsets over temperature  b(T) = b + sum_d b_d (T - T_ref)^d, T_ref %.6g degC, "
-        "positions at %.4g to %.4g degC: degree %d (%s)\n",
-        t->bias.t_ref_c, t->range_c.first, t->range_c.second, t->bias.degree(), t->reason.c_str());
+        "positions at %.4g to %.4g degC (%s): degree %d (%s)\n",
+        t->bias.t_ref_c, t->range_c.first, t->range_c.second,
+        internal::VisibleLine(t->temperature_source).c_str(), t->bias.degree(), t->reason.c_str());
     for (int d = 1; d <= t->bias.degree(); ++d) {
       const Vec3& b = t->bias.coefficients[static_cast<std::size_t>(d - 1)];
       std::string line = Format("    b_%d ", d);

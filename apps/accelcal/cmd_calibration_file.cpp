@@ -65,9 +65,17 @@ int RunApply(const ApplyArgs& args) {
   // accelerometer's at the same sample.
   const std::optional<GyroThermalBias>& gyro_bias =
       gyro ? cal.gyroscope->thermal : std::optional<GyroThermalBias>();
-  const bool gyro_own_t = gyro && rates.raw.temperature_c.size() == rates.raw.samples.size();
-  const bool gyro_thermal = gyro_bias && gyro_bias->degree() > 0 &&
-                            (gyro_own_t || log.temperature_c.size() == log.samples.size());
+  const std::string gyro_t_source = gyro ? GyroTemperatureSource(rates.raw, log) : "";
+  const bool gyro_own_t = gyro_t_source.rfind("the gyroscope's", 0) == 0;
+  const bool gyro_thermal = gyro_bias && gyro_bias->degree() > 0 && !gyro_t_source.empty();
+  if (gyro_thermal && !cal.gyroscope->thermal_source.empty() &&
+      cal.gyroscope->thermal_source != gyro_t_source) {
+    Warn(
+        "%s: the gyroscope's offsets over temperature were fitted at the temperatures of %s, and "
+        "these rates are corrected at those of %s: one die may run warmer than the other\n",
+        args.calibration.c_str(), VisibleLine(cal.gyroscope->thermal_source).c_str(),
+        VisibleLine(gyro_t_source).c_str());
+  }
   {
     LoadedCalibration said = cal;
     if (thermal) said.thermal.reset();
@@ -129,8 +137,8 @@ int RunApply(const ApplyArgs& args) {
   }
   if (gyro_thermal) {
     file.Write("# gyroscope temperature: each rate's offsets at its own (" +
-               VisibleLine(gyro_own_t ? rates.raw.temperature_source : log.temperature_source) +
-               "), held to " + FormatNumber(cal.gyroscope->thermal_range_c.first) + " .. " +
+               VisibleLine(gyro_t_source) + "), held to " +
+               FormatNumber(cal.gyroscope->thermal_range_c.first) + " .. " +
                FormatNumber(cal.gyroscope->thermal_range_c.second) + " degC\n");
   }
   if (gyro_held > 0) {

@@ -184,6 +184,7 @@ struct LoadedCalibration {
     /// temperatures they were fitted over, to which they are held.
     std::optional<GyroThermalBias> thermal;
     std::pair<double, double> thermal_range_c{0, 0};
+    std::string thermal_source;  ///< `thermal.temperature_source`, when present
   };
   std::optional<Gyroscope> gyroscope;
   bool has_gyroscope() const { return gyroscope.has_value(); }

@@ -93,7 +93,9 @@ struct GyroThermalOptions {
   /// by the still positions' held-out mean rates, as SelectThermalDegrees chooses the
   /// accelerometer's.
   std::optional<int> degree;
-  double t_ref_c = 0;  ///< T_ref [°C]: the accelerometer's, so that one file has one
+  /// T_ref [°C]: the accelerometer's, so that one file has one; when it lies outside the still
+  /// positions' temperatures (the gyroscope's die warmer), their mean instead, and said.
+  double t_ref_c = 0;
 };
 
 struct GyroCalibrationOptions {
@@ -180,6 +182,9 @@ struct GyroThermal {
   GyroThermalBias bias;                ///< degree 0 (no coefficients) when chosen so
   std::vector<double> temperatures_c;  ///< each still position's mean temperature [°C]
   std::pair<double, double> range_c;   ///< the still positions' lowest and highest [°C]
+  /// Whose temperature the rates were taken at: "the gyroscope's log: " or "the accelerometer's
+  /// log: " and the log's RawLog::temperature_source (GyroTemperatureSource).
+  std::string temperature_source;
   /// Why this degree ("given", or each step's held-out and Wald evidence).
   std::string reason;
   /// The still means' scatter about the polynomial over their sample noise, √(χ²/(3(n − p)))
@@ -224,6 +229,11 @@ struct GyroCalibration {
   /// this calibration is at its T_ref, and still_spans' mean_raw have them taken out.
   std::optional<GyroThermal> thermal;
 };
+
+/// Whose temperature each rate of `gyro` is taken at (the gyroscope's own where it has one, else
+/// the accelerometer's at the same sample): "the gyroscope's log: …" or "the accelerometer's log:
+/// …" with the log's temperature_source; empty when neither has one.
+std::string GyroTemperatureSource(const RawLog& gyro, const RawLog& accel);
 
 /// Throws DataError unless `gyro` holds a rate sample at each sample of `accel` (the same count,
 /// times within half the typical step): the two streams of one clock; and when its readings are

@@ -586,6 +586,19 @@ double RmsDeg(const std::vector<double>& rad) {
 
 }  // namespace
 
+std::string GyroTemperatureSource(const RawLog& gyro, const RawLog& accel) {
+  const auto has = [](const RawLog& log) {
+    if (log.temperature_c.size() != log.samples.size()) return false;
+    for (double t : log.temperature_c) {
+      if (std::isfinite(t)) return true;
+    }
+    return false;
+  };
+  if (has(gyro)) return "the gyroscope's log: " + gyro.temperature_source;
+  if (has(accel)) return "the accelerometer's log: " + accel.temperature_source;
+  return "";
+}
+
 // The two streams must be one clock: a gyro sample at each accelerometer sample's time.
 void CheckGyroClock(const RawLog& accel, const RawLog& gyro) {
   if (gyro.samples.size() != accel.samples.size()) {
@@ -764,6 +777,7 @@ GyroCalibration CalibrateGyro(const RawLog& accel, const RawLog& raw_gyro,
     }
     thermal = internal::FitGyroThermal(as_read.data.stills, position_t_c, *options.thermal,
                                        model != GyroModelKind::kLinear);
+    thermal->temperature_source = GyroTemperatureSource(raw_gyro, accel);
     corrected = raw_gyro;
     for (std::size_t k = 0; k < corrected.samples.size(); ++k) {
       corrected.samples[k] -= thermal->bias.OffsetChange(t_c[k]);

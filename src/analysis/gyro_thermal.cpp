@@ -173,13 +173,25 @@ GyroThermal FitGyroThermal(const std::vector<GyroStill>& stills,
   }
   GyroThermal out;
   out.temperatures_c = temperatures_c;
-  out.bias.t_ref_c = options.t_ref_c;
   const auto [lo, hi] = std::minmax_element(temperatures_c.begin(), temperatures_c.end());
   out.range_c = {*lo, *hi};
+  // T_ref within the temperatures fitted over (the gyro's die may run warmer than the
+  // accelerometer's whose T_ref is asked for): else their mean, and said.
+  out.bias.t_ref_c = options.t_ref_c;
+  std::string moved;
+  if (!(options.t_ref_c >= *lo && options.t_ref_c <= *hi)) {
+    double sum = 0;
+    for (double t : temperatures_c) sum += t;
+    out.bias.t_ref_c = sum / static_cast<double>(temperatures_c.size());
+    moved = Format(
+        "; T_ref %.4g degC, the mean of its still positions' temperatures, as %.4g degC "
+        "lies outside them",
+        out.bias.t_ref_c, options.t_ref_c);
+  }
   std::vector<double> dT;
   double scale = 0;
   for (double t : temperatures_c) {
-    dT.push_back(t - options.t_ref_c);
+    dT.push_back(t - out.bias.t_ref_c);
     scale = std::max(scale, std::abs(dT.back()));
   }
   const double span = *hi - *lo;
@@ -187,9 +199,19 @@ GyroThermal FitGyroThermal(const std::vector<GyroStill>& stills,
       "the gyroscope's %zu still positions, whose temperatures span %.3g K (%.4g to %.4g "
       "degC)",
       stills.size(), span, *lo, *hi);
+  const auto set = [&](const DegreeFit& fit) {
+    out.bias.coefficients = fit.b;
+    out.scatter_ratio = fit.dof > 0 ? std::sqrt(fit.chi2 / fit.dof) : 1.0;
+    const double inflate = std::max(1.0, out.scatter_ratio);
+    out.bias.covariance = inflate * inflate * fit.covariance;
+    if (fit.validated) out.heldout_rms_raw = Rms(fit.heldout_raw);
+  };
   if (!(span >= kMinSpan_K) || options.degree == 0) {
+    if (std::optional<DegreeFit> constant = FitDegree(stills, dT, 1.0, 0, g_sensitivity)) {
+      set(*constant);  // the still means' scatter about constant offsets
+    }
     if (options.degree == 0) {
-      out.reason = "given";
+      out.reason = "given" + moved;
       return out;
     }
     if (options.degree) {
@@ -198,16 +220,10 @@ GyroThermal FitGyroThermal(const std::vector<GyroStill>& stills,
                       "need " +
                       Format("%.3g", kMinSpan_K) + " K at least");
     }
-    out.reason = what + Format(": too narrow a span to see a change (under %.3g K)", kMinSpan_K);
+    out.reason =
+        what + Format(": too narrow a span to see a change (under %.3g K)", kMinSpan_K) + moved;
     return out;
   }
-  const auto set = [&](const DegreeFit& fit) {
-    out.bias.coefficients = fit.b;
-    out.scatter_ratio = fit.dof > 0 ? std::sqrt(fit.chi2 / fit.dof) : 1.0;
-    const double inflate = std::max(1.0, out.scatter_ratio);
-    out.bias.covariance = inflate * inflate * fit.covariance;
-    if (fit.validated) out.heldout_rms_raw = Rms(fit.heldout_raw);
-  };
   if (options.degree) {
     const std::optional<DegreeFit> fit =
         FitDegree(stills, dT, scale, *options.degree, g_sensitivity);
@@ -219,7 +235,7 @@ GyroThermal FitGyroThermal(const std::vector<GyroStill>& stills,
                                     g_sensitivity ? " beside the g-sensitivity" : ""));
     }
     set(*fit);
-    out.reason = "given";
+    out.reason = "given" + moved;
     return out;
   }
   // Chosen from 0 up, as SelectThermalDegrees chooses the accelerometer's degrees.
@@ -263,7 +279,7 @@ GyroThermal FitGyroThermal(const std::vector<GyroStill>& stills,
   set(*current);
   out.reason =
       Format("degree %d chosen by the still positions' held-out mean rates", current->degree) +
-      steps;
+      steps + moved;
   return out;
 }
 

@@ -373,6 +373,7 @@ ordered_json GyroscopeSection(const GyroCalibration& g, const CalibrationFileInf
          "temperature, the rest of the model at t_ref; coefficients[d-1] in raw per K^d, T held "
          "to temperature_range"},
         {"t_ref", t.bias.t_ref_c},
+        {"temperature_source", t.temperature_source},
         {"degree", degree},
         {"degree_reason", t.reason},
         {"temperature_range", {t.range_c.first, t.range_c.second}},

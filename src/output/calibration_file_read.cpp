@@ -508,6 +508,7 @@ void ReadGyroThermal(const Reader& r, const ordered_json& doc, LoadedCalibration
     bias.covariance = ReadSquareCovariance(in, t, 3 * degree, "the offsets' coefficients");
   }
   g.thermal_range_c = ReadTemperatureRange(in, t, bias.t_ref_c);
+  if (t.contains("temperature_source")) g.thermal_source = in.Text(t, "temperature_source");
   g.thermal = std::move(bias);
 }
 

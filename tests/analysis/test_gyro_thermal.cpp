@@ -100,6 +100,21 @@ TEST(GyroThermal, MonteCarloCoverageAndDegree) {
   EXPECT_GE(chose_zero_when_none, runs * 95 / 100) << chose_zero_when_none;
 }
 
+// Found by a hostile test: a gyroscope whose die runs warmer than the accelerometer's, whose T_ref
+// was outside the gyro's range, wrote a file its readers refused. T_ref moves to the stills' mean.
+TEST(GyroThermal, TRefOutsideTheStillsTemperaturesMovesToTheirMean) {
+  const Ramp r = MakeRamp(kB1, Vec3::Zero(), Mat33::Zero(), nullptr);
+  GyroThermalOptions options;
+  options.t_ref_c = 60;
+  const GyroThermal fit = FitGyroThermal(r.stills, r.t_c, options, true);
+  EXPECT_DOUBLE_EQ(fit.bias.t_ref_c, 27.5);
+  EXPECT_NE(fit.reason.find("as 60 degC lies outside them"), std::string::npos) << fit.reason;
+  EXPECT_LT((fit.bias.coefficients.at(0) - kB1).norm(), 1e-12);
+  // Degree 0 given: the still means' scatter about constant offsets, not a placeholder.
+  options.degree = 0;
+  EXPECT_GT(FitGyroThermal(r.stills, r.t_c, options, true).scatter_ratio, 10);  // 13.8
+}
+
 TEST(GyroThermal, WhatDoesNotDetermineIt) {
   Ramp r = MakeRamp(kB1, Vec3::Zero(), Mat33::Zero(), nullptr);
   GyroThermalOptions options;

@@ -547,6 +547,20 @@ TEST_F(ThermalCli, GyroscopeOffsetsOverTemperature) {
     EXPECT_EQ(p.at(Format("TC_G0_X2_%d", a)), 0);
     EXPECT_EQ(f32(p.at(Format("CAL_GYRO0_%cOFF", "XYZ"[a]))), f32(g["bias"][a].get<double>()));
   }
+  // What it refuses (found by a hostile test: an empty degree, and an automatic one without the
+  // cross-validation, were taken).
+  for (const auto& [options, message] : std::vector<std::pair<std::string, std::string>>{
+           {" --gyro-thermal ''", "--gyro-thermal: '' is neither auto nor a degree"},
+           {" --gyro-thermal 4", "--gyro-thermal: '4' is neither auto nor a degree from 0 to 3"},
+           {" --no-crossval --gyro-model linear", "--gyro-thermal auto (the default with"},
+           {" --gyro-estimator joint", "--gyro-estimator joint refits the accelerometer's"},
+       }) {
+    const test::CliRun refused =
+        Exec("calibrate " + log + " --thermal 1,1 --gyro " + log + options);
+    EXPECT_EQ(refused.status, 2) << options << ": " << refused.err;
+    EXPECT_NE(refused.err.find(message), std::string::npos) << options << ": " << refused.err;
+  }
+  EXPECT_EQ(g["thermal"]["temperature_source"], "the gyroscope's log: sensor_gyro.temperature");
   const test::CliRun kalibr = Exec("export " + Path("cal.json") + " --to kalibr");
   ASSERT_EQ(kalibr.status, 0) << kalibr.err;
   EXPECT_NE(kalibr.err.find("the offsets' change with temperature (degree 1 about T_ref"),

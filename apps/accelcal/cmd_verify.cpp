@@ -61,6 +61,28 @@ nlohmann::ordered_json ParametersJson(const std::vector<VerifiedParameter>& para
   return list;
 }
 
+// The calibration under test, as its file holds it (its thermal terms, when it has them).
+VerifiedCalibration UnderTest(const LoadedCalibration& cal, const std::string& path) {
+  VerifiedCalibration under_test;
+  under_test.model = cal.model;
+  under_test.frame = cal.frame;
+  under_test.params = cal.params;
+  under_test.covariance = cal.covariance;
+  under_test.gravity = cal.gravity;
+  under_test.misfit_sigma_raw = MisfitSigma(cal);
+  if (cal.thermal) {
+    under_test.thermal.emplace(cal.thermal->params);
+    under_test.covariance = cal.thermal->covariance;  // of the thermal coefficients
+    if (under_test.covariance.size() == 0) {
+      throw InputError(path, 0,
+                       "holds no covariance of its thermal coefficients: verify predicts the "
+                       "error from it; calibrate again");
+    }
+    if (cal.thermal_range_c) under_test.thermal_range_c = *cal.thermal_range_c;
+  }
+  return under_test;
+}
+
 }  // namespace
 
 int RunVerify(const VerifyArgs& args) {
@@ -71,17 +93,12 @@ int RunVerify(const VerifyArgs& args) {
   const LoadedCalibration cal = ParseCalibrationJson(
       ReadFileToString(args.calibration, kMaxSmallFileBytes), args.calibration);
   RefuseFailed(cal, args.calibration);
-  if (cal.thermal) {
-    // One set of parameters judged against a log recorded at another temperature would fail a
-    // good calibration (or pass a bad one at T_ref): not done until verify follows temperature.
-    throw InputError(
-        args.calibration, 0,
-        Format("its parameters follow temperature (degrees %s, T_ref %.6g degC): "
-               "verify checks one set of parameters against the log, and does not "
-               "yet take each position at its own temperature",
-               cal.thermal->params.degrees.ToString().c_str(), cal.thermal->params.t_ref_c));
+  {  // parameters over temperature are followed (each position at its own); a drift is not
+    LoadedCalibration said = cal;
+    said.thermal.reset();
+    said.gyroscope.reset();
+    WarnVaryingNotUsed(said, args.calibration, "verified");
   }
-  WarnVaryingNotUsed(cal, args.calibration, "verified");
   // The prediction needs the calibration's uncertainty: without it every good calibration of a
   // real sensor would fail (its parameters taken as exact, its misfit as none).
   const std::string method = cal.solver.method.empty() ? "?" : cal.solver.method;
@@ -114,13 +131,7 @@ int RunVerify(const VerifyArgs& args) {
                          " (the scatter of its turns or still rates over their rate noise): "
                          "verify predicts their error from it; calibrate again");
   }
-  VerifiedCalibration under_test;
-  under_test.model = cal.model;
-  under_test.frame = cal.frame;
-  under_test.params = cal.params;
-  under_test.covariance = cal.covariance;
-  under_test.gravity = cal.gravity;
-  under_test.misfit_sigma_raw = MisfitSigma(cal);
+  VerifiedCalibration under_test = UnderTest(cal, args.calibration);
   std::string gravity_origin = "the calibration's";
   if (args.gravity.gravity_ms2 || args.gravity.latitude_deg) {
     GravityArgs site = args.gravity;
@@ -138,8 +149,24 @@ int RunVerify(const VerifyArgs& args) {
   const Verification v = VerifyCalibration(under_test, data.raw, positions);
   std::optional<GyroVerification> gv;
   if (gyro) {
-    const InputData rates = ReadGyroLog(args.input, args.gyro, args.gyro_columns, false);
+    InputData rates = ReadGyroLog(args.input, args.gyro, args.gyro_columns, false);
     CheckGyroClock(data.raw, rates.raw);
+    // Offsets over temperature: taken out of each rate at its temperature, as calibrate did.
+    if (const std::optional<GyroThermalBias>& b = cal.gyroscope->thermal; b && b->degree() > 0) {
+      const std::string source = GyroTemperatureSource(rates.raw, data.raw);
+      if (!cal.gyroscope->thermal_source.empty() && source != cal.gyroscope->thermal_source) {
+        Warn(
+            "%s: the gyroscope's offsets over temperature were fitted at the temperatures of %s, "
+            "and these rates are verified at those of %s\n",
+            args.calibration.c_str(), VisibleLine(cal.gyroscope->thermal_source).c_str(),
+            VisibleLine(source).c_str());
+      }
+      const std::vector<double> t_c = GyroSampleTemperatures(rates.raw, data.raw);
+      const auto [lo, hi] = cal.gyroscope->thermal_range_c;
+      for (std::size_t k = 0; k < t_c.size(); ++k) {
+        rates.raw.samples[k] -= b->OffsetChange(std::clamp(t_c[k], lo, hi));
+      }
+    }
     VerifiedGyroscope g;
     g.model = cal.gyroscope->model;
     g.params = cal.gyroscope->params;
@@ -188,6 +215,7 @@ int RunVerify(const VerifyArgs& args) {
                       {"t_begin_s", p.t_begin_s},
                       {"t_end_s", p.t_end_s},
                       {"samples", p.samples},
+                      {"temperature", NumberOrNull(p.temperature_c)},
                       {"mean_raw", {p.mean_raw(0), p.mean_raw(1), p.mean_raw(2)}},
                       {"error", NumberOrNull(p.error)},
                       {"sigma", NumberOrNull(p.sigma)},
@@ -243,6 +271,13 @@ int RunVerify(const VerifyArgs& args) {
         "covariance, each position's noise, its own misfit (%.3g raw); g = %.9g %s (%s)\n",
         unit.c_str(), under_test.misfit_sigma_raw, under_test.gravity, unit.c_str(),
         gravity_origin.c_str());
+    if (under_test.thermal) {
+      out += Format(
+          "# each position judged at its own temperature (degrees %s about T_ref %.6g degC, held "
+          "to %.6g .. %.6g degC)\n",
+          under_test.thermal->degrees.ToString().c_str(), under_test.thermal->t_ref_c,
+          under_test.thermal_range_c.first, under_test.thermal_range_c.second);
+    }
     out += "position  t_begin_s  t_end_s  samples  error  sigma  z\n";
     for (std::size_t k = 0; k < v.positions.size(); ++k) {
       const VerifiedPosition& p = v.positions[k];

@@ -230,6 +230,12 @@ struct GyroCalibration {
   std::optional<GyroThermal> thermal;
 };
 
+/// Each rate sample's temperature [°C]: the gyro log's where it has one, else the
+/// accelerometer's (the same clock, one sample each); a sample with neither takes the line
+/// between its nearest neighbours that have one (held beyond the first and the last). Throws
+/// DataError when no sample of either log has a temperature.
+std::vector<double> GyroSampleTemperatures(const RawLog& gyro, const RawLog& accel);
+
 /// Whose temperature each rate of `gyro` is taken at (the gyroscope's own where it has one, else
 /// the accelerometer's at the same sample): "the gyroscope's log: …" or "the accelerometer's log:
 /// …" with the log's temperature_source; empty when neither has one.

@@ -30,6 +30,7 @@
 #include "accelcal/log_reader.hpp"
 #include "accelcal/model.hpp"
 #include "accelcal/positions.hpp"
+#include "accelcal/thermal.hpp"
 
 namespace accelcal {
 
@@ -44,6 +45,12 @@ struct VerifiedCalibration {
   /// The scatter of its own position means beyond their noise [raw, 1σ per axis] (see the file
   /// comment); 0 when none.
   double misfit_sigma_raw = 0;
+  /// Parameters that follow temperature (thermal.hpp, the x-first frame): each position is judged
+  /// at θ(T_k), its mean temperature held to `thermal_range_c`, and `covariance` is then that of
+  /// the thermal flat vector (ThermalSlots order), whose Jacobian at T_k is the model's times
+  /// ΔT_k^d per slot; `params` is θ(T_ref).
+  std::optional<ThermalParameters> thermal;
+  std::pair<double, double> thermal_range_c{kTemperatureRange_C[0], kTemperatureRange_C[1]};
 };
 
 struct VerifyOptions {
@@ -71,6 +78,8 @@ struct VerifiedPosition {
   Vec3 mean_raw = Vec3::Zero();
   std::size_t samples = 0;
   double t_begin_s = 0, t_end_s = 0;
+  /// The temperature it was judged at [°C] (a calibration that follows temperature; NaN else).
+  double temperature_c = std::nan("");
   /// |f| − g [the calibration's unit]; NaN where the model cannot invert the reading.
   double error = 0;
   /// The predicted 1σ of `error` and its parts: the parameters', the mean's noise, the misfit.
@@ -90,7 +99,8 @@ struct Verification {
   std::string reason;
   /// Positions (0-based) beyond VerifyOptions::position_z.
   std::vector<std::size_t> off_positions;
-  std::vector<VerifiedParameter> parameters;  ///< in ParameterSlots(model, frame) order
+  /// In ParameterSlots(model, frame) order; ThermalSlots' for a calibration over temperature.
+  std::vector<VerifiedParameter> parameters;
   /// The parameters the log cannot test (VerifyOptions::untested_sigmas): a pass says nothing of
   /// them (positions that excite them are missing).
   std::vector<std::string> untested;

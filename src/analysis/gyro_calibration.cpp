@@ -768,7 +768,7 @@ GyroCalibration CalibrateGyro(const RawLog& accel, const RawLog& raw_gyro,
           "constants; with the offsets over temperature use the two-stage one");
     }
     const Built as_read = BuildData(accel, raw_gyro, positions, accel_cal, options);
-    const std::vector<double> t_c = internal::SampleTemperatures(raw_gyro, accel);
+    const std::vector<double> t_c = GyroSampleTemperatures(raw_gyro, accel);
     std::vector<double> position_t_c;
     for (const StaticInterval& run : as_read.still_runs) {
       double sum = 0;

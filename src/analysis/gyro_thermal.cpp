@@ -122,42 +122,6 @@ double Rms(const std::vector<double>& e) {
 
 }  // namespace
 
-std::vector<double> SampleTemperatures(const RawLog& gyro, const RawLog& accel) {
-  const std::vector<double>* own = Temperatures(gyro);
-  const std::vector<double>* other =
-      accel.samples.size() == gyro.samples.size() ? Temperatures(accel) : nullptr;
-  if (own == nullptr && other == nullptr) {
-    throw DataError("neither the gyroscope's log " + gyro.source + " nor the accelerometer's " +
-                    accel.source +
-                    " has a temperature at its samples: the gyroscope's offsets over "
-                    "temperature are fitted to its readings at theirs");
-  }
-  std::vector<double> t(gyro.samples.size(), std::nan(""));
-  for (std::size_t k = 0; k < t.size(); ++k) {
-    if (own != nullptr && std::isfinite((*own)[k])) {
-      t[k] = (*own)[k];
-    } else if (other != nullptr && std::isfinite((*other)[k])) {
-      t[k] = (*other)[k];
-    }
-  }
-  // The gaps: the line between the samples on either side, held beyond the ends.
-  std::size_t last = t.size();  // the last sample with a temperature, none yet
-  for (std::size_t k = 0; k < t.size(); ++k) {
-    if (!std::isfinite(t[k])) continue;
-    if (last == t.size()) {
-      for (std::size_t j = 0; j < k; ++j) t[j] = t[k];
-    } else {
-      for (std::size_t j = last + 1; j < k; ++j) {
-        const double w = static_cast<double>(j - last) / static_cast<double>(k - last);
-        t[j] = (1 - w) * t[last] + w * t[k];
-      }
-    }
-    last = k;
-  }
-  for (std::size_t j = last + 1; j < t.size(); ++j) t[j] = t[last];
-  return t;
-}
-
 GyroThermal FitGyroThermal(const std::vector<GyroStill>& stills,
                            const std::vector<double>& temperatures_c,
                            const GyroThermalOptions& options, bool g_sensitivity) {
@@ -284,3 +248,43 @@ GyroThermal FitGyroThermal(const std::vector<GyroStill>& stills,
 }
 
 }  // namespace accelcal::internal
+
+namespace accelcal {
+
+std::vector<double> GyroSampleTemperatures(const RawLog& gyro, const RawLog& accel) {
+  const std::vector<double>* own = internal::Temperatures(gyro);
+  const std::vector<double>* other =
+      accel.samples.size() == gyro.samples.size() ? internal::Temperatures(accel) : nullptr;
+  if (own == nullptr && other == nullptr) {
+    throw DataError("neither the gyroscope's log " + gyro.source + " nor the accelerometer's " +
+                    accel.source +
+                    " has a temperature at its samples: the gyroscope's offsets over "
+                    "temperature are fitted to its readings at theirs");
+  }
+  std::vector<double> t(gyro.samples.size(), std::nan(""));
+  for (std::size_t k = 0; k < t.size(); ++k) {
+    if (own != nullptr && std::isfinite((*own)[k])) {
+      t[k] = (*own)[k];
+    } else if (other != nullptr && std::isfinite((*other)[k])) {
+      t[k] = (*other)[k];
+    }
+  }
+  // The gaps: the line between the samples on either side, held beyond the ends.
+  std::size_t last = t.size();  // the last sample with a temperature, none yet
+  for (std::size_t k = 0; k < t.size(); ++k) {
+    if (!std::isfinite(t[k])) continue;
+    if (last == t.size()) {
+      for (std::size_t j = 0; j < k; ++j) t[j] = t[k];
+    } else {
+      for (std::size_t j = last + 1; j < k; ++j) {
+        const double w = static_cast<double>(j - last) / static_cast<double>(k - last);
+        t[j] = (1 - w) * t[last] + w * t[k];
+      }
+    }
+    last = k;
+  }
+  for (std::size_t j = last + 1; j < t.size(); ++j) t[j] = t[last];
+  return t;
+}
+
+}  // namespace accelcal

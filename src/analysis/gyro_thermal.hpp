@@ -9,12 +9,6 @@
 
 namespace accelcal::internal {
 
-/// Each sample's temperature [°C]: the gyro log's where it has one, else the accelerometer's
-/// (the same clock, one sample each); a sample with neither takes the line between its nearest
-/// neighbours that have one (held beyond the first and the last). Throws DataError when no sample
-/// of either log has a temperature.
-std::vector<double> SampleTemperatures(const RawLog& gyro, const RawLog& accel);
-
 /// b_g(T) fitted to `stills` (mean rates, their σ, their specific force) at `temperatures_c` (one
 /// per still) by weighted least squares, per axis, beside a constant bias and, with
 /// `g_sensitivity`, the three G terms of the axis. The degree is options.degree or, without one,

@@ -33,6 +33,21 @@ Eigen::MatrixXd ModelJacobian(const std::vector<ParameterSlot>& slots, const Vec
   return J;
 }
 
+// The parameters position k is judged with: θ(T_k), its temperature held to the fitted range,
+// for a calibration over temperature (with ΔT = T_k − T_ref in `dT`); else the calibration's.
+ModelParameters ParametersAt(const VerifiedCalibration& cal, const Position& position,
+                             std::size_t k, double* dT = nullptr) {
+  if (!cal.thermal) return cal.params;
+  if (!position.temperature_c) {
+    throw DataError("position " + std::to_string(k + 1) +
+                    " has no temperature, which the calibration's parameters follow");
+  }
+  const double t =
+      std::clamp(*position.temperature_c, cal.thermal_range_c.first, cal.thermal_range_c.second);
+  if (dT != nullptr) *dT = t - cal.thermal->t_ref_c;
+  return cal.thermal->At(t);
+}
+
 void CheckOptions(const VerifyOptions& options) {
   if (!(options.significance > 0 && options.significance < 1) || !(options.position_z > 0) ||
       !(options.untested_sigmas > 0)) {
@@ -87,7 +102,8 @@ GyroVerification VerifyGyroscope(const VerifiedCalibration& accel, const Verifie
   accel_cal.params = accel.params;
   accel_cal.gravity = accel.gravity;
   for (std::size_t k = 0; k < positions.size(); ++k) {
-    const std::optional<Vec3> f = SpecificForce(accel.params, positions[k].mean);
+    const std::optional<Vec3> f =
+        SpecificForce(ParametersAt(accel, positions[k], k), positions[k].mean);
     if (!f || !(f->norm() > 0)) {
       throw DataError("still position " + std::to_string(k + 1) +
                       " reads outside the range the accelerometer's model can invert");
@@ -256,7 +272,21 @@ Verification VerifyCalibration(const VerifiedCalibration& cal, const RawLog& log
         "VerifyCalibration: gravity must be positive and the misfit not negative");
   }
   const std::vector<ParameterSlot>& slots = ParameterSlots(cal.model, cal.frame);
-  const auto P = static_cast<Eigen::Index>(slots.size());
+  // Over temperature: the thermal slots, each the model slot it moves (column) and its power.
+  std::vector<ThermalSlot> thermal_slots;
+  std::vector<Eigen::Index> model_column;
+  if (cal.thermal) {
+    if (cal.frame != Frame::kXFirst) {
+      throw std::invalid_argument("VerifyCalibration: a thermal model is in the x-first frame");
+    }
+    thermal_slots = ThermalSlots(cal.model, cal.thermal->degrees);
+    for (const ThermalSlot& t : thermal_slots) {
+      Eigen::Index column = 0;
+      while (slots[static_cast<std::size_t>(column)].name != t.slot.name) ++column;
+      model_column.push_back(column);
+    }
+  }
+  const auto P = static_cast<Eigen::Index>(cal.thermal ? thermal_slots.size() : slots.size());
   const bool with_covariance = cal.covariance.size() > 0;
   if (with_covariance && (cal.covariance.rows() != P || cal.covariance.cols() != P)) {
     throw std::invalid_argument("VerifyCalibration: the covariance is not P x P");
@@ -288,7 +318,10 @@ Verification VerifyCalibration(const VerifiedCalibration& cal, const RawLog& log
     v.samples = position.samples;
     v.t_begin_s = position.interval->t_begin_s;
     v.t_end_s = position.interval->t_end_s;
-    const std::optional<Vec3> f = SpecificForce(cal.params, position.mean);
+    double dT = 0;
+    const ModelParameters params = ParametersAt(cal, position, k, &dT);
+    if (cal.thermal) v.temperature_c = *position.temperature_c;
+    const std::optional<Vec3> f = SpecificForce(params, position.mean);
     if (!f || !(f->norm() > 0)) {
       v.error = v.sigma = v.z = std::numeric_limits<double>::quiet_NaN();
       outside.push_back(k);
@@ -297,12 +330,21 @@ Verification VerifyCalibration(const VerifiedCalibration& cal, const RawLog& log
     }
     const double norm = f->norm();
     ratios.push_back(norm / cal.gravity);
-    Mat33 J = cal.params.K;
-    for (int i = 0; i < 3; ++i) J(i, i) += 2 * cal.params.k2(i) * (*f)(i);
+    Mat33 J = params.K;
+    for (int i = 0; i < 3; ++i) J(i, i) += 2 * params.k2(i) * (*f)(i);
     // g = uᵀ J⁻¹: how |f| moves with the reading.
     const Eigen::RowVector3d g = (f->transpose() / norm) * J.inverse();
     const auto row = static_cast<Eigen::Index>(used.size());
-    A.row(row) = -g * ModelJacobian(slots, *f);
+    const Eigen::MatrixXd model_jacobian = ModelJacobian(slots, *f);
+    if (cal.thermal) {  // ∂θ(T)/∂θ_d = ΔT^d for each slot's own parameter
+      for (Eigen::Index j = 0; j < P; ++j) {
+        const std::size_t i = static_cast<std::size_t>(j);
+        A(row, j) =
+            -g.dot(model_jacobian.col(model_column[i])) * std::pow(dT, thermal_slots[i].degree);
+      }
+    } else {
+      A.row(row) = -g * model_jacobian;
+    }
     const Vec3 mean_variance = pooled / static_cast<double>(position.interval->count());
     const double noise2 = g.cwiseProduct(g).dot(mean_variance);
     const double misfit2 = g.squaredNorm() * cal.misfit_sigma_raw * cal.misfit_sigma_raw;
@@ -337,7 +379,8 @@ Verification VerifyCalibration(const VerifiedCalibration& cal, const RawLog& log
       double information = 0;
       for (Eigen::Index k = 0; k < n; ++k) information += A(k, i) * A(k, i) / noise(k);
       VerifiedParameter v;
-      v.name = std::string(slots[std::size_t(i)].name);
+      v.name = cal.thermal ? ThermalSlotName(thermal_slots[std::size_t(i)])
+                           : std::string(slots[std::size_t(i)].name);
       v.detectable =
           information > 0 ? std::sqrt(q / information) : std::numeric_limits<double>::infinity();
       v.sigma = with_covariance ? std::sqrt(std::max(0.0, cal.covariance(i, i))) : 0.0;

@@ -142,13 +142,13 @@ TEST(GyroThermal, EachSampleTakesTheNearestTemperatures) {
   accel.samples.assign(6, Vec3::Zero());
   gyro.source = "g.csv";
   accel.source = "a.csv";
-  EXPECT_THROW(SampleTemperatures(gyro, accel), DataError);
+  EXPECT_THROW(GyroSampleTemperatures(gyro, accel), DataError);
   const double nan = std::nan("");
   accel.temperature_c = {nan, 20, nan, nan, 26, nan};
-  EXPECT_EQ(SampleTemperatures(gyro, accel), (std::vector<double>{20, 20, 22, 24, 26, 26}));
+  EXPECT_EQ(GyroSampleTemperatures(gyro, accel), (std::vector<double>{20, 20, 22, 24, 26, 26}));
   // The gyro's own first, the accelerometer's where it has none.
   gyro.temperature_c = {30, nan, nan, nan, nan, nan};
-  EXPECT_EQ(SampleTemperatures(gyro, accel), (std::vector<double>{30, 20, 22, 24, 26, 26}));
+  EXPECT_EQ(GyroSampleTemperatures(gyro, accel), (std::vector<double>{30, 20, 22, 24, 26, 26}));
 }
 
 }  // namespace

@@ -140,12 +140,6 @@ TEST_F(ThermalCli, ThreeFilesAtThreeTemperatures) {
       },
       "positions[28].temperature' is outside");
   refused([](auto& a) { a["thermal"]["std"][3] = -1.0; }, "thermal.std' must not be negative");
-  // verify judges one set of parameters: refused rather than failing a good calibration.
-  const test::CliRun verify = Exec("verify " + Path("cal.json") + " " + Path("p50.csv"));
-  EXPECT_EQ(verify.status, 3);
-  EXPECT_NE(verify.err.find("its parameters follow temperature (degrees K:1 b:1, T_ref 25 degC)"),
-            std::string::npos)
-      << verify.err;
   // Scale terms only: nothing for TC_A or INS_TCAL to hold, so neither is enabled empty.
   ASSERT_EQ(
       Exec("calibrate" + files + " --thermal 1,0 --temperatures 0,25,50 -o " + Path("k_only.json"))
@@ -434,7 +428,7 @@ struct GyroRamp {
   std::vector<double> time_s, temperature_c;
 };
 
-GyroRamp SimulateGyroRamp() {
+GyroRamp SimulateGyroRamp(std::uint64_t seed = 21) {
   GyroRamp out;
   const ThermalParameters accel = Device();
   out.gyro.K << 1.003, 0.002, -0.001, 0.0015, 0.997, 0.003, -0.002, 0.001, 1.001;
@@ -445,7 +439,7 @@ GyroRamp SimulateGyroRamp() {
   sim.static_s = 5;
   sim.transition_s = 2;
   sim.sigma_raw_per_sample = Vec3::Constant(0.02);
-  sim.seed = 21;
+  sim.seed = seed;
   GyroSimulation gyro;
   gyro.truth = out.gyro;
   gyro.sigma_raw_per_sample = Vec3::Constant(0.004);
@@ -566,6 +560,43 @@ TEST_F(ThermalCli, GyroscopeOffsetsOverTemperature) {
   EXPECT_NE(kalibr.err.find("the offsets' change with temperature (degree 1 about T_ref"),
             std::string::npos)
       << kalibr.err;
+}
+
+// verify follows temperature: a second ramp of the same unit passes, each position judged at its
+// own temperature (it had failed a correct calibration with chi2 3e6 at T_ref); the same file
+// without its temperature terms fails, for the accelerometer and for the gyroscope.
+TEST_F(ThermalCli, VerifyFollowsTemperature) {
+  const std::string first = Write("first.ulg", SimulateGyroRamp(21).ulog);
+  const std::string second = Write("second.ulg", SimulateGyroRamp(22).ulog);
+  const test::CliRun run = Exec("calibrate " + first + " --thermal 1,1 --gyro " + first +
+                                " --gyro-units rad/s -q -o " + Path("cal.json"));
+  ASSERT_EQ(run.status, 0) << run.err;
+  const test::CliRun ok =
+      Exec("verify " + Path("cal.json") + " " + second + " --gyro " + second + " --json");
+  ASSERT_EQ(ok.status, 0) << ok.err << ok.out;
+  const auto v = nlohmann::json::parse(ok.out);
+  EXPECT_EQ(v["verdict"], "passed") << v["reason"];
+  EXPECT_EQ(v["gyroscope"]["verdict"], "passed") << v["gyroscope"]["reason"];
+  EXPECT_NEAR(v["positions"][0]["temperature"].get<double>(), 10.4, 0.2);
+  EXPECT_EQ(v["parameters"][9]["name"], "K_xx*dT^1");
+  // Measured: chi2 22.1 for 36 positions, the gyroscope's 159 for 175 (the turns' directions too
+  // are each position's at its own temperature).
+  // Without the temperature terms, the accelerometer's bias slope and the gyroscope's.
+  auto file = nlohmann::json::parse(test::Slurp(Path("cal.json")));
+  auto& a = file["sensors"]["accelerometer"]["thermal"]["coefficients"];
+  for (std::size_t i = 9; i < a.size(); ++i) a[i] = 0.0;
+  Write("flat.json", file.dump());
+  const test::CliRun accel_off = Exec("verify " + Path("flat.json") + " " + second + " --json");
+  EXPECT_EQ(accel_off.status, 6) << accel_off.err;  // chi2 7502 for 36
+  file = nlohmann::json::parse(test::Slurp(Path("cal.json")));
+  file["sensors"]["gyroscope"]["thermal"]["coefficients"][0] = {0.0, 0.0, 0.0};
+  Write("flat_gyro.json", file.dump());
+  const test::CliRun gyro_off =
+      Exec("verify " + Path("flat_gyro.json") + " " + second + " --gyro " + second + " --json");
+  EXPECT_EQ(gyro_off.status, 6) << gyro_off.err;  // the still rates' chi2 1.6e4 for 105
+  const auto w = nlohmann::json::parse(gyro_off.out);
+  EXPECT_EQ(w["accelerometer_verdict"], "passed");
+  EXPECT_EQ(w["gyroscope"]["verdict"], "failed");
 }
 
 TEST_F(ThermalCli, WhatItRefuses) {

@@ -840,11 +840,19 @@ std::vector<double> PositionTemperatures(const CalibrateArgs& args, LoadedInput*
     const Position& p = in->positions[k];
     if (!p.temperature_c) {
       const std::string& file = in->position_file.empty() ? args.input.path : in->position_file[k];
-      throw InputError(
-          file, 0,
-          "--thermal needs each position's temperature, and position " + std::to_string(k + 1) +
-              " has none: give the log's temperature column (--temperature-column) or one "
-              "temperature per file (--temperatures)");
+      // A column found by its name whose values were no temperature (kelvin, counts) was left
+      // out with a note: said here, where it matters.
+      std::string left_out;
+      for (const LoadedFile& f : in->files) {
+        if (f.path == file && !f.data.raw.temperature_note.empty()) {
+          left_out = " (" + f.data.raw.temperature_note + ")";
+        }
+      }
+      throw InputError(file, 0,
+                       "--thermal needs each position's temperature, and position " +
+                           std::to_string(k + 1) + " has none" + left_out +
+                           ": give the log's temperature column (--temperature-column) or one "
+                           "temperature per file (--temperatures)");
     }
     temps.push_back(*p.temperature_c);
   }

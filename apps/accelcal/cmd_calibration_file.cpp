@@ -66,7 +66,6 @@ int RunApply(const ApplyArgs& args) {
   const std::optional<GyroThermalBias>& gyro_bias =
       gyro ? cal.gyroscope->thermal : std::optional<GyroThermalBias>();
   const std::string gyro_t_source = gyro ? GyroTemperatureSource(rates.raw, log) : "";
-  const bool gyro_own_t = gyro_t_source.rfind("the gyroscope's", 0) == 0;
   const bool gyro_thermal = gyro_bias && gyro_bias->degree() > 0 && !gyro_t_source.empty();
   if (gyro_thermal && !cal.gyroscope->thermal_source.empty() &&
       cal.gyroscope->thermal_source != gyro_t_source) {
@@ -82,16 +81,11 @@ int RunApply(const ApplyArgs& args) {
     if (gyro_thermal || !gyro) said.gyroscope.reset();
     WarnVaryingNotUsed(said, args.calibration, "applied");
   }
-  const auto gyro_t_at = [&](std::size_t i) {
-    double t = gyro_own_t ? rates.raw.temperature_c[i] : std::nan("");
-    if (std::isnan(t) && log.temperature_c.size() == log.samples.size()) t = log.temperature_c[i];
-    if (std::isnan(t)) {
-      throw InputError(gyro_own_t ? rates.raw.source : args.input.path,
-                       rates.raw.line.empty() ? i + 1 : rates.raw.line[i],
-                       "the rate has no temperature, which the gyroscope's offsets follow");
-    }
-    return t;
-  };
+  // Each rate's temperature as calibrate took it: a gap between two readings that have one
+  // takes the line between them.
+  const std::vector<double> gyro_t =
+      gyro_thermal ? GyroSampleTemperatures(rates.raw, log) : std::vector<double>();
+  const auto gyro_t_at = [&](std::size_t i) { return gyro_t[i]; };
   double t_min = kTemperatureRange_C[0], t_max = kTemperatureRange_C[1];
   if (thermal && cal.thermal_range_c) std::tie(t_min, t_max) = *cal.thermal_range_c;
   std::size_t held = 0;

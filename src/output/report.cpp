@@ -365,6 +365,23 @@ std::string GyroSection(const Document& d) {
   std::string scales;
   for (int i = 0; i < 3; ++i) scales += (i ? ", " : "") + Format("%.8g", g.params.K.row(i).norm());
   html += Item("scale factors", scales + " " + g.raw_unit + " per rad/s (row norms of K)");
+  if (g.thermal) {
+    std::string text = Format("degree %d", g.thermal->degree());
+    if (g.thermal->degree() > 0) {
+      text += Format(", b(T) = b + sum_d b_d (T - T_ref)^d, the bias below at T_ref = %.6g degC; ",
+                     g.thermal->t_ref_c);
+      for (int k = 1; k <= g.thermal->degree(); ++k) {
+        const Vec3& b = g.thermal->coefficients[static_cast<std::size_t>(k - 1)];
+        text += Format("%sb_%d = (%.4g, %.4g, %.4g) %s per K^%d", k > 1 ? "; " : "", k, b(0), b(1),
+                       b(2), g.raw_unit.c_str(), k);
+      }
+    } else {
+      text += " (the offsets constant over temperature)";
+    }
+    text += Format("; still positions from %.4g to %.4g degC", g.thermal_range_c.first,
+                   g.thermal_range_c.second);
+    html += Item("offsets over temperature", text);
+  }
   html += "</dl>\n";
   // The parameters in their file order, ±1σ.
   const auto& slots = GyroParameterSlots(g.model);

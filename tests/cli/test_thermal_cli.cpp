@@ -555,6 +555,12 @@ TEST_F(ThermalCli, GyroscopeOffsetsOverTemperature) {
     EXPECT_NE(refused.err.find(message), std::string::npos) << options << ": " << refused.err;
   }
   EXPECT_EQ(g["thermal"]["temperature_source"], "the gyroscope's log: sensor_gyro.temperature");
+  // The report shows them (a hostile test found it left them out).
+  ASSERT_EQ(Exec("report " + Path("cal.json") + " -o " + Path("r.html")).status, 0);
+  EXPECT_NE(test::Slurp(Path("r.html"))
+                .find("offsets over temperature</dt><dd>degree 1, b(T) = b + sum_d b_d (T - "
+                      "T_ref)^d, the bias below at T_ref = 27.5 degC; b_1 = (0.0002989"),
+            std::string::npos);
   const test::CliRun kalibr = Exec("export " + Path("cal.json") + " --to kalibr");
   ASSERT_EQ(kalibr.status, 0) << kalibr.err;
   EXPECT_NE(kalibr.err.find("the offsets' change with temperature (degree 1 about T_ref"),

@@ -730,16 +730,33 @@ ExportResult ArduPilot(const LoadedCalibration& cal, const ExportOptions& option
   for (int i = 0; i < 3; ++i) {
     out.text += Format("%sSCAL_%c,%.9g\n", prefix.c_str(), axes[i], d.scale(i));
   }
-  if (!cal.thermal || cal.thermal->params.degrees.bias == 0) {  // nothing for INS_TCAL to hold
+  // Temperature: INS_TCAL<n>, v <- v - P(T - 35) + P(CALTEMP - 35) before the offsets
+  // (AP_InertialSensor_tempcal.cpp: correct_accel, correct_gyro), P(u) = 1e-6 (c1 u + c2 u^2 +
+  // c3 u^3), T held to TMIN..TMAX. The accelerometer's CALTEMP is T_ref, so that the offsets and
+  // scales above are those at T_ref; the gyroscope's (INS_GYR<n>_CALTEMP) is the temperature
+  // ArduPilot learnt its offsets at, at boot: only their change with temperature is written.
+  const bool accel_terms = cal.thermal && cal.thermal->params.degrees.bias > 0;
+  std::optional<double> gyro_rad_s;
+  if (cal.gyroscope) {
+    out.gyroscope_omitted =
+        "ArduPilot learns its gyroscope's offsets at each boot and holds no gyroscope scale";
+    if (cal.gyroscope->thermal && cal.gyroscope->thermal->degree() > 0) {
+      std::string why;
+      gyro_rad_s =
+          RawToRadPerSecond(cal, options, "ArduPilot", "its drivers scale the rates", &why);
+      out.gyroscope_omitted +=
+          gyro_rad_s ? Format(
+                           ": only the offsets' change with temperature is written "
+                           "(INS_TCAL%d_GYR)",
+                           options.instance + 1)
+                     : "; the offsets' change with temperature is not written either: " + why;
+    }
+  }
+  if (!accel_terms && !gyro_rad_s) {  // nothing for INS_TCAL to hold
     // The loss is the diagonal model's against the full one, on the data calibrated.
     out.loss = MeasureLoss(cal, d.correction, d.dropped);
     return out;
   }
-  // Temperature: INS_TCAL<n>, a <- a - P(T - 35) + P(CALTEMP - 35) before INS_ACCOFFS and
-  // INS_ACCSCAL (AP_InertialSensor_tempcal.cpp), P(u) = 1e-6 (c1 u + c2 u^2 + c3 u^3), with
-  // CALTEMP = T_ref: P(u) - P(delta) = sum_d b_d (u - delta)^d for delta = T_ref - 35, expanded
-  // in powers of u.
-  const OffsetPolynomial poly = OffsetsOverTemperature(cal);
   if (stream != nullptr && stream->corrected) {
     const std::map<std::string, double>& in_force =
         options.current_params ? *options.current_params : stream->calibration_in_force;
@@ -752,30 +769,68 @@ ExportResult ArduPilot(const LoadedCalibration& cal, const ExportOptions& option
           options.instance + 1, options.instance + 1));
     }
   }
+  // sum_d b_d (T - T_ref)^d in powers of u = T - 35 (its constant cancels against CALTEMP's).
   constexpr double kReference_C = 35.0, kScale = 1e6;
-  const double delta = poly.t_ref_c - kReference_C;
-  const std::array<Vec3, 4>& b = poly.b;
-  const std::array<Vec3, 3> c = {b[1] - 2 * delta * b[2] + 3 * delta * delta * b[3],
-                                 b[2] - 3 * delta * b[3], b[3]};
+  const auto about_35 = [](const std::array<Vec3, 4>& b, double t_ref_c) {
+    const double delta = t_ref_c - kReference_C;
+    return std::array<Vec3, 3>{b[1] - 2 * delta * b[2] + 3 * delta * delta * b[3],
+                               b[2] - 3 * delta * b[3], b[3]};
+  };
   const int n = options.instance + 1;
+  std::pair<double, double> range = accel_terms ? std::pair(OffsetsOverTemperature(cal).t_min_c,
+                                                            OffsetsOverTemperature(cal).t_max_c)
+                                                : cal.gyroscope->thermal_range_c;
   out.text += Format("INS_TCAL%d_ENABLE,1\nINS_TCAL%d_TMIN,%.9g\nINS_TCAL%d_TMAX,%.9g\n", n, n,
-                     Float32(poly.t_min_c), n, Float32(poly.t_max_c));
-  for (int k = 0; k < 3; ++k) {
-    for (int i = 0; i < 3; ++i) {
-      out.text +=
-          Format("INS_TCAL%d_ACC%d_%c,%.9g\n", n, k + 1, axes[i],
-                 // Composed with the scale in force, as the offsets are.
-                 Float32(kScale * raw_ms2 * c[static_cast<std::size_t>(k)](i) / s_in_force(i)));
+                     Float32(range.first), n, Float32(range.second));
+  if (accel_terms) {
+    const OffsetPolynomial poly = OffsetsOverTemperature(cal);
+    const std::array<Vec3, 3> c = about_35(poly.b, poly.t_ref_c);
+    for (int k = 0; k < 3; ++k) {
+      for (int i = 0; i < 3; ++i) {
+        out.text +=
+            Format("INS_TCAL%d_ACC%d_%c,%.9g\n", n, k + 1, axes[i],
+                   // Composed with the scale in force, as the offsets are.
+                   Float32(kScale * raw_ms2 * c[static_cast<std::size_t>(k)](i) / s_in_force(i)));
+      }
+    }
+    out.text += Format("INS_ACC%d_CALTEMP,%.9g\n", n, Float32(poly.t_ref_c));
+    out.convention += Format(
+        "; INS_TCAL%d: a <- a - P(T - 35) + P(INS_ACC%d_CALTEMP - 35) before the offset and "
+        "scale, P(u) = 1e-6 (ACC1 u + ACC2 u^2 + ACC3 u^3) in m/s2, T held to TMIN..TMAX, "
+        "CALTEMP = T_ref so that the offsets and scales above are those at T_ref",
+        n, n);
+  }
+  if (gyro_rad_s) {
+    const GyroThermalBias& t = *cal.gyroscope->thermal;
+    std::array<Vec3, 4> b{Vec3::Zero(), Vec3::Zero(), Vec3::Zero(), Vec3::Zero()};
+    for (int k = 1; k <= t.degree(); ++k) {
+      b[static_cast<std::size_t>(k)] =
+          *gyro_rad_s * t.coefficients[static_cast<std::size_t>(k - 1)];
+    }
+    const std::array<Vec3, 3> c = about_35(b, t.t_ref_c);
+    for (int k = 0; k < 3; ++k) {
+      for (int i = 0; i < 3; ++i) {
+        out.text += Format("INS_TCAL%d_GYR%d_%c,%.9g\n", n, k + 1, axes[i],
+                           Float32(kScale * c[static_cast<std::size_t>(k)](i)));
+      }
+    }
+    out.convention += Format(
+        "; INS_TCAL%d gyroscope: w <- w - P(T - 35) + P(INS_GYR%d_CALTEMP - 35), P(u) = 1e-6 "
+        "(GYR1 u + GYR2 u^2 + GYR3 u^3) in rad/s, CALTEMP the temperature of the offsets "
+        "ArduPilot learns at boot",
+        n, n);
+    if (!accel_terms) {
+      out.convention += Format("; TMIN..TMAX the gyroscope's still positions' (%.4g to %.4g degC)",
+                               range.first, range.second);
     }
   }
-  out.text += Format("INS_ACC%d_CALTEMP,%.9g\n", n, Float32(poly.t_ref_c));
-  out.convention += Format(
-      "; INS_TCAL%d: a <- a - P(T - 35) + P(INS_ACC%d_CALTEMP - 35) before the offset and scale, "
-      "P(u) = 1e-6 (ACC1 u + ACC2 u^2 + ACC3 u^3) in m/s2, T held to TMIN..TMAX, CALTEMP = T_ref "
-      "so that the offsets and scales above are those at T_ref",
-      n, n);
-  out.loss =
-      MeasureLoss(cal, d.correction, d.dropped, false, [poly](double t_c) { return poly.At(t_c); });
+  if (accel_terms) {
+    const OffsetPolynomial poly = OffsetsOverTemperature(cal);
+    out.loss = MeasureLoss(cal, d.correction, d.dropped, false,
+                           [poly](double t_c) { return poly.At(t_c); });
+  } else {
+    out.loss = MeasureLoss(cal, d.correction, d.dropped);
+  }
   return out;
 }
 

@@ -555,6 +555,23 @@ TEST_F(ThermalCli, GyroscopeOffsetsOverTemperature) {
     EXPECT_NE(refused.err.find(message), std::string::npos) << options << ": " << refused.err;
   }
   EXPECT_EQ(g["thermal"]["temperature_source"], "the gyroscope's log: sensor_gyro.temperature");
+  // ArduPilot learns the offsets at boot (INS_GYR<n>_CALTEMP): only their change, INS_TCAL1_GYR,
+  // in rad/s x 1e6 about its 35 degC (degree 1: the slope itself), beside the accelerometer's.
+  const test::CliRun ap = Exec("export " + Path("cal.json") + " --to ardupilot");
+  ASSERT_EQ(ap.status, 0) << ap.err;
+  const std::map<std::string, double> q = Params(ap.out, ',', 0);
+  EXPECT_EQ(q.at("INS_TCAL1_ENABLE"), 1);
+  for (int a = 0; a < 3; ++a) {
+    const char axis = "XYZ"[a];
+    EXPECT_EQ(f32(q.at(Format("INS_TCAL1_GYR1_%c", axis))),
+              f32(1e6 * t["coefficients"][0][a].get<double>()));
+    EXPECT_EQ(q.at(Format("INS_TCAL1_GYR2_%c", axis)), 0);
+    EXPECT_NE(q.at(Format("INS_TCAL1_ACC1_%c", axis)), 0);
+  }
+  EXPECT_EQ(q.count("INS_GYR1_CALTEMP"), 0u);
+  EXPECT_NE(ap.err.find("only the offsets' change with temperature is written (INS_TCAL1_GYR)"),
+            std::string::npos)
+      << ap.err;
   // The report shows them (a hostile test found it left them out).
   ASSERT_EQ(Exec("report " + Path("cal.json") + " -o " + Path("r.html")).status, 0);
   EXPECT_NE(test::Slurp(Path("r.html"))

@@ -670,15 +670,29 @@ int accelcal::cli::RunCommandLine(int argc, char** argv) {
       ->excludes(quiet_flag);
 
   // A list option given twice would be merged by CLI11 ("--gyro-columns 5 --gyro-columns 6,7"
-  // as 5,6,7): refused as every other option given twice.
+  // as 5,6,7): refused as every other option given twice. An empty item ("20,,30", "20,") would
+  // be dropped by it, the list shortened silently: refused too.
   for (const char* list :
        {"--columns", "--gyro-columns", "--methods", "--noise", "--bias-random-walk",
         "--temperatures", "--thermal-degrees", "--thermal-target"}) {
     int given = 0;
     for (int i = 1; i < argc && std::string_view(argv[i]) != "--"; ++i) {
       const std::string_view arg = argv[i], name = list;
-      given += arg == name || (arg.substr(0, name.size()) == name && arg.size() > name.size() &&
-                               arg[name.size()] == '=');
+      const bool joined =
+          arg.substr(0, name.size()) == name && arg.size() > name.size() && arg[name.size()] == '=';
+      if (arg != name && !joined) continue;
+      ++given;
+      const std::string_view value = joined         ? arg.substr(name.size() + 1)
+                                     : i + 1 < argc ? std::string_view(argv[i + 1])
+                                                    : std::string_view("x");
+      if (value.empty() || value.front() == ',' || value.back() == ',' ||
+          value.find(",,") != std::string_view::npos) {
+        std::fprintf(stderr,
+                     "accelcal: usage: %s '%s' has an empty item: give each value once, "
+                     "comma-separated (see --help)\n",
+                     list, std::string(value).c_str());
+        return kExitUsage;
+      }
     }
     if (given > 1) {
       std::fprintf(stderr,

@@ -639,6 +639,9 @@ TEST_F(ThermalCli, WhatItRefuses) {
            {"--thermal 1,1 --frame z-first", "not with --frame"},
            {"--thermal 1,1 --model auto", "not with --model auto"},
            {"--thermal auto --no-crossval", "--thermal auto decides on held-out error"},
+           // CLI11 drops an empty list item: "20," was taken as "20".
+           {"--thermal 1,1 --temperatures 20,", "--temperatures '20,' has an empty item"},
+           {"--thermal 1,1 --columns 1,,2,3", "--columns '1,,2,3' has an empty item"},
        }) {
     const test::CliRun run = Exec("calibrate " + f + " " + options);
     EXPECT_EQ(run.status, 2) << options << ": " << run.err;

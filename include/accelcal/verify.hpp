@@ -125,6 +125,11 @@ struct VerifiedGyroscope {
   double rotation_scatter_ratio = 1, still_scatter_ratio = 1;
 };
 
+/// (Each turn's predicted error also carries the accelerometer's parameters' uncertainty, through
+/// the gravity directions of its two positions: over temperature the directions are each at its
+/// own θ(T_k), whose uncertainty the turns' noise does not cover. On 300 simulated ramps the
+/// turns' χ²/dof fell from 1.058 ± 0.011 to 1.036 ± 0.011 with it; at constant temperature,
+/// 1.001.)
 /// One turn of the new recording: the calibrated rates integrated from one still position to the
 /// next must turn the first's gravity direction into the second's.
 struct VerifiedTurn {

@@ -48,6 +48,48 @@ ModelParameters ParametersAt(const VerifiedCalibration& cal, const Position& pos
   return cal.thermal->At(t);
 }
 
+// The calibration's flat vector θ: its model's slots, or over temperature the thermal slots, each
+// the model slot it moves (`model_column`) times ΔT^degree.
+struct FlatSlots {
+  std::vector<ParameterSlot> slots;  // the model's, in its frame
+  std::vector<ThermalSlot> thermal;  // empty: constant over temperature
+  std::vector<Eigen::Index> model_column;
+  Eigen::Index size() const {
+    return static_cast<Eigen::Index>(thermal.empty() ? slots.size() : thermal.size());
+  }
+};
+FlatSlots FlatSlotsOf(const VerifiedCalibration& cal) {
+  FlatSlots out;
+  out.slots = ParameterSlots(cal.model, cal.frame);
+  if (!cal.thermal) return out;
+  if (cal.frame != Frame::kXFirst) {
+    throw std::invalid_argument("VerifyCalibration: a thermal model is in the x-first frame");
+  }
+  out.thermal = ThermalSlots(cal.model, cal.thermal->degrees);
+  for (const ThermalSlot& t : out.thermal) {
+    Eigen::Index column = 0;
+    while (out.slots[static_cast<std::size_t>(column)].name != t.slot.name) ++column;
+    out.model_column.push_back(column);
+  }
+  return out;
+}
+
+// ∂f/∂θ (3 x P) of the specific force f that `params` (θ at ΔT = `dT`) give a reading at f:
+// f = μ⁻¹(p), so ∂f/∂θ = −J⁻¹ ∂μ/∂θ, J = K + 2 diag(k2 ∘ f), mapped to the flat slots.
+Eigen::MatrixXd ForceSensitivity(const FlatSlots& s, const ModelParameters& params, const Vec3& f,
+                                 double dT) {
+  Mat33 J = params.K;
+  for (int i = 0; i < 3; ++i) J(i, i) += 2 * params.k2(i) * f(i);
+  const Eigen::MatrixXd model = -(J.inverse() * ModelJacobian(s.slots, f));
+  if (s.thermal.empty()) return model;
+  Eigen::MatrixXd out(3, s.size());
+  for (Eigen::Index j = 0; j < s.size(); ++j) {
+    const std::size_t i = static_cast<std::size_t>(j);
+    out.col(j) = model.col(s.model_column[i]) * std::pow(dT, s.thermal[i].degree);
+  }
+  return out;
+}
+
 void CheckOptions(const VerifyOptions& options) {
   if (!(options.significance > 0 && options.significance < 1) || !(options.position_z > 0) ||
       !(options.untested_sigmas > 0)) {
@@ -97,18 +139,30 @@ GyroVerification VerifyGyroscope(const VerifiedCalibration& accel, const Verifie
         "the gyroscope is verified on the turns between still positions, and the log has " +
         std::to_string(positions.size()) + " still position");
   }
-  // The accelerometer's calibration measures each position's gravity direction.
+  // The accelerometer's calibration measures each position's gravity direction c_k, uncertain by
+  // its parameters': ∂δ_k/∂θ = Eᵀ (I − c cᵀ) / |f| ∂f/∂θ in c_k's tangent coordinates (TangentBasis
+  // E), carried into the turns below.
   CalibrationResult accel_cal;
   accel_cal.params = accel.params;
   accel_cal.gravity = accel.gravity;
+  const FlatSlots flat = FlatSlotsOf(accel);
+  const bool accel_covariance = accel.covariance.rows() == flat.size() && flat.size() > 0;
+  std::vector<Eigen::MatrixXd> direction_sensitivity;  // 2 x P per position
   for (std::size_t k = 0; k < positions.size(); ++k) {
-    const std::optional<Vec3> f =
-        SpecificForce(ParametersAt(accel, positions[k], k), positions[k].mean);
+    double dT = 0;
+    const ModelParameters at_k = ParametersAt(accel, positions[k], k, &dT);
+    const std::optional<Vec3> f = SpecificForce(at_k, positions[k].mean);
     if (!f || !(f->norm() > 0)) {
       throw DataError("still position " + std::to_string(k + 1) +
                       " reads outside the range the accelerometer's model can invert");
     }
-    accel_cal.directions.push_back(f->normalized());
+    const Vec3 c = f->normalized();
+    accel_cal.directions.push_back(c);
+    if (accel_covariance) {
+      const Mat33 project = (Mat33::Identity() - c * c.transpose()) / f->norm();
+      direction_sensitivity.push_back(internal::TangentBasis(c).transpose() * project *
+                                      ForceSensitivity(flat, at_k, *f, dT));
+    }
   }
   internal::Built built = internal::BuildData(accel_log, gyro_log, positions, accel_cal, {});
   internal::GyroFitData& data = built.data;
@@ -170,18 +224,27 @@ GyroVerification VerifyGyroscope(const VerifiedCalibration& accel, const Verifie
   const std::size_t K = data.motions.size();
   const auto rows = static_cast<Eigen::Index>(2 * K);
   Eigen::MatrixXd A(rows, P);
+  // The turns' residuals' sensitivity to the accelerometer's parameters, through the directions.
+  Eigen::MatrixXd A_accel = Eigen::MatrixXd::Zero(rows, accel_covariance ? flat.size() : 0);
   Eigen::VectorXd r(rows);
   std::vector<double> z;
   double sum_e2 = 0, sum_p2 = 0;
   for (std::size_t k = 0; k < K; ++k) {
     const internal::GyroMotion& m = data.motions[k];
     Eigen::MatrixXd J;
-    const Eigen::Vector2d r_k = internal::MotionResidual(
-        data, m, data.weights[k], params, data.directions[m.from], data.directions[m.to], &J);
+    Eigen::Matrix2d J_from, J_to;
+    const Eigen::Vector2d r_k =
+        internal::MotionResidual(data, m, data.weights[k], params, data.directions[m.from],
+                                 data.directions[m.to], &J, &J_from, &J_to);
     const auto row = static_cast<Eigen::Index>(2 * k);
     A.middleRows(row, 2) = J;
     r.segment(row, 2) = r_k;
-    const Eigen::Matrix2d C_k = s2 * Eigen::Matrix2d::Identity() + J * sigma * J.transpose();
+    Eigen::Matrix2d C_k = s2 * Eigen::Matrix2d::Identity() + J * sigma * J.transpose();
+    if (accel_covariance) {
+      A_accel.middleRows(row, 2) =
+          J_from * direction_sensitivity[m.from] + J_to * direction_sensitivity[m.to];
+      C_k += A_accel.middleRows(row, 2) * accel.covariance * A_accel.middleRows(row, 2).transpose();
+    }
     const Eigen::Matrix2d L_inverse = data.weights[k].L.inverse();
     VerifiedTurn turn;
     turn.from = m.from;
@@ -197,8 +260,8 @@ GyroVerification VerifyGyroscope(const VerifiedCalibration& accel, const Verifie
     out.turns.push_back(turn);
   }
   if (K > 0) {
-    const Eigen::MatrixXd C =
-        s2 * Eigen::MatrixXd::Identity(rows, rows) + A * sigma * A.transpose();
+    Eigen::MatrixXd C = s2 * Eigen::MatrixXd::Identity(rows, rows) + A * sigma * A.transpose();
+    if (accel_covariance) C += A_accel * accel.covariance * A_accel.transpose();
     out.turns_chi2 = r.dot(C.ldlt().solve(r));
     out.turns_dof = static_cast<int>(rows);
     out.chi2 = out.turns_chi2 + out.stills_chi2;
@@ -271,22 +334,8 @@ Verification VerifyCalibration(const VerifiedCalibration& cal, const RawLog& log
     throw std::invalid_argument(
         "VerifyCalibration: gravity must be positive and the misfit not negative");
   }
-  const std::vector<ParameterSlot>& slots = ParameterSlots(cal.model, cal.frame);
-  // Over temperature: the thermal slots, each the model slot it moves (column) and its power.
-  std::vector<ThermalSlot> thermal_slots;
-  std::vector<Eigen::Index> model_column;
-  if (cal.thermal) {
-    if (cal.frame != Frame::kXFirst) {
-      throw std::invalid_argument("VerifyCalibration: a thermal model is in the x-first frame");
-    }
-    thermal_slots = ThermalSlots(cal.model, cal.thermal->degrees);
-    for (const ThermalSlot& t : thermal_slots) {
-      Eigen::Index column = 0;
-      while (slots[static_cast<std::size_t>(column)].name != t.slot.name) ++column;
-      model_column.push_back(column);
-    }
-  }
-  const auto P = static_cast<Eigen::Index>(cal.thermal ? thermal_slots.size() : slots.size());
+  const FlatSlots flat = FlatSlotsOf(cal);
+  const Eigen::Index P = flat.size();
   const bool with_covariance = cal.covariance.size() > 0;
   if (with_covariance && (cal.covariance.rows() != P || cal.covariance.cols() != P)) {
     throw std::invalid_argument("VerifyCalibration: the covariance is not P x P");
@@ -335,16 +384,8 @@ Verification VerifyCalibration(const VerifiedCalibration& cal, const RawLog& log
     // g = uᵀ J⁻¹: how |f| moves with the reading.
     const Eigen::RowVector3d g = (f->transpose() / norm) * J.inverse();
     const auto row = static_cast<Eigen::Index>(used.size());
-    const Eigen::MatrixXd model_jacobian = ModelJacobian(slots, *f);
-    if (cal.thermal) {  // ∂θ(T)/∂θ_d = ΔT^d for each slot's own parameter
-      for (Eigen::Index j = 0; j < P; ++j) {
-        const std::size_t i = static_cast<std::size_t>(j);
-        A(row, j) =
-            -g.dot(model_jacobian.col(model_column[i])) * std::pow(dT, thermal_slots[i].degree);
-      }
-    } else {
-      A.row(row) = -g * model_jacobian;
-    }
+    // ∂|f|/∂θ = uᵀ ∂f/∂θ.
+    A.row(row) = (f->transpose() / norm) * ForceSensitivity(flat, params, *f, dT);
     const Vec3 mean_variance = pooled / static_cast<double>(position.interval->count());
     const double noise2 = g.cwiseProduct(g).dot(mean_variance);
     const double misfit2 = g.squaredNorm() * cal.misfit_sigma_raw * cal.misfit_sigma_raw;
@@ -379,8 +420,8 @@ Verification VerifyCalibration(const VerifiedCalibration& cal, const RawLog& log
       double information = 0;
       for (Eigen::Index k = 0; k < n; ++k) information += A(k, i) * A(k, i) / noise(k);
       VerifiedParameter v;
-      v.name = cal.thermal ? ThermalSlotName(thermal_slots[std::size_t(i)])
-                           : std::string(slots[std::size_t(i)].name);
+      v.name = cal.thermal ? ThermalSlotName(flat.thermal[std::size_t(i)])
+                           : std::string(flat.slots[std::size_t(i)].name);
       v.detectable =
           information > 0 ? std::sqrt(q / information) : std::numeric_limits<double>::infinity();
       v.sigma = with_covariance ? std::sqrt(std::max(0.0, cal.covariance(i, i))) : 0.0;

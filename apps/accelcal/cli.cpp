@@ -582,6 +582,11 @@ int accelcal::cli::RunCommandLine(int argc, char** argv) {
     gravity->excludes(latitude);
     verify->add_option("--height", ver.gravity.height_m, "height above the ellipsoid [m]")
         ->needs(latitude);
+    verify
+        ->add_option("--temperature", ver.temperature_c,
+                     "the log's temperature [degC], for a calibration whose parameters follow "
+                     "temperature and a log without its own (as calibrate's --temperatures)")
+        ->check(kDecimal);
     verify->add_option("--gyro", ver.gyro,
                        "the gyroscope's log on the same clock: its turns verified too");
     verify
@@ -672,9 +677,15 @@ int accelcal::cli::RunCommandLine(int argc, char** argv) {
   // A list option given twice would be merged by CLI11 ("--gyro-columns 5 --gyro-columns 6,7"
   // as 5,6,7): refused as every other option given twice. An empty item ("20,,30", "20,") would
   // be dropped by it, the list shortened silently: refused too.
+  // --noise is a list in design only (elsewhere a file, whose name may hold commas).
+  std::string_view command;
+  for (int i = 1; i < argc && command.empty(); ++i) {
+    if (argv[i][0] != '-') command = argv[i];
+  }
   for (const char* list :
        {"--columns", "--gyro-columns", "--methods", "--noise", "--bias-random-walk",
         "--temperatures", "--thermal-degrees", "--thermal-target"}) {
+    const bool items = std::string_view(list) != "--noise" || command == "design";
     int given = 0;
     for (int i = 1; i < argc && std::string_view(argv[i]) != "--"; ++i) {
       const std::string_view arg = argv[i], name = list;
@@ -685,8 +696,8 @@ int accelcal::cli::RunCommandLine(int argc, char** argv) {
       const std::string_view value = joined         ? arg.substr(name.size() + 1)
                                      : i + 1 < argc ? std::string_view(argv[i + 1])
                                                     : std::string_view("x");
-      if (value.empty() || value.front() == ',' || value.back() == ',' ||
-          value.find(",,") != std::string_view::npos) {
+      if (items && (value.empty() || value.front() == ',' || value.back() == ',' ||
+                    value.find(",,") != std::string_view::npos)) {
         std::fprintf(stderr,
                      "accelcal: usage: %s '%s' has an empty item: give each value once, "
                      "comma-separated (see --help)\n",

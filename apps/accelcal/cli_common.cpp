@@ -323,6 +323,20 @@ EngineeringValue ThermalEngineering(const ThermalSlot& slot, double raw, const M
   return {1e6 * raw * gravity / kii, "ug/g^2" + per};
 }
 
+void RefuseLeftOutTemperature(const LoadedCalibration& cal, const RawLog& log,
+                              const std::string& path) {
+  if (!cal.thermal || log.temperature_note.empty()) return;
+  for (double t : log.temperature_c) {
+    if (std::isfinite(t)) return;  // some readings have one
+  }
+  throw InputError(path, 0,
+                   "the calibration's parameters follow temperature, and this log's temperature "
+                   "was left out (" +
+                       log.temperature_note +
+                       "): give its column in degC with --temperature-column, or "
+                       "--temperature-column none to use the parameters at T_ref");
+}
+
 void WarnVaryingNotUsed(const LoadedCalibration& cal, const std::string& path, const char* use) {
   if (cal.thermal) {
     Warn(

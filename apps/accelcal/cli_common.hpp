@@ -121,6 +121,12 @@ std::string WithFlags(std::string message,
 // option" is --columns).
 std::string WithReaderFlags(const std::string& message);
 
+// A calibration whose parameters follow temperature, and a log whose temperature column, found
+// by its name, held no temperature in degC (kelvin, counts) and was left out: an InputError
+// naming the column, rather than the parameters at T_ref in silence.
+void RefuseLeftOutTemperature(const LoadedCalibration& cal, const RawLog& log,
+                              const std::string& path);
+
 // A calibration that failed its checks is written so that its reasons can be read, never used.
 void RefuseFailed(const LoadedCalibration& cal, const std::string& path);
 /// Warns that a calibration whose bias drifted within its session is used with one bias, its

@@ -52,6 +52,7 @@ int RunApply(const ApplyArgs& args) {
   const InputData data = ReadInput(args.input.path, read);
   bar.Finish();
   const RawLog& log = data.raw;
+  RefuseLeftOutTemperature(cal, log, args.input.path);
   const bool has_time = !log.time_s.empty();
   // Parameters that follow temperature: each reading at its own temperature when the log has
   // them, held to the range the calibration was fitted over (a polynomial is not extrapolated).
@@ -68,7 +69,7 @@ int RunApply(const ApplyArgs& args) {
   const std::string gyro_t_source = gyro ? GyroTemperatureSource(rates.raw, log) : "";
   const bool gyro_thermal = gyro_bias && gyro_bias->degree() > 0 && !gyro_t_source.empty();
   if (gyro_thermal && !cal.gyroscope->thermal_source.empty() &&
-      cal.gyroscope->thermal_source != gyro_t_source) {
+      !SameTemperatureSensor(cal.gyroscope->thermal_source, gyro_t_source)) {
     Warn(
         "%s: the gyroscope's offsets over temperature were fitted at the temperatures of %s, and "
         "these rates are corrected at those of %s: one die may run warmer than the other\n",

@@ -143,10 +143,43 @@ int RunVerify(const VerifyArgs& args) {
   ReadOptions read = MakeReadOptions(args.input);
   read.kind = InputKind::kRaw;
   const InputData data = ReadInput(args.input.path, read);
+  if (!args.temperature_c) RefuseLeftOutTemperature(cal, data.raw, args.input.path);
   const StaticDetectionResult detection = DetectStaticIntervals(data.raw, args.input.detection);
   if (detection.intervals.empty()) throw NoStaticInterval(detection);
-  const std::vector<Position> positions = PositionsFromIntervals(detection.intervals);
+  std::vector<Position> positions = PositionsFromIntervals(detection.intervals);
+  if (args.temperature_c) {
+    if (!cal.thermal) {
+      throw UsageError("--temperature is for a calibration whose parameters follow temperature");
+    }
+    if (!InTemperatureRange(*args.temperature_c)) {
+      throw UsageError(Format("--temperature: %g is outside %g to %g degC", *args.temperature_c,
+                              kTemperatureRange_C[0], kTemperatureRange_C[1]));
+    }
+    bool own = false;
+    for (Position& p : positions) {
+      own |= p.temperature_c.has_value();
+      p.temperature_c = *args.temperature_c + 0.0;
+    }
+    if (own) {
+      Warn("%s: its positions are judged at --temperature %g degC, not at the log's own\n",
+           args.input.path.c_str(), *args.temperature_c);
+    }
+  }
   const Verification v = VerifyCalibration(under_test, data.raw, positions);
+  if (under_test.thermal) {  // said as apply says it
+    std::size_t held = 0;
+    for (const VerifiedPosition& p : v.positions) {
+      held += p.temperature_c < under_test.thermal_range_c.first - 1 ||
+              p.temperature_c > under_test.thermal_range_c.second + 1;
+    }
+    if (held > 0) {
+      Warn(
+          "%s: %zu of its %zu positions were recorded more than 1 K outside %g .. %g degC, the "
+          "range the calibration was fitted over: judged at the nearest end\n",
+          args.input.path.c_str(), held, v.positions.size(), under_test.thermal_range_c.first,
+          under_test.thermal_range_c.second);
+    }
+  }
   std::optional<GyroVerification> gv;
   if (gyro) {
     InputData rates = ReadGyroLog(args.input, args.gyro, args.gyro_columns, false);
@@ -154,7 +187,8 @@ int RunVerify(const VerifyArgs& args) {
     // Offsets over temperature: taken out of each rate at its temperature, as calibrate did.
     if (const std::optional<GyroThermalBias>& b = cal.gyroscope->thermal; b && b->degree() > 0) {
       const std::string source = GyroTemperatureSource(rates.raw, data.raw);
-      if (!cal.gyroscope->thermal_source.empty() && source != cal.gyroscope->thermal_source) {
+      if (!cal.gyroscope->thermal_source.empty() &&
+          !SameTemperatureSensor(cal.gyroscope->thermal_source, source)) {
         Warn(
             "%s: the gyroscope's offsets over temperature were fitted at the temperatures of %s, "
             "and these rates are verified at those of %s\n",

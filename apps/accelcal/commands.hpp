@@ -165,6 +165,8 @@ struct VerifyArgs {
   std::string gyro;  // the gyroscope's log (ReadGyroLog)
   std::vector<std::string> gyro_columns;
   GravityArgs gravity;  // the site's, when not the calibration's (units: the calibration's)
+  // The log's one temperature [°C], for a calibration over temperature and a log without its own.
+  std::optional<double> temperature_c;
   bool json = false;
   std::string output;  // empty: stdout
 };

@@ -230,16 +230,19 @@ struct GyroCalibration {
   std::optional<GyroThermal> thermal;
 };
 
-/// Each rate sample's temperature [°C]: the gyro log's where it has one, else the
-/// accelerometer's (the same clock, one sample each); a sample with neither takes the line
-/// between its nearest neighbours that have one (held beyond the first and the last). Throws
-/// DataError when no sample of either log has a temperature.
+/// Each rate sample's temperature [°C]: the gyro log's when it has any, else the accelerometer's
+/// (the same clock, one sample each; one source, as one die may run warmer than the other); a
+/// sample without one takes the line between its nearest neighbours that have one (held beyond
+/// the first and the last). Throws DataError when no sample of either log has a temperature.
 std::vector<double> GyroSampleTemperatures(const RawLog& gyro, const RawLog& accel);
 
 /// Whose temperature each rate of `gyro` is taken at (the gyroscope's own where it has one, else
 /// the accelerometer's at the same sample): "the gyroscope's log: …" or "the accelerometer's log:
 /// …" with the log's temperature_source; empty when neither has one.
 std::string GyroTemperatureSource(const RawLog& gyro, const RawLog& accel);
+/// Whether two GyroTemperatureSource texts name the same sensor's temperature (the gyroscope's
+/// or the accelerometer's, whatever the column).
+bool SameTemperatureSensor(const std::string& a, const std::string& b);
 
 /// Throws DataError unless `gyro` holds a rate sample at each sample of `accel` (the same count,
 /// times within half the typical step): the two streams of one clock; and when its readings are

@@ -599,6 +599,11 @@ std::string GyroTemperatureSource(const RawLog& gyro, const RawLog& accel) {
   return "";
 }
 
+bool SameTemperatureSensor(const std::string& a, const std::string& b) {
+  const auto sensor = [](const std::string& s) { return s.substr(0, s.find(':')); };
+  return sensor(a) == sensor(b);
+}
+
 // The two streams must be one clock: a gyro sample at each accelerometer sample's time.
 void CheckGyroClock(const RawLog& accel, const RawLog& gyro) {
   if (gyro.samples.size() != accel.samples.size()) {

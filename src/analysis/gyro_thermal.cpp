@@ -261,14 +261,9 @@ std::vector<double> GyroSampleTemperatures(const RawLog& gyro, const RawLog& acc
                     " has a temperature at its samples: the gyroscope's offsets over "
                     "temperature are fitted to its readings at theirs");
   }
-  std::vector<double> t(gyro.samples.size(), std::nan(""));
-  for (std::size_t k = 0; k < t.size(); ++k) {
-    if (own != nullptr && std::isfinite((*own)[k])) {
-      t[k] = (*own)[k];
-    } else if (other != nullptr && std::isfinite((*other)[k])) {
-      t[k] = (*other)[k];
-    }
-  }
+  // One source: the gyroscope's own when it has any (its die may run warmer than the
+  // accelerometer's, so a gap is not filled from the other), else the accelerometer's.
+  std::vector<double> t = own != nullptr ? *own : *other;
   // The gaps: the line between the samples on either side, held beyond the ends.
   std::size_t last = t.size();  // the last sample with a temperature, none yet
   for (std::size_t k = 0; k < t.size(); ++k) {

@@ -604,6 +604,12 @@ TEST_F(ThermalCli, VerifyFollowsTemperature) {
   EXPECT_EQ(v["parameters"][9]["name"], "K_xx*dT^1");
   // Measured: chi2 22.1 for 36 positions, the gyroscope's 159 for 175 (the turns' directions too
   // are each position's at its own temperature).
+  // One temperature for a log without its own (--temperature): the ramp judged at T_ref fails;
+  // a temperature that is none is refused.
+  const test::CliRun one = Exec("verify " + Path("cal.json") + " " + second +
+                                " --temperature-column none --temperature 27.5");
+  EXPECT_EQ(one.status, 6) << one.err;
+  EXPECT_EQ(Exec("verify " + Path("cal.json") + " " + second + " --temperature 400").status, 2);
   // Without the temperature terms, the accelerometer's bias slope and the gyroscope's.
   auto file = nlohmann::json::parse(test::Slurp(Path("cal.json")));
   auto& a = file["sensors"]["accelerometer"]["thermal"]["coefficients"];

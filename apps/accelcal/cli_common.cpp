@@ -323,6 +323,19 @@ EngineeringValue ThermalEngineering(const ThermalSlot& slot, double raw, const M
   return {1e6 * raw * gravity / kii, "ug/g^2" + per};
 }
 
+void WarnOtherTemperatureSensor(const LoadedCalibration& cal, const std::string& path,
+                                const std::string& source, const char* use) {
+  if (!cal.gyroscope || cal.gyroscope->thermal_source.empty() ||
+      SameTemperatureSensor(cal.gyroscope->thermal_source, source)) {
+    return;
+  }
+  Warn(
+      "%s: the gyroscope's offsets over temperature were fitted at the temperatures of %s, and "
+      "these rates are %s at those of %s: one die may run warmer than the other\n",
+      path.c_str(), VisibleLine(cal.gyroscope->thermal_source).c_str(), use,
+      VisibleLine(source).c_str());
+}
+
 void RefuseLeftOutTemperature(const LoadedCalibration& cal, const RawLog& log,
                               const std::string& path) {
   if (!cal.thermal || log.temperature_note.empty()) return;

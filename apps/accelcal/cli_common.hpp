@@ -121,6 +121,11 @@ std::string WithFlags(std::string message,
 // option" is --columns).
 std::string WithReaderFlags(const std::string& message);
 
+// A warning when the gyroscope's rates are taken at another sensor's temperature (`source`,
+// GyroTemperatureSource) than its offsets over temperature were fitted at: one die may run warmer.
+void WarnOtherTemperatureSensor(const LoadedCalibration& cal, const std::string& path,
+                                const std::string& source, const char* use);
+
 // A calibration whose parameters follow temperature, and a log whose temperature column, found
 // by its name, held no temperature in degC (kelvin, counts) and was left out: an InputError
 // naming the column, rather than the parameters at T_ref in silence.

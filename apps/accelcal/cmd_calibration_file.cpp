@@ -68,14 +68,7 @@ int RunApply(const ApplyArgs& args) {
       gyro ? cal.gyroscope->thermal : std::optional<GyroThermalBias>();
   const std::string gyro_t_source = gyro ? GyroTemperatureSource(rates.raw, log) : "";
   const bool gyro_thermal = gyro_bias && gyro_bias->degree() > 0 && !gyro_t_source.empty();
-  if (gyro_thermal && !cal.gyroscope->thermal_source.empty() &&
-      !SameTemperatureSensor(cal.gyroscope->thermal_source, gyro_t_source)) {
-    Warn(
-        "%s: the gyroscope's offsets over temperature were fitted at the temperatures of %s, and "
-        "these rates are corrected at those of %s: one die may run warmer than the other\n",
-        args.calibration.c_str(), VisibleLine(cal.gyroscope->thermal_source).c_str(),
-        VisibleLine(gyro_t_source).c_str());
-  }
+  if (gyro_thermal) WarnOtherTemperatureSensor(cal, args.calibration, gyro_t_source, "corrected");
   {
     LoadedCalibration said = cal;
     if (thermal) said.thermal.reset();

@@ -186,15 +186,8 @@ int RunVerify(const VerifyArgs& args) {
     CheckGyroClock(data.raw, rates.raw);
     // Offsets over temperature: taken out of each rate at its temperature, as calibrate did.
     if (const std::optional<GyroThermalBias>& b = cal.gyroscope->thermal; b && b->degree() > 0) {
-      const std::string source = GyroTemperatureSource(rates.raw, data.raw);
-      if (!cal.gyroscope->thermal_source.empty() &&
-          !SameTemperatureSensor(cal.gyroscope->thermal_source, source)) {
-        Warn(
-            "%s: the gyroscope's offsets over temperature were fitted at the temperatures of %s, "
-            "and these rates are verified at those of %s\n",
-            args.calibration.c_str(), VisibleLine(cal.gyroscope->thermal_source).c_str(),
-            VisibleLine(source).c_str());
-      }
+      WarnOtherTemperatureSensor(cal, args.calibration, GyroTemperatureSource(rates.raw, data.raw),
+                                 "verified");
       const std::vector<double> t_c = GyroSampleTemperatures(rates.raw, data.raw);
       const auto [lo, hi] = cal.gyroscope->thermal_range_c;
       for (std::size_t k = 0; k < t_c.size(); ++k) {

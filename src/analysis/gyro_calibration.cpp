@@ -586,19 +586,6 @@ double RmsDeg(const std::vector<double>& rad) {
 
 }  // namespace
 
-std::string GyroTemperatureSource(const RawLog& gyro, const RawLog& accel) {
-  const auto has = [](const RawLog& log) {
-    if (log.temperature_c.size() != log.samples.size()) return false;
-    for (double t : log.temperature_c) {
-      if (std::isfinite(t)) return true;
-    }
-    return false;
-  };
-  if (has(gyro)) return "the gyroscope's log: " + gyro.temperature_source;
-  if (has(accel)) return "the accelerometer's log: " + accel.temperature_source;
-  return "";
-}
-
 bool SameTemperatureSensor(const std::string& a, const std::string& b) {
   const auto sensor = [](const std::string& s) { return s.substr(0, s.find(':')); };
   return sensor(a) == sensor(b);

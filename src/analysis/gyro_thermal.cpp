@@ -282,4 +282,15 @@ std::vector<double> GyroSampleTemperatures(const RawLog& gyro, const RawLog& acc
   return t;
 }
 
+std::string GyroTemperatureSource(const RawLog& gyro, const RawLog& accel) {
+  // The source GyroSampleTemperatures takes, by the same check.
+  if (internal::Temperatures(gyro) != nullptr) {
+    return "the gyroscope's log: " + gyro.temperature_source;
+  }
+  if (accel.samples.size() == gyro.samples.size() && internal::Temperatures(accel) != nullptr) {
+    return "the accelerometer's log: " + accel.temperature_source;
+  }
+  return "";
+}
+
 }  // namespace accelcal

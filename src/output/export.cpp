@@ -777,14 +777,15 @@ ExportResult ArduPilot(const LoadedCalibration& cal, const ExportOptions& option
                                b[2] - 3 * delta * b[3], b[3]};
   };
   const int n = options.instance + 1;
-  std::pair<double, double> range = accel_terms ? std::pair(OffsetsOverTemperature(cal).t_min_c,
-                                                            OffsetsOverTemperature(cal).t_max_c)
-                                                : cal.gyroscope->thermal_range_c;
+  // The accelerometer's offset polynomial, taken once.
+  const std::optional<OffsetPolynomial> poly =
+      accel_terms ? std::optional(OffsetsOverTemperature(cal)) : std::nullopt;
+  const std::pair<double, double> range =
+      poly ? std::pair(poly->t_min_c, poly->t_max_c) : cal.gyroscope->thermal_range_c;
   out.text += Format("INS_TCAL%d_ENABLE,1\nINS_TCAL%d_TMIN,%.9g\nINS_TCAL%d_TMAX,%.9g\n", n, n,
                      Float32(range.first), n, Float32(range.second));
-  if (accel_terms) {
-    const OffsetPolynomial poly = OffsetsOverTemperature(cal);
-    const std::array<Vec3, 3> c = about_35(poly.b, poly.t_ref_c);
+  if (poly) {
+    const std::array<Vec3, 3> c = about_35(poly->b, poly->t_ref_c);
     for (int k = 0; k < 3; ++k) {
       for (int i = 0; i < 3; ++i) {
         out.text +=
@@ -793,7 +794,7 @@ ExportResult ArduPilot(const LoadedCalibration& cal, const ExportOptions& option
                    Float32(kScale * raw_ms2 * c[static_cast<std::size_t>(k)](i) / s_in_force(i)));
       }
     }
-    out.text += Format("INS_ACC%d_CALTEMP,%.9g\n", n, Float32(poly.t_ref_c));
+    out.text += Format("INS_ACC%d_CALTEMP,%.9g\n", n, Float32(poly->t_ref_c));
     out.convention += Format(
         "; INS_TCAL%d: a <- a - P(T - 35) + P(INS_ACC%d_CALTEMP - 35) before the offset and "
         "scale, P(u) = 1e-6 (ACC1 u + ACC2 u^2 + ACC3 u^3) in m/s2, T held to TMIN..TMAX, "
@@ -824,10 +825,9 @@ ExportResult ArduPilot(const LoadedCalibration& cal, const ExportOptions& option
                                range.first, range.second);
     }
   }
-  if (accel_terms) {
-    const OffsetPolynomial poly = OffsetsOverTemperature(cal);
+  if (poly) {
     out.loss = MeasureLoss(cal, d.correction, d.dropped, false,
-                           [poly](double t_c) { return poly.At(t_c); });
+                           [p = *poly](double t_c) { return p.At(t_c); });
   } else {
     out.loss = MeasureLoss(cal, d.correction, d.dropped);
   }

@@ -1,6 +1,7 @@
 // Python's calibrate, calibrate_log and diagnose, and their result (CalibrationResult): the
 // calibration as the command line does it, with its diagnosis and provenance.
 #include "py_common.hpp"
+#include "py_result.hpp"
 
 #include <cmath>
 #include <cstdio>
@@ -33,26 +34,6 @@ namespace {
 
 // ---------------------------------------------------------------------------------------------
 // Calibration as the command line does it, and its diagnosis.
-
-// A calibration with what it was fitted to and its diagnosis: Python's CalibrationResult.
-struct PyCalibration {
-  CalibrationResult result;
-  std::optional<ModelSelection> selection;  // model "auto", or "quadratic" with held-out errors
-  std::string model_requested;
-  ForceUnit unit = ForceUnit::kMetersPerSecond2;
-  std::vector<Position> positions;  // the fitted positions, in the result's order
-  std::vector<Vec3> mean_sigmas;    // the 1σ of each one's mean as the fit took it (or none)
-  std::string source;               // the input file, "" from arrays
-  int max_excluded = OutlierOptions{}.max_excluded;
-  Diagnosis diagnosis;
-  Provenance provenance;  // the function and its arguments, the file read (to_json writes it)
-  // The gyroscope calibrated from the same recording (calibrate_log's gyro options), its log and
-  // the label of its raw unit.
-  std::optional<GyroCalibration> gyroscope;
-  std::string gyro_source, gyro_raw_unit;
-  // What the diagnosis of a log looks at (calibrate_log), kept to diagnose again.
-  const RawLog* log = nullptr;
-};
 
 struct FitSettings {
   std::string model = "linear";  // linear, quadratic or auto
@@ -204,8 +185,8 @@ py::dict GyroDict(const GyroCalibration& g) {
   py::list rotations;
   for (const GyroRotation& r : g.rotations) {
     py::dict t;
-    t["from"] = r.from;
-    t["to"] = r.to;
+    t["from"] = r.from + 1;  // position numbers count from 1, as in the file and the tool
+    t["to"] = r.to + 1;
     t["first_sample"] = r.first_sample;
     t["last_sample"] = r.last_sample;
     t["duration_s"] = r.duration_s;
@@ -226,27 +207,43 @@ py::dict GyroDict(const GyroCalibration& g) {
 }  // namespace
 
 void BindCalibration(py::module_& m) {
+  m.def(
+      "_result_from_state", [](const py::bytes& state) { return LoadState(std::string(state)); },
+      py::arg("state"), "A CalibrationResult from its pickled state (pickle calls it)");
   py::class_<PyCalibration>(
       m, "CalibrationResult",
       "A calibration: p = K f + b + k2 * f**2 (docs/model.md), with its diagnosis (verdict, "
       "diagnostics) and the positions it was fitted to")
       .def_property_readonly(
-          "model", [](const PyCalibration& c) { return std::string(ToString(c.result.model)); })
+          "model", [](const PyCalibration& c) { return std::string(ToString(c.result.model)); },
+          "The model fitted: 'linear' or 'quadratic' (with model='auto', the one chosen)")
       .def_property_readonly(
-          "frame", [](const PyCalibration& c) { return std::string(ToString(c.result.frame)); })
-      .def_property_readonly("gravity", [](const PyCalibration& c) { return c.result.gravity; })
+          "frame", [](const PyCalibration& c) { return std::string(ToString(c.result.frame)); },
+          "The body frame's convention: 'x-first' (K lower-triangular) or 'z-first' (upper)")
+      .def_property_readonly(
+          "gravity", [](const PyCalibration& c) { return c.result.gravity; },
+          "The magnitude of gravity the fit took, in units")
       .def_property_readonly(
           "units", [](const PyCalibration& c) { return std::string(ToString(c.unit)); },
           "Unit of gravity and of the calibrated specific force: 'm/s2' or 'g'")
-      .def_property_readonly("K", [](const PyCalibration& c) { return Mat33(c.result.params.K); })
-      .def_property_readonly("bias",
-                             [](const PyCalibration& c) { return Vec3(c.result.params.bias); })
-      .def_property_readonly("k2", [](const PyCalibration& c) { return Vec3(c.result.params.k2); })
-      .def_property_readonly("covariance",
-                             [](const PyCalibration& c) -> std::optional<Eigen::MatrixXd> {
-                               if (c.result.covariance.size() == 0) return std::nullopt;
-                               return c.result.covariance;
-                             })
+      .def_property_readonly(
+          "K", [](const PyCalibration& c) { return Mat33(c.result.params.K); },
+          "K (3 x 3) [raw per unit of specific force]: scale factors on the diagonal, "
+          "misalignments off it")
+      .def_property_readonly(
+          "bias", [](const PyCalibration& c) { return Vec3(c.result.params.bias); },
+          "b (3) [raw]: the reading at zero specific force")
+      .def_property_readonly(
+          "k2", [](const PyCalibration& c) { return Vec3(c.result.params.k2); },
+          "k2 (3) [raw per unit squared]: the squared coefficients (zeros for the linear model)")
+      .def_property_readonly(
+          "covariance",
+          [](const PyCalibration& c) -> std::optional<Eigen::MatrixXd> {
+            if (c.result.covariance.size() == 0) return std::nullopt;
+            return c.result.covariance;
+          },
+          "The parameters' covariance in parameter_names' order (maximum-likelihood methods; None "
+          "otherwise or without degrees of freedom)")
       .def_property_readonly(
           "parameter_names",
           [](const PyCalibration& c) {
@@ -254,30 +251,41 @@ void BindCalibration(py::module_& m) {
             for (const ParameterSlot& s : ParameterSlots(c.result.model, c.result.frame))
               names.emplace_back(s.name);
             return names;
-          })
-      .def_property_readonly("directions",
-                             [](const PyCalibration& c) { return ToRows(c.result.directions); })
-      .def_property_readonly("residuals",
-                             [](const PyCalibration& c) { return ToRows(c.result.residuals); })
-      .def_property_readonly("residual_sigma",
-                             [](const PyCalibration& c) { return c.result.residual_sigma; })
-      .def_property_readonly("scatter_ratio",
-                             [](const PyCalibration& c) { return c.result.scatter_ratio; })
-      .def_property_readonly("degrees_of_freedom",
-                             [](const PyCalibration& c) { return c.result.degrees_of_freedom; })
-      .def_property_readonly("crossval_rms",
-                             [](const PyCalibration& c) { return c.result.crossval_rms; })
-      .def_property_readonly("crossval_errors",
-                             [](const PyCalibration& c) { return c.result.crossval_errors; })
-      .def_property_readonly("crossval_note",
-                             [](const PyCalibration& c) { return c.result.crossval_note; })
+          },
+          "The flat parameters' names in the covariance's order (K_xx, b_x, ...)")
+      .def_property_readonly(
+          "directions", [](const PyCalibration& c) { return ToRows(c.result.directions); },
+          "The fitted unit gravity directions c_k in the body frame (m x 3, one row per position)")
+      .def_property_readonly(
+          "residuals", [](const PyCalibration& c) { return ToRows(c.result.residuals); },
+          "p_k - mu(theta, g c_k) [raw] (m x 3, one row per position)")
+      .def_property_readonly(
+          "residual_sigma", [](const PyCalibration& c) { return c.result.residual_sigma; },
+          "The residuals' sigma [raw] (0 without degrees of freedom)")
+      .def_property_readonly(
+          "scatter_ratio", [](const PyCalibration& c) { return c.result.scatter_ratio; },
+          "With the samples' noise: sqrt(chi2 / dof), 1 when that noise explains the positions' "
+          "scatter (the covariance is multiplied by its square above 1); NaN otherwise")
+      .def_property_readonly(
+          "degrees_of_freedom", [](const PyCalibration& c) { return c.result.degrees_of_freedom; },
+          "m - P: positions in the fit less parameters")
+      .def_property_readonly(
+          "crossval_rms", [](const PyCalibration& c) { return c.result.crossval_rms; },
+          "RMS of |f_k| - g with each position corrected by a fit without it [units]; None without "
+          "cross-validation or when a fit without some position failed (crossval_note)")
+      .def_property_readonly(
+          "crossval_errors", [](const PyCalibration& c) { return c.result.crossval_errors; },
+          "Each position's held-out |f_k| - g [units], in the positions' order")
+      .def_property_readonly(
+          "crossval_note", [](const PyCalibration& c) { return c.result.crossval_note; },
+          "Why cross-validation did not run on every position ('' when it did)")
       .def_property_readonly(
           "outliers",
           [](const PyCalibration& c) {
             py::list list;
             for (const OutlierFinding& o : c.result.outliers) {
               py::dict d;
-              d["position"] = o.position;  // 0-based, as the readings' rows
+              d["position"] = o.position + 1;  // counts from 1, as the file and the tool
               d["excluded"] = o.excluded;
               d["statistic"] = std::string(ToString(o.statistic));
               d["t"] = o.t;
@@ -289,12 +297,16 @@ void BindCalibration(py::module_& m) {
             }
             return list;
           },
-          "Positions the screening found discordant: dicts whose 'position' is the 0-based row "
-          "of the readings (the calibration file and the diagnostics count from 1)")
-      .def_property_readonly("outlier_note",
-                             [](const PyCalibration& c) { return c.result.outlier_note; })
-      .def_property_readonly("summary",
-                             [](const PyCalibration& c) { return SummaryDict(c.result.summary); })
+          "Positions the screening found discordant: dicts whose 'position' is the position's "
+          "number, counting from 1 as the calibration file, the diagnostics and the command line "
+          "do (its row of the readings is position - 1)")
+      .def_property_readonly(
+          "outlier_note", [](const PyCalibration& c) { return c.result.outlier_note; },
+          "Why the screening did not run or could not test some position ('' when it ran on all)")
+      .def_property_readonly(
+          "summary", [](const PyCalibration& c) { return SummaryDict(c.result.summary); },
+          "How the solve went: method, initialization, iterations, termination (and its formula), "
+          "costs, time_s, brief_report")
       .def_property_readonly(
           "verdict",
           [](const PyCalibration& c) { return std::string(ToString(c.diagnosis.verdict())); },
@@ -312,7 +324,9 @@ void BindCalibration(py::module_& m) {
             return SelectionDict(*c.selection);
           },
           "With model 'auto' (or 'quadratic' with cross-validation): which model the held-out "
-          "errors support and why (model_selection.hpp; positions_used 0-based); else None")
+          "errors support and why (model_selection.hpp; positions_used are position numbers, from "
+          "1); "
+          "else None")
       .def_property_readonly(
           "gyroscope",
           [](const PyCalibration& c) -> py::object {
@@ -325,10 +339,16 @@ void BindCalibration(py::module_& m) {
           "parameter_names' order) and std, noise_sigma_raw, scatter ratios, stills (per "
           "position: the samples where the gyro was still, its mean raw rate there, the angle "
           "it turned outside them), time_offset (the gyro's lag behind the accelerometer, "
-          "lag_s and std_s), rotations (dicts; from and to count positions from 0), "
+          "lag_s and std_s), rotations (dicts; from and to are position numbers, from 1), "
           "rms_deg and heldout_rms_deg")
       .def_property_readonly(
           "source", [](const PyCalibration& c) { return c.source; }, "The input file, or ''")
+      // Pickled as the call that restores it (every protocol, 0 included).
+      .def("__reduce__",
+           [](const PyCalibration& c) {
+             return py::make_tuple(py::module_::import("accelcal").attr("_restore_result"),
+                                   py::make_tuple(py::bytes(SaveState(c))));
+           })
       .def(
           "apply",
           [](const PyCalibration& c, const Rows& readings) {
@@ -397,8 +417,12 @@ void BindCalibration(py::module_& m) {
         const CalibrationOptions options = MakeOptions(s);
         std::vector<Vec3> sigmas;
         if (reading_sigmas) sigmas = ToVectors(*reading_sigmas);
-        PyCalibration c =
-            Fit(PositionsOf(readings), std::move(sigmas), s, options, nullptr, nullptr, "");
+        std::vector<Position> positions = PositionsOf(readings);
+        PyCalibration c;
+        {
+          py::gil_scoped_release release;
+          c = Fit(std::move(positions), std::move(sigmas), s, options, nullptr, nullptr, "");
+        }
         c.provenance.command = "accelcal Python calibrate";
         c.provenance.options = SettingsJson(s);
         c.provenance.options["reading_sigmas"] = reading_sigmas.has_value();
@@ -415,16 +439,19 @@ void BindCalibration(py::module_& m) {
 
   m.def(
       "calibrate_log",
-      [](const std::string& path, const std::string& model, const std::string& method,
+      [](const py::object& path_arg, const std::string& model, const std::string& method,
          const std::string& frame, double gravity, const std::string& estimator,
          std::vector<std::string> columns, std::optional<double> rate_hz, double window_s,
          double min_static_s, double threshold_factor, double init_rest_s, bool cross_validate,
          const std::string& outliers, double outlier_probability, int max_outliers,
          std::optional<std::string> units, const std::string& time_unit,
          std::optional<double> instance, const std::string& input_kind, int max_iterations,
-         std::optional<std::string> gyro, std::vector<std::string> gyro_columns,
+         const py::object& gyro_arg, std::vector<std::string> gyro_columns,
          const std::string& gyro_units, const std::string& gyro_model,
          std::optional<std::string> gyro_estimator) {
+        const std::string path = PathString(path_arg, "calibrate_log");
+        std::optional<std::string> gyro;
+        if (!gyro_arg.is_none()) gyro = PathString(gyro_arg, "gyro");
         const FitSettings s{model,        method,         frame,           gravity,
                             estimator,    cross_validate, outliers,        outlier_probability,
                             max_outliers, max_iterations, std::move(units)};
@@ -463,6 +490,7 @@ void BindCalibration(py::module_& m) {
         load.read = read;
         load.detection = detection_options;
         try {
+          py::gil_scoped_release release;  // taken again to build the Python result
           const LoadedInput in = LoadPositions({path}, load);
           const LoadedFile& file = in.files.front();
           const std::vector<Position>& positions = in.positions;
@@ -514,7 +542,9 @@ void BindCalibration(py::module_& m) {
               c.provenance.inputs.push_back({gyro_path, rates.bytes, rates.sha256});
             }
           }
-          return py::make_tuple(std::move(c), ToRows(Means(positions)));
+          Rows means = ToRows(Means(positions));
+          py::gil_scoped_acquire acquire;
+          return py::make_tuple(std::move(c), std::move(means));
         } catch (const DataError& e) {
           throw DataError(path + ": " + e.what());  // as the command line names the input
         }
@@ -527,8 +557,8 @@ void BindCalibration(py::module_& m) {
       py::arg("cross_validate") = true, py::kw_only(), py::arg("outliers") = "exclude",
       py::arg("outlier_probability") = 1e-3, py::arg("max_outliers") = 3,
       py::arg("units") = std::nullopt, py::arg("time_unit") = "auto",
-      py::arg("instance") = std::nullopt, py::arg("input_kind") = "raw",
-      py::arg("max_iterations") = 0, py::arg("gyro") = std::nullopt,
+      py::arg("instance") = std::nullopt, py::arg("input_kind") = "auto",
+      py::arg("max_iterations") = 0, py::arg("gyro") = py::none(),
       py::arg("gyro_columns") = std::vector<std::string>{}, py::arg("gyro_units") = "raw",
       py::arg("gyro_model") = "auto", py::arg("gyro_estimator") = std::nullopt,
       "What `accelcal calibrate INPUT` does, diagnosis included; returns (result, positions) "

@@ -26,6 +26,19 @@
 
 namespace accelcal::python {
 
+std::string PathString(const py::handle& path, const char* what) {
+  const py::module_ os = py::module_::import("os");
+  py::object name;
+  try {
+    name = os.attr("fsdecode")(os.attr("fspath")(path));
+  } catch (py::error_already_set& e) {
+    if (!e.matches(PyExc_TypeError)) throw;
+    throw py::type_error(std::string(what) + ": a file name (str, bytes or os.PathLike), not " +
+                         py::str(py::type::handle_of(path).attr("__name__")).cast<std::string>());
+  }
+  return name.cast<std::string>();
+}
+
 std::vector<Vec3> ToVectors(const Rows& rows) {
   std::vector<Vec3> v(static_cast<std::size_t>(rows.rows()));
   for (Eigen::Index k = 0; k < rows.rows(); ++k)
@@ -319,7 +332,10 @@ py::dict SelectionDict(const ModelSelection& s) {
   d["chosen"] = std::string(ToString(s.chosen));
   d["reason"] = s.reason;
   d["screened_with"] = std::string(ToString(s.screened_with));
-  d["positions_used"] = s.positions_used;  // 0-based
+  // Position numbers, from 1, as the file and the tool count them.
+  std::vector<int> used;
+  for (const int k : s.positions_used) used.push_back(k + 1);
+  d["positions_used"] = used;
   d["linear_crossval_rms"] = s.linear.crossval_rms;
   d["quadratic_crossval_rms"] =
       s.quadratic ? py::object(py::cast(s.quadratic->crossval_rms)) : py::none();

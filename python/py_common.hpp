@@ -38,6 +38,10 @@ T Parse(std::optional<T> value, const std::string& text, const char* what) {
   return *value;
 }
 
+/// A file name given as str, bytes or os.PathLike (pathlib.Path), as the library takes it;
+/// TypeError naming `what` for anything else.
+std::string PathString(const py::handle& path, const char* what);
+
 /// A number as Python prints it.
 std::string Number(double v);
 /// Corrected specific force of every row (the quadratic model's failures name the row).

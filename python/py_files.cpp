@@ -27,26 +27,76 @@
 
 namespace accelcal::python {
 
+namespace {
+
+// Python's Calibration: a file read, with its text (what it pickles as) and name.
+struct PyLoadedCalibration : LoadedCalibration {
+  std::string text, name;
+};
+
+PyLoadedCalibration LoadCalibrationText(std::string text, std::string name) {
+  PyLoadedCalibration c;
+  static_cast<LoadedCalibration&>(c) = ParseCalibrationJson(text, name);
+  c.text = std::move(text);
+  c.name = std::move(name);
+  return c;
+}
+
+}  // namespace
+
 void BindFilesAndLogs(py::module_& m) {
-  py::class_<LoadedCalibration>(m, "Calibration", "A calibration read from its file")
+  py::class_<PyLoadedCalibration>(
+      m, "Calibration",
+      "A calibration read from its file (load_calibration, parse_calibration_json): the "
+      "accelerometer's model and parameters, what made it, and the file's text (pickled as that "
+      "text)")
       .def_property_readonly(
-          "model", [](const LoadedCalibration& c) { return std::string(ToString(c.model)); })
+          "model", [](const PyLoadedCalibration& c) { return std::string(ToString(c.model)); },
+          "'linear' or 'quadratic'")
       .def_property_readonly(
-          "frame", [](const LoadedCalibration& c) { return std::string(ToString(c.frame)); })
-      .def_readonly("gravity", &LoadedCalibration::gravity)
+          "frame", [](const PyLoadedCalibration& c) { return std::string(ToString(c.frame)); },
+          "'x-first', 'z-first' or 'platform'")
+      .def_readonly("gravity", &LoadedCalibration::gravity,
+                    "The magnitude of gravity of the fit, in units")
       .def_property_readonly(
-          "units", [](const LoadedCalibration& c) { return std::string(ToString(c.unit)); })
-      .def_readonly("raw_units", &LoadedCalibration::raw_unit)
-      .def_property_readonly("K", [](const LoadedCalibration& c) { return Mat33(c.params.K); })
-      .def_property_readonly("bias", [](const LoadedCalibration& c) { return Vec3(c.params.bias); })
-      .def_property_readonly("k2", [](const LoadedCalibration& c) { return Vec3(c.params.k2); })
+          "units", [](const PyLoadedCalibration& c) { return std::string(ToString(c.unit)); },
+          "The unit of gravity and of the calibrated specific force: 'm/s2' or 'g'")
+      .def_readonly("raw_units", &LoadedCalibration::raw_unit,
+                    "The label of the raw readings' unit (units.raw)")
+      .def_property_readonly(
+          "K", [](const PyLoadedCalibration& c) { return Mat33(c.params.K); },
+          "K (3 x 3) [raw per unit of specific force]")
+      .def_property_readonly(
+          "bias", [](const PyLoadedCalibration& c) { return Vec3(c.params.bias); }, "b (3) [raw]")
+      .def_property_readonly(
+          "k2", [](const PyLoadedCalibration& c) { return Vec3(c.params.k2); },
+          "k2 (3) [raw per unit squared] (zeros for the linear model)")
+      .def_property_readonly(
+          "covariance",
+          [](const PyLoadedCalibration& c) -> std::optional<Eigen::MatrixXd> {
+            if (c.covariance.size() == 0) return std::nullopt;
+            return c.covariance;
+          },
+          "The parameters' covariance in parameter_names' order, or None (a file without one)")
+      .def_property_readonly(
+          "parameter_names",
+          [](const PyLoadedCalibration& c) {
+            std::vector<std::string> names;
+            for (const ParameterSlot& s : ParameterSlots(c.model, c.frame))
+              names.emplace_back(s.name);
+            return names;
+          },
+          "The names of the covariance's rows (K_xx, b_x, ...)")
+      .def_property_readonly(
+          "has_gyroscope", [](const PyLoadedCalibration& c) { return c.has_gyroscope(); },
+          "Whether the file holds a gyroscope's calibration (sensors.gyroscope)")
       .def_readonly("version", &LoadedCalibration::version, "The file's format version (1 or 2)")
       .def_readonly("verdict", &LoadedCalibration::verdict,
                     "\"ok\", \"warnings\" or \"failed\" ('' in files older than diagnoses)")
       .def_readonly("source", &LoadedCalibration::source, "The calibrated input's name")
       .def_property_readonly(
           "provenance",
-          [](const LoadedCalibration& c) -> py::object {
+          [](const PyLoadedCalibration& c) -> py::object {
             if (c.version < 2) return py::none();
             const Provenance& p = c.provenance;
             py::dict d;
@@ -69,27 +119,53 @@ void BindFilesAndLogs(py::module_& m) {
           "options, inputs (name, bytes, sha256), date (None when none was given)")
       .def(
           "apply",
-          [](const LoadedCalibration& c, const Rows& readings) {
+          [](const PyLoadedCalibration& c, const Rows& readings) {
             return Apply(c.params, readings);
           },
-          py::arg("readings"));
+          py::arg("readings"),
+          "Corrected specific force (n x 3) of raw readings (n x 3), in the file's units")
+      .def_property_readonly(
+          "text", [](const PyLoadedCalibration& c) { return c.text; },
+          "The calibration file's text, as read")
+      // Pickled as the call that reads its text again (every protocol, 0 included).
+      .def("__reduce__", [](const PyLoadedCalibration& c) {
+        return py::make_tuple(py::module_::import("accelcal").attr("_restore_calibration"),
+                              py::make_tuple(c.text, c.name));
+      });
 
-  m.def("parse_calibration_json", &ParseCalibrationJson, py::arg("text"),
-        py::arg("source") = "<string>", "Reads a calibration file's text (accelcal calibrate -o)");
+  m.def(
+      "parse_calibration_json",
+      [](const std::string& text, const std::string& source) {
+        return LoadCalibrationText(text, source);
+      },
+      py::arg("text"), py::arg("source") = "<string>",
+      "Reads a calibration file's text (accelcal calibrate -o); `source` names it in errors");
   m.def(
       "load_calibration",
-      [](const std::string& path) {
-        return ParseCalibrationJson(ReadFileToString(path, kMaxSmallFileBytes), path);
+      [](const py::object& path) {
+        const std::string name = PathString(path, "load_calibration");
+        std::string text;
+        {
+          py::gil_scoped_release release;
+          text = ReadFileToString(name, kMaxSmallFileBytes);
+        }
+        return LoadCalibrationText(std::move(text), name);
       },
-      py::arg("path"));
+      py::arg("path"), "Reads a calibration file (accelcal calibrate -o FILE)");
 
   m.def(
       "read_input",
-      [](const std::string& path, const std::string& kind, std::vector<std::string> columns,
+      [](const py::object& path_arg, const std::string& kind, std::vector<std::string> columns,
          std::optional<double> rate_hz, const std::string& time_unit,
          std::optional<double> instance) {
-        const InputData data = ReadInput(
-            path, MakeReadOptions(kind, std::move(columns), rate_hz, time_unit, instance));
+        const std::string path = PathString(path_arg, "read_input");
+        const ReadOptions options =
+            MakeReadOptions(kind, std::move(columns), rate_hz, time_unit, instance);
+        InputData data;
+        {
+          py::gil_scoped_release release;
+          data = ReadInput(path, options);
+        }
         py::dict d;
         d["kind"] = data.kind == InputKind::kRaw ? "raw" : "positions";
         d["kind_reason"] = data.kind_reason;
@@ -146,7 +222,12 @@ void BindFilesAndLogs(py::module_& m) {
         const StaticDetectionOptions o =
             DetectionOptions(window_s, min_static_s, threshold_factor, init_rest_s);
         const RawLog log = LogFromArrays(time, samples, rate_hz, time_unit);
-        return DetectionDict(DetectStaticIntervals(log, o), log);
+        StaticDetectionResult found;
+        {
+          py::gil_scoped_release release;
+          found = DetectStaticIntervals(log, o);
+        }
+        return DetectionDict(found, log);
       },
       py::arg("samples"), py::arg("time") = std::nullopt, py::arg("rate_hz") = std::nullopt,
       py::arg("window_s") = 0.5, py::arg("min_static_s") = 1.0, py::arg("threshold_factor") = 10.0,
@@ -202,6 +283,7 @@ void BindFilesAndLogs(py::module_& m) {
           input.log = &log;
         }
         input.calibration = ParseCalibrationJson(json_text, input.calibration_name);
+        py::gil_scoped_release release;
         return RenderReport(input);
       },
       py::arg("json_text"), py::arg("samples") = std::nullopt, py::arg("time") = std::nullopt,

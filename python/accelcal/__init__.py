@@ -11,9 +11,17 @@ carries its diagnosis (diagnosis.hpp, docs/diagnostics.md), as the calibration f
 
 - ``result.verdict``: ``"ok"`` (notes at most), ``"warnings"`` or ``"failed"``;
 - ``result.diagnostics``: the findings, failures first, then warnings, then notes, each a dict
-  ``{"code", "severity", "message", "numbers"}`` (``numbers`` a dict of floats; position numbers
-  in messages and numbers count from 1, as in the file; ``result.outliers[i]["position"]`` and
-  every other index of the Python API count from 0).
+  ``{"code", "severity", "message", "numbers"}`` (``numbers`` a dict of floats).
+
+Position numbers count from 1 everywhere, as in the calibration file, the messages and the
+command line: ``result.outliers[i]["position"]``, a gyroscope turn's ``from`` and ``to``,
+``model_selection["positions_used"]``. Rows of numpy arrays are indexed from 0 as always, so
+position k is row k - 1 of ``positions``. Sample indices (``first_sample``, a detection's
+``begin``) are 0-based offsets into the log, as in the file.
+
+Results pickle (``CalibrationResult`` exactly, every double's bits; ``Calibration`` as its file's
+text), print their parameters with ``repr``, and take file names as ``str`` or ``os.PathLike``.
+The long computations release the GIL, so threads calibrate concurrently.
 
 ``calibrate_log`` still returns ``(result, positions)``, so the diagnosis rides on the result
 rather than on a new return type: old code keeps working, and the verdict cannot be lost by
@@ -33,11 +41,14 @@ positions, or a raw log and detection from arrays) and only returns it.
 
 import warnings as _warnings
 
+import numpy as _np
+
 from ._accelcal import (  # noqa: F401
     Calibration,
     CalibrationResult,
     DataError,
     InputError,
+    __version__,
     detect_static_intervals,
     export_calibration,
     load_calibration,
@@ -46,6 +57,78 @@ from ._accelcal import (  # noqa: F401
     render_report,
 )
 from . import _accelcal
+
+__all__ = [
+    "Calibration", "CalibrationCheckFailed", "CalibrationResult", "CalibrationWarning",
+    "DataError", "InputError", "__version__", "apply", "calibrate", "calibrate_log",
+    "detect_static_intervals", "diagnose", "export_calibration", "load_calibration",
+    "parse_calibration_json", "read_input", "render_report",
+]
+
+
+def _entry(value, std):
+    """'value' or 'value ± std' in 7 significant digits (std in 2)."""
+    text = f"{value:.7g}"
+    return text if std is None or not _np.isfinite(std) else f"{text} ± {std:.2g}"
+
+
+def _parameter_lines(names, K, bias, k2, covariance, model, units, raw):
+    """The parameters with their 1 sigma, one matrix row per line."""
+    std = {}
+    if covariance is not None:
+        std = dict(zip(names, _np.sqrt(_np.clip(_np.diag(covariance), 0, None))))
+    axes = "xyz"
+    rows = [[_entry(K[i, j], std.get(f"K_{axes[i]}{axes[j]}")) for j in range(3)]
+            for i in range(3)]
+    width = max(len(e) for row in rows for e in row)
+    lines = [f"  K [{raw} per {units}] =" if raw else f"  K [raw per {units}] ="]
+    lines += ["    [" + "  ".join(e.rjust(width) for e in row) + "]" for row in rows]
+    lines.append("  bias [raw] = [" + ", ".join(
+        _entry(bias[i], std.get(f"b_{axes[i]}")) for i in range(3)) + "]")
+    if model == "quadratic":
+        lines.append(f"  k2 [raw per ({units})^2] = [" + ", ".join(
+            _entry(k2[i], std.get(f"k2_{axes[i]}")) for i in range(3)) + "]")
+    return lines
+
+
+def _result_repr(self):
+    lines = [f"<accelcal.CalibrationResult: {self.model} model, {len(self.directions)} positions, "
+             f"verdict {self.verdict!r}" + (f", from {self.source!r}" if self.source else "")]
+    lines += _parameter_lines(self.parameter_names, self.K, self.bias, self.k2, self.covariance,
+                              self.model, self.units, None)
+    if self.crossval_rms is not None:
+        lines.append(f"  held-out RMS of |f| - g = {self.crossval_rms:.4g} {self.units}")
+    if self.gyroscope is not None:
+        g = self.gyroscope
+        lines.append(f"  gyroscope: {g['model']} model, K [raw per rad/s] diagonal "
+                     f"{_np.array2string(_np.diag(g['K']), precision=6)}, bias [raw] "
+                     f"{_np.array2string(g['bias'], precision=6)}, held-out "
+                     f"{g['heldout_rms_deg']:.3g} deg")
+    return "\n".join(lines) + ">"
+
+
+def _calibration_repr(self):
+    lines = [f"<accelcal.Calibration: {self.model} model, verdict {self.verdict or 'unknown'!r}"
+             + (f", of {self.source!r}" if self.source else "")]
+    lines += _parameter_lines(self.parameter_names, self.K, self.bias, self.k2, self.covariance,
+                              self.model, self.units, self.raw_units if self.raw_units != "raw"
+                              else None)
+    return "\n".join(lines) + ">"
+
+
+def _restore_result(state):
+    """A CalibrationResult from its pickled state (what pickle calls: a function of the package,
+    found by its name)."""
+    return _accelcal._result_from_state(state)
+
+
+def _restore_calibration(text, source):
+    """A Calibration from its pickled state, its file's text and name."""
+    return parse_calibration_json(text, source)
+
+
+CalibrationResult.__repr__ = _result_repr
+Calibration.__repr__ = _calibration_repr
 
 
 class CalibrationWarning(UserWarning):
@@ -120,7 +203,7 @@ def calibrate_log(path, model="linear", method="joint", frame="x-first", gravity
                   estimator="ml", columns=(), rate_hz=None, window_s=0.5, min_static_s=1.0,
                   threshold_factor=10.0, init_rest_s=0.0, cross_validate=True, *,
                   outliers="exclude", outlier_probability=1e-3, max_outliers=3, units=None,
-                  time_unit="auto", instance=None, input_kind="raw", max_iterations=0,
+                  time_unit="auto", instance=None, input_kind="auto", max_iterations=0,
                   gyro=None, gyro_columns=(), gyro_units="raw", gyro_model="auto",
                   gyro_estimator=None):
     """What ``accelcal calibrate LOG`` does: read, detect the static intervals, average them,
@@ -137,10 +220,12 @@ def calibrate_log(path, model="linear", method="joint", frame="x-first", gravity
     the command line's: columns (--columns: 3 or 4 column numbers or header names), rate_hz
     (--rate), time_unit ("auto", "s", "ms", "us", "ns": --time-unit; "auto" decides from the
     column's name and step, time_axis.hpp), instance (--instance: the sensor to keep of a file
-    whose instance column holds several), input_kind ("raw", "positions" or "auto":
-    --input-kind), window_s, min_static_s, threshold_factor, init_rest_s (detection),
+    whose instance column holds several), input_kind ("auto", the default as on the command
+    line, "raw" or "positions": a positions file is calibrated as it is), window_s, min_static_s, threshold_factor, init_rest_s (detection),
     max_iterations (--max-iterations). Raises InputError (unreadable or malformed file) or
     DataError (no static interval, too few positions), both naming the file.
+
+    ``path`` and ``gyro`` are str or os.PathLike.
 
     The gyroscope recorded through the same positions (``calibrate --gyro``): ``gyro`` its log
     on the same clock, or ``gyro_columns`` its columns in this log (or in ``gyro``'s);
@@ -156,9 +241,9 @@ def calibrate_log(path, model="linear", method="joint", frame="x-first", gravity
         outlier_probability=outlier_probability, max_outliers=max_outliers, units=units,
         time_unit=time_unit, instance=instance, input_kind=input_kind,
         max_iterations=max_iterations,
-        gyro=None if gyro is None else str(gyro), gyro_columns=list(gyro_columns),
+        gyro=gyro, gyro_columns=list(gyro_columns),
         gyro_units=gyro_units, gyro_model=gyro_model, gyro_estimator=gyro_estimator)
-    _emit_diagnosis(result, str(path), stacklevel=2)
+    _emit_diagnosis(result, result.source, stacklevel=2)
     return result, positions
 
 

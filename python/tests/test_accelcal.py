@@ -97,8 +97,8 @@ def test_a_corrupted_position_is_excluded_as_the_cli_excludes_it(tmp_path):
     doc = sensor(cli.read_text())
     with pytest.warns(accelcal.CalibrationWarning, match="position 8 disagrees"):
         result = accelcal.calibrate(moved, gravity=9.81744)
-    assert [o["position"] for o in result.outliers] == [7]
-    # The diagnosis counts from 1, as the file and the messages do.
+    # Position numbers count from 1 everywhere: the result, the diagnosis, the file, the messages.
+    assert [o["position"] for o in result.outliers] == [8]
     outlier = [f for f in result.diagnostics if f["code"] == "outlier"]
     assert len(outlier) == 1 and outlier[0]["numbers"]["position"] == 8
     assert result.verdict == "warnings"
@@ -229,7 +229,7 @@ def test_calibrate_log_with_the_gyroscope_is_the_cli_calibration(tmp_path):
     np.testing.assert_array_equal(g["K"], np.array(doc["K"]))
     np.testing.assert_array_equal(g["bias"], np.array(doc["bias"]))
     assert len(g["rotations"]) == len(doc["rotations"]) == 37
-    assert g["rotations"][0]["from"] == 0 and doc["rotations"][0]["from"] == 1
+    assert g["rotations"][0]["from"] == doc["rotations"][0]["from"] == 1
     assert g["heldout_rms_deg"] == doc["validation"]["heldout_rms_deg"]
     np.testing.assert_array_equal(result.K, np.array(sensor(text)["K"]))
     assert result.verdict == sensor(text)["verdict"]

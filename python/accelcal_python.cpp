@@ -38,4 +38,5 @@ PYBIND11_MODULE(_accelcal, m) {
 
   python::BindCalibration(m);
   python::BindFilesAndLogs(m);
+  python::BindCommands(m);
 }

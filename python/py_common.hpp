@@ -69,8 +69,9 @@ ReadOptions MakeReadOptions(const std::string& kind, std::vector<std::string> co
                             std::optional<double> rate_hz, const std::string& time_unit,
                             std::optional<double> instance);
 
-/// The parts of the module (py_calibration.cpp, py_files.cpp).
+/// The parts of the module (py_calibration.cpp, py_files.cpp, py_commands.cpp).
 void BindCalibration(py::module_& m);
 void BindFilesAndLogs(py::module_& m);
+void BindCommands(py::module_& m);
 
 }  // namespace accelcal::python

@@ -73,8 +73,8 @@ void Fields(V& v, BiasTimeBasis& b) {
 }
 template <typename V>
 void Fields(V& v, BiasDrift& d) {
-  v("basis", d.basis)("D", d.D)("covariance", d.covariance)("times_s", d.times_s)(
-      "random_walk", d.random_walk);
+  v("basis", d.basis)("D", d.D)("covariance", d.covariance)("times_s", d.times_s)("random_walk",
+                                                                                  d.random_walk);
 }
 template <typename V>
 void Fields(V& v, ThermalDegrees& d) {
@@ -94,10 +94,9 @@ void Fields(V& v, CalibrationResult& r) {
       "directions", r.directions)("residuals", r.residuals)("covariance", r.covariance)(
       "residual_sigma", r.residual_sigma)("noise_source", r.noise_source)(
       "scatter_ratio", r.scatter_ratio)("degrees_of_freedom", r.degrees_of_freedom)(
-      "summary", r.summary)("drift", r.drift)("thermal", r.thermal)(
-      "crossval_rms", r.crossval_rms)("crossval_errors", r.crossval_errors)(
-      "crossval_note", r.crossval_note)("outliers", r.outliers)("outlier_note", r.outlier_note)(
-      "screening", r.screening);
+      "summary", r.summary)("drift", r.drift)("thermal", r.thermal)("crossval_rms", r.crossval_rms)(
+      "crossval_errors", r.crossval_errors)("crossval_note", r.crossval_note)(
+      "outliers", r.outliers)("outlier_note", r.outlier_note)("screening", r.screening);
 }
 template <typename V>
 void Fields(V& v, ModelSelection& s) {
@@ -109,13 +108,13 @@ void Fields(V& v, ModelSelection& s) {
 }
 template <typename V>
 void Fields(V& v, StaticInterval& i) {
-  v("begin", i.begin)("end", i.end)("t_begin_s", i.t_begin_s)("t_end_s", i.t_end_s)(
-      "mean", i.mean)("std", i.std)("averaged", i.averaged)("temperature_c", i.temperature_c);
+  v("begin", i.begin)("end", i.end)("t_begin_s", i.t_begin_s)("t_end_s", i.t_end_s)("mean", i.mean)(
+      "std", i.std)("averaged", i.averaged)("temperature_c", i.temperature_c);
 }
 template <typename V>
 void Fields(V& v, Position& p) {
-  v("mean", p.mean)("samples", p.samples)("std", p.std)("interval", p.interval)(
-      "temperature_c", p.temperature_c);
+  v("mean", p.mean)("samples", p.samples)("std", p.std)("interval", p.interval)("temperature_c",
+                                                                                p.temperature_c);
 }
 template <typename V>
 void Fields(V& v, Finding& f) {
@@ -128,8 +127,8 @@ void Fields(V& v, Diagnosis& d) {
 template <typename V>
 void Fields(V& v, SourceStream& s) {
   v("format", s.format)("topic", s.topic)("type", s.type)("instance", s.instance)(
-      "device_id", s.device_id)("unit", s.unit)("corrected", s.corrected)(
-      "calibration_in_force", s.calibration_in_force);
+      "device_id", s.device_id)("unit", s.unit)("corrected", s.corrected)("calibration_in_force",
+                                                                          s.calibration_in_force);
 }
 template <typename V>
 void Fields(V& v, InputRecord& i) {
@@ -148,15 +147,15 @@ void Fields(V& v, GyroStillSpan& s) {
 template <typename V>
 void Fields(V& v, GyroTimeOffset& t) {
   v("lag_s", t.lag_s)("std_s", t.std_s)("step_s", t.step_s)("turns", t.turns)("at_limit",
-                                                                                  t.at_limit);
+                                                                              t.at_limit);
 }
 template <typename V>
 void Fields(V& v, GyroRotation& r) {
   v("from", r.from)("to", r.to)("first_sample", r.first_sample)("last_sample", r.last_sample)(
       "duration_s", r.duration_s)("angle_deg", r.angle_deg)("turned_deg", r.turned_deg)(
       "turned_std_deg", r.turned_std_deg)("residual_deg", r.residual_deg)(
-      "heldout_deg", r.heldout_deg)("statistic", r.statistic)("threshold", r.threshold)(
-      "flagged", r.flagged);
+      "heldout_deg", r.heldout_deg)("statistic", r.statistic)("threshold", r.threshold)("flagged",
+                                                                                        r.flagged);
 }
 template <typename V>
 void Fields(V& v, GyroThermalBias& b) {
@@ -178,9 +177,8 @@ void Fields(V& v, GyroCalibration& g) {
                                                     g.rotation_scatter_ratio)(
       "accel_scatter_ratio", g.accel_scatter_ratio)("summary", g.summary)(
       "latitude_deg", g.latitude_deg)("earth_rate_vertical_rad_s", g.earth_rate_vertical_rad_s)(
-      "earth_rate_horizontal_rad_s", g.earth_rate_horizontal_rad_s)("accelerometer",
-                                                                    g.accelerometer)(
-      "thermal", g.thermal);
+      "earth_rate_horizontal_rad_s", g.earth_rate_horizontal_rad_s)(
+      "accelerometer", g.accelerometer)("thermal", g.thermal);
 }
 template <typename V>
 void Fields(V& v, PyCalibration& c) {
@@ -193,27 +191,44 @@ void Fields(V& v, PyCalibration& c) {
 // A struct that gains a field must have it in its list above: these sizes (x86-64, libstdc++)
 // are those of the structs the lists were written for.
 #if defined(__x86_64__) && defined(__GLIBCXX__)
-static_assert(sizeof(CalibrationResult) == 760, "CalibrationResult changed: update its field list (py_state.cpp)");
+static_assert(sizeof(CalibrationResult) == 760,
+              "CalibrationResult changed: update its field list (py_state.cpp)");
 static_assert(sizeof(Summary) == 112, "Summary changed: update its field list (py_state.cpp)");
-static_assert(sizeof(OutlierFinding) == 56, "OutlierFinding changed: update its field list (py_state.cpp)");
+static_assert(sizeof(OutlierFinding) == 56,
+              "OutlierFinding changed: update its field list (py_state.cpp)");
 static_assert(sizeof(BiasDrift) == 136, "BiasDrift changed: update its field list (py_state.cpp)");
-static_assert(sizeof(ThermalTerms) == 96, "ThermalTerms changed: update its field list (py_state.cpp)");
-static_assert(sizeof(ModelSelection) == 1688, "ModelSelection changed: update its field list (py_state.cpp)");
+static_assert(sizeof(ThermalTerms) == 96,
+              "ThermalTerms changed: update its field list (py_state.cpp)");
+static_assert(sizeof(ModelSelection) == 1688,
+              "ModelSelection changed: update its field list (py_state.cpp)");
 static_assert(sizeof(Position) == 192, "Position changed: update its field list (py_state.cpp)");
 static_assert(sizeof(Finding) == 96, "Finding changed: update its field list (py_state.cpp)");
-static_assert(sizeof(SourceStream) == 208, "SourceStream changed: update its field list (py_state.cpp)");
-static_assert(sizeof(InputRecord) == 288, "InputRecord changed: update its field list (py_state.cpp)");
-static_assert(sizeof(Provenance) == 136, "Provenance changed: update its field list (py_state.cpp)");
-static_assert(sizeof(GyroRotation) == 104, "GyroRotation changed: update its field list (py_state.cpp)");
-static_assert(sizeof(GyroThermal) == 176, "GyroThermal changed: update its field list (py_state.cpp)");
-static_assert(sizeof(GyroCalibration) == 1496, "GyroCalibration changed: update its field list (py_state.cpp)");
-static_assert(sizeof(PyCalibration) == 4312, "PyCalibration changed: update its field list (py_state.cpp)");
-static_assert(sizeof(StaticInterval) == 104, "StaticInterval changed: update its field list (py_state.cpp)");
-static_assert(sizeof(BiasTimeBasis) == 40, "BiasTimeBasis changed: update its field list (py_state.cpp)");
-static_assert(sizeof(ThermalParameters) == 48, "ThermalParameters changed: update its field list (py_state.cpp)");
-static_assert(sizeof(GyroStillSpan) == 48, "GyroStillSpan changed: update its field list (py_state.cpp)");
-static_assert(sizeof(GyroTimeOffset) == 40, "GyroTimeOffset changed: update its field list (py_state.cpp)");
-static_assert(sizeof(GyroThermalBias) == 56, "GyroThermalBias changed: update its field list (py_state.cpp)");
+static_assert(sizeof(SourceStream) == 208,
+              "SourceStream changed: update its field list (py_state.cpp)");
+static_assert(sizeof(InputRecord) == 288,
+              "InputRecord changed: update its field list (py_state.cpp)");
+static_assert(sizeof(Provenance) == 136,
+              "Provenance changed: update its field list (py_state.cpp)");
+static_assert(sizeof(GyroRotation) == 104,
+              "GyroRotation changed: update its field list (py_state.cpp)");
+static_assert(sizeof(GyroThermal) == 176,
+              "GyroThermal changed: update its field list (py_state.cpp)");
+static_assert(sizeof(GyroCalibration) == 1496,
+              "GyroCalibration changed: update its field list (py_state.cpp)");
+static_assert(sizeof(PyCalibration) == 4312,
+              "PyCalibration changed: update its field list (py_state.cpp)");
+static_assert(sizeof(StaticInterval) == 104,
+              "StaticInterval changed: update its field list (py_state.cpp)");
+static_assert(sizeof(BiasTimeBasis) == 40,
+              "BiasTimeBasis changed: update its field list (py_state.cpp)");
+static_assert(sizeof(ThermalParameters) == 48,
+              "ThermalParameters changed: update its field list (py_state.cpp)");
+static_assert(sizeof(GyroStillSpan) == 48,
+              "GyroStillSpan changed: update its field list (py_state.cpp)");
+static_assert(sizeof(GyroTimeOffset) == 40,
+              "GyroTimeOffset changed: update its field list (py_state.cpp)");
+static_assert(sizeof(GyroThermalBias) == 56,
+              "GyroThermalBias changed: update its field list (py_state.cpp)");
 static_assert(sizeof(Diagnosis) == 24, "Diagnosis changed: update its field list (py_state.cpp)");
 #endif
 
@@ -347,8 +362,8 @@ PyCalibration LoadState(const std::string& bytes) {
   }
   const std::string version = state.value("accelcal_version", "");
   if (version != Version()) {
-    throw py::value_error("a CalibrationResult pickled by accelcal " + version + " cannot be read by " +
-                          std::string(Version()) +
+    throw py::value_error("a CalibrationResult pickled by accelcal " + version +
+                          " cannot be read by " + std::string(Version()) +
                           ": carry results between versions as calibration files (to_json)");
   }
   PyCalibration c;

@@ -4,7 +4,9 @@
 #include <chrono>
 #include <cstdio>
 #include <exception>
+#include <sstream>
 #include <string_view>
+#include <vector>
 
 #include <CLI/CLI.hpp>
 
@@ -148,6 +150,58 @@ std::string ChosenCommand(int argc, char** argv) {
   return "";
 }
 
+// CLI11's help and version, through the tool's console.
+int ExitWith(const CLI::App& app, const CLI::Error& e) {
+  std::ostringstream out, err;
+  const int status = app.exit(e, out, err);
+  WriteOut(out.str());
+  WriteErr(err.str());
+  return status;
+}
+
+// Every command's options as JSON, for the Python package (accelcal.cli), which makes a function of
+// each command from it: the tool's own definitions, so that the functions cannot drift from them.
+std::string DescribeOptions(const CLI::App& app) {
+  using Json = nlohmann::ordered_json;
+  const auto describe = [](const CLI::Option* opt) {
+    Json o;
+    const bool positional = !opt->nonpositional();
+    o["name"] = positional ? opt->get_name() : opt->get_lnames().front();
+    o["positional"] = positional;
+    o["flag"] = opt->get_expected_max() == 0;
+    o["description"] = opt->get_description();
+    o["default"] = opt->get_default_str().empty() ? Json() : Json(opt->get_default_str());
+    o["required"] = opt->get_required();
+    o["many"] = opt->get_items_expected_max() > 1;
+    o["delimiter"] =
+        opt->get_delimiter() == '\0' ? Json() : Json(std::string(1, opt->get_delimiter()));
+    return o;
+  };
+  Json doc;
+  doc["version"] = std::string(accelcal::Version());
+  Json& global = doc["options"] = Json::array();
+  for (const CLI::Option* opt : app.get_options()) {
+    if (opt->get_lnames().empty() || opt->get_lnames().front() == "help" ||
+        opt->get_lnames().front() == "version") {
+      continue;
+    }
+    global.push_back(describe(opt));
+  }
+  Json& commands = doc["commands"] = Json::array();
+  for (const CLI::App* sub : app.get_subcommands([](const CLI::App*) { return true; })) {
+    Json c;
+    c["name"] = sub->get_name();
+    c["description"] = sub->get_description();
+    Json& options = c["options"] = Json::array();
+    for (const CLI::Option* opt : sub->get_options()) {
+      if (!opt->get_lnames().empty() && opt->get_lnames().front() == "help") continue;
+      options.push_back(describe(opt));
+    }
+    commands.push_back(std::move(c));
+  }
+  return accelcal::JsonText(doc);
+}
+
 // What a command that reads a gyroscope's log checks of its flags: a --gyro given names a file,
 // and the options that only act on the gyro (`gyro_only`) come with its rates.
 void CheckGyroFlags(const CLI::App& cmd, const std::string& gyro,
@@ -171,6 +225,23 @@ void CheckGyroFlags(const CLI::App& cmd, const std::string& gyro,
 }
 
 }  // namespace
+
+int accelcal::cli::RunCommandLineCaptured(const std::vector<std::string>& args, std::string* out,
+                                          std::string* err) {
+  struct Restore {  // this thread's console and verbosity as they were, however it ends
+    Console console;
+    Verbosity verbosity;
+    ~Restore() {
+      SetConsole(console);
+      SetVerbosity(verbosity);
+    }
+  } restore{SetConsole({out, err}), CurrentVerbosity()};
+  std::vector<std::string> copies = args;
+  std::vector<char*> argv;
+  for (std::string& a : copies) argv.push_back(a.data());
+  argv.push_back(nullptr);
+  return RunCommandLine(static_cast<int>(copies.size()), argv.data());
+}
 
 int accelcal::cli::RunCommandLine(int argc, char** argv) {
   CLI::App app{
@@ -674,6 +745,11 @@ int accelcal::cli::RunCommandLine(int argc, char** argv) {
                "also print diagnostics on stderr (detection thresholds, timings)")
       ->excludes(quiet_flag);
 
+  if (argc == 2 && std::string_view(argv[1]) == kDescribeOptionsFlag) {
+    WriteOut(DescribeOptions(app));
+    return kExitOk;
+  }
+
   // A list option given twice would be merged by CLI11 ("--gyro-columns 5 --gyro-columns 6,7"
   // as 5,6,7): refused as every other option given twice. An empty item ("20,,30", "20,") would
   // be dropped by it, the list shortened silently: refused too.
@@ -698,29 +774,29 @@ int accelcal::cli::RunCommandLine(int argc, char** argv) {
                                                     : std::string_view("x");
       if (items && (value.empty() || value.front() == ',' || value.back() == ',' ||
                     value.find(",,") != std::string_view::npos)) {
-        std::fprintf(stderr,
-                     "accelcal: usage: %s '%s' has an empty item: give each value once, "
-                     "comma-separated (see --help)\n",
-                     list, std::string(value).c_str());
+        WriteErr(
+            Format("accelcal: usage: %s '%s' has an empty item: give each value once, "
+                   "comma-separated (see --help)\n",
+                   list, std::string(value).c_str()));
         return kExitUsage;
       }
     }
     if (given > 1) {
-      std::fprintf(stderr,
-                   "accelcal: usage: %s given %d times: give it once (a list's values "
-                   "comma-separated; see --help)\n",
-                   list, given);
+      WriteErr(
+          Format("accelcal: usage: %s given %d times: give it once (a list's values "
+                 "comma-separated; see --help)\n",
+                 list, given));
       return kExitUsage;
     }
   }
   try {
     app.parse(argc, argv);
   } catch (const CLI::CallForHelp& e) {
-    return app.exit(e);
+    return ExitWith(app, e);
   } catch (const CLI::CallForAllHelp& e) {
-    return app.exit(e);
+    return ExitWith(app, e);
   } catch (const CLI::CallForVersion& e) {
-    return app.exit(e);
+    return ExitWith(app, e);
   } catch (const CLI::ParseError& e) {
     // Said as every other usage error is; an option given twice by what it is.
     std::string what = e.what();
@@ -729,7 +805,7 @@ int accelcal::cli::RunCommandLine(int argc, char** argv) {
       what =
           what.substr(0, at) + " given " + what.substr(at + twice.size()) + " times: give it once";
     }
-    std::fprintf(stderr, "accelcal: usage: %s (see --help)\n", what.c_str());
+    WriteErr(Format("accelcal: usage: %s (see --help)\n", what.c_str()));
     return kExitUsage;
   }
 
@@ -834,31 +910,31 @@ int accelcal::cli::RunCommandLine(int argc, char** argv) {
     FinishStdout();
     return status;
   } catch (const UsageError& e) {
-    std::fprintf(stderr, "accelcal: usage: %s\n", e.what());
+    WriteErr(Format("accelcal: usage: %s\n", e.what()));
     return kExitUsage;
   } catch (const accelcal::InputError& e) {
-    std::fprintf(stderr, "accelcal: %s\n", WithReaderFlags(e.what()).c_str());
+    WriteErr(Format("accelcal: %s\n", WithReaderFlags(e.what()).c_str()));
     return kExitBadInput;
   } catch (const accelcal::NotConvergedError& e) {
-    std::fprintf(stderr, "accelcal: %s: %s; nothing written\n", data_subject.c_str(), e.what());
+    WriteErr(Format("accelcal: %s: %s; nothing written\n", data_subject.c_str(), e.what()));
     return kExitNotConverged;
   } catch (const accelcal::DataError& e) {
     if (data_subject.empty()) {
-      std::fprintf(stderr, "accelcal: %s\n", e.what());
+      WriteErr(Format("accelcal: %s\n", e.what()));
     } else {
-      std::fprintf(stderr, "accelcal: %s: %s\n", data_subject.c_str(), e.what());
+      WriteErr(Format("accelcal: %s: %s\n", data_subject.c_str(), e.what()));
     }
     return kExitBadInput;
   } catch (const OutputError& e) {
-    std::fprintf(stderr, "accelcal: %s\n", e.what());
+    WriteErr(Format("accelcal: %s\n", e.what()));
     return kExitOutput;
   } catch (const std::bad_alloc&) {
-    std::fprintf(stderr,
-                 "accelcal: out of memory: the input (or what an option asks for) needs more "
-                 "memory than this machine can give\n");
+    WriteErr(
+        Format("accelcal: out of memory: the input (or what an option asks for) needs more "
+               "memory than this machine can give\n"));
     return kExitBadInput;
   } catch (const std::exception& e) {
-    std::fprintf(stderr, "accelcal: internal error: %s\n", e.what());
+    WriteErr(Format("accelcal: internal error: %s\n", e.what()));
     return kExitInternal;
   }
   return kExitUsage;

@@ -180,7 +180,7 @@ const RawLog& TheRawLogForGyro(const LoadedInput& in) {
 }
 
 std::string& DataSubject() {
-  static std::string subject;
+  thread_local std::string subject;  // per thread: the Python package runs commands in several
   return subject;
 }
 

@@ -248,8 +248,8 @@ void PrintFindings(const Diagnosis& diagnosis, const std::string& input_path,
     if (f.code == "outlier" || f.code == "rejected_period") continue;
     const std::string& path = f.code.rfind("gyro_", 0) == 0 ? gyro_path : input_path;
     if (f.severity == Severity::kFailure) {
-      std::fprintf(stderr, "accelcal: %s: failed check (%s): %s%s\n", path.c_str(), f.code.c_str(),
-                   f.message.c_str(), OptionHint(f));
+      WriteErr(Format("accelcal: %s: failed check (%s): %s%s\n", path.c_str(), f.code.c_str(),
+                      f.message.c_str(), OptionHint(f)));
     } else if (f.severity == Severity::kWarning) {
       Warn("%s: %s%s\n", path.c_str(), f.message.c_str(), OptionHint(f));
     }
@@ -636,10 +636,10 @@ int WriteCalibration(const CalibrateArgs& given, const LoadedInput& in, const Gr
     if (!args.report.empty()) Say("report    %s\n", args.report.c_str());
   }
   if (diagnosis.verdict() == Verdict::kFailed) {
-    std::fprintf(stderr,
-                 "accelcal: %s: the calibration failed its checks: written, but marked "
-                 "\"verdict\": \"failed\"; do not use it as it is\n",
-                 args.input.path.c_str());
+    WriteErr(
+        Format("accelcal: %s: the calibration failed its checks: written, but marked "
+               "\"verdict\": \"failed\"; do not use it as it is\n",
+               args.input.path.c_str()));
     return kExitFailedChecks;
   }
   return kExitOk;
@@ -926,8 +926,8 @@ int RunCalibrateThermal(const CalibrateArgs& args, const CalibrationOptions& opt
   }
   const CalibrationResult result = AsCalibrationResult(fit, thermal.temperatures_c);
   if (!result.summary.converged()) {
-    std::fprintf(stderr, "accelcal: %s: the solver did not converge: %s; nothing written\n",
-                 args.input.path.c_str(), result.summary.termination_message.c_str());
+    WriteErr(Format("accelcal: %s: the solver did not converge: %s; nothing written\n",
+                    args.input.path.c_str(), result.summary.termination_message.c_str()));
     return kExitNotConverged;
   }
   std::optional<GyroRun> gyro;
@@ -1124,8 +1124,8 @@ int RunCalibrate(const CalibrateArgs& args) {
             ", and the prior is a spline's\n";
   }
   if (!result.summary.converged()) {
-    std::fprintf(stderr, "accelcal: %s: the solver did not converge: %s; nothing written\n",
-                 args.input.path.c_str(), result.summary.termination_message.c_str());
+    WriteErr(Format("accelcal: %s: the solver did not converge: %s; nothing written\n",
+                    args.input.path.c_str(), result.summary.termination_message.c_str()));
     return kExitNotConverged;
   }
   if (GyroWanted(args)) {

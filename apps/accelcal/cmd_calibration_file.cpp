@@ -282,10 +282,10 @@ int RunExport(const ExportArgs& args) {
   WriteFileAtomically(args.output.empty() ? "-" : args.output, exported.text);
   if (noise_only) {  // the noise alone: no model to lose
     if (CurrentVerbosity() != Verbosity::kQuiet) {
-      std::fputs((exported.convention +
-                  "\nthe calibration's model is not in this file (--to kalibr writes Kalibr's)\n")
-                     .c_str(),
-                 args.output.empty() ? stderr : stdout);
+      const std::string what =
+          exported.convention +
+          "\nthe calibration's model is not in this file (--to kalibr writes Kalibr's)\n";
+      args.output.empty() ? WriteErr(what) : WriteOut(what);
     }
     return kExitOk;
   }
@@ -330,7 +330,7 @@ int RunExport(const ExportArgs& args) {
                 : "dropped from the gyroscope: " + exported.gyroscope_dropped + "\n";
   }
   if (CurrentVerbosity() != Verbosity::kQuiet) {
-    std::fputs(note.c_str(), args.output.empty() ? stderr : stdout);
+    args.output.empty() ? WriteErr(note) : WriteOut(note);
   }
   return kExitOk;
 }

@@ -31,6 +31,15 @@ enum ExitCode : int {
 /// never throws).
 int RunCommandLine(int argc, char** argv);
 
+/// RunCommandLine with `args` (argv[0] first), this thread's standard output and error appended
+/// to `out` and `err` instead (the Python package runs the tool's commands so, in-process and
+/// in several threads at once); no signal handlers are installed.
+int RunCommandLineCaptured(const std::vector<std::string>& args, std::string* out,
+                           std::string* err);
+
+/// `accelcal --describe-options`: every command's options as JSON (for the Python package).
+inline constexpr const char* kDescribeOptionsFlag = "--describe-options";
+
 /// A usage problem found after parsing (bad enum value, conflicting options).
 struct UsageError : std::runtime_error {
   using std::runtime_error::runtime_error;

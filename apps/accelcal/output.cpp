@@ -13,7 +13,9 @@
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <mutex>
 #include <optional>
+#include <string>
 
 #include "commands.hpp"
 
@@ -26,8 +28,46 @@ double NowSeconds() {
 }  // namespace
 
 namespace {
-Verbosity g_verbosity = Verbosity::kNormal;
+// Per thread: the Python package runs commands in several threads at once.
+thread_local Verbosity g_verbosity = Verbosity::kNormal;
+thread_local Console g_console;
+
+// printf into a string, in the "C" locale (Format's, with a va_list).
+std::string VFormat(const char* format, va_list args) {
+  va_list copy;
+  va_copy(copy, args);
+  const int n = std::vsnprintf(nullptr, 0, format, copy);
+  va_end(copy);
+  if (n <= 0) return {};
+  std::string text(static_cast<std::size_t>(n) + 1, '\0');
+  std::vsnprintf(text.data(), text.size(), format, args);
+  text.resize(static_cast<std::size_t>(n));
+  return text;
+}
 }  // namespace
+
+Console SetConsole(Console console) {
+  const Console old = g_console;
+  g_console = console;
+  return old;
+}
+bool Captured() { return g_console.out != nullptr || g_console.err != nullptr; }
+
+void WriteOut(std::string_view text) {
+  if (g_console.out != nullptr) {
+    g_console.out->append(text);
+  } else if (std::fwrite(text.data(), 1, text.size(), stdout) != text.size()) {
+    throw OutputError(std::string("cannot write to stdout: ") + std::strerror(errno));
+  }
+}
+
+void WriteErr(std::string_view text) {
+  if (g_console.err != nullptr) {
+    g_console.err->append(text);
+  } else {
+    std::fwrite(text.data(), 1, text.size(), stderr);
+  }
+}
 
 void SetVerbosity(Verbosity verbosity) { g_verbosity = verbosity; }
 Verbosity CurrentVerbosity() { return g_verbosity; }
@@ -36,30 +76,32 @@ void Say(const char* format, ...) {
   if (g_verbosity == Verbosity::kQuiet) return;
   va_list args;
   va_start(args, format);
-  std::vprintf(format, args);
+  const std::string text = VFormat(format, args);
   va_end(args);
+  WriteOut(text);
 }
 
 void Warn(const char* format, ...) {
   if (g_verbosity == Verbosity::kQuiet) return;
-  std::fputs("accelcal: warning: ", stderr);
   va_list args;
   va_start(args, format);
-  std::vfprintf(stderr, format, args);
+  const std::string text = VFormat(format, args);
   va_end(args);
+  WriteErr("accelcal: warning: " + text);
 }
 
 void Detail(const char* format, ...) {
   if (g_verbosity != Verbosity::kVerbose) return;
   va_list args;
   va_start(args, format);
-  std::vfprintf(stderr, format, args);
+  const std::string text = VFormat(format, args);
   va_end(args);
+  WriteErr(text);
 }
 
 ProgressBar::ProgressBar(std::string label)
     : label_(std::move(label)),
-      active_(isatty(STDERR_FILENO) == 1 && g_verbosity != Verbosity::kQuiet) {}
+      active_(!Captured() && isatty(STDERR_FILENO) == 1 && g_verbosity != Verbosity::kQuiet) {}
 
 ProgressBar::~ProgressBar() { Finish(); }
 
@@ -70,8 +112,8 @@ void ProgressBar::Update(long done, long total) {
   last_draw_s_ = now;
   constexpr int kWidth = 30;
   const long filled = kWidth * done / total;
-  std::fprintf(stderr, "\r%s [%s%s] %ld/%ld", label_.c_str(), std::string(filled, '#').c_str(),
-               std::string(kWidth - filled, '.').c_str(), done, total);
+  WriteErr(Format("\r%s [%s%s] %ld/%ld", label_.c_str(), std::string(filled, '#').c_str(),
+                  std::string(kWidth - filled, '.').c_str(), done, total));
   std::fflush(stderr);
   drawn_ = true;
 }
@@ -84,7 +126,7 @@ std::function<void(std::size_t, std::size_t)> ProgressBar::ByteCallback() {
 
 void ProgressBar::Finish() {
   if (!drawn_) return;
-  std::fprintf(stderr, "\r\033[K");  // erase the line
+  WriteErr(Format("\r\033[K"));  // erase the line
   std::fflush(stderr);
   drawn_ = false;
 }
@@ -99,9 +141,11 @@ struct CleanupSlot {
   char path[PATH_MAX];
 };
 CleanupSlot g_cleanup[kCleanupSlots];
+std::mutex g_cleanup_mutex;  // threads of the Python package take slots at once; handlers only read
 
 int RegisterTemporary(const std::string& path) {
   if (path.size() >= PATH_MAX) return -1;
+  const std::lock_guard<std::mutex> lock(g_cleanup_mutex);
   for (int i = 0; i < kCleanupSlots; ++i) {
     if (g_cleanup[i].used == 0) {
       std::memcpy(g_cleanup[i].path, path.c_str(), path.size() + 1);
@@ -113,6 +157,7 @@ int RegisterTemporary(const std::string& path) {
 }
 
 void UnregisterTemporary(int slot) {
+  const std::lock_guard<std::mutex> lock(g_cleanup_mutex);
   if (slot >= 0) g_cleanup[slot].used = 0;
 }
 
@@ -147,6 +192,7 @@ std::string Why(const std::string& path, const char* what) {
 }  // namespace
 
 void InstallCleanupHandlers() {
+  if (Captured()) return;  // in the Python package, whose signals are Python's
   // SIGXFSZ: a file-size limit (ulimit -f) reached while writing.
   for (int sig : {SIGINT, SIGTERM, SIGHUP, SIGPIPE, SIGQUIT, SIGXFSZ}) {
     struct sigaction action {};
@@ -225,9 +271,7 @@ OutputFile::~OutputFile() {
 
 void OutputFile::Write(std::string_view text) {
   if (to_stdout_) {
-    if (std::fwrite(text.data(), 1, text.size(), stdout) != text.size()) {
-      throw OutputError(std::string("cannot write to stdout: ") + std::strerror(errno));
-    }
+    WriteOut(text);
     return;
   }
   buffer_.append(text);
@@ -302,6 +346,7 @@ void WriteFileAtomically(const std::string& path, const std::string& content) {
 }
 
 void FinishStdout() {
+  if (g_console.out != nullptr) return;
   if (std::fflush(stdout) != 0 || std::ferror(stdout)) {
     const int e = errno;
     std::clearerr(stdout);

@@ -14,6 +14,20 @@
 
 namespace accelcal::cli {
 
+/// Where this thread's standard output and error go: the process's (default), or strings, when
+/// the Python package runs a command in-process (RunCommandLineCaptured). The tool writes both
+/// through WriteOut and WriteErr only.
+struct Console {
+  std::string* out = nullptr;  ///< nullptr: the process's stdout
+  std::string* err = nullptr;  ///< nullptr: the process's stderr
+};
+/// Sets this thread's console; returns the one it replaces.
+Console SetConsole(Console console);
+/// Whether this thread's output is captured (no terminal, no signal handlers of its own).
+bool Captured();
+void WriteOut(std::string_view text);
+void WriteErr(std::string_view text);
+
 /// How much the tool says besides its results (`--quiet`, `--verbose`). Results (files, and
 /// stdout when it is the requested output) are never affected; errors always go to stderr.
 enum class Verbosity { kQuiet, kNormal, kVerbose };

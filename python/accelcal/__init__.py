@@ -59,7 +59,7 @@ from ._accelcal import (  # noqa: F401
 from . import _accelcal
 
 __all__ = [
-    "Calibration", "CalibrationCheckFailed", "CalibrationResult", "CalibrationWarning",
+    "Calibration", "CalibrationCheckFailed", "CalibrationResult", "CalibrationWarning", "cli",
     "DataError", "InputError", "__version__", "apply", "calibrate", "calibrate_log",
     "detect_static_intervals", "diagnose", "export_calibration", "load_calibration",
     "parse_calibration_json", "read_input", "render_report",
@@ -265,3 +265,6 @@ def diagnose(result, positions=None, units=None, samples=None, time=None, rate_h
     """
     return _accelcal.diagnose(result, positions, units, samples, time, rate_hz, time_unit,
                               detection, max_outliers)
+
+
+from . import cli  # noqa: E402 - every command of the tool (it uses the names above)

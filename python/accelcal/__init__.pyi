@@ -6,6 +6,8 @@ from typing import Any, Dict, List, Optional, Sequence, Tuple, Union
 import numpy as np
 import numpy.typing as npt
 
+from . import cli as cli
+
 __version__: str
 
 PathLike = Union[str, bytes, "os.PathLike[str]", "os.PathLike[bytes]"]

@@ -11,6 +11,9 @@ milliseconds, compare's time row) are masked: they are the only outputs allowed 
 
   golden.py ACCELCAL          compare; on a difference print it and keep the run's directory
   golden.py ACCELCAL --update rewrite expected/ (review the diff before committing it)
+  golden.py --in-process      the same cases through the Python package's in-process runner
+                              (accelcal._accelcal._run_command, which accelcal.cli calls; the
+                              package on PYTHONPATH): the same bytes as the tool's
 """
 import hashlib
 import re
@@ -76,14 +79,36 @@ def describe(content):
     return f"[{len(content)} bytes, sha256 {hashlib.sha256(content).hexdigest()}]\n"
 
 
+def run_in_process(args, work):
+    """The case through the Python package's runner, in this process (cwd: work; stdin: empty,
+    as the tool's run has it)."""
+    import accelcal
+    previous = os.getcwd()
+    saved_stdin = os.dup(0)
+    empty = os.open(os.devnull, os.O_RDONLY)
+    try:
+        os.chdir(work)
+        os.dup2(empty, 0)
+        status, out, err = accelcal._accelcal._run_command(args)
+    finally:
+        os.dup2(saved_stdin, 0)
+        os.close(saved_stdin)
+        os.close(empty)
+        os.chdir(previous)
+    return subprocess.CompletedProcess(args, status, out, err)
+
+
 def run_case(accelcal, work, args):
     before = snapshot(work)
     env = dict(os.environ, LC_ALL="C", LANG="C")
     env.pop("ACCELCAL_THREADS", None)
-    # argv[0] is "accelcal", as on a PATH: help texts print it, and the build directory differs
-    # from one clone to the next.
-    r = subprocess.run(["accelcal"] + args, executable=accelcal, cwd=work,
-                       stdin=subprocess.DEVNULL, capture_output=True, env=env, timeout=600)
+    if accelcal is None:
+        r = run_in_process(args, work)
+    else:
+        # argv[0] is "accelcal", as on a PATH: help texts print it, and the build directory
+        # differs from one clone to the next.
+        r = subprocess.run(["accelcal"] + args, executable=accelcal, cwd=work,
+                           stdin=subprocess.DEVNULL, capture_output=True, env=env, timeout=600)
     after = snapshot(work)
     record = [f"$ accelcal {shlex.join(args)}\n", f"status {r.returncode}\n",
               "--- stdout\n", describe(r.stdout), "--- stderr\n", describe(r.stderr)]
@@ -94,10 +119,15 @@ def run_case(accelcal, work, args):
 
 
 def main():
-    if len(sys.argv) < 2 or not os.access(sys.argv[1], os.X_OK):
+    if sys.argv[1:] == ["--in-process"]:
+        accelcal = None
+        update = False
+        os.environ.pop("ACCELCAL_THREADS", None)
+    elif len(sys.argv) < 2 or not os.access(sys.argv[1], os.X_OK):
         sys.exit(__doc__)
-    accelcal = os.path.abspath(sys.argv[1])
-    update = "--update" in sys.argv[2:]
+    else:
+        accelcal = os.path.abspath(sys.argv[1])
+        update = "--update" in sys.argv[2:]
     expected_dir = os.path.join(HERE, "expected")
     work = tempfile.mkdtemp(prefix="accelcal-golden-")
     for link, target in (("data", os.path.join(ROOT, "data")),

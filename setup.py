@@ -48,7 +48,7 @@ class CMakeBuild(build_ext):
             f"-DPython_EXECUTABLE={sys.executable}",
             "-DACCELCAL_BUILD_PYTHON=ON", "-DACCELCAL_BUILD_CLI=OFF",
             "-DACCELCAL_BUILD_TESTS=OFF", "-DACCELCAL_BUILD_BENCHMARKS=OFF",
-            "-DACCELCAL_INSTALL=OFF",
+            "-DACCELCAL_INSTALL=OFF", "-DBUILD_SHARED_LIBS=OFF",
         ]
         configure += os.environ.get("ACCELCAL_CMAKE_ARGS", "").split()
         jobs = os.environ.get("CMAKE_BUILD_PARALLEL_LEVEL", str(os.cpu_count() or 1))

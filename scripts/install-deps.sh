@@ -3,7 +3,7 @@
 # Run as root (or with sudo). Nothing is downloaded except Debian packages.
 set -euo pipefail
 packages=(
-  build-essential cmake
+  build-essential cmake pkgconf dpkg-dev  # dpkg-dev: the .deb's library dependencies (cpack)
   libeigen3-dev libcli11-dev nlohmann-json3-dev libfast-float-dev
   libgtest-dev libgmock-dev libbenchmark-dev
   clang-format hyperfine valgrind

@@ -20,7 +20,8 @@ export ASAN_OPTIONS=detect_leaks=1:abort_on_error=1:strict_string_checks=1
 export UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1
 
 if [ -z "${SKIP_SANITIZED_TESTS:-}" ]; then
-  cmake -S . -B build-sanitize "${common[@]}" > /dev/null
+  # The library shared here (BUILD_SHARED_LIBS): the suite checks that build too, at no cost.
+  cmake -S . -B build-sanitize "${common[@]}" -DBUILD_SHARED_LIBS=ON > /dev/null
   cmake --build build-sanitize -j"$(nproc)"
   ctest --test-dir build-sanitize --output-on-failure -j"$(nproc)"
 fi

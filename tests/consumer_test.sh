@@ -22,3 +22,16 @@ if command -v man > /dev/null; then
   warnings=$(MANWIDTH=100 man --warnings -l "$man_page" 2>&1 > /dev/null || true)
   [ -z "$warnings" ] || { echo "man page warnings: $warnings"; exit 1; }
 fi
+# pkg-config gives what a Makefile needs (the static library with what it links, or the shared).
+pc_dir=$(dirname "$(find "$work/prefix" -name accelcal.pc | head -1)")
+flags=$(PKG_CONFIG_PATH="$pc_dir" pkg-config --cflags --libs --static accelcal)
+# shellcheck disable=SC2086
+c++ -O1 -o "$work/consumer-pc" "$source_dir/tests/consumer/main.cpp" $flags
+LD_LIBRARY_PATH="$(dirname "$(find "$work/prefix" -name 'libaccelcal.*' | head -1)")" \
+  "$work/consumer-pc"
+test "$(PKG_CONFIG_PATH="$pc_dir" pkg-config --modversion accelcal)" = \
+  "$("$work/prefix/bin/accelcal" --version | awk '{print $2}')"
+# The documentation is installed beside the licence.
+for doc in README.md LICENSE calibration-file.md model.md conventions.md; do
+  test -f "$work/prefix/share/doc/accelcal/$doc" || { echo "docs: $doc not installed"; exit 1; }
+done

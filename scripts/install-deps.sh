@@ -11,6 +11,7 @@ packages=(
   chromium      # the report test renders the page as a person would see it
   pybind11-dev python3-dev python3-numpy python3-pytest python3-matplotlib  # Python bindings
   python3-pip python3-setuptools python3-wheel python3-venv  # pip install . (setup.py runs CMake)
+  python3-pandas  # DataFrames in and out of the Python package
   clang libclang-rt-14-dev llvm-14  # sanitizers, libFuzzer and the symbolizer (scripts/sanitize.sh)
   libbz2-dev liblz4-dev libzstd-dev  # ROS bag and MCAP chunks (bz2, lz4, zstd)
   python3-rosbag python3-sensor-msgs  # ROS's own writer makes the bags the tests read

@@ -116,6 +116,43 @@ def _calibration_repr(self):
     return "\n".join(lines) + ">"
 
 
+def _positions_frame(text):
+    """The accelerometer's positions of a calibration file's text as a pandas DataFrame: one row
+    per position, indexed by its number (from 1, as in the file and the tool), the file's
+    per-position fields in columns (vectors as _x, _y, _z; the interval's as interval_...)."""
+    try:
+        import pandas
+    except ImportError as e:
+        raise ImportError("to_frame needs pandas (Debian: python3-pandas)") from e
+    import json
+    rows = []
+    for position in json.loads(text)["sensors"]["accelerometer"].get("positions", []):
+        row = {}
+        for key, value in position.items():
+            if isinstance(value, list) and len(value) == 3:
+                row.update({f"{key}_{axis}": v for axis, v in zip("xyz", value)})
+            elif isinstance(value, dict):
+                row.update({f"{key}_{k}": v for k, v in value.items()})
+            else:
+                row[key] = value
+        rows.append(row)
+    frame = pandas.DataFrame(rows)
+    frame.index = pandas.RangeIndex(1, len(rows) + 1, name="position")
+    return frame
+
+
+def _result_to_frame(self):
+    """The positions as a pandas DataFrame, indexed by position number (from 1): each one's mean
+    reading, samples, noise, interval, fitted direction, residual, |f| - g and held-out error,
+    as the calibration file holds them (``to_json()``)."""
+    return _positions_frame(self.to_json())
+
+
+def _calibration_to_frame(self):
+    """The file's positions as a pandas DataFrame, indexed by position number (from 1)."""
+    return _positions_frame(self.text)
+
+
 def _restore_result(state):
     """A CalibrationResult from its pickled state (what pickle calls: a function of the package,
     found by its name)."""
@@ -128,6 +165,8 @@ def _restore_calibration(text, source):
 
 
 CalibrationResult.__repr__ = _result_repr
+CalibrationResult.to_frame = _result_to_frame
+Calibration.to_frame = _calibration_to_frame
 Calibration.__repr__ = _calibration_repr
 
 

@@ -348,3 +348,23 @@ def test_threads_calibrate_concurrently_to_the_same_bytes():
         t.join()
     alone, _ = accelcal.calibrate_log(XSENS, gravity=G)
     assert results == [alone.to_json()] * 4
+
+
+# ---------------------------------------------------------------------------------------------
+# pandas
+
+def test_dataframes_in_and_out():
+    import pandas
+    result, positions = accelcal.calibrate_log(XSENS, gravity=G)
+    frame = result.to_frame()
+    assert list(frame.index) == list(range(1, 39)) and frame.index.name == "position"
+    np.testing.assert_array_equal(frame[["mean_x", "mean_y", "mean_z"]].to_numpy(), positions)
+    np.testing.assert_array_equal(frame[["direction_x", "direction_y", "direction_z"]].to_numpy(),
+                                  result.directions)
+    np.testing.assert_array_equal(frame["crossval_error"].to_numpy(), result.crossval_errors)
+    assert frame.equals(accelcal.parse_calibration_json(result.to_json()).to_frame())
+    # A DataFrame of readings is taken as its values.
+    readings = pandas.DataFrame(positions, columns=["ax", "ay", "az"])
+    assert accelcal.calibrate(readings, gravity=G).to_json() == accelcal.calibrate(
+        positions, gravity=G).to_json()
+    np.testing.assert_array_equal(result.apply(readings), result.apply(positions))

@@ -441,15 +441,16 @@ void BindCalibration(py::module_& m) {
       "calibrate_log",
       [](const py::object& path_arg, const std::string& model, const std::string& method,
          const std::string& frame, double gravity, const std::string& estimator,
-         std::vector<std::string> columns, std::optional<double> rate_hz, double window_s,
+         const py::object& columns, std::optional<double> rate_hz, double window_s,
          double min_static_s, double threshold_factor, double init_rest_s, bool cross_validate,
          const std::string& outliers, double outlier_probability, int max_outliers,
          std::optional<std::string> units, const std::string& time_unit,
          std::optional<double> instance, const std::string& input_kind, int max_iterations,
-         const py::object& gyro_arg, std::vector<std::string> gyro_columns,
+         const py::object& gyro_arg, const py::object& gyro_columns_arg,
          const std::string& gyro_units, const std::string& gyro_model,
-         std::optional<std::string> gyro_estimator) {
+         std::optional<std::string> gyro_estimator, std::optional<std::string> topic) {
         const std::string path = PathString(path_arg, "calibrate_log");
+        const std::vector<std::string> gyro_columns = ColumnList(gyro_columns_arg);
         std::optional<std::string> gyro;
         if (!gyro_arg.is_none()) gyro = PathString(gyro_arg, "gyro");
         const FitSettings s{model,        method,         frame,           gravity,
@@ -459,8 +460,8 @@ void BindCalibration(py::module_& m) {
         const StaticDetectionOptions detection_options =
             DetectionOptions(window_s, min_static_s, threshold_factor, init_rest_s);
         const CalibrationOptions options = MakeOptions(s);
-        const ReadOptions read =
-            MakeReadOptions(input_kind, std::move(columns), rate_hz, time_unit, instance);
+        const ReadOptions read = MakeReadOptions(input_kind, ColumnList(columns), rate_hz,
+                                                 time_unit, instance, std::move(topic));
         // The gyroscope's options, checked as the command line's (its flags named as keywords).
         const bool want_gyro = gyro.has_value() || !gyro_columns.empty();
         GyroCalibrationOptions gyro_options;
@@ -511,6 +512,8 @@ void BindCalibration(py::module_& m) {
           o["init_rest_s"] = init_rest_s;
           o["time_unit"] = time_unit;
           o["instance"] = instance ? nlohmann::ordered_json(*instance) : nlohmann::ordered_json();
+          o["topic"] =
+              read.topic.empty() ? nlohmann::ordered_json() : nlohmann::ordered_json(read.topic);
           o["input_kind"] = input_kind;
           c.provenance.inputs = InputRecords(in);
           if (want_gyro) {
@@ -551,7 +554,7 @@ void BindCalibration(py::module_& m) {
       },
       py::arg("path"), py::arg("model") = "linear", py::arg("method") = "joint",
       py::arg("frame") = "x-first", py::arg("gravity") = kStandardGravity_ms2,
-      py::arg("estimator") = "ml", py::arg("columns") = std::vector<std::string>{},
+      py::arg("estimator") = "ml", py::arg("columns") = py::tuple(),
       py::arg("rate_hz") = std::nullopt, py::arg("window_s") = 0.5, py::arg("min_static_s") = 1.0,
       py::arg("threshold_factor") = 10.0, py::arg("init_rest_s") = 0.0,
       py::arg("cross_validate") = true, py::kw_only(), py::arg("outliers") = "exclude",
@@ -559,8 +562,9 @@ void BindCalibration(py::module_& m) {
       py::arg("units") = std::nullopt, py::arg("time_unit") = "auto",
       py::arg("instance") = std::nullopt, py::arg("input_kind") = "auto",
       py::arg("max_iterations") = 0, py::arg("gyro") = py::none(),
-      py::arg("gyro_columns") = std::vector<std::string>{}, py::arg("gyro_units") = "raw",
+      py::arg("gyro_columns") = py::tuple(), py::arg("gyro_units") = "raw",
       py::arg("gyro_model") = "auto", py::arg("gyro_estimator") = std::nullopt,
+      py::arg("topic") = std::nullopt,
       "What `accelcal calibrate INPUT` does, diagnosis included; returns (result, positions) "
       "(no Python warnings: accelcal.calibrate_log adds them)");
 

@@ -30,13 +30,19 @@ std::string PathString(const py::handle& path, const char* what) {
   const py::module_ os = py::module_::import("os");
   py::object name;
   try {
-    name = os.attr("fsdecode")(os.attr("fspath")(path));
+    // The file system's bytes, as open() takes them (a name that is not UTF-8 included).
+    name = os.attr("fsencode")(os.attr("fspath")(path));
   } catch (py::error_already_set& e) {
     if (!e.matches(PyExc_TypeError)) throw;
     throw py::type_error(std::string(what) + ": a file name (str, bytes or os.PathLike), not " +
                          py::str(py::type::handle_of(path).attr("__name__")).cast<std::string>());
   }
-  return name.cast<std::string>();
+  std::string bytes = name.cast<std::string>();
+  // As open(): a NUL would end the name the system sees, and another file would be read.
+  if (bytes.find('\0') != std::string::npos) {
+    throw py::value_error(std::string(what) + ": embedded null byte in the file name");
+  }
+  return bytes;
 }
 
 std::vector<Vec3> ToVectors(const Rows& rows) {
@@ -364,12 +370,43 @@ StaticDetectionOptions DetectionOptions(double window_s, double min_static_s,
   return o;
 }
 
+std::vector<std::string> ColumnList(const py::handle& columns) {
+  std::vector<std::string> list;
+  if (columns.is_none()) return list;
+  if (py::isinstance<py::str>(columns)) {  // "t,x,y,z", as the command line takes it
+    std::string text = columns.cast<std::string>();
+    std::size_t start = 0;
+    while (true) {
+      const std::size_t comma = text.find(',', start);
+      list.push_back(text.substr(start, comma - start));
+      if (comma == std::string::npos) break;
+      start = comma + 1;
+    }
+    return list;
+  }
+  for (const py::handle item : py::iter(columns)) {
+    if (py::isinstance<py::str>(item)) {
+      list.push_back(item.cast<std::string>());
+    } else if (py::isinstance<py::int_>(item) && !py::isinstance<py::bool_>(item)) {
+      list.push_back(py::str(item).cast<std::string>());  // a 1-based column number
+    } else {
+      throw py::type_error("columns: column numbers (from 1) or header names, not " +
+                           py::str(py::type::handle_of(item).attr("__name__")).cast<std::string>());
+    }
+  }
+  return list;
+}
+
 ReadOptions MakeReadOptions(const std::string& kind, std::vector<std::string> columns,
                             std::optional<double> rate_hz, const std::string& time_unit,
-                            std::optional<double> instance) {
+                            std::optional<double> instance, std::optional<std::string> topic) {
   ReadOptions o;
   o.kind = Parse(InputKindFromString(kind), kind, "input kind");
   o.columns = std::move(columns);
+  if (topic) {
+    if (topic->empty()) throw py::value_error("topic: an empty name");
+    o.topic = *topic;
+  }
   CheckRate(rate_hz);
   o.rate_hz = rate_hz;
   o.time_unit = Parse(TimeUnitFromString(time_unit), time_unit, "time unit");

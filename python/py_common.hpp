@@ -65,9 +65,11 @@ py::dict SelectionDict(const ModelSelection& s);
 py::object ToPython(const nlohmann::ordered_json& value);
 StaticDetectionOptions DetectionOptions(double window_s, double min_static_s,
                                         double threshold_factor, double init_rest_s);
+/// Column numbers (from 1) or header names: a list of str or int, or one comma-separated str.
+std::vector<std::string> ColumnList(const py::handle& columns);
 ReadOptions MakeReadOptions(const std::string& kind, std::vector<std::string> columns,
                             std::optional<double> rate_hz, const std::string& time_unit,
-                            std::optional<double> instance);
+                            std::optional<double> instance, std::optional<std::string> topic);
 
 /// The parts of the module (py_calibration.cpp, py_files.cpp, py_commands.cpp).
 void BindCalibration(py::module_& m);

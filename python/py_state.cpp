@@ -4,9 +4,11 @@
 // saved and what is loaded cannot drift apart; a struct that gains a field fails the size checks
 // below until its list names it.
 #include <cstdint>
+#include <cstring>
 #include <map>
 #include <optional>
 #include <string>
+#include <string_view>
 #include <type_traits>
 #include <utility>
 #include <vector>
@@ -15,6 +17,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "accelcal/sha256.hpp"
 #include "accelcal/version.hpp"
 #include "py_result.hpp"
 
@@ -29,6 +32,17 @@ using Json = nlohmann::json;
 // back. Fields take the struct by non-const reference; Saver only reads it.
 struct Saver;
 struct Loader;
+
+std::uint64_t Bits(double v) {
+  std::uint64_t bits;
+  std::memcpy(&bits, &v, sizeof bits);
+  return bits;
+}
+double FromBits(std::uint64_t bits) {
+  double v;
+  std::memcpy(&v, &bits, sizeof v);
+  return v;
+}
 
 template <typename T>
 struct IsOptional : std::false_type {};
@@ -244,6 +258,8 @@ struct Saver {
   static Json Save(const T& value) {
     if constexpr (std::is_enum_v<T>) {
       return static_cast<std::int64_t>(value);
+    } else if constexpr (std::is_same_v<T, double>) {
+      return Bits(value);  // every bit, NaN's sign and payload included
     } else if constexpr (std::is_arithmetic_v<T> || std::is_same_v<T, std::string>) {
       return value;
     } else if constexpr (std::is_same_v<T, nlohmann::ordered_json>) {
@@ -254,7 +270,7 @@ struct Saver {
       j["cols"] = value.cols();
       Json data = Json::array();
       for (Eigen::Index c = 0; c < value.cols(); ++c) {
-        for (Eigen::Index r = 0; r < value.rows(); ++r) data.push_back(value(r, c));
+        for (Eigen::Index r = 0; r < value.rows(); ++r) data.push_back(Bits(value(r, c)));
       }
       j["data"] = std::move(data);
       return j;
@@ -266,11 +282,11 @@ struct Saver {
       return a;
     } else if constexpr (std::is_same_v<T, std::map<std::string, double>>) {
       Json a = Json::array();
-      for (const auto& [key, number] : value) a.push_back(Json::array({key, number}));
+      for (const auto& [key, number] : value) a.push_back(Json::array({key, Save(number)}));
       return a;
     } else if constexpr (std::is_same_v<T, std::pair<std::string, double>> ||
                          std::is_same_v<T, std::pair<double, double>>) {
-      return Json::array({value.first, value.second});
+      return Json::array({Save(value.first), Save(value.second)});
     } else {
       Saver nested;
       Fields(nested, const_cast<T&>(value));
@@ -293,6 +309,8 @@ struct Loader {
   static void Load(const Json& j, T& value) {
     if constexpr (std::is_enum_v<T>) {
       value = static_cast<T>(j.get<std::int64_t>());
+    } else if constexpr (std::is_same_v<T, double>) {
+      value = FromBits(j.get<std::uint64_t>());
     } else if constexpr (std::is_arithmetic_v<T> || std::is_same_v<T, std::string>) {
       value = j.get<T>();
     } else if constexpr (std::is_same_v<T, nlohmann::ordered_json>) {
@@ -301,7 +319,8 @@ struct Loader {
       const auto rows = j.at("rows").get<Eigen::Index>();
       const auto cols = j.at("cols").get<Eigen::Index>();
       const Json& data = j.at("data");
-      if (rows < 0 || cols < 0 || data.size() != static_cast<std::size_t>(rows * cols) ||
+      if (rows < 0 || cols < 0 || (cols > 0 && static_cast<std::size_t>(rows) > data.size()) ||
+          data.size() != static_cast<std::size_t>(rows) * static_cast<std::size_t>(cols) ||
           (T::RowsAtCompileTime != Eigen::Dynamic && rows != T::RowsAtCompileTime) ||
           (T::ColsAtCompileTime != Eigen::Dynamic && cols != T::ColsAtCompileTime)) {
         throw py::value_error("a matrix of the wrong shape");
@@ -309,7 +328,8 @@ struct Loader {
       value.resize(rows, cols);
       std::size_t i = 0;
       for (Eigen::Index c = 0; c < cols; ++c) {
-        for (Eigen::Index r = 0; r < rows; ++r) value(r, c) = data[i++].get<double>();
+        for (Eigen::Index r = 0; r < rows; ++r)
+          value(r, c) = FromBits(data[i++].get<std::uint64_t>());
       }
     } else if constexpr (IsOptional<T>::value) {
       if (j.is_null()) {
@@ -324,7 +344,7 @@ struct Loader {
       for (std::size_t i = 0; i < j.size(); ++i) Load(j[i], value[i]);
     } else if constexpr (std::is_same_v<T, std::map<std::string, double>>) {
       value.clear();
-      for (const Json& item : j) value[item.at(0).get<std::string>()] = item.at(1).get<double>();
+      for (const Json& item : j) Load(item.at(1), value[item.at(0).get<std::string>()]);
     } else if constexpr (std::is_same_v<T, std::pair<std::string, double>> ||
                          std::is_same_v<T, std::pair<double, double>>) {
       Load(j.at(0), value.first);
@@ -338,6 +358,60 @@ struct Loader {
 };
 
 constexpr const char* kStateFormat = "accelcal-python-calibration-result";
+// The state's bytes: this magic, the SHA-256 of the CBOR (64 hexadecimal digits), the CBOR. A
+// damaged pickle (truncated, a flipped bit) fails the digest before it is parsed.
+constexpr std::string_view kMagic = "accelcal-state-1:";
+
+template <typename E>
+void CheckEnum(E value, const char* what) {
+  if (ToString(value).empty()) throw py::value_error(std::string("an unknown ") + what);
+}
+
+// What the result's users index by: every per-position list as long as the positions, every
+// position number in range, every enum one of its values.
+void Validate(const PyCalibration& c) {
+  const CalibrationResult& r = c.result;
+  const std::size_t m = c.positions.size();
+  const auto same = [&](std::size_t n, const char* what) {
+    if (n != m) throw py::value_error(std::string(what) + " not one per position");
+  };
+  same(r.directions.size(), "directions");
+  same(r.residuals.size(), "residuals");
+  if (!r.crossval_errors.empty()) same(r.crossval_errors.size(), "crossval_errors");
+  if (!c.mean_sigmas.empty()) same(c.mean_sigmas.size(), "mean_sigmas");
+  for (const OutlierFinding& o : r.outliers) {
+    if (o.position < 0 || static_cast<std::size_t>(o.position) >= m) {
+      throw py::value_error("an outlier's position out of range");
+    }
+    CheckEnum(o.statistic, "outlier statistic");
+  }
+  CheckEnum(r.model, "model");
+  CheckEnum(r.frame, "frame");
+  CheckEnum(r.screening, "screening policy");
+  CheckEnum(r.summary.method, "method");
+  CheckEnum(r.summary.initialization, "initialization");
+  CheckEnum(r.summary.termination, "termination");
+  CheckEnum(r.summary.estimator, "estimator");
+  CheckEnum(c.unit, "unit");
+  for (const Finding& f : c.diagnosis.findings) CheckEnum(f.severity, "severity");
+  const Eigen::Index p = static_cast<Eigen::Index>(ParameterSlots(r.model, r.frame).size());
+  if (r.covariance.size() != 0 && (r.covariance.rows() != p || r.covariance.cols() != p)) {
+    throw py::value_error("a covariance of the wrong size");
+  }
+  if (c.selection) {
+    for (const int k : c.selection->positions_used) {
+      if (k < 0 || static_cast<std::size_t>(k) >= m) throw py::value_error("positions_used");
+    }
+  }
+  if (c.gyroscope) {
+    CheckEnum(c.gyroscope->model, "gyroscope model");
+    CheckEnum(c.gyroscope->estimator, "gyroscope estimator");
+    CheckEnum(c.gyroscope->unit, "gyroscope unit");
+    for (const GyroRotation& t : c.gyroscope->rotations) {
+      if (t.from >= m || t.to >= m) throw py::value_error("a turn's position out of range");
+    }
+  }
+}
 
 }  // namespace
 
@@ -346,14 +420,23 @@ std::string SaveState(const PyCalibration& c) {
   state["format"] = kStateFormat;
   state["accelcal_version"] = std::string(Version());
   state["result"] = Saver::Save(c);
-  const std::vector<std::uint8_t> bytes = Json::to_cbor(state);
-  return std::string(bytes.begin(), bytes.end());
+  const std::vector<std::uint8_t> cbor = Json::to_cbor(state);
+  const std::string body(cbor.begin(), cbor.end());
+  return std::string(kMagic) + Sha256Hex(body) + body;
 }
 
 PyCalibration LoadState(const std::string& bytes) {
+  constexpr std::size_t kDigest = 64;
+  if (bytes.size() < kMagic.size() + kDigest || bytes.compare(0, kMagic.size(), kMagic) != 0) {
+    throw py::value_error("not a pickled accelcal CalibrationResult");
+  }
+  const std::string body = bytes.substr(kMagic.size() + kDigest);
+  if (Sha256Hex(body) != bytes.substr(kMagic.size(), kDigest)) {
+    throw py::value_error("a damaged pickled CalibrationResult: its SHA-256 does not match");
+  }
   Json state;
   try {
-    state = Json::from_cbor(bytes);
+    state = Json::from_cbor(body);
   } catch (const Json::exception& e) {
     throw py::value_error(std::string("not a pickled accelcal CalibrationResult: ") + e.what());
   }
@@ -369,6 +452,7 @@ PyCalibration LoadState(const std::string& bytes) {
   PyCalibration c;
   try {
     Loader::Load(state.at("result"), c);
+    Validate(c);
   } catch (const Json::exception& e) {
     throw py::value_error(std::string("a damaged pickled CalibrationResult: ") + e.what());
   } catch (const py::value_error& e) {

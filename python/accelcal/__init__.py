@@ -68,7 +68,7 @@ __all__ = [
 
 def _entry(value, std):
     """'value' or 'value ± std' in 7 significant digits (std in 2)."""
-    text = f"{value:.7g}"
+    text = f"{value + 0.0:.7g}"  # + 0.0: a fixed zero printed as 0, not -0
     return text if std is None or not _np.isfinite(std) else f"{text} ± {std:.2g}"
 
 
@@ -83,7 +83,7 @@ def _parameter_lines(names, K, bias, k2, covariance, model, units, raw):
     width = max(len(e) for row in rows for e in row)
     lines = [f"  K [{raw} per {units}] =" if raw else f"  K [raw per {units}] ="]
     lines += ["    [" + "  ".join(e.rjust(width) for e in row) + "]" for row in rows]
-    lines.append("  bias [raw] = [" + ", ".join(
+    lines.append(f"  bias [{raw or 'raw'}] = [" + ", ".join(
         _entry(bias[i], std.get(f"b_{axes[i]}")) for i in range(3)) + "]")
     if model == "quadratic":
         lines.append(f"  k2 [raw per ({units})^2] = [" + ", ".join(
@@ -100,10 +100,14 @@ def _result_repr(self):
         lines.append(f"  held-out RMS of |f| - g = {self.crossval_rms:.4g} {self.units}")
     if self.gyroscope is not None:
         g = self.gyroscope
-        lines.append(f"  gyroscope: {g['model']} model, K [raw per rad/s] diagonal "
-                     f"{_np.array2string(_np.diag(g['K']), precision=6)}, bias [raw] "
-                     f"{_np.array2string(g['bias'], precision=6)}, held-out "
-                     f"{g['heldout_rms_deg']:.3g} deg")
+        std = dict(zip(g["parameter_names"], g["std"])) if g["std"] is not None else {}
+        lines.append(f"  gyroscope: {g['model']} model, {len(g['rotations'])} turns")
+        lines.append("    K diagonal [raw per rad/s] = [" + ", ".join(
+            _entry(g["K"][i, i], std.get(f"Kg_{a}{a}")) for i, a in enumerate("xyz")) + "]")
+        lines.append("    bias [raw] = [" + ", ".join(
+            _entry(g["bias"][i], std.get(f"bg_{a}")) for i, a in enumerate("xyz")) + "]")
+        if _np.isfinite(g["heldout_rms_deg"]):
+            lines.append(f"    held-out RMS of the turns = {g['heldout_rms_deg']:.3g} deg")
     return "\n".join(lines) + ">"
 
 
@@ -113,6 +117,8 @@ def _calibration_repr(self):
     lines += _parameter_lines(self.parameter_names, self.K, self.bias, self.k2, self.covariance,
                               self.model, self.units, self.raw_units if self.raw_units != "raw"
                               else None)
+    if self.has_gyroscope:
+        lines.append("  gyroscope: calibrated too (sensors.gyroscope of text)")
     return "\n".join(lines) + ">"
 
 
@@ -244,7 +250,7 @@ def calibrate_log(path, model="linear", method="joint", frame="x-first", gravity
                   outliers="exclude", outlier_probability=1e-3, max_outliers=3, units=None,
                   time_unit="auto", instance=None, input_kind="auto", max_iterations=0,
                   gyro=None, gyro_columns=(), gyro_units="raw", gyro_model="auto",
-                  gyro_estimator=None):
+                  gyro_estimator=None, topic=None):
     """What ``accelcal calibrate LOG`` does: read, detect the static intervals, average them,
     calibrate with each interval's noise and diagnose (the time column, still periods not used,
     interleaved sensors, the fit). Gives exactly the command line's doubles and diagnosis; with
@@ -256,7 +262,9 @@ def calibrate_log(path, model="linear", method="joint", frame="x-first", gravity
     path); nothing is raised for a failed verdict.
 
     Options as ``calibrate`` (gravity in ``units``: "m/s2", "g" or None for "g" below 2), and as
-    the command line's: columns (--columns: 3 or 4 column numbers or header names), rate_hz
+    the command line's: columns (--columns: 3 or 4 column numbers from 1 or header names, a list
+    or one comma-separated string), topic (--topic: the stream of a binary log, a ULog topic or
+    DataFlash message, or a MAT-file's variable), rate_hz
     (--rate), time_unit ("auto", "s", "ms", "us", "ns": --time-unit; "auto" decides from the
     column's name and step, time_axis.hpp), instance (--instance: the sensor to keep of a file
     whose instance column holds several), input_kind ("auto", the default as on the command
@@ -264,7 +272,13 @@ def calibrate_log(path, model="linear", method="joint", frame="x-first", gravity
     max_iterations (--max-iterations). Raises InputError (unreadable or malformed file) or
     DataError (no static interval, too few positions), both naming the file.
 
-    ``path`` and ``gyro`` are str or os.PathLike.
+    ``path`` and ``gyro`` are str, bytes or os.PathLike; ``"-"`` reads this process's standard
+    input, as the tool does.
+
+    One difference from the tool: a solver that does not converge is returned as a result whose
+    verdict is "failed" (with a ``CalibrationCheckFailed`` warning naming ``not_converged``), so
+    that it can be looked at, where ``accelcal calibrate`` writes nothing and exits with status 4
+    (``accelcal.cli.calibrate`` raises ``DataError`` there).
 
     The gyroscope recorded through the same positions (``calibrate --gyro``): ``gyro`` its log
     on the same clock, or ``gyro_columns`` its columns in this log (or in ``gyro``'s);
@@ -275,13 +289,13 @@ def calibrate_log(path, model="linear", method="joint", frame="x-first", gravity
     as ``accelcal calibrate LOG --gyro ... --json`` writes them.
     """
     result, positions = _accelcal.calibrate_log(
-        path, model, method, frame, gravity, estimator, list(columns), rate_hz, window_s,
+        path, model, method, frame, gravity, estimator, columns, rate_hz, window_s,
         min_static_s, threshold_factor, init_rest_s, cross_validate, outliers=outliers,
         outlier_probability=outlier_probability, max_outliers=max_outliers, units=units,
         time_unit=time_unit, instance=instance, input_kind=input_kind,
         max_iterations=max_iterations,
-        gyro=gyro, gyro_columns=list(gyro_columns),
-        gyro_units=gyro_units, gyro_model=gyro_model, gyro_estimator=gyro_estimator)
+        gyro=gyro, gyro_columns=gyro_columns,
+        gyro_units=gyro_units, gyro_model=gyro_model, gyro_estimator=gyro_estimator, topic=topic)
     _emit_diagnosis(result, result.source, stacklevel=2)
     return result, positions
 

@@ -128,7 +128,8 @@ def calibrate(readings: ArrayLike, model: str = "linear", method: str = "joint",
               max_iterations: int = 0) -> CalibrationResult: ...
 def calibrate_log(path: PathLike, model: str = "linear", method: str = "joint",
                   frame: str = "x-first", gravity: float = 9.80665, estimator: str = "ml",
-                  columns: Sequence[str] = (), rate_hz: Optional[float] = None,
+                  columns: Union[str, Sequence[Union[str, int]]] = (),
+                  rate_hz: Optional[float] = None,
                   window_s: float = 0.5, min_static_s: float = 1.0,
                   threshold_factor: float = 10.0, init_rest_s: float = 0.0,
                   cross_validate: bool = True, *, outliers: str = "exclude",
@@ -136,9 +137,10 @@ def calibrate_log(path: PathLike, model: str = "linear", method: str = "joint",
                   units: Optional[str] = None, time_unit: str = "auto",
                   instance: Optional[float] = None, input_kind: str = "auto",
                   max_iterations: int = 0, gyro: Optional[PathLike] = None,
-                  gyro_columns: Sequence[str] = (), gyro_units: str = "raw",
-                  gyro_model: str = "auto",
-                  gyro_estimator: Optional[str] = None) -> Tuple[CalibrationResult, Array]: ...
+                  gyro_columns: Union[str, Sequence[Union[str, int]]] = (),
+                  gyro_units: str = "raw", gyro_model: str = "auto",
+                  gyro_estimator: Optional[str] = None,
+                  topic: Optional[str] = None) -> Tuple[CalibrationResult, Array]: ...
 def diagnose(result: CalibrationResult, positions: Optional[ArrayLike] = None,
              units: Optional[str] = None, samples: Optional[ArrayLike] = None,
              time: Optional[ArrayLike] = None, rate_hz: Optional[float] = None,
@@ -153,9 +155,10 @@ def export_calibration(json_text: str, format: str, raw_unit: str = "", instance
                        c_prefix: str = "accelcal") -> Dict[str, Any]: ...
 def load_calibration(path: PathLike) -> Calibration: ...
 def parse_calibration_json(text: str, source: str = "<string>") -> Calibration: ...
-def read_input(path: PathLike, kind: str = "auto", columns: Sequence[str] = (),
+def read_input(path: PathLike, kind: str = "auto",
+               columns: Union[str, Sequence[Union[str, int]]] = (),
                rate_hz: Optional[float] = None, *, time_unit: str = "auto",
-               instance: Optional[float] = None) -> Dict[str, Any]: ...
+               instance: Optional[float] = None, topic: Optional[str] = None) -> Dict[str, Any]: ...
 def render_report(json_text: str, samples: Optional[ArrayLike] = None,
                   time: Optional[ArrayLike] = None, rate_hz: Optional[float] = None, *,
                   time_unit: str = "s") -> str: ...

@@ -62,12 +62,14 @@ def _value(value, what):
     if isinstance(value, bool):
         raise TypeError(f"{what}: a value, not {value!r}")
     if isinstance(value, (_os.PathLike, bytes)):
-        return _os.fsdecode(_os.fspath(value))
+        return _value(_os.fsdecode(_os.fspath(value)), what)
     if isinstance(value, float):
         return repr(value)  # the shortest text that reads back as the same double
     if hasattr(value, "item") and not isinstance(value, str):  # a numpy scalar
         return _value(value.item(), what)
     if isinstance(value, (int, str)):
+        if "\0" in str(value):
+            raise ValueError(f"{what}: embedded null byte")
         return str(value)
     raise TypeError(f"{what}: a number, a string or a file name, not {type(value).__name__}")
 

@@ -31,6 +31,8 @@ DATA = os.environ.get("ACCELCAL_DATA_DIR",
 XSENS_LOG = os.path.join(DATA, "imutk-xsens-mti", "xsens_acc.mat")
 XSENS_POSITIONS = os.path.join(DATA, "imutk-xsens-mti", "derived_static_means.csv")
 ACCEPTED = (ValueError, TypeError, OverflowError)
+# accelcal.cli's exit status 5 (an output that cannot be written) is an OSError.
+CLI_ACCEPTED = ACCEPTED + (OSError,)
 
 NUMBERS = [float("nan"), float("inf"), float("-inf"), -1.0, -2.0, 0.0, -0.0, 1e-300, 1e308,
            -1e308, 0.5, 3.0, 100.0, 2 ** 31, 2 ** 63, -(2 ** 63) - 1, 10 ** 30, 1, 0, -1, True]
@@ -53,6 +55,11 @@ class Fuzzer:
             self.result = accelcal.calibrate(self.positions, gravity=9.81744)
         self.json_text = self.result.to_json()
         self.log = accelcal.read_input(XSENS_LOG)
+        import tempfile
+        self.scratch = tempfile.mkdtemp(prefix="accelcal-fuzz-")
+        self.json_path = os.path.join(self.scratch, "calibration.json")
+        with open(self.json_path, "w") as f:
+            f.write(self.json_text)
 
     def choice(self, items):
         return items[self.r.randrange(len(items))]
@@ -198,6 +205,29 @@ class Fuzzer:
     def apply(self):
         return self.result.apply(self.array(self.positions))
 
+    def cli(self):
+        """A command of accelcal.cli with a random subset of its options, hostile values
+        included (the keyword layer: its conversions of numbers, lists, flags and paths). Its
+        outputs go to a scratch directory; montecarlo and simulate are left to the C++ option
+        fuzzer (fuzz_cli_options), where a huge count or duration is cheap to refuse."""
+        import inspect
+        name = self.choice([n for n in accelcal.cli.__all__
+                            if n not in ("ToolWarning", "montecarlo", "simulate")])
+        function = getattr(accelcal.cli, name)
+        args, kwargs = [], {}
+        for parameter in inspect.signature(function).parameters.values():
+            if parameter.kind is parameter.POSITIONAL_OR_KEYWORD:
+                args.append(self.choice(PATHS + [self.json_path]) if self.r.random() < 0.9
+                            else self.choice([None, 3, [XSENS_LOG, XSENS_LOG], b"x"]))
+            elif self.r.random() < 0.15:
+                if parameter.name in ("output", "report"):
+                    kwargs[parameter.name] = os.path.join(self.scratch, self.word("out.txt"))
+                else:
+                    kwargs[parameter.name] = self.choice([
+                        self.scalar(1.0), self.word("auto"), self.choice(PATHS), True, False,
+                        [self.scalar(1.0), self.scalar(2.0)], ["x", "y", "z"], []])
+        return function(*args, **kwargs)
+
     def mutated_json(self):
         text = self.json_text
         for _ in range(self.r.randrange(1, 4)):
@@ -220,9 +250,12 @@ def main():
     faulthandler.enable()
     warnings.simplefilter("ignore")
     fuzzer = Fuzzer(args.seed)
+    import atexit
+    import shutil
+    atexit.register(shutil.rmtree, fuzzer.scratch, True)
     calls = [fuzzer.calibrate, fuzzer.calibrate_log, fuzzer.diagnose, fuzzer.read_input,
              fuzzer.detect, fuzzer.export, fuzzer.report, fuzzer.parse, fuzzer.load, fuzzer.apply,
-             fuzzer.to_json]
+             fuzzer.to_json, fuzzer.cli]
     counts = {c.__name__: 0 for c in calls}
     accepted = 0
     end = time.monotonic() + args.seconds
@@ -233,7 +266,7 @@ def main():
             print(f"{executions}: {call.__name__}", flush=True)
         try:
             call()
-        except ACCEPTED:
+        except CLI_ACCEPTED if call == fuzzer.cli else ACCEPTED:
             accepted += 1
         except Exception as e:  # noqa: BLE001 - anything else is what this harness looks for
             print(f"finding (seed {args.seed}, call {executions}, {call.__name__}): "

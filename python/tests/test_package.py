@@ -302,10 +302,11 @@ def python_share_during(call):
 
 @pytest.fixture(scope="module")
 def long_log(tmp_path_factory):
-    """A raw log that takes about 0.2 s to read and calibrate: 18 positions, 30 s each at 1 kHz."""
+    """A raw log that takes about 0.3 s to read and 0.1 s to detect: 18 positions, 60 s each at
+    1 kHz."""
     path = tmp_path_factory.mktemp("gil") / "long.csv"
     subprocess.run([CLI, "simulate", "--scenario", "yang2012", "--raw", "--rate", "1000",
-                    "--duration", "30", "-o", str(path)], check=True, capture_output=True)
+                    "--duration", "60", "-o", str(path)], check=True, capture_output=True)
     return path
 
 
@@ -328,10 +329,11 @@ def test_the_long_computations_release_the_gil(what, long_log):
         warnings.simplefilter("ignore")
         share, elapsed = python_share_during(calls[what])
     # Held, the thread could run at most before the call enters C++ (one switch interval, 5 ms,
-    # of a call of 50 ms or more: a share of 0.1 at most); released, it keeps its pace, less what
-    # a loaded machine takes (ctest runs two tests at once on two cores).
-    assert elapsed > 0.05, elapsed
-    assert share > 0.3, share
+    # of a call of 100 ms or more: a share of 0.05 at most; 0.03 measured with the release
+    # removed); released, it keeps its pace, less what a loaded machine takes: 0.9 alone, 0.29
+    # seen while the package test compiled on both cores beside it.
+    assert elapsed > 0.1, elapsed
+    assert share > 0.12, share
 
 
 def test_threads_calibrate_concurrently_to_the_same_bytes():
@@ -368,3 +370,46 @@ def test_dataframes_in_and_out():
     assert accelcal.calibrate(readings, gravity=G).to_json() == accelcal.calibrate(
         positions, gravity=G).to_json()
     np.testing.assert_array_equal(result.apply(readings), result.apply(positions))
+
+
+# ---------------------------------------------------------------------------------------------
+# From a hostile test of the package
+
+def test_damaged_or_crafted_pickles_are_refused_not_crashes(with_gyro):
+    result, _ = with_gyro
+    restore, (state,) = result.__reduce__()
+    for bad in (b"\x81" * 10 ** 6 + b"\x00",  # nested a million deep: the parser's recursion
+                state[:-1], state[:40], state + b"\x00",
+                state[:100] + bytes([state[100] ^ 1]) + state[101:]):
+        with pytest.raises(ValueError):
+            restore(bad)
+
+
+def test_file_names_as_the_system_takes_them(tmp_path):
+    with pytest.raises(ValueError, match="embedded null byte"):
+        accelcal.calibrate_log(str(XSENS) + "\0junk", gravity=G)
+    with pytest.raises(ValueError, match="embedded null byte"):
+        accelcal.read_input(str(XSENS) + "\0junk")
+    with pytest.raises(ValueError, match="embedded null byte"):
+        accelcal.cli.calibrate(str(XSENS) + "\0junk")
+    # A name that is not UTF-8, as bytes or as os.fsdecode gives it.
+    odd = tmp_path / os.fsdecode(b"acc_\xff\xfe.mat")
+    odd.write_bytes(XSENS.read_bytes())
+    for name in (os.fsencode(odd), str(odd), odd):
+        assert accelcal.read_input(name)["samples"].shape == (accelcal.read_input(XSENS)[
+            "samples"].shape)
+
+
+def test_columns_as_numbers_or_one_string_and_a_topic():
+    positions = DATA / "imutk-xsens-mti" / "derived_static_means.csv"
+    by_name = accelcal.read_input(positions, columns=["4", "5", "6"])["positions"]
+    np.testing.assert_array_equal(accelcal.read_input(positions, columns=[4, 5, 6])["positions"],
+                                  by_name)
+    np.testing.assert_array_equal(accelcal.read_input(positions, columns="4,5,6")["positions"],
+                                  by_name)
+    with pytest.raises(TypeError, match="columns: column numbers"):
+        accelcal.read_input(positions, columns=[4.0, 5, 6])
+    ulog = DATA / "px4-ulog" / "sample_log_small.ulg"
+    with pytest.raises(accelcal.InputError, match="topic"):
+        accelcal.read_input(ulog)
+    assert accelcal.read_input(ulog, topic="sensor_accel", instance=0)["samples"].shape[1] == 3

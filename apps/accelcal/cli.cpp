@@ -228,6 +228,9 @@ void CheckGyroFlags(const CLI::App& cmd, const std::string& gyro,
 
 int accelcal::cli::RunCommandLineCaptured(const std::vector<std::string>& args, std::string* out,
                                           std::string* err) {
+  // The host program's locale may write a decimal comma (Python's locale.setlocale): the
+  // command reads its options and writes its numbers in "C", in this thread only.
+  const accelcal::internal::ClassicLocale c_locale;
   struct Restore {  // this thread's console and verbosity as they were, however it ends
     Console console;
     Verbosity verbosity;

@@ -34,6 +34,7 @@ thread_local Console g_console;
 
 // printf into a string, in the "C" locale (Format's, with a va_list).
 std::string VFormat(const char* format, va_list args) {
+  const internal::ClassicLocale c_locale;
   va_list copy;
   va_copy(copy, args);
   const int n = std::vsnprintf(nullptr, 0, format, copy);

@@ -76,3 +76,21 @@ def test_calibrating_in_a_decimal_comma_locale_gives_the_same_numbers_and_findin
     assert comma.to_json() == result.to_json()
     assert re.search(r"\d,\d", comma.summary["brief_report"]) is None, comma.summary
     assert "J " in comma.summary["brief_report"]
+
+
+def test_the_tools_commands_in_a_decimal_comma_locale(tmp_path):
+    """accelcal.cli runs the tool's code in this process: its options are read (CLI11) and its
+    numbers written in "C" whatever the host's locale."""
+    import warnings
+    before = accelcal.cli.calibrate(XSENS, gravity=9.81744, model="auto").text
+    device = tmp_path / "device.json"
+    device.write_text(before)
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        with decimal_comma():
+            after = accelcal.cli.calibrate(XSENS, gravity=9.81744, model="auto").text
+            accelcal.cli.calibrate(XSENS, gravity=99.5)
+            design = accelcal.cli.design(positions="yang18", device=device, noise=[0.5])
+    assert after == before
+    assert any("gravity is 99.5 m/s2" in str(w.message) for w in caught), caught
+    assert design == accelcal.cli.design(positions="yang18", device=device, noise=[0.5])

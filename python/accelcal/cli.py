@@ -25,6 +25,7 @@ failed its checks (status 6: written, marked ``"verdict": "failed"``) is returne
 ``accelcal.CalibrationCheckFailed`` warning. The GIL is released while a command runs.
 """
 
+import inspect as _inspect
 import json as _json
 import keyword as _keyword
 import os as _os
@@ -48,6 +49,19 @@ def _keyword_name(option):
     """The Python name of an option or positional argument."""
     name = option.replace("-", "_").lower()
     return name + "_" if _keyword.iskeyword(name) else name
+
+
+def _has_json(spec):
+    """Whether the command has --json: it is always given it, and returns its document."""
+    return any(o["name"] == "json" and not o["positional"] for o in spec["options"])
+
+
+def _parameters(spec):
+    """A command's positional arguments and its keyword options (the tool's global ones
+    included, --json left out: always given), in the tool's order."""
+    positionals = [o for o in spec["options"] if o["positional"]]
+    options = [o for o in spec["options"] if not o["positional"] and o["name"] != "json"]
+    return positionals, options + _DESCRIPTION["options"]
 
 
 def _python_message(text, command):
@@ -77,9 +91,8 @@ def _value(value, what):
 def _arguments(spec, args, options):
     """The command line of one call: its options (--name=value), then -- and its positionals."""
     argv = [spec["name"]]
-    positionals = [o for o in spec["options"] if o["positional"]]
-    named = {_keyword_name(o["name"]): o for o in spec["options"] if not o["positional"]}
-    named.update({_keyword_name(o["name"]): o for o in _DESCRIPTION["options"]})
+    positionals, keywords = _parameters(spec)
+    named = {_keyword_name(o["name"]): o for o in keywords}
     for key, value in options.items():
         if value is None:
             continue
@@ -124,7 +137,7 @@ def _raise(status, message, command):
 
 def _run(spec, args, options, stacklevel=3):
     command = spec["name"]
-    has_json = any(o["name"] == "json" and not o["positional"] for o in spec["options"])
+    has_json = _has_json(spec)
     argv = _arguments(spec, args, options)
     if has_json:
         argv.insert(1, "--json")
@@ -176,9 +189,7 @@ def _describe(option, command):
 
 
 def _make(spec):
-    positionals = [o for o in spec["options"] if o["positional"]]
-    options = [o for o in spec["options"] if not o["positional"] and o["name"] != "json"]
-    options += _DESCRIPTION["options"]
+    positionals, options = _parameters(spec)
     names = [_keyword_name(o["name"]) for o in positionals + options]
 
     def command(*args, **kwargs):
@@ -198,19 +209,17 @@ def _make(spec):
                                 f"'{_keyword_name(option['name'])}'")
         return _run(spec, args, kwargs)
 
-    import inspect
-    parameters = [inspect.Parameter(_keyword_name(o["name"]),
-                                    inspect.Parameter.POSITIONAL_OR_KEYWORD,
-                                    **({} if o["required"] else {"default": None}))
+    parameters = [_inspect.Parameter(_keyword_name(o["name"]),
+                                     _inspect.Parameter.POSITIONAL_OR_KEYWORD,
+                                     **({} if o["required"] else {"default": None}))
                   for o in positionals]
-    parameters += [inspect.Parameter(_keyword_name(o["name"]), inspect.Parameter.KEYWORD_ONLY,
-                                     default=None) for o in options]
-    command.__signature__ = inspect.Signature(parameters)
+    parameters += [_inspect.Parameter(_keyword_name(o["name"]), _inspect.Parameter.KEYWORD_ONLY,
+                                      default=None) for o in options]
+    command.__signature__ = _inspect.Signature(parameters)
     command.__name__ = command.__qualname__ = _keyword_name(spec["name"])
     command.__module__ = __name__
     returns = ("an accelcal.Calibration (the calibration file)" if spec["name"] == "calibrate"
-               else "the --json document (a dict)"
-               if any(o["name"] == "json" for o in spec["options"]) else
+               else "the --json document (a dict)" if _has_json(spec) else
                "what it writes to standard output (str, or bytes when not text), or None when "
                "output names a file")
     lines = [f"accelcal {spec['name']}: {spec['description']}.", "",
@@ -247,19 +256,16 @@ def _stubs():
              "class ToolWarning(UserWarning): ...",
              ""]
     for spec in _DESCRIPTION["commands"]:
-        has_json = any(o["name"] == "json" for o in spec["options"])
-        result = returns.get(spec["name"], "Dict[str, Any]" if has_json else
+        result = returns.get(spec["name"], "Dict[str, Any]" if _has_json(spec) else
                              "Union[str, bytes, None]")
+        positionals, options = _parameters(spec)
         params = []
-        for o in spec["options"]:
-            if not o["positional"]:
-                continue
+        for o in positionals:
             kind = "Union[PathLike, Sequence[PathLike]]" if o["many"] else "PathLike"
             params.append(f"{_keyword_name(o['name'])}: {kind}" if o["required"] else
                           f"{_keyword_name(o['name'])}: Optional[{kind}] = None")
         params.append("*")
-        for o in [o for o in spec["options"] if not o["positional"] and o["name"] != "json"] + \
-                _DESCRIPTION["options"]:
+        for o in options:
             kind = ("bool" if o["flag"] else "Union[Value, Sequence[Value]]" if o["many"]
                     else "Value")
             params.append(f"{_keyword_name(o['name'])}: Optional[{kind}] = None")

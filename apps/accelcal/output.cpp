@@ -31,20 +31,6 @@ namespace {
 // Per thread: the Python package runs commands in several threads at once.
 thread_local Verbosity g_verbosity = Verbosity::kNormal;
 thread_local Console g_console;
-
-// printf into a string, in the "C" locale (Format's, with a va_list).
-std::string VFormat(const char* format, va_list args) {
-  const internal::ClassicLocale c_locale;
-  va_list copy;
-  va_copy(copy, args);
-  const int n = std::vsnprintf(nullptr, 0, format, copy);
-  va_end(copy);
-  if (n <= 0) return {};
-  std::string text(static_cast<std::size_t>(n) + 1, '\0');
-  std::vsnprintf(text.data(), text.size(), format, args);
-  text.resize(static_cast<std::size_t>(n));
-  return text;
-}
 }  // namespace
 
 Console SetConsole(Console console) {
@@ -77,7 +63,7 @@ void Say(const char* format, ...) {
   if (g_verbosity == Verbosity::kQuiet) return;
   va_list args;
   va_start(args, format);
-  const std::string text = VFormat(format, args);
+  const std::string text = internal::VFormat(format, args);
   va_end(args);
   WriteOut(text);
 }
@@ -86,7 +72,7 @@ void Warn(const char* format, ...) {
   if (g_verbosity == Verbosity::kQuiet) return;
   va_list args;
   va_start(args, format);
-  const std::string text = VFormat(format, args);
+  const std::string text = internal::VFormat(format, args);
   va_end(args);
   WriteErr("accelcal: warning: " + text);
 }
@@ -95,7 +81,7 @@ void Detail(const char* format, ...) {
   if (g_verbosity != Verbosity::kVerbose) return;
   va_list args;
   va_start(args, format);
-  const std::string text = VFormat(format, args);
+  const std::string text = internal::VFormat(format, args);
   va_end(args);
   WriteErr(text);
 }

@@ -44,11 +44,9 @@ class ClassicLocale {
   locale_t previous_;
 };
 
-// printf into a std::string, in the "C" locale: "%.9g" of 0.5 is "0.5" everywhere.
-__attribute__((format(printf, 1, 2))) inline std::string Format(const char* format, ...) {
+// Format with a va_list (the tool's Say and Warn take their arguments so).
+__attribute__((format(printf, 1, 0))) inline std::string VFormat(const char* format, va_list args) {
   const ClassicLocale c_locale;
-  va_list args;
-  va_start(args, format);
   va_list copy;
   va_copy(copy, args);
   char stack[256];
@@ -61,6 +59,14 @@ __attribute__((format(printf, 1, 2))) inline std::string Format(const char* form
     text.resize(static_cast<std::size_t>(n));
     std::vsnprintf(text.data(), text.size() + 1, format, args);
   }
+  return text;
+}
+
+// printf into a std::string, in the "C" locale: "%.9g" of 0.5 is "0.5" everywhere.
+__attribute__((format(printf, 1, 2))) inline std::string Format(const char* format, ...) {
+  va_list args;
+  va_start(args, format);
+  std::string text = VFormat(format, args);
   va_end(args);
   return text;
 }

@@ -8,6 +8,7 @@ packages=(
   libgtest-dev libgmock-dev libbenchmark-dev
   clang-format hyperfine valgrind
   python3-yaml  # the YAML export's round-trip test reads it with PyYAML
+  libyaml-dev   # batch's limits file (YAML), read by libyaml's event parser
   chromium      # the report test renders the page as a person would see it
   pybind11-dev python3-dev python3-numpy python3-pytest python3-matplotlib  # Python bindings
   python3-pip python3-setuptools python3-wheel python3-venv  # pip install . (setup.py runs CMake)

@@ -54,7 +54,7 @@ run_harness() {
 # The harnesses run as many at a time as there are cores (each is one process on one core), so
 # every one still fuzzes for its full FUZZ_SECONDS; a finding stops the script with its log.
 harnesses=(log_reader native_log file_log orientations calibration_file calibration_keys series
-  calibrate cli_options)
+  calibrate cli_options limits)
 jobs=$(nproc)
 for ((first = 0; first < ${#harnesses[@]}; first += jobs)); do
   batch=("${harnesses[@]:first:jobs}")

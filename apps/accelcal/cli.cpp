@@ -120,6 +120,109 @@ void AddGravityOptions(CLI::App* cmd, GravityArgs* g) {
       ->capture_default_str();
 }
 
+// What calibrate computes from its inputs: every option of calibrate but its inputs and outputs,
+// shared by batch, which passes them to each unit's calibrate as given.
+void AddCalibrationOptions(CLI::App* cmd, CalibrateArgs* cal) {
+  AddInputOptions(cmd, &cal->input, true);
+  AddDetectionOptions(cmd, &cal->input);
+  AddGravityOptions(cmd, &cal->gravity);
+  cmd->add_option("--model", cal->model,
+                  "linear, quadratic, or auto (the model that predicts held-out positions "
+                  "better)")
+      ->capture_default_str();
+  cmd->add_option("--bias-model", cal->bias_model,
+                  "the bias over the session: constant, linear (a drift), spline:K (K knots "
+                  "over the session), or auto (the one that predicts held-out positions "
+                  "best); each position at the middle of its still interval")
+      ->capture_default_str();
+  CLI::Option* random_walk =
+      cmd->add_option("--bias-random-walk", cal->bias_random_walk,
+                      "with --bias-model spline:K or auto: the bias's random walk "
+                      "[m/s^2/sqrt(s)], one value or x,y,z, the prior that lets many knots "
+                      "follow a wandering bias")
+          ->expected(1, 3)
+          ->delimiter(',')
+          ->type_name("Q[,Q,Q]");
+  cmd->add_option("--noise", cal->noise,
+                  "instead of --bias-random-walk: the accelerometer's random walk from "
+                  "`accelcal noise --json` (calibrated; its 95% upper bound where the log "
+                  "does not resolve it)")
+      ->type_name("FILE")
+      ->excludes(random_walk);
+  cmd->add_option("--thermal", cal->thermal,
+                  "parameters that follow temperature: the degrees in T - T_ref of K and b "
+                  "(and k2 for the quadratic model), e.g. 1,1, or auto (chosen by held-out "
+                  "error); from several files at different temperatures or one ramp")
+      ->type_name("K,B[,K2]|auto");
+  cmd->add_option("--temperatures", cal->temperatures_c,
+                  "with --thermal: one temperature [degC] per input file, for logs without "
+                  "their own (see --temperature-column)")
+      ->delimiter(',')
+      ->check(kDecimal)
+      ->type_name("T[,T...]");
+  cmd->add_option("--method", cal->method,
+                  "joint, two-step, newton-lagrange, modulus, modulus-norm or ellipsoid")
+      ->capture_default_str();
+  cmd->add_option("--init", cal->init, "auto, ellipsoid or normalized-readings")
+      ->capture_default_str();
+  cmd->add_option("--frame", cal->frame,
+                  "body frame of the result: x-first (body x = sensor x, K lower-triangular, "
+                  "paper 000) or z-first (body z = sensor z, K upper-triangular, paper 001, "
+                  "imu_tk)")
+      ->capture_default_str();
+  cmd->add_option("--estimator", cal->estimator,
+                  "ml (maximum likelihood) or bias-corrected (removes the bias of order "
+                  "sigma^2/g that ML has at MEMS noise levels; same covariance)")
+      ->capture_default_str();
+  AddOutlierOptions(cmd, &cal->outliers,
+                    "a position that disagrees with the others (moved or bumped during its "
+                    "interval): exclude it with a warning, flag it only, or off");
+  cmd->add_option("--orientations", cal->orientations,
+                  "known orientation of every position, in order (a file of directions or "
+                  "attitudes, as for design): full misalignment in the platform frame, "
+                  "paper 003");
+  cmd->add_option("--gyro", cal->gyro,
+                  "the gyroscope's log, recorded with the accelerometer on the same clock "
+                  "(a rate sample at each accelerometer sample's time): calibrates it too");
+  cmd->add_option("--gyro-columns", cal->gyro_columns,
+                  "the gyroscope's x,y,z (or time,x,y,z) columns, in INPUT itself or in the "
+                  "--gyro log: 1-based column numbers or header names")
+      ->delimiter(',');
+  AddGyroTopic(cmd, &cal->input);
+  cmd->add_option("--gyro-units", cal->gyro_units,
+                  "the gyro's raw unit, for the start of its fit: rad/s, deg/s, or raw "
+                  "(counts: the scale starts from the turned angles)")
+      ->capture_default_str();
+  cmd->add_option("--gyro-model", cal->gyro_model,
+                  "linear (K, b), g-sensitive (K, b and a rate bias in proportion to the "
+                  "specific force), or auto (the one that predicts held-out rotations better)")
+      ->capture_default_str();
+  cmd->add_option(
+      "--gyro-estimator", cal->gyro_estimator,
+      "joint (both sensors and every gravity direction in one fit: the rotations "
+      "also calibrate the accelerometer; the default), two-stage (the "
+      "accelerometer's calibration held; the default with --orientations, whose "
+      "directions are known, and with --thermal), or imutk (imu_tk's method, a baseline: the "
+      "bias from the "
+      "first still position, K from the turns, no g-sensitivity)");
+  cmd->add_option("--gyro-thermal", cal->gyro_thermal,
+                  "with --thermal: the degree in T - T_ref of the gyroscope's offsets (0 to 3), "
+                  "or auto (chosen by the still positions' held-out rates; the default)")
+      ->type_name("D|auto");
+  cmd->add_flag("!--no-crossval", cal->cross_validate,
+                "skip the leave-one-position-out validation (one refit per position)");
+  cmd->add_option("--raw-units", cal->raw_units, "label of the raw unit (e.g. counts)")
+      ->capture_default_str();
+  cmd->add_option("--max-iterations", cal->max_iterations,
+                  "iteration cap of the solver (0: its default)");
+}
+
+void AddDateOption(CLI::App* cmd, CalibrateArgs* cal) {
+  cmd->add_option("--date", cal->date,
+                  "a date for the file's provenance (YYYY-MM-DD[THH:MM[:SS]Z]); without it none "
+                  "is written, so the same input gives the same bytes");
+}
+
 // The options given to `command` (long names without dashes, with their values as typed; none for
 // a flag), in the order the command defines them, except the positional arguments and `skip`:
 // what a calibration file's provenance records.
@@ -140,8 +243,8 @@ std::vector<std::pair<std::string, std::vector<std::string>>> GivenOptions(
 // list is only slower to start: every command's options are then set up).
 std::string ChosenCommand(int argc, char** argv) {
   static constexpr const char* kCommands[] = {
-      "calibrate",    "compare", "detect",   "inspect", "noise",  "design", "montecarlo",
-      "system-level", "gimbal",  "simulate", "apply",   "report", "export"};
+      "calibrate",    "batch",  "compare",  "detect", "inspect", "noise",  "design", "montecarlo",
+      "system-level", "gimbal", "simulate", "apply",  "report",  "export", "verify"};
   for (int i = 1; i < argc; ++i) {
     for (const char* command : kCommands) {
       if (std::string_view(argv[i]) == command) return command;
@@ -224,6 +327,15 @@ void CheckGyroFlags(const CLI::App& cmd, const std::string& gyro,
   }
 }
 
+// What calibrate and batch check of calibrate's options before anything is read.
+void CheckCalibrationFlags(const CLI::App& cmd, const CalibrateArgs& cal) {
+  CheckGyroFlags(cmd, cal.gyro, cal.gyro_columns,
+                 {"--gyro-units", "--gyro-model", "--gyro-estimator", "--gyro-thermal"});
+  if (cmd.count("--gyro-thermal") > 0 && cal.gyro_thermal.empty()) {
+    throw accelcal::cli::UsageError("--gyro-thermal: '' is neither auto nor a degree from 0 to 3");
+  }
+}
+
 }  // namespace
 
 int accelcal::cli::RunCommandLineCaptured(const std::vector<std::string>& args, std::string* out,
@@ -269,123 +381,56 @@ int accelcal::cli::RunCommandLine(int argc, char** argv) {
                      "raw logs or positions files (several: sessions of one device, positions "
                      "pooled; - reads standard input)")
         ->required();
-    AddInputOptions(calibrate, &cal.input, true);
-    AddDetectionOptions(calibrate, &cal.input);
-    AddGravityOptions(calibrate, &cal.gravity);
-    calibrate
-        ->add_option("--model", cal.model,
-                     "linear, quadratic, or auto (the model that predicts held-out positions "
-                     "better)")
-        ->capture_default_str();
-    calibrate
-        ->add_option("--bias-model", cal.bias_model,
-                     "the bias over the session: constant, linear (a drift), spline:K (K knots "
-                     "over the session), or auto (the one that predicts held-out positions "
-                     "best); each position at the middle of its still interval")
-        ->capture_default_str();
-    CLI::Option* random_walk =
-        calibrate
-            ->add_option("--bias-random-walk", cal.bias_random_walk,
-                         "with --bias-model spline:K or auto: the bias's random walk "
-                         "[m/s^2/sqrt(s)], one value or x,y,z, the prior that lets many knots "
-                         "follow a wandering bias")
-            ->expected(1, 3)
-            ->delimiter(',')
-            ->type_name("Q[,Q,Q]");
-    calibrate
-        ->add_option("--noise", cal.noise,
-                     "instead of --bias-random-walk: the accelerometer's random walk from "
-                     "`accelcal noise --json` (calibrated; its 95% upper bound where the log "
-                     "does not resolve it)")
-        ->type_name("FILE")
-        ->excludes(random_walk);
-    calibrate
-        ->add_option("--thermal", cal.thermal,
-                     "parameters that follow temperature: the degrees in T - T_ref of K and b "
-                     "(and k2 for the quadratic model), e.g. 1,1, or auto (chosen by held-out "
-                     "error); from several files at different temperatures or one ramp")
-        ->type_name("K,B[,K2]|auto");
-    calibrate
-        ->add_option("--temperatures", cal.temperatures_c,
-                     "with --thermal: one temperature [degC] per input file, for logs without "
-                     "their own (see --temperature-column)")
-        ->delimiter(',')
-        ->check(kDecimal)
-        ->type_name("T[,T...]");
-    calibrate
-        ->add_option("--method", cal.method,
-                     "joint, two-step, newton-lagrange, modulus, modulus-norm or ellipsoid")
-        ->capture_default_str();
-    calibrate->add_option("--init", cal.init, "auto, ellipsoid or normalized-readings")
-        ->capture_default_str();
-    calibrate
-        ->add_option("--frame", cal.frame,
-                     "body frame of the result: x-first (body x = sensor x, K lower-triangular, "
-                     "paper 000) or z-first (body z = sensor z, K upper-triangular, paper 001, "
-                     "imu_tk)")
-        ->capture_default_str();
-    calibrate
-        ->add_option("--estimator", cal.estimator,
-                     "ml (maximum likelihood) or bias-corrected (removes the bias of order "
-                     "sigma^2/g that ML has at MEMS noise levels; same covariance)")
-        ->capture_default_str();
-    AddOutlierOptions(calibrate, &cal.outliers,
-                      "a position that disagrees with the others (moved or bumped during its "
-                      "interval): exclude it with a warning, flag it only, or off");
-    calibrate->add_option("--orientations", cal.orientations,
-                          "known orientation of every position, in order (a file of directions or "
-                          "attitudes, as for design): full misalignment in the platform frame, "
-                          "paper 003");
-    calibrate->add_option("--gyro", cal.gyro,
-                          "the gyroscope's log, recorded with the accelerometer on the same clock "
-                          "(a rate sample at each accelerometer sample's time): calibrates it too");
-    calibrate
-        ->add_option("--gyro-columns", cal.gyro_columns,
-                     "the gyroscope's x,y,z (or time,x,y,z) columns, in INPUT itself or in the "
-                     "--gyro log: 1-based column numbers or header names")
-        ->delimiter(',');
-    AddGyroTopic(calibrate, &cal.input);
-    calibrate
-        ->add_option("--gyro-units", cal.gyro_units,
-                     "the gyro's raw unit, for the start of its fit: rad/s, deg/s, or raw "
-                     "(counts: the scale starts from the turned angles)")
-        ->capture_default_str();
-    calibrate
-        ->add_option("--gyro-model", cal.gyro_model,
-                     "linear (K, b), g-sensitive (K, b and a rate bias in proportion to the "
-                     "specific force), or auto (the one that predicts held-out rotations better)")
-        ->capture_default_str();
-    calibrate->add_option(
-        "--gyro-estimator", cal.gyro_estimator,
-        "joint (both sensors and every gravity direction in one fit: the rotations "
-        "also calibrate the accelerometer; the default), two-stage (the "
-        "accelerometer's calibration held; the default with --orientations, whose "
-        "directions are known, and with --thermal), or imutk (imu_tk's method, a baseline: the "
-        "bias from the "
-        "first still position, K from the turns, no g-sensitivity)");
-    calibrate
-        ->add_option("--gyro-thermal", cal.gyro_thermal,
-                     "with --thermal: the degree in T - T_ref of the gyroscope's offsets (0 to 3), "
-                     "or auto (chosen by the still positions' held-out rates; the default)")
-        ->type_name("D|auto");
-    calibrate->add_flag("!--no-crossval", cal.cross_validate,
-                        "skip the leave-one-position-out validation (one refit per position)");
-    calibrate->add_option("--raw-units", cal.raw_units, "label of the raw unit (e.g. counts)")
-        ->capture_default_str();
-    calibrate->add_option("--max-iterations", cal.max_iterations,
-                          "iteration cap of the solver (0: its default)");
+    AddCalibrationOptions(calibrate, &cal);
     calibrate->add_option("-o,--output", cal.output, "write the calibration file (JSON) here")
         ->check(kFileName);
     calibrate
         ->add_option("--report", cal.report,
                      "write the HTML report here (self-contained: plots, parameters, warnings)")
         ->check(kFileName);
-    calibrate->add_option(
-        "--date", cal.date,
-        "a date for the file's provenance (YYYY-MM-DD[THH:MM[:SS]Z]); without it none "
-        "is written, so the same input gives the same bytes");
+    AddDateOption(calibrate, &cal);
     calibrate->add_flag("--json", cal.json,
                         "print the calibration file to stdout instead of the summary");
+  }
+
+  BatchArgs bat;
+  CalibrateArgs bat_cal;  // the calibrate options batch takes, passed on as given
+  CLI::App* batch = app.add_subcommand(
+      "batch",
+      "a production line: calibrate many units as calibrate would, judge each against limits, "
+      "and tabulate them (units in parallel; a unit whose calibration is current is not redone)");
+  if (Wanted(batch)) {
+    batch
+        ->add_option("INPUT", bat.inputs,
+                     "the units' recordings: files, and directories whose files are read")
+        ->required();
+    batch
+        ->add_option("-o,--output", bat.output,
+                     "the batch's directory: units/ID/calibration.json and report.html, "
+                     "summary.csv and summary.json (made when missing)")
+        ->required()
+        ->check(kFileName);
+    batch
+        ->add_option("--limits", bat.limits,
+                     "acceptance limits (YAML, docs/batch.md); without: a unit passes when its "
+                     "calibration passes its own checks")
+        ->check(kFileName);
+    batch
+        ->add_option("--unit-id", bat.unit_id,
+                     "a regular expression searched in each file's name: its first group (or "
+                     "the match) is the unit's id; files with one id are one unit's sessions "
+                     "(default: the name less its extension)")
+        ->type_name("REGEX");
+    batch->add_option("--glob", bat.glob, "the files read from a directory given")
+        ->capture_default_str();
+    batch->add_option("--jobs", bat.jobs, "units calibrated at once (0: one per core)")
+        ->capture_default_str();
+    batch->add_flag("--redo", bat.redo,
+                    "calibrate every unit again, even one whose calibration is current");
+    batch->add_flag("!--no-report", bat.report, "no HTML report per unit");
+    batch->add_flag("--json", bat.json, "print the summary document instead of the table");
+    AddCalibrationOptions(batch, &bat_cal);
+    AddDateOption(batch, &bat_cal);
   }
 
   CompareArgs cmp;
@@ -836,15 +881,16 @@ int accelcal::cli::RunCommandLine(int argc, char** argv) {
                                "--bias-model", "--bias-random-walk", "--noise"}) {
         if (calibrate->count(name) > 0) cal.gravity_only_options.emplace_back(name);
       }
-      CheckGyroFlags(*calibrate, cal.gyro, cal.gyro_columns,
-                     {"--gyro-units", "--gyro-model", "--gyro-estimator", "--gyro-thermal"});
-      if (calibrate->count("--gyro-thermal") > 0 && cal.gyro_thermal.empty()) {
-        throw accelcal::cli::UsageError(
-            "--gyro-thermal: '' is neither auto nor a degree from 0 to 3");
-      }
+      CheckCalibrationFlags(*calibrate, cal);
       cal.given_options = GivenOptions(*calibrate, {"output", "report", "json", "date"});
       cal.date_given = calibrate->count("--date") > 0;
       return RunCalibrate(cal);
+    }
+    if (*batch) {
+      CheckCalibrationFlags(*batch, bat_cal);
+      bat.calibrate_options = GivenOptions(
+          *batch, {"output", "limits", "unit-id", "glob", "jobs", "redo", "no-report", "json"});
+      return RunBatch(bat);
     }
     if (*detect) {
       data_subject = det.input.path;

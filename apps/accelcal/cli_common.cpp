@@ -251,6 +251,17 @@ std::string OutlierMessage(const OutlierFinding& o, const std::vector<Position>&
                 test.c_str());
 }
 
+nlohmann::ordered_json GivenOptionsJson(
+    const std::vector<std::pair<std::string, std::vector<std::string>>>& given) {
+  nlohmann::ordered_json options = nlohmann::ordered_json::object();
+  for (const auto& [name, values] : given) {
+    options[name] = values.empty()       ? nlohmann::ordered_json(true)
+                    : values.size() == 1 ? nlohmann::ordered_json(values.front())
+                                         : nlohmann::ordered_json(values);
+  }
+  return options;
+}
+
 std::string FormatNumber(double v) {
   char buf[32];
   const auto res = std::to_chars(buf, buf + sizeof buf, v);

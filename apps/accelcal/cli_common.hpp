@@ -111,6 +111,11 @@ std::string PositionsCsv(const std::vector<Vec3>& means, double samples, const V
 // Three numbers as a JSON array.
 nlohmann::ordered_json JsonArray(const Vec3& v);
 
+/// Options as given (CalibrateArgs::given_options) as a calibration file's `provenance.options`
+/// records them: a flag true, one value a string, several a list.
+nlohmann::ordered_json GivenOptionsJson(
+    const std::vector<std::pair<std::string, std::vector<std::string>>>& given);
+
 // A library message with the names of the options it mentions (the library's field names, as
 // Python spells them: c_prefix) replaced by the command line's flags (--c-prefix): the library
 // speaks neutrally, the tool names what the user types.

@@ -458,11 +458,7 @@ Provenance MakeProvenance(const CalibrateArgs& args, const LoadedInput& in,
                           const OrientationFile* orientations, const GyroRun* gyro) {
   Provenance provenance;
   provenance.command = "accelcal calibrate";
-  for (const auto& [name, values] : args.given_options) {
-    provenance.options[name] = values.empty()       ? nlohmann::ordered_json(true)
-                               : values.size() == 1 ? nlohmann::ordered_json(values.front())
-                                                    : nlohmann::ordered_json(values);
-  }
+  provenance.options = GivenOptionsJson(args.given_options);
   provenance.inputs = InputRecords(in);
   if (orientations != nullptr) {
     provenance.inputs.push_back({args.orientations, orientations->bytes, orientations->sha256});

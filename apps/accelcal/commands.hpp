@@ -259,6 +259,23 @@ struct SystemLevelArgs {
   bool json = false;
 };
 
+// accelcal batch: a production line's units, each calibrated as `accelcal calibrate` would with the
+// options given, judged against a limits file (acceptance.hpp), in parallel (cmd_batch.cpp).
+struct BatchArgs {
+  std::vector<std::string> inputs;  // files, and directories whose files matching `glob` are read
+  std::string glob = "*";
+  std::string limits;   // limits file (YAML); empty: the calibrations' own checks only
+  std::string output;   // the batch's directory
+  std::string unit_id;  // a regular expression on file names; empty: the name less its extension
+  int jobs = 0;         // units at once; 0: one per core
+  bool redo = false;    // calibrate every unit again, even one whose calibration is current
+  bool report = true;   // an HTML report per unit
+  bool json = false;    // the summary document to stdout instead of the table
+  /// The calibrate options given, as GivenOptions lists them: passed to every unit's calibrate
+  /// as given (each unit's file records them in its provenance).
+  std::vector<std::pair<std::string, std::vector<std::string>>> calibrate_options;
+};
+
 struct GimbalArgs {
   std::string coarse;  // theta1_deg,theta2_deg,theta3_deg,ax,ay,az per position
   std::string fine;    // ax,ay,az per position (re-zeroed platform), optional
@@ -267,6 +284,7 @@ struct GimbalArgs {
 };
 
 int RunCalibrate(const CalibrateArgs& args);
+int RunBatch(const BatchArgs& args);
 int RunGimbal(const GimbalArgs& args);
 int RunSystemLevel(const SystemLevelArgs& args);
 int RunSimulate(const SimulateArgs& args);

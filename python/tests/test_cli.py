@@ -228,3 +228,22 @@ def test_commands_run_concurrently_in_threads(tmp_path):
     for t in threads:
         t.join()
     assert outputs == [tool_json("compare", CTU24, "--methods", "joint,modulus")] * 4
+
+
+def test_batch_returns_the_summary_and_warns_of_the_units_that_failed(tmp_path):
+    line = tmp_path / "line"
+    line.mkdir()
+    (line / "SN1.csv").write_bytes(CTU24.read_bytes())
+    (line / "SN2.csv").write_text("x,y,z\n1,2,3\n")  # too few positions: an error, not a stop
+    limits = tmp_path / "limits.yaml"
+    limits.write_text("format: accelcal-limits\nversion: 1\nunits: {specific_force: g}\n"
+                      "limits:\n  accelerometer.heldout_rms: {max: 0.01}\n")
+    with pytest.warns(accelcal.CalibrationCheckFailed, match="1 could not be calibrated"):
+        doc = accelcal.cli.batch(line, output=tmp_path / "out", limits=limits, units="g", jobs=2)
+    assert doc["counts"] == {"units": 2, "pass": 1, "fail": 0, "error": 1}
+    assert [u["status"] for u in doc["units"]] == ["pass", "error"]
+    assert doc == json.loads((tmp_path / "out" / "summary.json").read_text())
+    # The tool's own bytes, from the same options.
+    tool("batch", line, "-o", tmp_path / "tool", "--limits", limits, "--units", "g")
+    for name in ("summary.json", "summary.csv", "units/SN1/calibration.json"):
+        assert (tmp_path / "tool" / name).read_bytes() == (tmp_path / "out" / name).read_bytes()

@@ -1,0 +1,571 @@
+// accelcal batch: a production line's units. Each unit's files are calibrated by the tool's own
+// calibrate (in-process, RunCommandLineCaptured) with the options given, so that a unit's file and
+// report are exactly what `accelcal calibrate` writes; each calibration is then judged against
+// the limits (acceptance.hpp), and one summary table lists every unit. Units run in parallel, a
+// unit that fails never stops the others, and a unit whose calibration is current (same inputs,
+// options, date and accelcal version, by its own provenance) is not calibrated again.
+#include <fnmatch.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <atomic>
+#include <cerrno>
+#include <chrono>
+#include <cstring>
+#include <fstream>
+#include <map>
+#include <regex>
+#include <thread>
+
+#include <dirent.h>
+
+#include "accelcal/acceptance.hpp"
+#include "accelcal/calibration_file.hpp"
+#include "accelcal/json_text.hpp"
+#include "accelcal/log_reader.hpp"
+#include "accelcal/sha256.hpp"
+#include "accelcal/version.hpp"
+#include "cli_common.hpp"
+#include "commands.hpp"
+#include "output.hpp"
+
+namespace accelcal::cli {
+namespace {
+
+using Json = nlohmann::ordered_json;
+
+enum class UnitStatus { kPass, kFail, kError };
+const char* Name(UnitStatus s) {
+  return s == UnitStatus::kPass ? "pass" : s == UnitStatus::kFail ? "fail" : "error";
+}
+
+struct Unit {
+  std::string id;
+  std::vector<std::string> files;
+  std::string problem;  // found before calibrating (a name the pattern does not match): an error
+  // Filled by the run.
+  int exit_status = -1;
+  bool reused = false;
+  std::string message;  // an error's, from calibrate's stderr
+  UnitStatus status = UnitStatus::kError;
+  std::optional<LoadedCalibration> calibration;
+  Acceptance acceptance;
+};
+
+bool IsDirectory(const std::string& path) {
+  struct stat st {};
+  return ::stat(path.c_str(), &st) == 0 && S_ISDIR(st.st_mode);
+}
+
+// The regular files of `dir` whose names match `glob` (hidden ones left out), sorted by name;
+// `skipped` counts the other entries that match (directories, FIFOs, devices).
+std::vector<std::string> DirectoryFiles(const std::string& dir, const std::string& glob,
+                                        int* skipped) {
+  DIR* d = ::opendir(dir.c_str());
+  if (d == nullptr) {
+    throw InputError(dir, 0, std::string("cannot list the directory: ") + std::strerror(errno));
+  }
+  std::vector<std::string> names;
+  while (const dirent* e = ::readdir(d)) {
+    const std::string name = e->d_name;
+    if (name.empty() || name[0] == '.' || ::fnmatch(glob.c_str(), name.c_str(), 0) != 0) continue;
+    names.push_back(name);
+  }
+  ::closedir(d);
+  std::sort(names.begin(), names.end());
+  std::vector<std::string> files;
+  const std::string prefix = dir.back() == '/' ? dir : dir + "/";
+  for (const std::string& name : names) {
+    struct stat st {};
+    if (::stat((prefix + name).c_str(), &st) == 0 && S_ISREG(st.st_mode)) {
+      files.push_back(prefix + name);
+    } else {
+      ++*skipped;
+    }
+  }
+  return files;
+}
+
+std::string BaseName(const std::string& path) {
+  const std::size_t slash = path.find_last_of('/');
+  return slash == std::string::npos ? path : path.substr(slash + 1);
+}
+
+// Why `id` cannot name a unit's directory, or "" when it can.
+std::string BadUnitId(const std::string& id) {
+  if (id.empty()) return "the unit id is empty";
+  if (id.size() > 128) return "the unit id is longer than 128 characters";
+  if (id[0] == '.') return "the unit id '" + id + "' begins with '.'";
+  for (unsigned char c : id) {
+    if (c == '/' || c < 0x20 || c == 0x7f) {
+      return "the unit id '" + id + "' holds a '/' or a control character";
+    }
+  }
+  return "";
+}
+
+// The unit id of a file: the regular expression's first group (or its whole match) searched in
+// the file's name, or the name less its extension.
+std::string UnitIdOf(const std::string& path, const std::optional<std::regex>& pattern,
+                     std::string* problem) {
+  const std::string name = BaseName(path);
+  if (!pattern) {
+    const std::size_t dot = name.find_last_of('.');
+    return dot == 0 || dot == std::string::npos ? name : name.substr(0, dot);
+  }
+  std::smatch m;
+  if (!std::regex_search(name, m, *pattern)) {
+    *problem = "its name does not match the unit id pattern";
+    return name;
+  }
+  return m.size() > 1 ? m[1].str() : m[0].str();
+}
+
+// name, size and SHA-256 of a file, as a calibration's provenance records an input.
+InputRecord Record(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw InputError(path, 0, "cannot be read");
+  Sha256 sha;
+  std::uint64_t bytes = 0;
+  std::vector<char> buffer(1 << 16);
+  while (in) {
+    in.read(buffer.data(), static_cast<std::streamsize>(buffer.size()));
+    const auto n = static_cast<std::size_t>(in.gcount());
+    sha.Update(buffer.data(), n);
+    bytes += n;
+  }
+  if (in.bad()) throw InputError(path, 0, "could not be read to its end");
+  return {path, bytes, sha.HexDigest()};
+}
+
+// The files a unit's calibration reads beyond its own, in the order its provenance lists them
+// (cmd_calibrate.cpp MakeProvenance): the orientations, then the gyroscope's log.
+std::vector<std::string> SharedInputs(const BatchArgs& args) {
+  std::vector<std::string> files;
+  for (const char* option : {"orientations", "gyro"}) {
+    for (const auto& [name, values] : args.calibrate_options) {
+      if (name == option && !values.empty()) files.push_back(values.front());
+    }
+  }
+  return files;
+}
+
+std::string OptionValue(const BatchArgs& args, const char* option) {
+  for (const auto& [name, values] : args.calibrate_options) {
+    if (name == option && !values.empty()) return values.front();
+  }
+  return "";
+}
+
+// The options a unit's provenance records: those given, less the date (recorded apart).
+Json ProvenanceOptions(const BatchArgs& args) {
+  std::vector<std::pair<std::string, std::vector<std::string>>> given;
+  for (const auto& option : args.calibrate_options) {
+    if (option.first != "date") given.push_back(option);
+  }
+  return GivenOptionsJson(given);
+}
+
+// Whether the unit's calibration file is current: written by this accelcal from the same inputs
+// (by name, size and SHA-256), options and date, with its report when one is wanted.
+bool Current(const BatchArgs& args, const Unit& unit, const std::string& dir,
+             const std::vector<InputRecord>& shared) {
+  const std::string cal_path = dir + "/calibration.json";
+  if (!IsDirectory(dir) || (args.report && ::access((dir + "/report.html").c_str(), R_OK) != 0)) {
+    return false;
+  }
+  try {
+    const LoadedCalibration cal =
+        ParseCalibrationJson(ReadFileToString(cal_path, kMaxSmallFileBytes), cal_path);
+    const Provenance& p = cal.provenance;
+    if (p.accelcal_version != Version() || p.command != "accelcal calibrate" ||
+        p.options != ProvenanceOptions(args) ||
+        p.date != OptionValue(args, "date")) {
+      return false;
+    }
+    std::vector<InputRecord> expected;
+    for (const std::string& f : unit.files) expected.push_back(Record(f));
+    expected.insert(expected.end(), shared.begin(), shared.end());
+    if (p.inputs.size() != expected.size()) return false;
+    for (std::size_t i = 0; i < expected.size(); ++i) {
+      if (p.inputs[i].name != expected[i].name || p.inputs[i].bytes != expected[i].bytes ||
+          p.inputs[i].sha256 != expected[i].sha256) {
+        return false;
+      }
+    }
+    return true;
+  } catch (const std::exception&) {
+    return false;  // unreadable or not a calibration: calibrated again
+  }
+}
+
+// The calibrate command line of a unit: its files, the options as given, its outputs.
+std::vector<std::string> CalibrateCommand(const BatchArgs& args, const Unit& unit,
+                                          const std::string& dir) {
+  std::vector<std::string> argv = {"accelcal", "calibrate"};
+  for (const std::string& f : unit.files) {
+    // A file name that begins with '-' would be taken for an option.
+    argv.push_back(!f.empty() && f[0] == '-' ? "./" + f : f);
+  }
+  for (const auto& [name, values] : args.calibrate_options) {
+    if (values.empty()) {
+      argv.push_back("--" + name);
+    } else {
+      std::string joined;
+      for (const std::string& v : values) joined += (joined.empty() ? "" : ",") + v;
+      argv.push_back("--" + name + "=" + joined);
+    }
+  }
+  argv.push_back("--output=" + dir + "/calibration.json");
+  if (args.report) argv.push_back("--report=" + dir + "/report.html");
+  return argv;
+}
+
+// The last line calibrate wrote to stderr (its error), without the tool's name.
+std::string ErrorLine(const std::string& err) {
+  std::string line;
+  std::size_t end = err.size();
+  while (end > 0 && err[end - 1] == '\n') --end;
+  const std::size_t begin = err.rfind('\n', end == 0 ? 0 : end - 1);
+  line = err.substr(begin == std::string::npos ? 0 : begin + 1, end - (begin == std::string::npos ? 0 : begin + 1));
+  const std::string tool = "accelcal: ";
+  if (line.compare(0, tool.size(), tool) == 0) line.erase(0, tool.size());
+  return line;
+}
+
+void RunUnit(const BatchArgs& args, const std::vector<InputRecord>& shared, Unit* unit) {
+  if (!unit->problem.empty()) return;
+  const std::string dir = args.output + "/units/" + unit->id;
+  const std::string cal_path = dir + "/calibration.json";
+  try {
+    if (!args.redo && Current(args, *unit, dir, shared)) {
+      unit->reused = true;
+      unit->exit_status = kExitOk;
+    } else {
+      if (::mkdir(dir.c_str(), 0777) != 0 && errno != EEXIST) {
+        throw OutputError(dir + ": cannot create the unit's directory: " + std::strerror(errno));
+      }
+      std::string out, err;
+      unit->exit_status = RunCommandLineCaptured(CalibrateCommand(args, *unit, dir), &out, &err);
+      if (unit->exit_status != kExitOk && unit->exit_status != kExitFailedChecks) {
+        unit->message = ErrorLine(err);
+        // An earlier calibration of this unit is not of these inputs: not left to be taken
+        // for one.
+        std::remove(cal_path.c_str());
+        std::remove((dir + "/report.html").c_str());
+        ::rmdir(dir.c_str());  // when it is empty
+        return;
+      }
+    }
+    unit->calibration =
+        ParseCalibrationJson(ReadFileToString(cal_path, kMaxSmallFileBytes), cal_path);
+  } catch (const std::exception& e) {
+    unit->exit_status = kExitInternal;
+    unit->message = e.what();
+  }
+}
+
+std::string CsvField(const std::string& text) {
+  if (text.find_first_of(",\"\n\r") == std::string::npos) return text;
+  std::string quoted = "\"";
+  for (char c : text) {
+    if (c == '"') quoted += '"';
+    quoted += c;
+  }
+  return quoted + "\"";
+}
+
+std::string Joined(const std::vector<std::string>& items, const char* separator) {
+  std::string text;
+  for (const std::string& s : items) text += (text.empty() ? "" : separator) + s;
+  return text;
+}
+
+std::string WorstFinding(const LoadedCalibration& cal) {
+  std::optional<Severity> worst;
+  for (const Finding& f : cal.diagnostics.value_or(std::vector<Finding>())) {
+    if (!worst || f.severity > *worst) worst = f.severity;
+  }
+  return worst ? std::string(ToString(*worst)) : "none";
+}
+
+}  // namespace
+
+int RunBatch(const BatchArgs& args) {
+  // The limits first: a mistake there is found before anything is calibrated.
+  std::optional<AcceptanceLimits> limits;
+  if (!args.limits.empty()) {
+    limits = ParseLimits(ReadFileToString(args.limits, kMaxSmallFileBytes), args.limits);
+  }
+  std::optional<std::regex> pattern;
+  if (!args.unit_id.empty()) {
+    try {
+      pattern.emplace(args.unit_id, std::regex::ECMAScript);
+    } catch (const std::regex_error& e) {
+      throw UsageError("--unit-id '" + args.unit_id + "' is not a regular expression: " + e.what());
+    }
+  }
+  if (args.jobs < 0 || args.jobs > 1024) {
+    throw UsageError("--jobs " + std::to_string(args.jobs) + ": from 1 to 1024 (0: one per core)");
+  }
+  // The files: those given, and the matching regular files of each directory given.
+  std::vector<std::string> files;
+  int skipped = 0;
+  for (const std::string& input : args.inputs) {
+    if (input.empty()) throw UsageError("an input's name is empty");
+    if (IsDirectory(input)) {
+      const std::vector<std::string> found = DirectoryFiles(input, args.glob, &skipped);
+      if (found.empty()) {
+        Warn("warning: %s: no file matches --glob '%s'\n", input.c_str(), args.glob.c_str());
+      }
+      files.insert(files.end(), found.begin(), found.end());
+      continue;
+    }
+    struct stat st {};
+    if (::stat(input.c_str(), &st) != 0) {
+      throw InputError(input, 0, std::string("cannot be read: ") + std::strerror(errno));
+    }
+    if (!S_ISREG(st.st_mode)) {
+      throw InputError(input, 0,
+                       "not a regular file: batch reads each input twice (its SHA-256, then "
+                       "its data), which a FIFO or a device cannot give");
+    }
+    files.push_back(input);
+  }
+  if (skipped > 0) {
+    Warn("warning: %d directory entries matching --glob are not regular files: skipped\n",
+         skipped);
+  }
+  if (files.empty()) throw UsageError("no input file: give files or directories that hold some");
+  // The same file twice (given twice, or given and in a directory given) is a mistake.
+  std::map<std::pair<dev_t, ino_t>, std::string> seen;
+  for (const std::string& f : files) {
+    struct stat st {};
+    if (::stat(f.c_str(), &st) != 0) continue;
+    const auto [at, fresh] = seen.emplace(std::make_pair(st.st_dev, st.st_ino), f);
+    if (!fresh) throw UsageError(f + " is " + at->second + " again: give each file once");
+  }
+  // The output directory, made when missing; never one of the inputs' directories.
+  if (!IsDirectory(args.output)) {
+    if (::mkdir(args.output.c_str(), 0777) != 0) {
+      throw OutputError(args.output + ": cannot create the directory: " + std::strerror(errno));
+    }
+  }
+  struct stat out_st {};
+  ::stat(args.output.c_str(), &out_st);
+  for (const std::string& input : args.inputs) {
+    struct stat st {};
+    if (IsDirectory(input) && ::stat(input.c_str(), &st) == 0 && st.st_dev == out_st.st_dev &&
+        st.st_ino == out_st.st_ino) {
+      throw UsageError("-o " + args.output + " is the input directory " + input +
+                       ": its summary files would be taken for units; give another");
+    }
+  }
+  const std::string units_dir = args.output + "/units";
+  if (::mkdir(units_dir.c_str(), 0777) != 0 && errno != EEXIST) {
+    throw OutputError(units_dir + ": cannot create the directory: " + std::strerror(errno));
+  }
+  const std::string csv_path = args.output + "/summary.csv";
+  const std::string json_path = args.output + "/summary.json";
+  std::vector<std::string> all_inputs = files;
+  if (!args.limits.empty()) all_inputs.push_back(args.limits);
+  CheckOutputs({{"summary", csv_path}, {"summary", json_path}}, all_inputs);
+
+  // The units, by id: a file's id from its name; files with one id are sessions of one unit.
+  std::map<std::string, Unit> by_id;
+  std::vector<Unit> misnamed;
+  for (const std::string& f : files) {
+    std::string problem;
+    const std::string id = UnitIdOf(f, pattern, &problem);
+    if (problem.empty()) problem = BadUnitId(id);
+    if (!problem.empty()) {
+      Unit u;
+      u.id = id;
+      u.files = {f};
+      u.problem = f + ": " + problem;
+      misnamed.push_back(std::move(u));
+      continue;
+    }
+    Unit& u = by_id[id];
+    u.id = id;
+    u.files.push_back(f);
+  }
+  std::vector<Unit> units;
+  for (auto& [id, u] : by_id) units.push_back(std::move(u));
+  for (Unit& u : misnamed) units.push_back(std::move(u));
+
+  // The shared inputs are hashed once; then the units, `jobs` at a time.
+  std::vector<InputRecord> shared;
+  for (const std::string& f : SharedInputs(args)) shared.push_back(Record(f));
+  const unsigned cores = std::max(1u, std::thread::hardware_concurrency());
+  const std::size_t jobs = std::min<std::size_t>(
+      args.jobs > 0 ? static_cast<std::size_t>(args.jobs) : cores, units.size());
+  std::atomic<std::size_t> next{0}, done{0};
+  std::vector<std::thread> workers;
+  for (std::size_t j = 0; j < jobs; ++j) {
+    workers.emplace_back([&] {
+      for (std::size_t i; (i = next++) < units.size(); ++done) RunUnit(args, shared, &units[i]);
+    });
+  }
+  {
+    ProgressBar bar("batch");
+    while (done < units.size()) {
+      bar.Update(static_cast<long>(done), static_cast<long>(units.size()));
+      std::this_thread::sleep_for(std::chrono::milliseconds(50));
+    }
+  }
+  for (std::thread& w : workers) w.join();
+
+  // A usage error of calibrate is the options', the same for every unit: said once.
+  for (const Unit& u : units) {
+    if (u.exit_status == kExitUsage) {
+      const std::string usage = "usage: ";
+      throw UsageError(u.message.compare(0, usage.size(), usage) == 0 ? u.message.substr(usage.size())
+                                                                    : u.message);
+    }
+  }
+
+  // The verdicts, and the summary: every unit in id order, so the same inputs give the same bytes.
+  std::vector<std::string> columns;  // the quantities of all units, in their order of first use
+  for (Unit& u : units) {
+    if (!u.problem.empty()) {
+      u.message = u.problem;
+      continue;
+    }
+    if (!u.calibration) continue;
+    if (limits) {
+      u.acceptance = Accept(*u.calibration, *limits);
+    } else {
+      AcceptanceLimits none;
+      none.max_severity = Severity::kFailure;  // only the calibration's own verdict
+      u.acceptance = Accept(*u.calibration, none);
+    }
+    u.status = u.acceptance.passed ? UnitStatus::kPass : UnitStatus::kFail;
+    for (const CalibrationQuantity& q : CalibrationQuantities(*u.calibration)) {
+      if (std::find(columns.begin(), columns.end(), q.name) == columns.end()) {
+        columns.push_back(q.name);
+      }
+    }
+  }
+  int counts[3] = {0, 0, 0};
+  Json doc;
+  doc["format"] = "accelcal-batch-summary";
+  doc["version"] = 1;
+  doc["accelcal_version"] = std::string(Version());
+  if (limits) {
+    Json l;
+    l["file"] = args.limits;
+    l["sha256"] = Record(args.limits).sha256;
+    if (!limits->part.empty()) l["part"] = limits->part;
+    doc["limits"] = l;
+  } else {
+    doc["limits"] = nullptr;
+  }
+  doc["options"] = GivenOptionsJson(args.calibrate_options);
+  Json& rows = doc["units"] = Json::array();
+  std::string csv = "unit,status,failed,files,verdict,worst_finding,message";
+  for (const std::string& c : columns) csv += "," + c + "," + c + ".sigma";
+  csv += "\n";
+  for (const Unit& u : units) {
+    ++counts[static_cast<int>(u.status)];
+    Json row;
+    row["unit"] = u.id;
+    row["status"] = Name(u.status);
+    row["files"] = u.files;
+    std::vector<std::string> failed;
+    Json failures = Json::array();
+    for (const LimitFailure& f : u.acceptance.failures) {
+      failed.push_back(f.text);
+      Json jf;
+      jf["quantity"] = f.quantity;
+      jf["value"] = f.value ? Json(*f.value) : Json();
+      jf["text"] = f.text;
+      if (f.line > 0) jf["line"] = f.line;
+      failures.push_back(jf);
+    }
+    row["failed"] = failures;
+    std::map<std::string, const CalibrationQuantity*> by_name;
+    std::vector<CalibrationQuantity> quantities;
+    if (u.calibration) {
+      quantities = CalibrationQuantities(*u.calibration);
+      for (const CalibrationQuantity& q : quantities) by_name[q.name] = &q;
+      row["verdict"] = u.calibration->verdict;
+      row["worst_finding"] = WorstFinding(*u.calibration);
+      Json findings = Json::array();
+      for (const Finding& f : u.calibration->diagnostics.value_or(std::vector<Finding>())) {
+        findings.push_back({{"code", f.code}, {"severity", std::string(ToString(f.severity))}});
+      }
+      row["findings"] = findings;
+      Json q = Json::object();
+      for (const CalibrationQuantity& c : quantities) {
+        q[c.name] = {{"value", c.value},
+                     {"sigma", c.sigma ? Json(*c.sigma) : Json()},
+                     {"unit", c.unit}};
+      }
+      row["quantities"] = q;
+    } else {
+      row["message"] = u.message;
+    }
+    rows.push_back(row);
+    csv += CsvField(u.id) + "," + Name(u.status) + "," + CsvField(Joined(failed, "; ")) + "," +
+           CsvField(Joined(u.files, ";")) + "," +
+           (u.calibration ? u.calibration->verdict + "," + WorstFinding(*u.calibration) : ",") +
+           "," + CsvField(u.message);
+    for (const std::string& c : columns) {
+      const auto it = by_name.find(c);
+      if (it == by_name.end()) {
+        csv += ",,";
+      } else {
+        csv += "," + FormatNumber(it->second->value) + "," +
+               (it->second->sigma ? FormatNumber(*it->second->sigma) : "");
+      }
+    }
+    csv += "\n";
+  }
+  doc["counts"] = {{"units", units.size()},
+                   {"pass", counts[0]},
+                   {"fail", counts[1]},
+                   {"error", counts[2]}};
+  const std::string json_text = JsonText(doc);
+  OutputFile csv_file(csv_path), json_file(json_path);
+  csv_file.Write(csv);
+  json_file.Write(json_text);
+  CommitAll({&csv_file, &json_file});
+
+  if (args.json) {
+    WriteOut(json_text);
+  } else {
+    std::size_t width = 4;
+    for (const Unit& u : units) width = std::max(width, u.id.size());
+    for (const Unit& u : units) {
+      std::string detail = u.status == UnitStatus::kError
+                               ? u.message
+                               : Joined([&] {
+                                   std::vector<std::string> t;
+                                   for (const LimitFailure& f : u.acceptance.failures) {
+                                     t.push_back(f.text);
+                                   }
+                                   return t;
+                                 }(),
+                                        "; ");
+      const std::string line = Format("%-*s  %-5s  %s", static_cast<int>(width), u.id.c_str(),
+                                      Name(u.status), detail.c_str());
+      Say("%s\n", line.substr(0, line.find_last_not_of(' ') + 1).c_str());
+    }
+    const auto reused =
+        std::count_if(units.begin(), units.end(), [](const Unit& u) { return u.reused; });
+    Say("%zu units: %d pass, %d fail, %d error (%ld calibrations current, not redone); "
+        "summary %s, %s\n",
+        units.size(), counts[0], counts[1], counts[2], static_cast<long>(reused),
+        csv_path.c_str(), json_path.c_str());
+  }
+  if (counts[1] + counts[2] == 0) return kExitOk;
+  // Said on stderr too, as a calibration that fails its checks is: stdout may go to a file.
+  WriteErr(Format("accelcal: %d of %zu units failed their limits or checks, %d could not be "
+                  "calibrated (%s)\n",
+                  counts[1], units.size(), counts[2], csv_path.c_str()));
+  return kExitFailedChecks;
+}
+
+}  // namespace accelcal::cli

@@ -243,8 +243,8 @@ std::vector<std::pair<std::string, std::vector<std::string>>> GivenOptions(
 // list is only slower to start: every command's options are then set up).
 std::string ChosenCommand(int argc, char** argv) {
   static constexpr const char* kCommands[] = {
-      "calibrate",    "batch",  "compare",  "detect", "inspect", "noise",  "design", "montecarlo",
-      "system-level", "gimbal", "simulate", "apply",  "report",  "export", "verify"};
+      "calibrate",  "batch",        "store",  "compare",  "detect", "inspect", "noise",  "design",
+      "montecarlo", "system-level", "gimbal", "simulate", "apply",  "report",  "export", "verify"};
   for (int i = 1; i < argc; ++i) {
     for (const char* command : kCommands) {
       if (std::string_view(argv[i]) == command) return command;
@@ -421,6 +421,14 @@ int accelcal::cli::RunCommandLine(int argc, char** argv) {
                      "the match) is the unit's id; files with one id are one unit's sessions "
                      "(default: the name less its extension)")
         ->type_name("REGEX");
+    batch
+        ->add_option("--unit-id-from", bat.unit_id_from,
+                     "where a unit's id comes from: name (the file's, see --unit-id), info:KEY (a "
+                     "binary log's information, e.g. info:sys_uuid, a PX4 board's), param:KEY (a "
+                     "log's parameter, e.g. param:BRD_SERIAL_NUM, an ArduPilot board's), or "
+                     "device-id (the accelerometer stream's: the same on every board of a "
+                     "design, see docs/batch.md)")
+        ->capture_default_str();
     batch->add_option("--glob", bat.glob, "the files read from a directory given")
         ->capture_default_str();
     batch->add_option("--jobs", bat.jobs, "units calibrated at once (0: one per core)")
@@ -431,6 +439,41 @@ int accelcal::cli::RunCommandLine(int argc, char** argv) {
     batch->add_flag("--json", bat.json, "print the summary document instead of the table");
     AddCalibrationOptions(batch, &bat_cal);
     AddDateOption(batch, &bat_cal);
+  }
+
+  StoreArgs sto;
+  CLI::App* store = app.add_subcommand(
+      "store",
+      "a store of calibrations by unit and date: store add STORE CAL.json|BATCH_DIR..., store get "
+      "STORE UNIT, store list STORE [UNIT]; each calibration added is compared with the unit's "
+      "one before it within their covariances");
+  if (Wanted(store)) {
+    store->add_option("ACTION", sto.action, "add, get or list")->required();
+    store->add_option("STORE", sto.store, "the store's directory (made by the first add)")
+        ->required()
+        ->check(kFileName);
+    store->add_option("ITEMS", sto.items,
+                      "add: calibration files, or batch directories (their passing units); get: "
+                      "the unit; list: a unit (default: every unit)");
+    store->add_option("--unit", sto.unit,
+                      "add: the unit of the calibration files given (a batch directory names "
+                      "its own; with one, only that unit is added)");
+    store->add_option("--date", sto.date,
+                      "add: the date of calibrations whose provenance has none (default: today, "
+                      "UTC); get: the calibration of that date (YYYY-MM-DD: its latest that day; "
+                      "default: the unit's latest)");
+    store->add_option("-o,--output", sto.output, "get: write the calibration file here")
+        ->check(kFileName);
+    store->add_flag("--json", sto.json, "list: the index's entries; add: what was added");
+    store
+        ->add_option("--bias-repeatability", sto.bias_repeatability,
+                     "add: the accelerometer's turn-on bias repeatability (1 sigma, in the "
+                     "calibrations' specific-force unit; one value or x,y,z: a MEMS part's bias "
+                     "moves between power-ups by more than a calibration's covariance holds)")
+        ->expected(1, 3)
+        ->delimiter(',')
+        ->check(kDecimal)
+        ->type_name("Q[,Q,Q]");
   }
 
   CompareArgs cmp;
@@ -808,7 +851,7 @@ int accelcal::cli::RunCommandLine(int argc, char** argv) {
   }
   for (const char* list :
        {"--columns", "--gyro-columns", "--methods", "--noise", "--bias-random-walk",
-        "--temperatures", "--thermal-degrees", "--thermal-target"}) {
+        "--temperatures", "--thermal-degrees", "--thermal-target", "--bias-repeatability"}) {
     const bool items = std::string_view(list) != "--noise" || command == "design";
     int given = 0;
     for (int i = 1; i < argc && std::string_view(argv[i]) != "--"; ++i) {
@@ -886,10 +929,11 @@ int accelcal::cli::RunCommandLine(int argc, char** argv) {
       cal.date_given = calibrate->count("--date") > 0;
       return RunCalibrate(cal);
     }
+    if (*store) return RunStore(sto);
     if (*batch) {
       CheckCalibrationFlags(*batch, bat_cal);
-      bat.calibrate_options = GivenOptions(
-          *batch, {"output", "limits", "unit-id", "glob", "jobs", "redo", "no-report", "json"});
+      bat.calibrate_options = GivenOptions(*batch, {"output", "limits", "unit-id", "unit-id-from",
+                                                    "glob", "jobs", "redo", "no-report", "json"});
       return RunBatch(bat);
     }
     if (*detect) {

@@ -251,6 +251,18 @@ std::string OutlierMessage(const OutlierFinding& o, const std::vector<Position>&
                 test.c_str());
 }
 
+std::string UnitIdProblem(const std::string& id) {
+  if (id.empty()) return "the unit id is empty";
+  if (id.size() > 128) return "the unit id is longer than 128 characters";
+  if (id[0] == '.') return "the unit id '" + id + "' begins with '.'";
+  for (unsigned char c : id) {
+    if (c == '/' || c < 0x20 || c == 0x7f) {
+      return "the unit id '" + id + "' holds a '/' or a control character";
+    }
+  }
+  return "";
+}
+
 nlohmann::ordered_json GivenOptionsJson(
     const std::vector<std::pair<std::string, std::vector<std::string>>>& given) {
   nlohmann::ordered_json options = nlohmann::ordered_json::object();

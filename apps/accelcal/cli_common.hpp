@@ -111,6 +111,9 @@ std::string PositionsCsv(const std::vector<Vec3>& means, double samples, const V
 // Three numbers as a JSON array.
 nlohmann::ordered_json JsonArray(const Vec3& v);
 
+/// Why `id` cannot name a unit's directory (batch, store), or "" when it can.
+std::string UnitIdProblem(const std::string& id);
+
 /// Options as given (CalibrateArgs::given_options) as a calibration file's `provenance.options`
 /// records them: a flag true, one value a string, several a list.
 nlohmann::ordered_json GivenOptionsJson(

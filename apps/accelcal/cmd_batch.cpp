@@ -12,10 +12,12 @@
 #include <atomic>
 #include <cerrno>
 #include <chrono>
+#include <cmath>
 #include <cstring>
 #include <fstream>
 #include <map>
 #include <regex>
+#include <set>
 #include <thread>
 
 #include <dirent.h>
@@ -24,6 +26,7 @@
 #include "accelcal/calibration_file.hpp"
 #include "accelcal/json_text.hpp"
 #include "accelcal/log_reader.hpp"
+#include "accelcal/native_log.hpp"
 #include "accelcal/sha256.hpp"
 #include "accelcal/version.hpp"
 #include "cli_common.hpp"
@@ -61,7 +64,7 @@ bool IsDirectory(const std::string& path) {
 // The regular files of `dir` whose names match `glob` (hidden ones left out), sorted by name;
 // `skipped` counts the other entries that match (directories, FIFOs, devices).
 std::vector<std::string> DirectoryFiles(const std::string& dir, const std::string& glob,
-                                        int* skipped) {
+                                        std::vector<std::string>* skipped) {
   DIR* d = ::opendir(dir.c_str());
   if (d == nullptr) {
     throw InputError(dir, 0, std::string("cannot list the directory: ") + std::strerror(errno));
@@ -81,7 +84,7 @@ std::vector<std::string> DirectoryFiles(const std::string& dir, const std::strin
     if (::stat((prefix + name).c_str(), &st) == 0 && S_ISREG(st.st_mode)) {
       files.push_back(prefix + name);
     } else {
-      ++*skipped;
+      skipped->push_back(prefix + name);
     }
   }
   return files;
@@ -90,19 +93,6 @@ std::vector<std::string> DirectoryFiles(const std::string& dir, const std::strin
 std::string BaseName(const std::string& path) {
   const std::size_t slash = path.find_last_of('/');
   return slash == std::string::npos ? path : path.substr(slash + 1);
-}
-
-// Why `id` cannot name a unit's directory, or "" when it can.
-std::string BadUnitId(const std::string& id) {
-  if (id.empty()) return "the unit id is empty";
-  if (id.size() > 128) return "the unit id is longer than 128 characters";
-  if (id[0] == '.') return "the unit id '" + id + "' begins with '.'";
-  for (unsigned char c : id) {
-    if (c == '/' || c < 0x20 || c == 0x7f) {
-      return "the unit id '" + id + "' holds a '/' or a control character";
-    }
-  }
-  return "";
 }
 
 // The unit id of a file: the regular expression's first group (or its whole match) searched in
@@ -120,6 +110,71 @@ std::string UnitIdOf(const std::string& path, const std::optional<std::regex>& p
     return name;
   }
   return m.size() > 1 ? m[1].str() : m[0].str();
+}
+
+std::string OptionValue(const BatchArgs& args, const char* option) {
+  for (const auto& [name, values] : args.calibrate_options) {
+    if (name == option && !values.empty()) return values.front();
+  }
+  return "";
+}
+
+// The unit id a binary log gives itself (--unit-id-from): a string of its information (info:KEY,
+// such as PX4's sys_uuid, the board's processor's unique id), one of its parameters (param:KEY,
+// such as ArduPilot's BRD_SERIAL_NUM), or its accelerometer stream's device id (device-id; of
+// --topic and --instance when given).
+std::string UnitIdFromLog(const std::string& path, const BatchArgs& args, std::string* problem) {
+  LogInventory log;
+  try {
+    log = InspectLog(path);
+  } catch (const InputError& e) {
+    *problem = "no unit id from the log (" + args.unit_id_from + "): " + e.reason();
+    return BaseName(path);
+  }
+  const std::string& from = args.unit_id_from;
+  const auto listing = [](const auto& map) {
+    std::string keys;
+    for (const auto& entry : map) {
+      if (keys.size() > 200) return keys + ", ...";
+      keys += (keys.empty() ? "" : ", ") + entry.first;
+    }
+    return keys.empty() ? std::string("none") : keys;
+  };
+  if (from.rfind("info:", 0) == 0) {
+    const auto it = log.info.find(from.substr(5));
+    if (it == log.info.end()) {
+      *problem =
+          "the log has no information '" + from.substr(5) + "' (it has " + listing(log.info) + ")";
+      return BaseName(path);
+    }
+    return it->second;
+  }
+  if (from.rfind("param:", 0) == 0) {
+    const auto it = log.parameters.find(from.substr(6));
+    if (it == log.parameters.end()) {
+      *problem = "the log has no parameter '" + from.substr(6) + "'";
+      return BaseName(path);
+    }
+    const double v = it->second;
+    return v == std::floor(v) && std::abs(v) < 1e15 ? Format("%.0f", v) : FormatNumber(v);
+  }
+  // device-id: the accelerometer streams the calibration could read.
+  const std::string topic = OptionValue(args, "topic"), instance = OptionValue(args, "instance");
+  std::set<std::uint64_t> ids;
+  for (const LogStreamInfo& s : log.streams) {
+    const auto sensors = KnownSensors(s.type);
+    if (std::find(sensors.begin(), sensors.end(), "accelerometer") == sensors.end()) continue;
+    if (!topic.empty() && s.topic != topic) continue;
+    if (!instance.empty() && std::to_string(s.instance) != instance) continue;
+    if (s.device_id) ids.insert(*s.device_id);
+  }
+  if (ids.size() != 1) {
+    *problem = ids.empty() ? "the log has no accelerometer stream with a device id"
+                           : "its accelerometer streams have " + std::to_string(ids.size()) +
+                                 " device ids: choose one with --topic and --instance";
+    return BaseName(path);
+  }
+  return std::to_string(*ids.begin());
 }
 
 // name, size and SHA-256 of a file, as a calibration's provenance records an input.
@@ -151,13 +206,6 @@ std::vector<std::string> SharedInputs(const BatchArgs& args) {
   return files;
 }
 
-std::string OptionValue(const BatchArgs& args, const char* option) {
-  for (const auto& [name, values] : args.calibrate_options) {
-    if (name == option && !values.empty()) return values.front();
-  }
-  return "";
-}
-
 // The options a unit's provenance records: those given, less the date (recorded apart).
 Json ProvenanceOptions(const BatchArgs& args) {
   std::vector<std::pair<std::string, std::vector<std::string>>> given;
@@ -180,8 +228,7 @@ bool Current(const BatchArgs& args, const Unit& unit, const std::string& dir,
         ParseCalibrationJson(ReadFileToString(cal_path, kMaxSmallFileBytes), cal_path);
     const Provenance& p = cal.provenance;
     if (p.accelcal_version != Version() || p.command != "accelcal calibrate" ||
-        p.options != ProvenanceOptions(args) ||
-        p.date != OptionValue(args, "date")) {
+        p.options != ProvenanceOptions(args) || p.date != OptionValue(args, "date")) {
       return false;
     }
     std::vector<InputRecord> expected;
@@ -228,34 +275,70 @@ std::string ErrorLine(const std::string& err) {
   std::size_t end = err.size();
   while (end > 0 && err[end - 1] == '\n') --end;
   const std::size_t begin = err.rfind('\n', end == 0 ? 0 : end - 1);
-  line = err.substr(begin == std::string::npos ? 0 : begin + 1, end - (begin == std::string::npos ? 0 : begin + 1));
+  line = err.substr(begin == std::string::npos ? 0 : begin + 1,
+                    end - (begin == std::string::npos ? 0 : begin + 1));
   const std::string tool = "accelcal: ";
   if (line.compare(0, tool.size(), tool) == 0) line.erase(0, tool.size());
   return line;
+}
+
+// Why batch does not write `path` of a unit's directory, or "": it replaces only regular files
+// (a symbolic link there could send its output over a file of the user's).
+std::string NotReplaceable(const std::string& path) {
+  struct stat st {};
+  if (::lstat(path.c_str(), &st) != 0) return "";
+  if (S_ISLNK(st.st_mode)) {
+    return path + " is a symbolic link: batch replaces only the files it wrote";
+  }
+  if (!S_ISREG(st.st_mode)) return path + " is not a regular file: not replaced";
+  return "";
 }
 
 void RunUnit(const BatchArgs& args, const std::vector<InputRecord>& shared, Unit* unit) {
   if (!unit->problem.empty()) return;
   const std::string dir = args.output + "/units/" + unit->id;
   const std::string cal_path = dir + "/calibration.json";
+  const std::string report_path = dir + "/report.html";
   try {
+    struct stat st {};
+    if (::lstat(dir.c_str(), &st) == 0 && !S_ISDIR(st.st_mode)) {
+      unit->message = dir + " is not a directory (a link or a file): not written into";
+      return;
+    }
+    for (const std::string& path : {cal_path, report_path}) {
+      if (std::string why = NotReplaceable(path); !why.empty()) {
+        unit->message = why;
+        return;
+      }
+    }
     if (!args.redo && Current(args, *unit, dir, shared)) {
       unit->reused = true;
       unit->exit_status = kExitOk;
     } else {
+      // A file there that is not a calibration is not batch's: not replaced.
+      if (::access(cal_path.c_str(), F_OK) == 0) {
+        try {
+          ParseCalibrationJson(ReadFileToString(cal_path, kMaxSmallFileBytes), cal_path);
+        } catch (const std::exception&) {
+          unit->message = cal_path + " exists and is not a calibration file: not replaced";
+          return;
+        }
+      }
       if (::mkdir(dir.c_str(), 0777) != 0 && errno != EEXIST) {
         throw OutputError(dir + ": cannot create the unit's directory: " + std::strerror(errno));
       }
       std::string out, err;
       unit->exit_status = RunCommandLineCaptured(CalibrateCommand(args, *unit, dir), &out, &err);
       if (unit->exit_status != kExitOk && unit->exit_status != kExitFailedChecks) {
+        // An earlier calibration there is kept (it may be the user's, or read-only): it is not
+        // current, so it is neither reported nor taken as current by a later batch.
         unit->message = ErrorLine(err);
-        // An earlier calibration of this unit is not of these inputs: not left to be taken
-        // for one.
-        std::remove(cal_path.c_str());
-        std::remove((dir + "/report.html").c_str());
-        ::rmdir(dir.c_str());  // when it is empty
+        ::rmdir(dir.c_str());  // made for it and left empty: removed (else it fails, harmlessly)
         return;
+      }
+      // A report of an earlier calibration would describe other data.
+      if (!args.report && ::access(report_path.c_str(), F_OK) == 0) {
+        std::remove(report_path.c_str());
       }
     }
     unit->calibration =
@@ -295,8 +378,11 @@ std::string WorstFinding(const LoadedCalibration& cal) {
 int RunBatch(const BatchArgs& args) {
   // The limits first: a mistake there is found before anything is calibrated.
   std::optional<AcceptanceLimits> limits;
+  std::string limits_sha256;  // of the bytes read (a pipe cannot be read twice)
   if (!args.limits.empty()) {
-    limits = ParseLimits(ReadFileToString(args.limits, kMaxSmallFileBytes), args.limits);
+    const std::string text = ReadFileToString(args.limits, kMaxSmallFileBytes);
+    limits = ParseLimits(text, args.limits);
+    limits_sha256 = Sha256Hex(text);
   }
   std::optional<std::regex> pattern;
   if (!args.unit_id.empty()) {
@@ -306,18 +392,30 @@ int RunBatch(const BatchArgs& args) {
       throw UsageError("--unit-id '" + args.unit_id + "' is not a regular expression: " + e.what());
     }
   }
+  const std::string& from = args.unit_id_from;
+  const bool keyed = (from.rfind("info:", 0) == 0 && from.size() > 5) ||
+                     (from.rfind("param:", 0) == 0 && from.size() > 6);
+  if (from != "name" && from != "device-id" && !keyed) {
+    throw UsageError("--unit-id-from '" + from + "': name, device-id, info:KEY or param:KEY");
+  }
+  if (from != "name" && !args.unit_id.empty()) {
+    throw UsageError("--unit-id is a pattern on file names: it goes with --unit-id-from name");
+  }
   if (args.jobs < 0 || args.jobs > 1024) {
     throw UsageError("--jobs " + std::to_string(args.jobs) + ": from 1 to 1024 (0: one per core)");
   }
   // The files: those given, and the matching regular files of each directory given.
   std::vector<std::string> files;
-  int skipped = 0;
+  std::vector<std::string> skipped;
   for (const std::string& input : args.inputs) {
     if (input.empty()) throw UsageError("an input's name is empty");
+    if (input == "-") {
+      throw UsageError("batch reads files and directories, not standard input ('-')");
+    }
     if (IsDirectory(input)) {
       const std::vector<std::string> found = DirectoryFiles(input, args.glob, &skipped);
       if (found.empty()) {
-        Warn("warning: %s: no file matches --glob '%s'\n", input.c_str(), args.glob.c_str());
+        Warn("%s: no file matches --glob '%s'\n", input.c_str(), args.glob.c_str());
       }
       files.insert(files.end(), found.begin(), found.end());
       continue;
@@ -333,9 +431,13 @@ int RunBatch(const BatchArgs& args) {
     }
     files.push_back(input);
   }
-  if (skipped > 0) {
-    Warn("warning: %d directory entries matching --glob are not regular files: skipped\n",
-         skipped);
+  if (!skipped.empty()) {
+    std::string names;
+    for (std::size_t i = 0; i < skipped.size() && i < 5; ++i) names += (i ? ", " : "") + skipped[i];
+    Warn(
+        "%zu entries matching --glob are not regular files (a directory, a FIFO, a broken link): "
+        "skipped: %s%s\n",
+        skipped.size(), names.c_str(), skipped.size() > 5 ? ", ..." : "");
   }
   if (files.empty()) throw UsageError("no input file: give files or directories that hold some");
   // The same file twice (given twice, or given and in a directory given) is a mistake.
@@ -348,6 +450,9 @@ int RunBatch(const BatchArgs& args) {
   }
   // The output directory, made when missing; never one of the inputs' directories.
   if (!IsDirectory(args.output)) {
+    if (::access(args.output.c_str(), F_OK) == 0 || errno != ENOENT) {
+      throw OutputError(args.output + ": exists and is not a directory");
+    }
     if (::mkdir(args.output.c_str(), 0777) != 0) {
       throw OutputError(args.output + ": cannot create the directory: " + std::strerror(errno));
     }
@@ -377,8 +482,9 @@ int RunBatch(const BatchArgs& args) {
   std::vector<Unit> misnamed;
   for (const std::string& f : files) {
     std::string problem;
-    const std::string id = UnitIdOf(f, pattern, &problem);
-    if (problem.empty()) problem = BadUnitId(id);
+    const std::string id = args.unit_id_from == "name" ? UnitIdOf(f, pattern, &problem)
+                                                       : UnitIdFromLog(f, args, &problem);
+    if (problem.empty()) problem = UnitIdProblem(id);
     if (!problem.empty()) {
       Unit u;
       u.id = id;
@@ -392,8 +498,52 @@ int RunBatch(const BatchArgs& args) {
     u.files.push_back(f);
   }
   std::vector<Unit> units;
-  for (auto& [id, u] : by_id) units.push_back(std::move(u));
+  for (auto& [id, u] : by_id) {
+    // A unit's sessions in name order: the order given (a shell's glob, a locale's) changes
+    // nothing.
+    std::sort(u.files.begin(), u.files.end());
+    units.push_back(std::move(u));
+  }
   for (Unit& u : misnamed) units.push_back(std::move(u));
+  std::stable_sort(units.begin(), units.end(),
+                   [](const Unit& a, const Unit& b) { return a.id < b.id; });
+  // One gyroscope log given to every unit would calibrate each unit's accelerometer with another
+  // unit's gyroscope.
+  if (units.size() > 1 && !OptionValue(args, "gyro").empty()) {
+    throw UsageError(
+        "--gyro names one gyroscope log for every unit: give each unit's rates in its own "
+        "recording, with --gyro-columns (or --gyro-topic in a binary log)");
+  }
+  // calibrate's own checks of the options, before any unit, on inputs that cannot exist (so
+  // that nothing is read), as many as each unit has: a usage error for every count of files is
+  // the options', the same for every unit. One for some counts only (--temperatures with one
+  // value per file) is those units' error.
+  {
+    std::set<std::size_t> counts;
+    for (const Unit& u : units) {
+      if (u.problem.empty()) counts.insert(u.files.size());
+    }
+    std::string usage_error;
+    std::size_t usage_errors = 0;
+    for (const std::size_t count : counts) {
+      Unit probe;
+      for (std::size_t i = 0; i < count; ++i) {
+        probe.files.push_back("/dev/null/accelcal-batch-option-check-" + std::to_string(i));
+      }
+      std::string out, err;
+      if (RunCommandLineCaptured(CalibrateCommand(args, probe, "/dev/null"), &out, &err) ==
+          kExitUsage) {
+        ++usage_errors;
+        usage_error = ErrorLine(err);
+      }
+    }
+    if (!counts.empty() && usage_errors == counts.size()) {
+      const std::string usage = "usage: ";
+      throw UsageError(usage_error.compare(0, usage.size(), usage) == 0
+                           ? usage_error.substr(usage.size())
+                           : usage_error);
+    }
+  }
 
   // The shared inputs are hashed once; then the units, `jobs` at a time.
   std::vector<InputRecord> shared;
@@ -416,15 +566,6 @@ int RunBatch(const BatchArgs& args) {
     }
   }
   for (std::thread& w : workers) w.join();
-
-  // A usage error of calibrate is the options', the same for every unit: said once.
-  for (const Unit& u : units) {
-    if (u.exit_status == kExitUsage) {
-      const std::string usage = "usage: ";
-      throw UsageError(u.message.compare(0, usage.size(), usage) == 0 ? u.message.substr(usage.size())
-                                                                    : u.message);
-    }
-  }
 
   // The verdicts, and the summary: every unit in id order, so the same inputs give the same bytes.
   std::vector<std::string> columns;  // the quantities of all units, in their order of first use
@@ -456,7 +597,7 @@ int RunBatch(const BatchArgs& args) {
   if (limits) {
     Json l;
     l["file"] = args.limits;
-    l["sha256"] = Record(args.limits).sha256;
+    l["sha256"] = limits_sha256;
     if (!limits->part.empty()) l["part"] = limits->part;
     doc["limits"] = l;
   } else {
@@ -499,9 +640,8 @@ int RunBatch(const BatchArgs& args) {
       row["findings"] = findings;
       Json q = Json::object();
       for (const CalibrationQuantity& c : quantities) {
-        q[c.name] = {{"value", c.value},
-                     {"sigma", c.sigma ? Json(*c.sigma) : Json()},
-                     {"unit", c.unit}};
+        q[c.name] = {
+            {"value", c.value}, {"sigma", c.sigma ? Json(*c.sigma) : Json()}, {"unit", c.unit}};
       }
       row["quantities"] = q;
     } else {
@@ -523,11 +663,12 @@ int RunBatch(const BatchArgs& args) {
     }
     csv += "\n";
   }
-  doc["counts"] = {{"units", units.size()},
-                   {"pass", counts[0]},
-                   {"fail", counts[1]},
-                   {"error", counts[2]}};
+  doc["counts"] = {
+      {"units", units.size()}, {"pass", counts[0]}, {"fail", counts[1]}, {"error", counts[2]}};
   const std::string json_text = JsonText(doc);
+  for (const std::string& path : {csv_path, json_path}) {
+    if (std::string why = NotReplaceable(path); !why.empty()) throw OutputError(why);
+  }
   OutputFile csv_file(csv_path), json_file(json_path);
   csv_file.Write(csv);
   json_file.Write(json_text);
@@ -541,14 +682,15 @@ int RunBatch(const BatchArgs& args) {
     for (const Unit& u : units) {
       std::string detail = u.status == UnitStatus::kError
                                ? u.message
-                               : Joined([&] {
-                                   std::vector<std::string> t;
-                                   for (const LimitFailure& f : u.acceptance.failures) {
-                                     t.push_back(f.text);
-                                   }
-                                   return t;
-                                 }(),
-                                        "; ");
+                               : Joined(
+                                     [&] {
+                                       std::vector<std::string> t;
+                                       for (const LimitFailure& f : u.acceptance.failures) {
+                                         t.push_back(f.text);
+                                       }
+                                       return t;
+                                     }(),
+                                     "; ");
       const std::string line = Format("%-*s  %-5s  %s", static_cast<int>(width), u.id.c_str(),
                                       Name(u.status), detail.c_str());
       Say("%s\n", line.substr(0, line.find_last_not_of(' ') + 1).c_str());
@@ -557,14 +699,15 @@ int RunBatch(const BatchArgs& args) {
         std::count_if(units.begin(), units.end(), [](const Unit& u) { return u.reused; });
     Say("%zu units: %d pass, %d fail, %d error (%ld calibrations current, not redone); "
         "summary %s, %s\n",
-        units.size(), counts[0], counts[1], counts[2], static_cast<long>(reused),
-        csv_path.c_str(), json_path.c_str());
+        units.size(), counts[0], counts[1], counts[2], static_cast<long>(reused), csv_path.c_str(),
+        json_path.c_str());
   }
   if (counts[1] + counts[2] == 0) return kExitOk;
   // Said on stderr too, as a calibration that fails its checks is: stdout may go to a file.
-  WriteErr(Format("accelcal: %d of %zu units failed their limits or checks, %d could not be "
-                  "calibrated (%s)\n",
-                  counts[1], units.size(), counts[2], csv_path.c_str()));
+  WriteErr(
+      Format("accelcal: %d of %zu units failed their limits or checks, %d could not be "
+             "calibrated (%s)\n",
+             counts[1], units.size(), counts[2], csv_path.c_str()));
   return kExitFailedChecks;
 }
 

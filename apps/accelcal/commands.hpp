@@ -267,13 +267,31 @@ struct BatchArgs {
   std::string limits;   // limits file (YAML); empty: the calibrations' own checks only
   std::string output;   // the batch's directory
   std::string unit_id;  // a regular expression on file names; empty: the name less its extension
-  int jobs = 0;         // units at once; 0: one per core
-  bool redo = false;    // calibrate every unit again, even one whose calibration is current
-  bool report = true;   // an HTML report per unit
-  bool json = false;    // the summary document to stdout instead of the table
+  // Where a unit's id comes from: name (the file's), info:KEY or param:KEY (a binary log's
+  // information or parameter), device-id (its accelerometer stream's).
+  std::string unit_id_from = "name";
+  int jobs = 0;        // units at once; 0: one per core
+  bool redo = false;   // calibrate every unit again, even one whose calibration is current
+  bool report = true;  // an HTML report per unit
+  bool json = false;   // the summary document to stdout instead of the table
   /// The calibrate options given, as GivenOptions lists them: passed to every unit's calibrate
   /// as given (each unit's file records them in its provenance).
   std::vector<std::pair<std::string, std::vector<std::string>>> calibrate_options;
+};
+
+// accelcal store add|get|list: a directory of calibrations by unit and date, with an index, each
+// calibration added compared with the unit's one before it (cmd_store.cpp).
+struct StoreArgs {
+  std::string action;              // add, get or list
+  std::string store;               // the store's directory
+  std::vector<std::string> items;  // add: calibration files or batch directories; get, list: a unit
+  std::string unit;                // add: the unit of the calibration files given
+  std::string date;                // add: their date when they have none; get: the one wanted
+  bool json = false;
+  std::string output;  // get: where the file goes (empty: stdout)
+  /// add: the accelerometer's turn-on bias repeatability [specific-force unit, 1σ], one or x,y,z
+  /// (ChangeOptions); empty: none.
+  std::vector<double> bias_repeatability;
 };
 
 struct GimbalArgs {
@@ -285,6 +303,7 @@ struct GimbalArgs {
 
 int RunCalibrate(const CalibrateArgs& args);
 int RunBatch(const BatchArgs& args);
+int RunStore(const StoreArgs& args);
 int RunGimbal(const GimbalArgs& args);
 int RunSystemLevel(const SystemLevelArgs& args);
 int RunSimulate(const SimulateArgs& args);

@@ -18,10 +18,11 @@ namespace accelcal {
 
 /// One quantity of a calibration, named as a limits file and batch's summary name it.
 struct CalibrationQuantity {
-  std::string name;             ///< e.g. "accelerometer.K_xx", "gyroscope.heldout_rms_deg"
+  std::string name;  ///< e.g. "accelerometer.K_xx", "gyroscope.heldout_rms_deg"
   double value = 0;
   std::optional<double> sigma;  ///< its 1σ, when the file has the covariance it comes from
   std::string unit;             ///< e.g. "counts per m/s2", "rad", "m/s2"; "" for a count
+  bool fixed = false;  ///< set by the model, not estimated (k2 = 0 in the linear model): no σ
 };
 
 /// Every quantity of `cal`, in a fixed order: the accelerometer's parameters (the file's

@@ -155,6 +155,10 @@ struct LoadedCalibration {
   /// `noise.sigma_raw`: the residual σ̂ of the position means along the fitted surface's normal
   /// [raw], when present.
   std::optional<double> noise_sigma_raw;
+  /// The degrees of freedom of the noise level the covariance was scaled by, when that level was
+  /// estimated from the fit's residuals (`noise.degrees_of_freedom`, unless `noise.source` is
+  /// "samples" and not `inflated`); none when it came from the samples' own scatter.
+  std::optional<double> covariance_dof;
   SolverRecord solver;
   /// `diagnostics`; none in a file written before diagnoses existed.
   std::optional<std::vector<Finding>> diagnostics;

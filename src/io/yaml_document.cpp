@@ -71,8 +71,8 @@ YamlDocument ParseYaml(std::string_view text, const std::string& source) {
         fail(n->line, "a key must be a plain word, not a mapping or a list");
       }
       if (const auto [at, fresh] = parent.keys.emplace(n->scalar, n->line); !fresh) {
-        fail(n->line, "'" + n->scalar + "' given twice (first at line " +
-                          std::to_string(at->second) + ")");
+        fail(n->line,
+             "'" + n->scalar + "' given twice (first at line " + std::to_string(at->second) + ")");
       }
       parent.node->entries.push_back({n->scalar, n->line, nullptr});
       parent.key_read = true;
@@ -115,15 +115,13 @@ YamlDocument ParseYaml(std::string_view text, const std::string& source) {
         const bool mapping = e.type == YAML_MAPPING_START_EVENT;
         const auto& start = mapping ? e.data.mapping_start.anchor : e.data.sequence_start.anchor;
         if (start) fail(line, "an anchor ('&'): anchors are not taken");
-        const bool tagged = mapping
-                                ? e.data.mapping_start.tag && !e.data.mapping_start.implicit
-                                : e.data.sequence_start.tag && !e.data.sequence_start.implicit;
+        const bool tagged = mapping ? e.data.mapping_start.tag && !e.data.mapping_start.implicit
+                                    : e.data.sequence_start.tag && !e.data.sequence_start.implicit;
         if (tagged) fail(line, "a tag ('!'): tags are not taken");
         if (static_cast<int>(open.size()) >= kMaxYamlDepth) {
           fail(line, "nested more than " + std::to_string(kMaxYamlDepth) + " deep");
         }
-        YamlNode* n =
-            node(mapping ? YamlNode::Kind::kMapping : YamlNode::Kind::kSequence, line);
+        YamlNode* n = node(mapping ? YamlNode::Kind::kMapping : YamlNode::Kind::kSequence, line);
         attach(n);
         open.push_back({n, false, {}});
         break;

@@ -39,6 +39,12 @@ void AccelerometerQuantities(const LoadedCalibration& cal, std::vector<Calibrati
                                                                 : raw + " per (" + force + ")^2";
     add(std::string(s.name), value, SigmaOf(cal.covariance, i, n), unit);
   }
+  if (cal.model == ModelKind::kLinear) {  // k2 = 0 by the model: a value, not an estimate
+    for (int a = 0; a < 3; ++a) {
+      add(std::string("k2_") + kAxes[a], 0.0, std::nullopt, raw + " per (" + force + ")^2");
+      out->back().fixed = true;
+    }
+  }
   // Engineering quantities (paper 000 Table 3), their 1σ propagated from the covariance.
   const EngineeringParameters eng = ToEngineering(cal.params, cal.gravity);
   std::optional<EngineeringStd> std;
@@ -61,11 +67,13 @@ void AccelerometerQuantities(const LoadedCalibration& cal, std::vector<Calibrati
     add(std::string("bias_specific_force_") + kAxes[a], eng.bias_force(a),
         opt([a](const EngineeringStd& e) { return e.bias_force(a); }), force);
   }
-  if (cal.model == ModelKind::kQuadratic) {
-    for (int a = 0; a < 3; ++a) {
-      add(std::string("k2_g_per_g2_") + kAxes[a], eng.k2_g_per_g2(a),
-          opt([a](const EngineeringStd& e) { return e.k2_g_per_g2(a); }), "g/g^2");
-    }
+  for (int a = 0; a < 3; ++a) {
+    add(std::string("k2_g_per_g2_") + kAxes[a], eng.k2_g_per_g2(a),
+        cal.model == ModelKind::kQuadratic
+            ? opt([a](const EngineeringStd& e) { return e.k2_g_per_g2(a); })
+            : std::nullopt,
+        "g/g^2");
+    out->back().fixed = cal.model == ModelKind::kLinear;
   }
   if (cal.gravity_norm_rms_after) add("rms_after", *cal.gravity_norm_rms_after, {}, force);
   if (cal.crossval_rms) add("heldout_rms", *cal.crossval_rms, {}, force);
@@ -107,6 +115,13 @@ void GyroscopeQuantities(const LoadedCalibration::Gyroscope& gyro,
 
 std::string Number(double v) { return internal::Format("%.6g", v); }
 
+bool CanHaveSigma(const std::string& name) {
+  for (const QuantityName& q : KnownQuantityNames()) {
+    if (q.name == name) return q.has_sigma;
+  }
+  return false;
+}
+
 }  // namespace
 
 std::vector<CalibrationQuantity> CalibrationQuantities(const LoadedCalibration& cal) {
@@ -123,9 +138,12 @@ const std::vector<QuantityName>& KnownQuantityNames() {
     std::vector<QuantityName> all;
     const auto take = [&](const LoadedCalibration& cal) {
       for (const CalibrationQuantity& q : CalibrationQuantities(cal)) {
-        if (std::none_of(all.begin(), all.end(),
-                         [&](const QuantityName& k) { return k.name == q.name; })) {
+        const auto at = std::find_if(all.begin(), all.end(),
+                                     [&](const QuantityName& k) { return k.name == q.name; });
+        if (at == all.end()) {
           all.push_back({q.name, q.sigma.has_value()});
+        } else {
+          at->has_sigma = at->has_sigma || q.sigma.has_value();  // k2: in the quadratic model
         }
       }
     };
@@ -202,8 +220,17 @@ Acceptance Accept(const LoadedCalibration& cal, const AcceptanceLimits& limits) 
       bool named = false;
       for (const CalibrationQuantity& q : quantities) {
         if (!QuantityMatches(limit.pattern, q.name)) continue;
+        // A σ pattern such as accelerometer.*.sigma names the quantities that have one (in
+        // this model: k2 of the linear model is 0 by it).
+        const bool wildcard = limit.pattern.find('*') != std::string::npos;
+        if (sigma && (!CanHaveSigma(q.name) || (q.fixed && wildcard))) continue;
         named = true;
         const std::string name = q.name + suffix;
+        if (sigma && q.fixed) {
+          fail(name, std::nullopt, name + ": fixed by the calibration's model, not estimated",
+               limit.line);
+          continue;
+        }
         if (sigma && !q.sigma) {
           fail(name, std::nullopt, name + ": the calibration has no covariance to give it",
                limit.line);

@@ -450,6 +450,11 @@ void ReadAccelerometer(const Reader& r, const ordered_json& doc, LoadedCalibrati
     if (cal.noise_sigma_raw && !(*cal.noise_sigma_raw >= 0)) {
       rn.Fail(rn.Key("sigma_raw") + " must not be negative");
     }
+    const ordered_json& noise = r.Object(doc, "noise");
+    const std::optional<double> dof = rn.Nullable(noise, "degrees_of_freedom");
+    const bool from_samples = noise.contains("source") && noise["source"] == "samples" &&
+                              !(noise.contains("inflated") && noise["inflated"] == true);
+    if (dof && *dof > 0 && !from_samples) cal.covariance_dof = *dof;
   }
   ReadSolver(r, doc, cal);
   ReadDiagnostics(r, doc, cal);

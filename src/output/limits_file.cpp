@@ -21,7 +21,8 @@ class LimitsReader {
   }
 
   const YamlNode& Mapping(const YamlNode& node, const std::string& what) const {
-    if (node.kind != YamlNode::Kind::kMapping) Fail(node.line, what + " must be a mapping (key: value)");
+    if (node.kind != YamlNode::Kind::kMapping)
+      Fail(node.line, what + " must be a mapping (key: value)");
     return node;
   }
 
@@ -35,14 +36,15 @@ class LimitsReader {
   double Number(const YamlNode& node, const std::string& what) const {
     double value = 0;
     if (node.kind == YamlNode::Kind::kScalar && !node.plain) {
-      Fail(node.line, what + " is the quoted text '" + node.scalar +
-                          "': write a number without quotes");
+      Fail(node.line,
+           what + " is the quoted text '" + node.scalar + "': write a number without quotes");
     }
-    if (node.kind != YamlNode::Kind::kScalar ||
-        !internal::ParseNumber(node.scalar, &value) || !std::isfinite(value)) {
-      Fail(node.line, what + " must be a finite decimal number, not " +
-                          (node.kind == YamlNode::Kind::kScalar ? "'" + node.scalar + "'"
-                                                                : std::string("a mapping or list")));
+    if (node.kind != YamlNode::Kind::kScalar || !internal::ParseNumber(node.scalar, &value) ||
+        !std::isfinite(value)) {
+      Fail(node.line,
+           what + " must be a finite decimal number, not " +
+               (node.kind == YamlNode::Kind::kScalar ? "'" + node.scalar + "'"
+                                                     : std::string("a mapping or list")));
     }
     return value;
   }
@@ -139,8 +141,9 @@ AcceptanceLimits ParseLimits(std::string_view text, const std::string& source) {
         has_sigma = has_sigma || q.has_sigma;
       }
       if (!named) {
-        r.Fail(e.line, "'" + limit.pattern + "' names no quantity (they are listed in "
-                       "docs/batch.md, e.g. accelerometer.b_x, accelerometer.heldout_rms)");
+        r.Fail(e.line, "'" + limit.pattern +
+                           "' names no quantity (they are listed in "
+                           "docs/batch.md, e.g. accelerometer.b_x, accelerometer.heldout_rms)");
       }
       if (limit.statistic == LimitStatistic::kSigma && !has_sigma) {
         r.Fail(e.line, "'" + e.key + "': " + limit.pattern + " has no 1 sigma to bound");

@@ -6,11 +6,13 @@
 #include <cmath>
 #include <random>
 #include <set>
+#include <sstream>
 
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
 #include "accelcal/simulate.hpp"
+#include "accelcal/ulog_writer.hpp"
 #include "support/cli_test.hpp"
 
 namespace accelcal {
@@ -39,7 +41,8 @@ Plan PlanOf(int unit) {
 // A unit's 18 positions (paper 000's scheme) as a positions file: a MEMS part read in m/s2 with
 // scale factors within 1 %, misalignments within 5 mrad and biases within 0.2 m/s2 (the example's
 // limits: 3 %, 20 mrad, 0.5 m/s2), each mean with 2 mm/s2 of noise.
-std::string UnitPositions(int unit, Plan plan, std::uint64_t seed) {
+// `noise_seed`: another session of the same unit (0: the truth's seed).
+std::string UnitPositions(int unit, Plan plan, std::uint64_t seed, std::uint64_t noise_seed = 0) {
   std::mt19937_64 rng(seed);
   std::uniform_real_distribution<double> u(-1.0, 1.0);
   ModelParameters truth;
@@ -52,8 +55,8 @@ std::string UnitPositions(int unit, Plan plan, std::uint64_t seed) {
   if (plan == Plan::kScale) truth.K(1, 1) = 1.05;  // max 1.03
   std::vector<Vec3> directions = Yang18Directions();
   if (plan == Plan::kFew) directions.resize(6);  // the linear model needs 9
-  std::vector<Vec3> readings =
-      SimulatePositions(truth, 9.80665, directions, Vec3::Constant(0.002), seed + unit);
+  std::vector<Vec3> readings = SimulatePositions(truth, 9.80665, directions, Vec3::Constant(0.002),
+                                                 noise_seed != 0 ? noise_seed : seed + unit);
   if (plan == Plan::kBumped) readings[6](0) += 0.3;  // moved during its interval: 150 sigma
   std::string csv = "x,y,z\n";
   char line[128];
@@ -122,8 +125,7 @@ TEST_F(Batch, TwoHundredUnitsEachGetTheirVerdict) {
         // Left out by the screening (the calibration stands on 17 positions), which the limits
         // and the diagnosis's warning each refuse.
         EXPECT_EQ(row.at("status"), "fail");
-        EXPECT_EQ(failed,
-                  (std::set<std::string>{"accelerometer.excluded_positions", "diagnosis"}))
+        EXPECT_EQ(failed, (std::set<std::string>{"accelerometer.excluded_positions", "diagnosis"}))
             << row.dump();
         EXPECT_EQ(row.at("quantities").at("accelerometer.positions").at("value"), 17);
         break;
@@ -190,11 +192,9 @@ TEST_F(Batch, TwoHundredUnitsEachGetTheirVerdict) {
   EXPECT_NE(Slurp(Path("out/units/IMU-0001/calibration.json")), Slurp(Path("direct.json")));
   // Other options: every unit again.
   again = Exec(Command("out", "--model quadratic --no-report"));
-  EXPECT_NE(again.out.find("(0 calibrations current, not redone)"), std::string::npos)
-      << again.out;
+  EXPECT_NE(again.out.find("(0 calibrations current, not redone)"), std::string::npos) << again.out;
   again = Exec(Command("out", "--model quadratic --no-report --redo"));
-  EXPECT_NE(again.out.find("(0 calibrations current, not redone)"), std::string::npos)
-      << again.out;
+  EXPECT_NE(again.out.find("(0 calibrations current, not redone)"), std::string::npos) << again.out;
 }
 
 TEST_F(Batch, RefusesWhatWouldMakeItsResultsWrong) {
@@ -235,6 +235,265 @@ TEST_F(Batch, RefusesWhatWouldMakeItsResultsWrong) {
   EXPECT_EQ(r.status, 2);
   EXPECT_NE(r.err.find("--model"), std::string::npos) << r.err;
   EXPECT_FALSE(fs::exists(Path("out3/summary.csv")));
+}
+
+// From a hostile test: what is in the batch's directory and is not batch's own is kept, and one
+// unit's problem is that unit's.
+TEST_F(Batch, KeepsWhatIsNotItsOwnAndStopsForNoUnit) {
+  fs::create_directories(Path("in"));
+  Write("in/a.csv", UnitPositions(1, Plan::kGood, 1));
+  Write("in/b.csv", UnitPositions(2, Plan::kGood, 2));
+  fs::create_directories(Path("out/units/a"));
+  fs::create_directories(Path("out/units/b"));
+  Write("out/units/a/calibration.json", "{\"operator notes\": \"rework ticket 4711\"}\n");
+  Write("precious.txt", "user data\n");
+  fs::create_symlink(Path("precious.txt"), Path("out/units/b/report.html"));
+  CliRun r = Exec("batch " + Path("in") + " -o " + Path("out"));
+  EXPECT_EQ(r.status, 6);
+  EXPECT_NE(r.out.find("calibration.json exists and is not a calibration file: not replaced"),
+            std::string::npos)
+      << r.out;
+  EXPECT_NE(r.out.find("report.html is a symbolic link"), std::string::npos) << r.out;
+  EXPECT_EQ(Slurp(Path("out/units/a/calibration.json")),
+            "{\"operator notes\": \"rework ticket 4711\"}\n");
+  EXPECT_EQ(Slurp(Path("precious.txt")), "user data\n");
+  fs::remove_all(Path("out"));
+  // The summary through a link is not written either.
+  fs::create_directories(Path("out"));
+  fs::create_symlink(Path("precious.txt"), Path("out/summary.csv"));
+  EXPECT_EQ(Exec("batch " + Path("in") + " -o " + Path("out")).status, 5);
+  EXPECT_EQ(Slurp(Path("precious.txt")), "user data\n");
+  fs::remove_all(Path("out"));
+  // A read-only calibration of a unit whose recording changed is kept, and the unit is an error;
+  // nothing of it is removed.
+  ASSERT_EQ(Exec("batch " + Path("in") + " -o " + Path("out")).status, 0);
+  const std::string approved = Slurp(Path("out/units/a/calibration.json"));
+  fs::permissions(Path("out/units/a/calibration.json"), fs::perms::owner_read);
+  Write("in/a.csv", UnitPositions(1, Plan::kGood, 9));
+  r = Exec("batch " + Path("in") + " -o " + Path("out"));
+  EXPECT_EQ(r.status, 6);
+  EXPECT_NE(r.out.find("is read-only: not replaced"), std::string::npos) << r.out;
+  EXPECT_EQ(Slurp(Path("out/units/a/calibration.json")), approved);
+  EXPECT_TRUE(fs::exists(Path("out/units/a/report.html")));
+  fs::permissions(Path("out/units/a/calibration.json"), fs::perms::owner_all);
+  // Recalibrated without a report: the earlier report, of other data, does not stay beside it.
+  ASSERT_EQ(Exec("batch " + Path("in") + " -o " + Path("out") + " --no-report").status, 0);
+  EXPECT_FALSE(fs::exists(Path("out/units/a/report.html")));
+  // One unit's usage problem (one value per file, and it has one file) is its error row.
+  fs::create_directories(Path("two"));
+  Write("two/A_20.csv", UnitPositions(1, Plan::kGood, 1));
+  Write("two/A_40.csv", UnitPositions(1, Plan::kGood, 1, 5));
+  Write("two/B_20.csv", UnitPositions(2, Plan::kGood, 2));
+  r = Exec("batch " + Path("two") + " -o " + Path("t") + " --unit-id '^([A-Z])_' --no-report " +
+           "--thermal 0,1 --temperatures 20,40");
+  EXPECT_EQ(r.status, 6) << r.err;
+  EXPECT_NE(r.out.find("B     error  usage: --temperatures: 2 given for 1 input file"),
+            std::string::npos)
+      << r.out;
+  // The files of a unit in name order, whatever order they were given in: the same bytes.
+  ASSERT_EQ(Exec("batch " + Path("two/A_40.csv") + " " + Path("two/A_20.csv") + " -o " +
+                 Path("t2") + " --unit-id '^([A-Z])_' --no-report")
+                .status,
+            0);
+  ASSERT_EQ(Exec("batch " + Path("two/A_20.csv") + " " + Path("two/A_40.csv") + " -o " +
+                 Path("t3") + " --unit-id '^([A-Z])_' --no-report")
+                .status,
+            0);
+  EXPECT_EQ(Slurp(Path("t2/units/A/calibration.json")), Slurp(Path("t3/units/A/calibration.json")));
+  // One gyroscope log for several units is refused.
+  r = Exec("batch " + Path("in") + " -o " + Path("g") + " --gyro " + Path("in/a.csv"));
+  EXPECT_EQ(r.status, 2);
+  EXPECT_NE(r.err.find("--gyro names one gyroscope log for every unit"), std::string::npos)
+      << r.err;
+}
+
+}  // namespace
+}  // namespace accelcal
+
+namespace accelcal {
+namespace {
+
+// A unit's id from the log itself: two PX4 logs of one sensor (device id 101, two sessions) and
+// one of another (102), named anyhow; and the real PX4 log's board id.
+TEST_F(Batch, UnitIdsFromTheLogs) {
+  fs::create_directories(Path("logs"));
+  RawLogSimulation sim;
+  sim.static_s = 3;
+  sim.transition_s = 1;
+  sim.sigma_raw_per_sample = Vec3::Constant(0.02);
+  int file = 0;
+  for (const std::uint32_t device : {101u, 101u, 102u}) {
+    sim.seed = static_cast<std::uint64_t>(++file);
+    ModelParameters truth;
+    truth.bias = Vec3(0.01 * device - 1, 0.1, -0.1);
+    const SimulatedLog log = SimulateRawLog(truth, 9.80665, Yang18Directions(), sim);
+    const ULogImuWriter writer(device);
+    std::string bytes = writer.Header();
+    for (std::size_t i = 0; i < log.samples.size(); ++i) {
+      bytes += writer.Accel(static_cast<std::uint64_t>(1e6 * log.time_s[i]) + 1000, log.samples[i]);
+    }
+    Write("logs/flight" + std::to_string(file) + ".ulg", bytes);
+  }
+  CliRun r = Exec("batch " + Path("logs") + " -o " + Path("out") +
+                  " --unit-id-from device-id --no-report --json");
+  ASSERT_EQ(r.status, 0) << r.err;
+  const nlohmann::json doc = nlohmann::json::parse(r.out);
+  ASSERT_EQ(doc.at("units").size(), 2u);
+  EXPECT_EQ(doc["units"][0]["unit"], "101");
+  EXPECT_EQ(doc["units"][0]["files"].size(), 2u);  // the sessions of one sensor, pooled
+  EXPECT_EQ(doc["units"][1]["unit"], "102");
+  EXPECT_EQ(doc["units"][0]["quantities"]["accelerometer.positions"]["value"], 36);
+  // The real log's board (PX4's sys_uuid); its several accelerometer streams have several ids.
+  const std::string real = std::string(ACCELCAL_DATA_DIR) + "/px4-ulog/sample_log_small.ulg";
+  r = Exec("batch " + real + " -o " + Path("real") + " --unit-id-from info:sys_uuid --json");
+  EXPECT_EQ(r.status, 6);  // the log is a flight: no calibration, but its unit is named
+  EXPECT_EQ(nlohmann::json::parse(r.out)["units"][0]["unit"],
+            "000600000000383638393239510d0035002d");
+  r = Exec("batch " + real + " -o " + Path("real") + " --unit-id-from device-id");
+  EXPECT_NE(r.out.find("device ids: choose one with --topic and --instance"), std::string::npos)
+      << r.out;
+  r = Exec("batch " + real + " -o " + Path("real") +
+           " --unit-id-from device-id --topic "
+           "sensor_accel --instance 1 --json");
+  EXPECT_EQ(nlohmann::json::parse(r.out)["units"][0]["unit"], "3670050");
+  r = Exec("batch " + real + " -o " + Path("real") + " --unit-id-from info:serial");
+  EXPECT_NE(r.out.find("the log has no information 'serial' (it has sys_mcu, sys_name"),
+            std::string::npos)
+      << r.out;
+  EXPECT_EQ(Exec("batch " + real + " -o " + Path("real") + " --unit-id-from serial").status, 2);
+}
+
+}  // namespace
+}  // namespace accelcal
+
+namespace accelcal {
+namespace {
+
+// accelcal store: a unit's successive calibrations, each compared with the one before it.
+class Store : public test::CliTest {
+ protected:
+  // One batch of `units` units: session `session` of each (the same truths, new noise); unit 2's
+  // bias moved by `bump` m/s2 in x.
+  std::string Session(int session, int units, double bump = 0) {
+    const std::string dir = Path("s" + std::to_string(session));
+    fs::create_directories(dir + "/line");
+    for (int unit = 1; unit <= units; ++unit) {
+      std::string csv = UnitPositions(unit, Plan::kGood, 1000 + unit, 7919 * session + unit);
+      if (unit == 2 && bump != 0) {
+        // Every reading's x moved by the bump: a bias change of the unit.
+        std::string moved = "x,y,z\n";
+        std::istringstream in(csv.substr(6));
+        for (std::string line; std::getline(in, line);) {
+          double x = 0, y = 0, z = 0;
+          std::sscanf(line.c_str(), "%lf,%lf,%lf", &x, &y, &z);
+          char text[128];
+          std::snprintf(text, sizeof text, "%.17g,%.17g,%.17g\n", x + bump, y, z);
+          moved += text;
+        }
+        csv = moved;
+      }
+      char name[32];
+      std::snprintf(name, sizeof name, "/line/U%03d.csv", unit);
+      Write(dir.substr(Path("").size()) + name, csv);
+    }
+    const CliRun r = Exec("batch " + dir + "/line -o " + dir + "/out --no-report");
+    EXPECT_EQ(r.status, 0) << r.err;
+    return dir + "/out";
+  }
+};
+
+TEST_F(Store, SuccessiveCalibrationsAreComparedWithinTheirCovariances) {
+  const std::string store = Path("store");
+  CliRun r = Exec("store add " + store + " " + Session(1, 3) + " --date 2026-10-01");
+  ASSERT_EQ(r.status, 0) << r.err;
+  EXPECT_NE(r.out.find("U002  2026-10-01  added units/U002/2026-10-01_"), std::string::npos)
+      << r.out;
+  EXPECT_NE(r.out.find("the unit's first calibration"), std::string::npos);
+  // The same unit again: its new calibration agrees with the first within their covariances.
+  r = Exec("store add " + store + " " + Session(2, 3) + " --date 2026-11-01");
+  ASSERT_EQ(r.status, 0) << r.out << r.err;
+  EXPECT_EQ(std::count(r.out.begin(), r.out.end(), '\n'), 4) << r.out;
+  EXPECT_NE(r.out.find("compatible with 2026-10-01"), std::string::npos) << r.out;
+  // Unit 2's bias moved by 0.02 m/s2 (its 1 sigma about 1e-3): changed, b_x named first.
+  r = Exec("store add " + store + " " + Session(3, 3, 0.02) + " --date 2026-11-28");
+  EXPECT_EQ(r.status, 6) << r.out;
+  EXPECT_NE(r.out.find("U002  2026-11-28  added"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("CHANGED since 2026-11-01"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("largest: b_x +"), std::string::npos) << r.out;
+  EXPECT_NE(r.err.find("1 calibrations differ"), std::string::npos) << r.err;
+  // Adding what is there adds nothing.
+  r = Exec("store add " + store + " " + Path("s3/out") + " --date 2026-11-28");
+  EXPECT_NE(r.out.find("0 added, 3 already in the store"), std::string::npos) << r.out;
+  // list: a line per unit, or a unit's calibrations; get: the latest, or a date's.
+  r = Exec("store list " + store);
+  ASSERT_EQ(r.status, 0) << r.err;
+  EXPECT_EQ(std::count(r.out.begin(), r.out.end(), '\n'), 3) << r.out;
+  r = Exec("store list " + store + " U002 --json");
+  const nlohmann::json index = nlohmann::json::parse(r.out);
+  ASSERT_EQ(index.at("entries").size(), 3u);
+  EXPECT_EQ(index["entries"][2]["change"]["compatible"], false);
+  // It is the bias that moved, not K.
+  EXPECT_LT(index["entries"][2]["change"]["accelerometer_bias"]["p"].get<double>(), 1e-6);
+  EXPECT_GT(index["entries"][2]["change"]["accelerometer_scale"]["p"].get<double>(), 1e-3);
+  EXPECT_EQ(index["entries"][1]["change"]["compatible"], true);
+  r = Exec("store get " + store + " U002");
+  EXPECT_EQ(r.out, Slurp(Path("s3/out/units/U002/calibration.json")));
+  r = Exec("store get " + store + " U002 --date 2026-11-01 -o " + Path("nov.json"));
+  ASSERT_EQ(r.status, 0) << r.err;
+  EXPECT_EQ(Slurp(Path("nov.json")), Slurp(Path("s2/out/units/U002/calibration.json")));
+  r = Exec("store get " + store + " U009");
+  EXPECT_EQ(r.status, 3);
+  EXPECT_NE(r.err.find("no calibration of unit 'U009'"), std::string::npos) << r.err;
+  // A stored file changed afterwards is refused, not given.
+  Write("store/" + index["entries"][0]["file"].get<std::string>(), "{}");
+  r = Exec("store get " + store + " U002 --date 2026-10-01");
+  EXPECT_EQ(r.status, 3);
+  EXPECT_NE(r.err.find("changed after it was stored"), std::string::npos) << r.err;
+  // A part whose bias moves by 0.02 m/s2 between power-ups (its datasheet's repeatability): the
+  // same move is within it.
+  r = Exec("store add " + Path("store2") + " " + Path("s2/out") + " --date 2026-11-01");
+  r = Exec("store add " + Path("store2") + " " + Path("s3/out") +
+           " --date 2026-11-28 --bias-repeatability 0.02");
+  EXPECT_EQ(r.status, 0) << r.out;
+  EXPECT_EQ(r.out.find("CHANGED"), std::string::npos) << r.out;
+  EXPECT_EQ(
+      Exec("store add " + Path("store2") + " " + Path("s3/out") + " --bias-repeatability 0.1,,0.1")
+          .status,
+      2);
+  // A single file needs its unit.
+  r = Exec("store add " + store + " " + Path("s1/out/units/U001/calibration.json"));
+  EXPECT_EQ(r.status, 2);
+  EXPECT_NE(r.err.find("give its unit with --unit"), std::string::npos) << r.err;
+}
+
+// Two sessions of 100 units that did not change: each unit's chi2 / 9 follows F(9, 18) (9
+// parameters; each covariance scaled by a noise level estimated from its fit's 9 residual degrees
+// of freedom), so a change is flagged as often as its p says. (By chi2(9), 11 of these 100 had p
+// below 0.05; by F, 4.)
+TEST_F(Store, UnchangedUnitsAreCompatibleAsOftenAsTheirPSays) {
+  const std::string store = Path("store");
+  ASSERT_EQ(Exec("store add " + store + " " + Session(1, 100) + " --date 2026-10-01").status, 0);
+  Exec("store add " + store + " " + Session(2, 100) + " --date 2026-11-01");
+  const nlohmann::json index = nlohmann::json::parse(Slurp(store + "/index.json"));
+  double sum = 0;
+  int n = 0, flagged = 0, below_05 = 0;
+  for (const auto& e : index.at("entries")) {
+    if (e.at("change").is_null()) continue;
+    const auto& a = e["change"]["accelerometer"];
+    ASSERT_EQ(a.at("dof"), 9);
+    ASSERT_GE(a.at("noise_dof").get<double>(), 16);  // 9 + 9, less a position screened out
+    sum += a.at("chi2").get<double>();
+    ++n;
+    flagged += e["change"]["compatible"] ? 0 : 1;
+    below_05 += a.at("p").get<double>() < 0.05 ? 1 : 0;
+  }
+  ASSERT_EQ(n, 100);
+  // 9 F(9, 18) has mean 9 * 18 / 16 = 10.1 and sd 6.4: the mean of 100 within 5 of its sd 0.64.
+  EXPECT_NEAR(sum / n, 10.125, 3.2);
+  // p < 0.001 flags 0.1 of 100 on average: 3 or more would happen 1.5e-4 of the time.
+  EXPECT_LE(flagged, 2);
+  // p < 0.05: 5 expected, 1 sigma 2.2.
+  EXPECT_LE(below_05, 12);
 }
 
 }  // namespace

@@ -88,8 +88,8 @@ TEST(Acceptance, RefusesWhatItCannotMeanAsWritten) {
       ADD_FAILURE() << "accepted: " << c.text;
     } catch (const InputError& e) {
       EXPECT_EQ(e.line(), c.line) << c.text << "\n" << e.what();
-      EXPECT_NE(std::string(e.what()).find(c.reason), std::string::npos)
-          << c.text << "\n" << e.what();
+      EXPECT_NE(std::string(e.what()).find(c.reason), std::string::npos) << c.text << "\n"
+                                                                         << e.what();
     }
   }
 }
@@ -184,6 +184,11 @@ TEST(Acceptance, EachLimitPassesOrFailsAsItsBoundsSay) {
                                                  "{max: 1}\n",
                                        ""))
                    .passed);
+  // accelerometer.*.sigma names the quantities that have a sigma (not rms, positions, ...).
+  EXPECT_TRUE(verdict("limits:\n  accelerometer.*.sigma: {max: 1}\n").passed);
+  // k2 is 0 by the linear model: a bound on it holds, a bound on its sigma cannot be checked.
+  EXPECT_TRUE(verdict("limits:\n  accelerometer.k2_*: {abs_max: 0.01}\n").passed);
+  EXPECT_FALSE(verdict("limits:\n  accelerometer.k2_x.sigma: {max: 1}\n").passed);
   // The positions used and left out.
   EXPECT_FALSE(verdict("limits:\n  accelerometer.excluded_positions: {max: 0}\n").passed);
   EXPECT_TRUE(verdict("limits:\n  accelerometer.positions: {min: 17}\n").passed);

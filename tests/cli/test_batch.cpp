@@ -6,7 +6,6 @@
 #include <cmath>
 #include <random>
 #include <set>
-#include <sstream>
 
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
@@ -41,8 +40,10 @@ Plan PlanOf(int unit) {
 // A unit's 18 positions (paper 000's scheme) as a positions file: a MEMS part read in m/s2 with
 // scale factors within 1 %, misalignments within 5 mrad and biases within 0.2 m/s2 (the example's
 // limits: 3 %, 20 mrad, 0.5 m/s2), each mean with 2 mm/s2 of noise.
-// `noise_seed`: another session of the same unit (0: the truth's seed).
-std::string UnitPositions(int unit, Plan plan, std::uint64_t seed, std::uint64_t noise_seed = 0) {
+// `noise_seed`: another session of the same unit (0: the truth's seed); `bias_shift_x`: its bias
+// moved since [m/s2].
+std::string UnitPositions(int unit, Plan plan, std::uint64_t seed, std::uint64_t noise_seed = 0,
+                          double bias_shift_x = 0) {
   std::mt19937_64 rng(seed);
   std::uniform_real_distribution<double> u(-1.0, 1.0);
   ModelParameters truth;
@@ -53,18 +54,13 @@ std::string UnitPositions(int unit, Plan plan, std::uint64_t seed, std::uint64_t
   truth.bias = Vec3(0.2 * u(rng), 0.2 * u(rng), 0.2 * u(rng));
   if (plan == Plan::kBias) truth.bias(0) = 0.8;    // abs_max 0.5 m/s2
   if (plan == Plan::kScale) truth.K(1, 1) = 1.05;  // max 1.03
+  truth.bias(0) += bias_shift_x;
   std::vector<Vec3> directions = Yang18Directions();
   if (plan == Plan::kFew) directions.resize(6);  // the linear model needs 9
   std::vector<Vec3> readings = SimulatePositions(truth, 9.80665, directions, Vec3::Constant(0.002),
                                                  noise_seed != 0 ? noise_seed : seed + unit);
   if (plan == Plan::kBumped) readings[6](0) += 0.3;  // moved during its interval: 150 sigma
-  std::string csv = "x,y,z\n";
-  char line[128];
-  for (const Vec3& p : readings) {
-    std::snprintf(line, sizeof line, "%.17g,%.17g,%.17g\n", p(0), p(1), p(2));
-    csv += line;
-  }
-  return csv;
+  return test::ReadingsCsv(readings);
 }
 
 class Batch : public test::CliTest {
@@ -378,20 +374,8 @@ class Store : public test::CliTest {
     const std::string dir = Path("s" + std::to_string(session));
     fs::create_directories(dir + "/line");
     for (int unit = 1; unit <= units; ++unit) {
-      std::string csv = UnitPositions(unit, Plan::kGood, 1000 + unit, 7919 * session + unit);
-      if (unit == 2 && bump != 0) {
-        // Every reading's x moved by the bump: a bias change of the unit.
-        std::string moved = "x,y,z\n";
-        std::istringstream in(csv.substr(6));
-        for (std::string line; std::getline(in, line);) {
-          double x = 0, y = 0, z = 0;
-          std::sscanf(line.c_str(), "%lf,%lf,%lf", &x, &y, &z);
-          char text[128];
-          std::snprintf(text, sizeof text, "%.17g,%.17g,%.17g\n", x + bump, y, z);
-          moved += text;
-        }
-        csv = moved;
-      }
+      const std::string csv = UnitPositions(unit, Plan::kGood, 1000 + unit, 7919 * session + unit,
+                                            unit == 2 ? bump : 0.0);
       char name[32];
       std::snprintf(name, sizeof name, "/line/U%03d.csv", unit);
       Write(dir.substr(Path("").size()) + name, csv);

@@ -61,10 +61,8 @@ class CliTest : public ::testing::Test {
   fs::path dir_;
 };
 
-// A positions file of `count` simulated readings of paper 000's device (9.8 m/s2, seed 2).
-inline std::string PositionsCsv(int count) {
-  const std::vector<Vec3> readings = SimulatePositions(
-      Yang2012Truth(), 9.8, RandomDirections(count, 1), Vec3(0.05, 0.05, 0.05), 2);
+// Readings as a positions file, x,y,z with every digit.
+inline std::string ReadingsCsv(const std::vector<Vec3>& readings) {
   std::string s = "x,y,z\n";
   char line[128];
   for (const Vec3& p : readings) {
@@ -72,6 +70,12 @@ inline std::string PositionsCsv(int count) {
     s += line;
   }
   return s;
+}
+
+// A positions file of `count` simulated readings of paper 000's device (9.8 m/s2, seed 2).
+inline std::string PositionsCsv(int count) {
+  return ReadingsCsv(SimulatePositions(Yang2012Truth(), 9.8, RandomDirections(count, 1),
+                                       Vec3(0.05, 0.05, 0.05), 2));
 }
 
 }  // namespace accelcal::test

@@ -1,6 +1,8 @@
 // The pieces every command shares: option values, inputs, gravity, numbers (cli_common.hpp).
 #include "cli_common.hpp"
 
+#include <sys/stat.h>
+
 #include <algorithm>
 #include <cctype>
 #include <charconv>
@@ -249,6 +251,11 @@ std::string OutlierMessage(const OutlierFinding& o, const std::vector<Position>&
   return Format("position %d%s disagrees with the others: |f|-g %.3g %s under the fit %s it; %s",
                 o.position + 1, where.c_str(), errors[k], unit, o.excluded ? "without" : "with",
                 test.c_str());
+}
+
+bool IsDirectory(const std::string& path) {
+  struct stat st {};
+  return ::stat(path.c_str(), &st) == 0 && S_ISDIR(st.st_mode);
 }
 
 std::string UnitIdProblem(const std::string& id) {

@@ -111,6 +111,9 @@ std::string PositionsCsv(const std::vector<Vec3>& means, double samples, const V
 // Three numbers as a JSON array.
 nlohmann::ordered_json JsonArray(const Vec3& v);
 
+/// Whether `path` is a directory (or a link to one).
+bool IsDirectory(const std::string& path);
+
 /// Why `id` cannot name a unit's directory (batch, store), or "" when it can.
 std::string UnitIdProblem(const std::string& id);
 

@@ -56,11 +56,6 @@ struct Unit {
   Acceptance acceptance;
 };
 
-bool IsDirectory(const std::string& path) {
-  struct stat st {};
-  return ::stat(path.c_str(), &st) == 0 && S_ISDIR(st.st_mode);
-}
-
 // The regular files of `dir` whose names match `glob` (hidden ones left out), sorted by name;
 // `skipped` counts the other entries that match (directories, FIFOs, devices).
 std::vector<std::string> DirectoryFiles(const std::string& dir, const std::string& glob,

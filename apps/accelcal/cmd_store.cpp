@@ -36,11 +36,6 @@ struct Entry {
   Json change;  // null for a unit's first calibration
 };
 
-bool IsDirectory(const std::string& path) {
-  struct stat st {};
-  return ::stat(path.c_str(), &st) == 0 && S_ISDIR(st.st_mode);
-}
-
 void MakeDirectory(const std::string& path) {
   if (::mkdir(path.c_str(), 0777) != 0 && errno != EEXIST) {
     throw OutputError(path + ": cannot create the directory: " + std::strerror(errno));

@@ -2,18 +2,26 @@
 //   STORE/index.json                     every calibration: unit, date, file, SHA-256, verdict,
 //                                        and its change against the unit's calibration before it
 //   STORE/units/ID/DATE_SHA.json         the calibration files, as they were given
-// A calibration added is compared with the unit's latest one of an earlier or the same date
-// (calibration_change.hpp). Adding is locked (flock on STORE/.lock), every file is checked before
-// anything is written, the files are written before the index, and the index is replaced whole.
+// Each calibration is compared with the unit's latest comparable one before it in time
+// (calibration_change.hpp); one added before others re-compares the one after it, so the index
+// always says how each calibration differs from its predecessor. Adding is locked (flock on
+// STORE/.lock), every file is checked before anything is written, the files are written before
+// the index, and the index is replaced whole. The index is checked when read: a path that leaves
+// the store, a bad date or SHA-256, a duplicate are refused.
 #include <sys/file.h>
 #include <sys/stat.h>
 #include <unistd.h>
 
 #include <algorithm>
 #include <cerrno>
+#include <climits>
 #include <cmath>
+#include <cstdlib>
 #include <cstring>
 #include <ctime>
+#include <map>
+#include <optional>
+#include <set>
 
 #include <fcntl.h>
 
@@ -33,7 +41,9 @@ using Json = nlohmann::ordered_json;
 
 struct Entry {
   std::string unit, date, file, sha256, verdict, source;
-  Json change;  // null for a unit's first calibration
+  Json change;         // null for a unit's first calibration
+  std::string key;     // the date as a UTC instant, for ordering (DateKey)
+  bool fresh = false;  // added or re-compared by this add
 };
 
 void MakeDirectory(const std::string& path) {
@@ -45,25 +55,107 @@ void MakeDirectory(const std::string& path) {
 
 std::string IndexPath(const std::string& store) { return store + "/index.json"; }
 
-// The index, or none when the store is new; InputError for one that is not a store's.
+// A provenance date (CheckProvenanceDate's form) as the UTC instant "YYYY-MM-DDTHH:MM:SS", so that
+// dates with other time zones order by time; a date alone is its day's start.
+std::string DateKey(const std::string& date) {
+  std::tm t{};
+  t.tm_year = std::atoi(date.substr(0, 4).c_str()) - 1900;
+  t.tm_mon = std::atoi(date.substr(5, 2).c_str()) - 1;
+  t.tm_mday = std::atoi(date.substr(8, 2).c_str());
+  long offset_s = 0;
+  if (date.size() > 10) {
+    t.tm_hour = std::atoi(date.substr(11, 2).c_str());
+    t.tm_min = std::atoi(date.substr(14, 2).c_str());
+    std::size_t at = 16;
+    if (at < date.size() && date[at] == ':') {
+      t.tm_sec = std::atoi(date.substr(at + 1, 2).c_str());
+      at += 3;
+    }
+    if (at < date.size() && (date[at] == '+' || date[at] == '-')) {
+      offset_s = (date[at] == '-' ? -1 : 1) * (std::atol(date.substr(at + 1, 2).c_str()) * 3600 +
+                                               std::atol(date.substr(at + 4, 2).c_str()) * 60);
+    }
+  }
+  const std::time_t utc = timegm(&t) - offset_s;
+  std::tm out{};
+  gmtime_r(&utc, &out);
+  char text[32];
+  std::strftime(text, sizeof text, "%Y-%m-%dT%H:%M:%S", &out);
+  return text;
+}
+
+// The entries' order: by unit, then time; entries of one time in the order they were added.
+void SortEntries(std::vector<Entry>* entries) {
+  std::stable_sort(entries->begin(), entries->end(), [](const Entry& a, const Entry& b) {
+    return a.unit != b.unit ? a.unit < b.unit : a.key < b.key;
+  });
+}
+
+// The index, or none when the store has none yet. Every entry is checked: an index edited by hand
+// or damaged is refused (InputError naming the entry) rather than read outside the store or
+// half-understood.
 std::vector<Entry> ReadIndex(const std::string& store) {
   const std::string path = IndexPath(store);
-  if (::access(path.c_str(), F_OK) != 0) return {};
-  std::vector<Entry> entries;
-  try {
-    const Json doc = Json::parse(ReadFileToString(path, kMaxSmallFileBytes));
-    if (doc.at("format") != "accelcal-store" || doc.at("version") != 1) {
-      throw InputError(path, 0, "not an accelcal store's index (format accelcal-store, version 1)");
-    }
-    for (const Json& e : doc.at("entries")) {
-      entries.push_back({e.at("unit").get<std::string>(), e.at("date").get<std::string>(),
-                         e.at("file").get<std::string>(), e.at("sha256").get<std::string>(),
-                         e.at("verdict").get<std::string>(), e.at("source").get<std::string>(),
-                         e.at("change")});
-    }
-  } catch (const nlohmann::json::exception& e) {
-    throw InputError(path, 0, std::string("not an accelcal store's index: ") + e.what());
+  struct stat st {};
+  if (::stat(path.c_str(), &st) != 0) {
+    if (errno == ENOENT) return {};
+    throw InputError(path, 0, std::string("cannot be read: ") + std::strerror(errno));
   }
+  if (!S_ISREG(st.st_mode)) throw InputError(path, 0, "not a regular file");
+  std::vector<Entry> entries;
+  Json doc;
+  try {
+    doc = Json::parse(ReadFileToString(path, kMaxSmallFileBytes));
+  } catch (const nlohmann::json::exception& e) {
+    throw InputError(path, 0, std::string("not JSON: ") + e.what());
+  }
+  if (!doc.is_object() || doc.value("format", Json()) != "accelcal-store" ||
+      doc.value("version", Json()) != 1 || !doc.contains("entries") || !doc["entries"].is_array()) {
+    throw InputError(path, 0,
+                     "not an accelcal store's index: it must have format accelcal-store, "
+                     "version 1 and a list of entries");
+  }
+  std::set<std::pair<std::string, std::string>> seen;
+  for (std::size_t i = 0; i < doc["entries"].size(); ++i) {
+    const Json& e = doc["entries"][i];
+    const auto fail = [&](const std::string& why) {
+      throw InputError(path, 0, "entry " + std::to_string(i + 1) + ": " + why);
+    };
+    const auto text = [&](const char* key) {
+      if (!e.is_object() || !e.contains(key) || !e[key].is_string()) {
+        fail(std::string("'") + key + "' is missing or not a string");
+      }
+      return e[key].get<std::string>();
+    };
+    Entry entry;
+    entry.unit = text("unit");
+    entry.date = text("date");
+    entry.file = text("file");
+    entry.sha256 = text("sha256");
+    entry.verdict = text("verdict");
+    entry.source = text("source");
+    entry.change = e.value("change", Json());
+    if (const std::string why = UnitIdProblem(entry.unit); !why.empty()) fail(why);
+    if (const auto why = CheckProvenanceDate(entry.date)) fail(*why);
+    if (entry.sha256.size() != 64 ||
+        entry.sha256.find_first_not_of("0123456789abcdef") != std::string::npos) {
+      fail("'sha256' is not 64 hexadecimal digits");
+    }
+    // units/UNIT/NAME.json, NAME without a '/': never a path out of the store.
+    const std::string prefix = "units/" + entry.unit + "/";
+    const std::string name = entry.file.substr(std::min(entry.file.size(), prefix.size()));
+    if (entry.file.compare(0, prefix.size(), prefix) != 0 || name.empty() || name[0] == '.' ||
+        name.find('/') != std::string::npos) {
+      fail("'file' " + entry.file + " is not units/" + entry.unit + "/NAME.json");
+    }
+    if (!entry.change.is_null() && !entry.change.is_object()) fail("'change' is not an object");
+    if (!seen.emplace(entry.unit, entry.sha256).second) {
+      fail("unit " + entry.unit + "'s calibration " + entry.sha256.substr(0, 12) + " twice");
+    }
+    entry.key = DateKey(entry.date);
+    entries.push_back(std::move(entry));
+  }
+  SortEntries(&entries);
   return entries;
 }
 
@@ -118,7 +210,8 @@ struct Candidate {
 };
 
 // The calibrations to add: each file given (of --unit), and the passing units of each batch
-// directory given (their ids from its summary).
+// directory given (their ids from its summary; only --unit's when given). A calibration that
+// failed its own checks is no unit's reference: refused.
 std::vector<Candidate> Candidates(const StoreArgs& args, int* skipped) {
   std::vector<Candidate> out;
   const auto take = [&](const std::string& unit, const std::string& path) {
@@ -127,11 +220,21 @@ std::vector<Candidate> Candidates(const StoreArgs& args, int* skipped) {
     c.source = path;
     c.text = ReadFileToString(path, kMaxSmallFileBytes);
     c.cal = ParseCalibrationJson(c.text, path);
+    if (c.cal.verdict == "failed") {
+      throw InputError(path, 0,
+                       "the calibration failed its own checks (verdict failed): it is not "
+                       "stored as the unit's reference");
+    }
     c.date = !c.cal.provenance.date.empty() ? c.cal.provenance.date
              : !args.date.empty()           ? args.date
                                             : Today();
+    if (!c.cal.provenance.date.empty() && !args.date.empty() && args.date != c.date) {
+      Warn("%s: dated %s by its provenance; --date %s is for calibrations without one\n",
+           path.c_str(), c.date.c_str(), args.date.c_str());
+    }
     out.push_back(std::move(c));
   };
+  bool from_batch = false;
   for (const std::string& item : args.items) {
     if (!IsDirectory(item)) {
       if (args.unit.empty()) {
@@ -141,6 +244,7 @@ std::vector<Candidate> Candidates(const StoreArgs& args, int* skipped) {
       take(args.unit, item);
       continue;
     }
+    from_batch = true;
     const std::string summary = item + "/summary.json";
     std::vector<std::pair<std::string, bool>> units;  // id, passed
     try {
@@ -155,22 +259,31 @@ std::vector<Candidate> Candidates(const StoreArgs& args, int* skipped) {
       throw InputError(summary, 0, std::string("not a batch's summary: ") + e.what());
     }
     for (const auto& [unit, passed] : units) {
+      if (!args.unit.empty() && unit != args.unit) continue;
       if (!passed) {
         ++*skipped;
         continue;
       }
-      if (!args.unit.empty() && unit != args.unit) continue;
       if (const std::string why = UnitIdProblem(unit); !why.empty()) {
         throw InputError(summary, 0, why);
       }
       take(unit, item + "/units/" + unit + "/calibration.json");
     }
   }
+  if (from_batch && !args.unit.empty() && out.empty() && *skipped == 0) {
+    throw UsageError("--unit " + args.unit + ": no such unit in the batch directories given");
+  }
   return out;
 }
 
-// The comparison of `later` with `earlier` as the index records it.
-Json ChangeJson(const Entry& earlier, const CalibrationChange& c) {
+// A number for a person: %.3g, the extremes said as such.
+std::string Brief(double v) {
+  if (!std::isfinite(v)) return std::isnan(v) ? "nan" : (v > 0 ? "inf" : "-inf");
+  return Format("%.3g", v);
+}
+
+// The comparison with `earlier` as the index records it.
+Json ChangeJson(const Entry& earlier, const CalibrationChange& c, const ChangeOptions& options) {
   const auto sensor = [](const ParameterChange& p) {
     Json j;
     j["chi2"] = p.chi2;
@@ -195,45 +308,101 @@ Json ChangeJson(const Entry& earlier, const CalibrationChange& c) {
   j["accelerometer_scale"] = sensor(c.accelerometer_scale);
   j["accelerometer_bias"] = sensor(c.accelerometer_bias);
   j["gyroscope"] = c.gyroscope ? sensor(*c.gyroscope) : Json();
-  if (!c.gyroscope_note.empty()) j["note"] = c.gyroscope_note;
+  j["bias_repeatability"] =
+      options.bias_repeatability
+          ? Json::array({(*options.bias_repeatability)(0), (*options.bias_repeatability)(1),
+                         (*options.bias_repeatability)(2)})
+          : Json();
+  j["notes"] = c.notes;
   return j;
 }
 
+// What the index's record of a change says, in a line. Written by this file, but read from an
+// index a person may have edited: whatever is missing reads as unknown, never as a crash.
 std::string ChangeText(const Json& change) {
-  if (change.is_null()) return "the unit's first calibration";
-  if (change.contains("comparable") && !change["comparable"].get<bool>()) {
-    return "not compared with " + change["against_date"].get<std::string>() + ": " +
-           change["reason"].get<std::string>();
+  if (!change.is_object()) return "the unit's first calibration";
+  const std::string against = change.value("against_date", std::string("?"));
+  if (!change.value("comparable", true)) {
+    return "not compared with " + against + ": " + change.value("reason", std::string("?"));
   }
-  const Json& a = change["accelerometer"];
-  std::string text = Format("%s %s (chi2 %.3g for %d parameters, p %.2g",
-                            change["compatible"].get<bool>() ? "compatible with" : "CHANGED since",
-                            change["against_date"].get<std::string>().c_str(),
-                            a["chi2"].get<double>(), a["dof"].get<int>(), a["p"].get<double>());
-  if (!change["gyroscope"].is_null()) {
-    const Json& g = change["gyroscope"];
-    text += Format("; gyroscope chi2 %.3g for %d, p %.2g", g["chi2"].get<double>(),
-                   g["dof"].get<int>(), g["p"].get<double>());
+  const auto number = [](const Json& j, const char* key) {
+    return j.is_object() && j.contains(key) && j[key].is_number() ? j[key].get<double>() : NAN;
+  };
+  const Json a = change.value("accelerometer", Json());
+  const Json g = change.value("gyroscope", Json());
+  const bool compatible = change.value("compatible", false);
+  std::string text = (compatible ? "compatible with " : "CHANGED since ") + against + " (chi2 " +
+                     Brief(number(a, "chi2")) + " for " + Brief(number(a, "dof")) +
+                     " parameters, p " + Brief(number(a, "p"));
+  if (g.is_object()) {
+    text += "; gyroscope chi2 " + Brief(number(g, "chi2")) + " for " + Brief(number(g, "dof")) +
+            ", p " + Brief(number(g, "p"));
   }
   text += ")";
-  if (!change["compatible"].get<bool>()) {
-    text +=
-        Format("; K and k2 p %.2g, bias p %.2g", change["accelerometer_scale"]["p"].get<double>(),
-               change["accelerometer_bias"]["p"].get<double>());
-    text += "; largest:";
-    for (const Json& l : a["largest"]) {
-      text += Format(" %s %+.1f sigma", l["parameter"].get<std::string>().c_str(),
-                     l["z"].get<double>());
-    }
+  if (!compatible) {
+    const auto largest = [&](const char* label, const Json& sensor) {
+      if (!sensor.is_object() || !(number(sensor, "p") < kChangeP)) return;
+      text += std::string("; ") + label + " largest:";
+      for (const Json& l : sensor.value("largest", Json::array())) {
+        text +=
+            " " + l.value("parameter", std::string("?")) + " " + Brief(number(l, "z")) + " sigma";
+      }
+    };
+    text += "; K and k2 p " + Brief(number(change.value("accelerometer_scale", Json()), "p")) +
+            ", bias p " + Brief(number(change.value("accelerometer_bias", Json()), "p"));
+    largest("accelerometer", a);
+    largest("gyroscope", g);
+  }
+  for (const Json& note : change.value("notes", Json::array())) {
+    if (note.is_string()) text += "; " + note.get<std::string>();
   }
   return text;
 }
 
-// The entries' order: by unit, then date; entries of one date in the order they were added.
-void SortEntries(std::vector<Entry>* entries) {
-  std::stable_sort(entries->begin(), entries->end(), [](const Entry& a, const Entry& b) {
-    return a.unit != b.unit ? a.unit < b.unit : a.date < b.date;
-  });
+// The change of entry `i` against the unit's latest comparable calibration before it: each
+// earlier one is tried in turn (one of another model, or without a covariance, is passed over,
+// and said when none is comparable). A stored file whose bytes are no longer the index's is
+// refused, not compared.
+Json CompareWithPredecessor(const std::string& store, const std::vector<Entry>& entries,
+                            std::size_t i, const LoadedCalibration& cal,
+                            const ChangeOptions& options) {
+  Json first_refusal;
+  for (std::size_t j = i; j-- > 0 && entries[j].unit == entries[i].unit;) {
+    const Entry& earlier = entries[j];
+    const std::string path = store + "/" + earlier.file;
+    const std::string text = ReadFileToString(path, kMaxSmallFileBytes);
+    if (Sha256Hex(text) != earlier.sha256) {
+      throw InputError(path, 0,
+                       "its SHA-256 is not the index's: the file was changed after it was stored "
+                       "(restore it, or remove its entry from the index)");
+    }
+    try {
+      return ChangeJson(
+          earlier, CompareCalibrations(ParseCalibrationJson(text, path), cal, options), options);
+    } catch (const DataError& e) {
+      if (first_refusal.is_null()) {
+        first_refusal = {{"against", earlier.file},
+                         {"against_date", earlier.date},
+                         {"comparable", false},
+                         {"reason", e.what()}};
+      }
+    }
+  }
+  return first_refusal;
+}
+
+ChangeOptions ParseChangeOptions(const StoreArgs& args) {
+  ChangeOptions options;
+  if (args.bias_repeatability.empty()) return options;
+  const auto& q = args.bias_repeatability;
+  if (q.size() != 1 && q.size() != 3) throw UsageError("--bias-repeatability: one value, or x,y,z");
+  for (double v : q) {
+    if (!(v >= 0) || !std::isfinite(v)) {
+      throw UsageError("--bias-repeatability: a 1 sigma is finite and not negative");
+    }
+  }
+  options.bias_repeatability = q.size() == 1 ? Vec3::Constant(q[0]) : Vec3(q[0], q[1], q[2]);
+  return options;
 }
 
 int Add(const StoreArgs& args) {
@@ -245,6 +414,8 @@ int Add(const StoreArgs& args) {
   if (!args.date.empty()) {
     if (const auto why = CheckProvenanceDate(args.date)) throw UsageError("--date: " + *why);
   }
+  if (!args.output.empty()) throw UsageError("store add writes into the store: -o is get's");
+  const ChangeOptions options = ParseChangeOptions(args);
   // Every file is read and checked before anything is written.
   int skipped = 0;
   std::vector<Candidate> candidates = Candidates(args, &skipped);
@@ -252,86 +423,89 @@ int Add(const StoreArgs& args) {
   const StoreLock lock(args.store);
   std::vector<Entry> entries = ReadIndex(args.store);
   MakeDirectory(args.store + "/units");
-  ChangeOptions change_options;
-  if (!args.bias_repeatability.empty()) {
-    const auto& q = args.bias_repeatability;
-    if (q.size() != 1 && q.size() != 3) {
-      throw UsageError("--bias-repeatability: one value, or x,y,z");
-    }
-    for (double v : q) {
-      if (!(v >= 0) || !std::isfinite(v)) {
-        throw UsageError("--bias-repeatability: a 1 sigma is finite and not negative");
-      }
-    }
-    change_options.bias_repeatability =
-        q.size() == 1 ? Vec3::Constant(q[0]) : Vec3(q[0], q[1], q[2]);
-  }
-  int added = 0, changed = 0, present = 0;
-  Json report = Json::array();
+  int present = 0;
+  std::vector<std::string> lines;
+  std::map<std::string, const LoadedCalibration*> new_calibrations;  // by file
   for (Candidate& c : candidates) {
     const std::string sha = Sha256Hex(c.text);
-    const bool known = std::any_of(entries.begin(), entries.end(), [&](const Entry& e) {
-      return e.unit == c.unit && e.sha256 == sha;
-    });
-    if (known) {
+    const auto known = std::find_if(entries.begin(), entries.end(),
+                                    [&](const Entry& e) { return e.sha256 == sha; });
+    if (known != entries.end() && known->unit == c.unit) {
       ++present;
-      if (!args.json) Say("%s  %s  already in the store\n", c.unit.c_str(), c.date.c_str());
+      lines.push_back(c.unit + "  " + c.date + "  already in the store\n");
       continue;
     }
-    // The unit's latest calibration of an earlier or the same date.
-    const Entry* earlier = nullptr;
-    for (const Entry& e : entries) {
-      if (e.unit == c.unit && e.date <= c.date) earlier = &e;
+    if (known != entries.end()) {
+      Warn("%s: the same calibration is stored as unit %s's; is %s another unit's id for it?\n",
+           c.source.c_str(), known->unit.c_str(), c.unit.c_str());
     }
     Entry entry;
     entry.unit = c.unit;
     entry.date = c.date;
+    entry.key = DateKey(c.date);
     entry.sha256 = sha;
     entry.verdict = c.cal.verdict;
     entry.source = c.source;
+    entry.fresh = true;
     std::string day = c.date;
     std::replace(day.begin(), day.end(), ':', '-');
     entry.file = "units/" + c.unit + "/" + day + "_" + sha.substr(0, 12) + ".json";
-    if (earlier != nullptr) {
-      const std::string path = args.store + "/" + earlier->file;
-      try {
-        const LoadedCalibration before =
-            ParseCalibrationJson(ReadFileToString(path, kMaxSmallFileBytes), path);
-        entry.change = ChangeJson(*earlier, CompareCalibrations(before, c.cal, change_options));
-      } catch (const DataError& e) {
-        entry.change = {{"against", earlier->file},
-                        {"against_date", earlier->date},
-                        {"comparable", false},
-                        {"reason", e.what()}};
-      }
-    }
     MakeDirectory(args.store + "/units/" + c.unit);
     WriteFileAtomically(args.store + "/" + entry.file, c.text);
-    const bool was_changed = entry.change.is_object() && entry.change.contains("compatible") &&
-                             !entry.change["compatible"].get<bool>();
-    changed += was_changed ? 1 : 0;
-    if (!args.json) {
-      Say("%s  %s  added %s; %s\n", c.unit.c_str(), c.date.c_str(), entry.file.c_str(),
-          ChangeText(entry.change).c_str());
-    }
-    report.push_back({{"unit", entry.unit}, {"file", entry.file}, {"change", entry.change}});
+    new_calibrations[entry.file] = &c.cal;
     entries.push_back(std::move(entry));
     SortEntries(&entries);
-    ++added;
+  }
+  // Each new calibration against the one before it, and the one after it against it: an older
+  // calibration added late sits between two that were compared with each other.
+  int changed = 0, added = 0;
+  for (std::size_t i = 0; i < entries.size(); ++i) {
+    const bool is_new = new_calibrations.count(entries[i].file) > 0;
+    const bool after_new = !is_new && i > 0 && entries[i - 1].unit == entries[i].unit &&
+                           entries[i - 1].fresh && new_calibrations.count(entries[i - 1].file) > 0;
+    if (!is_new && !after_new) continue;
+    std::optional<LoadedCalibration> stored;
+    if (!is_new) {
+      const std::string path = args.store + "/" + entries[i].file;
+      const std::string text = ReadFileToString(path, kMaxSmallFileBytes);
+      if (Sha256Hex(text) != entries[i].sha256) {
+        throw InputError(path, 0,
+                         "its SHA-256 is not the index's: the file was changed after it "
+                         "was stored");
+      }
+      stored = ParseCalibrationJson(text, path);
+    }
+    const LoadedCalibration& cal = is_new ? *new_calibrations[entries[i].file] : *stored;
+    entries[i].change = CompareWithPredecessor(args.store, entries, i, cal, options);
+    const bool was_changed =
+        entries[i].change.is_object() && entries[i].change.value("compatible", true) == false;
+    changed += was_changed ? 1 : 0;
+    added += is_new ? 1 : 0;
+    lines.push_back(entries[i].unit + "  " + entries[i].date + "  " +
+                    (is_new ? "added " + entries[i].file : std::string("now")) + "; " +
+                    ChangeText(entries[i].change) + "\n");
   }
   WriteFileAtomically(IndexPath(args.store), IndexText(entries));
+  // Said once the index holds it.
   if (args.json) {
+    Json report = Json::array();
+    for (const Entry& e : entries) {
+      if (new_calibrations.count(e.file) > 0) {
+        report.push_back({{"unit", e.unit}, {"file", e.file}, {"change", e.change}});
+      }
+    }
     WriteOut(JsonText(report));
   } else {
+    for (const std::string& line : lines) Say("%s", line.c_str());
     Say("%d added, %d already in the store%s\n", added, present,
         skipped > 0 ? Format(", %d units that did not pass their batch left out", skipped).c_str()
                     : "");
   }
   if (changed > 0) {
     WriteErr(
-        Format("accelcal: %d calibrations differ from their unit's one before beyond their "
+        Format("accelcal: %d calibration%s differ%s from the unit's one before beyond the "
                "covariances (p < %g)\n",
-               changed, kChangeP));
+               changed, changed == 1 ? "" : "s", changed == 1 ? "s" : "", kChangeP));
     return kExitFailedChecks;
   }
   return kExitOk;
@@ -349,15 +523,47 @@ std::vector<Entry> UnitEntries(const std::vector<Entry>& entries, const std::str
   return of_unit;
 }
 
+// The store must exist to be read.
+void RequireStore(const std::string& store) {
+  if (!IsDirectory(store)) throw InputError(store, 0, "no such store (a directory)");
+}
+
+// Refuses an output inside the store: it would replace a stored calibration, the index or the lock.
+void RefuseOutputInStore(const std::string& output, const std::string& store) {
+  if (output.empty() || output == "-") return;
+  char store_real[PATH_MAX], out_dir_real[PATH_MAX];
+  const std::size_t slash = output.find_last_of('/');
+  const std::string dir = slash == std::string::npos ? "." : output.substr(0, slash + 1);
+  if (::realpath(store.c_str(), store_real) == nullptr ||
+      ::realpath(dir.c_str(), out_dir_real) == nullptr) {
+    return;  // the write itself will say what is wrong
+  }
+  const std::string s = store_real, o = out_dir_real;
+  if (o == s || o.compare(0, s.size() + 1, s + "/") == 0) {
+    throw UsageError("-o " + output +
+                     " is inside the store: it would replace what the store "
+                     "holds; write it elsewhere");
+  }
+}
+
 int Get(const StoreArgs& args) {
   if (args.items.size() != 1) throw UsageError("store get: give one unit");
+  if (!args.date.empty()) {
+    if (const auto why = CheckProvenanceDate(args.date)) throw UsageError("--date: " + *why);
+  }
+  RequireStore(args.store);
+  RefuseOutputInStore(args.output, args.store);
   CheckOutputs({{"-o", args.output}}, {IndexPath(args.store)});
   const std::vector<Entry> entries =
       UnitEntries(ReadIndex(args.store), args.items.front(), args.store);
   const Entry* chosen = nullptr;
+  // A day picks the unit's latest calibration dated that day; a date and time, the one of that
+  // instant (in any time zone).
+  const bool day = args.date.size() == 10;
   for (const Entry& e : entries) {
-    // A date picks the unit's latest calibration of that day (or that exact date and time).
-    if (args.date.empty() || e.date.compare(0, args.date.size(), args.date) == 0) chosen = &e;
+    const bool match = args.date.empty() ||
+                       (day ? e.date.compare(0, 10, args.date) == 0 : e.key == DateKey(args.date));
+    if (match) chosen = &e;
   }
   if (chosen == nullptr) {
     std::string dates;
@@ -383,8 +589,8 @@ int Get(const StoreArgs& args) {
 
 int List(const StoreArgs& args) {
   if (args.items.size() > 1) throw UsageError("store list: give at most one unit");
+  RequireStore(args.store);
   std::vector<Entry> entries = ReadIndex(args.store);
-  if (!IsDirectory(args.store)) throw InputError(args.store, 0, "no such store");
   if (!args.items.empty()) entries = UnitEntries(entries, args.items.front(), args.store);
   if (args.json) {
     WriteOut(IndexText(entries));

@@ -31,8 +31,9 @@ struct CalibrationChange {
   ParameterChange accelerometer, accelerometer_scale, accelerometer_bias;
   /// When both calibrations have a gyroscope of the same model, each with its covariance.
   std::optional<ParameterChange> gyroscope;
-  /// Why the gyroscopes were not compared, when one has a gyroscope ("" otherwise).
-  std::string gyroscope_note;
+  /// What was not compared, and why: the gyroscopes (one has none, their models differ, no
+  /// covariance), the temperature coefficients of calibrations over temperature.
+  std::vector<std::string> notes;
   /// p ≥ kChangeP for every sensor compared.
   bool compatible = true;
 };

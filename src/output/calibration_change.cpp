@@ -22,6 +22,9 @@ ParameterChange Change(const Eigen::VectorXd& earlier, const Eigen::VectorXd& la
                        std::optional<double> noise_dof) {
   ParameterChange change;
   const Eigen::VectorXd delta = later - earlier;
+  if (!delta.allFinite() || !c.allFinite()) {
+    throw DataError("a parameter, its difference or its covariance is not a finite number");
+  }
   std::vector<int> kept;
   for (int i = 0; i < delta.size(); ++i) {
     const double var = c(i, i);
@@ -124,6 +127,10 @@ CalibrationChange CompareCalibrations(const LoadedCalibration& earlier,
   for (const ParameterSlot& s : ParameterSlots(later.model, later.frame))
     names.emplace_back(s.name);
   CalibrationChange change;
+  if (later.thermal) {
+    change.notes.push_back(
+        "the parameters compared at T_ref; their temperature coefficients are not compared");
+  }
   // The two noise levels' degrees of freedom, summed: each covariance's scale estimated from its
   // own fit; a level from the samples counts as known.
   std::optional<double> noise_dof;
@@ -168,12 +175,12 @@ CalibrationChange CompareCalibrations(const LoadedCalibration& earlier,
     const auto& b = *later.gyroscope;
     const int m = NumGyroParameters(b.model);
     if (a.model != b.model) {
-      change.gyroscope_note = "the gyroscopes' models differ (" + std::string(ToString(a.model)) +
-                              ", then " + std::string(ToString(b.model)) + "): not compared";
+      change.notes.push_back("the gyroscopes' models differ (" + std::string(ToString(a.model)) +
+                             ", then " + std::string(ToString(b.model)) + "): not compared");
     } else if (a.raw_unit != b.raw_unit) {
-      change.gyroscope_note = "the gyroscopes' raw units differ: not compared";
+      change.notes.push_back("the gyroscopes' raw units differ: not compared");
     } else if (a.covariance.rows() != m || b.covariance.rows() != m) {
-      change.gyroscope_note = "a gyroscope has no covariance: not compared";
+      change.notes.push_back("a gyroscope has no covariance: not compared");
     } else {
       std::vector<std::string> gyro_names;
       for (const GyroParameterSlot& s : GyroParameterSlots(b.model))
@@ -184,7 +191,7 @@ CalibrationChange CompareCalibrations(const LoadedCalibration& earlier,
       change.compatible = change.compatible && change.gyroscope->p >= kChangeP;
     }
   } else if (earlier.gyroscope || later.gyroscope) {
-    change.gyroscope_note = "only one of them has a gyroscope: not compared";
+    change.notes.push_back("only one of them has a gyroscope: not compared");
   }
   return change;
 }

@@ -403,8 +403,8 @@ TEST_F(Store, SuccessiveCalibrationsAreComparedWithinTheirCovariances) {
   EXPECT_EQ(r.status, 6) << r.out;
   EXPECT_NE(r.out.find("U002  2026-11-28  added"), std::string::npos) << r.out;
   EXPECT_NE(r.out.find("CHANGED since 2026-11-01"), std::string::npos) << r.out;
-  EXPECT_NE(r.out.find("largest: b_x +"), std::string::npos) << r.out;
-  EXPECT_NE(r.err.find("1 calibrations differ"), std::string::npos) << r.err;
+  EXPECT_NE(r.out.find("accelerometer largest: b_x 1"), std::string::npos) << r.out;
+  EXPECT_NE(r.err.find("1 calibration differs"), std::string::npos) << r.err;
   // Adding what is there adds nothing.
   r = Exec("store add " + store + " " + Path("s3/out") + " --date 2026-11-28");
   EXPECT_NE(r.out.find("0 added, 3 already in the store"), std::string::npos) << r.out;
@@ -478,6 +478,57 @@ TEST_F(Store, UnchangedUnitsAreCompatibleAsOftenAsTheirPSays) {
   EXPECT_LE(flagged, 2);
   // p < 0.05: 5 expected, 1 sigma 2.2.
   EXPECT_LE(below_05, 12);
+}
+
+// From a hostile test of the store: the order of adding changes nothing, the index is the
+// store's and cannot send a read elsewhere, and nothing is written over what it holds.
+TEST_F(Store, KeepsEveryCalibrationComparedWithTheOneBeforeIt) {
+  const std::string store = Path("store");
+  const std::string s1 = Session(1, 2), s2 = Session(2, 2), s3 = Session(3, 2, 0.02);
+  // Added newest first: each one added before another re-compares the one after it.
+  EXPECT_EQ(Exec("store add " + store + " " + s3 + " --date 2026-06-01").status, 0);
+  CliRun r = Exec("store add " + store + " " + s1 + " --date 2026-01-01");
+  EXPECT_EQ(r.status, 6) << r.out;  // June's bias is 0.02 off January's
+  EXPECT_NE(r.out.find("U002  2026-06-01  now; CHANGED since 2026-01-01"), std::string::npos)
+      << r.out;
+  r = Exec("store add " + store + " " + s2 + " --date 2026-03-01T10:00+05:00");
+  EXPECT_NE(r.out.find("U002  2026-03-01T10:00+05:00  added"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("U002  2026-06-01  now; CHANGED since 2026-03-01T10:00+05:00"),
+            std::string::npos)
+      << r.out;
+  const nlohmann::json index = nlohmann::json::parse(Slurp(store + "/index.json"));
+  ASSERT_EQ(index["entries"].size(), 6u);
+  EXPECT_EQ(index["entries"][3]["date"], "2026-01-01");  // U002's, in time order
+  EXPECT_EQ(index["entries"][4]["change"]["against_date"], "2026-01-01");
+  EXPECT_EQ(index["entries"][5]["change"]["against_date"], "2026-03-01T10:00+05:00");
+  // A date in another zone is that instant.
+  r = Exec("store get " + store + " U002 --date 2026-03-01T05:00Z");
+  EXPECT_EQ(r.out, Slurp(Path("s2/out/units/U002/calibration.json"))) << r.err;
+  // -o inside the store is refused: it would replace what the store holds.
+  r = Exec("store get " + store + " U002 -o " + store + "/.lock");
+  EXPECT_EQ(r.status, 2);
+  EXPECT_NE(r.err.find("is inside the store"), std::string::npos) << r.err;
+  // An index entry whose file leaves the store is refused, not read.
+  nlohmann::json bad = index;
+  bad["entries"][0]["file"] = "units/U001/../../../etc/passwd";
+  Write("store/index.json", bad.dump());
+  r = Exec("store get " + store + " U001");
+  EXPECT_EQ(r.status, 3);
+  EXPECT_NE(r.err.find("entry 1: 'file' units/U001/../../../etc/passwd is not units/U001/"),
+            std::string::npos)
+      << r.err;
+  bad = index;
+  bad["entries"][1]["change"] = "lol";
+  Write("store/index.json", bad.dump());
+  EXPECT_EQ(Exec("store list " + store).status, 3);
+  // A calibration that failed its own checks is no reference.
+  nlohmann::json failed = nlohmann::json::parse(Slurp(Path("s1/out/units/U001/calibration.json")));
+  failed["verdict"] = "failed";
+  Write("failed.json", failed.dump());
+  Write("store/index.json", index.dump());
+  r = Exec("store add " + store + " " + Path("failed.json") + " --unit U001");
+  EXPECT_EQ(r.status, 3);
+  EXPECT_NE(r.err.find("failed its own checks"), std::string::npos) << r.err;
 }
 
 }  // namespace

@@ -345,7 +345,9 @@ struct CalibrationResult {
   /// Maximum likelihood methods only (IsMaximumLikelihood); empty otherwise, and empty when there
   /// are no residual degrees of freedom (m = P: exactly determined).
   Eigen::MatrixXd covariance;
-  double residual_sigma = 0;  ///< σ̂ [raw], 0 when there are no degrees of freedom
+  /// σ̂ [raw]; 0 when there are no degrees of freedom, or the method estimates no covariance (the
+  /// baselines modulus, modulus-norm, ellipsoid)
+  double residual_sigma = 0;
   /// Where the covariance's noise came from: "residuals", "samples" (reading_sigmas), or
   /// "joint" (the joint fit with the gyroscope, gyro_calibration.hpp: the residual σ̂ of the
   /// accelerometer's own fit, each of the gyroscope's groups scaled by its scatter ratio).

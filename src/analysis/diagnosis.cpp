@@ -541,8 +541,10 @@ Diagnosis Diagnose(const DiagnosisInput& input) {
                r.positions_used(), parameters),
         {{"parameters", static_cast<double>(parameters)}});
   }
-  // Round-off residuals with degrees of freedom left: not independent noisy readings.
-  if (r.degrees_of_freedom > 0 && r.summary.converged()) {
+  // Round-off residuals with degrees of freedom left: not independent noisy readings. Only where
+  // σ̂ was estimated: the baselines (modulus, ellipsoid) estimate none, and their σ̂ of 0 said
+  // every real recording was fitted to round-off.
+  if (r.degrees_of_freedom > 0 && r.summary.converged() && r.covariance.size() > 0) {
     double signal = 0;
     for (int a = 0; a < 3; ++a) signal = std::max(signal, std::abs(r.params.K(a, a)) * r.gravity);
     if (r.residual_sigma <= 1e-9 * signal) {

@@ -159,10 +159,13 @@ ordered_json AccelerometerSection(const CalibrationResult& result, const Calibra
     doc["std"] = nullptr;
     doc["covariance"] = nullptr;
   }
-  doc["noise"] = {{"source", result.noise_source},
-                  {"sigma_raw", result.degrees_of_freedom > 0 ? ordered_json(result.residual_sigma)
-                                                              : ordered_json(nullptr)},
-                  {"degrees_of_freedom", result.degrees_of_freedom}};
+  // σ̂ where it was estimated: with degrees of freedom, by a method that gives a covariance (the
+  // baselines estimate none; a 0 there would claim a noise-free sensor).
+  const bool estimated = result.degrees_of_freedom > 0 && result.covariance.size() > 0;
+  doc["noise"] = {
+      {"source", result.noise_source},
+      {"sigma_raw", estimated ? ordered_json(result.residual_sigma) : ordered_json(nullptr)},
+      {"degrees_of_freedom", result.degrees_of_freedom}};
   if (result.noise_source == "samples") {
     doc["noise"]["scatter_ratio"] = Nullable(result.scatter_ratio);
     doc["noise"]["inflated"] = result.scatter_ratio > 1.0;

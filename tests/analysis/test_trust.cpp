@@ -307,6 +307,22 @@ TEST_F(Trust, AQuantisedLogCalibratesRight) {
   EXPECT_FALSE(Has(doc, "exact_fit"));
 }
 
+// 4a. Only an estimated noise level can say the positions were fitted to round-off. The
+// baselines (modulus, ellipsoid) estimate none; their σ̂ of 0 had said every real recording was
+// fitted to round-off, and the file claimed a noise-free sensor.
+TEST_F(Trust, OnlyAnEstimatedNoiseLevelCanSayRoundOff) {
+  CliRun r;
+  const std::string ctu =
+      std::string(ACCELCAL_DATA_DIR) + "/ctu-innalabs-ahrs-m3/measured_accelerations_24pos.csv";
+  for (const char* method : {"modulus", "modulus-norm", "ellipsoid"}) {
+    r = Exec("calibrate " + ctu + " --units g --method " + method + " -o " + Path("b.json"));
+    ASSERT_EQ(r.status, 0) << method << r.err;
+    const json doc = Json(Path("b.json"));
+    EXPECT_FALSE(Has(doc, "exact_fit")) << method;
+    EXPECT_TRUE(doc.at("noise").at("sigma_raw").is_null()) << method;
+  }
+}
+
 // 4b. As many positions as parameters: the fit passes through all of them, so nothing checks it
 // (no residual, no covariance, no held-out position). It had said "ok".
 TEST_F(Trust, AnExactlyDeterminedFitIsNotOk) {

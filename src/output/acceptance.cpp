@@ -8,6 +8,7 @@
 #include "accelcal/engineering.hpp"
 #include "accelcal/frame.hpp"
 #include "accelcal/gyro_model.hpp"
+#include "accelcal/model.hpp"
 #include "core/text_format.hpp"
 
 namespace accelcal {
@@ -29,15 +30,13 @@ void AccelerometerQuantities(const LoadedCalibration& cal, std::vector<Calibrati
   const std::string raw(cal.raw_unit), force(ToString(cal.unit));
   const auto& slots = ParameterSlots(cal.model, cal.frame);
   const int n = static_cast<int>(slots.size());
+  const Eigen::VectorXd values = Pack(cal.params, slots);
   for (int i = 0; i < n; ++i) {
     const ParameterSlot& s = slots[i];
-    const double value = s.group == ParameterGroup::kK      ? cal.params.K(s.row, s.col)
-                         : s.group == ParameterGroup::kBias ? cal.params.bias(s.row)
-                                                            : cal.params.k2(s.row);
     const std::string unit = s.group == ParameterGroup::kK      ? raw + " per " + force
                              : s.group == ParameterGroup::kBias ? raw
                                                                 : raw + " per (" + force + ")^2";
-    add(std::string(s.name), value, SigmaOf(cal.covariance, i, n), unit);
+    add(std::string(s.name), values(i), SigmaOf(cal.covariance, i, n), unit);
   }
   if (cal.model == ModelKind::kLinear) {  // k2 = 0 by the model: a value, not an estimate
     for (int a = 0; a < 3; ++a) {
@@ -95,15 +94,13 @@ void GyroscopeQuantities(const LoadedCalibration::Gyroscope& gyro,
   const std::string& raw = gyro.raw_unit;
   const auto& slots = GyroParameterSlots(gyro.model);
   const int n = static_cast<int>(slots.size());
+  const Eigen::VectorXd values = Pack(gyro.params, gyro.model);
   for (int i = 0; i < n; ++i) {
     const GyroParameterSlot& s = slots[i];
-    const double value = s.group == GyroParameterGroup::kK      ? gyro.params.K(s.row, s.col)
-                         : s.group == GyroParameterGroup::kBias ? gyro.params.bias(s.row)
-                                                                : gyro.params.G(s.row, s.col);
     const std::string unit = s.group == GyroParameterGroup::kK      ? raw + " per rad/s"
                              : s.group == GyroParameterGroup::kBias ? raw
                                                                     : raw + " per specific force";
-    add(std::string(s.name), value, SigmaOf(gyro.covariance, i, n), unit);
+    add(std::string(s.name), values(i), SigmaOf(gyro.covariance, i, n), unit);
   }
   for (int a = 0; a < 3; ++a) {
     add(std::string("scale_factor_") + kAxes[a], gyro.params.K.row(a).norm(), {},

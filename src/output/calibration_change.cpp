@@ -9,6 +9,7 @@
 #include "accelcal/error.hpp"
 #include "accelcal/frame.hpp"
 #include "accelcal/gyro_model.hpp"
+#include "accelcal/model.hpp"
 #include "core/text_format.hpp"
 #include "statistics/student_t.hpp"
 
@@ -55,30 +56,6 @@ ParameterChange Change(const Eigen::VectorXd& earlier, const Eigen::VectorXd& la
     change.p = internal::ChiSquareSurvival(change.chi2, n);
   }
   return change;
-}
-
-Eigen::VectorXd AccelerometerVector(const LoadedCalibration& cal) {
-  const auto& slots = ParameterSlots(cal.model, cal.frame);
-  Eigen::VectorXd v(static_cast<int>(slots.size()));
-  for (std::size_t i = 0; i < slots.size(); ++i) {
-    const ParameterSlot& s = slots[i];
-    v(static_cast<int>(i)) = s.group == ParameterGroup::kK      ? cal.params.K(s.row, s.col)
-                             : s.group == ParameterGroup::kBias ? cal.params.bias(s.row)
-                                                                : cal.params.k2(s.row);
-  }
-  return v;
-}
-
-Eigen::VectorXd GyroVector(const LoadedCalibration::Gyroscope& g) {
-  const auto& slots = GyroParameterSlots(g.model);
-  Eigen::VectorXd v(static_cast<int>(slots.size()));
-  for (std::size_t i = 0; i < slots.size(); ++i) {
-    const GyroParameterSlot& s = slots[i];
-    v(static_cast<int>(i)) = s.group == GyroParameterGroup::kK      ? g.params.K(s.row, s.col)
-                             : s.group == GyroParameterGroup::kBias ? g.params.bias(s.row)
-                                                                    : g.params.G(s.row, s.col);
-  }
-  return v;
 }
 
 }  // namespace
@@ -148,7 +125,7 @@ CalibrationChange CompareCalibrations(const LoadedCalibration& earlier,
       c(i, i) += 2 * q * q;
     }
   }
-  const Eigen::VectorXd before = AccelerometerVector(earlier), after = AccelerometerVector(later);
+  const Eigen::VectorXd before = Pack(earlier.params, slots), after = Pack(later.params, slots);
   change.accelerometer = Change(before, after, c, names, noise_dof);
   // The same over the scale-and-misalignment slots, and over the bias's.
   for (const bool bias : {false, true}) {
@@ -185,9 +162,9 @@ CalibrationChange CompareCalibrations(const LoadedCalibration& earlier,
       std::vector<std::string> gyro_names;
       for (const GyroParameterSlot& s : GyroParameterSlots(b.model))
         gyro_names.emplace_back(s.name);
-      change.gyroscope =
-          Change(GyroVector(a), GyroVector(b), a.covariance + b.covariance, gyro_names,
-                 std::nullopt);  // the gyroscope's noise from its turns' scatter: as known
+      change.gyroscope = Change(
+          Pack(a.params, a.model), Pack(b.params, b.model), a.covariance + b.covariance, gyro_names,
+          std::nullopt);  // the gyroscope's noise from its turns' scatter: as known
       change.compatible = change.compatible && change.gyroscope->p >= kChangeP;
     }
   } else if (earlier.gyroscope || later.gyroscope) {

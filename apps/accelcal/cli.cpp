@@ -425,9 +425,10 @@ int accelcal::cli::RunCommandLine(int argc, char** argv) {
         ->add_option("--unit-id-from", bat.unit_id_from,
                      "where a unit's id comes from: name (the file's, see --unit-id), info:KEY (a "
                      "binary log's information, e.g. info:sys_uuid, a PX4 board's), param:KEY (a "
-                     "log's parameter, e.g. param:BRD_SERIAL_NUM, an ArduPilot board's), or "
+                     "log's parameter, e.g. param:BRD_SERIAL_NUM, an ArduPilot board's), "
                      "device-id (the accelerometer stream's: the same on every board of a "
-                     "design, see docs/batch.md)")
+                     "design, see docs/batch.md), or frame-id (a ROS Imu topic's "
+                     "header.frame_id, where each unit's frame has its own name)")
         ->capture_default_str();
     batch->add_option("--glob", bat.glob, "the files read from a directory given")
         ->capture_default_str();

@@ -116,8 +116,9 @@ std::string OptionValue(const BatchArgs& args, const char* option) {
 
 // The unit id a binary log gives itself (--unit-id-from): a string of its information (info:KEY,
 // such as PX4's sys_uuid, the board's processor's unique id), one of its parameters (param:KEY,
-// such as ArduPilot's BRD_SERIAL_NUM), or its accelerometer stream's device id (device-id; of
-// --topic and --instance when given).
+// such as ArduPilot's BRD_SERIAL_NUM), its accelerometer stream's device id (device-id; of
+// --topic and --instance when given), or a ROS accelerometer topic's header.frame_id (frame-id;
+// of --topic when given).
 std::string UnitIdFromLog(const std::string& path, const BatchArgs& args, std::string* problem) {
   LogInventory log;
   try {
@@ -153,23 +154,28 @@ std::string UnitIdFromLog(const std::string& path, const BatchArgs& args, std::s
     const double v = it->second;
     return v == std::floor(v) && std::abs(v) < 1e15 ? Format("%.0f", v) : FormatNumber(v);
   }
-  // device-id: the accelerometer streams the calibration could read.
+  // device-id, frame-id: of the accelerometer streams the calibration could read.
+  const bool frame = from == "frame-id";
   const std::string topic = OptionValue(args, "topic"), instance = OptionValue(args, "instance");
-  std::set<std::uint64_t> ids;
+  std::set<std::string> ids;
   for (const LogStreamInfo& s : log.streams) {
     const auto sensors = KnownSensors(s.type);
     if (std::find(sensors.begin(), sensors.end(), "accelerometer") == sensors.end()) continue;
     if (!topic.empty() && s.topic != topic) continue;
     if (!instance.empty() && std::to_string(s.instance) != instance) continue;
-    if (s.device_id) ids.insert(*s.device_id);
+    if (frame && s.frame_id) ids.insert(*s.frame_id);
+    if (!frame && s.device_id) ids.insert(std::to_string(*s.device_id));
   }
+  const char* what = frame ? "frame id" : "device id";
   if (ids.size() != 1) {
-    *problem = ids.empty() ? "the log has no accelerometer stream with a device id"
-                           : "its accelerometer streams have " + std::to_string(ids.size()) +
-                                 " device ids: choose one with --topic and --instance";
+    *problem = ids.empty()
+                   ? std::string("the log has no accelerometer stream with a ") + what +
+                         (frame ? " (a ROS topic's header.frame_id)" : "")
+                   : "its accelerometer streams have " + std::to_string(ids.size()) + " " + what +
+                         "s: choose one with --topic" + (frame ? "" : " and --instance");
     return BaseName(path);
   }
-  return std::to_string(*ids.begin());
+  return *ids.begin();
 }
 
 // name, size and SHA-256 of a file, as a calibration's provenance records an input.
@@ -390,8 +396,9 @@ int RunBatch(const BatchArgs& args) {
   const std::string& from = args.unit_id_from;
   const bool keyed = (from.rfind("info:", 0) == 0 && from.size() > 5) ||
                      (from.rfind("param:", 0) == 0 && from.size() > 6);
-  if (from != "name" && from != "device-id" && !keyed) {
-    throw UsageError("--unit-id-from '" + from + "': name, device-id, info:KEY or param:KEY");
+  if (from != "name" && from != "device-id" && from != "frame-id" && !keyed) {
+    throw UsageError("--unit-id-from '" + from +
+                     "': name, device-id, frame-id, info:KEY or param:KEY");
   }
   if (from != "name" && !args.unit_id.empty()) {
     throw UsageError("--unit-id is a pattern on file names: it goes with --unit-id-from name");

@@ -29,6 +29,7 @@ int RunInspect(const InspectArgs& args) {
            {"type", s.type},
            {"instance", s.instance},
            {"device_id", s.device_id ? nlohmann::ordered_json(*s.device_id) : nullptr},
+           {"frame_id", s.frame_id ? nlohmann::ordered_json(*s.frame_id) : nullptr},
            {"samples", s.samples},
            {"first_s", s.first_s},
            {"last_s", s.last_s},

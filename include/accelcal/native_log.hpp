@@ -110,6 +110,8 @@ struct LogStreamInfo {
   std::string type;  ///< its message type (a ROS topic's; a PX4 or ArduPilot topic's own name)
   int instance = 0;  ///< ULog multi id, DataFlash I (0 for a ROS topic)
   std::optional<std::uint64_t> device_id;
+  /// A ROS topic's `header.frame_id`, of its first message (the frame its readings are in).
+  std::optional<std::string> frame_id;
   std::size_t samples = 0;
   double first_s = 0, last_s = 0;  ///< timestamps of the first and last message [s]
   double rate_hz = 0;              ///< (samples − 1) / (last − first); 0 when undefined

@@ -34,6 +34,8 @@ struct DecodedStream {
   std::uint64_t first_us = 0, last_us = 0;
   /// The `device_id` field of its first message, when it has one.
   std::optional<std::uint64_t> device_id;
+  /// The `header.frame_id` of its first message (a ROS message with a std_msgs/Header).
+  std::optional<std::string> frame_id;
   /// Whether its messages were kept: then `values` holds the `stored` columns of each message
   /// (stored.size() values per message, message after message), and `offset` each message's
   /// byte offset in the file.

@@ -170,6 +170,7 @@ LogStreamInfo Describe(const internal::DecodedStream& s) {
   info.type = s.type;
   info.instance = s.instance;
   info.device_id = s.device_id;
+  info.frame_id = s.frame_id;
   info.samples = s.messages;
   info.first_s = static_cast<double>(s.first_us) / 1e6;
   info.last_s = static_cast<double>(s.last_us) / 1e6;

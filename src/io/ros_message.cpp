@@ -548,4 +548,29 @@ std::optional<std::string> RosMessageType::Decode(const unsigned char* p, std::s
   return std::nullopt;
 }
 
+std::optional<std::string> RosMessageType::FrameId(const unsigned char* p, std::size_t n) const {
+  if (!impl_->stamp) return std::nullopt;  // no std_msgs/Header first
+  Cursor c{p, p + n, p, false, 0, 0};
+  if (impl_->version == RosVersion::kRos2) {
+    if (n < 4 || p[0] != 0 || p[1] != 1) return std::nullopt;
+    c.p = c.origin = p + 4;
+    c.cdr = true;
+  }
+  const Type& header = impl_->types[std::size_t(impl_->types[0].members[0].type)];
+  for (const Member& m : header.members) {
+    if (m.array != Array::kNone) return std::nullopt;  // not a std_msgs/Header as ROS has it
+    if (m.kind == Kind::kString && m.name == "frame_id") {
+      if (!c.Align(4) || c.end - c.p < 4) return std::nullopt;
+      const std::uint32_t size = LoadLittle<std::uint32_t>(c.p);
+      if (std::size_t(c.end - c.p) - 4 < size) return std::nullopt;
+      std::string id(reinterpret_cast<const char*>(c.p + 4), size);
+      // CDR counts a string's terminating NUL.
+      if (c.cdr && !id.empty() && id.back() == '\0') id.pop_back();
+      return id;
+    }
+    if (!impl_->Element(m, c, nullptr)) return std::nullopt;
+  }
+  return std::nullopt;
+}
+
 }  // namespace accelcal::internal

@@ -52,6 +52,9 @@ class RosMessageType {
   /// in µs). Returns the reason when its bytes are not one such message (too few, too many, not
   /// little-endian CDR).
   std::optional<std::string> Decode(const unsigned char* p, std::size_t n, double* values) const;
+  /// The `header.frame_id` of one message of `n` bytes at `p`, when the type begins with a
+  /// std_msgs/Header (as stamp() has it) and the header's bytes hold it; else nullopt.
+  std::optional<std::string> FrameId(const unsigned char* p, std::size_t n) const;
 
  private:
   struct Impl;

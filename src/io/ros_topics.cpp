@@ -107,7 +107,10 @@ std::optional<std::string> RosTopics::Message(std::size_t stream, std::uint64_t 
                                               const unsigned char* data, std::size_t n,
                                               std::uint64_t at) {
   DecodedStream& s = out_->streams[stream];
-  if (s.messages == 0) s.first_us = time_us;
+  if (s.messages == 0) {
+    s.first_us = time_us;
+    if (types_[stream] != nullptr) s.frame_id = types_[stream]->FrameId(data, n);
+  }
   s.last_us = time_us;
   ++s.messages;
   if (!s.kept) return std::nullopt;

@@ -10,6 +10,8 @@
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
+#include "accelcal/mcap_writer.hpp"
+#include "accelcal/rosbag_writer.hpp"
 #include "accelcal/simulate.hpp"
 #include "accelcal/ulog_writer.hpp"
 #include "support/cli_test.hpp"
@@ -357,6 +359,78 @@ TEST_F(Batch, UnitIdsFromTheLogs) {
             std::string::npos)
       << r.out;
   EXPECT_EQ(Exec("batch " + real + " -o " + Path("real") + " --unit-id-from serial").status, 2);
+}
+
+// ROS bags named by their Imu topic's header.frame_id, where a line names each unit's frame: two
+// ROS 1 bags of one frame are one unit's sessions; an MCAP file (ROS 2's CDR) gives its own.
+TEST_F(Batch, UnitIdsFromRosFrameIds) {
+  fs::create_directories(Path("bags"));
+  RawLogSimulation sim;
+  sim.static_s = 3;
+  sim.transition_s = 1;
+  sim.sigma_raw_per_sample = Vec3::Constant(0.02);
+  // accelcal's writers name the frame imu_link; a unit's frame, of the same length, is put in
+  // its place in a ROS 1 bag's uncompressed bytes (an MCAP chunk has a CRC: it keeps imu_link).
+  const auto framed = [](std::string bytes, const std::string& frame) {
+    std::size_t replaced = 0;
+    for (std::size_t at = bytes.find("imu_link"); at != std::string::npos;
+         at = bytes.find("imu_link", at + 8), ++replaced) {
+      bytes.replace(at, 8, frame);
+    }
+    EXPECT_GT(replaced, 100u);
+    return bytes;
+  };
+  int file = 0;
+  for (const char* frame : {"imu_0042", "imu_0042", "imu_0043", "imu_link"}) {
+    sim.seed = static_cast<std::uint64_t>(++file);
+    ModelParameters truth;
+    truth.bias = Vec3(0.1 * file, 0.1, -0.1);
+    const SimulatedLog log = SimulateRawLog(truth, 9.80665, Yang18Directions(), sim);
+    const auto ns = [&](std::size_t i) {
+      return 1700000000000000000ull + static_cast<std::uint64_t>(1e9 * log.time_s[i]);
+    };
+    std::string bytes;
+    if (file == 4) {
+      McapImuWriter writer(McapCompression::kNone);
+      bytes = writer.Header();
+      for (std::size_t i = 0; i < log.samples.size(); ++i)
+        bytes += writer.Sample(ns(i), log.samples[i]);
+      bytes += writer.Finish();
+    } else {
+      RosBagImuWriter writer;
+      bytes = writer.Header();
+      for (std::size_t i = 0; i < log.samples.size(); ++i)
+        bytes += writer.Sample(ns(i), log.samples[i]);
+      bytes += writer.Finish();
+      const std::string indexed = writer.IndexedHeader();
+      bytes.replace(RosBagImuWriter::kHeaderOffset, indexed.size(), indexed);
+    }
+    Write("bags/session" + std::to_string(file) + (file == 4 ? ".mcap" : ".bag"),
+          file == 4 ? bytes : framed(bytes, frame));
+  }
+  CliRun r = Exec("inspect --json " + Path("bags/session2.bag"));
+  ASSERT_EQ(r.status, 0) << r.err;
+  EXPECT_EQ(nlohmann::json::parse(r.out)["streams"][0]["frame_id"], "imu_0042");
+  r = Exec("batch " + Path("bags") + " -o " + Path("out") +
+           " --unit-id-from frame-id --no-report --json");
+  ASSERT_EQ(r.status, 0) << r.err;
+  const nlohmann::json doc = nlohmann::json::parse(r.out);
+  ASSERT_EQ(doc.at("units").size(), 3u);
+  EXPECT_EQ(doc["units"][0]["unit"], "imu_0042");
+  EXPECT_EQ(doc["units"][0]["files"].size(), 2u);  // two sessions, pooled
+  EXPECT_EQ(doc["units"][0]["quantities"]["accelerometer.positions"]["value"], 36);
+  EXPECT_EQ(doc["units"][1]["unit"], "imu_0043");
+  EXPECT_EQ(doc["units"][2]["unit"], "imu_link");
+  // A topic that is not the accelerometer's has no frame id to give; nor has a ULog.
+  r = Exec("batch " + Path("bags/session3.bag") + " -o " + Path("other") +
+           " --unit-id-from frame-id --topic /imu/other");
+  EXPECT_EQ(r.status, 6);
+  EXPECT_NE(r.out.find("the log has no accelerometer stream with a frame id"), std::string::npos)
+      << r.out;
+  const std::string real = std::string(ACCELCAL_DATA_DIR) + "/px4-ulog/sample_log_small.ulg";
+  r = Exec("batch " + real + " -o " + Path("real") + " --unit-id-from frame-id");
+  EXPECT_NE(r.out.find("the log has no accelerometer stream with a frame id"), std::string::npos)
+      << r.out;
 }
 
 }  // namespace

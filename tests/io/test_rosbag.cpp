@@ -93,6 +93,14 @@ std::string TestMessage() {
 
 TEST(RosMessage, FlattensAndDecodesEveryKindOfField) {
   const RosMessageType type("test_msgs/Test", kDefinition);
+  {
+    const std::string m = TestMessage();
+    const auto* p = reinterpret_cast<const unsigned char*>(m.data());
+    EXPECT_EQ(type.FrameId(p, m.size()), std::optional<std::string>("imu_link"));
+    EXPECT_FALSE(type.FrameId(p, 14).has_value());  // cut inside the frame id
+    const RosMessageType headless("a/B", "float64 x\nstring frame_id\n");
+    EXPECT_FALSE(headless.FrameId(p, m.size()).has_value());
+  }
   EXPECT_EQ(type.name(), "test_msgs/Test");
   const std::vector<std::string> want = {"header.seq", "header.stamp", "pairs[0].a", "pairs[0].b",
                                          "pairs[1].a", "pairs[1].b",   "v.x",        "v.y",
@@ -198,6 +206,7 @@ TEST(RosMessage, DecodesRos2Cdr) {
   const auto* p = reinterpret_cast<const unsigned char*>(m.data());
   ASSERT_FALSE(type.Decode(p, m.size(), v.data()).has_value())
       << *type.Decode(p, m.size(), v.data());
+  EXPECT_EQ(type.FrameId(p, m.size()), std::optional<std::string>("imu"));  // its NUL not kept
   EXPECT_EQ(v, (std::vector<double>{1700000000000005.0, 9, -9.81, 65535, -1, 2, -2999999.5}));
   // Up to 3 bytes of padding may end a message; a fourth is not padding.
   const std::string padded = m + std::string(3, '\0');

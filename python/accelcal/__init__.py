@@ -49,18 +49,18 @@ from ._accelcal import (  # noqa: F401
     DataError,
     InputError,
     __version__,
-    detect_static_intervals,
     export_calibration,
     load_calibration,
     parse_calibration_json,
-    read_input,
     render_report,
 )
 from . import _accelcal
+from . import _frames
+from ._frames import Document
 
 __all__ = [
     "Calibration", "CalibrationCheckFailed", "CalibrationResult", "CalibrationWarning", "cli",
-    "DataError", "InputError", "__version__", "apply", "calibrate", "calibrate_log",
+    "DataError", "Document", "InputError", "__version__", "apply", "calibrate", "calibrate_log",
     "detect_static_intervals", "diagnose", "export_calibration", "load_calibration",
     "parse_calibration_json", "read_input", "render_report",
 ]
@@ -122,41 +122,16 @@ def _calibration_repr(self):
     return "\n".join(lines) + ">"
 
 
-def _positions_frame(text):
-    """The accelerometer's positions of a calibration file's text as a pandas DataFrame: one row
-    per position, indexed by its number (from 1, as in the file and the tool), the file's
-    per-position fields in columns (vectors as _x, _y, _z; the interval's as interval_...)."""
-    try:
-        import pandas
-    except ImportError as e:
-        raise ImportError("to_frame needs pandas (Debian: python3-pandas)") from e
-    import json
-    rows = []
-    for position in json.loads(text)["sensors"]["accelerometer"].get("positions", []):
-        row = {}
-        for key, value in position.items():
-            if isinstance(value, list) and len(value) == 3:
-                row.update({f"{key}_{axis}": v for axis, v in zip("xyz", value)})
-            elif isinstance(value, dict):
-                row.update({f"{key}_{k}": v for k, v in value.items()})
-            else:
-                row[key] = value
-        rows.append(row)
-    frame = pandas.DataFrame(rows)
-    frame.index = pandas.RangeIndex(1, len(rows) + 1, name="position")
-    return frame
-
-
 def _result_to_frame(self):
     """The positions as a pandas DataFrame, indexed by position number (from 1): each one's mean
     reading, samples, noise, interval, fitted direction, residual, |f| - g and held-out error,
     as the calibration file holds them (``to_json()``)."""
-    return _positions_frame(self.to_json())
+    return _frames.positions_frame(self.to_json())
 
 
 def _calibration_to_frame(self):
     """The file's positions as a pandas DataFrame, indexed by position number (from 1)."""
-    return _positions_frame(self.text)
+    return _frames.positions_frame(self.text)
 
 
 def _restore_result(state):
@@ -318,6 +293,41 @@ def diagnose(result, positions=None, units=None, samples=None, time=None, rate_h
     """
     return _accelcal.diagnose(result, positions, units, samples, time, rate_hz, time_unit,
                               detection, max_outliers)
+
+
+def _bound_doc(function, returns):
+    """The library function's docstring without pybind11's signature line, and what the
+    Python function returns."""
+    doc = function.__doc__ or ""
+    first, _, rest = doc.partition("\n")
+    return (rest.strip() if first.startswith(function.__name__ + "(") else doc) + "\n\n" + returns
+
+
+def read_input(path, kind="auto", columns=(), rate_hz=None, *, time_unit="auto", instance=None,
+               topic=None):
+    return Document(_accelcal.read_input(path, kind, columns, rate_hz, time_unit=time_unit,
+                                         instance=instance, topic=topic), "readings")
+
+
+read_input.__doc__ = _bound_doc(
+    _accelcal.read_input,
+    "The dict is a ``Document``: ``to_frame()`` gives a raw log's samples as a pandas DataFrame "
+    "(columns time_s, x, y, z; rows indexed by sample from 0) or a positions file's positions "
+    "(x, y, z, samples, std_x, std_y, std_z; indexed by position from 1).")
+
+
+def detect_static_intervals(samples, time=None, rate_hz=None, window_s=0.5, min_static_s=1.0,
+                            threshold_factor=10.0, init_rest_s=0.0, *, time_unit="s"):
+    return Document(_accelcal.detect_static_intervals(
+        samples, time, rate_hz, window_s, min_static_s, threshold_factor, init_rest_s,
+        time_unit=time_unit), "detection")
+
+
+detect_static_intervals.__doc__ = _bound_doc(
+    _accelcal.detect_static_intervals,
+    "The dict is a ``Document``: ``to_frame()`` gives the intervals as a pandas DataFrame (one "
+    "row per interval, numbered from 1; mean and std as _x, _y, _z), ``to_frame('rejected')`` "
+    "the rejected ones.")
 
 
 from . import cli  # noqa: E402 - every command of the tool (it uses the names above)

@@ -11,7 +11,8 @@ checks, numbers and messages. The functions are made from the tool's own option 
   ``gyro_columns``); ``None`` (the default) leaves it out, so the tool's own default applies
   (each function's docstring states it); a flag is ``True`` to give it; a list option takes a
   list (``columns=["t", "ax", "ay", "az"]``); file names may be ``os.PathLike``;
-- a command that has ``--json`` is run with it and returns the parsed document (a dict), except
+- a command that has ``--json`` is run with it and returns the parsed document (a dict: an
+  ``accelcal.Document``, whose ``to_frame()`` gives its table as a pandas DataFrame), except
   ``calibrate``, which returns the calibration file it writes as an ``accelcal.Calibration``;
   the others return what the tool writes to standard output (``str``, or ``bytes`` when it is
   not text, such as a ULog), or ``None`` when ``output`` names a file.
@@ -34,6 +35,7 @@ import warnings as _warnings
 
 from . import _accelcal
 from . import CalibrationCheckFailed, DataError, InputError, parse_calibration_json
+from ._frames import Document
 
 
 class ToolWarning(UserWarning):
@@ -163,6 +165,8 @@ def _run(spec, args, options, stacklevel=3):
                                         _value(source, "input") if source is not None else "")
     elif has_json:
         result = _json.loads(out.decode("utf-8")) if out else None
+        if isinstance(result, dict):
+            result = Document(result, command)
     elif options.get("output") not in (None, "-"):
         result = None
     else:
@@ -219,7 +223,8 @@ def _make(spec):
     command.__name__ = command.__qualname__ = _keyword_name(spec["name"])
     command.__module__ = __name__
     returns = ("an accelcal.Calibration (the calibration file)" if spec["name"] == "calibrate"
-               else "the --json document (a dict)" if _has_json(spec) else
+               else "the --json document (a dict: an accelcal.Document, to_frame() its table)"
+               if _has_json(spec) else
                "what it writes to standard output (str, or bytes when not text), or None when "
                "output names a file")
     lines = [f"accelcal {spec['name']}: {spec['description']}.", "",
@@ -241,14 +246,15 @@ for _spec in _DESCRIPTION["commands"]:
 
 def _stubs():
     """The type stubs of this module (cli.pyi), made from the same description."""
-    returns = {"calibrate": "Calibration"}
+    # store add writes a list (an entry per calibration), store get and list a document.
+    returns = {"calibrate": "Calibration", "store": "Union[Document, List[Any]]"}
     lines = ["# Made by accelcal.cli._stubs() from `accelcal --describe-options`; checked by",
              "# python/tests/test_cli.py. To remake it: PYTHONPATH=build/python python3 -c",
              "# 'import accelcal.cli as c; print(c._stubs(), end=\"\")' > python/accelcal/cli.pyi",
              "import os",
-             "from typing import Any, Dict, Optional, Sequence, Union",
+             "from typing import Any, List, Optional, Sequence, Union",
              "",
-             "from . import Calibration",
+             "from . import Calibration, Document",
              "",
              "PathLike = Union[str, bytes, \"os.PathLike[str]\", \"os.PathLike[bytes]\"]",
              "Value = Union[str, int, float, PathLike]",
@@ -256,7 +262,7 @@ def _stubs():
              "class ToolWarning(UserWarning): ...",
              ""]
     for spec in _DESCRIPTION["commands"]:
-        result = returns.get(spec["name"], "Dict[str, Any]" if _has_json(spec) else
+        result = returns.get(spec["name"], "Document" if _has_json(spec) else
                              "Union[str, bytes, None]")
         positionals, options = _parameters(spec)
         params = []

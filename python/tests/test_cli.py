@@ -154,6 +154,48 @@ def test_design_montecarlo_simulate_and_the_platform(cal, tmp_path):
         "gimbal", coarse, "--fine", fine, "--latitude", "40")
 
 
+def test_the_documents_tables_are_the_tools_numbers(cal, tmp_path):
+    import pandas
+    compared = accelcal.cli.compare(XSENS, gravity=9.81744)
+    assert compared == tool_json("compare", XSENS, "--gravity", "9.81744")
+    frame = compared.to_frame()
+    assert list(frame.index) == [m["method"] for m in compared["methods"]]
+    np.testing.assert_array_equal(frame["parameters_K_xx"].to_numpy(),
+                                  [m["parameters"]["K_xx"] for m in compared["methods"]])
+    # A design's parameters: each one's 1 sigma, the square root of the bound's diagonal, is
+    # the document's own std of that parameter.
+    design = accelcal.cli.design(positions="yang18", device=cal, noise=10, choose=12)
+    assert design.tables == ["parameters", "crlb", "chosen"]
+    std = design.to_frame()["std"]
+    assert std["K_xx"] == pytest.approx(design["std"]["K"][0][0], rel=1e-12)
+    assert std["b_z"] == pytest.approx(design["std"]["bias"][2], rel=1e-12)
+    crlb = design.to_frame("crlb")
+    assert list(crlb.index) == list(crlb.columns) == design["parameter_order"]
+    assert len(design.to_frame("chosen")) == 12
+    # The noise's terms: five per axis; its Allan deviation, one row per axis and time.
+    noise = accelcal.cli.noise(XSENS, still=True)
+    terms = noise.to_frame()
+    assert len(terms) == 15 and set(terms["term"]) == {
+        "quantization", "white", "bias_instability", "random_walk", "rate_ramp"}
+    allan = noise.to_frame("allan")
+    assert len(allan) == sum(len(a["allan"]) for a in noise["accelerometer"]["axes"])
+    # A batch's units are summary.csv's rows, the same numbers.
+    batch = accelcal.cli.batch([CTU24, XSENS], output=tmp_path / "batch", no_report=True,
+                               gravity=9.81744)
+    frame = batch.to_frame()
+    csv = pandas.read_csv(tmp_path / "batch" / "summary.csv", index_col="unit",
+                          float_precision="round_trip")
+    assert list(frame.index) == list(csv.index) == ["measured_accelerations_24pos", "xsens_acc"]
+    quantities = [c for c in csv.columns if c.startswith("accelerometer.")]
+    assert len(quantities) > 20
+    np.testing.assert_array_equal(frame[quantities].to_numpy(dtype=float),
+                                  csv[quantities].to_numpy(dtype=float))
+    assert list(frame["status"]) == list(csv["status"])
+    # A command's document that has no table says so.
+    with pytest.raises(KeyError, match="has no table"):
+        accelcal.cli.gimbal(GOLDEN_INPUTS / "coarse.csv").to_frame()
+
+
 def test_the_calibration_file_commands(cal, tmp_path):
     log = tmp_path / "log.csv"
     log.write_text(tool("simulate", "--scenario", "yang2012", "--raw", "--duration", "3").decode())

@@ -374,6 +374,37 @@ def test_dataframes_in_and_out():
     np.testing.assert_array_equal(result.apply(readings), result.apply(positions))
 
 
+def test_documents_give_their_tables_as_dataframes():
+    # A raw log's samples, indexed from 0 as the file's sample indices are.
+    raw = accelcal.read_input(XSENS)
+    assert isinstance(raw, dict) and raw.kind == "readings" and raw.tables == ["samples"]
+    frame = raw.to_frame()
+    assert list(frame.columns) == ["time_s", "x", "y", "z"] and frame.index.name == "sample"
+    assert frame.index[0] == 0 and len(frame) == len(raw["samples"])
+    np.testing.assert_array_equal(frame[["x", "y", "z"]].to_numpy(), raw["samples"])
+    np.testing.assert_array_equal(frame["time_s"].to_numpy(), raw["time"])
+    # A positions file's positions, numbered from 1.
+    means = accelcal.read_input(DATA / "ctu-innalabs-ahrs-m3" / "measured_accelerations_24pos.csv")
+    frame = means.to_frame()
+    assert means.tables == ["positions"] and list(frame.index) == list(range(1, 25))
+    np.testing.assert_array_equal(frame[["x", "y", "z"]].to_numpy(), means["positions"])
+    np.testing.assert_array_equal(frame["samples"].to_numpy(), means["counts"])
+    # The intervals found, numbered from 1 as the positions they become.
+    found = accelcal.detect_static_intervals(raw["samples"], raw["time"])
+    frame = found.to_frame()
+    assert found.tables == ["intervals", "rejected"] and frame.index[0] == 1
+    assert len(frame) == len(found["intervals"]) == 38
+    np.testing.assert_array_equal(frame[["mean_x", "mean_y", "mean_z"]].to_numpy(),
+                                  [i["mean"] for i in found["intervals"]])
+    np.testing.assert_array_equal(frame["begin"].to_numpy(),
+                                  [i["begin"] for i in found["intervals"]])
+    # A document pickles with its kind, and is still the dict the tool writes.
+    again = pickle.loads(pickle.dumps(found))
+    assert again.kind == "detection" and again.to_frame().equals(frame)
+    with pytest.raises(KeyError, match=r"no table 'allan' \(its tables: intervals, rejected\)"):
+        found.to_frame("allan")
+
+
 # ---------------------------------------------------------------------------------------------
 # From a hostile test of the package
 

@@ -195,7 +195,11 @@ py::dict GyroDict(const GyroCalibration& g) {
     t["turned_std_deg"] = r.turned_std_deg;
     t["residual_deg"] = r.residual_deg;
     t["heldout_deg"] = r.heldout_deg;
+    // The screening's, None when not screened, as the file has them (null).
+    t["statistic"] = std::isnan(r.statistic) ? py::object(py::none()) : py::float_(r.statistic);
+    t["threshold"] = std::isnan(r.threshold) ? py::object(py::none()) : py::float_(r.threshold);
     t["flagged"] = r.flagged;
+    t["excluded"] = false;
     rotations.append(t);
   }
   d["rotations"] = rotations;
@@ -339,7 +343,8 @@ void BindCalibration(py::module_& m) {
           "parameter_names' order) and std, noise_sigma_raw, scatter ratios, stills (per "
           "position: the samples where the gyro was still, its mean raw rate there, the angle "
           "it turned outside them), time_offset (the gyro's lag behind the accelerometer, "
-          "lag_s and std_s), rotations (dicts; from and to are position numbers, from 1), "
+          "lag_s and std_s), rotations (dicts with the file's keys; from and to are position "
+          "numbers, from 1; statistic and threshold None when not screened), "
           "rms_deg and heldout_rms_deg")
       .def_property_readonly(
           "source", [](const PyCalibration& c) { return c.source; }, "The input file, or ''")

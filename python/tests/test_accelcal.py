@@ -230,6 +230,7 @@ def test_calibrate_log_with_the_gyroscope_is_the_cli_calibration(tmp_path):
     np.testing.assert_array_equal(g["bias"], np.array(doc["bias"]))
     assert len(g["rotations"]) == len(doc["rotations"]) == 37
     assert g["rotations"][0]["from"] == doc["rotations"][0]["from"] == 1
+    assert g["rotations"] == doc["rotations"]  # every key and value the file has
     assert g["heldout_rms_deg"] == doc["validation"]["heldout_rms_deg"]
     np.testing.assert_array_equal(result.K, np.array(sensor(text)["K"]))
     assert result.verdict == sensor(text)["verdict"]

@@ -311,14 +311,20 @@ TEST_F(Batch, KeepsWhatIsNotItsOwnAndStopsForNoUnit) {
 namespace accelcal {
 namespace {
 
-// A unit's id from the log itself: two PX4 logs of one sensor (device id 101, two sessions) and
-// one of another (102), named anyhow; and the real PX4 log's board id.
-TEST_F(Batch, UnitIdsFromTheLogs) {
-  fs::create_directories(Path("logs"));
+// A short simulated session of paper 000's 18 positions (3 s each), read in m/s2.
+RawLogSimulation ShortSession() {
   RawLogSimulation sim;
   sim.static_s = 3;
   sim.transition_s = 1;
   sim.sigma_raw_per_sample = Vec3::Constant(0.02);
+  return sim;
+}
+
+// A unit's id from the log itself: two PX4 logs of one sensor (device id 101, two sessions) and
+// one of another (102), named anyhow; and the real PX4 log's board id.
+TEST_F(Batch, UnitIdsFromTheLogs) {
+  fs::create_directories(Path("logs"));
+  RawLogSimulation sim = ShortSession();
   int file = 0;
   for (const std::uint32_t device : {101u, 101u, 102u}) {
     sim.seed = static_cast<std::uint64_t>(++file);
@@ -365,10 +371,7 @@ TEST_F(Batch, UnitIdsFromTheLogs) {
 // ROS 1 bags of one frame are one unit's sessions; an MCAP file (ROS 2's CDR) gives its own.
 TEST_F(Batch, UnitIdsFromRosFrameIds) {
   fs::create_directories(Path("bags"));
-  RawLogSimulation sim;
-  sim.static_s = 3;
-  sim.transition_s = 1;
-  sim.sigma_raw_per_sample = Vec3::Constant(0.02);
+  RawLogSimulation sim = ShortSession();
   // accelcal's writers name the frame imu_link; a unit's frame, of the same length, is put in
   // its place in a ROS 1 bag's uncompressed bytes (an MCAP chunk has a CRC: it keeps imu_link).
   const auto framed = [](std::string bytes, const std::string& frame) {

@@ -933,6 +933,7 @@ int accelcal::cli::RunCommandLine(int argc, char** argv) {
     if (*store) return RunStore(sto);
     if (*batch) {
       CheckCalibrationFlags(*batch, bat_cal);
+      bat.unit_id_given = batch->count("--unit-id") > 0;
       bat.calibrate_options = GivenOptions(*batch, {"output", "limits", "unit-id", "unit-id-from",
                                                     "glob", "jobs", "redo", "no-report", "json"});
       return RunBatch(bat);

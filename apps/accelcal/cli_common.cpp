@@ -260,12 +260,22 @@ bool IsDirectory(const std::string& path) {
 
 std::string UnitIdProblem(const std::string& id) {
   if (id.empty()) return "the unit id is empty";
-  if (id.size() > 128) return "the unit id is longer than 128 characters";
-  if (id[0] == '.') return "the unit id '" + id + "' begins with '.'";
-  for (unsigned char c : id) {
-    if (c == '/' || c < 0x20 || c == 0x7f) {
-      return "the unit id '" + id + "' holds a '/' or a control character";
+  if (id.size() > 128) return "the unit id is longer than 128 bytes";
+  // Named as a line can show it: a control character escaped, a byte that is not UTF-8 as \xHH.
+  const std::string shown = "the unit id '" + internal::VisibleLine(id) + "'";
+  if (id[0] == '.') return shown + " begins with '.'";
+  if (id.front() == ' ' || id.back() == ' ') return shown + " begins or ends with a space";
+  for (std::size_t i = 0; i < id.size();) {
+    const internal::CodePoint c = internal::DecodeUtf8(id, i);
+    // Not UTF-8: the summary's JSON could not hold it as it is, and two ids would read alike.
+    if (c.value < 0) return shown + " is not UTF-8 text";
+    // Controls and direction or width formatting: an id that would not read as it is.
+    if (c.value == '/' || internal::IsInvisible(c.value) ||
+        (c.value >= 0x200B && c.value <= 0x200F) || (c.value >= 0x202A && c.value <= 0x202E) ||
+        (c.value >= 0x2060 && c.value <= 0x2069)) {
+      return shown + " holds a '/', a control character or a direction or width format character";
     }
+    i += c.length;
   }
   return "";
 }

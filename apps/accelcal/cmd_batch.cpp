@@ -37,6 +37,7 @@ namespace accelcal::cli {
 namespace {
 
 using Json = nlohmann::ordered_json;
+using internal::VisibleLine;
 
 enum class UnitStatus { kPass, kFail, kError };
 const char* Name(UnitStatus s) {
@@ -167,12 +168,39 @@ std::string UnitIdFromLog(const std::string& path, const BatchArgs& args, std::s
     if (!frame && s.device_id) ids.insert(std::to_string(*s.device_id));
   }
   const char* what = frame ? "frame id" : "device id";
+  if (ids.empty()) {
+    // What the log has: its accelerometer streams (or, without one, all its streams), each with
+    // its type and the id asked for.
+    const auto accelerometer = [](const LogStreamInfo& s) {
+      const auto sensors = KnownSensors(s.type);
+      return std::find(sensors.begin(), sensors.end(), "accelerometer") != sensors.end();
+    };
+    const bool any = std::any_of(log.streams.begin(), log.streams.end(), accelerometer);
+    std::string streams;
+    for (const LogStreamInfo& s : log.streams) {
+      if (any && !accelerometer(s)) continue;
+      if (streams.size() > 300) {
+        streams += ", ...";
+        break;
+      }
+      std::string id = "none";
+      if (frame && s.frame_id) id = "'" + *s.frame_id + "'";
+      if (!frame && s.device_id) id = std::to_string(*s.device_id);
+      streams += (streams.empty() ? "" : ", ") + s.topic +
+                 (s.instance != 0 ? " instance " + std::to_string(s.instance) : "") +
+                 (s.type != s.topic ? " (" + s.type + ", " : " (") + what + " " + id + ")";
+    }
+    *problem = std::string("the log has no accelerometer stream") +
+               (topic.empty() ? "" : " " + topic) +
+               (instance.empty() ? "" : " instance " + instance) + " with a " + what +
+               (frame ? " (a sensor_msgs/Imu topic's header.frame_id)" : "") +
+               (any ? "; its accelerometer streams: " : "; its streams: ") +
+               (streams.empty() ? "none" : streams);
+    return BaseName(path);
+  }
   if (ids.size() != 1) {
-    *problem = ids.empty()
-                   ? std::string("the log has no accelerometer stream with a ") + what +
-                         (frame ? " (a ROS topic's header.frame_id)" : "")
-                   : "its accelerometer streams have " + std::to_string(ids.size()) + " " + what +
-                         "s: choose one with --topic" + (frame ? "" : " and --instance");
+    *problem = "its accelerometer streams have " + std::to_string(ids.size()) + " " + what +
+               "s: choose one with --topic" + (frame ? "" : " and --instance");
     return BaseName(path);
   }
   return *ids.begin();
@@ -386,6 +414,9 @@ int RunBatch(const BatchArgs& args) {
     limits_sha256 = Sha256Hex(text);
   }
   std::optional<std::regex> pattern;
+  if (args.unit_id_given && args.unit_id.empty()) {
+    throw UsageError("--unit-id is empty: give a regular expression whose first group is the id");
+  }
   if (!args.unit_id.empty()) {
     try {
       pattern.emplace(args.unit_id, std::regex::ECMAScript);
@@ -400,7 +431,7 @@ int RunBatch(const BatchArgs& args) {
     throw UsageError("--unit-id-from '" + from +
                      "': name, device-id, frame-id, info:KEY or param:KEY");
   }
-  if (from != "name" && !args.unit_id.empty()) {
+  if (from != "name" && args.unit_id_given) {
     throw UsageError("--unit-id is a pattern on file names: it goes with --unit-id-from name");
   }
   if (args.jobs < 0 || args.jobs > 1024) {
@@ -507,8 +538,11 @@ int RunBatch(const BatchArgs& args) {
     units.push_back(std::move(u));
   }
   for (Unit& u : misnamed) units.push_back(std::move(u));
-  std::stable_sort(units.begin(), units.end(),
-                   [](const Unit& a, const Unit& b) { return a.id < b.id; });
+  // By id, then (error rows of one id) by their files: the order the inputs were given changes
+  // nothing.
+  std::sort(units.begin(), units.end(), [](const Unit& a, const Unit& b) {
+    return a.id != b.id ? a.id < b.id : a.files < b.files;
+  });
   // One gyroscope log given to every unit would calibrate each unit's accelerometer with another
   // unit's gyroscope.
   if (units.size() > 1 && !OptionValue(args, "gyro").empty()) {
@@ -679,8 +713,9 @@ int RunBatch(const BatchArgs& args) {
   if (args.json) {
     WriteOut(json_text);
   } else {
+    // Ids as a line shows them, padded to the longest up to 40 bytes.
     std::size_t width = 4;
-    for (const Unit& u : units) width = std::max(width, u.id.size());
+    for (const Unit& u : units) width = std::max(width, std::min<std::size_t>(40, u.id.size()));
     for (const Unit& u : units) {
       std::string detail = u.status == UnitStatus::kError
                                ? u.message
@@ -693,8 +728,9 @@ int RunBatch(const BatchArgs& args) {
                                        return t;
                                      }(),
                                      "; ");
-      const std::string line = Format("%-*s  %-5s  %s", static_cast<int>(width), u.id.c_str(),
-                                      Name(u.status), detail.c_str());
+      const std::string line =
+          Format("%-*s  %-5s  %s", static_cast<int>(width), VisibleLine(u.id).c_str(),
+                 Name(u.status), VisibleLine(detail).c_str());
       Say("%s\n", line.substr(0, line.find_last_not_of(' ') + 1).c_str());
     }
     const auto reused =

@@ -363,8 +363,20 @@ int RunDesign(const DesignArgs& args) {
     out += target_text;
   }
   WriteFileAtomically("-", out);
-  return planned.observable && (!degrees || (thermal && thermal->observable)) ? kExitOk
-                                                                              : kExitBadInput;
+  // A plan that determines nothing is an error: said on stderr too, as every error is (the
+  // output may go to a file, and a caller of the status reads stderr for its reason).
+  if (!planned.observable) {
+    WriteErr(
+        Format("accelcal: these positions do not determine parameter %s (reciprocal "
+               "condition %.2g); add positions with other orientations\n",
+               planned.weakest.c_str(), planned.rcond));
+    return kExitBadInput;
+  }
+  if (degrees && !(thermal && thermal->observable)) {
+    WriteErr("accelcal: " + thermal_reason + "\n");
+    return kExitBadInput;
+  }
+  return kExitOk;
 }
 
 int RunMonteCarlo(const MonteCarloArgs& args) {

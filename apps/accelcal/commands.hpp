@@ -267,8 +267,10 @@ struct BatchArgs {
   std::string limits;   // limits file (YAML); empty: the calibrations' own checks only
   std::string output;   // the batch's directory
   std::string unit_id;  // a regular expression on file names; empty: the name less its extension
+  bool unit_id_given = false;  // --unit-id was given (an empty one too)
   // Where a unit's id comes from: name (the file's), info:KEY or param:KEY (a binary log's
-  // information or parameter), device-id (its accelerometer stream's).
+  // information or parameter), device-id (its accelerometer stream's), frame-id (its ROS
+  // topic's header.frame_id).
   std::string unit_id_from = "name";
   int jobs = 0;        // units at once; 0: one per core
   bool redo = false;   // calibrate every unit again, even one whose calibration is current

@@ -69,29 +69,30 @@ def _at(doc, path):
     return doc
 
 
-def _list(path, **how):
-    """A table that is the list of objects at `path` of the document."""
-    def table(doc):
-        rows = _at(doc, path)
-        return _frame(rows, **how) if isinstance(rows, list) else None
-    return table
+class _Table:
+    """A table of a document: whether the document has it (cheap), and how it is built."""
+
+    def __init__(self, name, present, build):
+        self.name, self.present, self.build = name, present, build
+
+
+def _list(table, path, **how):
+    """The table `table`: the list of objects at `path` of the document."""
+    return _Table(table, lambda doc: isinstance(_at(doc, path), list),
+                  lambda doc: _frame(_at(doc, path), **how))
 
 
 def _readings(doc):
     pandas = _pandas()
-    if doc.get("kind") == "raw":
-        frame = pandas.DataFrame(doc["samples"], columns=["x", "y", "z"])
-        if doc.get("time") is not None:
-            frame.insert(0, "time_s", doc["time"])
-        frame.index.name = "sample"
-        return frame
-    return None
+    frame = pandas.DataFrame(doc["samples"], columns=["x", "y", "z"])
+    if doc.get("time") is not None:
+        frame.insert(0, "time_s", doc["time"])
+    frame.index.name = "sample"
+    return frame
 
 
 def _readings_positions(doc):
     pandas = _pandas()
-    if doc.get("kind") != "positions":
-        return None
     frame = pandas.DataFrame(doc["positions"], columns=["x", "y", "z"])
     frame["samples"] = doc["counts"]
     if doc.get("stds") is not None:
@@ -101,79 +102,91 @@ def _readings_positions(doc):
     return frame
 
 
-def _noise(part):
+def _noise_rows(doc, part):
     """The noise document's axes, one row per sensor and axis and `part`'s entry: its fitted
     terms ("terms") or its Allan deviation ("allan")."""
-    def table(doc):
-        rows = []
-        for sensor in ("accelerometer", "gyroscope"):
-            for axis in (_at(doc, sensor + ".axes") or []):
-                entries = axis.get(part)
-                if part == "terms":
-                    entries = [dict(term=k, **v) for k, v in (entries or {}).items()]
-                for entry in entries or []:
-                    rows.append(dict(sensor=sensor, axis=axis.get("axis"), **entry))
-        return _frame(rows) if rows else None
-    return table
+    rows = []
+    for sensor in ("accelerometer", "gyroscope"):
+        for axis in (_at(doc, sensor + ".axes") or []):
+            entries = axis.get(part)
+            if part == "terms":
+                entries = [dict(term=k, **v) for k, v in (entries or {}).items()]
+            for entry in entries or []:
+                rows.append(dict(sensor=sensor, axis=axis.get("axis"), **entry))
+    return rows
+
+
+def _noise(name):
+    return _Table(name, lambda doc: bool(_noise_rows(doc, name)),
+                  lambda doc: _frame(_noise_rows(doc, name)))
+
+
+def _has_crlb(doc):
+    return bool(doc.get("parameter_order")) and bool(doc.get("crlb"))
 
 
 def _design_parameters(doc):
-    names, crlb = doc.get("parameter_order"), doc.get("crlb")
-    if not names or not crlb:
-        return None
-    return _frame([{"parameter": n, "std": crlb[i][i] ** 0.5} for i, n in enumerate(names)],
-                  index="parameter")
+    crlb = doc["crlb"]
+    return _frame([{"parameter": n, "std": crlb[i][i] ** 0.5}
+                   for i, n in enumerate(doc["parameter_order"])], index="parameter")
 
 
 def _design_crlb(doc):
-    names, crlb = doc.get("parameter_order"), doc.get("crlb")
-    if not names or not crlb:
-        return None
     pandas = _pandas()
-    return pandas.DataFrame(crlb, index=pandas.Index(names, name="parameter"), columns=names)
+    names = doc["parameter_order"]
+    return pandas.DataFrame(doc["crlb"], index=pandas.Index(names, name="parameter"),
+                            columns=names)
 
 
 def _design_chosen(doc):
-    chosen = doc.get("chosen")
-    if not isinstance(chosen, list):
-        return None
-    return _frame([{"direction": d} for d in chosen], first=1, name="position")
+    return _frame([{"direction": d} for d in doc["chosen"]], first=1, name="position")
 
 
 def _batch_units(doc):
-    """summary.csv's table: a row per unit, each quantity and its 1 sigma (``NAME.sigma``)."""
-    units = doc.get("units")
-    if not isinstance(units, list):
-        return None
+    """summary.csv's table: a row per unit, its columns and text as the CSV has them (the failed
+    limits' texts joined by "; ", the files by ";"), each quantity and its 1 sigma
+    (``NAME.sigma``) as numbers, in their order of first use."""
     rows = []
-    for unit in units:
-        row = {k: v for k, v in unit.items() if k not in ("quantities", "findings")}
+    for unit in doc["units"]:
+        row = {"unit": unit.get("unit"), "status": unit.get("status"),
+               "failed": "; ".join(f.get("text", "") for f in unit.get("failed") or []),
+               "files": ";".join(unit.get("files") or []),
+               "verdict": unit.get("verdict"), "worst_finding": unit.get("worst_finding"),
+               "message": unit.get("message")}
         for name, q in (unit.get("quantities") or {}).items():
             row[name] = q.get("value")
             row[name + ".sigma"] = q.get("sigma")
         rows.append(row)
     pandas = _pandas()
-    frame = pandas.DataFrame(rows) if rows else pandas.DataFrame(columns=["unit"])
+    base = ["unit", "status", "failed", "files", "verdict", "worst_finding", "message"]
+    frame = pandas.DataFrame(rows, columns=list(dict.fromkeys(
+        base + [k for row in rows for k in row])))
+    numbers = [c for c in frame.columns if c not in base]
+    frame[numbers] = frame[numbers].astype(float)  # a sigma no unit has is NaN, as read_csv's
     return frame.set_index("unit")
 
 
 # Each document's tables, its natural one first (what to_frame() gives).
+_DETECTION = [_list("intervals", "intervals", first=1, name="interval"),
+              _list("rejected", "rejected", first=1, name="rejected")]
 _TABLES = {
-    "readings": [("samples", _readings), ("positions", _readings_positions)],
-    "detection": [("intervals", _list("intervals", first=1, name="interval")),
-                  ("rejected", _list("rejected", first=1, name="rejected"))],
-    "detect": [("intervals", _list("intervals", first=1, name="interval")),
-               ("rejected", _list("rejected", first=1, name="rejected"))],
-    "compare": [("methods", _list("methods", index="method"))],
-    "noise": [("terms", _noise("terms")), ("allan", _noise("allan"))],
-    "montecarlo": [("parameters", _list("parameters", index="name"))],
-    "design": [("parameters", _design_parameters), ("crlb", _design_crlb),
-               ("chosen", _design_chosen)],
-    "verify": [("positions", _list("positions", index="position")),
-               ("parameters", _list("parameters", index="name"))],
-    "inspect": [("streams", _list("streams"))],
-    "batch": [("units", _batch_units)],
-    "store": [("entries", _list("entries"))],
+    "readings": [_Table("samples", lambda doc: doc.get("kind") == "raw", _readings),
+                 _Table("positions", lambda doc: doc.get("kind") == "positions",
+                        _readings_positions)],
+    "detection": _DETECTION,
+    "detect": _DETECTION,
+    "compare": [_list("methods", "methods", index="method")],
+    "noise": [_noise("terms"), _noise("allan")],
+    "montecarlo": [_list("parameters", "parameters", index="name")],
+    "design": [_Table("parameters", _has_crlb, _design_parameters),
+               _Table("crlb", _has_crlb, _design_crlb),
+               _Table("chosen", lambda doc: isinstance(doc.get("chosen"), list),
+                      _design_chosen)],
+    "verify": [_list("positions", "positions", index="position"),
+               _list("parameters", "parameters", index="name")],
+    "inspect": [_list("streams", "streams")],
+    "batch": [_Table("units", lambda doc: isinstance(doc.get("units"), list), _batch_units)],
+    "store": [_list("entries", "entries")],
 }
 
 
@@ -208,18 +221,18 @@ class Document(dict):
     @property
     def tables(self):
         """The names of the tables it has, its natural one (``to_frame()``'s) first."""
-        return [name for name, table in _TABLES.get(self.kind, []) if table(self) is not None]
+        return [t.name for t in _TABLES.get(self._kind, []) if t.present(self)]
 
     def to_frame(self, table=None):
         """Its table `table` (default: its natural one) as a pandas DataFrame. KeyError names
         the tables it has when it has no such table."""
-        for name, build in _TABLES.get(self.kind, []):
-            if table is None or table == name:
-                frame = build(self)
-                if frame is not None:
-                    return frame
-                if table is not None:
-                    break
+        for t in _TABLES.get(self._kind, []):
+            if (table is None or table == t.name) and t.present(self):
+                return t.build(self)
         what = f"no table {table!r}" if table is not None else "no table"
-        raise KeyError(f"the {self.kind or 'untitled'} document has {what} (its tables: "
+        raise KeyError(f"the {self._kind or 'untitled'} document has {what} (its tables: "
                        f"{', '.join(self.tables) or 'none'})")
+
+    def copy(self):
+        """A shallow copy, a Document of the same kind."""
+        return Document(self, self._kind)

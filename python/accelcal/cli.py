@@ -13,7 +13,8 @@ checks, numbers and messages. The functions are made from the tool's own option 
   list (``columns=["t", "ax", "ay", "az"]``); file names may be ``os.PathLike``;
 - a command that has ``--json`` is run with it and returns the parsed document (a dict: an
   ``accelcal.Document``, whose ``to_frame()`` gives its table as a pandas DataFrame), except
-  ``calibrate``, which returns the calibration file it writes as an ``accelcal.Calibration``;
+  ``calibrate`` and ``store get``, which return the calibration file as an
+  ``accelcal.Calibration``;
   the others return what the tool writes to standard output (``str``, or ``bytes`` when it is
   not text, such as a ULog), or ``None`` when ``output`` names a file.
 
@@ -165,7 +166,11 @@ def _run(spec, args, options, stacklevel=3):
                                         _value(source, "input") if source is not None else "")
     elif has_json:
         result = _json.loads(out.decode("utf-8")) if out else None
-        if isinstance(result, dict):
+        if isinstance(result, dict) and result.get("format") == "accelcal-calibration":
+            # A calibration file (store get's): an accelcal.Calibration, as calibrate's.
+            result = parse_calibration_json(out.decode("utf-8"), "accelcal " + " ".join(
+                _value(a, "argument") for a in args if isinstance(a, (str, _os.PathLike))))
+        elif isinstance(result, dict):
             result = Document(result, command)
     elif options.get("output") not in (None, "-"):
         result = None
@@ -246,8 +251,8 @@ for _spec in _DESCRIPTION["commands"]:
 
 def _stubs():
     """The type stubs of this module (cli.pyi), made from the same description."""
-    # store add writes a list (an entry per calibration), store get and list a document.
-    returns = {"calibrate": "Calibration", "store": "Union[Document, List[Any]]"}
+    # store add writes a list (an entry per calibration), get a calibration, list a document.
+    returns = {"calibrate": "Calibration", "store": "Union[Calibration, Document, List[Any]]"}
     lines = ["# Made by accelcal.cli._stubs() from `accelcal --describe-options`; checked by",
              "# python/tests/test_cli.py. To remake it: PYTHONPATH=build/python python3 -c",
              "# 'import accelcal.cli as c; print(c._stubs(), end=\"\")' > python/accelcal/cli.pyi",

@@ -141,6 +141,9 @@ def test_design_montecarlo_simulate_and_the_platform(cal, tmp_path):
                                temperatures=[10, 25, 40]) == tool_json(
         "design", "--positions", "yang18", "--device", cal, "--noise", "1,2,3",
         "--temperatures", "10,25,40")
+    # A plan that determines nothing raises, and says why.
+    with pytest.raises(accelcal.InputError, match="these positions do not determine parameter"):
+        accelcal.cli.design(positions="six", device=cal, noise=0.1)
     assert accelcal.cli.montecarlo(runs=20, seed=7, threads=2) == tool_json(
         "montecarlo", "--runs", "20", "--seed", "7", "--threads", "2")
     assert accelcal.cli.simulate(scenario="sunxu2020", seed=3) == tool(
@@ -190,7 +193,14 @@ def test_the_documents_tables_are_the_tools_numbers(cal, tmp_path):
     assert len(quantities) > 20
     np.testing.assert_array_equal(frame[quantities].to_numpy(dtype=float),
                                   csv[quantities].to_numpy(dtype=float))
-    assert list(frame["status"]) == list(csv["status"])
+    assert list(frame.columns) == list(csv.columns)
+    for text in ("status", "failed", "files", "verdict", "worst_finding", "message"):
+        assert list(frame[text].fillna("")) == list(csv[text].fillna("")), text
+    # store get gives the calibration stored, as calibrate does.
+    accelcal.cli.store("add", tmp_path / "store", tmp_path / "batch")
+    got = accelcal.cli.store("get", tmp_path / "store", "xsens_acc")
+    assert isinstance(got, accelcal.Calibration)
+    assert got.text == (tmp_path / "batch" / "units" / "xsens_acc" / "calibration.json").read_text()
     # A command's document that has no table says so.
     with pytest.raises(KeyError, match="has no table"):
         accelcal.cli.gimbal(GOLDEN_INPUTS / "coarse.csv").to_frame()

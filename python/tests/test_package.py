@@ -401,6 +401,7 @@ def test_documents_give_their_tables_as_dataframes():
     # A document pickles with its kind, and is still the dict the tool writes.
     again = pickle.loads(pickle.dumps(found))
     assert again.kind == "detection" and again.to_frame().equals(frame)
+    assert found.copy().kind == "detection" and found.copy().to_frame().equals(frame)
     with pytest.raises(KeyError, match=r"no table 'allan' \(its tables: intervals, rejected\)"):
         found.to_frame("allan")
 

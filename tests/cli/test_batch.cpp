@@ -425,15 +425,53 @@ TEST_F(Batch, UnitIdsFromRosFrameIds) {
   EXPECT_EQ(doc["units"][1]["unit"], "imu_0043");
   EXPECT_EQ(doc["units"][2]["unit"], "imu_link");
   // A topic that is not the accelerometer's has no frame id to give; nor has a ULog.
+  // The row says what the log has.
   r = Exec("batch " + Path("bags/session3.bag") + " -o " + Path("other") +
            " --unit-id-from frame-id --topic /imu/other");
   EXPECT_EQ(r.status, 6);
-  EXPECT_NE(r.out.find("the log has no accelerometer stream with a frame id"), std::string::npos)
+  EXPECT_NE(
+      r.out.find("the log has no accelerometer stream /imu/other with a frame id (a "
+                 "sensor_msgs/Imu topic's header.frame_id); its accelerometer streams: /imu/data "
+                 "(sensor_msgs/Imu, frame id 'imu_0043')"),
+      std::string::npos)
       << r.out;
   const std::string real = std::string(ACCELCAL_DATA_DIR) + "/px4-ulog/sample_log_small.ulg";
   r = Exec("batch " + real + " -o " + Path("real") + " --unit-id-from frame-id");
   EXPECT_NE(r.out.find("the log has no accelerometer stream with a frame id"), std::string::npos)
       << r.out;
+  EXPECT_NE(r.out.find("its accelerometer streams: sensor_combined (frame id none), "
+                       "sensor_accel (frame id none), sensor_accel instance 1 (frame id none)"),
+            std::string::npos)
+      << r.out;
+  // A frame id that would not read as itself is no unit's id: bytes that are not UTF-8 (two
+  // such ids would both read as U+FFFD in the summary's JSON), a terminal's escape (shown
+  // escaped), a leading space. --unit-id, a pattern on names, does not go with it, even empty.
+  fs::create_directories(Path("odd"));
+  const std::string session = Slurp(Path("bags/session3.bag"));
+  int odd = 0;
+  for (const std::string& frame : {std::string("imu\xff\xfe"
+                                               "042"),
+                                   std::string("imu\x1b[31m"), std::string(" imu_042")}) {
+    std::string bytes = session;
+    bytes.replace(bytes.find("imu_0043"), 8, frame);  // the first message's
+    Write("odd/" + std::to_string(++odd) + ".bag", bytes);
+  }
+  r = Exec("batch " + Path("odd") + " -o " + Path("odd_out") + " --unit-id-from frame-id");
+  EXPECT_EQ(r.status, 6);
+  EXPECT_NE(r.out.find("the unit id 'imu\\xFF\\xFE042' is not UTF-8 text"), std::string::npos)
+      << r.out;
+  EXPECT_NE(r.out.find("the unit id 'imu\\x1B[31m' holds a '/', a control character"),
+            std::string::npos)
+      << r.out;
+  EXPECT_EQ(r.out.find('\x1b'), std::string::npos);  // nothing raw reaches the terminal
+  EXPECT_NE(r.out.find("the unit id ' imu_042' begins or ends with a space"), std::string::npos)
+      << r.out;
+  EXPECT_FALSE(fs::exists(Path("odd_out/units/ imu_042")));
+  EXPECT_EQ(Exec("batch " + Path("odd") + " -o " + Path("odd_out") +
+                 " --unit-id-from frame-id --unit-id ''")
+                .status,
+            2);
+  EXPECT_EQ(Exec("batch " + Path("odd") + " -o " + Path("odd_out") + " --unit-id ''").status, 2);
 }
 
 }  // namespace

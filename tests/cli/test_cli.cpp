@@ -291,6 +291,9 @@ TEST_F(Cli, DesignPredictsTheBoundBeforeRecording) {
   const CliRun six = Exec("design --positions six --noise 0.12" + device);
   EXPECT_EQ(six.status, 3);
   EXPECT_NE(six.out.find("NOT OBSERVABLE"), std::string::npos) << six.out;
+  // The reason on stderr too, where a caller of the status (Python's InputError) reads it.
+  EXPECT_NE(six.err.find("these positions do not determine parameter"), std::string::npos)
+      << six.err;
   const std::string bad = Write("dirs.csv", "x,y,z\n1,0,0\n0,2,0\n");
   const CliRun b = Exec("design --positions " + bad + " --noise 0.1" + device);
   EXPECT_EQ(b.status, 3);

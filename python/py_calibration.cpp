@@ -139,6 +139,9 @@ Diagnosis DiagnoseFit(const PyCalibration& c, const RawLog* log,
   return Diagnose(in);
 }
 
+// A value the file writes as null when it is NaN (not computed): None.
+py::object FloatOrNone(double v) { return std::isnan(v) ? py::object(py::none()) : py::float_(v); }
+
 py::dict GyroDict(const GyroCalibration& g) {
   py::dict d;
   d["model"] = std::string(ToString(g.model));
@@ -195,9 +198,8 @@ py::dict GyroDict(const GyroCalibration& g) {
     t["turned_std_deg"] = r.turned_std_deg;
     t["residual_deg"] = r.residual_deg;
     t["heldout_deg"] = r.heldout_deg;
-    // The screening's, None when not screened, as the file has them (null).
-    t["statistic"] = std::isnan(r.statistic) ? py::object(py::none()) : py::float_(r.statistic);
-    t["threshold"] = std::isnan(r.threshold) ? py::object(py::none()) : py::float_(r.threshold);
+    t["statistic"] = FloatOrNone(r.statistic);  // the screening's, None when not screened
+    t["threshold"] = FloatOrNone(r.threshold);
     t["flagged"] = r.flagged;
     t["excluded"] = false;
     rotations.append(t);

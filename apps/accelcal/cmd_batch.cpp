@@ -158,10 +158,13 @@ std::string UnitIdFromLog(const std::string& path, const BatchArgs& args, std::s
   // device-id, frame-id: of the accelerometer streams the calibration could read.
   const bool frame = from == "frame-id";
   const std::string topic = OptionValue(args, "topic"), instance = OptionValue(args, "instance");
+  const auto accelerometer = [](const LogStreamInfo& s) {
+    const auto sensors = KnownSensors(s.type);
+    return std::find(sensors.begin(), sensors.end(), "accelerometer") != sensors.end();
+  };
   std::set<std::string> ids;
   for (const LogStreamInfo& s : log.streams) {
-    const auto sensors = KnownSensors(s.type);
-    if (std::find(sensors.begin(), sensors.end(), "accelerometer") == sensors.end()) continue;
+    if (!accelerometer(s)) continue;
     if (!topic.empty() && s.topic != topic) continue;
     if (!instance.empty() && std::to_string(s.instance) != instance) continue;
     if (frame && s.frame_id) ids.insert(*s.frame_id);
@@ -171,10 +174,6 @@ std::string UnitIdFromLog(const std::string& path, const BatchArgs& args, std::s
   if (ids.empty()) {
     // What the log has: its accelerometer streams (or, without one, all its streams), each with
     // its type and the id asked for.
-    const auto accelerometer = [](const LogStreamInfo& s) {
-      const auto sensors = KnownSensors(s.type);
-      return std::find(sensors.begin(), sensors.end(), "accelerometer") != sensors.end();
-    };
     const bool any = std::any_of(log.streams.begin(), log.streams.end(), accelerometer);
     std::string streams;
     for (const LogStreamInfo& s : log.streams) {

@@ -82,6 +82,11 @@ int RunDesign(const DesignArgs& args) {
     if (!design.summary.converged) chosen_note += "; " + design.summary.termination_message;
   }
   const auto& slots = ParameterSlots(model, planned.frame);
+  // Why the plan determines nothing, for the report and for stderr.
+  const std::string unobservable = Format(
+      "these positions do not determine parameter %s (reciprocal condition %.2g); add positions "
+      "with other orientations",
+      planned.weakest.c_str(), planned.rcond);
   // A drift to plan for: each parameter's 1σ with it over without it, and advice when the order
   // lets the drift take up a parameter.
   std::optional<PlannedDriftCost> drift;
@@ -342,10 +347,7 @@ int RunDesign(const DesignArgs& args) {
       for (const Vec3& c : directions) out += Format("  %+.6f %+.6f %+.6f\n", c(0), c(1), c(2));
     }
     if (!planned.observable) {
-      out += Format(
-          "NOT OBSERVABLE: these positions do not determine parameter %s (reciprocal "
-          "condition %.2g); add positions with other orientations\n",
-          planned.weakest.c_str(), planned.rcond);
+      out += "NOT OBSERVABLE: " + unobservable + "\n";
     } else {
       out += "predicted 1 sigma (Cramer-Rao bound; raw units as the device file)\n";
       for (std::size_t i = 0; i < slots.size(); ++i) {
@@ -366,10 +368,7 @@ int RunDesign(const DesignArgs& args) {
   // A plan that determines nothing is an error: said on stderr too, as every error is (the
   // output may go to a file, and a caller of the status reads stderr for its reason).
   if (!planned.observable) {
-    WriteErr(
-        Format("accelcal: these positions do not determine parameter %s (reciprocal "
-               "condition %.2g); add positions with other orientations\n",
-               planned.weakest.c_str(), planned.rcond));
+    WriteErr("accelcal: " + unobservable + "\n");
     return kExitBadInput;
   }
   if (degrees && !(thermal && thermal->observable)) {

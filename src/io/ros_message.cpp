@@ -125,12 +125,12 @@ bool IsName(std::string_view s, bool slash) {
 
 // Where a message is being read: its bytes, and for CDR the origin its alignment counts from.
 struct Cursor {
-  const unsigned char* p;
-  const unsigned char* end;
-  const unsigned char* origin;
-  bool cdr;
-  std::size_t column = 0;  // the next column's index
-  std::size_t columns;     // how many are stored
+  const unsigned char* p = nullptr;
+  const unsigned char* end = nullptr;
+  const unsigned char* origin = nullptr;
+  bool cdr = false;
+  std::size_t column = 0;   // the next column's index
+  std::size_t columns = 0;  // how many are stored
   // Skips CDR's padding before a value of `size` bytes (its alignment, at most 8).
   bool Align(std::size_t size) {
     if (!cdr || size <= 1) return true;
@@ -155,7 +155,24 @@ struct RosMessageType::Impl {
   // Reads a `t` at c (values into `values` when not null: outside variable-length arrays).
   bool Walk(const Type& t, Cursor& c, double* values) const;
   bool Element(const Member& m, Cursor& c, double* values) const;
+  // A cursor at the first field of the message of `n` bytes at `p` (after ROS 2's CDR
+  // encapsulation), or the reason it is not one.
+  std::optional<std::string> Open(const unsigned char* p, std::size_t n, Cursor* c) const;
 };
+
+namespace {
+
+// Reads a string at the cursor (its uint32 count, then its bytes), its bytes in `text`.
+bool ReadString(Cursor& c, std::string_view* text) {
+  if (!c.Align(4) || c.end - c.p < 4) return false;
+  const std::uint32_t n = LoadLittle<std::uint32_t>(c.p);
+  if (std::size_t(c.end - c.p) - 4 < n) return false;
+  *text = std::string_view(reinterpret_cast<const char*>(c.p + 4), n);
+  c.p += 4 + n;
+  return true;
+}
+
+}  // namespace
 
 // The index of type `name`'s resolved Type, parsed from its section (recursively).
 int RosMessageType::Impl::Resolve(const std::string& name, std::vector<std::string>* stack) {
@@ -355,11 +372,8 @@ double Scalar(Kind kind, const unsigned char* p) {
 bool RosMessageType::Impl::Element(const Member& m, Cursor& c, double* values) const {
   if (m.kind == Kind::kStruct) return Walk(types[std::size_t(m.type)], c, values);
   if (m.kind == Kind::kString) {
-    if (!c.Align(4) || c.end - c.p < 4) return false;
-    const std::uint32_t n = LoadLittle<std::uint32_t>(c.p);
-    if (std::size_t(c.end - c.p) - 4 < n) return false;
-    c.p += 4 + n;
-    return true;
+    std::string_view skipped;
+    return ReadString(c, &skipped);
   }
   if (!c.Align(m.align) || std::size_t(c.end - c.p) < m.size) return false;
   if (values != nullptr) {
@@ -520,11 +534,10 @@ const std::shared_ptr<const std::vector<std::string>>& RosMessageType::columns()
 std::optional<std::size_t> RosMessageType::stamp() const { return impl_->stamp; }
 const std::vector<std::size_t>& RosMessageType::microseconds() const { return impl_->microseconds; }
 
-std::optional<std::string> RosMessageType::Decode(const unsigned char* p, std::size_t n,
-                                                  double* values) const {
-  Cursor c{p, p + n, p, false, 0, impl_->columns->size()};
-  std::size_t padding = 0;  // bytes a whole message may end with after its fields
-  if (impl_->version == RosVersion::kRos2) {
+std::optional<std::string> RosMessageType::Impl::Open(const unsigned char* p, std::size_t n,
+                                                      Cursor* c) const {
+  *c = Cursor{p, p + n, p, false, 0, columns->size()};
+  if (version == RosVersion::kRos2) {
     // The RTPS encapsulation: a representation identifier and options; ROS 2 writes CDR,
     // little-endian (00 01), its alignment counted from after these 4 bytes.
     if (n < 4) return Format("a %zu-byte message, shorter than its CDR encapsulation", n);
@@ -534,10 +547,18 @@ std::optional<std::string> RosMessageType::Decode(const unsigned char* p, std::s
           "accelcal reads",
           p[0], p[1]);
     }
-    c.p = c.origin = p + 4;
-    c.cdr = true;
-    padding = 3;  // CDR pads a message to 4 bytes
+    c->p = c->origin = p + 4;
+    c->cdr = true;
   }
+  return std::nullopt;
+}
+
+std::optional<std::string> RosMessageType::Decode(const unsigned char* p, std::size_t n,
+                                                  double* values) const {
+  Cursor c;
+  if (std::optional<std::string> why = impl_->Open(p, n, &c)) return why;
+  // Bytes a whole message may end with after its fields: CDR pads a message to 4 bytes.
+  const std::size_t padding = c.cdr ? 3 : 0;
   if (!impl_->Walk(impl_->types[0], c, values)) {
     return Format("a %zu-byte message, shorter than its fields", n);
   }
@@ -550,23 +571,17 @@ std::optional<std::string> RosMessageType::Decode(const unsigned char* p, std::s
 
 std::optional<std::string> RosMessageType::FrameId(const unsigned char* p, std::size_t n) const {
   if (!impl_->stamp) return std::nullopt;  // no std_msgs/Header first
-  Cursor c{p, p + n, p, false, 0, 0};
-  if (impl_->version == RosVersion::kRos2) {
-    if (n < 4 || p[0] != 0 || p[1] != 1) return std::nullopt;
-    c.p = c.origin = p + 4;
-    c.cdr = true;
-  }
+  Cursor c;
+  if (impl_->Open(p, n, &c)) return std::nullopt;
   const Type& header = impl_->types[std::size_t(impl_->types[0].members[0].type)];
   for (const Member& m : header.members) {
     if (m.array != Array::kNone) return std::nullopt;  // not a std_msgs/Header as ROS has it
     if (m.kind == Kind::kString && m.name == "frame_id") {
-      if (!c.Align(4) || c.end - c.p < 4) return std::nullopt;
-      const std::uint32_t size = LoadLittle<std::uint32_t>(c.p);
-      if (std::size_t(c.end - c.p) - 4 < size) return std::nullopt;
-      std::string id(reinterpret_cast<const char*>(c.p + 4), size);
+      std::string_view id;
+      if (!ReadString(c, &id)) return std::nullopt;
       // CDR counts a string's terminating NUL.
-      if (c.cdr && !id.empty() && id.back() == '\0') id.pop_back();
-      return id;
+      if (c.cdr && !id.empty() && id.back() == '\0') id.remove_suffix(1);
+      return std::string(id);
     }
     if (!impl_->Element(m, c, nullptr)) return std::nullopt;
   }

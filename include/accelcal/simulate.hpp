@@ -5,6 +5,7 @@
 
 #include <cstdint>
 #include <functional>
+#include <utility>
 #include <vector>
 
 #include "accelcal/gyro_model.hpp"
@@ -92,6 +93,18 @@ double SimulatedSampleCount(std::size_t directions, const RawLogSimulation& opti
 struct GyroSimulation {
   GyroParameters truth;  ///< K_g [gyro raw per rad/s], b_g, G [gyro raw per force unit]
   Vec3 sigma_raw_per_sample = Vec3::Zero();  ///< white noise of each rate sample [gyro raw]
+  /// The body's own slow motion while it stands in a position (a unit held by hand or on a soft
+  /// mount): about each body axis a rate of three sinusoids near `wobble_hz` (0.6, 1 and 1.6
+  /// times it, each frequency within ±20 %, with random phases; drawn anew for each position),
+  /// of σ `wobble_rad_s` in all, whose
+  /// angle starts at 0 in each position and stays bounded (σ_ω / 2πf). Both sensors see it: the
+  /// force direction moves with the body. 0: still.
+  double wobble_rad_s = 0;
+  double wobble_hz = 0.5;
+  /// Turns about the vertical (the force direction, which they leave unchanged) inside still
+  /// positions: (position, angle [rad]) with the position 0-based, turned over the middle half
+  /// of the position at a rate that rises and falls linearly.
+  std::vector<std::pair<std::size_t, double>> vertical_turns;
 };
 /// An accelerometer's and a gyroscope's samples at the same times.
 struct SimulatedImuLog {
@@ -107,8 +120,12 @@ struct SimulatedImuLog {
 /// turns by Exp(−α a)); α at each sample is the trapezoidal sum of the sampled rates, so
 /// IntegrateAngularRate with RateInterpolation::kTrapezoidal gives the motion exactly, and the
 /// turn ends on c_next. Each gyro sample is ω_raw = K_g ω + b_g + G f + noise with f = gravity · c
-/// (no linear or centripetal acceleration: the sensor turns about itself). Noise draws: the
-/// accelerometer's three, then the gyro's three, per sample; deterministic in options.seed.
+/// (no linear or centripetal acceleration: the sensor turns about itself). With a wobble or a turn
+/// about the vertical (GyroSimulation) the force direction in a still position follows the body
+/// rates by the same trapezoidal rule, c_{k+1} = Exp(−½(ω_k + ω_{k+1}) h) c_k, and the turn out
+/// of it starts where the body is. Noise draws: the accelerometer's three, then the gyro's three,
+/// per sample (the wobble's phases and frequencies from a generator of their own, so the noise is
+/// the same with and without it); deterministic in options.seed.
 SimulatedImuLog SimulateImuLog(const ModelParameters& accel_truth, double gravity,
                                const std::vector<Vec3>& directions, const RawLogSimulation& options,
                                const GyroSimulation& gyro);

@@ -7,6 +7,7 @@
 #include <Eigen/Geometry>
 
 #include "accelcal/engineering.hpp"
+#include "accelcal/rotations.hpp"
 
 namespace accelcal {
 
@@ -213,9 +214,70 @@ SimulatedImuLog SimulateImuLog(const ModelParameters& accel_truth, double gravit
     log.omega_rad_s.push_back(omega);
     log.direction.push_back(c);
   };
+  // The wobble: per axis three sinusoids of the rate (angular frequency, amplitude, phase), from a
+  // generator of their own, drawn anew for each position; three of amplitude A have σ A √(3/2).
+  struct Wave {
+    double omega_rad_s, amplitude, phase;
+  };
+  std::vector<Wave> waves[3];
+  std::mt19937_64 wobble_rng(options.seed ^ 0x9e3779b97f4a7c15ULL);
+  std::uniform_real_distribution<double> unit(0.0, 1.0);
+  const auto draw_waves = [&] {
+    const double amplitude = gyro.wobble_rad_s * std::sqrt(2.0 / 3.0);
+    for (std::vector<Wave>& axis : waves) {
+      axis.clear();
+      for (const double ratio : {0.6, 1.0, 1.6}) {
+        const double f = gyro.wobble_hz * ratio * (0.8 + 0.4 * unit(wobble_rng));
+        axis.push_back({2 * kPi * f, amplitude, 2 * kPi * unit(wobble_rng)});
+      }
+    }
+  };
+  // The rate profile of a turn about the vertical in a still position: a triangle over its
+  // middle half, scaled to the angle under the trapezoidal rule.
+  const auto vertical_rates = [&](std::size_t position) {
+    std::vector<double> rate;
+    for (const auto& [p, angle] : gyro.vertical_turns) {
+      if (p != position || angle == 0) continue;
+      rate.assign(still, 0.0);
+      const std::size_t first = still / 4, last = (3 * still) / 4;
+      if (last < first + 2) break;
+      double area = 0;
+      for (std::size_t i = first; i <= last; ++i) {
+        const double s = static_cast<double>(i - first) / static_cast<double>(last - first);
+        rate[i] = 1.0 - std::abs(2.0 * s - 1.0);
+        area += rate[i];
+      }
+      for (double& r : rate) r *= angle / (h * area);
+    }
+    return rate;
+  };
+  const double ramp_s = 0.25;  // the wobble fades in and out: no jump at a turn's still ends
+  Vec3 c = directions.empty() ? Vec3::UnitZ() : directions[0].normalized();
   for (std::size_t k = 0; k < directions.size(); ++k) {
-    const Vec3 c = directions[k].normalized();
-    for (std::size_t i = 0; i < still; ++i) emit(c, Vec3::Zero());
+    c = directions[k].normalized();
+    const std::vector<double> vertical = vertical_rates(k);
+    if (gyro.wobble_rad_s > 0) draw_waves();
+    if (gyro.wobble_rad_s > 0 || !vertical.empty()) {
+      // The body's rates while it stands, and the force direction they move.
+      Vec3 omega_before = Vec3::Zero();
+      for (std::size_t i = 0; i < still; ++i) {
+        const double t = static_cast<double>(i) * h;
+        const double envelope =
+            std::min({1.0, t / ramp_s, (static_cast<double>(still - 1) * h - t) / ramp_s});
+        Vec3 omega = Vec3::Zero();
+        for (int a = 0; a < 3; ++a) {
+          for (const Wave& w : waves[a]) {
+            omega(a) += envelope * w.amplitude * std::cos(w.omega_rad_s * t + w.phase);
+          }
+        }
+        if (!vertical.empty()) omega += vertical[i] * c;
+        if (i > 0) c = so3::Exp(Vec3(-0.5 * h * (omega_before + omega))) * c;
+        emit(c, omega);
+        omega_before = omega;
+      }
+    } else {
+      for (std::size_t i = 0; i < still; ++i) emit(c, Vec3::Zero());
+    }
     if (k + 1 == directions.size() || turn < 2) continue;
     const Vec3 next = directions[k + 1].normalized();
     const double angle = std::atan2(c.cross(next).norm(), c.dot(next));

@@ -51,7 +51,9 @@ PositionNoise PoolPositionNoise(const std::vector<Position>& positions,
                                 const std::vector<Vec3>& mean_variances);
 
 /// The noise of every position of `input`, each from its raw log, pooled over the positions of
-/// each file (sessions may differ in noise and rate; `per_sample_variance` is the last file's);
+/// each file (sessions may differ in noise and rate; `per_sample_variance` is the last file's),
+/// each mean's variance at least what rounding to the file's quantisation step leaves in it
+/// (internal::RoundingFloorVariance: readings that do not dither are not averaged down);
 /// nullopt when some position is not from a raw log (a positions file: its own columns give its
 /// noise, SigmasOfMeans) or a file's pooled noise is not positive on every axis (a quantised
 /// sensor that reads one value).

@@ -7,6 +7,7 @@
 #include <stdexcept>
 
 #include "core/median.hpp"
+#include "statistics/rounding.hpp"
 
 namespace accelcal {
 
@@ -101,10 +102,20 @@ std::optional<PositionNoise> MeasurePositionNoise(const LoadedInput& input) {
       if (!p.interval) return std::nullopt;
       variances.push_back(PositionMeanVariance(file.data.raw, p));
     }
-    const PositionNoise pooled = PoolPositionNoise(positions, variances);
-    if (!(pooled.per_sample_variance.minCoeff() > 0) || !pooled.per_sample_variance.allFinite()) {
+    PositionNoise pooled = PoolPositionNoise(positions, variances);
+    // Readings rounded to a step coarser than their noise keep a rounding error in each mean
+    // that averaging does not take down (a 12-bit part, a log written with 2 decimals): each
+    // mean's variance is at least what that leaves, also where the readings hardly ever change.
+    Vec3 floor = Vec3::Zero();
+    for (int a = 0; a < 3; ++a) {
+      floor(a) = internal::RoundingFloorVariance(file.detection->quantisation_step(a),
+                                                 pooled.per_sample_variance(a));
+    }
+    if (!((pooled.per_sample_variance + floor).minCoeff() > 0) ||
+        !pooled.per_sample_variance.allFinite()) {
       return std::nullopt;
     }
+    for (Vec3& sigma : pooled.sigmas) sigma = (sigma.cwiseAbs2() + floor).cwiseSqrt();
     out.sigmas.insert(out.sigmas.end(), pooled.sigmas.begin(), pooled.sigmas.end());
     out.batched += pooled.batched;
     out.per_sample_variance = pooled.per_sample_variance;

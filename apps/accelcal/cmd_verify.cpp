@@ -202,7 +202,7 @@ int RunVerify(const VerifyArgs& args) {
     g.still_scatter_ratio = *cal.gyroscope->still_scatter_ratio;
     gv = VerifyGyroscope(under_test, g, data.raw, rates.raw, positions);
   }
-  const bool passed = v.passed && (!gv || gv->passed);
+  const bool checks_hold = v.passed && (!gv || gv->passed);
   std::string why = v.reason;  // why it failed, both sensors' reasons
   if (gv && !gv->passed) why += (why.empty() ? "" : "; ") + ("the gyroscope: " + gv->reason);
   std::string untested;
@@ -211,6 +211,14 @@ int RunVerify(const VerifyArgs& args) {
     for (const std::string& name : gv->untested) {
       untested += (untested.empty() ? "" : ", ") + name;
     }
+  }
+  // A log that cannot test some of the parameters verifies only the others: the checks holding
+  // is then no pass (one position tests 2 of 9), but inconclusive.
+  const bool passed = checks_hold && untested.empty();
+  const char* verdict = !checks_hold ? "failed" : passed ? "passed" : "inconclusive";
+  if (checks_hold && !passed) {
+    why = "this log does not test " + untested +
+          " (its positions and turns do not excite them enough): record one that does";
   }
 
   const std::string unit(ToString(cal.unit));
@@ -223,9 +231,13 @@ int RunVerify(const VerifyArgs& args) {
     doc["gravity"] = under_test.gravity;
     doc["gravity_origin"] = gravity_origin;
     doc["misfit_sigma_raw"] = under_test.misfit_sigma_raw;
-    doc["verdict"] = passed ? "passed" : "failed";  // written again below, after the gyroscope
+    doc["verdict"] = verdict;  // written again below, after the gyroscope
     doc["accelerometer_verdict"] = v.passed ? "passed" : "failed";
-    if (!v.passed) doc["reason"] = v.reason;
+    if (!v.passed) {
+      doc["reason"] = v.reason;
+    } else if (checks_hold && !passed) {
+      doc["reason"] = why;
+    }
     doc["chi2"] = v.chi2;
     doc["dof"] = v.dof;
     doc["p_value"] = v.p_value;
@@ -287,7 +299,7 @@ int RunVerify(const VerifyArgs& args) {
       doc["gyroscope"] =
           cal.has_gyroscope() ? "not verified: give its log (--gyro)" : "none in the calibration";
     }
-    doc["verdict"] = passed ? "passed" : "failed";
+    doc["verdict"] = verdict;
     out = JsonText(doc);
   } else {
     out += "# accelcal verify " + VisibleLine(args.calibration) + " on " +
@@ -336,14 +348,18 @@ int RunVerify(const VerifyArgs& args) {
     } else if (cal.has_gyroscope()) {
       out += "# the gyroscope: not verified (give its log: --gyro)\n";
     }
-    out += passed ? std::string("# verdict: passed\n") : "# verdict: failed: " + why + "\n";
+    out += passed ? std::string("# verdict: passed\n")
+                  : std::string("# verdict: ") + verdict + ": " + why + "\n";
   }
   WriteFileAtomically(args.output.empty() ? "-" : args.output, out);
+  if (checks_hold && !passed) {
+    Warn("%s: inconclusive on %s: %s\n", args.calibration.c_str(), args.input.path.c_str(),
+         why.c_str());
+    return kExitFailedChecks;
+  }
   if (!untested.empty()) {
-    Warn(
-        "%s: this log does not test %s (its positions and turns do not excite them enough): a "
-        "pass says nothing of them\n",
-        args.input.path.c_str(), untested.c_str());
+    Warn("%s: this log does not test %s (its positions and turns do not excite them enough)\n",
+         args.input.path.c_str(), untested.c_str());
   }
   if (!passed) {
     Warn("%s does not hold on %s: %s\n", args.calibration.c_str(), args.input.path.c_str(),

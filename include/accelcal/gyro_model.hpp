@@ -135,13 +135,17 @@ Eigen::MatrixXd GyroJacobianWrtParameters(const Vec3& omega_rad_s, const Vec3& f
 ///     ε = Rᵀ Σ_m C_m K_g⁻¹ n_m,  C_m = Σ_k R_{k+1} J_r(φ_k) ∂φ_k/∂ω_m
 /// (R_k the product of the first k increments; a sample enters the step before it and the step
 /// after it with weights Δt/2 under the trapezoidal rule, the step after it with Δt under the
-/// piecewise-constant one). Throws std::invalid_argument for sizes that differ, times that do not
+/// piecewise-constant one). With `step_weights` (one per step, t_k to t_{k+1}), each increment is
+/// φ_k = w_k ω̄_k Δt_k, its Jacobian and its samples' noise scaled alike: rates weighted from 0
+/// to 1 over a still span integrate from the span's mean orientation rather than from one of its
+/// samples (gyro_fit.hpp). Throws std::invalid_argument for sizes that differ, times that do not
 /// increase, or a singular K_g.
 Mat33 IntegrateCalibratedRate(const GyroParameters& params, GyroModelKind kind,
                               const std::vector<double>& t_s, const std::vector<Vec3>& raw,
                               const std::vector<Vec3>& f, RateInterpolation rule,
                               Eigen::MatrixXd* J_R_theta = nullptr,
-                              const Vec3* noise_sigma_raw = nullptr, Mat33* covariance = nullptr);
+                              const Vec3* noise_sigma_raw = nullptr, Mat33* covariance = nullptr,
+                              const std::vector<double>* step_weights = nullptr);
 
 /// The angle the body turned through between the first and the last sample: θ = |s|, s = ∫ ω dt
 /// of the calibrated rates ω_k = BodyRate(params, ω_raw,k, f_k), summed with the weights c_k of
@@ -157,10 +161,12 @@ struct TurnedAngle {
   Eigen::RowVectorXd gradient;  ///< ∂θ/∂θ_p over the flat parameters of the model [rad]
   double noise_variance_rad2 = 0;
 };
-/// Throws std::invalid_argument as IntegrateCalibratedRate.
+/// With `step_weights`, each step's share of its samples' weights c_k scaled by its weight (as
+/// IntegrateCalibratedRate). Throws std::invalid_argument as IntegrateCalibratedRate.
 TurnedAngle IntegrateTurnedAngle(const GyroParameters& params, GyroModelKind kind,
                                  const std::vector<double>& t_s, const std::vector<Vec3>& raw,
                                  const std::vector<Vec3>& f, RateInterpolation rule,
-                                 const Vec3& noise_sigma_raw);
+                                 const Vec3& noise_sigma_raw,
+                                 const std::vector<double>* step_weights = nullptr);
 
 }  // namespace accelcal

@@ -135,7 +135,8 @@ template <int PerAxis>
 Mat33 Integrate(const GyroParameters& params, const Mat33& K_inverse,
                 const std::vector<double>& t_s, const std::vector<Vec3>& raw,
                 const std::vector<Vec3>& f, RateInterpolation rule, Eigen::MatrixXd* J_R_theta,
-                const Vec3* noise_sigma_raw, Mat33* covariance) {
+                const Vec3* noise_sigma_raw, Mat33* covariance,
+                const std::vector<double>* step_weights) {
   const bool jacobian = J_R_theta != nullptr;
   // ∂ω_k/∂θ = −K_g⁻¹ ∂ω_raw/∂θ, whose columns of axis i's group are −K_g⁻¹ e_i u_kᵀ with u_k =
   // (ω_k, 1[, f_k]) (GyroJacobianWrtParameters): each step adds to J rank-one blocks −J_r K_g⁻¹ e_i
@@ -170,21 +171,25 @@ Mat33 Integrate(const GyroParameters& params, const Mat33& K_inverse,
                                   std::to_string(k + 1));
     }
     const Vec3 omega_next = rate(k + 1, jacobian ? &u_next : nullptr);
-    const Vec3 phi = (trapezoid ? Vec3(0.5 * (omega_this + omega_next)) : omega_this) * dt;
+    // The step's weight scales its increment, its parameter regressor and its samples' noise
+    // alike (all linear in the rates).
+    const double w = step_weights != nullptr ? (*step_weights)[k] : 1.0;
+    const Vec3 phi = (trapezoid ? Vec3(0.5 * (omega_this + omega_next)) : omega_this) * (w * dt);
     Mat33 J_r;
     const Mat33 increment = StepExp(phi, jacobian || noise ? &J_r : nullptr);
     if (noise) {
-      const Mat33 A = R * increment * J_r;   // R_{k+1} J_r(φ_k)
-      C += A * (trapezoid ? 0.5 * dt : dt);  // sample k's share of this step: C_k is complete
+      const Mat33 A = R * increment * J_r;  // R_{k+1} J_r(φ_k)
+      C += A *
+           (trapezoid ? 0.5 * w * dt : w * dt);  // sample k's share of this step: C_k is complete
       S += C * Q * C.transpose();
-      C = trapezoid ? Mat33(A * (0.5 * dt)) : Mat33::Zero();  // sample k + 1's share
+      C = trapezoid ? Mat33(A * (0.5 * w * dt)) : Mat33::Zero();  // sample k + 1's share
     }
     R = R * increment;
     if (jacobian) {
       // In the frame of the first sample, W = R_k J_k: W_{k+1} = W_k + R_{k+1} ΔJ_k, where the
       // recursion's Exp(φ_k)ᵀ cancels (J_n = R_nᵀ W_n).
       const Regressor u =
-          trapezoid ? Regressor(0.5 * dt * (u_this + u_next)) : Regressor(dt * u_this);
+          trapezoid ? Regressor(0.5 * w * dt * (u_this + u_next)) : Regressor(w * dt * u_this);
       const Mat33 A = R * J_r;
       for (int b = 0; b < 3; ++b) {
         T.template middleCols<PerAxis>(b * PerAxis).noalias() += A.col(b) * u;
@@ -216,11 +221,16 @@ namespace {
 
 // K_g⁻¹ after the checks both integrations make (`who` names the caller in their messages).
 Mat33 CheckedInverse(const char* who, const GyroParameters& params, const std::vector<double>& t_s,
-                     const std::vector<Vec3>& raw, const std::vector<Vec3>& f) {
+                     const std::vector<Vec3>& raw, const std::vector<Vec3>& f,
+                     const std::vector<double>* step_weights) {
   if (t_s.size() != raw.size() || t_s.size() != f.size() || t_s.empty()) {
     throw std::invalid_argument(std::string(who) + ": " + std::to_string(t_s.size()) +
                                 " times for " + std::to_string(raw.size()) + " rates and " +
                                 std::to_string(f.size()) + " specific forces");
+  }
+  if (step_weights != nullptr && step_weights->size() + 1 != t_s.size()) {
+    throw std::invalid_argument(std::string(who) + ": " + std::to_string(step_weights->size()) +
+                                " step weights for " + std::to_string(t_s.size()) + " samples");
   }
   const Eigen::PartialPivLU<Mat33> lu(params.K);
   if (!(lu.determinant() != 0.0) || !std::isfinite(lu.determinant())) {
@@ -235,29 +245,35 @@ Mat33 IntegrateCalibratedRate(const GyroParameters& params, GyroModelKind kind,
                               const std::vector<double>& t_s, const std::vector<Vec3>& raw,
                               const std::vector<Vec3>& f, RateInterpolation rule,
                               Eigen::MatrixXd* J_R_theta, const Vec3* noise_sigma_raw,
-                              Mat33* covariance) {
-  const Mat33 K_inverse = CheckedInverse("IntegrateCalibratedRate", params, t_s, raw, f);
-  return kind == GyroModelKind::kLinear ? Integrate<4>(params, K_inverse, t_s, raw, f, rule,
-                                                       J_R_theta, noise_sigma_raw, covariance)
-                                        : Integrate<7>(params, K_inverse, t_s, raw, f, rule,
-                                                       J_R_theta, noise_sigma_raw, covariance);
+                              Mat33* covariance, const std::vector<double>* step_weights) {
+  const Mat33 K_inverse =
+      CheckedInverse("IntegrateCalibratedRate", params, t_s, raw, f, step_weights);
+  return kind == GyroModelKind::kLinear
+             ? Integrate<4>(params, K_inverse, t_s, raw, f, rule, J_R_theta, noise_sigma_raw,
+                            covariance, step_weights)
+             : Integrate<7>(params, K_inverse, t_s, raw, f, rule, J_R_theta, noise_sigma_raw,
+                            covariance, step_weights);
 }
 
 TurnedAngle IntegrateTurnedAngle(const GyroParameters& params, GyroModelKind kind,
                                  const std::vector<double>& t_s, const std::vector<Vec3>& raw,
                                  const std::vector<Vec3>& f, RateInterpolation rule,
-                                 const Vec3& noise_sigma_raw) {
-  const Mat33 K_inverse = CheckedInverse("IntegrateTurnedAngle", params, t_s, raw, f);
+                                 const Vec3& noise_sigma_raw,
+                                 const std::vector<double>* step_weights) {
+  const Mat33 K_inverse = CheckedInverse("IntegrateTurnedAngle", params, t_s, raw, f, step_weights);
   // The weights c_k of the rule, and the sums s = K_g⁻¹ Σ c_k u_k (u_k = ω_raw,k − b_g − G f_k),
   // Σ c_k, Σ c_k f_k and Σ c_k².
   const bool trapezoid = rule == RateInterpolation::kTrapezoidal;
   const std::size_t n = t_s.size();
   Vec3 u_sum = Vec3::Zero(), f_sum = Vec3::Zero();
   double c_sum = 0, c_sq = 0;
+  const auto weight = [&](std::size_t step) {
+    return step_weights != nullptr ? (*step_weights)[step] : 1.0;
+  };
   for (std::size_t k = 0; k < n; ++k) {
-    const double before = k > 0 ? t_s[k] - t_s[k - 1] : 0.0;
-    const double after = k + 1 < n ? t_s[k + 1] - t_s[k] : 0.0;
-    if (k + 1 < n && !(after > 0)) {
+    const double before = k > 0 ? (t_s[k] - t_s[k - 1]) * weight(k - 1) : 0.0;
+    const double after = k + 1 < n ? (t_s[k + 1] - t_s[k]) * weight(k) : 0.0;
+    if (k + 1 < n && !(t_s[k + 1] > t_s[k])) {
       throw std::invalid_argument("IntegrateTurnedAngle: times do not increase at sample " +
                                   std::to_string(k + 1));
     }

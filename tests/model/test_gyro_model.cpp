@@ -145,6 +145,88 @@ TEST(GyroModel, IntegrationJacobianMatchesFiniteDifferences) {
   }
 }
 
+// Step weights for `m` as a motion between two still spans weights them: rising over the first
+// fifth of its steps, falling over the last fifth.
+std::vector<double> Ramps(const Motion& m) {
+  const std::size_t steps = m.t.size() - 1, ramp = steps / 5;
+  std::vector<double> w(steps, 1.0);
+  for (std::size_t k = 0; k < ramp; ++k) {
+    w[k] = static_cast<double>(k + 1) / static_cast<double>(ramp + 1);
+    w[steps - 1 - k] = w[k];
+  }
+  return w;
+}
+
+TEST(GyroModel, WeightedIntegrationJacobianAndNoiseMatchTheirChecks) {
+  // Issue 47: a motion integrated from a still span's mean orientation weights its steps. The
+  // weights scale each increment, its Jacobian and its samples' noise alike: the Jacobian against
+  // the finite-difference checker, the noise against 4000 noisy draws (as unweighted above), and
+  // weights of 1 are no weights, bit for bit.
+  const GyroParameters p = Typical(5);
+  const Motion m = Turn(p);
+  const std::vector<double> w = Ramps(m), ones(m.t.size() - 1, 1.0);
+  for (RateInterpolation rule :
+       {RateInterpolation::kPiecewiseConstant, RateInterpolation::kTrapezoidal}) {
+    const GyroModelKind kind = GyroModelKind::kGSensitive;
+    Eigen::MatrixXd J;
+    const Mat33 R0 =
+        IntegrateCalibratedRate(p, kind, m.t, m.raw, m.f, rule, &J, nullptr, nullptr, &w);
+    EXPECT_EQ(
+        IntegrateCalibratedRate(p, kind, m.t, m.raw, m.f, rule, nullptr, nullptr, nullptr, &ones),
+        IntegrateCalibratedRate(p, kind, m.t, m.raw, m.f, rule));
+    // Not vacuous: the weights change the rotation.
+    EXPECT_GT(
+        so3::Log(Mat33(R0.transpose() * IntegrateCalibratedRate(p, kind, m.t, m.raw, m.f, rule)))
+            .norm(),
+        0.01);
+    const auto log = [&](const Eigen::VectorXd& t) -> Eigen::VectorXd {
+      const Mat33 R = IntegrateCalibratedRate(UnpackGyro(t, kind), kind, m.t, m.raw, m.f, rule,
+                                              nullptr, nullptr, nullptr, &w);
+      return so3::Log(Mat33(R0.transpose() * R));
+    };
+    EXPECT_TRUE(testing::JacobianMatches(log, Pack(p, kind), J, 1e-6)) << static_cast<int>(rule);
+    const Vec3 sigma(40, 55, 70);
+    Mat33 stated;
+    IntegrateCalibratedRate(p, kind, m.t, m.raw, m.f, rule, nullptr, &sigma, &stated, &w);
+    std::mt19937_64 random(8);
+    std::normal_distribution<double> normal;
+    constexpr int kDraws = 4000;
+    Mat33 sum = Mat33::Zero();
+    for (int draw = 0; draw < kDraws; ++draw) {
+      std::vector<Vec3> noisy = m.raw;
+      for (Vec3& r : noisy) {
+        for (int i = 0; i < 3; ++i) r(i) += sigma(i) * normal(random);
+      }
+      const Vec3 e =
+          so3::Log(Mat33(R0.transpose() * IntegrateCalibratedRate(p, kind, m.t, noisy, m.f, rule,
+                                                                  nullptr, nullptr, nullptr, &w)));
+      sum += e * e.transpose();
+    }
+    const Mat33 sampled = sum / kDraws;
+    for (int i = 0; i < 3; ++i) {
+      for (int j = 0; j < 3; ++j) {
+        const double sd =
+            std::sqrt((stated(i, i) * stated(j, j) + stated(i, j) * stated(i, j)) / kDraws);
+        EXPECT_NEAR(sampled(i, j), stated(i, j), 5 * sd)
+            << i << "," << j << " rule " << static_cast<int>(rule);
+      }
+    }
+    // The turned angle's gradient with the same weights, against the checker too.
+    const TurnedAngle turned = IntegrateTurnedAngle(p, kind, m.t, m.raw, m.f, rule, sigma, &w);
+    const auto angle = [&](const Eigen::VectorXd& t) -> Eigen::VectorXd {
+      return Eigen::VectorXd::Constant(1, IntegrateTurnedAngle(UnpackGyro(t, kind), kind, m.t,
+                                                               m.raw, m.f, rule, Vec3::Zero(), &w)
+                                              .angle_rad);
+    };
+    EXPECT_TRUE(testing::JacobianMatches(angle, Pack(p, kind), turned.gradient, 1e-6));
+  }
+  const std::vector<double> one_short(m.t.size() - 2, 1.0);  // a weight per step, not per sample
+  EXPECT_THROW(IntegrateCalibratedRate(p, GyroModelKind::kLinear, m.t, m.raw, m.f,
+                                       RateInterpolation::kTrapezoidal, nullptr, nullptr, nullptr,
+                                       &one_short),
+               std::invalid_argument);
+}
+
 TEST(GyroModel, PropagatedNoiseCovarianceMatchesMonteCarlo) {
   // White noise on every raw sample: the right perturbation Log(Rᵀ R_noisy) of 4000 draws has the
   // stated covariance. Each entry of a sample covariance of N draws has the standard deviation

@@ -172,6 +172,7 @@ py::dict GyroDict(const GyroCalibration& g) {
     st["last_sample"] = span.last_sample;
     st["mean_raw"] = Vec3(span.mean_raw);
     st["turned_outside_deg"] = span.turned_outside_deg;
+    st["still"] = span.still;
     stills.append(st);
   }
   d["stills"] = stills;

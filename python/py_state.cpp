@@ -156,7 +156,7 @@ void Fields(V& v, Provenance& p) {
 template <typename V>
 void Fields(V& v, GyroStillSpan& s) {
   v("first_sample", s.first_sample)("last_sample", s.last_sample)("mean_raw", s.mean_raw)(
-      "turned_outside_deg", s.turned_outside_deg);
+      "turned_outside_deg", s.turned_outside_deg)("still", s.still);
 }
 template <typename V>
 void Fields(V& v, GyroTimeOffset& t) {
@@ -237,7 +237,7 @@ static_assert(sizeof(BiasTimeBasis) == 40,
               "BiasTimeBasis changed: update its field list (py_state.cpp)");
 static_assert(sizeof(ThermalParameters) == 48,
               "ThermalParameters changed: update its field list (py_state.cpp)");
-static_assert(sizeof(GyroStillSpan) == 48,
+static_assert(sizeof(GyroStillSpan) == 56,
               "GyroStillSpan changed: update its field list (py_state.cpp)");
 static_assert(sizeof(GyroTimeOffset) == 40,
               "GyroTimeOffset changed: update its field list (py_state.cpp)");

@@ -183,7 +183,9 @@ struct LoadedCalibration {
       std::optional<double> heldout_deg, turned_deg;
     };
     std::vector<Rotation> rotations;
-    std::vector<Vec3> still_mean_raw;  ///< `stills[].mean_raw`, when present
+    /// `stills[].mean_raw`, when present; NaN for a position the gyro turned throughout
+    /// (`stills[].still` false).
+    std::vector<Vec3> still_mean_raw;
     /// `thermal`: the offsets over temperature (degree 0: asked for, none found), and the
     /// temperatures they were fitted over, to which they are held.
     std::optional<GyroThermalBias> thermal;

@@ -78,7 +78,8 @@
 ///     the rotations scatter R times more than the rate noise explains (the covariance is
 ///     inflated by R).
 ///   - `gyro_poorly_determined` (warning): a scale factor of K_g known to worse than 1 % (1σ), or
-///     a misalignment (an off-diagonal term over its row's scale) to worse than 0.5°, as the
+///     a misalignment to worse than 0.5°, each entry's σ over its row's length (the scale the
+///     row's largest entry, the diagonal of an aligned gyro; the others misalignments), as the
 ///     accelerometer's `poorly_determined`: turns about one axis mostly leave the others' free. A
 ///     failure at ten times that (10 % of a scale, 5° of a misalignment): no calibration at all.
 ///   - `gyro_turn_outlier` (warning): a turn the screening flagged (its held-out χ² beyond the 1 %
@@ -97,6 +98,13 @@
 ///     inside a still position of the accelerometer, outside its own still span (a turn about the
 ///     vertical, which the accelerometer cannot see, or the gyro's stream lagging or leading the
 ///     accelerometer's): those samples were integrated with the neighbouring turns.
+///   - `gyro_mirrored` (warning): det K_g < 0, the gyro's axes mirrored against the
+///     accelerometer's (an axis inverted or two swapped): mapped as they are, but likely a
+///     driver's axis setting gone wrong.
+///   - `gyro_position_turning` (warning): the gyro did not stand still in a still position of the
+///     accelerometer (GyroStillSpan::still false: it turned throughout, about the vertical, or
+///     its still part's rate is off the zero-rate offset the other positions agree on): the
+///     position gives no still rate, and the turns on either side of it were integrated as one.
 
 #include <string>
 #include <string_view>

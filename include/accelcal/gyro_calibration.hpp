@@ -161,6 +161,11 @@ struct GyroStillSpan {
   /// a turn about the vertical it cannot see, or the gyro's stream lagging or leading the
   /// accelerometer's.
   double turned_outside_deg = 0;
+  /// false: the gyro turned throughout this position (about the vertical, which the
+  /// accelerometer cannot see) or its still part's rate is not the zero-rate offset: it gives no
+  /// still rate, the turns on either side of it are integrated as one through it, and the span
+  /// is the whole interval (mean_raw its mean rate, turned_outside_deg the angle turned in it).
+  bool still = true;
 };
 
 /// The lag of the gyro's readings behind the accelerometer's [s] (> 0: the gyro late), from the

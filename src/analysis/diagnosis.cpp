@@ -213,9 +213,13 @@ std::vector<Finding> GyroFindings(const GyroCalibration& g) {
       const GyroParameterSlot& s = slots[p];
       if (s.group != GyroParameterGroup::kK) continue;
       const auto i = static_cast<Eigen::Index>(p);
-      const double scale = std::abs(g.params.K(s.row, s.row));
+      // Relative to its row's length (a gyro mounted turned has a diagonal near 0): its scale
+      // the row's largest entry (the diagonal when aligned), its misalignments the others.
+      const double scale = g.params.K.row(s.row).norm();
+      Eigen::Index largest = 0;
+      g.params.K.row(s.row).cwiseAbs().maxCoeff(&largest);
       const double sigma = std::sqrt(g.covariance(i, i)) / scale;  // relative, or radians
-      const double limit = s.row == s.col ? kGyroScaleSigmaLimit : kGyroMisalignmentSigmaLimit;
+      const double limit = s.col == largest ? kGyroScaleSigmaLimit : kGyroMisalignmentSigmaLimit;
       if (!(sigma <= limit)) {
         names += (names.empty() ? "" : ", ") + std::string(s.name);
         worst = std::max(worst, sigma / limit);
@@ -230,6 +234,13 @@ std::vector<Finding> GyroFindings(const GyroCalibration& g) {
                  names.c_str(), worst),
           {{"worst_ratio", worst}});
     }
+  }
+  if (g.params.K.determinant() < 0) {
+    Add(&out, "gyro_mirrored", Severity::kWarning,
+        "the gyroscope's axes are mirrored against the accelerometer's (det K_g < 0: one axis "
+        "reads inverted, or two are swapped): the calibration maps the rates as they are, but a "
+        "driver's or log's axis setting is likely wrong; check the gyro's axis signs and order",
+        {{"det_K", g.params.K.determinant()}});
   }
   for (const GyroRotation& r : g.rotations) {
     if (!r.flagged) continue;
@@ -286,9 +297,26 @@ std::vector<Finding> GyroFindings(const GyroCalibration& g) {
           {{"lag_s", lag->lag_s}, {"std_s", lag->std_s}});
     }
   }
+  std::string turning;
+  for (std::size_t i = 0; i < g.still_spans.size(); ++i) {
+    if (g.still_spans[i].still) continue;
+    turning += Format("%s%zu (%.3g deg)", turning.empty() ? "" : ", ", i + 1,
+                      g.still_spans[i].turned_outside_deg);
+  }
+  if (!turning.empty()) {
+    Add(&out, "gyro_position_turning", Severity::kWarning,
+        Format("the gyroscope did not stand still in position %s while the accelerometer was "
+               "still (it turned about the vertical, which the accelerometer cannot see, or its "
+               "rate there is off the offset the other positions agree on): no still rate was "
+               "taken from it, and the turns on either side of it were integrated as one; hold "
+               "the unit still in every position",
+               turning.c_str()),
+        {});
+  }
   std::string turned;
   double most = 0;
   for (std::size_t i = 0; i < g.still_spans.size(); ++i) {
+    if (!g.still_spans[i].still) continue;
     const double angle = g.still_spans[i].turned_outside_deg;
     if (!(angle > kGyroTurnedInStillNote_deg)) continue;
     turned += Format("%s%zu (%.3g deg)", turned.empty() ? "" : ", ", i + 1, angle);

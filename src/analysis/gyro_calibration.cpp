@@ -22,6 +22,7 @@
 #include "io/gyro_still_runs.hpp"
 #include "solvers/gyro_fit.hpp"
 #include "solvers/imu_joint_fit.hpp"
+#include "statistics/rounding.hpp"
 #include "statistics/student_t.hpp"
 
 namespace accelcal {
@@ -48,6 +49,10 @@ std::string Num(double x, int digits) { return internal::Format("%.*g", digits, 
 /// A turn of more than this per sample step is integrated too coarsely (the trapezoidal rule's
 /// error grows with the square of the angle per step).
 constexpr double kMaxDegreesPerStep = 10.0;
+/// A turn is integrated from the mean orientation over this much of the still span before it to
+/// that over as much of the one after it [s]: a unit's wobble as it stands (0.3-1 Hz by hand)
+/// averages over it, and the Earth's horizontal rate (15 °/h, not modelled) adds 0.004° at most.
+constexpr double kMeanOrientationSpan_s = 2.0;
 
 std::string AxisName(int axis) { return std::string(1, static_cast<char>('x' + axis)); }
 
@@ -147,12 +152,13 @@ GyroMotion SamplesOf(const RawLog& accel, const RawLog& gyro, const std::vector<
 // that is too fast for the rate, the axis never turned about.
 void CheckExcitation(const GyroFitData& data, const internal::GyroFitData& /*unused*/,
                      const GyroParameters& start) {
-  const double k = start.K.diagonal().cwiseAbs().mean();
+  const double k = start.K.rowwise().norm().mean();  // the start's K_g = k P, P a mount
   Vec3 turned = Vec3::Zero();
   for (const GyroMotion& m : data.motions) {
     for (std::size_t s = 0; s + 1 < m.t_s.size(); ++s) {
+      const double w = m.step_weight.empty() ? 1.0 : m.step_weight[s];
       const Vec3 step =
-          0.5 * (m.raw[s] + m.raw[s + 1] - 2 * start.bias) / k * (m.t_s[s + 1] - m.t_s[s]);
+          0.5 * (m.raw[s] + m.raw[s + 1] - 2 * start.bias) / k * (w * (m.t_s[s + 1] - m.t_s[s]));
       turned += step.cwiseAbs();
       if (step.norm() * kRadToDeg > kMaxDegreesPerStep) {
         throw DataError("the turn from position " + std::to_string(m.from + 1) + " to " +
@@ -230,22 +236,29 @@ Built BuildData(const RawLog& accel, const RawLog& gyro, const std::vector<Posit
   for (const Position& p : positions) intervals.push_back(*p.interval);
   const internal::GyroStillRuns still =
       internal::FindGyroStillRuns(gyro.samples, intervals, typical_step, quantum);
+  // The positions where the gyro stood still. One it turned throughout (about the vertical, which
+  // the accelerometer cannot see) gives no still rate: the turns on either side of it are
+  // integrated as one through it. Most of them turning is not a unit turned about the vertical:
+  // the rates are not this accelerometer's, or the streams are out of step.
+  std::vector<std::size_t> standing;
   for (std::size_t i = 0; i < m; ++i) {
-    const StaticInterval& run = still.runs[i];
-    if (run.end - run.begin < 2) {
-      throw DataError("the gyroscope turns throughout still position " + std::to_string(i + 1) +
-                      " (lines " + LineOf(gyro, intervals[i].begin) + "-" +
-                      LineOf(gyro, intervals[i].end - 1) + " of " + gyro.source +
-                      "), where the accelerometer is still: these are not this accelerometer's "
-                      "rates, or the two streams are far out of step");
-    }
-    b.still_runs.push_back(run);
+    if (still.runs[i].end - still.runs[i].begin >= 2) standing.push_back(i);
   }
-  // Each position's mean rate and the pooled sample noise.
+  if (2 * standing.size() < m || standing.size() < 2) {
+    std::size_t first = 0;
+    while (first < m && still.runs[first].end - still.runs[first].begin >= 2) ++first;
+    throw DataError("the gyroscope turns throughout " + std::to_string(m - standing.size()) +
+                    " of the " + std::to_string(m) + " still positions (position " +
+                    std::to_string(first + 1) + ": lines " + LineOf(gyro, intervals[first].begin) +
+                    "-" + LineOf(gyro, intervals[first].end - 1) + " of " + gyro.source +
+                    "), where the accelerometer is still: these are not this accelerometer's "
+                    "rates, or the two streams are far out of step");
+  }
+  b.still_runs = still.runs;
+  // Each still position's mean rate and the pooled sample noise.
   Vec3 sum_sq = Vec3::Zero();
   double dof = 0;
-  std::vector<std::size_t> counts;
-  for (std::size_t i = 0; i < m; ++i) {
+  for (const std::size_t i : standing) {
     const StaticInterval& iv = still.runs[i];
     Vec3 mean = Vec3::Zero();
     for (std::size_t k = iv.begin; k < iv.end; ++k) mean += gyro.samples[k];
@@ -255,10 +268,9 @@ Built BuildData(const RawLog& accel, const RawLog& gyro, const std::vector<Posit
       sum_sq += (gyro.samples[k] - mean).cwiseAbs2();
     }
     dof += n - 1;
-    counts.push_back(iv.end - iv.begin);
-    data.stills.push_back({mean, Vec3::Zero(), accel_cal.gravity * accel_cal.directions[i]});
-    data.directions.push_back(accel_cal.directions[i]);
+    data.stills.push_back({mean, Vec3::Zero(), accel_cal.gravity * accel_cal.directions[i], i});
   }
+  for (std::size_t i = 0; i < m; ++i) data.directions.push_back(accel_cal.directions[i]);
   if (!(dof > 0)) throw DataError("the still positions are too short to measure the rate noise");
   data.noise_sigma_raw = (sum_sq / dof).cwiseSqrt();
   for (int a = 0; a < 3; ++a) {
@@ -269,9 +281,18 @@ Built BuildData(const RawLog& accel, const RawLog& gyro, const std::vector<Posit
                       "column?)");
     }
   }
-  for (std::size_t i = 0; i < m; ++i) {
-    data.stills[i].sigma_mean_raw =
-        data.noise_sigma_raw / std::sqrt(static_cast<double>(counts[i]));
+  // Each still mean's σ: the noise over its samples, and at least what rounding to the axis'
+  // step leaves when the rates do not dither (statistics/rounding.hpp).
+  Vec3 rounding = Vec3::Zero();
+  for (int a = 0; a < 3; ++a) {
+    rounding(a) = internal::RoundingFloorVariance(
+        quantum(a), data.noise_sigma_raw(a) * data.noise_sigma_raw(a));
+  }
+  for (GyroStill& s : data.stills) {
+    const StaticInterval& iv = still.runs[s.position];
+    s.sigma_mean_raw =
+        (data.noise_sigma_raw.cwiseAbs2() / static_cast<double>(iv.end - iv.begin) + rounding)
+            .cwiseSqrt();
   }
   // The turns: from the last still sample of one position to the first of the next.
   b.t = IntegrationTimes(gyro, accel);
@@ -299,17 +320,46 @@ Built BuildData(const RawLog& accel, const RawLog& gyro, const std::vector<Posit
       steep(a) = kSaturationSteepness * quantum(a);
     }
   }
-  for (std::size_t i = 0; i + 1 < m; ++i) {
+  for (std::size_t j = 0; j + 1 < standing.size(); ++j) {
+    const std::size_t i = standing[j], next = standing[j + 1];
+    // The turn proper: from the last still sample of one position to the first of the next.
     const std::size_t first = still.runs[i].end - 1;
-    const std::size_t last = still.runs[i + 1].begin;
-    GyroMotion motion = SamplesOf(accel, gyro, t, accel_cal.params,
-                                  accel_cal.gravity * accel_cal.directions[i], first, last);
+    const std::size_t last = still.runs[next].begin;
+    // Integrated from the mean orientation over the end of the first still span to that over
+    // the start of the next, which is what the accelerometer's mean readings see (a unit that
+    // wobbles as it stands is not where it was on average at the span's last sample): the
+    // span's steps weighted by the share of its samples before them, (k − b + 1)/n, those of the
+    // next span by the share after them, each span's mean rotation taken to first order (a
+    // wobble of a fraction of a degree). At most kMeanOrientationSpan_s of each span: over a
+    // whole span the rates would integrate the Earth's unmodelled horizontal rate and the bias's
+    // drift too (the Xsens's first span of 51 s turned its turn by 0.1°). Only a span that
+    // wobbles (GyroStillRuns::wobbles) is averaged so: its samples' noise is in its still mean
+    // too, and a quiet span's would make the two correlated for nothing (σ of b_g 15 % low over
+    // 400 simulated recordings).
+    const auto span = static_cast<std::size_t>(
+        typical_step > 0 ? std::max(2.0, std::round(kMeanOrientationSpan_s / typical_step)) : 2.0);
+    const auto wobbles = [&](std::size_t p) { return still.wobbles[p] != 0; };
+    StaticInterval from = still.runs[i], to = still.runs[next];
+    from.begin = !wobbles(i) ? first : std::max(from.begin, from.end > span ? from.end - span : 0);
+    to.end = !wobbles(next) ? last + 1 : std::min(to.end, to.begin + span);
+    GyroMotion motion =
+        SamplesOf(accel, gyro, t, accel_cal.params, accel_cal.gravity * accel_cal.directions[i],
+                  from.begin, to.end - 1);
+    if (wobbles(i) || wobbles(next)) motion.step_weight.assign(motion.t_s.size() - 1, 1.0);
+    const auto n_from = static_cast<double>(from.end - from.begin);
+    const auto n_to = static_cast<double>(to.end - to.begin);
+    for (std::size_t k = from.begin; k + 1 < from.end; ++k) {
+      motion.step_weight[k - from.begin] = static_cast<double>(k - from.begin + 1) / n_from;
+    }
+    for (std::size_t k = to.begin; k + 1 < to.end; ++k) {
+      motion.step_weight[k - from.begin] = static_cast<double>(to.end - 1 - k) / n_to;
+    }
     motion.from = i;
-    motion.to = i + 1;
+    motion.to = next;
     for (std::size_t k = first + 1; k <= last; ++k) {
       if (typical_step > 0 && t[k] - t[k - 1] > 5 * typical_step) {
         throw DataError("the turn from position " + std::to_string(i + 1) + " to " +
-                        std::to_string(i + 2) + " has a gap of " + Num(t[k] - t[k - 1], 4) +
+                        std::to_string(next + 1) + " has a gap of " + Num(t[k] - t[k - 1], 4) +
                         " s in its samples (at line " +
                         std::to_string(gyro.line.empty() ? k + 1 : gyro.line[k]) + " of " +
                         gyro.source + "): its rotation cannot be integrated");
@@ -322,14 +372,14 @@ Built BuildData(const RawLog& accel, const RawLog& gyro, const std::vector<Posit
                         Num(gyro.samples[run->begin](a), 6) + ") for " +
                         std::to_string(run->end - run->begin) +
                         " samples in a row during the turn from position " + std::to_string(i + 1) +
-                        " to " + std::to_string(i + 2) + " (lines " + LineOf(gyro, run->begin) +
+                        " to " + std::to_string(next + 1) + " (lines " + LineOf(gyro, run->begin) +
                         "-" + LineOf(gyro, run->end - 1) + " of " + gyro.source +
                         "): it saturated, so the turn's angle is wrong");
       }
     }
     GyroRotation r;
     r.from = i;
-    r.to = i + 1;
+    r.to = next;
     r.first_sample = first;
     r.last_sample = last;
     r.duration_s = t[last] - t[first];
@@ -413,7 +463,8 @@ TurnCheck CheckTurn(const GyroFitData& data, std::size_t k, const GyroParameters
                     const std::vector<Vec3>& directions) {
   if (!Determined(gyro)) return {std::nan(""), std::nan(""), std::nan("")};
   const GyroMotion& m = data.motions[k];
-  const Mat33 R = IntegrateCalibratedRate(gyro, data.model, m.t_s, m.raw, m.f, data.rule);
+  const Mat33 R = IntegrateCalibratedRate(gyro, data.model, m.t_s, m.raw, m.f, data.rule, nullptr,
+                                          nullptr, nullptr, m.weights());
   const Vec3 v = R.transpose() * directions[m.from];
   const Vec3& c = directions[m.to];
   return {std::atan2(v.cross(c).norm(), v.dot(c)), so3::Log(R).norm(),
@@ -450,6 +501,27 @@ struct ModelFit {
   std::optional<internal::ImuJointData> joint_data;  // the joint estimator's problem
 };
 
+// The motions as the turns proper, from the last sample of one still span to the first of the
+// next: their steps of weight 1 (a span's steps weigh less than 1: BuildData).
+internal::GyroMotions WithoutSpans(const internal::GyroMotions& motions) {
+  internal::GyroMotions out;
+  for (const GyroMotion& m : motions) {
+    std::size_t first = 0, last = m.step_weight.size();  // the turn's steps [first, last)
+    while (first < last && m.step_weight[first] < 1) ++first;
+    while (last > first && m.step_weight[last - 1] < 1) --last;
+    GyroMotion turn;
+    turn.from = m.from;
+    turn.to = m.to;
+    const auto begin = static_cast<std::ptrdiff_t>(first);
+    const auto end = static_cast<std::ptrdiff_t>(m.step_weight.empty() ? m.t_s.size() : last + 1);
+    turn.t_s.assign(m.t_s.begin() + begin, m.t_s.begin() + end);
+    turn.raw.assign(m.raw.begin() + begin, m.raw.begin() + end);
+    turn.f.assign(m.f.begin() + begin, m.f.begin() + end);
+    out.push_back(std::move(turn));
+  }
+  return out;
+}
+
 void RequireConverged(const internal::LeastSquaresSummary& summary) {
   if (!summary.converged()) {
     throw NotConvergedError(
@@ -467,9 +539,13 @@ ModelFit FitModel(GyroFitData data, GyroModelKind kind, const std::vector<Positi
   data.model = kind;
   if (options.estimator == GyroEstimator::kImuTk) {
     // imu_tk's bias: the first still position's mean rate, held (its residual weighted 10¹²
-    // times, the others' left out); K_g from the turns alone. Its σ is that mean's (below).
+    // times, the others' left out); K_g from the turns alone, each integrated from the last
+    // sample of one still span to the first of the next (not from their mean orientations).
+    // Its σ is that mean's (below).
     data.stills.resize(1);
     data.stills[0].sigma_mean_raw *= 1e-6;
+    data.motions = WithoutSpans(data.motions);
+    data.weights = internal::WeighMotions(data, start);
   }
   // The two-stage fit under the sample noise (data.weights, the turns' weights); each group's
   // scatter ratio there, and the fit again with each group's noise scaled by its ratio (when
@@ -701,8 +777,9 @@ void CheckFit(const RawLog& accel, const RawLog& gyro, const std::vector<Positio
   // the rate noise of its samples (a check of the scale against a turn of known angle).
   for (std::size_t k = 0; k < f.data.motions.size(); ++k) {
     const GyroMotion& m = f.data.motions[k];
-    const TurnedAngle turned = IntegrateTurnedAngle(f.solution.gyro, f.kind, m.t_s, m.raw, m.f,
-                                                    f.data.rule, built.data.noise_sigma_raw);
+    const TurnedAngle turned =
+        IntegrateTurnedAngle(f.solution.gyro, f.kind, m.t_s, m.raw, m.f, f.data.rule,
+                             built.data.noise_sigma_raw, m.weights());
     double variance = turned.noise_variance_rad2;
     if (out->covariance.size() > 0) {
       variance += turned.gradient.dot(out->covariance * turned.gradient.transpose());
@@ -712,24 +789,39 @@ void CheckFit(const RawLog& accel, const RawLog& gyro, const std::vector<Positio
   }
   // Where the gyro was still in each position, and the angle it turned outside that but inside
   // the accelerometer's still interval (a turn about the vertical, the ends of the turns the
-  // accelerometer hardly sees, a lag of the gyro's stream).
+  // accelerometer hardly sees, a lag of the gyro's stream); in a position it turned throughout,
+  // the interval's mean rate and the angle turned over all of it.
+  std::vector<const internal::GyroStill*> still_of(positions.size(), nullptr);
+  for (const internal::GyroStill& s : built.data.stills) still_of[s.position] = &s;
   for (std::size_t i = 0; i < positions.size(); ++i) {
     const StaticInterval& iv = *positions[i].interval;
     const StaticInterval& run = built.still_runs[i];
     GyroStillSpan span;
+    const Vec3 f0 = accel_cal.gravity * f.solution.directions[i];
+    const auto turned_deg = [&](std::size_t a, std::size_t b) {
+      const GyroMotion part = SamplesOf(accel, gyro, built.t, accel_cal.params, f0, a, b);
+      return IntegrateTurnedAngle(f.solution.gyro, f.kind, part.t_s, part.raw, part.f, f.data.rule,
+                                  built.data.noise_sigma_raw)
+                 .angle_rad *
+             kRadToDeg;
+    };
+    if (still_of[i] == nullptr) {
+      span.still = false;
+      span.first_sample = iv.begin;
+      span.last_sample = iv.end - 1;
+      for (std::size_t k = iv.begin; k < iv.end; ++k) span.mean_raw += gyro.samples[k];
+      span.mean_raw /= static_cast<double>(iv.end - iv.begin);
+      if (iv.end - iv.begin >= 2) span.turned_outside_deg = turned_deg(iv.begin, iv.end - 1);
+      out->still_spans.push_back(span);
+      continue;
+    }
     span.first_sample = run.begin;
     span.last_sample = run.end - 1;
-    span.mean_raw = built.data.stills[i].mean_raw;
-    const Vec3 f0 = accel_cal.gravity * f.solution.directions[i];
+    span.mean_raw = still_of[i]->mean_raw;
     for (const auto& [a, b] :
          {std::pair{iv.begin, run.begin}, std::pair{run.end - 1, iv.end - 1}}) {
       if (b <= a) continue;
-      const GyroMotion part = SamplesOf(accel, gyro, built.t, accel_cal.params, f0, a, b);
-      span.turned_outside_deg +=
-          IntegrateTurnedAngle(f.solution.gyro, f.kind, part.t_s, part.raw, part.f, f.data.rule,
-                               built.data.noise_sigma_raw)
-              .angle_rad *
-          kRadToDeg;
+      span.turned_outside_deg += turned_deg(a, b);
     }
     out->still_spans.push_back(span);
   }
@@ -762,7 +854,8 @@ GyroCalibration CalibrateGyro(const RawLog& accel, const RawLog& raw_gyro,
     const Built as_read = BuildData(accel, raw_gyro, positions, accel_cal, options);
     const std::vector<double> t_c = GyroSampleTemperatures(raw_gyro, accel);
     std::vector<double> position_t_c;
-    for (const StaticInterval& run : as_read.still_runs) {
+    for (const internal::GyroStill& still : as_read.data.stills) {
+      const StaticInterval& run = as_read.still_runs[still.position];
       double sum = 0;
       for (std::size_t k = run.begin; k < run.end; ++k) sum += t_c[k];
       position_t_c.push_back(sum / static_cast<double>(run.end - run.begin));
@@ -789,7 +882,7 @@ GyroCalibration CalibrateGyro(const RawLog& accel, const RawLog& raw_gyro,
   // A declared unit must agree with the angles turned: the closed-form scale (GyroStart) is
   // within 0.1 % of the fitted one on the Xsens recording and 2 % on the T265 one; a declared
   // scale from half to twice it is accepted, where a misread unit is a factor of 57 or more.
-  const double turned_scale = internal::GyroStart(data, std::nullopt).K(0, 0);
+  const double turned_scale = internal::GyroStart(data, std::nullopt).K.row(0).norm();
   if (scale && !(*scale >= 0.5 * turned_scale && *scale <= 2 * turned_scale)) {
     throw DataError(internal::Format(
         "the rates read in %s turn the sensor %.3g times the angles the accelerometer sees "

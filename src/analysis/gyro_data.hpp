@@ -15,7 +15,7 @@ namespace accelcal::internal {
 struct Built {
   GyroFitData data;
   std::vector<GyroRotation> rotations;     // one per motion
-  std::vector<StaticInterval> still_runs;  // per position: where the gyro is still
+  std::vector<StaticInterval> still_runs;  // per position: where the gyro is still (or empty)
   std::vector<double> t;                   // the integration times
   double step_s = 0;                       // their typical step
 };

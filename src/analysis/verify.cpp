@@ -249,7 +249,7 @@ GyroVerification VerifyGyroscope(const VerifiedCalibration& accel, const Verifie
     VerifiedTurn turn;
     turn.from = m.from;
     turn.to = m.to;
-    turn.duration_s = m.t_s.back() - m.t_s.front();
+    turn.duration_s = built.rotations[k].duration_s;  // the turn proper, between its still spans
     turn.error_deg = internal::MotionAngleError(data, m, params) * kRadToDeg;
     turn.predicted_deg = std::sqrt((L_inverse * C_k * L_inverse.transpose()).trace()) * kRadToDeg;
     turn.z = std::sqrt(r_k.dot(C_k.ldlt().solve(r_k)));

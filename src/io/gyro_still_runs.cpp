@@ -53,21 +53,59 @@ GyroStillRuns FindGyroStillRuns(const std::vector<Vec3>& rates_raw,
       centre[i](a) = axis.empty() ? 0.0 : Median(std::move(axis));
     }
   }
+  // The offset's first guess, the median of the intervals' medians; the turns' peak rate about it
+  // over the samples between consecutive intervals (the median over the turns: one slip of the
+  // hand or one slow turn does not set it).
+  const auto axis_median = [](const std::vector<Vec3>& values, const std::vector<char>& use) {
+    Vec3 median = Vec3::Zero();
+    for (int a = 0; a < 3; ++a) {
+      std::vector<double> axis;
+      for (std::size_t i = 0; i < values.size(); ++i) {
+        if (use[i]) axis.push_back(values[i](a));
+      }
+      median(a) = axis.empty() ? 0.0 : Median(std::move(axis));
+    }
+    return median;
+  };
+  {
+    const Vec3 offset = axis_median(centre, std::vector<char>(m, 1));
+    std::vector<double> peaks;
+    for (std::size_t i = 0; i + 1 < m; ++i) {
+      double peak = 0;
+      for (std::size_t k = intervals[i].end; k < intervals[i + 1].begin; ++k) {
+        peak = std::max(peak, (rates_raw[k] - offset).cwiseAbs().maxCoeff());
+      }
+      if (intervals[i + 1].begin > intervals[i].end) peaks.push_back(peak);
+    }
+    out.turn_peak_raw = peaks.empty() ? 0.0 : Median(std::move(peaks));
+  }
+  const double wobble_cap = kGyroWobbleFraction * out.turn_peak_raw;
   out.runs.assign(m, StaticInterval{});
+  out.interval_sigma_raw.assign(m, Vec3::Zero());
   std::vector<std::vector<Vec3>> means(m);
   std::vector<double> sigmas;
   std::vector<char> moving;
   for (int pass = 0; pass < 3; ++pass) {
     // The windows' deviations: all of them at first, then those inside the runs found.
     std::vector<double> deviation[3];
+    std::vector<Vec3> own(m, Vec3::Zero());
     for (std::vector<double>& d : deviation) d.reserve(rates_raw.size());
     for (std::size_t i = 0; i < m; ++i) {
       WindowMeans(rates_raw, intervals[i], w, centre[i], &means[i]);
       const StaticInterval& run = out.runs[i];
+      std::vector<double> mine[3];
       for (std::size_t j = 0; j < means[i].size(); ++j) {
         const std::size_t k = intervals[i].begin + j;
         if (pass > 0 && !(k >= run.begin && k + w <= run.end)) continue;
-        for (int a = 0; a < 3; ++a) deviation[a].push_back(std::abs(means[i][j](a)));
+        for (int a = 0; a < 3; ++a) {
+          deviation[a].push_back(std::abs(means[i][j](a)));
+          mine[a].push_back(std::abs(means[i][j](a)));
+        }
+      }
+      // The interval's own scatter, by the median of its windows' deviations (a turn's ends
+      // take less than half of an interval).
+      for (int a = 0; a < 3; ++a) {
+        own[i](a) = mine[a].empty() ? 0.0 : Median(std::move(mine[a])) / 0.6745;
       }
     }
     for (int a = 0; a < 3; ++a) {
@@ -84,12 +122,21 @@ GyroStillRuns FindGyroStillRuns(const std::vector<Vec3>& rates_raw,
     }
     for (std::size_t i = 0; i < m; ++i) {
       const StaticInterval& iv = intervals[i];
+      // The interval's wobble, where it clearly has more than the pooled noise (an estimate
+      // from a few seconds' windows is within about 30 % of it), up to the cap.
+      Vec3 sigma = out.window_sigma_raw;
+      for (int a = 0; a < 3; ++a) {
+        if (own[i](a) > kGyroWobbleSignificance * sigma(a)) {
+          sigma(a) = std::max(sigma(a), std::min(own[i](a), wobble_cap));
+        }
+      }
+      out.interval_sigma_raw[i] = sigma;
       // Hysteresis: a stretch of consecutive windows beyond kGyroStillThreshold σ is moving
       // when one of them is beyond kGyroMotionThreshold σ.
       // Each window's largest deviation in σ.
       sigmas.resize(means[i].size());
       for (std::size_t j = 0; j < means[i].size(); ++j) {
-        sigmas[j] = means[i][j].cwiseAbs().cwiseQuotient(out.window_sigma_raw).maxCoeff();
+        sigmas[j] = means[i][j].cwiseAbs().cwiseQuotient(sigma).maxCoeff();
       }
       moving.assign(iv.end - iv.begin, 0);
       for (std::size_t j = 0; j < sigmas.size();) {
@@ -131,6 +178,63 @@ GyroStillRuns FindGyroStillRuns(const std::vector<Vec3>& rates_raw,
       } else {
         run.begin = run.end = iv.begin;
       }
+    }
+  }
+  // Each run's mean against the offset, the median of the runs' means; their spread about it
+  // by the median absolute deviation.
+  std::vector<char> has_run(m);
+  for (std::size_t i = 0; i < m; ++i) has_run[i] = out.runs[i].end > out.runs[i].begin ? 1 : 0;
+  out.offset_raw = axis_median(centre, has_run);
+  std::vector<Vec3> off(m, Vec3::Zero());
+  for (std::size_t i = 0; i < m; ++i) {
+    if (has_run[i]) off[i] = (centre[i] - out.offset_raw).cwiseAbs();
+  }
+  const Vec3 spread = axis_median(off, has_run) / 0.6745;
+  // White noise's share of a window mean, from the successive differences inside the runs (a
+  // slow wobble hardly moves them); each run's own scatter against it.
+  {
+    std::vector<double> differences[3];
+    for (std::size_t i = 0; i < m; ++i) {
+      for (std::size_t k = out.runs[i].begin + 1; k < out.runs[i].end; ++k) {
+        for (int a = 0; a < 3; ++a) {
+          differences[a].push_back(std::abs(rates_raw[k](a) - rates_raw[k - 1](a)));
+        }
+      }
+    }
+    Vec3 white = Vec3::Zero();
+    for (int a = 0; a < 3; ++a) {
+      if (!differences[a].empty()) {
+        white(a) = Median(std::move(differences[a])) / 0.6745 / std::sqrt(2.0) /
+                   std::sqrt(static_cast<double>(w));
+      }
+    }
+    out.wobbles.assign(m, 0);
+    for (std::size_t i = 0; i < m; ++i) {
+      const StaticInterval& run = out.runs[i];
+      if (run.end - run.begin < w + 1) continue;
+      WindowMeans(rates_raw, run, w, centre[i], &means[i]);
+      for (int a = 0; a < 3; ++a) {
+        std::vector<double> d;
+        for (const Vec3& mean : means[i]) d.push_back(std::abs(mean(a)));
+        const double own = Median(std::move(d)) / 0.6745;
+        if (own > kGyroWobbleSignificance * white(a)) out.wobbles[i] = 1;
+      }
+    }
+  }
+  out.run_offset_raw.assign(m, Vec3::Zero());
+  out.run_tolerance_raw.assign(m, Vec3::Zero());
+  for (std::size_t i = 0; i < m; ++i) {
+    if (!has_run[i]) continue;
+    const StaticInterval& run = out.runs[i];
+    const double windows = static_cast<double>(run.end - run.begin) / static_cast<double>(w);
+    const Vec3 own_mean = out.interval_sigma_raw[i] / std::sqrt(std::max(1.0, windows));
+    const Vec3 tolerance = (kGyroOffsetSpread * spread)
+                               .cwiseMax(kGyroMotionThreshold * own_mean)
+                               .cwiseMax(Vec3::Constant(wobble_cap));
+    out.run_offset_raw[i] = centre[i] - out.offset_raw;
+    out.run_tolerance_raw[i] = tolerance;
+    if (((centre[i] - out.offset_raw).cwiseAbs().array() > tolerance.array()).any()) {
+      out.runs[i].end = out.runs[i].begin;
     }
   }
   return out;

@@ -354,7 +354,8 @@ ordered_json GyroscopeSection(const GyroCalibration& g, const CalibrationFileInf
                       {"first_sample", span.first_sample},
                       {"last_sample", span.last_sample},
                       {"mean_raw", ToJson(span.mean_raw)},
-                      {"turned_outside_deg", span.turned_outside_deg}});
+                      {"turned_outside_deg", span.turned_outside_deg},
+                      {"still", span.still}});
   }
   doc["stills"] = stills;
   if (g.thermal) {

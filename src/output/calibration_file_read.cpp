@@ -603,7 +603,14 @@ LoadedCalibration::Gyroscope ReadGyroscope(const Reader& r, const ordered_json& 
     const Reader in = r.Inside("stills[]");
     for (const ordered_json& st : *stills) {
       if (!st.is_object()) r.Fail(r.Key("stills") + " must hold objects");
-      g.still_mean_raw.push_back(in.Vector3(st, "mean_raw"));
+      const Vec3 mean = in.Vector3(st, "mean_raw");
+      // A position the gyro turned throughout (`still` false) has no still rate.
+      bool still = true;
+      if (st.contains("still")) {
+        if (!st["still"].is_boolean()) in.Fail(in.Key("still") + " must be true or false");
+        still = st["still"].get<bool>();
+      }
+      g.still_mean_raw.push_back(still ? mean : Vec3::Constant(std::nan("")));
     }
   }
   if (doc.contains("thermal")) ReadGyroThermal(r, doc, g);

@@ -443,9 +443,15 @@ std::string GyroSection(const Document& d) {
     const std::size_t m = g.still_mean_raw.size();
     std::vector<Vec3> measured, modelled;
     double lo = 0, hi = 0;
+    // A position the gyro turned throughout (its still rate NaN) is not drawn.
+    std::vector<bool> drawn(m, true);
     for (std::size_t k = 0; k < m; ++k) {
       measured.push_back(g.still_mean_raw[k] - g.params.bias);
       modelled.push_back(g.params.G * (d.cal.gravity * *d.cal.positions[k].direction));
+      if (g.still_mean_raw[k].hasNaN() && modelled.back().allFinite()) {
+        drawn[k] = false;
+        continue;
+      }
       if (!measured.back().allFinite() || !modelled.back().allFinite()) {
         return html + NotPlotted("still rates") + "</section>\n";
       }
@@ -459,6 +465,7 @@ std::string GyroSection(const Document& d) {
     std::string body = Axes(f, "position", "still rate - bias [" + g.raw_unit + "]");
     const double dx = std::min(6.0, 0.25 * f.width / static_cast<double>(m));
     for (std::size_t k = 0; k < m; ++k) {
+      if (!drawn[k]) continue;
       for (int a = 0; a < 3; ++a) {
         const double x = f.X(static_cast<double>(k + 1)) + (a - 1) * dx;
         const std::string tip = "position " + std::to_string(k + 1) + " " + kAxisName[a];

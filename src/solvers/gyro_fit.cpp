@@ -16,7 +16,7 @@ std::optional<MotionWeight> WeighMotion(const GyroFitData& data, const GyroMotio
                                         const GyroParameters& params) {
   Mat33 covariance;
   IntegrateCalibratedRate(params, data.model, m.t_s, m.raw, m.f, data.rule, nullptr,
-                          &data.noise_sigma_raw, &covariance);
+                          &data.noise_sigma_raw, &covariance, m.weights());
   MotionWeight w;
   w.B = TangentBasis(data.directions[m.to]);
   const Eigen::Matrix2d M = w.B.transpose() * covariance * w.B;
@@ -43,8 +43,9 @@ Eigen::Vector2d MotionResidual(const GyroFitData& data, const GyroMotion& m,
                                const Vec3& c_i, const Vec3& c_j, Eigen::MatrixXd* J_theta,
                                Eigen::Matrix2d* J_from, Eigen::Matrix2d* J_to) {
   Eigen::MatrixXd J_R;
-  const Mat33 R = IntegrateCalibratedRate(params, data.model, m.t_s, m.raw, m.f, data.rule,
-                                          J_theta != nullptr ? &J_R : nullptr);
+  const Mat33 R =
+      IntegrateCalibratedRate(params, data.model, m.t_s, m.raw, m.f, data.rule,
+                              J_theta != nullptr ? &J_R : nullptr, nullptr, nullptr, m.weights());
   const Vec3 v = R.transpose() * c_i;
   const Eigen::Matrix<double, 2, 3> W = weight.L * weight.B.transpose();
   // e = v × c_j = −[c_j]× v = [v]× c_j; v(θ ⊞ δ) = v + [v]× J_R δ, v(c_i ⊞ δ) = v + Rᵀ E_i δ.
@@ -61,13 +62,19 @@ Eigen::Vector2d RotationResidual(const MotionWeight& weight, const Mat33& R, con
 
 double MotionAngleError(const GyroFitData& data, const GyroMotion& m,
                         const GyroParameters& params) {
-  const Mat33 R = IntegrateCalibratedRate(params, data.model, m.t_s, m.raw, m.f, data.rule);
+  const Mat33 R = IntegrateCalibratedRate(params, data.model, m.t_s, m.raw, m.f, data.rule, nullptr,
+                                          nullptr, nullptr, m.weights());
   const Vec3 v = R.transpose() * data.directions[m.from];
   const Vec3& c = data.directions[m.to];
   return std::atan2(v.cross(c).norm(), v.dot(c));
 }
 
-GyroParameters GyroStart(const GyroFitData& data, std::optional<double> scale_raw_per_rad_s) {
+namespace {
+
+// The start with K_g = k P for the mount P (a signed permutation: the gyro's axes as the
+// accelerometer's, turned or mirrored), b_g the mean of the still rates, G = 0.
+GyroParameters StartForMount(const GyroFitData& data, std::optional<double> scale_raw_per_rad_s,
+                             const Mat33& P) {
   GyroParameters start;
   start.bias.setZero();
   for (const GyroStill& s : data.stills) start.bias += s.mean_raw;
@@ -76,8 +83,8 @@ GyroParameters GyroStart(const GyroFitData& data, std::optional<double> scale_ra
   if (scale_raw_per_rad_s) {
     k = *scale_raw_per_rad_s;
   } else {
-    // Each turn taken about the fixed axis n = s/|s| of its bias-free raw rate summed over it
-    // (s = k θ n for K_g = k I): the angle θ about n that takes c_i to c_j, read from their
+    // Each turn taken about the fixed axis n = Pᵀ s/|s| of its bias-free raw rate summed over it
+    // (s = k θ P n for K_g = k P): the angle θ about n that takes c_i to c_j, read from their
     // projections on the plane ⟂ n, gives k = |s|/θ; the median over the turns whose directions
     // are well off n. Without such a turn, the turned angle is taken as at least the angle
     // between c_i and c_j: k = Σ |s_m| α_m / Σ α_m² (an overestimate when turns are longer).
@@ -86,7 +93,9 @@ GyroParameters GyroStart(const GyroFitData& data, std::optional<double> scale_ra
     for (const GyroMotion& m : data.motions) {
       Vec3 sum = Vec3::Zero();  // the bias-free raw rate summed over the motion (trapezoidal)
       for (std::size_t k2 = 0; k2 + 1 < m.t_s.size(); ++k2) {
-        sum += 0.5 * (m.raw[k2] + m.raw[k2 + 1] - 2.0 * start.bias) * (m.t_s[k2 + 1] - m.t_s[k2]);
+        const double w = m.step_weight.empty() ? 1.0 : m.step_weight[k2];
+        sum += 0.5 * (m.raw[k2] + m.raw[k2 + 1] - 2.0 * start.bias) *
+               (w * (m.t_s[k2 + 1] - m.t_s[k2]));
       }
       const Vec3& a = data.directions[m.from];
       const Vec3& b = data.directions[m.to];
@@ -94,7 +103,7 @@ GyroParameters GyroStart(const GyroFitData& data, std::optional<double> scale_ra
       sa += sum.norm() * angle;
       aa += angle * angle;
       if (!(sum.norm() > 0)) continue;
-      const Vec3 n = sum.normalized();
+      const Vec3 n = P.transpose() * sum.normalized();
       const Vec3 pa = a - a.dot(n) * n, pb = b - b.dot(n) * n;
       if (pa.norm() < 0.3 || pb.norm() < 0.3) continue;
       // The body turns by θ about n, so the force direction turns by −θ: c_j = Exp(θ n)ᵀ c_i.
@@ -112,8 +121,46 @@ GyroParameters GyroStart(const GyroFitData& data, std::optional<double> scale_ra
       k = sa / aa;
     }
   }
-  start.K = k * Mat33::Identity();
+  start.K = k * P;
   return start;
+}
+
+// The turns' RMS angle error [rad] under `params` (their predicted direction against c_to).
+double StartError(const GyroFitData& data, const GyroParameters& params) {
+  double sum = 0;
+  for (const GyroMotion& m : data.motions) {
+    const double e = MotionAngleError(data, m, params);
+    sum += e * e;
+  }
+  return data.motions.empty() ? 0.0 : std::sqrt(sum / static_cast<double>(data.motions.size()));
+}
+
+}  // namespace
+
+GyroParameters GyroStart(const GyroFitData& data, std::optional<double> scale_raw_per_rad_s) {
+  const GyroParameters aligned = StartForMount(data, scale_raw_per_rad_s, Mat33::Identity());
+  const double aligned_error = StartError(data, aligned);
+  if (aligned_error <= kGyroMountSearchRad) return aligned;
+  // The gyro's axes are not the accelerometer's: each of the 48 signed permutations (24 turned,
+  // 24 mirrored) as the mount, the one whose start turns the directions best (the first of
+  // equals, in a fixed order: the same start on any machine).
+  GyroParameters best = aligned;
+  double best_error = aligned_error;
+  for (int order = 0; order < 6; ++order) {
+    static constexpr int kPermutations[6][3] = {{0, 1, 2}, {0, 2, 1}, {1, 0, 2},
+                                                {1, 2, 0}, {2, 0, 1}, {2, 1, 0}};
+    for (int signs = 0; signs < 8; ++signs) {
+      Mat33 P = Mat33::Zero();
+      for (int row = 0; row < 3; ++row) {
+        P(row, kPermutations[order][row]) = (signs >> row) & 1 ? -1.0 : 1.0;
+      }
+      if (P.isIdentity()) continue;
+      const GyroParameters start = StartForMount(data, scale_raw_per_rad_s, P);
+      const double error = StartError(data, start);
+      if (error < best_error) best = start, best_error = error;
+    }
+  }
+  return best;
 }
 
 namespace {

@@ -29,18 +29,26 @@ namespace accelcal::internal {
 
 /// The gyro samples of one still position.
 struct GyroStill {
-  Vec3 mean_raw;        ///< mean raw rate over the interval
-  Vec3 sigma_mean_raw;  ///< 1σ of that mean per axis (the samples' σ / √n) [gyro raw]
-  Vec3 f;               ///< specific force (the accelerometer's, g c_i)
+  Vec3 mean_raw;             ///< mean raw rate over the interval
+  Vec3 sigma_mean_raw;       ///< 1σ of that mean per axis (the samples' σ / √n) [gyro raw]
+  Vec3 f;                    ///< specific force (the accelerometer's, g c_i)
+  std::size_t position = 0;  ///< its position: the index of c_i in GyroFitData::directions
 };
 
-/// The gyro samples of one motion, from the last sample of position `from`'s interval to the first
-/// of position `to`'s.
+/// The gyro samples of one motion, from position `from` to position `to`.
 struct GyroMotion {
   std::size_t from = 0, to = 0;
   std::vector<double> t_s;
   std::vector<Vec3> raw;
   std::vector<Vec3> f;  ///< specific force at each sample (the calibrated accelerometer)
+  /// One per step, t_k to t_{k+1} (IntegrateCalibratedRate); empty: all 1. A motion that starts
+  /// over the still span of `from` and ends over that of `to` weights their steps from 0 up to
+  /// 1 and down again, so that it turns the span's mean orientation, which the accelerometer's
+  /// mean reading sees, into the next's (a unit that wobbles as it stands), not one sample's.
+  std::vector<double> step_weight;
+  const std::vector<double>* weights() const {
+    return step_weight.empty() ? nullptr : &step_weight;
+  }
 };
 
 /// The motions of a fit's data, held once however often the data are copied: each model's fit,
@@ -71,8 +79,9 @@ struct MotionWeight {
 
 /// What the gyro fit is given.
 struct GyroFitData {
-  std::vector<GyroStill> stills;  ///< one per position
-  std::vector<Vec3> directions;   ///< c_i, unit, one per position
+  /// One per position where the gyro stood still (a position it turned throughout has none).
+  std::vector<GyroStill> stills;
+  std::vector<Vec3> directions;  ///< c_i, unit, one per position
   GyroMotions motions;
   Vec3 noise_sigma_raw = Vec3::Ones();  ///< white noise of one raw sample, per axis
   GyroModelKind model = GyroModelKind::kLinear;
@@ -122,8 +131,17 @@ double MotionAngleError(const GyroFitData& data, const GyroMotion& m, const Gyro
 /// `scale_raw_per_rad_s` when the unit is known, else in closed form from the turns: each taken
 /// about the fixed axis n of its bias-free raw rate summed over it, s = k θ n, with θ the angle
 /// about n that takes c_i to c_j (from their projections on the plane ⟂ n): k the median of
-/// |s|/θ over the turns whose directions lie well off n.
+/// |s|/θ over the turns whose directions lie well off n. When that start turns the directions
+/// worse than kGyroMountSearchRad RMS, the gyro is mounted otherwise than the accelerometer (its
+/// axes turned or mirrored): K_g = k P for the signed permutation P of the 48 whose start turns
+/// them best (a fit started from k I landed on a flipped solution, 109° RMS, for a gyro turned
+/// 90° about z).
 GyroParameters GyroStart(const GyroFitData& data, std::optional<double> scale_raw_per_rad_s);
+
+/// The start's RMS turn error beyond which other mounts are tried: an aligned gyro's start is
+/// within a few degrees (its scale to 2 %, its misalignment ignored); a mount turned by 90°
+/// misses by 60° or more.
+inline constexpr double kGyroMountSearchRad = 20.0 * 3.14159265358979323846 / 180.0;
 
 struct GyroFit {
   GyroParameters params;

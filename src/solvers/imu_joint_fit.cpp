@@ -16,10 +16,11 @@ class JointProblem : public LeastSquaresProblem {
         slots_(ParameterSlots(data.accel_model, data.frame)),
         pa_(static_cast<int>(slots_.size())),
         pg_(NumGyroParameters(data.gyro.model)),
-        m_(static_cast<int>(data.accel_means.size())) {}
+        m_(static_cast<int>(data.accel_means.size())),
+        s_(static_cast<int>(data.gyro.stills.size())) {}
 
   int GlobalSize() const override { return pa_ + pg_ + 2 * m_; }
-  int NumBlocks() const override { return 2 * m_ + static_cast<int>(data_.gyro.motions.size()); }
+  int NumBlocks() const override { return m_ + s_ + static_cast<int>(data_.gyro.motions.size()); }
   Eigen::VectorXd PlusGlobal(const Eigen::VectorXd& x,
                              const Eigen::VectorXd& delta) const override {
     Eigen::VectorXd out = x;
@@ -36,8 +37,8 @@ class JointProblem : public LeastSquaresProblem {
                 Eigen::MatrixXd* /*J_y*/) const override {
     const int n = GlobalSize();
     if (block < m_) return AccelBlock(block, x, residual, J_x, n);
-    if (block < 2 * m_) return StillBlock(block - m_, x, residual, J_x, n);
-    const auto k = static_cast<std::size_t>(block - 2 * m_);
+    if (block < m_ + s_) return StillBlock(block - m_, x, residual, J_x, n);
+    const auto k = static_cast<std::size_t>(block - m_ - s_);
     const GyroMotion& mo = data_.gyro.motions[k];
     if (!data_.gyro.used(k)) {
       residual->resize(0);
@@ -95,9 +96,11 @@ class JointProblem : public LeastSquaresProblem {
     return residual->allFinite();
   }
 
-  bool StillBlock(int k, const Eigen::VectorXd& x, Eigen::VectorXd* residual, Eigen::MatrixXd* J_x,
-                  int n) const {
-    const GyroStill& s = data_.gyro.stills[static_cast<std::size_t>(k)];
+  // Still k, at its position's direction.
+  bool StillBlock(int still, const Eigen::VectorXd& x, Eigen::VectorXd* residual,
+                  Eigen::MatrixXd* J_x, int n) const {
+    const GyroStill& s = data_.gyro.stills[static_cast<std::size_t>(still)];
+    const int k = static_cast<int>(s.position);
     const GyroParameters params = UnpackGyro(x.segment(pa_, pg_), data_.gyro.model);
     const Vec3 c = Direction(x, k);
     const Vec3 f = data_.gravity * c;
@@ -117,6 +120,7 @@ class JointProblem : public LeastSquaresProblem {
   const ImuJointData& data_;
   const std::vector<ParameterSlot>& slots_;
   int pa_, pg_, m_;
+  int s_;  // the stills' blocks follow the accelerometer's, then the motions' (one each)
 };
 
 Eigen::VectorXd Start(const ImuJointData& data, const ModelParameters& accel,
@@ -188,9 +192,10 @@ std::vector<ImuJointFit> HeldOutFits(const ImuJointData& data, const ImuJointFit
   const LeastSquaresState state = StateAt(data, problem, fit);
   std::vector<int> blocks;
   const int m = static_cast<int>(data.accel_means.size());
+  const int stills = static_cast<int>(data.gyro.stills.size());
   if (motions) {
     for (std::size_t k = 0; k < data.gyro.motions.size(); ++k) {
-      blocks.push_back(2 * m + static_cast<int>(k));
+      blocks.push_back(m + stills + static_cast<int>(k));
     }
   } else {
     for (int k = 0; k < m; ++k) blocks.push_back(k);
@@ -219,12 +224,13 @@ GroupCosts JointGroupRedundancy(const ImuJointData& data, const ImuJointFit& fit
   const std::vector<double> h = BlockLeverages(problem, state, fit.summary);
   const std::size_t m = data.accel_means.size();
   GroupCosts r;
+  const std::size_t stills = data.gyro.stills.size();
   for (std::size_t k = 0; k < m; ++k) {
     if (data.accel_used[k]) r.accel += 3 - h[k];
-    r.stills += 3 - h[m + k];
   }
+  for (std::size_t k = 0; k < stills; ++k) r.stills += 3 - h[m + k];
   for (std::size_t k = 0; k < data.gyro.motions.size(); ++k) {
-    if (data.gyro.used(k)) r.turns += 2 - h[2 * m + k];
+    if (data.gyro.used(k)) r.turns += 2 - h[m + stills + k];
   }
   return r;
 }
@@ -240,12 +246,14 @@ GroupCosts JointGroupCosts(const ImuJointData& data, const ImuJointFit& fit) {
                             PredictRaw(fit.accel, Vec3(data.gravity * fit.directions[k])))
               .squaredNorm();
     }
-    const GyroStill& s = data.gyro.stills[k];
-    costs.stills += (data.gyro.still_scale * s.sigma_mean_raw)
-                        .cwiseInverse()
-                        .cwiseProduct(s.mean_raw - StillRate(data.gyro, fit.gyro, fit.directions[k],
-                                                             data.gravity))
-                        .squaredNorm();
+  }
+  for (const GyroStill& s : data.gyro.stills) {
+    costs.stills +=
+        (data.gyro.still_scale * s.sigma_mean_raw)
+            .cwiseInverse()
+            .cwiseProduct(s.mean_raw -
+                          StillRate(data.gyro, fit.gyro, fit.directions[s.position], data.gravity))
+            .squaredNorm();
   }
   costs.turns = fit.summary.final_cost - costs.accel - costs.stills;
   return costs;

@@ -46,7 +46,7 @@ GyroFitData FromSimulation(const GyroParameters& truth, GyroModelKind model, dou
     data.directions.push_back(directions[i].normalized());
     data.stills.push_back({sum / static_cast<double>(still),
                            data.noise_sigma_raw / std::sqrt(static_cast<double>(still)),
-                           kG * data.directions.back()});
+                           kG * data.directions.back(), i});
     if (i + 1 == directions.size()) break;
     GyroMotion m;
     m.from = i;

@@ -91,11 +91,23 @@ IMU_DEFINITION = (
     "=" * 80 + "\nMSG: geometry_msgs/Vector3\nfloat64 x\nfloat64 y\nfloat64 z\n")
 
 
-def write_db3(path, rows, iron):
-    """rosbag2's SQLite storage: Humble's tables, and Iron's message_definitions when `iron`."""
-    if os.path.exists(path):
-        os.remove(path)
+def write_db3(path, rows, iron, wal_from=None):
+    """rosbag2's SQLite storage: Humble's tables, and Iron's message_definitions when `iron`.
+    `wal_from`: in WAL mode (rosbag2's resilient preset), its recorder killed after the rows from
+    `wal_from` on were committed to the log and before any checkpoint (they are in FILE-wal only;
+    FILE-shm is left too)."""
+    for old in (path, path + "-wal", path + "-shm"):
+        if os.path.exists(old):
+            os.remove(old)
+    if wal_from is not None:
+        pid = os.fork()
+        if pid:
+            os.waitpid(pid, 0)
+            return
     db = sqlite3.connect(path)
+    if wal_from is not None:
+        db.execute("PRAGMA journal_mode=WAL")
+        db.execute("PRAGMA wal_autocheckpoint=0")
     db.execute("CREATE TABLE schema(schema_version INTEGER PRIMARY KEY, ros_distro TEXT NOT NULL)")
     db.execute("CREATE TABLE metadata(id INTEGER PRIMARY KEY, metadata_version INTEGER NOT NULL,"
                " metadata TEXT NOT NULL)")
@@ -117,6 +129,9 @@ def write_db3(path, rows, iron):
                    " ?, '')", (IMU_DEFINITION,))
     gyro = random.Random(7)
     for i, (t_us, x, y, z) in enumerate(rows):
+        if i == wal_from:
+            db.commit()
+            db.execute("PRAGMA wal_checkpoint(TRUNCATE)")
         t_ns = T0_NS + t_us * 1000
         w = [gyro.gauss(0, 1e-3) for _ in range(3)]
         db.execute("INSERT INTO messages (topic_id, timestamp, data) VALUES (1, ?, ?)",
@@ -127,7 +142,57 @@ def write_db3(path, rows, iron):
             db.execute("INSERT INTO messages (topic_id, timestamp, data) VALUES (3, ?, ?)",
                        (t_ns, b"\x00\x01\x00\x00\x07\x00\x00\x00"))
     db.commit()
+    if wal_from is not None:
+        os._exit(0)  # killed: the log neither checkpointed nor removed
     db.close()
+
+
+def digests(work):
+    """Each file of `work` and its SHA-256."""
+    return {n: hashlib.sha256(open(os.path.join(work, n), "rb").read()).hexdigest()
+            for n in sorted(os.listdir(work))}
+
+
+def killed_recorder(ck, p, work, rows, want):
+    """rosbag2's resilient preset (WAL) with its recorder killed: the last 40 % of the session in
+    FILE-wal only. Read as committed, with nothing written in or beside the bag (no checkpoint
+    into it, FILE-shm untouched, nothing created): it had read the database alone, the samples
+    of its first 60 % with no warning."""
+    os.makedirs(p("wal"))
+    bag = os.path.join(p("wal"), "killed.db3")
+    write_db3(bag, rows, True, wal_from=len(rows) * 6 // 10)
+    before = digests(p("wal"))
+    ck.check(sorted(before) == ["killed.db3", "killed.db3-shm", "killed.db3-wal"] and
+             os.path.getsize(bag + "-wal") > 0, f"a killed recorder's files: {before}")
+    r = ck.run("calibrate", bag, "-o", p("killed.json"))
+    ck.check(r.returncode == 0 and calibration(p("killed.json")) == want,
+             f"the killed recorder's bag calibrates as its samples as CSV: {r.stdout}{r.stderr}")
+    doc = json.loads(ck.run("inspect", bag, "--json").stdout)
+    streams = {s["topic"]: s for s in doc["streams"]}
+    ck.check(streams["/imu/data"]["samples"] == len(rows),
+             f"inspect counts the samples in the log: {doc['streams']}")
+    ck.check(digests(p("wal")) == before, f"nothing written in or beside the bag: "
+             f"{digests(p('wal'))}, before {before}")
+    # A transaction the recorder never committed, and a frame torn by the kill: not applied (a
+    # frame whose checksum does not follow ends the log, as SQLite reads it).
+    with open(bag + "-wal", "ab") as f:
+        f.write(bytes(random.Random(5).randrange(256) for _ in range(4096 + 24)))
+    r = ck.run("calibrate", bag, "-o", p("torn.json"))
+    ck.check(r.returncode == 0 and calibration(p("torn.json")) == want,
+             f"a torn frame after the last commit is not applied: {r.stderr}")
+    # A log that is not SQLite's: refused, naming it.
+    with open(bag + "-wal", "r+b") as f:
+        f.write(b"\0\0\0\0")
+    r = ck.run("inspect", bag, expect=3)
+    ck.check(r.stderr.startswith(f"accelcal: {bag}: its write-ahead log {bag}-wal is not one "
+                                 "SQLite wrote"), f"a log that is not SQLite's: {r.stderr}")
+    # An empty log (a checkpoint emptied it): the database alone, as without one.
+    with open(bag + "-wal", "wb"):
+        pass
+    r = ck.run("inspect", bag, "--json")
+    streams = {s["topic"]: s for s in json.loads(r.stdout)["streams"]}
+    ck.check(streams["/imu/data"]["samples"] == len(rows) * 6 // 10,
+             f"an empty log: the database's samples: {streams['/imu/data']}")
 
 
 def main():
@@ -170,6 +235,8 @@ def main():
         r = ck.run("calibrate", bag, "--topic", "/vendor/status", "--columns", "1,2,3",
                 "-o", p("x.json"), expect=3)
         ck.check("does not carry its definition" in r.stderr, f"an unknown type: {r.stderr}")
+
+    killed_recorder(ck, p, work, rows, want)
 
     # Through a pipe, a database cannot be opened: said.
     with open(p("iron.db3"), "rb") as f:

@@ -11,6 +11,7 @@
 #include "accelcal/error.hpp"
 #include "core/text_format.hpp"
 #include "io/ros_topics.hpp"
+#include "io/sqlite_wal.hpp"
 
 namespace accelcal::internal {
 
@@ -20,13 +21,9 @@ bool IsSqlite(std::string_view first_bytes) {
 
 namespace {
 
-struct CloseDb {
-  void operator()(sqlite3* db) const { sqlite3_close(db); }
-};
 struct Finalize {
   void operator()(sqlite3_stmt* s) const { sqlite3_finalize(s); }
 };
-using Db = std::unique_ptr<sqlite3, CloseDb>;
 using Statement = std::unique_ptr<sqlite3_stmt, Finalize>;
 
 [[noreturn]] void Fail(const std::string& name, const std::string& why) {
@@ -40,42 +37,23 @@ std::string Text(sqlite3_stmt* s, int column) {
                       : std::string();
 }
 
-// The database's URI for `path`: read-only and immutable (no journal, no lock, nothing written
-// beside the user's file), its characters escaped as a URI needs.
-std::string Uri(const std::string& path) {
-  std::string out = "file:";
-  for (unsigned char c : path) {
-    if (c == '%' || c == '?' || c == '#' || c < 0x20 || c >= 0x7f) {
-      out += Format("%%%02X", c);
-    } else {
-      out += static_cast<char>(c);
-    }
-  }
-  return out + "?mode=ro&immutable=1";
-}
-
 }  // namespace
 
 DecodedLog ReadRosbag2Sqlite(const std::string& path, const std::string& name,
                              const KeepStream& keep, const StoreColumns& store) {
-  sqlite3* raw = nullptr;
-  const int opened =
-      sqlite3_open_v2(Uri(path).c_str(), &raw, SQLITE_OPEN_READONLY | SQLITE_OPEN_URI, nullptr);
-  const Db db(raw);
-  if (opened != SQLITE_OK) {
-    Fail(name, std::string("an SQLite database that cannot be opened (") +
-                   (db ? sqlite3_errmsg(db.get()) : sqlite3_errstr(opened)) + ")");
-  }
+  // Read as committed, its write-ahead log included, nothing written (sqlite_wal.hpp).
+  const SqliteSnapshot snapshot(path, name);
+  sqlite3* db = snapshot.db();
   const auto prepare = [&](const char* sql) {
     sqlite3_stmt* s = nullptr;
-    if (sqlite3_prepare_v2(db.get(), sql, -1, &s, nullptr) != SQLITE_OK) {
+    if (sqlite3_prepare_v2(db, sql, -1, &s, nullptr) != SQLITE_OK) {
       Statement failed(s);
       return Statement();
     }
     return Statement(s);
   };
   const auto error = [&](const std::string& what) {
-    Fail(name, what + " (SQLite: " + sqlite3_errmsg(db.get()) + ")");
+    Fail(name, what + " (SQLite: " + sqlite3_errmsg(db) + ")");
   };
   Statement topics = prepare("SELECT id, name, type, serialization_format FROM topics ORDER BY id");
   if (!topics) {

@@ -91,11 +91,11 @@ IMU_DEFINITION = (
     "=" * 80 + "\nMSG: geometry_msgs/Vector3\nfloat64 x\nfloat64 y\nfloat64 z\n")
 
 
-def write_db3(path, rows, iron, wal_from=None):
+def write_db3(path, rows, iron, wal_from=None, index=True):
     """rosbag2's SQLite storage: Humble's tables, and Iron's message_definitions when `iron`.
     `wal_from`: in WAL mode (rosbag2's resilient preset), its recorder killed after the rows from
     `wal_from` on were committed to the log and before any checkpoint (they are in FILE-wal only;
-    FILE-shm is left too)."""
+    FILE-shm is left too). `index`: with rosbag2's index of the messages' timestamps."""
     for old in (path, path + "-wal", path + "-shm"):
         if os.path.exists(old):
             os.remove(old)
@@ -115,7 +115,8 @@ def write_db3(path, rows, iron, wal_from=None):
                " serialization_format TEXT NOT NULL, offered_qos_profiles TEXT NOT NULL)")
     db.execute("CREATE TABLE messages(id INTEGER PRIMARY KEY, topic_id INTEGER NOT NULL,"
                " timestamp INTEGER NOT NULL, data BLOB NOT NULL)")
-    db.execute("CREATE INDEX timestamp_idx ON messages (timestamp ASC)")
+    if index:
+        db.execute("CREATE INDEX timestamp_idx ON messages (timestamp ASC)")
     topics = [(1, "/imu/data", "sensor_msgs/msg/Imu"), (2, "/imu/temperature",
                                                         "sensor_msgs/msg/Temperature"),
               (3, "/vendor/status", "vendor_msgs/msg/Status")]
@@ -151,6 +152,41 @@ def digests(work):
     """Each file of `work` and its SHA-256."""
     return {n: hashlib.sha256(open(os.path.join(work, n), "rb").read()).hexdigest()
             for n in sorted(os.listdir(work))}
+
+
+def hostile_schemas(ck, p, bag):
+    """A bag whose tables are not tables: refused at once, naming the file and the reason (a view
+    over a recursive query had run until the disk was full of SQLite's temporary files)."""
+    endless = ("WITH RECURSIVE r(n) AS (SELECT 1 UNION ALL SELECT n + 1 FROM r) SELECT n AS id, 1 "
+               "AS topic_id, -n AS timestamp, randomblob(100) AS data FROM r")
+    cases = {
+        "view-messages": ["DROP TABLE messages", "CREATE VIEW messages AS " + endless],
+        "view-topics": ["DROP TABLE topics", "CREATE VIEW topics AS SELECT n AS id, 'x' AS name, "
+                        "'y' AS type, 'cdr' AS serialization_format FROM (" + endless + ") "
+                        "ORDER BY id DESC"],
+        "view-definitions": ["DROP TABLE message_definitions",
+                             "CREATE VIEW message_definitions AS SELECT 't' AS topic_type, 'e' AS "
+                             "encoding, 'd' AS encoded_message_definition FROM (" + endless + ")"],
+        "generated-data": ["DROP TABLE messages",
+                           "CREATE TABLE messages(id INTEGER PRIMARY KEY, topic_id INTEGER, "
+                           "timestamp INTEGER, data BLOB GENERATED ALWAYS AS "
+                           "(zeroblob(100000000)) VIRTUAL)",
+                           "INSERT INTO messages(topic_id, timestamp) VALUES (1, 1)"],
+    }
+    for case, statements in cases.items():
+        path = p(f"{case}.db3")
+        shutil.copy(bag, path)
+        db = sqlite3.connect(path)
+        for statement in statements:
+            db.execute(statement)
+        db.commit()
+        db.close()
+        for command in (["inspect", path], ["calibrate", path, "-o", p(f"{case}.json")]):
+            r = ck.run(*command, expect=3, timeout=20)
+            ck.check(r.stderr.startswith(f"accelcal: {path}: an SQLite database whose ") and
+                     ("is a view, not a table" in r.stderr or "is computed" in r.stderr) and
+                     not os.path.exists(p(f"{case}.json")),
+                     f"{case}, {command[0]}: {r.stderr}")
 
 
 def killed_recorder(ck, p, work, rows, want):
@@ -237,6 +273,20 @@ def main():
         ck.check("does not carry its definition" in r.stderr, f"an unknown type: {r.stderr}")
 
     killed_recorder(ck, p, work, rows, want)
+    hostile_schemas(ck, p, p("iron.db3"))
+    # Without rosbag2's index of the timestamps, the messages are still read in their order
+    # (their times and ids sorted here; SQLite would sort the rows with their data, in temporary
+    # files, which the VFS does not make), and the ids of equal times in theirs.
+    write_db3(p("no-index.db3"), rows, True, index=False)
+    db = sqlite3.connect(p("no-index.db3"))  # and 48 MB more than SQLite's cache could sort
+    for k in range(48):
+        db.execute("INSERT INTO messages (topic_id, timestamp, data) VALUES (3, ?, ?)",
+                   (T0_NS + k * 10**9 + 1, bytes(1 << 20)))
+    db.commit()
+    db.close()
+    r = ck.run("calibrate", p("no-index.db3"), "-o", p("no-index.json"))
+    ck.check(r.returncode == 0 and calibration(p("no-index.json")) == want,
+             f"a bag without the index of timestamps calibrates the same: {r.stderr}")
 
     # Through a pipe, a database cannot be opened: said.
     with open(p("iron.db3"), "rb") as f:

@@ -20,7 +20,9 @@ bool IsSqlite(std::string_view first_bytes);
 /// topics `keep` accepts, in the order of their time. A stream is a topic (instance 0), its time
 /// [µs] the messages' timestamps; a message's offset is its row id (DecodedLog::offset_name).
 /// Throws InputError naming the file for a database that cannot be read or is not a rosbag2 bag,
-/// and naming the row for a message that does not decode.
+/// and naming the row for a message that does not decode. Only tables are read, each checked first:
+/// a `topics`, `messages` or `message_definitions` that is a view, a virtual table, or has a
+/// generated column is refused, and so is a query that runs 2^27 steps without a row.
 DecodedLog ReadRosbag2Sqlite(const std::string& path, const std::string& name,
                              const KeepStream& keep, const StoreColumns& store = {});
 

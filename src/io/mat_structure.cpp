@@ -151,7 +151,7 @@ class InflateSource : public Source {
         return false;
       }
       if (z_.total_out > kMaxMatInflatedBytes) {
-        error_ = Format("it inflates past %llu MiB",
+        error_ = Format("data inflate past %llu MiB",
                         static_cast<unsigned long long>(kMaxMatInflatedBytes >> 20));
         return false;
       }
@@ -172,7 +172,7 @@ class InflateSource : public Source {
 
 class Walker {
  public:
-  explicit Walker(bool swap) : swap_(swap) {}
+  Walker(bool swap, std::uint64_t file_bytes) : swap_(swap), file_bytes_(file_bytes) {}
 
   // The elements of a container of `size` bytes from `in` (`top`: the file's, ended by its end).
   void Elements(Source* in, std::uint64_t size, int depth, bool top) {
@@ -211,8 +211,25 @@ class Walker {
       } else if (type == kMiCompressed) {
         if (depth != 0) Fail("a compressed element inside a matrix");
         InflateSource inflated(in, bytes);
-        Elements(&inflated, kMaxMatInflatedBytes, depth + 1, true);
+        try {
+          Elements(&inflated, kMaxMatInflatedBytes, depth + 1, true);
+        } catch (const Refused&) {
+          // An element cut short by the stream's own failure (corrupt, or past the bound): that.
+          if (!inflated.error().empty()) Fail("a compressed variable whose " + inflated.error());
+          throw;
+        }
         if (!inflated.Drain()) Fail("a compressed variable whose " + inflated.error());
+        // In all, what a real file's variables inflate to: a compressed file's size times a
+        // ratio no real data reaches, and at least kMaxMatFileInflatedBytes.
+        inflated_ += inflated.inflated();
+        const std::uint64_t bound = std::max(kMaxMatFileInflatedBytes, 64 * file_bytes_);
+        if (inflated_ > bound) {
+          Fail(
+              Format("compressed variables that inflate past %llu MiB in all (64 times the "
+                     "file, and at least %llu MiB)",
+                     static_cast<unsigned long long>(bound >> 20),
+                     static_cast<unsigned long long>(kMaxMatFileInflatedBytes >> 20)));
+        }
         if (!inflated.error().empty() && inflated.inflated() == 0) {
           Fail("a compressed variable whose " + inflated.error());
         }
@@ -279,6 +296,8 @@ class Walker {
   }
 
   bool swap_;
+  std::uint64_t file_bytes_;
+  std::uint64_t inflated_ = 0;  // by the compressed variables so far
   std::uint32_t field_name_length_ = 0;
   std::string where_;
 };
@@ -313,7 +332,7 @@ std::optional<std::string> CheckMatStructure(const std::string& path) {
   }
   FileSource file(f.get(), static_cast<std::uint64_t>(size));
   try {
-    Walker(!little).Elements(&file, 0, 0, true);
+    Walker(!little, static_cast<std::uint64_t>(size)).Elements(&file, 0, 0, true);
   } catch (const Walker::Refused& refused) {
     return refused.why;
   }

@@ -240,6 +240,18 @@ TEST(MatStructure, TheFuzzersFindingsAreRefused) {
   }
 }
 
+TEST(MatStructure, DataInTheSmallFormatHoldsWhatTheDimensionsClaim) {
+  // Found by fuzz_file_schema (issue 47): a cell's double matrix of 0xdfe6a07a x 1 values whose
+  // data is one byte in the small format (its value in the tag): unchecked, libmatio asked for
+  // 30 GB.
+  const std::optional<std::string> why = CheckMatStructure(
+      std::string(ACCELCAL_SOURCE_DIR) + "/fuzz/regressions/file_log/small-data-claim-30gb.mat");
+  ASSERT_TRUE(why);
+  EXPECT_NE(why->find("a matrix of 3756433530 values whose data holds 1 bytes of type 5"),
+            std::string::npos)
+      << *why;
+}
+
 TEST(MatStructure, TheVersionFieldNotTheTextSaysHowItIsRead) {
   // Found by the fuzzer (CI, 2026-11-28): "MATLAB 7.3" as text over a Level 5 version field.
   // libmatio read it as Level 5 while the check took it for HDF5 and let it pass, and libmatio

@@ -7,7 +7,7 @@ cli=${1:-build}/accelcal
 c=fuzz/corpus
 # Its seeds are (re)written; the seeds added by hand or by tests (native_log, calibration_keys,
 # cli_options, the *_v2.json and printf_* ones) are kept, never deleted.
-mkdir -p "$c"/{log_reader,orientations,calibration_file,series,calibrate,file_log}
+mkdir -p "$c"/{log_reader,orientations,calibration_file,series,calibrate,file_log,file_schema}
 # Logs and positions files: heads of the real recordings (seeds stay under 16 KB).
 head -c 12000 data/imutk-xsens-mti/xsens_acc.mat | sed '$d' > "$c/log_reader/xsens_head.mat"
 head -c 12000 data/imutk-t265/t265_acc.mat | sed '$d' > "$c/log_reader/t265_head.mat"
@@ -72,3 +72,14 @@ rosbag2_test.write_db3(f"{out}/ros2_iron.db3", rows, True)
 rosbag2_test.write_db3(f"{out}/ros2_humble.db3", rows, False)
 PY
 ls -R "$c" | head -60
+# Schema objects (fuzz_file_schema): its input is a list of choices that builds the bag or the
+# MAT-file, so its seeds are fixed fills and the bytes of fixed pseudo-random seeds.
+/usr/bin/python3 - "$c/file_schema" <<'PY'
+import random, sys
+out = sys.argv[1]
+for k in range(12):
+    r = random.Random(k)
+    open(f"{out}/seed_{k:02d}", "wb").write(bytes(r.randrange(256) for _ in range(1024)))
+for b in (0x00, 0x01, 0x55, 0xff):
+    open(f"{out}/fill_{b:02x}", "wb").write(bytes([b]) * 512)
+PY

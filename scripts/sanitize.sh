@@ -43,6 +43,8 @@ run_harness() {
   # fills it only from the file: virtual, never resident (accelcal inspect: 15 MB). The resident
   # memory stays limited by -rss_limit_mb.
   [ "$harness" = file_log ] && extra=(-malloc_limit_mb=16384)
+  # Its inputs are choices, not bytes: a few hundred make a bag or a MAT-file of every kind.
+  [ "$harness" = file_schema ] && extra=(-max_len=4096)
   # Inputs that once failed (fuzz/regressions) are replayed with the seeds.
   local regressions=()
   [ -d "fuzz/regressions/$harness" ] && regressions=("$PWD/fuzz/regressions/$harness")
@@ -53,8 +55,8 @@ run_harness() {
 }
 # The harnesses run as many at a time as there are cores (each is one process on one core), so
 # every one still fuzzes for its full FUZZ_SECONDS; a finding stops the script with its log.
-harnesses=(log_reader native_log file_log orientations calibration_file calibration_keys series
-  calibrate cli_options limits)
+harnesses=(log_reader native_log file_log file_schema orientations calibration_file
+  calibration_keys series calibrate cli_options limits)
 jobs=$(nproc)
 for ((first = 0; first < ${#harnesses[@]}; first += jobs)); do
   batch=("${harnesses[@]:first:jobs}")

@@ -17,9 +17,15 @@ class Checks:
             self.failures.append(what)
             print("FAIL:", what)
 
-    def run(self, *args, expect=0, stdin=None):
-        """accelcal with `args`; a failure when it does not exit with `expect` (None: any)."""
-        p = subprocess.run([self.accelcal, *args], capture_output=True, text=True, stdin=stdin)
+    def run(self, *args, expect=0, stdin=None, timeout=None):
+        """accelcal with `args`; a failure when it does not exit with `expect` (None: any), or
+        run past `timeout` seconds (then killed: its exit status is None)."""
+        try:
+            p = subprocess.run([self.accelcal, *args], capture_output=True, text=True,
+                               stdin=stdin, timeout=timeout)
+        except subprocess.TimeoutExpired as e:
+            self.check(False, f"accelcal {' '.join(args)}: still running after {timeout} s")
+            return subprocess.CompletedProcess(e.cmd, None, e.stdout or "", e.stderr or "")
         if expect is not None and p.returncode != expect:
             self.check(False, f"accelcal {' '.join(args)}: exit {p.returncode}, wanted {expect}\n"
                               f"{p.stdout}{p.stderr}")

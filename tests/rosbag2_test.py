@@ -91,11 +91,23 @@ IMU_DEFINITION = (
     "=" * 80 + "\nMSG: geometry_msgs/Vector3\nfloat64 x\nfloat64 y\nfloat64 z\n")
 
 
-def write_db3(path, rows, iron):
-    """rosbag2's SQLite storage: Humble's tables, and Iron's message_definitions when `iron`."""
-    if os.path.exists(path):
-        os.remove(path)
+def write_db3(path, rows, iron, wal_from=None, index=True):
+    """rosbag2's SQLite storage: Humble's tables, and Iron's message_definitions when `iron`.
+    `wal_from`: in WAL mode (rosbag2's resilient preset), its recorder killed after the rows from
+    `wal_from` on were committed to the log and before any checkpoint (they are in FILE-wal only;
+    FILE-shm is left too). `index`: with rosbag2's index of the messages' timestamps."""
+    for old in (path, path + "-wal", path + "-shm"):
+        if os.path.exists(old):
+            os.remove(old)
+    if wal_from is not None:
+        pid = os.fork()
+        if pid:
+            os.waitpid(pid, 0)
+            return
     db = sqlite3.connect(path)
+    if wal_from is not None:
+        db.execute("PRAGMA journal_mode=WAL")
+        db.execute("PRAGMA wal_autocheckpoint=0")
     db.execute("CREATE TABLE schema(schema_version INTEGER PRIMARY KEY, ros_distro TEXT NOT NULL)")
     db.execute("CREATE TABLE metadata(id INTEGER PRIMARY KEY, metadata_version INTEGER NOT NULL,"
                " metadata TEXT NOT NULL)")
@@ -103,7 +115,8 @@ def write_db3(path, rows, iron):
                " serialization_format TEXT NOT NULL, offered_qos_profiles TEXT NOT NULL)")
     db.execute("CREATE TABLE messages(id INTEGER PRIMARY KEY, topic_id INTEGER NOT NULL,"
                " timestamp INTEGER NOT NULL, data BLOB NOT NULL)")
-    db.execute("CREATE INDEX timestamp_idx ON messages (timestamp ASC)")
+    if index:
+        db.execute("CREATE INDEX timestamp_idx ON messages (timestamp ASC)")
     topics = [(1, "/imu/data", "sensor_msgs/msg/Imu"), (2, "/imu/temperature",
                                                         "sensor_msgs/msg/Temperature"),
               (3, "/vendor/status", "vendor_msgs/msg/Status")]
@@ -117,6 +130,9 @@ def write_db3(path, rows, iron):
                    " ?, '')", (IMU_DEFINITION,))
     gyro = random.Random(7)
     for i, (t_us, x, y, z) in enumerate(rows):
+        if i == wal_from:
+            db.commit()
+            db.execute("PRAGMA wal_checkpoint(TRUNCATE)")
         t_ns = T0_NS + t_us * 1000
         w = [gyro.gauss(0, 1e-3) for _ in range(3)]
         db.execute("INSERT INTO messages (topic_id, timestamp, data) VALUES (1, ?, ?)",
@@ -127,7 +143,92 @@ def write_db3(path, rows, iron):
             db.execute("INSERT INTO messages (topic_id, timestamp, data) VALUES (3, ?, ?)",
                        (t_ns, b"\x00\x01\x00\x00\x07\x00\x00\x00"))
     db.commit()
+    if wal_from is not None:
+        os._exit(0)  # killed: the log neither checkpointed nor removed
     db.close()
+
+
+def digests(work):
+    """Each file of `work` and its SHA-256."""
+    return {n: hashlib.sha256(open(os.path.join(work, n), "rb").read()).hexdigest()
+            for n in sorted(os.listdir(work))}
+
+
+def hostile_schemas(ck, p, bag):
+    """A bag whose tables are not tables: refused at once, naming the file and the reason (a view
+    over a recursive query had run until the disk was full of SQLite's temporary files)."""
+    endless = ("WITH RECURSIVE r(n) AS (SELECT 1 UNION ALL SELECT n + 1 FROM r) SELECT n AS id, 1 "
+               "AS topic_id, -n AS timestamp, randomblob(100) AS data FROM r")
+    cases = {
+        "view-messages": ["DROP TABLE messages", "CREATE VIEW messages AS " + endless],
+        "view-topics": ["DROP TABLE topics", "CREATE VIEW topics AS SELECT n AS id, 'x' AS name, "
+                        "'y' AS type, 'cdr' AS serialization_format FROM (" + endless + ") "
+                        "ORDER BY id DESC"],
+        "view-definitions": ["DROP TABLE message_definitions",
+                             "CREATE VIEW message_definitions AS SELECT 't' AS topic_type, 'e' AS "
+                             "encoding, 'd' AS encoded_message_definition FROM (" + endless + ")"],
+        "generated-data": ["DROP TABLE messages",
+                           "CREATE TABLE messages(id INTEGER PRIMARY KEY, topic_id INTEGER, "
+                           "timestamp INTEGER, data BLOB GENERATED ALWAYS AS "
+                           "(zeroblob(100000000)) VIRTUAL)",
+                           "INSERT INTO messages(topic_id, timestamp) VALUES (1, 1)"],
+    }
+    for case, statements in cases.items():
+        path = p(f"{case}.db3")
+        shutil.copy(bag, path)
+        db = sqlite3.connect(path)
+        for statement in statements:
+            db.execute(statement)
+        db.commit()
+        db.close()
+        for command in (["inspect", path], ["calibrate", path, "-o", p(f"{case}.json")]):
+            r = ck.run(*command, expect=3, timeout=20)
+            ck.check(r.stderr.startswith(f"accelcal: {path}: an SQLite database whose ") and
+                     ("is a view, not a table" in r.stderr or "is computed" in r.stderr) and
+                     not os.path.exists(p(f"{case}.json")),
+                     f"{case}, {command[0]}: {r.stderr}")
+
+
+def killed_recorder(ck, p, work, rows, want):
+    """rosbag2's resilient preset (WAL) with its recorder killed: the last 40 % of the session in
+    FILE-wal only. Read as committed, with nothing written in or beside the bag (no checkpoint
+    into it, FILE-shm untouched, nothing created): it had read the database alone, the samples
+    of its first 60 % with no warning."""
+    os.makedirs(p("wal"))
+    bag = os.path.join(p("wal"), "killed.db3")
+    write_db3(bag, rows, True, wal_from=len(rows) * 6 // 10)
+    before = digests(p("wal"))
+    ck.check(sorted(before) == ["killed.db3", "killed.db3-shm", "killed.db3-wal"] and
+             os.path.getsize(bag + "-wal") > 0, f"a killed recorder's files: {before}")
+    r = ck.run("calibrate", bag, "-o", p("killed.json"))
+    ck.check(r.returncode == 0 and calibration(p("killed.json")) == want,
+             f"the killed recorder's bag calibrates as its samples as CSV: {r.stdout}{r.stderr}")
+    doc = json.loads(ck.run("inspect", bag, "--json").stdout)
+    streams = {s["topic"]: s for s in doc["streams"]}
+    ck.check(streams["/imu/data"]["samples"] == len(rows),
+             f"inspect counts the samples in the log: {doc['streams']}")
+    ck.check(digests(p("wal")) == before, f"nothing written in or beside the bag: "
+             f"{digests(p('wal'))}, before {before}")
+    # A transaction the recorder never committed, and a frame torn by the kill: not applied (a
+    # frame whose checksum does not follow ends the log, as SQLite reads it).
+    with open(bag + "-wal", "ab") as f:
+        f.write(bytes(random.Random(5).randrange(256) for _ in range(4096 + 24)))
+    r = ck.run("calibrate", bag, "-o", p("torn.json"))
+    ck.check(r.returncode == 0 and calibration(p("torn.json")) == want,
+             f"a torn frame after the last commit is not applied: {r.stderr}")
+    # A log that is not SQLite's: refused, naming it.
+    with open(bag + "-wal", "r+b") as f:
+        f.write(b"\0\0\0\0")
+    r = ck.run("inspect", bag, expect=3)
+    ck.check(r.stderr.startswith(f"accelcal: {bag}: its write-ahead log {bag}-wal is not one "
+                                 "SQLite wrote"), f"a log that is not SQLite's: {r.stderr}")
+    # An empty log (a checkpoint emptied it): the database alone, as without one.
+    with open(bag + "-wal", "wb"):
+        pass
+    r = ck.run("inspect", bag, "--json")
+    streams = {s["topic"]: s for s in json.loads(r.stdout)["streams"]}
+    ck.check(streams["/imu/data"]["samples"] == len(rows) * 6 // 10,
+             f"an empty log: the database's samples: {streams['/imu/data']}")
 
 
 def main():
@@ -170,6 +271,22 @@ def main():
         r = ck.run("calibrate", bag, "--topic", "/vendor/status", "--columns", "1,2,3",
                 "-o", p("x.json"), expect=3)
         ck.check("does not carry its definition" in r.stderr, f"an unknown type: {r.stderr}")
+
+    killed_recorder(ck, p, work, rows, want)
+    hostile_schemas(ck, p, p("iron.db3"))
+    # Without rosbag2's index of the timestamps, the messages are still read in their order
+    # (their times and ids sorted here; SQLite would sort the rows with their data, in temporary
+    # files, which the VFS does not make), and the ids of equal times in theirs.
+    write_db3(p("no-index.db3"), rows, True, index=False)
+    db = sqlite3.connect(p("no-index.db3"))  # and 48 MB more than SQLite's cache could sort
+    for k in range(48):
+        db.execute("INSERT INTO messages (topic_id, timestamp, data) VALUES (3, ?, ?)",
+                   (T0_NS + k * 10**9 + 1, bytes(1 << 20)))
+    db.commit()
+    db.close()
+    r = ck.run("calibrate", p("no-index.db3"), "-o", p("no-index.json"))
+    ck.check(r.returncode == 0 and calibration(p("no-index.json")) == want,
+             f"a bag without the index of timestamps calibrates the same: {r.stderr}")
 
     # Through a pipe, a database cannot be opened: said.
     with open(p("iron.db3"), "rb") as f:

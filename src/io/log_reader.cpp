@@ -636,9 +636,7 @@ InputData ReadMat(internal::InputFile& file, const std::string& path, std::strin
           if (pending.empty()) {
             if (row == table.rows) break;
             char value[32];
-            const auto end = std::to_chars(value, value + sizeof value,
-                                           table.values[row * table.columns + column])
-                                 .ptr;
+            const auto end = std::to_chars(value, value + sizeof value, table.At(row, column)).ptr;
             pending.assign(value, end);
             pending += ++column == table.columns ? '\n' : ',';
             if (column == table.columns) column = 0, ++row;

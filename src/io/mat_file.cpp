@@ -28,8 +28,6 @@ void QuietMatio() {
   std::call_once(once, [] { Mat_LogInitFunc("accelcal", KeepMessage); });
 }
 
-// The largest matrix read: 2^28 values (2 GiB as doubles); more is no IMU session.
-constexpr std::size_t kMaxValues = std::size_t{1} << 28;
 // A matrix with more columns than this and at most this many rows is stored turned.
 constexpr std::size_t kMaxFields = 16;
 
@@ -179,6 +177,12 @@ std::string Shape(const MatVariable& v) {
 
 }  // namespace
 
+double MatTable::At(std::size_t row, std::size_t column) const {
+  const auto& v = *static_cast<const matvar_t*>(data.get());
+  // MATLAB stores a matrix column after column: a turned one's samples are its columns.
+  return transposed ? ValueAt(v, row * columns + column) : ValueAt(v, column * rows + row);
+}
+
 bool IsMatFile(std::string_view first_bytes) {
   return first_bytes.substr(0, 16) == "MATLAB 5.0 MAT-f" ||
          first_bytes.substr(0, 16) == "MATLAB 7.3 MAT-f";
@@ -230,13 +234,15 @@ MatTable ReadMatTable(const std::string& path, const std::string& name) {
   if (rows == 0 || columns == 0) {
     Fail(path, "the variable " + chosen + " is " + Shape(*it) + ": it holds no values");
   }
-  if (rows != 0 && columns > kMaxValues / rows) {
-    Fail(path, Format("the variable %s has %zu x %zu values, more than the %zu accelcal reads",
-                      chosen.c_str(), rows, columns, kMaxValues));
+  if (rows != 0 && columns > kMaxMatValues / rows) {
+    Fail(path, Format("the variable %s has %zu x %zu values, more than the %zu accelcal reads "
+                      "from a MAT-file (8.4 M samples of time,x,y,z; a longer session can be "
+                      "read as text)",
+                      chosen.c_str(), rows, columns, kMaxMatValues));
   }
   const MatFile mat = Open(path);
   last_matio_message.clear();
-  const MatVar v(Mat_VarRead(mat.get(), chosen.c_str()));
+  std::shared_ptr<matvar_t> v(Mat_VarRead(mat.get(), chosen.c_str()), FreeVar());
   if (!v || v->data == nullptr || !Numeric(*v) || v->dims[0] != rows || v->dims[1] != columns ||
       v->nbytes < rows * columns * SizeOfClass(v->class_type)) {
     Fail(path, "the variable " + chosen + " cannot be read" + Matio());
@@ -246,18 +252,7 @@ MatTable ReadMatTable(const std::string& path, const std::string& name) {
   out.transposed = columns > kMaxFields && rows <= kMaxFields;
   out.rows = out.transposed ? columns : rows;
   out.columns = out.transposed ? rows : columns;
-  out.values.resize(rows * columns);
-  // MATLAB stores a matrix column after column.
-  for (std::size_t c = 0; c < columns; ++c) {
-    for (std::size_t r = 0; r < rows; ++r) {
-      const double x = ValueAt(*v, c * rows + r);
-      if (out.transposed) {
-        out.values[c * rows + r] = x;  // sample c, field r
-      } else {
-        out.values[r * columns + c] = x;
-      }
-    }
-  }
+  out.data = std::move(v);
   return out;
 }
 

@@ -151,7 +151,7 @@ class InflateSource : public Source {
         return false;
       }
       if (z_.total_out > kMaxMatInflatedBytes) {
-        error_ = Format("it inflates past %llu MiB",
+        error_ = Format("data inflate past %llu MiB",
                         static_cast<unsigned long long>(kMaxMatInflatedBytes >> 20));
         return false;
       }
@@ -172,7 +172,7 @@ class InflateSource : public Source {
 
 class Walker {
  public:
-  explicit Walker(bool swap) : swap_(swap) {}
+  Walker(bool swap, std::uint64_t file_bytes) : swap_(swap), file_bytes_(file_bytes) {}
 
   // The elements of a container of `size` bytes from `in` (`top`: the file's, ended by its end).
   void Elements(Source* in, std::uint64_t size, int depth, bool top) {
@@ -197,6 +197,9 @@ class Walker {
         type &= 0xffff;
         if (bytes > 4) Fail(Format("a small element of %u bytes (at most 4)", bytes));
         if (index == 3 && matrix_class == kStructClass) field_name_length_ = U32(tag + 4);
+        // A matrix's data in the small format: as many values as a large element's (found by
+        // fuzz_file_schema: 3.7 G values claimed by one byte, libmatio asked for 30 GB).
+        if (!top) CheckValues(index, matrix_class, values, bytes, type);
         continue;
       }
       if (!top && bytes > left) {
@@ -211,8 +214,25 @@ class Walker {
       } else if (type == kMiCompressed) {
         if (depth != 0) Fail("a compressed element inside a matrix");
         InflateSource inflated(in, bytes);
-        Elements(&inflated, kMaxMatInflatedBytes, depth + 1, true);
+        try {
+          Elements(&inflated, kMaxMatInflatedBytes, depth + 1, true);
+        } catch (const Refused&) {
+          // An element cut short by the stream's own failure (corrupt, or past the bound): that.
+          if (!inflated.error().empty()) Fail("a compressed variable whose " + inflated.error());
+          throw;
+        }
         if (!inflated.Drain()) Fail("a compressed variable whose " + inflated.error());
+        // In all, what a real file's variables inflate to: a compressed file's size times a
+        // ratio no real data reaches, and at least kMaxMatFileInflatedBytes.
+        inflated_ += inflated.inflated();
+        const std::uint64_t bound = std::max(kMaxMatFileInflatedBytes, 64 * file_bytes_);
+        if (inflated_ > bound) {
+          Fail(
+              Format("compressed variables that inflate past %llu MiB in all (64 times the "
+                     "file, and at least %llu MiB)",
+                     static_cast<unsigned long long>(bound >> 20),
+                     static_cast<unsigned long long>(kMaxMatFileInflatedBytes >> 20)));
+        }
         if (!inflated.error().empty() && inflated.inflated() == 0) {
           Fail("a compressed variable whose " + inflated.error());
         }
@@ -243,12 +263,7 @@ class Walker {
         }
         if (!in->Read(nullptr, Pad(bytes) - bytes)) Fail("an element is cut short");
       } else {
-        // The real part of a numeric or char matrix holds each value in `type`'s size.
-        if (!top && index == 3 && matrix_class >= kCharClass && matrix_class != kSparseClass &&
-            values > bytes / TypeSize(type)) {
-          Fail(Format("a matrix of %llu values whose data holds %u bytes of type %u",
-                      static_cast<unsigned long long>(values), bytes, type));
-        }
+        if (!top) CheckValues(index, matrix_class, values, bytes, type);
         if (!top && index == 4 && matrix_class == kStructClass && field_name_length_ > 0 &&
             values > 0 && bytes / field_name_length_ > Less(left, Pad(bytes)) / 8 / values) {
           Fail("a struct whose fields claim more elements than it holds");
@@ -260,6 +275,16 @@ class Walker {
         if (!in->Read(nullptr, padded - bytes) && !top) Fail("an element is cut short");
       }
       if (!top) left -= std::min<std::uint64_t>(Pad(bytes), left);
+    }
+  }
+
+  // The real part of a numeric or char matrix (its element 3) holds each value in `type`'s size.
+  void CheckValues(int index, std::uint32_t matrix_class, std::uint64_t values, std::uint32_t bytes,
+                   std::uint32_t type) const {
+    if (index == 3 && matrix_class >= kCharClass && matrix_class != kSparseClass &&
+        values > bytes / TypeSize(type)) {
+      Fail(Format("a matrix of %llu values whose data holds %u bytes of type %u",
+                  static_cast<unsigned long long>(values), bytes, type));
     }
   }
 
@@ -279,6 +304,8 @@ class Walker {
   }
 
   bool swap_;
+  std::uint64_t file_bytes_;
+  std::uint64_t inflated_ = 0;  // by the compressed variables so far
   std::uint32_t field_name_length_ = 0;
   std::string where_;
 };
@@ -313,7 +340,7 @@ std::optional<std::string> CheckMatStructure(const std::string& path) {
   }
   FileSource file(f.get(), static_cast<std::uint64_t>(size));
   try {
-    Walker(!little).Elements(&file, 0, 0, true);
+    Walker(!little, static_cast<std::uint64_t>(size)).Elements(&file, 0, 0, true);
   } catch (const Walker::Refused& refused) {
     return refused.why;
   }

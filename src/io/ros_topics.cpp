@@ -13,6 +13,9 @@ namespace {
 // A log's message definitions are read up to this many bytes in all (a real log's are kilobytes):
 // past it, a small compressed file could take minutes to parse.
 constexpr std::size_t kMaxDefinitionBytes = std::size_t{64} << 20;
+// A log's topics are read up to this many (a robot's recording has hundreds): each stream costs
+// about a kilobyte, and a small compressed file can name millions (800 MB for a 3 MB bz2 bag).
+constexpr std::size_t kMaxTopics = std::size_t{1} << 16;
 }  // namespace
 
 std::size_t RosTopics::Add(const std::string& topic, const std::string& type,
@@ -38,6 +41,11 @@ std::size_t RosTopics::Add(const std::string& topic, const std::string& type,
       *error = "the topic " + topic + " " + conflict + ": record one publisher of one type";
     }
     return s;
+  }
+  if (out_->streams.size() == kMaxTopics) {
+    stream_of_.erase(it);
+    *error = Format("a log of more than %zu topics: no recording has that many", kMaxTopics);
+    return 0;
   }
   std::shared_ptr<const RosMessageType> parsed;
   std::string unreadable = why;

@@ -63,11 +63,10 @@ class Fields {
   std::size_t n_ = 0;
 };
 
-// A connection: a topic's publisher, with its type.
-struct Connection {
-  std::string topic;
-  std::size_t stream = 0;
-};
+// A bag's connections (a topic's publisher each) are read up to this many: a real bag's are
+// its topics times their publishers, hundreds. Past it a small compressed bag could ask for
+// gigabytes (a 3 MB bz2 chunk held a million connection records).
+constexpr std::size_t kMaxConnections = std::size_t{1} << 16;
 
 class Reader {
  public:
@@ -111,7 +110,7 @@ class Reader {
   const KeepStream& keep_;
   const StoreColumns& store_;
   DecodedLog out_;
-  std::unordered_map<std::uint32_t, Connection> connections_;
+  std::unordered_map<std::uint32_t, std::size_t> connections_;  // connection -> its stream
   RosTopics topics_{&out_, keep_, store_};
   std::vector<unsigned char> chunk_;
   std::size_t whole_ = 0;  // messages read whole
@@ -141,12 +140,13 @@ void Reader::Connect(const Fields& header, const unsigned char* data, std::size_
   const std::string topic(Text(header, "topic", at));
   if (const auto known = connections_.find(id); known != connections_.end()) {
     // The index repeats each connection after the chunks.
-    if (known->second.topic != topic) {
-      Fail(at, Format("connection %u is %s here, %s before", id, topic.c_str(),
-                      known->second.topic.c_str()));
+    const std::string& before = out_.streams[known->second].topic;
+    if (before != topic) {
+      Fail(at, Format("connection %u is %s here, %s before", id, topic.c_str(), before.c_str()));
     }
     return;
   }
+
   if (n > kMaxConnectionBytes) {
     Fail(at, Format("a connection header of %zu bytes: no message definition is that long", n));
   }
@@ -158,7 +158,12 @@ void Reader::Connect(const Fields& header, const unsigned char* data, std::size_
       topics_.Add(topic, type, std::string(Text(c, "message_definition", at)), RosVersion::kRos1,
                   "", &error, callerid != nullptr ? std::string(*callerid) : std::string());
   if (!error.empty()) Fail(at, error);
-  connections_.emplace(id, Connection{topic, stream});
+  if (connections_.size() == kMaxConnections) {
+    Fail(at, Format("a bag of more than %zu connections (a topic's publisher each): no "
+                    "recording has that many",
+                    kMaxConnections));
+  }
+  connections_.emplace(id, stream);
 }
 
 void Reader::Message(const Fields& header, const unsigned char* data, std::size_t n,
@@ -173,7 +178,7 @@ void Reader::Message(const Fields& header, const unsigned char* data, std::size_
   // The record's time: seconds and nanoseconds, in µs.
   const std::uint64_t t_us = (time & 0xffffffffu) * 1000000u + (time >> 32) / 1000u;
   ++whole_;
-  if (const std::optional<std::string> why = topics_.Message(c->second.stream, t_us, data, n, at)) {
+  if (const std::optional<std::string> why = topics_.Message(c->second, t_us, data, n, at)) {
     Fail(at, *why);
   }
 }

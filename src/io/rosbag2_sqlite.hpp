@@ -15,12 +15,14 @@ namespace accelcal::internal {
 /// A file that begins as an SQLite 3 database ("SQLite format 3" and a NUL).
 bool IsSqlite(std::string_view first_bytes);
 
-/// Reads the ROS 2 bag at `path` (named `name` in messages; opened read-only and immutable, so
-/// that nothing is written beside it), decoding the messages of the topics `keep` accepts, in
-/// the order of their time. A stream is a topic (instance 0), its time [µs] the messages'
-/// timestamps; a message's offset is its row id (DecodedLog::offset_name). Throws InputError
-/// naming the file for a database that cannot be read or is not a rosbag2 bag, and naming the
-/// row for a message that does not decode.
+/// Reads the ROS 2 bag at `path` (named `name` in messages) as committed, its write-ahead log
+/// included, with nothing written in or beside it (sqlite_wal.hpp), decoding the messages of the
+/// topics `keep` accepts, in the order of their time. A stream is a topic (instance 0), its time
+/// [µs] the messages' timestamps; a message's offset is its row id (DecodedLog::offset_name).
+/// Throws InputError naming the file for a database that cannot be read or is not a rosbag2 bag,
+/// and naming the row for a message that does not decode. Only tables are read, each checked first:
+/// a `topics`, `messages` or `message_definitions` that is a view, a virtual table, or has a
+/// generated column is refused, and so is a query that runs 2^27 steps without a row.
 DecodedLog ReadRosbag2Sqlite(const std::string& path, const std::string& name,
                              const KeepStream& keep, const StoreColumns& store = {});
 

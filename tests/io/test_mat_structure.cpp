@@ -68,7 +68,7 @@ TEST(MatStructure, WellFormedFilesPassAndAreRead) {
     const MatTable t = ReadMatTable(path, "");
     EXPECT_EQ(t.rows, 100u) << name;
     EXPECT_TRUE(t.transposed) << name;
-    EXPECT_EQ(t.values[4 * 99 + 1], 0.1 * 99) << name;
+    EXPECT_EQ(t.At(99, 1), 0.1 * 99) << name;
   }
 }
 
@@ -112,6 +112,109 @@ TEST(MatStructure, ClaimsBeyondTheFileAreRefusedWhereTheyAre) {
   }
 }
 
+// A compressed uint8 matrix "imu" of `rows` x 4 zeros: `rows` x 4 bytes in a file of a thousandth
+// of that (zlib's best ratio).
+std::string ByteBomb(std::uint32_t rows) {
+  std::string element;
+  const auto put = [&](std::uint32_t v) { element.append(reinterpret_cast<const char*>(&v), 4); };
+  const std::uint32_t values = rows * 4;
+  put(14);  // miMATRIX
+  put(16 + 16 + 8 + 8 + (values + 7) / 8 * 8);
+  put(6), put(8), put(9), put(0);                        // array flags: mxUINT8_CLASS
+  put(5), put(8), put(rows), put(4);                     // dimensions
+  put(3u << 16 | 1), element += "imu", element += '\0';  // the name, in the small format
+  put(2), put(values);                                   // miUINT8
+  element.append((values + 7) / 8 * 8, '\0');
+  uLongf n = compressBound(element.size());
+  std::string z(n, '\0');
+  EXPECT_EQ(compress2(reinterpret_cast<Bytef*>(z.data()), &n,
+                      reinterpret_cast<const Bytef*>(element.data()), element.size(), 9),
+            Z_OK);
+  z.resize(n);
+  std::string out = Matrix().substr(0, 128);
+  out += std::string("\x0f\x00\x00\x00", 4);
+  const auto size = static_cast<std::uint32_t>(z.size());
+  out.append(reinterpret_cast<const char*>(&size), 4);
+  return out + z;
+}
+
+TEST(MatStructure, ASmallFileCannotAskForMoreThanACalibrationReads) {
+  // A 32 kB file of 2^25 + 4 byte values (a 1 MB one of 2^28 had taken 2.26 GB and 26 s: the
+  // bytes as libmatio read them, then as doubles): refused before libmatio reads its data.
+  const std::string path = Write("bomb.mat", ByteBomb((1u << 23) + 1));
+  EXPECT_LT(ReadFileToString(path).size(), std::size_t{64} << 10);
+  try {
+    ReadMatTable(path, "");
+    ADD_FAILURE() << "read";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("the variable imu has 8388609 x 4 values, more than "
+                                         "the 33554432 accelcal reads from a MAT-file"),
+              std::string::npos)
+        << e.what();
+  }
+  // At the bound, read, each value where libmatio has it (a byte each, not a double).
+  const MatTable t = ReadMatTable(Write("bound.mat", ByteBomb(1u << 23)), "");
+  EXPECT_EQ(t.rows, std::size_t{1} << 23);
+  EXPECT_EQ(t.columns, 4u);
+  EXPECT_EQ(t.At(t.rows - 1, 3), 0.0);
+}
+
+// A compressed variable whose matrix claims `claim` bytes of doubles, its stream `zeros` zero
+// bytes after the element's headers (deflated as a stream: no buffer of that size).
+std::string DoubleBomb(std::uint32_t claim, std::uint64_t zeros) {
+  std::string head;
+  const auto put = [&](std::uint32_t v) { head.append(reinterpret_cast<const char*>(&v), 4); };
+  put(14), put(48 + claim);
+  put(6), put(8), put(6), put(0);  // mxDOUBLE_CLASS
+  put(5), put(8), put(claim / 32), put(4);
+  put(3u << 16 | 1), head += "imu", head += '\0';
+  put(9), put(claim);  // miDOUBLE
+  z_stream z{};
+  EXPECT_EQ(deflateInit(&z, 1), Z_OK);
+  std::string out;
+  const std::string block(1 << 20, '\0');
+  std::string buffer(1 << 20, '\0');
+  const auto deflate_some = [&](const std::string& in, std::size_t n, int flush) {
+    z.next_in = reinterpret_cast<Bytef*>(const_cast<char*>(in.data()));
+    z.avail_in = static_cast<uInt>(n);
+    do {
+      z.next_out = reinterpret_cast<Bytef*>(buffer.data());
+      z.avail_out = static_cast<uInt>(buffer.size());
+      deflate(&z, flush);
+      out.append(buffer.data(), buffer.size() - z.avail_out);
+    } while (z.avail_out == 0);
+  };
+  deflate_some(head, head.size(), Z_NO_FLUSH);
+  for (std::uint64_t left = zeros; left > 0; left -= std::min<std::uint64_t>(left, block.size())) {
+    deflate_some(block, std::min<std::uint64_t>(left, block.size()), Z_NO_FLUSH);
+  }
+  deflate_some(block, 0, Z_FINISH);
+  deflateEnd(&z);
+  std::string file = Matrix().substr(0, 128);
+  file += std::string("\x0f\x00\x00\x00", 4);
+  const auto size = static_cast<std::uint32_t>(out.size());
+  file.append(reinterpret_cast<const char*>(&size), 4);
+  return file + out;
+}
+
+TEST(MatStructure, InflatingIsBoundedPerVariableAndPerFile) {
+  // A 1 MB file inflating to 1 GiB, the bound before, had taken 22 s and 2.26 GB: refused when
+  // its inflated bytes pass 256 MiB, saying so (not "an element is cut short").
+  std::optional<std::string> why = CheckMatStructure(
+      Write("1g.mat", DoubleBomb(1u << 30, (std::uint64_t{1} << 28) + (1u << 20))));
+  ASSERT_TRUE(why);
+  EXPECT_NE(why->find("a compressed variable whose data inflate past 256 MiB"), std::string::npos)
+      << *why;
+  // Five variables of 240 MiB each, under the bound each, 1.2 GiB in all from 1.2 MB.
+  const std::string one = DoubleBomb(240u << 20, 240u << 20);
+  std::string five = one;
+  for (int i = 0; i < 4; ++i) five += one.substr(128);
+  why = CheckMatStructure(Write("five.mat", five));
+  ASSERT_TRUE(why);
+  EXPECT_NE(why->find("compressed variables that inflate past 1024 MiB in all"), std::string::npos)
+      << *why;
+}
+
 TEST(MatStructure, AnEmptyMatrixIsRefusedByName) {
   // Found by the fuzzer: a 262294 x 0 matrix was read as rows of nothing (the first value of an
   // empty vector).
@@ -135,6 +238,18 @@ TEST(MatStructure, TheFuzzersFindingsAreRefused) {
     ASSERT_TRUE(why) << name;
     EXPECT_NE(why->find("where its matrix holds"), std::string::npos) << *why;
   }
+}
+
+TEST(MatStructure, DataInTheSmallFormatHoldsWhatTheDimensionsClaim) {
+  // Found by fuzz_file_schema (issue 47): a cell's double matrix of 0xdfe6a07a x 1 values whose
+  // data is one byte in the small format (its value in the tag): unchecked, libmatio asked for
+  // 30 GB.
+  const std::optional<std::string> why = CheckMatStructure(
+      std::string(ACCELCAL_SOURCE_DIR) + "/fuzz/regressions/file_log/small-data-claim-30gb.mat");
+  ASSERT_TRUE(why);
+  EXPECT_NE(why->find("a matrix of 3756433530 values whose data holds 1 bytes of type 5"),
+            std::string::npos)
+      << *why;
 }
 
 TEST(MatStructure, TheVersionFieldNotTheTextSaysHowItIsRead) {

@@ -502,6 +502,26 @@ TEST(RosBag, RefusesATopicOfTwoDefinitionsOrTwoPublishers) {
   EXPECT_EQ(log.streams[1].values, (std::vector<double>{3, 6, 9, 3e6}));
 }
 
+TEST(RosBag, BoundsItsTopicsAndConnections) {
+  // A 3 MB bz2 chunk can name a million topics (800 MB and 20 s read before): the topics and the
+  // connections a bag may have are bounded, refused where the bound is passed.
+  const auto many = [](std::uint32_t n, bool one_topic) {
+    std::string records;
+    for (std::uint32_t i = 0; i < n; ++i) {
+      records += Connection(i, one_topic ? "/a" : "/t" + std::to_string(i));
+    }
+    return BagHeader() + Chunk(records);
+  };
+  const auto why = [](const std::string& bag) {
+    const std::string reason = Why(bag);
+    return reason.substr(reason.find(": ") + 2);  // less the record's byte
+  };
+  EXPECT_EQ(why(many(65537, false)), "a log of more than 65536 topics: no recording has that many");
+  EXPECT_EQ(why(many(65537, true)),
+            "a bag of more than 65536 connections (a topic's publisher each): no recording has "
+            "that many");
+}
+
 // --- decompression -----------------------------------------------------------------------------
 
 TEST(Decompress, ExactlyTheSizeSaid) {

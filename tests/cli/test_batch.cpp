@@ -1,7 +1,10 @@
 // accelcal batch as a production line runs it: 200 simulated units with known parameters, some out
 // of the MEMS example's limits, some with a bumped position or too few positions; every verdict,
 // the same bytes whatever the number of jobs, a resumed batch, and a unit's file as calibrate's.
+#include <fcntl.h>
+#include <sys/file.h>
 #include <sys/stat.h>
+#include <unistd.h>
 
 #include <cmath>
 #include <random>
@@ -12,6 +15,7 @@
 
 #include "accelcal/mcap_writer.hpp"
 #include "accelcal/rosbag_writer.hpp"
+#include "accelcal/sha256.hpp"
 #include "accelcal/simulate.hpp"
 #include "accelcal/ulog_writer.hpp"
 #include "support/cli_test.hpp"
@@ -155,8 +159,8 @@ TEST_F(Batch, TwoHundredUnitsEachGetTheirVerdict) {
   // The table: a header and one row per unit, each parameter and its sigma in columns.
   const std::string csv = Slurp(Path("out/summary.csv"));
   EXPECT_EQ(std::count(csv.begin(), csv.end(), '\n'), kUnits + 2);
-  EXPECT_EQ(csv.rfind("unit,status,failed,files,verdict,worst_finding,message,accelerometer.K_xx,"
-                      "accelerometer.K_xx.sigma,",
+  EXPECT_EQ(csv.rfind("unit,status,failed,files,verdict,worst_finding,message,sha256,"
+                      "accelerometer.K_xx,accelerometer.K_xx.sigma,",
                       0),
             0u);
   EXPECT_NE(r.out.find("201 units: 132 pass, 60 fail, 9 error"), std::string::npos) << r.out;
@@ -303,6 +307,59 @@ TEST_F(Batch, KeepsWhatIsNotItsOwnAndStopsForNoUnit) {
   EXPECT_EQ(r.status, 2);
   EXPECT_NE(r.err.find("--gyro names one gyroscope log for every unit"), std::string::npos)
       << r.err;
+}
+
+// Issue 47: below the directory named, batch follows no symbolic link, at any level; what it
+// refuses is named, and nothing is written where a link points.
+TEST_F(Batch, FollowsNoLinkBelowItsDirectory) {
+  fs::create_directories(Path("in"));
+  Write("in/a.csv", UnitPositions(1, Plan::kGood, 1));
+  Write("in/b.csv", UnitPositions(2, Plan::kGood, 2));
+  fs::create_directories(Path("elsewhere"));
+  const auto untouched = [&] { return fs::is_empty(Path("elsewhere")); };
+  const std::string run = "batch " + Path("in") + " -o " + Path("out") + " --no-report";
+  // OUT/units a link: nothing calibrated into it.
+  fs::create_directories(Path("out"));
+  fs::create_directory_symlink(Path("elsewhere"), Path("out/units"));
+  CliRun r = Exec(run);
+  EXPECT_EQ(r.status, 5) << r.out << r.err;
+  EXPECT_NE(r.err.find(Path("out/units") + ": is a symbolic link: not followed"), std::string::npos)
+      << r.err;
+  EXPECT_TRUE(untouched());
+  EXPECT_FALSE(fs::exists(Path("out/summary.csv")));
+  fs::remove_all(Path("out"));
+  // OUT/units/a a link: unit a is an error row naming it, unit b is calibrated.
+  fs::create_directories(Path("out/units"));
+  fs::create_directory_symlink(Path("elsewhere"), Path("out/units/a"));
+  r = Exec(run);
+  EXPECT_EQ(r.status, 6) << r.out << r.err;
+  EXPECT_NE(r.out.find(Path("out/units/a") + ": is a symbolic link: not followed"),
+            std::string::npos)
+      << r.out;
+  EXPECT_TRUE(untouched());
+  EXPECT_TRUE(fs::is_symlink(Path("out/units/a")));
+  EXPECT_TRUE(fs::exists(Path("out/units/b/calibration.json")));
+  fs::remove_all(Path("out"));
+  // A FIFO where a calibration goes: an error row, never waited on; a directory where the
+  // summary goes: nothing written.
+  fs::create_directories(Path("out/units/a"));
+  ASSERT_EQ(::mkfifo(Path("out/units/a/calibration.json").c_str(), 0600), 0);
+  r = Exec(run);
+  EXPECT_EQ(r.status, 6) << r.out << r.err;
+  EXPECT_NE(r.out.find("calibration.json is not a regular file: not replaced"), std::string::npos)
+      << r.out;
+  fs::remove_all(Path("out"));
+  fs::create_directories(Path("out/summary.json"));
+  EXPECT_EQ(Exec(run).status, 5);
+  EXPECT_FALSE(fs::exists(Path("out/summary.csv")));
+  fs::remove_all(Path("out"));
+  // The directory named may be a link the user made: followed, as every tool follows it.
+  fs::create_directories(Path("real"));
+  fs::create_directory_symlink(Path("real"), Path("out"));
+  r = Exec(run);
+  EXPECT_EQ(r.status, 0) << r.out << r.err;
+  EXPECT_TRUE(fs::exists(Path("real/units/a/calibration.json")));
+  EXPECT_TRUE(untouched());
 }
 
 }  // namespace

@@ -10,7 +10,6 @@
 // the store or holds a control character, a bad date or SHA-256, a duplicate are refused. Below
 // STORE (the directory the user names) nothing is followed: every directory, file and the index
 // are opened relative to their parent without following a link (output.hpp's Directory).
-#include <sys/file.h>
 #include <sys/stat.h>
 #include <unistd.h>
 
@@ -24,8 +23,6 @@
 #include <map>
 #include <optional>
 #include <set>
-
-#include <fcntl.h>
 
 #include "accelcal/calibration_change.hpp"
 #include "accelcal/calibration_file.hpp"

@@ -350,10 +350,12 @@ DirectoryLock::DirectoryLock(const Directory& dir, const std::string& name, bool
       ::openat(dir.fd(), name.c_str(),
                (create ? O_RDWR | O_CREAT : O_RDONLY) | O_NOFOLLOW | O_NONBLOCK | O_CLOEXEC, 0666);
   if (fd_ < 0 && !create && errno == ENOENT) return;  // none: no one holds it
-  if (fd_ < 0) throw OutputError(shown + ": cannot lock: " + OpenFailure(errno, "the files"));
+  if (fd_ < 0) Refuse(create, shown, "cannot lock: " + OpenFailure(errno, "the files"));
   struct stat st {};
   if (::fstat(fd_, &st) != 0 || !S_ISREG(st.st_mode)) {
-    throw OutputError(shown + ": cannot lock: not a regular file");
+    ::close(fd_);
+    fd_ = -1;
+    Refuse(create, shown, "cannot lock: not a regular file");
   }
   int op = exclusive ? LOCK_EX : LOCK_SH;
   if (!wait) op |= LOCK_NB;
@@ -363,7 +365,10 @@ DirectoryLock::DirectoryLock(const Directory& dir, const std::string& name, bool
       busy_ = true;
       return;
     }
-    throw OutputError(shown + ": cannot lock: " + std::strerror(errno));
+    const int e = errno;
+    ::close(fd_);
+    fd_ = -1;
+    Refuse(create, shown, std::string("cannot lock: ") + std::strerror(e));
   }
 }
 

@@ -102,8 +102,9 @@ class Directory {
 /// it when the process ends however it ends (kill -9 included), so a lock is never left stale.
 /// `exclusive`: a writer's, else a reader's (shared); `wait`: wait for another holder, else
 /// busy() says one holds it. `create`: make the file when missing (a writer's), else a missing
-/// file is no holder (a reader does not write into what it reads). OutputError naming the file
-/// when it cannot be opened (a link, not a regular file).
+/// file is no holder (a reader does not write into what it reads). An error naming the file when
+/// it cannot be opened (a link, not a regular file): OutputError for a writer (`create`), else
+/// InputError.
 class DirectoryLock {
  public:
   DirectoryLock(const Directory& dir, const std::string& name, bool exclusive, bool wait,

@@ -339,7 +339,7 @@ void CheckCalibrationFlags(const CLI::App& cmd, const CalibrateArgs& cal) {
 }  // namespace
 
 int accelcal::cli::RunCommandLineCaptured(const std::vector<std::string>& args, std::string* out,
-                                          std::string* err) {
+                                          std::string* err, std::vector<CapturedFile>* files) {
   // The host program's locale may write a decimal comma (Python's locale.setlocale): the
   // command reads its options and writes its numbers in "C", in this thread only.
   const accelcal::internal::ClassicLocale c_locale;
@@ -350,7 +350,7 @@ int accelcal::cli::RunCommandLineCaptured(const std::vector<std::string>& args, 
       SetConsole(console);
       SetVerbosity(verbosity);
     }
-  } restore{SetConsole({out, err}), CurrentVerbosity()};
+  } restore{SetConsole({out, err, files}), CurrentVerbosity()};
   std::vector<std::string> copies = args;
   std::vector<char*> argv;
   for (std::string& a : copies) argv.push_back(a.data());

@@ -54,6 +54,7 @@ struct Unit {
   std::string message;  // an error's, from calibrate's stderr
   UnitStatus status = UnitStatus::kError;
   std::optional<LoadedCalibration> calibration;
+  std::string sha256;  // of the calibration's file, the bytes judged
   Acceptance acceptance;
 };
 
@@ -243,17 +244,14 @@ Json ProvenanceOptions(const BatchArgs& args) {
   return GivenOptionsJson(given);
 }
 
-// Whether the unit's calibration file is current: written by this accelcal from the same inputs
-// (by name, size and SHA-256), options and date, with its report when one is wanted.
-bool Current(const BatchArgs& args, const Unit& unit, const std::string& dir,
-             const std::vector<InputRecord>& shared) {
-  const std::string cal_path = dir + "/calibration.json";
-  if (!IsDirectory(dir) || (args.report && ::access((dir + "/report.html").c_str(), R_OK) != 0)) {
-    return false;
-  }
+// Whether the unit's calibration file (its bytes `text`) is current: written by this accelcal
+// from the same inputs (by name, size and SHA-256), options and date, with its report when one is
+// wanted.
+bool Current(const BatchArgs& args, const Unit& unit, const std::string& text,
+             const std::string& cal_path, bool has_report, const std::vector<InputRecord>& shared) {
+  if (args.report && !has_report) return false;
   try {
-    const LoadedCalibration cal =
-        ParseCalibrationJson(ReadFileToString(cal_path, kMaxSmallFileBytes), cal_path);
+    const LoadedCalibration cal = ParseCalibrationJson(text, cal_path);
     const Provenance& p = cal.provenance;
     if (p.accelcal_version != Version() || p.command != "accelcal calibrate" ||
         p.options != ProvenanceOptions(args) || p.date != OptionValue(args, "date")) {
@@ -310,70 +308,82 @@ std::string ErrorLine(const std::string& err) {
   return line;
 }
 
-// Why batch does not write `path` of a unit's directory, or "": it replaces only regular files
-// (a symbolic link there could send its output over a file of the user's).
-std::string NotReplaceable(const std::string& path) {
-  struct stat st {};
-  if (::lstat(path.c_str(), &st) != 0) return "";
-  if (S_ISLNK(st.st_mode)) {
-    return path + " is a symbolic link: batch replaces only the files it wrote";
-  }
-  if (!S_ISREG(st.st_mode)) return path + " is not a regular file: not replaced";
-  return "";
-}
-
-void RunUnit(const BatchArgs& args, const std::vector<InputRecord>& shared, Unit* unit) {
+// A unit: its directory OUT/units/ID opened without following a link (Directory), calibrate run
+// in-process with its two files kept in memory, and those written by batch itself into that
+// directory (a link planted anywhere below OUT can send nothing elsewhere). The calibration's
+// SHA-256 is of the bytes judged, so the summary names exactly the file it judged.
+void RunUnit(const BatchArgs& args, const std::vector<InputRecord>& shared,
+             const Directory& units_dir, Unit* unit) {
   if (!unit->problem.empty()) return;
-  const std::string dir = args.output + "/units/" + unit->id;
+  const std::string dir = units_dir.Shown(unit->id);
   const std::string cal_path = dir + "/calibration.json";
   const std::string report_path = dir + "/report.html";
+  bool made = false;  // the unit's directory, made for it: removed again when left empty
   try {
-    struct stat st {};
-    if (::lstat(dir.c_str(), &st) == 0 && !S_ISDIR(st.st_mode)) {
-      unit->message = dir + " is not a directory (a link or a file): not written into";
-      return;
-    }
-    for (const std::string& path : {cal_path, report_path}) {
-      if (std::string why = NotReplaceable(path); !why.empty()) {
-        unit->message = why;
-        return;
+    made = !units_dir.Has(unit->id);
+    const Directory unit_dir = units_dir.Sub(unit->id, true);
+    const auto fail = [&](const std::string& why) {
+      unit->message = why;
+      if (made) units_dir.RemoveEmpty(unit->id);
+    };
+    // batch replaces only regular files it wrote: a link there could send its output over a
+    // file of the user's.
+    bool has_calibration = false, has_report = false;
+    for (const char* name : {"calibration.json", "report.html"}) {
+      struct stat st {};
+      if (!unit_dir.Has(name, &st)) continue;
+      if (S_ISLNK(st.st_mode)) {
+        return fail(unit_dir.Shown(name) +
+                    " is a symbolic link: batch replaces only the files it wrote");
       }
+      if (!S_ISREG(st.st_mode)) {
+        return fail(unit_dir.Shown(name) + " is not a regular file: not replaced");
+      }
+      (name[0] == 'c' ? has_calibration : has_report) = true;
     }
-    if (!args.redo && Current(args, *unit, dir, shared)) {
+    std::string text;
+    if (has_calibration) text = unit_dir.Read("calibration.json", kMaxSmallFileBytes);
+    if (!args.redo && has_calibration && Current(args, *unit, text, cal_path, has_report, shared)) {
       unit->reused = true;
       unit->exit_status = kExitOk;
     } else {
       // A file there that is not a calibration is not batch's: not replaced.
-      if (::access(cal_path.c_str(), F_OK) == 0) {
+      if (has_calibration) {
         try {
-          ParseCalibrationJson(ReadFileToString(cal_path, kMaxSmallFileBytes), cal_path);
+          ParseCalibrationJson(text, cal_path);
         } catch (const std::exception&) {
-          unit->message = cal_path + " exists and is not a calibration file: not replaced";
-          return;
+          return fail(cal_path + " exists and is not a calibration file: not replaced");
         }
       }
-      if (::mkdir(dir.c_str(), 0777) != 0 && errno != EEXIST) {
-        throw OutputError(dir + ": cannot create the unit's directory: " + std::strerror(errno));
-      }
+      std::vector<CapturedFile> files = {{cal_path, false, ""}, {report_path, false, ""}};
       std::string out, err;
-      unit->exit_status = RunCommandLineCaptured(CalibrateCommand(args, *unit, dir), &out, &err);
+      unit->exit_status =
+          RunCommandLineCaptured(CalibrateCommand(args, *unit, dir), &out, &err, &files);
       if (unit->exit_status != kExitOk && unit->exit_status != kExitFailedChecks) {
         // An earlier calibration there is kept (it may be the user's, or read-only): it is not
         // current, so it is neither reported nor taken as current by a later batch.
-        unit->message = ErrorLine(err);
-        ::rmdir(dir.c_str());  // made for it and left empty: removed (else it fails, harmlessly)
-        return;
+        return fail(ErrorLine(err));
       }
+      if (!files[0].written || (args.report && !files[1].written)) {
+        throw OutputError(cal_path + ": calibrate wrote no calibration");
+      }
+      // Both files or neither; an earlier calibration that is read-only is kept (and the unit is
+      // an error: its calibration is not of the current files).
+      OutputFile cal_file(unit_dir, "calibration.json");
+      cal_file.Write(files[0].bytes);
+      std::optional<OutputFile> report_file;
+      if (args.report) report_file.emplace(unit_dir, "report.html").Write(files[1].bytes);
+      CommitAll({&cal_file, report_file ? &*report_file : nullptr});
       // A report of an earlier calibration would describe other data.
-      if (!args.report && ::access(report_path.c_str(), F_OK) == 0) {
-        std::remove(report_path.c_str());
-      }
+      if (!args.report) unit_dir.Remove("report.html");
+      text = std::move(files[0].bytes);
     }
-    unit->calibration =
-        ParseCalibrationJson(ReadFileToString(cal_path, kMaxSmallFileBytes), cal_path);
+    unit->calibration = ParseCalibrationJson(text, cal_path);
+    unit->sha256 = Sha256Hex(text);
   } catch (const std::exception& e) {
     unit->exit_status = kExitInternal;
     unit->message = e.what();
+    if (made) units_dir.RemoveEmpty(unit->id);
   }
 }
 
@@ -480,17 +490,13 @@ int RunBatch(const BatchArgs& args) {
     const auto [at, fresh] = seen.emplace(std::make_pair(st.st_dev, st.st_ino), f);
     if (!fresh) throw UsageError(f + " is " + at->second + " again: give each file once");
   }
-  // The output directory, made when missing; never one of the inputs' directories.
-  if (!IsDirectory(args.output)) {
-    if (::access(args.output.c_str(), F_OK) == 0 || errno != ENOENT) {
-      throw OutputError(args.output + ": exists and is not a directory");
-    }
-    if (::mkdir(args.output.c_str(), 0777) != 0) {
-      throw OutputError(args.output + ": cannot create the directory: " + std::strerror(errno));
-    }
-  }
+  // The output directory, made when missing (a link there is the user's and followed); never
+  // one of the inputs' directories. Everything below it is opened without following links.
+  const Directory out_dir = Directory::Open(args.output, true);
   struct stat out_st {};
-  ::stat(args.output.c_str(), &out_st);
+  if (::fstat(out_dir.fd(), &out_st) != 0) {
+    throw OutputError(args.output + ": cannot be read: " + std::strerror(errno));
+  }
   for (const std::string& input : args.inputs) {
     struct stat st {};
     if (IsDirectory(input) && ::stat(input.c_str(), &st) == 0 && st.st_dev == out_st.st_dev &&
@@ -499,10 +505,17 @@ int RunBatch(const BatchArgs& args) {
                        ": its summary files would be taken for units; give another");
     }
   }
-  const std::string units_dir = args.output + "/units";
-  if (::mkdir(units_dir.c_str(), 0777) != 0 && errno != EEXIST) {
-    throw OutputError(units_dir + ": cannot create the directory: " + std::strerror(errno));
+  // One batch at a time per directory: two at once would replace each other's units between
+  // judging and summing up, and a summary would pass a calibration that another run replaced.
+  // The second is refused rather than made to wait: a batch runs for minutes to hours, and two
+  // lines writing into one directory is a mistake better said at once than hidden by a queue.
+  const DirectoryLock lock(out_dir, ".lock", true, false, true);
+  if (lock.busy()) {
+    throw OutputError(args.output + ": another batch is writing into it (it holds " +
+                      out_dir.Shown(".lock") +
+                      "): run this one when it has finished, or give another -o");
   }
+  const Directory units_dir = out_dir.Sub("units", true);
   const std::string csv_path = args.output + "/summary.csv";
   const std::string json_path = args.output + "/summary.json";
   std::vector<std::string> all_inputs = files;
@@ -590,7 +603,9 @@ int RunBatch(const BatchArgs& args) {
   std::vector<std::thread> workers;
   for (std::size_t j = 0; j < jobs; ++j) {
     workers.emplace_back([&] {
-      for (std::size_t i; (i = next++) < units.size(); ++done) RunUnit(args, shared, &units[i]);
+      for (std::size_t i; (i = next++) < units.size(); ++done) {
+        RunUnit(args, shared, units_dir, &units[i]);
+      }
     });
   }
   {
@@ -640,7 +655,7 @@ int RunBatch(const BatchArgs& args) {
   }
   doc["options"] = GivenOptionsJson(args.calibrate_options);
   Json& rows = doc["units"] = Json::array();
-  std::string csv = "unit,status,failed,files,verdict,worst_finding,message";
+  std::string csv = "unit,status,failed,files,verdict,worst_finding,message,sha256";
   for (const std::string& c : columns) csv += "," + c + "," + c + ".sigma";
   csv += "\n";
   for (const Unit& u : units) {
@@ -649,6 +664,8 @@ int RunBatch(const BatchArgs& args) {
     row["unit"] = u.id;
     row["status"] = Name(u.status);
     row["files"] = u.files;
+    // What store add checks the unit's file against: the bytes judged here.
+    row["sha256"] = u.calibration ? Json(u.sha256) : Json();
     std::vector<std::string> failed;
     Json failures = Json::array();
     for (const LimitFailure& f : u.acceptance.failures) {
@@ -686,7 +703,7 @@ int RunBatch(const BatchArgs& args) {
     csv += CsvField(u.id) + "," + Name(u.status) + "," + CsvField(Joined(failed, "; ")) + "," +
            CsvField(Joined(u.files, ";")) + "," +
            (u.calibration ? u.calibration->verdict + "," + WorstFinding(*u.calibration) : ",") +
-           "," + CsvField(u.message);
+           "," + CsvField(u.message) + "," + (u.calibration ? u.sha256 : "");
     for (const std::string& c : columns) {
       const auto it = by_name.find(c);
       if (it == by_name.end()) {
@@ -701,10 +718,7 @@ int RunBatch(const BatchArgs& args) {
   doc["counts"] = {
       {"units", units.size()}, {"pass", counts[0]}, {"fail", counts[1]}, {"error", counts[2]}};
   const std::string json_text = JsonText(doc);
-  for (const std::string& path : {csv_path, json_path}) {
-    if (std::string why = NotReplaceable(path); !why.empty()) throw OutputError(why);
-  }
-  OutputFile csv_file(csv_path), json_file(json_path);
+  OutputFile csv_file(out_dir, "summary.csv"), json_file(out_dir, "summary.json");
   csv_file.Write(csv);
   json_file.Write(json_text);
   CommitAll({&csv_file, &json_file});

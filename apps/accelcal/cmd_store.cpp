@@ -7,8 +7,9 @@
 // always says how each calibration differs from its predecessor. Adding is locked (flock on
 // STORE/.lock), every file is checked before anything is written, the files are written before
 // the index, and the index is replaced whole. The index is checked when read: a path that leaves
-// the store, a bad date or SHA-256, a duplicate are refused.
-#include <sys/file.h>
+// the store or holds a control character, a bad date or SHA-256, a duplicate are refused. Below
+// STORE (the directory the user names) nothing is followed: every directory, file and the index
+// are opened relative to their parent without following a link (output.hpp's Directory).
 #include <sys/stat.h>
 #include <unistd.h>
 
@@ -22,8 +23,6 @@
 #include <map>
 #include <optional>
 #include <set>
-
-#include <fcntl.h>
 
 #include "accelcal/calibration_change.hpp"
 #include "accelcal/calibration_file.hpp"
@@ -46,14 +45,18 @@ struct Entry {
   bool fresh = false;  // added or re-compared by this add
 };
 
-void MakeDirectory(const std::string& path) {
-  if (::mkdir(path.c_str(), 0777) != 0 && errno != EEXIST) {
-    throw OutputError(path + ": cannot create the directory: " + std::strerror(errno));
-  }
-  if (!IsDirectory(path)) throw OutputError(path + ": exists and is not a directory");
-}
+constexpr const char* kIndex = "index.json";
 
-std::string IndexPath(const std::string& store) { return store + "/index.json"; }
+std::string IndexPath(const std::string& store) { return store + "/" + kIndex; }
+
+// A stored file's bytes: `file` is an index's units/UNIT/NAME (checked by ReadIndex), each part
+// opened without following a link.
+std::string ReadStored(const Directory& store, const std::string& file) {
+  const std::size_t first = file.find('/'), last = file.rfind('/');
+  return store.Sub(file.substr(0, first), false)
+      .Sub(file.substr(first + 1, last - first - 1), false)
+      .Read(file.substr(last + 1), kMaxSmallFileBytes);
+}
 
 // A provenance date (CheckProvenanceDate's form) as the UTC instant "YYYY-MM-DDTHH:MM:SS", so that
 // dates with other time zones order by time; a date alone is its day's start.
@@ -94,18 +97,13 @@ void SortEntries(std::vector<Entry>* entries) {
 // The index, or none when the store has none yet. Every entry is checked: an index edited by hand
 // or damaged is refused (InputError naming the entry) rather than read outside the store or
 // half-understood.
-std::vector<Entry> ReadIndex(const std::string& store) {
-  const std::string path = IndexPath(store);
-  struct stat st {};
-  if (::stat(path.c_str(), &st) != 0) {
-    if (errno == ENOENT) return {};
-    throw InputError(path, 0, std::string("cannot be read: ") + std::strerror(errno));
-  }
-  if (!S_ISREG(st.st_mode)) throw InputError(path, 0, "not a regular file");
+std::vector<Entry> ReadIndex(const Directory& store) {
+  const std::string path = store.Shown(kIndex);
+  if (!store.Has(kIndex)) return {};
   std::vector<Entry> entries;
   Json doc;
   try {
-    doc = Json::parse(ReadFileToString(path, kMaxSmallFileBytes));
+    doc = Json::parse(store.Read(kIndex, kMaxSmallFileBytes));
   } catch (const nlohmann::json::exception& e) {
     throw InputError(path, 0, std::string("not JSON: ") + e.what());
   }
@@ -140,6 +138,12 @@ std::vector<Entry> ReadIndex(const std::string& store) {
     if (entry.sha256.size() != 64 ||
         entry.sha256.find_first_not_of("0123456789abcdef") != std::string::npos) {
       fail("'sha256' is not 64 hexadecimal digits");
+    }
+    // A control character (a NUL above all: the system would see the name end there, and open
+    // another file) is no part of a name the store writes.
+    if (std::any_of(entry.file.begin(), entry.file.end(),
+                    [](char c) { return static_cast<unsigned char>(c) < 0x20 || c == 0x7f; })) {
+      fail("'file' " + internal::VisibleLine(entry.file) + " holds a control character");
     }
     // units/UNIT/NAME.json, NAME without a '/': never a path out of the store.
     const std::string prefix = "units/" + entry.unit + "/";
@@ -186,24 +190,6 @@ std::string Today() {
   return text;
 }
 
-// The store's lock, held while it lives.
-class StoreLock {
- public:
-  explicit StoreLock(const std::string& store) {
-    const std::string path = store + "/.lock";
-    fd_ = ::open(path.c_str(), O_RDWR | O_CREAT | O_CLOEXEC | O_NOFOLLOW, 0666);
-    if (fd_ < 0 || ::flock(fd_, LOCK_EX) != 0) {
-      throw OutputError(path + ": cannot lock the store: " + std::strerror(errno));
-    }
-  }
-  ~StoreLock() { ::close(fd_); }
-  StoreLock(const StoreLock&) = delete;
-  StoreLock& operator=(const StoreLock&) = delete;
-
- private:
-  int fd_ = -1;
-};
-
 struct Candidate {
   std::string unit, source, text, date;
   LoadedCalibration cal;
@@ -214,11 +200,11 @@ struct Candidate {
 // failed its own checks is no unit's reference: refused.
 std::vector<Candidate> Candidates(const StoreArgs& args, int* skipped) {
   std::vector<Candidate> out;
-  const auto take = [&](const std::string& unit, const std::string& path) {
+  const auto take = [&](const std::string& unit, const std::string& path, std::string text) {
     Candidate c;
     c.unit = unit;
     c.source = path;
-    c.text = ReadFileToString(path, kMaxSmallFileBytes);
+    c.text = std::move(text);
     c.cal = ParseCalibrationJson(c.text, path);
     if (c.cal.verdict == "failed") {
       throw InputError(path, 0,
@@ -241,33 +227,65 @@ std::vector<Candidate> Candidates(const StoreArgs& args, int* skipped) {
         throw UsageError(item +
                          ": give its unit with --unit (a batch's directory names its units)");
       }
-      take(args.unit, item);
+      take(args.unit, item, ReadFileToString(item, kMaxSmallFileBytes));
       continue;
     }
     from_batch = true;
-    const std::string summary = item + "/summary.json";
-    std::vector<std::pair<std::string, bool>> units;  // id, passed
+    // The batch's directory as batch writes it: nothing below it followed through a link, and
+    // not while a batch writes into it (its lock, shared; never made: store add only reads it).
+    const Directory batch = Directory::Open(item, false);
+    const DirectoryLock lock(batch, ".lock", false, false, false);
+    if (lock.busy()) {
+      throw InputError(item, 0, "a batch is writing into it: add it when the batch has finished");
+    }
+    const std::string summary = batch.Shown("summary.json");
+    struct Row {
+      std::string unit, sha256;
+      bool passed;
+    };
+    std::vector<Row> units;
     try {
-      const Json doc = Json::parse(ReadFileToString(summary, kMaxSmallFileBytes));
+      const Json doc = Json::parse(batch.Read("summary.json", kMaxSmallFileBytes));
       if (doc.at("format") != "accelcal-batch-summary") throw std::runtime_error("its format");
       for (const Json& row : doc.at("units")) {
-        units.emplace_back(row.at("unit").get<std::string>(), row.at("status") == "pass");
+        const bool passed = row.at("status") == "pass";
+        const Json sha = row.value("sha256", Json());
+        units.push_back({row.at("unit").get<std::string>(),
+                         sha.is_string() ? sha.get<std::string>() : std::string(), passed});
       }
     } catch (const InputError&) {
       throw;
     } catch (const std::exception& e) {
       throw InputError(summary, 0, std::string("not a batch's summary: ") + e.what());
     }
-    for (const auto& [unit, passed] : units) {
-      if (!args.unit.empty() && unit != args.unit) continue;
-      if (!passed) {
+    for (const Row& row : units) {
+      if (!args.unit.empty() && row.unit != args.unit) continue;
+      if (!row.passed) {
         ++*skipped;
         continue;
       }
-      if (const std::string why = UnitIdProblem(unit); !why.empty()) {
+      if (const std::string why = UnitIdProblem(row.unit); !why.empty()) {
         throw InputError(summary, 0, why);
       }
-      take(unit, item + "/units/" + unit + "/calibration.json");
+      // The unit's file must be the one the batch judged: another run, or a hand, may have
+      // replaced it since (a unit that passed would then store a calibration never judged).
+      const Directory unit_dir = batch.Sub("units", false).Sub(row.unit, false);
+      const std::string path = unit_dir.Shown("calibration.json");
+      const std::string text = unit_dir.Read("calibration.json", kMaxSmallFileBytes);
+      if (row.sha256.size() != 64) {
+        throw InputError(summary, 0,
+                         "unit " + row.unit +
+                             " has no SHA-256 of its file (a summary written before summaries "
+                             "carried one): run the batch again, which redoes no current "
+                             "calibration");
+      }
+      if (Sha256Hex(text) != row.sha256) {
+        throw InputError(path, 0,
+                         "its SHA-256 is not the one " + summary +
+                             " judged: the file was replaced after the batch (run the batch "
+                             "again)");
+      }
+      take(row.unit, path, text);
     }
   }
   if (from_batch && !args.unit.empty() && out.empty() && *skipped == 0) {
@@ -363,14 +381,14 @@ std::string ChangeText(const Json& change) {
 // earlier one is tried in turn (one of another model, or without a covariance, is passed over,
 // and said when none is comparable). A stored file whose bytes are no longer the index's is
 // refused, not compared.
-Json CompareWithPredecessor(const std::string& store, const std::vector<Entry>& entries,
+Json CompareWithPredecessor(const Directory& store, const std::vector<Entry>& entries,
                             std::size_t i, const LoadedCalibration& cal,
                             const ChangeOptions& options) {
   Json first_refusal;
   for (std::size_t j = i; j-- > 0 && entries[j].unit == entries[i].unit;) {
     const Entry& earlier = entries[j];
-    const std::string path = store + "/" + earlier.file;
-    const std::string text = ReadFileToString(path, kMaxSmallFileBytes);
+    const std::string path = store.Shown(earlier.file);
+    const std::string text = ReadStored(store, earlier.file);
     if (Sha256Hex(text) != earlier.sha256) {
       throw InputError(path, 0,
                        "its SHA-256 is not the index's: the file was changed after it was stored "
@@ -419,10 +437,11 @@ int Add(const StoreArgs& args) {
   // Every file is read and checked before anything is written.
   int skipped = 0;
   std::vector<Candidate> candidates = Candidates(args, &skipped);
-  MakeDirectory(args.store);
-  const StoreLock lock(args.store);
-  std::vector<Entry> entries = ReadIndex(args.store);
-  MakeDirectory(args.store + "/units");
+  const Directory store = Directory::Open(args.store, true);
+  // Concurrent adds wait for each other: an add takes seconds.
+  const DirectoryLock lock(store, ".lock", true, true, true);
+  std::vector<Entry> entries = ReadIndex(store);
+  const Directory units = store.Sub("units", true);
   int present = 0;
   std::vector<std::string> lines;
   std::map<std::string, const LoadedCalibration*> new_calibrations;  // by file
@@ -449,9 +468,12 @@ int Add(const StoreArgs& args) {
     entry.fresh = true;
     std::string day = c.date;
     std::replace(day.begin(), day.end(), ':', '-');
-    entry.file = "units/" + c.unit + "/" + day + "_" + sha.substr(0, 12) + ".json";
-    MakeDirectory(args.store + "/units/" + c.unit);
-    WriteFileAtomically(args.store + "/" + entry.file, c.text);
+    const std::string name = day + "_" + sha.substr(0, 12) + ".json";
+    entry.file = "units/" + c.unit + "/" + name;
+    const Directory unit_dir = units.Sub(c.unit, true);
+    OutputFile file(unit_dir, name);
+    file.Write(c.text);
+    file.Commit();
     new_calibrations[entry.file] = &c.cal;
     entries.push_back(std::move(entry));
     SortEntries(&entries);
@@ -466,8 +488,8 @@ int Add(const StoreArgs& args) {
     if (!is_new && !after_new) continue;
     std::optional<LoadedCalibration> stored;
     if (!is_new) {
-      const std::string path = args.store + "/" + entries[i].file;
-      const std::string text = ReadFileToString(path, kMaxSmallFileBytes);
+      const std::string path = store.Shown(entries[i].file);
+      const std::string text = ReadStored(store, entries[i].file);
       if (Sha256Hex(text) != entries[i].sha256) {
         throw InputError(path, 0,
                          "its SHA-256 is not the index's: the file was changed after it "
@@ -476,7 +498,7 @@ int Add(const StoreArgs& args) {
       stored = ParseCalibrationJson(text, path);
     }
     const LoadedCalibration& cal = is_new ? *new_calibrations[entries[i].file] : *stored;
-    entries[i].change = CompareWithPredecessor(args.store, entries, i, cal, options);
+    entries[i].change = CompareWithPredecessor(store, entries, i, cal, options);
     const bool was_changed =
         entries[i].change.is_object() && entries[i].change.value("compatible", true) == false;
     changed += was_changed ? 1 : 0;
@@ -485,7 +507,11 @@ int Add(const StoreArgs& args) {
                     (is_new ? "added " + entries[i].file : std::string("now")) + "; " +
                     ChangeText(entries[i].change) + "\n");
   }
-  WriteFileAtomically(IndexPath(args.store), IndexText(entries));
+  {
+    OutputFile index(store, kIndex);
+    index.Write(IndexText(entries));
+    index.Commit();
+  }
   // Said once the index holds it.
   if (args.json) {
     Json report = Json::array();
@@ -524,8 +550,9 @@ std::vector<Entry> UnitEntries(const std::vector<Entry>& entries, const std::str
 }
 
 // The store must exist to be read.
-void RequireStore(const std::string& store) {
+Directory RequireStore(const std::string& store) {
   if (!IsDirectory(store)) throw InputError(store, 0, "no such store (a directory)");
+  return Directory::Open(store, false);
 }
 
 // Refuses an output inside the store: it would replace a stored calibration, the index or the lock.
@@ -551,11 +578,10 @@ int Get(const StoreArgs& args) {
   if (!args.date.empty()) {
     if (const auto why = CheckProvenanceDate(args.date)) throw UsageError("--date: " + *why);
   }
-  RequireStore(args.store);
+  const Directory store = RequireStore(args.store);
   RefuseOutputInStore(args.output, args.store);
   CheckOutputs({{"-o", args.output}}, {IndexPath(args.store)});
-  const std::vector<Entry> entries =
-      UnitEntries(ReadIndex(args.store), args.items.front(), args.store);
+  const std::vector<Entry> entries = UnitEntries(ReadIndex(store), args.items.front(), args.store);
   const Entry* chosen = nullptr;
   // A day picks the unit's latest calibration dated that day; a date and time, the one of that
   // instant (in any time zone).
@@ -572,8 +598,8 @@ int Get(const StoreArgs& args) {
                      "unit '" + args.items.front() + "' has no calibration of " + args.date +
                          " (it has " + dates + ")");
   }
-  const std::string path = args.store + "/" + chosen->file;
-  const std::string text = ReadFileToString(path, kMaxSmallFileBytes);
+  const std::string path = store.Shown(chosen->file);
+  const std::string text = ReadStored(store, chosen->file);
   if (Sha256Hex(text) != chosen->sha256) {
     throw InputError(path, 0,
                      "its SHA-256 is not the index's: the file was changed after it was "
@@ -589,8 +615,7 @@ int Get(const StoreArgs& args) {
 
 int List(const StoreArgs& args) {
   if (args.items.size() > 1) throw UsageError("store list: give at most one unit");
-  RequireStore(args.store);
-  std::vector<Entry> entries = ReadIndex(args.store);
+  std::vector<Entry> entries = ReadIndex(RequireStore(args.store));
   if (!args.items.empty()) entries = UnitEntries(entries, args.items.front(), args.store);
   if (args.json) {
     WriteOut(IndexText(entries));

@@ -33,9 +33,11 @@ int RunCommandLine(int argc, char** argv);
 
 /// RunCommandLine with `args` (argv[0] first), this thread's standard output and error appended
 /// to `out` and `err` instead (the Python package runs the tool's commands so, in-process and
-/// in several threads at once); no signal handlers are installed.
-int RunCommandLineCaptured(const std::vector<std::string>& args, std::string* out,
-                           std::string* err);
+/// in several threads at once); no signal handlers are installed. `files`: output files written
+/// into memory instead of the disk (Console::files, output.hpp).
+struct CapturedFile;
+int RunCommandLineCaptured(const std::vector<std::string>& args, std::string* out, std::string* err,
+                           std::vector<CapturedFile>* files = nullptr);
 
 /// `accelcal --describe-options`: every command's options as JSON (for the Python package).
 inline constexpr const char* kDescribeOptionsFlag = "--describe-options";

@@ -1,6 +1,7 @@
 #include "output.hpp"
 
 #include <fcntl.h>
+#include <sys/file.h>
 #include <sys/random.h>
 #include <sys/stat.h>
 #include <unistd.h>
@@ -17,6 +18,7 @@
 #include <optional>
 #include <string>
 
+#include "accelcal/error.hpp"
 #include "commands.hpp"
 
 namespace accelcal::cli {
@@ -125,16 +127,18 @@ namespace {
 constexpr int kCleanupSlots = 8;
 struct CleanupSlot {
   volatile std::sig_atomic_t used = 0;
+  int dir_fd = AT_FDCWD;  // what path is relative to (a Directory's file)
   char path[PATH_MAX];
 };
 CleanupSlot g_cleanup[kCleanupSlots];
 std::mutex g_cleanup_mutex;  // threads of the Python package take slots at once; handlers only read
 
-int RegisterTemporary(const std::string& path) {
+int RegisterTemporary(int dir_fd, const std::string& path) {
   if (path.size() >= PATH_MAX) return -1;
   const std::lock_guard<std::mutex> lock(g_cleanup_mutex);
   for (int i = 0; i < kCleanupSlots; ++i) {
     if (g_cleanup[i].used == 0) {
+      g_cleanup[i].dir_fd = dir_fd;
       std::memcpy(g_cleanup[i].path, path.c_str(), path.size() + 1);
       g_cleanup[i].used = 1;
       return i;
@@ -150,7 +154,7 @@ void UnregisterTemporary(int slot) {
 
 extern "C" void RemoveTemporariesAndDie(int sig) {
   for (CleanupSlot& slot : g_cleanup) {
-    if (slot.used != 0) ::unlink(slot.path);
+    if (slot.used != 0) ::unlinkat(slot.dir_fd, slot.path, 0);
   }
   std::signal(sig, SIG_DFL);
   std::raise(sig);
@@ -189,12 +193,204 @@ void InstallCleanupHandlers() {
   }
 }
 
-OutputFile::OutputFile(const std::string& path) : path_(path), target_(path) {
+void CheckNoNul(const std::string& path) {
+  if (path.find('\0') != std::string::npos) {
+    throw OutputError(internal::VisibleLine(path) +
+                      ": the name holds a NUL character: the system would see a shorter name, "
+                      "another file");
+  }
+}
+
+namespace {
+
+// One component of a path: never a way up, across or out of the directory it is in.
+void CheckComponent(const std::string& parent, const std::string& name) {
+  CheckNoNul(name);
+  if (name.empty() || name == "." || name == ".." || name.find('/') != std::string::npos) {
+    throw OutputError(parent + "/" + internal::VisibleLine(name) + ": not a name of one file in " +
+                      parent);
+  }
+}
+
+// An error about `path`: an OutputError when the tool is about to write there, else an
+// InputError (it only reads).
+[[noreturn]] void Refuse(bool writing, const std::string& path, const std::string& why) {
+  if (writing) throw OutputError(path + ": " + why);
+  throw InputError(path, 0, why);
+}
+
+std::string OpenFailure(int error, const char* what) {
+  if (error == ELOOP) {
+    return std::string("is a symbolic link: not followed (below the directory named, ") + what +
+           " are the tool's own, never links: nothing is written or read outside it)";
+  }
+  if (error == ENOTDIR) return "is not a directory";
+  return std::string("cannot be opened: ") + std::strerror(error);
+}
+
+}  // namespace
+
+Directory Directory::Open(const std::string& path, bool create) {
+  if (path.empty()) Refuse(create, "''", "a directory's name is empty");
+  CheckNoNul(path);
+  if (create && ::mkdir(path.c_str(), 0777) != 0 && errno != EEXIST) {
+    Refuse(create, path, std::string("cannot create the directory: ") + std::strerror(errno));
+  }
+  // Followed when a link: the name is the user's own.
+  const int fd = ::open(path.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
+  if (fd < 0) {
+    const int e = errno;
+    struct stat st {};
+    if (e == ENOTDIR || (::stat(path.c_str(), &st) == 0 && !S_ISDIR(st.st_mode))) {
+      Refuse(create, path, "exists and is not a directory");
+    }
+    Refuse(create, path, e == ENOENT ? "no such directory" : OpenFailure(e, "the directories"));
+  }
+  return Directory(path, fd);
+}
+
+Directory Directory::Sub(const std::string& name, bool create) const {
+  CheckComponent(path_, name);
+  const std::string shown = Shown(name);
+  if (create && ::mkdirat(fd_, name.c_str(), 0777) != 0 && errno != EEXIST) {
+    Refuse(create, shown, std::string("cannot create the directory: ") + std::strerror(errno));
+  }
+  const int fd = ::openat(fd_, name.c_str(), O_RDONLY | O_DIRECTORY | O_NOFOLLOW | O_CLOEXEC);
+  if (fd < 0) {
+    const int e = errno;
+    struct stat st {};
+    // O_NOFOLLOW|O_DIRECTORY on a link gives ENOTDIR on some kernels: said as a link.
+    if (::fstatat(fd_, name.c_str(), &st, AT_SYMLINK_NOFOLLOW) == 0 && S_ISLNK(st.st_mode)) {
+      Refuse(create, shown, OpenFailure(ELOOP, "the directories"));
+    }
+    Refuse(create, shown, e == ENOENT ? "no such directory" : OpenFailure(e, "the directories"));
+  }
+  return Directory(shown, fd);
+}
+
+bool Directory::Has(const std::string& name, struct stat* st) const {
+  CheckComponent(path_, name);
+  struct stat own {};
+  return ::fstatat(fd_, name.c_str(), st != nullptr ? st : &own, AT_SYMLINK_NOFOLLOW) == 0;
+}
+
+std::string Directory::Read(const std::string& name, std::size_t max_bytes) const {
+  CheckComponent(path_, name);
+  const std::string shown = Shown(name);
+  // O_NONBLOCK: a FIFO planted there is refused below, not waited on.
+  const int fd = ::openat(fd_, name.c_str(), O_RDONLY | O_NOFOLLOW | O_NONBLOCK | O_CLOEXEC);
+  if (fd < 0) Refuse(false, shown, OpenFailure(errno, "the files"));
+  struct stat st {};
+  if (::fstat(fd, &st) != 0 || !S_ISREG(st.st_mode)) {
+    ::close(fd);
+    Refuse(false, shown, "not a regular file");
+  }
+  if (static_cast<std::size_t>(st.st_size) > max_bytes) {
+    ::close(fd);
+    Refuse(false, shown, "larger than " + std::to_string(max_bytes >> 20) + " MiB");
+  }
+  std::string data;
+  char buffer[1 << 16];
+  for (;;) {
+    const ssize_t n = ::read(fd, buffer, sizeof buffer);
+    if (n < 0 && errno == EINTR) continue;
+    if (n < 0) {
+      const int e = errno;
+      ::close(fd);
+      Refuse(false, shown, std::string("cannot be read: ") + std::strerror(e));
+    }
+    if (n == 0) break;
+    data.append(buffer, static_cast<std::size_t>(n));
+    if (data.size() > max_bytes) {
+      ::close(fd);
+      Refuse(false, shown, "larger than " + std::to_string(max_bytes >> 20) + " MiB");
+    }
+  }
+  ::close(fd);
+  return data;
+}
+
+void Directory::Remove(const std::string& name) const {
+  struct stat st {};
+  if (!Has(name, &st)) return;
+  if (!S_ISREG(st.st_mode)) throw OutputError(Shown(name) + ": is not a regular file: not removed");
+  if (::unlinkat(fd_, name.c_str(), 0) != 0 && errno != ENOENT) {
+    throw OutputError(Shown(name) + ": cannot be removed: " + std::strerror(errno));
+  }
+}
+
+void Directory::RemoveEmpty(const std::string& name) const {
+  CheckComponent(path_, name);
+  ::unlinkat(fd_, name.c_str(), AT_REMOVEDIR);  // not empty, or gone: left as it is
+}
+
+std::string Directory::Shown(const std::string& name) const {
+  return path_ + (!path_.empty() && path_.back() == '/' ? "" : "/") + name;
+}
+
+Directory& Directory::operator=(Directory&& other) noexcept {
+  if (this != &other) {
+    if (fd_ >= 0) ::close(fd_);
+    path_ = std::move(other.path_);
+    fd_ = other.fd_;
+    other.fd_ = -1;
+  }
+  return *this;
+}
+
+Directory::~Directory() {
+  if (fd_ >= 0) ::close(fd_);
+}
+
+DirectoryLock::DirectoryLock(const Directory& dir, const std::string& name, bool exclusive,
+                             bool wait, bool create) {
+  CheckComponent(dir.path(), name);
+  const std::string shown = dir.Shown(name);
+  fd_ =
+      ::openat(dir.fd(), name.c_str(),
+               (create ? O_RDWR | O_CREAT : O_RDONLY) | O_NOFOLLOW | O_NONBLOCK | O_CLOEXEC, 0666);
+  if (fd_ < 0 && !create && errno == ENOENT) return;  // none: no one holds it
+  if (fd_ < 0) Refuse(create, shown, "cannot lock: " + OpenFailure(errno, "the files"));
+  struct stat st {};
+  if (::fstat(fd_, &st) != 0 || !S_ISREG(st.st_mode)) {
+    ::close(fd_);
+    fd_ = -1;
+    Refuse(create, shown, "cannot lock: not a regular file");
+  }
+  int op = exclusive ? LOCK_EX : LOCK_SH;
+  if (!wait) op |= LOCK_NB;
+  while (::flock(fd_, op) != 0) {
+    if (errno == EINTR) continue;
+    if (!wait && errno == EWOULDBLOCK) {
+      busy_ = true;
+      return;
+    }
+    const int e = errno;
+    ::close(fd_);
+    fd_ = -1;
+    Refuse(create, shown, std::string("cannot lock: ") + std::strerror(e));
+  }
+}
+
+DirectoryLock::~DirectoryLock() {
+  if (fd_ >= 0) ::close(fd_);
+}
+
+OutputFile::OutputFile(const std::string& path) : path_(path), target_(path), dir_fd_(AT_FDCWD) {
   if (path == "-") {
     to_stdout_ = true;
     return;
   }
   if (path.empty()) throw OutputError("an output file name is empty");
+  CheckNoNul(path);
+  if (g_console.files != nullptr) {
+    for (CapturedFile& f : *g_console.files) {
+      if (f.path == path) {
+        captured_ = &f;
+        return;
+      }
+    }
+  }
   struct stat st;
   if (::lstat(path.c_str(), &st) == 0 && S_ISLNK(st.st_mode)) {
     struct stat to;
@@ -233,26 +429,51 @@ OutputFile::OutputFile(const std::string& path) : path_(path), target_(path) {
                           : slash == 0               ? "/"
                                                      : target_.substr(0, slash);
   const std::string base = slash == std::string::npos ? target_ : target_.substr(slash + 1);
+  CreateTemporary(dir, (dir == "/" ? "" : dir) + "/", base, exists ? &st : nullptr);
+}
+
+void OutputFile::CreateTemporary(const std::string& dir, const std::string& prefix,
+                                 const std::string& base, const struct stat* replaced) {
   // ".NAME.XXXXXXXXXX.tmp": hidden from globs, NAME cut so the whole stays within NAME_MAX.
   for (int attempt = 0; fd_ < 0; ++attempt) {
-    temp_ = (dir == "/" ? "" : dir) + "/." + base.substr(0, 200) + "." + RandomPart() + ".tmp";
-    fd_ = ::open(temp_.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_NOFOLLOW | O_CLOEXEC, 0666);
+    temp_ = prefix + "." + base.substr(0, 200) + "." + RandomPart() + ".tmp";
+    fd_ = ::openat(dir_fd_, temp_.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_NOFOLLOW | O_CLOEXEC,
+                   0666);
     if (fd_ < 0 && (errno != EEXIST || attempt == 100)) {
-      const std::string why = Why(path, ("cannot create a file in " + dir).c_str());
+      const std::string why = Why(path_, ("cannot create a file in " + dir).c_str());
       temp_.clear();
       throw OutputError(why);
     }
   }
-  slot_ = RegisterTemporary(temp_);
-  if (exists) {  // the file replaced keeps its permissions (and, for root, its owner)
-    ::fchmod(fd_, st.st_mode & 0777);
-    if (::geteuid() == 0) (void)!::fchown(fd_, st.st_uid, st.st_gid);
+  slot_ = RegisterTemporary(dir_fd_, temp_);
+  if (replaced != nullptr) {  // the file replaced keeps its permissions (and, for root, its owner)
+    ::fchmod(fd_, replaced->st_mode & 0777);
+    if (::geteuid() == 0) (void)!::fchown(fd_, replaced->st_uid, replaced->st_gid);
   }
+}
+
+OutputFile::OutputFile(const Directory& dir, const std::string& name)
+    : path_(dir.Shown(name)), target_(path_), dir_fd_(dir.fd()), name_(name) {
+  CheckComponent(dir.path(), name);
+  struct stat st {};
+  const bool exists = dir.Has(name, &st);
+  if (exists) {
+    if (S_ISLNK(st.st_mode)) {
+      throw OutputError(path_ +
+                        " is a symbolic link: not written through (a file here is the tool's "
+                        "own; a link could send it elsewhere)");
+    }
+    if (!S_ISREG(st.st_mode)) throw OutputError(path_ + " is not a regular file: not replaced");
+    if ((st.st_mode & 0222) == 0 || ::faccessat(dir_fd_, name.c_str(), W_OK, 0) != 0) {
+      throw OutputError(path_ + ": is read-only: not replaced");
+    }
+  }
+  CreateTemporary(dir.path(), "", name, exists ? &st : nullptr);
 }
 
 OutputFile::~OutputFile() {
   if (fd_ >= 0) ::close(fd_);
-  if (!committed_ && !temp_.empty()) ::unlink(temp_.c_str());
+  if (!committed_ && !temp_.empty()) ::unlinkat(dir_fd_, temp_.c_str(), 0);
   UnregisterTemporary(slot_);
 }
 
@@ -262,7 +483,7 @@ void OutputFile::Write(std::string_view text) {
     return;
   }
   buffer_.append(text);
-  if (buffer_.size() >= (std::size_t{1} << 20)) Flush();
+  if (captured_ == nullptr && buffer_.size() >= (std::size_t{1} << 20)) Flush();
 }
 
 void OutputFile::Flush() {
@@ -277,6 +498,10 @@ void OutputFile::Flush() {
 }
 
 void OutputFile::Rewrite(std::uint64_t offset, std::string_view bytes) {
+  if (captured_ != nullptr && !finished_ && offset + bytes.size() <= buffer_.size()) {
+    buffer_.replace(static_cast<std::size_t>(offset), bytes.size(), bytes);
+    return;
+  }
   if (temp_.empty() || finished_) {
     throw OutputError(path_ + ": cannot be written back into (not a regular file)");
   }
@@ -295,6 +520,8 @@ void OutputFile::Finish() {
   if (finished_) return;
   if (to_stdout_) {
     FinishStdout();
+  } else if (captured_ != nullptr) {
+    // kept in buffer_ until Commit
   } else {
     Flush();
     if (!temp_.empty() && ::fsync(fd_) != 0) throw OutputError(Why(path_, "cannot write"));
@@ -307,8 +534,13 @@ void OutputFile::Finish() {
 
 void OutputFile::Commit() {
   Finish();
+  if (captured_ != nullptr && !committed_) {
+    captured_->bytes = std::move(buffer_);
+    captured_->written = true;
+  }
   if (!temp_.empty() && !committed_) {
-    if (std::rename(temp_.c_str(), target_.c_str()) != 0) {
+    const std::string& to = name_.empty() ? target_ : name_;
+    if (::renameat(dir_fd_, temp_.c_str(), dir_fd_, to.c_str()) != 0) {
       throw OutputError(Why(path_, "cannot replace it"));
     }
     UnregisterTemporary(slot_);

@@ -152,13 +152,13 @@ def _batch_units(doc):
                "failed": "; ".join(f.get("text", "") for f in unit.get("failed") or []),
                "files": ";".join(unit.get("files") or []),
                "verdict": unit.get("verdict"), "worst_finding": unit.get("worst_finding"),
-               "message": unit.get("message")}
+               "message": unit.get("message"), "sha256": unit.get("sha256")}
         for name, q in (unit.get("quantities") or {}).items():
             row[name] = q.get("value")
             row[name + ".sigma"] = q.get("sigma")
         rows.append(row)
     pandas = _pandas()
-    base = ["unit", "status", "failed", "files", "verdict", "worst_finding", "message"]
+    base = ["unit", "status", "failed", "files", "verdict", "worst_finding", "message", "sha256"]
     frame = pandas.DataFrame(rows, columns=list(dict.fromkeys(
         base + [k for row in rows for k in row])))
     numbers = [c for c in frame.columns if c not in base]

@@ -194,7 +194,7 @@ def test_the_documents_tables_are_the_tools_numbers(cal, tmp_path):
     np.testing.assert_array_equal(frame[quantities].to_numpy(dtype=float),
                                   csv[quantities].to_numpy(dtype=float))
     assert list(frame.columns) == list(csv.columns)
-    for text in ("status", "failed", "files", "verdict", "worst_finding", "message"):
+    for text in ("status", "failed", "files", "verdict", "worst_finding", "message", "sha256"):
         assert list(frame[text].fillna("")) == list(csv[text].fillna("")), text
     # store get gives the calibration stored, as calibrate does.
     accelcal.cli.store("add", tmp_path / "store", tmp_path / "batch")

@@ -37,6 +37,11 @@ InputFile::InputFile(const std::string& path, std::size_t max_stream_bytes)
   if (path == "-") {
     fd_ = STDIN_FILENO;
   } else {
+    // A NUL would end the name the system sees: another file would be read.
+    if (path.find('\0') != std::string::npos) {
+      throw InputError(internal::VisibleLine(path), 0,
+                       "the name holds a NUL character: the system would read another file");
+    }
     fd_ = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
     if (fd_ < 0) throw InputError(name_, 0, std::string("cannot open: ") + std::strerror(errno));
     owned_ = true;

@@ -1,7 +1,10 @@
 // accelcal batch as a production line runs it: 200 simulated units with known parameters, some out
 // of the MEMS example's limits, some with a bumped position or too few positions; every verdict,
 // the same bytes whatever the number of jobs, a resumed batch, and a unit's file as calibrate's.
+#include <fcntl.h>
+#include <sys/file.h>
 #include <sys/stat.h>
+#include <unistd.h>
 
 #include <cmath>
 #include <random>
@@ -12,6 +15,7 @@
 
 #include "accelcal/mcap_writer.hpp"
 #include "accelcal/rosbag_writer.hpp"
+#include "accelcal/sha256.hpp"
 #include "accelcal/simulate.hpp"
 #include "accelcal/ulog_writer.hpp"
 #include "support/cli_test.hpp"
@@ -155,8 +159,8 @@ TEST_F(Batch, TwoHundredUnitsEachGetTheirVerdict) {
   // The table: a header and one row per unit, each parameter and its sigma in columns.
   const std::string csv = Slurp(Path("out/summary.csv"));
   EXPECT_EQ(std::count(csv.begin(), csv.end(), '\n'), kUnits + 2);
-  EXPECT_EQ(csv.rfind("unit,status,failed,files,verdict,worst_finding,message,accelerometer.K_xx,"
-                      "accelerometer.K_xx.sigma,",
+  EXPECT_EQ(csv.rfind("unit,status,failed,files,verdict,worst_finding,message,sha256,"
+                      "accelerometer.K_xx,accelerometer.K_xx.sigma,",
                       0),
             0u);
   EXPECT_NE(r.out.find("201 units: 132 pass, 60 fail, 9 error"), std::string::npos) << r.out;
@@ -303,6 +307,118 @@ TEST_F(Batch, KeepsWhatIsNotItsOwnAndStopsForNoUnit) {
   EXPECT_EQ(r.status, 2);
   EXPECT_NE(r.err.find("--gyro names one gyroscope log for every unit"), std::string::npos)
       << r.err;
+}
+
+// Issue 47: below the directory named, batch follows no symbolic link, at any level; what it
+// refuses is named, and nothing is written where a link points.
+TEST_F(Batch, FollowsNoLinkBelowItsDirectory) {
+  fs::create_directories(Path("in"));
+  Write("in/a.csv", UnitPositions(1, Plan::kGood, 1));
+  Write("in/b.csv", UnitPositions(2, Plan::kGood, 2));
+  fs::create_directories(Path("elsewhere"));
+  const auto untouched = [&] { return fs::is_empty(Path("elsewhere")); };
+  const std::string run = "batch " + Path("in") + " -o " + Path("out") + " --no-report";
+  // OUT/units a link: nothing calibrated into it.
+  fs::create_directories(Path("out"));
+  fs::create_directory_symlink(Path("elsewhere"), Path("out/units"));
+  CliRun r = Exec(run);
+  EXPECT_EQ(r.status, 5) << r.out << r.err;
+  EXPECT_NE(r.err.find(Path("out/units") + ": is a symbolic link: not followed"), std::string::npos)
+      << r.err;
+  EXPECT_TRUE(untouched());
+  EXPECT_FALSE(fs::exists(Path("out/summary.csv")));
+  fs::remove_all(Path("out"));
+  // OUT/units/a a link: unit a is an error row naming it, unit b is calibrated.
+  fs::create_directories(Path("out/units"));
+  fs::create_directory_symlink(Path("elsewhere"), Path("out/units/a"));
+  r = Exec(run);
+  EXPECT_EQ(r.status, 6) << r.out << r.err;
+  EXPECT_NE(r.out.find(Path("out/units/a") + ": is a symbolic link: not followed"),
+            std::string::npos)
+      << r.out;
+  EXPECT_TRUE(untouched());
+  EXPECT_TRUE(fs::is_symlink(Path("out/units/a")));
+  EXPECT_TRUE(fs::exists(Path("out/units/b/calibration.json")));
+  fs::remove_all(Path("out"));
+  // A FIFO where a calibration goes: an error row, never waited on; a directory where the
+  // summary goes: nothing written.
+  fs::create_directories(Path("out/units/a"));
+  ASSERT_EQ(::mkfifo(Path("out/units/a/calibration.json").c_str(), 0600), 0);
+  r = Exec(run);
+  EXPECT_EQ(r.status, 6) << r.out << r.err;
+  EXPECT_NE(r.out.find("calibration.json is not a regular file: not replaced"), std::string::npos)
+      << r.out;
+  fs::remove_all(Path("out"));
+  fs::create_directories(Path("out/summary.json"));
+  EXPECT_EQ(Exec(run).status, 5);
+  EXPECT_FALSE(fs::exists(Path("out/summary.csv")));
+  fs::remove_all(Path("out"));
+  // The directory named may be a link the user made: followed, as every tool follows it.
+  fs::create_directories(Path("real"));
+  fs::create_directory_symlink(Path("real"), Path("out"));
+  r = Exec(run);
+  EXPECT_EQ(r.status, 0) << r.out << r.err;
+  EXPECT_TRUE(fs::exists(Path("real/units/a/calibration.json")));
+  EXPECT_TRUE(untouched());
+}
+
+// Issue 47: two batches into one directory at once replaced each other's units between judging
+// and summing up. One batch at a time; the summary names each unit's file by its SHA-256, and
+// store add takes no file the batch did not judge.
+TEST_F(Batch, OneAtATimeAndTheSummaryNamesTheFilesItJudged) {
+  fs::create_directories(Path("in"));
+  Write("in/a.csv", UnitPositions(1, Plan::kGood, 1));
+  Write("in/b.csv", UnitPositions(2, Plan::kGood, 2));
+  const std::string run = "batch " + Path("in") + " -o " + Path("out") + " --no-report";
+  ASSERT_EQ(Exec(run).status, 0);
+  const std::string a = Slurp(Path("out/units/a/calibration.json"));
+  const std::string b = Slurp(Path("out/units/b/calibration.json"));
+  nlohmann::json summary = nlohmann::json::parse(Slurp(Path("out/summary.json")));
+  EXPECT_EQ(summary["units"][0]["sha256"], Sha256Hex(a));
+  EXPECT_EQ(summary["units"][1]["sha256"], Sha256Hex(b));
+  const std::string csv = Slurp(Path("out/summary.csv"));
+  EXPECT_EQ(csv.rfind("unit,status,failed,files,verdict,worst_finding,message,sha256,", 0), 0u)
+      << csv;
+  EXPECT_NE(csv.find("\na,pass,,"), std::string::npos);
+  EXPECT_NE(csv.find(",," + Sha256Hex(a) + ","), std::string::npos) << csv;
+  // Another batch holds the directory: this one is refused, and writes nothing.
+  {
+    const int fd = ::open(Path("out/.lock").c_str(), O_RDWR);
+    ASSERT_GE(fd, 0);
+    ASSERT_EQ(::flock(fd, LOCK_EX), 0);
+    const CliRun r = Exec(run + " --redo");
+    EXPECT_EQ(r.status, 5);
+    EXPECT_NE(r.err.find(Path("out") + ": another batch is writing into it"), std::string::npos)
+        << r.err;
+    // Nor does store add read it meanwhile.
+    const CliRun s = Exec("store add " + Path("store") + " " + Path("out"));
+    EXPECT_EQ(s.status, 3);
+    EXPECT_NE(s.err.find("a batch is writing into it"), std::string::npos) << s.err;
+    ::close(fd);
+  }
+  EXPECT_EQ(Slurp(Path("out/units/a/calibration.json")), a);
+  EXPECT_FALSE(fs::exists(Path("store/index.json")));
+  // A unit's file replaced after the batch judged it (here by b's): store add refuses it, naming
+  // it, and stores nothing.
+  Write("out/units/a/calibration.json", b);
+  CliRun r = Exec("store add " + Path("store") + " " + Path("out"));
+  EXPECT_EQ(r.status, 3);
+  EXPECT_NE(r.err.find(Path("out/units/a/calibration.json") + ": its SHA-256 is not the one"),
+            std::string::npos)
+      << r.err;
+  EXPECT_FALSE(fs::exists(Path("store/index.json")));
+  // A summary without the SHA-256s (an earlier accelcal's) is not trusted either.
+  Write("out/units/a/calibration.json", a);
+  summary["units"][0].erase("sha256");
+  Write("out/summary.json", summary.dump());
+  r = Exec("store add " + Path("store") + " " + Path("out"));
+  EXPECT_EQ(r.status, 3);
+  EXPECT_NE(r.err.find("unit a has no SHA-256 of its file"), std::string::npos) << r.err;
+  // Run again, the batch's summary is whole again, and store add takes both.
+  ASSERT_EQ(Exec(run).status, 0);
+  r = Exec("store add " + Path("store") + " " + Path("out"));
+  EXPECT_EQ(r.status, 0) << r.err;
+  EXPECT_NE(r.out.find("2 added"), std::string::npos) << r.out;
 }
 
 }  // namespace
@@ -644,6 +760,62 @@ TEST_F(Store, KeepsEveryCalibrationComparedWithTheOneBeforeIt) {
   r = Exec("store add " + store + " " + Path("failed.json") + " --unit U001");
   EXPECT_EQ(r.status, 3);
   EXPECT_NE(r.err.find("failed its own checks"), std::string::npos) << r.err;
+}
+
+// Issue 47: below the store named, store add follows no link (a unit's directory, the units'
+// directory, the index), and the index cannot name a file by a string the system would cut.
+TEST_F(Store, FollowsNoLinkAndTakesNoNameWithAControlCharacter) {
+  const std::string store = Path("store");
+  const std::string s1 = Session(1, 1);
+  fs::create_directories(Path("elsewhere"));
+  fs::create_directories(store + "/units");
+  fs::create_directory_symlink(Path("elsewhere"), store + "/units/U001");
+  CliRun r = Exec("store add " + store + " " + s1);
+  EXPECT_EQ(r.status, 5) << r.out;
+  EXPECT_NE(r.err.find(store + "/units/U001: is a symbolic link: not followed"), std::string::npos)
+      << r.err;
+  EXPECT_TRUE(fs::is_empty(Path("elsewhere")));
+  EXPECT_FALSE(fs::exists(store + "/index.json"));
+  fs::remove_all(store);
+  fs::create_directories(store);
+  fs::create_directory_symlink(Path("elsewhere"), store + "/units");
+  EXPECT_EQ(Exec("store add " + store + " " + s1).status, 5);
+  EXPECT_TRUE(fs::is_empty(Path("elsewhere")));
+  fs::remove_all(store);
+  // The index a link: neither read nor replaced (its target is another store's, or anything).
+  ASSERT_EQ(Exec("store add " + Path("other") + " " + s1).status, 0);
+  const std::string other = Slurp(Path("other/index.json"));
+  fs::create_directories(store);
+  fs::create_symlink(Path("other/index.json"), store + "/index.json");
+  r = Exec("store add " + store + " " + Session(2, 1));
+  EXPECT_EQ(r.status, 3) << r.out;
+  EXPECT_NE(r.err.find(store + "/index.json: is a symbolic link"), std::string::npos) << r.err;
+  EXPECT_EQ(Slurp(Path("other/index.json")), other);
+  EXPECT_EQ(Exec("store list " + store).status, 3);
+  fs::remove_all(store);
+  // A stored unit's directory replaced by a link afterwards: get refuses to read through it.
+  fs::create_directories(store);
+  fs::copy(Path("other"), store, fs::copy_options::recursive);
+  fs::rename(store + "/units/U001", Path("moved"));
+  fs::create_directory_symlink(Path("moved"), store + "/units/U001");
+  r = Exec("store get " + store + " U001");
+  EXPECT_EQ(r.status, 3);
+  EXPECT_NE(r.err.find(store + "/units/U001: is a symbolic link"), std::string::npos) << r.err;
+  fs::remove(store + "/units/U001");
+  fs::rename(Path("moved"), store + "/units/U001");
+  // A NUL in an entry's file: the system would open the name up to it, another file. Refused,
+  // naming the index and the entry.
+  nlohmann::json index = nlohmann::json::parse(Slurp(store + "/index.json"));
+  ASSERT_EQ(Exec("store get " + store + " U001").status, 0);
+  index["entries"][0]["file"] =
+      index["entries"][0]["file"].get<std::string>() + std::string("\0x", 2);
+  Write("store/index.json", index.dump());
+  r = Exec("store get " + store + " U001");
+  EXPECT_EQ(r.status, 3) << r.out;
+  EXPECT_NE(r.err.find(store + "/index.json: entry 1: 'file' units/U001/"), std::string::npos)
+      << r.err;
+  EXPECT_NE(r.err.find("\\x00x holds a control character"), std::string::npos) << r.err;
+  EXPECT_EQ(r.out, "");
 }
 
 }  // namespace

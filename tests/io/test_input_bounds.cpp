@@ -309,6 +309,22 @@ TEST(InputBounds, DevicesAndDirectoriesAreRefusedAtOnce) {
   EXPECT_NE(ErrorReading("/", {}).find("is a directory"), std::string::npos);
 }
 
+// Issue 47: a name with a NUL is refused, not cut at the NUL (the system would have read the
+// file whose name ends there, another file than the one named).
+TEST(InputBounds, ANameWithANulIsRefused) {
+  const std::string path = TempPath("nul");
+  WriteText(path, "not this one\n");
+  std::string error;
+  try {
+    ReadFileToString(path + std::string("\0.json", 6), 1 << 20);
+  } catch (const InputError& e) {
+    error = e.what();
+  }
+  std::remove(path.c_str());
+  EXPECT_NE(error.find("nul\\x00.json: the name holds a NUL character"), std::string::npos)
+      << error;
+}
+
 TEST(InputBounds, BlankLinesBeforeTheFirstRowAreBounded) {
   // 80 MiB of line ends: refused after 64 MiB, without holding the rest.
   const std::string path = TempPath("blank.csv");

@@ -145,6 +145,42 @@ TEST(GyroModel, IntegrationJacobianMatchesFiniteDifferences) {
   }
 }
 
+// The covariance IntegrateCalibratedRate states for white noise of `sigma` on every raw sample
+// (with `weights`, or none) against the right perturbations Log(Rᵀ R_noisy) of 4000 noisy draws.
+// Each entry of a sample covariance of N draws has the standard deviation √((Σ_ii Σ_jj + Σ_ij²) /
+// N); 5 of them bound it for all 9 entries. Returns the stated covariance.
+Mat33 ExpectStatedNoiseMatchesDraws(const GyroParameters& p, const Motion& m,
+                                    RateInterpolation rule, const Vec3& sigma,
+                                    const std::vector<double>* weights, std::mt19937_64& random) {
+  std::normal_distribution<double> normal;
+  const GyroModelKind kind = GyroModelKind::kGSensitive;
+  Mat33 stated;
+  const Mat33 R =
+      IntegrateCalibratedRate(p, kind, m.t, m.raw, m.f, rule, nullptr, &sigma, &stated, weights);
+  constexpr int kDraws = 4000;
+  Mat33 sum = Mat33::Zero();
+  for (int draw = 0; draw < kDraws; ++draw) {
+    std::vector<Vec3> noisy = m.raw;
+    for (Vec3& r : noisy) {
+      for (int i = 0; i < 3; ++i) r(i) += sigma(i) * normal(random);
+    }
+    const Vec3 e = so3::Log(
+        Mat33(R.transpose() * IntegrateCalibratedRate(p, kind, m.t, noisy, m.f, rule, nullptr,
+                                                      nullptr, nullptr, weights)));
+    sum += e * e.transpose();
+  }
+  const Mat33 sampled = sum / kDraws;
+  for (int i = 0; i < 3; ++i) {
+    for (int j = 0; j < 3; ++j) {
+      const double sd =
+          std::sqrt((stated(i, i) * stated(j, j) + stated(i, j) * stated(i, j)) / kDraws);
+      EXPECT_NEAR(sampled(i, j), stated(i, j), 5 * sd)
+          << i << "," << j << " rule " << static_cast<int>(rule);
+    }
+  }
+  return stated;
+}
+
 // Step weights for `m` as a motion between two still spans weights them: rising over the first
 // fifth of its steps, falling over the last fifth.
 std::vector<double> Ramps(const Motion& m) {
@@ -186,31 +222,8 @@ TEST(GyroModel, WeightedIntegrationJacobianAndNoiseMatchTheirChecks) {
     };
     EXPECT_TRUE(testing::JacobianMatches(log, Pack(p, kind), J, 1e-6)) << static_cast<int>(rule);
     const Vec3 sigma(40, 55, 70);
-    Mat33 stated;
-    IntegrateCalibratedRate(p, kind, m.t, m.raw, m.f, rule, nullptr, &sigma, &stated, &w);
     std::mt19937_64 random(8);
-    std::normal_distribution<double> normal;
-    constexpr int kDraws = 4000;
-    Mat33 sum = Mat33::Zero();
-    for (int draw = 0; draw < kDraws; ++draw) {
-      std::vector<Vec3> noisy = m.raw;
-      for (Vec3& r : noisy) {
-        for (int i = 0; i < 3; ++i) r(i) += sigma(i) * normal(random);
-      }
-      const Vec3 e =
-          so3::Log(Mat33(R0.transpose() * IntegrateCalibratedRate(p, kind, m.t, noisy, m.f, rule,
-                                                                  nullptr, nullptr, nullptr, &w)));
-      sum += e * e.transpose();
-    }
-    const Mat33 sampled = sum / kDraws;
-    for (int i = 0; i < 3; ++i) {
-      for (int j = 0; j < 3; ++j) {
-        const double sd =
-            std::sqrt((stated(i, i) * stated(j, j) + stated(i, j) * stated(i, j)) / kDraws);
-        EXPECT_NEAR(sampled(i, j), stated(i, j), 5 * sd)
-            << i << "," << j << " rule " << static_cast<int>(rule);
-      }
-    }
+    ExpectStatedNoiseMatchesDraws(p, m, rule, sigma, &w, random);
     // The turned angle's gradient with the same weights, against the checker too.
     const TurnedAngle turned = IntegrateTurnedAngle(p, kind, m.t, m.raw, m.f, rule, sigma, &w);
     const auto angle = [&](const Eigen::VectorXd& t) -> Eigen::VectorXd {
@@ -235,33 +248,9 @@ TEST(GyroModel, PropagatedNoiseCovarianceMatchesMonteCarlo) {
   const Motion m = Turn(p);
   const Vec3 sigma(40, 55, 70);  // counts: about 0.01 rad/s per sample
   std::mt19937_64 random(7);
-  std::normal_distribution<double> normal;
   for (RateInterpolation rule :
        {RateInterpolation::kPiecewiseConstant, RateInterpolation::kTrapezoidal}) {
-    Mat33 stated;
-    const Mat33 R = IntegrateCalibratedRate(p, GyroModelKind::kGSensitive, m.t, m.raw, m.f, rule,
-                                            nullptr, &sigma, &stated);
-    constexpr int kDraws = 4000;
-    Mat33 sum = Mat33::Zero();
-    for (int draw = 0; draw < kDraws; ++draw) {
-      std::vector<Vec3> noisy = m.raw;
-      for (Vec3& r : noisy) {
-        for (int i = 0; i < 3; ++i) r(i) += sigma(i) * normal(random);
-      }
-      const Vec3 e =
-          so3::Log(Mat33(R.transpose() * IntegrateCalibratedRate(p, GyroModelKind::kGSensitive, m.t,
-                                                                 noisy, m.f, rule)));
-      sum += e * e.transpose();
-    }
-    const Mat33 sampled = sum / kDraws;
-    for (int i = 0; i < 3; ++i) {
-      for (int j = 0; j < 3; ++j) {
-        const double sd =
-            std::sqrt((stated(i, i) * stated(j, j) + stated(i, j) * stated(i, j)) / kDraws);
-        EXPECT_NEAR(sampled(i, j), stated(i, j), 5 * sd)
-            << i << "," << j << " rule " << static_cast<int>(rule);
-      }
-    }
+    const Mat33 stated = ExpectStatedNoiseMatchesDraws(p, m, rule, sigma, nullptr, random);
     EXPECT_GT(stated.trace(), 1e-6);  // not vacuous: about 0.05° per axis
   }
 }

@@ -232,6 +232,7 @@ Built BuildData(const RawLog& accel, const RawLog& gyro, const std::vector<Posit
   b.step_s = typical_step;
   // Where the gyro is still inside each position's interval (gyro_still_runs.hpp): the still
   // rates are averaged there, and the turns integrated from one run to the next.
+  if (m == 0) throw DataError("no still positions: the gyroscope has no turns between them");
   std::vector<StaticInterval> intervals;
   for (const Position& p : positions) intervals.push_back(*p.interval);
   const internal::GyroStillRuns still =
@@ -245,8 +246,8 @@ Built BuildData(const RawLog& accel, const RawLog& gyro, const std::vector<Posit
     if (still.runs[i].end - still.runs[i].begin >= 2) standing.push_back(i);
   }
   if (2 * standing.size() < m || standing.size() < 2) {
-    std::size_t first = 0;
-    while (first < m && still.runs[first].end - still.runs[first].begin >= 2) ++first;
+    std::size_t first = 0;  // the first position without a still span (one position: itself)
+    while (first + 1 < m && still.runs[first].end - still.runs[first].begin >= 2) ++first;
     throw DataError("the gyroscope turns throughout " + std::to_string(m - standing.size()) +
                     " of the " + std::to_string(m) + " still positions (position " +
                     std::to_string(first + 1) + ": lines " + LineOf(gyro, intervals[first].begin) +

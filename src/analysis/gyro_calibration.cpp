@@ -321,6 +321,11 @@ Built BuildData(const RawLog& accel, const RawLog& gyro, const std::vector<Posit
       steep(a) = kSaturationSteepness * quantum(a);
     }
   }
+  // The samples of a still span a turn's mean orientation is taken over (below), and whether a
+  // span wobbles enough for it.
+  const auto span = static_cast<std::size_t>(
+      typical_step > 0 ? std::max(2.0, std::round(kMeanOrientationSpan_s / typical_step)) : 2.0);
+  const auto wobbles = [&](std::size_t p) { return still.wobbles[p] != 0; };
   for (std::size_t j = 0; j + 1 < standing.size(); ++j) {
     const std::size_t i = standing[j], next = standing[j + 1];
     // The turn proper: from the last still sample of one position to the first of the next.
@@ -337,9 +342,6 @@ Built BuildData(const RawLog& accel, const RawLog& gyro, const std::vector<Posit
     // wobbles (GyroStillRuns::wobbles) is averaged so: its samples' noise is in its still mean
     // too, and a quiet span's would make the two correlated for nothing (σ of b_g 15 % low over
     // 400 simulated recordings).
-    const auto span = static_cast<std::size_t>(
-        typical_step > 0 ? std::max(2.0, std::round(kMeanOrientationSpan_s / typical_step)) : 2.0);
-    const auto wobbles = [&](std::size_t p) { return still.wobbles[p] != 0; };
     StaticInterval from = still.runs[i], to = still.runs[next];
     from.begin = !wobbles(i) ? first : std::max(from.begin, from.end > span ? from.end - span : 0);
     to.end = !wobbles(next) ? last + 1 : std::min(to.end, to.begin + span);

@@ -269,8 +269,9 @@ void BindFilesAndLogs(py::module_& m) {
         d["loss"] = loss;
         return d;
       },
-      py::arg("json_text"), py::arg("format"), py::arg("raw_unit") = "", py::arg("instance") = std::nullopt,
-      py::arg("c_prefix") = "accelcal", "A calibration in another tool's format (export.hpp)");
+      py::arg("json_text"), py::arg("format"), py::arg("raw_unit") = "",
+      py::arg("instance") = std::nullopt, py::arg("c_prefix") = "accelcal",
+      "A calibration in another tool's format (export.hpp)");
 
   m.def(
       "render_report",

@@ -138,8 +138,8 @@ struct LogInventory {
     double value = 0;
   };
   std::vector<ParameterChange> parameter_changes;
-  std::map<std::string, std::string> info;   ///< the log's string information (sys_name, ...)
-  std::optional<std::string> truncated;      ///< where a log cut short stopped
+  std::map<std::string, std::string> info;  ///< the log's string information (sys_name, ...)
+  std::optional<std::string> truncated;     ///< where a log cut short stopped
 };
 
 /// What a binary log holds. Throws InputError for what cannot be read, for a text file (it has

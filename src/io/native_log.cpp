@@ -370,8 +370,8 @@ std::vector<std::size_t> Stored(const Chosen& c) {
 // (an accelerometer's INS_GYROFFS, which ArduPilot learns at each boot) are not.
 bool CalibrationParameter(const std::string& name, std::string_view sensor) {
   bool calibration = false;
-  for (const char* prefix : {"CAL_ACC", "CAL_GYRO", "SENS_BOARD_", "INS_ACC", "INS_GYR",
-                             "INS_TCAL", "AHRS_ORIENTATION"}) {
+  for (const char* prefix : {"CAL_ACC", "CAL_GYRO", "SENS_BOARD_", "INS_ACC", "INS_GYR", "INS_TCAL",
+                             "AHRS_ORIENTATION"}) {
     calibration = calibration || name.rfind(prefix, 0) == 0;
   }
   const char* other = sensor == "gyroscope" ? "ACC" : "GYR";

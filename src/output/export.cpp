@@ -495,9 +495,10 @@ int Px4SlotIndex(const char* base, const SourceStream* stream, std::optional<std
   }
   if (given) {
     if (ids[*given] && *ids[*given] != 0) {
-      *why = Format("the instance given; the log's %s%d_ID is %.10g, another sensor's, whose "
-                    "calibration this replaces",
-                    base, *given, *ids[*given]);
+      *why = Format(
+          "the instance given; the log's %s%d_ID is %.10g, another sensor's, whose "
+          "calibration this replaces",
+          base, *given, *ids[*given]);
     }
     return *given;
   }
@@ -513,14 +514,14 @@ int Px4SlotIndex(const char* base, const SourceStream* stream, std::optional<std
       return n;
     }
   }
-  throw DataError(Format("%s, and every %s slot holds another sensor's calibration: give the "
-                         "instance of the one to replace",
-                         unmatched.c_str(), base));
+  throw DataError(
+      Format("%s, and every %s slot holds another sensor's calibration: give the "
+             "instance of the one to replace",
+             unmatched.c_str(), base));
 }
 
 Px4Slot Px4SlotFor(const std::string& prefix, const SourceStream* stream,
-                   std::optional<std::uint64_t> id, const char* listener,
-                   const std::string& why) {
+                   std::optional<std::uint64_t> id, const char* listener, const std::string& why) {
   Px4Slot out;
   out.comment = "# " + prefix.substr(0, prefix.size() - 1) + ": ";
   if (stream != nullptr) {
@@ -542,8 +543,9 @@ Px4Slot Px4SlotFor(const std::string& prefix, const SourceStream* stream,
                    listener + "` shows it)";
     out.convention = "; " + prefix + "ID not written (no device id known)";
   }
-  if (!why.empty()) out.comment += "; slot " + std::to_string(prefix[prefix.size() - 2] - '0') +
-                                   ": " + internal::VisibleLine(why);
+  if (!why.empty())
+    out.comment += "; slot " + std::to_string(prefix[prefix.size() - 2] - '0') + ": " +
+                   internal::VisibleLine(why);
   out.comment += "\n";
   return out;
 }
@@ -636,15 +638,17 @@ std::optional<Px4Slot> Px4Gyroscope(const LoadedCalibration& cal, const ExportOp
     // gyro_raw_unit given for them): PX4 would apply the offsets to rates of another scale.
     out->gyroscope_omitted =
         options.gyro_raw_unit.empty()
-            ? Format("PX4 holds a gyroscope's offsets only, and these rates, labelled '%s', "
-                     "differ from the calibrated ones by up to %.3g %% (a gyroscope's scale is "
-                     "near 1): they are not in '%s'; give gyro_raw_unit if they were",
-                     internal::VisibleLine(g.raw_unit).c_str(), 100 * largest,
-                     internal::VisibleLine(g.raw_unit).c_str())
-            : Format("PX4 holds a gyroscope's offsets only, and these rates, in '%s' as "
-                     "gyro_raw_unit %s says, differ from the calibrated ones by up to %.3g %% (a "
-                     "gyroscope's scale is near 1): the unit given does not fit these rates",
-                     options.gyro_raw_unit.c_str(), options.gyro_raw_unit.c_str(), 100 * largest);
+            ? Format(
+                  "PX4 holds a gyroscope's offsets only, and these rates, labelled '%s', "
+                  "differ from the calibrated ones by up to %.3g %% (a gyroscope's scale is "
+                  "near 1): they are not in '%s'; give gyro_raw_unit if they were",
+                  internal::VisibleLine(g.raw_unit).c_str(), 100 * largest,
+                  internal::VisibleLine(g.raw_unit).c_str())
+            : Format(
+                  "PX4 holds a gyroscope's offsets only, and these rates, in '%s' as "
+                  "gyro_raw_unit %s says, differ from the calibrated ones by up to %.3g %% (a "
+                  "gyroscope's scale is near 1): the unit given does not fit these rates",
+                  options.gyro_raw_unit.c_str(), options.gyro_raw_unit.c_str(), 100 * largest);
     return std::nullopt;
   }
   if (g.thermal && g.thermal->degree() > 0) {
@@ -656,9 +660,9 @@ std::optional<Px4Slot> Px4Gyroscope(const LoadedCalibration& cal, const ExportOp
       per_K[static_cast<std::size_t>(k - 1)] =
           *rad_s * g.thermal->coefficients[static_cast<std::size_t>(k - 1)];
     }
-    const Px4TemperatureTerms tc = Px4Temperature(
-        'G', instance, id, g.thermal->t_ref_c,
-        g.thermal_range_c, per_K, "rad/s", "the rate before CAL_GYRO%d's offset", "CAL_GYRO");
+    const Px4TemperatureTerms tc =
+        Px4Temperature('G', instance, id, g.thermal->t_ref_c, g.thermal_range_c, per_K, "rad/s",
+                       "the rate before CAL_GYRO%d's offset", "CAL_GYRO");
     slot.lines += tc.lines;
     slot.convention += tc.convention;
     slot.comment += tc.comment;
@@ -724,10 +728,10 @@ ExportResult Px4(const LoadedCalibration& cal, const ExportOptions& options) {
   // CAL_ACC's offset (TemperatureCompensation.cpp, sensor_calibration/Accelerometer.hpp), zero at
   // TREF so that CAL_ACC holds the offset at T_ref; PX4 matches it to the sensor by TC_A<n>_ID.
   const OffsetPolynomial poly = OffsetsOverTemperature(cal);
-  const Px4TemperatureTerms tc = Px4Temperature(
-      'A', instance, id, poly.t_ref_c,
-      {poly.t_min_c, poly.t_max_c}, {raw_ms2 * poly.b[1], raw_ms2 * poly.b[2], raw_ms2 * poly.b[3]},
-      "m/s2", "the reading before CAL_ACC%d's offset and scale", "CAL_ACC");
+  const Px4TemperatureTerms tc =
+      Px4Temperature('A', instance, id, poly.t_ref_c, {poly.t_min_c, poly.t_max_c},
+                     {raw_ms2 * poly.b[1], raw_ms2 * poly.b[2], raw_ms2 * poly.b[3]}, "m/s2",
+                     "the reading before CAL_ACC%d's offset and scale", "CAL_ACC");
   out.text += tc.lines;
   out.convention += tc.convention;
   if (!tc.comment.empty()) out.text.insert(out.text.find("#\n# Vehicle-Id"), tc.comment);
@@ -746,8 +750,7 @@ ExportResult ArduPilot(const LoadedCalibration& cal, const ExportOptions& option
   PlausibleScales(d.scale, cal, options, "ArduPilot");
   ExportResult out;
   out.convention = DiagonalConvention("ArduPilot (AP_InertialSensor)", cal, raw_ms2);
-  const std::string prefix =
-      instance == 0 ? "INS_ACC" : "INS_ACC" + std::to_string(instance + 1);
+  const std::string prefix = instance == 0 ? "INS_ACC" : "INS_ACC" + std::to_string(instance + 1);
   const char axes[3] = {'X', 'Y', 'Z'};
   std::string composed;
   Vec3 s_in_force = Vec3::Ones();  // the scale of the calibration in force, composed with

@@ -572,8 +572,8 @@ TEST_F(NativeLogTest, Px4ExportTakesTheSlotTheLogGivesTheSensor) {
   // No slot of the log holds the sensor: the first free one, said.
   Write("free.ulg", session(ULogImuWriter::Parameter("CAL_ACC0_ID", 2) +
                             ULogImuWriter::Parameter("CAL_ACC1_ID", 0)));
-  ASSERT_EQ(Exec("calibrate " + Path("free.ulg") + " --gravity 9.81 -q -o " + Path("f.json")).status,
-            0);
+  ASSERT_EQ(
+      Exec("calibrate " + Path("free.ulg") + " --gravity 9.81 -q -o " + Path("f.json")).status, 0);
   e = Exec("export " + Path("f.json") + " --to px4");
   ASSERT_EQ(e.status, 0) << e.err;
   EXPECT_NE(e.out.find("1\t1\tCAL_ACC1_ID\t1\t6\n"), std::string::npos) << e.out;
@@ -586,8 +586,8 @@ TEST_F(NativeLogTest, Px4ExportTakesTheSlotTheLogGivesTheSensor) {
                             ULogImuWriter::Parameter("CAL_ACC1_ID", 3) +
                             ULogImuWriter::Parameter("CAL_ACC2_ID", 4) +
                             ULogImuWriter::Parameter("CAL_ACC3_ID", 5)));
-  ASSERT_EQ(Exec("calibrate " + Path("full.ulg") + " --gravity 9.81 -q -o " + Path("u.json")).status,
-            0);
+  ASSERT_EQ(
+      Exec("calibrate " + Path("full.ulg") + " --gravity 9.81 -q -o " + Path("u.json")).status, 0);
   e = Exec("export " + Path("u.json") + " --to px4");
   EXPECT_EQ(e.status, 3);
   EXPECT_NE(e.err.find("every CAL_ACC slot holds another sensor's calibration"), std::string::npos)
@@ -626,11 +626,11 @@ TEST_F(NativeLogTest, DataFlashParametersAreThoseInForceAtTheSamples) {
                               static_cast<float>(i == 0 ? 1.02 * s_old(i) : s_old(i)));
     }
     // A temperature calibration in force, off: what the records were corrected by, kept.
-    out += writer.Parameter(0, "INS_TCAL1_ENABLE", 0) + writer.Parameter(0, "INS_TCAL1_ACC1_X", 3000);
-    std::string later = writer.Parameter(recalibrated_us, "INS_ACCOFFS_X",
-                                         static_cast<float>(o_old(0))) +
-                        writer.Parameter(recalibrated_us, "INS_ACCSCAL_X",
-                                         static_cast<float>(s_old(0)));
+    out +=
+        writer.Parameter(0, "INS_TCAL1_ENABLE", 0) + writer.Parameter(0, "INS_TCAL1_ACC1_X", 3000);
+    std::string later =
+        writer.Parameter(recalibrated_us, "INS_ACCOFFS_X", static_cast<float>(o_old(0))) +
+        writer.Parameter(recalibrated_us, "INS_ACCSCAL_X", static_cast<float>(s_old(0)));
     SimulateRawLog(seen, 9.80665, Yang18Directions(), options, [&](double t, const Vec3& a) {
       const auto t_us = static_cast<std::uint64_t>(std::llround(t * 1e6)) + 1000000;
       if (!later.empty() && t_us >= recalibrated_us) out += std::move(later), later.clear();
@@ -643,9 +643,9 @@ TEST_F(NativeLogTest, DataFlashParametersAreThoseInForceAtTheSamples) {
     return out;
   };
   Write("before.bin", session(500000));
-  ASSERT_EQ(Exec("calibrate " + Path("before.bin") + " --gravity 9.80665 -q -o " + Path("b.json"))
-                .status,
-            0);
+  ASSERT_EQ(
+      Exec("calibrate " + Path("before.bin") + " --gravity 9.80665 -q -o " + Path("b.json")).status,
+      0);
   const nlohmann::json cal = nlohmann::json::parse(Slurp(Path("b.json")));
   const nlohmann::json& in_force = cal["provenance"]["inputs"][0]["stream"]["calibration_in_force"];
   EXPECT_FLOAT_EQ(in_force["INS_ACCOFFS_X"].get<double>(), static_cast<float>(o_old(0)));
@@ -683,9 +683,9 @@ TEST_F(NativeLogTest, DataFlashParametersAreThoseInForceAtTheSamples) {
   // A gyroscope's offsets set meanwhile (ArduPilot learns them at boot) are not the
   // accelerometer's calibration.
   Write("gyro.bin", session(500000, true));
-  EXPECT_EQ(Exec("calibrate " + Path("gyro.bin") + " --gravity 9.80665 -q -o " + Path("g.json"))
-                .status,
-            0);
+  EXPECT_EQ(
+      Exec("calibrate " + Path("gyro.bin") + " --gravity 9.80665 -q -o " + Path("g.json")).status,
+      0);
 }
 
 // PX4's other accelerometer topics, written here as PX4 lays them out (ULog specification):

@@ -250,7 +250,7 @@ void BindFilesAndLogs(py::module_& m) {
   m.def(
       "export_calibration",
       [](const std::string& json_text, const std::string& format, const std::string& raw_unit,
-         int instance, const std::string& c_prefix) {
+         std::optional<int> instance, const std::string& c_prefix) {
         const LoadedCalibration cal = ParseCalibrationJson(json_text, "<calibration>");
         ExportOptions o;
         o.raw_unit = raw_unit;
@@ -269,8 +269,9 @@ void BindFilesAndLogs(py::module_& m) {
         d["loss"] = loss;
         return d;
       },
-      py::arg("json_text"), py::arg("format"), py::arg("raw_unit") = "", py::arg("instance") = 0,
-      py::arg("c_prefix") = "accelcal", "A calibration in another tool's format (export.hpp)");
+      py::arg("json_text"), py::arg("format"), py::arg("raw_unit") = "",
+      py::arg("instance") = std::nullopt, py::arg("c_prefix") = "accelcal",
+      "A calibration in another tool's format (export.hpp)");
 
   m.def(
       "render_report",

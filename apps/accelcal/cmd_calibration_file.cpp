@@ -245,7 +245,10 @@ int RunExport(const ExportArgs& args) {
   options.sensor = args.sensor;
   options.raw_unit = args.raw_unit;
   options.gyro_raw_unit = args.gyro_raw_unit;
-  options.instance = args.instance;
+  // Unset unless given: PX4's slot is then the log's own for the sensor.
+  if (std::find(args.given.begin(), args.given.end(), "instance") != args.given.end()) {
+    options.instance = args.instance;
+  }
   options.c_prefix = args.c_prefix;
   options.rostopic = args.rostopic;
   if (!args.noise.empty()) {

@@ -38,6 +38,10 @@ int RunInspect(const InspectArgs& args) {
     }
     doc["fields"] = log.fields;
     doc["parameters"] = log.parameters;
+    nlohmann::ordered_json& changes = doc["parameter_changes"] = nlohmann::ordered_json::array();
+    for (const LogInventory::ParameterChange& c : log.parameter_changes) {
+      changes.push_back({{"name", c.name}, {"time_s", c.time_s}, {"value", c.value}});
+    }
     out = JsonText(doc);
   } else {
     const char* format = log.format == LogFormat::kULog            ? "PX4 ULog"
@@ -96,6 +100,11 @@ int RunInspect(const InspectArgs& args) {
                     s.instance, s.device_id ? std::to_string(*s.device_id).c_str() : "-", s.samples,
                     s.rate_hz > 0 ? Format("%.4g", s.rate_hz).c_str() : "-", s.first_s, s.last_s,
                     sensors.empty() ? "-" : sensors.c_str());
+    }
+    // A parameter set while the log ran: the values at the start are not the ones in force after.
+    for (const LogInventory::ParameterChange& c : log.parameter_changes) {
+      out += Format("parameter %s set to %.9g at %.6f s\n", VisibleLine(c.name).c_str(), c.value,
+                    c.time_s);
     }
     out += Format(
         "%zu stream%s, %zu parameter%s. Read one with --topic NAME [--instance N]; one "

@@ -82,7 +82,10 @@ struct ExportOptions {
   /// "rad/s" or "deg/s". Empty: the file's `sensors.gyroscope.units.raw`.
   std::string gyro_raw_unit;
   /// Sensor instance: PX4 CAL_ACC<n> (0-based), ArduPilot INS_ACC / INS_ACC2 / INS_ACC3 (0, 1, 2).
-  int instance = 0;
+  /// Unset: ArduPilot's 0; PX4's the slot whose CAL_ACC<n>_ID (CAL_GYRO<n>_ID) in the log's
+  /// parameters is the sensor's device id, else the first the log leaves free (the export says
+  /// which and why). PX4 refuses a given one that contradicts the log's (std::invalid_argument).
+  std::optional<int> instance;
   /// PX4: the CAL_ACC<n>_ID to write (the sensor's device id, by which PX4 matches a calibration
   /// to its sensor). Unset: the device id of the ULog stream the calibration was made from (its
   /// provenance), else none is written and the export says PX4 will not apply it.

@@ -99,8 +99,11 @@ struct SourceStream {
   /// Already corrected by the calibration in force when it was logged (KnownStream::corrected):
   /// a calibration of it is a correction on top of that one.
   bool corrected = false;
-  /// The log's parameters that make the sensors' calibration in force (PX4's CAL_ACC*, CAL_GYRO*,
-  /// SENS_BOARD_*; ArduPilot's INS_ACC*, INS_GYR*, AHRS_ORIENTATION), at the log's start.
+  /// The log's parameters that make the sensor's calibration in force (PX4's CAL_ACC*, CAL_GYRO*,
+  /// SENS_BOARD_*; ArduPilot's INS_ACC*, INS_GYR*, INS_TCAL*, AHRS_ORIENTATION; not the other
+  /// sensor's own), at the stream's first sample: each one's last value logged at or before it.
+  /// A log in which one of them changes during the samples is refused (InputError naming it, both
+  /// values and their times).
   std::map<std::string, double> calibration_in_force;
 };
 
@@ -126,9 +129,17 @@ struct LogInventory {
   std::vector<LogStreamInfo> streams;
   /// Each topic's numeric fields (the names --columns takes), once per topic.
   std::map<std::string, std::vector<std::string>> fields;
-  std::map<std::string, double> parameters;  ///< the parameters at the log's start
-  std::map<std::string, std::string> info;   ///< the log's string information (sys_name, ...)
-  std::optional<std::string> truncated;      ///< where a log cut short stopped
+  /// The parameters at the log's start (each one's first value logged).
+  std::map<std::string, double> parameters;
+  /// The parameters set while the log ran: each change after its first value, with its time [s].
+  struct ParameterChange {
+    std::string name;
+    double time_s = 0;
+    double value = 0;
+  };
+  std::vector<ParameterChange> parameter_changes;
+  std::map<std::string, std::string> info;  ///< the log's string information (sys_name, ...)
+  std::optional<std::string> truncated;     ///< where a log cut short stopped
 };
 
 /// What a binary log holds. Throws InputError for what cannot be read, for a text file (it has

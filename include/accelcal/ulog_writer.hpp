@@ -22,7 +22,12 @@ class ULogImuWriter {
       : device_id_(device_id), gyro_device_id_(gyro_device_id), gyroscope_(gyroscope) {}
   /// The header, flag bits, the formats, the log's information and the subscriptions (multi id
   /// 0: sensor_accel, then sensor_gyro).
-  std::string Header() const;
+  /// `parameters`: Parameter messages, written among the definitions (the values at the log's
+  /// start).
+  std::string Header(const std::string& parameters = {}) const;
+  /// A parameter message (PX4's int32 parameters, as CAL_ACC0_ID): among the definitions (Header)
+  /// a value at the log's start, among the samples a change made after the last one before it.
+  static std::string Parameter(const std::string& name, std::int32_t value);
   /// One sensor_accel message: timestamp and timestamp_sample `time_us` [µs], the reading as
   /// float32 (x, y, z), the temperature [°C] (NaN: not measured, as PX4's drivers without one).
   /// Throws std::invalid_argument for a reading that is not finite or beyond float32's range.

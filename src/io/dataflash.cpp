@@ -207,8 +207,12 @@ void Reader::Define(const unsigned char* r, std::uint64_t at) {
 void Reader::Record(const Type& type, const unsigned char* r, std::uint64_t at) {
   if (type.param_name >= 0 && type.param_value >= 0 && type.name == "PARM") {
     const std::string name = Text(r + type.fields[std::size_t(type.param_name)].offset, 16);
-    out_.parameters.emplace(
-        name, LoadLittle<float>(r + type.fields[std::size_t(type.param_value)].offset));
+    const double value = LoadLittle<float>(r + type.fields[std::size_t(type.param_value)].offset);
+    out_.parameters.emplace(name, value);
+    out_.parameter_history[name].emplace_back(
+        type.time >= 0 ? LoadLittle<std::uint64_t>(r + type.fields[std::size_t(type.time)].offset)
+                       : 0,
+        value);
   }
   const int instance =
       type.instance >= 0

@@ -48,8 +48,13 @@ struct DecodedStream {
 struct DecodedLog {
   std::uint64_t start_us = 0;          ///< the log's start, when it says
   std::vector<DecodedStream> streams;  ///< in the order of their first appearance
-  /// The parameters in force when the log began.
+  /// The parameters in force when the log began: each one's first value logged.
   std::map<std::string, double> parameters;
+  /// Every value logged of each parameter, in the log's order, with its time [µs, the streams'
+  /// clock]: a parameter set while the log ran (a DataFlash PARM record after the first, a ULog
+  /// parameter message among the data, timed by the last message before it) is in force from
+  /// then on.
+  std::map<std::string, std::vector<std::pair<std::uint64_t, double>>> parameter_history;
   /// Information whose value is a string (sys_name, ver_hw, ...).
   std::map<std::string, std::string> info;
   /// Set when the log ends inside a message (a log cut short): where, and how many messages were

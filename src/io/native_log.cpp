@@ -364,6 +364,56 @@ std::vector<std::size_t> Stored(const Chosen& c) {
   return out;
 }
 
+// Whether a parameter belongs to the calibration the autopilot applies to `sensor`'s readings:
+// PX4's CAL_ACC*, CAL_GYRO*, SENS_BOARD_*; ArduPilot's INS_ACC*, INS_GYR*, INS_TCAL* (its
+// temperature calibration, applied before the offsets), AHRS_ORIENTATION. The other sensor's own
+// (an accelerometer's INS_GYROFFS, which ArduPilot learns at each boot) are not.
+bool CalibrationParameter(const std::string& name, std::string_view sensor) {
+  bool calibration = false;
+  for (const char* prefix : {"CAL_ACC", "CAL_GYRO", "SENS_BOARD_", "INS_ACC", "INS_GYR", "INS_TCAL",
+                             "AHRS_ORIENTATION"}) {
+    calibration = calibration || name.rfind(prefix, 0) == 0;
+  }
+  const char* other = sensor == "gyroscope" ? "ACC" : "GYR";
+  return calibration && name.find(other, 4) == std::string::npos;
+}
+
+// The calibration parameters in force at the first sample of `s`: each one's last value logged
+// at or before it (a recalibration logged before the session wins over the values at the log's
+// start), or its first value when it was first logged later (ArduPilot logs its parameters while
+// the first records are written). Throws InputError naming the parameter, both values and their
+// times when one changes during the samples: their calibration in force is then two.
+std::map<std::string, double> CalibrationInForce(const internal::DecodedLog& log,
+                                                 const internal::DecodedStream& s,
+                                                 std::string_view sensor,
+                                                 const std::string& source) {
+  std::map<std::string, double> out;
+  for (const auto& [name, history] : log.parameter_history) {
+    if (history.empty() || !CalibrationParameter(name, sensor)) continue;
+    std::size_t in_force = 0;
+    while (in_force + 1 < history.size() && history[in_force + 1].first <= s.first_us) {
+      ++in_force;
+    }
+    const double value = history[in_force].second;
+    out[name] = value;
+    for (std::size_t k = in_force + 1; k < history.size(); ++k) {
+      const auto [t_us, changed] = history[k];
+      if (t_us > s.first_us && t_us <= s.last_us && !(changed == value)) {
+        throw InputError(
+            source, 0,
+            Format("the calibration parameter %s changes from %.9g (logged at %.6f s) to %.9g at "
+                   "%.6f s, during the samples of %s (%.6f s to %.6f s): the %s readings were "
+                   "taken under two calibrations; calibrate a log whose samples have one",
+                   Shown(name).c_str(), value, static_cast<double>(history[in_force].first) / 1e6,
+                   changed, static_cast<double>(t_us) / 1e6, Line(s).c_str(),
+                   static_cast<double>(s.first_us) / 1e6, static_cast<double>(s.last_us) / 1e6,
+                   std::string(sensor).c_str()));
+      }
+    }
+  }
+  return out;
+}
+
 }  // namespace
 
 namespace internal {
@@ -640,12 +690,7 @@ InputData ReadNativeLog(BinaryStream& in, InputFile* file, const ReadOptions& op
         (*s.columns)[chosen.axis[2]] == known->z))) {
     stream.unit = std::string(known->unit);
   }
-  for (const auto& [parameter, value] : log.parameters) {
-    for (const char* prefix :
-         {"CAL_ACC", "CAL_GYRO", "SENS_BOARD_", "INS_ACC", "INS_GYR", "AHRS_ORIENTATION"}) {
-      if (parameter.rfind(prefix, 0) == 0) stream.calibration_in_force[parameter] = value;
-    }
-  }
+  stream.calibration_in_force = CalibrationInForce(log, s, sensor, source);
   if (s.microseconds && chosen.time && (*s.columns)[*chosen.time] != internal::kLogTime &&
       raw.time_s.size() >= 2 && raw.time_s.front() == raw.time_s.back() &&
       std::is_sorted(raw.time_s.begin(), raw.time_s.end())) {
@@ -717,6 +762,17 @@ LogInventory InspectLog(const std::string& path) {
     out.fields.emplace(s.topic, *s.columns);  // the first subscription's: a topic has one format
   }
   out.parameters = log.parameters;
+  for (const auto& [name, history] : log.parameter_history) {
+    for (std::size_t k = 1; k < history.size(); ++k) {
+      if (!(history[k].second == history[k - 1].second)) {
+        out.parameter_changes.push_back(
+            {name, static_cast<double>(history[k].first) / 1e6, history[k].second});
+      }
+    }
+  }
+  std::stable_sort(out.parameter_changes.begin(), out.parameter_changes.end(),
+                   [](const LogInventory::ParameterChange& a,
+                      const LogInventory::ParameterChange& b) { return a.time_s < b.time_s; });
   out.info = log.info;
   out.truncated = log.truncated;
   return out;

@@ -128,6 +128,7 @@ class Reader {
   std::vector<const Layout*> stream_layout_;  // per stream
   std::map<std::pair<std::string, int>, int> stream_of_;
   bool data_section_ = false;
+  std::uint64_t last_us_ = 0;  // the timestamp of the last data message read
 };
 
 void Reader::ParseFormat(std::string_view text, std::uint64_t at) {
@@ -316,6 +317,7 @@ void Reader::Data(const unsigned char* p, std::size_t size, std::uint64_t at) {
     }
   }
   s.last_us = t;
+  if (layout.timestamp >= 0) last_us_ = std::max(last_us_, t);
   ++s.messages;
   if (s.kept) {
     for (std::size_t c : s.stored) {
@@ -338,14 +340,20 @@ void Reader::KeyValue(const unsigned char* p, std::size_t size, bool parameter, 
   const std::string_view type = key.substr(0, space);
   const std::string name(key.substr(space + 1));
   if (parameter) {
+    double v = 0;
     if (type == "float" && value_size == 4) {
-      out_.parameters[name] = LoadLittle<float>(value);
+      v = LoadLittle<float>(value);
     } else if (type == "int32_t" && value_size == 4) {
-      out_.parameters[name] = LoadLittle<std::int32_t>(value);
+      v = LoadLittle<std::int32_t>(value);
     } else {
       Fail(at, "the parameter " + name + " is of type " + std::string(type) + " with " +
                    std::to_string(value_size) + " bytes (float or int32_t expected)");
     }
+    // A change among the data has no time of its own: it was set after the last message logged.
+    // The definitions' value (the log's start) is the first, and there the value in force.
+    if (!data_section_) out_.parameters[name] = v;
+    out_.parameters.emplace(name, v);
+    out_.parameter_history[name].emplace_back(data_section_ ? last_us_ : 0, v);
   } else if (type.rfind("char[", 0) == 0) {
     out_.info[name] = std::string(reinterpret_cast<const char*>(value), value_size);
   }
@@ -420,7 +428,8 @@ DecodedLog Reader::Read() {
         KeyValue(p, size, false, at);
         break;
       case 'P':
-        if (!data_section_) KeyValue(p, size, true, at);
+        // Among the data: a parameter changed while the log ran.
+        KeyValue(p, size, true, at);
         break;
       case 'M':
       case 'Q':

@@ -408,15 +408,23 @@ const SourceStream* GyroscopeStream(const LoadedCalibration& cal) {
 // units readings are mistaken for are 9.8, 57 or thousands of times apart.
 constexpr double kMostPlausibleScaleError = 0.5;
 
-// The scales a diagonal target (PX4, ArduPilot) writes, when the raw unit is the file's label (not
-// one given with the export): scales far from 1 are readings in another unit (counts labelled
-// m/s2), which the target would apply as written.
+// The scales a diagonal target (PX4, ArduPilot) writes: scales far from 1 are readings in another
+// unit than the one they are said to be in (counts labelled m/s2), which the target would apply as
+// written. A unit given with the export is checked as the file's label is: vouching for a unit
+// does not make the readings fit it.
 void PlausibleScales(const Vec3& scale, const LoadedCalibration& cal, const ExportOptions& options,
                      const char* tool) {
-  if (!options.raw_unit.empty()) return;  // the caller's word for the unit
   for (int i = 0; i < 3; ++i) {
     if (!(scale(i) >= 1 / (1 + kMostPlausibleScaleError) &&
           scale(i) <= 1 + kMostPlausibleScaleError)) {
+      if (!options.raw_unit.empty()) {
+        throw DataError(Format(
+            "%s would apply scales of %.6g, %.6g, %.6g: a sensor's readings in '%s' have scales "
+            "near 1, so the raw unit given (raw_unit %s) does not fit these readings (counts?); "
+            "calibrate them in their unit",
+            tool, scale(0), scale(1), scale(2), options.raw_unit.c_str(),
+            options.raw_unit.c_str()));
+      }
       throw DataError(Format(
           "%s would apply scales of %.6g, %.6g, %.6g: a sensor's readings in '%s' have scales "
           "near 1, so these readings were not in '%s' (counts?); calibrate them with their "
@@ -448,8 +456,72 @@ std::optional<std::uint64_t> Px4DeviceId(std::optional<std::uint64_t> given,
 struct Px4Slot {
   std::string comment, lines, convention;
 };
+// PX4's calibration slot for a sensor (`base` CAL_ACC or CAL_GYRO): PX4 applies slot n to the
+// sensor whose device id is <base><n>_ID, so the slot is the one the log's parameters give the
+// sensor's id (a primary IMU's slot written for another sensor would replace its calibration and
+// leave it slotless). A `given` slot that contradicts the log's is refused; without a match the
+// first slot the log leaves free (no id, or 0) is taken, and `why` says so.
+int Px4SlotIndex(const char* base, const SourceStream* stream, std::optional<std::uint64_t> id,
+                 std::optional<int> given, std::string* why) {
+  if (given && (*given < 0 || *given > 3)) {
+    throw std::invalid_argument(
+        Format("PX4 has calibration slots 0 to 3 (%s0 to %s3)", base, base));
+  }
+  std::optional<double> ids[4];
+  bool any = false;
+  std::string listed;  // "CAL_ACC0_ID 2, CAL_ACC1_ID 1", for messages
+  for (int n = 0; n < 4 && stream != nullptr; ++n) {
+    const auto it = stream->calibration_in_force.find(Format("%s%d_ID", base, n));
+    if (it == stream->calibration_in_force.end()) continue;
+    ids[n] = it->second;
+    any = true;
+    listed += Format("%s%s%d_ID %.10g", listed.empty() ? "" : ", ", base, n, it->second);
+  }
+  // The log holds an id as PX4's int32 parameter.
+  const std::optional<double> wanted =
+      id ? std::optional<double>(static_cast<std::int32_t>(static_cast<std::uint32_t>(*id)))
+         : std::nullopt;
+  for (int n = 0; n < 4 && wanted; ++n) {
+    if (ids[n] != wanted) continue;
+    if (given && *given != n) {
+      throw std::invalid_argument(
+          Format("instance %d contradicts the log: its %s%d_ID is the sensor's device id %llu, "
+                 "so PX4 applies %s%d to it (the log's: %s); %s%d would be another slot's",
+                 *given, base, n, static_cast<unsigned long long>(*id), base, n, listed.c_str(),
+                 base, *given));
+    }
+    *why = Format("the log's %s%d_ID is its device id", base, n);
+    return n;
+  }
+  if (given) {
+    if (ids[*given] && *ids[*given] != 0) {
+      *why = Format(
+          "the instance given; the log's %s%d_ID is %.10g, another sensor's, whose "
+          "calibration this replaces",
+          base, *given, *ids[*given]);
+    }
+    return *given;
+  }
+  if (stream == nullptr) return 0;
+  const std::string unmatched =
+      !any ? Format("the log holds no %sn_ID", base)
+      : id ? Format("no %sn_ID of the log is its device id (the log's: %s)", base, listed.c_str())
+           : Format("its device id is unknown (the log's: %s)", listed.c_str());
+  for (int n = 0; n < 4; ++n) {
+    if (!ids[n] || *ids[n] == 0) {
+      *why = Format("%s: %s%d is the first slot it leaves free (give the instance for another)",
+                    unmatched.c_str(), base, n);
+      return n;
+    }
+  }
+  throw DataError(
+      Format("%s, and every %s slot holds another sensor's calibration: give the "
+             "instance of the one to replace",
+             unmatched.c_str(), base));
+}
+
 Px4Slot Px4SlotFor(const std::string& prefix, const SourceStream* stream,
-                   std::optional<std::uint64_t> id, const char* listener) {
+                   std::optional<std::uint64_t> id, const char* listener, const std::string& why) {
   Px4Slot out;
   out.comment = "# " + prefix.substr(0, prefix.size() - 1) + ": ";
   if (stream != nullptr) {
@@ -471,6 +543,9 @@ Px4Slot Px4SlotFor(const std::string& prefix, const SourceStream* stream,
                    listener + "` shows it)";
     out.convention = "; " + prefix + "ID not written (no device id known)";
   }
+  if (!why.empty())
+    out.comment += "; slot " + std::to_string(prefix[prefix.size() - 2] - '0') + ": " +
+                   internal::VisibleLine(why);
   out.comment += "\n";
   return out;
 }
@@ -545,9 +620,11 @@ std::optional<Px4Slot> Px4Gyroscope(const LoadedCalibration& cal, const ExportOp
   if (!rad_s) return std::nullopt;
   const Vec3 offset_rad_s = *rad_s * g.params.bias;
   for (int i = 0; i < 3; ++i) Float32(offset_rad_s(i));
-  const std::string prefix = "CAL_GYRO" + std::to_string(options.instance) + "_";
-  Px4Slot slot =
-      Px4SlotFor(prefix, stream, Px4DeviceId(options.gyro_device_id, stream), "sensor_gyro");
+  const std::optional<std::uint64_t> id = Px4DeviceId(options.gyro_device_id, stream);
+  std::string why;
+  const int instance = Px4SlotIndex("CAL_GYRO", stream, id, options.instance, &why);
+  const std::string prefix = "CAL_GYRO" + std::to_string(instance) + "_";
+  Px4Slot slot = Px4SlotFor(prefix, stream, id, "sensor_gyro", why);
   const char axes[3] = {'X', 'Y', 'Z'};
   for (int i = 0; i < 3; ++i) {
     slot.lines += Format("1\t1\t%s%cOFF\t%.9g\t9\n", prefix.c_str(), axes[i], offset_rad_s(i));
@@ -556,15 +633,22 @@ std::optional<Px4Slot> Px4Gyroscope(const LoadedCalibration& cal, const ExportOp
   // largest singular value of s K_g - I times |w|.
   const double largest =
       Eigen::JacobiSVD<Mat33>(Mat33(*rad_s * g.params.K - Mat33::Identity())).singularValues()(0);
-  if (options.gyro_raw_unit.empty() && !(largest <= kMostPlausibleScaleError)) {
-    // Rates that are not in the unit their label says (counts labelled rad/s): PX4 would apply
-    // the offsets to rates of another scale.
-    out->gyroscope_omitted = Format(
-        "PX4 holds a gyroscope's offsets only, and these rates, labelled '%s', differ from the "
-        "calibrated ones by up to %.3g %% (a gyroscope's scale is near 1): they are not in "
-        "'%s'; give gyro_raw_unit if they were",
-        internal::VisibleLine(g.raw_unit).c_str(), 100 * largest,
-        internal::VisibleLine(g.raw_unit).c_str());
+  if (!(largest <= kMostPlausibleScaleError)) {
+    // Rates that are not in the unit they are said to be in (counts labelled rad/s, or a
+    // gyro_raw_unit given for them): PX4 would apply the offsets to rates of another scale.
+    out->gyroscope_omitted =
+        options.gyro_raw_unit.empty()
+            ? Format(
+                  "PX4 holds a gyroscope's offsets only, and these rates, labelled '%s', "
+                  "differ from the calibrated ones by up to %.3g %% (a gyroscope's scale is "
+                  "near 1): they are not in '%s'; give gyro_raw_unit if they were",
+                  internal::VisibleLine(g.raw_unit).c_str(), 100 * largest,
+                  internal::VisibleLine(g.raw_unit).c_str())
+            : Format(
+                  "PX4 holds a gyroscope's offsets only, and these rates, in '%s' as "
+                  "gyro_raw_unit %s says, differ from the calibrated ones by up to %.3g %% (a "
+                  "gyroscope's scale is near 1): the unit given does not fit these rates",
+                  options.gyro_raw_unit.c_str(), options.gyro_raw_unit.c_str(), 100 * largest);
     return std::nullopt;
   }
   if (g.thermal && g.thermal->degree() > 0) {
@@ -576,9 +660,9 @@ std::optional<Px4Slot> Px4Gyroscope(const LoadedCalibration& cal, const ExportOp
       per_K[static_cast<std::size_t>(k - 1)] =
           *rad_s * g.thermal->coefficients[static_cast<std::size_t>(k - 1)];
     }
-    const Px4TemperatureTerms tc = Px4Temperature(
-        'G', options.instance, Px4DeviceId(options.gyro_device_id, stream), g.thermal->t_ref_c,
-        g.thermal_range_c, per_K, "rad/s", "the rate before CAL_GYRO%d's offset", "CAL_GYRO");
+    const Px4TemperatureTerms tc =
+        Px4Temperature('G', instance, id, g.thermal->t_ref_c, g.thermal_range_c, per_K, "rad/s",
+                       "the rate before CAL_GYRO%d's offset", "CAL_GYRO");
     slot.lines += tc.lines;
     slot.convention += tc.convention;
     slot.comment += tc.comment;
@@ -603,7 +687,7 @@ ExportResult Px4(const LoadedCalibration& cal, const ExportOptions& options) {
                     "parameters correct the driver's output: calibrate sensor_accel (logged at "
                     "the sensor's rate) and export that");
   }
-  if (options.instance < 0 || options.instance > 3) {
+  if (options.instance && (*options.instance < 0 || *options.instance > 3)) {
     throw std::invalid_argument("PX4 has calibration slots 0 to 3 (CAL_ACC0 to CAL_ACC3)");
   }
   if (options.gyro_device_id && !cal.gyroscope) {
@@ -616,9 +700,11 @@ ExportResult Px4(const LoadedCalibration& cal, const ExportOptions& options) {
   PlausibleScales(d.scale, cal, options, "PX4");
   ExportResult out;
   out.convention = DiagonalConvention("PX4 (src/lib/sensor_calibration)", cal, raw_ms2);
-  const std::string prefix = "CAL_ACC" + std::to_string(options.instance) + "_";
-  const Px4Slot slot =
-      Px4SlotFor(prefix, stream, Px4DeviceId(options.device_id, stream), "sensor_accel");
+  const std::optional<std::uint64_t> id = Px4DeviceId(options.device_id, stream);
+  std::string why;
+  const int instance = Px4SlotIndex("CAL_ACC", stream, id, options.instance, &why);
+  const std::string prefix = "CAL_ACC" + std::to_string(instance) + "_";
+  const Px4Slot slot = Px4SlotFor(prefix, stream, id, "sensor_accel", why);
   const std::optional<Px4Slot> gyro = Px4Gyroscope(cal, options, &out);
   out.convention += slot.convention + (gyro ? gyro->convention : "");
   out.text = "# Onboard parameters for Vehicle 1\n#\n#" + Header(cal) + "\n# " + out.convention +
@@ -642,10 +728,10 @@ ExportResult Px4(const LoadedCalibration& cal, const ExportOptions& options) {
   // CAL_ACC's offset (TemperatureCompensation.cpp, sensor_calibration/Accelerometer.hpp), zero at
   // TREF so that CAL_ACC holds the offset at T_ref; PX4 matches it to the sensor by TC_A<n>_ID.
   const OffsetPolynomial poly = OffsetsOverTemperature(cal);
-  const Px4TemperatureTerms tc = Px4Temperature(
-      'A', options.instance, Px4DeviceId(options.device_id, stream), poly.t_ref_c,
-      {poly.t_min_c, poly.t_max_c}, {raw_ms2 * poly.b[1], raw_ms2 * poly.b[2], raw_ms2 * poly.b[3]},
-      "m/s2", "the reading before CAL_ACC%d's offset and scale", "CAL_ACC");
+  const Px4TemperatureTerms tc =
+      Px4Temperature('A', instance, id, poly.t_ref_c, {poly.t_min_c, poly.t_max_c},
+                     {raw_ms2 * poly.b[1], raw_ms2 * poly.b[2], raw_ms2 * poly.b[3]}, "m/s2",
+                     "the reading before CAL_ACC%d's offset and scale", "CAL_ACC");
   out.text += tc.lines;
   out.convention += tc.convention;
   if (!tc.comment.empty()) out.text.insert(out.text.find("#\n# Vehicle-Id"), tc.comment);
@@ -655,7 +741,8 @@ ExportResult Px4(const LoadedCalibration& cal, const ExportOptions& options) {
 }
 
 ExportResult ArduPilot(const LoadedCalibration& cal, const ExportOptions& options) {
-  if (options.instance > 2) throw std::invalid_argument("ArduPilot has accelerometers 0, 1 and 2");
+  const int instance = options.instance.value_or(0);
+  if (instance > 2) throw std::invalid_argument("ArduPilot has accelerometers 0, 1 and 2");
   const double raw_ms2 =
       RawToMetersPerSecond2(cal, options, "ArduPilot", "its drivers scale the counts");
   Diagonal d = DiagonalPart(cal, raw_ms2);
@@ -663,8 +750,7 @@ ExportResult ArduPilot(const LoadedCalibration& cal, const ExportOptions& option
   PlausibleScales(d.scale, cal, options, "ArduPilot");
   ExportResult out;
   out.convention = DiagonalConvention("ArduPilot (AP_InertialSensor)", cal, raw_ms2);
-  const std::string prefix =
-      options.instance == 0 ? "INS_ACC" : "INS_ACC" + std::to_string(options.instance + 1);
+  const std::string prefix = instance == 0 ? "INS_ACC" : "INS_ACC" + std::to_string(instance + 1);
   const char axes[3] = {'X', 'Y', 'Z'};
   std::string composed;
   Vec3 s_in_force = Vec3::Ones();  // the scale of the calibration in force, composed with
@@ -696,11 +782,11 @@ ExportResult ArduPilot(const LoadedCalibration& cal, const ExportOptions& option
                  "with the one in force only without that rotation (0)",
                  it->second, from));
     }
-    if (stream->instance != options.instance) {
+    if (stream->instance != instance) {
       throw DataError(
           Format("the calibration is of instance %d's records and the export is for "
                  "instance %d: the calibration in force is another sensor's",
-                 stream->instance, options.instance));
+                 stream->instance, instance));
     }
     Vec3 o_old, s_old;
     for (int i = 0; i < 3; ++i) {
@@ -748,7 +834,7 @@ ExportResult ArduPilot(const LoadedCalibration& cal, const ExportOptions& option
           gyro_rad_s ? Format(
                            ": only the offsets' change with temperature is written "
                            "(INS_TCAL%d_GYR)",
-                           options.instance + 1)
+                           instance + 1)
                      : "; the offsets' change with temperature is not written either: " + why;
     }
   }
@@ -760,13 +846,13 @@ ExportResult ArduPilot(const LoadedCalibration& cal, const ExportOptions& option
   if (stream != nullptr && stream->corrected) {
     const std::map<std::string, double>& in_force =
         options.current_params ? *options.current_params : stream->calibration_in_force;
-    const auto enabled = in_force.find(Format("INS_TCAL%d_ENABLE", options.instance + 1));
+    const auto enabled = in_force.find(Format("INS_TCAL%d_ENABLE", instance + 1));
     if (enabled != in_force.end() && enabled->second == 1) {
       throw DataError(Format(
           "this calibration is of records a temperature calibration in force (INS_TCAL%d_ENABLE "
           "1) had already corrected, and accelcal does not compose one with it: record with "
           "INS_TCAL%d_ENABLE 0 and calibrate that",
-          options.instance + 1, options.instance + 1));
+          instance + 1, instance + 1));
     }
   }
   // sum_d b_d (T - T_ref)^d in powers of u = T - 35 (its constant cancels against CALTEMP's).
@@ -776,7 +862,7 @@ ExportResult ArduPilot(const LoadedCalibration& cal, const ExportOptions& option
     return std::array<Vec3, 3>{b[1] - 2 * delta * b[2] + 3 * delta * delta * b[3],
                                b[2] - 3 * delta * b[3], b[3]};
   };
-  const int n = options.instance + 1;
+  const int n = instance + 1;
   // The accelerometer's offset polynomial, taken once.
   const std::optional<OffsetPolynomial> poly =
       accel_terms ? std::optional(OffsetsOverTemperature(cal)) : std::nullopt;
@@ -1469,7 +1555,9 @@ ExportResult ExportCalibration(const LoadedCalibration& cal, const std::string& 
 namespace {
 ExportResult ExportFormatted(const LoadedCalibration& cal, const std::string& native_json,
                              ExportFormat format, const ExportOptions& options) {
-  if (options.instance < 0) throw std::invalid_argument("instance must be >= 0");
+  if (options.instance && *options.instance < 0) {
+    throw std::invalid_argument("instance must be >= 0");
+  }
   if (options.sensor != "accelerometer" && options.sensor != "gyroscope") {
     throw std::invalid_argument("sensor must be \"accelerometer\" or \"gyroscope\"");
   }

@@ -67,7 +67,13 @@ std::string Sample(std::uint16_t id, std::uint32_t device_id, std::uint64_t time
 
 }  // namespace
 
-std::string ULogImuWriter::Header() const {
+std::string ULogImuWriter::Parameter(const std::string& name, std::int32_t value) {
+  std::string bytes;
+  PutLittle<std::int32_t>(&bytes, value);
+  return Message('P', KeyValue("int32_t " + name, bytes));
+}
+
+std::string ULogImuWriter::Header(const std::string& parameters) const {
   std::string out = {'U', 'L', 'o', 'g', 0x01, 0x12, 0x35, 0x01};
   PutLittle<std::uint64_t>(&out, 0);           // the log's start [µs]
   out += Message('B', std::string(40, '\0'));  // no flags, no appended data
@@ -75,6 +81,7 @@ std::string ULogImuWriter::Header() const {
   if (gyroscope_) out += Message('F', std::string("sensor_gyro") + kFields);
   const std::string name = "accelcal simulate";
   out += Message('I', KeyValue("char[" + std::to_string(name.size()) + "] sys_name", name));
+  out += parameters;
   out += Subscribe(kAccelId, "sensor_accel");
   if (gyroscope_) out += Subscribe(kGyroId, "sensor_gyro");
   return out;

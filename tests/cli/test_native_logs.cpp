@@ -450,14 +450,40 @@ TEST_F(NativeLogTest, Px4ExportNamesTheSensorByItsDeviceId) {
   EXPECT_EQ(stream["topic"], "sensor_accel");
   EXPECT_EQ(stream["device_id"], 1);  // ULogImuWriter's default
   EXPECT_EQ(stream["corrected"], false);
-  // The simulated counts are not m/s²: --raw-unit says what PX4 would have had.
+  // The simulated counts are not m/s²: --raw-unit m/s2 vouching for them does not make scales of
+  // 0.0002 plausible (issue 47: it wrote CAL_ACC0_XSCALE 0.000208).
   CliRun e = Exec("export " + Path("u.json") + " --to px4 --raw-unit m/s2");
+  EXPECT_EQ(e.status, 3);
+  EXPECT_EQ(e.out, "");
+  EXPECT_NE(e.err.find("PX4 would apply scales of 0.000"), std::string::npos) << e.err;
+  EXPECT_NE(e.err.find("the raw unit given (--raw-unit m/s2) does not fit these readings"),
+            std::string::npos)
+      << e.err;
+  EXPECT_EQ(Exec("export " + Path("u.json") + " --to ardupilot --raw-unit m/s2").status, 3);
+  // The same session in m/s² (its scales near 1).
+  ModelParameters truth;
+  truth.K = Vec3(1.002, 0.998, 1.001).asDiagonal();
+  truth.bias = Vec3(0.05, -0.03, 0.08);
+  RawLogSimulation sim;
+  sim.static_s = 2.0;
+  sim.transition_s = 1.0;
+  const ULogImuWriter writer;
+  std::string ulog = writer.Header();
+  SimulateRawLog(truth, 9.81, Yang18Directions(), sim, [&](double t, const Vec3& a) {
+    ulog += writer.Accel(static_cast<std::uint64_t>(std::llround(t * 1e6)), a);
+  });
+  Write("m.ulg", ulog);
+  ASSERT_EQ(Exec("calibrate " + Path("m.ulg") + " --gravity 9.81 -q -o " + Path("m.json")).status,
+            0);
+  e = Exec("export " + Path("m.json") + " --to px4 --raw-unit m/s2");
   ASSERT_EQ(e.status, 0) << e.err;
   EXPECT_NE(e.out.find("1\t1\tCAL_ACC0_ID\t1\t6\n1\t1\tCAL_ACC0_PRIO\t50\t6\n"), std::string::npos)
       << e.out;
-  EXPECT_NE(e.out.find("# CAL_ACC0: sensor_accel instance 0 of the log, device id 1"),
-            std::string::npos);
-  e = Exec("export " + Path("u.json") +
+  EXPECT_NE(e.out.find("# CAL_ACC0: sensor_accel instance 0 of the log, device id 1; slot 0: the "
+                       "log holds no CAL_ACCn_ID: CAL_ACC0 is the first slot it leaves free"),
+            std::string::npos)
+      << e.out;
+  e = Exec("export " + Path("m.json") +
            " --to px4 --raw-unit m/s2 --device-id 3670050 "
            "--instance 2");
   EXPECT_NE(e.out.find("1\t1\tCAL_ACC2_ID\t3670050\t6\n"), std::string::npos) << e.out;
@@ -478,7 +504,7 @@ TEST_F(NativeLogTest, Px4ExportNamesTheSensorByItsDeviceId) {
   EXPECT_NE(e.err.find("PX4 would apply scales of 0.000"), std::string::npos) << e.err;
   EXPECT_NE(e.err.find("these readings were not in 'm/s2' (counts?)"), std::string::npos) << e.err;
   // PX4's slots are 0 to 3; a device id is 1 to 2^32 - 1; a gyroscope's needs a gyroscope.
-  const std::string px4 = "export " + Path("u.json") + " --to px4 --raw-unit m/s2 ";
+  const std::string px4 = "export " + Path("m.json") + " --to px4 --raw-unit m/s2 ";
   e = Exec(px4 + "--instance 4");
   EXPECT_EQ(e.status, 2);
   EXPECT_NE(e.err.find("PX4 has calibration slots 0 to 3"), std::string::npos) << e.err;
@@ -491,6 +517,175 @@ TEST_F(NativeLogTest, Px4ExportNamesTheSensorByItsDeviceId) {
   e = Exec(px4 + "--gyro-device-id 5");
   EXPECT_EQ(e.status, 2);
   EXPECT_NE(e.err.find("a calibration without a gyroscope"), std::string::npos) << e.err;
+}
+
+// PX4 applies CAL_ACC<n> to the sensor whose device id is CAL_ACC<n>_ID: the export takes the
+// slot the log's parameters give the stream's device id (issue 47: it wrote CAL_ACC0 for device
+// 1 of slot CAL_ACC1, replacing the primary IMU's calibration), refuses an --instance that
+// contradicts it, and without a match takes the first free slot and says so.
+TEST_F(NativeLogTest, Px4ExportTakesTheSlotTheLogGivesTheSensor) {
+  ModelParameters truth;
+  truth.K = Vec3(1.002, 0.998, 1.001).asDiagonal();
+  truth.bias = Vec3(0.05, -0.03, 0.08);
+  RawLogSimulation sim;
+  sim.static_s = 2.0;
+  sim.transition_s = 1.0;
+  const ULogImuWriter writer(1, true, 9);  // accelerometer device 1, gyroscope device 9
+  const auto session = [&](const std::string& parameters) {
+    std::string ulog = writer.Header(parameters);
+    SimulateRawLog(truth, 9.81, Yang18Directions(), sim, [&](double t, const Vec3& a) {
+      const auto t_us = static_cast<std::uint64_t>(std::llround(t * 1e6));
+      ulog += writer.Accel(t_us, a) + writer.Gyro(t_us, Vec3(0.01, -0.02, 0.005));
+    });
+    return ulog;
+  };
+  Write("slot.ulg", session(ULogImuWriter::Parameter("CAL_ACC0_ID", 2) +
+                            ULogImuWriter::Parameter("CAL_ACC1_ID", 1) +
+                            ULogImuWriter::Parameter("CAL_GYRO0_ID", 5) +
+                            ULogImuWriter::Parameter("CAL_GYRO1_ID", 3) +
+                            ULogImuWriter::Parameter("CAL_GYRO2_ID", 9)));
+  const std::string log = Path("slot.ulg");
+  ASSERT_EQ(Exec("calibrate " + log + " --gravity 9.81 --gyro " + log + " -q -o " + Path("s.json"))
+                .status,
+            0);
+  CliRun e = Exec("export " + Path("s.json") + " --to px4");
+  ASSERT_EQ(e.status, 0) << e.err;
+  EXPECT_NE(e.out.find("1\t1\tCAL_ACC1_ID\t1\t6\n"), std::string::npos) << e.out;
+  EXPECT_NE(e.out.find("1\t1\tCAL_ACC1_XSCALE\t"), std::string::npos) << e.out;
+  EXPECT_EQ(e.out.find("\tCAL_ACC0_"), std::string::npos) << e.out;
+  EXPECT_NE(e.out.find("# CAL_ACC1: sensor_accel instance 0 of the log, device id 1; slot 1: the "
+                       "log's CAL_ACC1_ID is its device id"),
+            std::string::npos)
+      << e.out;
+  EXPECT_NE(e.out.find("1\t1\tCAL_GYRO2_ID\t9\t6\n"), std::string::npos) << e.out;
+  EXPECT_NE(e.out.find("1\t1\tCAL_GYRO2_XOFF\t"), std::string::npos) << e.out;
+  // The slot given agrees: the same file; it contradicts the log: refused, with the reason.
+  EXPECT_EQ(Exec("export " + Path("s.json") + " --to px4 --instance 1").out, e.out);
+  e = Exec("export " + Path("s.json") + " --to px4 --instance 0");
+  EXPECT_EQ(e.status, 2);
+  EXPECT_EQ(e.out, "");
+  EXPECT_NE(e.err.find("--instance 0 contradicts the log: its CAL_ACC1_ID is the sensor's device "
+                       "id 1, so PX4 applies CAL_ACC1 to it (the log's: CAL_ACC0_ID 2, "
+                       "CAL_ACC1_ID 1)"),
+            std::string::npos)
+      << e.err;
+  // No slot of the log holds the sensor: the first free one, said.
+  Write("free.ulg", session(ULogImuWriter::Parameter("CAL_ACC0_ID", 2) +
+                            ULogImuWriter::Parameter("CAL_ACC1_ID", 0)));
+  ASSERT_EQ(
+      Exec("calibrate " + Path("free.ulg") + " --gravity 9.81 -q -o " + Path("f.json")).status, 0);
+  e = Exec("export " + Path("f.json") + " --to px4");
+  ASSERT_EQ(e.status, 0) << e.err;
+  EXPECT_NE(e.out.find("1\t1\tCAL_ACC1_ID\t1\t6\n"), std::string::npos) << e.out;
+  EXPECT_NE(e.out.find("slot 1: no CAL_ACCn_ID of the log is its device id (the log's: "
+                       "CAL_ACC0_ID 2, CAL_ACC1_ID 0): CAL_ACC1 is the first slot it leaves free"),
+            std::string::npos)
+      << e.out;
+  // Every slot another sensor's: refused rather than one replaced unasked.
+  Write("full.ulg", session(ULogImuWriter::Parameter("CAL_ACC0_ID", 2) +
+                            ULogImuWriter::Parameter("CAL_ACC1_ID", 3) +
+                            ULogImuWriter::Parameter("CAL_ACC2_ID", 4) +
+                            ULogImuWriter::Parameter("CAL_ACC3_ID", 5)));
+  ASSERT_EQ(
+      Exec("calibrate " + Path("full.ulg") + " --gravity 9.81 -q -o " + Path("u.json")).status, 0);
+  e = Exec("export " + Path("u.json") + " --to px4");
+  EXPECT_EQ(e.status, 3);
+  EXPECT_NE(e.err.find("every CAL_ACC slot holds another sensor's calibration"), std::string::npos)
+      << e.err;
+  e = Exec("export " + Path("u.json") + " --to px4 --instance 3");
+  ASSERT_EQ(e.status, 0) << e.err;
+  EXPECT_NE(e.out.find("slot 3: the instance given; the log's CAL_ACC3_ID is 5, another sensor's"),
+            std::string::npos)
+      << e.out;
+}
+
+// ArduPilot logs a parameter set while the log runs as another PARM record: the value in force
+// at the samples is the last one logged before them (issue 47: the first won, and the export
+// composed with INS_ACCOFFS_X 0.5 where 0.05 was in force), and a calibration parameter that
+// changes during the samples is refused, named with both values and their times.
+TEST_F(NativeLogTest, DataFlashParametersAreThoseInForceAtTheSamples) {
+  const Vec3 o_true(0.35, -0.21, 0.48), s_true(1.012, 0.991, 1.004);
+  const Vec3 o_old(0.05, 0.05, -0.30), s_old(0.995, 1.006, 0.998);
+  ModelParameters seen;  // what the records hold under (o_old, s_old), as the compose test
+  seen.K = s_old.cwiseQuotient(s_true).asDiagonal();
+  seen.bias = (o_true - o_old).cwiseProduct(s_old);
+  RawLogSimulation options;
+  options.static_s = 2.0;
+  options.transition_s = 1.0;
+  options.sigma_raw_per_sample = Vec3(1e-3, 1e-3, 1e-3);
+  const DataFlashImuWriter writer;
+  const char axes[3] = {'X', 'Y', 'Z'};
+  // At the start a calibration ten times off in X, then the recalibration, logged before the
+  // session at 0.5 s (the samples begin 1 s in).
+  const auto session = [&](std::uint64_t recalibrated_us, bool gyro_set = false) {
+    std::string out = writer.Header();
+    for (int i = 0; i < 3; ++i) {
+      out += writer.Parameter(0, std::string("INS_ACCOFFS_") + axes[i],
+                              static_cast<float>(i == 0 ? 10 * o_old(i) : o_old(i)));
+      out += writer.Parameter(0, std::string("INS_ACCSCAL_") + axes[i],
+                              static_cast<float>(i == 0 ? 1.02 * s_old(i) : s_old(i)));
+    }
+    // A temperature calibration in force, off: what the records were corrected by, kept.
+    out +=
+        writer.Parameter(0, "INS_TCAL1_ENABLE", 0) + writer.Parameter(0, "INS_TCAL1_ACC1_X", 3000);
+    std::string later =
+        writer.Parameter(recalibrated_us, "INS_ACCOFFS_X", static_cast<float>(o_old(0))) +
+        writer.Parameter(recalibrated_us, "INS_ACCSCAL_X", static_cast<float>(s_old(0)));
+    SimulateRawLog(seen, 9.80665, Yang18Directions(), options, [&](double t, const Vec3& a) {
+      const auto t_us = static_cast<std::uint64_t>(std::llround(t * 1e6)) + 1000000;
+      if (!later.empty() && t_us >= recalibrated_us) out += std::move(later), later.clear();
+      if (gyro_set && t_us >= 20000000) {
+        out += writer.Parameter(t_us, "INS_GYROFFS_X", 0.01f);
+        gyro_set = false;
+      }
+      out += writer.Sample(t_us, a, Vec3::Zero());
+    });
+    return out;
+  };
+  Write("before.bin", session(500000));
+  ASSERT_EQ(
+      Exec("calibrate " + Path("before.bin") + " --gravity 9.80665 -q -o " + Path("b.json")).status,
+      0);
+  const nlohmann::json cal = nlohmann::json::parse(Slurp(Path("b.json")));
+  const nlohmann::json& in_force = cal["provenance"]["inputs"][0]["stream"]["calibration_in_force"];
+  EXPECT_FLOAT_EQ(in_force["INS_ACCOFFS_X"].get<double>(), static_cast<float>(o_old(0)));
+  EXPECT_FLOAT_EQ(in_force["INS_ACCSCAL_X"].get<double>(), static_cast<float>(s_old(0)));
+  EXPECT_EQ(in_force["INS_TCAL1_ENABLE"], 0);
+  EXPECT_EQ(in_force["INS_TCAL1_ACC1_X"], 3000);
+  CliRun e = Exec("export " + Path("b.json") + " --to ardupilot -o " + Path("e.param"));
+  ASSERT_EQ(e.status, 0) << e.err;
+  const std::string text = Slurp(Path("e.param"));
+  const auto value = [&](const std::string& name) {
+    const std::size_t at = text.find("\n" + name + ",");
+    EXPECT_NE(at, std::string::npos) << name << "\n" << text;
+    return std::stod(text.substr(at + name.size() + 2));
+  };
+  EXPECT_NEAR(value("INS_ACCOFFS_X"), o_true(0), 5e-4);  // 0.45 m/s² off with the first value
+  EXPECT_NEAR(value("INS_ACCSCAL_X"), s_true(0), 5e-5);  // 2 % off
+  // inspect says what was set when.
+  e = Exec("inspect " + Path("before.bin"));
+  EXPECT_NE(e.out.find("parameter INS_ACCOFFS_X set to 0.0500000007 at 0.500000 s"),
+            std::string::npos)
+      << e.out;
+  e = Exec("inspect --json " + Path("before.bin"));
+  const nlohmann::json listed = nlohmann::json::parse(e.out)["parameter_changes"];
+  ASSERT_EQ(listed.size(), 2u) << e.out;
+  EXPECT_EQ(listed[0]["name"], "INS_ACCOFFS_X");
+  EXPECT_EQ(listed[0]["time_s"], 0.5);
+  // Recalibrated during the samples: refused, both values and their times named.
+  Write("during.bin", session(20000000));
+  e = Exec("calibrate " + Path("during.bin") + " --gravity 9.80665 -q -o " + Path("d.json"));
+  EXPECT_EQ(e.status, 3);
+  EXPECT_NE(e.err.find("the calibration parameter INS_ACCOFFS_X changes from 0.5 (logged at "
+                       "0.000000 s) to 0.0500000007 at 20.000000 s, during the samples of IMU"),
+            std::string::npos)
+      << e.err;
+  // A gyroscope's offsets set meanwhile (ArduPilot learns them at boot) are not the
+  // accelerometer's calibration.
+  Write("gyro.bin", session(500000, true));
+  EXPECT_EQ(
+      Exec("calibrate " + Path("gyro.bin") + " --gravity 9.80665 -q -o " + Path("g.json")).status,
+      0);
 }
 
 // PX4's other accelerometer topics, written here as PX4 lays them out (ULog specification):

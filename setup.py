@@ -4,7 +4,8 @@ The extension module accelcal._accelcal is the CMake target accelcal_python, con
 setuptools' temporary directory with only the library and the module (no tool, tests or
 benchmarks) for the interpreter that runs the build; the package's Python files come from
 python/accelcal. Environment: CMAKE_BUILD_PARALLEL_LEVEL (jobs; default: every core),
-ACCELCAL_CMAKE_ARGS (more arguments for CMake's configure step, split on spaces).
+ACCELCAL_CMAKE_ARGS (more arguments for CMake's configure step, split on spaces),
+ACCELCAL_CMAKE_BUILD_DIR (CMake's build directory; default: in setuptools' temporary one).
 """
 import os
 import re
@@ -39,7 +40,8 @@ class CMakeBuild(build_ext):
     def build_extension(self, ext):
         if not isinstance(ext, CMakeExtension):
             return super().build_extension(ext)
-        build_dir = Path(self.build_temp).resolve() / "cmake"
+        build_dir = Path(os.environ.get("ACCELCAL_CMAKE_BUILD_DIR") or
+                         Path(self.build_temp) / "cmake").resolve()
         build_dir.mkdir(parents=True, exist_ok=True)
         config = "Debug" if self.debug else "Release"
         configure = [

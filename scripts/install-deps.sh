@@ -7,6 +7,7 @@ packages=(
   libeigen3-dev libcli11-dev nlohmann-json3-dev libfast-float-dev
   libgtest-dev libgmock-dev libbenchmark-dev
   clang-format hyperfine valgrind
+  ccache        # the build scripts compile through it: CI's fresh clones reuse unchanged objects
   python3-yaml  # the YAML export's round-trip test reads it with PyYAML
   libyaml-dev   # batch's limits file (YAML), read by libyaml's event parser
   chromium      # the report test renders the page as a person would see it

@@ -9,13 +9,14 @@
 # Two build trees: the fuzzers' coverage instrumentation would slow the tests several times over.
 set -euo pipefail
 cd "$(dirname "$0")/.."
+source scripts/compiler-cache.sh
 seconds=${FUZZ_SECONDS:-60}
 # Line tables are all a report's stack trace needs (file, line, inlined frames): full debug
 # information made the two builds about a fifth slower and their objects ten times larger.
 common=(-DCMAKE_BUILD_TYPE=RelWithDebInfo
   "-DCMAKE_CXX_FLAGS_RELWITHDEBINFO=-O2 -gline-tables-only -DNDEBUG" -DCMAKE_C_COMPILER=clang -DCMAKE_CXX_COMPILER=clang++
   -DACCELCAL_WERROR=ON -DACCELCAL_SANITIZE=ON -DACCELCAL_BUILD_PYTHON=OFF
-  -DACCELCAL_BUILD_BENCHMARKS=OFF -DACCELCAL_INSTALL=OFF)
+  -DACCELCAL_BUILD_BENCHMARKS=OFF -DACCELCAL_INSTALL=OFF "${cache_args[@]}")
 export ASAN_OPTIONS=detect_leaks=1:abort_on_error=1:strict_string_checks=1
 export UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1
 

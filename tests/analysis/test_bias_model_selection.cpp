@@ -9,6 +9,7 @@
 #include "accelcal/model_selection.hpp"
 #include "accelcal/simulate.hpp"
 #include "accelcal/static_detection.hpp"
+#include "support/paths.hpp"
 
 namespace accelcal {
 namespace {

@@ -11,6 +11,7 @@
 #include "accelcal/known_orientation.hpp"
 #include "accelcal/log_reader.hpp"
 #include "accelcal/static_detection.hpp"
+#include "support/paths.hpp"
 
 namespace accelcal {
 namespace {

@@ -16,6 +16,7 @@
 #include "accelcal/orientation_file.hpp"
 #include "accelcal/positions.hpp"
 #include "accelcal/simulate.hpp"
+#include "support/paths.hpp"
 
 namespace accelcal {
 namespace {

@@ -8,6 +8,7 @@
 #include "accelcal/calibrate.hpp"
 #include "accelcal/log_reader.hpp"
 #include "accelcal/static_detection.hpp"
+#include "support/paths.hpp"
 
 namespace accelcal {
 namespace {

@@ -17,6 +17,7 @@
 #include "accelcal/simulate.hpp"
 #include "support/calibration_keys.hpp"
 #include "support/cli_test.hpp"
+#include "support/paths.hpp"
 
 namespace accelcal {
 namespace {

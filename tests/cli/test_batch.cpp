@@ -19,6 +19,7 @@
 #include "accelcal/simulate.hpp"
 #include "accelcal/ulog_writer.hpp"
 #include "support/cli_test.hpp"
+#include "support/paths.hpp"
 
 namespace accelcal {
 namespace {

@@ -25,6 +25,7 @@
 #include "accelcal/series_file.hpp"
 #include "accelcal/simulate.hpp"
 #include "accelcal/static_detection.hpp"
+#include "support/paths.hpp"
 #include "support/sample_noise.hpp"
 
 namespace accelcal {

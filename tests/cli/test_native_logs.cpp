@@ -23,6 +23,7 @@
 #include "io/input_file.hpp"
 #include "io/ulog.hpp"
 #include "support/cli_test.hpp"
+#include "support/paths.hpp"
 
 namespace accelcal::test {
 namespace {

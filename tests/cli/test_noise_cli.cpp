@@ -10,6 +10,7 @@
 
 #include "accelcal/noise_simulation.hpp"
 #include "support/cli_test.hpp"
+#include "support/paths.hpp"
 
 namespace accelcal {
 namespace {

@@ -15,6 +15,7 @@
 #include <thread>
 
 #include "support/cli_test.hpp"
+#include "support/paths.hpp"
 
 extern char** environ;
 

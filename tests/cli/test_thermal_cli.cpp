@@ -20,6 +20,7 @@
 #include "accelcal/ulog_writer.hpp"
 #include "core/text_format.hpp"
 #include "support/cli_test.hpp"
+#include "support/paths.hpp"
 
 namespace accelcal {
 namespace {

@@ -11,6 +11,7 @@
 #include <nlohmann/json.hpp>
 
 #include "support/cli_test.hpp"
+#include "support/paths.hpp"
 
 namespace accelcal {
 namespace {

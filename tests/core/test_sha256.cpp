@@ -9,6 +9,7 @@
 #include <gtest/gtest.h>
 
 #include "accelcal/sha256.hpp"
+#include "support/paths.hpp"
 
 namespace accelcal {
 namespace {
@@ -28,7 +29,8 @@ TEST(Sha256, KnownAnswers) {
 }
 
 TEST(Sha256, BundledRecordingAsSha256sumHasIt) {
-  std::ifstream in(ACCELCAL_DATA_DIR "/imutk-xsens-mti/xsens_acc.mat", std::ios::binary);
+  std::ifstream in(std::string(ACCELCAL_DATA_DIR) + "/imutk-xsens-mti/xsens_acc.mat",
+                   std::ios::binary);
   ASSERT_TRUE(in);
   std::stringstream bytes;
   bytes << in.rdbuf();

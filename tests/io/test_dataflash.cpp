@@ -10,6 +10,7 @@
 #include "io/binary_stream.hpp"
 #include "io/dataflash.hpp"
 #include "io/input_file.hpp"
+#include "support/paths.hpp"
 
 namespace accelcal::internal {
 namespace {

@@ -16,6 +16,7 @@
 #include "accelcal/mat_writer.hpp"
 #include "io/mat_file.hpp"
 #include "io/mat_structure.hpp"
+#include "support/paths.hpp"
 
 namespace accelcal::internal {
 namespace {

@@ -14,6 +14,7 @@
 #include "accelcal/log_reader.hpp"
 #include "accelcal/positions.hpp"
 #include "accelcal/static_detection.hpp"
+#include "support/paths.hpp"
 
 namespace accelcal {
 namespace {

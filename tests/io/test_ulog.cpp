@@ -12,6 +12,7 @@
 #include "io/binary_stream.hpp"
 #include "io/input_file.hpp"
 #include "io/ulog.hpp"
+#include "support/paths.hpp"
 
 namespace accelcal::internal {
 namespace {

@@ -10,6 +10,7 @@
 #include "accelcal/engineering.hpp"
 #include "accelcal/error.hpp"
 #include "support/cli_test.hpp"
+#include "support/paths.hpp"
 
 namespace accelcal {
 namespace {

@@ -14,6 +14,7 @@
 #include "accelcal/error.hpp"
 #include "accelcal/export.hpp"
 #include "accelcal/report.hpp"
+#include "support/paths.hpp"
 
 namespace accelcal {
 namespace {

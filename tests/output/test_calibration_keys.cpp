@@ -16,6 +16,7 @@
 #include "accelcal/export.hpp"
 #include "accelcal/report.hpp"
 #include "support/json_mutations.hpp"
+#include "support/paths.hpp"
 #include "support/use_calibration.hpp"
 
 namespace accelcal::test {

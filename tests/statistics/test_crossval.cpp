@@ -16,6 +16,7 @@
 #include "accelcal/static_detection.hpp"
 #include "statistics/held_out.hpp"
 #include "support/jacobian_check.hpp"
+#include "support/paths.hpp"
 
 namespace accelcal {
 namespace {

@@ -11,6 +11,7 @@
 #include "accelcal/simulate.hpp"
 #include "accelcal/static_detection.hpp"
 #include "statistics/student_t.hpp"
+#include "support/paths.hpp"
 
 namespace accelcal {
 namespace {

@@ -12,6 +12,7 @@
 #include <gtest/gtest.h>
 
 #include "accelcal/simulate.hpp"
+#include "support/paths.hpp"
 
 namespace accelcal::test {
 

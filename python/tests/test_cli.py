@@ -209,8 +209,16 @@ def test_the_documents_tables_are_the_tools_numbers(cal, tmp_path):
 def test_the_calibration_file_commands(cal, tmp_path):
     log = tmp_path / "log.csv"
     log.write_text(tool("simulate", "--scenario", "yang2012", "--raw", "--duration", "3").decode())
-    assert accelcal.cli.export(cal, to="px4", device_id=123, raw_unit="m/s2") == tool(
-        "export", cal, "--to", "px4", "--device-id", "123", "--raw-unit", "m/s2").decode()
+    assert accelcal.cli.export(cal, to="yaml") == tool("export", cal, "--to", "yaml").decode()
+    # The Xsens's counts are no unit PX4 takes, nor m/s2 when said to be (issue 47): refused by
+    # both, with the same reason.
+    for unit, reason in ((None, "calibrate readings in m/s2 or g"),
+                         ("m/s2", "does not fit these readings")):
+        given = ["--raw-unit", unit] if unit else []
+        refused = subprocess.run([CLI, "export", cal, "--to", "px4", *given], capture_output=True)
+        assert refused.returncode == 3 and reason.encode() in refused.stderr, refused.stderr
+        with pytest.raises(accelcal.InputError, match=reason):
+            accelcal.cli.export(cal, to="px4", **({"raw_unit": unit} if unit else {}))
     assert accelcal.cli.report(cal) == tool("report", cal).decode()
     assert accelcal.cli.apply(cal, log) == tool("apply", cal, log).decode()
     corrected = tmp_path / "corrected.csv"

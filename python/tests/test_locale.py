@@ -15,6 +15,7 @@ import accelcal
 
 DATA = os.environ["ACCELCAL_DATA_DIR"]
 XSENS = os.path.join(DATA, "imutk-xsens-mti", "xsens_acc.mat")
+T265 = os.path.join(DATA, "imutk-t265", "t265_acc.mat")
 FORMATS = ["json", "yaml", "kalibr", "px4", "ardupilot", "c-header", "imutk"]
 
 
@@ -32,25 +33,27 @@ def decimal_comma():
 
 
 def exports(text):
-    # raw_unit m/s2: as if the counts were m/s2, so that PX4 and ArduPilot take the calibration;
-    # their scales are then small numbers, like the issue's INS_ACCSCAL_X,0,000208474897.
-    return {f: accelcal.export_calibration(text, f, raw_unit="m/s2") for f in FORMATS}
+    # The T265's readings are in m/s2: PX4 and ArduPilot take its calibration, with scales of
+    # 0.99... and offsets of 0.0... (the issue's INS_ACCSCAL_X,0,000208474897 had a comma).
+    return {f: accelcal.export_calibration(text, f) for f in FORMATS}
 
 
 def test_exports_file_and_report_are_the_same_bytes_in_a_decimal_comma_locale():
     data = accelcal.read_input(XSENS)
     result, positions = accelcal.calibrate_log(XSENS, gravity=9.81744)
     text = result.to_json(positions, raw_units="counts", source="xsens_acc.mat")
-    before = exports(text)
+    t265, t265_positions = accelcal.calibrate_log(T265, gravity=9.8016)
+    t265_text = t265.to_json(t265_positions, raw_units="m/s2", source="t265_acc.mat")
+    before = exports(t265_text)
     html = accelcal.render_report(text, data["samples"], data["time"])
     with decimal_comma():
-        after = exports(text)
+        after = exports(t265_text)
         text_after = result.to_json(positions, raw_units="counts", source="xsens_acc.mat")
         html_after = accelcal.render_report(text, data["samples"], data["time"])
         loaded = accelcal.parse_calibration_json(text)
     assert after == before
-    assert "\nINS_ACCSCAL_X,0.00" in after["ardupilot"]["text"]
-    assert "\t1\tCAL_ACC0_XSCALE\t0.00" in after["px4"]["text"]
+    assert re.search(r"\nINS_ACCSCAL_X,[01]\.[0-9]+\n", after["ardupilot"]["text"])
+    assert re.search(r"\t1\tCAL_ACC0_XSCALE\t[01]\.[0-9]+\t9\n", after["px4"]["text"])
     assert text_after == text
     assert html_after == html
     np.testing.assert_array_equal(loaded.K, result.K)

@@ -439,7 +439,9 @@ void PlausibleScales(const Vec3& scale, const LoadedCalibration& cal, const Expo
 std::optional<std::uint64_t> Px4DeviceId(std::optional<std::uint64_t> given,
                                          const SourceStream* stream) {
   if (given && *given == 0) {
-    throw std::invalid_argument("device id 0 is no sensor's: PX4 gives each sensor a nonzero id");
+    // (No bare "sensor" in an options error: the command line names its option so.)
+    throw std::invalid_argument(
+        "device id 0 is none: PX4 gives every one of its sensors a nonzero id");
   }
   std::optional<std::uint64_t> id = given;
   if (!id && stream != nullptr && stream->device_id != std::optional<std::uint64_t>(0)) {
@@ -484,11 +486,11 @@ int Px4SlotIndex(const char* base, const SourceStream* stream, std::optional<std
   for (int n = 0; n < 4 && wanted; ++n) {
     if (ids[n] != wanted) continue;
     if (given && *given != n) {
-      throw std::invalid_argument(
-          Format("instance %d contradicts the log: its %s%d_ID is the sensor's device id %llu, "
-                 "so PX4 applies %s%d to it (the log's: %s); %s%d would be another slot's",
-                 *given, base, n, static_cast<unsigned long long>(*id), base, n, listed.c_str(),
-                 base, *given));
+      throw std::invalid_argument(Format(
+          "instance %d contradicts the log: its %s%d_ID is the %s's device id %llu, so PX4 "
+          "applies %s%d to it (the log's: %s); %s%d would be another slot's",
+          *given, base, n, std::string_view(base) == "CAL_GYRO" ? "gyroscope" : "accelerometer",
+          static_cast<unsigned long long>(*id), base, n, listed.c_str(), base, *given));
     }
     *why = Format("the log's %s%d_ID is its device id", base, n);
     return n;

@@ -86,28 +86,58 @@ std::vector<double> IntegrationTimes(const RawLog& gyro, const RawLog& accel) {
 constexpr double kSaturationFalseAlarm = 1e-6;
 constexpr std::size_t kSaturatedRun = 3;
 constexpr double kSaturationSteepness = 3.0;
+// An analogue rail is not one value: the readings on it keep a little noise of their own (a few
+// counts where the sensor's is tens), so a rail is also a plateau: readings within
+// kRailBand σ of the axis' extreme, where noise puts a reading with probability at most
+// p = kRailBand/√(2π) (0.1: L ≥ 7 by the rule above). A smooth peak stays near its top too, for
+// longer the finer the sampling, but it is round: the run within the band is then at most
+// 1/√kRailFlatness of the run within kRailFlatness times the band (a parabola's), where a rail,
+// entered and left at the turn's rate, keeps nearly all of it. A plateau is saturation when its
+// run is at least kRailKept of the wider one.
+constexpr double kRailBand = 0.25;
+constexpr double kRailFlatness = 8.0;
+constexpr double kRailKept = 0.6;
 
 struct ClippedRun {
   std::size_t begin = 0, end = 0;  // samples [begin, end)
 };
 
-// A run of at least `min_run` at the extreme, entered or left by a step beyond `steep` (< 0:
-// any) in its two steps before or after.
+// A run of at least `min_run` at the extreme: with `band` 0, of one value, entered or left by a
+// step beyond `steep` (< 0: any) in its two steps before or after; with `band` > 0, of readings
+// within `band` of the extreme, at least kRailKept of the run within kRailFlatness times it.
 std::optional<ClippedRun> FindClippedRun(const std::vector<Vec3>& samples, std::size_t first,
                                          std::size_t last, int axis, double lo, double hi,
-                                         std::size_t min_run, double steep) {
+                                         std::size_t min_run, double steep, double band = 0) {
   if (!(hi > lo)) return std::nullopt;
-  const auto at_extreme = [&](std::size_t k) {
-    return samples[k](axis) == lo || samples[k](axis) == hi;
+  // Within `width` of the extreme the reading at k is at (+1 the top, -1 the bottom, 0 neither).
+  const auto side = [&](std::size_t k, double width) {
+    const double v = samples[k](axis);
+    return v >= hi - width ? 1 : v <= lo + width ? -1 : 0;
   };
   for (std::size_t k = first; k <= last;) {
-    if (!at_extreme(k)) {
+    const int at = side(k, band);
+    if (at == 0) {
       ++k;
       continue;
     }
     std::size_t end = k;
-    while (end <= last && samples[end](axis) == samples[k](axis)) ++end;
+    if (band > 0) {
+      while (end <= last && side(end, band) == at) ++end;
+    } else {
+      while (end <= last && samples[end](axis) == samples[k](axis)) ++end;
+    }
     if (end - k >= min_run) {
+      if (band > 0) {
+        std::size_t wide_begin = k, wide_end = end;
+        while (wide_begin > first && side(wide_begin - 1, kRailFlatness * band) == at) --wide_begin;
+        while (wide_end <= last && side(wide_end, kRailFlatness * band) == at) ++wide_end;
+        if (static_cast<double>(end - k) >=
+            kRailKept * static_cast<double>(wide_end - wide_begin)) {
+          return ClippedRun{k, end};
+        }
+        k = end;
+        continue;
+      }
       // The two steps into the run and the two out of it: the step onto the rail itself is cut
       // short by it (a count, when the reading before fell just below it).
       const auto jump = [&](std::size_t a) {  // from sample a to a + 1
@@ -307,15 +337,21 @@ Built BuildData(const RawLog& accel, const RawLog& gyro, const std::vector<Posit
   // a smooth turn on a quantised axis may repeat its extreme too, but the steps around it are of
   // the noise's and the resolution's size.
   // Per axis, the run at the extreme and the step into or out of it that mark saturation.
-  std::size_t min_run[3];
-  Vec3 steep;
+  // And on an axis whose noise is four resolution steps or more, a plateau (a rail with noise
+  // of its own): `band` its width, `plateau_run` its length.
+  const auto run_for = [](double p) {
+    const double length = 1 + std::log(kSaturationFalseAlarm) / std::log(p);
+    return std::max(kSaturatedRun, static_cast<std::size_t>(std::ceil(length)));
+  };
+  std::size_t min_run[3], plateau_run[3];
+  Vec3 steep, band = Vec3::Zero();
   for (int a = 0; a < 3; ++a) {
     const double sigma = data.noise_sigma_raw(a);
+    plateau_run[a] = run_for(kRailBand / std::sqrt(2 * kPi));
     if (!std::isfinite(quantum(a)) || std::sqrt(2.0) * sigma >= quantum(a)) {
-      const double p = std::min(0.5, quantum(a) / (2 * std::sqrt(kPi) * sigma));
-      const double length = 1 + std::log(kSaturationFalseAlarm) / std::log(p);
-      min_run[a] = std::max(kSaturatedRun, static_cast<std::size_t>(std::ceil(length)));
+      min_run[a] = run_for(std::min(0.5, quantum(a) / (2 * std::sqrt(kPi) * sigma)));
       steep(a) = -1.0;
+      if (!(kRailBand * sigma <= quantum(a))) band(a) = kRailBand * sigma;
     } else {
       min_run[a] = kSaturatedRun;
       steep(a) = kSaturationSteepness * quantum(a);
@@ -378,6 +414,21 @@ Built BuildData(const RawLog& accel, const RawLog& gyro, const std::vector<Posit
                         " to " + std::to_string(next + 1) + " (lines " + LineOf(gyro, run->begin) +
                         "-" + LineOf(gyro, run->end - 1) + " of " + gyro.source +
                         "): it saturated, so the turn's angle is wrong");
+      }
+      if (band(a) > 0) {
+        if (const std::optional<ClippedRun> run = FindClippedRun(
+                gyro.samples, first, last, a, lo(a), hi(a), plateau_run[a], -1.0, band(a))) {
+          const bool top = gyro.samples[run->begin](a) >= hi(a) - band(a);
+          throw DataError(
+              "the gyroscope's " + AxisName(a) + " axis stays within " + Num(band(a), 3) +
+              " (a quarter of its noise) of the log's extreme (" + Num(top ? hi(a) : lo(a), 6) +
+              ") for " + std::to_string(run->end - run->begin) +
+              " samples in a row during the turn from position " + std::to_string(i + 1) + " to " +
+              std::to_string(next + 1) + " (lines " + LineOf(gyro, run->begin) + "-" +
+              LineOf(gyro, run->end - 1) + " of " + gyro.source +
+              "), a flat plateau where a turn's peak is round: it saturated, so the turn's angle "
+              "is wrong");
+        }
       }
     }
     GyroRotation r;

@@ -456,7 +456,8 @@ void BindCalibration(py::module_& m) {
          std::optional<double> instance, const std::string& input_kind, int max_iterations,
          const py::object& gyro_arg, const py::object& gyro_columns_arg,
          const std::string& gyro_units, const std::string& gyro_model,
-         std::optional<std::string> gyro_estimator, std::optional<std::string> topic) {
+         std::optional<std::string> gyro_estimator, std::optional<std::string> topic,
+         std::optional<std::string> frame_id) {
         const std::string path = PathString(path_arg, "calibrate_log");
         const std::vector<std::string> gyro_columns = ColumnList(gyro_columns_arg);
         std::optional<std::string> gyro;
@@ -468,8 +469,9 @@ void BindCalibration(py::module_& m) {
         const StaticDetectionOptions detection_options =
             DetectionOptions(window_s, min_static_s, threshold_factor, init_rest_s);
         const CalibrationOptions options = MakeOptions(s);
-        const ReadOptions read = MakeReadOptions(input_kind, ColumnList(columns), rate_hz,
-                                                 time_unit, instance, std::move(topic));
+        const ReadOptions read =
+            MakeReadOptions(input_kind, ColumnList(columns), rate_hz, time_unit, instance,
+                            std::move(topic), std::move(frame_id));
         // The gyroscope's options, checked as the command line's (its flags named as keywords).
         const bool want_gyro = gyro.has_value() || !gyro_columns.empty();
         GyroCalibrationOptions gyro_options;
@@ -572,7 +574,7 @@ void BindCalibration(py::module_& m) {
       py::arg("max_iterations") = 0, py::arg("gyro") = py::none(),
       py::arg("gyro_columns") = py::tuple(), py::arg("gyro_units") = "raw",
       py::arg("gyro_model") = "auto", py::arg("gyro_estimator") = std::nullopt,
-      py::arg("topic") = std::nullopt,
+      py::arg("topic") = std::nullopt, py::arg("frame_id") = std::nullopt,
       "What `accelcal calibrate INPUT` does, diagnosis included; returns (result, positions) "
       "(no Python warnings: accelcal.calibrate_log adds them)");
 

@@ -399,13 +399,18 @@ std::vector<std::string> ColumnList(const py::handle& columns) {
 
 ReadOptions MakeReadOptions(const std::string& kind, std::vector<std::string> columns,
                             std::optional<double> rate_hz, const std::string& time_unit,
-                            std::optional<double> instance, std::optional<std::string> topic) {
+                            std::optional<double> instance, std::optional<std::string> topic,
+                            std::optional<std::string> frame_id) {
   ReadOptions o;
   o.kind = Parse(InputKindFromString(kind), kind, "input kind");
   o.columns = std::move(columns);
   if (topic) {
     if (topic->empty()) throw py::value_error("topic: an empty name");
     o.topic = *topic;
+  }
+  if (frame_id) {
+    if (frame_id->empty()) throw py::value_error("frame_id: an empty name");
+    o.frame_id = *frame_id;
   }
   CheckRate(rate_hz);
   o.rate_hz = rate_hz;

@@ -69,7 +69,8 @@ StaticDetectionOptions DetectionOptions(double window_s, double min_static_s,
 std::vector<std::string> ColumnList(const py::handle& columns);
 ReadOptions MakeReadOptions(const std::string& kind, std::vector<std::string> columns,
                             std::optional<double> rate_hz, const std::string& time_unit,
-                            std::optional<double> instance, std::optional<std::string> topic);
+                            std::optional<double> instance, std::optional<std::string> topic,
+                            std::optional<std::string> frame_id = std::nullopt);
 
 /// The parts of the module (py_calibration.cpp, py_files.cpp, py_commands.cpp).
 void BindCalibration(py::module_& m);

@@ -157,10 +157,12 @@ void BindFilesAndLogs(py::module_& m) {
       "read_input",
       [](const py::object& path_arg, const std::string& kind, const py::object& columns,
          std::optional<double> rate_hz, const std::string& time_unit,
-         std::optional<double> instance, std::optional<std::string> topic) {
+         std::optional<double> instance, std::optional<std::string> topic,
+         std::optional<std::string> frame_id) {
         const std::string path = PathString(path_arg, "read_input");
-        const ReadOptions options = MakeReadOptions(kind, ColumnList(columns), rate_hz, time_unit,
-                                                    instance, std::move(topic));
+        const ReadOptions options =
+            MakeReadOptions(kind, ColumnList(columns), rate_hz, time_unit, instance,
+                            std::move(topic), std::move(frame_id));
         InputData data;
         {
           py::gil_scoped_release release;
@@ -200,13 +202,15 @@ void BindFilesAndLogs(py::module_& m) {
       py::arg("path"), py::arg("kind") = "auto", py::arg("columns") = py::tuple(),
       py::arg("rate_hz") = std::nullopt, py::kw_only(), py::arg("time_unit") = "auto",
       py::arg("instance") = std::nullopt, py::arg("topic") = std::nullopt,
+      py::arg("frame_id") = std::nullopt,
       "Reads a raw log or a positions file (log_reader.hpp) as `accelcal calibrate` reads it.\n"
       "kind: 'auto', 'raw' or 'positions'; columns: 3 or 4 column numbers or header names; "
       "rate_hz: for logs without a time column (with one it must agree within 5 %); "
       "time_unit: 'auto', 's', 'ms', 'us' or 'ns' (time_axis.hpp); instance: the sensor to keep "
       "of a file whose instance column holds several (a ULog topic's multi id); topic: the "
       "stream of a binary log (a ULog topic, a DataFlash message, a bag's topic) or a "
-      "MAT-file's variable. path '-' reads this process's standard input.\n"
+      "MAT-file's variable; frame_id: of a ROS topic on which several sensors publish, the "
+      "header.frame_id whose messages to read. path '-' reads this process's standard input.\n"
       "A raw log gives {'kind', 'kind_reason', 'samples' (n x 3), 'time' (seconds from the first "
       "sample, or None), 'time_axis', 'rate_hz'}; time_axis is None without a time column, else "
       "{'unit', 'unit_reason', 'origin_s' (the first timestamp in s, as written), "

@@ -70,6 +70,9 @@ void AddInputOptions(CLI::App* cmd, InputArgs* in, bool with_kind) {
                   "the stream to read from a binary log (a ULog topic such as sensor_accel, a "
                   "DataFlash message such as IMU, a ROS 1 or 2 bag's topic; default: its only "
                   "accelerometer stream), or a MAT-file's variable (default: its only matrix)");
+  cmd->add_option("--frame-id", in->frame_id,
+                  "a ROS topic on which several sensors publish (its messages name several "
+                  "header.frame_id): the frame whose messages to read (inspect lists them)");
   cmd->add_option("--temperature-column", in->temperature_column,
                   "the sensor's temperature [degC] with each sample: a column (number or header "
                   "name) or a binary log's field; default: a header column named temperature or "

@@ -72,6 +72,10 @@ ReadOptions MakeReadOptions(const InputArgs& in) {
     if (in.topic->empty()) throw UsageError("--topic: an empty topic name");
     options.topic = *in.topic;
   }
+  if (in.frame_id) {
+    if (in.frame_id->empty()) throw UsageError("--frame-id: an empty frame name");
+    options.frame_id = *in.frame_id;
+  }
   if (in.temperature_column) {
     if (in.temperature_column->empty()) throw UsageError("--temperature-column: an empty name");
     options.temperature = *in.temperature_column;
@@ -166,6 +170,7 @@ InputData ReadGyroLog(const InputArgs& input, const std::string& gyro,
                                {"the columns option", "--gyro-columns"},
                                {"the topic and instance options", "--gyro-topic and --instance"},
                                {"the topic option", "--gyro-topic"},
+                               {"the frame option", "--frame-id"},
                                {"the time unit option", "--time-unit"},
                                {"the rate option", "--rate"},
                                {"the other stream of this file", "the accelerometer"}}));
@@ -334,6 +339,7 @@ std::string WithReaderFlags(const std::string& message) {
                              {"the columns option", "--columns"},
                              {"the topic and instance options", "--topic and --instance"},
                              {"the topic option", "--topic"},
+                             {"the frame option", "--frame-id"},
                              {"the temperature column", "--temperature-column"},
                              {"the temperature option", "--temperature-column"},
                              {"the time unit option", "--time-unit"},

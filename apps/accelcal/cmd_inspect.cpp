@@ -34,7 +34,15 @@ int RunInspect(const InspectArgs& args) {
            {"first_s", s.first_s},
            {"last_s", s.last_s},
            {"rate_hz", s.rate_hz > 0 ? nlohmann::ordered_json(s.rate_hz) : nullptr},
-           {"sensors", s.sensors}});
+           {"sensors", s.sensors},
+           {"unreadable", s.unreadable.empty() ? nlohmann::ordered_json(nullptr)
+                                               : nlohmann::ordered_json(s.unreadable)}});
+      if (s.frames.size() > 1) {
+        nlohmann::ordered_json& frames = streams.back()["frames"] = nlohmann::ordered_json::array();
+        for (const auto& [id, messages] : s.frames) {
+          frames.push_back({{"frame_id", id}, {"messages", messages}});
+        }
+      }
     }
     doc["fields"] = log.fields;
     doc["parameters"] = log.parameters;
@@ -100,6 +108,24 @@ int RunInspect(const InspectArgs& args) {
                     s.instance, s.device_id ? std::to_string(*s.device_id).c_str() : "-", s.samples,
                     s.rate_hz > 0 ? Format("%.4g", s.rate_hz).c_str() : "-", s.first_s, s.last_s,
                     sensors.empty() ? "-" : sensors.c_str());
+    }
+    // What the table cannot say: a topic accelcal cannot decode, several sensors on one topic.
+    for (const LogStreamInfo& s : log.streams) {
+      if (!s.unreadable.empty()) {
+        out += Format("topic %s: accelcal cannot decode its messages: %s\n",
+                      VisibleLine(s.topic).c_str(), VisibleLine(s.unreadable).c_str());
+      }
+      if (s.frames.size() > 1) {
+        std::string frames;
+        for (const auto& [id, messages] : s.frames) {
+          frames += Format("%s'%s' (%zu messages)", frames.empty() ? "" : ", ",
+                           VisibleLine(id).c_str(), messages);
+        }
+        out += Format(
+            "topic %s: its messages name %zu frames (header.frame_id), several sensors on one "
+            "topic: %s; read one with --frame-id NAME\n",
+            VisibleLine(s.topic).c_str(), s.frames.size(), frames.c_str());
+      }
     }
     // A parameter set while the log ran: the values at the start are not the ones in force after.
     for (const LogInventory::ParameterChange& c : log.parameter_changes) {

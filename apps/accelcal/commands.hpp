@@ -62,6 +62,7 @@ struct InputArgs {
   std::string time_unit = "auto";                 // TimeUnit
   std::optional<double> instance;                 // ReadOptions::instance
   std::optional<std::string> topic;               // ReadOptions::topic
+  std::optional<std::string> frame_id;            // ReadOptions::frame_id
   std::optional<std::string> temperature_column;  // ReadOptions::temperature
   /// The gyroscope's topic in a binary log (ReadGyroInput), for the commands that read one.
   std::optional<std::string> gyro_topic;

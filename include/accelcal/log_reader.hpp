@@ -72,6 +72,11 @@ struct ReadOptions {
   /// `instance`). Empty: the log's only stream of `sensor` (KnownStreams), an InputError listing
   /// them when there are several. A text file with a topic given is an InputError.
   std::string topic{};
+  /// A ROS topic whose messages name several `header.frame_id` (several sensors published on one
+  /// topic; MCAP and rosbag2 carry no publisher to tell them apart): the frame whose messages are
+  /// read. Empty: a topic of one frame (one of several is an InputError listing them). Given for
+  /// a stream without frame ids, or naming none of its frames: an InputError.
+  std::string frame_id{};
   /// Whose stream a binary log gives when no topic is given (the gyroscope's for its rates).
   SensorKind sensor = SensorKind::kAccelerometer;
   /// An input that is not a regular file (a pipe, standard input, a device such as /dev/zero) is

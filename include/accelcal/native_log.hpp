@@ -115,11 +115,19 @@ struct LogStreamInfo {
   std::optional<std::uint64_t> device_id;
   /// A ROS topic's `header.frame_id`, of its first message (the frame its readings are in).
   std::optional<std::string> frame_id;
+  /// Every `header.frame_id` its messages name, with how many name it, in the order of their
+  /// first message (up to 64): more than one is several sensors published on one topic, of which
+  /// ReadOptions::frame_id reads one.
+  std::vector<std::pair<std::string, std::size_t>> frames;
   std::size_t samples = 0;
   double first_s = 0, last_s = 0;  ///< timestamps of the first and last message [s]
   double rate_hz = 0;              ///< (samples − 1) / (last − first); 0 when undefined
-  /// The sensors accelcal takes from it by default (KnownStreams), e.g. "accelerometer".
+  /// The sensors accelcal takes from it by default (KnownStreams), e.g. "accelerometer"; none
+  /// when its messages cannot be decoded.
   std::vector<std::string> sensors;
+  /// Why accelcal cannot decode its messages (a ROS topic serialised as JSON, a ros2idl or
+  /// unparsable definition): empty when it can.
+  std::string unreadable;
 };
 
 struct LogInventory {

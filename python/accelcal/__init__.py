@@ -225,7 +225,7 @@ def calibrate_log(path, model="linear", method="joint", frame="x-first", gravity
                   outliers="exclude", outlier_probability=1e-3, max_outliers=3, units=None,
                   time_unit="auto", instance=None, input_kind="auto", max_iterations=0,
                   gyro=None, gyro_columns=(), gyro_units="raw", gyro_model="auto",
-                  gyro_estimator=None, topic=None):
+                  gyro_estimator=None, topic=None, frame_id=None):
     """What ``accelcal calibrate LOG`` does: read, detect the static intervals, average them,
     calibrate with each interval's noise and diagnose (the time column, still periods not used,
     interleaved sensors, the fit). Gives exactly the command line's doubles and diagnosis; with
@@ -239,7 +239,8 @@ def calibrate_log(path, model="linear", method="joint", frame="x-first", gravity
     Options as ``calibrate`` (gravity in ``units``: "m/s2", "g" or None for "g" below 2), and as
     the command line's: columns (--columns: 3 or 4 column numbers from 1 or header names, a list
     or one comma-separated string), topic (--topic: the stream of a binary log, a ULog topic or
-    DataFlash message, or a MAT-file's variable), rate_hz
+    DataFlash message, or a MAT-file's variable), frame_id (--frame-id: of a ROS topic on which
+    several sensors publish, the header.frame_id whose messages to read), rate_hz
     (--rate), time_unit ("auto", "s", "ms", "us", "ns": --time-unit; "auto" decides from the
     column's name and step, time_axis.hpp), instance (--instance: the sensor to keep of a file
     whose instance column holds several), input_kind ("auto", the default as on the command
@@ -270,7 +271,8 @@ def calibrate_log(path, model="linear", method="joint", frame="x-first", gravity
         time_unit=time_unit, instance=instance, input_kind=input_kind,
         max_iterations=max_iterations,
         gyro=gyro, gyro_columns=gyro_columns,
-        gyro_units=gyro_units, gyro_model=gyro_model, gyro_estimator=gyro_estimator, topic=topic)
+        gyro_units=gyro_units, gyro_model=gyro_model, gyro_estimator=gyro_estimator, topic=topic,
+        frame_id=frame_id)
     _emit_diagnosis(result, result.source, stacklevel=2)
     return result, positions
 
@@ -304,9 +306,10 @@ def _bound_doc(function, returns):
 
 
 def read_input(path, kind="auto", columns=(), rate_hz=None, *, time_unit="auto", instance=None,
-               topic=None):
+               topic=None, frame_id=None):
     return Document(_accelcal.read_input(path, kind, columns, rate_hz, time_unit=time_unit,
-                                         instance=instance, topic=topic), "readings")
+                                         instance=instance, topic=topic, frame_id=frame_id),
+                    "readings")
 
 
 read_input.__doc__ = _bound_doc(

@@ -148,7 +148,8 @@ def calibrate_log(path: PathLike, model: str = "linear", method: str = "joint",
                   gyro_columns: Union[str, Sequence[Union[str, int]]] = (),
                   gyro_units: str = "raw", gyro_model: str = "auto",
                   gyro_estimator: Optional[str] = None,
-                  topic: Optional[str] = None) -> Tuple[CalibrationResult, Array]: ...
+                  topic: Optional[str] = None,
+                  frame_id: Optional[str] = None) -> Tuple[CalibrationResult, Array]: ...
 def diagnose(result: CalibrationResult, positions: Optional[ArrayLike] = None,
              units: Optional[str] = None, samples: Optional[ArrayLike] = None,
              time: Optional[ArrayLike] = None, rate_hz: Optional[float] = None,
@@ -166,7 +167,8 @@ def parse_calibration_json(text: str, source: str = "<string>") -> Calibration: 
 def read_input(path: PathLike, kind: str = "auto",
                columns: Union[str, Sequence[Union[str, int]]] = (),
                rate_hz: Optional[float] = None, *, time_unit: str = "auto",
-               instance: Optional[float] = None, topic: Optional[str] = None) -> Document: ...
+               instance: Optional[float] = None, topic: Optional[str] = None,
+               frame_id: Optional[str] = None) -> Document: ...
 def render_report(json_text: str, samples: Optional[ArrayLike] = None,
                   time: Optional[ArrayLike] = None, rate_hz: Optional[float] = None, *,
                   time_unit: str = "s") -> str: ...

@@ -149,7 +149,8 @@ class Fuzzer:
                       init_rest_s=self.scalar(0.0), cross_validate=self.scalar(False),
                       max_outliers=self.scalar(3), units=self.word(None),
                       time_unit=self.word("auto"), instance=self.scalar(None),
-                      input_kind=self.word("raw"), max_iterations=self.scalar(0))
+                      input_kind=self.word("raw"), max_iterations=self.scalar(0),
+                      frame_id=self.word(None))
         return accelcal.calibrate_log(self.choice(PATHS), **self.subset(kwargs))
 
     def diagnose(self):
@@ -165,7 +166,7 @@ class Fuzzer:
     def read_input(self):
         kwargs = dict(kind=self.word("auto"), columns=self.choice([(), ("1", "2", "3"), ("q",)]),
                       rate_hz=self.scalar(None), time_unit=self.word("auto"),
-                      instance=self.scalar(None))
+                      instance=self.scalar(None), frame_id=self.word(None))
         return accelcal.read_input(self.choice(PATHS), **self.subset(kwargs))
 
     def detect(self):

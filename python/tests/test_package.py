@@ -447,3 +447,10 @@ def test_columns_as_numbers_or_one_string_and_a_topic():
     with pytest.raises(accelcal.InputError, match="topic"):
         accelcal.read_input(ulog)
     assert accelcal.read_input(ulog, topic="sensor_accel", instance=0)["samples"].shape[1] == 3
+    # frame_id chooses among a ROS topic's frames: a ULog's topics have none; empty is no name.
+    with pytest.raises(accelcal.InputError, match="messages name no frame"):
+        accelcal.read_input(ulog, topic="sensor_accel", instance=0, frame_id="imu_link")
+    with pytest.raises(ValueError, match="frame_id: an empty name"):
+        accelcal.read_input(ulog, frame_id="")
+    with pytest.raises(accelcal.InputError, match="messages name no frame"):
+        accelcal.calibrate_log(ulog, topic="sensor_accel", instance=0, frame_id="imu_link")

@@ -120,10 +120,14 @@ inline CodePoint DecodeUtf8(std::string_view text, std::size_t i) {
 
 // Whether a code point is a control character or a line or paragraph separator by some reader:
 // C0 and DEL, C1 (U+0085 is YAML 1.1's and Python's "next line"), U+2028 and U+2029, the
-// byte-order mark U+FEFF and the non-characters U+FFFE, U+FFFF (YAML readers refuse them).
+// byte-order mark U+FEFF and the non-characters U+FFFE, U+FFFF (YAML readers refuse them); and
+// the bidirectional controls (Unicode's Bidi_Control: U+061C, U+200E, U+200F, U+202A to U+202E,
+// U+2066 to U+2069), which reorder what a terminal shows after them (a topic named with U+202E
+// shows its name, and the rest of the line, reversed).
 inline bool IsInvisible(long c) {
   return c < 0x20 || (c >= 0x7F && c <= 0x9F) || c == 0x2028 || c == 0x2029 || c == 0xFEFF ||
-         c == 0xFFFE || c == 0xFFFF;
+         c == 0xFFFE || c == 0xFFFF || c == 0x061C || c == 0x200E || c == 0x200F ||
+         (c >= 0x202A && c <= 0x202E) || (c >= 0x2066 && c <= 0x2069);
 }
 
 // What EscapeText writes for what a line (or a quoted string) cannot hold.

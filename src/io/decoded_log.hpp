@@ -29,6 +29,9 @@ struct DecodedStream {
   /// and `log_time`); null where they are known by name (ULog's timestamp and
   /// timestamp_sample, DataFlash's TimeUS and SampleUS).
   std::shared_ptr<const std::vector<std::size_t>> microseconds;
+  /// Why its messages cannot be decoded (a ROS topic's definition that does not parse, a
+  /// serialisation other than ROS's): empty when they can. Keeping such a stream is an error.
+  std::string unreadable;
   std::size_t messages = 0;
   /// The time field [µs] of its first and last message (0 without messages).
   std::uint64_t first_us = 0, last_us = 0;
@@ -36,6 +39,12 @@ struct DecodedStream {
   std::optional<std::uint64_t> device_id;
   /// The `header.frame_id` of its first message (a ROS message with a std_msgs/Header).
   std::optional<std::string> frame_id;
+  /// Every `header.frame_id` its messages name, in the order of their first message, with how
+  /// many messages name it (kMaxFrames at most): several are several sensors published on one
+  /// topic (MCAP and rosbag2 carry no publisher to tell them apart).
+  std::vector<std::pair<std::string, std::size_t>> frames;
+  /// With `kept` and `frames`: each kept message's index into `frames`.
+  std::vector<std::uint32_t> frame_of;
   /// Whether its messages were kept: then `values` holds the `stored` columns of each message
   /// (stored.size() values per message, message after message), and `offset` each message's
   /// byte offset in the file.
@@ -72,6 +81,9 @@ using KeepStream = std::function<bool(const DecodedStream& stream)>;
 /// wanted); without one, all of them. Memory then grows with what is kept, not with the log.
 using StoreColumns = std::function<std::vector<std::size_t>(const DecodedStream& stream)>;
 
+/// A topic whose messages name more frame ids than this is not several sensors on one topic: a
+/// kept one is refused, another's further frames are not listed.
+inline constexpr std::size_t kMaxFrames = 64;
 /// A format's numeric fields beyond this many are not columns (a huge array, arrays of arrays).
 inline constexpr std::size_t kMaxFormatColumns = 4096;
 /// A log whose formats define more columns than this in all is refused: a small file could

@@ -615,6 +615,11 @@ void RefuseTopicOfText(const std::string& source, const ReadOptions& options) {
                      "a topic was given, but this is a text file (its columns are chosen by "
                      "the columns option)");
   }
+  if (!options.frame_id.empty()) {
+    throw InputError(source, 0,
+                     "a frame was given, but this is a text file: the frame option chooses among "
+                     "a ROS topic's header.frame_id");
+  }
 }
 
 // A MAT-file's matrix, read as the same numbers written as text would be (its rows the lines,
@@ -625,6 +630,11 @@ InputData ReadMat(internal::InputFile& file, const std::string& path, std::strin
     throw InputError(file.name(), 0,
                      "a MAT-file is read from its file (libmatio opens it by its path), not from "
                      "standard input, a pipe or a device");
+  }
+  if (!options.frame_id.empty()) {
+    throw InputError(file.name(), 0,
+                     "a frame was given, but this is a MAT-file: the frame option chooses among a "
+                     "ROS topic's header.frame_id");
   }
   const internal::MatTable table = internal::ReadMatTable(path, options.topic);
   std::size_t row = 0, column = 0;

@@ -171,13 +171,17 @@ LogStreamInfo Describe(const internal::DecodedStream& s) {
   info.instance = s.instance;
   info.device_id = s.device_id;
   info.frame_id = s.frame_id;
+  info.frames = s.frames;
   info.samples = s.messages;
   info.first_s = static_cast<double>(s.first_us) / 1e6;
   info.last_s = static_cast<double>(s.last_us) / 1e6;
   if (s.messages >= 2 && s.last_us > s.first_us) {
     info.rate_hz = static_cast<double>(s.messages - 1) / (info.last_s - info.first_s);
   }
-  for (std::string_view sensor : KnownSensors(s.type)) info.sensors.emplace_back(sensor);
+  info.unreadable = s.unreadable;
+  if (s.unreadable.empty()) {
+    for (std::string_view sensor : KnownSensors(s.type)) info.sensors.emplace_back(sensor);
+  }
   return info;
 }
 
@@ -440,6 +444,63 @@ const char* FormatName(LogFormat format) {
   return "a text log";
 }
 
+// Several sensors published on one ROS topic, told apart by header.frame_id alone (MCAP and
+// rosbag2 carry no publisher): the messages of the frame `options` names, else the refusal that
+// lists the frames (read as one they would be one sensor at twice the rate, its bias their mean).
+void ChooseFrame(internal::DecodedStream* s, const ReadOptions& options,
+                 const std::string& source) {
+  std::string listed;
+  for (const auto& [id, messages] : s->frames) {
+    listed +=
+        Format("%s'%s' (%zu messages)", listed.empty() ? "" : ", ", Shown(id).c_str(), messages);
+  }
+  if (options.frame_id.empty()) {
+    if (s->frames.size() <= 1) return;
+    throw InputError(source, 0,
+                     Format("%s's messages name %zu frames (header.frame_id): %s: several "
+                            "sensors published on one topic, which read as one would mix their "
+                            "readings; choose one with the frame option",
+                            Shown(s->topic).c_str(), s->frames.size(), listed.c_str()));
+  }
+  if (s->frames.empty()) {
+    throw InputError(source, 0,
+                     Shown(s->topic) +
+                         "'s messages name no frame (header.frame_id): the frame option chooses "
+                         "among a ROS topic's frames");
+  }
+  std::size_t wanted = s->frames.size();
+  for (std::size_t k = 0; k < s->frames.size(); ++k) {
+    if (s->frames[k].first == options.frame_id) wanted = k;
+  }
+  if (wanted == s->frames.size()) {
+    throw InputError(
+        source, 0,
+        Format("no message of %s names the frame '%s' (its frames: %s)", Shown(s->topic).c_str(),
+               Shown(options.frame_id).c_str(), listed.c_str()));
+  }
+  if (s->frames.size() == 1) return;
+  if (s->frame_of.size() != s->messages) {
+    throw InputError(source, 0,
+                     Shown(s->topic) +
+                         ": the header.frame_id of some of its messages does not "
+                         "read, so its frames cannot be told apart");
+  }
+  const std::size_t width = s->stored.size();
+  std::size_t kept = 0;
+  for (std::size_t i = 0; i < s->messages; ++i) {
+    if (s->frame_of[i] != wanted) continue;
+    std::copy_n(s->values.begin() + static_cast<std::ptrdiff_t>(i * width), width,
+                s->values.begin() + static_cast<std::ptrdiff_t>(kept * width));
+    s->offset[kept++] = s->offset[i];
+  }
+  s->values.resize(kept * width);
+  s->offset.resize(kept);
+  s->frame_of.assign(kept, static_cast<std::uint32_t>(wanted));
+  s->messages = kept;
+  s->frame_id = options.frame_id;
+  s->frames = {s->frames[wanted]};
+}
+
 // A binary log's format, from its first bytes in `in`.
 LogFormat FormatOf(BinaryStream& in) {
   in.Need(16);
@@ -505,8 +566,8 @@ InputData ReadNativeLog(BinaryStream& in, InputFile* file, const ReadOptions& op
   if (options.fingerprint && file != nullptr) RequireUnchanged(*file);
   const std::string cut = log.truncated ? "; " + *log.truncated : std::string();
   // The stream: the topic's (and instance's) with messages.
-  std::vector<const DecodedStream*> candidates;
-  for (const DecodedStream& s : log.streams) {
+  std::vector<DecodedStream*> candidates;
+  for (DecodedStream& s : log.streams) {
     if (!s.kept || s.messages == 0) continue;
     if (options.instance && static_cast<double>(s.instance) != *options.instance) continue;
     candidates.push_back(&s);
@@ -537,6 +598,7 @@ InputData ReadNativeLog(BinaryStream& in, InputFile* file, const ReadOptions& op
                      "several " + what + "s:" + list.substr(1) +
                          "; choose one with the topic and instance options");
   }
+  ChooseFrame(candidates.front(), options, source);
   const DecodedStream& s = *candidates.front();
   const Chosen chosen = Choose(s, options, Known(s.type, sensor), source);
   if (s.stored != Stored(chosen)) {
@@ -691,18 +753,33 @@ InputData ReadNativeLog(BinaryStream& in, InputFile* file, const ReadOptions& op
     stream.unit = std::string(known->unit);
   }
   stream.calibration_in_force = CalibrationInForce(log, s, sensor, source);
-  if (s.microseconds && chosen.time && (*s.columns)[*chosen.time] != internal::kLogTime &&
-      raw.time_s.size() >= 2 && raw.time_s.front() == raw.time_s.back() &&
+  if (microseconds && raw.time_s.size() >= 2 && raw.time_s.front() == raw.time_s.back() &&
       std::is_sorted(raw.time_s.begin(), raw.time_s.end())) {
-    // A driver that does not stamp its messages: the time they were logged is the one there is.
+    // A driver that does not stamp its samples (a ROS publisher's header.stamp, a PX4 driver's
+    // timestamp_sample left 0): another time the stream has is the one there is, the time the
+    // recorder logged each message (ROS's log_time, ULog's timestamp, DataFlash's TimeUS).
+    const std::string& field = (*s.columns)[*chosen.time];
+    std::string other;
+    for (const char* candidate : {internal::kLogTime, "timestamp", "TimeUS", "SampleUS"}) {
+      const std::optional<std::size_t> c = Find(s, candidate);
+      if (other.empty() && c && *c != *chosen.time && IsMicrosecondColumn(s, *c)) other = candidate;
+    }
+    const std::string axes = (*s.columns)[chosen.axis[0]] + "," + (*s.columns)[chosen.axis[1]] +
+                             "," + (*s.columns)[chosen.axis[2]];
     throw InputError(
         source, 0,
-        Format("%s's %s is the same in every message (%.17g us): its publisher does not stamp "
-               "them; read the time the recorder logged each with the columns option (%s,%s,%s,"
-               "%s)",
-               Shown(s.topic).c_str(), (*s.columns)[*chosen.time].c_str(), raw.time_s.front(),
-               internal::kLogTime, (*s.columns)[chosen.axis[0]].c_str(),
-               (*s.columns)[chosen.axis[1]].c_str(), (*s.columns)[chosen.axis[2]].c_str()));
+        Format("%s's %s is the same in every message (%.17g us): the sensor's driver does not "
+               "stamp them; %s",
+               Shown(s.topic).c_str(), field.c_str(), raw.time_s.front(),
+               other.empty()
+                   ? Format("name a time that changes with the columns option (time,%s), or "
+                            "give the rate option",
+                            axes.c_str())
+                         .c_str()
+                   : Format("read the time the recorder logged each with the columns option "
+                            "(%s,%s)",
+                            other.c_str(), axes.c_str())
+                         .c_str()));
   }
   FinishRawLog(&raw, microseconds ? TimeUnit::kMicroseconds : options.time_unit, options.rate_hz,
                chosen.time ? std::string_view((*s.columns)[*chosen.time]) : std::string_view());

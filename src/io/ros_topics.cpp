@@ -83,6 +83,7 @@ std::size_t RosTopics::Add(const std::string& topic, const std::string& type,
     s.microseconds = layout.microseconds;
   } else {
     s.columns = std::make_shared<const std::vector<std::string>>();
+    s.unreadable = unreadable.empty() ? "its type is not known" : unreadable;
   }
   columns_ += s.columns->size();
   if (columns_ > kMaxLogColumns) {
@@ -115,10 +116,29 @@ std::optional<std::string> RosTopics::Message(std::size_t stream, std::uint64_t 
                                               const unsigned char* data, std::size_t n,
                                               std::uint64_t at) {
   DecodedStream& s = out_->streams[stream];
-  if (s.messages == 0) {
-    s.first_us = time_us;
-    if (types_[stream] != nullptr) s.frame_id = types_[stream]->FrameId(data, n);
+  // Every message's frame: two sensors published on one topic differ by it alone.
+  std::optional<std::size_t> frame;
+  if (types_[stream] != nullptr) {
+    if (const std::optional<std::string> id = types_[stream]->FrameId(data, n)) {
+      if (s.messages == 0) s.frame_id = id;
+      for (std::size_t k = 0; k < s.frames.size() && !frame; ++k) {
+        if (s.frames[k].first == *id) frame = k;
+      }
+      if (!frame && s.frames.size() < kMaxFrames) {
+        frame = s.frames.size();
+        s.frames.emplace_back(*id, 0);
+      }
+      if (frame) {
+        ++s.frames[*frame].second;
+      } else if (s.kept) {
+        return Format(
+            "%s names more than %zu frame ids (header.frame_id): no recording publishes "
+            "that many sensors on one topic",
+            VisibleLine(s.topic).c_str(), kMaxFrames);
+      }
+    }
   }
+  if (s.messages == 0) s.first_us = time_us;
   s.last_us = time_us;
   ++s.messages;
   if (!s.kept) return std::nullopt;
@@ -130,6 +150,7 @@ std::optional<std::string> RosTopics::Message(std::size_t stream, std::uint64_t 
   scratch_.back() = static_cast<double>(time_us);  // log_time
   for (std::size_t col : s.stored) s.values.push_back(scratch_[col]);
   s.offset.push_back(at);
+  if (frame) s.frame_of.push_back(static_cast<std::uint32_t>(*frame));
   return std::nullopt;
 }
 

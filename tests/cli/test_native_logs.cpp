@@ -80,6 +80,37 @@ TEST_F(NativeLogTest, ULogCalibratesToTheSameBytesAsItsSamplesAsCsv) {
   EXPECT_NE(u.out.find("time in us"), std::string::npos) << u.out;
 }
 
+// A PX4 driver that leaves timestamp_sample 0 (issue 47): the refusal names the field and the
+// time the logger stamped each message (timestamp), which then reads the session as it is.
+TEST_F(NativeLogTest, ULogWithoutSampleTimesSuggestsItsTimestamp) {
+  ModelParameters truth;
+  truth.K = Vec3(1.002, 0.998, 1.001).asDiagonal();
+  truth.bias = Vec3(0.05, -0.03, 0.08);
+  RawLogSimulation sim;
+  sim.static_s = 2.0;
+  sim.transition_s = 1.0;
+  sim.sigma_raw_per_sample = Vec3::Constant(1e-3);  // some noise: detection needs it
+  const ULogImuWriter writer;
+  std::string ulog = writer.Header();
+  SimulateRawLog(truth, 9.81, Yang18Directions(), sim, [&](double t, const Vec3& a) {
+    std::string message = writer.Accel(static_cast<std::uint64_t>(std::llround(t * 1e6)), a);
+    // size (2), type (1), msg_id (2), timestamp (8), then timestamp_sample (8): zeroed.
+    std::fill(message.begin() + 13, message.begin() + 21, '\0');
+    ulog += message;
+  });
+  Write("z.ulg", ulog);
+  CliRun e = Exec("calibrate " + Path("z.ulg") + " --gravity 9.81 -q -o " + Path("z.json"));
+  EXPECT_EQ(e.status, 3);
+  EXPECT_NE(e.err.find("sensor_accel's timestamp_sample is the same in every message (0 us): the "
+                       "sensor's driver does not stamp them; read the time the recorder logged "
+                       "each with --columns (timestamp,x,y,z)"),
+            std::string::npos)
+      << e.err;
+  e = Exec("calibrate " + Path("z.ulg") + " --gravity 9.81 --columns timestamp,x,y,z -q -o " +
+           Path("z.json"));
+  EXPECT_EQ(e.status, 0) << e.err;
+}
+
 // The gyroscope too: an IMU session (accelerometer and gyroscope, Xsens-like counts, noise) as a
 // ULog with sensor_accel and sensor_gyro, and as two CSVs of the same float32 samples; the joint
 // calibration from the one and from the others is the same, byte for byte.
@@ -468,6 +499,7 @@ TEST_F(NativeLogTest, Px4ExportNamesTheSensorByItsDeviceId) {
   RawLogSimulation sim;
   sim.static_s = 2.0;
   sim.transition_s = 1.0;
+  sim.sigma_raw_per_sample = Vec3::Constant(1e-3);  // some noise: detection needs it
   const ULogImuWriter writer;
   std::string ulog = writer.Header();
   SimulateRawLog(truth, 9.81, Yang18Directions(), sim, [&](double t, const Vec3& a) {
@@ -531,13 +563,19 @@ TEST_F(NativeLogTest, Px4ExportTakesTheSlotTheLogGivesTheSensor) {
   RawLogSimulation sim;
   sim.static_s = 2.0;
   sim.transition_s = 1.0;
+  sim.sigma_raw_per_sample = Vec3::Constant(1e-3);  // m/s²: some noise, detection needs it
+  GyroSimulation gyro;                              // rad/s, as PX4's sensor_gyro, with an offset
+  gyro.truth.bias = Vec3(0.01, -0.02, 0.005);
+  gyro.sigma_raw_per_sample = Vec3::Constant(1e-3);
+  const SimulatedImuLog imu = SimulateImuLog(truth, 9.81, Yang18Directions(), sim, gyro);
   const ULogImuWriter writer(1, true, 9);  // accelerometer device 1, gyroscope device 9
   const auto session = [&](const std::string& parameters) {
     std::string ulog = writer.Header(parameters);
-    SimulateRawLog(truth, 9.81, Yang18Directions(), sim, [&](double t, const Vec3& a) {
-      const auto t_us = static_cast<std::uint64_t>(std::llround(t * 1e6));
-      ulog += writer.Accel(t_us, a) + writer.Gyro(t_us, Vec3(0.01, -0.02, 0.005));
-    });
+    for (std::size_t k = 0; k < imu.time_s.size(); ++k) {
+      const auto t_us = static_cast<std::uint64_t>(std::llround(imu.time_s[k] * 1e6));
+      ulog += writer.Accel(t_us, imu.accel[k]);
+      ulog += writer.Gyro(t_us, imu.gyro[k]);
+    }
     return ulog;
   };
   Write("slot.ulg", session(ULogImuWriter::Parameter("CAL_ACC0_ID", 2) +
@@ -560,14 +598,20 @@ TEST_F(NativeLogTest, Px4ExportTakesTheSlotTheLogGivesTheSensor) {
       << e.out;
   EXPECT_NE(e.out.find("1\t1\tCAL_GYRO2_ID\t9\t6\n"), std::string::npos) << e.out;
   EXPECT_NE(e.out.find("1\t1\tCAL_GYRO2_XOFF\t"), std::string::npos) << e.out;
-  // The slot given agrees: the same file; it contradicts the log: refused, with the reason.
-  EXPECT_EQ(Exec("export " + Path("s.json") + " --to px4 --instance 1").out, e.out);
+  // A slot given that contradicts the log's, for either sensor: refused, with the reason (one
+  // --instance is both sensors' slot; without it each takes its own).
   e = Exec("export " + Path("s.json") + " --to px4 --instance 0");
   EXPECT_EQ(e.status, 2);
   EXPECT_EQ(e.out, "");
-  EXPECT_NE(e.err.find("--instance 0 contradicts the log: its CAL_ACC1_ID is the sensor's device "
-                       "id 1, so PX4 applies CAL_ACC1 to it (the log's: CAL_ACC0_ID 2, "
+  EXPECT_NE(e.err.find("--instance 0 contradicts the log: its CAL_ACC1_ID is the accelerometer's "
+                       "device id 1, so PX4 applies CAL_ACC1 to it (the log's: CAL_ACC0_ID 2, "
                        "CAL_ACC1_ID 1)"),
+            std::string::npos)
+      << e.err;
+  e = Exec("export " + Path("s.json") + " --to px4 --instance 1");
+  EXPECT_EQ(e.status, 2);
+  EXPECT_NE(e.err.find("--instance 1 contradicts the log: its CAL_GYRO2_ID is the gyroscope's "
+                       "device id 9"),
             std::string::npos)
       << e.err;
   // No slot of the log holds the sensor: the first free one, said.
@@ -649,8 +693,11 @@ TEST_F(NativeLogTest, DataFlashParametersAreThoseInForceAtTheSamples) {
       0);
   const nlohmann::json cal = nlohmann::json::parse(Slurp(Path("b.json")));
   const nlohmann::json& in_force = cal["provenance"]["inputs"][0]["stream"]["calibration_in_force"];
-  EXPECT_FLOAT_EQ(in_force["INS_ACCOFFS_X"].get<double>(), static_cast<float>(o_old(0)));
-  EXPECT_FLOAT_EQ(in_force["INS_ACCSCAL_X"].get<double>(), static_cast<float>(s_old(0)));
+  // The log holds float32 values: the doubles they are.
+  EXPECT_EQ(in_force["INS_ACCOFFS_X"].get<double>(),
+            static_cast<double>(static_cast<float>(o_old(0))));
+  EXPECT_EQ(in_force["INS_ACCSCAL_X"].get<double>(),
+            static_cast<double>(static_cast<float>(s_old(0))));
   EXPECT_EQ(in_force["INS_TCAL1_ENABLE"], 0);
   EXPECT_EQ(in_force["INS_TCAL1_ACC1_X"], 3000);
   CliRun e = Exec("export " + Path("b.json") + " --to ardupilot -o " + Path("e.param"));
@@ -687,6 +734,120 @@ TEST_F(NativeLogTest, DataFlashParametersAreThoseInForceAtTheSamples) {
   EXPECT_EQ(
       Exec("calibrate " + Path("gyro.bin") + " --gravity 9.80665 -q -o " + Path("g.json")).status,
       0);
+}
+
+// Two IMUs published on one ROS topic, told apart by header.frame_id alone (issue 47: read as one
+// 200 Hz sensor, verdict ok, the bias the mean of the two): inspect lists the frames, calibrate
+// refuses the topic naming them, and --frame-id reads one sensor, whose bias is its own.
+TEST_F(NativeLogTest, TwoSensorsOnOneRosTopicAreToldApartByFrame) {
+  RawLogSimulation sim;
+  sim.static_s = 2.0;
+  sim.transition_s = 1.0;
+  sim.sigma_raw_per_sample = Vec3::Constant(0.01);
+  ModelParameters a, b;
+  a.bias = Vec3(0.30, -0.10, 0.05);
+  b.bias = Vec3(-0.20, 0.25, -0.15);
+  const SimulatedLog la = SimulateRawLog(a, 9.80665, Yang18Directions(), sim);
+  sim.seed = 2;
+  const SimulatedLog lb = SimulateRawLog(b, 9.80665, Yang18Directions(), sim);
+  ASSERT_EQ(la.samples.size(), lb.samples.size());
+  RosBagImuWriter writer;
+  std::string bytes = writer.Header();
+  for (std::size_t i = 0; i < la.samples.size(); ++i) {
+    const auto ns = 1700000000000000000ull + static_cast<std::uint64_t>(1e9 * la.time_s[i]);
+    bytes += writer.Sample(ns, la.samples[i]);  // a's first: the order the frames are named in
+    bytes += writer.Sample(ns + 1000000, lb.samples[i]);
+  }
+  bytes += writer.Finish();
+  const std::string indexed = writer.IndexedHeader();
+  bytes.replace(RosBagImuWriter::kHeaderOffset, indexed.size(), indexed);
+  // The writer names every message's frame imu_link: sensor a's become imu_000a, b's imu_000b
+  // (the same length, in a ROS 1 bag's uncompressed bytes, in the messages' order).
+  std::size_t k = 0;
+  for (std::size_t at = bytes.find("imu_link"); at != std::string::npos;
+       at = bytes.find("imu_link", at + 8), ++k) {
+    bytes.replace(at, 8, k % 2 == 0 ? "imu_000a" : "imu_000b");
+  }
+  ASSERT_EQ(k, 2 * la.samples.size());
+  Write("two.bag", bytes);
+  const std::string n = std::to_string(la.samples.size());
+  const std::string frames = "'imu_000a' (" + n + " messages), 'imu_000b' (" + n + " messages)";
+  CliRun e = Exec("inspect " + Path("two.bag"));
+  ASSERT_EQ(e.status, 0) << e.err;
+  EXPECT_NE(e.out.find("topic /imu/data: its messages name 2 frames (header.frame_id), several "
+                       "sensors on one topic: " +
+                       frames + "; read one with --frame-id NAME"),
+            std::string::npos)
+      << e.out;
+  const nlohmann::json listed =
+      nlohmann::json::parse(Exec("inspect --json " + Path("two.bag")).out);
+  EXPECT_EQ(listed["streams"][0]["frames"][1]["frame_id"], "imu_000b");
+  EXPECT_EQ(listed["streams"][0]["frames"][1]["messages"], la.samples.size());
+  e = Exec("calibrate " + Path("two.bag") + " -q -o " + Path("two.json"));
+  EXPECT_EQ(e.status, 3);
+  EXPECT_NE(e.err.find("/imu/data's messages name 2 frames (header.frame_id): " + frames +
+                       ": several sensors published on one topic, which read as one would mix "
+                       "their readings; choose one with --frame-id"),
+            std::string::npos)
+      << e.err;
+  for (const char* frame : {"imu_000a", "imu_000b"}) {
+    SCOPED_TRACE(frame);
+    e = Exec("calibrate " + Path("two.bag") + " --frame-id " + frame + " -q -o " + Path("f.json"));
+    ASSERT_EQ(e.status, 0) << e.err;
+    const nlohmann::json cal = nlohmann::json::parse(Slurp(Path("f.json")));
+    const Vec3& bias = std::string(frame) == "imu_000a" ? a.bias : b.bias;
+    for (int i = 0; i < 3; ++i) {
+      // σ of a bias from 18 positions of 200 samples at 0.01: about 0.0003; 0.01 is 30 of them
+      // and a fifth of the two sensors' smallest difference.
+      EXPECT_NEAR(cal["sensors"]["accelerometer"]["bias"][i].get<double>(), bias(i), 0.01);
+    }
+  }
+  e = Exec("calibrate " + Path("two.bag") + " --frame-id imu_000c -q -o " + Path("c.json"));
+  EXPECT_EQ(e.status, 3);
+  EXPECT_NE(
+      e.err.find("no message of /imu/data names the frame 'imu_000c' (its frames: " + frames + ")"),
+      std::string::npos)
+      << e.err;
+  // A ULog's topics have no frame; a text file neither.
+  e = Exec("calibrate " + kSmall + " --topic sensor_accel --instance 0 --frame-id imu_000a -q -o " +
+           Path("u.json"));
+  EXPECT_EQ(e.status, 3);
+  EXPECT_NE(e.err.find("sensor_accel's messages name no frame (header.frame_id)"),
+            std::string::npos)
+      << e.err;
+  Write("t.csv", "t,x,y,z\n0,0,0,9.8\n0.01,0,0,9.8\n");
+  e = Exec("calibrate " + Path("t.csv") + " --frame-id imu_000a -q -o " + Path("t.json"));
+  EXPECT_EQ(e.status, 3);
+  EXPECT_NE(e.err.find("a frame was given, but this is a text file"), std::string::npos) << e.err;
+}
+
+// A topic accelcal cannot decode (issue 47: inspect listed a JSON channel as read, with its
+// sensors, and calibrate then refused it): inspect says why, and lists no sensor for it.
+TEST_F(NativeLogTest, InspectSaysWhyATopicCannotBeRead) {
+  McapImuWriter writer(McapCompression::kNone, "/imu");
+  std::string bytes = writer.Header();
+  // The Channel record ends the header: its message encoding "cdr" made another.
+  const std::size_t at = bytes.rfind("cdr");
+  ASSERT_NE(at, std::string::npos);
+  bytes.replace(at, 3, "cbr");
+  for (int k = 0; k < 50; ++k) {
+    bytes += writer.Sample(1000000000ull + 10000000ull * std::uint64_t(k), Vec3(0, 0, 9.81));
+  }
+  bytes += writer.Finish();
+  Write("cbr.mcap", bytes);
+  CliRun e = Exec("inspect " + Path("cbr.mcap"));
+  ASSERT_EQ(e.status, 0) << e.err;
+  EXPECT_NE(e.out.find("topic /imu: accelcal cannot decode its messages: its messages are cbr of a "
+                       "ros2msg schema"),
+            std::string::npos)
+      << e.out;
+  EXPECT_EQ(e.out.find("accelerometer"), std::string::npos) << e.out;
+  const nlohmann::json doc = nlohmann::json::parse(Exec("inspect --json " + Path("cbr.mcap")).out);
+  EXPECT_TRUE(doc["streams"][0]["sensors"].empty());
+  EXPECT_NE(doc["streams"][0]["unreadable"].get<std::string>().find("cbr"), std::string::npos);
+  e = Exec("calibrate " + Path("cbr.mcap") + " --topic /imu -q -o " + Path("c.json"));
+  EXPECT_EQ(e.status, 3);
+  EXPECT_NE(e.err.find("accelcal cannot decode the topic /imu"), std::string::npos) << e.err;
 }
 
 // PX4's other accelerometer topics, written here as PX4 lays them out (ULog specification):

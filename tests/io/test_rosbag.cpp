@@ -637,11 +637,12 @@ TEST(RosBag, AnUnstampedTopicIsNamedAndItsLogTimeOffered) {
     ParseInput(bag, "u.bag", options);
     ADD_FAILURE() << "read";
   } catch (const InputError& e) {
-    EXPECT_NE(std::string(e.what()).find(
-                  "/imu's header.stamp is the same in every message (0 us): its publisher does "
-                  "not stamp them; read the time the recorder logged each with the columns "
-                  "option (log_time,x,y,z)"),
-              std::string::npos)
+    EXPECT_NE(
+        std::string(e.what()).find(
+            "/imu's header.stamp is the same in every message (0 us): the sensor's driver does "
+            "not stamp them; read the time the recorder logged each with the columns "
+            "option (log_time,x,y,z)"),
+        std::string::npos)
         << e.what();
   }
   options.columns = {"log_time", "x", "y", "z"};

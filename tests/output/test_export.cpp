@@ -578,6 +578,14 @@ TEST(Export, VisibleLineEscapesWhatWouldBreakALine) {
   EXPECT_EQ(VisibleLine(std::string("\x01\x1b\x7f", 3)), "\\x01\\x1B\\x7F");
   EXPECT_EQ(VisibleLine("\xc2\x85\xc2\x9f\xe2\x80\xa8\xe2\x80\xa9\xef\xbb\xbf\xef\xbf\xbf"),
             "\\x85\\x9F\\u2028\\u2029\\uFEFF\\uFFFF");
+  // The bidirectional controls, which reorder what a terminal shows after them (issue 47: a topic
+  // named with U+202E in inspect's listing and the PX4 export's comment): U+061C, U+200E,
+  // U+200F, U+202A to U+202E, U+2066 to U+2069; their neighbours U+202F, U+2065, U+206A kept.
+  EXPECT_EQ(VisibleLine("a\xe2\x80\xae"
+                        "b\xd8\x9c\xe2\x80\x8e\xe2\x80\x8f\xe2\x80\xaa\xe2\x81\xa6\xe2\x81\xa9"),
+            "a\\u202Eb\\u061C\\u200E\\u200F\\u202A\\u2066\\u2069");
+  const std::string neighbours = "\xe2\x80\xaf\xe2\x81\xa5\xe2\x81\xaa\xe2\x80\x8d";
+  EXPECT_EQ(VisibleLine(neighbours), neighbours);
   // Bytes that are no UTF-8: a lone continuation, a truncated sequence, an overlong '/', a
   // surrogate.
   EXPECT_EQ(VisibleLine("\x80 \xe2\x80 \xc0\xaf \xed\xa0\x80"),

@@ -111,12 +111,13 @@ TEST(BiasCorrection, ReachesTheBoundOnPaper001WhereMaximumLikelihoodIsBiased) {
   // (seed 7): bias-corrected RMSE/CRLB 1.004-1.047 for all nine parameters, diag(T) bias within
   // its standard error; maximum likelihood: RMSE/CRLB of K_xx 1.36, bias ≈ σ²/T_ii. 2000 runs give
   // each ratio a sampling error of 1/√4000 = 1.6 %, so the bound 1.1 is 3 of those above
-  // the largest measured ratio. Under the sanitizers (ten times slower) 500 runs, the bounds
-  // widened by the larger sampling error: 1.047 + 3/√(2·runs), and the coverage's ±2 % by
-  // √(2000/runs).
+  // the largest measured ratio. Under the sanitizers (ten times slower: 281 s at 500 runs) 250
+  // runs, the bounds widened by the larger sampling error: 1.047 + 3/√(2·runs), the coverage's
+  // ±2 % by √(2000/runs), and maximum likelihood's ratio of 1.36 lowered by the same 3 sampling
+  // errors (1.25 from 2000 runs, 1.18 from 250).
   const Scenario s = *ScenarioByName("sunxu2020");
   MonteCarloOptions o;
-  o.runs = ACCELCAL_TESTS_SANITIZED ? 500 : 2000;
+  o.runs = ACCELCAL_TESTS_SANITIZED ? 250 : 2000;
   const double runs = o.runs;
   const double rmse_bound = std::max(1.1, 1.047 + 3 / std::sqrt(2 * runs));
   o.calibration.estimator = Estimator::kBiasCorrected;
@@ -138,7 +139,8 @@ TEST(BiasCorrection, ReachesTheBoundOnPaper001WhereMaximumLikelihoodIsBiased) {
   const MonteCarloResult ml = RunMonteCarlo(s, o);
   double worst_ml = 0;
   for (const ErrorStatistics& e : ml.errors) worst_ml = std::max(worst_ml, e.rmse_ratio);
-  EXPECT_GT(worst_ml, 1.25);  // the bias the correction removes
+  // The bias the correction removes.
+  EXPECT_GT(worst_ml, std::min(1.25, 1.36 * (1 - 3 / std::sqrt(2 * runs))));
 }
 
 TEST(BiasCorrection, NegligibleAtNavigationGradeNoiseAndRefusedForNonMlMethods) {

@@ -60,18 +60,21 @@ Recording Recorded(const SimulatedImuLog& log, double rate_hz) {
   return r;
 }
 
+// Yang's accelerometer (1 count of noise) and `truth`'s gyroscope turned through `directions`
+// (Yang's 18 by default), 4 s still and 3 s turning each, at `rate_hz` (0: the simulator's).
 Recording Simulate(std::uint64_t seed, double gyro_sigma,
-                   const GyroParameters& truth = XsensLikeGyro()) {
+                   const GyroParameters& truth = XsensLikeGyro(), double rate_hz = 0,
+                   const std::vector<Vec3>& directions = Yang18Directions()) {
   RawLogSimulation options;
   options.static_s = 4.0;
   options.transition_s = 3.0;
   options.sigma_raw_per_sample = Vec3::Constant(1.0);
   options.seed = seed;
+  if (rate_hz > 0) options.rate_hz = rate_hz;
   GyroSimulation gyro;
   gyro.truth = truth;
   gyro.sigma_raw_per_sample = Vec3::Constant(gyro_sigma);
-  return Recorded(SimulateImuLog(Yang2012Truth(), kG, Yang18Directions(), options, gyro),
-                  options.rate_hz);
+  return Recorded(SimulateImuLog(Yang2012Truth(), kG, directions, options, gyro), options.rate_hz);
 }
 
 TEST(GyroMonteCarlo, RmsErrorAndCoverageOfEveryGyroParameter) {
@@ -216,17 +219,7 @@ TEST(GyroCalibrationInput, ANoisyRailIsSaturationAndARoundPeakIsNot) {
     }
   }
   // 1 kHz: ten times the samples in every turn.
-  RawLogSimulation options;
-  options.static_s = 4.0;
-  options.transition_s = 3.0;
-  options.rate_hz = 1000.0;
-  options.sigma_raw_per_sample = Vec3::Constant(1.0);
-  options.seed = 7;
-  GyroSimulation gyro;
-  gyro.truth = XsensLikeGyro();
-  gyro.sigma_raw_per_sample = Vec3::Constant(27.0);
-  Recording fast =
-      Recorded(SimulateImuLog(Yang2012Truth(), kG, Yang18Directions(), options, gyro), 1000.0);
+  Recording fast = Simulate(7, 27.0, XsensLikeGyro(), 1000.0);
   for (Vec3& s : fast.gyro.samples) s = s.array().round().matrix();
   GyroCalibrationOptions o;
   o.model = GyroModelKind::kGSensitive;
@@ -394,16 +387,7 @@ TEST(GyroCalibrationInput, TurnsAboutOneAxisAreRefusedOrFailedNeverAnInternalErr
   up.emplace_back(0.6, -0.8, 0.0);
   up.emplace_back(-0.6, -0.8, 0.0);
   up.emplace_back(-0.8, 0.0, 0.6);
-  RawLogSimulation options;
-  options.static_s = 4.0;
-  options.transition_s = 3.0;
-  options.sigma_raw_per_sample = Vec3::Constant(1.0);
-  options.seed = 5;
-  GyroSimulation gyro;
-  gyro.truth = XsensLikeGyro();
-  gyro.sigma_raw_per_sample = Vec3::Constant(27.0);
-  const Recording r =
-      Recorded(SimulateImuLog(Yang2012Truth(), kG, up, options, gyro), options.rate_hz);
+  const Recording r = Simulate(5, 27.0, XsensLikeGyro(), 0, up);
   ASSERT_TRUE(r.accel_cal.summary.converged());
   for (GyroEstimator estimator : {GyroEstimator::kJoint, GyroEstimator::kTwoStage}) {
     GyroCalibrationOptions g;

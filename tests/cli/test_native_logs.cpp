@@ -3,6 +3,7 @@
 // refused with the candidates named; a log cut short is used with a warning.
 #include <cmath>
 #include <cstdio>
+#include <functional>
 #include <map>
 #include <random>
 #include <sstream>
@@ -31,6 +32,31 @@ namespace {
 class NativeLogTest : public CliTest {};
 
 const std::string kSmall = std::string(ACCELCAL_DATA_DIR) + "/px4-ulog/sample_log_small.ulg";
+
+// A short session in m/s² as PX4's sensor_accel has it (scales near 1, an offset): 18 positions
+// of 2 s, the truth and options the ULog tests below simulate.
+struct MetricSession {
+  ModelParameters truth;
+  RawLogSimulation sim;
+  MetricSession() {
+    truth.K = Vec3(1.002, 0.998, 1.001).asDiagonal();
+    truth.bias = Vec3(0.05, -0.03, 0.08);
+    sim.static_s = 2.0;
+    sim.transition_s = 1.0;
+    sim.sigma_raw_per_sample = Vec3::Constant(1e-3);  // some noise: detection needs it
+  }
+  // The session as a ULog of sensor_accel, each message as `edit` leaves it.
+  std::string ULog(const std::function<void(std::string*)>& edit = {}) const {
+    const ULogImuWriter writer;
+    std::string ulog = writer.Header();
+    SimulateRawLog(truth, 9.81, Yang18Directions(), sim, [&](double t, const Vec3& a) {
+      std::string message = writer.Accel(static_cast<std::uint64_t>(std::llround(t * 1e6)), a);
+      if (edit) edit(&message);
+      ulog += message;
+    });
+    return ulog;
+  }
+};
 
 // The ULog's sensor_accel samples as CSV: the times in µs as the integers they are, the float32
 // readings as the doubles they are (17 digits read back exactly).
@@ -83,22 +109,10 @@ TEST_F(NativeLogTest, ULogCalibratesToTheSameBytesAsItsSamplesAsCsv) {
 // A PX4 driver that leaves timestamp_sample 0 (issue 47): the refusal names the field and the
 // time the logger stamped each message (timestamp), which then reads the session as it is.
 TEST_F(NativeLogTest, ULogWithoutSampleTimesSuggestsItsTimestamp) {
-  ModelParameters truth;
-  truth.K = Vec3(1.002, 0.998, 1.001).asDiagonal();
-  truth.bias = Vec3(0.05, -0.03, 0.08);
-  RawLogSimulation sim;
-  sim.static_s = 2.0;
-  sim.transition_s = 1.0;
-  sim.sigma_raw_per_sample = Vec3::Constant(1e-3);  // some noise: detection needs it
-  const ULogImuWriter writer;
-  std::string ulog = writer.Header();
-  SimulateRawLog(truth, 9.81, Yang18Directions(), sim, [&](double t, const Vec3& a) {
-    std::string message = writer.Accel(static_cast<std::uint64_t>(std::llround(t * 1e6)), a);
+  Write("z.ulg", MetricSession().ULog([](std::string* message) {
     // size (2), type (1), msg_id (2), timestamp (8), then timestamp_sample (8): zeroed.
-    std::fill(message.begin() + 13, message.begin() + 21, '\0');
-    ulog += message;
-  });
-  Write("z.ulg", ulog);
+    std::fill(message->begin() + 13, message->begin() + 21, '\0');
+  }));
   CliRun e = Exec("calibrate " + Path("z.ulg") + " --gravity 9.81 -q -o " + Path("z.json"));
   EXPECT_EQ(e.status, 3);
   EXPECT_NE(e.err.find("sensor_accel's timestamp_sample is the same in every message (0 us): the "
@@ -492,20 +506,8 @@ TEST_F(NativeLogTest, Px4ExportNamesTheSensorByItsDeviceId) {
             std::string::npos)
       << e.err;
   EXPECT_EQ(Exec("export " + Path("u.json") + " --to ardupilot --raw-unit m/s2").status, 3);
-  // The same session in m/s² (its scales near 1).
-  ModelParameters truth;
-  truth.K = Vec3(1.002, 0.998, 1.001).asDiagonal();
-  truth.bias = Vec3(0.05, -0.03, 0.08);
-  RawLogSimulation sim;
-  sim.static_s = 2.0;
-  sim.transition_s = 1.0;
-  sim.sigma_raw_per_sample = Vec3::Constant(1e-3);  // some noise: detection needs it
-  const ULogImuWriter writer;
-  std::string ulog = writer.Header();
-  SimulateRawLog(truth, 9.81, Yang18Directions(), sim, [&](double t, const Vec3& a) {
-    ulog += writer.Accel(static_cast<std::uint64_t>(std::llround(t * 1e6)), a);
-  });
-  Write("m.ulg", ulog);
+  // A session in m/s² (its scales near 1).
+  Write("m.ulg", MetricSession().ULog());
   ASSERT_EQ(Exec("calibrate " + Path("m.ulg") + " --gravity 9.81 -q -o " + Path("m.json")).status,
             0);
   e = Exec("export " + Path("m.json") + " --to px4 --raw-unit m/s2");
@@ -557,17 +559,11 @@ TEST_F(NativeLogTest, Px4ExportNamesTheSensorByItsDeviceId) {
 // 1 of slot CAL_ACC1, replacing the primary IMU's calibration), refuses an --instance that
 // contradicts it, and without a match takes the first free slot and says so.
 TEST_F(NativeLogTest, Px4ExportTakesTheSlotTheLogGivesTheSensor) {
-  ModelParameters truth;
-  truth.K = Vec3(1.002, 0.998, 1.001).asDiagonal();
-  truth.bias = Vec3(0.05, -0.03, 0.08);
-  RawLogSimulation sim;
-  sim.static_s = 2.0;
-  sim.transition_s = 1.0;
-  sim.sigma_raw_per_sample = Vec3::Constant(1e-3);  // m/s²: some noise, detection needs it
-  GyroSimulation gyro;                              // rad/s, as PX4's sensor_gyro, with an offset
+  const MetricSession m;
+  GyroSimulation gyro;  // rad/s, as PX4's sensor_gyro, with an offset
   gyro.truth.bias = Vec3(0.01, -0.02, 0.005);
   gyro.sigma_raw_per_sample = Vec3::Constant(1e-3);
-  const SimulatedImuLog imu = SimulateImuLog(truth, 9.81, Yang18Directions(), sim, gyro);
+  const SimulatedImuLog imu = SimulateImuLog(m.truth, 9.81, Yang18Directions(), m.sim, gyro);
   const ULogImuWriter writer(1, true, 9);  // accelerometer device 1, gyroscope device 9
   const auto session = [&](const std::string& parameters) {
     std::string ulog = writer.Header(parameters);

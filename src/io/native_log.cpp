@@ -760,10 +760,12 @@ InputData ReadNativeLog(BinaryStream& in, InputFile* file, const ReadOptions& op
     // recorder logged each message (ROS's log_time, ULog's timestamp, DataFlash's TimeUS).
     const std::string& field = (*s.columns)[*chosen.time];
     std::string other;
-    for (const char* candidate : {internal::kLogTime, "timestamp", "TimeUS", "SampleUS"}) {
+    const auto offer = [&](const char* candidate) {
       const std::optional<std::size_t> c = Find(s, candidate);
       if (other.empty() && c && *c != *chosen.time && IsMicrosecondColumn(s, *c)) other = candidate;
-    }
+    };
+    offer(internal::kLogTime);
+    for (const char* candidate : kMicrosecondFields) offer(candidate);
     const std::string axes = (*s.columns)[chosen.axis[0]] + "," + (*s.columns)[chosen.axis[1]] +
                              "," + (*s.columns)[chosen.axis[2]];
     throw InputError(

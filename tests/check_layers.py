@@ -11,7 +11,8 @@ import os
 import re
 import sys
 
-LAYERS = ["core", "model", "io", "solvers", "statistics", "analysis", "platform", "output"]
+LAYERS = ["core", "model", "io", "solvers", "statistics", "analysis", "platform", "output",
+          "pipeline"]
 PUBLIC_ONLY = {"types.hpp": "core", "names.hpp": "core"}
 INCLUDE = re.compile(r'^\s*#\s*include\s+"([^"]+)"', re.M)
 

@@ -330,13 +330,19 @@ void CheckGyroFlags(const CLI::App& cmd, const std::string& gyro,
   }
 }
 
-// What calibrate and batch check of calibrate's options before anything is read.
-void CheckCalibrationFlags(const CLI::App& cmd, const CalibrateArgs& cal) {
-  CheckGyroFlags(cmd, cal.gyro, cal.gyro_columns,
+// What calibrate and batch check of calibrate's options before anything is read, and which of
+// them were given.
+void CheckCalibrationFlags(const CLI::App& cmd, CalibrateArgs* cal) {
+  CheckGyroFlags(cmd, cal->gyro, cal->gyro_columns,
                  {"--gyro-units", "--gyro-model", "--gyro-estimator", "--gyro-thermal"});
-  if (cmd.count("--gyro-thermal") > 0 && cal.gyro_thermal.empty()) {
+  if (cmd.count("--gyro-thermal") > 0 && cal->gyro_thermal.empty()) {
     throw accelcal::cli::UsageError("--gyro-thermal: '' is neither auto nor a degree from 0 to 3");
   }
+  for (const char* name : {"--method", "--init", "--frame", "--estimator", "--max-iterations",
+                           "--bias-model", "--bias-random-walk", "--noise"}) {
+    if (cmd.count(name) > 0) cal->gravity_only_options.emplace_back(name);
+  }
+  cal->date_given = cmd.count("--date") > 0;
 }
 
 }  // namespace
@@ -869,7 +875,7 @@ int accelcal::cli::RunCommandLine(int argc, char** argv) {
                                                     : std::string_view("x");
       if (items && (value.empty() || value.front() == ',' || value.back() == ',' ||
                     value.find(",,") != std::string_view::npos)) {
-        WriteErr(
+        WriteErrLine(
             Format("accelcal: usage: %s '%s' has an empty item: give each value once, "
                    "comma-separated (see --help)\n",
                    list, std::string(value).c_str()));
@@ -877,7 +883,7 @@ int accelcal::cli::RunCommandLine(int argc, char** argv) {
       }
     }
     if (given > 1) {
-      WriteErr(
+      WriteErrLine(
           Format("accelcal: usage: %s given %d times: give it once (a list's values "
                  "comma-separated; see --help)\n",
                  list, given));
@@ -900,7 +906,7 @@ int accelcal::cli::RunCommandLine(int argc, char** argv) {
       what =
           what.substr(0, at) + " given " + what.substr(at + twice.size()) + " times: give it once";
     }
-    WriteErr(Format("accelcal: usage: %s (see --help)\n", what.c_str()));
+    WriteErrLine(Format("accelcal: usage: %s (see --help)\n", what.c_str()));
     return kExitUsage;
   }
 
@@ -924,21 +930,20 @@ int accelcal::cli::RunCommandLine(int argc, char** argv) {
   const auto run = [&]() -> int {
     if (*calibrate) {
       data_subject = cal.input.path;
-      for (const char* name : {"--method", "--init", "--frame", "--estimator", "--max-iterations",
-                               "--bias-model", "--bias-random-walk", "--noise"}) {
-        if (calibrate->count(name) > 0) cal.gravity_only_options.emplace_back(name);
-      }
-      CheckCalibrationFlags(*calibrate, cal);
+      CheckCalibrationFlags(*calibrate, &cal);
       cal.given_options = GivenOptions(*calibrate, {"output", "report", "json", "date"});
-      cal.date_given = calibrate->count("--date") > 0;
       return RunCalibrate(cal);
     }
     if (*store) return RunStore(sto);
     if (*batch) {
-      CheckCalibrationFlags(*batch, bat_cal);
+      CheckCalibrationFlags(*batch, &bat_cal);
       bat.unit_id_given = batch->count("--unit-id") > 0;
       bat.calibrate_options = GivenOptions(*batch, {"output", "limits", "unit-id", "unit-id-from",
                                                     "glob", "jobs", "redo", "no-report", "json"});
+      bat_cal.given_options =
+          GivenOptions(*batch, {"output", "limits", "unit-id", "unit-id-from", "glob", "jobs",
+                                "redo", "no-report", "json", "date"});
+      bat.calibrate = bat_cal;
       return RunBatch(bat);
     }
     if (*detect) {
@@ -1007,33 +1012,11 @@ int accelcal::cli::RunCommandLine(int argc, char** argv) {
     const int status = run();
     FinishStdout();
     return status;
-  } catch (const UsageError& e) {
-    WriteErr(Format("accelcal: usage: %s\n", e.what()));
-    return kExitUsage;
-  } catch (const accelcal::InputError& e) {
-    WriteErr(Format("accelcal: %s\n", WithReaderFlags(e.what()).c_str()));
-    return kExitBadInput;
-  } catch (const accelcal::NotConvergedError& e) {
-    WriteErr(Format("accelcal: %s: %s; nothing written\n", data_subject.c_str(), e.what()));
-    return kExitNotConverged;
-  } catch (const accelcal::DataError& e) {
-    if (data_subject.empty()) {
-      WriteErr(Format("accelcal: %s\n", e.what()));
-    } else {
-      WriteErr(Format("accelcal: %s: %s\n", data_subject.c_str(), e.what()));
-    }
-    return kExitBadInput;
-  } catch (const OutputError& e) {
-    WriteErr(Format("accelcal: %s\n", e.what()));
-    return kExitOutput;
-  } catch (const std::bad_alloc&) {
-    WriteErr(
-        Format("accelcal: out of memory: the input (or what an option asks for) needs more "
-               "memory than this machine can give\n"));
-    return kExitBadInput;
-  } catch (const std::exception& e) {
-    WriteErr(Format("accelcal: internal error: %s\n", e.what()));
-    return kExitInternal;
+  } catch (...) {
+    int status = kExitInternal;
+    const std::string message = ErrorMessage(std::current_exception(), data_subject, &status);
+    WriteErrLine("accelcal: " + message + "\n");
+    return status;
   }
   return kExitUsage;
 }

@@ -10,10 +10,13 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <exception>
 #include <iostream>
+#include <memory>
 #include <sstream>
 #include <stdexcept>
 
+#include "accelcal/calibrate_unit.hpp"
 #include "accelcal/calibration_file.hpp"
 #include "accelcal/compare.hpp"
 #include "accelcal/design.hpp"
@@ -83,22 +86,18 @@ ReadOptions MakeReadOptions(const InputArgs& in) {
   return options;
 }
 
-LoadedInput LoadInput(const InputArgs& in) {
-  if (auto why = in.detection.Validate()) throw UsageError(*why);
-  LoadOptions options;
-  options.read = MakeReadOptions(in);
-  options.detection = in.detection;
-  std::optional<ProgressBar> bar;
-  auto start = std::chrono::steady_clock::now();
-  options.before_file = [&](const std::string&) {
-    start = std::chrono::steady_clock::now();
-    bar.emplace("reading");
-    options.read.progress = bar->ByteCallback();
+void ReportLoading(LoadOptions* options) {
+  auto bar = std::make_shared<std::optional<ProgressBar>>();
+  auto start = std::make_shared<std::chrono::steady_clock::time_point>();
+  options->before_file = [options, bar, start](const std::string&) {
+    *start = std::chrono::steady_clock::now();
+    bar->emplace("reading");
+    options->read.progress = (*bar)->ByteCallback();
   };
-  options.after_file = [&](const LoadedFile& loaded) {
-    bar->Finish();
+  options->after_file = [bar, start](const LoadedFile& loaded) {
+    (*bar)->Finish();
     Detail("read %s in %.1f ms\n", loaded.path.c_str(),
-           1e3 * std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
+           1e3 * std::chrono::duration<double>(std::chrono::steady_clock::now() - *start).count());
     if (!loaded.detection) return;
     const StaticDetectionResult& d = *loaded.detection;
     Detail(
@@ -116,6 +115,14 @@ LoadedInput LoadInput(const InputArgs& in) {
     }
     if (d.intervals.empty()) throw NoStaticInterval(d);  // with the options that act on it
   };
+}
+
+LoadedInput LoadInput(const InputArgs& in) {
+  if (auto why = in.detection.Validate()) throw UsageError(*why);
+  LoadOptions options;
+  options.read = MakeReadOptions(in);
+  options.detection = in.detection;
+  ReportLoading(&options);
   std::vector<std::string> paths{in.path};
   paths.insert(paths.end(), in.more_paths.begin(), in.more_paths.end());
   return LoadPositions(paths, options);
@@ -123,32 +130,8 @@ LoadedInput LoadInput(const InputArgs& in) {
 
 void CheckGyroColumns(const InputArgs& input, const std::string& gyro,
                       const std::vector<std::string>& gyro_columns) {
-  if (gyro_columns.size() != 0 && gyro_columns.size() != 3 && gyro_columns.size() != 4) {
-    throw UsageError("--gyro-columns takes x,y,z or time,x,y,z");
-  }
-  if (gyro.empty() && gyro_columns.empty()) {
-    throw UsageError("the gyroscope's rates: give --gyro LOG or --gyro-columns");
-  }
-  if (gyro.empty() && input.path == "-") {
-    throw UsageError("--gyro-columns reads the log a second time: it cannot be standard input");
-  }
-  if (gyro == "-" && input.path == "-") {
-    throw UsageError(
-        "the accelerometer's log and --gyro are both standard input, which can be read once: "
-        "give one of them as a file");
-  }
-  if (gyro.empty() && input.columns.size() >= 3 && gyro_columns.size() >= 3 &&
-      std::equal(gyro_columns.end() - 3, gyro_columns.end(), input.columns.end() - 3)) {
-    throw UsageError(
-        "--gyro-columns names the accelerometer's columns (--columns): give the rates' own");
-  }
-  for (std::size_t a = 0; a < gyro_columns.size(); ++a) {
-    for (std::size_t b = 0; b < a; ++b) {
-      if (gyro_columns[a] == gyro_columns[b]) {
-        throw UsageError("--gyro-columns names '" + gyro_columns[a] +
-                         "' twice: each rate axis needs its own column");
-      }
-    }
+  if (auto why = GyroInputProblem(input.path, input.columns, {gyro, gyro_columns, ""})) {
+    throw UsageError(WithCliFlags(*why));
   }
 }
 
@@ -160,30 +143,50 @@ InputData ReadGyroLog(const InputArgs& input, const std::string& gyro,
   if (input.gyro_topic && input.gyro_topic->empty()) {
     throw UsageError("--gyro-topic: an empty topic name");
   }
-  try {
-    return ReadGyroInput(input.path, read, gyro, gyro_columns, input.gyro_topic.value_or(""));
-  } catch (const InputError& e) {
-    // The reader's "columns option" is --gyro-columns here: the rates' columns.
-    throw InputError(
-        e.file(), e.line(),
-        WithFlags(e.reason(), {{"the columns option's entry", "--gyro-columns entry"},
-                               {"the columns option", "--gyro-columns"},
-                               {"the topic and instance options", "--gyro-topic and --instance"},
-                               {"the topic option", "--gyro-topic"},
-                               {"the frame option", "--frame-id"},
-                               {"the time unit option", "--time-unit"},
-                               {"the rate option", "--rate"},
-                               {"the other stream of this file", "the accelerometer"}}));
-  }
+  return accelcal::ReadGyroLog(input.path, read,
+                               {gyro, gyro_columns, input.gyro_topic.value_or("")});
 }
 
-const RawLog& TheRawLogForGyro(const LoadedInput& in) {
-  if (in.files.size() != 1 || in.files.front().data.kind != InputKind::kRaw) {
-    throw UsageError(
-        "the gyroscope is calibrated from one raw log (its turns between the positions): give "
-        "one INPUT that is a raw log");
+std::string CliFlag(const std::string& name) {
+  if (name == "input") return "INPUT";
+  std::string flag = "--" + name;
+  std::replace(flag.begin(), flag.end(), '_', '-');
+  return flag;
+}
+
+std::string WithCliFlags(const std::string& marked) { return RenderOptionNames(marked, CliFlag); }
+
+std::string ErrorMessage(const std::exception_ptr& error, const std::string& subject, int* status) {
+  try {
+    std::rethrow_exception(error);
+  } catch (const UsageError& e) {
+    *status = kExitUsage;
+    return std::string("usage: ") + e.what();
+  } catch (const OptionError& e) {  // the library's rule, in the tool's words
+    *status = kExitUsage;
+    return "usage: " + WithCliFlags(e.marked());
+  } catch (const InputError& e) {
+    *status = kExitBadInput;
+    return WithReaderFlags(WithCliFlags(e.what()));
+  } catch (const NotConvergedError& e) {
+    *status = kExitNotConverged;
+    return (e.file().empty() ? subject : e.file()) + ": " + WithCliFlags(e.what()) +
+           "; nothing written";
+  } catch (const DataError& e) {
+    *status = kExitBadInput;
+    const std::string& about = e.file().empty() ? subject : e.file();
+    return (about.empty() ? "" : about + ": ") + WithCliFlags(e.what());
+  } catch (const OutputError& e) {
+    *status = kExitOutput;
+    return e.what();
+  } catch (const std::bad_alloc&) {
+    *status = kExitBadInput;
+    return "out of memory: the input (or what an option asks for) needs more memory than this "
+           "machine can give";
+  } catch (const std::exception& e) {
+    *status = kExitInternal;
+    return std::string("internal error: ") + e.what();
   }
-  return in.files.front().data.raw;
 }
 
 std::string& DataSubject() {
@@ -318,20 +321,7 @@ nlohmann::ordered_json JsonArray(const Vec3& v) { return {v(0), v(1), v(2)}; }
 
 std::string WithFlags(std::string message,
                       std::initializer_list<std::pair<const char*, const char*>> flags) {
-  const auto word = [](char c) { return std::isalnum(static_cast<unsigned char>(c)) || c == '_'; };
-  for (const auto& [field, flag] : flags) {
-    const std::string name = field;
-    for (std::size_t at = message.find(name); at != std::string::npos;
-         at = message.find(name, at + 1)) {
-      const std::size_t end = at + name.size();
-      if ((at > 0 && word(message[at - 1])) || (end < message.size() && word(message[end]))) {
-        continue;  // part of a longer word
-      }
-      message.replace(at, name.size(), flag);
-      at += std::string_view(flag).size() - 1;
-    }
-  }
-  return message;
+  return internal::ReplaceWords(std::move(message), flags);
 }
 
 std::string WithReaderFlags(const std::string& message) {

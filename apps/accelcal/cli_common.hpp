@@ -4,6 +4,7 @@
 // shortest round-trip.
 
 #include <algorithm>
+#include <exception>
 #include <initializer_list>
 #include <optional>
 #include <string>
@@ -12,6 +13,7 @@
 
 #include "accelcal/json_text.hpp"
 
+#include "accelcal/calibrate_unit.hpp"
 #include "accelcal/calibration_file.hpp"
 #include "accelcal/error.hpp"
 #include "accelcal/gravity.hpp"
@@ -72,11 +74,12 @@ std::string& DataSubject();
 void CheckGyroColumns(const InputArgs& input, const std::string& gyro,
                       const std::vector<std::string>& gyro_columns);
 
+/// The reading of a calibration's input files reported as the tool does: a progress display,
+/// details, still periods not used, a log without a still one with the options that act on it.
+/// The callbacks refer to `options`, which must stay where it is while they are used.
+void ReportLoading(LoadOptions* options);
 // The input files of a calibration, read, detected and pooled.
 LoadedInput LoadInput(const InputArgs& in);
-/// The one raw log a gyroscope is calibrated beside (its turns between the positions); a usage
-/// error for several inputs or a positions file.
-const RawLog& TheRawLogForGyro(const LoadedInput& in);
 /// The gyroscope's log beside the accelerometer's `input`: `gyro` (empty: `input` itself, read
 /// again for `gyro_columns`), read with `input`'s options and `gyro_columns` (x,y,z or
 /// time,x,y,z; with 3 in `input` itself, `input`'s time column in front when its columns name
@@ -85,6 +88,15 @@ const RawLog& TheRawLogForGyro(const LoadedInput& in);
 InputData ReadGyroLog(const InputArgs& input, const std::string& gyro,
                       const std::vector<std::string>& gyro_columns, bool fingerprint);
 
+/// The tool's name of an option the library names (calibrate_unit.hpp: the Python keyword):
+/// its flag (--gyro-columns), or INPUT; and a library message with its marked names so named.
+std::string CliFlag(const std::string& name);
+std::string WithCliFlags(const std::string& marked);
+
+/// The tool's message for an error a command threw (without "accelcal: "), and its exit status:
+/// `subject` is the file a DataError is about when it names none (DataError::file).
+std::string ErrorMessage(const std::exception_ptr& error, const std::string& subject, int* status);
+
 struct Gravity {
   double in_unit;  // gravity magnitude in the output unit
   double ms2;      // the same in m/s²
@@ -92,6 +104,18 @@ struct Gravity {
   std::string origin;
 };
 Gravity ResolveGravity(const GravityArgs& args);
+
+/// The library's request for calibrate's options as given (their values parsed; their rules are
+/// the library's, UnitRequest::Validate), and the gravity resolved: calibrate's and batch's.
+UnitRequest CalibrateRequest(const CalibrateArgs& args, Gravity* g);
+
+/// A unit's calibration file and (when `report`) its HTML report, rendered (`name`: the file's
+/// name as the report gives it).
+struct RenderedCalibration {
+  std::string json, report;
+};
+RenderedCalibration RenderCalibration(const UnitOutcome& unit, const std::string& name,
+                                      bool report);
 
 // Three numbers in a printf format.
 std::string Vec(const Vec3& v, const char* fmt = "%14.8g");

@@ -1,9 +1,9 @@
-// accelcal batch: a production line's units. Each unit's files are calibrated by the tool's own
-// calibrate (in-process, RunCommandLineCaptured) with the options given, so that a unit's file and
-// report are exactly what `accelcal calibrate` writes; each calibration is then judged against
-// the limits (acceptance.hpp), and one summary table lists every unit. Units run in parallel, a
-// unit that fails never stops the others, and a unit whose calibration is current (same inputs,
-// options, date and accelcal version, by its own provenance) is not calibrated again.
+// accelcal batch: a production line's units. Each unit's files are calibrated as calibrate does
+// (the library's CalibrateUnit, from the same request) with the options given, so that a unit's
+// file and report are exactly what `accelcal calibrate` writes; each calibration is then judged
+// against the limits (acceptance.hpp), and one summary table lists every unit. Units run in
+// parallel, a unit that fails never stops the others, and a unit whose calibration is current (same
+// inputs, options, date and accelcal version, by its own provenance) is not calibrated again.
 #include <fnmatch.h>
 #include <sys/stat.h>
 #include <unistd.h>
@@ -16,7 +16,6 @@
 #include <cstring>
 #include <fstream>
 #include <map>
-#include <regex>
 #include <set>
 #include <thread>
 
@@ -32,6 +31,7 @@
 #include "cli_common.hpp"
 #include "commands.hpp"
 #include "output.hpp"
+#include "unit_id_pattern.hpp"
 
 namespace accelcal::cli {
 namespace {
@@ -94,19 +94,19 @@ std::string BaseName(const std::string& path) {
 
 // The unit id of a file: the regular expression's first group (or its whole match) searched in
 // the file's name, or the name less its extension.
-std::string UnitIdOf(const std::string& path, const std::optional<std::regex>& pattern,
+std::string UnitIdOf(const std::string& path, const std::optional<UnitIdPattern>& pattern,
                      std::string* problem) {
   const std::string name = BaseName(path);
   if (!pattern) {
     const std::size_t dot = name.find_last_of('.');
     return dot == 0 || dot == std::string::npos ? name : name.substr(0, dot);
   }
-  std::smatch m;
-  if (!std::regex_search(name, m, *pattern)) {
+  std::optional<std::string> id = pattern->Search(name);
+  if (!id) {
     *problem = "its name does not match the unit id pattern";
     return name;
   }
-  return m.size() > 1 ? m[1].str() : m[0].str();
+  return *id;
 }
 
 std::string OptionValue(const BatchArgs& args, const char* option) {
@@ -273,39 +273,19 @@ bool Current(const BatchArgs& args, const Unit& unit, const std::string& text,
   }
 }
 
-// The calibrate command line of a unit: its files, the options as given, its outputs.
-std::vector<std::string> CalibrateCommand(const BatchArgs& args, const Unit& unit,
-                                          const std::string& dir) {
-  std::vector<std::string> argv = {"accelcal", "calibrate"};
-  for (const std::string& f : unit.files) {
-    // A file name that begins with '-' would be taken for an option.
-    argv.push_back(!f.empty() && f[0] == '-' ? "./" + f : f);
-  }
-  for (const auto& [name, values] : args.calibrate_options) {
-    if (values.empty()) {
-      argv.push_back("--" + name);
-    } else {
-      std::string joined;
-      for (const std::string& v : values) joined += (joined.empty() ? "" : ",") + v;
-      argv.push_back("--" + name + "=" + joined);
-    }
-  }
-  argv.push_back("--output=" + dir + "/calibration.json");
-  if (args.report) argv.push_back("--report=" + dir + "/report.html");
-  return argv;
-}
-
-// The last line calibrate wrote to stderr (its error), without the tool's name.
-std::string ErrorLine(const std::string& err) {
-  std::string line;
-  std::size_t end = err.size();
-  while (end > 0 && err[end - 1] == '\n') --end;
-  const std::size_t begin = err.rfind('\n', end == 0 ? 0 : end - 1);
-  line = err.substr(begin == std::string::npos ? 0 : begin + 1,
-                    end - (begin == std::string::npos ? 0 : begin + 1));
-  const std::string tool = "accelcal: ";
-  if (line.compare(0, tool.size(), tool) == 0) line.erase(0, tool.size());
-  return line;
+// The calibrate request of a unit's files: the options as given (a usage error for what they
+// cannot be), a log without a still period said with the options that act on it as calibrate
+// says it.
+UnitRequest UnitRequestOf(const BatchArgs& args, const std::vector<std::string>& files) {
+  CalibrateArgs cal = args.calibrate;
+  cal.input.path = files.front();
+  cal.input.more_paths.assign(files.begin() + 1, files.end());
+  Gravity g{};
+  UnitRequest request = CalibrateRequest(cal, &g);
+  request.load.after_file = [](const LoadedFile& f) {
+    if (f.detection && f.detection->intervals.empty()) throw NoStaticInterval(*f.detection);
+  };
+  return request;
 }
 
 // A unit: its directory OUT/units/ID opened without following a link (Directory), calibrate run
@@ -355,28 +335,34 @@ void RunUnit(const BatchArgs& args, const std::vector<InputRecord>& shared,
           return fail(cal_path + " exists and is not a calibration file: not replaced");
         }
       }
-      std::vector<CapturedFile> files = {{cal_path, false, ""}, {report_path, false, ""}};
-      std::string out, err;
-      unit->exit_status =
-          RunCommandLineCaptured(CalibrateCommand(args, *unit, dir), &out, &err, &files);
-      if (unit->exit_status != kExitOk && unit->exit_status != kExitFailedChecks) {
-        // An earlier calibration there is kept (it may be the user's, or read-only): it is not
-        // current, so it is neither reported nor taken as current by a later batch.
-        return fail(ErrorLine(err));
-      }
-      if (!files[0].written || (args.report && !files[1].written)) {
-        throw OutputError(cal_path + ": calibrate wrote no calibration");
+      // Calibrated as calibrate would (the library's unit), its files rendered in memory. On an
+      // error an earlier calibration there is kept (it may be the user's, or read-only): it is
+      // not current, so it is neither reported nor taken as current by a later batch.
+      RenderedCalibration rendered;
+      try {
+        const UnitOutcome outcome = CalibrateUnit(UnitRequestOf(args, unit->files));
+        if (!outcome.converged()) {
+          unit->exit_status = kExitNotConverged;
+          return fail(unit->files.front() + ": the solver did not converge: " +
+                      outcome.accelerometer.summary.termination_message + "; nothing written");
+        }
+        rendered = RenderCalibration(outcome, cal_path, args.report);
+        unit->exit_status =
+            outcome.diagnosis.verdict() == Verdict::kFailed ? kExitFailedChecks : kExitOk;
+      } catch (const std::exception&) {
+        return fail(
+            ErrorMessage(std::current_exception(), unit->files.front(), &unit->exit_status));
       }
       // Both files or neither; an earlier calibration that is read-only is kept (and the unit is
       // an error: its calibration is not of the current files).
       OutputFile cal_file(unit_dir, "calibration.json");
-      cal_file.Write(files[0].bytes);
+      cal_file.Write(rendered.json);
       std::optional<OutputFile> report_file;
-      if (args.report) report_file.emplace(unit_dir, "report.html").Write(files[1].bytes);
+      if (args.report) report_file.emplace(unit_dir, "report.html").Write(rendered.report);
       CommitAll({&cal_file, report_file ? &*report_file : nullptr});
       // A report of an earlier calibration would describe other data.
       if (!args.report) unit_dir.Remove("report.html");
-      text = std::move(files[0].bytes);
+      text = std::move(rendered.json);
     }
     unit->calibration = ParseCalibrationJson(text, cal_path);
     unit->sha256 = Sha256Hex(text);
@@ -422,17 +408,11 @@ int RunBatch(const BatchArgs& args) {
     limits = ParseLimits(text, args.limits);
     limits_sha256 = Sha256Hex(text);
   }
-  std::optional<std::regex> pattern;
+  std::optional<UnitIdPattern> pattern;
   if (args.unit_id_given && args.unit_id.empty()) {
     throw UsageError("--unit-id is empty: give a regular expression whose first group is the id");
   }
-  if (!args.unit_id.empty()) {
-    try {
-      pattern.emplace(args.unit_id, std::regex::ECMAScript);
-    } catch (const std::regex_error& e) {
-      throw UsageError("--unit-id '" + args.unit_id + "' is not a regular expression: " + e.what());
-    }
-  }
+  if (!args.unit_id.empty()) pattern.emplace(args.unit_id);
   const std::string& from = args.unit_id_from;
   const bool keyed = (from.rfind("info:", 0) == 0 && from.size() > 5) ||
                      (from.rfind("param:", 0) == 0 && from.size() > 6);
@@ -574,15 +554,19 @@ int RunBatch(const BatchArgs& args) {
     std::string usage_error;
     std::size_t usage_errors = 0;
     for (const std::size_t count : counts) {
-      Unit probe;
+      std::vector<std::string> probe;
       for (std::size_t i = 0; i < count; ++i) {
-        probe.files.push_back("/dev/null/accelcal-batch-option-check-" + std::to_string(i));
+        probe.push_back("/dev/null/accelcal-batch-option-check-" + std::to_string(i));
       }
-      std::string out, err;
-      if (RunCommandLineCaptured(CalibrateCommand(args, probe, "/dev/null"), &out, &err) ==
-          kExitUsage) {
+      try {
+        const UnitRequest request = UnitRequestOf(args, probe);
+        if (auto why = request.Validate()) throw OptionError(*why);
+      } catch (const std::exception&) {
+        int status = kExitOk;
+        const std::string message = ErrorMessage(std::current_exception(), "", &status);
+        if (status != kExitUsage) throw;
         ++usage_errors;
-        usage_error = ErrorLine(err);
+        usage_error = message;
       }
     }
     if (!counts.empty() && usage_errors == counts.size()) {
@@ -755,7 +739,7 @@ int RunBatch(const BatchArgs& args) {
   }
   if (counts[1] + counts[2] == 0) return kExitOk;
   // Said on stderr too, as a calibration that fails its checks is: stdout may go to a file.
-  WriteErr(
+  WriteErrLine(
       Format("accelcal: %d of %zu units failed their limits or checks, %d could not be "
              "calibrated (%s)\n",
              counts[1], units.size(), counts[2], csv_path.c_str()));

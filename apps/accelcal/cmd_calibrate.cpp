@@ -14,6 +14,7 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "accelcal/calibrate_unit.hpp"
 #include "accelcal/engineering.hpp"
 #include "accelcal/gyro_calibration.hpp"
 #include "accelcal/known_orientation.hpp"
@@ -36,12 +37,12 @@ namespace {
 void PrintInput(const LoadedInput& in) {
   for (const LoadedFile& f : in.files) {
     if (f.data.kind == InputKind::kPositions) {
-      Say("input     %s: %zu positions (%s)\n", f.path.c_str(), f.data.positions.size(),
+      Say("input     %s: %zu positions (%s)\n", Shown(f.path).c_str(), f.data.positions.size(),
           WithReaderFlags(f.data.kind_reason).c_str());
       continue;
     }
     const StaticDetectionResult& d = *f.detection;
-    Say("input     %s: raw log, %zu samples at %.6g Hz (%s)\n", f.path.c_str(),
+    Say("input     %s: raw log, %zu samples at %.6g Hz (%s)\n", Shown(f.path).c_str(),
         f.data.raw.samples.size(), d.rate_hz, WithReaderFlags(f.data.kind_reason).c_str());
     Say("detection %zu static intervals (window %zu samples, threshold %.4g raw^2 = %.3g x "
         "noise reference)\n",
@@ -248,139 +249,21 @@ void PrintFindings(const Diagnosis& diagnosis, const std::string& input_path,
     if (f.code == "outlier" || f.code == "rejected_period") continue;
     const std::string& path = f.code.rfind("gyro_", 0) == 0 ? gyro_path : input_path;
     if (f.severity == Severity::kFailure) {
-      WriteErr(Format("accelcal: %s: failed check (%s): %s%s\n", path.c_str(), f.code.c_str(),
-                      f.message.c_str(), OptionHint(f)));
+      WriteErrLine(Format("accelcal: %s: failed check (%s): %s%s\n", path.c_str(), f.code.c_str(),
+                          f.message.c_str(), OptionHint(f)));
     } else if (f.severity == Severity::kWarning) {
       Warn("%s: %s%s\n", path.c_str(), f.message.c_str(), OptionHint(f));
     }
   }
 }
 
-// The gyroscope read and calibrated beside the accelerometer (calibrate --gyro / --gyro-columns).
-struct GyroRun {
-  std::string path;
-  InputData data;
-  GyroCalibration calibration;
-};
-
-// The gyroscope's raw-unit label: --gyro-units when its rates were in a unit, else the unit its
-// binary-log stream has by its specification (PX4's sensor_gyro, a ROS Imu's angular_velocity:
-// rad/s), else --raw-units unless that names a force unit.
-std::string GyroRawLabel(const GyroRun& gyro, const CalibrateArgs& args) {
-  if (gyro.calibration.unit != GyroUnit::kRaw) return args.gyro_units;
-  if (gyro.data.stream && !gyro.data.stream->unit.empty()) return gyro.data.stream->unit;
-  return ForceUnitFromString(args.raw_units) ? std::string("raw") : args.raw_units;
-}
-
-bool GyroWanted(const CalibrateArgs& args) {
-  return !args.gyro.empty() || !args.gyro_columns.empty();
-}
-
-GyroCalibrationOptions GyroOptions(const CalibrateArgs& args) {
-  GyroCalibrationOptions o;
-  o.unit = ParseChoice<GyroUnit>(args.gyro_units, "--gyro-units");
-  const bool known = !args.orientations.empty();
-  const bool thermal = !args.thermal.empty();
-  o.estimator = args.gyro_estimator.empty()
-                    ? (known || thermal ? GyroEstimator::kTwoStage : GyroEstimator::kJoint)
-                    : ParseChoice<GyroEstimator>(args.gyro_estimator, "--gyro-estimator");
-  if (known && o.estimator == GyroEstimator::kJoint) {
-    throw UsageError(
-        "--gyro-estimator joint fits every position's gravity direction, which --orientations "
-        "gives: the gyroscope is fitted on top of the known-orientation calibration "
-        "(two-stage)");
-  }
-  if (thermal && o.estimator == GyroEstimator::kJoint) {
-    throw UsageError(
-        "--gyro-estimator joint refits the accelerometer's parameters as constants, which "
-        "--thermal's are not: the gyroscope is fitted on top of the calibration over "
-        "temperature (two-stage, the default with --thermal)");
-  }
-  if (!args.gyro_thermal.empty() && !thermal) {
-    throw UsageError(
-        "--gyro-thermal is the gyroscope's offsets over temperature, fitted with --thermal: give "
-        "it too");
-  }
-  if (thermal) {
-    o.thermal.emplace();  // T_ref is the accelerometer's, set when it is fitted
-    if (!args.gyro_thermal.empty() && args.gyro_thermal != "auto") {
-      const std::string& d = args.gyro_thermal;
-      if (d.size() != 1 || d[0] < '0' || d[0] > '0' + kMaxThermalDegree) {
-        throw UsageError("--gyro-thermal: '" + d + "' is neither auto nor a degree from 0 to " +
-                         std::to_string(kMaxThermalDegree));
-      }
-      o.thermal->degree = d[0] - '0';
-    } else if (!args.cross_validate) {
-      throw UsageError(
-          "--gyro-thermal auto (the default with --thermal) decides on held-out error: it needs "
-          "the cross-validation that --no-crossval turns off; give --gyro-thermal 0 to 3");
-    }
-  }
-  if (args.gyro_model != "auto") {
-    o.model = ParseEnum(GyroModelKindFromString(args.gyro_model), args.gyro_model, "--gyro-model",
-                        (NameList<GyroModelKind>() + ", auto").c_str());
-  } else if (!args.cross_validate && o.estimator != GyroEstimator::kImuTk) {
-    throw UsageError(
-        "the gyro's model is chosen on held-out rotations (--gyro-model auto, the default), "
-        "which --no-crossval turns off: give --gyro-model linear or g-sensitive");
-  }
-  if (o.estimator == GyroEstimator::kImuTk && o.model && *o.model != GyroModelKind::kLinear) {
-    throw UsageError(
-        "--gyro-estimator imutk is imu_tk's method, which has no g-sensitivity: "
-        "--gyro-model linear");
-  }
-  o.validate = args.cross_validate;
-  o.latitude_deg = args.gravity.latitude_deg;  // the Earth rate's vertical part, taken out
-  return o;
-}
-
-// The gyroscope's log, when it is a regular file of its own, read on a thread of its own while
-// the accelerometer's is loaded and fitted: the same data, and what reading it throws is thrown
-// where it was read before, after the accelerometer's fit (whose errors come first). Standard
-// input, a FIFO or a device is read in turn as before: two readers must not share one.
-class GyroLogAhead {
- public:
-  explicit GyroLogAhead(const CalibrateArgs& args) {
-    std::error_code error;
-    if (!args.gyro.empty() && args.gyro != "-" && args.gyro != args.input.path &&
-        std::filesystem::is_regular_file(args.gyro, error)) {
-      pending_ = std::async(std::launch::async | std::launch::deferred, [&args] {
-        return ReadGyroLog(args.input, args.gyro, args.gyro_columns, true);
-      });
-    }
-  }
-  // The log, read ahead or now.
-  InputData Take(const CalibrateArgs& args) {
-    if (pending_.valid()) return pending_.get();
-    return ReadGyroLog(args.input, args.gyro, args.gyro_columns, true);
-  }
-
- private:
-  std::future<InputData> pending_;
-};
-
-GyroRun RunGyro(const CalibrateArgs& args, const LoadedInput& in, const CalibrationResult& accel,
-                GyroLogAhead* ahead = nullptr) {
-  GyroCalibrationOptions options = GyroOptions(args);
-  if (options.thermal && accel.thermal) options.thermal->t_ref_c = accel.thermal->params.t_ref_c;
-  const RawLog& accel_log = TheRawLogForGyro(in);
-  GyroRun run;
-  run.path = args.gyro.empty() ? args.input.path : args.gyro;
-  run.data = ahead != nullptr ? ahead->Take(args)
-                              : ReadGyroLog(args.input, args.gyro, args.gyro_columns, true);
-  const std::string subject = DataSubject();
-  DataSubject() = run.path;  // what CalibrateGyro refuses is the gyroscope's
-  run.calibration = CalibrateGyro(accel_log, run.data.raw, in.positions, accel, options);
-  DataSubject() = subject;
-  return run;
-}
-
-void PrintGyro(const GyroRun& run, const std::string& raw_unit, const char* force_unit) {
+void PrintGyro(const UnitOutcome::Gyroscope& run, const char* force_unit) {
   const GyroCalibration& g = run.calibration;
+  const std::string& raw_unit = run.raw_unit;
   const auto& slots = GyroParameterSlots(g.model);
   const bool have_std = g.covariance.size() > 0;
   Say("\ngyroscope %s: %zu samples; model %s (%s), %s fit, w_raw = K w + b + G f\n",
-      run.path.c_str(), run.data.raw.samples.size(), std::string(ToString(g.model)).c_str(),
+      Shown(run.path).c_str(), run.data.raw.samples.size(), std::string(ToString(g.model)).c_str(),
       g.model_reason.c_str(), std::string(ToString(g.estimator)).c_str());
   Say("parameters (K in %s per rad/s, b in %s, G in %s per %s; +- 1 sigma)\n", raw_unit.c_str(),
       raw_unit.c_str(), raw_unit.c_str(), force_unit);
@@ -452,409 +335,6 @@ void PrintGyro(const GyroRun& run, const std::string& raw_unit, const char* forc
   Say("solver    %s\n", g.summary.termination_message.c_str());
 }
 
-// The file's provenance: the options given, every input file (with the orientations) by name, size
-// and SHA-256 of the bytes read, and the date when one was given.
-Provenance MakeProvenance(const CalibrateArgs& args, const LoadedInput& in,
-                          const OrientationFile* orientations, const GyroRun* gyro) {
-  Provenance provenance;
-  provenance.command = "accelcal calibrate";
-  provenance.options = GivenOptionsJson(args.given_options);
-  provenance.inputs = InputRecords(in);
-  if (orientations != nullptr) {
-    provenance.inputs.push_back({args.orientations, orientations->bytes, orientations->sha256});
-  }
-  if (gyro != nullptr && !args.gyro.empty()) {
-    provenance.inputs.push_back(
-        {gyro->path, gyro->data.bytes, gyro->data.sha256, gyro->data.stream});
-  }
-  provenance.date = args.date;
-  return provenance;
-}
-
-// The end of every calibrate: the file to -o, then the file to stdout (--json) or the summary
-// (`input_note`, when not empty, printed after the input's description).
-// `mean_sigmas`: the 1σ of each position's mean as the fit took it (empty: none).
-// The raw unit's label: --raw-units when given, else the unit every input's binary-log stream
-// has by its specification (PX4's sensor_accel, ArduPilot's IMU, a ROS Imu: m/s2), else "raw".
-std::string RawUnitLabel(const CalibrateArgs& args, const LoadedInput& in) {
-  for (const auto& [name, values] : args.given_options) {
-    if (name == "raw-units") return args.raw_units;
-  }
-  std::string unit;
-  for (const LoadedFile& f : in.files) {
-    if (!f.data.stream || f.data.stream->unit.empty()) return args.raw_units;
-    if (!unit.empty() && unit != f.data.stream->unit) return args.raw_units;
-    unit = f.data.stream->unit;
-  }
-  return unit.empty() ? args.raw_units : unit;
-}
-
-// The middle time of each position's still interval [s], or why the positions have none: a
-// positions file holds means only, and the clocks of several files are not one time.
-std::vector<double> PositionTimes(const LoadedInput& in, std::string* why) {
-  if (in.files.size() > 1) {
-    *why = "the positions come from " + std::to_string(in.files.size()) +
-           " files, whose times are not one clock";
-    return {};
-  }
-  std::vector<double> times;
-  for (const Position& p : in.positions) {
-    if (!p.interval) {
-      *why = in.files.front().path +
-             " holds the positions' means without their times (a raw log gives them)";
-      return {};
-    }
-    times.push_back(0.5 * (p.interval->t_begin_s + p.interval->t_end_s));
-  }
-  return times;
-}
-
-// The longest pause between two positions when it is over 5 times the median pause and a minute:
-// a drift is fitted straight (or between knots) across it, which nothing between them checks.
-void WarnDriftAcrossGap(const std::string& path, const std::vector<double>& times,
-                        const BiasModel& model) {
-  if (model.constant() || times.size() < 3) return;
-  std::vector<double> sorted = times;
-  std::sort(sorted.begin(), sorted.end());
-  std::vector<double> pauses;
-  std::size_t longest = 0;
-  for (std::size_t k = 1; k < sorted.size(); ++k) {
-    pauses.push_back(sorted[k] - sorted[k - 1]);
-    if (pauses.back() > pauses[longest]) longest = pauses.size() - 1;
-  }
-  std::vector<double> ordered = pauses;
-  std::nth_element(ordered.begin(), ordered.begin() + ordered.size() / 2, ordered.end());
-  const double median = ordered[ordered.size() / 2];
-  if (pauses[longest] > 5 * median && pauses[longest] > 60) {
-    Warn(
-        "%s: no position between %.6g s and %.6g s (%.0f s, %.0f times the median pause): the %s "
-        "bias is fitted across that time as if it drifted as it did around it\n",
-        path.c_str(), sorted[longest], sorted[longest + 1], pauses[longest],
-        pauses[longest] / median, ToString(model).c_str());
-  }
-}
-
-int WriteCalibration(const CalibrateArgs& given, const LoadedInput& in, const Gravity& g,
-                     const CalibrationResult& result, const std::vector<Vec3>& mean_sigmas,
-                     const ModelSelection* selection, const BiasModelSelection* bias_selection,
-                     const std::string& input_note, const OrientationFile* orientations = nullptr,
-                     const GyroRun* gyro = nullptr, const std::string& thermal_text = "") {
-  CalibrateArgs args = given;
-  args.raw_units = RawUnitLabel(given, in);
-  DiagnosisInput diagnosis_input;
-  diagnosis_input.result = &result;
-  diagnosis_input.positions = &in.positions;
-  diagnosis_input.max_excluded = args.outliers.max_excluded;
-  diagnosis_input.selection = selection;
-  for (const LoadedFile& f : in.files) {
-    if (f.data.kind == InputKind::kRaw) {
-      diagnosis_input.logs.push_back({f.path, &f.data.raw, &*f.detection});
-    }
-  }
-  diagnosis_input.unit = g.unit;
-  if (gyro != nullptr) diagnosis_input.gyroscope = &gyro->calibration;
-  for (const LoadedFile& f : in.files) {
-    diagnosis_input.positions_by_row_count |= f.data.kind_from_row_count;
-  }
-  const Diagnosis diagnosis = Diagnose(diagnosis_input);
-  CalibrationFileInfo info;
-  info.unit = g.unit;
-  info.raw_unit = args.raw_units;
-  info.source = args.input.path;
-  if (in.files.size() > 1) {
-    for (const LoadedFile& f : in.files) info.sources.push_back(f.path);
-    for (const std::string& file : in.position_file) {
-      info.position_source.push_back(static_cast<int>(
-          std::find(info.sources.begin(), info.sources.end(), file) - info.sources.begin()));
-    }
-  }
-  info.positions = in.positions;
-  info.mean_sigmas = mean_sigmas;
-  info.model_selection = selection;
-  info.model_requested = args.model;
-  info.bias_model_selection = bias_selection;
-  info.diagnosis = &diagnosis;
-  info.provenance = MakeProvenance(args, in, orientations, gyro);
-  if (gyro != nullptr) {
-    info.gyroscope = &gyro->calibration;
-    info.gyro_source = gyro->path;
-    info.gyro_raw_unit = GyroRawLabel(*gyro, args);
-  }
-  const std::string json = CalibrationToJson(result, info);
-  // Everything is rendered before anything is written: a failure leaves no file behind.
-  std::string report;
-  if (!args.report.empty()) {
-    ReportInput input;
-    input.calibration_name = args.output.empty() ? args.input.path : args.output;
-    input.calibration = ParseCalibrationJson(json, input.calibration_name);
-    if (const LoadedFile* raw = in.FirstRaw()) {  // the report plots one log: the first
-      input.log = &raw->data.raw;
-      input.rejected = raw->detection->rejected;
-    }
-    report = RenderReport(input);
-  }
-  {  // both files or neither
-    std::optional<OutputFile> file, report_file;
-    if (!args.output.empty()) file.emplace(args.output).Write(json);
-    if (!args.report.empty()) report_file.emplace(args.report).Write(report);
-    CommitAll({file ? &*file : nullptr, report_file ? &*report_file : nullptr});
-  }
-  const std::vector<double> errors = GravityNormErrors(result, Means(in.positions));
-  for (const OutlierFinding& o : result.outliers) {
-    Warn("%s: %s%s\n", args.input.path.c_str(),
-         OutlierMessage(o, in.positions, errors,
-                        g.unit == ForceUnit::kMetersPerSecond2 ? "m/s2" : "g", in.position_file)
-             .c_str(),
-         o.excluded ? " It was left out of the fit." : " It was kept in the fit.");
-  }
-  PrintFindings(diagnosis, args.input.path, gyro != nullptr ? gyro->path : args.input.path);
-  if (args.json) {
-    WriteFileAtomically("-", json);
-  } else {
-    PrintInput(in);
-    Say("%s", input_note.c_str());
-    PrintCalibration(result, in.positions, in.position_file, g, args.raw_units);
-    Say("%s", thermal_text.c_str());
-    if (selection) PrintModelSelection(*selection, args.model == "auto");
-    if (bias_selection) {
-      Say("bias      auto -> %s: %s\n", ToString(bias_selection->chosen).c_str(),
-          bias_selection->reason.c_str());
-    }
-    if (gyro != nullptr) {
-      PrintGyro(*gyro, GyroRawLabel(*gyro, args),
-                g.unit == ForceUnit::kMetersPerSecond2 ? "m/s2" : "g");
-    }
-    for (const Finding& f : diagnosis.findings) {
-      if (f.severity == Severity::kNote) Say("note      %s\n", f.message.c_str());
-    }
-    Say("verdict   %s\n", std::string(ToString(diagnosis.verdict())).c_str());
-    if (!args.output.empty()) Say("wrote     %s\n", args.output.c_str());
-    if (!args.report.empty()) Say("report    %s\n", args.report.c_str());
-  }
-  if (diagnosis.verdict() == Verdict::kFailed) {
-    WriteErr(
-        Format("accelcal: %s: the calibration failed its checks: written, but marked "
-               "\"verdict\": \"failed\"; do not use it as it is\n",
-               args.input.path.c_str()));
-    return kExitFailedChecks;
-  }
-  return kExitOk;
-}
-
-// --bias-random-walk or --noise: the bias's random walk q [m/s²/√s] per axis, and where it is from.
-struct RandomWalkArg {
-  Vec3 q_ms2 = Vec3::Zero();
-  std::string source;                                       // empty: not given
-  std::array<bool, 3> upper_bound = {false, false, false};  // the noise file's 95 % upper bound
-  bool given() const { return !source.empty(); }
-};
-
-// A bias random walk below 1e-12 m/s²/√s is none (1 ng after a day); above 1e3 it would move the
-// bias by a hundred g in a second.
-constexpr double kMinRandomWalk = 1e-12, kMaxRandomWalk = 1e3;
-
-// Usage errors before anything is read; the noise file read (small). `spline`: the bias model
-// asked for can take the prior (spline:K, or auto with its spline candidates).
-RandomWalkArg ParseRandomWalk(const CalibrateArgs& args, bool spline) {
-  RandomWalkArg out;
-  const std::vector<double>& v = args.bias_random_walk;
-  if (v.empty() && args.noise.empty()) return out;
-  const std::string flag = args.noise.empty() ? "--bias-random-walk" : "--noise";
-  if (!spline) {
-    throw UsageError(flag + " is the random-walk prior of a spline bias: give --bias-model " +
-                     "spline:K or auto with it, not " + args.bias_model);
-  }
-  if (!args.noise.empty()) {
-    const ImuNoise noise =
-        ParseNoiseJson(ReadFileToString(args.noise, kMaxSmallFileBytes), args.noise);
-    out.q_ms2 = noise.accelerometer.random_walk;
-    for (std::size_t a = 0; a < 3; ++a) {
-      out.upper_bound[a] = !noise.accelerometer.random_walk_resolved[a];
-      const double q = out.q_ms2(static_cast<Eigen::Index>(a));
-      if (!(q >= kMinRandomWalk && q <= kMaxRandomWalk)) {
-        throw DataError(
-            Format("%s: the accelerometer's random walk on %c, %g m/s^2/sqrt(s), is "
-                   "outside %g to %g: not a bias's random walk",
-                   args.noise.c_str(), "xyz"[a], q, kMinRandomWalk, kMaxRandomWalk));
-      }
-    }
-    out.source = args.noise;
-    return out;
-  }
-  if (v.size() != 1 && v.size() != 3) {
-    throw UsageError("--bias-random-walk takes one value or three (x,y,z), not " +
-                     std::to_string(v.size()) + " (the decimal point is '.')");
-  }
-  for (std::size_t i = 0; i < 3; ++i) {
-    const double q = v.size() == 1 ? v[0] : v[i];
-    if (!(q >= kMinRandomWalk && q <= kMaxRandomWalk)) {
-      throw UsageError(Format("--bias-random-walk must be from %g to %g m/s^2/sqrt(s), not %g",
-                              kMinRandomWalk, kMaxRandomWalk, q));
-    }
-    out.q_ms2(static_cast<Eigen::Index>(i)) = q;
-  }
-  out.source = "--bias-random-walk";
-  return out;
-}
-
-// q in raw units per √s: K q per axis (the walk of specific force w shows as K w in the readings),
-// K from a constant-bias fit of the positions; its line of the summary appended to `note`.
-Vec3 RandomWalkInRaw(const RandomWalkArg& walk, const std::vector<Vec3>& means,
-                     const CalibrationOptions& options, const Gravity& g, const std::string& path,
-                     std::string* note) {
-  if (options.reading_sigmas.empty()) {
-    throw DataError("a random walk of the bias weighs each position by the noise of its samples: " +
-                    path + " has positions without samples (give the raw log)");
-  }
-  CalibrationOptions constant = options;
-  constant.model = ModelKind::kLinear;
-  constant.bias_model = BiasModel{};
-  constant.position_times_s.clear();
-  constant.cross_validate = false;
-  constant.reading_sigmas.clear();
-  const CalibrationResult fit = Calibrate(means, constant);
-  const Vec3 q_unit = walk.q_ms2 * (g.in_unit / g.ms2);
-  const Vec3 q_raw = (fit.params.K.cwiseAbs2() * q_unit.cwiseAbs2()).cwiseSqrt();
-  std::string bounds;
-  for (std::size_t a = 0; a < 3; ++a) {
-    if (walk.upper_bound[a]) bounds += std::string(bounds.empty() ? "" : ", ") + "xyz"[a];
-  }
-  if (!bounds.empty()) {
-    bounds = "; " + bounds + ": its 95% upper bound, the noise log does not resolve " +
-             (bounds.size() > 1 ? "them" : "it");
-  }
-  *note += Format("prior     bias random walk %s m/s^2/sqrt(s) (%s%s): %s raw/sqrt(s)\n",
-                  Vec(walk.q_ms2, " %.3g").c_str() + 1, walk.source.c_str(), bounds.c_str(),
-                  Vec(q_raw, " %.3g").c_str() + 1);
-  if (!(q_raw.allFinite() && q_raw.minCoeff() > 0)) {
-    throw DataError(
-        Format("the bias random walk %s m/s^2/sqrt(s) is %s raw/sqrt(s) through K: "
-               "outside what this sensor's readings can hold",
-               Vec(walk.q_ms2, " %.3g").c_str() + 1, Vec(q_raw, " %.3g").c_str() + 1));
-  }
-  return q_raw;
-}
-
-// calibrate --orientations: the platform-frame least squares of known_orientation.hpp.
-int RunCalibrateKnownOrientations(const CalibrateArgs& args) {
-  if (!args.gravity_only_options.empty()) {
-    throw UsageError(args.gravity_only_options.front() +
-                     " does not apply with --orientations (a closed-form fit in the platform "
-                     "frame)");
-  }
-  if (args.model == "auto") {
-    throw UsageError("--model auto is not available with --orientations: give linear or quadratic");
-  }
-  KnownOrientationOptions options;
-  options.model = ParseChoice<ModelKind>(args.model, "--model");
-  options.cross_validate = args.cross_validate;
-  options.outliers = ParseOutlierOptions(args.outliers);
-  const Gravity g = ResolveGravity(args.gravity);
-  options.gravity = g.in_unit;
-  if (auto why = options.Validate()) throw UsageError(*why);
-  const OrientationFile orientations = ReadOrientations(args.orientations);
-  const LoadedInput in = LoadInput(args.input);
-  if (orientations.directions.size() != in.positions.size()) {
-    throw DataError(args.orientations + " has " + std::to_string(orientations.directions.size()) +
-                    " orientations for the " + std::to_string(in.positions.size()) +
-                    " positions of " + args.input.path);
-  }
-  options.reading_sigmas = ReadingSigmas(in);
-  const CalibrationResult result =
-      CalibrateKnownOrientations(Means(in.positions), orientations.directions, options);
-  const std::string note = Format("orient.   %s: %zu known orientations\n",
-                                  args.orientations.c_str(), orientations.directions.size());
-  if (GyroWanted(args)) {
-    // The gyroscope on top of the known directions: its K_g maps into the platform frame.
-    const GyroRun gyro = RunGyro(args, in, result);
-    return WriteCalibration(args, in, g, result, options.reading_sigmas, nullptr, nullptr, note,
-                            &orientations, &gyro);
-  }
-  return WriteCalibration(args, in, g, result, options.reading_sigmas, nullptr, nullptr, note,
-                          &orientations);
-}
-
-}  // namespace
-
-// Positions whose temperatures span this much get a note suggesting --thermal: a MEMS part's
-// scale moves by 100-300 ppm/K, 0.1-0.3 % over 10 K.
-constexpr double kTemperatureSpanNote_K = 10;
-
-// --thermal: "auto" (nothing), or the degrees K,B[,K2] of `model`. Usage errors before anything is
-// read.
-std::optional<ThermalDegrees> ParseThermal(const CalibrateArgs& args, ModelKind model) {
-  if (args.thermal == "auto") return std::nullopt;
-  std::vector<int> d;
-  std::stringstream list(args.thermal);
-  for (std::string item; std::getline(list, item, ',');) {
-    if (item.size() != 1 || item[0] < '0' || item[0] > '9') {
-      throw UsageError("--thermal: '" + args.thermal +
-                       "' is neither auto nor the degrees K,B[,K2] (whole numbers from 0 to " +
-                       std::to_string(kMaxThermalDegree) + ")");
-    }
-    d.push_back(item[0] - '0');
-  }
-  if (d.size() < 2 || d.size() > 3 || args.thermal.back() == ',') {
-    throw UsageError("--thermal: '" + args.thermal +
-                     "' is neither auto nor the degrees K,B[,K2] (e.g. 1,1)");
-  }
-  const ThermalDegrees degrees{d[0], d[1], d.size() > 2 ? d[2] : 0};
-  try {
-    (void)ThermalSlots(model, degrees);
-  } catch (const std::invalid_argument& e) {
-    throw UsageError(std::string("--thermal: ") + e.what());
-  }
-  if (degrees.Max() == 0) {
-    throw UsageError("--thermal " + args.thermal +
-                     " has no temperature term: leave --thermal out for parameters constant over "
-                     "temperature");
-  }
-  return degrees;
-}
-
-// Each position's temperature: its file's from --temperatures, else its own (read with its log).
-std::vector<double> PositionTemperatures(const CalibrateArgs& args, LoadedInput* in,
-                                         std::string* note) {
-  std::vector<double> temps;
-  if (!args.temperatures_c.empty()) {
-    bool own = false;
-    for (std::size_t k = 0; k < in->positions.size(); ++k) {
-      const std::string& file = in->position_file.empty() ? args.input.path : in->position_file[k];
-      std::size_t i = 0;
-      while (i < in->files.size() && in->files[i].path != file) ++i;
-      own |= in->positions[k].temperature_c.has_value();
-      const double t = args.temperatures_c.at(i) + 0.0;  // -0 written as 0
-      in->positions[k].temperature_c = t;
-      temps.push_back(t);
-    }
-    if (own) {
-      *note += "          temperatures: --temperatures, one per file, not the logs' own readings\n";
-    }
-    return temps;
-  }
-  for (std::size_t k = 0; k < in->positions.size(); ++k) {
-    const Position& p = in->positions[k];
-    if (!p.temperature_c) {
-      const std::string& file = in->position_file.empty() ? args.input.path : in->position_file[k];
-      // A column found by its name whose values were no temperature (kelvin, counts) was left
-      // out with a note: said here, where it matters.
-      std::string left_out;
-      for (const LoadedFile& f : in->files) {
-        if (f.path == file && !f.data.raw.temperature_note.empty()) {
-          left_out = " (" + f.data.raw.temperature_note + ")";
-        }
-      }
-      throw InputError(file, 0,
-                       "--thermal needs each position's temperature, and position " +
-                           std::to_string(k + 1) + " has none" + left_out +
-                           ": give the log's temperature column (--temperature-column) or one "
-                           "temperature per file (--temperatures)");
-    }
-    temps.push_back(*p.temperature_c);
-  }
-  return temps;
-}
-
 // The temperature terms fitted, each in engineering units per K^d (x-first frame).
 std::string ThermalText(const CalibrationResult& r, const ThermalDegreeSelection* selection,
                         const Gravity& g, const std::string& raw_unit) {
@@ -889,49 +369,196 @@ std::string ThermalText(const CalibrationResult& r, const ThermalDegreeSelection
   return out;
 }
 
-// calibrate --thermal: the joint fit with parameters that follow temperature, from positions at
-// several temperatures (several files, or one ramp).
-int RunCalibrateThermal(const CalibrateArgs& args, const CalibrationOptions& options,
-                        const std::optional<ThermalDegrees>& degrees, const Gravity& g) {
-  std::optional<GyroLogAhead> gyro_ahead;
-  if (GyroWanted(args)) gyro_ahead.emplace(args);
-  LoadedInput in = LoadInput(args.input);
-  std::string note;
-  ThermalOptions thermal;
-  thermal.base = options;
-  thermal.temperatures_c = PositionTemperatures(args, &in, &note);
-  thermal.cross_validate = args.cross_validate;
-  if (options.outliers.policy != OutlierPolicy::kOff) {
-    note +=
-        "          outliers: not screened with --thermal (a discordant position shows in "
-        "its held-out error)\n";
-  }
-  const std::vector<Vec3> means = Means(in.positions);
-  std::optional<ThermalDegreeSelection> selection;
-  ThermalResult fit;
-  try {
-    if (degrees) {
-      thermal.degrees = *degrees;
-      fit = CalibrateThermal(means, thermal);
-    } else {
-      selection = SelectThermalDegrees(means, thermal);
-      fit = selection->result;
-    }
-  } catch (const DataError& e) {
-    throw DataError(std::string("--thermal: ") + e.what());
-  }
-  const CalibrationResult result = AsCalibrationResult(fit, thermal.temperatures_c);
-  if (!result.summary.converged()) {
-    WriteErr(Format("accelcal: %s: the solver did not converge: %s; nothing written\n",
-                    args.input.path.c_str(), result.summary.termination_message.c_str()));
-    return kExitNotConverged;
-  }
-  std::optional<GyroRun> gyro;
-  if (gyro_ahead) gyro = RunGyro(args, in, result, &*gyro_ahead);
-  return WriteCalibration(
-      args, in, g, result, {}, nullptr, nullptr, note, nullptr, gyro ? &*gyro : nullptr,
-      ThermalText(result, selection ? &*selection : nullptr, g, RawUnitLabel(args, in)));
+bool GyroWanted(const CalibrateArgs& args) {
+  return !args.gyro.empty() || !args.gyro_columns.empty();
 }
+
+bool Given(const CalibrateArgs& args, const char* flag) {
+  const auto& given = args.gravity_only_options;
+  return std::find(given.begin(), given.end(), flag) != given.end();
+}
+
+// --thermal's degrees K,B[,K2] (none: auto).
+std::optional<ThermalDegrees> ParseThermalDegrees(const std::string& text) {
+  if (text == "auto") return std::nullopt;
+  std::vector<int> d;
+  std::stringstream list(text);
+  for (std::string item; std::getline(list, item, ',');) {
+    if (item.size() != 1 || item[0] < '0' || item[0] > '9') {
+      throw UsageError("--thermal: '" + text +
+                       "' is neither auto nor the degrees K,B[,K2] (whole numbers from 0 to " +
+                       std::to_string(kMaxThermalDegree) + ")");
+    }
+    d.push_back(item[0] - '0');
+  }
+  if (d.size() < 2 || d.size() > 3 || text.back() == ',') {
+    throw UsageError("--thermal: '" + text +
+                     "' is neither auto nor the degrees K,B[,K2] (e.g. 1,1)");
+  }
+  return ThermalDegrees{d[0], d[1], d.size() > 2 ? d[2] : 0};
+}
+
+// The gyroscope's part of the request (calibrate --gyro / --gyro-columns).
+void GyroRequest(const CalibrateArgs& args, UnitRequest* r) {
+  if (args.input.gyro_topic && args.input.gyro_topic->empty()) {
+    throw UsageError("--gyro-topic: an empty topic name");
+  }
+  r->gyro = GyroInput{args.gyro, args.gyro_columns, args.input.gyro_topic.value_or("")};
+  r->gyro_units = ParseChoice<GyroUnit>(args.gyro_units, "--gyro-units");
+  if (!args.gyro_estimator.empty()) {
+    r->gyro_estimator = ParseChoice<GyroEstimator>(args.gyro_estimator, "--gyro-estimator");
+  }
+  if (args.gyro_thermal == "auto") {
+    r->gyro_thermal_auto = true;
+  } else if (!args.gyro_thermal.empty()) {
+    const std::string& d = args.gyro_thermal;
+    if (d.size() != 1 || d[0] < '0' || d[0] > '9') {
+      throw UsageError("--gyro-thermal: '" + d + "' is neither auto nor a degree from 0 to " +
+                       std::to_string(kMaxThermalDegree));
+    }
+    r->gyro_thermal = d[0] - '0';
+  }
+  if (args.gyro_model != "auto") {
+    r->gyro_model = ParseEnum(GyroModelKindFromString(args.gyro_model), args.gyro_model,
+                              "--gyro-model", (NameList<GyroModelKind>() + ", auto").c_str());
+  }
+}
+
+}  // namespace
+
+UnitRequest CalibrateRequest(const CalibrateArgs& args, Gravity* g) {
+  UnitRequest r;
+  r.inputs = {args.input.path};
+  r.inputs.insert(r.inputs.end(), args.input.more_paths.begin(), args.input.more_paths.end());
+  r.load.read = MakeReadOptions(args.input);
+  r.load.detection = args.input.detection;
+  if (GyroWanted(args)) GyroRequest(args, &r);
+  r.orientations = args.orientations;
+  r.noise = args.noise;
+  r.bias_random_walk = args.bias_random_walk;
+  r.temperatures_c = args.temperatures_c;
+  r.model = args.model == "auto"
+                ? std::nullopt
+                : std::optional(ParseEnum(ModelKindFromString(args.model), args.model, "--model",
+                                          (NameList<ModelKind>() + ", auto").c_str()));
+  if (Given(args, "--method")) {
+    r.method = ParseChoice<SolverMethod>(args.method, "--method", kOrientationFreeMethods);
+  }
+  if (Given(args, "--init")) {
+    r.init = ParseChoice<Initialization>(args.init, "--init", kInitializations);
+  }
+  if (Given(args, "--frame")) r.frame = ParseChoice<Frame>(args.frame, "--frame");
+  if (Given(args, "--estimator"))
+    r.estimator = ParseChoice<Estimator>(args.estimator, "--estimator");
+  if (args.bias_model == "auto") {
+    r.bias_model_auto = true;
+  } else if (Given(args, "--bias-model")) {
+    r.bias_model = BiasModelFromString(args.bias_model);
+    if (!r.bias_model) {
+      throw UsageError("--bias-model: '" + args.bias_model +
+                       "' is none of constant, linear, spline:K (K from 2 to " +
+                       std::to_string(kMaxBiasKnots) + ") or auto");
+    }
+  }
+  if (!args.thermal.empty()) {
+    r.thermal = true;
+    r.thermal_degrees = ParseThermalDegrees(args.thermal);
+  }
+  r.outliers = ParseOutlierOptions(args.outliers);
+  r.cross_validate = args.cross_validate;
+  r.max_iterations = args.max_iterations;
+  *g = ResolveGravity(args.gravity);
+  r.units = g->unit;
+  r.gravity_ms2 = g->ms2;
+  r.latitude_deg = args.gravity.latitude_deg;
+  for (const auto& [name, values] : args.given_options) {
+    if (name == "raw-units") r.raw_units = args.raw_units;
+  }
+  r.provenance.command = "accelcal calibrate";
+  r.provenance.options = GivenOptionsJson(args.given_options);
+  r.provenance.date = args.date;
+  return r;
+}
+
+RenderedCalibration RenderCalibration(const UnitOutcome& unit, const std::string& name,
+                                      bool report) {
+  RenderedCalibration out;
+  out.json = CalibrationToJson(unit.accelerometer, unit.FileInfo());
+  if (report) {
+    ReportInput input;
+    input.calibration_name = name;
+    input.calibration = ParseCalibrationJson(out.json, input.calibration_name);
+    if (const LoadedFile* raw = unit.input.FirstRaw()) {  // the report plots one log: the first
+      input.log = &raw->data.raw;
+      input.rejected = raw->detection->rejected;
+    }
+    out.report = RenderReport(input);
+  }
+  return out;
+}
+
+namespace {
+
+// The end of every calibrate: the file to -o, then the file to stdout (--json) or the summary.
+int WriteCalibration(const CalibrateArgs& args, const UnitOutcome& unit, const Gravity& g) {
+  const CalibrationResult& result = unit.accelerometer;
+  const LoadedInput& in = unit.input;
+  const Diagnosis& diagnosis = unit.diagnosis;
+  // Everything is rendered before anything is written: a failure leaves no file behind.
+  const RenderedCalibration rendered = RenderCalibration(
+      unit, args.output.empty() ? args.input.path : args.output, !args.report.empty());
+  const std::string& json = rendered.json;
+  const std::string& report = rendered.report;
+  {  // both files or neither
+    std::optional<OutputFile> file, report_file;
+    if (!args.output.empty()) file.emplace(args.output).Write(json);
+    if (!args.report.empty()) report_file.emplace(args.report).Write(report);
+    CommitAll({file ? &*file : nullptr, report_file ? &*report_file : nullptr});
+  }
+  const char* force_unit = g.unit == ForceUnit::kMetersPerSecond2 ? "m/s2" : "g";
+  const std::vector<double> errors = GravityNormErrors(result, Means(in.positions));
+  for (const OutlierFinding& o : result.outliers) {
+    Warn("%s: %s%s\n", args.input.path.c_str(),
+         OutlierMessage(o, in.positions, errors, force_unit, in.position_file).c_str(),
+         o.excluded ? " It was left out of the fit." : " It was kept in the fit.");
+  }
+  PrintFindings(diagnosis, args.input.path,
+                unit.gyroscope ? unit.gyroscope->path : args.input.path);
+  if (args.json) {
+    WriteFileAtomically("-", json);
+  } else {
+    PrintInput(in);
+    std::stringstream notes(WithCliFlags(unit.notes));
+    for (std::string line; std::getline(notes, line);) Say("%s\n", Shown(line).c_str());
+    PrintCalibration(result, in.positions, in.position_file, g, unit.raw_unit);
+    if (result.thermal) {
+      Say("%s", ThermalText(result, unit.thermal_selection ? &*unit.thermal_selection : nullptr, g,
+                            unit.raw_unit)
+                    .c_str());
+    }
+    if (unit.model_selection) PrintModelSelection(*unit.model_selection, args.model == "auto");
+    if (const std::optional<BiasModelSelection>& b = unit.bias_model_selection) {
+      Say("bias      auto -> %s: %s\n", ToString(b->chosen).c_str(), b->reason.c_str());
+    }
+    if (unit.gyroscope) PrintGyro(*unit.gyroscope, force_unit);
+    for (const Finding& f : diagnosis.findings) {
+      if (f.severity == Severity::kNote) Say("note      %s\n", f.message.c_str());
+    }
+    Say("verdict   %s\n", std::string(ToString(diagnosis.verdict())).c_str());
+    if (!args.output.empty()) Say("wrote     %s\n", Shown(args.output).c_str());
+    if (!args.report.empty()) Say("report    %s\n", Shown(args.report).c_str());
+  }
+  if (diagnosis.verdict() == Verdict::kFailed) {
+    WriteErrLine(
+        Format("accelcal: %s: the calibration failed its checks: written, but marked "
+               "\"verdict\": \"failed\"; do not use it as it is\n",
+               args.input.path.c_str()));
+    return kExitFailedChecks;
+  }
+  return kExitOk;
+}
+
+}  // namespace
 
 int RunCalibrate(const CalibrateArgs& args) {
   if (args.date_given) {
@@ -945,197 +572,18 @@ int RunCalibrate(const CalibrateArgs& args) {
     inputs.push_back(args.noise);
     CheckOutputs({{"-o", args.output}, {"--report", args.report}}, inputs);
   }
-  if (GyroWanted(args)) {  // usage errors before anything is read
-    GyroOptions(args);
-    CheckGyroColumns(args.input, args.gyro, args.gyro_columns);
-  }
-  const bool thermal = !args.thermal.empty();
-  if (!args.temperatures_c.empty()) {
-    if (!thermal) throw UsageError("--temperatures are for --thermal: give it too");
-    const std::size_t files = 1 + args.input.more_paths.size();
-    if (args.temperatures_c.size() != files) {
-      throw UsageError(Format("--temperatures: %zu given for %zu input file%s: one per file",
-                              args.temperatures_c.size(), files, files == 1 ? "" : "s"));
-    }
-    for (double t : args.temperatures_c) {
-      if (!InTemperatureRange(t)) {
-        throw UsageError(Format("--temperatures: %g is outside %g to %g degC", t,
-                                kTemperatureRange_C[0], kTemperatureRange_C[1]));
-      }
-    }
-  }
-  if (thermal) {
-    const char* with = !args.orientations.empty()       ? "--orientations"
-                       : args.bias_model != "constant"  ? "--bias-model"
-                       : args.model == "auto"           ? "--model auto"
-                       : args.method != "joint"         ? "--method"
-                       : args.frame != "x-first"        ? "--frame"
-                       : args.estimator != "ml"         ? "--estimator"
-                       : !args.bias_random_walk.empty() ? "--bias-random-walk"
-                       : !args.noise.empty()            ? "--noise"
-                                                        : nullptr;
-    if (with != nullptr) {
-      throw UsageError(std::string("--thermal is the joint maximum-likelihood fit (--method joint, "
-                                   "--estimator ml, --frame x-first) of a model chosen by --model "
-                                   "linear or quadratic, with a bias constant in time: not with ") +
-                       with);
-    }
-    if (GyroWanted(args) && !args.input.more_paths.empty()) {
-      throw UsageError(
-          "--thermal with --gyro calibrates the gyroscope from one recording through the "
-          "temperatures (a ramp, its turns between the positions): give one INPUT");
-    }
-    if (args.thermal == "auto" && !args.cross_validate) {
-      throw UsageError(
-          "--thermal auto decides on held-out error: it needs the cross-validation that "
-          "--no-crossval turns off");
-    }
-  }
-  if (!args.orientations.empty()) return RunCalibrateKnownOrientations(args);
-  CalibrationOptions options;
-  const bool auto_model = args.model == "auto";
-  options.model = auto_model ? ModelKind::kLinear
-                             : ParseEnum(ModelKindFromString(args.model), args.model, "--model",
-                                         (NameList<ModelKind>() + ", auto").c_str());
-  options.method = ParseChoice<SolverMethod>(args.method, "--method", kOrientationFreeMethods);
-  if (GyroWanted(args) && !IsMaximumLikelihood(options.method)) {
-    throw UsageError(
-        "--gyro and --gyro-columns need a maximum-likelihood --method (joint, "
-        "two-step or newton-lagrange): the gyroscope's fit weighs the "
-        "accelerometer by the residual of its fit, which " +
-        args.method + " does not estimate");
-  }
-  options.initialization = ParseChoice<Initialization>(args.init, "--init", kInitializations);
-  if (args.frame == "platform") {
-    throw UsageError(
-        "--frame platform is the frame of known orientations: give them with "
-        "--orientations");
-  }
-  options.frame = ParseChoice<Frame>(args.frame, "--frame", {Frame::kXFirst, Frame::kZFirst});
-  options.estimator = ParseChoice<Estimator>(args.estimator, "--estimator");
-  const bool auto_bias = args.bias_model == "auto";
-  if (!auto_bias) {
-    const std::optional<BiasModel> bias = BiasModelFromString(args.bias_model);
-    if (!bias) {
-      throw UsageError("--bias-model: '" + args.bias_model +
-                       "' is none of constant, linear, spline:K (K from 2 to " +
-                       std::to_string(kMaxBiasKnots) + ") or auto");
-    }
-    options.bias_model = *bias;
-  }
-  options.outliers = ParseOutlierOptions(args.outliers);
-  options.cross_validate = args.cross_validate;
-  const RandomWalkArg random_walk =
-      ParseRandomWalk(args, auto_bias || options.bias_model.kind == BiasModelKind::kSpline);
-  if (args.bias_model != "constant" && GyroWanted(args)) {
-    throw UsageError("--bias-model " + args.bias_model +
-                     " does not apply with the gyroscope: the joint fit with its rotations "
-                     "takes the accelerometer's bias as constant");
-  }
-  if (auto_bias && !args.cross_validate) {
-    throw UsageError(
-        "--bias-model auto decides on held-out error: it needs the cross-validation that "
-        "--no-crossval turns off");
-  }
-  if (auto_model && !args.cross_validate) {
-    throw UsageError(
-        "--model auto decides on held-out error: it needs the cross-validation that "
-        "--no-crossval turns off");
-  }
-  const Gravity g = ResolveGravity(args.gravity);
-  options.gravity = g.in_unit;
-  if (args.max_iterations > 0) {
-    options.two_step.max_sweeps = args.max_iterations;
-    options.joint.max_iterations = args.max_iterations;
-    options.modulus.max_iterations = args.max_iterations;
-    options.newton_lagrange.max_iterations = args.max_iterations;
-  }
-  if (auto why = options.Validate()) throw UsageError(*why);
-  if (auto_bias) {  // its candidates must be fittable as the options stand
-    CalibrationOptions drifting = options;
-    drifting.bias_model = BiasModel{BiasModelKind::kLinear, 0};
-    if (auto why = drifting.Validate()) throw UsageError("--bias-model auto: " + *why);
-  }
-  if (auto_model) {
-    CalibrationOptions quadratic = options;
-    quadratic.model = ModelKind::kQuadratic;
-    if (auto why = quadratic.Validate()) throw UsageError("--model auto: " + *why);
-  }
-  if (thermal) return RunCalibrateThermal(args, options, ParseThermal(args, options.model), g);
-  std::optional<GyroLogAhead> gyro_ahead;
-  if (GyroWanted(args)) gyro_ahead.emplace(args);
-  const LoadedInput in = LoadInput(args.input);
-  const std::vector<Vec3> means = Means(in.positions);
-  options.reading_sigmas = ReadingSigmas(in);  // empty: noise from the residuals
-  std::string note;
-  {  // positions recorded over a span of temperature, calibrated as if it did not matter
-    double lo = kTemperatureRange_C[1], hi = kTemperatureRange_C[0];
-    for (const Position& p : in.positions) {
-      if (p.temperature_c) lo = std::min(lo, *p.temperature_c), hi = std::max(hi, *p.temperature_c);
-    }
-    if (hi - lo >= kTemperatureSpanNote_K) {
-      note += Format(
-          "          temperature: the positions span %.3g K (%.4g to %.4g degC); parameters that "
-          "follow it (--thermal auto) may describe them better\n",
-          hi - lo, lo, hi);
-    }
-  }
-  if (random_walk.given()) {
-    options.bias_random_walk =
-        RandomWalkInRaw(random_walk, means, options, g, args.input.path, &note);
-  }
-  std::optional<BiasModelSelection> bias_selection;
-  if (!options.bias_model.constant() || auto_bias) {
-    std::string why;
-    options.position_times_s = PositionTimes(in, &why);
-    if (!why.empty() && !auto_bias) {
-      throw DataError("--bias-model " + args.bias_model + " needs each position's time: " + why);
-    }
-    if (auto_bias) {
-      // With --model auto the bias is chosen under the quadratic model, which holds whichever
-      // model is true (so that squared terms are not taken for a drift), then the model under
-      // that bias; the linear model when the quadratic one cannot be fitted.
-      if (auto_model) {
-        CalibrationOptions quadratic = options;
-        quadratic.model = ModelKind::kQuadratic;
-        try {
-          bias_selection = SelectBiasModel(means, quadratic);
-        } catch (const DataError&) {  // too few positions for it: the linear model decides
-        }
-      }
-      if (!bias_selection) bias_selection = SelectBiasModel(means, options);
-      if (!why.empty()) bias_selection->reason = "no position has a time: " + why;
-      options.bias_model = bias_selection->chosen;
-      if (options.bias_model.constant()) options.position_times_s.clear();
-    }
-  }
-  // For a quadratic fit (asked for, or a candidate of --model auto) the linear fit is the
-  // comparison: both with held-out validation, decided by ModelSelection's rule.
-  const ModelChoice choice = CalibrateChoosingModel(means, options, auto_model);
-  const CalibrationResult& result = choice.result;
-  const std::optional<ModelSelection>& selection = choice.selection;
-  if (result.drift) WarnDriftAcrossGap(args.input.path, result.drift->times_s, options.bias_model);
-  if (random_walk.given() && !(result.drift && result.drift->random_walk)) {
-    note += "          unused: the bias chosen is " + ToString(options.bias_model) +
-            ", and the prior is a spline's\n";
-  }
-  if (!result.summary.converged()) {
-    WriteErr(Format("accelcal: %s: the solver did not converge: %s; nothing written\n",
-                    args.input.path.c_str(), result.summary.termination_message.c_str()));
+  Gravity g{};
+  UnitRequest request = CalibrateRequest(args, &g);
+  ReportLoading(&request.load);
+  const UnitOutcome unit = CalibrateUnit(request);
+  for (const std::string& warning : unit.warnings) Warn("%s\n", WithCliFlags(warning).c_str());
+  if (!unit.converged()) {
+    WriteErrLine(Format("accelcal: %s: the solver did not converge: %s; nothing written\n",
+                        args.input.path.c_str(),
+                        unit.accelerometer.summary.termination_message.c_str()));
     return kExitNotConverged;
   }
-  if (GyroWanted(args)) {
-    const GyroRun gyro = RunGyro(args, in, result, &*gyro_ahead);
-    // The joint fit's accelerometer is the file's: the rotations refined it.
-    const CalibrationResult& accel =
-        gyro.calibration.accelerometer ? *gyro.calibration.accelerometer : result;
-    return WriteCalibration(args, in, g, accel, options.reading_sigmas,
-                            selection ? &*selection : nullptr,
-                            bias_selection ? &*bias_selection : nullptr, note, nullptr, &gyro);
-  }
-  return WriteCalibration(args, in, g, result, options.reading_sigmas,
-                          selection ? &*selection : nullptr,
-                          bias_selection ? &*bias_selection : nullptr, note);
+  return WriteCalibration(args, unit, g);
 }
 
 }  // namespace accelcal::cli

@@ -11,6 +11,7 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "accelcal/calibrate_unit.hpp"
 #include "accelcal/compare.hpp"
 #include "accelcal/error.hpp"
 #include "accelcal/gyro_calibration.hpp"

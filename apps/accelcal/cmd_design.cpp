@@ -368,11 +368,11 @@ int RunDesign(const DesignArgs& args) {
   // A plan that determines nothing is an error: said on stderr too, as every error is (the
   // output may go to a file, and a caller of the status reads stderr for its reason).
   if (!planned.observable) {
-    WriteErr("accelcal: " + unobservable + "\n");
+    WriteErrLine("accelcal: " + unobservable + "\n");
     return kExitBadInput;
   }
   if (degrees && !(thermal && thermal->observable)) {
-    WriteErr("accelcal: " + thermal_reason + "\n");
+    WriteErrLine("accelcal: " + thermal_reason + "\n");
     return kExitBadInput;
   }
   return kExitOk;

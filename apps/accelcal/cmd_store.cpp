@@ -528,7 +528,7 @@ int Add(const StoreArgs& args) {
                     : "");
   }
   if (changed > 0) {
-    WriteErr(
+    WriteErrLine(
         Format("accelcal: %d calibration%s differ%s from the unit's one before beyond the "
                "covariances (p < %g)\n",
                changed, changed == 1 ? "" : "s", changed == 1 ? "s" : "", kChangeP));

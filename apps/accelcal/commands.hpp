@@ -282,6 +282,8 @@ struct BatchArgs {
   /// The calibrate options given, as GivenOptions lists them: passed to every unit's calibrate
   /// as given (each unit's file records them in its provenance).
   std::vector<std::pair<std::string, std::vector<std::string>>> calibrate_options;
+  /// The same, as calibrate takes them (its INPUT each unit's files).
+  CalibrateArgs calibrate;
 };
 
 // accelcal store add|get|list: a directory of calibrations by unit and date, with an index, each

@@ -58,6 +58,14 @@ void WriteErr(std::string_view text) {
   }
 }
 
+void WriteErrLine(std::string_view text) {
+  const bool ends = !text.empty() && text.back() == '\n';
+  WriteErr(internal::VisibleLine(ends ? text.substr(0, text.size() - 1) : text) +
+           (ends ? "\n" : ""));
+}
+
+std::string Shown(std::string_view name) { return internal::VisibleLine(name); }
+
 void SetVerbosity(Verbosity verbosity) { g_verbosity = verbosity; }
 Verbosity CurrentVerbosity() { return g_verbosity; }
 
@@ -76,7 +84,7 @@ void Warn(const char* format, ...) {
   va_start(args, format);
   const std::string text = internal::VFormat(format, args);
   va_end(args);
-  WriteErr("accelcal: warning: " + text);
+  WriteErrLine("accelcal: warning: " + text);
 }
 
 void Detail(const char* format, ...) {
@@ -85,7 +93,7 @@ void Detail(const char* format, ...) {
   va_start(args, format);
   const std::string text = internal::VFormat(format, args);
   va_end(args);
-  WriteErr(text);
+  WriteErrLine(text);
 }
 
 ProgressBar::ProgressBar(std::string label)

@@ -40,6 +40,10 @@ Console SetConsole(Console console);
 bool Captured();
 void WriteOut(std::string_view text);
 void WriteErr(std::string_view text);
+/// A message of one line on stderr: every character of `text` but a final line feed made visible
+/// (internal::VisibleLine), so that a file name holding a line feed or a terminal's control
+/// sequence cannot make a line of its own ("verdict   ok") or rewrite the screen.
+void WriteErrLine(std::string_view text);
 
 /// How much the tool says besides its results (`--quiet`, `--verbose`). Results (files, and
 /// stdout when it is the requested output) are never affected; errors always go to stderr.
@@ -47,12 +51,16 @@ enum class Verbosity { kQuiet, kNormal, kVerbose };
 void SetVerbosity(Verbosity verbosity);
 Verbosity CurrentVerbosity();
 
+/// A name the user gave (a file's, a topic's) as a line of the summary can show it: control and
+/// direction characters escaped (internal::VisibleLine).
+std::string Shown(std::string_view name);
+
 /// An informational line on stdout (summaries, "wrote FILE"); nothing when quiet.
 void Say(const char* format, ...) __attribute__((format(printf, 1, 2)));
 /// "accelcal: warning: ..." on stderr (something the user must know about a result that was still
-/// written); nothing when quiet.
+/// written), one line (WriteErrLine); nothing when quiet.
 void Warn(const char* format, ...) __attribute__((format(printf, 1, 2)));
-/// A diagnostic line on stderr (detection thresholds, timings); only when verbose.
+/// A diagnostic line on stderr (detection thresholds, timings), as WriteErrLine; only when verbose.
 void Detail(const char* format, ...) __attribute__((format(printf, 1, 2)));
 
 /// A directory opened once and then used through its descriptor, so that what is made, read or

@@ -4,8 +4,10 @@
 /// the Summary, not thrown.
 
 #include <cstddef>
+#include <functional>
 #include <stdexcept>
 #include <string>
+#include <utility>
 
 namespace accelcal {
 
@@ -27,7 +29,14 @@ class InputError : public std::runtime_error {
 /// unobservable geometry, no static interval, ...). The message names the problem.
 class DataError : public std::runtime_error {
  public:
-  using std::runtime_error::runtime_error;
+  explicit DataError(const std::string& message, std::string file = "")
+      : std::runtime_error(message), file_(std::move(file)) {}
+  /// The file it is about when that is not the calculation's main input (the gyroscope's log
+  /// beside the accelerometer's); empty: the main input, or none.
+  const std::string& file() const { return file_; }
+
+ private:
+  std::string file_;
 };
 
 /// A DataError where an estimator that returns no Summary (the gyroscope's, whose failure to
@@ -36,5 +45,24 @@ class NotConvergedError : public DataError {
  public:
   using DataError::DataError;
 };
+
+/// Options of a request that cannot be used as given, alone or together (calibrate_unit.hpp).
+/// what() names each option as the Python keywords do (the tool's long options with `_` for
+/// `-`); marked() is the same text with each name marked {{name}}, for an edge that names
+/// options otherwise (RenderOptionNames): one rule, each edge's own words.
+class OptionError : public std::invalid_argument {
+ public:
+  explicit OptionError(const std::string& marked);
+  const std::string& marked() const { return marked_; }
+
+ private:
+  std::string marked_;
+};
+
+/// `marked` with each {{name}} replaced by `name_of(name)` (a flag of the tool, a keyword of
+/// Python); text without marks comes back as it is. The names are lowercase words of letters,
+/// digits and `_`: other braces are left alone.
+std::string RenderOptionNames(const std::string& marked,
+                              const std::function<std::string(const std::string&)>& name_of);
 
 }  // namespace accelcal

@@ -18,8 +18,10 @@
 #include <cstdarg>
 #include <cstdint>
 #include <cstdio>
+#include <initializer_list>
 #include <string>
 #include <string_view>
+#include <utility>
 
 namespace accelcal::internal {
 
@@ -175,6 +177,29 @@ inline std::string EscapeText(std::string_view text, Escaping style) {
 // quotes, printable Unicode) is kept as it is.
 inline std::string VisibleLine(std::string_view text) {
   return EscapeText(text, Escaping::kVisibleLine);
+}
+
+// `message` with each phrase of `pairs` (first: the phrase, second: its replacement) replaced where
+// it stands as words of its own (not inside a longer word of letters, digits and '_'), in order:
+// a message of the library's readers with the options it names put as an edge names them.
+inline std::string ReplaceWords(std::string message,
+                                std::initializer_list<std::pair<const char*, const char*>> pairs) {
+  const auto word = [](char c) {
+    return (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || (c >= '0' && c <= '9') || c == '_';
+  };
+  for (const auto& [phrase, replacement] : pairs) {
+    const std::string_view name = phrase;
+    for (std::size_t at = message.find(name); at != std::string::npos;
+         at = message.find(name, at + 1)) {
+      const std::size_t end = at + name.size();
+      if ((at > 0 && word(message[at - 1])) || (end < message.size() && word(message[end]))) {
+        continue;  // part of a longer word
+      }
+      message.replace(at, name.size(), replacement);
+      at += std::string_view(replacement).size() - 1;
+    }
+  }
+  return message;
 }
 
 }  // namespace accelcal::internal

@@ -222,6 +222,23 @@ TEST_F(Batch, RefusesWhatWouldMakeItsResultsWrong) {
   r = Exec("batch " + Path("in") + " -o " + Path("out") + " --unit-id '('");
   EXPECT_EQ(r.status, 2);
   EXPECT_NE(r.err.find("is not a regular expression"), std::string::npos) << r.err;
+  // From a hostile test: patterns that a backtracking search takes exponential time (or, with a
+  // large automaton, minutes) over: "^(a|aa)*c" on a name of 200 a's ran for more than a minute.
+  // Searched breadth-first over a bounded automaton they finish; a back-reference, which only
+  // backtracking can match, and an automaton over the bound are refused before anything is read.
+  fs::create_directories(Path("slow"));
+  const std::string long_name = std::string(200, 'a') + "b.csv";
+  Write("slow/" + long_name, UnitPositions(3, Plan::kGood, 3));
+  r = Exec("batch " + Path("slow") + " -o " + Path("slow_out") + " --unit-id '^(a|aa)*c' --json");
+  EXPECT_EQ(r.status, 6) << r.err;
+  EXPECT_NE(r.out.find("does not match the unit id pattern"), std::string::npos) << r.out;
+  r = Exec("batch " + Path("slow") + " -o " + Path("slow_out2") + " --unit-id '(a)\\1'");
+  EXPECT_EQ(r.status, 2);
+  EXPECT_NE(r.err.find("refers back to a group"), std::string::npos) << r.err;
+  r = Exec("batch " + Path("slow") + " -o " + Path("slow_out3") + " --unit-id '(a{1,99}){1,99}c'");
+  EXPECT_EQ(r.status, 2);
+  EXPECT_NE(r.err.find("too large to search in bounded time"), std::string::npos) << r.err;
+  EXPECT_FALSE(fs::exists(Path("slow_out3")));
   // A unit id that would leave the batch's directory.
   r = Exec("batch " + Path("in") + " -o " + Path("out") + " --unit-id '^()'");
   EXPECT_EQ(r.status, 6);

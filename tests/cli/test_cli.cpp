@@ -437,6 +437,33 @@ TEST_F(Cli, PositionsFileInG) {
             doc["gravity_norm_rms_before"].get<double>());
 }
 
+// From a hostile test: a file name is the user's, and may hold a line feed or a terminal's
+// control sequence. Every message line shows it escaped: "verdict   ok" in a name cannot make a
+// line of its own in a run that failed, nor ESC [2J clear the screen.
+TEST_F(Cli, FileNamesCannotMakeLinesOfTheirOwn) {
+  // Each odd name alone in its folder, given by a glob (the test's shell has no $'...').
+  fs::create_directories(Path("odd"));
+  fs::copy_file(kData + "/ctu-innalabs-ahrs-m3/measured_accelerations_24pos.csv",
+                Path("odd/n\nverdict   ok\n\x1b[2J\u202ex.csv"));
+  CliRun r = Exec("calibrate " + Path("odd") + "/n*x.csv --units g -o " + Path("out.json"));
+  ASSERT_EQ(r.status, 0) << r.err;
+  // One verdict line: the run's own.
+  EXPECT_EQ(r.out.find("\nverdict "), r.out.rfind("\nverdict ")) << r.out;
+  for (const std::string* text : {&r.out, &r.err}) {
+    EXPECT_EQ(text->find('\x1b'), std::string::npos) << *text;
+    EXPECT_EQ(text->find("\u202e"), std::string::npos) << *text;
+  }
+  EXPECT_NE(r.out.find("n\\nverdict   ok\\n\\x1B[2J\\u202Ex.csv: 24 positions"), std::string::npos)
+      << r.out;
+  // An error naming the file, on stderr.
+  fs::create_directories(Path("bad"));
+  Write("bad/b\nverdict   ok.csv", "x,y,z\n1,2\n");
+  r = Exec("calibrate " + Path("bad") + "/b*.csv");
+  EXPECT_EQ(r.status, 3);
+  EXPECT_EQ(r.err.find("\nverdict   ok"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("b\\nverdict   ok.csv"), std::string::npos) << r.err;
+}
+
 TEST_F(Cli, ApplyInvertsTheQuadraticModelAndConvertsUnits) {
   // A quadratic calibration in g from the CTU set, applied to a 3-column log of its own readings:
   // every corrected reading must have |f| close to 1 g, and m/s2 output is 9.80665 times larger.

@@ -1,0 +1,21 @@
+#pragma once
+// The library's options of a unit's request (calibrate_unit.hpp), for unit_request.cpp and
+// calibrate_unit.cpp.
+
+#include <string>
+
+#include "accelcal/calibrate_unit.hpp"
+#include "accelcal/known_orientation.hpp"
+
+namespace accelcal {
+
+/// The bias model as asked for: "auto", its name, or "constant" when none was.
+std::string BiasModelText(const UnitRequest& r);
+/// The gyroscope's estimator: as asked for, else two-stage on top of known orientations or a
+/// calibration over temperature, else joint.
+GyroEstimator GyroEstimatorOf(const UnitRequest& r);
+/// The orientation-free fit's options (the linear model when the model is chosen).
+CalibrationOptions CalibrationOptionsOf(const UnitRequest& r);
+KnownOrientationOptions KnownOrientationOptionsOf(const UnitRequest& r);
+
+}  // namespace accelcal

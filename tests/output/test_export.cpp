@@ -25,7 +25,8 @@ namespace {
 namespace fs = std::filesystem;
 constexpr double kPi = 3.14159265358979323846;
 
-// A MEMS device in g (raw readings in g too, as a phone logs them), fitted on 24 noisy positions.
+// A MEMS device in g (raw readings in g too, as a phone logs them, or in m/s2 when `raw_unit` says
+// so), fitted on 24 noisy positions.
 struct Fitted {
   std::string json;
   LoadedCalibration cal;
@@ -36,6 +37,11 @@ Fitted Fit(ModelKind model, Frame frame, const std::string& raw_unit = "g",
   truth.K << 1.02, 0, 0, 0.01, 0.98, 0, -0.02, 0.015, 1.01;
   truth.bias << 0.03, -0.02, 0.05;
   if (model == ModelKind::kQuadratic) truth.k2 << 0.01, -0.008, 0.012;
+  if (raw_unit == "m/s2") {  // readings in m/s2 of a force in g: K and b g0 times as large
+    truth.K *= kStandardGravity_ms2;
+    truth.bias *= kStandardGravity_ms2;
+    truth.k2 *= kStandardGravity_ms2;
+  }
   const std::vector<Vec3> readings =
       SimulatePositions(truth, 1.0, RandomDirectionsInCap(24, kPi, 3), Vec3::Constant(1e-3), 4);
   CalibrationOptions options;
@@ -252,6 +258,18 @@ LoadedCalibration::Gyroscope Gyroscope() {
   return g;
 }
 
+// The same gyroscope behind a driver that scales its rates to `unit` (`per_rad_s` of them a rad/s):
+// the counts taken from their zero (32768) and divided by the nominal 4780 per rad/s.
+LoadedCalibration::Gyroscope ScaledGyroscope(const std::string& unit, double per_rad_s) {
+  LoadedCalibration::Gyroscope g = Gyroscope();
+  const double s = per_rad_s / 4780;
+  g.params.K *= s;
+  g.params.bias = s * (g.params.bias - Vec3::Constant(32768));
+  g.params.G *= s;
+  g.raw_unit = unit;
+  return g;
+}
+
 // The three rows "- [a, b, c]" after the line `key` at or after `from` in a YAML text.
 Mat33 YamlRows(const std::string& text, const std::string& from, const std::string& key) {
   std::size_t at = text.find(from);
@@ -278,9 +296,9 @@ TEST(Export, KalibrGyroscopeAppliedAsKalibrDoesIsAccelcalsModel) {
   // raw unit) for the same vectors in the calibration's own frame, to round-off.
   for (const Frame frame : {Frame::kXFirst, Frame::kZFirst}) {
     Fitted f = Fit(ModelKind::kLinear, frame);
-    f.cal.gyroscope = Gyroscope();
+    f.cal.gyroscope = ScaledGyroscope("raw", 180 / kPi);
     ExportOptions options;
-    options.gyro_raw_unit = "deg/s";  // the rates as if in deg/s: s = π/180
+    options.gyro_raw_unit = "deg/s";  // the rates said to be in deg/s: s = π/180
     const ExportResult e = ExportCalibration(f.cal, f.json, ExportFormat::kKalibr, options);
     EXPECT_TRUE(e.gyroscope_included);
     EXPECT_TRUE(e.loss.dropped.empty());
@@ -632,8 +650,7 @@ TEST(Export, UnitOverridesMayNotContradictTheFile) {
   // --raw-unit and --gyro-raw-unit name a unit the file does not say ("raw", "counts"); against
   // one it says they would scale everything by 9.81 or 57.3 without a word.
   Fitted f = Fit(ModelKind::kLinear, Frame::kXFirst, "m/s2");
-  f.cal.gyroscope = Gyroscope();
-  f.cal.gyroscope->raw_unit = "deg/s";
+  f.cal.gyroscope = ScaledGyroscope("deg/s", 180 / kPi);
   ExportOptions g;
   g.raw_unit = "g";
   EXPECT_THROW(ExportCalibration(f.cal, f.json, ExportFormat::kPx4, g), std::invalid_argument);
@@ -678,8 +695,7 @@ TEST(Export, YamlNumbersAreNumbersToYaml11) {
   const fs::path dir = fs::path(::testing::TempDir()) / "accelcal_yaml_numbers";
   fs::create_directories(dir);
   Fitted f = Fit(ModelKind::kLinear, Frame::kXFirst, "m/s2");
-  f.cal.gyroscope = Gyroscope();
-  f.cal.gyroscope->raw_unit = "rad/s";
+  f.cal.gyroscope = ScaledGyroscope("rad/s", 1);
   ExportOptions o;
   o.noise = test::SampleNoise();
   o.noise->accelerometer.white = Vec3::Constant(5e-05);

@@ -137,7 +137,12 @@ struct ExportResult {
 
 /// `native_json` is the calibration file's text (for json and yaml, which carry all of it).
 /// Throws DataError when the format cannot express this calibration at all (kalibr, px4 and
-/// ardupilot need readings in m/s² or g), std::invalid_argument for bad options.
+/// ardupilot need readings in m/s² or g), or when a format that applies it to readings in m/s²
+/// (px4, ardupilot, kalibr, openvins, basalt) would be given an accelerometer no sensor has in that
+/// unit: scales outside 2/3 to 3/2, offsets beyond 0.5 g. A gyroscope no sensor has in rad/s
+/// (scales as those, offsets beyond 150 deg/s) is left out with the reason in gyroscope_omitted,
+/// or refused (DataError) by openvins and basalt, whose files state a gyroscope in any case.
+/// std::invalid_argument for bad options.
 ExportResult ExportCalibration(const LoadedCalibration& calibration, const std::string& native_json,
                                ExportFormat format, const ExportOptions& options = {});
 

@@ -408,12 +408,34 @@ const SourceStream* GyroscopeStream(const LoadedCalibration& cal) {
 // units readings are mistaken for are 9.8, 57 or thousands of times apart.
 constexpr double kMostPlausibleScaleError = 0.5;
 
-// The scales a diagonal target (PX4, ArduPilot) writes: scales far from 1 are readings in another
-// unit than the one they are said to be in (counts labelled m/s2), which the target would apply as
-// written. A unit given with the export is checked as the file's label is: vouching for a unit
-// does not make the readings fit it.
-void PlausibleScales(const Vec3& scale, const LoadedCalibration& cal, const ExportOptions& options,
-                     const char* tool) {
+// The largest accelerometer offset a target may be given, in g. Datasheets' worst zero-g offsets
+// are a few tenths of a g (ADXL345/ADXL350: ±150 mg on x and y, ±250 mg on z; consumer IMUs such
+// as the MPU-6050 or ICM-20602 well below), and an offset of half a g would already take a
+// quarter of a ±2 g part's full scale; ArduPilot's own accelerometer calibration refuses offsets
+// beyond 1 g (AccelCalibrator::accept_result). Twice the datasheets' worst leaves room for the
+// stress of soldering and mounting; beyond it the readings are another unit's, or the calibration
+// is not a sensor's.
+constexpr double kMostPlausibleOffset_g = 0.5;
+
+// The largest gyroscope offset a target may be given, in deg/s. Consumer MEMS gyroscopes' zero-rate
+// offsets reach tens of deg/s at their widest full scale (the MPU-6050's ±20 deg/s, the L3GD20's
+// ±75 deg/s typical at ±2000 deg/s); twice the worst of them is more than half of a ±250 deg/s
+// part's range, which no calibration that leaves the sensor usable has.
+constexpr double kMostPlausibleRateOffset_deg_s = 150.0;
+
+// The accelerometer as a target that takes readings in m/s² applies it (PX4, ArduPilot, Kalibr,
+// OpenVINS, Basalt), checked before anything is written: scales (K_ii⁻¹ in m/s² per m/s², what
+// PX4's and ArduPilot's SCALE hold) far from 1 are readings in another unit than the one they are
+// said to be in (counts labelled m/s2), and an offset beyond any sensor's is no sensor's
+// calibration; the target would apply either as written. One check for every target, so that a
+// file one of them refuses is refused by all. A unit given with the export is checked as the
+// file's label is: vouching for a unit does not make the readings fit it.
+void PlausibleAccelerometer(const LoadedCalibration& cal, const ExportOptions& options,
+                            double raw_ms2, const char* tool) {
+  const Vec3 scale =
+      (ForceToMetersPerSecond2(cal) / raw_ms2) * cal.params.K.diagonal().cwiseInverse();
+  const Vec3 offset_ms2 = raw_ms2 * cal.params.bias;
+  const std::string label = internal::VisibleLine(cal.raw_unit);
   for (int i = 0; i < 3; ++i) {
     if (!(scale(i) >= 1 / (1 + kMostPlausibleScaleError) &&
           scale(i) <= 1 + kMostPlausibleScaleError)) {
@@ -429,10 +451,60 @@ void PlausibleScales(const Vec3& scale, const LoadedCalibration& cal, const Expo
           "%s would apply scales of %.6g, %.6g, %.6g: a sensor's readings in '%s' have scales "
           "near 1, so these readings were not in '%s' (counts?); calibrate them with their "
           "unit, or give the raw unit option if they were in it",
-          tool, scale(0), scale(1), scale(2), internal::VisibleLine(cal.raw_unit).c_str(),
-          internal::VisibleLine(cal.raw_unit).c_str()));
+          tool, scale(0), scale(1), scale(2), label.c_str(), label.c_str()));
     }
   }
+  const double most_ms2 = kMostPlausibleOffset_g * kStandardGravity_ms2;
+  for (int i = 0; i < 3; ++i) {
+    if (!(std::abs(offset_ms2(i)) <= most_ms2)) {
+      throw DataError(Format(
+          "%s would apply offsets of %.6g, %.6g, %.6g m/s2: an accelerometer's zero-g offset is "
+          "within %.3g m/s2 (%.2g g; datasheets' worst are a few tenths of a g), so this is no "
+          "sensor's calibration, or its readings were not in '%s'",
+          tool, offset_ms2(0), offset_ms2(1), offset_ms2(2), most_ms2, kMostPlausibleOffset_g,
+          options.raw_unit.empty() ? label.c_str() : options.raw_unit.c_str()));
+    }
+  }
+}
+
+// The gyroscope as a target that takes rates in rad/s applies it (`rad_s` the rad/s of one raw
+// unit), the same check as the accelerometer's: its scales (the singular values of (s K_g)⁻¹, so
+// that a rotation between the sensors, which Kalibr, OpenVINS and Basalt hold, is no error) near
+// 1 and its offsets within any gyroscope's. Empty when plausible, else why not, for the target to
+// leave the gyroscope out with that reason or, where its file states a gyroscope in any case
+// (OpenVINS, Basalt), to refuse the export.
+std::string ImplausibleGyroscope(const LoadedCalibration& cal, const ExportOptions& options,
+                                 double rad_s, std::string_view format) {
+  const LoadedCalibration::Gyroscope& g = *cal.gyroscope;
+  const std::string tool(format);
+  const std::string label =
+      options.gyro_raw_unit.empty() ? internal::VisibleLine(g.raw_unit) : options.gyro_raw_unit;
+  const Vec3 singular = Eigen::JacobiSVD<Mat33>(Mat33(rad_s * g.params.K)).singularValues();
+  const double largest_scale = 1 / singular(2), smallest_scale = 1 / singular(0);
+  if (!(largest_scale <= 1 + kMostPlausibleScaleError &&
+        smallest_scale >= 1 / (1 + kMostPlausibleScaleError))) {
+    const std::string why =
+        options.gyro_raw_unit.empty()
+            ? "these rates were not in '" + label + "' (counts?); give gyro_raw_unit if they were"
+            : "the unit given (gyro_raw_unit " + label + ") does not fit these rates";
+    return Format(
+        "%s would apply gyroscope scales from %.6g to %.6g: a gyroscope's rates in '%s' have "
+        "scales near 1, so %s",
+        tool.c_str(), smallest_scale, largest_scale, label.c_str(), why.c_str());
+  }
+  const Vec3 offset_rad_s = rad_s * g.params.bias;
+  const double most_rad_s = kMostPlausibleRateOffset_deg_s * 3.14159265358979323846 / 180.0;
+  for (int i = 0; i < 3; ++i) {
+    if (!(std::abs(offset_rad_s(i)) <= most_rad_s)) {
+      return Format(
+          "%s would apply gyroscope offsets of %.6g, %.6g, %.6g rad/s: a gyroscope's zero-rate "
+          "offset is within %.3g rad/s (%.3g deg/s), so this is no sensor's calibration, or its "
+          "rates were not in '%s'",
+          tool.c_str(), offset_rad_s(0), offset_rad_s(1), offset_rad_s(2), most_rad_s,
+          kMostPlausibleRateOffset_deg_s, label.c_str());
+    }
+  }
+  return "";
 }
 
 // A PX4 device id: 32-bit.
@@ -653,6 +725,10 @@ std::optional<Px4Slot> Px4Gyroscope(const LoadedCalibration& cal, const ExportOp
                   options.gyro_raw_unit.c_str(), options.gyro_raw_unit.c_str(), 100 * largest);
     return std::nullopt;
   }
+  // Scales PX4 could hold within the bound above can still be no gyroscope's (offsets beyond
+  // any): the check every target makes.
+  out->gyroscope_omitted = ImplausibleGyroscope(cal, options, *rad_s, "PX4");
+  if (!out->gyroscope_omitted.empty()) return std::nullopt;
   if (g.thermal && g.thermal->degree() > 0) {
     // TC_G<n>: the offsets' polynomial in T - TREF taken from the rate before CAL_GYRO's offset
     // (TemperatureCompensation.cpp, sensor_calibration/Gyroscope.hpp), as TC_A: X0 = 0 and TREF
@@ -699,7 +775,7 @@ ExportResult Px4(const LoadedCalibration& cal, const ExportOptions& options) {
   const double raw_ms2 = RawToMetersPerSecond2(cal, options, "PX4", "its drivers scale the counts");
   const Diagonal d = DiagonalPart(cal, raw_ms2);
   for (int i = 0; i < 3; ++i) Float32(d.offset_ms2(i)), Float32(d.scale(i));
-  PlausibleScales(d.scale, cal, options, "PX4");
+  PlausibleAccelerometer(cal, options, raw_ms2, "PX4");
   ExportResult out;
   out.convention = DiagonalConvention("PX4 (src/lib/sensor_calibration)", cal, raw_ms2);
   const std::optional<std::uint64_t> id = Px4DeviceId(options.device_id, stream);
@@ -749,7 +825,7 @@ ExportResult ArduPilot(const LoadedCalibration& cal, const ExportOptions& option
       RawToMetersPerSecond2(cal, options, "ArduPilot", "its drivers scale the counts");
   Diagonal d = DiagonalPart(cal, raw_ms2);
   for (int i = 0; i < 3; ++i) Float32(d.offset_ms2(i)), Float32(d.scale(i));
-  PlausibleScales(d.scale, cal, options, "ArduPilot");
+  PlausibleAccelerometer(cal, options, raw_ms2, "ArduPilot");
   ExportResult out;
   out.convention = DiagonalConvention("ArduPilot (AP_InertialSensor)", cal, raw_ms2);
   const std::string prefix = instance == 0 ? "INS_ACC" : "INS_ACC" + std::to_string(instance + 1);
@@ -830,8 +906,11 @@ ExportResult ArduPilot(const LoadedCalibration& cal, const ExportOptions& option
         "ArduPilot learns its gyroscope's offsets at each boot and holds no gyroscope scale";
     if (cal.gyroscope->thermal && cal.gyroscope->thermal->degree() > 0) {
       std::string why;
-      gyro_rad_s =
+      const std::optional<double> rad_s =
           RawToRadPerSecond(cal, options, "ArduPilot", "its drivers scale the rates", &why);
+      // Terms in rad/s of rates that are not in the unit said would be applied as written.
+      if (rad_s) why = ImplausibleGyroscope(cal, options, *rad_s, "ArduPilot");
+      if (why.empty()) gyro_rad_s = rad_s;
       out.gyroscope_omitted +=
           gyro_rad_s ? Format(
                            ": only the offsets' change with temperature is written "
@@ -1157,7 +1236,10 @@ std::optional<KalibrGyro> XFirstGyroscope(const LoadedCalibration& cal,
   if (!cal.gyroscope) return std::nullopt;
   const std::optional<double> rad_s = RawToRadPerSecond(
       cal, options, format, "sensor_msgs/Imu angular_velocity", &out->gyroscope_omitted);
-  if (!rad_s) {
+  if (rad_s) {
+    out->gyroscope_omitted = ImplausibleGyroscope(cal, options, *rad_s, format);
+  }
+  if (!rad_s || !out->gyroscope_omitted.empty()) {
     if (required) throw DataError(out->gyroscope_omitted);
     return std::nullopt;
   }
@@ -1181,8 +1263,9 @@ struct EstimatorImu {
 EstimatorImu ForEstimator(const LoadedCalibration& cal, const ExportOptions& options,
                           const char* file, const char* tool, const char* why, ExportResult* out) {
   const ImuNoise& noise = NeedNoise(options, file, true);
-  const ForwardAccelerometer a =
-      XFirstAccelerometer(cal, RawToMetersPerSecond2(cal, options, tool, why));
+  const double raw_ms2 = RawToMetersPerSecond2(cal, options, tool, why);
+  PlausibleAccelerometer(cal, options, raw_ms2, tool);
+  const ForwardAccelerometer a = XFirstAccelerometer(cal, raw_ms2);
   std::optional<KalibrGyro> g = XFirstGyroscope(cal, options, a.change, tool, out, true);
   return {noise, a, std::move(g)};
 }
@@ -1191,6 +1274,7 @@ EstimatorImu ForEstimator(const LoadedCalibration& cal, const ExportOptions& opt
 ExportResult Kalibr(const LoadedCalibration& cal, const ExportOptions& options) {
   const double raw_ms2 =
       RawToMetersPerSecond2(cal, options, "Kalibr", "sensor_msgs/Imu linear_acceleration");
+  PlausibleAccelerometer(cal, options, raw_ms2, "Kalibr");
   const ForwardAccelerometer a = XFirstAccelerometer(cal, raw_ms2);
   ExportResult out;
   out.convention =

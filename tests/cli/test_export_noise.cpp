@@ -259,11 +259,37 @@ TEST_F(ExportNoise, AGyroscopeBesideAnAccelerometerInMetersPerSecond2IsLabelledR
       << r.err;
 }
 
+// The Xsens calibration as it would be of a driver's readings: its counts, 32768 at zero, taken to
+// m/s2 and rad/s by its sensitivities (raw' = (raw − 32768) / s, s its K's first entry), so that
+// the estimators' tests check its g-sensitive gyroscope in the units they read. The counts
+// themselves, said to be m/s2 and rad/s, are refused: scales of 0.0024 are no sensor's in m/s2.
+std::string InPhysicalUnits(const std::string& counts_json) {
+  constexpr double kZero = 32768;
+  nlohmann::ordered_json d = nlohmann::ordered_json::parse(counts_json);
+  for (const char* sensor : {"accelerometer", "gyroscope"}) {
+    nlohmann::ordered_json& c = d["sensors"][sensor];
+    const double s = c["K"][0][0].get<double>();
+    const auto scaled = [s](nlohmann::ordered_json& v, double zero) {
+      for (auto& x : v) x = (x.get<double>() - zero) / s;
+    };
+    for (auto& row : c["K"]) scaled(row, 0);
+    scaled(c["bias"], kZero);
+    if (c.contains("g_sensitivity")) {
+      for (auto& row : c["g_sensitivity"]) scaled(row, 0);
+    }
+    if (c.contains("positions")) {
+      for (auto& position : c["positions"]) scaled(position["mean"], kZero);
+    }
+  }
+  d["sensors"]["accelerometer"]["units"]["raw"] = "m/s2";
+  d["sensors"]["gyroscope"]["units"]["raw"] = "rad/s";
+  return d.dump();
+}
+
 // The raw readings the estimators' tests correct (one row per position of the Xsens calibration:
-// its accelerometer mean and a rate in a different direction each time), and accelcal's own
-// correction of them: f from the calibration, w = K_g⁻¹ (raw − b_g − G f) in rad/s, without G when
-// `with_g` is false. The Xsens readings are counts; the exports are told they are m/s2 and rad/s
-// (--raw-unit, --gyro-raw-unit) so that its g-sensitive gyroscope can be checked too.
+// its accelerometer mean and a rate of ~0.6 rad/s in a different direction each time), and
+// accelcal's own correction of them: f from the calibration, w = K_g⁻¹ (raw − b_g − G f) in rad/s,
+// without G when `with_g` is false.
 struct Readings {
   std::string rows;        // "ax ay az wx wy wz" per line
   std::vector<Vec3> f, w;  // accelcal's correction
@@ -274,7 +300,8 @@ Readings XsensReadings(const LoadedCalibration& cal, bool with_g) {
   for (std::size_t k = 0; k < cal.position_means.size(); ++k) {
     const Vec3& p = cal.position_means[k];
     const double t = static_cast<double>(k);
-    const Vec3 raw_w = g.params.bias + 3000 * Vec3(std::cos(t), std::sin(2 * t), std::cos(3 * t));
+    const Vec3 raw_w = g.params.bias +
+                       0.6 * g.params.K(0, 0) * Vec3(std::cos(t), std::sin(2 * t), std::cos(3 * t));
     const Vec3 f = *SpecificForce(cal.params, p);
     r.f.push_back(f);
     const Vec3 g_f = with_g ? Vec3(g.params.G * f) : Vec3::Zero();
@@ -363,11 +390,11 @@ TEST_F(ExportNoise, CalibrateTakesTheBiasRandomWalkFromIt) {
 }
 
 TEST_F(ExportNoise, OpenVinsCorrectsReadingsAsAccelcalDoes) {
-  const LoadedCalibration cal = ParseCalibrationJson(test::Slurp(cal_), cal_);
+  const std::string si = Write("xsens-si.json", InPhysicalUnits(test::Slurp(cal_)));
+  const LoadedCalibration cal = ParseCalibrationJson(test::Slurp(si), si);
   ASSERT_TRUE(cal.gyroscope && !cal.gyroscope->params.G.isZero(0));  // the g-sensitive model
   const std::string yaml = Path("kalibr_imu_chain.yaml");
-  const CliRun r = Exec("export " + cal_ + " --to openvins --noise " + noise_ +
-                        " --raw-unit m/s2 --gyro-raw-unit rad/s -o " + yaml);
+  const CliRun r = Exec("export " + si + " --to openvins --noise " + noise_ + " -o " + yaml);
   ASSERT_EQ(r.status, 0) << r.err;
   const Readings ours = XsensReadings(cal, true);
   const std::string rows = Write("readings.txt", ours.rows);
@@ -407,10 +434,10 @@ constexpr const char* kBasaltReader =
     "    print(\" \".join(repr(float(x)) for x in list(a) + list(w)))\n";
 
 TEST_F(ExportNoise, BasaltCorrectsReadingsAsAccelcalDoesWithoutTheGSensitivity) {
-  const LoadedCalibration cal = ParseCalibrationJson(test::Slurp(cal_), cal_);
+  const std::string si = Write("xsens-si.json", InPhysicalUnits(test::Slurp(cal_)));
+  const LoadedCalibration cal = ParseCalibrationJson(test::Slurp(si), si);
   const std::string json = Path("calib.json");
-  const CliRun r = Exec("export " + cal_ + " --to basalt --noise " + noise_ +
-                        " --raw-unit m/s2 --gyro-raw-unit rad/s -o " + json);
+  const CliRun r = Exec("export " + si + " --to basalt --noise " + noise_ + " -o " + json);
   ASSERT_EQ(r.status, 0) << r.err;
   // Basalt has no g-sensitivity: its correction is accelcal's without G, and the export says so.
   const Readings ours = XsensReadings(cal, false);

@@ -1,5 +1,6 @@
-// Exports to other tools' formats (export.hpp, docs/conventions.md): each read back the way its
-// tool reads it and applied the way its tool applies it, against accelcal's own correction.
+// Exports to other tools' formats (export.hpp, docs/conventions.md): each read
+// back the way its tool reads it and applied the way its tool applies it,
+// against accelcal's own correction.
 #include <sys/wait.h>
 
 #include <cmath>
@@ -9,6 +10,7 @@
 #include <sstream>
 
 #include <gtest/gtest.h>
+#include <Eigen/Geometry>
 #include <Eigen/LU>
 #include <Eigen/SVD>
 
@@ -25,7 +27,8 @@ namespace {
 namespace fs = std::filesystem;
 constexpr double kPi = 3.14159265358979323846;
 
-// A MEMS device in g (raw readings in g too, as a phone logs them), fitted on 24 noisy positions.
+// A MEMS device in g (raw readings in g too, as a phone logs them, or in m/s2
+// when `raw_unit` says so), fitted on 24 noisy positions.
 struct Fitted {
   std::string json;
   LoadedCalibration cal;
@@ -36,6 +39,11 @@ Fitted Fit(ModelKind model, Frame frame, const std::string& raw_unit = "g",
   truth.K << 1.02, 0, 0, 0.01, 0.98, 0, -0.02, 0.015, 1.01;
   truth.bias << 0.03, -0.02, 0.05;
   if (model == ModelKind::kQuadratic) truth.k2 << 0.01, -0.008, 0.012;
+  if (raw_unit == "m/s2") {  // readings in m/s2 of a force in g: K and b g0 times as large
+    truth.K *= kStandardGravity_ms2;
+    truth.bias *= kStandardGravity_ms2;
+    truth.k2 *= kStandardGravity_ms2;
+  }
   const std::vector<Vec3> readings =
       SimulatePositions(truth, 1.0, RandomDirectionsInCap(24, kPi, 3), Vec3::Constant(1e-3), 4);
   CalibrationOptions options;
@@ -63,7 +71,8 @@ std::vector<double> Numbers(const std::string& text) {
   return v;
 }
 
-// Every value of `NAME<sep>VALUE` lines whose name starts with `prefix`, in order.
+// Every value of `NAME<sep>VALUE` lines whose name starts with `prefix`, in
+// order.
 std::vector<double> ParameterValues(const std::string& text, const std::string& prefix, char sep,
                                     int value_field) {
   std::vector<double> values;
@@ -86,7 +95,8 @@ TEST(Export, ImuTkAppliedAsImuTkDoesIsAccelcalsCorrection) {
   for (const Frame frame : {Frame::kXFirst, Frame::kZFirst}) {
     const Fitted f = Fit(ModelKind::kLinear, frame);
     const ExportResult e = ExportCalibration(f.cal, f.json, ExportFormat::kImuTk);
-    // CalibratedTriad::load: 9 numbers of T (row-major), 9 of S, 3 of B; f = T S (p − B).
+    // CalibratedTriad::load: 9 numbers of T (row-major), 9 of S, 3 of B; f = T
+    // S (p − B).
     const std::vector<double> n = Numbers(e.text);
     ASSERT_EQ(n.size(), 21u);
     const Mat33 T = Eigen::Map<const Eigen::Matrix<double, 3, 3, Eigen::RowMajor>>(n.data());
@@ -108,7 +118,8 @@ TEST(Export, QuadraticTermsDroppedAreNamedAndMeasured) {
   const Fitted f = Fit(ModelKind::kQuadratic, Frame::kXFirst);
   const ExportResult e = ExportCalibration(f.cal, f.json, ExportFormat::kImuTk);
   EXPECT_EQ(e.loss.dropped, "the squared terms k2");
-  // Independently: the linear part's correction against the full one on the file's positions.
+  // Independently: the linear part's correction against the full one on the
+  // file's positions.
   double max_error = 0;
   for (const Vec3& p : f.cal.position_means) {
     const Vec3 linear = f.cal.params.K.inverse() * (p - f.cal.params.bias);
@@ -125,15 +136,17 @@ TEST(Export, Px4AndArduPilotHoldTheDiagonalAndSayWhatTheyDrop) {
   for (const ExportFormat format : {ExportFormat::kPx4, ExportFormat::kArduPilot}) {
     const ExportResult e = ExportCalibration(f.cal, f.json, format);
     const bool px4 = format == ExportFormat::kPx4;
-    // PX4: `1 1 CAL_ACC0_XOFF value 9` (tab-separated, offsets then scales); ArduPilot: NAME,VALUE.
+    // PX4: `1 1 CAL_ACC0_XOFF value 9` (tab-separated, offsets then scales);
+    // ArduPilot: NAME,VALUE.
     const std::vector<double> offsets = px4 ? ParameterValues(e.text, "CAL_ACC0_", '\t', 3)
                                             : ParameterValues(e.text, "INS_ACCOFFS", ',', 1);
     const std::vector<double> scales = px4 ? std::vector<double>(offsets.begin() + 3, offsets.end())
                                            : ParameterValues(e.text, "INS_ACCSCAL", ',', 1);
     ASSERT_EQ(offsets.size(), px4 ? 6u : 3u);
     ASSERT_EQ(scales.size(), 3u);
-    // The tool's correction (p − offset) .* scale on readings in m/s², here g · 9.80665, gives
-    // m/s²; it equals (p − b)_i / K_ii in g, to the 9 digits written.
+    // The tool's correction (p − offset) .* scale on readings in m/s², here g
+    // · 9.80665, gives m/s²; it equals (p − b)_i / K_ii in g, to the 9 digits
+    // written.
     for (const Vec3& p : f.cal.position_means) {
       for (int i = 0; i < 3; ++i) {
         const auto j = static_cast<std::size_t>(i);
@@ -143,7 +156,8 @@ TEST(Export, Px4AndArduPilotHoldTheDiagonalAndSayWhatTheyDrop) {
       }
     }
     EXPECT_EQ(e.loss.dropped, "the misalignments (K's off-diagonal terms)");
-    // The dropped misalignments (0.01-0.02) move corrected readings by up to ~2e-2 g.
+    // The dropped misalignments (0.01-0.02) move corrected readings by up to
+    // ~2e-2 g.
     EXPECT_GT(e.loss.max_error, 1e-3);
     EXPECT_LT(e.loss.max_error, 5e-2);
   }
@@ -164,6 +178,73 @@ TEST(Export, ToolsThatNeedMetersPerSecond2RefuseOtherRawUnits) {
   ExportOptions said_g;
   said_g.raw_unit = "g";
   EXPECT_NO_THROW(ExportCalibration(f.cal, f.json, ExportFormat::kPx4, said_g));
+}
+
+// The targets that apply a calibration to readings in m/s2 and rates in rad/s
+// load it as it is written, so each refuses, as the others do, a calibration no
+// sensor has in those units. A Kalibr M of 4796 "in m/s2" (counts said to be
+// m/s2) had been written, exit 0, where PX4 refused it.
+const std::vector<ExportFormat> kPhysicalTargets = {ExportFormat::kPx4, ExportFormat::kArduPilot,
+                                                    ExportFormat::kKalibr, ExportFormat::kOpenVins,
+                                                    ExportFormat::kBasalt};
+
+// The DataError of an export, or "" when it is written.
+std::string Refusal(const Fitted& f, ExportFormat format, const ExportOptions& options) {
+  try {
+    ExportCalibration(f.cal, f.json, format, options);
+    return "";
+  } catch (const DataError& e) {
+    return e.what();
+  }
+}
+
+TEST(Export, EveryTargetInPhysicalUnitsRefusesScalesNoSensorHas) {
+  ExportOptions options;
+  options.noise = test::SampleNoise();
+  const Fitted good = Fit(ModelKind::kLinear, Frame::kXFirst);
+  for (const ExportFormat format : kPhysicalTargets) {
+    EXPECT_EQ(Refusal(good, format, options), "") << ToString(format);
+  }
+  // Counts said to be g (a 4096-per-g part); K twice or a billionth of a
+  // sensor's; an axis reading the negative of its force.
+  const std::pair<const char*, Mat33> wrong[] = {
+      {"counts", 4096 * good.cal.params.K},
+      {"2x", 2 * good.cal.params.K},
+      {"tiny", 1e-9 * good.cal.params.K},
+      {"negative", Vec3(-1, 1, 1).asDiagonal() * good.cal.params.K}};
+  for (const auto& [what, K] : wrong) {
+    Fitted f = good;
+    f.cal.params.K = K;
+    for (const ExportFormat format : kPhysicalTargets) {
+      const std::string refusal = Refusal(f, format, options);
+      EXPECT_NE(refusal.find("would apply scales of"), std::string::npos)
+          << what << " " << ToString(format) << ": " << refusal;
+    }
+  }
+}
+
+TEST(Export, EveryTargetInPhysicalUnitsRefusesOffsetsNoSensorHas) {
+  // Datasheets' worst zero-g offsets are ~0.25 g: 0.45 g is a poor part's, 0.55
+  // g and 500 m/s2 (51 g) no accelerometer's; the bound is 0.5 g, on every
+  // axis.
+  ExportOptions options;
+  options.noise = test::SampleNoise();
+  for (const auto& [offset_g, plausible] :
+       {std::pair{0.45, true}, std::pair{-0.55, false}, std::pair{51.0, false}}) {
+    for (int axis = 0; axis < 3; ++axis) {
+      Fitted f = Fit(ModelKind::kLinear, Frame::kXFirst);
+      f.cal.params.bias(axis) = offset_g;
+      for (const ExportFormat format : kPhysicalTargets) {
+        const std::string refusal = Refusal(f, format, options);
+        if (plausible) {
+          EXPECT_EQ(refusal, "") << ToString(format);
+        } else {
+          EXPECT_NE(refusal.find("would apply offsets of"), std::string::npos)
+              << offset_g << " " << ToString(format) << ": " << refusal;
+        }
+      }
+    }
+  }
 }
 
 TEST(Export, KalibrMIsKInTheXFirstFrameInMetersPerSecond2) {
@@ -187,7 +268,8 @@ TEST(Export, KalibrMIsKInTheXFirstFrameInMetersPerSecond2) {
     EXPECT_EQ(M(0, 1), 0.0);
     EXPECT_EQ(M(0, 2), 0.0);
     EXPECT_EQ(M(1, 2), 0.0);
-    // Readings and bias in m/s² (raw g · g0); the corrected magnitude is the frame-free check.
+    // Readings and bias in m/s² (raw g · g0); the corrected magnitude is the
+    // frame-free check.
     const double g0 = kStandardGravity_ms2;
     for (const Vec3& p : f.cal.position_means) {
       const Vec3 a = M.inverse() * (g0 * (p - f.cal.params.bias));
@@ -215,10 +297,12 @@ TEST(Export, CHeaderCompiledAndRunGivesAccelcalsCorrectionBitForBit) {
     std::ofstream((dir / "cal.h").string())
         << ExportCalibration(f.cal, f.json, ExportFormat::kCHeader, options).text;
     std::ofstream((dir / "main.c").string())
-        << "#include <stdio.h>\n#include \"cal.h\"\nint main(void) {\n  double p[3], f[3];\n"
+        << "#include <stdio.h>\n#include \"cal.h\"\nint main(void) {\n  double "
+           "p[3], f[3];\n"
            "  while (scanf(\"%lf %lf %lf\", &p[0], &p[1], &p[2]) == 3) {\n"
            "    if (imu0_correct(p, f) != 0) return 2;\n"
-           "    printf(\"%.17g %.17g %.17g\\n\", f[0], f[1], f[2]);\n  }\n  return 0;\n}\n";
+           "    printf(\"%.17g %.17g %.17g\\n\", f[0], f[1], f[2]);\n  }\n  "
+           "return 0;\n}\n";
     std::ofstream in((dir / "in.txt").string());
     in.precision(17);
     for (const Vec3& p : f.cal.position_means) in << p(0) << " " << p(1) << " " << p(2) << "\n";
@@ -241,7 +325,8 @@ TEST(Export, CHeaderCompiledAndRunGivesAccelcalsCorrectionBitForBit) {
   }
 }
 
-// A gyroscope beside the accelerometer of Fit (its numbers as the Xsens recording's).
+// A gyroscope beside the accelerometer of Fit (its numbers as the Xsens
+// recording's).
 LoadedCalibration::Gyroscope Gyroscope() {
   LoadedCalibration::Gyroscope g;
   g.model = GyroModelKind::kGSensitive;
@@ -252,7 +337,21 @@ LoadedCalibration::Gyroscope Gyroscope() {
   return g;
 }
 
-// The three rows "- [a, b, c]" after the line `key` at or after `from` in a YAML text.
+// The same gyroscope behind a driver that scales its rates to `unit`
+// (`per_rad_s` of them a rad/s): the counts taken from their zero (32768) and
+// divided by the nominal 4780 per rad/s.
+LoadedCalibration::Gyroscope ScaledGyroscope(const std::string& unit, double per_rad_s) {
+  LoadedCalibration::Gyroscope g = Gyroscope();
+  const double s = per_rad_s / 4780;
+  g.params.K *= s;
+  g.params.bias = s * (g.params.bias - Vec3::Constant(32768));
+  g.params.G *= s;
+  g.raw_unit = unit;
+  return g;
+}
+
+// The three rows "- [a, b, c]" after the line `key` at or after `from` in a
+// YAML text.
 Mat33 YamlRows(const std::string& text, const std::string& from, const std::string& key) {
   std::size_t at = text.find(from);
   at = text.find(key + "\n", at);
@@ -272,15 +371,16 @@ Mat33 YamlRows(const std::string& text, const std::string& from, const std::stri
 }
 
 TEST(Export, KalibrGyroscopeAppliedAsKalibrDoesIsAccelcalsModel) {
-  // Kalibr's reference IMU: w_measured = M C_gyro_i w + A C_gyro_i a + b in rad/s, for w and a in
-  // the IMU frame of its accelerometer's M (accelcal's x-first frame). Read back and applied to
-  // rates and forces in that frame, it gives accelcal's K_g w + b_g + G f (times the rad/s of a
-  // raw unit) for the same vectors in the calibration's own frame, to round-off.
+  // Kalibr's reference IMU: w_measured = M C_gyro_i w + A C_gyro_i a + b in
+  // rad/s, for w and a in the IMU frame of its accelerometer's M (accelcal's
+  // x-first frame). Read back and applied to rates and forces in that frame, it
+  // gives accelcal's K_g w + b_g + G f (times the rad/s of a raw unit) for the
+  // same vectors in the calibration's own frame, to round-off.
   for (const Frame frame : {Frame::kXFirst, Frame::kZFirst}) {
     Fitted f = Fit(ModelKind::kLinear, frame);
-    f.cal.gyroscope = Gyroscope();
+    f.cal.gyroscope = ScaledGyroscope("raw", 180 / kPi);
     ExportOptions options;
-    options.gyro_raw_unit = "deg/s";  // the rates as if in deg/s: s = π/180
+    options.gyro_raw_unit = "deg/s";  // the rates said to be in deg/s: s = π/180
     const ExportResult e = ExportCalibration(f.cal, f.json, ExportFormat::kKalibr, options);
     EXPECT_TRUE(e.gyroscope_included);
     EXPECT_TRUE(e.loss.dropped.empty());
@@ -293,7 +393,8 @@ TEST(Export, KalibrGyroscopeAppliedAsKalibrDoesIsAccelcalsModel) {
     EXPECT_LT((C * C.transpose() - Mat33::Identity()).norm(), 1e-15);
     EXPECT_NEAR(C.determinant(), 1.0, 1e-15);
     const Mat33 Q = ChangeFrame(f.cal.params.K, Frame::kXFirst).Q_old_new;
-    const double s = kPi / 180, g0 = kStandardGravity_ms2;  // the calibration's force unit is g
+    const double s = kPi / 180,
+                 g0 = kStandardGravity_ms2;  // the calibration's force unit is g
     const GyroParameters& g = f.cal.gyroscope->params;
     for (const auto& [w, a] : {std::pair<Vec3, Vec3>{{0.3, -1.2, 0.7}, {1.0, -9.0, 3.5}},
                                std::pair<Vec3, Vec3>{{-2.0, 0.1, 0.4}, {9.8, 0.2, -0.3}}}) {
@@ -309,6 +410,56 @@ TEST(Export, KalibrGyroscopeAppliedAsKalibrDoesIsAccelcalsModel) {
   EXPECT_FALSE(e.gyroscope_included);
   EXPECT_EQ(e.text.find("gyroscopes:"), std::string::npos);
   EXPECT_NE(e.gyroscope_omitted.find("gyro_raw_unit"), std::string::npos) << e.gyroscope_omitted;
+}
+
+TEST(Export, GyroscopesNoSensorHasAreLeftOutOrRefused) {
+  // Kalibr and PX4 hold a gyroscope beside the accelerometer: one no sensor has
+  // is left out, saying why; OpenVINS' and Basalt's files state one in any
+  // case, so they refuse the export.
+  ExportOptions options;
+  options.noise = test::SampleNoise();
+  Fitted f = Fit(ModelKind::kLinear, Frame::kXFirst);
+  f.cal.gyroscope = ScaledGyroscope("rad/s", 1);
+  for (const ExportFormat format : {ExportFormat::kPx4, ExportFormat::kKalibr,
+                                    ExportFormat::kOpenVins, ExportFormat::kBasalt}) {
+    EXPECT_TRUE(ExportCalibration(f.cal, f.json, format, options).gyroscope_included)
+        << ToString(format);
+  }
+  // A gyroscope turned 90 degrees from the accelerometer is a sensor's: the
+  // estimators hold the rotation between them (Kalibr's C_gyro_i), so its
+  // scales are 1.
+  Fitted turned = f;
+  turned.cal.gyroscope->params.K =
+      f.cal.gyroscope->params.K * Eigen::AngleAxisd(kPi / 2, Vec3::UnitZ()).toRotationMatrix();
+  for (const ExportFormat format :
+       {ExportFormat::kKalibr, ExportFormat::kOpenVins, ExportFormat::kBasalt}) {
+    EXPECT_TRUE(ExportCalibration(turned.cal, turned.json, format, options).gyroscope_included)
+        << ToString(format);
+  }
+  // Rates in deg/s said to be rad/s; offsets of 3 rad/s (172 deg/s, beyond any
+  // gyroscope's).
+  Fitted degrees = f;
+  degrees.cal.gyroscope = ScaledGyroscope("rad/s", 180 / kPi);
+  Fitted offset = f;
+  offset.cal.gyroscope->params.bias(1) = 3;
+  for (const auto& [wrong, why] : {std::pair{&degrees, "would apply gyroscope scales"},
+                                   std::pair{&offset, "would apply gyroscope offsets"}}) {
+    const ExportResult kalibr =
+        ExportCalibration(wrong->cal, wrong->json, ExportFormat::kKalibr, options);
+    EXPECT_FALSE(kalibr.gyroscope_included);
+    EXPECT_EQ(kalibr.text.find("gyroscopes:"), std::string::npos);
+    EXPECT_NE(kalibr.gyroscope_omitted.find(why), std::string::npos) << kalibr.gyroscope_omitted;
+    EXPECT_FALSE(
+        ExportCalibration(wrong->cal, wrong->json, ExportFormat::kPx4, options).gyroscope_included);
+    for (const ExportFormat format : {ExportFormat::kOpenVins, ExportFormat::kBasalt}) {
+      const std::string refusal = Refusal(*wrong, format, options);
+      EXPECT_NE(refusal.find(why), std::string::npos) << ToString(format) << ": " << refusal;
+    }
+  }
+  const ExportResult px4 = ExportCalibration(offset.cal, offset.json, ExportFormat::kPx4, options);
+  EXPECT_EQ(px4.text.find("CAL_GYRO"), std::string::npos) << px4.text;
+  EXPECT_NE(px4.gyroscope_omitted.find("would apply gyroscope offsets"), std::string::npos)
+      << px4.gyroscope_omitted;
 }
 
 TEST(Export, ImuTkGyroscopeAppliedAsImuTkDoesIsAccelcalsCorrectionLessG) {
@@ -336,7 +487,8 @@ TEST(Export, ImuTkGyroscopeAppliedAsImuTkDoesIsAccelcalsCorrectionLessG) {
   std::snprintf(expected, sizeof expected, "up to %.3g deg/h",
                 largest * f.cal.gravity * 180 / kPi * 3600);
   EXPECT_NE(e.gyroscope_dropped.find(expected), std::string::npos) << e.gyroscope_dropped;
-  // Without a gyroscope in the file, or for another format, the sensor is refused.
+  // Without a gyroscope in the file, or for another format, the sensor is
+  // refused.
   EXPECT_THROW(ExportCalibration(Fit(ModelKind::kLinear, Frame::kXFirst).cal, f.json,
                                  ExportFormat::kImuTk, options),
                DataError);
@@ -354,10 +506,13 @@ TEST(Export, CHeaderCorrectsTheGyroscopeBitForBit) {
   EXPECT_TRUE(e.gyroscope_included);
   std::ofstream((dir / "cal.h").string()) << e.text;
   std::ofstream((dir / "main.c").string())
-      << "#include <stdio.h>\n#include \"cal.h\"\nint main(void) {\n  double raw[3], f[3], w[3];\n"
-         "  while (scanf(\"%lf %lf %lf %lf %lf %lf\", &raw[0], &raw[1], &raw[2], &f[0], &f[1], "
+      << "#include <stdio.h>\n#include \"cal.h\"\nint main(void) {\n  double "
+         "raw[3], f[3], w[3];\n"
+         "  while (scanf(\"%lf %lf %lf %lf %lf %lf\", &raw[0], &raw[1], "
+         "&raw[2], &f[0], &f[1], "
          "&f[2]) == 6) {\n    accelcal_correct_gyro(raw, f, w);\n"
-         "    printf(\"%.17g %.17g %.17g\\n\", w[0], w[1], w[2]);\n  }\n  return 0;\n}\n";
+         "    printf(\"%.17g %.17g %.17g\\n\", w[0], w[1], w[2]);\n  }\n  "
+         "return 0;\n}\n";
   const std::vector<std::pair<Vec3, Vec3>> samples = {
       {Vec3(32770, 32451, 32509), Vec3(0, 0, 9.81)},
       {Vec3(40000.5, 30000.25, 20000.125), Vec3(3.1, -4.2, 8.0)}};
@@ -377,8 +532,8 @@ TEST(Export, CHeaderCorrectsTheGyroscopeBitForBit) {
   std::ifstream out((dir / "out.txt").string());
   const std::vector<double> n = Numbers(std::string(std::istreambuf_iterator<char>(out), {}));
   ASSERT_EQ(n.size(), 6u);
-  // The header's constants are the printed doubles of K_g⁻¹, b and G: the same operations in the
-  // same order here give the same bits.
+  // The header's constants are the printed doubles of K_g⁻¹, b and G: the same
+  // operations in the same order here give the same bits.
   const GyroParameters& g = f.cal.gyroscope->params;
   const Mat33 K_inverse = g.K.inverse();
   for (std::size_t k = 0; k < samples.size(); ++k) {
@@ -396,31 +551,38 @@ TEST(Export, CHeaderCorrectsTheGyroscopeBitForBit) {
 }
 
 TEST(Export, YamlReadsBackAsTheSameDocumentInAYaml11Reader) {
-  // PyYAML (YAML 1.1, Debian's python3-yaml) is the strictest common reader: it takes 1e-05 for a
-  // string. The document must compare equal to the JSON one, every number exactly.
+  // PyYAML (YAML 1.1, Debian's python3-yaml) is the strictest common reader: it
+  // takes 1e-05 for a string. The document must compare equal to the JSON one,
+  // every number exactly.
   const fs::path dir = fs::path(::testing::TempDir()) / "accelcal_yaml";
   fs::create_directories(dir);
   const Fitted f = Fit(ModelKind::kQuadratic, Frame::kZFirst);
   std::ofstream((dir / "cal.json").string()) << f.json;
   std::ofstream((dir / "cal.yaml").string())
       << ExportCalibration(f.cal, f.json, ExportFormat::kYaml).text;
-  EXPECT_NE(f.json.find("e-"), std::string::npos);  // small numbers in exponent form are in it
+  EXPECT_NE(f.json.find("e-"),
+            std::string::npos);  // small numbers in exponent form are in it
   EXPECT_EQ(Shell("/usr/bin/python3 -c \"import json, sys, yaml; "
-                  "sys.exit(json.load(open(sys.argv[1])) != yaml.safe_load(open(sys.argv[2])))\" " +
+                  "sys.exit(json.load(open(sys.argv[1])) != "
+                  "yaml.safe_load(open(sys.argv[2])))\" " +
                   (dir / "cal.json").string() + " " + (dir / "cal.yaml").string()),
             0);
   EXPECT_EQ(ExportCalibration(f.cal, f.json, ExportFormat::kJson).text, f.json);
 }
 
-// Labels and paths as hostile as a command line allows (no NUL): the C comment's terminator and
-// opener, the ??/ trigraph (a backslash in C99), line breaks of every kind (LF, CR, VT, FF, NEL,
-// U+2028, U+2029), parameter lines of each tool after them, other control characters, quotes,
-// YAML indicators, non-ASCII letters and an emoji, and a backslash at the end.
+// Labels and paths as hostile as a command line allows (no NUL): the C
+// comment's terminator and opener, the ??/ trigraph (a backslash in C99), line
+// breaks of every kind (LF, CR, VT, FF, NEL, U+2028, U+2029), parameter lines
+// of each tool after them, other control characters, quotes, YAML indicators,
+// non-ASCII letters and an emoji, and a backslash at the end.
 const std::string kEvilUnit =
-    "counts */ int evil2 = 2; /*\nINS_EVIL,1\r1\t1\tCAL_EVIL\t1\t9\x0b\x0c\x1b[31m\x7f \"q\" 'q' : "
-    "# ?\?/ \xc2\x85NEL \xe2\x80\xa8LS \xe2\x80\xa9PS \xc3\xa4 \xf0\x9f\x98\x80 \\";
+    "counts */ int evil2 = 2; "
+    "/*\nINS_EVIL,1\r1\t1\tCAL_EVIL\t1\t9\x0b\x0c\x1b[31m\x7f \"q\" 'q' : "
+    "# ?\?/ \xc2\x85NEL \xe2\x80\xa8LS \xe2\x80\xa9PS \xc3\xa4 "
+    "\xf0\x9f\x98\x80 \\";
 const std::string kEvilSource =
-    "/logs/*/x.csv\nimu1:\n  model: evil\r\nINS_ACCSCAL_X,7\n1\t1\tCAL_ACC0_XOFF\t7\t9\n# "
+    "/logs/*/x.csv\nimu1:\n  model: "
+    "evil\r\nINS_ACCSCAL_X,7\n1\t1\tCAL_ACC0_XOFF\t7\t9\n# "
     "*/ int evil = 1; /* \"a\" 'b': c #d \x01\x1f \xc3\xa9t\xc3\xa9 ?\?\?/";
 
 std::vector<std::string> Lines(const std::string& text) {
@@ -440,8 +602,8 @@ std::vector<std::string> Content(const std::string& text, const std::string& com
   return out;
 }
 
-// No control character but tab and line feed, and no line separator of YAML 1.1 or Python's
-// splitlines (NEL, U+2028, U+2029).
+// No control character but tab and line feed, and no line separator of YAML 1.1
+// or Python's splitlines (NEL, U+2028, U+2029).
 void ExpectOnlyPlainLines(const std::string& text, const std::string& what) {
   for (const char c : text) {
     const auto u = static_cast<unsigned char>(c);
@@ -461,17 +623,20 @@ std::string Slurp(const fs::path& path) {
 TEST(Export, LabelsAndPathsChangeNoFileBeyondItsComments) {
   const Fitted evil = Fit(ModelKind::kLinear, Frame::kXFirst, kEvilUnit, kEvilSource);
   const Fitted clean = Fit(ModelKind::kLinear, Frame::kXFirst, "g", "simulated");
-  ASSERT_EQ(evil.cal.raw_unit, kEvilUnit);  // the calibration file holds them exactly
+  ASSERT_EQ(evil.cal.raw_unit,
+            kEvilUnit);  // the calibration file holds them exactly
   ASSERT_EQ(evil.cal.source, kEvilSource);
   ASSERT_EQ(evil.cal.params.K, clean.cal.params.K);
   ExportOptions g;
-  g.raw_unit = "g";  // what the readings were: the label is no unit PX4 or ArduPilot knows
+  g.raw_unit = "g";  // what the readings were: the label is no unit PX4 or
+                     // ArduPilot knows
   const auto both = [&](ExportFormat format) {
     return std::pair(ExportCalibration(evil.cal, evil.json, format, g),
                      ExportCalibration(clean.cal, clean.json, format, g));
   };
 
-  // PX4 and ArduPilot: the same parameter lines, byte for byte, as many comment lines.
+  // PX4 and ArduPilot: the same parameter lines, byte for byte, as many comment
+  // lines.
   for (const ExportFormat format : {ExportFormat::kPx4, ExportFormat::kArduPilot}) {
     const auto [e, c] = both(format);
     EXPECT_EQ(Content(e.text, "#"), Content(c.text, "#")) << e.text;
@@ -509,12 +674,14 @@ TEST(Export, LabelsAndPathsChangeNoFileBeyondItsComments) {
   // imu_tk holds no label: the same bytes.
   EXPECT_EQ(both(ExportFormat::kImuTk).first.text, both(ExportFormat::kImuTk).second.text);
 
-  // C header: compiles warning-free as C99 (trigraphs on: ??/ is a backslash; -Wcomment: no /*
-  // in a comment), and after the preprocessor (comments gone) is the clean header's code.
+  // C header: compiles warning-free as C99 (trigraphs on: ??/ is a backslash;
+  // -Wcomment: no /* in a comment), and after the preprocessor (comments gone)
+  // is the clean header's code.
   const auto [e, c] = both(ExportFormat::kCHeader);
   ExpectOnlyPlainLines(e.text, "c-header");
   EXPECT_EQ(Lines(e.text).size(), Lines(c.text).size()) << e.text;
-  // The first comment ends where the clean header's does: at the end of its third line.
+  // The first comment ends where the clean header's does: at the end of its
+  // third line.
   EXPECT_EQ(e.text.find("*/"), e.text.find(" */\n#ifndef") + 1) << e.text;
   EXPECT_EQ(Lines(e.text.substr(0, e.text.find("*/"))).size(), 3u) << e.text;
   std::ofstream((dir / "evil.h").string()) << e.text;
@@ -533,7 +700,8 @@ TEST(Export, LabelsAndPathsChangeNoFileBeyondItsComments) {
 }
 
 TEST(Export, LabelsThatAreNoUtf8AreWrittenWithTheReplacementCharacter) {
-  // A Latin-1 file name and label: JSON holds no such bytes, so the file has U+FFFD for each.
+  // A Latin-1 file name and label: JSON holds no such bytes, so the file has
+  // U+FFFD for each.
   const Fitted f = Fit(ModelKind::kLinear, Frame::kXFirst, "z\xe4hler", "/logs/m\xfcll.csv");
   EXPECT_EQ(f.cal.raw_unit, "z\xef\xbf\xbdhler");
   EXPECT_EQ(f.cal.source, "/logs/m\xef\xbf\xbdll.csv");
@@ -546,8 +714,9 @@ TEST(Export, LabelsThatAreNoUtf8AreWrittenWithTheReplacementCharacter) {
 }
 
 TEST(Export, YamlHoldsEveryStringExactly) {
-  // The whole calibration document with the labels, and keys no YAML 1.1 reader may take for
-  // booleans or null, read by PyYAML: equal to the JSON, every string exact.
+  // The whole calibration document with the labels, and keys no YAML 1.1 reader
+  // may take for booleans or null, read by PyYAML: equal to the JSON, every
+  // string exact.
   const fs::path dir = fs::path(::testing::TempDir()) / "accelcal_yaml_strings";
   fs::create_directories(dir);
   const Fitted f = Fit(ModelKind::kQuadratic, Frame::kZFirst, kEvilUnit, kEvilSource);
@@ -578,27 +747,31 @@ TEST(Export, VisibleLineEscapesWhatWouldBreakALine) {
   EXPECT_EQ(VisibleLine(std::string("\x01\x1b\x7f", 3)), "\\x01\\x1B\\x7F");
   EXPECT_EQ(VisibleLine("\xc2\x85\xc2\x9f\xe2\x80\xa8\xe2\x80\xa9\xef\xbb\xbf\xef\xbf\xbf"),
             "\\x85\\x9F\\u2028\\u2029\\uFEFF\\uFFFF");
-  // The bidirectional controls, which reorder what a terminal shows after them (issue 47: a topic
-  // named with U+202E in inspect's listing and the PX4 export's comment): U+061C, U+200E,
-  // U+200F, U+202A to U+202E, U+2066 to U+2069; their neighbours U+202F, U+2065, U+206A kept.
+  // The bidirectional controls, which reorder what a terminal shows after them
+  // (issue 47: a topic named with U+202E in inspect's listing and the PX4
+  // export's comment): U+061C, U+200E, U+200F, U+202A to U+202E, U+2066 to
+  // U+2069; their neighbours U+202F, U+2065, U+206A kept.
   EXPECT_EQ(VisibleLine("a\xe2\x80\xae"
-                        "b\xd8\x9c\xe2\x80\x8e\xe2\x80\x8f\xe2\x80\xaa\xe2\x81\xa6\xe2\x81\xa9"),
+                        "b\xd8\x9c\xe2\x80\x8e\xe2\x80\x8f\xe2\x80\xaa\xe2\x81"
+                        "\xa6\xe2\x81\xa9"),
             "a\\u202Eb\\u061C\\u200E\\u200F\\u202A\\u2066\\u2069");
   const std::string neighbours = "\xe2\x80\xaf\xe2\x81\xa5\xe2\x81\xaa\xe2\x80\x8d";
   EXPECT_EQ(VisibleLine(neighbours), neighbours);
-  // Bytes that are no UTF-8: a lone continuation, a truncated sequence, an overlong '/', a
-  // surrogate.
+  // Bytes that are no UTF-8: a lone continuation, a truncated sequence, an
+  // overlong '/', a surrogate.
   EXPECT_EQ(VisibleLine("\x80 \xe2\x80 \xc0\xaf \xed\xa0\x80"),
             "\\x80 \\xE2\\x80 \\xC0\\xAF \\xED\\xA0\\x80");
-  // Printable text is kept as it is: quotes, backslashes, comment markers, Unicode.
+  // Printable text is kept as it is: quotes, backslashes, comment markers,
+  // Unicode.
   const std::string printable = "C:\\logs\\\"a\" 'b' */ # \xc3\xa4\xc2\xa0\xf0\x9f\x98\x80";
   EXPECT_EQ(VisibleLine(printable), printable);
 }
 
 TEST(Export, NeverWritesANumberThatIsNot) {
-  // Parameters at the edge of double arithmetic: every format either writes numbers alone or
-  // refuses (DataError). A K of 1e160 had gone through QR and inversions to "null" in OpenVINS'
-  // Tw and Ta with exit 0, and 1e-200 to nulls in Basalt's calib_accel_bias.
+  // Parameters at the edge of double arithmetic: every format either writes
+  // numbers alone or refuses (DataError). A K of 1e160 had gone through QR and
+  // inversions to "null" in OpenVINS' Tw and Ta with exit 0, and 1e-200 to
+  // nulls in Basalt's calib_accel_bias.
   for (const double extreme : {1e160, 1e-200, 1e-310, 1e300}) {
     Fitted f = Fit(ModelKind::kLinear, Frame::kXFirst);
     f.cal.params.K(0, 0) = extreme;
@@ -617,11 +790,13 @@ TEST(Export, NeverWritesANumberThatIsNot) {
               << text;
         }
       } catch (const DataError& e) {
-        // Not finite; beyond a float32 parameter (PX4, ArduPilot); or scales no sensor has.
+        // Not finite; beyond a float32 parameter (PX4, ArduPilot); or scales no
+        // sensor has.
         const std::string what = e.what();
         EXPECT_TRUE(what.find("not finite") != std::string::npos ||
                     what.find("beyond a float32 parameter's range") != std::string::npos ||
-                    what.find("would apply scales of") != std::string::npos)
+                    what.find("would apply scales of") != std::string::npos ||
+                    what.find("would apply gyroscope scales") != std::string::npos)
             << what;
       }
     }
@@ -629,11 +804,11 @@ TEST(Export, NeverWritesANumberThatIsNot) {
 }
 
 TEST(Export, UnitOverridesMayNotContradictTheFile) {
-  // --raw-unit and --gyro-raw-unit name a unit the file does not say ("raw", "counts"); against
-  // one it says they would scale everything by 9.81 or 57.3 without a word.
+  // --raw-unit and --gyro-raw-unit name a unit the file does not say ("raw",
+  // "counts"); against one it says they would scale everything by 9.81 or 57.3
+  // without a word.
   Fitted f = Fit(ModelKind::kLinear, Frame::kXFirst, "m/s2");
-  f.cal.gyroscope = Gyroscope();
-  f.cal.gyroscope->raw_unit = "deg/s";
+  f.cal.gyroscope = ScaledGyroscope("deg/s", 180 / kPi);
   ExportOptions g;
   g.raw_unit = "g";
   EXPECT_THROW(ExportCalibration(f.cal, f.json, ExportFormat::kPx4, g), std::invalid_argument);
@@ -646,8 +821,8 @@ TEST(Export, UnitOverridesMayNotContradictTheFile) {
   same.raw_unit = "m/s2";
   same.gyro_raw_unit = "deg/s";
   EXPECT_TRUE(ExportCalibration(f.cal, f.json, ExportFormat::kKalibr, same).gyroscope_included);
-  // OpenVINS and Basalt state the gyroscope's model in any case: one they cannot convert is
-  // refused, not written as the identity.
+  // OpenVINS and Basalt state the gyroscope's model in any case: one they
+  // cannot convert is refused, not written as the identity.
   f.cal.gyroscope->raw_unit = "raw";
   ExportOptions noise;
   noise.noise = test::SampleNoise();
@@ -673,13 +848,13 @@ TEST(Export, TopicsAreRosNames) {
 }
 
 TEST(Export, YamlNumbersAreNumbersToYaml11) {
-  // PyYAML (Kalibr's reader) takes 5e-05 for a string: YAML 1.1's floats need a '.' in the
-  // mantissa. Every number of the YAML formats is read back as a float.
+  // PyYAML (Kalibr's reader) takes 5e-05 for a string: YAML 1.1's floats need a
+  // '.' in the mantissa. Every number of the YAML formats is read back as a
+  // float.
   const fs::path dir = fs::path(::testing::TempDir()) / "accelcal_yaml_numbers";
   fs::create_directories(dir);
   Fitted f = Fit(ModelKind::kLinear, Frame::kXFirst, "m/s2");
-  f.cal.gyroscope = Gyroscope();
-  f.cal.gyroscope->raw_unit = "rad/s";
+  f.cal.gyroscope = ScaledGyroscope("rad/s", 1);
   ExportOptions o;
   o.noise = test::SampleNoise();
   o.noise->accelerometer.white = Vec3::Constant(5e-05);

@@ -71,6 +71,10 @@ struct StaticDetectionResult {
   /// step of a quantised sensor or log; q²/12 floors the noise levels.
   Vec3 quantisation_step = Vec3::Zero();
   std::size_t segments = 1;  ///< pieces of the log between time gaps (RawLog::time)
+  /// Readings left out as corrupted (CorruptedReadings), by index: no window holds one, so one
+  /// absurd value (a bit flip, a garbled record) spoils neither the windows after it nor the
+  /// noise reference; a still interval around one ends at it.
+  std::vector<std::size_t> corrupted;
   /// Still periods split by a short disturbance that were joined: two intervals at most a window
   /// apart whose means agree within 5 standard errors per axis (plus a quantisation step).
   std::size_t joined = 0;
@@ -80,6 +84,17 @@ struct StaticDetectionResult {
 /// periods were rejected as turning, how many ("a log in continuous motion has no static
 /// positions"), else the threshold used.
 std::string NoStaticIntervalReason(const StaticDetectionResult& detection);
+
+/// How far from the log's median, in multiples of its spread, a reading is corrupted: the spread
+/// (per axis, the median absolute deviation of the readings, or their smallest step when that is
+/// larger) is at least a sensor's noise, and no sensor's range is a million times its noise
+/// around where it reads most; below this, a reading's square cannot swamp the window sums
+/// (1e12 times the noise's variance, against a double's 1e-16).
+inline constexpr double kCorruptedReadingFactor = 1e6;
+
+/// The readings (indices) more than kCorruptedReadingFactor times the spread from the median on an
+/// axis, or not numbers. `step`: each axis's smallest nonzero change (StaticDetectionResult).
+std::vector<std::size_t> CorruptedReadings(const std::vector<Vec3>& samples, const Vec3& step);
 
 /// Throws DataError when the log is too short, has no rate (no time column and no rate given) or
 /// the options are invalid. Returns an empty interval list when nothing is still.

@@ -451,6 +451,20 @@ std::vector<Finding> LogFindings(const RawLog* log, const StaticDetectionResult*
           {{"lag1_correlation", rho}, {"limit", kInterleavedCorrelation}});
     }
   }
+  if (log && detection && !detection->corrupted.empty()) {
+    const std::size_t i = detection->corrupted.front();
+    const Vec3& x = log->samples[i];
+    const std::size_t count = detection->corrupted.size();
+    Add(&out, "corrupted_reading", Severity::kWarning,
+        Format(
+            "%zu reading%s lie%s more than a million times the log's spread from its median (the "
+            "first: sample %zu%s, %.6g %.6g %.6g): corrupted, not a sensor's; left out, and a "
+            "still interval around one ends at it",
+            count, count == 1 ? "" : "s", count == 1 ? "s" : "", i + 1,
+            log->time_s.size() > i ? Format(" at %.6g s", log->time_s[i]).c_str() : "", x(0), x(1),
+            x(2)),
+        {{"count", static_cast<double>(count)}, {"first_sample", static_cast<double>(i + 1)}});
+  }
   if (detection) {
     for (Finding& f : RejectedPeriodFindings(detection->rejected)) out.push_back(std::move(f));
     if (detection->joined > 0) {

@@ -4,6 +4,7 @@
 #include <cmath>
 #include <cstdint>
 #include <cstring>
+#include <limits>
 #include <optional>
 #include <utility>
 
@@ -258,6 +259,36 @@ std::string NoStaticIntervalReason(const StaticDetectionResult& d) {
   return Format("no static interval found (threshold %.3g raw^2)", d.threshold);
 }
 
+std::vector<std::size_t> CorruptedReadings(const std::vector<Vec3>& samples, const Vec3& step) {
+  const std::size_t n = samples.size();
+  // The median and spread from at most 4096 readings spread over the log: a spread to a factor of
+  // a million needs no more.
+  const std::size_t stride = std::max<std::size_t>(1, n / 4096);
+  std::vector<double> values;
+  Vec3 center = Vec3::Zero(), bound = Vec3::Constant(std::numeric_limits<double>::infinity());
+  for (int a = 0; a < 3; ++a) {
+    values.clear();
+    for (std::size_t i = 0; i < n; i += stride) {
+      if (std::isfinite(samples[i](a))) values.push_back(samples[i](a));
+    }
+    if (values.empty()) continue;
+    const auto mid = values.begin() + static_cast<std::ptrdiff_t>(values.size() / 2);
+    std::nth_element(values.begin(), mid, values.end());
+    const double median = *mid;
+    for (double& v : values) v = std::abs(v - median);
+    std::nth_element(values.begin(), mid, values.end());
+    const double spread = std::max({*mid, step(a), 1e-12 * (std::abs(median) + 1)});
+    center(a) = median;
+    bound(a) = kCorruptedReadingFactor * spread;
+  }
+  std::vector<std::size_t> out;
+  for (std::size_t i = 0; i < n; ++i) {
+    const Vec3 d = (samples[i] - center).cwiseAbs();
+    if (!(d(0) <= bound(0) && d(1) <= bound(1) && d(2) <= bound(2))) out.push_back(i);
+  }
+  return out;
+}
+
 StaticDetectionResult DetectStaticIntervals(const RawLog& log,
                                             const StaticDetectionOptions& options) {
   if (auto why = options.Validate()) throw DataError(*why);
@@ -294,7 +325,7 @@ StaticDetectionResult DetectStaticIntervals(const RawLog& log,
   const std::size_t w = static_cast<std::size_t>(std::lround(window_samples)) | 1;
   result.window_samples = w;
   const std::size_t h = w / 2;
-  const std::vector<std::size_t> segments =
+  std::vector<std::size_t> segments =
       log.time ? SegmentStarts(log.time->gaps) : std::vector<std::size_t>{0};
   result.segments = segments.size();
 
@@ -310,6 +341,17 @@ StaticDetectionResult DetectStaticIntervals(const RawLog& log,
   }
   result.quantisation_step = step;
   const double quantisation_variance = step.cwiseAbs2().sum() / 12.0;
+
+  // A corrupted reading is cut out as a gap is: a segment of its own, too short for a window.
+  result.corrupted = CorruptedReadings(log.samples, step);
+  if (!result.corrupted.empty()) {
+    for (std::size_t i : result.corrupted) {
+      segments.push_back(i);
+      if (i + 1 < n) segments.push_back(i + 1);
+    }
+    std::sort(segments.begin(), segments.end());
+    segments.erase(std::unique(segments.begin(), segments.end()), segments.end());
+  }
 
   // Sliding sums of the samples and their squares, shifted by the first sample of the segment to
   // avoid cancellation with raw counts far from zero, and of the successive differences. Centres
@@ -353,10 +395,15 @@ StaticDetectionResult DetectStaticIntervals(const RawLog& log,
     valid += sums.valid;
   }
   if (valid == 0) {
-    throw DataError(
-        Format("no segment of the log is longer than one detection window (%zu "
-               "samples): the gaps cut it into %zu pieces",
-               w, segments.size()));
+    throw DataError(Format(
+        "no segment of the log is longer than one detection window (%zu "
+        "samples): the gaps%s cut it into %zu pieces",
+        w,
+        result.corrupted.empty() ? ""
+                                 : Format(" and %zu corrupted readings (sample %zu the first)",
+                                          result.corrupted.size(), result.corrupted.front() + 1)
+                                       .c_str(),
+        segments.size()));
   }
 
   // Noise reference.
@@ -380,7 +427,10 @@ StaticDetectionResult DetectStaticIntervals(const RawLog& log,
   }
   // Quantised sensors can be perfectly still (zero variance): the floor is their quantisation
   // noise, and a round-off floor for noise-free (simulated) data.
-  const Vec3 shift = log.samples.front();
+  // The first reading that is not corrupted (a corrupted one would make the floor absurd).
+  std::size_t first = 0;
+  for (std::size_t i : result.corrupted) first += i == first;
+  const Vec3 shift = log.samples[std::min(first, n - 1)];
   double floor_value = quantisation_variance;
   for (int a = 0; a < 3; ++a)
     floor_value += 1.0 / 12.0 * 1e-12 * std::pow(std::abs(shift(a)) + 1.0, 2);

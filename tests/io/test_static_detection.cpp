@@ -54,6 +54,37 @@ TEST(StaticDetection, FindsEveryStillPeriod) {
   }
 }
 
+// From a hostile test: one absurd reading early in a log (1e20 at sample 40 of a ULog, 1e200 in a
+// CSV: a bit flip, a garbled record) spoiled every window after it (its square swamped the sliding
+// sums, or made them inf) and the log was refused as having one position, or "cut into 1 pieces
+// by gaps". It is cut out as a gap is, and named; the still periods are found as without it.
+TEST(StaticDetection, ACorruptedReadingIsCutOutAndNamed) {
+  std::vector<std::pair<std::size_t, std::size_t>> truth;
+  const RawLog clean = SyntheticLog({20, 5, 3, 8, 1.8, 4}, &truth);
+  const StaticDetectionResult expected = DetectStaticIntervals(clean, {});
+  EXPECT_TRUE(expected.corrupted.empty());
+  for (const double value : {1e20, 1e200, -1e12}) {
+    RawLog log = clean;
+    log.samples[40](1) = value;
+    const StaticDetectionResult r = DetectStaticIntervals(log, {});
+    EXPECT_EQ(r.corrupted, std::vector<std::size_t>{40}) << value;
+    ASSERT_EQ(r.intervals.size(), expected.intervals.size()) << value;
+    // The same quantile of the scores less the 51 windows that held the reading.
+    EXPECT_NEAR(r.noise_reference, expected.noise_reference, 0.02 * expected.noise_reference);
+    // The first still period begins after the reading (no window holds it), the rest are as they
+    // were.
+    EXPECT_GT(r.intervals[0].begin, 40u) << value;
+    for (std::size_t k = 1; k < r.intervals.size(); ++k) {
+      EXPECT_EQ(r.intervals[k].begin, expected.intervals[k].begin) << value;
+      EXPECT_EQ(r.intervals[k].end, expected.intervals[k].end) << value;
+    }
+  }
+  // A hard knock, a hundred thousand times the noise (2 counts), is a sensor's reading: kept.
+  RawLog log = clean;
+  log.samples[40](1) += 1e5 * 2;
+  EXPECT_TRUE(DetectStaticIntervals(log, {}).corrupted.empty());
+}
+
 TEST(StaticDetection, ShortStillPeriodsAreDropped) {
   std::vector<std::pair<std::size_t, std::size_t>> truth;
   const RawLog log = SyntheticLog({10, 0.9, 5}, &truth);

@@ -14,6 +14,7 @@
 
 #include "accelcal/error.hpp"
 #include "accelcal/log_reader.hpp"
+#include "accelcal/ulog_writer.hpp"
 #include "io/number_parser.hpp"
 
 namespace accelcal {
@@ -239,6 +240,24 @@ TEST(LogReader, ARecordingThatRepeatsEachSampleIsRefused) {
       400, 1, [](int k) { return 0.005 * (k / 2); },
       [&](int k) { return k % 50 < 40 ? 0.0 : noise(k); }));
   EXPECT_EQ(still.raw.samples.size(), 400u);
+  // A binary log's copies are named by their topic, message and byte (a ULog's, here).
+  const ULogImuWriter ulog;
+  std::string twice = ulog.Header();
+  for (int k = 0; k < 400; ++k) {
+    const std::string message =
+        ulog.Accel(1000000 + 10000 * std::uint64_t(k), Vec3(noise(k), 0, -9.8));
+    twice += message + message;
+  }
+  try {
+    ParseInput(twice, "twice.ulg", {});
+    ADD_FAILURE() << "read";
+  } catch (const InputError& e) {
+    const std::size_t second =
+        ulog.Header().size() + ulog.Accel(1000000, Vec3(noise(0), 0, -9.8)).size();
+    const std::string named = "twice.ulg: sensor_accel message 2 (byte " + std::to_string(second) +
+                              "): the recording repeats each sample";
+    EXPECT_EQ(std::string(e.what()).find(named), 0u) << e.what();
+  }
 }
 
 TEST(LogReader, NumbersAreCorrectlyRounded) {

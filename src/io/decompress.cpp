@@ -138,6 +138,18 @@ std::optional<std::string> Zstd(const unsigned char* data, std::size_t n, std::s
 
 }  // namespace
 
+std::optional<std::string> InflatedTotal::Add(std::uint64_t bytes, std::uint64_t file_bytes,
+                                              const char* what) {
+  total_ += bytes;
+  const std::uint64_t bound = std::max(kMaxFileInflatedBytes, 64 * file_bytes);
+  if (total_ <= bound) return std::nullopt;
+  return Format(
+      "compressed %s that inflate past %llu MiB in all (64 times the file, and at least "
+      "%llu MiB)",
+      what, static_cast<unsigned long long>(bound >> 20),
+      static_cast<unsigned long long>(kMaxFileInflatedBytes >> 20));
+}
+
 std::optional<std::string> Decompress(Compression compression, const unsigned char* data,
                                       std::size_t n, std::size_t size,
                                       std::vector<unsigned char>* out) {

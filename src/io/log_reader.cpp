@@ -196,6 +196,44 @@ std::string TimeBackwards(double now, double before) {
   return buf;
 }
 
+// A recording that repeats each sample: the sample after each is an exact copy of it, the same
+// time and the same values (a recorder, or a merge of a log with itself, that wrote every message
+// twice). Read as it is, it has twice the samples at twice the rate, and its repeated timestamps
+// look like a resolution coarser than the period. Refused when such copies are most of the steps
+// (at least 40%; every sample twice gives 50%) and far more common (at least 4 times) than values
+// repeated at distinct times: a still sensor quantised coarser than its noise repeats its values
+// whatever the times, and timestamps coarser than the period come with values that differ.
+constexpr double kMinCopiedSteps = 0.4;
+constexpr double kCopiesOverRepeats = 4;
+constexpr std::size_t kMinStepsForCopies = 16;
+
+void RefuseCopiedSamples(const std::string& source, const std::vector<double>& t,
+                         const std::vector<Vec3>& samples, const std::vector<std::uint32_t>& line) {
+  if (t.size() != samples.size() || t.size() <= kMinStepsForCopies) return;
+  std::size_t copies = 0, repeats = 0, first = 0;
+  for (std::size_t i = 1; i < t.size(); ++i) {
+    if (samples[i] != samples[i - 1]) continue;
+    if (t[i] == t[i - 1]) {
+      if (copies++ == 0) first = i;
+    } else {
+      ++repeats;
+    }
+  }
+  const double steps = static_cast<double>(t.size() - 1);
+  if (static_cast<double>(copies) < kMinCopiedSteps * steps ||
+      static_cast<double>(copies) < kCopiesOverRepeats * static_cast<double>(repeats)) {
+    return;
+  }
+  throw InputError(
+      source, line[first],
+      internal::Format(
+          "the recording repeats each sample: this sample is an exact copy of the one before "
+          "it, the same time and values, as are %zu of its %zu samples (a recorder or a merge "
+          "that wrote every message twice); read as it is, its rate and sample count would be "
+          "twice the sensor's: keep one of each",
+          copies, t.size()));
+}
+
 // The rate of a log with a time column: the timestamps', or the one given when it agrees with
 // them within kRateTolerance (InputError otherwise).
 double RateOf(const TimeAxis& time, const std::optional<double>& given, const std::string& source) {
@@ -697,6 +735,7 @@ void internal::FinishRawLog(RawLog* log, TimeUnit unit, const std::optional<doub
   for (std::size_t i = 1; i < t.size(); ++i) {
     if (t[i] < t[i - 1]) throw InputError(source, log->line[i], TimeBackwards(t[i], t[i - 1]));
   }
+  RefuseCopiedSamples(source, t, log->samples, log->line);
   if (log->time_s.size() >= 2) {
     try {
       log->time = MakeTimeAxis(&log->time_s, unit, time_name);
@@ -841,6 +880,9 @@ StreamedLog StreamRawLog(const std::string& path, const ReadOptions& options,
         throw InputError(source, head.line[i], TimeBackwards(head.time_s[i], head.time_s[i - 1]));
       }
     }
+    // Copies are found in the head: a recorder that writes every message twice does from the
+    // start.
+    RefuseCopiedSamples(source, head.time_s, head.samples, head.line);
     std::vector<double> times = head.time_s;
     try {
       axis = MakeTimeAxis(&times, options.time_unit, columns.time_name);

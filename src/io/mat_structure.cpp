@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "core/text_format.hpp"
+#include "io/decompress.hpp"
 
 namespace accelcal::internal {
 
@@ -222,16 +223,10 @@ class Walker {
           throw;
         }
         if (!inflated.Drain()) Fail("a compressed variable whose " + inflated.error());
-        // In all, what a real file's variables inflate to: a compressed file's size times a
-        // ratio no real data reaches, and at least kMaxMatFileInflatedBytes.
-        inflated_ += inflated.inflated();
-        const std::uint64_t bound = std::max(kMaxMatFileInflatedBytes, 64 * file_bytes_);
-        if (inflated_ > bound) {
-          Fail(
-              Format("compressed variables that inflate past %llu MiB in all (64 times the "
-                     "file, and at least %llu MiB)",
-                     static_cast<unsigned long long>(bound >> 20),
-                     static_cast<unsigned long long>(kMaxMatFileInflatedBytes >> 20)));
+        // In all, what a real file's variables inflate to (decompress.hpp).
+        if (const std::optional<std::string> why =
+                inflated_.Add(inflated.inflated(), file_bytes_, "variables")) {
+          Fail(*why);
         }
         if (!inflated.error().empty() && inflated.inflated() == 0) {
           Fail("a compressed variable whose " + inflated.error());
@@ -305,7 +300,7 @@ class Walker {
 
   bool swap_;
   std::uint64_t file_bytes_;
-  std::uint64_t inflated_ = 0;  // by the compressed variables so far
+  InflatedTotal inflated_;  // by the compressed variables so far
   std::uint32_t field_name_length_ = 0;
   std::string where_;
 };

@@ -14,16 +14,13 @@ namespace accelcal::internal {
 /// 2^25) as doubles, and its headers. Beyond it the variable is refused, as a zip bomb would be
 /// (a 1 MB file inflating to 1 GiB, the bound before, had taken 22 s and 2.26 GB).
 inline constexpr std::uint64_t kMaxMatInflatedBytes = (std::uint64_t{1} << 28) + (1u << 16);
-/// The most the compressed variables of one file may inflate to in all, unless the file is large
-/// (64 times its size: noisy samples compress a few times, not 64): each is inflated to check it
-/// (about 0.4 GB/s), and a small file of many variables at the bound above is refused too.
-inline constexpr std::uint64_t kMaxMatFileInflatedBytes = std::uint64_t{1} << 30;
 
 /// Why the Level 5 MAT-file at `path` cannot be handed to libmatio: an element that claims more
 /// bytes than its container (or the file) holds, a matrix whose dimensions claim more values than
 /// its data holds, a compressed variable that does not inflate or inflates past
-/// kMaxMatInflatedBytes (kMaxMatFileInflatedBytes all of them), nesting deeper than 64.
-/// std::nullopt when every claim holds, and for a MAT-file 7.3 (HDF5, read by its library).
+/// kMaxMatInflatedBytes (kMaxFileInflatedBytes all of them, decompress.hpp), nesting deeper
+/// than 64. std::nullopt when every claim holds, and for a MAT-file 7.3 (HDF5, read by its
+/// library).
 std::optional<std::string> CheckMatStructure(const std::string& path);
 
 }  // namespace accelcal::internal

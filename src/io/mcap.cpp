@@ -89,7 +89,8 @@ class Reader {
   std::unordered_map<std::uint16_t, Schema> schemas_;
   std::unordered_map<std::uint16_t, std::size_t> channels_;  // channel -> stream
   std::vector<unsigned char> chunk_;
-  std::size_t whole_ = 0;  // messages read whole
+  InflatedTotal inflated_;  // by the compressed chunks so far
+  std::size_t whole_ = 0;   // messages read whole
 };
 
 void Reader::Channel(const unsigned char* p, std::size_t n, std::uint64_t at) {
@@ -215,6 +216,10 @@ void Reader::Chunk(const unsigned char* p, std::size_t n, std::uint64_t at) {
                       "reads in one (ROS 2 writes 768 kB to 4 MiB chunks; the mcap tool's "
                       "compress --chunk-size rewrites a file recorded with larger ones)",
                       static_cast<unsigned long long>(size), kMaxDecompressedBytes >> 20));
+    }
+    // Counted before it is inflated: a bomb of many chunks is refused at the first past the bound.
+    if (const std::optional<std::string> why = inflated_.Add(size, at + 9 + n, "chunks")) {
+      Fail(at, *why);
     }
     if (const std::optional<std::string> why =
             Decompress(c, data, records.size(), std::size_t(size), &chunk_)) {

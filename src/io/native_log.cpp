@@ -783,8 +783,19 @@ InputData ReadNativeLog(BinaryStream& in, InputFile* file, const ReadOptions& op
                             other.c_str(), axes.c_str())
                          .c_str()));
   }
-  FinishRawLog(&raw, microseconds ? TimeUnit::kMicroseconds : options.time_unit, options.rate_hz,
-               chosen.time ? std::string_view((*s.columns)[*chosen.time]) : std::string_view());
+  try {
+    FinishRawLog(&raw, microseconds ? TimeUnit::kMicroseconds : options.time_unit, options.rate_hz,
+                 chosen.time ? std::string_view((*s.columns)[*chosen.time]) : std::string_view());
+  } catch (const InputError& e) {
+    // A sample's error (a recording that repeats each sample): its line is its message's number,
+    // named as the errors above name a message, by its topic, number and byte.
+    if (e.line() == 0 || e.line() > s.offset.size()) throw;
+    throw InputError(
+        source, 0,
+        Format("%s message %zu (%s %llu): ", Shown(s.topic).c_str(), e.line(),
+               log.offset_name.c_str(), static_cast<unsigned long long>(s.offset[e.line() - 1])) +
+            e.reason());
+  }
   if (options.fingerprint) {
     data.bytes = in.offset();
     data.sha256 = hash.HexDigest();

@@ -113,7 +113,8 @@ class Reader {
   std::unordered_map<std::uint32_t, std::size_t> connections_;  // connection -> its stream
   RosTopics topics_{&out_, keep_, store_};
   std::vector<unsigned char> chunk_;
-  std::size_t whole_ = 0;  // messages read whole
+  InflatedTotal inflated_;  // by the compressed chunks so far
+  std::size_t whole_ = 0;   // messages read whole
   std::uint64_t index_pos_ = 0;
 };
 
@@ -334,6 +335,11 @@ bool Reader::Next() {
         Fail(at, Format("an uncompressed chunk of %zu bytes that says %zu", data_len, size));
       Records(data, data_len, at + 8 + header_len, true, false);
     } else {
+      // Counted before it is inflated: a bomb of many chunks is refused at the first past the
+      // bound.
+      if (const std::optional<std::string> why = inflated_.Add(size, at + length, "chunks")) {
+        Fail(at, *why);
+      }
       if (const std::optional<std::string> why = Decompress(c, data, data_len, size, &chunk_)) {
         Fail(at, "a chunk that does not decompress: " + *why);
       }

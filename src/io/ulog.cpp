@@ -309,11 +309,23 @@ void Reader::Data(const unsigned char* p, std::size_t size, std::uint64_t at) {
       layout.timestamp >= 0
           ? LoadLittle<std::uint64_t>(d + layout.leaves[std::size_t(layout.timestamp)].offset)
           : 0;
-  if (s.messages == 0) {
-    s.first_us = t;
-    if (layout.device_id >= 0) {
-      const Leaf& l = layout.leaves[std::size_t(layout.device_id)];
-      s.device_id = static_cast<std::uint64_t>(Decode(l.type, d + l.offset));
+  if (s.messages == 0) s.first_us = t;
+  if (layout.device_id >= 0) {
+    const Leaf& l = layout.leaves[std::size_t(layout.device_id)];
+    const auto device_id = static_cast<std::uint64_t>(Decode(l.type, d + l.offset));
+    if (s.messages == 0) {
+      s.device_id = device_id;
+    } else if (device_id != *s.device_id && s.unreadable.empty()) {
+      // Another sensor in the same instance (a driver restarted on another bus, two logs
+      // joined): its samples would be calibrated and exported as the first sensor's. Read, it is
+      // refused here; listed (inspect), it is named as a stream accelcal cannot read.
+      s.unreadable = Format(
+          "its device_id changes from %llu to %llu at its message %zu (timestamp %llu us): two "
+          "sensors' samples in one instance, which accelcal cannot calibrate as one (it reads no "
+          "part of a log by device id)",
+          static_cast<unsigned long long>(*s.device_id), static_cast<unsigned long long>(device_id),
+          s.messages + 1, static_cast<unsigned long long>(t));
+      if (s.kept) Fail(at, Format("%s instance %d: ", s.topic.c_str(), s.instance) + s.unreadable);
     }
   }
   s.last_us = t;

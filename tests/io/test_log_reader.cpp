@@ -5,6 +5,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <functional>
 #include <random>
 #include <string>
 #include <vector>
@@ -13,6 +14,7 @@
 
 #include "accelcal/error.hpp"
 #include "accelcal/log_reader.hpp"
+#include "accelcal/ulog_writer.hpp"
 #include "io/number_parser.hpp"
 
 namespace accelcal {
@@ -185,6 +187,77 @@ TEST(LogReader, ErrorsNameFileLineAndReason) {
             "test.csv:1: the sample count must be a whole number from 1 to 2^53");
   EXPECT_EQ(ErrorOf("1,2,3,9007199254740994\n"),
             "test.csv:1: the sample count must be a whole number from 1 to 2^53");
+}
+
+// `n` rows time,x,y,z at 100 Hz of a noisy sensor, each written `copies` times; `time(k)` the
+// k-th sample's time [s] as written, `value(k)` its x.
+std::string Noisy(int n, int copies, const std::function<double(int)>& time,
+                  const std::function<double(int)>& value) {
+  std::string s = "time,x,y,z\n";
+  for (int k = 0; k < n; ++k) {
+    char row[128];
+    std::snprintf(row, sizeof row, "%.6f,%.6f,%.6f,%.6f\n", time(k), value(k), 9.8 + 0.5 * value(k),
+                  -value(k));
+    for (int c = 0; c < copies; ++c) s += row;
+  }
+  return s;
+}
+
+// A recorder or a merge that wrote every message twice: each sample followed by an exact copy
+// (time and values). Read as it was, it had twice the samples at 200 Hz, its repeated timestamps
+// blamed on their resolution; it is refused at the first copy. Not refused: a few copies, values
+// repeated at distinct times (a driver re-sending its last reading, a still sensor quantised
+// coarser than its noise), timestamps coarser than the period with values that differ.
+TEST(LogReader, ARecordingThatRepeatsEachSampleIsRefused) {
+  const auto at_100hz = [](int k) { return 0.01 * k; };
+  const auto noise = [](int k) { return 0.001 * ((k * 7919) % 1000); };
+  EXPECT_EQ(ErrorOf(Noisy(400, 2, at_100hz, noise)),
+            "test.csv:3: the recording repeats each sample: this sample is an exact copy of the "
+            "one before it, the same time and values, as are 400 of its 800 samples (a recorder "
+            "or a merge that wrote every message twice); read as it is, its rate and sample count "
+            "would be twice the sensor's: keep one of each");
+  // Five copies in 400 samples: read, all of them.
+  std::string few = "time,x,y,z\n";
+  for (int k = 0; k < 400; ++k) {
+    char row[96];
+    std::snprintf(row, sizeof row, "%.2f,%.3f,9.8,0\n", 0.01 * k, noise(k));
+    few += row;
+    if (k % 80 == 7) few += row;
+  }
+  EXPECT_EQ(Parse(few).raw.samples.size(), 405u);
+  // Every value held for two samples at their own times (a sensor at half the log's rate, or a
+  // quantised one at rest): read.
+  const InputData held = Parse(Noisy(400, 1, at_100hz, [&](int k) { return noise(k / 2); }));
+  EXPECT_EQ(held.raw.samples.size(), 400u);
+  EXPECT_NEAR(*held.raw.rate_hz, 100, 1e-6);
+  // Four samples to a timestamp (400 Hz stamped in 10 ms), values that differ: read.
+  const InputData coarse = Parse(Noisy(
+      800, 1, [](int k) { return 0.01 * (k / 4); }, noise));
+  EXPECT_EQ(coarse.raw.samples.size(), 800u);
+  // The same quantised values at rest, two to a timestamp: their values repeat at distinct
+  // times as often as at the same time, so not copies: read.
+  const InputData still = Parse(Noisy(
+      400, 1, [](int k) { return 0.005 * (k / 2); },
+      [&](int k) { return k % 50 < 40 ? 0.0 : noise(k); }));
+  EXPECT_EQ(still.raw.samples.size(), 400u);
+  // A binary log's copies are named by their topic, message and byte (a ULog's, here).
+  const ULogImuWriter ulog;
+  std::string twice = ulog.Header();
+  for (int k = 0; k < 400; ++k) {
+    const std::string message =
+        ulog.Accel(1000000 + 10000 * std::uint64_t(k), Vec3(noise(k), 0, -9.8));
+    twice += message + message;
+  }
+  try {
+    ParseInput(twice, "twice.ulg", {});
+    ADD_FAILURE() << "read";
+  } catch (const InputError& e) {
+    const std::size_t second =
+        ulog.Header().size() + ulog.Accel(1000000, Vec3(noise(0), 0, -9.8)).size();
+    const std::string named = "twice.ulg: sensor_accel message 2 (byte " + std::to_string(second) +
+                              "): the recording repeats each sample";
+    EXPECT_EQ(std::string(e.what()).find(named), 0u) << e.what();
+  }
 }
 
 TEST(LogReader, NumbersAreCorrectlyRounded) {

@@ -2,6 +2,9 @@
 // damaged as files are: a chunk whose CRC-32 fails, cut inside a chunk, never closed, zeros at the
 // end, a large attachment, an unknown compression, a topic of another encoding, a message of a
 // channel never defined. The specification's own examples are tests/mcap_spec_test.py's.
+#include <zstd.h>
+
+#include <chrono>
 #include <cstring>
 #include <string>
 #include <vector>
@@ -12,6 +15,7 @@
 #include "accelcal/mcap_writer.hpp"
 #include "core/crc32.hpp"
 #include "io/binary_stream.hpp"
+#include "io/decompress.hpp"
 #include "io/mcap.hpp"
 
 namespace accelcal::internal {
@@ -150,6 +154,69 @@ TEST(Mcap, ReadsWhatARecordingLeft) {
   log = Read(with);
   EXPECT_EQ(log.streams[0].messages, 5000u);
   EXPECT_FALSE(log.truncated.has_value()) << *log.truncated;
+}
+
+// A bomb of chunks, each within the bound of one but together far past what any recording
+// inflates to: zstd chunks of 128 MiB of one private record (a few kB each), before the real
+// ones. Each was inflated (a 3.4 MB file of 300 chunks of 255 MiB took 39 s and then read);
+// now the first past kMaxFileInflatedBytes in all is refused, before it is inflated.
+TEST(Mcap, RefusesChunksThatInflatePastTheBoundInAll) {
+  const std::size_t size = std::size_t{128} << 20;
+  std::string records(size, '\0');
+  records[0] = '\x80';
+  const std::uint64_t record_length = size - 9;
+  std::memcpy(&records[1], &record_length, 8);
+  std::string z(ZSTD_compressBound(size), '\0');
+  z.resize(ZSTD_compress(z.data(), z.size(), records.data(), size, 1));
+  ASSERT_FALSE(ZSTD_isError(z.size()));
+  std::string body;
+  const auto put = [&](auto v) { body.append(reinterpret_cast<const char*>(&v), sizeof(v)); };
+  put(std::uint64_t{0});  // message start and end time
+  put(std::uint64_t{0});
+  put(std::uint64_t{size});
+  put(std::uint32_t{0});  // no CRC
+  put(std::uint32_t{4});
+  body += "zstd";
+  put(std::uint64_t{z.size()});
+  body += z;
+  std::string chunk(1, '\x06');
+  const std::uint64_t body_length = body.size();
+  chunk.append(reinterpret_cast<const char*>(&body_length), 8);
+  chunk += body;
+
+  McapImuWriter writer(McapCompression::kZstd, "/imu");
+  std::string file = writer.Header();
+  const int bombs = int(kMaxFileInflatedBytes / size) + 1;  // 9
+  for (int k = 0; k < bombs; ++k) file += chunk;
+  for (int k = 0; k < 50; ++k) {
+    file += writer.Sample(1000000000ull + 10000000ull * std::uint64_t(k), Vec3(0, 0, 9.81),
+                          Vec3(0, 0, 0));
+  }
+  file += writer.Finish();
+  ASSERT_LT(file.size(), std::size_t{1} << 20);
+
+  const auto start = std::chrono::steady_clock::now();
+  const std::string why = Why(file);
+  const double seconds =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  // Named at the chunk that passes the bound: the last bomb.
+  const std::size_t at = writer.Header().size() + std::size_t(bombs - 1) * chunk.size();
+  EXPECT_EQ(why, "byte " + std::to_string(at) +
+                     ": compressed chunks that inflate past 1024 MiB in all (64 times the file, "
+                     "and at least 1024 MiB)");
+  // The chunks before it are inflated (1 GiB of zstd, well under a second), not the rest.
+  EXPECT_LT(seconds, 10.0);
+  // Two such chunks fewer (896 MiB in all, with the real ones) are read: as much as a large
+  // real recording inflates to is not refused.
+  McapImuWriter again(McapCompression::kZstd, "/imu");
+  std::string fewer = again.Header();
+  for (int k = 0; k + 2 < bombs; ++k) fewer += chunk;
+  for (int k = 0; k < 50; ++k) {
+    fewer += again.Sample(1000000000ull + 10000000ull * std::uint64_t(k), Vec3(0, 0, 9.81),
+                          Vec3(0, 0, 0));
+  }
+  fewer += again.Finish();
+  EXPECT_EQ(Read(fewer).streams[0].messages, 50u);
 }
 
 }  // namespace

@@ -6,6 +6,7 @@
 #include <lz4frame.h>
 #include <zstd.h>
 
+#include <chrono>
 #include <cstring>
 #include <functional>
 #include <string>
@@ -401,6 +402,50 @@ TEST(RosBag, NamesTheByteOfWhatIsWrong) {
   Put<std::uint32_t>(&huge, 0xfffffff0u);
   EXPECT_NE(Why(huge).find("more than the 257 MiB accelcal reads in one"), std::string::npos)
       << Why(huge);
+}
+
+// A bomb of chunks, each within the bound of one but together far past what any recording
+// inflates to: lz4 chunks of one 128 MiB message of another topic (0.5 MB each). Each was
+// inflated (a 16 kB bag of 40 bz2 chunks of 255 MiB took 44 s and then read); now the first past
+// kMaxFileInflatedBytes in all is refused, before it is inflated.
+TEST(RosBag, RefusesChunksThatInflatePastTheBoundInAll) {
+  const std::string junk =
+      Record(Op(0x07) + Field("conn", Bytes<std::uint32_t>(1)) + Field("topic", "/junk"),
+             Field("topic", "/junk") + Field("type", "std_msgs/String") + Field("md5sum", "*") +
+                 Field("message_definition", "string data\n"));
+  const std::size_t size = std::size_t{128} << 20;
+  std::string text(size - junk.size() - 64, 'a');
+  std::string message;
+  PutString(&message, text);
+  const std::string records =
+      junk + Record(Op(0x02) + Field("conn", Bytes<std::uint32_t>(1)) +
+                        Field("time", Bytes<std::uint32_t>(1) + Bytes<std::uint32_t>(0)),
+                    message);
+  ASSERT_LE(records.size(), size);
+  const std::string bomb = Chunk(records, "lz4");
+  const int bombs = int(kMaxFileInflatedBytes / records.size()) + 1;  // 9
+  std::string bag = BagHeader();
+  for (int k = 0; k < bombs; ++k) bag += bomb;
+  bag += Chunk(Connection(0, "/a") + Message(0, 10, 0, 1.0) + Message(0, 10, 10000000, 2.0));
+  ASSERT_LT(bag.size(), std::size_t{8} << 20);
+
+  const auto start = std::chrono::steady_clock::now();
+  const std::string why = Why(bag);
+  const double seconds =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  // Named at the chunk that passes the bound: the last bomb.
+  const std::size_t at = BagHeader().size() + std::size_t(bombs - 1) * bomb.size();
+  EXPECT_EQ(why, "byte " + std::to_string(at) +
+                     ": compressed chunks that inflate past 1024 MiB in all (64 times the file, "
+                     "and at least 1024 MiB)");
+  EXPECT_LT(seconds, 10.0);  // the chunks before it inflated (1 GiB of lz4), not the rest
+  // Fewer such chunks (under 1 GiB in all) are read: a large real recording is not refused.
+  std::string fewer = BagHeader();
+  for (int k = 0; k + 1 < bombs; ++k) fewer += bomb;
+  fewer += Chunk(Connection(0, "/a") + Message(0, 10, 0, 1.0) + Message(0, 10, 10000000, 2.0));
+  const DecodedLog log = Read(fewer);
+  ASSERT_EQ(log.streams.size(), 2u);
+  EXPECT_EQ(log.streams[1].messages, 2u);
 }
 
 // A recorder killed leaves its open chunk with no length (0) and its records after it; a bag cut

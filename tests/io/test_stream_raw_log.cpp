@@ -137,6 +137,18 @@ TEST(StreamRawLog, RefusesWhatReadInputRefuses) {
   wrong.rate_hz = 100;
   EXPECT_NE(ErrorOf(WriteFile("stream_rate.csv", Log(3000)), wrong).find("contradicts"),
             std::string::npos);
+  // Every row twice (a recorder that wrote each message twice): refused at the first copy.
+  std::string twice;
+  const std::string rows = Log(100000);
+  for (std::size_t b = 0, e = 0; b < rows.size(); b = e) {
+    e = rows.find('\n', b) + 1;
+    twice += rows.substr(b, e - b);
+    if (b > 0) twice += rows.substr(b, e - b);  // not the header
+  }
+  EXPECT_NE(ErrorOf(WriteFile("stream_twice.csv", twice))
+                .find("stream_twice.csv:3: the recording repeats each sample"),
+            std::string::npos)
+      << ErrorOf(WriteFile("stream_twice.csv", twice));
 }
 
 }  // namespace

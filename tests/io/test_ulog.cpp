@@ -9,6 +9,7 @@
 #include <gtest/gtest.h>
 
 #include "accelcal/error.hpp"
+#include "accelcal/ulog_writer.hpp"
 #include "io/binary_stream.hpp"
 #include "io/input_file.hpp"
 #include "io/ulog.hpp"
@@ -262,6 +263,44 @@ TEST(ULog, OnlyTheColumnsAskedForAreStored) {
     ASSERT_EQ(b.values[2 * i], a.values[i * a.columns->size() + 6]);
     ASSERT_EQ(b.values[2 * i + 1], a.values[i * a.columns->size()]);
   }
+}
+
+// A sensor_accel instance whose device_id changes within the log (another sensor in its place:
+// a driver restarted on another bus, two logs joined) was read as one sensor and exported with
+// the first's CAL_ACC0_ID; it is refused at the message where the id changes, with both ids. An
+// instance that is not read is listed (inspect) as one accelcal cannot read, saying why.
+TEST(ULog, ADeviceIdThatChangesWithinAnInstanceIsRefused) {
+  const ULogImuWriter first(1), second(999);
+  std::string log = first.Header();
+  for (int k = 0; k < 200; ++k) {
+    const ULogImuWriter& w = k < 100 ? first : second;
+    log += w.Accel(1000000 + 10000 * std::uint64_t(k), Vec3(0.1 * k, 0, -9.81));
+  }
+  const std::string path = WriteTemp(log, "devid_switch.ulg");
+  std::string why;
+  try {
+    Read(path, [](const DecodedStream&) { return true; });
+  } catch (const InputError& e) {
+    why = e.what();
+  }
+  EXPECT_NE(why.find("sensor_accel instance 0: its device_id changes from 1 to 999 at its "
+                     "message 101 (timestamp 2000000 us): two sensors' samples in one instance"),
+            std::string::npos)
+      << why;
+  const DecodedLog listed = Read(path, [](const DecodedStream&) { return false; });
+  ASSERT_NE(Find(listed, "sensor_accel", 0), nullptr);
+  EXPECT_EQ(*Find(listed, "sensor_accel", 0)->device_id, 1u);
+  EXPECT_EQ(Find(listed, "sensor_accel", 0)->messages, 200u);
+  EXPECT_NE(Find(listed, "sensor_accel", 0)->unreadable.find("its device_id changes from 1 to 999"),
+            std::string::npos);
+  // One id throughout: read.
+  std::string same = first.Header();
+  for (int k = 0; k < 200; ++k) {
+    same += first.Accel(1000000 + 10000 * std::uint64_t(k), Vec3(0.1 * k, 0, -9.81));
+  }
+  const DecodedLog read =
+      Read(WriteTemp(same, "devid_same.ulg"), [](const DecodedStream&) { return true; });
+  EXPECT_EQ(Find(read, "sensor_accel", 0)->messages, 200u);
 }
 
 TEST(ULog, NotAULogIsRefused) {

@@ -299,13 +299,20 @@ void Conclude(const UnitRequest& r, UnitOutcome* out) {
   }
 }
 
-UnitOutcome KnownOrientations(const UnitRequest& r) {
+// The accelerometer's files read and cut into positions, and the labels of their units.
+UnitOutcome Load(const UnitRequest& r) {
   UnitOutcome out;
-  KnownOrientationOptions options = KnownOrientationOptionsOf(r);
-  out.orientations = ReadOrientations(r.orientations);
   out.input = LoadPositions(r.inputs, r.load);
   out.raw_unit = RawUnitLabel(r, out.input);
   out.unit = r.units;
+  return out;
+}
+
+UnitOutcome KnownOrientations(const UnitRequest& r) {
+  KnownOrientationOptions options = KnownOrientationOptionsOf(r);
+  OrientationFile orientation_file = ReadOrientations(r.orientations);
+  UnitOutcome out = Load(r);
+  out.orientations = std::move(orientation_file);
   const OrientationFile& orientations = *out.orientations;
   if (orientations.directions.size() != out.input.positions.size()) {
     throw DataError(r.orientations + " has " + std::to_string(orientations.directions.size()) +
@@ -331,10 +338,7 @@ UnitOutcome KnownOrientations(const UnitRequest& r) {
 UnitOutcome OverTemperature(const UnitRequest& r) {
   std::optional<GyroLogAhead> gyro_ahead;
   if (r.gyro) gyro_ahead.emplace(r);
-  UnitOutcome out;
-  out.input = LoadPositions(r.inputs, r.load);
-  out.raw_unit = RawUnitLabel(r, out.input);
-  out.unit = r.units;
+  UnitOutcome out = Load(r);
   out.model_requested = std::string(NameOf(r.model.value_or(ModelKind::kLinear)));
   ThermalOptions thermal;
   thermal.base = CalibrationOptionsOf(r);
@@ -413,10 +417,7 @@ UnitOutcome OrientationFree(const UnitRequest& r) {
   const RandomWalk random_walk = ReadRandomWalk(r);
   std::optional<GyroLogAhead> gyro_ahead;
   if (r.gyro) gyro_ahead.emplace(r);
-  UnitOutcome out;
-  out.input = LoadPositions(r.inputs, r.load);
-  out.raw_unit = RawUnitLabel(r, out.input);
-  out.unit = r.units;
+  UnitOutcome out = Load(r);
   out.model_requested = r.model ? std::string(NameOf(*r.model)) : "auto";
   const std::vector<Vec3> means = Means(out.input.positions);
   options.reading_sigmas = ReadingSigmas(out.input);  // empty: noise from the residuals

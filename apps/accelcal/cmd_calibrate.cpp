@@ -237,6 +237,7 @@ const char* OptionHint(const Finding& f) {
     return " (--bias-model auto fits a bias that follows time)";
   }
   if (f.code == "time_unit") return " (--time-unit)";
+  if (f.code == "temperature_span") return " (--thermal auto)";
   if (f.code == "positions_like_samples") return " (--input-kind raw)";
   return "";
 }
@@ -542,7 +543,9 @@ int WriteCalibration(const CalibrateArgs& args, const UnitOutcome& unit, const G
     }
     if (unit.gyroscope) PrintGyro(*unit.gyroscope, force_unit);
     for (const Finding& f : diagnosis.findings) {
-      if (f.severity == Severity::kNote) Say("note      %s\n", f.message.c_str());
+      // A note's option, where it suggests one (the summary's other notes name none).
+      const char* hint = f.code == "temperature_span" ? OptionHint(f) : "";
+      if (f.severity == Severity::kNote) Say("note      %s%s\n", f.message.c_str(), hint);
     }
     Say("verdict   %s\n", std::string(ToString(diagnosis.verdict())).c_str());
     if (!args.output.empty()) Say("wrote     %s\n", Shown(args.output).c_str());
@@ -576,7 +579,6 @@ int RunCalibrate(const CalibrateArgs& args) {
   UnitRequest request = CalibrateRequest(args, &g);
   ReportLoading(&request.load);
   const UnitOutcome unit = CalibrateUnit(request);
-  for (const std::string& warning : unit.warnings) Warn("%s\n", WithCliFlags(warning).c_str());
   if (!unit.converged()) {
     WriteErrLine(Format("accelcal: %s: the solver did not converge: %s; nothing written\n",
                         args.input.path.c_str(),

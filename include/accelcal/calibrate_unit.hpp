@@ -28,6 +28,10 @@
 
 namespace accelcal {
 
+/// Positions whose temperatures span this much get a finding (`temperature_span`) suggesting a
+/// calibration over temperature: a MEMS part's scale moves by 100-300 ppm/K, 0.1-0.3 % over 10 K.
+inline constexpr double kTemperatureSpanNote_K = 10;
+
 /// The gyroscope's rates beside the accelerometer's (ReadGyroInput).
 struct GyroInput {
   std::string log;                   ///< `gyro`: its file; empty: the first input, read again
@@ -134,8 +138,6 @@ struct UnitOutcome {
   Provenance provenance;
   /// Lines for the summary, after the input's description (options marked {{name}}).
   std::string notes;
-  /// Warnings not (yet) findings of the file, each a line (options marked {{name}}).
-  std::vector<std::string> warnings;
   /// The solver converged: there is a calibration to write. Otherwise nothing is to be written.
   bool converged() const { return accelerometer.summary.converged(); }
   /// The calibration file's description of this outcome (CalibrationToJson): pointers into it.

@@ -64,6 +64,14 @@
 ///     `joined_periods` (note): still periods split by a short disturbance that were joined.
 ///   - `time_unit`, `time_gaps`, `coarse_timestamps` (notes), `irregular_sampling` (note beyond
 ///     1 % of the steps, warning beyond 10 %): what the time column was found to be.
+///   - `corrupted_reading` (warning): readings more than kCorruptedReadingFactor times the log's
+///     spread from its median (static_detection.hpp), left out of every window.
+///
+/// The unit's, from its calibration as a whole (CalibrateUnit, calibrate_unit.hpp):
+///   - `drift_across_gap` (warning): a bias that drifts was fitted across a pause between two
+///     positions of more than a minute and five times the median pause, which nothing checks.
+///   - `temperature_span` (note): the positions span kTemperatureSpanNote_K or more, and the
+///     parameters were fitted as constants over temperature.
 ///
 /// The gyroscope's, when it was calibrated too (GyroFindings; gyro_calibration.hpp):
 ///   - `gyro_misfit` (failure): the rotations miss the fitted gravity directions by more than

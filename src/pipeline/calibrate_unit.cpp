@@ -20,10 +20,6 @@ namespace {
 
 using internal::Format;
 
-// Positions whose temperatures span this much get a note suggesting a calibration over
-// temperature: a MEMS part's scale moves by 100-300 ppm/K, 0.1-0.3 % over 10 K.
-constexpr double kTemperatureSpanNote_K = 10;
-
 // A bias random walk below 1e-12 m/s²/√s is none; above 1e3 it would move the bias by a hundred g
 // in a second (as unit_request.cpp).
 constexpr double kMinRandomWalk = 1e-12, kMaxRandomWalk = 1e3;
@@ -126,8 +122,7 @@ std::vector<double> PositionTimes(const LoadedInput& in, std::string* why) {
 
 // The longest pause between two positions when it is over 5 times the median pause and a minute:
 // a drift is fitted straight (or between knots) across it, which nothing between them checks.
-std::optional<std::string> DriftAcrossGap(const std::string& path, const std::vector<double>& times,
-                                          const BiasModel& model) {
+std::optional<Finding> DriftAcrossGap(const std::vector<double>& times, const BiasModel& model) {
   if (model.constant() || times.size() < 3) return std::nullopt;
   std::vector<double> sorted = times;
   std::sort(sorted.begin(), sorted.end());
@@ -141,11 +136,14 @@ std::optional<std::string> DriftAcrossGap(const std::string& path, const std::ve
   std::nth_element(ordered.begin(), ordered.begin() + ordered.size() / 2, ordered.end());
   const double median = ordered[ordered.size() / 2];
   if (!(pauses[longest] > 5 * median && pauses[longest] > 60)) return std::nullopt;
-  return Format(
-      "%s: no position between %.6g s and %.6g s (%.0f s, %.0f times the median pause): the %s "
-      "bias is fitted across that time as if it drifted as it did around it",
-      path.c_str(), sorted[longest], sorted[longest + 1], pauses[longest], pauses[longest] / median,
-      ToString(model).c_str());
+  return Finding{
+      "drift_across_gap",
+      Severity::kWarning,
+      Format("no position between %.6g s and %.6g s (%.0f s, %.0f times the median pause): the "
+             "%s bias is fitted across that time as if it drifted as it did around it",
+             sorted[longest], sorted[longest + 1], pauses[longest], pauses[longest] / median,
+             ToString(model).c_str()),
+      {{"pause_s", pauses[longest]}, {"median_pause_s", median}}};
 }
 
 // Each position's temperature: its file's from `temperatures`, else its own (read with its log).
@@ -369,19 +367,19 @@ UnitOutcome OverTemperature(const UnitRequest& r) {
   return out;
 }
 
-// A note when the positions span a range of temperature they were calibrated as if it did not
-// matter over.
-void NoteTemperatureSpan(const std::vector<Position>& positions, std::string* notes) {
+// Positions that span a range of temperature they were calibrated as if it did not matter over.
+std::optional<Finding> TemperatureSpan(const std::vector<Position>& positions) {
   double lo = kTemperatureRange_C[1], hi = kTemperatureRange_C[0];
   for (const Position& p : positions) {
     if (p.temperature_c) lo = std::min(lo, *p.temperature_c), hi = std::max(hi, *p.temperature_c);
   }
-  if (hi - lo >= kTemperatureSpanNote_K) {
-    *notes += Format(
-        "          temperature: the positions span %.3g K (%.4g to %.4g degC); parameters that "
-        "follow it ({{thermal}} auto) may describe them better\n",
-        hi - lo, lo, hi);
-  }
+  if (!(hi - lo >= kTemperatureSpanNote_K)) return std::nullopt;
+  return Finding{"temperature_span",
+                 Severity::kNote,
+                 Format("the positions span %.3g K (%.4g to %.4g degC); parameters that follow "
+                        "temperature may describe them better",
+                        hi - lo, lo, hi),
+                 {{"span_K", hi - lo}, {"lowest_C", lo}, {"highest_C", hi}}};
 }
 
 // The bias model, chosen when asked for (`options` takes it and the positions' times).
@@ -422,7 +420,8 @@ UnitOutcome OrientationFree(const UnitRequest& r) {
   const std::vector<Vec3> means = Means(out.input.positions);
   options.reading_sigmas = ReadingSigmas(out.input);  // empty: noise from the residuals
   out.mean_sigmas = options.reading_sigmas;
-  NoteTemperatureSpan(out.input.positions, &out.notes);
+  std::vector<Finding> unit_findings;
+  if (auto span = TemperatureSpan(out.input.positions)) unit_findings.push_back(*span);
   if (random_walk.given()) {
     options.bias_random_walk = RandomWalkInRaw(random_walk, means, options, r, &out.notes);
   }
@@ -433,9 +432,8 @@ UnitOutcome OrientationFree(const UnitRequest& r) {
   out.accelerometer = std::move(choice.result);
   out.model_selection = std::move(choice.selection);
   if (out.accelerometer.drift) {
-    if (auto gap = DriftAcrossGap(r.inputs.front(), out.accelerometer.drift->times_s,
-                                  options.bias_model)) {
-      out.warnings.push_back(*gap);
+    if (auto gap = DriftAcrossGap(out.accelerometer.drift->times_s, options.bias_model)) {
+      unit_findings.push_back(*gap);
     }
   }
   if (random_walk.given() && !(out.accelerometer.drift && out.accelerometer.drift->random_walk)) {
@@ -445,6 +443,7 @@ UnitOutcome OrientationFree(const UnitRequest& r) {
   if (!out.converged()) return out;
   if (gyro_ahead) CalibrateGyroscope(r, &*gyro_ahead, &out);
   Conclude(r, &out);
+  for (Finding& f : unit_findings) out.diagnosis.findings.push_back(std::move(f));
   return out;
 }
 

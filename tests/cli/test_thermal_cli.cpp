@@ -166,12 +166,21 @@ TEST_F(ThermalCli, OneRampWithItsTemperaturesAndAuto) {
   ASSERT_EQ(run.status, 0) << run.err;
   const auto doc = nlohmann::json::parse(run.out)["sensors"]["accelerometer"];
   EXPECT_EQ(doc["thermal"]["degrees"], nlohmann::json::parse(R"({"K": 1, "bias": 1, "k2": 0})"));
-  // Calibrated as if temperature did not matter, the span is pointed out.
+  // Calibrated as if temperature did not matter, the span is pointed out: in the summary, and as
+  // a finding of the file, where Python and a later reader see it too.
   const test::CliRun constant = Exec("calibrate " + ramp);
-  EXPECT_NE(constant.out.find("temperature: the positions span 35 K (10 to 45 degC); parameters "
-                              "that follow it (--thermal auto) may describe them better"),
+  EXPECT_NE(constant.out.find("note      the positions span 35 K (10 to 45 degC); parameters "
+                              "that follow temperature may describe them better (--thermal auto)"),
             std::string::npos)
       << constant.out;
+  const test::CliRun file = Exec("calibrate " + ramp + " --json");
+  ASSERT_EQ(file.status, 0) << file.err;
+  const nlohmann::json written = nlohmann::json::parse(file.out);
+  bool found = false;
+  for (const auto& f : written["sensors"]["accelerometer"]["diagnostics"]) {
+    found |= f["code"] == "temperature_span" && f["severity"] == "note";
+  }
+  EXPECT_TRUE(found) << file.out;
   // Without the temperature column, nothing to fit: said, with the options that give one.
   const std::string bare = Write("bare.csv", ThermalCsv(p, {}));
   const test::CliRun none = Exec("calibrate " + bare + " --thermal 1,1");

@@ -2,9 +2,13 @@
 // once and named by each edge in its own words, and the same file as the tool writes.
 #include "accelcal/calibrate_unit.hpp"
 
+#include <cstdio>
+#include <map>
+
 #include <gtest/gtest.h>
 
 #include "accelcal/error.hpp"
+#include "accelcal/simulate.hpp"
 #include "support/cli_test.hpp"
 
 namespace accelcal {
@@ -90,6 +94,46 @@ TEST_F(UnitCalibration, WritesTheToolsFile) {
   const CliRun tool = Exec("calibrate " + kCtu24 + " --units g --model auto --json");
   ASSERT_EQ(tool.status, 0) << tool.err;
   EXPECT_EQ(CalibrationToJson(unit.accelerometer, unit.FileInfo()), tool.out);
+}
+
+// A drifting bias fitted across a long pause with no position in it: a finding of the file (it
+// was a warning on the tool's stderr only, which Python and a later reader never saw).
+TEST_F(UnitCalibration, ADriftFittedAcrossALongPauseIsAFinding) {
+  const std::vector<Vec3> directions = Yang18Directions();
+  RawLogSimulation sim;
+  sim.rate_hz = 50;
+  sim.static_s = 10;
+  const std::vector<Vec3> first(directions.begin(), directions.begin() + 9);
+  const std::vector<Vec3> second(directions.begin() + 9, directions.end());
+  const SimulatedLog a = SimulateRawLog(Yang2012Truth(), 9.80665, first, sim);
+  sim.seed = 2;
+  const SimulatedLog b = SimulateRawLog(Yang2012Truth(), 9.80665, second, sim);
+  const auto csv = [&](double pause_s) {
+    std::string text = "t,x,y,z\n";
+    char line[160];
+    for (std::size_t i = 0; i < a.samples.size() + b.samples.size(); ++i) {
+      const bool later = i >= a.samples.size();
+      const std::size_t j = later ? i - a.samples.size() : i;
+      const Vec3& x = later ? b.samples[j] : a.samples[j];
+      const double t = later ? a.time_s.back() + pause_s + b.time_s[j] : a.time_s[j];
+      std::snprintf(line, sizeof line, "%.17g,%.17g,%.17g,%.17g\n", t, x(0), x(1), x(2));
+      text += line;
+    }
+    return text;
+  };
+  const auto codes = [&](double pause_s) {
+    UnitRequest r;
+    r.inputs = {Write("log" + std::to_string(pause_s) + ".csv", csv(pause_s))};
+    r.bias_model = BiasModel{BiasModelKind::kLinear, 0};
+    const UnitOutcome unit = CalibrateUnit(r);
+    std::map<std::string, Severity> out;
+    for (const Finding& f : unit.diagnosis.findings) out[f.code] = f.severity;
+    return out;
+  };
+  const std::map<std::string, Severity> paused = codes(600);
+  ASSERT_EQ(paused.count("drift_across_gap"), 1u);
+  EXPECT_EQ(paused.at("drift_across_gap"), Severity::kWarning);
+  EXPECT_EQ(codes(4).count("drift_across_gap"), 0u);
 }
 
 }  // namespace

@@ -312,6 +312,18 @@ TEST(LogReader, UnreadablePath) {
 // Text as spreadsheets and old tools write it (issue 16): a UTF-8 byte-order mark is skipped (it
 // made the first row of a headerless file a "header" and dropped it), CR-only line ends are line
 // ends, and UTF-16 and semicolon-separated exports are named in the message.
+TEST(LogReader, AFileWhoseSizeIsZeroButHasContentIsReadToItsEnd) {
+  // /proc's files say they have 0 bytes: read, their content is what is judged (here, not a log),
+  // not called empty.
+  try {
+    ReadInput("/proc/self/status", {});
+    ADD_FAILURE() << "read /proc/self/status as a log";
+  } catch (const InputError& e) {
+    EXPECT_EQ(std::string(e.what()).find("no data"), std::string::npos) << e.what();
+    EXPECT_EQ(e.line(), 1u) << e.what();
+  }
+}
+
 TEST(LogReader, ByteOrderMarksLineEndsAndSemicolons) {
   const std::string rows = "1,2,3\n4,5,6\n7,8,9\n";
   InputData d = Parse("\xEF\xBB\xBF" + rows);

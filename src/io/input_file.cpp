@@ -56,7 +56,9 @@ InputFile::InputFile(const std::string& path, std::size_t max_stream_bytes)
     if (owned_) ::close(fd_);
     throw InputError(name_, 0, "is a directory, not a file");
   }
-  regular_ = S_ISREG(st.st_mode);
+  // A file of /proc or /sys says it has 0 bytes but has content, made as it is read: read as a
+  // pipe is, to its end (within max_stream_bytes), not as the empty file its size claims.
+  regular_ = S_ISREG(st.st_mode) && st.st_size > 0;
   if (regular_) {
     const off_t at = ::lseek(fd_, 0, SEEK_CUR);  // standard input may have been read from
     start_ = at > 0 ? static_cast<std::size_t>(at) : 0;

@@ -442,6 +442,31 @@ int TemperatureColumn(const std::string& given, const std::vector<std::string>& 
   return c;
 }
 
+// A raw log's last block (`block`, after `lines_before` lines) whose last line has no line end,
+// and holds data: a logger writes a row, then its line end, so the recording stopped while that
+// row was written, and its last field may be a number cut short ("34" of "34799"), read as
+// wrong as any. The line is left out of `block` and said (read_warning), as a binary log's
+// record cut short is. The first data line (`first_line`, perhaps the header) is kept: a file
+// of one line is not a recording cut short. A positions file is never passed here: each of its
+// rows is a position, typed by hand as often as not, and a last line without its end is whole.
+void LeaveOutCutLine(std::string_view* block, std::uint32_t lines_before, std::uint32_t first_line,
+                     char eol, InputData* data) {
+  if (block->empty() || block->back() == eol) return;
+  const std::size_t end = block->rfind(eol);
+  const std::size_t start = end == std::string_view::npos ? 0 : end + 1;
+  std::string_view tail = block->substr(start);
+  tail = internal::Trim(tail.substr(0, tail.find('#')));
+  if (tail.empty()) return;  // a comment or blanks: nothing cut that was read
+  const auto number = static_cast<std::uint32_t>(
+      lines_before + std::count(block->begin(), block->begin() + start, eol) + 1);
+  if (number <= first_line) return;
+  *block = block->substr(0, start);
+  data->raw.read_warning = internal::Format(
+      "the file ends inside line %u, which has no line end (the recording was cut while it was "
+      "written; its last value may be cut short), left out: the rows before it were read",
+      number);
+}
+
 InputData ParseBlocks(internal::TextBlocks& blocks, const std::string& source,
                       const ReadOptions& options, const BlockSink* sink = nullptr,
                       BlockColumns* columns = nullptr) {
@@ -598,6 +623,7 @@ InputData ParseBlocks(internal::TextBlocks& blocks, const std::string& source,
   std::size_t parsed_rows = 0;
   bool skip_header = has_header;
   while (blocks.Next(&block)) {
+    if (raw && blocks.AtEnd()) LeaveOutCutLine(&block, lines, first_line, blocks.line_end(), &data);
     lines = parser.Parse(block, blocks.block_offset(), blocks.total(), lines, blocks.line_end(),
                          skip_header, &parsed_rows, &data, &instances);
     skip_header = false;
@@ -945,7 +971,7 @@ StreamedLog StreamRawLog(const std::string& path, const ReadOptions& options,
     rows.line.clear();
     instances->clear();
   };
-  ParseBlocks(blocks, source, read, &take, &columns);
+  out.read_warning = ParseBlocks(blocks, source, read, &take, &columns).raw.read_warning;
   if (options.instance && columns.instance_name.empty()) {
     throw InputError(source, 0, kNoInstanceColumn);
   }

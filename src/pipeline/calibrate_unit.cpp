@@ -410,6 +410,17 @@ void ChooseBiasModel(const UnitRequest& r, const std::vector<Vec3>& means,
   if (options->bias_model.constant()) options->position_times_s.clear();
 }
 
+// A log the reader found cut short: " (FILE ends early: why)", for each; empty when none was.
+std::string CutShortNote(const LoadedInput& in) {
+  std::string note;
+  for (const LoadedFile& f : in.files) {
+    if (f.data.kind == InputKind::kRaw && !f.data.raw.read_warning.empty()) {
+      note += " (" + f.path + " ends early: " + f.data.raw.read_warning + ")";
+    }
+  }
+  return note;
+}
+
 UnitOutcome OrientationFree(const UnitRequest& r) {
   CalibrationOptions options = CalibrationOptionsOf(r);
   const RandomWalk random_walk = ReadRandomWalk(r);
@@ -425,10 +436,20 @@ UnitOutcome OrientationFree(const UnitRequest& r) {
   if (random_walk.given()) {
     options.bias_random_walk = RandomWalkInRaw(random_walk, means, options, r, &out.notes);
   }
-  ChooseBiasModel(r, means, &options, &out);
-  // For a quadratic fit (asked for, or a candidate of the model's choice) the linear fit is the
-  // comparison: both with held-out validation, decided by ModelSelection's rule.
-  ModelChoice choice = CalibrateChoosingModel(means, options, !r.model);
+  // A fit refused (too few positions, a term not observable) from a log cut short says so: the
+  // part lost may have held what it lacks, and the warning that says so comes only with a result.
+  std::optional<ModelChoice> fitted;
+  try {
+    ChooseBiasModel(r, means, &options, &out);
+    // For a quadratic fit (asked for, or a candidate of the model's choice) the linear fit is the
+    // comparison: both with held-out validation, decided by ModelSelection's rule.
+    fitted = CalibrateChoosingModel(means, options, !r.model);
+  } catch (const DataError& e) {
+    const std::string note = CutShortNote(out.input);
+    if (note.empty() || dynamic_cast<const NotConvergedError*>(&e) != nullptr) throw;
+    throw DataError(e.what() + note, e.file());
+  }
+  ModelChoice choice = std::move(*fitted);
   out.accelerometer = std::move(choice.result);
   out.model_selection = std::move(choice.selection);
   if (out.accelerometer.drift) {

@@ -312,6 +312,18 @@ TEST(LogReader, UnreadablePath) {
 // Text as spreadsheets and old tools write it (issue 16): a UTF-8 byte-order mark is skipped (it
 // made the first row of a headerless file a "header" and dropped it), CR-only line ends are line
 // ends, and UTF-16 and semicolon-separated exports are named in the message.
+TEST(LogReader, AFileWhoseSizeIsZeroButHasContentIsReadToItsEnd) {
+  // /proc's files say they have 0 bytes: read, their content is what is judged (here, not a log),
+  // not called empty.
+  try {
+    ReadInput("/proc/self/status", {});
+    ADD_FAILURE() << "read /proc/self/status as a log";
+  } catch (const InputError& e) {
+    EXPECT_EQ(std::string(e.what()).find("no data"), std::string::npos) << e.what();
+    EXPECT_EQ(e.line(), 1u) << e.what();
+  }
+}
+
 TEST(LogReader, ByteOrderMarksLineEndsAndSemicolons) {
   const std::string rows = "1,2,3\n4,5,6\n7,8,9\n";
   InputData d = Parse("\xEF\xBB\xBF" + rows);
@@ -607,8 +619,9 @@ TEST(LogReader, TheFastPathsReadWhatTheGeneralPathReads) {
 
 TEST(LogReader, EveryRowIsReadAsStrtodReadsIt) {
   // Whitespace and comma logs of mixed spellings (long mantissas, signs, exponents, CRLF, blank
-  // lines and comments between the rows, no line end after the last), read by the fast path and
-  // the general one: every value bit-identical to strtod's.
+  // lines and comments between the rows), read by the fast path and the general one: every value
+  // bit-identical to strtod's. The last row has no line end: a recording cut while it was
+  // written, that row left out and said.
   std::mt19937_64 rng(5);
   for (const char* sep : {"   ", ",", " , ", "\t"}) {
     std::string text;
@@ -624,14 +637,52 @@ TEST(LogReader, EveryRowIsReadAsStrtodReadsIt) {
     }
     text.pop_back();  // the last row without its line end
     const InputData d = Parse(text);
-    ASSERT_EQ(d.raw.samples.size(), rows.size()) << sep;
-    for (std::size_t i = 0; i < rows.size(); ++i) {
+    ASSERT_EQ(d.raw.samples.size(), rows.size() - 1) << sep;
+    EXPECT_NE(d.raw.read_warning.find("the file ends inside line"), std::string::npos);
+    for (std::size_t i = 0; i + 1 < rows.size(); ++i) {
       for (int a = 0; a < 3; ++a) {
         ASSERT_EQ(Bits(d.raw.samples[i](a)), Bits(std::strtod(rows[i][a + 1].c_str(), nullptr)))
             << "row " << i << " '" << rows[i][a + 1] << "' separated by '" << sep << "'";
       }
     }
   }
+}
+
+TEST(LogReader, ARawLogWhoseLastLineHasNoLineEndLeavesItOutAndSaysSo) {
+  // A logger cut while it wrote "34799": the last row ends "34", read as wrong as any number.
+  // From a file, as a recording comes: the row is left out and said (a binary log's record cut
+  // short is said alike).
+  std::string text = "t,ax,ay,az\n" + ManyRows(300, ",", true) + "3,1.5,2.5,34";
+  const std::string path = ::testing::TempDir() + "/cut_mid_number.csv";
+  std::FILE* f = std::fopen(path.c_str(), "wb");
+  ASSERT_NE(f, nullptr);
+  std::fwrite(text.data(), 1, text.size(), f);
+  std::fclose(f);
+  const InputData d = ReadInput(path, {});
+  std::remove(path.c_str());
+  ASSERT_EQ(d.kind, InputKind::kRaw);
+  EXPECT_EQ(d.raw.samples.size(), 300u);
+  EXPECT_EQ(d.raw.samples.back(), Vec3(299, 2.5, -0.3));
+  EXPECT_EQ(
+      d.raw.read_warning,
+      "the file ends inside line 302, which has no line end (the recording was cut while "
+      "it was written; its last value may be cut short), left out: the rows before it were read");
+
+  // A row cut before all its fields were written is left out alike, not refused.
+  EXPECT_EQ(Parse("t,ax,ay,az\n" + ManyRows(300, ",", true) + "3,1.5").raw.samples.size(), 300u);
+  // A comment or blanks after the last line end: nothing cut, nothing said.
+  const InputData c = Parse(ManyRows(300, ",", true) + "# stopped  ");
+  EXPECT_EQ(c.raw.samples.size(), 300u);
+  EXPECT_EQ(c.raw.read_warning, "");
+  // A positions file's every row is a position, typed by hand as often as not: its last line
+  // without a line end is whole and read.
+  const InputData p = Parse("ax_g,ay_g,az_g\n0.1,0.2,0.97\n-0.9,0.1,0.3");
+  ASSERT_EQ(p.kind, InputKind::kPositions);
+  ASSERT_EQ(p.positions.size(), 2u);
+  EXPECT_EQ(p.positions[1].mean, Vec3(-0.9, 0.1, 0.3));
+  ReadOptions positions;
+  positions.kind = InputKind::kPositions;
+  EXPECT_EQ(Parse("1,2,3\n4,5,6", positions).positions.size(), 2u);
 }
 
 TEST(LogReader, ErrorsDeepInTheFileNameTheirLine) {

@@ -151,5 +151,19 @@ TEST(StreamRawLog, RefusesWhatReadInputRefuses) {
       << ErrorOf(WriteFile("stream_twice.csv", twice));
 }
 
+TEST(StreamRawLog, ALastLineWithoutItsLineEndIsLeftOutAndSaid) {
+  // As ReadInput: a recording cut while its last row was written.
+  std::string text = Log(1000);
+  text.resize(text.size() - 4);  // "...,-0.123456\n" cut to "...,-0.123"
+  const std::string path = WriteFile("cut.csv", text);
+  const Streamed s = Stream(path);
+  const InputData whole = ReadInput(path, {});
+  std::remove(path.c_str());
+  EXPECT_EQ(s.log.samples, 999u);
+  EXPECT_EQ(whole.raw.samples.size(), 999u);
+  EXPECT_NE(s.log.read_warning.find("the file ends inside line 1001"), std::string::npos);
+  EXPECT_EQ(s.log.read_warning, whole.raw.read_warning);
+}
+
 }  // namespace
 }  // namespace accelcal

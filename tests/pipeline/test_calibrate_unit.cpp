@@ -4,6 +4,7 @@
 
 #include <cstdio>
 #include <map>
+#include <string>
 
 #include <gtest/gtest.h>
 
@@ -39,6 +40,35 @@ UnitRequest Ctu24() {
   r.inputs = {kCtu24};
   r.units = ForceUnit::kStandardGravity;
   return r;
+}
+
+TEST(UnitRequest, AFitRefusedFromALogCutShortSaysItEndsEarly) {
+  // The log's warning that it was cut short comes with a result; when the fit is refused for
+  // too few positions, the refusal is where the user looks, and the part lost may hold them.
+  const std::string path = ::testing::TempDir() + "/cut_one_position.csv";
+  {
+    std::string text = "t,ax,ay,az\n";
+    for (int i = 0; i < 3000; ++i) text += std::to_string(0.01 * i) + ",0.01,-0.02,1.0\n";
+    text += "30,0.01,-0.02,0.9";  // cut while "0.99..." was written
+    std::FILE* f = std::fopen(path.c_str(), "wb");
+    ASSERT_NE(f, nullptr);
+    std::fwrite(text.data(), 1, text.size(), f);
+    std::fclose(f);
+  }
+  UnitRequest r;
+  r.inputs = {path};
+  r.units = ForceUnit::kStandardGravity;
+  try {
+    CalibrateUnit(r);
+    ADD_FAILURE() << "calibrated from one position";
+  } catch (const DataError& e) {
+    EXPECT_NE(std::string(e.what()).find(" (" + path +
+                                         " ends early: the file ends inside line "
+                                         "3002"),
+              std::string::npos)
+        << e.what();
+  }
+  std::remove(path.c_str());
 }
 
 TEST(UnitRequest, StatesEachRuleBetweenOptionsOnce) {

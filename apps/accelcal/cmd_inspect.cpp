@@ -75,10 +75,13 @@ int RunInspect(const InspectArgs& args) {
       out += Format("%-*s %s\n", width, "variable", "size and class");
       std::size_t matrices = 0;
       for (const LogStreamInfo& s : log.streams) {
-        out +=
-            Format("%-*s %s%s\n", width, VisibleLine(s.topic).c_str(), VisibleLine(s.type).c_str(),
-                   s.samples > 0 ? Format(" (%zu rows read)", s.samples).c_str() : "");
-        if (s.samples > 0) ++matrices;
+        const std::string what = !s.unreadable.empty()
+                                     ? " (unreadable: " + VisibleLine(s.unreadable) + ")"
+                                 : s.samples > 0 ? Format(" (%zu rows read)", s.samples)
+                                                 : std::string();
+        out += Format("%-*s %s%s\n", width, VisibleLine(s.topic).c_str(),
+                      VisibleLine(s.type).c_str(), what.c_str());
+        if (s.samples > 0 && s.unreadable.empty()) ++matrices;
       }
       out += Format(
           "%zu variables, %zu numeric matrices. A matrix is read as a text log's columns "

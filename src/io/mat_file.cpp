@@ -223,6 +223,13 @@ MatTable ReadMatTable(const std::string& path, const std::string& name) {
     }
     chosen = numeric.front()->name;
   }
+  if (chosen.empty()) {
+    // libmatio gives a variable whose name element is malformed (not text) or empty the name "",
+    // under which it cannot find it again.
+    Fail(path,
+         "its numeric matrix has no name (the variable's name element is empty or not "
+         "text): a MAT-file's variable is read by its name");
+  }
   const auto it =
       std::find_if(all.begin(), all.end(), [&](const MatVariable& v) { return v.name == chosen; });
   if (it == all.end()) Fail(path, "no variable " + chosen + " (its variables: " + list + ")");

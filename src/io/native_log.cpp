@@ -836,6 +836,11 @@ LogInventory InspectLog(const std::string& path) {
         info.samples = turned ? v.dims[1] : v.dims[0];
         if (turned) info.type += ", its samples as columns: read turned";
       }
+      if (v.name.empty()) {  // as ReadMatTable refuses it
+        info.unreadable =
+            "it has no name (its name element is empty or not text): a variable is read by its "
+            "name";
+      }
       out.streams.push_back(std::move(info));
     }
     out.bytes = file.size();

@@ -73,6 +73,21 @@ TEST(MatStructure, WellFormedFilesPassAndAreRead) {
   }
 }
 
+// From a hostile test: a variable whose name element is not text reads, through libmatio, as a
+// variable named "", which it cannot find again: the refusal said "the variable  cannot be read",
+// and inspect listed it as readable. Both now say why.
+TEST(MatStructure, AVariableWithoutANameIsRefusedSayingSo) {
+  std::string m = Matrix();
+  PutU32(&m, 168, 9);  // the name element's type: doubles, not text
+  const std::string path = Write("badname.mat", m);
+  try {
+    ReadMatTable(path, "");
+    ADD_FAILURE() << "read";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("has no name"), std::string::npos) << e.what();
+  }
+}
+
 TEST(MatStructure, ClaimsBeyondTheFileAreRefusedWhereTheyAre) {
   // The matrix's tag (8 bytes at 128), flags (16), dimensions (16), then the name's tag at 168.
   std::string name = Matrix();

@@ -306,6 +306,31 @@ UnitOutcome Load(const UnitRequest& r) {
   return out;
 }
 
+// A log the reader found cut short: " (FILE ends early: why)", for each; empty when none was.
+std::string CutShortNote(const LoadedInput& in) {
+  std::string note;
+  for (const LoadedFile& f : in.files) {
+    if (f.data.kind == InputKind::kRaw && !f.data.raw.read_warning.empty()) {
+      note += " (" + f.path + " ends early: " + f.data.raw.read_warning + ")";
+    }
+  }
+  return note;
+}
+
+// `fit()`, and a fit it refuses (too few positions, a term not observable) from a log cut short
+// said so: the part lost may have held what it lacks, and the warning that says so comes only with
+// a result.
+template <typename Fit>
+auto NotingCutShort(const LoadedInput& in, Fit&& fit) -> decltype(fit()) {
+  try {
+    return fit();
+  } catch (const DataError& e) {
+    const std::string note = CutShortNote(in);
+    if (note.empty() || dynamic_cast<const NotConvergedError*>(&e) != nullptr) throw;
+    throw DataError(e.what() + note, e.file());
+  }
+}
+
 UnitOutcome KnownOrientations(const UnitRequest& r) {
   KnownOrientationOptions options = KnownOrientationOptionsOf(r);
   OrientationFile orientation_file = ReadOrientations(r.orientations);
@@ -320,8 +345,9 @@ UnitOutcome KnownOrientations(const UnitRequest& r) {
   options.reading_sigmas = ReadingSigmas(out.input);
   out.mean_sigmas = options.reading_sigmas;
   out.model_requested = std::string(NameOf(options.model));
-  out.accelerometer =
-      CalibrateKnownOrientations(Means(out.input.positions), orientations.directions, options);
+  out.accelerometer = NotingCutShort(out.input, [&] {
+    return CalibrateKnownOrientations(Means(out.input.positions), orientations.directions, options);
+  });
   out.notes = Format("orient.   %s: %zu known orientations\n", r.orientations.c_str(),
                      orientations.directions.size());
   if (r.gyro) {
@@ -350,13 +376,15 @@ UnitOutcome OverTemperature(const UnitRequest& r) {
   const std::vector<Vec3> means = Means(out.input.positions);
   ThermalResult fit;
   try {
-    if (r.thermal_degrees) {
-      thermal.degrees = *r.thermal_degrees;
-      fit = CalibrateThermal(means, thermal);
-    } else {
-      out.thermal_selection = SelectThermalDegrees(means, thermal);
-      fit = out.thermal_selection->result;
-    }
+    NotingCutShort(out.input, [&] {
+      if (r.thermal_degrees) {
+        thermal.degrees = *r.thermal_degrees;
+        fit = CalibrateThermal(means, thermal);
+      } else {
+        out.thermal_selection = SelectThermalDegrees(means, thermal);
+        fit = out.thermal_selection->result;
+      }
+    });
   } catch (const DataError& e) {
     throw DataError(std::string("{{thermal}}: ") + e.what());
   }
@@ -410,17 +438,6 @@ void ChooseBiasModel(const UnitRequest& r, const std::vector<Vec3>& means,
   if (options->bias_model.constant()) options->position_times_s.clear();
 }
 
-// A log the reader found cut short: " (FILE ends early: why)", for each; empty when none was.
-std::string CutShortNote(const LoadedInput& in) {
-  std::string note;
-  for (const LoadedFile& f : in.files) {
-    if (f.data.kind == InputKind::kRaw && !f.data.raw.read_warning.empty()) {
-      note += " (" + f.path + " ends early: " + f.data.raw.read_warning + ")";
-    }
-  }
-  return note;
-}
-
 UnitOutcome OrientationFree(const UnitRequest& r) {
   CalibrationOptions options = CalibrationOptionsOf(r);
   const RandomWalk random_walk = ReadRandomWalk(r);
@@ -436,20 +453,12 @@ UnitOutcome OrientationFree(const UnitRequest& r) {
   if (random_walk.given()) {
     options.bias_random_walk = RandomWalkInRaw(random_walk, means, options, r, &out.notes);
   }
-  // A fit refused (too few positions, a term not observable) from a log cut short says so: the
-  // part lost may have held what it lacks, and the warning that says so comes only with a result.
-  std::optional<ModelChoice> fitted;
-  try {
+  ModelChoice choice = NotingCutShort(out.input, [&] {
     ChooseBiasModel(r, means, &options, &out);
     // For a quadratic fit (asked for, or a candidate of the model's choice) the linear fit is the
     // comparison: both with held-out validation, decided by ModelSelection's rule.
-    fitted = CalibrateChoosingModel(means, options, !r.model);
-  } catch (const DataError& e) {
-    const std::string note = CutShortNote(out.input);
-    if (note.empty() || dynamic_cast<const NotConvergedError*>(&e) != nullptr) throw;
-    throw DataError(e.what() + note, e.file());
-  }
-  ModelChoice choice = std::move(*fitted);
+    return CalibrateChoosingModel(means, options, !r.model);
+  });
   out.accelerometer = std::move(choice.result);
   out.model_selection = std::move(choice.selection);
   if (out.accelerometer.drift) {

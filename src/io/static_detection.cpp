@@ -9,6 +9,7 @@
 #include <utility>
 
 #include "accelcal/error.hpp"
+#include "core/median.hpp"
 #include "core/text_format.hpp"
 #include "io/detection_kernels.hpp"
 
@@ -272,12 +273,10 @@ std::vector<std::size_t> CorruptedReadings(const std::vector<Vec3>& samples, con
       if (std::isfinite(samples[i](a))) values.push_back(samples[i](a));
     }
     if (values.empty()) continue;
-    const auto mid = values.begin() + static_cast<std::ptrdiff_t>(values.size() / 2);
-    std::nth_element(values.begin(), mid, values.end());
-    const double median = *mid;
+    const double median = internal::Median(values);
     for (double& v : values) v = std::abs(v - median);
-    std::nth_element(values.begin(), mid, values.end());
-    const double spread = std::max({*mid, step(a), 1e-12 * (std::abs(median) + 1)});
+    const double spread =
+        std::max({internal::Median(std::move(values)), step(a), 1e-12 * (std::abs(median) + 1)});
     center(a) = median;
     bound(a) = kCorruptedReadingFactor * spread;
   }

@@ -940,9 +940,9 @@ int accelcal::cli::RunCommandLine(int argc, char** argv) {
       bat.unit_id_given = batch->count("--unit-id") > 0;
       bat.calibrate_options = GivenOptions(*batch, {"output", "limits", "unit-id", "unit-id-from",
                                                     "glob", "jobs", "redo", "no-report", "json"});
-      bat_cal.given_options =
-          GivenOptions(*batch, {"output", "limits", "unit-id", "unit-id-from", "glob", "jobs",
-                                "redo", "no-report", "json", "date"});
+      for (const auto& option : bat.calibrate_options) {  // the date is the provenance's own
+        if (option.first != "date") bat_cal.given_options.push_back(option);
+      }
       bat.calibrate = bat_cal;
       return RunBatch(bat);
     }

@@ -156,6 +156,11 @@ std::string CliFlag(const std::string& name) {
 
 std::string WithCliFlags(const std::string& marked) { return RenderOptionNames(marked, CliFlag); }
 
+std::string DidNotConverge(const std::string& path, const UnitOutcome& unit) {
+  return path + ": the solver did not converge: " + unit.accelerometer.summary.termination_message +
+         "; nothing written";
+}
+
 std::string ErrorMessage(const std::exception_ptr& error, const std::string& subject, int* status) {
   try {
     std::rethrow_exception(error);

@@ -93,6 +93,10 @@ InputData ReadGyroLog(const InputArgs& input, const std::string& gyro,
 std::string CliFlag(const std::string& name);
 std::string WithCliFlags(const std::string& marked);
 
+/// The tool's message for a calibration whose solver did not converge (without "accelcal: "):
+/// calibrate's and batch's.
+std::string DidNotConverge(const std::string& path, const UnitOutcome& unit);
+
 /// The tool's message for an error a command threw (without "accelcal: "), and its exit status:
 /// `subject` is the file a DataError is about when it names none (DataError::file).
 std::string ErrorMessage(const std::exception_ptr& error, const std::string& subject, int* status);

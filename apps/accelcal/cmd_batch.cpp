@@ -235,13 +235,10 @@ std::vector<std::string> SharedInputs(const BatchArgs& args) {
   return files;
 }
 
-// The options a unit's provenance records: those given, less the date (recorded apart).
+// The options a unit's provenance records: those given, less the date (recorded apart), as the
+// unit's calibrate request writes them.
 Json ProvenanceOptions(const BatchArgs& args) {
-  std::vector<std::pair<std::string, std::vector<std::string>>> given;
-  for (const auto& option : args.calibrate_options) {
-    if (option.first != "date") given.push_back(option);
-  }
-  return GivenOptionsJson(given);
+  return GivenOptionsJson(args.calibrate.given_options);
 }
 
 // Whether the unit's calibration file (its bytes `text`) is current: written by this accelcal
@@ -297,7 +294,6 @@ void RunUnit(const BatchArgs& args, const std::vector<InputRecord>& shared,
   if (!unit->problem.empty()) return;
   const std::string dir = units_dir.Shown(unit->id);
   const std::string cal_path = dir + "/calibration.json";
-  const std::string report_path = dir + "/report.html";
   bool made = false;  // the unit's directory, made for it: removed again when left empty
   try {
     made = !units_dir.Has(unit->id);
@@ -343,8 +339,7 @@ void RunUnit(const BatchArgs& args, const std::vector<InputRecord>& shared,
         const UnitOutcome outcome = CalibrateUnit(UnitRequestOf(args, unit->files));
         if (!outcome.converged()) {
           unit->exit_status = kExitNotConverged;
-          return fail(unit->files.front() + ": the solver did not converge: " +
-                      outcome.accelerometer.summary.termination_message + "; nothing written");
+          return fail(DidNotConverge(unit->files.front(), outcome));
         }
         rendered = RenderCalibration(outcome, cal_path, args.report);
         unit->exit_status =

@@ -580,9 +580,7 @@ int RunCalibrate(const CalibrateArgs& args) {
   ReportLoading(&request.load);
   const UnitOutcome unit = CalibrateUnit(request);
   if (!unit.converged()) {
-    WriteErrLine(Format("accelcal: %s: the solver did not converge: %s; nothing written\n",
-                        args.input.path.c_str(),
-                        unit.accelerometer.summary.termination_message.c_str()));
+    WriteErrLine("accelcal: " + DidNotConverge(args.input.path, unit) + "\n");
     return kExitNotConverged;
   }
   return WriteCalibration(args, unit, g);

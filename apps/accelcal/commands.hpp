@@ -282,7 +282,8 @@ struct BatchArgs {
   /// The calibrate options given, as GivenOptions lists them: passed to every unit's calibrate
   /// as given (each unit's file records them in its provenance).
   std::vector<std::pair<std::string, std::vector<std::string>>> calibrate_options;
-  /// The same, as calibrate takes them (its INPUT each unit's files).
+  /// The same, as calibrate takes them (its INPUT each unit's files; its given_options those above
+  /// less the date).
   CalibrateArgs calibrate;
 };
 

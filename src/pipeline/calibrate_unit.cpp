@@ -12,6 +12,7 @@
 #include "accelcal/known_orientation.hpp"
 #include "accelcal/noise_file.hpp"
 #include "accelcal/position_noise.hpp"
+#include "core/median.hpp"
 #include "core/text_format.hpp"
 #include "pipeline/unit_options.hpp"
 
@@ -19,10 +20,6 @@ namespace accelcal {
 namespace {
 
 using internal::Format;
-
-// A bias random walk below 1e-12 m/s²/√s is none; above 1e3 it would move the bias by a hundred g
-// in a second (as unit_request.cpp).
-constexpr double kMinRandomWalk = 1e-12, kMaxRandomWalk = 1e3;
 
 // The spline bias's random-walk prior q [m/s²/√s] per axis, and where it is from.
 struct RandomWalk {
@@ -132,9 +129,7 @@ std::optional<Finding> DriftAcrossGap(const std::vector<double>& times, const Bi
     pauses.push_back(sorted[k] - sorted[k - 1]);
     if (pauses.back() > pauses[longest]) longest = pauses.size() - 1;
   }
-  std::vector<double> ordered = pauses;
-  std::nth_element(ordered.begin(), ordered.begin() + ordered.size() / 2, ordered.end());
-  const double median = ordered[ordered.size() / 2];
+  const double median = internal::Median(pauses);
   if (!(pauses[longest] > 5 * median && pauses[longest] > 60)) return std::nullopt;
   return Finding{
       "drift_across_gap",

@@ -9,6 +9,10 @@
 
 namespace accelcal {
 
+/// A bias random walk below 1e-12 m/s²/√s is none (1 ng after a day); above 1e3 it would move the
+/// bias by a hundred g in a second.
+inline constexpr double kMinRandomWalk = 1e-12, kMaxRandomWalk = 1e3;
+
 /// The bias model as asked for: "auto", its name, or "constant" when none was.
 std::string BiasModelText(const UnitRequest& r);
 /// The gyroscope's estimator: as asked for, else two-stage on top of known orientations or a

@@ -15,10 +15,6 @@ namespace {
 
 using internal::Format;
 
-// A bias random walk below 1e-12 m/s²/√s is none (1 ng after a day); above 1e3 it would move the
-// bias by a hundred g in a second.
-constexpr double kMinRandomWalk = 1e-12, kMaxRandomWalk = 1e3;
-
 // The methods and starts an orientation-free fit takes (known-orientation and a given start are
 // the library's, chosen by other means).
 constexpr SolverMethod kOrientationFreeMethods[] = {

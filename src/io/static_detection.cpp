@@ -262,9 +262,11 @@ std::string NoStaticIntervalReason(const StaticDetectionResult& d) {
 
 std::vector<std::size_t> CorruptedReadings(const std::vector<Vec3>& samples, const Vec3& step) {
   const std::size_t n = samples.size();
-  // The median and spread from at most 4096 readings spread over the log: a spread to a factor of
-  // a million needs no more.
-  const std::size_t stride = std::max<std::size_t>(1, n / 4096);
+  // The median and spread from 2048 to 4095 readings spread over the log (all of a shorter one): a
+  // spread to a factor of a million needs no more, and below 4096 Median partially sorts them
+  // without its counting pass over 65,536 buckets, which pays only on longer samples (that pass
+  // had cost 3.9 M instructions on the Xsens recording).
+  const std::size_t stride = std::max<std::size_t>(1, n / 2048);
   std::vector<double> values;
   Vec3 center = Vec3::Zero(), bound = Vec3::Constant(std::numeric_limits<double>::infinity());
   for (int a = 0; a < 3; ++a) {

@@ -1,5 +1,7 @@
 // Python's calibrate, calibrate_log and diagnose, and their result (CalibrationResult): the
 // calibration as the command line does it, with its diagnosis and provenance.
+#include "cli_common.hpp"
+#include "commands.hpp"
 #include "py_common.hpp"
 #include "py_result.hpp"
 
@@ -15,6 +17,7 @@
 #include <pybind11/stl.h>
 
 #include "accelcal/calibrate.hpp"
+#include "accelcal/calibrate_unit.hpp"
 #include "accelcal/calibration_file.hpp"
 #include "accelcal/diagnosis.hpp"
 #include "accelcal/error.hpp"
@@ -121,6 +124,32 @@ PyCalibration Fit(std::vector<Position> positions, std::vector<Vec3> sigmas, con
   c.result = std::move(choice.result);
   c.selection = std::move(choice.selection);
   c.diagnosis = DiagnoseFit(c, log, detection);
+  return c;
+}
+
+// Python's result of a unit calibrated by the library (calibrate_log).
+PyCalibration FromOutcome(const UnitOutcome& u, int max_excluded) {
+  PyCalibration c;
+  const CalibrationFileInfo info = u.FileInfo();
+  c.result = u.accelerometer;
+  c.selection = u.model_selection;
+  c.model_requested = u.model_requested;
+  c.unit = u.unit;
+  c.positions = u.input.positions;
+  c.mean_sigmas = u.mean_sigmas;
+  c.source = info.source;
+  c.raw_unit = u.raw_unit;
+  c.sources = info.sources;
+  c.position_source = info.position_source;
+  c.bias_model_selection = u.bias_model_selection;
+  c.max_excluded = max_excluded;
+  c.diagnosis = u.diagnosis;
+  c.provenance = u.provenance;
+  if (u.gyroscope) {
+    c.gyroscope = u.gyroscope->calibration;
+    c.gyro_source = u.gyroscope->path;
+    c.gyro_raw_unit = u.gyroscope->raw_unit;
+  }
   return c;
 }
 
@@ -366,12 +395,15 @@ void BindCalibration(py::module_& m) {
       .def(
           "to_json",
           [](const PyCalibration& c, std::optional<Rows> positions,
-             std::optional<std::string> units, const std::string& raw_units,
+             std::optional<std::string> units, std::optional<std::string> raw_units,
              std::optional<std::string> source, std::optional<std::string> date) {
             CalibrationFileInfo info;
             info.unit = units ? Parse(ForceUnitFromString(*units), *units, "units") : c.unit;
-            info.raw_unit = raw_units;
+            info.raw_unit = raw_units ? *raw_units : c.raw_unit;
             info.source = source ? *source : c.source;
+            info.sources = c.sources;
+            info.position_source = c.position_source;
+            info.bias_model_selection = c.bias_model_selection ? &*c.bias_model_selection : nullptr;
             if (positions) {
               if (static_cast<std::size_t>(positions->rows()) != c.result.directions.size()) {
                 throw py::value_error("to_json: " + std::to_string(positions->rows()) +
@@ -391,8 +423,9 @@ void BindCalibration(py::module_& m) {
             if (c.gyroscope) {
               info.gyroscope = &*c.gyroscope;
               info.gyro_source = c.gyro_source;
+              // A raw gyroscope's counts are labelled as the accelerometer's when they are.
               info.gyro_raw_unit =
-                  c.gyroscope->unit == GyroUnit::kRaw ? raw_units : c.gyro_raw_unit;
+                  raw_units && c.gyroscope->unit == GyroUnit::kRaw ? *raw_units : c.gyro_raw_unit;
             }
             if (date) {
               if (const auto why = CheckProvenanceDate(*date))
@@ -402,7 +435,7 @@ void BindCalibration(py::module_& m) {
             return CalibrationToJson(c.result, info);
           },
           py::arg("positions") = std::nullopt, py::arg("units") = std::nullopt,
-          py::arg("raw_units") = "raw", py::arg("source") = std::nullopt,
+          py::arg("raw_units") = std::nullopt, py::arg("source") = std::nullopt,
           py::arg("date") = std::nullopt,
           "The calibration file (JSON text, docs/calibration-file.md). By default of the fitted "
           "positions (with their sample counts and noise) in the result's units, with its "
@@ -446,137 +479,42 @@ void BindCalibration(py::module_& m) {
       "accelcal.calibrate adds them)");
 
   m.def(
-      "calibrate_log",
-      [](const py::object& path_arg, const std::string& model, const std::string& method,
-         const std::string& frame, double gravity, const std::string& estimator,
-         const py::object& columns, std::optional<double> rate_hz, double window_s,
-         double min_static_s, double threshold_factor, double init_rest_s, bool cross_validate,
-         const std::string& outliers, double outlier_probability, int max_outliers,
-         std::optional<std::string> units, const std::string& time_unit,
-         std::optional<double> instance, const std::string& input_kind, int max_iterations,
-         const py::object& gyro_arg, const py::object& gyro_columns_arg,
-         const std::string& gyro_units, const std::string& gyro_model,
-         std::optional<std::string> gyro_estimator, std::optional<std::string> topic,
-         std::optional<std::string> frame_id) {
-        const std::string path = PathString(path_arg, "calibrate_log");
-        const std::vector<std::string> gyro_columns = ColumnList(gyro_columns_arg);
-        std::optional<std::string> gyro;
-        if (!gyro_arg.is_none()) gyro = PathString(gyro_arg, "gyro");
-        const FitSettings s{model,        method,         frame,           gravity,
-                            estimator,    cross_validate, outliers,        outlier_probability,
-                            max_outliers, max_iterations, std::move(units)};
-        // Every option is checked before the file is read, as the command line does.
-        const StaticDetectionOptions detection_options =
-            DetectionOptions(window_s, min_static_s, threshold_factor, init_rest_s);
-        const CalibrationOptions options = MakeOptions(s);
-        const ReadOptions read =
-            MakeReadOptions(input_kind, ColumnList(columns), rate_hz, time_unit, instance,
-                            std::move(topic), std::move(frame_id));
-        // The gyroscope's options, checked as the command line's (its flags named as keywords).
-        const bool want_gyro = gyro.has_value() || !gyro_columns.empty();
-        GyroCalibrationOptions gyro_options;
-        if (want_gyro) {
-          if (gyro && gyro->empty()) throw py::value_error("gyro: the file name is empty");
-          if (gyro_columns.size() != 0 && gyro_columns.size() != 3 && gyro_columns.size() != 4) {
-            throw py::value_error("gyro_columns takes x,y,z or time,x,y,z");
-          }
-          gyro_options.unit = Parse(FromName<GyroUnit>(gyro_units), gyro_units, "gyro_units");
-          gyro_options.estimator = gyro_estimator ? Parse(FromName<GyroEstimator>(*gyro_estimator),
-                                                          *gyro_estimator, "gyro_estimator")
-                                                  : GyroEstimator::kJoint;
-          if (gyro_model != "auto") {
-            gyro_options.model =
-                Parse(GyroModelKindFromString(gyro_model), gyro_model, "gyro_model");
-          } else if (!cross_validate && gyro_options.estimator != GyroEstimator::kImuTk) {
-            throw py::value_error(
-                "gyro_model 'auto' decides on held-out rotations: it needs cross_validate=True");
-          }
-          gyro_options.validate = cross_validate;
-        } else if (gyro_units != "raw" || gyro_model != "auto" || gyro_estimator) {
-          throw py::value_error(
-              "gyro_units, gyro_model and gyro_estimator apply to the gyroscope: give its rates "
-              "with gyro=LOG or gyro_columns");
+      "_calibrate_unit",
+      [](std::vector<std::string> args) {
+        if (args.empty() || args.front() != "calibrate") {
+          throw py::value_error("_calibrate_unit: the arguments of calibrate");
         }
-        LoadOptions load;
-        load.read = read;
-        load.detection = detection_options;
-        try {
+        std::string out, err;
+        std::optional<PyCalibration> c;
+        bool data_error = false;  // DataError: too little in the data (the tool's status 3 too)
+        int status = 0;
+        {
           py::gil_scoped_release release;  // taken again to build the Python result
-          const LoadedInput in = LoadPositions({path}, load);
-          const LoadedFile& file = in.files.front();
-          const std::vector<Position>& positions = in.positions;
-          const InputData& data = file.data;
-          const std::optional<StaticDetectionResult>& detection = file.detection;
-          std::vector<Vec3> sigmas = ReadingSigmas(in);  // empty: from the residuals
-          PyCalibration c = Fit(positions, std::move(sigmas), s, options,
-                                data.kind == InputKind::kRaw ? &data.raw : nullptr,
-                                detection ? &*detection : nullptr, path);
-          c.provenance.command = "accelcal Python calibrate_log";
-          c.provenance.options = SettingsJson(s);
-          nlohmann::ordered_json& o = c.provenance.options;
-          o["columns"] = read.columns;
-          o["rate_hz"] = rate_hz ? nlohmann::ordered_json(*rate_hz) : nlohmann::ordered_json();
-          o["window_s"] = window_s;
-          o["min_static_s"] = min_static_s;
-          o["threshold_factor"] = threshold_factor;
-          o["init_rest_s"] = init_rest_s;
-          o["time_unit"] = time_unit;
-          o["instance"] = instance ? nlohmann::ordered_json(*instance) : nlohmann::ordered_json();
-          o["topic"] =
-              read.topic.empty() ? nlohmann::ordered_json() : nlohmann::ordered_json(read.topic);
-          o["input_kind"] = input_kind;
-          c.provenance.inputs = InputRecords(in);
-          if (want_gyro) {
-            if (data.kind != InputKind::kRaw) {
-              throw py::value_error(
-                  "the gyroscope is calibrated from a raw log (its turns between the positions)");
-            }
-            if (!c.result.summary.converged()) {
-              throw DataError("the solver did not converge: " +
-                              c.result.summary.termination_message);
-            }
-            const std::string gyro_path = gyro ? *gyro : std::string();
-            ReadOptions gyro_read = read;
-            gyro_read.fingerprint = true;
-            const InputData rates = ReadGyroInput(path, gyro_read, gyro_path, gyro_columns);
-            c.gyroscope = CalibrateGyro(data.raw, rates.raw, positions, c.result, gyro_options);
-            c.gyro_source = gyro_path.empty() ? path : gyro_path;
-            c.gyro_raw_unit = gyro_units;
-            // The joint fit's accelerometer is the result's: the rotations refined it.
-            if (c.gyroscope->accelerometer) c.result = *c.gyroscope->accelerometer;
-            c.diagnosis = DiagnoseFit(c, data.kind == InputKind::kRaw ? &data.raw : nullptr,
-                                      detection ? &*detection : nullptr);
-            o["gyro"] = gyro ? nlohmann::ordered_json(*gyro) : nlohmann::ordered_json();
-            o["gyro_columns"] = gyro_columns;
-            o["gyro_units"] = gyro_units;
-            o["gyro_model"] = gyro_model;
-            o["gyro_estimator"] = std::string(ToString(gyro_options.estimator));
-            if (!gyro_path.empty()) {
-              c.provenance.inputs.push_back({gyro_path, rates.bytes, rates.sha256});
-            }
-          }
-          Rows means = ToRows(Means(positions));
-          py::gil_scoped_acquire acquire;
-          return py::make_tuple(std::move(c), std::move(means));
-        } catch (const DataError& e) {
-          throw DataError(path + ": " + e.what());  // as the command line names the input
+          args.insert(args.begin(), "accelcal");
+          // The tool's own options, rules and messages, then the library's CalibrateUnit.
+          status = cli::RunCommandLineCaptured(
+              args, &out, &err, nullptr, [&c, &data_error](const cli::CalibrateArgs& a) {
+                cli::Gravity g;
+                UnitRequest request = cli::CalibrateRequest(a, &g);
+                request.provenance.command = "accelcal Python calibrate_log";
+                try {
+                  c = FromOutcome(CalibrateUnit(request), request.outliers.max_excluded);
+                } catch (const DataError&) {
+                  data_error = true;
+                  throw;  // the tool's message for it
+                }
+                return 0;
+              });
         }
+        if (!c) return py::make_tuple(status, py::none(), py::none(), py::bytes(err), data_error);
+        Rows means = ToRows(Means(c->positions));
+        return py::make_tuple(status, std::move(*c), std::move(means), py::bytes(err), false);
       },
-      py::arg("path"), py::arg("model") = "linear", py::arg("method") = "joint",
-      py::arg("frame") = "x-first", py::arg("gravity") = kStandardGravity_ms2,
-      py::arg("estimator") = "ml", py::arg("columns") = py::tuple(),
-      py::arg("rate_hz") = std::nullopt, py::arg("window_s") = 0.5, py::arg("min_static_s") = 1.0,
-      py::arg("threshold_factor") = 10.0, py::arg("init_rest_s") = 0.0,
-      py::arg("cross_validate") = true, py::kw_only(), py::arg("outliers") = "exclude",
-      py::arg("outlier_probability") = 1e-3, py::arg("max_outliers") = 3,
-      py::arg("units") = std::nullopt, py::arg("time_unit") = "auto",
-      py::arg("instance") = std::nullopt, py::arg("input_kind") = "auto",
-      py::arg("max_iterations") = 0, py::arg("gyro") = py::none(),
-      py::arg("gyro_columns") = py::tuple(), py::arg("gyro_units") = "raw",
-      py::arg("gyro_model") = "auto", py::arg("gyro_estimator") = std::nullopt,
-      py::arg("topic") = std::nullopt, py::arg("frame_id") = std::nullopt,
-      "What `accelcal calibrate INPUT` does, diagnosis included; returns (result, positions) "
-      "(no Python warnings: accelcal.calibrate_log adds them)");
+      py::arg("args"),
+      "accelcal.calibrate_log: `accelcal calibrate ARGS...`'s options parsed and checked by the "
+      "tool, the unit calibrated by the library (CalibrateUnit): (exit status, result or None, "
+      "positions or None, the tool's standard error as bytes, whether the error was a "
+      "DataError)");
 
   m.def(
       "diagnose",

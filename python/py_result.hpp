@@ -23,6 +23,11 @@ struct PyCalibration {
   std::vector<Position> positions;  // the fitted positions, in the result's order
   std::vector<Vec3> mean_sigmas;    // the 1σ of each one's mean as the fit took it (or none)
   std::string source;               // the input file, "" from arrays
+  std::string raw_unit = "raw";     // the label of the readings' unit (the file's raw_unit)
+  // Several input files (sessions of one unit): their names and each position's file index.
+  std::vector<std::string> sources;
+  std::vector<int> position_source;
+  std::optional<BiasModelSelection> bias_model_selection;  // bias_model "auto"
   int max_excluded = OutlierOptions{}.max_excluded;
   Diagnosis diagnosis;
   Provenance provenance;  // the function and its arguments, the file read (to_json writes it)

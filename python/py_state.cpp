@@ -195,11 +195,25 @@ void Fields(V& v, GyroCalibration& g) {
       "accelerometer", g.accelerometer)("thermal", g.thermal);
 }
 template <typename V>
+void Fields(V& v, BiasModelStep& s) {
+  v("simpler", s.simpler)("richer", s.richer)("error", s.error)("positions_used", s.positions_used)(
+      "simpler_rms", s.simpler_rms)("richer_rms", s.richer_rms)("improvement", s.improvement)(
+      "improvement_se", s.improvement_se)("improvement_threshold", s.improvement_threshold)(
+      "wald", s.wald)("wald_threshold", s.wald_threshold)("wald_dof", s.wald_dof)("accepted",
+                                                                                  s.accepted);
+}
+template <typename V>
+void Fields(V& v, BiasModelSelection& b) {
+  v("chosen", b.chosen)("reason", b.reason)("result", b.result)("steps", b.steps);
+}
+template <typename V>
 void Fields(V& v, PyCalibration& c) {
   v("result", c.result)("selection", c.selection)("model_requested", c.model_requested)(
       "unit", c.unit)("positions", c.positions)("mean_sigmas", c.mean_sigmas)("source", c.source)(
-      "max_excluded", c.max_excluded)("diagnosis", c.diagnosis)("provenance", c.provenance)(
-      "gyroscope", c.gyroscope)("gyro_source", c.gyro_source)("gyro_raw_unit", c.gyro_raw_unit);
+      "raw_unit", c.raw_unit)("sources", c.sources)("position_source", c.position_source)(
+      "bias_model_selection", c.bias_model_selection)("max_excluded", c.max_excluded)(
+      "diagnosis", c.diagnosis)("provenance", c.provenance)("gyroscope", c.gyroscope)(
+      "gyro_source", c.gyro_source)("gyro_raw_unit", c.gyro_raw_unit);
 }
 
 // A struct that gains a field must have it in its list above: these sizes (x86-64, libstdc++)
@@ -229,7 +243,11 @@ static_assert(sizeof(GyroThermal) == 176,
               "GyroThermal changed: update its field list (py_state.cpp)");
 static_assert(sizeof(GyroCalibration) == 1496,
               "GyroCalibration changed: update its field list (py_state.cpp)");
-static_assert(sizeof(PyCalibration) == 4312,
+static_assert(sizeof(BiasModelStep) == 136,
+              "BiasModelStep changed: update its field list (py_state.cpp)");
+static_assert(sizeof(BiasModelSelection) == 824,
+              "BiasModelSelection changed: update its field list (py_state.cpp)");
+static_assert(sizeof(PyCalibration) == 5224,
               "PyCalibration changed: update its field list (py_state.cpp)");
 static_assert(sizeof(StaticInterval) == 104,
               "StaticInterval changed: update its field list (py_state.cpp)");

@@ -348,7 +348,8 @@ void CheckCalibrationFlags(const CLI::App& cmd, CalibrateArgs* cal) {
 }  // namespace
 
 int accelcal::cli::RunCommandLineCaptured(const std::vector<std::string>& args, std::string* out,
-                                          std::string* err, std::vector<CapturedFile>* files) {
+                                          std::string* err, std::vector<CapturedFile>* files,
+                                          const CalibrateRunner& runner) {
   // The host program's locale may write a decimal comma (Python's locale.setlocale): the
   // command reads its options and writes its numbers in "C", in this thread only.
   const accelcal::internal::ClassicLocale c_locale;
@@ -364,10 +365,10 @@ int accelcal::cli::RunCommandLineCaptured(const std::vector<std::string>& args, 
   std::vector<char*> argv;
   for (std::string& a : copies) argv.push_back(a.data());
   argv.push_back(nullptr);
-  return RunCommandLine(static_cast<int>(copies.size()), argv.data());
+  return RunCommandLine(static_cast<int>(copies.size()), argv.data(), runner);
 }
 
-int accelcal::cli::RunCommandLine(int argc, char** argv) {
+int accelcal::cli::RunCommandLine(int argc, char** argv, const CalibrateRunner& runner) {
   CLI::App app{
       "accelcal: calibration of triaxial accelerometers from static multi-position recordings"};
   app.require_subcommand(1);
@@ -932,7 +933,7 @@ int accelcal::cli::RunCommandLine(int argc, char** argv) {
       data_subject = cal.input.path;
       CheckCalibrationFlags(*calibrate, &cal);
       cal.given_options = GivenOptions(*calibrate, {"output", "report", "json", "date"});
-      return RunCalibrate(cal);
+      return runner ? runner(cal) : RunCalibrate(cal);
     }
     if (*store) return RunStore(sto);
     if (*batch) {

@@ -428,6 +428,9 @@ void GyroRequest(const CalibrateArgs& args, UnitRequest* r) {
 }  // namespace
 
 UnitRequest CalibrateRequest(const CalibrateArgs& args, Gravity* g) {
+  if (args.date_given) {
+    if (const auto why = CheckProvenanceDate(args.date)) throw UsageError("--date: " + *why);
+  }
   UnitRequest r;
   r.inputs = {args.input.path};
   r.inputs.insert(r.inputs.end(), args.input.more_paths.begin(), args.input.more_paths.end());
@@ -564,9 +567,6 @@ int WriteCalibration(const CalibrateArgs& args, const UnitOutcome& unit, const G
 }  // namespace
 
 int RunCalibrate(const CalibrateArgs& args) {
-  if (args.date_given) {
-    if (const auto why = CheckProvenanceDate(args.date)) throw UsageError("--date: " + *why);
-  }
   {
     std::vector<std::string> inputs = args.input.more_paths;
     inputs.push_back(args.input.path);

@@ -3,6 +3,7 @@
 // the library and do the I/O.
 
 #include <cstdint>
+#include <functional>
 #include <optional>
 #include <stdexcept>
 #include <string>
@@ -27,9 +28,14 @@ enum ExitCode : int {
   kExitFailedChecks = 6,
 };
 
-/// The whole tool: parses the arguments, runs the subcommand, returns the exit status (never exits,
-/// never throws).
-int RunCommandLine(int argc, char** argv);
+struct CalibrateArgs;
+/// What `calibrate` runs once its arguments are parsed and checked, in place of RunCalibrate:
+/// Python's calibrate_log makes its request from the tool's own options and keeps the result.
+using CalibrateRunner = std::function<int(const CalibrateArgs&)>;
+
+/// The whole tool: parses the arguments, runs the subcommand (`calibrate` through `runner` when
+/// one is given), returns the exit status (never exits, never throws).
+int RunCommandLine(int argc, char** argv, const CalibrateRunner& runner = {});
 
 /// RunCommandLine with `args` (argv[0] first), this thread's standard output and error appended
 /// to `out` and `err` instead (the Python package runs the tool's commands so, in-process and
@@ -37,7 +43,8 @@ int RunCommandLine(int argc, char** argv);
 /// into memory instead of the disk (Console::files, output.hpp).
 struct CapturedFile;
 int RunCommandLineCaptured(const std::vector<std::string>& args, std::string* out, std::string* err,
-                           std::vector<CapturedFile>* files = nullptr);
+                           std::vector<CapturedFile>* files = nullptr,
+                           const CalibrateRunner& runner = {});
 
 /// `accelcal --describe-options`: every command's options as JSON (for the Python package).
 inline constexpr const char* kDescribeOptionsFlag = "--describe-options";

@@ -134,6 +134,7 @@ struct UnitOutcome {
   std::optional<Gyroscope> gyroscope;
   ForceUnit unit = ForceUnit::kMetersPerSecond2;  ///< the calibration's specific-force unit
   std::string raw_unit;                           ///< the accelerometer's raw unit's label
+  /// The diagnosis of everything above; of a fit that did not converge too (`not_converged`).
   Diagnosis diagnosis;
   Provenance provenance;
   /// Lines for the summary, after the input's description (options marked {{name}}).
@@ -148,7 +149,7 @@ struct UnitOutcome {
 /// (before anything is read), InputError for a file that cannot be read or used, DataError for
 /// data that do not determine a calibration (a DataError of the gyroscope's names its log:
 /// DataError::file). A solver that does not converge is returned (converged() false), its
-/// termination in accelerometer.summary.
+/// termination in accelerometer.summary, diagnosed, without the gyroscope.
 UnitOutcome CalibrateUnit(const UnitRequest& request);
 
 /// The one raw log a gyroscope is calibrated beside (its turns between the positions); OptionError

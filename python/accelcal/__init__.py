@@ -39,6 +39,7 @@ silences a failure. ``diagnose(result, ...)`` computes the diagnosis again (othe
 positions, or a raw log and detection from arrays) and only returns it.
 """
 
+import os as _os
 import warnings as _warnings
 
 import numpy as _np
@@ -219,60 +220,97 @@ def calibrate(readings, model="linear", method="joint", frame="x-first", gravity
     return result
 
 
-def calibrate_log(path, model="linear", method="joint", frame="x-first", gravity=9.80665,
-                  estimator="ml", columns=(), rate_hz=None, window_s=0.5, min_static_s=1.0,
-                  threshold_factor=10.0, init_rest_s=0.0, cross_validate=True, *,
-                  outliers="exclude", outlier_probability=1e-3, max_outliers=3, units=None,
-                  time_unit="auto", instance=None, input_kind="auto", max_iterations=0,
-                  gyro=None, gyro_columns=(), gyro_units="raw", gyro_model="auto",
-                  gyro_estimator=None, topic=None, frame_id=None):
-    """What ``accelcal calibrate LOG`` does: read, detect the static intervals, average them,
-    calibrate with each interval's noise and diagnose (the time column, still periods not used,
-    interleaved sensors, the fit). Gives exactly the command line's doubles and diagnosis; with
-    the defaults ``result.to_json()`` is the text of ``accelcal calibrate LOG --json``.
+# calibrate_log's arguments before it took accelcal.cli.calibrate's names, still accepted with a
+# DeprecationWarning: its positional parameters after the path, and its renamed keywords
+# (cross_validate=False is now no_crossval=True).
+_LOG_LEGACY_POSITIONAL = ("model", "method", "frame", "gravity", "estimator", "columns",
+                          "rate_hz", "window_s", "min_static_s", "threshold_factor",
+                          "init_rest_s", "cross_validate")
+_LOG_RENAMED = {"path": "input", "rate_hz": "rate", "window_s": "window",
+                "min_static_s": "min_static", "init_rest_s": "init_rest"}
+# The options of ``accelcal calibrate`` that say where its results go and what it prints:
+# calibrate_log returns the calibration instead (``result.to_json()`` is the file);
+# ``accelcal.cli.calibrate`` writes the file and the report.
+_LOG_NOT_TAKEN = ("output", "report", "json", "quiet", "verbose")
 
-    Returns ``(result, positions)``: positions the (m x 3) averaged readings, in the order of the
-    result's directions and residuals; ``result.verdict`` and ``result.diagnostics`` the
-    diagnosis. Warnings and a failed verdict are emitted as for ``calibrate`` (prefixed with the
-    path); nothing is raised for a failed verdict.
 
-    Options as ``calibrate`` (gravity in ``units``: "m/s2", "g" or None for "g" below 2), and as
-    the command line's: columns (--columns: 3 or 4 column numbers from 1 or header names, a list
-    or one comma-separated string), topic (--topic: the stream of a binary log, a ULog topic or
-    DataFlash message, or a MAT-file's variable), frame_id (--frame-id: of a ROS topic on which
-    several sensors publish, the header.frame_id whose messages to read), rate_hz
-    (--rate), time_unit ("auto", "s", "ms", "us", "ns": --time-unit; "auto" decides from the
-    column's name and step, time_axis.hpp), instance (--instance: the sensor to keep of a file
-    whose instance column holds several), input_kind ("auto", the default as on the command
-    line, "raw" or "positions": a positions file is calibrated as it is), window_s, min_static_s, threshold_factor, init_rest_s (detection),
-    max_iterations (--max-iterations). Raises InputError (unreadable or malformed file) or
-    DataError (no static interval, too few positions), both naming the file.
+def _deprecated(message):
+    _warnings.warn(DeprecationWarning("calibrate_log: " + message), stacklevel=4)
 
-    ``path`` and ``gyro`` are str, bytes or os.PathLike; ``"-"`` reads this process's standard
-    input, as the tool does.
 
-    One difference from the tool: a solver that does not converge is returned as a result whose
-    verdict is "failed" (with a ``CalibrationCheckFailed`` warning naming ``not_converged``), so
-    that it can be looked at, where ``accelcal calibrate`` writes nothing and exits with status 4
-    (``accelcal.cli.calibrate`` raises ``DataError`` there).
+def _log_options(input, legacy, options):
+    """calibrate_log's arguments under accelcal.cli.calibrate's names: (input, options)."""
+    if len(legacy) > len(_LOG_LEGACY_POSITIONAL):
+        raise TypeError(f"calibrate_log() takes at most {len(_LOG_LEGACY_POSITIONAL) + 1} "
+                        f"positional arguments but {len(legacy) + 1} were given")
+    if legacy:
+        _deprecated("options given by position are deprecated: give them by keyword, as "
+                    "accelcal.cli.calibrate names them")
+    for name, value in zip(_LOG_LEGACY_POSITIONAL, legacy):
+        if name in options:
+            raise TypeError(f"calibrate_log() got multiple values for argument '{name}'")
+        options[name] = value
+    for old, new in _LOG_RENAMED.items():
+        if old not in options:
+            continue
+        if (input if new == "input" else options.get(new)) is not None:
+            raise TypeError(f"calibrate_log() got both '{old}' and '{new}'")
+        _deprecated(f"'{old}' is deprecated: it is '{new}', as accelcal.cli.calibrate names it")
+        if new == "input":
+            input = options.pop(old)
+        else:
+            options[new] = options.pop(old)
+    if "cross_validate" in options:
+        if options.get("no_crossval") is not None:
+            raise TypeError("calibrate_log() got both 'cross_validate' and 'no_crossval'")
+        _deprecated("'cross_validate' is deprecated: cross_validate=False is no_crossval=True, "
+                    "as accelcal.cli.calibrate names it")
+        options["no_crossval"] = not options.pop("cross_validate")
+    for name in ("columns", "gyro_columns"):  # the old default, an empty list: the tool's own
+        if isinstance(options.get(name), (list, tuple)) and len(options[name]) == 0:
+            options[name] = None
+    gravity = options.get("gravity")
+    if isinstance(gravity, (int, float)) and not isinstance(gravity, bool) and 0 < gravity < 2:
+        _deprecated(f"gravity={gravity!r} in g is deprecated: give gravity in m/s2 (the tool's "
+                    "--gravity) and units='g' for a calibration in g")
+        options["gravity"] = gravity * 9.80665
+        if options.get("units") is None:
+            options["units"] = "g"
+    for name in _LOG_NOT_TAKEN:
+        if name in options:
+            raise TypeError(f"calibrate_log() does not take '{name}': it returns the "
+                            "calibration (result.to_json() is the file); accelcal.cli.calibrate "
+                            "writes it and the report")
+    if input is None:
+        raise TypeError("calibrate_log() missing the argument 'input'")
+    return input, options
 
-    The gyroscope recorded through the same positions (``calibrate --gyro``): ``gyro`` its log
-    on the same clock, or ``gyro_columns`` its columns in this log (or in ``gyro``'s);
-    ``gyro_units`` ("raw", "rad/s", "deg/s"), ``gyro_model`` ("auto", "linear",
-    "g-sensitive"), ``gyro_estimator`` ("joint", the default, or "two-stage"). Then
-    ``result.gyroscope`` is its calibration (a dict; None without), the result's accelerometer
-    is the joint fit's, the diagnosis judges both, and ``result.to_json()`` holds both sensors,
-    as ``accelcal calibrate LOG --gyro ... --json`` writes them.
-    """
-    result, positions = _accelcal.calibrate_log(
-        path, model, method, frame, gravity, estimator, columns, rate_hz, window_s,
-        min_static_s, threshold_factor, init_rest_s, cross_validate, outliers=outliers,
-        outlier_probability=outlier_probability, max_outliers=max_outliers, units=units,
-        time_unit=time_unit, instance=instance, input_kind=input_kind,
-        max_iterations=max_iterations,
-        gyro=gyro, gyro_columns=gyro_columns,
-        gyro_units=gyro_units, gyro_model=gyro_model, gyro_estimator=gyro_estimator, topic=topic,
-        frame_id=frame_id)
+
+def _file_name(value, what):
+    """A file name as given (str, bytes or os.PathLike), or TypeError naming ``what``."""
+    if isinstance(value, (str, bytes, _os.PathLike)):
+        return value
+    raise TypeError(f"{what}: a file name (str, bytes or os.PathLike), not "
+                    f"{type(value).__name__}")
+
+
+def calibrate_log(input=None, *legacy, **options):
+    input, options = _log_options(input, legacy, options)
+    if isinstance(input, (list, tuple)):
+        input = [_file_name(name, "calibrate_log") for name in input]
+    else:
+        _file_name(input, "calibrate_log")
+    for name in ("gyro", "orientations", "noise"):
+        if options.get(name) is not None:
+            _file_name(options[name], name)
+    spec = cli._command_spec("calibrate")
+    taken = {cli._keyword_name(o["name"]) for o in cli._parameters(spec)[1]}
+    unknown = sorted(set(options) - taken)
+    if unknown:
+        raise TypeError(f"calibrate_log() got an unexpected keyword argument '{unknown[0]}'")
+    argv = cli._arguments(spec, [input], options)
+    status, result, positions, err, data_error = _accelcal._calibrate_unit(argv)
+    cli._outcome(status, err, "calibrate", stacklevel=2, data_error=data_error)
     _emit_diagnosis(result, result.source, stacklevel=2)
     return result, positions
 
@@ -334,3 +372,53 @@ detect_static_intervals.__doc__ = _bound_doc(
 
 
 from . import cli  # noqa: E402 - every command of the tool (it uses the names above)
+
+
+def _log_signature_and_doc():
+    """calibrate_log's signature and docstring, from the tool's options (as accelcal.cli's)."""
+    import inspect
+    spec = cli._command_spec("calibrate")
+    options = [o for o in cli._parameters(spec)[1]
+               if cli._keyword_name(o["name"]) not in _LOG_NOT_TAKEN]
+    parameters = [inspect.Parameter("input", inspect.Parameter.POSITIONAL_OR_KEYWORD)]
+    parameters += [inspect.Parameter(cli._keyword_name(o["name"]), inspect.Parameter.KEYWORD_ONLY,
+                                     default=None) for o in options]
+    lines = [
+        "What ``accelcal calibrate INPUT`` does, in this process: the same options, rules and "
+        "messages (the tool's own), the same library call (CalibrateUnit: reading, detection, "
+        "model and bias-model choice, thermal, known orientations, the gyroscope, the "
+        "diagnosis), the same doubles; ``result.to_json()`` is the file ``accelcal calibrate "
+        "INPUT --json`` writes, but for its provenance's command.",
+        "",
+        "input: a raw log or positions file, or a list of them (sessions of one unit, positions "
+        "pooled); str, bytes or os.PathLike; \"-\" reads this process's standard input. Every "
+        "other argument is a keyword, the tool's long option with _ for - (``--gyro-columns`` "
+        "is ``gyro_columns``; a flag is True to give it; a list option takes a list); None "
+        "(the default) leaves it out, so the tool's default applies.",
+        "",
+        "Returns ``(result, positions)``: a ``CalibrationResult`` (its ``verdict`` and "
+        "``diagnostics`` the diagnosis; ``gyroscope`` with ``gyro``/``gyro_columns``) and the "
+        "(m x 3) averaged readings in the order of the result's directions. Warnings and a "
+        "failed verdict are emitted as for ``calibrate`` (prefixed with the input's name); "
+        "nothing is raised for a failed verdict. A solver that does not converge is returned "
+        "as a result whose verdict is \"failed\" (finding ``not_converged``), where the tool "
+        "writes nothing and exits with status 4. Raises ValueError for options the tool "
+        "refuses (its message, options named as keywords), InputError for a file that cannot "
+        "be read or used, DataError for data that do not determine a calibration (too few "
+        "positions, no still interval).",
+        "",
+        "Not taken: " + ", ".join(_LOG_NOT_TAKEN) + " (where the tool's results go and what it "
+        "prints: ``accelcal.cli.calibrate`` writes the file and the report). Deprecated, still "
+        "accepted with a DeprecationWarning: options by position after ``input`` ("
+        + ", ".join(_LOG_LEGACY_POSITIONAL) + "), the keywords "
+        + ", ".join(f"{old} (now {new})" for old, new in _LOG_RENAMED.items())
+        + ", cross_validate (now no_crossval) and gravity below 2 meaning g (now gravity in "
+        "m/s2 and units='g').",
+        "",
+    ]
+    for o in options:
+        lines.append(f"{cli._keyword_name(o['name'])}: {cli._describe(o, 'calibrate')}")
+    return inspect.Signature(parameters), "\n".join(lines)
+
+
+calibrate_log.__signature__, calibrate_log.__doc__ = _log_signature_and_doc()

@@ -54,6 +54,11 @@ def _keyword_name(option):
     return name + "_" if _keyword.iskeyword(name) else name
 
 
+def _command_spec(name):
+    """The tool's description of one command."""
+    return next(c for c in _DESCRIPTION["commands"] if c["name"] == name)
+
+
 def _has_json(spec):
     """Whether the command has --json: it is always given it, and returns its document."""
     return any(o["name"] == "json" and not o["positional"] for o in spec["options"])
@@ -138,13 +143,10 @@ def _raise(status, message, command):
     raise RuntimeError(f"accelcal {command}: exit status {status}: {text}")
 
 
-def _run(spec, args, options, stacklevel=3):
-    command = spec["name"]
-    has_json = _has_json(spec)
-    argv = _arguments(spec, args, options)
-    if has_json:
-        argv.insert(1, "--json")
-    status, out, err = _accelcal._run_command(argv)
+def _outcome(status, err, command, stacklevel, data_error=False):
+    """The tool's standard error: an exception for a failed status (DataError for status 3 when
+    ``data_error`` says the library's DataError caused it), else its warnings emitted. Returns
+    its lines."""
     err = err.decode("utf-8", "replace")
     lines = [line for line in err.splitlines() if line]
     if status not in (0, 6):
@@ -152,11 +154,24 @@ def _run(spec, args, options, stacklevel=3):
                             for line in lines if not line.startswith("accelcal: warning: "))
         if message.startswith("usage: "):
             message = message[len("usage: "):]
+        if data_error and status == 3:
+            raise DataError(_python_message(message, command))
         _raise(status, message, command)
     for line in lines:
         if line.startswith("accelcal: warning: "):
             _warnings.warn(ToolWarning(_python_message(line[len("accelcal: warning: "):],
-                                                       command)), stacklevel=stacklevel)
+                                                       command)), stacklevel=stacklevel + 1)
+    return lines
+
+
+def _run(spec, args, options, stacklevel=3):
+    command = spec["name"]
+    has_json = _has_json(spec)
+    argv = _arguments(spec, args, options)
+    if has_json:
+        argv.insert(1, "--json")
+    status, out, err = _accelcal._run_command(argv)
+    lines = _outcome(status, err, command, stacklevel)
     failed = [line[len("accelcal: "):] for line in lines
               if status == 6 and not line.startswith("accelcal: warning: ")]
     if command == "calibrate" and has_json:

@@ -2,8 +2,12 @@
 error messages, and the example script running end to end."""
 
 import hashlib
+import inspect
 import json
+import warnings
+import re
 import os
+import pickle
 import subprocess
 import sys
 
@@ -78,8 +82,8 @@ def test_calibrate_log_model_auto_is_the_cli_model_auto():
     assert result.model == "linear" and result.model_selection["chosen"] == "linear"
     assert result.model_selection["reason"] == sensor(text)["model_selection"]["reason"]
     assert without_provenance(result.to_json()) == without_provenance(text)
-    with pytest.raises(ValueError, match="cross_validate"):
-        accelcal.calibrate_log(XSENS, model="auto", cross_validate=False)
+    with pytest.raises(ValueError, match="no_crossval"):
+        accelcal.calibrate_log(XSENS, model="auto", no_crossval=True)
 
 
 def test_a_corrupted_position_is_excluded_as_the_cli_excludes_it(tmp_path):
@@ -185,7 +189,8 @@ def test_the_file_says_what_made_it(tmp_path):
     doc = json.loads(result.to_json())
     provenance = doc["provenance"]
     assert provenance["command"] == "accelcal Python calibrate_log"
-    assert provenance["options"]["gravity"] == 9.81744 and provenance["options"]["model"] == "linear"
+    # The options as given, as the tool records them (`accelcal calibrate XSENS --gravity ...`).
+    assert provenance["options"] == {"gravity": "9.81744"}
     assert [i["name"] for i in provenance["inputs"]] == [XSENS]
     raw = open(XSENS, "rb").read()
     assert provenance["inputs"][0]["bytes"] == len(raw)
@@ -243,5 +248,104 @@ def test_calibrate_log_with_the_gyroscope_is_the_cli_calibration(tmp_path):
         accelcal.calibrate_log(XSENS, gyro=gyro, gyro_estimator="both")
     # imu_tk's method has one model: no validation needed to choose it.
     imutk = accelcal.calibrate_log(XSENS, gravity=9.81744, gyro=gyro, gyro_estimator="imutk",
-                                   cross_validate=False)[0].gyroscope
+                                   no_crossval=True)[0].gyroscope
     assert imutk["model"] == "linear" and imutk["estimator"] == "imutk"
+
+
+# --- calibrate_log takes every option of `accelcal calibrate` ------------------------------------
+
+# A value for each option of `accelcal calibrate` (one the Xsens recording takes, or one it
+# refuses: the tool and the package must agree either way). An option the tool gains fails the
+# test below until it is given one here.
+OPTION_VALUES = {
+    "input_kind": "raw", "columns": ["1", "2", "3"], "rate": 100, "time_unit": "s",
+    "instance": 1, "topic": "acc", "frame_id": "imu", "temperature_column": "none",
+    "window": 0.4, "min_static": 2, "threshold_factor": 12, "init_rest": 1, "gravity": 9.81,
+    "latitude": 45.5, "height": 100, "units": "g", "model": "quadratic", "bias_model": "linear",
+    "bias_random_walk": [1e-4], "noise": "no-such-noise.json", "thermal": "auto",
+    "temperatures": [20], "method": "two-step", "init": "ellipsoid", "frame": "z-first",
+    "estimator": "bias-corrected", "outliers": "flag", "outlier_probability": 0.01,
+    "max_outliers": 2, "orientations": "no-such-orientations.csv", "gyro": "GYRO",
+    "gyro_columns": ["1", "2", "3"], "gyro_topic": "gyr", "gyro_units": "rad/s",
+    "gyro_model": "linear", "gyro_estimator": "two-stage", "gyro_thermal": "auto",
+    "no_crossval": True, "raw_units": "counts", "max_iterations": 50, "date": "2026-11-29",
+}
+
+
+def outcome(function, *args, **kwargs):
+    """What a call gives: ("file", its text with the command's name left out) or the error."""
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        try:
+            value = function(*args, **kwargs)
+        except (ValueError, OSError, RuntimeError) as e:
+            return (type(e).__name__, str(e))
+    text = value[0].to_json() if isinstance(value, tuple) else value.text
+    return ("file", re.sub(r'"command": "[^"]*"', '"command": ""', text))
+
+
+def test_calibrate_log_takes_every_option_of_the_tool():
+    spec = accelcal.cli._command_spec("calibrate")
+    options = {accelcal.cli._keyword_name(o["name"]) for o in accelcal.cli._parameters(spec)[1]}
+    taken = set(inspect.signature(accelcal.calibrate_log).parameters) - {"input"}
+    assert taken == options - set(accelcal._LOG_NOT_TAKEN)
+    assert set(OPTION_VALUES) == taken
+    gyro = XSENS.replace("xsens_acc.mat", "xsens_gyro.mat")
+    for name, value in OPTION_VALUES.items():
+        given = {"gravity": 9.81744}
+        if name.startswith("gyro_"):
+            given["gyro"] = gyro
+        given[name] = gyro if value == "GYRO" else value
+        expected = outcome(accelcal.cli.calibrate, XSENS, **given)
+        got = outcome(accelcal.calibrate_log, XSENS, **given)
+        if got == expected:
+            continue
+        if expected[0] == "DataError":  # the accelerometer's fit did not converge: a result
+            assert "did not converge" in expected[1], name  # marked failed, not an exception
+            assert got[0] == "file" and '"not_converged"' in got[1], name
+        else:  # the library's DataError: the tool's exit status 3, its InputError
+            assert got[0] == "DataError" and expected == ("InputError", got[1]), name
+    # Where the tool's results go is the tool's: calibrate_log returns the calibration.
+    for name in accelcal._LOG_NOT_TAKEN:
+        with pytest.raises(TypeError, match=f"does not take '{name}'"):
+            accelcal.calibrate_log(XSENS, **{name: "x.json"})
+    with pytest.raises(TypeError, match="unexpected keyword argument 'gyro_colums'"):
+        accelcal.calibrate_log(XSENS, gyro_colums=["4", "5", "6"])
+
+
+def test_calibrate_log_keeps_its_old_names_with_a_deprecation_warning():
+    new = outcome(accelcal.calibrate_log, XSENS, gravity=9.81744, window=0.4, min_static=2,
+                  init_rest=1, no_crossval=True)
+    with pytest.warns(DeprecationWarning) as caught:
+        old = accelcal.calibrate_log(path=XSENS, gravity=9.81744, window_s=0.4, min_static_s=2,
+                                     init_rest_s=1, cross_validate=False)
+    assert outcome(lambda: old) == new
+    assert {str(w.message).split("'")[1] for w in caught} == {
+        "path", "window_s", "min_static_s", "init_rest_s", "cross_validate"}
+    with pytest.warns(DeprecationWarning, match="by position"):
+        by_position = accelcal.calibrate_log(XSENS, "quadratic", "joint", "x-first", 9.81744)
+    # (the file's provenance records the options given: these four)
+    assert without_provenance(by_position[0].to_json()) == without_provenance(
+        accelcal.calibrate_log(XSENS, model="quadratic", gravity=9.81744)[0].to_json())
+    # gravity in g, as it was given before: the tool's gravity in m/s2 and units="g".
+    with pytest.warns(DeprecationWarning, match="in g is deprecated"):
+        in_g = accelcal.calibrate_log(XSENS, gravity=1.0)[0]
+    assert without_provenance(in_g.to_json()) == without_provenance(
+        accelcal.calibrate_log(XSENS, units="g")[0].to_json())
+    with pytest.raises(TypeError, match="both 'rate_hz' and 'rate'"):
+        accelcal.calibrate_log(XSENS, rate=100, rate_hz=100)
+
+
+def test_calibrate_log_keeps_what_the_file_holds_through_pickle(tmp_path):
+    # The bias model chosen; two sessions pooled (the Xsens' positions in two files), in g: the
+    # file the tool writes, before and after a pickle round trip.
+    _, positions = accelcal.calibrate_log(XSENS, gravity=9.81744)
+    sessions = [str(tmp_path / "first.csv"), str(tmp_path / "second.csv")]
+    for name, half in zip(sessions, (positions[::2], positions[1::2])):
+        np.savetxt(name, half, delimiter=",", header="x,y,z", comments="", fmt="%.17g")
+    for args, given in (([XSENS], {"bias_model": "auto", "gravity": 9.81744}),
+                        ([sessions], {"units": "g", "raw_units": "counts"})):
+        expected = outcome(accelcal.cli.calibrate, *args, **given)
+        result = accelcal.calibrate_log(*args, **given)[0]
+        assert expected[0] == "file" and outcome(lambda: (result,)) == expected
+        assert outcome(lambda: (pickle.loads(pickle.dumps(result)),)) == expected

@@ -266,7 +266,7 @@ std::string RawUnitLabel(const UnitRequest& r, const LoadedInput& in) {
   return unit.empty() ? "raw" : unit;
 }
 
-// The diagnosis and provenance of a converged outcome.
+// The diagnosis and provenance of an outcome.
 void Conclude(const UnitRequest& r, UnitOutcome* out) {
   DiagnosisInput d;
   d.result = &out->accelerometer;
@@ -384,8 +384,8 @@ UnitOutcome OverTemperature(const UnitRequest& r) {
     throw DataError(std::string("{{thermal}}: ") + e.what());
   }
   out.accelerometer = AsCalibrationResult(fit, thermal.temperatures_c);
-  if (!out.converged()) return out;
-  if (gyro_ahead) CalibrateGyroscope(r, &*gyro_ahead, &out);
+  // A fit that did not converge is diagnosed too (not_converged); the gyroscope builds on none.
+  if (gyro_ahead && out.converged()) CalibrateGyroscope(r, &*gyro_ahead, &out);
   Conclude(r, &out);
   return out;
 }
@@ -465,8 +465,8 @@ UnitOutcome OrientationFree(const UnitRequest& r) {
     out.notes += "          unused: the bias chosen is " + ToString(options.bias_model) +
                  ", and the prior is a spline's\n";
   }
-  if (!out.converged()) return out;
-  if (gyro_ahead) CalibrateGyroscope(r, &*gyro_ahead, &out);
+  // A fit that did not converge is diagnosed too (not_converged); the gyroscope builds on none.
+  if (gyro_ahead && out.converged()) CalibrateGyroscope(r, &*gyro_ahead, &out);
   Conclude(r, &out);
   for (Finding& f : unit_findings) out.diagnosis.findings.push_back(std::move(f));
   return out;

@@ -16,6 +16,7 @@
 #include <cstring>
 #include <fstream>
 #include <map>
+#include <memory>
 #include <set>
 #include <thread>
 
@@ -29,6 +30,7 @@
 #include "accelcal/sha256.hpp"
 #include "accelcal/version.hpp"
 #include "cli_common.hpp"
+#include "cli_options.hpp"
 #include "commands.hpp"
 #include "output.hpp"
 #include "unit_id_pattern.hpp"
@@ -739,6 +741,57 @@ int RunBatch(const BatchArgs& args) {
              "calibrated (%s)\n",
              counts[1], units.size(), counts[2], csv_path.c_str()));
   return kExitFailedChecks;
+}
+
+CommandRun SetUpBatch(CLI::App* cmd) {
+  auto a = std::make_shared<BatchArgs>();
+  auto calibrate = std::make_shared<CalibrateArgs>();  // passed on as given
+  cmd->add_option("INPUT", a->inputs,
+                  "the units' recordings: files, and directories whose files are read")
+      ->required();
+  cmd->add_option("-o,--output", a->output,
+                  "the batch's directory: units/ID/calibration.json and report.html, "
+                  "summary.csv and summary.json (made when missing)")
+      ->required()
+      ->check(kFileName);
+  cmd->add_option("--limits", a->limits,
+                  "acceptance limits (YAML, docs/batch.md); without: a unit passes when its "
+                  "calibration passes its own checks")
+      ->check(kFileName);
+  cmd->add_option("--unit-id", a->unit_id,
+                  "a regular expression searched in each file's name: its first group (or "
+                  "the match) is the unit's id; files with one id are one unit's sessions "
+                  "(default: the name less its extension)")
+      ->type_name("REGEX");
+  cmd->add_option("--unit-id-from", a->unit_id_from,
+                  "where a unit's id comes from: name (the file's, see --unit-id), info:KEY (a "
+                  "binary log's information, e.g. info:sys_uuid, a PX4 board's), param:KEY (a "
+                  "log's parameter, e.g. param:BRD_SERIAL_NUM, an ArduPilot board's), "
+                  "device-id (the accelerometer stream's: the same on every board of a "
+                  "design, see docs/batch.md), or frame-id (a ROS Imu topic's "
+                  "header.frame_id, where each unit's frame has its own name)")
+      ->capture_default_str();
+  cmd->add_option("--glob", a->glob, "the files read from a directory given")
+      ->capture_default_str();
+  cmd->add_option("--jobs", a->jobs, "units calibrated at once (0: one per core)")
+      ->capture_default_str();
+  cmd->add_flag("--redo", a->redo,
+                "calibrate every unit again, even one whose calibration is current");
+  cmd->add_flag("!--no-report", a->report, "no HTML report per unit");
+  cmd->add_flag("--json", a->json, "print the summary document instead of the table");
+  AddCalibrationOptions(cmd, calibrate.get());
+  AddDateOption(cmd, calibrate.get());
+  return [a, calibrate](const CLI::App& parsed) {
+    CheckCalibrationFlags(parsed, calibrate.get());
+    a->unit_id_given = parsed.count("--unit-id") > 0;
+    a->calibrate_options = GivenOptions(parsed, {"output", "limits", "unit-id", "unit-id-from",
+                                                 "glob", "jobs", "redo", "no-report", "json"});
+    for (const auto& option : a->calibrate_options) {  // the date is the provenance's own
+      if (option.first != "date") calibrate->given_options.push_back(option);
+    }
+    a->calibrate = *calibrate;
+    return RunBatch(*a);
+  };
 }
 
 }  // namespace accelcal::cli

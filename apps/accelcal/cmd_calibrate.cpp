@@ -11,6 +11,7 @@
 #include <filesystem>
 #include <future>
 #include <iostream>
+#include <memory>
 #include <sstream>
 #include <stdexcept>
 
@@ -25,6 +26,7 @@
 #include "accelcal/report.hpp"
 #include "accelcal/thermal_calibration.hpp"
 #include "cli_common.hpp"
+#include "cli_options.hpp"
 #include "output.hpp"
 
 namespace accelcal::cli {
@@ -584,6 +586,33 @@ int RunCalibrate(const CalibrateArgs& args) {
     return kExitNotConverged;
   }
   return WriteCalibration(args, unit, g);
+}
+
+CommandRun SetUpCalibrate(CLI::App* cmd, const CalibrateRunner& runner) {
+  auto a = std::make_shared<CalibrateArgs>();
+  auto inputs = std::make_shared<std::vector<std::string>>();
+  cmd->add_option("INPUT", *inputs,
+                  "raw logs or positions files (several: sessions of one device, positions "
+                  "pooled; - reads standard input)")
+      ->required();
+  AddCalibrationOptions(cmd, a.get());
+  cmd->add_option("-o,--output", a->output, "write the calibration file (JSON) here")
+      ->check(kFileName);
+  cmd->add_option("--report", a->report,
+                  "write the HTML report here (self-contained: plots, parameters, warnings)")
+      ->check(kFileName);
+  AddDateOption(cmd, a.get());
+  cmd->add_flag("--json", a->json, "print the calibration file to stdout instead of the summary");
+  return [a, inputs, runner](const CLI::App& parsed) {
+    if (!inputs->empty()) {  // INPUT is required: the parse has refused none
+      a->input.path = inputs->front();
+      a->input.more_paths.assign(inputs->begin() + 1, inputs->end());
+    }
+    DataSubject() = a->input.path;
+    CheckCalibrationFlags(parsed, a.get());
+    a->given_options = GivenOptions(parsed, {"output", "report", "json", "date"});
+    return runner ? runner(*a) : RunCalibrate(*a);
+  };
 }
 
 }  // namespace accelcal::cli

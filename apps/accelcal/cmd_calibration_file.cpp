@@ -8,6 +8,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <iostream>
+#include <memory>
 #include <sstream>
 #include <stdexcept>
 
@@ -17,6 +18,7 @@
 #include "accelcal/parameter_file.hpp"
 #include "accelcal/report.hpp"
 #include "cli_common.hpp"
+#include "cli_options.hpp"
 #include "output.hpp"
 
 namespace accelcal::cli {
@@ -336,6 +338,91 @@ int RunExport(const ExportArgs& args) {
     args.output.empty() ? WriteErr(note) : WriteOut(note);
   }
   return kExitOk;
+}
+
+CommandRun SetUpApply(CLI::App* cmd) {
+  auto a = std::make_shared<ApplyArgs>();
+  cmd->add_option("CAL", a->calibration, "calibration file (JSON)")->required();
+  cmd->add_option("LOG", a->input.path, "raw log")->required();
+  AddInputOptions(cmd, &a->input, false);
+  cmd->add_option("-o,--output", a->output, "output file (default: stdout)")->check(kFileName);
+  cmd->add_option("--units", a->units, "output unit m/s2 or g (default: the calibration's)");
+  cmd->add_option("--gyro", a->gyro,
+                  "the gyroscope's log on the same clock: its body rates [rad/s] too");
+  cmd->add_option("--gyro-columns", a->gyro_columns,
+                  "the gyroscope's x,y,z (or time,x,y,z) columns, in LOG or the --gyro log")
+      ->delimiter(',');
+  AddGyroTopic(cmd, &a->input);
+  return [a](const CLI::App& parsed) {
+    CheckGyroFlags(parsed, a->gyro, a->gyro_columns, {});
+    DataSubject() = a->input.path;
+    return RunApply(*a);
+  };
+}
+
+CommandRun SetUpReport(CLI::App* cmd) {
+  auto a = std::make_shared<ReportArgs>();
+  cmd->add_option("CAL", a->calibration, "calibration file (JSON)")->required();
+  cmd->add_option("LOG", a->log.path, "the raw log it was calibrated from (optional)");
+  AddInputOptions(cmd, &a->log, false);
+  AddDetectionOptions(cmd, &a->log);
+  cmd->add_option("-o,--output", a->output, "HTML file (default: stdout)")->check(kFileName);
+  return [a](const CLI::App& /*parsed*/) {
+    DataSubject() = a->log.path.empty() ? a->calibration : a->log.path;
+    return RunReport(*a);
+  };
+}
+
+CommandRun SetUpExport(CLI::App* cmd) {
+  auto a = std::make_shared<ExportArgs>();
+  cmd->add_option("CAL", a->calibration, "calibration file (JSON)")->required();
+  cmd->add_option("--to", a->format,
+                  "json, yaml, kalibr, px4, ardupilot, c-header, imutk, kalibr-imu, ros, "
+                  "openvins or basalt (docs/conventions.md)")
+      ->required();
+  cmd->add_option("--noise", a->noise,
+                  "the sensor's noise (accelcal noise --json, calibrated): kalibr-imu, ros, "
+                  "openvins and basalt need it, kalibr writes its keys beside the model")
+      ->check(kFileName);
+  cmd->add_option("--rostopic", a->rostopic,
+                  "the IMU's topic (kalibr-imu, openvins, kalibr with --noise)")
+      ->capture_default_str();
+  cmd->add_option("-o,--output", a->output, "output file (default: stdout)")->check(kFileName);
+  cmd->add_option("--raw-unit", a->raw_unit,
+                  "unit of the calibrated raw readings, m/s2 or g, when the file's label "
+                  "is another (kalibr, px4, ardupilot need readings in m/s2)");
+  cmd->add_option("--gyro-raw-unit", a->gyro_raw_unit,
+                  "unit of the gyroscope's calibrated raw rates, rad/s or deg/s, when the "
+                  "file's label is another (kalibr, openvins, basalt need rates in rad/s)");
+  cmd->add_option("--instance", a->instance,
+                  "accelerometer index: PX4 CAL_ACC<n>, ArduPilot INS_ACC / INS_ACC2 / INS_ACC3")
+      ->capture_default_str();
+  cmd->add_option("--device-id", a->device_id,
+                  "px4: the sensor's device id for CAL_ACC<n>_ID (default: the one of the "
+                  "ULog stream calibrated)")
+      ->check(kDeviceId);
+  cmd->add_option("--gyro-device-id", a->gyro_device_id,
+                  "px4: the gyroscope's device id for CAL_GYRO<n>_ID (default: the one of the "
+                  "ULog stream calibrated)")
+      ->check(kDeviceId);
+  cmd->add_option("--current-params", a->current_params,
+                  "ardupilot: the parameters in force when the log was recorded (.param "
+                  "file), composed with a calibration of IMU or ACC records (default: the "
+                  "log's PARM values)")
+      ->check(kFileName);
+  cmd->add_option("--c-prefix", a->c_prefix, "prefix of the C identifiers (c-header)")
+      ->capture_default_str();
+  cmd->add_option("--sensor", a->sensor,
+                  "accelerometer or gyroscope: the triad imutk writes (c-header writes both)")
+      ->capture_default_str();
+  return [a](const CLI::App& parsed) {
+    DataSubject() = a->calibration;
+    for (const char* name : {"raw-unit", "gyro-raw-unit", "instance", "c-prefix", "sensor", "noise",
+                             "rostopic", "device-id", "gyro-device-id", "current-params"}) {
+      if (parsed.count(std::string("--") + name) > 0) a->given.push_back(name);
+    }
+    return RunExport(*a);
+  };
 }
 
 }  // namespace accelcal::cli

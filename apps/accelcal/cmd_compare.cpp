@@ -8,6 +8,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <iostream>
+#include <memory>
 #include <sstream>
 #include <stdexcept>
 
@@ -16,6 +17,7 @@
 #include "accelcal/error.hpp"
 #include "accelcal/gyro_calibration.hpp"
 #include "cli_common.hpp"
+#include "cli_options.hpp"
 #include "output.hpp"
 
 namespace accelcal::cli {
@@ -282,6 +284,41 @@ int RunCompare(const CompareArgs& args) {
   }
   WriteFileAtomically("-", out);
   return kExitOk;
+}
+
+CommandRun SetUpCompare(CLI::App* cmd) {
+  auto a = std::make_shared<CompareArgs>();
+  cmd->add_option("INPUT", a->input.path, "raw log or positions file")->required();
+  AddInputOptions(cmd, &a->input, true);
+  AddDetectionOptions(cmd, &a->input);
+  AddGravityOptions(cmd, &a->gravity);
+  cmd->add_option("--model", a->model, "linear or quadratic")->capture_default_str();
+  cmd->add_option("--methods", a->methods, "comma-separated (default: all for the model)")
+      ->delimiter(',');
+  cmd->add_option("--init", a->init, "auto, ellipsoid or normalized-readings")
+      ->capture_default_str();
+  cmd->add_flag("!--no-held-out", a->leave_one_out, "skip the leave-one-position-out fits");
+  AddOutlierOptions(cmd, &a->outliers,
+                    "screen the positions once (maximum-likelihood fit) and fit every method to "
+                    "the same ones: exclude a disagreeing position, flag it only, or off");
+  cmd->add_option("--reference", a->reference,
+                  "a known calibration (JSON): adds paper 001's e_T and e_b per method");
+  cmd->add_flag("--json", a->json, "machine-readable output");
+  cmd->add_option("--gyro", a->gyro,
+                  "the gyroscope's log on the same clock: compare its estimators too "
+                  "(imu_tk's method, two-stage and joint, linear and g-sensitive)");
+  cmd->add_option("--gyro-columns", a->gyro_columns,
+                  "the gyroscope's x,y,z (or time,x,y,z) columns, in INPUT or the --gyro log")
+      ->delimiter(',');
+  AddGyroTopic(cmd, &a->input);
+  cmd->add_option("--gyro-units", a->gyro_units,
+                  "the gyro's raw unit, for the start of its fits: rad/s, deg/s, or raw")
+      ->capture_default_str();
+  return [a](const CLI::App& parsed) {
+    CheckGyroFlags(parsed, a->gyro, a->gyro_columns, {"--gyro-units"});
+    DataSubject() = a->input.path;
+    return RunCompare(*a);
+  };
 }
 
 }  // namespace accelcal::cli

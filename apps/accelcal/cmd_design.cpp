@@ -8,6 +8,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <iostream>
+#include <memory>
 #include <sstream>
 #include <stdexcept>
 
@@ -15,6 +16,7 @@
 #include "accelcal/montecarlo.hpp"
 #include "accelcal/simulate.hpp"
 #include "cli_common.hpp"
+#include "cli_options.hpp"
 #include "output.hpp"
 
 namespace accelcal::cli {
@@ -467,6 +469,77 @@ int RunMonteCarlo(const MonteCarloArgs& args) {
   }
   WriteFileAtomically("-", out);
   return kExitOk;
+}
+
+CommandRun SetUpDesign(CLI::App* cmd) {
+  auto a = std::make_shared<DesignArgs>();
+  cmd->add_option("--positions", a->positions,
+                  "yang18, six, random:N[:SEED], or a file of unit directions (x,y,z) or "
+                  "attitudes (roll_deg,pitch_deg[,yaw_deg] or qw,qx,qy,qz; body to level, z up)")
+      ->required();
+  cmd->add_option("--device", a->device, "calibration file of the nominal device")->required();
+  cmd->add_option("--noise", a->noise_raw,
+                  "1 sigma of one averaged reading in raw units: one value or three (x,y,z)")
+      ->delimiter(',')
+      ->expected(1, 3);
+  cmd->add_option("--temperatures", a->temperatures_c,
+                  "plan a temperature schedule: the positions recorded at each of these "
+                  "temperatures [degC], comma-separated")
+      ->delimiter(',')
+      ->check(kDecimal);
+  cmd->add_option("--thermal-degrees", a->thermal_degrees,
+                  "with --temperatures: the degrees in T - T_ref of K and b (and k2 for the "
+                  "quadratic model), e.g. 1,1")
+      ->delimiter(',')
+      ->expected(2, 3)
+      ->type_name("K,B[,K2]")
+      ->capture_default_str();
+  cmd->add_option("--thermal-target", a->thermal_target,
+                  "with --temperatures: 1 sigma targets of the coefficients per K, of K in "
+                  "ppm/K (urad/K off the diagonal) and of b in mg/K; says how many "
+                  "temperatures over the same span reach them")
+      ->delimiter(',')
+      ->expected(1, 2)
+      ->type_name("S[,B]");
+  cmd->add_option("--noise-density", a->noise_density_ug,
+                  "instead of --noise: white noise [ug/sqrt(Hz)], with --rate and --duration");
+  cmd->add_option("--rate", a->rate_hz, "sample rate [Hz], with --noise-density");
+  cmd->add_option("--duration", a->duration_s, "still time per position [s], with --noise-density");
+  cmd->add_option("--model", a->model, "linear or quadratic (default: the device's)");
+  cmd->add_option("--bias-model", a->bias_model,
+                  "linear or spline:K: what fitting a drifting bias costs the positions, "
+                  "recorded in the order given, one a minute")
+      ->capture_default_str();
+  cmd->add_option("--choose", a->choose,
+                  "choose this many of the positions (the candidates) by --criterion; compared "
+                  "with paper 000's yang18");
+  cmd->add_option("--criterion", a->criterion,
+                  "with --choose: d (maximise det of the information, D-optimal) or a (minimise "
+                  "the trace of the CRLB, parameters in the device's relative metric, A-optimal)")
+      ->capture_default_str();
+  cmd->add_flag("--json", a->json, "machine-readable output");
+  return [a](const CLI::App& parsed) {
+    DataSubject() = a->positions;
+    a->thermal_degrees_given = parsed.count("--thermal-degrees") > 0;
+    return RunDesign(*a);
+  };
+}
+
+CommandRun SetUpMonteCarlo(CLI::App* cmd) {
+  auto a = std::make_shared<MonteCarloArgs>();
+  cmd->add_option("--scenario", a->scenario,
+                  "yang2012 (paper 000 Table 3/4) or sunxu2020 (paper 001 section 4.1)")
+      ->capture_default_str();
+  cmd->add_option("--runs", a->runs, "number of runs")->capture_default_str();
+  cmd->add_option("--method", a->method, "joint, two-step or newton-lagrange")
+      ->capture_default_str();
+  cmd->add_option("--estimator", a->estimator, "ml or bias-corrected")->capture_default_str();
+  cmd->add_option("--seed", a->seed, "seed of the first run's noise")->capture_default_str();
+  cmd->add_option("--threads", a->threads, "threads (0: all cores)")->capture_default_str();
+  cmd->add_flag("--residual-noise", a->residual_noise,
+                "covariance from the residuals instead of the known noise");
+  cmd->add_flag("--json", a->json, "machine-readable output");
+  return [a](const CLI::App& /*parsed*/) { return RunMonteCarlo(*a); };
 }
 
 }  // namespace accelcal::cli

@@ -8,11 +8,13 @@
 #include <cstdio>
 #include <cstdlib>
 #include <iostream>
+#include <memory>
 #include <sstream>
 #include <stdexcept>
 
 #include "accelcal/export.hpp"
 #include "cli_common.hpp"
+#include "cli_options.hpp"
 #include "output.hpp"
 
 namespace accelcal::cli {
@@ -77,6 +79,18 @@ int RunDetect(const DetectArgs& args) {
   }
   WriteFileAtomically("-", out);
   return kExitOk;
+}
+
+CommandRun SetUpDetect(CLI::App* cmd) {
+  auto a = std::make_shared<DetectArgs>();
+  cmd->add_option("LOG", a->input.path, "raw log")->required();
+  AddInputOptions(cmd, &a->input, false);
+  AddDetectionOptions(cmd, &a->input);
+  cmd->add_flag("--json", a->json, "machine-readable output");
+  return [a](const CLI::App& /*parsed*/) {
+    DataSubject() = a->input.path;
+    return RunDetect(*a);
+  };
 }
 
 }  // namespace accelcal::cli

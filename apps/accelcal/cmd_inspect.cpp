@@ -2,10 +2,12 @@
 #include "commands.hpp"
 
 #include <algorithm>
+#include <memory>
 #include <string>
 
 #include "accelcal/native_log.hpp"
 #include "cli_common.hpp"
+#include "cli_options.hpp"
 #include "output.hpp"
 
 namespace accelcal::cli {
@@ -144,6 +146,16 @@ int RunInspect(const InspectArgs& args) {
   }
   WriteFileAtomically("-", out);
   return kExitOk;
+}
+
+CommandRun SetUpInspect(CLI::App* cmd) {
+  auto a = std::make_shared<InspectArgs>();
+  cmd->add_option("LOG", a->path, "binary log")->required();
+  cmd->add_flag("--json", a->json, "machine-readable output");
+  return [a](const CLI::App& /*parsed*/) {
+    DataSubject() = a->path;
+    return RunInspect(*a);
+  };
 }
 
 }  // namespace accelcal::cli

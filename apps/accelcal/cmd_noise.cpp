@@ -4,6 +4,7 @@
 #include <array>
 #include <cmath>
 #include <functional>
+#include <memory>
 #include <optional>
 #include <string>
 #include <vector>
@@ -16,6 +17,7 @@
 #include "accelcal/noise_report.hpp"
 #include "accelcal/sample_clock.hpp"
 #include "cli_common.hpp"
+#include "cli_options.hpp"
 #include "core/text_format.hpp"
 #include "output.hpp"
 
@@ -652,6 +654,32 @@ int RunNoise(const NoiseArgs& args) {
     sensors.push_back(std::move(g));
   }
   return WriteNoise(args, cal.has_value(), begin, end, rate_hz, log.time, std::move(sensors));
+}
+
+CommandRun SetUpNoise(CLI::App* cmd) {
+  auto a = std::make_shared<NoiseArgs>();
+  cmd->add_option("LOG", a->input.path, "raw log of the sensor held still")->required();
+  AddInputOptions(cmd, &a->input, false);
+  AddDetectionOptions(cmd, &a->input);
+  cmd->add_option("--calibration", a->calibration,
+                  "calibration file (JSON): the samples calibrated first (else the log's unit)");
+  cmd->add_option("--gyro", a->gyro, "the gyroscope's log on the same clock: its noise too");
+  cmd->add_option("--gyro-columns", a->gyro_columns,
+                  "the gyroscope's x,y,z (or time,x,y,z) columns, in LOG or the --gyro log")
+      ->delimiter(',');
+  AddGyroTopic(cmd, &a->input);
+  cmd->add_flag("--still", a->still,
+                "only the longest still interval of the log (a calibration log's rest)");
+  cmd->add_flag("--json", a->json, "machine-readable output");
+  cmd->add_option("--report", a->report,
+                  "HTML report: the Allan deviation plotted with its bands and the fit")
+      ->check(kFileName);
+  cmd->add_option("-o,--output", a->output, "output file (default: stdout)")->check(kFileName);
+  return [a](const CLI::App& parsed) {
+    CheckGyroFlags(parsed, a->gyro, a->gyro_columns, {});
+    DataSubject() = a->input.path;
+    return RunNoise(*a);
+  };
 }
 
 }  // namespace accelcal::cli

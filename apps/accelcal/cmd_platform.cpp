@@ -8,6 +8,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <iostream>
+#include <memory>
 #include <sstream>
 #include <stdexcept>
 
@@ -31,6 +32,7 @@
 #include "accelcal/system_level.hpp"
 #include "accelcal/table_file.hpp"
 #include "cli_common.hpp"
+#include "cli_options.hpp"
 #include "output.hpp"
 
 namespace accelcal::cli {
@@ -206,6 +208,36 @@ int RunGimbal(const GimbalArgs& args) {
   WriteFileAtomically("-", out);
   const bool ok = coarse.summary.converged() && (!fine || fine->summary.converged());
   return ok ? kExitOk : kExitNotConverged;
+}
+
+CommandRun SetUpSystemLevel(CLI::App* cmd) {
+  auto a = std::make_shared<SystemLevelArgs>();
+  cmd->add_option("SERIES", a->series, "series file (binary or t,fx,fy,fz,roll,pitch)")->required();
+  cmd->add_option("--latitude", a->latitude_deg, "latitude of the base [deg]")->required();
+  cmd->add_option("--gravity", a->gravity_ms2,
+                  "local gravity [m/s2] (default: WGS-84 normal gravity)");
+  cmd->add_flag("--json", a->json, "machine-readable output");
+  return [a](const CLI::App& /*parsed*/) {
+    DataSubject() = a->series;
+    return RunSystemLevel(*a);
+  };
+}
+
+CommandRun SetUpGimbal(CLI::App* cmd) {
+  auto a = std::make_shared<GimbalArgs>();
+  cmd->add_option("COARSE", a->coarse,
+                  "commanded gimbal angles and mean output per position: "
+                  "theta1_deg,theta2_deg,theta3_deg,ax,ay,az (Table 1's 18 positions)")
+      ->required();
+  cmd->add_option("--fine", a->fine,
+                  "mean outputs ax,ay,az of the fine stage's positions, measured after "
+                  "re-zeroing the gimbals by the coarse offsets");
+  AddGravityOptions(cmd, &a->gravity);
+  cmd->add_flag("--json", a->json, "machine-readable output");
+  return [a](const CLI::App& /*parsed*/) {
+    DataSubject() = a->coarse;
+    return RunGimbal(*a);
+  };
 }
 
 }  // namespace accelcal::cli

@@ -10,6 +10,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <iostream>
+#include <memory>
 #include <sstream>
 #include <stdexcept>
 
@@ -22,6 +23,7 @@
 #include "accelcal/system_level.hpp"
 #include "accelcal/ulog_writer.hpp"
 #include "cli_common.hpp"
+#include "cli_options.hpp"
 #include "output.hpp"
 
 namespace accelcal::cli {
@@ -273,6 +275,42 @@ int RunSimulate(const SimulateArgs& args) {
   WriteFileAtomically(args.output.empty() ? "-" : args.output,
                       PositionsCsv(means, per_position, sigma_raw));
   return kExitOk;
+}
+
+CommandRun SetUpSimulate(CLI::App* cmd) {
+  auto a = std::make_shared<SimulateArgs>();
+  cmd->add_option("--scenario", a->scenario,
+                  "yang2012: paper 000's device, 18 positions, 10 ug/sqrt(Hz), 100 Hz, 60 s; "
+                  "sunxu2020: paper 001's, 300 Gaussian attitudes, 0.1 g per position; "
+                  "wu2018-system: paper 003's system-level series (Tables 2-3, 40 deg, "
+                  "5e-3 m/s2, 100 Hz, 24 h; binary, -o required)");
+  cmd->add_option("--truth", a->truth, "calibration file of the simulated device");
+  cmd->add_option("--positions", a->positions,
+                  "yang18, six, random:N[:SEED], or a file of unit directions or attitudes "
+                  "(as for design)");
+  cmd->add_option("--noise-density", a->noise_density_ug, "white noise [ug/sqrt(Hz)]");
+  cmd->add_option("--rate", a->rate_hz, "sample rate [Hz]")->capture_default_str();
+  cmd->add_option("--duration", a->duration_s, "still time per position [s]")
+      ->capture_default_str();
+  cmd->add_option("--transition", a->transition_s, "turning time between positions [s]")
+      ->capture_default_str();
+  cmd->add_option("--seed", a->seed, "noise seed")->capture_default_str();
+  cmd->add_flag("--raw", a->raw, "write a raw log (time,x,y,z) instead of positions");
+  cmd->add_flag("!--positions-out", a->raw,
+                "write a positions file x,y,z,n,sx,sy,sz (the default)");
+  cmd->add_option("--format", a->format,
+                  "of a raw log: csv (time,x,y,z), ulog (PX4's sensor_accel), dataflash "
+                  "(ArduPilot's IMU records), both float32; rosbag (ROS 1 bag, "
+                  "sensor_msgs/Imu), mcap (ROS 2, zstd chunks) or db3 (ROS 2 SQLite), each "
+                  "/imu/data stamped from 0 s; or mat (MATLAB v5: a 4 x N matrix imu of "
+                  "time, x, y, z per column)")
+      ->capture_default_str();
+  cmd->add_option("-o,--output", a->output, "output file (default: stdout)")->check(kFileName);
+  return [a](const CLI::App& parsed) {
+    a->rate_given = parsed.count("--rate") > 0;
+    a->duration_given = parsed.count("--duration") > 0;
+    return RunSimulate(*a);
+  };
 }
 
 }  // namespace accelcal::cli

@@ -21,6 +21,7 @@
 #include <cstring>
 #include <ctime>
 #include <map>
+#include <memory>
 #include <optional>
 #include <set>
 
@@ -30,6 +31,7 @@
 #include "accelcal/log_reader.hpp"
 #include "accelcal/sha256.hpp"
 #include "cli_common.hpp"
+#include "cli_options.hpp"
 #include "commands.hpp"
 #include "output.hpp"
 
@@ -647,6 +649,36 @@ int RunStore(const StoreArgs& args) {
   if (args.action == "get") return Get(args);
   if (args.action == "list") return List(args);
   throw UsageError("store: '" + args.action + "' is neither add, get nor list");
+}
+
+CommandRun SetUpStore(CLI::App* cmd) {
+  auto a = std::make_shared<StoreArgs>();
+  cmd->add_option("ACTION", a->action, "add, get or list")->required();
+  cmd->add_option("STORE", a->store, "the store's directory (made by the first add)")
+      ->required()
+      ->check(kFileName);
+  cmd->add_option("ITEMS", a->items,
+                  "add: calibration files, or batch directories (their passing units); get: "
+                  "the unit; list: a unit (default: every unit)");
+  cmd->add_option("--unit", a->unit,
+                  "add: the unit of the calibration files given (a batch directory names "
+                  "its own; with one, only that unit is added)");
+  cmd->add_option("--date", a->date,
+                  "add: the date of calibrations whose provenance has none (default: today, "
+                  "UTC); get: the calibration of that date (YYYY-MM-DD: its latest that day; "
+                  "default: the unit's latest)");
+  cmd->add_option("-o,--output", a->output, "get: write the calibration file here")
+      ->check(kFileName);
+  cmd->add_flag("--json", a->json, "list: the index's entries; add: what was added");
+  cmd->add_option("--bias-repeatability", a->bias_repeatability,
+                  "add: the accelerometer's turn-on bias repeatability (1 sigma, in the "
+                  "calibrations' specific-force unit; one value or x,y,z: a MEMS part's bias "
+                  "moves between power-ups by more than a calibration's covariance holds)")
+      ->expected(1, 3)
+      ->delimiter(',')
+      ->check(kDecimal)
+      ->type_name("Q[,Q,Q]");
+  return [a](const CLI::App& /*parsed*/) { return RunStore(*a); };
 }
 
 }  // namespace accelcal::cli

@@ -3,6 +3,7 @@
 #include "commands.hpp"
 
 #include <cmath>
+#include <memory>
 #include <optional>
 #include <string>
 #include <vector>
@@ -12,6 +13,7 @@
 #include "accelcal/gyro_calibration.hpp"
 #include "accelcal/verify.hpp"
 #include "cli_common.hpp"
+#include "cli_options.hpp"
 #include "core/text_format.hpp"
 #include "output.hpp"
 
@@ -367,6 +369,39 @@ int RunVerify(const VerifyArgs& args) {
     return kExitFailedChecks;
   }
   return kExitOk;
+}
+
+CommandRun SetUpVerify(CLI::App* cmd) {
+  auto a = std::make_shared<VerifyArgs>();
+  cmd->add_option("CAL", a->calibration, "calibration file (JSON)")->required();
+  cmd->add_option("LOG", a->input.path, "a new raw log: still positions with turns between")
+      ->required();
+  AddInputOptions(cmd, &a->input, false);
+  AddDetectionOptions(cmd, &a->input);
+  auto* gravity = cmd->add_option("--gravity", a->gravity.gravity_ms2,
+                                  "this site's gravity [m/s2] (default: the calibration's)");
+  auto* latitude = cmd->add_option("--latitude", a->gravity.latitude_deg,
+                                   "this site's latitude [deg]: gravity from WGS-84");
+  gravity->excludes(latitude);
+  cmd->add_option("--height", a->gravity.height_m, "height above the ellipsoid [m]")
+      ->needs(latitude);
+  cmd->add_option("--temperature", a->temperature_c,
+                  "the log's temperature [degC], for a calibration whose parameters follow "
+                  "temperature and a log without its own (as calibrate's --temperatures)")
+      ->check(kDecimal);
+  cmd->add_option("--gyro", a->gyro,
+                  "the gyroscope's log on the same clock: its turns verified too");
+  cmd->add_option("--gyro-columns", a->gyro_columns,
+                  "the gyroscope's x,y,z (or time,x,y,z) columns, in LOG or the --gyro log")
+      ->delimiter(',');
+  AddGyroTopic(cmd, &a->input);
+  cmd->add_flag("--json", a->json, "machine-readable output");
+  cmd->add_option("-o,--output", a->output, "output file (default: stdout)")->check(kFileName);
+  return [a](const CLI::App& parsed) {
+    CheckGyroFlags(parsed, a->gyro, a->gyro_columns, {});
+    DataSubject() = a->input.path;
+    return RunVerify(*a);
+  };
 }
 
 }  // namespace accelcal::cli

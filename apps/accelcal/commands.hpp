@@ -13,6 +13,10 @@
 #include "accelcal/log_reader.hpp"
 #include "accelcal/static_detection.hpp"
 
+namespace CLI {
+class App;
+}  // namespace CLI
+
 namespace accelcal::cli {
 
 /// Process exit statuses.
@@ -32,6 +36,28 @@ struct CalibrateArgs;
 /// What `calibrate` runs once its arguments are parsed and checked, in place of RunCalibrate:
 /// Python's calibrate_log makes its request from the tool's own options and keeps the result.
 using CalibrateRunner = std::function<int(const CalibrateArgs&)>;
+
+/// What runs a command once its options are parsed (`parsed`: its CLI::App, for what was given).
+using CommandRun = std::function<int(const CLI::App& parsed)>;
+
+/// Each command registers its options on its CLI::App beside its Run (into arguments of its own),
+/// and returns what runs it: the table of commands in cli.cpp calls them.
+CommandRun SetUpCalibrate(CLI::App* cmd, const CalibrateRunner& runner);
+CommandRun SetUpBatch(CLI::App* cmd);
+CommandRun SetUpStore(CLI::App* cmd);
+CommandRun SetUpCompare(CLI::App* cmd);
+CommandRun SetUpDetect(CLI::App* cmd);
+CommandRun SetUpInspect(CLI::App* cmd);
+CommandRun SetUpNoise(CLI::App* cmd);
+CommandRun SetUpDesign(CLI::App* cmd);
+CommandRun SetUpMonteCarlo(CLI::App* cmd);
+CommandRun SetUpSystemLevel(CLI::App* cmd);
+CommandRun SetUpGimbal(CLI::App* cmd);
+CommandRun SetUpSimulate(CLI::App* cmd);
+CommandRun SetUpApply(CLI::App* cmd);
+CommandRun SetUpVerify(CLI::App* cmd);
+CommandRun SetUpReport(CLI::App* cmd);
+CommandRun SetUpExport(CLI::App* cmd);
 
 /// The whole tool: parses the arguments, runs the subcommand (`calibrate` through `runner` when
 /// one is given), returns the exit status (never exits, never throws).

@@ -240,19 +240,11 @@ py::dict GyroDict(const GyroCalibration& g) {
   return d;
 }
 
-}  // namespace
-
-void BindCalibration(py::module_& m) {
-  m.def(
-      "_result_from_state", [](const py::bytes& state) { return LoadState(std::string(state)); },
-      py::arg("state"), "A CalibrationResult from its pickled state (pickle calls it)");
-  py::class_<PyCalibration>(
-      m, "CalibrationResult",
-      "A calibration: p = K f + b + k2 * f**2 (docs/model.md), with its diagnosis (verdict, "
-      "diagnostics) and the positions it was fitted to")
-      .def_property_readonly(
-          "model", [](const PyCalibration& c) { return std::string(ToString(c.result.model)); },
-          "The model fitted: 'linear' or 'quadratic' (with model='auto', the one chosen)")
+// CalibrationResult's read-only attributes.
+void BindResultAttributes(py::class_<PyCalibration>& cls) {
+  cls.def_property_readonly(
+         "model", [](const PyCalibration& c) { return std::string(ToString(c.result.model)); },
+         "The model fitted: 'linear' or 'quadratic' (with model='auto', the one chosen)")
       .def_property_readonly(
           "frame", [](const PyCalibration& c) { return std::string(ToString(c.result.frame)); },
           "The body frame's convention: 'x-first' (K lower-triangular) or 'z-first' (upper)")
@@ -379,7 +371,12 @@ void BindCalibration(py::module_& m) {
           "numbers, from 1; statistic and threshold None when not screened), "
           "rms_deg and heldout_rms_deg")
       .def_property_readonly(
-          "source", [](const PyCalibration& c) { return c.source; }, "The input file, or ''")
+          "source", [](const PyCalibration& c) { return c.source; }, "The input file, or ''");
+}
+
+// CalibrationResult's methods: pickling, apply and to_json.
+void BindResultMethods(py::class_<PyCalibration>& cls) {
+  cls
       // Pickled as the call that restores it (every protocol, 0 included).
       .def("__reduce__",
            [](const PyCalibration& c) {
@@ -444,7 +441,10 @@ void BindCalibration(py::module_& m) {
           "SHA-256). Other positions (m x 3) or units are diagnosed anew, without the log. "
           "`date` (YYYY-MM-DD[THH:MM[:SS]Z]) is written as the provenance's date; none without "
           "it.");
+}
 
+// The functions that make a CalibrationResult, and diagnose.
+void BindCalibrationFunctions(py::module_& m) {
   m.def(
       "calibrate",
       [](const Rows& readings, const std::string& model, const std::string& method,
@@ -558,6 +558,21 @@ void BindCalibration(py::module_& m) {
       py::arg("rate_hz") = std::nullopt, py::arg("time_unit") = "s",
       py::arg("detection") = std::nullopt, py::arg("max_outliers") = std::nullopt,
       "The diagnosis of a calibration (diagnosis.hpp): {'verdict': ..., 'diagnostics': [...]}");
+}
+
+}  // namespace
+
+void BindCalibration(py::module_& m) {
+  m.def(
+      "_result_from_state", [](const py::bytes& state) { return LoadState(std::string(state)); },
+      py::arg("state"), "A CalibrationResult from its pickled state (pickle calls it)");
+  py::class_<PyCalibration> cls(
+      m, "CalibrationResult",
+      "A calibration: p = K f + b + k2 * f**2 (docs/model.md), with its diagnosis (verdict, "
+      "diagnostics) and the positions it was fitted to");
+  BindResultAttributes(cls);
+  BindResultMethods(cls);
+  BindCalibrationFunctions(m);
 }
 
 }  // namespace accelcal::python

@@ -42,9 +42,8 @@ PyLoadedCalibration LoadCalibrationText(std::string text, std::string name) {
   return c;
 }
 
-}  // namespace
-
-void BindFilesAndLogs(py::module_& m) {
+// Calibration, a calibration file as read, and the functions that read one.
+void BindCalibrationFiles(py::module_& m) {
   py::class_<PyLoadedCalibration>(
       m, "Calibration",
       "A calibration read from its file (load_calibration, parse_calibration_json): the "
@@ -152,7 +151,10 @@ void BindFilesAndLogs(py::module_& m) {
         return LoadCalibrationText(std::move(text), name);
       },
       py::arg("path"), "Reads a calibration file (accelcal calibrate -o FILE)");
+}
 
+// Logs read and cut into still intervals as the tool does.
+void BindLogs(py::module_& m) {
   m.def(
       "read_input",
       [](const py::object& path_arg, const std::string& kind, const py::object& columns,
@@ -250,7 +252,10 @@ void BindFilesAndLogs(py::module_& m) {
       "'threshold', 'noise_reference' [raw^2], 'rate_hz', 'window_samples', "
       "'quantisation_step', 'segments', 'joined', 'time_axis' (as read_input's, None without "
       "time)}.");
+}
 
+// A calibration written in other formats, and its report.
+void BindOutputs(py::module_& m) {
   m.def(
       "export_calibration",
       [](const std::string& json_text, const std::string& format, const std::string& raw_unit,
@@ -297,6 +302,14 @@ void BindFilesAndLogs(py::module_& m) {
       py::arg("rate_hz") = std::nullopt, py::kw_only(), py::arg("time_unit") = "s",
       "The HTML report (report.hpp) of a calibration file's text, with the raw signal when "
       "samples (and time or rate_hz, checked as for detect_static_intervals) are given");
+}
+
+}  // namespace
+
+void BindFilesAndLogs(py::module_& m) {
+  BindCalibrationFiles(m);
+  BindLogs(m);
+  BindOutputs(m);
 }
 
 }  // namespace accelcal::python

@@ -127,6 +127,13 @@ struct GyroCalibrationOptions {
   /// rates as without (two-stage or imu_tk: the joint estimator refits the accelerometer's
   /// parameters as constants, which a calibration over temperature is not).
   std::optional<GyroThermalOptions> thermal;
+
+  /// Why these options cannot calibrate, or nothing: the rules between them, stated once (the
+  /// request of calibrate_unit.hpp and CalibrateGyro take them from here). Fields are named as
+  /// a unit's request names its options, marked {{name}} (OptionError): `model` {{gyro_model}},
+  /// `estimator` {{gyro_estimator}}, `validate` {{no_crossval}} (its opposite),
+  /// `thermal->degree` {{gyro_thermal}}, `latitude_deg` {{latitude}}.
+  std::optional<std::string> Validate() const;
 };
 
 /// One turn between consecutive still positions.

@@ -885,15 +885,9 @@ GyroCalibration CalibrateGyro(const RawLog& accel, const RawLog& raw_gyro,
                               const std::vector<Position>& positions,
                               const CalibrationResult& accel_cal,
                               const GyroCalibrationOptions& options) {
+  if (auto why = options.Validate()) throw OptionError(*why);
   const bool imutk = options.estimator == GyroEstimator::kImuTk;
-  if (imutk && options.model && *options.model != GyroModelKind::kLinear) {
-    throw std::invalid_argument("CalibrateGyro: imu_tk's method has no g-sensitivity");
-  }
-  // imu_tk's method has one model: nothing to choose, so no validation needed to choose it.
   const std::optional<GyroModelKind> model = imutk ? GyroModelKind::kLinear : options.model;
-  if (!model && !options.validate) {
-    throw std::invalid_argument("CalibrateGyro: the automatic model choice needs validation");
-  }
   CheckGyroClock(accel, raw_gyro);
   // The offsets over temperature first, from the still means of the rates as read; then every
   // rate sample with them taken out at its temperature, and the calibration as without.

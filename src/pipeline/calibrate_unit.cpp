@@ -211,18 +211,11 @@ class GyroLogAhead {
   std::future<InputData> pending_;
 };
 
-GyroCalibrationOptions GyroOptionsOf(const UnitRequest& r, const CalibrationResult& accel) {
-  GyroCalibrationOptions o;
-  o.unit = r.gyro_units;
-  o.estimator = GyroEstimatorOf(r);
-  if (r.thermal) {
-    o.thermal.emplace();
-    o.thermal->degree = r.gyro_thermal;
-    if (accel.thermal) o.thermal->t_ref_c = accel.thermal->params.t_ref_c;
-  }
-  o.model = r.gyro_model;
-  o.validate = r.cross_validate;
-  o.latitude_deg = r.latitude_deg;  // the Earth rate's vertical part, taken out
+// The gyroscope's options, its offsets over temperature about the accelerometer's T_ref.
+GyroCalibrationOptions GyroOptionsWithTReference(const UnitRequest& r,
+                                                 const CalibrationResult& accel) {
+  GyroCalibrationOptions o = GyroOptionsOf(r);
+  if (o.thermal && accel.thermal) o.thermal->t_ref_c = accel.thermal->params.t_ref_c;
   return o;
 }
 
@@ -233,7 +226,7 @@ void CalibrateGyroscope(const UnitRequest& r, GyroLogAhead* ahead, UnitOutcome* 
   g.data = ahead->Take();
   try {
     g.calibration = CalibrateGyro(accel_log, g.data.raw, out->input.positions, out->accelerometer,
-                                  GyroOptionsOf(r, out->accelerometer));
+                                  GyroOptionsWithTReference(r, out->accelerometer));
   } catch (const NotConvergedError& e) {  // what is refused is the gyroscope's
     throw NotConvergedError(e.what(), g.path);
   } catch (const DataError& e) {

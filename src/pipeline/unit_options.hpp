@@ -18,6 +18,8 @@ std::string BiasModelText(const UnitRequest& r);
 /// The gyroscope's estimator: as asked for, else two-stage on top of known orientations or a
 /// calibration over temperature, else joint.
 GyroEstimator GyroEstimatorOf(const UnitRequest& r);
+/// The gyroscope's options (its thermal T_ref is the accelerometer's, set once that is fitted).
+GyroCalibrationOptions GyroOptionsOf(const UnitRequest& r);
 /// The orientation-free fit's options (the linear model when the model is chosen).
 CalibrationOptions CalibrationOptionsOf(const UnitRequest& r);
 KnownOrientationOptions KnownOrientationOptionsOf(const UnitRequest& r);

@@ -53,28 +53,7 @@ std::optional<std::string> GyroProblem(const UnitRequest& r) {
     return "{{gyro_thermal}} is the gyroscope's offsets over temperature, fitted with "
            "{{thermal}}: give it too";
   }
-  if (r.thermal) {
-    if (r.gyro_thermal) {
-      if (*r.gyro_thermal < 0 || *r.gyro_thermal > kMaxThermalDegree) {
-        return Format("{{gyro_thermal}}: '%d' is neither auto nor a degree from 0 to %d",
-                      *r.gyro_thermal, kMaxThermalDegree);
-      }
-    } else if (!r.cross_validate) {
-      return "{{gyro_thermal}} auto (the default with {{thermal}}) decides on held-out error: it "
-             "needs the cross-validation that {{no_crossval}} turns off; give {{gyro_thermal}} 0 "
-             "to 3";
-    }
-  }
-  if (!r.gyro_model) {
-    if (!r.cross_validate && estimator != GyroEstimator::kImuTk) {
-      return "the gyro's model is chosen on held-out rotations ({{gyro_model}} auto, the "
-             "default), which {{no_crossval}} turns off: give {{gyro_model}} linear or "
-             "g-sensitive";
-    }
-  } else if (estimator == GyroEstimator::kImuTk && *r.gyro_model != GyroModelKind::kLinear) {
-    return "{{gyro_estimator}} imutk is imu_tk's method, which has no g-sensitivity: "
-           "{{gyro_model}} linear";
-  }
+  if (auto why = GyroOptionsOf(r).Validate()) return why;
   const std::string first = r.inputs.empty() ? std::string() : r.inputs.front();
   return GyroInputProblem(first, r.load.read.columns, *r.gyro);
 }
@@ -240,6 +219,20 @@ std::optional<std::string> FreeFitProblem(const UnitRequest& r) {
 
 std::string BiasModelText(const UnitRequest& r) {
   return r.bias_model_auto ? "auto" : r.bias_model ? ToString(*r.bias_model) : "constant";
+}
+
+GyroCalibrationOptions GyroOptionsOf(const UnitRequest& r) {
+  GyroCalibrationOptions o;
+  o.unit = r.gyro_units;
+  o.estimator = GyroEstimatorOf(r);
+  if (r.thermal) {
+    o.thermal.emplace();
+    o.thermal->degree = r.gyro_thermal;
+  }
+  o.model = r.gyro_model;
+  o.validate = r.cross_validate;
+  o.latitude_deg = r.latitude_deg;  // the Earth rate's vertical part, taken out
+  return o;
 }
 
 GyroEstimator GyroEstimatorOf(const UnitRequest& r) {

@@ -102,7 +102,44 @@ TEST(GyroCalibration, ImuTkBaselineOnXsensIsTheIssuesPrototype) {
   o.validate = false;
   EXPECT_EQ(Calibrated(Xsens(), o).model, GyroModelKind::kLinear);
   o.model = GyroModelKind::kGSensitive;
-  EXPECT_THROW(Calibrated(Xsens(), o), std::invalid_argument);
+  EXPECT_THROW(Calibrated(Xsens(), o), OptionError);
+}
+
+// The rules between the options, stated once: the messages name the options as a unit's request
+// does ({{name}}), whoever calls CalibrateGyro.
+TEST(GyroCalibrationOptions, ValidateStatesEachRuleByTheOptionsNames) {
+  GyroCalibrationOptions o;
+  EXPECT_EQ(o.Validate(), std::nullopt);
+  o.validate = false;  // the model chosen on held-out rotations needs them
+  ASSERT_TRUE(o.Validate());
+  EXPECT_NE(o.Validate()->find("{{gyro_model}} auto"), std::string::npos) << *o.Validate();
+  o.estimator = GyroEstimator::kImuTk;  // one model: nothing to choose
+  EXPECT_EQ(o.Validate(), std::nullopt);
+  o.model = GyroModelKind::kGSensitive;
+  ASSERT_TRUE(o.Validate());
+  EXPECT_NE(o.Validate()->find("{{gyro_estimator}} imutk"), std::string::npos);
+  o = GyroCalibrationOptions{};
+  o.thermal.emplace();
+  o.thermal->degree = kMaxThermalDegree + 1;
+  ASSERT_TRUE(o.Validate());
+  EXPECT_NE(o.Validate()->find("{{gyro_thermal}}: '4'"), std::string::npos);
+  o.thermal->degree = -1;
+  EXPECT_TRUE(o.Validate());
+  o.thermal->degree = std::nullopt;  // auto: chosen on held-out rates
+  EXPECT_EQ(o.Validate(), std::nullopt);
+  o.validate = false;
+  o.model = GyroModelKind::kLinear;
+  ASSERT_TRUE(o.Validate());
+  EXPECT_NE(o.Validate()->find("{{gyro_thermal}} auto"), std::string::npos);
+  o = GyroCalibrationOptions{};
+  for (double latitude : {91.0, -90.5, std::nan("")}) {
+    o.latitude_deg = latitude;
+    EXPECT_TRUE(o.Validate()) << latitude;
+  }
+  o.latitude_deg = -90;
+  EXPECT_EQ(o.Validate(), std::nullopt);
+  o.threads = -1;
+  EXPECT_TRUE(o.Validate());
 }
 
 TEST(GyroCalibration, T265JointFitDeterminesTheAccelerometersMisalignment) {

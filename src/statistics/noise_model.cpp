@@ -5,6 +5,7 @@
 #include <cmath>
 #include <cstdint>
 #include <limits>
+#include <optional>
 #include <stdexcept>
 
 #include <Eigen/Dense>
@@ -169,6 +170,28 @@ class EstimateCorrelation {
   std::vector<Eigen::MatrixXd> products_;  // I_tu, t ≤ u, row by row
 };
 
+// The correlation's products depend on the points' m and τ₀ alone, which the axes of one log
+// share: the last one made is kept (per thread) and made again only for other m or τ₀.
+const EstimateCorrelation& CorrelationFor(const std::vector<AllanPoint>& points) {
+  struct Cached {
+    double tau0 = 0;
+    std::vector<std::uint64_t> m;
+    std::optional<EstimateCorrelation> correlation;
+  };
+  thread_local Cached cached;
+  const double tau0 = points.front().tau_s / static_cast<double>(points.front().m);
+  bool same = cached.correlation && cached.tau0 == tau0 && cached.m.size() == points.size();
+  for (std::size_t i = 0; same && i < points.size(); ++i) same = cached.m[i] == points[i].m;
+  if (!same) {
+    cached.correlation.reset();
+    cached.tau0 = tau0;
+    cached.m.clear();
+    for (const AllanPoint& p : points) cached.m.push_back(p.m);
+    cached.correlation.emplace(points);
+  }
+  return *cached.correlation;
+}
+
 }  // namespace
 
 const char* ToString(NoiseTerm term) {
@@ -274,7 +297,7 @@ NoiseModelFit FitNear1(const std::vector<AllanPoint>& points, const NoiseFitOpti
   // Columns scaled to unit norm for the solves (τ⁻² to τ² span many decades).
   const Eigen::VectorXd scale = G.colwise().norm().transpose();
   const Eigen::MatrixXd Gs = G * scale.cwiseInverse().asDiagonal();
-  const EstimateCorrelation correlation(points);
+  const EstimateCorrelation& correlation = CorrelationFor(points);
 
   NoiseModelFit out;
   out.points = points;

@@ -1,6 +1,7 @@
 // The overlapping Allan variance, streamed (allan.hpp).
 #include "accelcal/allan.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <stdexcept>
 #include <string>
@@ -49,45 +50,77 @@ AllanAccumulator::AllanAccumulator(const AllanOptions& options) : options_(optio
 void AllanAccumulator::Add(const double* y, std::size_t count) {
   const std::uint64_t R = options_.full_overlap_up_to;
   const std::uint64_t mask = 4 * R - 1;
-  for (std::size_t k = 0; k < count; ++k) {
-    const double v = y[k];
-    if (!std::isfinite(v)) {
+  // Level 0 octave by octave over chunks of the samples: θ at each chunk's phase points, after
+  // the 2R before them (from level 0's ring), in one array, so that each octave's sum is one
+  // loop without the ring's masks; each sum takes the same terms in the same order as a sample
+  // at a time would.
+  const std::size_t chunk = std::max<std::size_t>(static_cast<std::size_t>(2 * R), 1024);
+  const std::size_t before = static_cast<std::size_t>(2 * R);
+  history_.resize(before + chunk);
+  double* const history = history_.data();
+  for (std::size_t begin = 0; begin < count; begin += chunk) {
+    const std::size_t size = std::min(chunk, count - begin);
+    const std::uint64_t i0 = samples_ + 1;  // the chunk's first phase point
+    // θ at phase points i0 − 2R … i0 − 1 (those before 0 are never read).
+    for (std::size_t q = 0; q < before; ++q) {
+      history[q] = levels_[0].ring[(i0 - before + q) & mask];
+    }
+    std::size_t added = size;
+    for (std::size_t k = 0; k < size; ++k) {
+      const double v = y[begin + k];
+      if (!std::isfinite(v)) {
+        added = k;
+        break;
+      }
+      if (samples_ == 0) origin_ = v;
+      theta_ += v - origin_;
+      ++samples_;
+      const std::uint64_t i = samples_;  // the phase point's index
+      levels_[0].ring[i & mask] = theta_;
+      history[before + k] = theta_;
+      // Level l ≥ 1 at every index divisible by 2^l; created at its first (i = 2^l), with θ_0.
+      for (std::size_t l = 1; (i & ((std::uint64_t{1} << l) - 1)) == 0; ++l) {
+        if (l == levels_.size()) {
+          Level level;
+          level.stride = std::uint64_t{1} << l;
+          level.m = R * level.stride;
+          level.ring.assign(4 * R, 0.0);
+          level.count = 1;  // θ_0 = 0 at its slot 0
+          levels_.push_back(std::move(level));
+        }
+        Level& level = levels_[l];
+        const std::uint64_t p = level.count++;  // this point's index in the level's sequence
+        level.ring[p & mask] = theta_;
+        if (p >= 2 * R) {
+          const double d = theta_ - 2 * level.ring[(p - R) & mask] + level.ring[(p - 2 * R) & mask];
+          level.sum += d * d;
+          ++level.terms;
+        }
+      }
+    }
+    levels_[0].count = samples_ + 1;
+    // Level 0: every m = 1, 2, 4, …, R at each phase point i ≥ 2m.
+    const std::uint64_t end = i0 + added;
+    std::size_t j = 0;
+    for (std::uint64_t m = 1; m <= R; m <<= 1, ++j) {
+      const std::uint64_t first = std::max(i0, 2 * m);
+      if (first >= end) continue;
+      const auto at = static_cast<std::size_t>(before + (first - i0));
+      const double* theta = history + at;
+      const double* back = theta - m;
+      const double* back2 = theta - 2 * m;
+      const auto n = static_cast<std::size_t>(end - first);
+      double sum = sums_[j];
+      for (std::size_t q = 0; q < n; ++q) {
+        const double d = theta[q] - 2 * back[q] + back2[q];
+        sum += d * d;
+      }
+      sums_[j] = sum;
+      terms_[j] += end - first;
+    }
+    if (added < size) {
       throw std::invalid_argument("AllanAccumulator: sample " + std::to_string(samples_ + 1) +
                                   " is not a finite number");
-    }
-    if (samples_ == 0) origin_ = v;
-    theta_ += v - origin_;
-    ++samples_;
-    const std::uint64_t i = samples_;  // the phase point's index
-    // Level 0: every m = 1, 2, 4, …, R with i ≥ 2m.
-    Level& zero = levels_[0];
-    double* ring = zero.ring.data();
-    ring[i & mask] = theta_;
-    zero.count = i + 1;
-    std::size_t j = 0;
-    for (std::uint64_t m = 1; m <= R && 2 * m <= i; m <<= 1, ++j) {
-      const double d = theta_ - 2 * ring[(i - m) & mask] + ring[(i - 2 * m) & mask];
-      sums_[j] += d * d;
-      ++terms_[j];
-    }
-    // Level l ≥ 1 at every index divisible by 2^l; created at its first (i = 2^l), with θ_0.
-    for (std::size_t l = 1; (i & ((std::uint64_t{1} << l) - 1)) == 0; ++l) {
-      if (l == levels_.size()) {
-        Level level;
-        level.stride = std::uint64_t{1} << l;
-        level.m = R * level.stride;
-        level.ring.assign(4 * R, 0.0);
-        level.count = 1;  // θ_0 = 0 at its slot 0
-        levels_.push_back(std::move(level));
-      }
-      Level& level = levels_[l];
-      const std::uint64_t p = level.count++;  // this point's index in the level's sequence
-      level.ring[p & mask] = theta_;
-      if (p >= 2 * R) {
-        const double d = theta_ - 2 * level.ring[(p - R) & mask] + level.ring[(p - 2 * R) & mask];
-        level.sum += d * d;
-        ++level.terms;
-      }
     }
   }
 }

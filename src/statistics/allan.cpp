@@ -50,21 +50,16 @@ AllanAccumulator::AllanAccumulator(const AllanOptions& options) : options_(optio
 void AllanAccumulator::Add(const double* y, std::size_t count) {
   const std::uint64_t R = options_.full_overlap_up_to;
   const std::uint64_t mask = 4 * R - 1;
-  // Level 0 octave by octave over chunks of the samples: θ at each chunk's phase points, after
-  // the 2R before them (from level 0's ring), in one array, so that each octave's sum is one
-  // loop without the ring's masks; each sum takes the same terms in the same order as a sample
-  // at a time would.
-  const std::size_t chunk = std::max<std::size_t>(static_cast<std::size_t>(2 * R), 1024);
-  const std::size_t before = static_cast<std::size_t>(2 * R);
-  history_.resize(before + chunk);
+  // Level 0 octave by octave over chunks of the samples: θ at each chunk's phase points in one
+  // array, so that each octave's sum is one loop without the ring's masks once its terms reach
+  // back no further than the chunk (those before read the ring); each sum takes the same terms
+  // in the same order as a sample at a time would. The ring takes the chunk's θ at its end.
+  constexpr std::size_t kChunk = 4096;
+  history_.resize(std::min(count, kChunk));
   double* const history = history_.data();
-  for (std::size_t begin = 0; begin < count; begin += chunk) {
-    const std::size_t size = std::min(chunk, count - begin);
+  for (std::size_t begin = 0; begin < count; begin += kChunk) {
+    const std::size_t size = std::min(kChunk, count - begin);
     const std::uint64_t i0 = samples_ + 1;  // the chunk's first phase point
-    // θ at phase points i0 − 2R … i0 − 1 (those before 0 are never read).
-    for (std::size_t q = 0; q < before; ++q) {
-      history[q] = levels_[0].ring[(i0 - before + q) & mask];
-    }
     std::size_t added = size;
     for (std::size_t k = 0; k < size; ++k) {
       const double v = y[begin + k];
@@ -76,8 +71,7 @@ void AllanAccumulator::Add(const double* y, std::size_t count) {
       theta_ += v - origin_;
       ++samples_;
       const std::uint64_t i = samples_;  // the phase point's index
-      levels_[0].ring[i & mask] = theta_;
-      history[before + k] = theta_;
+      history[k] = theta_;
       // Level l ≥ 1 at every index divisible by 2^l; created at its first (i = 2^l), with θ_0.
       for (std::size_t l = 1; (i & ((std::uint64_t{1} << l) - 1)) == 0; ++l) {
         if (l == levels_.size()) {
@@ -98,26 +92,39 @@ void AllanAccumulator::Add(const double* y, std::size_t count) {
         }
       }
     }
-    levels_[0].count = samples_ + 1;
     // Level 0: every m = 1, 2, 4, …, R at each phase point i ≥ 2m.
+    double* const ring = levels_[0].ring.data();
     const std::uint64_t end = i0 + added;
+    const auto theta_at = [&](std::uint64_t p) {
+      return p >= i0 ? history[p - i0] : ring[p & mask];
+    };
     std::size_t j = 0;
     for (std::uint64_t m = 1; m <= R; m <<= 1, ++j) {
       const std::uint64_t first = std::max(i0, 2 * m);
       if (first >= end) continue;
-      const auto at = static_cast<std::size_t>(before + (first - i0));
-      const double* theta = history + at;
-      const double* back = theta - m;
-      const double* back2 = theta - 2 * m;
-      const auto n = static_cast<std::size_t>(end - first);
       double sum = sums_[j];
-      for (std::size_t q = 0; q < n; ++q) {
-        const double d = theta[q] - 2 * back[q] + back2[q];
+      const std::uint64_t within = std::min(end, std::max(first, i0 + 2 * m));
+      for (std::uint64_t i = first; i < within; ++i) {
+        const double d = theta_at(i) - 2 * theta_at(i - m) + theta_at(i - 2 * m);
         sum += d * d;
+      }
+      if (within < end) {  // within ≥ i0 + 2m: all three in the chunk
+        const double* const theta = history + (within - i0);
+        const double* const back = theta - m;
+        const double* const back2 = theta - 2 * m;
+        const auto n = static_cast<std::size_t>(end - within);
+        for (std::size_t q = 0; q < n; ++q) {
+          const double d = theta[q] - 2 * back[q] + back2[q];
+          sum += d * d;
+        }
       }
       sums_[j] = sum;
       terms_[j] += end - first;
     }
+    for (std::uint64_t p = std::max(i0, end > 4 * R ? end - 4 * R : 0); p < end; ++p) {
+      ring[p & mask] = history[p - i0];
+    }
+    levels_[0].count = samples_ + 1;
     if (added < size) {
       throw std::invalid_argument("AllanAccumulator: sample " + std::to_string(samples_ + 1) +
                                   " is not a finite number");

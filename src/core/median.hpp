@@ -32,7 +32,8 @@ inline double Quantile(std::vector<double> v, double p) {
   // the 65,536 (the non-negative ones start at the 32,768th).
   constexpr std::size_t kNarrowFrom = 4096;
   if (v.size() >= kNarrowFrom) {
-    thread_local std::array<std::uint32_t, std::size_t{1} << 16> count{};  // all 0 between calls
+    // On the heap (a thread's first long sample), not in every thread's static TLS block.
+    thread_local std::vector<std::uint32_t> count(std::size_t{1} << 16, 0);  // 0 between calls
     std::size_t lowest = count.size(), highest = 0;
     for (double x : v) {
       const auto b = static_cast<std::size_t>(OrderKey(x) >> 48);

@@ -93,6 +93,7 @@ class AllanAccumulator {
   std::vector<Level> levels_;
   std::vector<double> sums_;
   std::vector<std::uint64_t> terms_;
+  std::vector<double> history_;  // Add's θ of a chunk's phase points
 };
 
 /// The overlapping Allan variance of `y` (AllanAccumulator over the whole vector).

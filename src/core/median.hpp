@@ -27,12 +27,24 @@ inline double Quantile(std::vector<double> v, double p) {
   // element of that rank; the partial sort then runs on that bucket only. The element is the same;
   // std::nth_element alone spends several branchy passes over all of them (on 30 000 window
   // means, most of the gyroscope's still-span search).
+  // The counts are kept between calls (per thread) and only the buckets between the lowest and
+  // the highest key's are read and cleared: a sample of one sign spans a few hundred buckets of
+  // the 65,536 (the non-negative ones start at the 32,768th).
   constexpr std::size_t kNarrowFrom = 4096;
   if (v.size() >= kNarrowFrom) {
-    std::vector<std::uint32_t> count(std::size_t{1} << 16, 0);
-    for (double x : v) ++count[OrderKey(x) >> 48];
-    std::size_t below = 0, bucket = 0;
+    // On the heap (a thread's first long sample), not in every thread's static TLS block.
+    thread_local std::vector<std::uint32_t> count(std::size_t{1} << 16, 0);  // 0 between calls
+    std::size_t lowest = count.size(), highest = 0;
+    for (double x : v) {
+      const auto b = static_cast<std::size_t>(OrderKey(x) >> 48);
+      ++count[b];
+      lowest = std::min(lowest, b);
+      highest = std::max(highest, b);
+    }
+    std::size_t below = 0, bucket = lowest;
     while (below + count[bucket] <= rank) below += count[bucket++];
+    std::fill(count.begin() + static_cast<std::ptrdiff_t>(lowest),
+              count.begin() + static_cast<std::ptrdiff_t>(highest) + 1, 0u);
     std::size_t kept = 0;
     for (double x : v) {
       if ((OrderKey(x) >> 48) == bucket) v[kept++] = x;

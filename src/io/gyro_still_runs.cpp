@@ -19,8 +19,10 @@ void WindowMeans(const std::vector<Vec3>& rates, const StaticInterval& iv, std::
   Vec3 sum = Vec3::Zero();
   for (std::size_t k = iv.begin; k < iv.begin + w; ++k) sum += rates[k];
   const double inv = 1.0 / static_cast<double>(w);
+  out->resize(iv.end - iv.begin - w + 1);
+  Vec3* mean = out->data();
   for (std::size_t k = iv.begin;; ++k) {
-    out->push_back(sum * inv - centre);
+    *mean++ = sum * inv - centre;
     if (k + w >= iv.end) break;
     sum += rates[k + w] - rates[k];
   }
@@ -93,19 +95,24 @@ GyroStillRuns FindGyroStillRuns(const std::vector<Vec3>& rates_raw,
     for (std::size_t i = 0; i < m; ++i) {
       WindowMeans(rates_raw, intervals[i], w, centre[i], &means[i]);
       const StaticInterval& run = out.runs[i];
-      std::vector<double> mine[3];
-      for (std::size_t j = 0; j < means[i].size(); ++j) {
+      // Written in place (sized for every window, cut to those taken): an out-of-line
+      // push_back per value had cost more than the windows' sums.
+      const std::size_t pooled = deviation[0].size(), windows = means[i].size();
+      for (std::vector<double>& d : deviation) d.resize(pooled + windows);
+      std::size_t taken = 0;
+      for (std::size_t j = 0; j < windows; ++j) {
         const std::size_t k = intervals[i].begin + j;
         if (pass > 0 && !(k >= run.begin && k + w <= run.end)) continue;
-        for (int a = 0; a < 3; ++a) {
-          deviation[a].push_back(std::abs(means[i][j](a)));
-          mine[a].push_back(std::abs(means[i][j](a)));
-        }
+        for (int a = 0; a < 3; ++a) deviation[a][pooled + taken] = std::abs(means[i][j](a));
+        ++taken;
       }
+      for (std::vector<double>& d : deviation) d.resize(pooled + taken);
       // The interval's own scatter, by the median of its windows' deviations (a turn's ends
-      // take less than half of an interval).
+      // take less than half of an interval): the values just pooled.
       for (int a = 0; a < 3; ++a) {
-        own[i](a) = mine[a].empty() ? 0.0 : Median(std::move(mine[a])) / 0.6745;
+        const auto from = deviation[a].begin() + static_cast<std::ptrdiff_t>(pooled);
+        own[i](a) =
+            taken == 0 ? 0.0 : Median(std::vector<double>(from, deviation[a].end())) / 0.6745;
       }
     }
     for (int a = 0; a < 3; ++a) {
@@ -194,10 +201,16 @@ GyroStillRuns FindGyroStillRuns(const std::vector<Vec3>& rates_raw,
   // slow wobble hardly moves them); each run's own scatter against it.
   {
     std::vector<double> differences[3];
+    std::size_t count = 0;
     for (std::size_t i = 0; i < m; ++i) {
-      for (std::size_t k = out.runs[i].begin + 1; k < out.runs[i].end; ++k) {
+      count += out.runs[i].end > out.runs[i].begin ? out.runs[i].end - out.runs[i].begin - 1 : 0;
+    }
+    for (std::vector<double>& d : differences) d.resize(count);
+    std::size_t at = 0;
+    for (std::size_t i = 0; i < m; ++i) {
+      for (std::size_t k = out.runs[i].begin + 1; k < out.runs[i].end; ++k, ++at) {
         for (int a = 0; a < 3; ++a) {
-          differences[a].push_back(std::abs(rates_raw[k](a) - rates_raw[k - 1](a)));
+          differences[a][at] = std::abs(rates_raw[k](a) - rates_raw[k - 1](a));
         }
       }
     }
@@ -214,8 +227,8 @@ GyroStillRuns FindGyroStillRuns(const std::vector<Vec3>& rates_raw,
       if (run.end - run.begin < w + 1) continue;
       WindowMeans(rates_raw, run, w, centre[i], &means[i]);
       for (int a = 0; a < 3; ++a) {
-        std::vector<double> d;
-        for (const Vec3& mean : means[i]) d.push_back(std::abs(mean(a)));
+        std::vector<double> d(means[i].size());
+        for (std::size_t j = 0; j < d.size(); ++j) d[j] = std::abs(means[i][j](a));
         const double own = Median(std::move(d)) / 0.6745;
         if (own > kGyroWobbleSignificance * white(a)) out.wobbles[i] = 1;
       }

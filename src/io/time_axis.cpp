@@ -216,16 +216,30 @@ TimeAxis MakeTimeAxis(std::vector<double>* time, TimeUnit unit, std::string_view
   };
   // Locals: a gap's push_back could otherwise change axis.typical_step_s for the compiler.
   const double typical = axis.typical_step_s, tolerance = 0.5 * typical, gap = kGapFactor * typical;
-  for (std::size_t i = 1; i < t.size(); ++i) {
-    const double d = t[i] - t[i - 1];
-    if (d > 0) resolution = std::min(resolution, d);
-    repeated += d == 0;
-    irregular += std::abs(d - typical) > tolerance;
-    if (d > gap) {
-      close_segment(i);
-      axis.gaps.push_back({i, t[i - 1], t[i]});
-      segment_begin = i;
+  // The steps up to each gap in a loop of their own, its tallies in registers (a gap's
+  // push_back, inside the loop, had kept them in memory: 35 instructions a step).
+  const double* const time_s = t.data();
+  const std::size_t size = t.size();
+  for (std::size_t i = 1; i < size;) {
+    double least = resolution;
+    std::size_t repeats = 0, irregulars = 0, j = i;
+    for (; j < size; ++j) {
+      const double d = time_s[j] - time_s[j - 1];
+      if (d > 0) least = std::min(least, d);
+      repeats += d == 0;
+      irregulars += std::abs(d - typical) > tolerance;
+      if (d > gap) break;
     }
+    resolution = least;
+    repeated += repeats;
+    irregular += irregulars;
+    if (j < size) {  // a gap before sample j
+      close_segment(j);
+      axis.gaps.push_back({j, time_s[j - 1], time_s[j]});
+      segment_begin = j;
+      ++j;
+    }
+    i = j;
   }
   close_segment(t.size());
   axis.resolution_s = std::isfinite(resolution) ? resolution : 0;

@@ -1,6 +1,7 @@
 // The overlapping Allan variance, streamed (allan.hpp).
 #include "accelcal/allan.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <stdexcept>
 #include <string>
@@ -49,45 +50,84 @@ AllanAccumulator::AllanAccumulator(const AllanOptions& options) : options_(optio
 void AllanAccumulator::Add(const double* y, std::size_t count) {
   const std::uint64_t R = options_.full_overlap_up_to;
   const std::uint64_t mask = 4 * R - 1;
-  for (std::size_t k = 0; k < count; ++k) {
-    const double v = y[k];
-    if (!std::isfinite(v)) {
+  // Level 0 octave by octave over chunks of the samples: θ at each chunk's phase points in one
+  // array, so that each octave's sum is one loop without the ring's masks once its terms reach
+  // back no further than the chunk (those before read the ring); each sum takes the same terms
+  // in the same order as a sample at a time would. The ring takes the chunk's θ at its end.
+  constexpr std::size_t kChunk = 4096;
+  history_.resize(std::min(count, kChunk));
+  double* const history = history_.data();
+  for (std::size_t begin = 0; begin < count; begin += kChunk) {
+    const std::size_t size = std::min(kChunk, count - begin);
+    const std::uint64_t i0 = samples_ + 1;  // the chunk's first phase point
+    std::size_t added = size;
+    for (std::size_t k = 0; k < size; ++k) {
+      const double v = y[begin + k];
+      if (!std::isfinite(v)) {
+        added = k;
+        break;
+      }
+      if (samples_ == 0) origin_ = v;
+      theta_ += v - origin_;
+      ++samples_;
+      const std::uint64_t i = samples_;  // the phase point's index
+      history[k] = theta_;
+      // Level l ≥ 1 at every index divisible by 2^l; created at its first (i = 2^l), with θ_0.
+      for (std::size_t l = 1; (i & ((std::uint64_t{1} << l) - 1)) == 0; ++l) {
+        if (l == levels_.size()) {
+          Level level;
+          level.stride = std::uint64_t{1} << l;
+          level.m = R * level.stride;
+          level.ring.assign(4 * R, 0.0);
+          level.count = 1;  // θ_0 = 0 at its slot 0
+          levels_.push_back(std::move(level));
+        }
+        Level& level = levels_[l];
+        const std::uint64_t p = level.count++;  // this point's index in the level's sequence
+        level.ring[p & mask] = theta_;
+        if (p >= 2 * R) {
+          const double d = theta_ - 2 * level.ring[(p - R) & mask] + level.ring[(p - 2 * R) & mask];
+          level.sum += d * d;
+          ++level.terms;
+        }
+      }
+    }
+    // Level 0: every m = 1, 2, 4, …, R at each phase point i ≥ 2m.
+    double* const ring = levels_[0].ring.data();
+    const std::uint64_t end = i0 + added;
+    const auto theta_at = [&](std::uint64_t p) {
+      return p >= i0 ? history[p - i0] : ring[p & mask];
+    };
+    std::size_t j = 0;
+    for (std::uint64_t m = 1; m <= R; m <<= 1, ++j) {
+      const std::uint64_t first = std::max(i0, 2 * m);
+      if (first >= end) continue;
+      double sum = sums_[j];
+      const std::uint64_t within = std::min(end, std::max(first, i0 + 2 * m));
+      for (std::uint64_t i = first; i < within; ++i) {
+        const double d = theta_at(i) - 2 * theta_at(i - m) + theta_at(i - 2 * m);
+        sum += d * d;
+      }
+      if (within < end) {  // within ≥ i0 + 2m: all three in the chunk
+        const double* const theta = history + (within - i0);
+        const double* const back = theta - m;
+        const double* const back2 = theta - 2 * m;
+        const auto n = static_cast<std::size_t>(end - within);
+        for (std::size_t q = 0; q < n; ++q) {
+          const double d = theta[q] - 2 * back[q] + back2[q];
+          sum += d * d;
+        }
+      }
+      sums_[j] = sum;
+      terms_[j] += end - first;
+    }
+    for (std::uint64_t p = std::max(i0, end > 4 * R ? end - 4 * R : 0); p < end; ++p) {
+      ring[p & mask] = history[p - i0];
+    }
+    levels_[0].count = samples_ + 1;
+    if (added < size) {
       throw std::invalid_argument("AllanAccumulator: sample " + std::to_string(samples_ + 1) +
                                   " is not a finite number");
-    }
-    if (samples_ == 0) origin_ = v;
-    theta_ += v - origin_;
-    ++samples_;
-    const std::uint64_t i = samples_;  // the phase point's index
-    // Level 0: every m = 1, 2, 4, …, R with i ≥ 2m.
-    Level& zero = levels_[0];
-    double* ring = zero.ring.data();
-    ring[i & mask] = theta_;
-    zero.count = i + 1;
-    std::size_t j = 0;
-    for (std::uint64_t m = 1; m <= R && 2 * m <= i; m <<= 1, ++j) {
-      const double d = theta_ - 2 * ring[(i - m) & mask] + ring[(i - 2 * m) & mask];
-      sums_[j] += d * d;
-      ++terms_[j];
-    }
-    // Level l ≥ 1 at every index divisible by 2^l; created at its first (i = 2^l), with θ_0.
-    for (std::size_t l = 1; (i & ((std::uint64_t{1} << l) - 1)) == 0; ++l) {
-      if (l == levels_.size()) {
-        Level level;
-        level.stride = std::uint64_t{1} << l;
-        level.m = R * level.stride;
-        level.ring.assign(4 * R, 0.0);
-        level.count = 1;  // θ_0 = 0 at its slot 0
-        levels_.push_back(std::move(level));
-      }
-      Level& level = levels_[l];
-      const std::uint64_t p = level.count++;  // this point's index in the level's sequence
-      level.ring[p & mask] = theta_;
-      if (p >= 2 * R) {
-        const double d = theta_ - 2 * level.ring[(p - R) & mask] + level.ring[(p - 2 * R) & mask];
-        level.sum += d * d;
-        ++level.terms;
-      }
     }
   }
 }

@@ -74,36 +74,26 @@ constexpr double kCoplanarRatio = 1e-3;
 
 namespace {
 
-struct Term {
-  double e = 0;
-  double omega = 0;
-  Vec3 dir = Vec3::UnitZ();
-  Vec12 u = Vec12::Zero();
-  Vec12 gradient = Vec12::Zero();
-  Mat12 hessian = Mat12::Zero();
-  bool ok = false;
-};
+// A position's term: ProfiledPosition's own (returned in place: its Hessian is not copied), or
+// the modulus objectives' in its fields (u, ω 0, the foot point unused). The gradient and, with
+// `hessian`, the Hessian are set where `ok`; nothing else is read of a term not `ok`.
+using Term = ProfiledTerm;
 
 Term Evaluate(const Setup& setup, const ModelParameters& params, const Vec3& reading,
               const Vec3& start, bool hessian) {
-  Term term;
   if (setup.objective == Objective::kProfiled) {
-    const ProfiledTerm t =
-        ProfiledPosition(params, setup.gravity, setup.model, reading, start, hessian);
-    term.e = t.e;
-    term.omega = t.omega;
-    term.dir = t.dir;
-    term.u = t.u;
-    term.gradient = t.gradient;
-    if (hessian) term.hessian = t.hessian;
-    term.ok = t.ok;
-    return term;
+    return ProfiledPosition(params, setup.gravity, setup.model, reading, start, hessian);
   }
   const ModulusTerm t = ModulusPosition(
       params, setup.gravity, setup.objective == Objective::kModulusSquared, reading, hessian);
+  Term term;
+  term.dir = Vec3::UnitZ();
+  term.normal = Vec3::UnitZ();
   term.e = t.e;
+  term.u.setZero();
   term.gradient = t.gradient;
   if (hessian) term.hessian = t.hessian;
+  term.omega = 0;
   term.ok = t.ok;
   return term;
 }

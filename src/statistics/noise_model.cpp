@@ -5,6 +5,7 @@
 #include <cmath>
 #include <cstdint>
 #include <limits>
+#include <optional>
 #include <stdexcept>
 
 #include <Eigen/Dense>
@@ -115,45 +116,23 @@ class EstimateCorrelation {
         A(g, static_cast<Eigen::Index>(i)) = s4 / (m[i] * m[i] * sin2);
       }
     }
-    Eigen::VectorXd w(count);
-    // The corrections where both points are fast run over the grid's first min(fast_until) rows:
-    // a running sum of w / sin⁴ π ν makes each one a lookup.
-    std::vector<double> running(static_cast<std::size_t>(count) + 1);
-    for (int t = 0; t < kSpectral; ++t) {
-      for (int u = t; u < kSpectral; ++u) {
-        running[0] = 0;
-        for (Eigen::Index g = 0; g < count; ++g) {
-          const auto gi = static_cast<std::size_t>(g);
-          w(g) = (t == u ? 1.0 : 2.0) * spectra(g, t) * spectra(g, u) * weight[gi];
-          running[gi + 1] = running[gi] + w(g) / (s2[gi] * s2[gi]);
-        }
-        Eigen::MatrixXd I = A.transpose() * w.asDiagonal() * A;
-        for (std::size_t i = 0; i < n; ++i) {
-          for (std::size_t j = i; j < n; ++j) {
-            const double ratio = std::log2(m[j] / m[i]);
-            const long apart = std::lround(std::abs(ratio));
-            if (apart > 1 || std::abs(std::abs(ratio) - static_cast<double>(apart)) > 1e-9) {
-              continue;
-            }
-            const double excess = apart == 0 ? 35.0 / 128 - 9.0 / 64 : 7.0 / 64 - 9.0 / 64;
-            const double sum = excess * running[std::min(fast_until[i], fast_until[j])] /
-                               (m[i] * m[i] * m[j] * m[j]);
-            I(static_cast<Eigen::Index>(i), static_cast<Eigen::Index>(j)) += sum;
-            if (i != j) I(static_cast<Eigen::Index>(j), static_cast<Eigen::Index>(i)) += sum;
-          }
-        }
-        products_.push_back(std::move(I));
-      }
-    }
+    m_ = std::move(m);
+    A_ = std::move(A);
+    spectra_ = std::move(spectra);
+    s2_ = std::move(s2);
+    weight_ = std::move(weight);
+    fast_until_ = std::move(fast_until);
+    products_.resize(kSpectral * (kSpectral + 1) / 2);
   }
 
   Eigen::MatrixXd operator()(const std::array<double, kNoiseTerms>& c) const {
-    Eigen::MatrixXd I = Eigen::MatrixXd::Zero(products_.front().rows(), products_.front().cols());
+    const auto n = static_cast<Eigen::Index>(m_.size());
+    Eigen::MatrixXd I = Eigen::MatrixXd::Zero(n, n);
     std::size_t k = 0;
     for (int t = 0; t < kSpectral; ++t) {
       for (int u = t; u < kSpectral; ++u, ++k) {
         const double cc = c[static_cast<std::size_t>(t)] * c[static_cast<std::size_t>(u)];
-        if (cc != 0) I += cc * products_[k];
+        if (cc != 0) I += cc * Product(t, u, k);
       }
     }
     Eigen::MatrixXd rho(I.rows(), I.cols());
@@ -166,8 +145,71 @@ class EstimateCorrelation {
   }
 
  private:
-  std::vector<Eigen::MatrixXd> products_;  // I_tu, t ≤ u, row by row
+  // I_tu (the k-th of the pairs t ≤ u, row by row), made when a fit first weighs by it: a term
+  // whose estimate stays at or below 0 never needs its four.
+  const Eigen::MatrixXd& Product(int t, int u, std::size_t k) const {
+    std::optional<Eigen::MatrixXd>& product = products_[k];
+    if (product) return *product;
+    const std::size_t n = m_.size();
+    const Eigen::Index count = A_.rows();
+    const std::vector<double>& m = m_;
+    Eigen::VectorXd w(count);
+    // The corrections where both points are fast run over the grid's first min(fast_until) rows:
+    // a running sum of w / sin⁴ π ν makes each one a lookup.
+    std::vector<double> running(static_cast<std::size_t>(count) + 1);
+    running[0] = 0;
+    for (Eigen::Index g = 0; g < count; ++g) {
+      const auto gi = static_cast<std::size_t>(g);
+      w(g) = (t == u ? 1.0 : 2.0) * spectra_(g, t) * spectra_(g, u) * weight_[gi];
+      running[gi + 1] = running[gi] + w(g) / (s2_[gi] * s2_[gi]);
+    }
+    Eigen::MatrixXd I = A_.transpose() * w.asDiagonal() * A_;
+    for (std::size_t i = 0; i < n; ++i) {
+      for (std::size_t j = i; j < n; ++j) {
+        const double ratio = std::log2(m[j] / m[i]);
+        const long apart = std::lround(std::abs(ratio));
+        if (apart > 1 || std::abs(std::abs(ratio) - static_cast<double>(apart)) > 1e-9) {
+          continue;
+        }
+        const double excess = apart == 0 ? 35.0 / 128 - 9.0 / 64 : 7.0 / 64 - 9.0 / 64;
+        const double sum = excess * running[std::min(fast_until_[i], fast_until_[j])] /
+                           (m[i] * m[i] * m[j] * m[j]);
+        I(static_cast<Eigen::Index>(i), static_cast<Eigen::Index>(j)) += sum;
+        if (i != j) I(static_cast<Eigen::Index>(j), static_cast<Eigen::Index>(i)) += sum;
+      }
+    }
+    product = std::move(I);
+    return *product;
+  }
+
+  std::vector<double> m_;                // the points' m
+  Eigen::MatrixXd A_, spectra_;          // a_i on the grid; s_t(ν) of the spectral terms
+  std::vector<double> s2_, weight_;      // sin² π ν; ν dln ν
+  std::vector<std::size_t> fast_until_;  // per point: grid indices below are fast
+  mutable std::vector<std::optional<Eigen::MatrixXd>> products_;
 };
+
+// The correlation's products depend on the points' m and τ₀ alone, which the axes of one log
+// share: the last one made is kept (per thread) and made again only for other m or τ₀.
+const EstimateCorrelation& CorrelationFor(const std::vector<AllanPoint>& points) {
+  struct Cached {
+    double tau0 = 0;
+    std::vector<std::uint64_t> m;
+    std::optional<EstimateCorrelation> correlation;
+  };
+  thread_local Cached cached;
+  const double tau0 = points.front().tau_s / static_cast<double>(points.front().m);
+  bool same = cached.correlation && cached.tau0 == tau0 && cached.m.size() == points.size();
+  for (std::size_t i = 0; same && i < points.size(); ++i) same = cached.m[i] == points[i].m;
+  if (!same) {
+    cached.correlation.reset();
+    cached.tau0 = tau0;
+    cached.m.clear();
+    for (const AllanPoint& p : points) cached.m.push_back(p.m);
+    cached.correlation.emplace(points);
+  }
+  return *cached.correlation;
+}
 
 }  // namespace
 
@@ -274,7 +316,7 @@ NoiseModelFit FitNear1(const std::vector<AllanPoint>& points, const NoiseFitOpti
   // Columns scaled to unit norm for the solves (τ⁻² to τ² span many decades).
   const Eigen::VectorXd scale = G.colwise().norm().transpose();
   const Eigen::MatrixXd Gs = G * scale.cwiseInverse().asDiagonal();
-  const EstimateCorrelation correlation(points);
+  const EstimateCorrelation& correlation = CorrelationFor(points);
 
   NoiseModelFit out;
   out.points = points;

@@ -2,6 +2,7 @@
 // noise of known Allan variance, and the coverage of its confidence intervals.
 #include "accelcal/allan.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <random>
@@ -77,6 +78,36 @@ TEST(Allan, StreamedInPiecesIsTheSame) {
   for (std::size_t j = 0; j < whole.size(); ++j) EXPECT_EQ(whole[j].avar, streamed[j].avar);
 }
 
+// Add sums level 0 over chunks of 4096 samples, reading the ring for the terms that reach back
+// before a chunk: across chunks, and one sample at a time, the sums are the same to the bit.
+TEST(Allan, ChunksAndSingleSamplesGiveTheSameBits) {
+  const std::vector<double> y = WhiteNoise(10000, 0.7, 3);
+  for (std::uint64_t R : {1u, 32u, 8192u}) {
+    AllanOptions options;
+    options.sample_period_s = 0.01;
+    options.full_overlap_up_to = R;
+    AllanAccumulator single(options), pieces(options);
+    for (double v : y) single.Add(v);
+    for (std::size_t k = 0; k < y.size();) {
+      const std::size_t n = std::min<std::size_t>(1 + (k * 7919) % 5000, y.size() - k);
+      pieces.Add(y.data() + k, n);
+      k += n;
+    }
+    const std::vector<AllanPoint> whole = AllanVariance(y, options);
+    for (const AllanAccumulator* other : {&single, &pieces}) {
+      const std::vector<AllanPoint> points = other->Points();
+      ASSERT_EQ(points.size(), whole.size()) << "R " << R;
+      for (std::size_t j = 0; j < whole.size(); ++j) {
+        EXPECT_EQ(points[j].avar, whole[j].avar) << "R " << R << " m " << whole[j].m;
+        EXPECT_EQ(points[j].terms, whole[j].terms) << "R " << R << " m " << whole[j].m;
+      }
+    }
+    for (const AllanPoint& p : whole) {
+      EXPECT_NEAR(p.avar, DirectAvar(y, p.m, p.stride), 1e-12 * p.avar) << "R " << R;
+    }
+  }
+}
+
 TEST(Allan, RefusesWhatItCannotUse) {
   AllanOptions options;
   for (double period : {0.0, -1.0, std::nan(""), HUGE_VAL}) {
@@ -96,6 +127,18 @@ TEST(Allan, RefusesWhatItCannotUse) {
     FAIL() << "a NaN sample was taken";
   } catch (const std::invalid_argument& e) {
     EXPECT_NE(std::string(e.what()).find("sample 2"), std::string::npos) << e.what();
+  }
+  {
+    // A sample not finite within a long block: those before it are taken, as one at a time.
+    std::vector<double> y = WhiteNoise(6000, 1.0, 4);
+    y[5000] = HUGE_VAL;
+    AllanAccumulator block(options), before(options);
+    EXPECT_THROW(block.Add(y.data(), y.size()), std::invalid_argument);
+    before.Add(y.data(), 5000);
+    EXPECT_EQ(block.samples(), 5000u);
+    const std::vector<AllanPoint> p = block.Points(), q = before.Points();
+    ASSERT_EQ(p.size(), q.size());
+    for (std::size_t j = 0; j < p.size(); ++j) EXPECT_EQ(p[j].avar, q[j].avar);
   }
   EXPECT_TRUE(a.Points().empty()) << "one sample: no m with 4 m ≤ n";
 }

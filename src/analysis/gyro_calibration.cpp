@@ -525,6 +525,70 @@ void CheckFit(const RawLog& accel, const RawLog& gyro, const std::vector<Positio
   }
 }
 
+namespace {
+
+// The gyroscope's offsets over temperature, from the still means of the rates as read, and in
+// `corrected` every rate sample with them taken out at its temperature.
+GyroThermal FitThermalOffsets(const RawLog& accel, const RawLog& raw_gyro,
+                              const std::vector<Position>& positions,
+                              const CalibrationResult& accel_cal,
+                              const GyroCalibrationOptions& options,
+                              const std::optional<GyroModelKind>& model, RawLog* corrected) {
+  if (options.estimator == GyroEstimator::kJoint) {
+    throw std::invalid_argument(
+        "CalibrateGyro: the joint estimator refits the accelerometer's parameters as "
+        "constants; with the offsets over temperature use the two-stage one");
+  }
+  const Built as_read = BuildData(accel, raw_gyro, positions, accel_cal, options);
+  const std::vector<double> t_c = GyroSampleTemperatures(raw_gyro, accel);
+  std::vector<double> position_t_c;
+  for (const internal::GyroStill& still : as_read.data.stills) {
+    const StaticInterval& run = as_read.still_runs[still.position];
+    double sum = 0;
+    for (std::size_t k = run.begin; k < run.end; ++k) sum += t_c[k];
+    position_t_c.push_back(sum / static_cast<double>(run.end - run.begin));
+  }
+  GyroThermal thermal = internal::FitGyroThermal(as_read.data.stills, position_t_c,
+                                                 *options.thermal, model != GyroModelKind::kLinear);
+  thermal.temperature_source = GyroTemperatureSource(raw_gyro, accel);
+  *corrected = raw_gyro;
+  for (std::size_t k = 0; k < corrected->samples.size(); ++k) {
+    corrected->samples[k] -= thermal.bias.OffsetChange(t_c[k]);
+  }
+  return thermal;
+}
+
+// The automatic choice between the linear model (fits[0]) and the g-sensitive one (fits[1]):
+// the index of the one chosen, and in `reason` why.
+std::size_t ChooseModel(const std::vector<ModelFit>& fits, std::string* reason) {
+  // The paired comparison of the held-out errors, turn by turn (as the accelerometer's
+  // automatic model choice): d_k = e_lin,k² − e_gs,k², g-sensitive when mean(d) exceeds
+  // t_{n−1}(0.95) · sd(d)/√n.
+  const std::size_t n = fits[0].heldout.size();
+  double mean = 0, var = 0;
+  for (std::size_t k = 0; k < n; ++k) {
+    mean += fits[0].heldout[k] * fits[0].heldout[k] - fits[1].heldout[k] * fits[1].heldout[k];
+  }
+  mean /= static_cast<double>(n);
+  for (std::size_t k = 0; k < n; ++k) {
+    const double d =
+        fits[0].heldout[k] * fits[0].heldout[k] - fits[1].heldout[k] * fits[1].heldout[k];
+    var += (d - mean) * (d - mean);
+  }
+  const double se = std::sqrt(var / static_cast<double>(n - 1) / static_cast<double>(n));
+  const double threshold =
+      internal::StudentTTwoSidedQuantile(0.10, static_cast<double>(n - 1)) * se;
+  const std::size_t chosen = mean > threshold ? 1 : 0;
+  *reason = internal::Format(
+      "held-out RMS %.3g° (linear) against %.3g° (g-sensitive); the mean of the paired "
+      "differences of squares %.3g deg² %s the threshold %.3g deg² (t · standard error)",
+      RmsDeg(fits[0].heldout), RmsDeg(fits[1].heldout), mean * kRadToDeg * kRadToDeg,
+      chosen == 1 ? "exceeds" : "does not exceed", threshold * kRadToDeg * kRadToDeg);
+  return chosen;
+}
+
+}  // namespace
+
 GyroCalibration CalibrateGyro(const RawLog& accel, const RawLog& raw_gyro,
                               const std::vector<Position>& positions,
                               const CalibrationResult& accel_cal,
@@ -539,32 +603,12 @@ GyroCalibration CalibrateGyro(const RawLog& accel, const RawLog& raw_gyro,
     throw std::invalid_argument("CalibrateGyro: the automatic model choice needs validation");
   }
   CheckGyroClock(accel, raw_gyro);
-  // The offsets over temperature first, from the still means of the rates as read; then every
-  // rate sample with them taken out at its temperature, and the calibration as without.
-  std::optional<GyroThermal> thermal;
+  // The offsets over temperature first; then every rate sample with them taken out at its
+  // temperature, and the calibration as without.
   RawLog corrected;
+  std::optional<GyroThermal> thermal;
   if (options.thermal) {
-    if (options.estimator == GyroEstimator::kJoint) {
-      throw std::invalid_argument(
-          "CalibrateGyro: the joint estimator refits the accelerometer's parameters as "
-          "constants; with the offsets over temperature use the two-stage one");
-    }
-    const Built as_read = BuildData(accel, raw_gyro, positions, accel_cal, options);
-    const std::vector<double> t_c = GyroSampleTemperatures(raw_gyro, accel);
-    std::vector<double> position_t_c;
-    for (const internal::GyroStill& still : as_read.data.stills) {
-      const StaticInterval& run = as_read.still_runs[still.position];
-      double sum = 0;
-      for (std::size_t k = run.begin; k < run.end; ++k) sum += t_c[k];
-      position_t_c.push_back(sum / static_cast<double>(run.end - run.begin));
-    }
-    thermal = internal::FitGyroThermal(as_read.data.stills, position_t_c, *options.thermal,
-                                       model != GyroModelKind::kLinear);
-    thermal->temperature_source = GyroTemperatureSource(raw_gyro, accel);
-    corrected = raw_gyro;
-    for (std::size_t k = 0; k < corrected.samples.size(); ++k) {
-      corrected.samples[k] -= thermal->bias.OffsetChange(t_c[k]);
-    }
+    thermal = FitThermalOffsets(accel, raw_gyro, positions, accel_cal, options, model, &corrected);
   }
   const RawLog& gyro = options.thermal ? corrected : raw_gyro;
   Built built = BuildData(accel, gyro, positions, accel_cal, options);
@@ -623,29 +667,7 @@ GyroCalibration CalibrateGyro(const RawLog& accel, const RawLog& raw_gyro,
   if (model) {
     result.model_reason = imutk ? "imu_tk's method: no g-sensitivity" : "given";
   } else {
-    // The paired comparison of the held-out errors, turn by turn (as the accelerometer's
-    // automatic model choice): d_k = e_lin,k² − e_gs,k², g-sensitive when mean(d) exceeds
-    // t_{n−1}(0.95) · sd(d)/√n.
-    const std::size_t n = fits[0].heldout.size();
-    double mean = 0, var = 0;
-    for (std::size_t k = 0; k < n; ++k) {
-      mean += fits[0].heldout[k] * fits[0].heldout[k] - fits[1].heldout[k] * fits[1].heldout[k];
-    }
-    mean /= static_cast<double>(n);
-    for (std::size_t k = 0; k < n; ++k) {
-      const double d =
-          fits[0].heldout[k] * fits[0].heldout[k] - fits[1].heldout[k] * fits[1].heldout[k];
-      var += (d - mean) * (d - mean);
-    }
-    const double se = std::sqrt(var / static_cast<double>(n - 1) / static_cast<double>(n));
-    const double threshold =
-        internal::StudentTTwoSidedQuantile(0.10, static_cast<double>(n - 1)) * se;
-    chosen = mean > threshold ? 1 : 0;
-    result.model_reason = internal::Format(
-        "held-out RMS %.3g° (linear) against %.3g° (g-sensitive); the mean of the paired "
-        "differences of squares %.3g deg² %s the threshold %.3g deg² (t · standard error)",
-        RmsDeg(fits[0].heldout), RmsDeg(fits[1].heldout), mean * kRadToDeg * kRadToDeg,
-        chosen == 1 ? "exceeds" : "does not exceed", threshold * kRadToDeg * kRadToDeg);
+    chosen = ChooseModel(fits, &result.model_reason);
   }
   const ModelFit& f = fits[chosen];
   result.model = f.kind;

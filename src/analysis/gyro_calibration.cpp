@@ -365,35 +365,6 @@ bool SameTemperatureSensor(const std::string& a, const std::string& b) {
   return sensor(a) == sensor(b);
 }
 
-// The two streams must be one clock: a gyro sample at each accelerometer sample's time.
-void CheckGyroClock(const RawLog& accel, const RawLog& gyro) {
-  if (gyro.samples.size() != accel.samples.size()) {
-    throw DataError("the gyroscope's log " + gyro.source + " has " +
-                    std::to_string(gyro.samples.size()) + " samples and the accelerometer's " +
-                    std::to_string(accel.samples.size()) +
-                    ": the two streams must be on one clock, a rate sample at each "
-                    "accelerometer sample's time");
-  }
-  if (gyro.samples == accel.samples) {
-    throw DataError("the gyroscope's readings in " + gyro.source +
-                    " are the accelerometer's, value for value: its columns or its file are the "
-                    "accelerometer's");
-  }
-  if (gyro.time_s.empty() || accel.time_s.empty()) return;  // same rows of one file
-  const double step = accel.time ? accel.time->typical_step_s : 0.0;
-  const double origin_offset =
-      (gyro.time ? gyro.time->origin_s : 0.0) - (accel.time ? accel.time->origin_s : 0.0);
-  for (std::size_t k = 0; k < gyro.time_s.size(); ++k) {
-    const double d = gyro.time_s[k] + origin_offset - accel.time_s[k];
-    if (!(std::abs(d) <= 0.5 * step)) {
-      throw DataError("the gyroscope's sample " + std::to_string(k + 1) + " (line " +
-                      std::to_string(gyro.line.empty() ? k + 1 : gyro.line[k]) + " of " +
-                      gyro.source + ") is " + Num(d, 6) +
-                      " s from the accelerometer's: the two streams must be on one clock");
-    }
-  }
-}
-
 // The chosen fit's checks: each turn's residual, held-out error and angle turned, the
 // covariance (the accelerometer's too, when refitted jointly), and the angle the gyro turned in
 // each position outside its still run.

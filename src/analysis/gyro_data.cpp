@@ -1,5 +1,6 @@
 // The gyroscope's data from a recording (gyro_data.hpp): the still rates, the turns between
-// positions and where the gyro is still, checked for gaps and saturation.
+// positions and where the gyro is still, checked for gaps and saturation, and the check that the
+// gyroscope's log and the accelerometer's are on one clock (CheckGyroClock).
 #include "analysis/gyro_data.hpp"
 
 #include <algorithm>
@@ -135,6 +136,109 @@ std::string LineOf(const RawLog& log, std::size_t k) {
   return std::to_string(log.line.empty() ? k + 1 : log.line[k]);
 }
 
+// Every position has an interval of the log, within the gyroscope's, in time order.
+void CheckPositions(const std::vector<Position>& positions, const RawLog& gyro) {
+  const std::size_t m = positions.size();
+  for (std::size_t i = 0; i < m; ++i) {
+    if (!positions[i].interval) {
+      throw DataError("position " + std::to_string(i + 1) +
+                      " has no interval of the log: the gyroscope is calibrated from a raw log "
+                      "only");
+    }
+    if (i > 0 && positions[i].interval->begin < positions[i - 1].interval->end) {
+      throw DataError(
+          "the positions are not in time order: the gyroscope is calibrated from "
+          "one raw log");
+    }
+    if (positions[i].interval->end > gyro.samples.size()) {
+      throw DataError("position " + std::to_string(i + 1) + " ends beyond the gyroscope's log");
+    }
+  }
+}
+
+// The smallest step each axis makes anywhere (its resolution, when quantised).
+Vec3 Quantum(const std::vector<Vec3>& samples) {
+  Vec3 quantum = Vec3::Constant(std::numeric_limits<double>::infinity());
+  for (std::size_t k = 1; k < samples.size(); ++k) {
+    for (int a = 0; a < 3; ++a) {
+      const double d = std::abs(samples[k](a) - samples[k - 1](a));
+      if (d > 0 && d < quantum(a)) quantum(a) = d;
+    }
+  }
+  return quantum;
+}
+
+// A saturated axis holds its extreme for several samples, entered or left steeply; the peak of
+// a smooth turn on a quantised axis may repeat its extreme too, but the steps around it are of
+// the noise's and the resolution's size.
+// Per axis, the run at the extreme and the step into or out of it that mark saturation.
+// And on an axis whose noise is four resolution steps or more, a plateau (a rail with noise
+// of its own): `band` its width, `plateau_run` its length.
+struct Saturation {
+  Saturation(const std::vector<Vec3>& samples, const Vec3& quantum, const Vec3& noise_sigma_raw)
+      : lo(samples.front()), hi(samples.front()) {
+    for (const Vec3& s : samples) {
+      lo = lo.cwiseMin(s);
+      hi = hi.cwiseMax(s);
+    }
+    const auto run_for = [](double p) {
+      const double length = 1 + std::log(kSaturationFalseAlarm) / std::log(p);
+      return std::max(kSaturatedRun, static_cast<std::size_t>(std::ceil(length)));
+    };
+    for (int a = 0; a < 3; ++a) {
+      const double sigma = noise_sigma_raw(a);
+      plateau_run[a] = run_for(kRailBand / std::sqrt(2 * kPi));
+      if (!std::isfinite(quantum(a)) || std::sqrt(2.0) * sigma >= quantum(a)) {
+        min_run[a] = run_for(std::min(0.5, quantum(a) / (2 * std::sqrt(kPi) * sigma)));
+        steep(a) = -1.0;
+        if (!(kRailBand * sigma <= quantum(a))) band(a) = kRailBand * sigma;
+      } else {
+        min_run[a] = kSaturatedRun;
+        steep(a) = kSaturationSteepness * quantum(a);
+      }
+    }
+  }
+
+  // Refuses a turn (samples first..last, from position i to next) on an axis that saturated.
+  void Refuse(const RawLog& gyro, std::size_t first, std::size_t last, std::size_t i,
+              std::size_t next) const;
+
+  Vec3 lo, hi;  // the log's extremes
+  std::size_t min_run[3], plateau_run[3];
+  Vec3 steep, band = Vec3::Zero();
+};
+
+void Saturation::Refuse(const RawLog& gyro, std::size_t first, std::size_t last, std::size_t i,
+                        std::size_t next) const {
+  for (int a = 0; a < 3; ++a) {
+    if (const std::optional<ClippedRun> run =
+            FindClippedRun(gyro.samples, first, last, a, lo(a), hi(a), min_run[a], steep(a))) {
+      throw DataError("the gyroscope's " + AxisName(a) + " axis holds the log's extreme (" +
+                      Num(gyro.samples[run->begin](a), 6) + ") for " +
+                      std::to_string(run->end - run->begin) +
+                      " samples in a row during the turn from position " + std::to_string(i + 1) +
+                      " to " + std::to_string(next + 1) + " (lines " + LineOf(gyro, run->begin) +
+                      "-" + LineOf(gyro, run->end - 1) + " of " + gyro.source +
+                      "): it saturated, so the turn's angle is wrong");
+    }
+    if (band(a) > 0) {
+      if (const std::optional<ClippedRun> run = FindClippedRun(
+              gyro.samples, first, last, a, lo(a), hi(a), plateau_run[a], -1.0, band(a))) {
+        const bool top = gyro.samples[run->begin](a) >= hi(a) - band(a);
+        throw DataError(
+            "the gyroscope's " + AxisName(a) + " axis stays within " + Num(band(a), 3) +
+            " (a quarter of its noise) of the log's extreme (" + Num(top ? hi(a) : lo(a), 6) +
+            ") for " + std::to_string(run->end - run->begin) +
+            " samples in a row during the turn from position " + std::to_string(i + 1) + " to " +
+            std::to_string(next + 1) + " (lines " + LineOf(gyro, run->begin) + "-" +
+            LineOf(gyro, run->end - 1) + " of " + gyro.source +
+            "), a flat plateau where a turn's peak is round: it saturated, so the turn's angle "
+            "is wrong");
+      }
+    }
+  }
+}
+
 }  // namespace
 
 namespace internal {
@@ -176,29 +280,8 @@ Built BuildData(const RawLog& accel, const RawLog& gyro, const std::vector<Posit
     throw std::invalid_argument("CalibrateGyro: " + std::to_string(m) + " positions and " +
                                 std::to_string(accel_cal.directions.size()) + " directions");
   }
-  for (std::size_t i = 0; i < m; ++i) {
-    if (!positions[i].interval) {
-      throw DataError("position " + std::to_string(i + 1) +
-                      " has no interval of the log: the gyroscope is calibrated from a raw log "
-                      "only");
-    }
-    if (i > 0 && positions[i].interval->begin < positions[i - 1].interval->end) {
-      throw DataError(
-          "the positions are not in time order: the gyroscope is calibrated from "
-          "one raw log");
-    }
-    if (positions[i].interval->end > gyro.samples.size()) {
-      throw DataError("position " + std::to_string(i + 1) + " ends beyond the gyroscope's log");
-    }
-  }
-  // The smallest step each axis makes anywhere (its resolution, when quantised).
-  Vec3 quantum = Vec3::Constant(std::numeric_limits<double>::infinity());
-  for (std::size_t k = 1; k < gyro.samples.size(); ++k) {
-    for (int a = 0; a < 3; ++a) {
-      const double d = std::abs(gyro.samples[k](a) - gyro.samples[k - 1](a));
-      if (d > 0 && d < quantum(a)) quantum(a) = d;
-    }
-  }
+  CheckPositions(positions, gyro);
+  const Vec3 quantum = Quantum(gyro.samples);
   const double typical_step = gyro.time      ? gyro.time->typical_step_s
                               : accel.time   ? accel.time->typical_step_s
                               : gyro.rate_hz ? 1.0 / *gyro.rate_hz
@@ -272,35 +355,7 @@ Built BuildData(const RawLog& accel, const RawLog& gyro, const std::vector<Posit
   // The turns: from the last still sample of one position to the first of the next.
   b.t = IntegrationTimes(gyro, accel);
   const std::vector<double>& t = b.t;
-  Vec3 lo = gyro.samples.front(), hi = lo;
-  for (const Vec3& s : gyro.samples) {
-    lo = lo.cwiseMin(s);
-    hi = hi.cwiseMax(s);
-  }
-  // A saturated axis holds its extreme for several samples, entered or left steeply; the peak of
-  // a smooth turn on a quantised axis may repeat its extreme too, but the steps around it are of
-  // the noise's and the resolution's size.
-  // Per axis, the run at the extreme and the step into or out of it that mark saturation.
-  // And on an axis whose noise is four resolution steps or more, a plateau (a rail with noise
-  // of its own): `band` its width, `plateau_run` its length.
-  const auto run_for = [](double p) {
-    const double length = 1 + std::log(kSaturationFalseAlarm) / std::log(p);
-    return std::max(kSaturatedRun, static_cast<std::size_t>(std::ceil(length)));
-  };
-  std::size_t min_run[3], plateau_run[3];
-  Vec3 steep, band = Vec3::Zero();
-  for (int a = 0; a < 3; ++a) {
-    const double sigma = data.noise_sigma_raw(a);
-    plateau_run[a] = run_for(kRailBand / std::sqrt(2 * kPi));
-    if (!std::isfinite(quantum(a)) || std::sqrt(2.0) * sigma >= quantum(a)) {
-      min_run[a] = run_for(std::min(0.5, quantum(a) / (2 * std::sqrt(kPi) * sigma)));
-      steep(a) = -1.0;
-      if (!(kRailBand * sigma <= quantum(a))) band(a) = kRailBand * sigma;
-    } else {
-      min_run[a] = kSaturatedRun;
-      steep(a) = kSaturationSteepness * quantum(a);
-    }
-  }
+  const Saturation saturation(gyro.samples, quantum, data.noise_sigma_raw);
   // The samples of a still span a turn's mean orientation is taken over (below), and whether a
   // span wobbles enough for it.
   const auto span = static_cast<std::size_t>(
@@ -348,33 +403,7 @@ Built BuildData(const RawLog& accel, const RawLog& gyro, const std::vector<Posit
                         gyro.source + "): its rotation cannot be integrated");
       }
     }
-    for (int a = 0; a < 3; ++a) {
-      if (const std::optional<ClippedRun> run =
-              FindClippedRun(gyro.samples, first, last, a, lo(a), hi(a), min_run[a], steep(a))) {
-        throw DataError("the gyroscope's " + AxisName(a) + " axis holds the log's extreme (" +
-                        Num(gyro.samples[run->begin](a), 6) + ") for " +
-                        std::to_string(run->end - run->begin) +
-                        " samples in a row during the turn from position " + std::to_string(i + 1) +
-                        " to " + std::to_string(next + 1) + " (lines " + LineOf(gyro, run->begin) +
-                        "-" + LineOf(gyro, run->end - 1) + " of " + gyro.source +
-                        "): it saturated, so the turn's angle is wrong");
-      }
-      if (band(a) > 0) {
-        if (const std::optional<ClippedRun> run = FindClippedRun(
-                gyro.samples, first, last, a, lo(a), hi(a), plateau_run[a], -1.0, band(a))) {
-          const bool top = gyro.samples[run->begin](a) >= hi(a) - band(a);
-          throw DataError(
-              "the gyroscope's " + AxisName(a) + " axis stays within " + Num(band(a), 3) +
-              " (a quarter of its noise) of the log's extreme (" + Num(top ? hi(a) : lo(a), 6) +
-              ") for " + std::to_string(run->end - run->begin) +
-              " samples in a row during the turn from position " + std::to_string(i + 1) + " to " +
-              std::to_string(next + 1) + " (lines " + LineOf(gyro, run->begin) + "-" +
-              LineOf(gyro, run->end - 1) + " of " + gyro.source +
-              "), a flat plateau where a turn's peak is round: it saturated, so the turn's angle "
-              "is wrong");
-        }
-      }
-    }
+    saturation.Refuse(gyro, first, last, i, next);
     GyroRotation r;
     r.from = i;
     r.to = next;
@@ -388,5 +417,34 @@ Built BuildData(const RawLog& accel, const RawLog& gyro, const std::vector<Posit
 }
 
 }  // namespace internal
+
+// The two streams must be one clock: a gyro sample at each accelerometer sample's time.
+void CheckGyroClock(const RawLog& accel, const RawLog& gyro) {
+  if (gyro.samples.size() != accel.samples.size()) {
+    throw DataError("the gyroscope's log " + gyro.source + " has " +
+                    std::to_string(gyro.samples.size()) + " samples and the accelerometer's " +
+                    std::to_string(accel.samples.size()) +
+                    ": the two streams must be on one clock, a rate sample at each "
+                    "accelerometer sample's time");
+  }
+  if (gyro.samples == accel.samples) {
+    throw DataError("the gyroscope's readings in " + gyro.source +
+                    " are the accelerometer's, value for value: its columns or its file are the "
+                    "accelerometer's");
+  }
+  if (gyro.time_s.empty() || accel.time_s.empty()) return;  // same rows of one file
+  const double step = accel.time ? accel.time->typical_step_s : 0.0;
+  const double origin_offset =
+      (gyro.time ? gyro.time->origin_s : 0.0) - (accel.time ? accel.time->origin_s : 0.0);
+  for (std::size_t k = 0; k < gyro.time_s.size(); ++k) {
+    const double d = gyro.time_s[k] + origin_offset - accel.time_s[k];
+    if (!(std::abs(d) <= 0.5 * step)) {
+      throw DataError("the gyroscope's sample " + std::to_string(k + 1) + " (line " +
+                      std::to_string(gyro.line.empty() ? k + 1 : gyro.line[k]) + " of " +
+                      gyro.source + ") is " + Num(d, 6) +
+                      " s from the accelerometer's: the two streams must be on one clock");
+    }
+  }
+}
 
 }  // namespace accelcal

@@ -345,6 +345,88 @@ void LeaveOutCutLine(std::string_view* block, std::uint32_t lines_before, std::u
       number);
 }
 
+// The header: a first line with a field that is not a number (`has_header`), or a comment just
+// above the first row; empty when there is none.
+std::vector<std::string> HeaderOf(const std::string_view* fields, std::size_t ncols,
+                                  std::string_view preceding_comment, bool* has_header) {
+  std::vector<std::string> header;
+  for (std::size_t i = 0; i < ncols; ++i) {
+    double v;
+    if (!ParseNumber(fields[i], &v)) *has_header = true;
+  }
+  if (*has_header) {
+    for (std::size_t i = 0; i < ncols; ++i) header.push_back(Normalise(fields[i]));
+  } else if (!preceding_comment.empty()) {
+    // A comment line just above the first row that names as many columns as it has, none a
+    // number, is the header ("# time tx ty tz").
+    std::string_view names[kMaxFields];
+    const std::string_view comment = preceding_comment;
+    const Delimiter comment_delim =
+        comment.find(',') != std::string_view::npos ? Delimiter::kComma : Delimiter::kWhitespace;
+    if (Split(comment, comment_delim, names, kMaxFields) == ncols &&
+        std::none_of(names, names + ncols, [](std::string_view f) {
+          double v;
+          return f.empty() || ParseNumber(f, &v);
+        })) {
+      for (std::size_t i = 0; i < ncols; ++i) header.push_back(Normalise(names[i]));
+    }
+  }
+  return header;
+}
+
+// The input's kind: the one given, else what the header names, else a raw log when a rate was
+// given or the file has more rows (`count_rows`) than a positions file.
+void ChooseKind(const ReadOptions& options, const Layout& named,
+                const std::vector<std::string>& header,
+                const std::function<std::size_t()>& count_rows, InputData* data) {
+  std::size_t rows = 0;
+  if (options.kind != InputKind::kAuto) {
+    data->kind = options.kind;
+    data->kind_reason = "given";
+  } else if (named.column[kTime] >= 0) {
+    data->kind = InputKind::kRaw;
+    data->kind_reason = "auto: the header names a time column";
+  } else if (NamesPositionsColumns(header)) {
+    // Only averaged readings carry a sample count and standard deviations, however many rows.
+    data->kind = InputKind::kPositions;
+    data->kind_reason = "auto: the header is a positions file's (n, sx, sy, sz)";
+  } else if (options.rate_hz) {  // a sample rate belongs to a raw log, however short
+    data->kind = InputKind::kRaw;
+    data->kind_reason = "auto: a sample rate was given: a raw log";
+  } else if ((rows = count_rows()) <= options.max_rows_of_positions_file) {
+    data->kind = InputKind::kPositions;
+    data->kind_from_row_count = true;
+    data->kind_reason = "auto: " + std::to_string(rows) +
+                        " rows <= " + std::to_string(options.max_rows_of_positions_file) +
+                        " is a positions file (input kind \"raw\" to override)";
+  } else {
+    data->kind = InputKind::kRaw;
+    data->kind_reason = "auto: more than " + std::to_string(options.max_rows_of_positions_file) +
+                        " rows is a raw log";
+  }
+}
+
+// Another stream of this file (the accelerometer's beside the gyroscope's, `other_columns`): no
+// column both.
+void RefuseSharedColumns(const std::vector<std::string>& other_columns,
+                         const std::vector<std::string>& header, const Layout& named,
+                         std::size_t ncols, const std::string& source, std::uint32_t first_line,
+                         const Layout& layout) {
+  const Layout other = ChooseLayout(other_columns, header, named, ncols, true, source, first_line);
+  for (int a = kX; a <= kZ; ++a) {
+    for (int b = kX; b <= kZ; ++b) {
+      if (layout.column[a] == other.column[b]) {
+        throw InputError(source, 0,
+                         "the columns option reads column " + std::to_string(layout.column[a] + 1) +
+                             ColumnName(header, layout.column[a]) + " as its " +
+                             std::string(1, "xyz"[a - kX]) +
+                             ", which the other stream of this file reads as its " +
+                             std::string(1, "xyz"[b - kX]) + ": each needs its own columns");
+      }
+    }
+  }
+}
+
 }  // namespace
 
 std::string ShortNumber(double v) {
@@ -382,30 +464,9 @@ InputData ParseBlocks(TextBlocks& blocks, const std::string& source, const ReadO
                      "commas?); accelcal reads commas, tabs or spaces between fields and points "
                      "in numbers");
   }
-  // A first line with a field that is not a number is a header.
   bool has_header = false;
-  std::vector<std::string> header;
-  for (std::size_t i = 0; i < ncols; ++i) {
-    double v;
-    if (!ParseNumber(fields[i], &v)) has_header = true;
-  }
-  if (has_header) {
-    for (std::size_t i = 0; i < ncols; ++i) header.push_back(Normalise(fields[i]));
-  } else if (!reader.preceding_comment().empty()) {
-    // A comment line just above the first row that names as many columns as it has, none a
-    // number, is the header ("# time tx ty tz").
-    std::string_view names[kMaxFields];
-    const std::string_view comment = reader.preceding_comment();
-    const Delimiter comment_delim =
-        comment.find(',') != std::string_view::npos ? Delimiter::kComma : Delimiter::kWhitespace;
-    if (Split(comment, comment_delim, names, kMaxFields) == ncols &&
-        std::none_of(names, names + ncols, [](std::string_view f) {
-          double v;
-          return f.empty() || ParseNumber(f, &v);
-        })) {
-      for (std::size_t i = 0; i < ncols; ++i) header.push_back(Normalise(names[i]));
-    }
-  }
+  const std::vector<std::string> header =
+      HeaderOf(fields, ncols, reader.preceding_comment(), &has_header);
   const std::uint32_t first_line = first.number;
   // A guess for reserving; capped, so that a huge file with a short first line cannot make the
   // reader ask for memory its rows will never fill (the vectors grow past it as needed).
@@ -414,37 +475,13 @@ InputData ParseBlocks(TextBlocks& blocks, const std::string& source, const ReadO
 
   const Layout named = NamedLayout(header);
   // Auto-detection needs to know only whether there are more rows than a positions file has.
-  std::size_t rows = 0;
   const auto CountRows = [&] {
     std::size_t found = 0;
     PeekRows(blocks, options.max_rows_of_positions_file + 2, source, &found);
     return has_header ? found - 1 : found;
   };
   InputData data;
-  if (options.kind != InputKind::kAuto) {
-    data.kind = options.kind;
-    data.kind_reason = "given";
-  } else if (named.column[kTime] >= 0) {
-    data.kind = InputKind::kRaw;
-    data.kind_reason = "auto: the header names a time column";
-  } else if (NamesPositionsColumns(header)) {
-    // Only averaged readings carry a sample count and standard deviations, however many rows.
-    data.kind = InputKind::kPositions;
-    data.kind_reason = "auto: the header is a positions file's (n, sx, sy, sz)";
-  } else if (options.rate_hz) {  // a sample rate belongs to a raw log, however short
-    data.kind = InputKind::kRaw;
-    data.kind_reason = "auto: a sample rate was given: a raw log";
-  } else if ((rows = CountRows()) <= options.max_rows_of_positions_file) {
-    data.kind = InputKind::kPositions;
-    data.kind_from_row_count = true;
-    data.kind_reason = "auto: " + std::to_string(rows) +
-                       " rows <= " + std::to_string(options.max_rows_of_positions_file) +
-                       " is a positions file (input kind \"raw\" to override)";
-  } else {
-    data.kind = InputKind::kRaw;
-    data.kind_reason = "auto: more than " + std::to_string(options.max_rows_of_positions_file) +
-                       " rows is a raw log";
-  }
+  ChooseKind(options, named, header, CountRows, &data);
   const bool raw = data.kind == InputKind::kRaw;
   if (!raw && options.rate_hz) {
     throw InputError(source, 0,
@@ -454,22 +491,7 @@ InputData ParseBlocks(TextBlocks& blocks, const std::string& source, const ReadO
 
   Layout layout = ChooseLayout(options.columns, header, named, ncols, raw, source, first_line);
   if (options.other_columns) {
-    // Another stream of this file (the accelerometer's beside the gyroscope's): no column both.
-    const Layout other =
-        ChooseLayout(*options.other_columns, header, named, ncols, true, source, first_line);
-    for (int a = kX; a <= kZ; ++a) {
-      for (int b = kX; b <= kZ; ++b) {
-        if (layout.column[a] == other.column[b]) {
-          throw InputError(source, 0,
-                           "the columns option reads column " +
-                               std::to_string(layout.column[a] + 1) +
-                               ColumnName(header, layout.column[a]) + " as its " +
-                               std::string(1, "xyz"[a - kX]) +
-                               ", which the other stream of this file reads as its " +
-                               std::string(1, "xyz"[b - kX]) + ": each needs its own columns");
-        }
-      }
-    }
+    RefuseSharedColumns(*options.other_columns, header, named, ncols, source, first_line, layout);
   }
   if (sink != nullptr && !raw) {
     throw InputError(source, 0, "a positions file, not a raw log (" + data.kind_reason + ")");

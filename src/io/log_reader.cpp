@@ -196,6 +196,53 @@ InputData ReadBinary(internal::InputFile& file, const std::string& path, std::st
   return internal::ReadNativeLog(in, &file, options, &path);
 }
 
+// A binary log keeps only the stream's samples (4 numbers each): read whole, one piece.
+void StreamBinary(internal::InputFile& file, const std::string& path, std::string head,
+                  const ReadOptions& read, const std::function<void(const RawLog& piece)>& sink,
+                  StreamedLog* out) {
+  const InputData data = ReadBinary(file, path, std::move(head), read);
+  out->samples = data.raw.samples.size();
+  out->rate_hz = data.raw.rate_hz;
+  out->time = data.raw.time;
+  out->read_warning = data.raw.read_warning;
+  if (out->time) {
+    for (const TimeGap& g : out->time->gaps) out->gap_lines.push_back(data.raw.line[g.index]);
+  }
+  sink(data.raw);
+}
+
+// The rows of the chosen instance (`instance_name` the file's instance column); without a
+// choice, one value throughout (`instance_seen` the first, at `instance_seen_line`), else
+// InputError.
+void KeepInstance(const ReadOptions& options, const std::string& instance_name,
+                  const std::string& source, const std::vector<double>& instances,
+                  std::optional<double>* instance_seen, std::size_t* instance_seen_line,
+                  RawLog* rows) {
+  std::size_t kept = 0;
+  for (std::size_t i = 0; i < rows->samples.size(); ++i) {
+    const double v = instances[i];
+    if (options.instance) {
+      if (v != *options.instance) continue;
+    } else if (!*instance_seen) {
+      *instance_seen = v;
+      *instance_seen_line = rows->line[i];
+    } else if (v != **instance_seen) {
+      throw InputError(source, rows->line[i],
+                       "the rows belong to more than one sensor (instance column '" +
+                           instance_name + "': " + ShortNumber(**instance_seen) + " from line " +
+                           std::to_string(*instance_seen_line) + ", " + ShortNumber(v) +
+                           " here): choose one instance");
+    }
+    if (!rows->time_s.empty()) rows->time_s[kept] = rows->time_s[i];
+    rows->samples[kept] = rows->samples[i];
+    rows->line[kept] = rows->line[i];
+    ++kept;
+  }
+  if (!rows->time_s.empty()) rows->time_s.resize(kept);
+  rows->samples.resize(kept);
+  rows->line.resize(kept);
+}
+
 }  // namespace
 
 void internal::FinishRawLog(RawLog* log, TimeUnit unit, const std::optional<double>& rate_hz,
@@ -280,16 +327,7 @@ StreamedLog StreamRawLog(const std::string& path, const ReadOptions& options,
   std::string head_bytes(16, '\0');
   head_bytes.resize(file.ReadFully(head_bytes.data(), head_bytes.size()));
   if (DetectLogFormat(head_bytes) != LogFormat::kText) {
-    // A binary log keeps only the stream's samples (4 numbers each): read whole, one piece.
-    const InputData data = ReadBinary(file, path, std::move(head_bytes), read);
-    out.samples = data.raw.samples.size();
-    out.rate_hz = data.raw.rate_hz;
-    out.time = data.raw.time;
-    out.read_warning = data.raw.read_warning;
-    if (out.time) {
-      for (const TimeGap& g : out.time->gaps) out.gap_lines.push_back(data.raw.line[g.index]);
-    }
-    sink(data.raw);
+    StreamBinary(file, path, std::move(head_bytes), read, sink, &out);
     return out;
   }
   RefuseTopicOfText(out.source, options);
@@ -372,30 +410,8 @@ StreamedLog StreamRawLog(const std::string& path, const ReadOptions& options,
       throw InputError(source, 0, kNoInstanceColumn);
     }
     if (!columns.instance_name.empty()) {
-      // The rows of the chosen instance; without a choice, one value throughout.
-      std::size_t kept = 0;
-      for (std::size_t i = 0; i < rows.samples.size(); ++i) {
-        const double v = (*instances)[i];
-        if (options.instance) {
-          if (v != *options.instance) continue;
-        } else if (!instance_seen) {
-          instance_seen = v;
-          instance_seen_line = rows.line[i];
-        } else if (v != *instance_seen) {
-          throw InputError(source, rows.line[i],
-                           "the rows belong to more than one sensor (instance column '" +
-                               columns.instance_name + "': " + ShortNumber(*instance_seen) +
-                               " from line " + std::to_string(instance_seen_line) + ", " +
-                               ShortNumber(v) + " here): choose one instance");
-        }
-        if (!rows.time_s.empty()) rows.time_s[kept] = rows.time_s[i];
-        rows.samples[kept] = rows.samples[i];
-        rows.line[kept] = rows.line[i];
-        ++kept;
-      }
-      if (!rows.time_s.empty()) rows.time_s.resize(kept);
-      rows.samples.resize(kept);
-      rows.line.resize(kept);
+      KeepInstance(options, columns.instance_name, source, *instances, &instance_seen,
+                   &instance_seen_line, &rows);
     }
     if (decided) {
       emit(rows);

@@ -239,6 +239,51 @@ void Saturation::Refuse(const RawLog& gyro, std::size_t first, std::size_t last,
   }
 }
 
+// Each still position's mean rate and the pooled sample noise, and each still mean's σ.
+void StillRates(const RawLog& gyro, const internal::GyroStillRuns& still,
+                const std::vector<std::size_t>& standing, const CalibrationResult& accel_cal,
+                const Vec3& quantum, GyroFitData* data) {
+  const std::size_t m = accel_cal.directions.size();  // the positions' count (BuildData checks)
+  Vec3 sum_sq = Vec3::Zero();
+  double dof = 0;
+  for (const std::size_t i : standing) {
+    const StaticInterval& iv = still.runs[i];
+    Vec3 mean = Vec3::Zero();
+    for (std::size_t k = iv.begin; k < iv.end; ++k) mean += gyro.samples[k];
+    const auto n = static_cast<double>(iv.end - iv.begin);
+    mean /= n;
+    for (std::size_t k = iv.begin; k < iv.end; ++k) {
+      sum_sq += (gyro.samples[k] - mean).cwiseAbs2();
+    }
+    dof += n - 1;
+    data->stills.push_back({mean, Vec3::Zero(), accel_cal.gravity * accel_cal.directions[i], i});
+  }
+  for (std::size_t i = 0; i < m; ++i) data->directions.push_back(accel_cal.directions[i]);
+  if (!(dof > 0)) throw DataError("the still positions are too short to measure the rate noise");
+  data->noise_sigma_raw = (sum_sq / dof).cwiseSqrt();
+  for (int a = 0; a < 3; ++a) {
+    if (!(data->noise_sigma_raw(a) > 0)) {
+      throw DataError("the gyroscope's " + AxisName(a) +
+                      " axis reads the same value throughout every still position: its noise, "
+                      "and so the weight of its readings, is unknown (a constant or missing "
+                      "column?)");
+    }
+  }
+  // Each still mean's σ: the noise over its samples, and at least what rounding to the axis'
+  // step leaves when the rates do not dither (statistics/rounding.hpp).
+  Vec3 rounding = Vec3::Zero();
+  for (int a = 0; a < 3; ++a) {
+    rounding(a) = internal::RoundingFloorVariance(
+        quantum(a), data->noise_sigma_raw(a) * data->noise_sigma_raw(a));
+  }
+  for (GyroStill& s : data->stills) {
+    const StaticInterval& iv = still.runs[s.position];
+    s.sigma_mean_raw =
+        (data->noise_sigma_raw.cwiseAbs2() / static_cast<double>(iv.end - iv.begin) + rounding)
+            .cwiseSqrt();
+  }
+}
+
 }  // namespace
 
 namespace internal {
@@ -313,45 +358,7 @@ Built BuildData(const RawLog& accel, const RawLog& gyro, const std::vector<Posit
                     "rates, or the two streams are far out of step");
   }
   b.still_runs = still.runs;
-  // Each still position's mean rate and the pooled sample noise.
-  Vec3 sum_sq = Vec3::Zero();
-  double dof = 0;
-  for (const std::size_t i : standing) {
-    const StaticInterval& iv = still.runs[i];
-    Vec3 mean = Vec3::Zero();
-    for (std::size_t k = iv.begin; k < iv.end; ++k) mean += gyro.samples[k];
-    const auto n = static_cast<double>(iv.end - iv.begin);
-    mean /= n;
-    for (std::size_t k = iv.begin; k < iv.end; ++k) {
-      sum_sq += (gyro.samples[k] - mean).cwiseAbs2();
-    }
-    dof += n - 1;
-    data.stills.push_back({mean, Vec3::Zero(), accel_cal.gravity * accel_cal.directions[i], i});
-  }
-  for (std::size_t i = 0; i < m; ++i) data.directions.push_back(accel_cal.directions[i]);
-  if (!(dof > 0)) throw DataError("the still positions are too short to measure the rate noise");
-  data.noise_sigma_raw = (sum_sq / dof).cwiseSqrt();
-  for (int a = 0; a < 3; ++a) {
-    if (!(data.noise_sigma_raw(a) > 0)) {
-      throw DataError("the gyroscope's " + AxisName(a) +
-                      " axis reads the same value throughout every still position: its noise, "
-                      "and so the weight of its readings, is unknown (a constant or missing "
-                      "column?)");
-    }
-  }
-  // Each still mean's σ: the noise over its samples, and at least what rounding to the axis'
-  // step leaves when the rates do not dither (statistics/rounding.hpp).
-  Vec3 rounding = Vec3::Zero();
-  for (int a = 0; a < 3; ++a) {
-    rounding(a) = internal::RoundingFloorVariance(
-        quantum(a), data.noise_sigma_raw(a) * data.noise_sigma_raw(a));
-  }
-  for (GyroStill& s : data.stills) {
-    const StaticInterval& iv = still.runs[s.position];
-    s.sigma_mean_raw =
-        (data.noise_sigma_raw.cwiseAbs2() / static_cast<double>(iv.end - iv.begin) + rounding)
-            .cwiseSqrt();
-  }
+  StillRates(gyro, still, standing, accel_cal, quantum, &data);
   // The turns: from the last still sample of one position to the first of the next.
   b.t = IntegrationTimes(gyro, accel);
   const std::vector<double>& t = b.t;

@@ -29,6 +29,7 @@
 #include "accelcal/native_log.hpp"
 #include "accelcal/sha256.hpp"
 #include "accelcal/version.hpp"
+#include "batch_units.hpp"
 #include "cli_common.hpp"
 #include "cli_options.hpp"
 #include "commands.hpp"
@@ -39,26 +40,10 @@ namespace accelcal::cli {
 namespace {
 
 using Json = nlohmann::ordered_json;
+using batch::Joined;
+using batch::Unit;
+using batch::UnitStatus;
 using internal::VisibleLine;
-
-enum class UnitStatus { kPass, kFail, kError };
-const char* Name(UnitStatus s) {
-  return s == UnitStatus::kPass ? "pass" : s == UnitStatus::kFail ? "fail" : "error";
-}
-
-struct Unit {
-  std::string id;
-  std::vector<std::string> files;
-  std::string problem;  // found before calibrating (a name the pattern does not match): an error
-  // Filled by the run.
-  int exit_status = -1;
-  bool reused = false;
-  std::string message;  // an error's, from calibrate's stderr
-  UnitStatus status = UnitStatus::kError;
-  std::optional<LoadedCalibration> calibration;
-  std::string sha256;  // of the calibration's file, the bytes judged
-  Acceptance acceptance;
-};
 
 // The regular files of `dir` whose names match `glob` (hidden ones left out), sorted by name;
 // `skipped` counts the other entries that match (directories, FIFOs, devices).
@@ -370,41 +355,8 @@ void RunUnit(const BatchArgs& args, const std::vector<InputRecord>& shared,
   }
 }
 
-std::string CsvField(const std::string& text) {
-  if (text.find_first_of(",\"\n\r") == std::string::npos) return text;
-  std::string quoted = "\"";
-  for (char c : text) {
-    if (c == '"') quoted += '"';
-    quoted += c;
-  }
-  return quoted + "\"";
-}
-
-std::string Joined(const std::vector<std::string>& items, const char* separator) {
-  std::string text;
-  for (const std::string& s : items) text += (text.empty() ? "" : separator) + s;
-  return text;
-}
-
-std::string WorstFinding(const LoadedCalibration& cal) {
-  std::optional<Severity> worst;
-  for (const Finding& f : cal.diagnostics.value_or(std::vector<Finding>())) {
-    if (!worst || f.severity > *worst) worst = f.severity;
-  }
-  return worst ? std::string(ToString(*worst)) : "none";
-}
-
-}  // namespace
-
-int RunBatch(const BatchArgs& args) {
-  // The limits first: a mistake there is found before anything is calibrated.
-  std::optional<AcceptanceLimits> limits;
-  std::string limits_sha256;  // of the bytes read (a pipe cannot be read twice)
-  if (!args.limits.empty()) {
-    const std::string text = ReadFileToString(args.limits, kMaxSmallFileBytes);
-    limits = ParseLimits(text, args.limits);
-    limits_sha256 = Sha256Hex(text);
-  }
+// The pattern --unit-id gives file names (with --unit-id-from name), and --unit-id-from checked.
+std::optional<UnitIdPattern> UnitIdPatternOf(const BatchArgs& args) {
   std::optional<UnitIdPattern> pattern;
   if (args.unit_id_given && args.unit_id.empty()) {
     throw UsageError("--unit-id is empty: give a regular expression whose first group is the id");
@@ -420,10 +372,11 @@ int RunBatch(const BatchArgs& args) {
   if (from != "name" && args.unit_id_given) {
     throw UsageError("--unit-id is a pattern on file names: it goes with --unit-id-from name");
   }
-  if (args.jobs < 0 || args.jobs > 1024) {
-    throw UsageError("--jobs " + std::to_string(args.jobs) + ": from 1 to 1024 (0: one per core)");
-  }
-  // The files: those given, and the matching regular files of each directory given.
+  return pattern;
+}
+
+// The files: those given, and the matching regular files of each directory given; each once.
+std::vector<std::string> InputFiles(const BatchArgs& args) {
   std::vector<std::string> files;
   std::vector<std::string> skipped;
   for (const std::string& input : args.inputs) {
@@ -467,9 +420,11 @@ int RunBatch(const BatchArgs& args) {
     const auto [at, fresh] = seen.emplace(std::make_pair(st.st_dev, st.st_ino), f);
     if (!fresh) throw UsageError(f + " is " + at->second + " again: give each file once");
   }
-  // The output directory, made when missing (a link there is the user's and followed); never
-  // one of the inputs' directories. Everything below it is opened without following links.
-  const Directory out_dir = Directory::Open(args.output, true);
+  return files;
+}
+
+// The output directory is none of the inputs' directories.
+void CheckNotAnInput(const BatchArgs& args, const Directory& out_dir) {
   struct stat out_st {};
   if (::fstat(out_dir.fd(), &out_st) != 0) {
     throw OutputError(args.output + ": cannot be read: " + std::strerror(errno));
@@ -482,24 +437,11 @@ int RunBatch(const BatchArgs& args) {
                        ": its summary files would be taken for units; give another");
     }
   }
-  // One batch at a time per directory: two at once would replace each other's units between
-  // judging and summing up, and a summary would pass a calibration that another run replaced.
-  // The second is refused rather than made to wait: a batch runs for minutes to hours, and two
-  // lines writing into one directory is a mistake better said at once than hidden by a queue.
-  const DirectoryLock lock(out_dir, ".lock", true, false, true);
-  if (lock.busy()) {
-    throw OutputError(args.output + ": another batch is writing into it (it holds " +
-                      out_dir.Shown(".lock") +
-                      "): run this one when it has finished, or give another -o");
-  }
-  const Directory units_dir = out_dir.Sub("units", true);
-  const std::string csv_path = args.output + "/summary.csv";
-  const std::string json_path = args.output + "/summary.json";
-  std::vector<std::string> all_inputs = files;
-  if (!args.limits.empty()) all_inputs.push_back(args.limits);
-  CheckOutputs({{"summary", csv_path}, {"summary", json_path}}, all_inputs);
+}
 
-  // The units, by id: a file's id from its name; files with one id are sessions of one unit.
+// The units, by id: a file's id from its name; files with one id are sessions of one unit.
+std::vector<Unit> UnitsOf(const BatchArgs& args, const std::vector<std::string>& files,
+                          const std::optional<UnitIdPattern>& pattern) {
   std::map<std::string, Unit> by_id;
   std::vector<Unit> misnamed;
   for (const std::string& f : files) {
@@ -532,6 +474,11 @@ int RunBatch(const BatchArgs& args) {
   std::sort(units.begin(), units.end(), [](const Unit& a, const Unit& b) {
     return a.id != b.id ? a.id < b.id : a.files < b.files;
   });
+  return units;
+}
+
+// The calibrate options, checked once for all units.
+void CheckUnitOptions(const BatchArgs& args, const std::vector<Unit>& units) {
   // One gyroscope log given to every unit would calibrate each unit's accelerometer with another
   // unit's gyroscope.
   if (units.size() > 1 && !OptionValue(args, "gyro").empty()) {
@@ -543,38 +490,39 @@ int RunBatch(const BatchArgs& args) {
   // that nothing is read), as many as each unit has: a usage error for every count of files is
   // the options', the same for every unit. One for some counts only (--temperatures with one
   // value per file) is those units' error.
-  {
-    std::set<std::size_t> counts;
-    for (const Unit& u : units) {
-      if (u.problem.empty()) counts.insert(u.files.size());
+  std::set<std::size_t> counts;
+  for (const Unit& u : units) {
+    if (u.problem.empty()) counts.insert(u.files.size());
+  }
+  std::string usage_error;
+  std::size_t usage_errors = 0;
+  for (const std::size_t count : counts) {
+    std::vector<std::string> probe;
+    for (std::size_t i = 0; i < count; ++i) {
+      probe.push_back("/dev/null/accelcal-batch-option-check-" + std::to_string(i));
     }
-    std::string usage_error;
-    std::size_t usage_errors = 0;
-    for (const std::size_t count : counts) {
-      std::vector<std::string> probe;
-      for (std::size_t i = 0; i < count; ++i) {
-        probe.push_back("/dev/null/accelcal-batch-option-check-" + std::to_string(i));
-      }
-      try {
-        const UnitRequest request = UnitRequestOf(args, probe);
-        if (auto why = request.Validate()) throw OptionError(*why);
-      } catch (const std::exception&) {
-        int status = kExitOk;
-        const std::string message = ErrorMessage(std::current_exception(), "", &status);
-        if (status != kExitUsage) throw;
-        ++usage_errors;
-        usage_error = message;
-      }
-    }
-    if (!counts.empty() && usage_errors == counts.size()) {
-      const std::string usage = "usage: ";
-      throw UsageError(usage_error.compare(0, usage.size(), usage) == 0
-                           ? usage_error.substr(usage.size())
-                           : usage_error);
+    try {
+      const UnitRequest request = UnitRequestOf(args, probe);
+      if (auto why = request.Validate()) throw OptionError(*why);
+    } catch (const std::exception&) {
+      int status = kExitOk;
+      const std::string message = ErrorMessage(std::current_exception(), "", &status);
+      if (status != kExitUsage) throw;
+      ++usage_errors;
+      usage_error = message;
     }
   }
+  if (!counts.empty() && usage_errors == counts.size()) {
+    const std::string usage = "usage: ";
+    throw UsageError(usage_error.compare(0, usage.size(), usage) == 0
+                         ? usage_error.substr(usage.size())
+                         : usage_error);
+  }
+}
 
-  // The shared inputs are hashed once; then the units, `jobs` at a time.
+// The shared inputs are hashed once; then the units, `jobs` at a time.
+void RunUnits(const BatchArgs& args, const Directory& units_dir, std::vector<Unit>* all) {
+  std::vector<Unit>& units = *all;
   std::vector<InputRecord> shared;
   for (const std::string& f : SharedInputs(args)) shared.push_back(Record(f));
   const unsigned cores = std::max(1u, std::thread::hardware_concurrency());
@@ -597,142 +545,92 @@ int RunBatch(const BatchArgs& args) {
     }
   }
   for (std::thread& w : workers) w.join();
+}
 
-  // The verdicts, and the summary: every unit in id order, so the same inputs give the same bytes.
-  std::vector<std::string> columns;  // the quantities of all units, in their order of first use
-  for (Unit& u : units) {
-    if (!u.problem.empty()) {
-      u.message = u.problem;
-      continue;
-    }
-    if (!u.calibration) continue;
-    if (limits) {
-      u.acceptance = Accept(*u.calibration, *limits);
-    } else {
-      AcceptanceLimits none;
-      none.max_severity = Severity::kFailure;  // only the calibration's own verdict
-      u.acceptance = Accept(*u.calibration, none);
-    }
-    u.status = u.acceptance.passed ? UnitStatus::kPass : UnitStatus::kFail;
-    for (const CalibrationQuantity& q : CalibrationQuantities(*u.calibration)) {
-      if (std::find(columns.begin(), columns.end(), q.name) == columns.end()) {
-        columns.push_back(q.name);
-      }
-    }
-  }
-  int counts[3] = {0, 0, 0};
-  Json doc;
-  doc["format"] = "accelcal-batch-summary";
-  doc["version"] = 1;
-  doc["accelcal_version"] = std::string(Version());
-  if (limits) {
-    Json l;
-    l["file"] = args.limits;
-    l["sha256"] = limits_sha256;
-    if (!limits->part.empty()) l["part"] = limits->part;
-    doc["limits"] = l;
-  } else {
-    doc["limits"] = nullptr;
-  }
-  doc["options"] = GivenOptionsJson(args.calibrate_options);
-  Json& rows = doc["units"] = Json::array();
-  std::string csv = "unit,status,failed,files,verdict,worst_finding,message,sha256";
-  for (const std::string& c : columns) csv += "," + c + "," + c + ".sigma";
-  csv += "\n";
+// Each unit's line, and the counts, on stdout.
+void SayUnits(const std::vector<Unit>& units, const std::array<int, 3>& counts,
+              const std::string& csv_path, const std::string& json_path) {
+  // Ids as a line shows them, padded to the longest up to 40 bytes.
+  std::size_t width = 4;
+  for (const Unit& u : units) width = std::max(width, std::min<std::size_t>(40, u.id.size()));
   for (const Unit& u : units) {
-    ++counts[static_cast<int>(u.status)];
-    Json row;
-    row["unit"] = u.id;
-    row["status"] = Name(u.status);
-    row["files"] = u.files;
-    // What store add checks the unit's file against: the bytes judged here.
-    row["sha256"] = u.calibration ? Json(u.sha256) : Json();
-    std::vector<std::string> failed;
-    Json failures = Json::array();
-    for (const LimitFailure& f : u.acceptance.failures) {
-      failed.push_back(f.text);
-      Json jf;
-      jf["quantity"] = f.quantity;
-      jf["value"] = f.value ? Json(*f.value) : Json();
-      jf["text"] = f.text;
-      if (f.line > 0) jf["line"] = f.line;
-      failures.push_back(jf);
-    }
-    row["failed"] = failures;
-    std::map<std::string, const CalibrationQuantity*> by_name;
-    std::vector<CalibrationQuantity> quantities;
-    if (u.calibration) {
-      quantities = CalibrationQuantities(*u.calibration);
-      for (const CalibrationQuantity& q : quantities) by_name[q.name] = &q;
-      row["verdict"] = u.calibration->verdict;
-      row["worst_finding"] = WorstFinding(*u.calibration);
-      Json findings = Json::array();
-      for (const Finding& f : u.calibration->diagnostics.value_or(std::vector<Finding>())) {
-        findings.push_back({{"code", f.code}, {"severity", std::string(ToString(f.severity))}});
-      }
-      row["findings"] = findings;
-      Json q = Json::object();
-      for (const CalibrationQuantity& c : quantities) {
-        q[c.name] = {
-            {"value", c.value}, {"sigma", c.sigma ? Json(*c.sigma) : Json()}, {"unit", c.unit}};
-      }
-      row["quantities"] = q;
-    } else {
-      row["message"] = u.message;
-    }
-    rows.push_back(row);
-    csv += CsvField(u.id) + "," + Name(u.status) + "," + CsvField(Joined(failed, "; ")) + "," +
-           CsvField(Joined(u.files, ";")) + "," +
-           (u.calibration ? u.calibration->verdict + "," + WorstFinding(*u.calibration) : ",") +
-           "," + CsvField(u.message) + "," + (u.calibration ? u.sha256 : "");
-    for (const std::string& c : columns) {
-      const auto it = by_name.find(c);
-      if (it == by_name.end()) {
-        csv += ",,";
-      } else {
-        csv += "," + FormatNumber(it->second->value) + "," +
-               (it->second->sigma ? FormatNumber(*it->second->sigma) : "");
-      }
-    }
-    csv += "\n";
+    std::string detail = u.status == UnitStatus::kError
+                             ? u.message
+                             : Joined(
+                                   [&] {
+                                     std::vector<std::string> t;
+                                     for (const LimitFailure& f : u.acceptance.failures) {
+                                       t.push_back(f.text);
+                                     }
+                                     return t;
+                                   }(),
+                                   "; ");
+    const std::string line =
+        Format("%-*s  %-5s  %s", static_cast<int>(width), VisibleLine(u.id).c_str(), Name(u.status),
+               VisibleLine(detail).c_str());
+    Say("%s\n", line.substr(0, line.find_last_not_of(' ') + 1).c_str());
   }
-  doc["counts"] = {
-      {"units", units.size()}, {"pass", counts[0]}, {"fail", counts[1]}, {"error", counts[2]}};
-  const std::string json_text = JsonText(doc);
+  const auto reused =
+      std::count_if(units.begin(), units.end(), [](const Unit& u) { return u.reused; });
+  Say("%zu units: %d pass, %d fail, %d error (%ld calibrations current, not redone); "
+      "summary %s, %s\n",
+      units.size(), counts[0], counts[1], counts[2], static_cast<long>(reused), csv_path.c_str(),
+      json_path.c_str());
+}
+
+}  // namespace
+
+int RunBatch(const BatchArgs& args) {
+  // The limits first: a mistake there is found before anything is calibrated.
+  std::optional<AcceptanceLimits> limits;
+  std::string limits_sha256;  // of the bytes read (a pipe cannot be read twice)
+  if (!args.limits.empty()) {
+    const std::string text = ReadFileToString(args.limits, kMaxSmallFileBytes);
+    limits = ParseLimits(text, args.limits);
+    limits_sha256 = Sha256Hex(text);
+  }
+  const std::optional<UnitIdPattern> pattern = UnitIdPatternOf(args);
+  if (args.jobs < 0 || args.jobs > 1024) {
+    throw UsageError("--jobs " + std::to_string(args.jobs) + ": from 1 to 1024 (0: one per core)");
+  }
+  const std::vector<std::string> files = InputFiles(args);
+  // The output directory, made when missing (a link there is the user's and followed); never
+  // one of the inputs' directories. Everything below it is opened without following links.
+  const Directory out_dir = Directory::Open(args.output, true);
+  CheckNotAnInput(args, out_dir);
+  // One batch at a time per directory: two at once would replace each other's units between
+  // judging and summing up, and a summary would pass a calibration that another run replaced.
+  // The second is refused rather than made to wait: a batch runs for minutes to hours, and two
+  // lines writing into one directory is a mistake better said at once than hidden by a queue.
+  const DirectoryLock lock(out_dir, ".lock", true, false, true);
+  if (lock.busy()) {
+    throw OutputError(args.output + ": another batch is writing into it (it holds " +
+                      out_dir.Shown(".lock") +
+                      "): run this one when it has finished, or give another -o");
+  }
+  const Directory units_dir = out_dir.Sub("units", true);
+  const std::string csv_path = args.output + "/summary.csv";
+  const std::string json_path = args.output + "/summary.json";
+  std::vector<std::string> all_inputs = files;
+  if (!args.limits.empty()) all_inputs.push_back(args.limits);
+  CheckOutputs({{"summary", csv_path}, {"summary", json_path}}, all_inputs);
+
+  std::vector<Unit> units = UnitsOf(args, files, pattern);
+  CheckUnitOptions(args, units);
+  RunUnits(args, units_dir, &units);
+
+  const batch::Summary summary = batch::Summarise(args, limits, limits_sha256, &units);
+  const std::array<int, 3>& counts = summary.counts;
+  const std::string json_text = JsonText(summary.doc);
   OutputFile csv_file(out_dir, "summary.csv"), json_file(out_dir, "summary.json");
-  csv_file.Write(csv);
+  csv_file.Write(summary.csv);
   json_file.Write(json_text);
   CommitAll({&csv_file, &json_file});
 
   if (args.json) {
     WriteOut(json_text);
   } else {
-    // Ids as a line shows them, padded to the longest up to 40 bytes.
-    std::size_t width = 4;
-    for (const Unit& u : units) width = std::max(width, std::min<std::size_t>(40, u.id.size()));
-    for (const Unit& u : units) {
-      std::string detail = u.status == UnitStatus::kError
-                               ? u.message
-                               : Joined(
-                                     [&] {
-                                       std::vector<std::string> t;
-                                       for (const LimitFailure& f : u.acceptance.failures) {
-                                         t.push_back(f.text);
-                                       }
-                                       return t;
-                                     }(),
-                                     "; ");
-      const std::string line =
-          Format("%-*s  %-5s  %s", static_cast<int>(width), VisibleLine(u.id).c_str(),
-                 Name(u.status), VisibleLine(detail).c_str());
-      Say("%s\n", line.substr(0, line.find_last_not_of(' ') + 1).c_str());
-    }
-    const auto reused =
-        std::count_if(units.begin(), units.end(), [](const Unit& u) { return u.reused; });
-    Say("%zu units: %d pass, %d fail, %d error (%ld calibrations current, not redone); "
-        "summary %s, %s\n",
-        units.size(), counts[0], counts[1], counts[2], static_cast<long>(reused), csv_path.c_str(),
-        json_path.c_str());
+    SayUnits(units, counts, csv_path, json_path);
   }
   if (counts[1] + counts[2] == 0) return kExitOk;
   // Said on stderr too, as a calibration that fails its checks is: stdout may go to a file.

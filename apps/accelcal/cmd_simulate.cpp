@@ -9,6 +9,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <functional>
 #include <iostream>
 #include <memory>
 #include <sstream>
@@ -65,49 +66,45 @@ void CheckSimulatedSamples(double samples, const char* options) {
 
 }  // namespace
 
-int RunSimulate(const SimulateArgs& args) {
-  CheckOutputs({{"-o", args.output}}, {args.truth, args.positions});
-  if (args.format != "csv" && args.format != "ulog" && args.format != "dataflash" &&
-      args.format != "mcap" && args.format != "rosbag" && args.format != "db3" &&
-      args.format != "mat") {
-    throw UsageError("--format is csv, ulog, dataflash, rosbag, mcap, db3 or mat, not \"" +
-                     args.format + "\"");
+namespace {
+
+// wu2018-system: the system-level calibration's series, streamed to -o.
+void WriteSystemSeries(const SimulateArgs& args) {
+  if (!args.truth.empty() || !args.positions.empty() || args.noise_density_ug || args.raw) {
+    throw UsageError("--scenario wu2018-system takes only --seed, --rate, --duration and -o");
   }
-  if (args.format != "csv" && (!args.raw || args.scenario == "wu2018-system")) {
-    throw UsageError("--format " + args.format +
-                     " writes a raw log: give --raw (and no wu2018-system scenario)");
+  if (args.output.empty()) {
+    throw UsageError("--scenario wu2018-system writes a binary series: give -o FILE");
   }
-  if (args.scenario == "wu2018-system") {
-    if (!args.truth.empty() || !args.positions.empty() || args.noise_density_ug || args.raw) {
-      throw UsageError("--scenario wu2018-system takes only --seed, --rate, --duration and -o");
-    }
-    if (args.output.empty()) {
-      throw UsageError("--scenario wu2018-system writes a binary series: give -o FILE");
-    }
-    SystemSimulationOptions o;
-    o.seed = args.seed;
-    if (args.rate_given) o.rate_hz = args.rate_hz;
-    if (args.duration_given) o.duration_s = args.duration_s;
-    if (!(o.rate_hz > 0 && o.rate_hz <= kMaxRate_hz) || !(o.duration_s > 0)) {
-      throw UsageError(Format("--rate must be in (0, %g] Hz and --duration positive", kMaxRate_hz));
-    }
-    CheckSimulatedSamples(o.rate_hz * o.duration_s, "--rate x --duration");
-    OutputFile file(args.output);  // streamed: the series is never held whole
-    std::string bytes;
-    AppendSeriesHeader(&bytes);
+  SystemSimulationOptions o;
+  o.seed = args.seed;
+  if (args.rate_given) o.rate_hz = args.rate_hz;
+  if (args.duration_given) o.duration_s = args.duration_s;
+  if (!(o.rate_hz > 0 && o.rate_hz <= kMaxRate_hz) || !(o.duration_s > 0)) {
+    throw UsageError(Format("--rate must be in (0, %g] Hz and --duration positive", kMaxRate_hz));
+  }
+  CheckSimulatedSamples(o.rate_hz * o.duration_s, "--rate x --duration");
+  OutputFile file(args.output);  // streamed: the series is never held whole
+  std::string bytes;
+  AppendSeriesHeader(&bytes);
+  file.Write(bytes);
+  SimulateSystemLevel(o, [&](const SystemSample& s) {
+    bytes.clear();
+    AppendSeriesSample(s, &bytes);
     file.Write(bytes);
-    SimulateSystemLevel(o, [&](const SystemSample& s) {
-      bytes.clear();
-      AppendSeriesSample(s, &bytes);
-      file.Write(bytes);
-    });
-    file.Commit();
-    return kExitOk;
-  }
-  if (args.scenario == "sunxu2020") {
-    WriteFileAtomically(args.output.empty() ? "-" : args.output, SunXu2020Positions(args));
-    return kExitOk;
-  }
+  });
+  file.Commit();
+}
+
+// The device a simulation records (--scenario yang2012's, or --truth's), its positions and its
+// noise density.
+struct Device {
+  ModelParameters truth;
+  double gravity = 0;
+  std::string positions;
+  double density = 0;
+};
+Device DeviceOf(const SimulateArgs& args) {
   ModelParameters truth;
   double gravity = 0;
   std::string positions = args.positions;
@@ -132,9 +129,163 @@ int RunSimulate(const SimulateArgs& args) {
     if (positions.empty()) throw UsageError("--positions is required with --truth");
     if (!density) throw UsageError("--noise-density is required with --truth");
   }
-  if (!(*density > 0) || !(args.rate_hz > 0) || !(args.duration_s > 0) ||
-      !(args.transition_s >= 0) || !std::isfinite(*density) || !std::isfinite(args.duration_s) ||
-      !std::isfinite(args.transition_s)) {
+  return {truth, gravity, positions, *density};
+}
+
+// ROS stamps in ns from 0 s.
+std::uint64_t RosNs(double t) { return static_cast<std::uint64_t>(std::llround(t * 1e9)); }
+
+using Sink = std::function<void(double time_s, const Vec3& raw)>;
+
+// --format db3: a ROS 2 bag, written by SQLite into the file that will replace the output.
+void WriteDb3(const SimulateArgs& args, OutputFile& file,
+              const std::function<void(const Sink&)>& simulate) {
+  // An SQLite journal beside the file replaced belongs to the old database, and the next
+  // SQLite reader would apply it to the new one (rolled back onto it, or its pages read).
+  for (const char* suffix : {"-journal", "-wal", "-shm"}) {
+    struct stat st;
+    if (::lstat((file.target() + suffix).c_str(), &st) == 0) {
+      throw OutputError(args.output + ": " + file.target() + suffix +
+                        " exists beside it: the journal of the database it would replace, "
+                        "which SQLite would apply to the new bag; remove it first, or write "
+                        "another file");
+    }
+  }
+  const std::size_t slash = file.target().rfind('/');
+  const std::string name = file.target().substr(slash == std::string::npos ? 0 : slash + 1);
+  try {
+    Rosbag2SqliteImuWriter writer(file.temporary(), "/imu/data", name);
+    simulate([&](double t, const Vec3& p) { writer.Sample(RosNs(t), p); });
+    writer.Finish();
+  } catch (const std::runtime_error& e) {
+    // SQLite's reason, for the file the user named (not the temporary one).
+    std::string why = e.what();
+    if (why.rfind(file.temporary() + ": ", 0) == 0) why.erase(0, file.temporary().size() + 2);
+    throw OutputError(args.output + ": " + why);
+  }
+  file.Commit();
+}
+
+// --raw: the log in --format, streamed to -o or stdout, never held whole.
+void WriteRawLog(const SimulateArgs& args, const Device& device,
+                 const std::vector<Vec3>& directions, const Vec3& sigma_raw) {
+  RawLogSimulation options;
+  options.rate_hz = args.rate_hz;
+  options.static_s = args.duration_s;
+  options.transition_s = args.transition_s;
+  options.sigma_raw_per_sample = sigma_raw;
+  options.seed = args.seed;
+  CheckSimulatedSamples(SimulatedSampleCount(directions.size(), options),
+                        "positions x (--duration + --transition) x --rate");
+  // A ROS time holds its seconds in 32 bits: ROS 1 unsigned (to 2106), ROS 2 signed (2038).
+  const double last_s = (SimulatedSampleCount(directions.size(), options) - 1) / args.rate_hz;
+  const double most_s = args.format == "rosbag" ? 4294967295.0 : 2147483647.0;
+  if ((args.format == "rosbag" || args.format == "mcap" || args.format == "db3") &&
+      !(last_s <= most_s)) {
+    throw UsageError(
+        Format("--format %s stamps its messages from 0 s in ROS time, at most %.10g "
+               "s; this session lasts %.4g s",
+               args.format.c_str(), most_s, last_s));
+  }
+  OutputFile file(args.output.empty() ? "-" : args.output);  // streamed, never held whole
+  const auto simulate = [&](const Sink& sink) {
+    SimulateRawLog(device.truth, device.gravity, directions, options, sink);
+  };
+  if (args.format == "dataflash") {
+    const DataFlashImuWriter writer;
+    file.Write(writer.Header());
+    simulate([&](double t, const Vec3& p) {
+      file.Write(writer.Sample(static_cast<std::uint64_t>(std::llround(t * 1e6)), p, Vec3::Zero()));
+    });
+    file.Commit();
+    return;
+  }
+  if (args.format == "rosbag" || args.format == "db3") {
+    // A bag's header is completed at its end, and SQLite writes a file by its name: both need
+    // the file that will replace the output, not a stream.
+    if (file.temporary().empty()) {
+      throw UsageError("--format " + args.format +
+                       " writes a file completed at its end: give -o FILE, a file to create "
+                       "or replace (not stdout, a device or a FIFO)");
+    }
+  }
+  if (args.format == "rosbag") {
+    RosBagImuWriter writer;
+    file.Write(writer.Header());
+    simulate([&](double t, const Vec3& p) { file.Write(writer.Sample(RosNs(t), p)); });
+    file.Write(writer.Finish());
+    file.Rewrite(RosBagImuWriter::kHeaderOffset, writer.IndexedHeader());
+    file.Commit();
+    return;
+  }
+  if (args.format == "db3") {
+    WriteDb3(args, file, simulate);
+    return;
+  }
+  if (args.format == "mat") {
+    // A 4 x N matrix "imu" (time [s], x, y, z per column), its sample count known first.
+    MatMatrixWriter writer(
+        "imu", 4, static_cast<std::uint64_t>(SimulatedSampleCount(directions.size(), options)));
+    file.Write(writer.Header());
+    simulate([&](double t, const Vec3& p) {
+      const double column[4] = {t, p(0), p(1), p(2)};
+      file.Write(writer.Column(column));
+    });
+    file.Write(writer.Finish());
+    file.Commit();
+    return;
+  }
+  if (args.format == "mcap") {
+    McapImuWriter writer;
+    file.Write(writer.Header());
+    simulate([&](double t, const Vec3& p) { file.Write(writer.Sample(RosNs(t), p)); });
+    file.Write(writer.Finish());
+    file.Commit();
+    return;
+  }
+  if (args.format == "ulog") {
+    const ULogImuWriter writer;
+    file.Write(writer.Header());
+    simulate([&](double t, const Vec3& p) {
+      file.Write(writer.Accel(static_cast<std::uint64_t>(std::llround(t * 1e6)), p));
+    });
+    file.Commit();
+    return;
+  }
+  file.Write("time,x,y,z\n");
+  simulate([&](double t, const Vec3& p) {
+    file.Write(FormatNumber(t) + "," + FormatNumber(p(0)) + "," + FormatNumber(p(1)) + "," +
+               FormatNumber(p(2)) + "\n");
+  });
+  file.Commit();
+}
+
+}  // namespace
+
+int RunSimulate(const SimulateArgs& args) {
+  CheckOutputs({{"-o", args.output}}, {args.truth, args.positions});
+  if (args.format != "csv" && args.format != "ulog" && args.format != "dataflash" &&
+      args.format != "mcap" && args.format != "rosbag" && args.format != "db3" &&
+      args.format != "mat") {
+    throw UsageError("--format is csv, ulog, dataflash, rosbag, mcap, db3 or mat, not \"" +
+                     args.format + "\"");
+  }
+  if (args.format != "csv" && (!args.raw || args.scenario == "wu2018-system")) {
+    throw UsageError("--format " + args.format +
+                     " writes a raw log: give --raw (and no wu2018-system scenario)");
+  }
+  if (args.scenario == "wu2018-system") {
+    WriteSystemSeries(args);
+    return kExitOk;
+  }
+  if (args.scenario == "sunxu2020") {
+    WriteFileAtomically(args.output.empty() ? "-" : args.output, SunXu2020Positions(args));
+    return kExitOk;
+  }
+  const Device device = DeviceOf(args);
+  if (!(device.density > 0) || !(args.rate_hz > 0) || !(args.duration_s > 0) ||
+      !(args.transition_s >= 0) || !std::isfinite(device.density) ||
+      !std::isfinite(args.duration_s) || !std::isfinite(args.transition_s)) {
     throw UsageError(
         "--noise-density, --rate and --duration must be positive, --transition "
         "zero or positive");
@@ -149,129 +300,16 @@ int RunSimulate(const SimulateArgs& args) {
     throw UsageError(
         Format("--duration x --rate must be 1 to 2^53 samples per position (%g)", per_position));
   }
-  const std::vector<Vec3> directions = PlannedDirections(positions);
+  const std::vector<Vec3> directions = PlannedDirections(device.positions);
   // Per-sample white noise.
-  const Vec3 sigma_raw = RawNoiseFromDensity(truth, gravity, *density, args.rate_hz);
+  const Vec3 sigma_raw =
+      RawNoiseFromDensity(device.truth, device.gravity, device.density, args.rate_hz);
   if (args.raw) {
-    RawLogSimulation options;
-    options.rate_hz = args.rate_hz;
-    options.static_s = args.duration_s;
-    options.transition_s = args.transition_s;
-    options.sigma_raw_per_sample = sigma_raw;
-    options.seed = args.seed;
-    CheckSimulatedSamples(SimulatedSampleCount(directions.size(), options),
-                          "positions x (--duration + --transition) x --rate");
-    // A ROS time holds its seconds in 32 bits: ROS 1 unsigned (to 2106), ROS 2 signed (2038).
-    const double last_s = (SimulatedSampleCount(directions.size(), options) - 1) / args.rate_hz;
-    const double most_s = args.format == "rosbag" ? 4294967295.0 : 2147483647.0;
-    if ((args.format == "rosbag" || args.format == "mcap" || args.format == "db3") &&
-        !(last_s <= most_s)) {
-      throw UsageError(
-          Format("--format %s stamps its messages from 0 s in ROS time, at most %.10g "
-                 "s; this session lasts %.4g s",
-                 args.format.c_str(), most_s, last_s));
-    }
-    OutputFile file(args.output.empty() ? "-" : args.output);  // streamed, never held whole
-    if (args.format == "dataflash") {
-      const DataFlashImuWriter writer;
-      file.Write(writer.Header());
-      SimulateRawLog(truth, gravity, directions, options, [&](double t, const Vec3& p) {
-        file.Write(
-            writer.Sample(static_cast<std::uint64_t>(std::llround(t * 1e6)), p, Vec3::Zero()));
-      });
-      file.Commit();
-      return kExitOk;
-    }
-    // ROS stamps in ns from 0 s.
-    const auto ns = [](double t) { return static_cast<std::uint64_t>(std::llround(t * 1e9)); };
-    if (args.format == "rosbag" || args.format == "db3") {
-      // A bag's header is completed at its end, and SQLite writes a file by its name: both need
-      // the file that will replace the output, not a stream.
-      if (file.temporary().empty()) {
-        throw UsageError("--format " + args.format +
-                         " writes a file completed at its end: give -o FILE, a file to create "
-                         "or replace (not stdout, a device or a FIFO)");
-      }
-    }
-    if (args.format == "rosbag") {
-      RosBagImuWriter writer;
-      file.Write(writer.Header());
-      SimulateRawLog(truth, gravity, directions, options,
-                     [&](double t, const Vec3& p) { file.Write(writer.Sample(ns(t), p)); });
-      file.Write(writer.Finish());
-      file.Rewrite(RosBagImuWriter::kHeaderOffset, writer.IndexedHeader());
-      file.Commit();
-      return kExitOk;
-    }
-    if (args.format == "db3") {
-      // An SQLite journal beside the file replaced belongs to the old database, and the next
-      // SQLite reader would apply it to the new one (rolled back onto it, or its pages read).
-      for (const char* suffix : {"-journal", "-wal", "-shm"}) {
-        struct stat st;
-        if (::lstat((file.target() + suffix).c_str(), &st) == 0) {
-          throw OutputError(args.output + ": " + file.target() + suffix +
-                            " exists beside it: the journal of the database it would replace, "
-                            "which SQLite would apply to the new bag; remove it first, or write "
-                            "another file");
-        }
-      }
-      const std::size_t slash = file.target().rfind('/');
-      const std::string name = file.target().substr(slash == std::string::npos ? 0 : slash + 1);
-      try {
-        Rosbag2SqliteImuWriter writer(file.temporary(), "/imu/data", name);
-        SimulateRawLog(truth, gravity, directions, options,
-                       [&](double t, const Vec3& p) { writer.Sample(ns(t), p); });
-        writer.Finish();
-      } catch (const std::runtime_error& e) {
-        // SQLite's reason, for the file the user named (not the temporary one).
-        std::string why = e.what();
-        if (why.rfind(file.temporary() + ": ", 0) == 0) why.erase(0, file.temporary().size() + 2);
-        throw OutputError(args.output + ": " + why);
-      }
-      file.Commit();
-      return kExitOk;
-    }
-    if (args.format == "mat") {
-      // A 4 x N matrix "imu" (time [s], x, y, z per column), its sample count known first.
-      MatMatrixWriter writer(
-          "imu", 4, static_cast<std::uint64_t>(SimulatedSampleCount(directions.size(), options)));
-      file.Write(writer.Header());
-      SimulateRawLog(truth, gravity, directions, options, [&](double t, const Vec3& p) {
-        const double column[4] = {t, p(0), p(1), p(2)};
-        file.Write(writer.Column(column));
-      });
-      file.Write(writer.Finish());
-      file.Commit();
-      return kExitOk;
-    }
-    if (args.format == "mcap") {
-      McapImuWriter writer;
-      file.Write(writer.Header());
-      SimulateRawLog(truth, gravity, directions, options,
-                     [&](double t, const Vec3& p) { file.Write(writer.Sample(ns(t), p)); });
-      file.Write(writer.Finish());
-      file.Commit();
-      return kExitOk;
-    }
-    if (args.format == "ulog") {
-      const ULogImuWriter writer;
-      file.Write(writer.Header());
-      SimulateRawLog(truth, gravity, directions, options, [&](double t, const Vec3& p) {
-        file.Write(writer.Accel(static_cast<std::uint64_t>(std::llround(t * 1e6)), p));
-      });
-      file.Commit();
-      return kExitOk;
-    }
-    file.Write("time,x,y,z\n");
-    SimulateRawLog(truth, gravity, directions, options, [&](double t, const Vec3& p) {
-      file.Write(FormatNumber(t) + "," + FormatNumber(p(0)) + "," + FormatNumber(p(1)) + "," +
-                 FormatNumber(p(2)) + "\n");
-    });
-    file.Commit();
+    WriteRawLog(args, device, directions, sigma_raw);
     return kExitOk;
   }
-  const std::vector<Vec3> means =
-      SimulatePositions(truth, gravity, directions, sigma_raw / std::sqrt(per_position), args.seed);
+  const std::vector<Vec3> means = SimulatePositions(device.truth, device.gravity, directions,
+                                                    sigma_raw / std::sqrt(per_position), args.seed);
   WriteFileAtomically(args.output.empty() ? "-" : args.output,
                       PositionsCsv(means, per_position, sigma_raw));
   return kExitOk;

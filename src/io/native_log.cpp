@@ -16,6 +16,7 @@
 #include "io/ros_topics.hpp"
 #include "io/rosbag.hpp"
 #include "io/rosbag2_sqlite.hpp"
+#include "io/stream_columns.hpp"
 #include "io/ulog.hpp"
 
 namespace accelcal {
@@ -34,135 +35,16 @@ LogFormat DetectLogFormat(std::string_view first_bytes) {
 
 namespace {
 
-// A type's name as the table holds it: ROS 2's "sensor_msgs/msg/Imu" is ROS 1's "sensor_msgs/Imu".
-std::string TableName(std::string_view type) {
-  std::string name(type);
-  if (const std::size_t msg = name.find("/msg/"); msg != std::string::npos) name.erase(msg, 4);
-  return name;
-}
-
-}  // namespace
-
-const std::vector<KnownStream>& KnownStreams() {
-  static const std::vector<KnownStream> kStreams = {
-      // PX4: sampled at timestamp_sample where the topic has one.
-      {"sensor_accel",
-       "accelerometer",
-       "timestamp_sample",
-       "x",
-       "y",
-       "z",
-       "m/s2",
-       false,
-       KnownStream::Packing::kSample,
-       {},
-       {},
-       "temperature"},
-      {"sensor_combined", "accelerometer", "timestamp", "accelerometer_m_s2[0]",
-       "accelerometer_m_s2[1]", "accelerometer_m_s2[2]", "m/s2", true},
-      {"sensor_gyro",
-       "gyroscope",
-       "timestamp_sample",
-       "x",
-       "y",
-       "z",
-       "rad/s",
-       false,
-       KnownStream::Packing::kSample,
-       {},
-       {},
-       "temperature"},
-      {"sensor_combined", "gyroscope", "timestamp", "gyro_rad[0]", "gyro_rad[1]", "gyro_rad[2]",
-       "rad/s", true},
-      // PX4's FIFO topics: the driver's every sample, packed (SDLOG_PROFILE's raw FIFO bits).
-      {"sensor_accel_fifo", "accelerometer", "timestamp_sample", "x", "y", "z", "m/s2", false,
-       KnownStream::Packing::kFifo},
-      {"sensor_gyro_fifo", "gyroscope", "timestamp_sample", "x", "y", "z", "rad/s", false,
-       KnownStream::Packing::kFifo},
-      // vehicle_imu: integrated over its interval, after the calibration in force.
-      {"vehicle_imu", "accelerometer", "timestamp_sample", "delta_velocity[0]", "delta_velocity[1]",
-       "delta_velocity[2]", "m/s2", true, KnownStream::Packing::kDelta, "delta_velocity_dt"},
-      {"vehicle_imu", "gyroscope", "timestamp_sample", "delta_angle[0]", "delta_angle[1]",
-       "delta_angle[2]", "rad/s", true, KnownStream::Packing::kDelta, "delta_angle_dt"},
-      // ArduPilot: ACC and GYR at SampleUS, IMU at TimeUS.
-      {"IMU",
-       "accelerometer",
-       "TimeUS",
-       "AccX",
-       "AccY",
-       "AccZ",
-       "m/s2",
-       true,
-       KnownStream::Packing::kSample,
-       {},
-       {},
-       "T"},
-      {"ACC", "accelerometer", "SampleUS", "AccX", "AccY", "AccZ", "m/s2", true},
-      {"IMU",
-       "gyroscope",
-       "TimeUS",
-       "GyrX",
-       "GyrY",
-       "GyrZ",
-       "rad/s",
-       true,
-       KnownStream::Packing::kSample,
-       {},
-       {},
-       "T"},
-      {"GYR", "gyroscope", "SampleUS", "GyrX", "GyrY", "GyrZ", "rad/s", true},
-      // ROS: a driver's message, stamped when sampled (REP 145 asks for the sensor's own frame,
-      // without the driver's corrections).
-      // A field's covariance[0] = -1 marks it not measured.
-      {"sensor_msgs/Imu",
-       "accelerometer",
-       "header.stamp",
-       "linear_acceleration.x",
-       "linear_acceleration.y",
-       "linear_acceleration.z",
-       "m/s2",
-       false,
-       KnownStream::Packing::kSample,
-       {},
-       "linear_acceleration_covariance[0]"},
-      {"sensor_msgs/Imu",
-       "gyroscope",
-       "header.stamp",
-       "angular_velocity.x",
-       "angular_velocity.y",
-       "angular_velocity.z",
-       "rad/s",
-       false,
-       KnownStream::Packing::kSample,
-       {},
-       "angular_velocity_covariance[0]"},
-  };
-  return kStreams;
-}
-
-std::vector<std::string_view> KnownSensors(std::string_view type) {
-  const std::string name = TableName(type);
-  std::vector<std::string_view> out;
-  for (const KnownStream& k : KnownStreams()) {
-    if (k.type == name) out.push_back(k.sensor);
-  }
-  return out;
-}
-
-namespace {
-
 using internal::Format;
 
-const KnownStream* Known(std::string_view type, std::string_view sensor) {
-  const std::string name = TableName(type);
-  for (const KnownStream& k : KnownStreams()) {
-    if (k.type == name && k.sensor == sensor) return &k;
-  }
-  return nullptr;
-}
-
-// A name from the log, for a message: one line, every character visible.
-std::string Shown(std::string_view name) { return internal::VisibleLine(name); }
+using internal::Choose;
+using internal::Chosen;
+using internal::Find;
+using internal::IsMicrosecondColumn;
+using internal::kMicrosecondFields;
+using internal::Known;
+using internal::Shown;
+using internal::Stored;
 
 LogStreamInfo Describe(const internal::DecodedStream& s) {
   LogStreamInfo info;
@@ -193,179 +75,6 @@ std::string Line(const internal::DecodedStream& s) {
   out += Format("%zu samples", s.messages);
   if (info.rate_hz > 0) out += Format(" at %.4g Hz", info.rate_hz);
   return out + ")";
-}
-
-// The fields of `s`, escaped, for a message that lists them.
-std::string Fields(const internal::DecodedStream& s) {
-  std::string out;
-  for (const std::string& c : *s.columns) out += (out.empty() ? "" : ", ") + Shown(c);
-  return out;
-}
-
-// The index of the column `name` of `s`, if it has one.
-std::optional<std::size_t> Find(const internal::DecodedStream& s, std::string_view name) {
-  const auto it = std::find(s.columns->begin(), s.columns->end(), name);
-  if (it == s.columns->end()) return std::nullopt;
-  return std::size_t(it - s.columns->begin());
-}
-
-// Which column of `s` a columns option's entry names: a field's name, or its 1-based number.
-std::size_t ColumnOf(const internal::DecodedStream& s, const std::string& entry,
-                     const std::string& source, const char* option = "the columns option") {
-  if (const std::optional<std::size_t> c = Find(s, entry)) return *c;
-  std::size_t number = 0;
-  bool digits = !entry.empty() && entry.size() < 6;
-  for (char c : entry) {
-    if (c < '0' || c > '9') {
-      digits = false;
-    } else {
-      number = number * 10 + std::size_t(c - '0');
-    }
-  }
-  if (digits && number >= 1 && number <= s.columns->size()) return number - 1;
-  throw InputError(source, 0,
-                   std::string(option) + " names \"" + Shown(entry) + "\", which " +
-                       Shown(s.topic) + " does not have (its fields: " + Fields(s) + ")");
-}
-
-// The time fields the formats define in µs by name (ULog's timestamp and timestamp_sample,
-// DataFlash's TimeUS and SampleUS), in the order they are preferred when none is named. A ROS
-// message's are known by their type (DecodedStream::microseconds): header.stamp is preferred,
-// then log_time.
-constexpr const char* kMicrosecondFields[] = {"timestamp_sample", "timestamp", "SampleUS",
-                                              "TimeUS"};
-
-// Whether column `c` of `s` is a time its format or reader gives in µs.
-bool IsMicrosecondColumn(const internal::DecodedStream& s, std::size_t c) {
-  if (s.microseconds) {
-    return std::find(s.microseconds->begin(), s.microseconds->end(), c) != s.microseconds->end();
-  }
-  const std::string& name = (*s.columns)[c];
-  return std::find(std::begin(kMicrosecondFields), std::end(kMicrosecondFields), name) !=
-         std::end(kMicrosecondFields);
-}
-
-// The columns a stream's samples come from: its time (if any) and x, y, z.
-struct Chosen {
-  std::optional<std::size_t> time;
-  std::size_t axis[3];
-  KnownStream::Packing packing = KnownStream::Packing::kSample;
-  // kDelta: the interval's column. kFifo: dt, scale, samples, then x[1..], y[1..], z[1..] (x[0],
-  // y[0], z[0] being the axes): `fifo` samples a message at most.
-  std::vector<std::size_t> extra;
-  std::size_t fifo = 1;
-  std::optional<std::size_t> temperature;  // ReadOptions::temperature's, or the known stream's
-  std::optional<std::size_t> unmeasured;   // KnownStream::unmeasured's column, stored last
-};
-
-// The columns option's (time,x,y,z, or x,y,z with the stream's own time field when it has one),
-// else the known stream's. Throws InputError naming what is wrong.
-Chosen Choose(const internal::DecodedStream& s, const ReadOptions& options,
-              const KnownStream* known, const std::string& source) {
-  Chosen out;
-  if (!options.columns.empty()) {
-    const std::size_t n = options.columns.size();
-    if (n != 3 && n != 4) {
-      throw InputError(source, 0, "the columns option takes 3 entries (x,y,z) or 4 (time,x,y,z)");
-    }
-    if (n == 4) {
-      out.time = ColumnOf(s, options.columns[0], source);
-    } else if (known != nullptr) {
-      out.time = Find(s, known->time);
-    } else if (s.microseconds) {
-      for (const char* name : {"header.stamp", internal::kLogTime}) {
-        if ((out.time = Find(s, name)) && IsMicrosecondColumn(s, *out.time)) break;
-        out.time.reset();
-      }
-    } else {
-      for (const char* name : kMicrosecondFields) {
-        if ((out.time = Find(s, name))) break;
-      }
-    }
-    for (std::size_t a = 0; a < 3; ++a)
-      out.axis[a] = ColumnOf(s, options.columns[n - 3 + a], source);
-  } else {
-    if (known == nullptr) {
-      throw InputError(source, 0,
-                       "accelcal does not know which fields of " + Shown(s.topic) +
-                           " are the readings: name them with the columns option (x,y,z or "
-                           "time,x,y,z)");
-    }
-    // A field the known stream should have (an older firmware's log may not).
-    const auto field = [&](std::string_view want) {
-      if (const std::optional<std::size_t> c = Find(s, want)) return *c;
-      throw InputError(source, 0,
-                       Shown(s.topic) + " has no field " + std::string(want) +
-                           " (its fields: " + Fields(s) +
-                           "): name its time and readings with the columns option "
-                           "(time,x,y,z, or x,y,z and the rate option)");
-    };
-    out.time = field(known->time);
-    out.packing = known->packing;
-    if (known->packing == KnownStream::Packing::kFifo) {
-      // The arrays x[i], y[i], z[i]: as long as the log's format has them.
-      const auto element = [&](std::string_view base, std::size_t i) {
-        return std::string(base) + "[" + std::to_string(i) + "]";
-      };
-      out.axis[0] = field(element(known->x, 0));
-      out.axis[1] = field(element(known->y, 0));
-      out.axis[2] = field(element(known->z, 0));
-      out.extra = {field("dt"), field("scale"), field("samples")};
-      while (Find(s, element(known->x, out.fifo)) && Find(s, element(known->y, out.fifo)) &&
-             Find(s, element(known->z, out.fifo))) {
-        ++out.fifo;
-      }
-      for (std::string_view base : {known->x, known->y, known->z}) {
-        for (std::size_t i = 1; i < out.fifo; ++i) out.extra.push_back(field(element(base, i)));
-      }
-    } else {
-      out.axis[0] = field(known->x);
-      out.axis[1] = field(known->y);
-      out.axis[2] = field(known->z);
-      if (known->packing == KnownStream::Packing::kDelta) out.extra = {field(known->interval)};
-      if (!known->unmeasured.empty()) out.unmeasured = Find(s, known->unmeasured);
-    }
-  }
-  if (options.temperature.empty()) {
-    if (known != nullptr && !known->temperature.empty())
-      out.temperature = Find(s, known->temperature);
-  } else if (options.temperature != "none") {
-    out.temperature = ColumnOf(s, options.temperature, source, "the temperature option");
-  }
-  std::vector<std::size_t> all(std::begin(out.axis), std::end(out.axis));
-  if (out.time) all.insert(all.begin(), *out.time);
-
-  for (std::size_t i = 0; i < all.size(); ++i) {
-    for (std::size_t j = 0; j < i; ++j) {
-      if (all[i] == all[j]) {
-        throw InputError(source, 0,
-                         "the columns option reads the field " + Shown((*s.columns)[all[i]]) +
-                             " twice: each of time, x, y, z needs its own");
-      }
-    }
-  }
-  if (out.temperature && std::find(all.begin(), all.end(), *out.temperature) != all.end()) {
-    if (options.temperature.empty()) {
-      out.temperature.reset();  // the known field, chosen as a reading: no temperature
-    } else {
-      throw InputError(source, 0,
-                       "the temperature option names the field " +
-                           Shown((*s.columns)[*out.temperature]) +
-                           ", which is read as the time or a reading: each needs its own");
-    }
-  }
-  return out;
-}
-
-// The stored order of a Chosen: time first when there is one.
-std::vector<std::size_t> Stored(const Chosen& c) {
-  std::vector<std::size_t> out;
-  if (c.time) out.push_back(*c.time);
-  out.insert(out.end(), std::begin(c.axis), std::end(c.axis));
-  out.insert(out.end(), c.extra.begin(), c.extra.end());
-  if (c.temperature) out.push_back(*c.temperature);
-  if (c.unmeasured) out.push_back(*c.unmeasured);
-  return out;
 }
 
 // Whether a parameter belongs to the calibration the autopilot applies to `sensor`'s readings:
@@ -534,47 +243,19 @@ DecodedLog Decode(BinaryStream& in, LogFormat format, const KeepStream& keep,
   throw std::logic_error("Decode: not a log of streams");
 }
 
-}  // namespace
-
-InputData ReadNativeLog(BinaryStream& in, InputFile* file, const ReadOptions& options,
-                        const std::string* path) {
-  const std::string source = in.name();
-  const LogFormat format = FormatOf(in);
-  const std::string name = FormatName(format);
-  if (options.kind == InputKind::kPositions) {
-    throw InputError(source, 0, name + " is a raw log, not a positions file");
-  }
-  Sha256 hash;
-  if (options.fingerprint) in.Fingerprint(&hash);
-  // Keep the topic asked for, or every stream of the sensor accelcal knows; store only the
-  // columns the samples come from (none when they cannot be chosen: the error comes below).
-  const std::string_view sensor = NameOf(options.sensor);
-  const auto keep = [&](const DecodedStream& s) {
-    return options.topic.empty() ? Known(s.type, sensor) != nullptr : s.topic == options.topic;
-  };
-  const auto store = [&](const DecodedStream& s) {
-    try {
-      return Stored(Choose(s, options, Known(s.type, sensor), source));
-    } catch (const InputError&) {
-      return std::vector<std::size_t>();
-    }
-  };
-  // (Standard input, even redirected from a file, has no path to open.)
-  if (file == nullptr || !file->regular() || (path != nullptr && *path == "-")) path = nullptr;
-  DecodedLog log = Decode(in, format, keep, store, path);
-  in.Drain();
-  if (options.fingerprint && file != nullptr) RequireUnchanged(*file);
-  const std::string cut = log.truncated ? "; " + *log.truncated : std::string();
-  // The stream: the topic's (and instance's) with messages.
+// The stream: the topic's (and instance's) with messages; InputError listing the candidates
+// when there is none or several (`cut`: how the log was cut short, if it was).
+DecodedStream& TheStream(DecodedLog* log, const ReadOptions& options, std::string_view sensor,
+                         const std::string& source, const std::string& cut) {
   std::vector<DecodedStream*> candidates;
-  for (DecodedStream& s : log.streams) {
+  for (DecodedStream& s : log->streams) {
     if (!s.kept || s.messages == 0) continue;
     if (options.instance && static_cast<double>(s.instance) != *options.instance) continue;
     candidates.push_back(&s);
   }
   if (candidates.size() != 1) {
     std::string list;
-    for (const DecodedStream& s : log.streams) {
+    for (const DecodedStream& s : log->streams) {
       if (s.messages > 0 &&
           (options.topic.empty() ? Known(s.type, sensor) != nullptr : s.topic == options.topic)) {
         list += "; " + Line(s);
@@ -586,7 +267,7 @@ InputData ReadNativeLog(BinaryStream& in, InputFile* file, const ReadOptions& op
         options.instance ? Format(" with instance %g", *options.instance) : std::string();
     if (candidates.empty()) {
       std::string topics;
-      for (const DecodedStream& s : log.streams) {
+      for (const DecodedStream& s : log->streams) {
         if (s.messages > 0) topics += (topics.empty() ? "" : ", ") + Shown(s.topic);
       }
       throw InputError(source, 0,
@@ -598,41 +279,18 @@ InputData ReadNativeLog(BinaryStream& in, InputFile* file, const ReadOptions& op
                      "several " + what + "s:" + list.substr(1) +
                          "; choose one with the topic and instance options");
   }
-  ChooseFrame(candidates.front(), options, source);
-  const DecodedStream& s = *candidates.front();
-  const Chosen chosen = Choose(s, options, Known(s.type, sensor), source);
-  if (s.stored != Stored(chosen)) {
-    throw std::logic_error("ReadNativeLog: the columns stored are not the columns chosen");
-  }
-  // A time field the format defines is in µs; another the user chose is read as a text log's.
-  const bool microseconds = chosen.time && IsMicrosecondColumn(s, *chosen.time);
-  if (microseconds && options.time_unit != TimeUnit::kAuto &&
-      options.time_unit != TimeUnit::kMicroseconds) {
-    throw InputError(
-        source, 0,
-        name + "'s " + (*s.columns)[*chosen.time] +
-            (format == LogFormat::kRosBag || format == LogFormat::kMcap ||
-                     format == LogFormat::kRosbag2Sqlite
-                 ? " is a ROS time (seconds and nanoseconds) by its specification: "
-                   "the time unit option (" +
-                       std::string(ToString(options.time_unit)) + ") does not apply to it"
-                 : " is in microseconds by its specification, not in " +
-                       std::string(ToString(options.time_unit))));
-  }
-  InputData data;
-  data.kind = InputKind::kRaw;
-  data.kind_reason = name + ": " + Line(s);
-  if (const KnownStream* known = Known(s.type, sensor); known != nullptr && known->corrected) {
-    data.kind_reason +=
-        ", already corrected by the calibration in force when it was logged: what is calibrated "
-        "is what that calibration left";
-  }
-  RawLog& raw = data.raw;
-  raw.source = source;
+  return *candidates.front();
+}
+
+// The chosen columns of `s`'s messages as samples, a FIFO's unpacked and a delta's divided by its
+// interval, each checked: finite, times not going backwards, temperatures within range.
+void AppendSamples(const DecodedLog& log, const DecodedStream& s, const Chosen& chosen,
+                   bool microseconds, std::string_view sensor, const std::string& source,
+                   RawLog* raw) {
   const std::size_t width = s.stored.size(), first = chosen.time ? 1 : 0;
-  if (chosen.time) raw.time_s.reserve(s.messages);
-  raw.samples.reserve(s.messages);
-  raw.line.reserve(s.messages);
+  if (chosen.time) raw->time_s.reserve(s.messages);
+  raw->samples.reserve(s.messages);
+  raw->line.reserve(s.messages);
   // Beyond 2^53 a time in µs is no longer an exact double.
   constexpr double kExact = 9007199254740992.0;
   using Packing = KnownStream::Packing;
@@ -651,7 +309,7 @@ InputData ReadNativeLog(BinaryStream& in, InputFile* file, const ReadOptions& op
   }
   // The temperature's place in a stored row: before the unmeasured marker, which is last.
   const std::size_t temperature_at = width - 1 - (chosen.unmeasured ? 1 : 0);
-  if (chosen.temperature) raw.temperature_c.reserve(s.messages);
+  if (chosen.temperature) raw->temperature_c.reserve(s.messages);
   for (std::size_t i = 0; i < s.messages; ++i) {
     const double* row = s.values.data() + i * width;
     const auto where = [&] {
@@ -713,18 +371,120 @@ InputData ReadNativeLog(BinaryStream& in, InputFile* file, const ReadOptions& op
       }
       if (chosen.time) {
         const double t = row[0] - static_cast<double>(n - 1 - k) * dt_us;
-        if (!raw.time_s.empty() && t < raw.time_s.back()) {
+        if (!raw->time_s.empty() && t < raw->time_s.back()) {
           throw InputError(source, 0,
                            where() + Format(": time goes backwards (%.17g after %.17g %s)", t,
-                                            raw.time_s.back(), microseconds ? "us" : "as read"));
+                                            raw->time_s.back(), microseconds ? "us" : "as read"));
         }
-        raw.time_s.push_back(t);
+        raw->time_s.push_back(t);
       }
-      raw.samples.push_back(v);
-      raw.line.push_back(static_cast<std::uint32_t>(std::min<std::size_t>(i + 1, UINT32_MAX)));
-      if (chosen.temperature) raw.temperature_c.push_back(t_c);
+      raw->samples.push_back(v);
+      raw->line.push_back(static_cast<std::uint32_t>(std::min<std::size_t>(i + 1, UINT32_MAX)));
+      if (chosen.temperature) raw->temperature_c.push_back(t_c);
     }
   }
+}
+
+// A time in µs the same in every message: the driver does not stamp its samples; InputError
+// naming another time the stream has, or the options that read one.
+void RefuseUnstampedTimes(const DecodedStream& s, const Chosen& chosen, const RawLog& raw,
+                          const std::string& source) {
+  if (!(raw.time_s.size() >= 2 && raw.time_s.front() == raw.time_s.back() &&
+        std::is_sorted(raw.time_s.begin(), raw.time_s.end()))) {
+    return;
+  }
+  // A driver that does not stamp its samples (a ROS publisher's header.stamp, a PX4 driver's
+  // timestamp_sample left 0): another time the stream has is the one there is, the time the
+  // recorder logged each message (ROS's log_time, ULog's timestamp, DataFlash's TimeUS).
+  const std::string& field = (*s.columns)[*chosen.time];
+  std::string other;
+  const auto offer = [&](const char* candidate) {
+    const std::optional<std::size_t> c = Find(s, candidate);
+    if (other.empty() && c && *c != *chosen.time && IsMicrosecondColumn(s, *c)) other = candidate;
+  };
+  offer(internal::kLogTime);
+  for (const char* candidate : kMicrosecondFields) offer(candidate);
+  const std::string axes = (*s.columns)[chosen.axis[0]] + "," + (*s.columns)[chosen.axis[1]] + "," +
+                           (*s.columns)[chosen.axis[2]];
+  throw InputError(
+      source, 0,
+      Format("%s's %s is the same in every message (%.17g us): the sensor's driver does not "
+             "stamp them; %s",
+             Shown(s.topic).c_str(), field.c_str(), raw.time_s.front(),
+             other.empty()
+                 ? Format("name a time that changes with the columns option (time,%s), or "
+                          "give the rate option",
+                          axes.c_str())
+                       .c_str()
+                 : Format("read the time the recorder logged each with the columns option "
+                          "(%s,%s)",
+                          other.c_str(), axes.c_str())
+                       .c_str()));
+}
+
+}  // namespace
+
+InputData ReadNativeLog(BinaryStream& in, InputFile* file, const ReadOptions& options,
+                        const std::string* path) {
+  const std::string source = in.name();
+  const LogFormat format = FormatOf(in);
+  const std::string name = FormatName(format);
+  if (options.kind == InputKind::kPositions) {
+    throw InputError(source, 0, name + " is a raw log, not a positions file");
+  }
+  Sha256 hash;
+  if (options.fingerprint) in.Fingerprint(&hash);
+  // Keep the topic asked for, or every stream of the sensor accelcal knows; store only the
+  // columns the samples come from (none when they cannot be chosen: the error comes below).
+  const std::string_view sensor = NameOf(options.sensor);
+  const auto keep = [&](const DecodedStream& s) {
+    return options.topic.empty() ? Known(s.type, sensor) != nullptr : s.topic == options.topic;
+  };
+  const auto store = [&](const DecodedStream& s) {
+    try {
+      return Stored(Choose(s, options, Known(s.type, sensor), source));
+    } catch (const InputError&) {
+      return std::vector<std::size_t>();
+    }
+  };
+  // (Standard input, even redirected from a file, has no path to open.)
+  if (file == nullptr || !file->regular() || (path != nullptr && *path == "-")) path = nullptr;
+  DecodedLog log = Decode(in, format, keep, store, path);
+  in.Drain();
+  if (options.fingerprint && file != nullptr) RequireUnchanged(*file);
+  const std::string cut = log.truncated ? "; " + *log.truncated : std::string();
+  DecodedStream& s = TheStream(&log, options, sensor, source, cut);
+  ChooseFrame(&s, options, source);
+  const Chosen chosen = Choose(s, options, Known(s.type, sensor), source);
+  if (s.stored != Stored(chosen)) {
+    throw std::logic_error("ReadNativeLog: the columns stored are not the columns chosen");
+  }
+  // A time field the format defines is in µs; another the user chose is read as a text log's.
+  const bool microseconds = chosen.time && IsMicrosecondColumn(s, *chosen.time);
+  if (microseconds && options.time_unit != TimeUnit::kAuto &&
+      options.time_unit != TimeUnit::kMicroseconds) {
+    throw InputError(
+        source, 0,
+        name + "'s " + (*s.columns)[*chosen.time] +
+            (format == LogFormat::kRosBag || format == LogFormat::kMcap ||
+                     format == LogFormat::kRosbag2Sqlite
+                 ? " is a ROS time (seconds and nanoseconds) by its specification: "
+                   "the time unit option (" +
+                       std::string(ToString(options.time_unit)) + ") does not apply to it"
+                 : " is in microseconds by its specification, not in " +
+                       std::string(ToString(options.time_unit))));
+  }
+  InputData data;
+  data.kind = InputKind::kRaw;
+  data.kind_reason = name + ": " + Line(s);
+  if (const KnownStream* known = Known(s.type, sensor); known != nullptr && known->corrected) {
+    data.kind_reason +=
+        ", already corrected by the calibration in force when it was logged: what is calibrated "
+        "is what that calibration left";
+  }
+  RawLog& raw = data.raw;
+  raw.source = source;
+  AppendSamples(log, s, chosen, microseconds, sensor, source, &raw);
   if (log.truncated) raw.read_warning = *log.truncated;
   if (std::all_of(raw.temperature_c.begin(), raw.temperature_c.end(),
                   [](double t) { return std::isnan(t); })) {
@@ -747,42 +507,13 @@ InputData ReadNativeLog(BinaryStream& in, InputFile* file, const ReadOptions& op
   stream.corrected = known != nullptr && known->corrected;
   // The unit of a known stream's readings, when they are what was read (by default, or named).
   if (known != nullptr &&
-      (chosen.packing != Packing::kSample ||
+      (chosen.packing != KnownStream::Packing::kSample ||
        ((*s.columns)[chosen.axis[0]] == known->x && (*s.columns)[chosen.axis[1]] == known->y &&
         (*s.columns)[chosen.axis[2]] == known->z))) {
     stream.unit = std::string(known->unit);
   }
   stream.calibration_in_force = CalibrationInForce(log, s, sensor, source);
-  if (microseconds && raw.time_s.size() >= 2 && raw.time_s.front() == raw.time_s.back() &&
-      std::is_sorted(raw.time_s.begin(), raw.time_s.end())) {
-    // A driver that does not stamp its samples (a ROS publisher's header.stamp, a PX4 driver's
-    // timestamp_sample left 0): another time the stream has is the one there is, the time the
-    // recorder logged each message (ROS's log_time, ULog's timestamp, DataFlash's TimeUS).
-    const std::string& field = (*s.columns)[*chosen.time];
-    std::string other;
-    const auto offer = [&](const char* candidate) {
-      const std::optional<std::size_t> c = Find(s, candidate);
-      if (other.empty() && c && *c != *chosen.time && IsMicrosecondColumn(s, *c)) other = candidate;
-    };
-    offer(internal::kLogTime);
-    for (const char* candidate : kMicrosecondFields) offer(candidate);
-    const std::string axes = (*s.columns)[chosen.axis[0]] + "," + (*s.columns)[chosen.axis[1]] +
-                             "," + (*s.columns)[chosen.axis[2]];
-    throw InputError(
-        source, 0,
-        Format("%s's %s is the same in every message (%.17g us): the sensor's driver does not "
-               "stamp them; %s",
-               Shown(s.topic).c_str(), field.c_str(), raw.time_s.front(),
-               other.empty()
-                   ? Format("name a time that changes with the columns option (time,%s), or "
-                            "give the rate option",
-                            axes.c_str())
-                         .c_str()
-                   : Format("read the time the recorder logged each with the columns option "
-                            "(%s,%s)",
-                            other.c_str(), axes.c_str())
-                         .c_str()));
-  }
+  if (microseconds) RefuseUnstampedTimes(s, chosen, raw, source);
   try {
     FinishRawLog(&raw, microseconds ? TimeUnit::kMicroseconds : options.time_unit, options.rate_hz,
                  chosen.time ? std::string_view((*s.columns)[*chosen.time]) : std::string_view());

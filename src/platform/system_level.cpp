@@ -4,6 +4,8 @@
 #include <cstdio>
 #include <random>
 #include <stdexcept>
+#include <utility>
+#include <vector>
 
 #include <Eigen/Cholesky>
 #include <Eigen/Eigenvalues>
@@ -45,6 +47,49 @@ std::string Number(double v) {
   char buf[32];
   internal::FormatTo(buf, sizeof buf, "%.6g", v);
   return buf;
+}
+
+// The combinations w of the free parameters (`free`, the unknowns the null space of eq. (41)
+// moves) that it determines, with Nᵀw = 0, in reduced row echelon form (pivots in the order of the
+// unknowns), each named from `names`: e.g. ∇x/g − sin L Δβxy.
+std::vector<std::pair<std::string, Eigen::Matrix<double, 6, 1>>> DeterminedCombinations(
+    const Eigen::MatrixXd& null_space, const std::vector<int>& free, const char* const names[6]) {
+  std::vector<std::pair<std::string, Eigen::Matrix<double, 6, 1>>> out;
+  Eigen::MatrixXd Nf(null_space.cols(), static_cast<Eigen::Index>(free.size()));
+  for (std::size_t j = 0; j < free.size(); ++j) Nf.col(j) = null_space.row(free[j]).transpose();
+  Eigen::JacobiSVD<Eigen::MatrixXd> nsvd(Nf, Eigen::ComputeFullV);
+  const Eigen::Index nrank = (nsvd.singularValues().array() > 1e-9).count();
+  Eigen::MatrixXd W = nsvd.matrixV().rightCols(Nf.cols() - nrank).transpose();  // rows: w
+  // Reduced row echelon form by Gauss-Jordan with partial pivoting along the columns.
+  Eigen::Index row = 0;
+  for (Eigen::Index col = 0; col < W.cols() && row < W.rows(); ++col) {
+    Eigen::Index pivot = row;
+    W.col(col).segment(row, W.rows() - row).cwiseAbs().maxCoeff(&pivot);
+    pivot += row;
+    if (std::abs(W(pivot, col)) < 1e-9) continue;
+    W.row(row).swap(W.row(pivot));
+    W.row(row) /= W(row, col);
+    for (Eigen::Index other = 0; other < W.rows(); ++other) {
+      if (other != row) W.row(other) -= W(other, col) * W.row(row);
+    }
+    ++row;
+  }
+  for (Eigen::Index k = 0; k < W.rows(); ++k) {
+    Eigen::Matrix<double, 6, 1> w = Eigen::Matrix<double, 6, 1>::Zero();
+    std::string name;
+    for (std::size_t j = 0; j < free.size(); ++j) {
+      const double coefficient = W(k, static_cast<Eigen::Index>(j));
+      if (std::abs(coefficient) < 1e-12) continue;
+      w(free[j]) = coefficient;
+      const std::string term = std::abs(std::abs(coefficient) - 1.0) < 1e-12
+                                   ? names[free[j]]
+                                   : Number(std::abs(coefficient)) + "*" + names[free[j]];
+      name += name.empty() ? (coefficient < 0 ? "-" : "") + term
+                           : (coefficient < 0 ? " - " : " + ") + term;
+    }
+    out.emplace_back(name, w);
+  }
+  return out;
 }
 
 }  // namespace
@@ -262,42 +307,8 @@ SystemLevelResult SystemLevelEstimator::Finish() const {
     }
   }
   if (!free.empty()) {
-    // Combinations w of the free parameters with Nᵀw = 0, in reduced row echelon form (pivots in
-    // the order of the unknowns): e.g. ∇x/g − sin L Δβxy.
-    Eigen::MatrixXd Nf(null_space.cols(), static_cast<Eigen::Index>(free.size()));
-    for (std::size_t j = 0; j < free.size(); ++j) Nf.col(j) = null_space.row(free[j]).transpose();
-    Eigen::JacobiSVD<Eigen::MatrixXd> nsvd(Nf, Eigen::ComputeFullV);
-    const Eigen::Index nrank = (nsvd.singularValues().array() > 1e-9).count();
-    Eigen::MatrixXd W = nsvd.matrixV().rightCols(Nf.cols() - nrank).transpose();  // rows: w
-    // Reduced row echelon form by Gauss-Jordan with partial pivoting along the columns.
-    Eigen::Index row = 0;
-    for (Eigen::Index col = 0; col < W.cols() && row < W.rows(); ++col) {
-      Eigen::Index pivot = row;
-      W.col(col).segment(row, W.rows() - row).cwiseAbs().maxCoeff(&pivot);
-      pivot += row;
-      if (std::abs(W(pivot, col)) < 1e-9) continue;
-      W.row(row).swap(W.row(pivot));
-      W.row(row) /= W(row, col);
-      for (Eigen::Index other = 0; other < W.rows(); ++other) {
-        if (other != row) W.row(other) -= W(other, col) * W.row(row);
-      }
-      ++row;
-    }
-    for (Eigen::Index k = 0; k < W.rows(); ++k) {
-      Eigen::Matrix<double, 6, 1> w = Eigen::Matrix<double, 6, 1>::Zero();
-      std::string name;
-      for (std::size_t j = 0; j < free.size(); ++j) {
-        const double coefficient = W(k, static_cast<Eigen::Index>(j));
-        if (std::abs(coefficient) < 1e-12) continue;
-        w(free[j]) = coefficient;
-        const std::string term = std::abs(std::abs(coefficient) - 1.0) < 1e-12
-                                     ? kNames[free[j]]
-                                     : Number(std::abs(coefficient)) + "*" + kNames[free[j]];
-        name += name.empty() ? (coefficient < 0 ? "-" : "") + term
-                             : (coefficient < 0 ? " - " : " + ") + term;
-      }
+    for (const auto& [name, w] : DeterminedCombinations(null_space, free, kNames))
       estimate(name, w);
-    }
   }
   // The closed form's summary: the specific-force fit's sums of squares and conditioning.
   const Eigen::Matrix<double, 5, 1> scale = gram_.diagonal().cwiseSqrt().cwiseInverse();

@@ -1,0 +1,31 @@
+#pragma once
+// The sections of a calibration file that more than one reader takes (calibration_file_read.cpp),
+// and the gyroscope's (calibration_file_gyroscope.cpp).
+#include <string>
+#include <utility>
+
+#include <Eigen/Core>
+#include <nlohmann/json.hpp>
+
+#include "accelcal/calibration_file.hpp"
+#include "output/json_reader.hpp"
+
+namespace accelcal::internal {
+
+// `doc`'s `covariance`: n × n numbers, symmetric with a diagonal ≥ 0 (`what` names its
+// parameters in the error).
+Eigen::MatrixXd ReadSquareCovariance(const Reader& r, const ordered_json& doc, std::size_t n,
+                                     const std::string& what);
+
+// `diagnostics`: the findings of the checks the calibration passed or failed.
+void ReadDiagnostics(const Reader& r, const ordered_json& doc, LoadedCalibration& cal);
+
+// A thermal section's `temperature_range`: the temperatures its fit spans, to which its
+// polynomials are held; T_ref within them.
+std::pair<double, double> ReadTemperatureRange(const Reader& in, const ordered_json& t,
+                                               double t_ref_c);
+
+// `sensors.gyroscope`: the model and its parameters (the rest is a record for people).
+LoadedCalibration::Gyroscope ReadGyroscope(const Reader& r, const ordered_json& doc);
+
+}  // namespace accelcal::internal

@@ -7,6 +7,7 @@
 #include "accelcal/error.hpp"
 #include "accelcal/frame.hpp"
 #include "accelcal/noise.hpp"
+#include "analysis/findings.hpp"
 #include "core/median.hpp"
 #include "core/text_format.hpp"
 #include "statistics/student_t.hpp"
@@ -54,12 +55,8 @@ std::pair<double, Vec3> LargestGap(const std::vector<Vec3>& directions) {
   return {worst * 180.0 / kPi, where};
 }
 
+using internal::AddFinding;
 using internal::Median;
-
-void Add(std::vector<Finding>* out, const char* code, Severity severity, std::string message,
-         std::vector<std::pair<std::string, double>> numbers = {}) {
-  out->push_back({code, severity, std::move(message), std::move(numbers)});
-}
 
 // RMS misfit as a fraction of g (see the file comment), over the positions in the fit.
 double MisfitFraction(const CalibrationResult& r, const std::vector<Vec3>& means) {
@@ -109,8 +106,8 @@ void PoorlyDetermined(const CalibrationResult& r, std::vector<Finding>* out) {
     }
   }
   if (!list.empty()) {
-    Add(out, "poorly_determined", Severity::kWarning,
-        "poorly determined: " + list + "; add positions that excite them", numbers);
+    AddFinding(out, "poorly_determined", Severity::kWarning,
+               "poorly determined: " + list + "; add positions that excite them", numbers);
   }
 }
 
@@ -135,7 +132,8 @@ double MedianLagOneCorrelation(const RawLog& log, const std::vector<StaticInterv
 
 std::vector<Finding> TimeFindings(const TimeAxis& time) {
   std::vector<Finding> out;
-  Add(&out, "time_unit", Severity::kNote,
+  AddFinding(
+      &out, "time_unit", Severity::kNote,
       Format("time in %s: %s; times are seconds from the first sample (t = %.15g s)",
              std::string(ToString(time.unit)).c_str(), time.unit_reason.c_str(), time.origin_s),
       {{"origin_s", time.origin_s}, {"rate_hz", time.rate_hz}});
@@ -144,7 +142,8 @@ std::vector<Finding> TimeFindings(const TimeAxis& time) {
         time.gaps.begin(), time.gaps.end(), [](const TimeGap& a, const TimeGap& b) {
           return a.t_after_s - a.t_before_s < b.t_after_s - b.t_before_s;
         });
-    Add(&out, "time_gaps", Severity::kNote,
+    AddFinding(
+        &out, "time_gaps", Severity::kNote,
         Format("the time column has %zu gap%s (steps over %.0f times the typical %.4g s; the "
                "longest %.4g s at %.4g s): the %zu pieces are detected separately and no interval "
                "spans a gap",
@@ -154,187 +153,21 @@ std::vector<Finding> TimeFindings(const TimeAxis& time) {
          {"longest_s", longest->t_after_s - longest->t_before_s}});
   }
   if (time.repeated_fraction > 0.05) {
-    Add(&out, "coarse_timestamps", Severity::kNote,
+    AddFinding(
+        &out, "coarse_timestamps", Severity::kNote,
         Format("%.0f %% of the time steps are 0: the timestamps (resolution %.4g s) are coarser "
                "than the sample period; the rate is taken over spans (%.6g Hz)",
                100 * time.repeated_fraction, time.resolution_s, time.rate_hz),
         {{"repeated_fraction", time.repeated_fraction}, {"resolution_s", time.resolution_s}});
   }
   if (time.irregular_fraction > 0.01) {
-    Add(&out, "irregular_sampling",
+    AddFinding(
+        &out, "irregular_sampling",
         time.irregular_fraction > 0.1 ? Severity::kWarning : Severity::kNote,
         Format("irregular sampling: %.1f %% of the time steps differ from the typical %.4g s by "
                "more than half of it",
                100 * time.irregular_fraction, time.typical_step_s),
         {{"irregular_fraction", time.irregular_fraction}});
-  }
-  return out;
-}
-
-std::vector<Finding> GyroFindings(const GyroCalibration& g) {
-  std::vector<Finding> out;
-  const double ratio = g.rotation_scatter_ratio;
-  if (g.rms_deg > kGyroMisfitFailure_deg && !(ratio <= kScatterWarning)) {
-    Add(&out, "gyro_misfit", Severity::kFailure,
-        Format("the gyroscope's rotations miss the gravity directions by %.3g deg RMS, %.3g times "
-               "what its rate noise explains, beyond %.0f deg: its calibration does not fit (its "
-               "axes mapped otherwise than the accelerometer's, a rate axis saturated, or a model "
-               "without a term this gyro has%s)",
-               g.rms_deg, ratio, kGyroMisfitFailure_deg,
-               g.estimator != GyroEstimator::kJoint
-                   ? "; the accelerometer's calibration was held, and the rotations may contradict "
-                     "it: the joint estimator fits both"
-                   : ""),
-        {{"rms_deg", g.rms_deg}, {"scatter_ratio", ratio}, {"limit_deg", kGyroMisfitFailure_deg}});
-  }
-  const struct {
-    const char* what;
-    double ratio;
-  } groups[] = {{"still rates", g.still_scatter_ratio}, {"rotations", g.rotation_scatter_ratio}};
-  for (const auto& group : groups) {
-    if (!(group.ratio > kScatterNote)) continue;
-    const bool warn = group.ratio > kScatterWarning;
-    Add(&out, "gyro_scatter_ratio", warn ? Severity::kWarning : Severity::kNote,
-        Format("the gyroscope's %s scatter %.3g times more than its rate noise explains%s; its "
-               "uncertainties are inflated by that factor",
-               group.what, group.ratio,
-               warn ? ": something other than noise dominates (a bias drifting, turns not "
-                      "integrated faithfully, a model that does not fit this gyro)"
-                    : ""),
-        {{"scatter_ratio", group.ratio}});
-  }
-  // The accelerometer's rule for a calibration worth applying: a scale factor to 1 %, a
-  // misalignment to 0.5° (K_g's off-diagonal terms over their row's scale, in radians).
-  if (g.covariance.size() > 0) {
-    const auto& slots = GyroParameterSlots(g.model);
-    std::string names;
-    double worst = 0;
-    for (std::size_t p = 0; p < slots.size(); ++p) {
-      const GyroParameterSlot& s = slots[p];
-      if (s.group != GyroParameterGroup::kK) continue;
-      const auto i = static_cast<Eigen::Index>(p);
-      // Relative to its row's length (a gyro mounted turned has a diagonal near 0): its scale
-      // the row's largest entry (the diagonal when aligned), its misalignments the others.
-      const double scale = g.params.K.row(s.row).norm();
-      Eigen::Index largest = 0;
-      g.params.K.row(s.row).cwiseAbs().maxCoeff(&largest);
-      const double sigma = std::sqrt(g.covariance(i, i)) / scale;  // relative, or radians
-      const double limit = s.col == largest ? kGyroScaleSigmaLimit : kGyroMisalignmentSigmaLimit;
-      if (!(sigma <= limit)) {
-        names += (names.empty() ? "" : ", ") + std::string(s.name);
-        worst = std::max(worst, sigma / limit);
-      }
-    }
-    if (!names.empty()) {
-      // Ten times beyond (10 % of a scale, 5° of a misalignment): not a calibration at all.
-      Add(&out, "gyro_poorly_determined", worst > 10 ? Severity::kFailure : Severity::kWarning,
-          Format("the turns barely determine the gyroscope's %s (up to %.3g times the 1 %% of a "
-                 "scale or 0.5 deg of a misalignment a calibration worth applying has): turn "
-                 "about every axis, several times",
-                 names.c_str(), worst),
-          {{"worst_ratio", worst}});
-    }
-  }
-  if (g.params.K.determinant() < 0) {
-    Add(&out, "gyro_mirrored", Severity::kWarning,
-        "the gyroscope's axes are mirrored against the accelerometer's (det K_g < 0: one axis "
-        "reads inverted, or two are swapped): the calibration maps the rates as they are, but a "
-        "driver's or log's axis setting is likely wrong; check the gyro's axis signs and order",
-        {{"det_K", g.params.K.determinant()}});
-  }
-  for (const GyroRotation& r : g.rotations) {
-    if (!r.flagged) continue;
-    Add(&out, "gyro_turn_outlier", Severity::kWarning,
-        Format("the turn from position %zu to %zu (samples %zu-%zu, %.3g s) disagrees with the "
-               "others: its held-out chi^2 %.3g is beyond %.3g (1 %% over all turns); a bump "
-               "during it? It was kept in the fit",
-               r.from + 1, r.to + 1, r.first_sample + 1, r.last_sample + 1, r.duration_s,
-               r.statistic, r.threshold),
-        {{"from", static_cast<double>(r.from + 1)},
-         {"to", static_cast<double>(r.to + 1)},
-         {"statistic", r.statistic},
-         {"threshold", r.threshold}});
-  }
-  if (const std::optional<double> nominal = RawPerRadPerSecond(g.unit)) {
-    Vec3 scale;
-    for (int i = 0; i < 3; ++i) scale(i) = g.params.K.row(i).norm() / *nominal;
-    if (!((scale.array() - 1).abs() <= kGyroUnitScaleTolerance).all()) {
-      const std::string unit(ToString(g.unit));
-      Add(&out, "gyro_unit_scale", Severity::kWarning,
-          Format("the gyroscope's scales are %.3g, %.3g and %.3g times its declared unit %s "
-                 "(a MEMS gyro's lie within a few percent): its readings were converted with "
-                 "another range setting than the sensor's, or are in another unit; the "
-                 "calibration maps them as they are",
-                 scale(0), scale(1), scale(2), unit.c_str()),
-          {{"scale_x", scale(0)}, {"scale_y", scale(1)}, {"scale_z", scale(2)}});
-    }
-  }
-  if (const std::optional<GyroTimeOffset>& lag = g.time_offset) {
-    const bool beyond =
-        std::abs(lag->lag_s) > 3 * lag->std_s && std::abs(lag->lag_s) > 0.5 * lag->step_s;
-    if (lag->at_limit) {
-      // Failed when the rotations miss by more than the misfit's 2° too: the lag is more than
-      // the still spans absorbed (a gyro 2 s early in 3 s stills: K_g 80 % low, 4.7° RMS, its
-      // noise inflated 50 times, so that the misfit's ratio passed).
-      const bool failed = g.rms_deg > kGyroMisfitFailure_deg;
-      Add(&out, "gyro_time_offset", failed ? Severity::kFailure : Severity::kWarning,
-          Format(
-              "the gyroscope's readings and the accelerometer's align best at the edge of the "
-              "+-0.5 s searched (the gyro %s by at least %.3g ms), or do not correlate: the "
-              "still positions may hold the gyro's turns%s; check that the two streams are of "
-              "one sensor and on one clock",
-              lag->lag_s >= 0 ? "late" : "early", std::abs(lag->lag_s) * 1e3,
-              failed ? Format(", and the rotations miss by %.3g deg RMS", g.rms_deg).c_str() : ""),
-          {{"lag_s", lag->lag_s}, {"rms_deg", g.rms_deg}});
-    } else if (beyond) {
-      Add(&out, "gyro_time_offset", Severity::kNote,
-          Format("the gyroscope's readings %s the accelerometer's by %.3g +- %.2g ms (the shift "
-                 "that best aligns its rates with the accelerometer's tilting over the %zu turns): "
-                 "each turn is integrated where the gyro turned, so the calibration holds; a "
-                 "filter fusing the two streams needs that lag",
-                 lag->lag_s >= 0 ? "lag" : "lead", std::abs(lag->lag_s) * 1e3, lag->std_s * 1e3,
-                 lag->turns),
-          {{"lag_s", lag->lag_s}, {"std_s", lag->std_s}});
-    }
-  }
-  std::string turning;
-  for (std::size_t i = 0; i < g.still_spans.size(); ++i) {
-    if (g.still_spans[i].still) continue;
-    turning += Format("%s%zu (%.3g deg)", turning.empty() ? "" : ", ", i + 1,
-                      g.still_spans[i].turned_outside_deg);
-  }
-  if (!turning.empty()) {
-    Add(&out, "gyro_position_turning", Severity::kWarning,
-        Format("the gyroscope did not stand still in position %s while the accelerometer was "
-               "still (it turned about the vertical, which the accelerometer cannot see, or its "
-               "rate there is off the offset the other positions agree on): no still rate was "
-               "taken from it, and the turns on either side of it were integrated as one; hold "
-               "the unit still in every position",
-               turning.c_str()),
-        {});
-  }
-  std::string turned;
-  double most = 0;
-  for (std::size_t i = 0; i < g.still_spans.size(); ++i) {
-    if (!g.still_spans[i].still) continue;
-    const double angle = g.still_spans[i].turned_outside_deg;
-    if (!(angle > kGyroTurnedInStillNote_deg)) continue;
-    turned += Format("%s%zu (%.3g deg)", turned.empty() ? "" : ", ", i + 1, angle);
-    most = std::max(most, angle);
-  }
-  if (!turned.empty()) {
-    Add(&out, "gyro_turned_in_still", Severity::kNote,
-        Format("the gyroscope turned while the accelerometer was still, in position %s: a turn "
-               "about the vertical, which the accelerometer cannot see, or the gyro's readings "
-               "lagging or leading the accelerometer's; those samples were integrated with the "
-               "neighbouring turns, not averaged into the still rates",
-               turned.c_str()),
-        {{"largest_deg", most}});
-  }
-  if (!std::isfinite(g.heldout_rms_deg)) {
-    Add(&out, "gyro_not_validated", Severity::kNote,
-        "the gyroscope's rotations were not held out one by one (validation turned off): no "
-        "held-out error");
   }
   return out;
 }
@@ -430,11 +263,12 @@ std::optional<Finding> DriftFinding(const RawLog& log, const StaticDetectionResu
 std::vector<Finding> LogFindings(const RawLog* log, const StaticDetectionResult* detection) {
   std::vector<Finding> out;
   if (log && !log->read_warning.empty()) {
-    Add(&out, "log_cut_short", Severity::kWarning,
-        log->read_warning + ": those were used; the rest of the recording, if any, is lost", {});
+    AddFinding(&out, "log_cut_short", Severity::kWarning,
+               log->read_warning + ": those were used; the rest of the recording, if any, is lost",
+               {});
   }
   if (log && !log->temperature_note.empty()) {
-    Add(&out, "temperature_left_out", Severity::kNote, log->temperature_note, {});
+    AddFinding(&out, "temperature_left_out", Severity::kNote, log->temperature_note, {});
   }
   if (log && detection) {
     if (std::optional<Finding> drift = DriftFinding(*log, *detection)) {
@@ -444,7 +278,8 @@ std::vector<Finding> LogFindings(const RawLog* log, const StaticDetectionResult*
   if (log && detection && !detection->intervals.empty()) {
     const double rho = MedianLagOneCorrelation(*log, detection->intervals);
     if (rho < kInterleavedCorrelation) {
-      Add(&out, "interleaved", Severity::kFailure,
+      AddFinding(
+          &out, "interleaved", Severity::kFailure,
           Format("successive samples alternate in the still intervals (lag-1 correlation %.2f, "
                  "below %.1f): the rows come from two sensors in turn; read one of them",
                  rho, kInterleavedCorrelation),
@@ -455,7 +290,8 @@ std::vector<Finding> LogFindings(const RawLog* log, const StaticDetectionResult*
     const std::size_t i = detection->corrupted.front();
     const Vec3& x = log->samples[i];
     const std::size_t count = detection->corrupted.size();
-    Add(&out, "corrupted_reading", Severity::kWarning,
+    AddFinding(
+        &out, "corrupted_reading", Severity::kWarning,
         Format(
             "%zu reading%s lie%s more than a million times the log's spread from its median (the "
             "first: sample %zu%s, %.6g %.6g %.6g): corrupted, not a sensor's; left out, and a "
@@ -468,7 +304,8 @@ std::vector<Finding> LogFindings(const RawLog* log, const StaticDetectionResult*
   if (detection) {
     for (Finding& f : RejectedPeriodFindings(detection->rejected)) out.push_back(std::move(f));
     if (detection->joined > 0) {
-      Add(&out, "joined_periods", Severity::kNote,
+      AddFinding(
+          &out, "joined_periods", Severity::kNote,
           Format("%zu still period%s split by a short disturbance %s joined (the same orientation "
                  "on both sides, within 5 standard errors)",
                  detection->joined, detection->joined == 1 ? "" : "s",
@@ -485,24 +322,21 @@ std::vector<Finding> LogFindings(const RawLog* log, const StaticDetectionResult*
 std::vector<Finding> RejectedPeriodFindings(const std::vector<RejectedInterval>& rejected) {
   std::vector<Finding> out;
   for (const RejectedInterval& r : rejected) {
-    Add(&out, "rejected_period",
-        r.cause == RejectedInterval::Cause::kClipped ? Severity::kWarning : Severity::kNote,
-        Format("the still period %.3f-%.3f s is not used: %s", r.t_begin_s, r.t_end_s,
-               r.reason.c_str()),
-        {{"t_begin_s", r.t_begin_s}, {"t_end_s", r.t_end_s}});
+    AddFinding(&out, "rejected_period",
+               r.cause == RejectedInterval::Cause::kClipped ? Severity::kWarning : Severity::kNote,
+               Format("the still period %.3f-%.3f s is not used: %s", r.t_begin_s, r.t_end_s,
+                      r.reason.c_str()),
+               {{"t_begin_s", r.t_begin_s}, {"t_end_s", r.t_end_s}});
   }
   return out;
 }
 
-Diagnosis Diagnose(const DiagnosisInput& input) {
-  Diagnosis d;
-  std::vector<Finding>& out = d.findings;
-  const CalibrationResult& r = *input.result;
-  const std::vector<Position>& positions = *input.positions;
-  const std::vector<Vec3> means = Means(positions);
-  const bool known = r.frame == Frame::kPlatform;
-  const char* unit = input.unit == ForceUnit::kMetersPerSecond2 ? "m/s2" : "g";
+namespace {
 
+// Positions that look like a raw log's samples, each read as a position.
+void InputShapeFindings(const DiagnosisInput& input, const std::vector<Vec3>& means,
+                        std::vector<Finding>* out_findings) {
+  std::vector<Finding>& out = *out_findings;
   if (input.positions_by_row_count && means.size() >= 3) {
     Vec3 centre = Vec3::Zero();
     for (const Vec3& m : means) centre += m;
@@ -516,7 +350,8 @@ Diagnosis Diagnose(const DiagnosisInput& input) {
     std::nth_element(steps.begin(), steps.begin() + steps.size() / 2, steps.end());
     const double ratio = steps[steps.size() / 2] / spread;
     if (ratio < kRepeatedStepFraction) {
-      Add(&out, "positions_like_samples", Severity::kWarning,
+      AddFinding(
+          &out, "positions_like_samples", Severity::kWarning,
           Format("the file was read as positions (no header, few rows), but its rows barely move "
                  "from one to the next (median step %.2g %% of their spread, where positions "
                  "turn to a new orientation at every row): it looks like a raw log, each sample "
@@ -525,16 +360,25 @@ Diagnosis Diagnose(const DiagnosisInput& input) {
           {{"median_step_fraction", ratio}, {"limit", kRepeatedStepFraction}});
     }
   }
+}
+
+// The fit: convergence, misfit, scatter, the prior, the degrees of freedom, the model asked for.
+void FitFindings(const DiagnosisInput& input, const std::vector<Vec3>& means,
+                 std::vector<Finding>* out_findings) {
+  std::vector<Finding>& out = *out_findings;
+  const CalibrationResult& r = *input.result;
+  const bool known = r.frame == Frame::kPlatform;
   if (!r.summary.converged()) {
-    Add(&out, "not_converged", Severity::kFailure,
-        "the solver did not converge: " + r.summary.termination_message);
+    AddFinding(&out, "not_converged", Severity::kFailure,
+               "the solver did not converge: " + r.summary.termination_message);
   }
   // The misfit fails the result unless the samples' own noise explains it (a scatter ratio
   // below kScatterWarning: then the readings are merely noisy, and the covariance says so).
   const double misfit = MisfitFraction(r, means);
   const bool noise_explains = std::isfinite(r.scatter_ratio) && r.scatter_ratio <= kScatterWarning;
   if (misfit > kMisfitFailure && !noise_explains) {
-    Add(&out, "misfit", Severity::kFailure,
+    AddFinding(
+        &out, "misfit", Severity::kFailure,
         known ? Format("the residuals of the known orientations are %.2g %% of g RMS, beyond "
                        "%.0f %%: the orientation file does not describe these positions (lines "
                        "out of order or missing, or another frame or sign convention)",
@@ -547,7 +391,8 @@ Diagnosis Diagnose(const DiagnosisInput& input) {
   }
   if (std::isfinite(r.scatter_ratio) && r.scatter_ratio > kScatterNote) {
     const bool warn = r.scatter_ratio > kScatterWarning;
-    Add(&out, "scatter_ratio", warn ? Severity::kWarning : Severity::kNote,
+    AddFinding(
+        &out, "scatter_ratio", warn ? Severity::kWarning : Severity::kNote,
         Format("the positions scatter %.3g times more than the noise of their samples explains%s; "
                "the uncertainties are inflated by that factor",
                r.scatter_ratio,
@@ -563,7 +408,8 @@ Diagnosis Diagnose(const DiagnosisInput& input) {
     const double dof = static_cast<double>(r.positions_used() - NumParameters(r.model));
     if (dof > 0 && r.scatter_ratio * r.scatter_ratio * dof <
                        internal::ChiSquareQuantile(1.0 - kPriorContradictionProbability, dof)) {
-      Add(&out, "loose_random_walk", Severity::kWarning,
+      AddFinding(
+          &out, "loose_random_walk", Severity::kWarning,
           Format("the positions scatter %.3g times what the bias's random walk q and the samples' "
                  "noise predict: q is larger than this bias wanders, and the uncertainties are "
                  "widened by the prior rather than the data; give the random walk measured for "
@@ -577,7 +423,8 @@ Diagnosis Diagnose(const DiagnosisInput& input) {
   if (r.degrees_of_freedom == 0 && r.summary.converged() && !(r.drift && r.drift->random_walk)) {
     const int parameters =
         NumParameters(r.model) + (r.drift ? 3 * static_cast<int>(r.drift->D.cols()) : 0);
-    Add(&out, "exactly_determined", Severity::kWarning,
+    AddFinding(
+        &out, "exactly_determined", Severity::kWarning,
         Format("%d positions fitted for %d parameters: the fit passes through every one of them, "
                "so no residual, uncertainty or held-out position checks it; add positions",
                r.positions_used(), parameters),
@@ -590,7 +437,8 @@ Diagnosis Diagnose(const DiagnosisInput& input) {
     double signal = 0;
     for (int a = 0; a < 3; ++a) signal = std::max(signal, std::abs(r.params.K(a, a)) * r.gravity);
     if (r.residual_sigma <= 1e-9 * signal) {
-      Add(&out, "exact_fit", Severity::kWarning,
+      AddFinding(
+          &out, "exact_fit", Severity::kWarning,
           Format("the positions are fitted to round-off (residual sigma %.3g raw) with %d degrees "
                  "of freedom: they are not independent noisy readings (repeated rows, or "
                  "noise-free data), and the uncertainties mean nothing",
@@ -600,21 +448,30 @@ Diagnosis Diagnose(const DiagnosisInput& input) {
   }
   if (input.selection && r.model == ModelKind::kQuadratic &&
       input.selection->chosen == ModelKind::kLinear) {
-    Add(&out, "model_choice", Severity::kWarning,
-        "the quadratic model was asked for, but the data do not support it: " +
-            input.selection->reason);
+    AddFinding(&out, "model_choice", Severity::kWarning,
+               "the quadratic model was asked for, but the data do not support it: " +
+                   input.selection->reason);
   }
   if (!r.crossval_note.empty()) {
-    Add(&out, "crossval_unavailable", Severity::kNote, "held-out validation: " + r.crossval_note);
+    AddFinding(&out, "crossval_unavailable", Severity::kNote,
+               "held-out validation: " + r.crossval_note);
   }
-  // The screening's findings, and the held-out errors far beyond the typical one that it did not
-  // flag (screening off, or too few degrees of freedom to test).
+}
+
+// The screening's findings, and the held-out errors far beyond the typical one that it did not
+// flag (screening off, or too few degrees of freedom to test).
+void OutlierFindings(const DiagnosisInput& input, std::vector<Finding>* out_findings) {
+  std::vector<Finding>& out = *out_findings;
+  const CalibrationResult& r = *input.result;
+  const std::vector<Position>& positions = *input.positions;
+  const char* unit = input.unit == ForceUnit::kMetersPerSecond2 ? "m/s2" : "g";
   std::vector<bool> found(positions.size(), false);
   int excluded = 0;
   for (const OutlierFinding& o : r.outliers) {
     found[static_cast<std::size_t>(o.position)] = true;
     excluded += o.excluded;
-    Add(&out, "outlier", Severity::kWarning,
+    AddFinding(
+        &out, "outlier", Severity::kWarning,
         Format("position %d disagrees with the others (%s = %.1f, beyond %.2f): %s; it may have "
                "moved or been bumped during its interval",
                o.position + 1, std::string(ToString(o.statistic)).c_str(), o.t, o.threshold,
@@ -622,11 +479,11 @@ Diagnosis Diagnose(const DiagnosisInput& input) {
         {{"position", o.position + 1}, {"statistic", o.t}, {"threshold", o.threshold}});
   }
   if (excluded > 0 && excluded >= input.max_excluded) {
-    Add(&out, "outlier_limit", Severity::kWarning,
-        Format("%d positions were left out, the most allowed: more may disagree (raise the "
-               "limit to test further)",
-               excluded),
-        {{"excluded", excluded}});
+    AddFinding(&out, "outlier_limit", Severity::kWarning,
+               Format("%d positions were left out, the most allowed: more may disagree (raise the "
+                      "limit to test further)",
+                      excluded),
+               {{"excluded", excluded}});
   }
   // Only where the screening did not test every position: where it did, its test (Student t,
   // Bonferroni) is the judgement, and this cruder rule would contradict it.
@@ -638,7 +495,8 @@ Diagnosis Diagnose(const DiagnosisInput& input) {
     const double typical = 1.4826 * Median(magnitudes);  // σ of a zero-mean normal from |e|
     for (std::size_t k = 0; k < magnitudes.size(); ++k) {
       if (typical > 0 && magnitudes[k] > 5.0 * typical && !found[k]) {
-        Add(&out, "held_out_outlier", Severity::kWarning,
+        AddFinding(
+            &out, "held_out_outlier", Severity::kWarning,
             Format("position %zu: held-out |f| - g = %.3g %s, %.1f times the typical: it may "
                    "have moved or been bumped",
                    k + 1, r.crossval_errors[k], unit, magnitudes[k] / typical),
@@ -646,6 +504,15 @@ Diagnosis Diagnose(const DiagnosisInput& input) {
       }
     }
   }
+}
+
+// Where the positions leave the sphere uncovered, what they barely determine, and gravity and
+// units that do not look like Earth's.
+void CoverageFindings(const DiagnosisInput& input, const std::vector<Vec3>& means,
+                      std::vector<Finding>* out_findings) {
+  std::vector<Finding>& out = *out_findings;
+  const CalibrationResult& r = *input.result;
+  const bool known = r.frame == Frame::kPlatform;
   if (!known && !r.directions.empty()) {
     std::vector<Vec3> used;
     for (std::size_t k = 0; k < r.directions.size(); ++k) {
@@ -653,11 +520,11 @@ Diagnosis Diagnose(const DiagnosisInput& input) {
     }
     const auto [gap_deg, where] = LargestGap(used);
     if (gap_deg > 60.0) {
-      Add(&out, "coverage_gap", Severity::kWarning,
-          Format("no position within %.0f deg of the direction (%.2f, %.2f, %.2f): the "
-                 "calibration is extrapolated there; add positions facing it",
-                 gap_deg, where(0), where(1), where(2)),
-          {{"gap_deg", gap_deg}});
+      AddFinding(&out, "coverage_gap", Severity::kWarning,
+                 Format("no position within %.0f deg of the direction (%.2f, %.2f, %.2f): the "
+                        "calibration is extrapolated there; add positions facing it",
+                        gap_deg, where(0), where(1), where(2)),
+                 {{"gap_deg", gap_deg}});
     }
   }
   PoorlyDetermined(r, &out);
@@ -666,7 +533,8 @@ Diagnosis Diagnose(const DiagnosisInput& input) {
   const double g_ms2 =
       input.unit == ForceUnit::kMetersPerSecond2 ? r.gravity : r.gravity * kStandardGravity_ms2;
   if (std::abs(g_ms2 / kStandardGravity_ms2 - 1.0) > 0.01) {
-    Add(&out, "gravity_value", Severity::kWarning,
+    AddFinding(
+        &out, "gravity_value", Severity::kWarning,
         Format("gravity is %.6g m/s2, while on Earth it lies within 9.76-9.84 m/s2 (surface, any "
                "latitude): the scale factors carry that error",
                g_ms2),
@@ -677,19 +545,27 @@ Diagnosis Diagnose(const DiagnosisInput& input) {
     const double median = Median(norms);
     const bool in_g = input.unit == ForceUnit::kStandardGravity;
     if (!in_g && std::abs(median - 1.0) < 0.2) {
-      Add(&out, "units", Severity::kWarning,
+      AddFinding(
+          &out, "units", Severity::kWarning,
           Format("the readings' median magnitude is %.4g, about 1 g, while gravity is %.6g m/s2: "
                  "if they are in g, calibrate in g (the result then maps g to g)",
                  median, r.gravity),
           {{"median_norm", median}, {"gravity", r.gravity}});
     } else if (in_g && std::abs(median / kStandardGravity_ms2 - 1.0) < 0.2) {
-      Add(&out, "units", Severity::kWarning,
+      AddFinding(
+          &out, "units", Severity::kWarning,
           Format("the readings' median magnitude is %.4g, about 9.8 m/s2, while the result is in "
                  "g: if they are in m/s2, calibrate in m/s2",
                  median),
           {{"median_norm", median}, {"gravity", r.gravity}});
     }
   }
+}
+
+// The gyroscope's findings, and each log's (prefixed with its name when there are several).
+void SensorAndLogFindings(const DiagnosisInput& input, std::vector<Finding>* out_findings) {
+  std::vector<Finding>& out = *out_findings;
+  const CalibrationResult& r = *input.result;
   if (input.gyroscope != nullptr) {
     for (Finding& f : GyroFindings(*input.gyroscope)) out.push_back(std::move(f));
   }
@@ -708,6 +584,19 @@ Diagnosis Diagnose(const DiagnosisInput& input) {
       out.push_back(std::move(f));
     }
   }
+}
+
+}  // namespace
+
+Diagnosis Diagnose(const DiagnosisInput& input) {
+  Diagnosis d;
+  std::vector<Finding>& out = d.findings;
+  const std::vector<Vec3> means = Means(*input.positions);
+  InputShapeFindings(input, means, &out);
+  FitFindings(input, means, &out);
+  OutlierFindings(input, &out);
+  CoverageFindings(input, means, &out);
+  SensorAndLogFindings(input, &out);
   // Failures first, then warnings, then notes; each kind in the order found.
   std::stable_sort(out.begin(), out.end(), [](const Finding& a, const Finding& b) {
     return static_cast<int>(a.severity) > static_cast<int>(b.severity);

@@ -127,6 +127,125 @@ double NoticedNoncentrality(double significance, int dof) {
 
 constexpr double kRadToDeg = 180 / 3.14159265358979323846;
 
+// The accelerometer's calibration measures each position's gravity direction c_k, uncertain by
+// its parameters': ∂δ_k/∂θ = Eᵀ (I − c cᵀ) / |f| ∂f/∂θ in c_k's tangent coordinates (TangentBasis
+// E), carried into the turns (`sensitivity`, 2 x P per position, when wanted). DataError for a
+// position the model cannot invert.
+CalibrationResult GravityDirections(const VerifiedCalibration& accel, const FlatSlots& flat,
+                                    const std::vector<Position>& positions,
+                                    std::vector<Eigen::MatrixXd>* sensitivity) {
+  CalibrationResult accel_cal;
+  accel_cal.params = accel.params;
+  accel_cal.gravity = accel.gravity;
+  for (std::size_t k = 0; k < positions.size(); ++k) {
+    double dT = 0;
+    const ModelParameters at_k = ParametersAt(accel, positions[k], k, &dT);
+    const std::optional<Vec3> f = SpecificForce(at_k, positions[k].mean);
+    if (!f || !(f->norm() > 0)) {
+      throw DataError("still position " + std::to_string(k + 1) +
+                      " reads outside the range the accelerometer's model can invert");
+    }
+    const Vec3 c = f->normalized();
+    accel_cal.directions.push_back(c);
+    if (sensitivity) {
+      const Mat33 project = (Mat33::Identity() - c * c.transpose()) / f->norm();
+      sensitivity->push_back(internal::TangentBasis(c).transpose() * project *
+                             ForceSensitivity(flat, at_k, *f, dT));
+    }
+  }
+  return accel_cal;
+}
+
+// Why the gyroscope's verification fails, or "": beyond any statistics (a prediction too loose to
+// verify anything, a turn far off, a bias that moved further than any gyro's turn-on bias does),
+// then the statistic and the turns furthest off. `z`: each turn's.
+std::string GyroFailureReason(const GyroVerification& out, const VerifiedGyroscope& gyro,
+                              const std::vector<double>& z, std::size_t K,
+                              const VerifyOptions& options) {
+  std::string reason;
+  const double bias_change_deg_s =
+      (gyro.params.K.inverse() * out.bias_change_raw).norm() * kRadToDeg;
+  double worst_turn = 0;
+  for (const VerifiedTurn& t : out.turns) worst_turn = std::max(worst_turn, t.error_deg);
+  if (!std::isfinite(out.chi2) || !std::isfinite(out.rms_predicted_deg)) {
+    reason =
+        "the turns' statistic is not finite (the calibration's covariance or turn scatter ratio "
+        "is beyond what arithmetic holds)";
+  } else if (out.rms_predicted_deg > kMaxPredictedTurnDeg) {
+    reason = internal::Format(
+        "the calibration predicts turn errors of %.3g deg RMS (its covariance, its turn scatter "
+        "ratio): beyond %g deg it verifies nothing",
+        out.rms_predicted_deg, kMaxPredictedTurnDeg);
+  } else if (!(bias_change_deg_s < kMaxBiasChangeDegS)) {
+    reason = internal::Format(
+        "the session's bias is %.3g deg/s from the calibration's (beyond %g deg/s no gyro's "
+        "turn-on bias moves): is the gyroscope's log in the calibration's raw unit, and from "
+        "this sensor?",
+        bias_change_deg_s, kMaxBiasChangeDegS);
+  } else if (worst_turn > kMaxTurnErrorDeg) {
+    reason = internal::Format(
+        "a turn is off by %.3g deg (beyond %g deg a calibrated gyroscope does not err): is the "
+        "gyroscope's log in the calibration's raw unit, and from this sensor?",
+        worst_turn, kMaxTurnErrorDeg);
+  } else if (out.p_value < options.significance) {
+    reason = internal::Format(
+        "the turns' rotations and the still rates are further from what the gyroscope's "
+        "calibration predicts than its noise and covariance allow: chi2 = %.4g for %d (the %zu "
+        "turns' %.4g for %d, the still rates' %.4g for %d; p = %.2g < %.2g)",
+        out.chi2, out.dof, K, out.turns_chi2, out.turns_dof, out.stills_chi2, out.stills_dof,
+        out.p_value, options.significance);
+    const std::string named = Furthest(out.off_turns, z, [&](std::size_t k) {
+      return internal::Format("the turn %zu-%zu", out.turns[k].from + 1, out.turns[k].to + 1);
+    });
+    if (!named.empty()) reason += "; furthest off: " + named;
+  }
+  return reason;
+}
+
+// Why the accelerometer's verification fails, or "": the statistic, then the positions furthest
+// off (1-based, as the files and the tool count them), and a hint when |f| is far from g.
+std::string FailureReason(const Verification& out, const VerifiedCalibration& cal,
+                          const std::vector<std::size_t>& outside,
+                          const std::vector<double>& ratios, const VerifyOptions& options) {
+  const std::size_t N = out.positions.size();
+  std::string reason;
+  std::vector<double> z;
+  for (const VerifiedPosition& p : out.positions) z.push_back(p.z);
+  const std::string named = Furthest(
+      out.off_positions, z, [](std::size_t k) { return "position " + std::to_string(k + 1); });
+  if (!std::isfinite(out.chi2) || !std::isfinite(out.rms_predicted)) {
+    reason =
+        "the statistic is not finite (the calibration's covariance or noise is beyond what "
+        "arithmetic holds)";
+  } else if (out.rms_predicted > kMaxPredictedNormError * cal.gravity) {
+    reason = internal::Format(
+        "the calibration predicts errors of |f| - g of %.3g RMS (%.3g of g: its covariance, its "
+        "noise): beyond %g of g it verifies nothing",
+        out.rms_predicted, out.rms_predicted / cal.gravity, kMaxPredictedNormError);
+  } else if (!outside.empty()) {
+    reason = internal::Format(
+        "%zu of %zu positions read outside the range the model can invert (the first: position "
+        "%zu)",
+        outside.size(), N, outside.front() + 1);
+  } else if (out.p_value < options.significance) {
+    reason = internal::Format(
+        "the errors |f| - g are larger than the calibration predicts: chi2 = %.4g for %d "
+        "positions (p = %.2g < %.2g)",
+        out.chi2, out.dof, out.p_value, options.significance);
+    if (!named.empty()) reason += "; furthest off: " + named;
+  }
+  if (!reason.empty() && !ratios.empty()) {
+    const double ratio = internal::Median(ratios);
+    if (std::abs(ratio - 1) > 0.1) {
+      reason += internal::Format(
+          "; |f| is %.3g times g on the median position: is the log in the calibration's raw "
+          "unit, and from this sensor?",
+          ratio);
+    }
+  }
+  return reason;
+}
+
 }  // namespace
 
 GyroVerification VerifyGyroscope(const VerifiedCalibration& accel, const VerifiedGyroscope& gyro,
@@ -139,31 +258,11 @@ GyroVerification VerifyGyroscope(const VerifiedCalibration& accel, const Verifie
         "the gyroscope is verified on the turns between still positions, and the log has " +
         std::to_string(positions.size()) + " still position");
   }
-  // The accelerometer's calibration measures each position's gravity direction c_k, uncertain by
-  // its parameters': ∂δ_k/∂θ = Eᵀ (I − c cᵀ) / |f| ∂f/∂θ in c_k's tangent coordinates (TangentBasis
-  // E), carried into the turns below.
-  CalibrationResult accel_cal;
-  accel_cal.params = accel.params;
-  accel_cal.gravity = accel.gravity;
   const FlatSlots flat = FlatSlotsOf(accel);
   const bool accel_covariance = accel.covariance.rows() == flat.size() && flat.size() > 0;
   std::vector<Eigen::MatrixXd> direction_sensitivity;  // 2 x P per position
-  for (std::size_t k = 0; k < positions.size(); ++k) {
-    double dT = 0;
-    const ModelParameters at_k = ParametersAt(accel, positions[k], k, &dT);
-    const std::optional<Vec3> f = SpecificForce(at_k, positions[k].mean);
-    if (!f || !(f->norm() > 0)) {
-      throw DataError("still position " + std::to_string(k + 1) +
-                      " reads outside the range the accelerometer's model can invert");
-    }
-    const Vec3 c = f->normalized();
-    accel_cal.directions.push_back(c);
-    if (accel_covariance) {
-      const Mat33 project = (Mat33::Identity() - c * c.transpose()) / f->norm();
-      direction_sensitivity.push_back(internal::TangentBasis(c).transpose() * project *
-                                      ForceSensitivity(flat, at_k, *f, dT));
-    }
-  }
+  const CalibrationResult accel_cal = GravityDirections(
+      accel, flat, positions, accel_covariance ? &direction_sensitivity : nullptr);
   internal::Built built = internal::BuildData(accel_log, gyro_log, positions, accel_cal, {});
   internal::GyroFitData& data = built.data;
   data.model = gyro.model;
@@ -283,44 +382,7 @@ GyroVerification VerifyGyroscope(const VerifiedCalibration& accel, const Verifie
       out.parameters.push_back(v);
     }
   }
-  // Beyond any statistics: a prediction too loose to verify anything, a turn far off, a bias
-  // that moved further than any gyro's turn-on bias does.
-  const double bias_change_deg_s =
-      (gyro.params.K.inverse() * out.bias_change_raw).norm() * kRadToDeg;
-  double worst_turn = 0;
-  for (const VerifiedTurn& t : out.turns) worst_turn = std::max(worst_turn, t.error_deg);
-  if (!std::isfinite(out.chi2) || !std::isfinite(out.rms_predicted_deg)) {
-    out.reason =
-        "the turns' statistic is not finite (the calibration's covariance or turn scatter ratio "
-        "is beyond what arithmetic holds)";
-  } else if (out.rms_predicted_deg > kMaxPredictedTurnDeg) {
-    out.reason = internal::Format(
-        "the calibration predicts turn errors of %.3g deg RMS (its covariance, its turn scatter "
-        "ratio): beyond %g deg it verifies nothing",
-        out.rms_predicted_deg, kMaxPredictedTurnDeg);
-  } else if (!(bias_change_deg_s < kMaxBiasChangeDegS)) {
-    out.reason = internal::Format(
-        "the session's bias is %.3g deg/s from the calibration's (beyond %g deg/s no gyro's "
-        "turn-on bias moves): is the gyroscope's log in the calibration's raw unit, and from "
-        "this sensor?",
-        bias_change_deg_s, kMaxBiasChangeDegS);
-  } else if (worst_turn > kMaxTurnErrorDeg) {
-    out.reason = internal::Format(
-        "a turn is off by %.3g deg (beyond %g deg a calibrated gyroscope does not err): is the "
-        "gyroscope's log in the calibration's raw unit, and from this sensor?",
-        worst_turn, kMaxTurnErrorDeg);
-  } else if (out.p_value < options.significance) {
-    out.reason = internal::Format(
-        "the turns' rotations and the still rates are further from what the gyroscope's "
-        "calibration predicts than its noise and covariance allow: chi2 = %.4g for %d (the %zu "
-        "turns' %.4g for %d, the still rates' %.4g for %d; p = %.2g < %.2g)",
-        out.chi2, out.dof, K, out.turns_chi2, out.turns_dof, out.stills_chi2, out.stills_dof,
-        out.p_value, options.significance);
-    const std::string named = Furthest(out.off_turns, z, [&](std::size_t k) {
-      return internal::Format("the turn %zu-%zu", out.turns[k].from + 1, out.turns[k].to + 1);
-    });
-    if (!named.empty()) out.reason += "; furthest off: " + named;
-  }
+  out.reason = GyroFailureReason(out, gyro, z, K, options);
   out.passed = out.reason.empty();
   return out;
 }
@@ -439,42 +501,7 @@ Verification VerifyCalibration(const VerifiedCalibration& cal, const RawLog& log
     out.dof = static_cast<int>(n);
     out.p_value = internal::ChiSquareSurvival(out.chi2, out.dof);
   }
-  // The reason, when it fails: the statistic, then the positions furthest off (1-based, as the
-  // files and the tool count them).
-  std::vector<double> z;
-  for (const VerifiedPosition& p : out.positions) z.push_back(p.z);
-  const std::string named = Furthest(
-      out.off_positions, z, [](std::size_t k) { return "position " + std::to_string(k + 1); });
-  if (!std::isfinite(out.chi2) || !std::isfinite(out.rms_predicted)) {
-    out.reason =
-        "the statistic is not finite (the calibration's covariance or noise is beyond what "
-        "arithmetic holds)";
-  } else if (out.rms_predicted > kMaxPredictedNormError * cal.gravity) {
-    out.reason = internal::Format(
-        "the calibration predicts errors of |f| - g of %.3g RMS (%.3g of g: its covariance, its "
-        "noise): beyond %g of g it verifies nothing",
-        out.rms_predicted, out.rms_predicted / cal.gravity, kMaxPredictedNormError);
-  } else if (!outside.empty()) {
-    out.reason = internal::Format(
-        "%zu of %zu positions read outside the range the model can invert (the first: position "
-        "%zu)",
-        outside.size(), N, outside.front() + 1);
-  } else if (out.p_value < options.significance) {
-    out.reason = internal::Format(
-        "the errors |f| - g are larger than the calibration predicts: chi2 = %.4g for %d "
-        "positions (p = %.2g < %.2g)",
-        out.chi2, out.dof, out.p_value, options.significance);
-    if (!named.empty()) out.reason += "; furthest off: " + named;
-  }
-  if (!out.reason.empty() && !ratios.empty()) {
-    const double ratio = internal::Median(ratios);
-    if (std::abs(ratio - 1) > 0.1) {
-      out.reason += internal::Format(
-          "; |f| is %.3g times g on the median position: is the log in the calibration's raw "
-          "unit, and from this sensor?",
-          ratio);
-    }
-  }
+  out.reason = FailureReason(out, cal, outside, ratios, options);
   out.passed = out.reason.empty();
   return out;
 }

@@ -129,6 +129,106 @@ ordered_json ThermalSection(const ThermalTerms& t, ModelKind model) {
 }
 
 // The accelerometer's section: every key of a version-1 file but `format` and `version`.
+// The positions fitted, each with its reading, interval, direction, residual and errors.
+ordered_json PositionsSection(const CalibrationResult& result, const CalibrationFileInfo& info,
+                              const std::vector<double>& errors) {
+  const std::vector<Vec3> offsets = result.DriftOffsets(info.positions.size());
+  ordered_json positions = ordered_json::array();
+  for (std::size_t k = 0; k < info.positions.size(); ++k) {
+    const Position& p = info.positions[k];
+    ordered_json entry;
+    entry["mean"] = ToJson(p.mean);
+    entry["samples"] = p.samples;
+    if (p.std) entry["std"] = ToJson(*p.std);
+    if (k < info.mean_sigmas.size()) entry["mean_sigma"] = ToJson(info.mean_sigmas[k]);
+    if (p.interval) {
+      entry["interval"] = {{"begin", p.interval->begin},
+                           {"end", p.interval->end},
+                           {"t_begin", p.interval->t_begin_s},
+                           {"t_end", p.interval->t_end_s}};
+    }
+    if (p.temperature_c) entry["temperature"] = *p.temperature_c;
+    if (result.drift) {
+      entry["time"] = result.drift->times_s[k];
+      entry["drift_offset"] = ToJson(offsets[k]);
+    }
+    entry["direction"] = ToJson(result.directions[k]);
+    entry["residual"] = ToJson(result.residuals[k]);
+    entry["gravity_norm_error"] = Nullable(errors[k]);
+    if (result.crossval_rms) entry["crossval_error"] = result.crossval_errors[k];
+    if (result.excluded(k)) entry["excluded"] = true;
+    if (k < info.position_source.size()) entry["file"] = info.position_source[k];
+    positions.push_back(entry);
+  }
+  return positions;
+}
+
+// How the linear and quadratic models were compared (model "auto", or "quadratic" with the
+// linear fit as comparison).
+ordered_json ModelSelectionSection(const CalibrationFileInfo& info) {
+  const ModelSelection* s = info.model_selection;
+  ordered_json selection;
+  selection["requested"] = info.model_requested;
+  selection["chosen"] = std::string(ToString(s->chosen));
+  selection["reason"] = s->reason;
+  selection["linear_crossval_rms"] = Nullable(s->linear.crossval_rms);
+  selection["quadratic_crossval_rms"] =
+      s->quadratic ? Nullable(s->quadratic->crossval_rms) : ordered_json(nullptr);
+  selection["k2_t"] =
+      s->quadratic && std::isfinite(s->k2_t.sum()) ? ToJson(s->k2_t) : ordered_json(nullptr);
+  selection["k2_t_threshold"] = Nullable(s->k2_t_threshold);
+  selection["improvement"] = Nullable(s->improvement);
+  selection["improvement_se"] = Nullable(s->improvement_se);
+  selection["improvement_threshold"] = Nullable(s->improvement_threshold);
+  selection["screened_with"] = std::string(ToString(s->screened_with));
+  selection["positions_compared"] = s->positions_used.size();
+  if (!s->quadratic_error.empty()) selection["quadratic_error"] = s->quadratic_error;
+  return selection;
+}
+
+// How the bias model was chosen (bias model "auto"): each step of the forward selection.
+ordered_json BiasModelSelectionSection(const BiasModelSelection& s) {
+  ordered_json steps = ordered_json::array();
+  for (const BiasModelStep& step : s.steps) {
+    ordered_json entry;
+    entry["simpler"] = ToString(step.simpler);
+    entry["richer"] = ToString(step.richer);
+    if (!step.error.empty()) {
+      entry["error"] = step.error;
+    } else {
+      entry["positions_compared"] = step.positions_used.size();
+      entry["simpler_crossval_rms"] = Nullable(step.simpler_rms);
+      entry["richer_crossval_rms"] = Nullable(step.richer_rms);
+      entry["improvement"] = Nullable(step.improvement);
+      entry["improvement_se"] = Nullable(step.improvement_se);
+      entry["improvement_threshold"] = Nullable(step.improvement_threshold);
+      entry["wald"] = Nullable(step.wald);
+      entry["wald_degrees_of_freedom"] = step.wald_dof;
+      entry["wald_threshold"] = Nullable(step.wald_threshold);
+    }
+    entry["accepted"] = step.accepted;
+    steps.push_back(entry);
+  }
+  return {{"requested", "auto"},
+          {"chosen", ToString(s.chosen)},
+          {"reason", s.reason},
+          {"steps", steps}};
+}
+
+// The diagnosis's findings, each with its code, severity, message and numbers.
+ordered_json FindingsSection(const Diagnosis& diagnosis) {
+  ordered_json findings = ordered_json::array();
+  for (const Finding& f : diagnosis.findings) {
+    ordered_json numbers = ordered_json::object();
+    for (const auto& [name, value] : f.numbers) numbers[name] = Nullable(value);
+    findings.push_back({{"code", f.code},
+                        {"severity", std::string(ToString(f.severity))},
+                        {"message", f.message},
+                        {"numbers", numbers}});
+  }
+  return findings;
+}
+
 ordered_json AccelerometerSection(const CalibrationResult& result, const CalibrationFileInfo& info,
                                   const Diagnosis& diagnosis) {
   const std::vector<Vec3> means = Means(info.positions);
@@ -188,35 +288,7 @@ ordered_json AccelerometerSection(const CalibrationResult& result, const Calibra
   if (result.drift) doc["bias_drift"] = DriftSection(*result.drift);
   if (result.thermal) doc["thermal"] = ThermalSection(*result.thermal, result.model);
   const std::vector<double> errors = GravityNormErrors(result, means);
-  const std::vector<Vec3> offsets = result.DriftOffsets(info.positions.size());
-  ordered_json positions = ordered_json::array();
-  for (std::size_t k = 0; k < info.positions.size(); ++k) {
-    const Position& p = info.positions[k];
-    ordered_json entry;
-    entry["mean"] = ToJson(p.mean);
-    entry["samples"] = p.samples;
-    if (p.std) entry["std"] = ToJson(*p.std);
-    if (k < info.mean_sigmas.size()) entry["mean_sigma"] = ToJson(info.mean_sigmas[k]);
-    if (p.interval) {
-      entry["interval"] = {{"begin", p.interval->begin},
-                           {"end", p.interval->end},
-                           {"t_begin", p.interval->t_begin_s},
-                           {"t_end", p.interval->t_end_s}};
-    }
-    if (p.temperature_c) entry["temperature"] = *p.temperature_c;
-    if (result.drift) {
-      entry["time"] = result.drift->times_s[k];
-      entry["drift_offset"] = ToJson(offsets[k]);
-    }
-    entry["direction"] = ToJson(result.directions[k]);
-    entry["residual"] = ToJson(result.residuals[k]);
-    entry["gravity_norm_error"] = Nullable(errors[k]);
-    if (result.crossval_rms) entry["crossval_error"] = result.crossval_errors[k];
-    if (result.excluded(k)) entry["excluded"] = true;
-    if (k < info.position_source.size()) entry["file"] = info.position_source[k];
-    positions.push_back(entry);
-  }
-  doc["positions"] = positions;
+  doc["positions"] = PositionsSection(result, info, errors);
   doc["gravity_norm_rms_before"] = Nullable(GravityNormRmsUncalibrated(means, result.gravity));
   doc["gravity_norm_rms_after"] = Nullable(Rms(result.InFit(errors)));  // outliers excluded
   doc["crossval_rms"] = Nullable(result.crossval_rms);
@@ -234,51 +306,9 @@ ordered_json AccelerometerSection(const CalibrationResult& result, const Calibra
   }
   doc["outliers"] = outliers;
   if (!result.outlier_note.empty()) doc["outlier_note"] = result.outlier_note;
-  if (const ModelSelection* s = info.model_selection) {
-    ordered_json selection;
-    selection["requested"] = info.model_requested;
-    selection["chosen"] = std::string(ToString(s->chosen));
-    selection["reason"] = s->reason;
-    selection["linear_crossval_rms"] = Nullable(s->linear.crossval_rms);
-    selection["quadratic_crossval_rms"] =
-        s->quadratic ? Nullable(s->quadratic->crossval_rms) : ordered_json(nullptr);
-    selection["k2_t"] =
-        s->quadratic && std::isfinite(s->k2_t.sum()) ? ToJson(s->k2_t) : ordered_json(nullptr);
-    selection["k2_t_threshold"] = Nullable(s->k2_t_threshold);
-    selection["improvement"] = Nullable(s->improvement);
-    selection["improvement_se"] = Nullable(s->improvement_se);
-    selection["improvement_threshold"] = Nullable(s->improvement_threshold);
-    selection["screened_with"] = std::string(ToString(s->screened_with));
-    selection["positions_compared"] = s->positions_used.size();
-    if (!s->quadratic_error.empty()) selection["quadratic_error"] = s->quadratic_error;
-    doc["model_selection"] = selection;
-  }
-  if (const BiasModelSelection* s = info.bias_model_selection) {
-    ordered_json steps = ordered_json::array();
-    for (const BiasModelStep& step : s->steps) {
-      ordered_json entry;
-      entry["simpler"] = ToString(step.simpler);
-      entry["richer"] = ToString(step.richer);
-      if (!step.error.empty()) {
-        entry["error"] = step.error;
-      } else {
-        entry["positions_compared"] = step.positions_used.size();
-        entry["simpler_crossval_rms"] = Nullable(step.simpler_rms);
-        entry["richer_crossval_rms"] = Nullable(step.richer_rms);
-        entry["improvement"] = Nullable(step.improvement);
-        entry["improvement_se"] = Nullable(step.improvement_se);
-        entry["improvement_threshold"] = Nullable(step.improvement_threshold);
-        entry["wald"] = Nullable(step.wald);
-        entry["wald_degrees_of_freedom"] = step.wald_dof;
-        entry["wald_threshold"] = Nullable(step.wald_threshold);
-      }
-      entry["accepted"] = step.accepted;
-      steps.push_back(entry);
-    }
-    doc["bias_model_selection"] = {{"requested", "auto"},
-                                   {"chosen", ToString(s->chosen)},
-                                   {"reason", s->reason},
-                                   {"steps", steps}};
+  if (info.model_selection) doc["model_selection"] = ModelSelectionSection(info);
+  if (info.bias_model_selection) {
+    doc["bias_model_selection"] = BiasModelSelectionSection(*info.bias_model_selection);
   }
   const Summary& s = result.summary;
   doc["solver"] = {{"method", std::string(ToString(s.method))},
@@ -292,16 +322,7 @@ ordered_json AccelerometerSection(const CalibrationResult& result, const Calibra
                    {"termination_message", s.termination_message},
                    {"initial_cost", s.initial_cost},
                    {"cost", s.final_cost}};
-  ordered_json findings = ordered_json::array();
-  for (const Finding& f : diagnosis.findings) {
-    ordered_json numbers = ordered_json::object();
-    for (const auto& [name, value] : f.numbers) numbers[name] = Nullable(value);
-    findings.push_back({{"code", f.code},
-                        {"severity", std::string(ToString(f.severity))},
-                        {"message", f.message},
-                        {"numbers", numbers}});
-  }
-  doc["diagnostics"] = findings;
+  doc["diagnostics"] = FindingsSection(diagnosis);
   doc["source"] = info.source;
   if (!info.sources.empty()) doc["sources"] = info.sources;
   return doc;

@@ -290,75 +290,49 @@ std::vector<std::size_t> CorruptedReadings(const std::vector<Vec3>& samples, con
   return out;
 }
 
-StaticDetectionResult DetectStaticIntervals(const RawLog& log,
-                                            const StaticDetectionOptions& options) {
-  if (auto why = options.Validate()) throw DataError(*why);
-  if (!log.rate_hz) throw DataError("the log has no time column and no sample rate was given");
-  StaticDetectionResult result;
-  result.rate_hz = *log.rate_hz;
-  const std::size_t n = log.samples.size();
-  // A window or a minimum duration the rate cannot honour is an error, never a clamp.
-  const double window_samples = options.window_s * result.rate_hz;
+namespace {
+
+// The detection window in samples (odd), and the shortest interval's (`min_samples`): a window
+// or a minimum duration the rate cannot honour is an error, never a clamp.
+std::size_t WindowSamples(const StaticDetectionOptions& options, double rate_hz, std::size_t n,
+                          double* min_samples) {
+  const double window_samples = options.window_s * rate_hz;
   if (!(window_samples >= 3)) {
     throw DataError(
         Format("a detection window of %.6g s holds %.3g samples at %.6g Hz; it needs "
                "at least 3",
-               options.window_s, window_samples, result.rate_hz));
+               options.window_s, window_samples, rate_hz));
   }
   if (!(window_samples <= static_cast<double>(n))) {
     throw DataError(
         Format("%zu samples are fewer than one detection window (%.6g s = %.6g samples)", n,
                options.window_s, window_samples));
   }
-  const double min_samples = options.min_duration_s * result.rate_hz;
-  if (options.min_duration_s > 0 && min_samples < 2) {
+  *min_samples = options.min_duration_s * rate_hz;
+  if (options.min_duration_s > 0 && *min_samples < 2) {
     throw DataError(
         Format("a minimum static duration of %.6g s is %.3g samples at %.6g Hz; an "
                "interval needs at least 2",
-               options.min_duration_s, min_samples, result.rate_hz));
+               options.min_duration_s, *min_samples, rate_hz));
   }
-  if (!(min_samples <= static_cast<double>(n))) {  // also keeps the casts below defined
+  if (!(*min_samples <= static_cast<double>(n))) {  // also keeps the casts below defined
     throw DataError(
         Format("a minimum static duration of %.6g s is longer than the log (%zu "
                "samples at %.6g Hz)",
-               options.min_duration_s, n, result.rate_hz));
+               options.min_duration_s, n, rate_hz));
   }
-  const std::size_t w = static_cast<std::size_t>(std::lround(window_samples)) | 1;
-  result.window_samples = w;
+  return static_cast<std::size_t>(std::lround(window_samples)) | 1;
+}
+
+// Sliding sums of the samples and their squares, shifted by the first sample of the segment to
+// avoid cancellation with raw counts far from zero, and of the successive differences. Centres
+// without a full window inside their segment keep score NaN: no window crosses a gap. Returns
+// how many centres were scored.
+std::size_t ScoreWindows(const RawLog& log, const std::vector<std::size_t>& segments, std::size_t w,
+                         double max_noise_ratio, double quantisation_variance,
+                         std::vector<double>* score, std::vector<char>* white) {
+  const std::size_t n = log.samples.size();
   const std::size_t h = w / 2;
-  std::vector<std::size_t> segments =
-      log.time ? SegmentStarts(log.time->gaps) : std::vector<std::size_t>{0};
-  result.segments = segments.size();
-
-  // Quantisation: a sensor (or a log written with few decimals) whose noise is below its step
-  // reads the same value for many samples; its window variances are 0 or a few steps². The
-  // floor of every noise level is the quantisation noise q²/12 of each axis, with q the smallest
-  // nonzero change between successive samples.
-  SmallestSteps steps{&log.samples, Vec3::Zero()};
-  RunKernel<FindSmallestSteps>(steps);
-  Vec3 step = steps.step;
-  for (int a = 0; a < 3; ++a) {
-    if (!std::isfinite(step(a))) step(a) = 0;
-  }
-  result.quantisation_step = step;
-  const double quantisation_variance = step.cwiseAbs2().sum() / 12.0;
-
-  // A corrupted reading is cut out as a gap is: a segment of its own, too short for a window.
-  result.corrupted = CorruptedReadings(log.samples, step);
-  if (!result.corrupted.empty()) {
-    for (std::size_t i : result.corrupted) {
-      segments.push_back(i);
-      if (i + 1 < n) segments.push_back(i + 1);
-    }
-    std::sort(segments.begin(), segments.end());
-    segments.erase(std::unique(segments.begin(), segments.end()), segments.end());
-  }
-
-  // Sliding sums of the samples and their squares, shifted by the first sample of the segment to
-  // avoid cancellation with raw counts far from zero, and of the successive differences. Centres
-  // without a full window inside their segment keep score NaN: no window crosses a gap.
-  std::vector<double> score(n, std::nan(""));
-  std::vector<char> white(n, 0);
   const double wn = static_cast<double>(w);
   std::size_t valid = 0;
   for (std::size_t s = 0; s < segments.size(); ++s) {
@@ -387,14 +361,117 @@ StaticDetectionResult DetectStaticIntervals(const RawLog& log,
                     dsum,
                     dsum2,
                     wn,
-                    options.max_noise_ratio,
+                    max_noise_ratio,
                     quantisation_variance,
-                    score.data(),
-                    white.data(),
+                    score->data(),
+                    white->data(),
                     0};
     RunKernel<SlideWindows>(sums);
     valid += sums.valid;
   }
+  return valid;
+}
+
+// A still period split by a short disturbance (a glitch, a bump that did not move the sensor)
+// is one orientation: two intervals at most a window apart whose means agree within 5 standard
+// errors on every axis (plus one quantisation step) are joined. The joined interval spans both
+// and the disturbance; its mean and standard deviation are those of the two parts' samples.
+std::vector<StaticInterval> JoinSplitIntervals(const std::vector<StaticInterval>& intervals,
+                                               const std::vector<std::size_t>& segments,
+                                               std::size_t w, const Vec3& step,
+                                               std::size_t* count) {
+  std::vector<StaticInterval> joined;
+  for (const StaticInterval& cur : intervals) {
+    if (!joined.empty()) {
+      StaticInterval& prev = joined.back();
+      const double n1 = static_cast<double>(prev.count()), n2 = static_cast<double>(cur.count());
+      // Never across a time gap: the first sample after a gap starts a segment.
+      const bool gap_between =
+          std::any_of(segments.begin(), segments.end(),
+                      [&](std::size_t start) { return start >= prev.end && start <= cur.begin; });
+      bool same = cur.begin - prev.end <= w && !gap_between;
+      for (int a = 0; a < 3 && same; ++a) {
+        const double se = std::sqrt(prev.std(a) * prev.std(a) / n1 + cur.std(a) * cur.std(a) / n2);
+        same = std::abs(prev.mean(a) - cur.mean(a)) <= 5 * se + step(a);
+      }
+      if (same) {
+        const double total = n1 + n2;
+        const Vec3 mean = (n1 * prev.mean + n2 * cur.mean) / total;
+        const Vec3 ss = (n1 - 1) * prev.std.cwiseAbs2() + (n2 - 1) * cur.std.cwiseAbs2() +
+                        (n1 * n2 / total) * (prev.mean - cur.mean).cwiseAbs2();
+        const std::size_t parts = prev.count() + cur.count();
+        prev.end = cur.end;
+        prev.t_end_s = cur.t_end_s;
+        prev.mean = mean;
+        prev.std = (ss / (total - 1)).cwiseSqrt();
+        prev.averaged = parts;
+        ++*count;
+        continue;
+      }
+    }
+    joined.push_back(cur);
+  }
+  return joined;
+}
+
+// Each interval's temperature: the mean of its samples' that have one.
+void IntervalTemperatures(const RawLog& log, std::vector<StaticInterval>* intervals) {
+  if (log.temperature_c.size() == log.samples.size()) {
+    for (StaticInterval& interval : *intervals) {
+      double sum = 0;
+      std::size_t known = 0;
+      for (std::size_t i = interval.begin; i < interval.end; ++i) {
+        if (!std::isnan(log.temperature_c[i])) sum += log.temperature_c[i], ++known;
+      }
+      if (known > 0) interval.temperature_c = sum / static_cast<double>(known);
+    }
+  }
+}
+
+}  // namespace
+
+StaticDetectionResult DetectStaticIntervals(const RawLog& log,
+                                            const StaticDetectionOptions& options) {
+  if (auto why = options.Validate()) throw DataError(*why);
+  if (!log.rate_hz) throw DataError("the log has no time column and no sample rate was given");
+  StaticDetectionResult result;
+  result.rate_hz = *log.rate_hz;
+  const std::size_t n = log.samples.size();
+  double min_samples = 0;
+  const std::size_t w = WindowSamples(options, result.rate_hz, n, &min_samples);
+  result.window_samples = w;
+  std::vector<std::size_t> segments =
+      log.time ? SegmentStarts(log.time->gaps) : std::vector<std::size_t>{0};
+  result.segments = segments.size();
+
+  // Quantisation: a sensor (or a log written with few decimals) whose noise is below its step
+  // reads the same value for many samples; its window variances are 0 or a few steps². The
+  // floor of every noise level is the quantisation noise q²/12 of each axis, with q the smallest
+  // nonzero change between successive samples.
+  SmallestSteps steps{&log.samples, Vec3::Zero()};
+  RunKernel<FindSmallestSteps>(steps);
+  Vec3 step = steps.step;
+  for (int a = 0; a < 3; ++a) {
+    if (!std::isfinite(step(a))) step(a) = 0;
+  }
+  result.quantisation_step = step;
+  const double quantisation_variance = step.cwiseAbs2().sum() / 12.0;
+
+  // A corrupted reading is cut out as a gap is: a segment of its own, too short for a window.
+  result.corrupted = CorruptedReadings(log.samples, step);
+  if (!result.corrupted.empty()) {
+    for (std::size_t i : result.corrupted) {
+      segments.push_back(i);
+      if (i + 1 < n) segments.push_back(i + 1);
+    }
+    std::sort(segments.begin(), segments.end());
+    segments.erase(std::unique(segments.begin(), segments.end()), segments.end());
+  }
+
+  std::vector<double> score(n, std::nan(""));
+  std::vector<char> white(n, 0);
+  const std::size_t valid = ScoreWindows(log, segments, w, options.max_noise_ratio,
+                                         quantisation_variance, &score, &white);
   if (valid == 0) {
     throw DataError(Format(
         "no segment of the log is longer than one detection window (%zu "
@@ -487,53 +564,8 @@ StaticDetectionResult DetectStaticIntervals(const RawLog& log,
       }
     }
   }
-  // A still period split by a short disturbance (a glitch, a bump that did not move the sensor)
-  // is one orientation: two intervals at most a window apart whose means agree within 5 standard
-  // errors on every axis (plus one quantisation step) are joined. The joined interval spans both
-  // and the disturbance; its mean and standard deviation are those of the two parts' samples.
-  std::vector<StaticInterval> joined;
-  for (const StaticInterval& cur : result.intervals) {
-    if (!joined.empty()) {
-      StaticInterval& prev = joined.back();
-      const double n1 = static_cast<double>(prev.count()), n2 = static_cast<double>(cur.count());
-      // Never across a time gap: the first sample after a gap starts a segment.
-      const bool gap_between =
-          std::any_of(segments.begin(), segments.end(),
-                      [&](std::size_t start) { return start >= prev.end && start <= cur.begin; });
-      bool same = cur.begin - prev.end <= w && !gap_between;
-      for (int a = 0; a < 3 && same; ++a) {
-        const double se = std::sqrt(prev.std(a) * prev.std(a) / n1 + cur.std(a) * cur.std(a) / n2);
-        same = std::abs(prev.mean(a) - cur.mean(a)) <= 5 * se + step(a);
-      }
-      if (same) {
-        const double total = n1 + n2;
-        const Vec3 mean = (n1 * prev.mean + n2 * cur.mean) / total;
-        const Vec3 ss = (n1 - 1) * prev.std.cwiseAbs2() + (n2 - 1) * cur.std.cwiseAbs2() +
-                        (n1 * n2 / total) * (prev.mean - cur.mean).cwiseAbs2();
-        const std::size_t parts = prev.count() + cur.count();
-        prev.end = cur.end;
-        prev.t_end_s = cur.t_end_s;
-        prev.mean = mean;
-        prev.std = (ss / (total - 1)).cwiseSqrt();
-        prev.averaged = parts;
-        ++result.joined;
-        continue;
-      }
-    }
-    joined.push_back(cur);
-  }
-  result.intervals = std::move(joined);
-  // Each interval's temperature: the mean of its samples' that have one.
-  if (log.temperature_c.size() == log.samples.size()) {
-    for (StaticInterval& interval : result.intervals) {
-      double sum = 0;
-      std::size_t known = 0;
-      for (std::size_t i = interval.begin; i < interval.end; ++i) {
-        if (!std::isnan(log.temperature_c[i])) sum += log.temperature_c[i], ++known;
-      }
-      if (known > 0) interval.temperature_c = sum / static_cast<double>(known);
-    }
-  }
+  result.intervals = JoinSplitIntervals(result.intervals, segments, w, step, &result.joined);
+  IntervalTemperatures(log, &result.intervals);
   return result;
 }
 

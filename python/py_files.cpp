@@ -258,15 +258,18 @@ void BindLogs(py::module_& m) {
 void BindOutputs(py::module_& m) {
   m.def(
       "export_calibration",
-      [](const std::string& json_text, const std::string& format, const std::string& raw_unit,
-         std::optional<int> instance, const std::string& c_prefix) {
-        const LoadedCalibration cal = ParseCalibrationJson(json_text, "<calibration>");
+      [](const std::string& json_text, const std::string& format,
+         std::optional<std::string> raw_unit, std::optional<int> instance,
+         std::optional<std::string> c_prefix) {
+        const ExportFormat to = Parse(ExportFormatFromString(format), format, "export format");
         ExportOptions o;
-        o.raw_unit = raw_unit;
-        o.instance = instance;
-        o.c_prefix = c_prefix;
-        const ExportResult e = ExportCalibration(
-            cal, json_text, Parse(ExportFormatFromString(format), format, "export format"), o);
+        std::vector<std::string> given;  // an option the format has no use for is refused
+        if (raw_unit) o.raw_unit = *raw_unit, given.push_back("raw_unit");
+        if (instance) o.instance = instance, given.push_back("instance");
+        if (c_prefix) o.c_prefix = *c_prefix, given.push_back("c_prefix");
+        if (auto why = o.Validate(to, given)) throw OptionError(*why);
+        const LoadedCalibration cal = ParseCalibrationJson(json_text, "<calibration>");
+        const ExportResult e = ExportCalibration(cal, json_text, to, o);
         py::dict loss;
         loss["dropped"] = e.loss.dropped;
         loss["positions"] = e.loss.positions;
@@ -278,8 +281,8 @@ void BindOutputs(py::module_& m) {
         d["loss"] = loss;
         return d;
       },
-      py::arg("json_text"), py::arg("format"), py::arg("raw_unit") = "",
-      py::arg("instance") = std::nullopt, py::arg("c_prefix") = "accelcal",
+      py::arg("json_text"), py::arg("format"), py::arg("raw_unit") = std::nullopt,
+      py::arg("instance") = std::nullopt, py::arg("c_prefix") = std::nullopt,
       "A calibration in another tool's format (export.hpp)");
 
   m.def(

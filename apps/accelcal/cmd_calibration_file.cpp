@@ -196,47 +196,6 @@ int RunReport(const ReportArgs& args) {
   return kExitOk;
 }
 
-namespace {
-
-// An option the chosen format does not use is a mistake (a typo of the format, or an option
-// thought to do something it does not): refused, never silently ignored.
-void RefuseUnusedOptions(ExportFormat format, const ExportArgs& args) {
-  using F = ExportFormat;
-  const auto in = [&](std::initializer_list<F> formats) {
-    return std::find(formats.begin(), formats.end(), format) != formats.end();
-  };
-  struct Use {
-    const char* option;
-    bool used;
-    const char* formats;
-  };
-  const Use uses[] = {
-      {"raw-unit", in({F::kKalibr, F::kOpenVins, F::kBasalt, F::kPx4, F::kArduPilot}),
-       "kalibr, openvins, basalt, px4 and ardupilot"},
-      {"gyro-raw-unit", in({F::kKalibr, F::kOpenVins, F::kBasalt, F::kPx4}),
-       "kalibr, openvins, basalt and px4"},
-      {"instance", in({F::kPx4, F::kArduPilot}), "px4 and ardupilot"},
-      {"c-prefix", in({F::kCHeader}), "c-header"},
-      {"sensor", in({F::kImuTk}), "imutk"},
-      {"noise", in({F::kKalibrImu, F::kRos, F::kKalibr, F::kOpenVins, F::kBasalt}),
-       "kalibr-imu, ros, kalibr, openvins and basalt"},
-      {"rostopic", in({F::kKalibrImu, F::kKalibr, F::kOpenVins}),
-       "kalibr-imu, kalibr and openvins"},
-      {"device-id", in({F::kPx4}), "px4"},
-      {"gyro-device-id", in({F::kPx4}), "px4"},
-      {"current-params", in({F::kArduPilot}), "ardupilot"},
-  };
-  for (const Use& use : uses) {
-    if (!use.used &&
-        std::find(args.given.begin(), args.given.end(), use.option) != args.given.end()) {
-      throw UsageError(std::string("--") + use.option + " is for " + use.formats + "; " +
-                       args.format + " has no use for it");
-    }
-  }
-}
-
-}  // namespace
-
 int RunExport(const ExportArgs& args) {
   CheckOutputs({{"-o", args.output}}, {args.calibration, args.noise});
   const ExportFormat format = ParseChoice<ExportFormat>(args.format, "--to");
@@ -263,7 +222,13 @@ int RunExport(const ExportArgs& args) {
         ReadFileToString(args.current_params, kMaxSmallFileBytes), args.current_params);
   }
   const bool noise_only = format == ExportFormat::kKalibrImu || format == ExportFormat::kRos;
-  RefuseUnusedOptions(format, args);
+  // The options given, by their field names: one the format has no use for is refused.
+  std::vector<std::string> given;
+  for (std::string name : args.given) {
+    std::replace(name.begin(), name.end(), '-', '_');
+    given.push_back(std::move(name));
+  }
+  if (auto why = options.Validate(format, given)) throw OptionError(*why);
   ExportResult exported;
   try {
     exported = ExportCalibration(cal, text, format, options);

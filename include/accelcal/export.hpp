@@ -108,6 +108,14 @@ struct ExportOptions {
   /// The topic of the IMU's sensor_msgs/Imu messages (kalibr-imu, openvins, kalibr's `rostopic`):
   /// a ROS name (a letter, '/' or '~' first, then letters, digits, '_' and '/').
   std::string rostopic = "/imu0";
+
+  /// Why these options cannot export to `format`, or nothing: a value out of its range (instance,
+  /// PX4's and ArduPilot's slots, sensor, gyro_raw_unit, rostopic, c_prefix), and, of the fields
+  /// named in `given` (those the caller set), one that `format` has no use for: an option
+  /// silently ignored is a mistake. Fields are named as themselves, marked {{name}} (OptionError);
+  /// ExportCalibration applies the value rules to any caller.
+  std::optional<std::string> Validate(ExportFormat format,
+                                      const std::vector<std::string>& given = {}) const;
 };
 
 /// What the target format could not hold, measured on the calibration's own positions (the means

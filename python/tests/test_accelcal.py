@@ -349,3 +349,16 @@ def test_calibrate_log_keeps_what_the_file_holds_through_pickle(tmp_path):
         result = accelcal.calibrate_log(*args, **given)[0]
         assert expected[0] == "file" and outcome(lambda: (result,)) == expected
         assert outcome(lambda: (pickle.loads(pickle.dumps(result)),)) == expected
+
+
+def test_export_calibration_refuses_an_option_its_format_has_no_use_for():
+    result, _ = accelcal.calibrate_log(XSENS, gravity=9.81744)
+    text = result.to_json()
+    # The library's rule, named as the keyword (the tool says --c-prefix).
+    with pytest.raises(ValueError, match="^c_prefix is for c-header; px4 has no use for it$"):
+        accelcal.export_calibration(text, "px4", c_prefix="imu")
+    with pytest.raises(ValueError, match="^instance must be >= 0$"):
+        accelcal.export_calibration(text, "ardupilot", instance=-1)
+    with pytest.raises(ValueError, match="c_prefix must start with a letter"):
+        accelcal.export_calibration(text, "c-header", c_prefix="1imu")
+    assert "imu_K" in accelcal.export_calibration(text, "c-header", c_prefix="imu")["text"]

@@ -3,7 +3,10 @@
 // pieces in export_common.hpp), and accelcal's own file as JSON or YAML, which holds everything.
 #include "accelcal/export.hpp"
 
+#include <algorithm>
 #include <stdexcept>
+
+#include "accelcal/error.hpp"
 
 #include "output/export_common.hpp"
 
@@ -77,28 +80,89 @@ ExportResult ExportCalibration(const LoadedCalibration& cal, const std::string& 
 }
 
 namespace {
+
+// Which formats use each option (ExportOptions' fields), and how a message lists them.
+struct OptionUse {
+  const char* option;
+  std::vector<ExportFormat> formats;
+  const char* listed;
+};
+
+const std::vector<OptionUse>& OptionUses() {
+  using F = ExportFormat;
+  static const std::vector<OptionUse> uses = {
+      {"raw_unit",
+       {F::kKalibr, F::kOpenVins, F::kBasalt, F::kPx4, F::kArduPilot},
+       "kalibr, openvins, basalt, px4 and ardupilot"},
+      {"gyro_raw_unit",
+       {F::kKalibr, F::kOpenVins, F::kBasalt, F::kPx4},
+       "kalibr, openvins, basalt and px4"},
+      {"instance", {F::kPx4, F::kArduPilot}, "px4 and ardupilot"},
+      {"c_prefix", {F::kCHeader}, "c-header"},
+      {"sensor", {F::kImuTk}, "imutk"},
+      {"noise",
+       {F::kKalibrImu, F::kRos, F::kKalibr, F::kOpenVins, F::kBasalt},
+       "kalibr-imu, ros, kalibr, openvins and basalt"},
+      {"rostopic", {F::kKalibrImu, F::kKalibr, F::kOpenVins}, "kalibr-imu, kalibr and openvins"},
+      {"device_id", {F::kPx4}, "px4"},
+      {"gyro_device_id", {F::kPx4}, "px4"},
+      {"current_params", {F::kArduPilot}, "ardupilot"},
+  };
+  return uses;
+}
+
+// A C identifier's prefix: a letter or '_' first, then letters, digits and '_'.
+std::optional<std::string> CPrefixProblem(const std::string& prefix) {
+  if (prefix.empty() || exports::IsAsciiDigit(prefix[0])) {
+    return "{{c_prefix}} must start with a letter or '_'";
+  }
+  if (!std::all_of(prefix.begin(), prefix.end(), exports::IsIdentifierChar)) {
+    return "{{c_prefix}} may hold only letters, digits and '_'";
+  }
+  return std::nullopt;
+}
+
+}  // namespace
+
+std::optional<std::string> ExportOptions::Validate(ExportFormat format,
+                                                   const std::vector<std::string>& given) const {
+  for (const OptionUse& use : OptionUses()) {
+    const bool used =
+        std::find(use.formats.begin(), use.formats.end(), format) != use.formats.end();
+    if (!used && std::find(given.begin(), given.end(), use.option) != given.end()) {
+      return "{{" + std::string(use.option) + "}} is for " + use.listed + "; " +
+             std::string(ToString(format)) + " has no use for it";
+    }
+  }
+  if (instance && *instance < 0) return "{{instance}} must be >= 0";
+  if (format == ExportFormat::kPx4 && instance && *instance > 3) {
+    return "PX4 has calibration slots 0 to 3 (CAL_ACC0 to CAL_ACC3)";
+  }
+  if (format == ExportFormat::kArduPilot && instance && *instance > 2) {
+    return "ArduPilot has accelerometers 0, 1 and 2";
+  }
+  if (sensor != "accelerometer" && sensor != "gyroscope") {
+    return "{{sensor}} must be \"accelerometer\" or \"gyroscope\"";
+  }
+  if (!gyro_raw_unit.empty() && gyro_raw_unit != "rad/s" && gyro_raw_unit != "deg/s") {
+    return "{{gyro_raw_unit}} must be rad/s or deg/s";
+  }
+  if (!IsRosName(rostopic)) {
+    return "{{rostopic}} must be a ROS name: '/' or '~/' (or nothing) first, then tokens joined "
+           "by '/', each a letter or '_' followed by letters, digits and '_'";
+  }
+  if (sensor == "gyroscope" && format != ExportFormat::kImuTk) {
+    return "{{sensor}} \"gyroscope\" is for the imutk format (the c-header holds both sensors; "
+           "json and yaml the whole file)";
+  }
+  if (format == ExportFormat::kCHeader) return CPrefixProblem(c_prefix);
+  return std::nullopt;
+}
+
+namespace {
 ExportResult ExportFormatted(const LoadedCalibration& cal, const std::string& native_json,
                              ExportFormat format, const ExportOptions& options) {
-  if (options.instance && *options.instance < 0) {
-    throw std::invalid_argument("instance must be >= 0");
-  }
-  if (options.sensor != "accelerometer" && options.sensor != "gyroscope") {
-    throw std::invalid_argument("sensor must be \"accelerometer\" or \"gyroscope\"");
-  }
-  if (!options.gyro_raw_unit.empty() && options.gyro_raw_unit != "rad/s" &&
-      options.gyro_raw_unit != "deg/s") {
-    throw std::invalid_argument("gyro_raw_unit must be rad/s or deg/s");
-  }
-  if (!IsRosName(options.rostopic)) {
-    throw std::invalid_argument(
-        "rostopic must be a ROS name: '/' or '~/' (or nothing) first, then tokens joined by '/', "
-        "each a letter or '_' followed by letters, digits and '_'");
-  }
-  if (options.sensor == "gyroscope" && format != ExportFormat::kImuTk) {
-    throw std::invalid_argument(
-        "sensor \"gyroscope\" is for the imutk format (the c-header holds both sensors; json "
-        "and yaml the whole file)");
-  }
+  if (auto why = options.Validate(format)) throw OptionError(*why);
   ExportResult out;
   switch (format) {
     case ExportFormat::kJson:

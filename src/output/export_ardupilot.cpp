@@ -124,7 +124,6 @@ std::array<Vec3, 3> About35(const std::array<Vec3, 4>& b, double t_ref_c) {
 
 ExportResult ArduPilot(const LoadedCalibration& cal, const ExportOptions& options) {
   const int instance = options.instance.value_or(0);
-  if (instance > 2) throw std::invalid_argument("ArduPilot has accelerometers 0, 1 and 2");
   const double raw_ms2 =
       RawToMetersPerSecond2(cal, options, "ArduPilot", "its drivers scale the counts");
   Diagonal d = DiagonalPart(cal, raw_ms2);

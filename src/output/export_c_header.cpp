@@ -31,23 +31,11 @@ std::string CCommentText(std::string_view text) {
   return out;
 }
 
-std::string CIdentifier(const std::string& prefix) {
-  if (prefix.empty() || IsAsciiDigit(prefix[0])) {
-    throw std::invalid_argument("c_prefix must start with a letter or '_'");
-  }
-  for (const char c : prefix) {
-    if (!IsIdentifierChar(c)) {
-      throw std::invalid_argument("c_prefix may hold only letters, digits and '_'");
-    }
-  }
-  return prefix;
-}
-
 }  // namespace
 
 // Firmware: the model's exact inverse, as SpecificForce computes it.
 ExportResult CHeader(const LoadedCalibration& cal, const ExportOptions& options) {
-  const std::string p = CIdentifier(options.c_prefix);
+  const std::string& p = options.c_prefix;  // a C identifier: ExportOptions::Validate
   std::string guard;
   for (const char c : p) guard += c >= 'a' && c <= 'z' ? static_cast<char>(c - 'a' + 'A') : c;
   guard += "_CALIBRATION_H";

@@ -273,9 +273,6 @@ ExportResult Px4(const LoadedCalibration& cal, const ExportOptions& options) {
                     "parameters correct the driver's output: calibrate sensor_accel (logged at "
                     "the sensor's rate) and export that");
   }
-  if (options.instance && (*options.instance < 0 || *options.instance > 3)) {
-    throw std::invalid_argument("PX4 has calibration slots 0 to 3 (CAL_ACC0 to CAL_ACC3)");
-  }
   if (options.gyro_device_id && !cal.gyroscope) {
     throw std::invalid_argument(
         "a gyroscope's device id for a calibration without a gyroscope (nothing to apply it to)");

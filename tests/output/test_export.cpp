@@ -91,6 +91,39 @@ std::vector<double> ParameterValues(const std::string& text, const std::string& 
   return values;
 }
 
+// The options' rules, stated once: values out of range, and an option given that the format has
+// no use for (named as the field, marked for each edge to name its own way).
+TEST(ExportOptions, ValidateRefusesValuesAndOptionsTheFormatDoesNotUse) {
+  ExportOptions o;
+  for (ExportFormat f : AllExportFormats()) EXPECT_EQ(o.Validate(f), std::nullopt) << ToString(f);
+  EXPECT_EQ(o.Validate(ExportFormat::kPx4, {"c_prefix"}),
+            "{{c_prefix}} is for c-header; px4 has no use for it");
+  EXPECT_EQ(o.Validate(ExportFormat::kCHeader, {"c_prefix"}), std::nullopt);
+  EXPECT_EQ(o.Validate(ExportFormat::kJson, {"rostopic"}),
+            "{{rostopic}} is for kalibr-imu, kalibr and openvins; json has no use for it");
+  o.instance = -1;
+  EXPECT_EQ(o.Validate(ExportFormat::kPx4), "{{instance}} must be >= 0");
+  o.instance = 4;
+  EXPECT_TRUE(o.Validate(ExportFormat::kPx4));
+  EXPECT_EQ(o.Validate(ExportFormat::kPx4, {}), o.Validate(ExportFormat::kPx4));
+  o.instance = 3;
+  EXPECT_EQ(o.Validate(ExportFormat::kPx4), std::nullopt);
+  EXPECT_TRUE(o.Validate(ExportFormat::kArduPilot));
+  o = ExportOptions{};
+  o.c_prefix = "9lives";
+  EXPECT_TRUE(o.Validate(ExportFormat::kCHeader));
+  EXPECT_EQ(o.Validate(ExportFormat::kPx4), std::nullopt);  // not given: not used, not checked
+  o = ExportOptions{};
+  o.rostopic = "/imu//0";
+  EXPECT_TRUE(o.Validate(ExportFormat::kKalibrImu));
+  o = ExportOptions{};
+  o.sensor = "gyroscope";
+  EXPECT_TRUE(o.Validate(ExportFormat::kKalibr));
+  EXPECT_EQ(o.Validate(ExportFormat::kImuTk), std::nullopt);
+  o.gyro_raw_unit = "rpm";
+  EXPECT_TRUE(o.Validate(ExportFormat::kImuTk));
+}
+
 TEST(Export, ImuTkAppliedAsImuTkDoesIsAccelcalsCorrection) {
   for (const Frame frame : {Frame::kXFirst, Frame::kZFirst}) {
     const Fitted f = Fit(ModelKind::kLinear, frame);

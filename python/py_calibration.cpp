@@ -359,10 +359,13 @@ void BindResultAttributes(py::class_<PyCalibration>& cls) {
           "gyroscope",
           [](const PyCalibration& c) -> py::object {
             if (!c.gyroscope) return py::none();
-            return GyroDict(*c.gyroscope);
+            py::dict d = GyroDict(*c.gyroscope);
+            if (!c.gyro_source.empty()) d["source"] = FileNameStr(c.gyro_source);  // its log
+            return d;
           },
           "The gyroscope calibrated from the same recording (calibrate_log's gyro options; "
-          "gyro_calibration.hpp), else None: a dict with model, estimator, K [raw per rad/s], "
+          "gyro_calibration.hpp), else None: a dict with source (its log), model, estimator, K "
+          "[raw per rad/s], "
           "bias [raw], G [raw per force unit, zeros for the linear model], covariance (in "
           "parameter_names' order) and std, noise_sigma_raw, scatter ratios, stills (per "
           "position: the samples where the gyro was still, its mean raw rate there, the angle "
@@ -371,7 +374,8 @@ void BindResultAttributes(py::class_<PyCalibration>& cls) {
           "numbers, from 1; statistic and threshold None when not screened), "
           "rms_deg and heldout_rms_deg")
       .def_property_readonly(
-          "source", [](const PyCalibration& c) { return c.source; }, "The input file, or ''");
+          "source", [](const PyCalibration& c) { return FileNameStr(c.source); },
+          "The input file, or ''");
 }
 
 // CalibrationResult's methods: pickling, apply and to_json.

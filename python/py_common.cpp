@@ -58,10 +58,22 @@ Rows ToRows(const std::vector<Vec3>& v) {
   return rows;
 }
 // Positions known only by their averaged reading (one sample, no standard deviation).
+py::str FileNameStr(const std::string& name) {
+  PyObject* text =
+      PyUnicode_DecodeFSDefaultAndSize(name.data(), static_cast<Py_ssize_t>(name.size()));
+  if (text == nullptr) throw py::error_already_set();
+  return py::reinterpret_steal<py::str>(text);
+}
+
 std::vector<Position> PositionsOf(const Rows& rows) {
   std::vector<Position> positions;
-  for (const Vec3& p : ToVectors(rows))
+  for (const Vec3& p : ToVectors(rows)) {
+    if (!p.allFinite()) {  // a file of them could not be read back
+      throw py::value_error("positions: row " + std::to_string(positions.size()) +
+                            " is not finite");
+    }
     positions.push_back(Position{p, 1, std::nullopt, std::nullopt, std::nullopt});
+  }
   return positions;
 }
 

@@ -41,6 +41,9 @@ T Parse(std::optional<T> value, const std::string& text, const char* what) {
 /// A file name given as str, bytes or os.PathLike (pathlib.Path), as the library takes it;
 /// TypeError naming `what` for anything else.
 std::string PathString(const py::handle& path, const char* what);
+/// A file name as Python's os names it: its bytes decoded as os.fsdecode does (a name that is not
+/// UTF-8 keeps its bytes as surrogate escapes, so that it opens the same file).
+py::str FileNameStr(const std::string& name);
 
 /// A number as Python prints it.
 std::string Number(double v);

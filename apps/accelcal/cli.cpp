@@ -138,6 +138,24 @@ std::string DescribeOptions(const CLI::App& app) {
   return accelcal::JsonText(doc);
 }
 
+// An option written with an empty value ("--raw-units=") would take the next argument for its
+// value in CLI11 ("--raw-units= --model=quadratic" labelled the raw unit "--model=quadratic" and
+// dropped the model): refused. Returns the usage error's status, or 0.
+int RefuseEmptyValues(int argc, char** argv) {
+  for (int i = 1; i < argc && std::string_view(argv[i]) != "--"; ++i) {
+    const std::string_view arg = argv[i];
+    if (arg.size() > 3 && arg.substr(0, 2) == "--" && arg.back() == '=' &&
+        arg.find('=') == arg.size() - 1) {
+      WriteErrLine(
+          Format("accelcal: usage: %s: an empty value; give one, or leave the option "
+                 "out (see --help)\n",
+                 std::string(arg.substr(0, arg.size() - 1)).c_str()));
+      return kExitUsage;
+    }
+  }
+  return 0;
+}
+
 // A list option given twice would be merged by CLI11 ("--gyro-columns 5 --gyro-columns 6,7"
 // as 5,6,7): refused as every other option given twice. An empty item ("20,,30", "20,") would
 // be dropped by it, the list shortened silently: refused too.
@@ -234,6 +252,7 @@ int accelcal::cli::RunCommandLine(int argc, char** argv, const CalibrateRunner& 
     return kExitOk;
   }
 
+  if (const int status = RefuseEmptyValues(argc, argv)) return status;
   if (const int status = RefuseMergedLists(argc, argv)) return status;
   try {
     app.parse(argc, argv);

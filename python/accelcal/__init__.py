@@ -39,6 +39,7 @@ silences a failure. ``diagnose(result, ...)`` computes the diagnosis again (othe
 positions, or a raw log and detection from arrays) and only returns it.
 """
 
+import numbers as _numbers
 import os as _os
 import warnings as _warnings
 
@@ -167,12 +168,15 @@ def _emit_diagnosis(result, source, stacklevel):
     """Warns of the result's warning-severity findings (CalibrationWarning, one each) and, when it
     failed, once of its failures (CalibrationCheckFailed). Notes are not emitted."""
     prefix = f"{source}: " if source else ""
+    gyro = getattr(result, "gyroscope", None)
+    gyro_prefix = f"{gyro['source']}: " if gyro and gyro.get("source") else prefix
     failures = []
     for finding in result.diagnostics:
         if finding["severity"] == "failure":
             failures.append(finding)
         elif finding["severity"] == "warning":
-            w = CalibrationWarning(f"{prefix}{finding['message']} [{finding['code']}]")
+            about = gyro_prefix if finding["code"].startswith("gyro_") else prefix
+            w = CalibrationWarning(f"{about}{finding['message']} [{finding['code']}]")
             w.finding, w.result = finding, result
             _warnings.warn(w, stacklevel=stacklevel + 1)
     if failures:
@@ -253,6 +257,9 @@ def _log_options(input, legacy, options):
     for old, new in _LOG_RENAMED.items():
         if old not in options:
             continue
+        if options[old] is None:  # None leaves an option out, under either name
+            del options[old]
+            continue
         if (input if new == "input" else options.get(new)) is not None:
             raise TypeError(f"calibrate_log() got both '{old}' and '{new}'")
         _deprecated(f"'{old}' is deprecated: it is '{new}', as accelcal.cli.calibrate names it")
@@ -260,20 +267,27 @@ def _log_options(input, legacy, options):
             input = options.pop(old)
         else:
             options[new] = options.pop(old)
-    if "cross_validate" in options:
+    if options.get("cross_validate", None) is None:
+        options.pop("cross_validate", None)
+    else:
         if options.get("no_crossval") is not None:
             raise TypeError("calibrate_log() got both 'cross_validate' and 'no_crossval'")
+        value = options.pop("cross_validate")
+        if hasattr(value, "item") and not isinstance(value, (str, bytes)):
+            value = value.item()  # numpy's bool
+        if not isinstance(value, bool):
+            raise TypeError(f"cross_validate: True or False, not {value!r}")
         _deprecated("'cross_validate' is deprecated: cross_validate=False is no_crossval=True, "
                     "as accelcal.cli.calibrate names it")
-        options["no_crossval"] = not options.pop("cross_validate")
+        options["no_crossval"] = not value
     for name in ("columns", "gyro_columns"):  # the old default, an empty list: the tool's own
         if isinstance(options.get(name), (list, tuple)) and len(options[name]) == 0:
             options[name] = None
     gravity = options.get("gravity")
-    if isinstance(gravity, (int, float)) and not isinstance(gravity, bool) and 0 < gravity < 2:
+    if isinstance(gravity, _numbers.Real) and not isinstance(gravity, bool) and 0 < gravity < 2:
         _deprecated(f"gravity={gravity!r} in g is deprecated: give gravity in m/s2 (the tool's "
                     "--gravity) and units='g' for a calibration in g")
-        options["gravity"] = gravity * 9.80665
+        options["gravity"] = float(gravity) * 9.80665
         if options.get("units") is None:
             options["units"] = "g"
     for name in _LOG_NOT_TAKEN:
@@ -309,8 +323,10 @@ def calibrate_log(input=None, *legacy, **options):
     if unknown:
         raise TypeError(f"calibrate_log() got an unexpected keyword argument '{unknown[0]}'")
     argv = cli._arguments(spec, [input], options)
-    status, result, positions, err, data_error = _accelcal._calibrate_unit(argv)
+    status, result, positions, err, data_error = _accelcal._calibrate_unit(cli._native(argv))
     cli._outcome(status, err, "calibrate", stacklevel=2, data_error=data_error)
+    if result is None:  # the tool's parse ran no calibration (it cannot: a defect)
+        raise RuntimeError(f"calibrate_log: the tool ran no calibration (exit status {status})")
     _emit_diagnosis(result, result.source, stacklevel=2)
     return result, positions
 
@@ -400,9 +416,10 @@ def _log_signature_and_doc():
         "``diagnostics`` the diagnosis; ``gyroscope`` with ``gyro``/``gyro_columns``) and the "
         "(m x 3) averaged readings in the order of the result's directions. Warnings and a "
         "failed verdict are emitted as for ``calibrate`` (prefixed with the input's name); "
-        "nothing is raised for a failed verdict. A solver that does not converge is returned "
-        "as a result whose verdict is \"failed\" (finding ``not_converged``), where the tool "
-        "writes nothing and exits with status 4. Raises ValueError for options the tool "
+        "nothing is raised for a failed verdict. An accelerometer's fit that does not converge is "
+        "returned as a result whose verdict is \"failed\" (finding ``not_converged``), where "
+        "the tool writes nothing and exits with status 4; a gyroscope's raises DataError. "
+        "Raises ValueError for options the tool "
         "refuses (its message, options named as keywords), InputError for a file that cannot "
         "be read or used, DataError for data that do not determine a calibration (too few "
         "positions, no still interval).",

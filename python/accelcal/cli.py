@@ -72,11 +72,18 @@ def _parameters(spec):
     return positionals, options + _DESCRIPTION["options"]
 
 
+# Every option of the tool by its long name, of any command (a message may name another's).
+_OPTION_NAMES = {o["name"] for c in _DESCRIPTION["commands"] for o in c["options"]
+                 if not o["positional"]} | {o["name"] for o in _DESCRIPTION["options"]}
+
+
 def _python_message(text, command):
-    """The tool's message with its options named as this module's keywords."""
+    """The tool's message with its options named as this module's keywords (only the tool's
+    option names: a file name or value such as "--x.csv" is left as it is)."""
     text = text.replace("(see --help)", f"(see help(accelcal.cli.{_keyword_name(command)}))")
-    return _re.sub(r"(?<![\w-])--([a-z][a-z0-9-]*)",
-                   lambda m: _keyword_name(m.group(1)), text)
+    return _re.sub(r"(?<![\w-])--([a-z][a-z0-9-]*)(?![\w.-])",
+                   lambda m: (_keyword_name(m.group(1)) if m.group(1) in _OPTION_NAMES
+                              else m.group(0)), text)
 
 
 def _value(value, what):
@@ -107,16 +114,24 @@ def _arguments(spec, args, options):
         option = named[key]
         flag = "--" + option["name"]
         if option["flag"]:
+            if hasattr(value, "item") and not isinstance(value, (str, bytes)):
+                value = value.item()  # numpy's bool
             if not isinstance(value, bool):
                 raise TypeError(f"{key}: True or False, not {value!r}")
             if value:
                 argv.append(flag)
             continue
-        if option["many"] and isinstance(value, (list, tuple)):
-            items = [_value(v, key) for v in value]
+        if option["many"] and not isinstance(value, (str, bytes, _os.PathLike)) and \
+                hasattr(value, "__iter__"):
+            delimiter = option["delimiter"] or ","
+            items = [_value(v, key) for v in list(value)]
             if not items:
                 raise ValueError(f"{key}: an empty list")
-            argv.append(flag + "=" + (option["delimiter"] or ",").join(items))
+            for item in items:
+                if delimiter in item:
+                    raise ValueError(f"{key}: the item {item!r} holds {delimiter!r}, which "
+                                     "separates the items: give each value as an item of its own")
+            argv.append(flag + "=" + delimiter.join(items))
         else:
             argv.append(f"{flag}={_value(value, key)}")
     tail = []
@@ -128,6 +143,12 @@ def _arguments(spec, args, options):
         else:
             tail.append(_value(value, _keyword_name(option["name"])))
     return argv + (["--"] + tail if tail else [])
+
+
+def _native(argv):
+    """The arguments as the tool takes them: bytes, so that a file name that is not UTF-8 (os's
+    surrogate escapes) passes as it is."""
+    return [_os.fsencode(a) for a in argv]
 
 
 def _raise(status, message, command):
@@ -170,7 +191,7 @@ def _run(spec, args, options, stacklevel=3):
     argv = _arguments(spec, args, options)
     if has_json:
         argv.insert(1, "--json")
-    status, out, err = _accelcal._run_command(argv)
+    status, out, err = _accelcal._run_command(_native(argv))
     lines = _outcome(status, err, command, stacklevel)
     failed = [line[len("accelcal: "):] for line in lines
               if status == 6 and not line.startswith("accelcal: warning: ")]

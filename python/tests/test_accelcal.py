@@ -362,3 +362,35 @@ def test_export_calibration_refuses_an_option_its_format_has_no_use_for():
     with pytest.raises(ValueError, match="c_prefix must start with a letter"):
         accelcal.export_calibration(text, "c-header", c_prefix="1imu")
     assert "imu_K" in accelcal.export_calibration(text, "c-header", c_prefix="imu")["text"]
+
+
+def test_calibrate_log_refuses_what_would_make_it_silently_wrong(tmp_path):
+    # An empty value took the next option for its own ("--raw-units=" then "--model=quadratic").
+    with pytest.raises(ValueError, match="^raw_units: an empty value"):
+        accelcal.calibrate_log(XSENS, raw_units="", model="quadratic")
+    # None leaves an option out, under its old name too; only a bool says whether to validate.
+    assert accelcal.calibrate_log(XSENS, cross_validate=None)[0].crossval_rms is not None
+    assert accelcal.calibrate_log(XSENS, rate_hz=None, window=0.5)[0].verdict == "ok"
+    with pytest.raises(TypeError, match="cross_validate: True or False"):
+        accelcal.calibrate_log(XSENS, cross_validate="no")
+    # A list item holding the delimiter would be split into several.
+    with pytest.raises(ValueError, match="holds ','"):
+        accelcal.calibrate_log(XSENS, columns=["acc_x", "acc_y,acc_z"])
+    # numpy's values as Python's: a bool flag, an array for a list, a float32 gravity in g.
+    flagged = accelcal.calibrate_log(XSENS, gravity=9.81744, no_crossval=np.bool_(True))[0]
+    assert flagged.crossval_rms is None
+    with pytest.warns(DeprecationWarning, match="in g is deprecated"):
+        in_g = accelcal.calibrate_log(XSENS, gravity=np.float32(1.0))[0]
+    assert json.loads(in_g.to_json())["sensors"]["accelerometer"]["units"]["specific_force"] == "g"
+    # A file name that is not UTF-8, and one that looks like an option, named as they are.
+    _, positions = accelcal.calibrate_log(XSENS, gravity=9.81744)
+    odd = os.path.join(os.fsencode(str(tmp_path)), b"\xff.csv")
+    np.savetxt(odd.decode("utf-8", "surrogateescape"), positions, delimiter=",",
+               header="x,y,z", comments="", fmt="%.17g")
+    assert accelcal.calibrate_log(odd, gravity=9.81744)[0].verdict == "ok"
+    with pytest.raises(accelcal.InputError, match="/--model.csv: cannot open"):
+        accelcal.calibrate_log(str(tmp_path / "--model.csv"))
+    # Positions that are not numbers are no calibration file.
+    result, _ = accelcal.calibrate_log(XSENS, gravity=9.81744)
+    with pytest.raises(ValueError, match="positions: row 0 is not finite"):
+        result.to_json(positions=np.full_like(positions, np.nan))

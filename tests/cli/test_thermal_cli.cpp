@@ -658,6 +658,9 @@ TEST_F(ThermalCli, WhatItRefuses) {
            // CLI11 drops an empty list item: "20," was taken as "20".
            {"--thermal 1,1 --temperatures 20,", "--temperatures '20,' has an empty item"},
            {"--thermal 1,1 --columns 1,,2,3", "--columns '1,,2,3' has an empty item"},
+           // CLI11 took the next argument for an empty value: the raw unit "--model=quadratic".
+           {"--raw-units= --model=quadratic", "--raw-units: an empty value; give one"},
+           {"--date= -q", "--date: an empty value; give one"},
        }) {
     const test::CliRun run = Exec("calibrate " + f + " " + options);
     EXPECT_EQ(run.status, 2) << options << ": " << run.err;

@@ -90,14 +90,14 @@ CalibrationOptions MakeOptions(const FitSettings& s) {
     o.modulus.max_iterations = s.max_iterations;
     o.newton_lagrange.max_iterations = s.max_iterations;
   }
-  if (auto why = o.Validate()) throw py::value_error(*why);
+  if (auto why = o.Validate()) throw OptionError(*why);
   if (auto_model) {
     if (!s.cross_validate) {
       throw py::value_error("model 'auto' decides on held-out error: it needs cross_validate=True");
     }
     CalibrationOptions quadratic = o;
     quadratic.model = ModelKind::kQuadratic;
-    if (auto why = quadratic.Validate()) throw py::value_error("model 'auto': " + *why);
+    if (auto why = quadratic.Validate()) throw OptionError("model 'auto': " + *why);
   }
   UnitOf(s.units, s.gravity);  // an unknown unit is an error before any work
   return o;

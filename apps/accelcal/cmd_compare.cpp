@@ -98,11 +98,11 @@ CompareOptions CompareOptionsOf(const CompareArgs& args, Gravity* g) {
         ParseChoice<SolverMethod>(name, "--methods", kOrientationFreeMethods));
   }
   options.base.outliers = ParseOutlierOptions(args.outliers);
-  if (auto why = options.base.Validate()) throw UsageError(*why);
+  if (auto why = options.base.Validate()) throw OptionError(*why);
   for (SolverMethod m : options.methods) {
     CalibrationOptions o = options.base;
     o.method = m;
-    if (auto why = o.Validate()) throw UsageError(*why);
+    if (auto why = o.Validate()) throw OptionError(*why);
   }
   return options;
 }

@@ -467,7 +467,7 @@ int RunMonteCarlo(const MonteCarloArgs& args) {
   }
   options.calibration.estimator = ParseChoice<Estimator>(args.estimator, "--estimator");
   options.calibration.model = scenario->model;
-  if (auto why = options.calibration.Validate()) throw UsageError(*why);
+  if (auto why = options.calibration.Validate()) throw OptionError(*why);
   ProgressBar bar("montecarlo " + args.scenario);
   options.progress = [&bar](int done, int total) { bar.Update(done, total); };
   const MonteCarloResult r = RunMonteCarlo(*scenario, options);

@@ -390,6 +390,11 @@ def test_calibrate_log_refuses_what_would_make_it_silently_wrong(tmp_path):
     assert accelcal.calibrate_log(odd, gravity=9.81744)[0].verdict == "ok"
     with pytest.raises(accelcal.InputError, match="/--model.csv: cannot open"):
         accelcal.calibrate_log(str(tmp_path / "--model.csv"))
+    # The screening's options named as the keywords, not as the library's fields.
+    with pytest.raises(ValueError, match="^max_outliers must be non-negative$"):
+        accelcal.calibrate(positions, max_outliers=-1)
+    with pytest.raises(ValueError, match="^outlier_probability must be in"):
+        accelcal.calibrate_log(XSENS, outlier_probability=2)
     # Positions that are not numbers are no calibration file.
     result, _ = accelcal.calibrate_log(XSENS, gravity=9.81744)
     with pytest.raises(ValueError, match="positions: row 0 is not finite"):

@@ -184,9 +184,9 @@ def test_max_outliers_and_outlier_probability_reach_the_screening(xsens):
         strict = accelcal.calibrate(moved, gravity=G, outlier_probability=1e-12)
     assert strict.outliers[0]["threshold"] > 2 * both.outliers[0]["threshold"]
     for bad in (0.0, 1.0, math.nan):
-        with pytest.raises(ValueError, match="false_alarm_probability"):
+        with pytest.raises(ValueError, match="^outlier_probability must be in"):
             accelcal.calibrate(moved, gravity=G, outlier_probability=bad)
-    with pytest.raises(ValueError, match="max_excluded"):
+    with pytest.raises(ValueError, match="^max_outliers must be non-negative"):
         accelcal.calibrate(moved, gravity=G, max_outliers=-1)
     # calibrate_log takes them too (the Xsens has no outlier: nothing changes).
     result, _ = accelcal.calibrate_log(XSENS, gravity=G, outliers="off", max_outliers=0,

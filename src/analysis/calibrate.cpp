@@ -4,6 +4,7 @@
 
 #include <stdexcept>
 
+#include "accelcal/error.hpp"
 #include "statistics/fit.hpp"
 #include "statistics/held_out.hpp"
 #include "statistics/outliers.hpp"
@@ -14,7 +15,7 @@ namespace accelcal {
 // (held_out.hpp).
 void CrossValidate(const std::vector<Vec3>& readings, const CalibrationOptions& options,
                    CalibrationResult* result) {
-  if (auto why = options.Validate()) throw std::invalid_argument(*why);
+  if (auto why = options.Validate()) throw OptionError(*why);
   const CalibrationResult& full = *result;
   if (full.drift) {  // the expansion is the constant bias's: refits
     internal::CrossValidateByRefits(readings, options, result);
@@ -26,7 +27,7 @@ void CrossValidate(const std::vector<Vec3>& readings, const CalibrationOptions& 
 }
 
 CalibrationResult Calibrate(const std::vector<Vec3>& readings, const CalibrationOptions& options) {
-  if (auto why = options.Validate()) throw std::invalid_argument(*why);
+  if (auto why = options.Validate()) throw OptionError(*why);
   internal::CheckReadingSigmas(options.reading_sigmas, readings.size());
   internal::CheckDistinctReadings(readings);
   CalibrationResult result = internal::CalibrateScreened(readings, options);

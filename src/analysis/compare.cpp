@@ -101,7 +101,7 @@ CalibrationOptions ScreenOnce(const std::vector<Vec3>& readings, const Calibrati
 }  // namespace
 
 Comparison CompareMethods(const std::vector<Vec3>& all_readings, const CompareOptions& options) {
-  if (auto why = options.base.Validate()) throw std::invalid_argument(*why);
+  if (auto why = options.base.Validate()) throw OptionError(*why);
   internal::CheckReadingSigmas(options.base.reading_sigmas, all_readings.size());
   const std::vector<SolverMethod> methods =
       options.methods.empty() ? MethodsFor(options.base.model) : options.methods;
@@ -112,7 +112,7 @@ Comparison CompareMethods(const std::vector<Vec3>& all_readings, const CompareOp
   for (SolverMethod method : methods) {
     CalibrationOptions o = shared;
     o.method = method;
-    if (auto why = o.Validate()) throw std::invalid_argument(*why);
+    if (auto why = o.Validate()) throw OptionError(*why);
     MethodComparison c;
     c.method = method;
     c.error = Fit(readings, o, &c.result);

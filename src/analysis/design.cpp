@@ -504,7 +504,7 @@ std::optional<std::string> DesignOptions::Validate() const {
 }
 
 DesignResult Design(const std::vector<Vec3>& directions_in, const DesignOptions& options) {
-  if (auto why = options.Validate()) throw std::invalid_argument(*why);
+  if (auto why = options.Validate()) throw OptionError(*why);
   // A platform-frame device (known-orientation fit) has a full K: the orientation-free bound is
   // that of the same linear device in its x-first form (frame.hpp), the directions rotated with it.
   ModelParameters device = options.device;

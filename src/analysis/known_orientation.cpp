@@ -234,7 +234,7 @@ std::vector<OutlierFinding> Screen(const std::vector<Vec3>& readings,
 
 std::optional<std::string> KnownOrientationOptions::Validate() const {
   if (!(gravity > 0) || !std::isfinite(gravity)) return "gravity must be a positive number";
-  if (auto why = outliers.Validate()) return "outliers." + *why;
+  if (auto why = outliers.Validate()) return why;
   return std::nullopt;
 }
 
@@ -242,7 +242,7 @@ CalibrationResult CalibrateKnownOrientations(const std::vector<Vec3>& readings,
                                              const std::vector<Vec3>& directions,
                                              const KnownOrientationOptions& options) {
   const auto t0 = std::chrono::steady_clock::now();
-  if (auto why = options.Validate()) throw std::invalid_argument(*why);
+  if (auto why = options.Validate()) throw OptionError(*why);
   const std::size_t m = readings.size();
   if (directions.size() != m) {
     throw std::invalid_argument(std::to_string(directions.size()) + " known directions for " +

@@ -11,6 +11,7 @@
 #include "accelcal/compare.hpp"
 #include "accelcal/design.hpp"
 #include "accelcal/engineering.hpp"
+#include "accelcal/error.hpp"
 #include "accelcal/simulate.hpp"
 #include "core/parallel.hpp"
 
@@ -217,7 +218,7 @@ MonteCarloResult RunMonteCarlo(const Scenario& scenario, const MonteCarloOptions
                                     ? static_cast<std::size_t>(scenario.random_attitudes)
                                     : scenario.directions.size();
   if (options.known_noise) calibration.reading_sigmas.assign(positions, scenario.sigma_raw);
-  if (auto why = calibration.Validate()) throw std::invalid_argument(*why);
+  if (auto why = calibration.Validate()) throw OptionError(*why);
 
   const EngineeringParameters truth = ToEngineering(scenario.truth, scenario.gravity);
   const Eigen::Matrix<double, kErrors, 1> truth_eng =

@@ -119,7 +119,7 @@ internal::ThermalFit Fit(const std::vector<Vec3>& readings, const ThermalOptions
 }  // namespace
 
 ThermalResult CalibrateThermal(const std::vector<Vec3>& readings, const ThermalOptions& options) {
-  if (auto why = options.Validate()) throw std::invalid_argument(*why);
+  if (auto why = options.Validate()) throw OptionError(*why);
   const auto start_time = std::chrono::steady_clock::now();
   if (options.temperatures_c.size() != readings.size()) {
     throw std::invalid_argument("temperatures_c has " +

@@ -24,9 +24,9 @@ std::optional<Estimator> EstimatorFromString(std::string_view text) {
 std::string_view ToString(OutlierPolicy policy) { return NameOf(policy); }
 std::optional<std::string> OutlierOptions::Validate() const {
   if (!(false_alarm_probability > 0 && false_alarm_probability < 1)) {
-    return "false_alarm_probability must be in (0, 1)";
+    return "{{outlier_probability}} must be in (0, 1)";
   }
-  if (max_excluded < 0) return "max_excluded must be non-negative";
+  if (max_excluded < 0) return "{{max_outliers}} must be non-negative";
   return std::nullopt;
 }
 
@@ -107,7 +107,7 @@ std::optional<std::string> CalibrationOptions::Validate() const {
     return "the bias-corrected estimator corrects maximum likelihood: it does not apply to the " +
            std::string(ToString(method)) + " method";
   }
-  if (auto why = outliers.Validate()) return "outliers." + *why;
+  if (auto why = outliers.Validate()) return why;
   if (bias_correction.max_rounds < 1) return "bias_correction.max_rounds must be at least 1";
   if (!(bias_correction.tolerance > 0)) return "bias_correction.tolerance must be positive";
   if (method == SolverMethod::kEllipsoid && initialization != Initialization::kAuto &&

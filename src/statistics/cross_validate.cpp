@@ -72,7 +72,7 @@ HeldOutRefit HeldOutErrorUnder(const ModelParameters& without, const Vec3& readi
 // out of every fit already: their error is that of the final fit.
 void CrossValidateByRefits(const std::vector<Vec3>& readings, const CalibrationOptions& options,
                            CalibrationResult* result) {
-  if (auto why = options.Validate()) throw std::invalid_argument(*why);
+  if (auto why = options.Validate()) throw OptionError(*why);
   LeaveOneOut(
       readings, [&](std::size_t k) { return RefitWithout(readings, options, *result, k); }, result);
 }

@@ -661,6 +661,9 @@ TEST_F(ThermalCli, WhatItRefuses) {
            // CLI11 took the next argument for an empty value: the raw unit "--model=quadratic".
            {"--raw-units= --model=quadratic", "--raw-units: an empty value; give one"},
            {"--date= -q", "--date: an empty value; give one"},
+           // Named as the options are, not as the library's fields (outliers.max_excluded).
+           {"--max-outliers -1", "usage: --max-outliers must be non-negative"},
+           {"--outlier-probability 2", "usage: --outlier-probability must be in (0, 1)"},
        }) {
     const test::CliRun run = Exec("calibrate " + f + " " + options);
     EXPECT_EQ(run.status, 2) << options << ": " << run.err;

@@ -222,23 +222,17 @@ int RunExport(const ExportArgs& args) {
         ReadFileToString(args.current_params, kMaxSmallFileBytes), args.current_params);
   }
   const bool noise_only = format == ExportFormat::kKalibrImu || format == ExportFormat::kRos;
-  // The options given, by their field names: one the format has no use for is refused.
-  std::vector<std::string> given;
-  for (std::string name : args.given) {
-    std::replace(name.begin(), name.end(), '-', '_');
-    given.push_back(std::move(name));
-  }
-  if (auto why = options.Validate(format, given)) throw OptionError(*why);
+  // An option given that the format has no use for is refused.
+  if (auto why = options.Validate(format, args.given)) throw OptionError(*why);
   ExportResult exported;
   try {
     exported = ExportCalibration(cal, text, format, options);
   } catch (const std::invalid_argument& e) {
-    throw UsageError(WithFlags(e.what(), {{"c_prefix", "--c-prefix"},
-                                          {"instance", "--instance"},
+    // The targets' refusals that depend on the calibration (ExportOptions::Validate's are
+    // refused above, named by their marks).
+    throw UsageError(WithFlags(e.what(), {{"instance", "--instance"},
                                           {"gyro_raw_unit", "--gyro-raw-unit"},
-                                          {"raw_unit", "--raw-unit"},
-                                          {"rostopic", "--rostopic"},
-                                          {"sensor", "--sensor"}}));
+                                          {"raw_unit", "--raw-unit"}}));
   } catch (const DataError& e) {
     throw InputError(
         noise_only ? args.noise.empty() ? args.calibration : args.noise : args.calibration, 0,
@@ -382,9 +376,11 @@ CommandRun SetUpExport(CLI::App* cmd) {
       ->capture_default_str();
   return [a](const CLI::App& parsed) {
     DataSubject() = a->calibration;
-    for (const char* name : {"raw-unit", "gyro-raw-unit", "instance", "c-prefix", "sensor", "noise",
-                             "rostopic", "device-id", "gyro-device-id", "current-params"}) {
-      if (parsed.count(std::string("--") + name) > 0) a->given.push_back(name);
+    for (const char* name : {"raw_unit", "gyro_raw_unit", "instance", "c_prefix", "sensor", "noise",
+                             "rostopic", "device_id", "gyro_device_id", "current_params"}) {
+      std::string flag = std::string("--") + name;
+      std::replace(flag.begin(), flag.end(), '_', '-');
+      if (parsed.count(flag) > 0) a->given.push_back(name);
     }
     return RunExport(*a);
   };

@@ -236,8 +236,8 @@ struct ExportArgs {
   std::optional<std::uint64_t> device_id;       // px4: CAL_ACC<n>_ID
   std::optional<std::uint64_t> gyro_device_id;  // px4: CAL_GYRO<n>_ID
   std::string current_params;                   // ardupilot: the .param file in force when logged
-  /// The options given on the command line (long names without dashes): one the chosen format
-  /// does not use is refused, never silently ignored.
+  /// The options given on the command line, by ExportOptions' field names (raw_unit, ...): one
+  /// the chosen format does not use is refused, never silently ignored.
   std::vector<std::string> given;
 };
 

@@ -81,34 +81,37 @@ ExportResult ExportCalibration(const LoadedCalibration& cal, const std::string& 
 
 namespace {
 
-// Which formats use each option (ExportOptions' fields), and how a message lists them.
+// Which formats use each option (ExportOptions' fields).
 struct OptionUse {
   const char* option;
   std::vector<ExportFormat> formats;
-  const char* listed;
 };
 
 const std::vector<OptionUse>& OptionUses() {
   using F = ExportFormat;
   static const std::vector<OptionUse> uses = {
-      {"raw_unit",
-       {F::kKalibr, F::kOpenVins, F::kBasalt, F::kPx4, F::kArduPilot},
-       "kalibr, openvins, basalt, px4 and ardupilot"},
-      {"gyro_raw_unit",
-       {F::kKalibr, F::kOpenVins, F::kBasalt, F::kPx4},
-       "kalibr, openvins, basalt and px4"},
-      {"instance", {F::kPx4, F::kArduPilot}, "px4 and ardupilot"},
-      {"c_prefix", {F::kCHeader}, "c-header"},
-      {"sensor", {F::kImuTk}, "imutk"},
-      {"noise",
-       {F::kKalibrImu, F::kRos, F::kKalibr, F::kOpenVins, F::kBasalt},
-       "kalibr-imu, ros, kalibr, openvins and basalt"},
-      {"rostopic", {F::kKalibrImu, F::kKalibr, F::kOpenVins}, "kalibr-imu, kalibr and openvins"},
-      {"device_id", {F::kPx4}, "px4"},
-      {"gyro_device_id", {F::kPx4}, "px4"},
-      {"current_params", {F::kArduPilot}, "ardupilot"},
+      {"raw_unit", {F::kKalibr, F::kOpenVins, F::kBasalt, F::kPx4, F::kArduPilot}},
+      {"gyro_raw_unit", {F::kKalibr, F::kOpenVins, F::kBasalt, F::kPx4}},
+      {"instance", {F::kPx4, F::kArduPilot}},
+      {"c_prefix", {F::kCHeader}},
+      {"sensor", {F::kImuTk}},
+      {"noise", {F::kKalibrImu, F::kRos, F::kKalibr, F::kOpenVins, F::kBasalt}},
+      {"rostopic", {F::kKalibrImu, F::kKalibr, F::kOpenVins}},
+      {"device_id", {F::kPx4}},
+      {"gyro_device_id", {F::kPx4}},
+      {"current_params", {F::kArduPilot}},
   };
   return uses;
+}
+
+// The formats by name, as a sentence lists them: "a, b and c".
+std::string Listed(const std::vector<ExportFormat>& formats) {
+  std::string out;
+  for (std::size_t i = 0; i < formats.size(); ++i) {
+    if (i > 0) out += i + 1 == formats.size() ? " and " : ", ";
+    out += ToString(formats[i]);
+  }
+  return out;
 }
 
 // A C identifier's prefix: a letter or '_' first, then letters, digits and '_'.
@@ -130,7 +133,7 @@ std::optional<std::string> ExportOptions::Validate(ExportFormat format,
     const bool used =
         std::find(use.formats.begin(), use.formats.end(), format) != use.formats.end();
     if (!used && std::find(given.begin(), given.end(), use.option) != given.end()) {
-      return "{{" + std::string(use.option) + "}} is for " + use.listed + "; " +
+      return "{{" + std::string(use.option) + "}} is for " + Listed(use.formats) + "; " +
              std::string(ToString(format)) + " has no use for it";
     }
   }

@@ -23,13 +23,9 @@
 #include "accelcal/error.hpp"
 #include "accelcal/export.hpp"
 #include "accelcal/gyro_calibration.hpp"
-#include "accelcal/load_positions.hpp"
-#include "accelcal/log_reader.hpp"
 #include "accelcal/model_selection.hpp"
-#include "accelcal/position_noise.hpp"
 #include "accelcal/report.hpp"
 #include "accelcal/static_detection.hpp"
-#include "accelcal/time_axis.hpp"
 
 namespace accelcal::python {
 

@@ -143,8 +143,7 @@ PyCalibration FromOutcome(const UnitOutcome& u, int max_excluded) {
   c.provenance = u.provenance;
   if (u.gyroscope) {
     c.gyroscope = u.gyroscope->calibration;
-    c.gyro_source = u.gyroscope->path;
-    c.gyro_raw_unit = u.gyroscope->raw_unit;
+    c.gyroscope->accelerometer.reset();  // the joint fit's accelerometer is c.result
   }
   return c;
 }
@@ -356,7 +355,7 @@ void BindResultAttributes(py::class_<PyCalibration>& cls) {
           [](const PyCalibration& c) -> py::object {
             if (!c.gyroscope) return py::none();
             py::dict d = GyroDict(*c.gyroscope);
-            if (!c.gyro_source.empty()) d["source"] = FileNameStr(c.gyro_source);  // its log
+            if (!c.gyroscope->source.empty()) d["source"] = FileNameStr(c.gyroscope->source);
             return d;
           },
           "The gyroscope calibrated from the same recording (calibrate_log's gyro options; "
@@ -417,13 +416,13 @@ void BindResultMethods(py::class_<PyCalibration>& cls) {
             // The stored diagnosis is of the fitted positions in the stored unit.
             if (!positions && info.unit == c.unit) info.diagnosis = &c.diagnosis;
             info.provenance = c.provenance;
-            if (c.gyroscope) {
-              info.gyroscope = &*c.gyroscope;
-              info.gyro_source = c.gyro_source;
-              // A raw gyroscope's counts are labelled as the accelerometer's when they are.
-              info.gyro_raw_unit =
-                  raw_units && c.gyroscope->unit == GyroUnit::kRaw ? *raw_units : c.gyro_raw_unit;
+            // A raw gyroscope's counts are labelled as the accelerometer's when they are.
+            std::optional<UnitGyroscope> relabelled;
+            if (c.gyroscope && raw_units && c.gyroscope->unit == GyroUnit::kRaw) {
+              relabelled = *c.gyroscope;
+              relabelled->raw_unit = *raw_units;
             }
+            info.gyroscope = relabelled ? &*relabelled : c.gyroscope ? &*c.gyroscope : nullptr;
             if (date) {
               if (const auto why = CheckProvenanceDate(*date))
                 throw py::value_error("date: " + *why);

@@ -31,10 +31,9 @@ struct PyCalibration {
   int max_excluded = OutlierOptions{}.max_excluded;
   Diagnosis diagnosis;
   Provenance provenance;  // the function and its arguments, the file read (to_json writes it)
-  // The gyroscope calibrated from the same recording (calibrate_log's gyro options), its log and
-  // the label of its raw unit.
-  std::optional<GyroCalibration> gyroscope;
-  std::string gyro_source, gyro_raw_unit;
+  // The gyroscope calibrated from the same recording (calibrate_log's gyro options), with its log
+  // and the label of its raw unit.
+  std::optional<UnitGyroscope> gyroscope;
 };
 
 /// The whole of a result as bytes (CBOR), every double's bits kept: what pickle stores.

@@ -2,7 +2,8 @@
 // as CBOR (binary: each double's bits, NaN and infinities included, survive, which JSON text
 // would not promise). One field list per struct (Fields) serves both directions, so that what is
 // saved and what is loaded cannot drift apart; a struct that gains a field fails the size checks
-// below until its list names it.
+// below until its list names it. The gyroscope is pickled as its section of the calibration file
+// (GyroscopeToJson), the one description that also writes and reads the file.
 #include <cstdint>
 #include <cstring>
 #include <map>
@@ -17,6 +18,8 @@
 
 #include <nlohmann/json.hpp>
 
+#include "accelcal/calibration_file.hpp"
+#include "accelcal/error.hpp"
 #include "accelcal/sha256.hpp"
 #include "accelcal/version.hpp"
 #include "py_result.hpp"
@@ -58,10 +61,6 @@ struct IsEigen : std::is_base_of<Eigen::MatrixBase<T>, T> {};
 template <typename V>
 void Fields(V& v, ModelParameters& p) {
   v("K", p.K)("bias", p.bias)("k2", p.k2);
-}
-template <typename V>
-void Fields(V& v, GyroParameters& p) {
-  v("K", p.K)("bias", p.bias)("G", p.G);
 }
 template <typename V>
 void Fields(V& v, Summary& s) {
@@ -154,47 +153,6 @@ void Fields(V& v, Provenance& p) {
       "accelcal_version", p.accelcal_version);
 }
 template <typename V>
-void Fields(V& v, GyroStillSpan& s) {
-  v("first_sample", s.first_sample)("last_sample", s.last_sample)("mean_raw", s.mean_raw)(
-      "turned_outside_deg", s.turned_outside_deg)("still", s.still);
-}
-template <typename V>
-void Fields(V& v, GyroTimeOffset& t) {
-  v("lag_s", t.lag_s)("std_s", t.std_s)("step_s", t.step_s)("turns", t.turns)("at_limit",
-                                                                              t.at_limit);
-}
-template <typename V>
-void Fields(V& v, GyroRotation& r) {
-  v("from", r.from)("to", r.to)("first_sample", r.first_sample)("last_sample", r.last_sample)(
-      "duration_s", r.duration_s)("angle_deg", r.angle_deg)("turned_deg", r.turned_deg)(
-      "turned_std_deg", r.turned_std_deg)("residual_deg", r.residual_deg)(
-      "heldout_deg", r.heldout_deg)("statistic", r.statistic)("threshold", r.threshold)("flagged",
-                                                                                        r.flagged);
-}
-template <typename V>
-void Fields(V& v, GyroThermalBias& b) {
-  v("t_ref_c", b.t_ref_c)("coefficients", b.coefficients)("covariance", b.covariance);
-}
-template <typename V>
-void Fields(V& v, GyroThermal& t) {
-  v("bias", t.bias)("temperatures_c", t.temperatures_c)("range_c", t.range_c)(
-      "temperature_source", t.temperature_source)("reason", t.reason)(
-      "scatter_ratio", t.scatter_ratio)("heldout_rms_raw", t.heldout_rms_raw);
-}
-template <typename V>
-void Fields(V& v, GyroCalibration& g) {
-  v("model", g.model)("model_reason", g.model_reason)("estimator", g.estimator)("unit", g.unit)(
-      "params", g.params)("covariance", g.covariance)("noise_sigma_raw", g.noise_sigma_raw)(
-      "still_spans", g.still_spans)("time_offset", g.time_offset)("rotations", g.rotations)(
-      "rms_deg", g.rms_deg)("heldout_rms_deg", g.heldout_rms_deg)(
-      "still_scatter_ratio", g.still_scatter_ratio)("rotation_scatter_ratio",
-                                                    g.rotation_scatter_ratio)(
-      "accel_scatter_ratio", g.accel_scatter_ratio)("summary", g.summary)(
-      "latitude_deg", g.latitude_deg)("earth_rate_vertical_rad_s", g.earth_rate_vertical_rad_s)(
-      "earth_rate_horizontal_rad_s", g.earth_rate_horizontal_rad_s)(
-      "accelerometer", g.accelerometer)("thermal", g.thermal);
-}
-template <typename V>
 void Fields(V& v, BiasModelStep& s) {
   v("simpler", s.simpler)("richer", s.richer)("error", s.error)("positions_used", s.positions_used)(
       "simpler_rms", s.simpler_rms)("richer_rms", s.richer_rms)("improvement", s.improvement)(
@@ -212,8 +170,7 @@ void Fields(V& v, PyCalibration& c) {
       "unit", c.unit)("positions", c.positions)("mean_sigmas", c.mean_sigmas)("source", c.source)(
       "raw_unit", c.raw_unit)("sources", c.sources)("position_source", c.position_source)(
       "bias_model_selection", c.bias_model_selection)("max_excluded", c.max_excluded)(
-      "diagnosis", c.diagnosis)("provenance", c.provenance)("gyroscope", c.gyroscope)(
-      "gyro_source", c.gyro_source)("gyro_raw_unit", c.gyro_raw_unit);
+      "diagnosis", c.diagnosis)("provenance", c.provenance)("gyroscope", c.gyroscope);
 }
 
 // A struct that gains a field must have it in its list above: these sizes (x86-64, libstdc++)
@@ -237,12 +194,6 @@ static_assert(sizeof(InputRecord) == 288,
               "InputRecord changed: update its field list (py_state.cpp)");
 static_assert(sizeof(Provenance) == 136,
               "Provenance changed: update its field list (py_state.cpp)");
-static_assert(sizeof(GyroRotation) == 104,
-              "GyroRotation changed: update its field list (py_state.cpp)");
-static_assert(sizeof(GyroThermal) == 176,
-              "GyroThermal changed: update its field list (py_state.cpp)");
-static_assert(sizeof(GyroCalibration) == 1496,
-              "GyroCalibration changed: update its field list (py_state.cpp)");
 static_assert(sizeof(BiasModelStep) == 136,
               "BiasModelStep changed: update its field list (py_state.cpp)");
 static_assert(sizeof(BiasModelSelection) == 824,
@@ -255,12 +206,6 @@ static_assert(sizeof(BiasTimeBasis) == 40,
               "BiasTimeBasis changed: update its field list (py_state.cpp)");
 static_assert(sizeof(ThermalParameters) == 48,
               "ThermalParameters changed: update its field list (py_state.cpp)");
-static_assert(sizeof(GyroStillSpan) == 56,
-              "GyroStillSpan changed: update its field list (py_state.cpp)");
-static_assert(sizeof(GyroTimeOffset) == 40,
-              "GyroTimeOffset changed: update its field list (py_state.cpp)");
-static_assert(sizeof(GyroThermalBias) == 56,
-              "GyroThermalBias changed: update its field list (py_state.cpp)");
 static_assert(sizeof(Diagnosis) == 24, "Diagnosis changed: update its field list (py_state.cpp)");
 #endif
 
@@ -282,6 +227,10 @@ struct Saver {
       return value;
     } else if constexpr (std::is_same_v<T, nlohmann::ordered_json>) {
       return value.dump();  // as text: its keys' order is the file's
+    } else if constexpr (std::is_same_v<T, UnitGyroscope>) {
+      // As the file's section (one description writes, reads and pickles it); its text holds
+      // every double exactly (17 digits), and null for the numbers that do not exist.
+      return GyroscopeToJson(value, ForceUnit::kMetersPerSecond2).dump();
     } else if constexpr (IsEigen<T>::value) {
       Json j = Json::object();
       j["rows"] = value.rows();
@@ -333,6 +282,12 @@ struct Loader {
       value = j.get<T>();
     } else if constexpr (std::is_same_v<T, nlohmann::ordered_json>) {
       value = nlohmann::ordered_json::parse(j.get<std::string>());
+    } else if constexpr (std::is_same_v<T, UnitGyroscope>) {
+      try {
+        value = GyroscopeFromJson(nlohmann::ordered_json::parse(j.get<std::string>()), "pickle");
+      } catch (const InputError& e) {
+        throw py::value_error(std::string("a pickled gyroscope that is not one: ") + e.what());
+      }
     } else if constexpr (IsEigen<T>::value) {
       const auto rows = j.at("rows").get<Eigen::Index>();
       const auto cols = j.at("cols").get<Eigen::Index>();

@@ -366,15 +366,13 @@ EngineeringValue ThermalEngineering(const ThermalSlot& slot, double raw, const M
 
 void WarnOtherTemperatureSensor(const LoadedCalibration& cal, const std::string& path,
                                 const std::string& source, const char* use) {
-  if (!cal.gyroscope || cal.gyroscope->thermal_source.empty() ||
-      SameTemperatureSensor(cal.gyroscope->thermal_source, source)) {
-    return;
-  }
+  if (!cal.gyroscope || !cal.gyroscope->thermal) return;
+  const std::string& fitted_at = cal.gyroscope->thermal->temperature_source;
+  if (fitted_at.empty() || SameTemperatureSensor(fitted_at, source)) return;
   Warn(
       "%s: the gyroscope's offsets over temperature were fitted at the temperatures of %s, and "
       "these rates are %s at those of %s: one die may run warmer than the other\n",
-      path.c_str(), VisibleLine(cal.gyroscope->thermal_source).c_str(), use,
-      VisibleLine(source).c_str());
+      path.c_str(), VisibleLine(fitted_at).c_str(), use, VisibleLine(source).c_str());
 }
 
 void RefuseLeftOutTemperature(const LoadedCalibration& cal, const RawLog& log,
@@ -399,11 +397,12 @@ void WarnVaryingNotUsed(const LoadedCalibration& cal, const std::string& path, c
         path.c_str(), cal.thermal->params.degrees.ToString().c_str(), use,
         cal.thermal->params.t_ref_c);
   }
-  if (cal.gyroscope && cal.gyroscope->thermal && cal.gyroscope->thermal->degree() > 0) {
+  if (cal.gyroscope && cal.gyroscope->thermal && cal.gyroscope->thermal->bias.degree() > 0) {
     Warn(
         "%s: its gyroscope's offsets follow temperature (degree %d); they are %s at one "
         "temperature, T_ref = %.6g degC, not at the temperature of each reading\n",
-        path.c_str(), cal.gyroscope->thermal->degree(), use, cal.gyroscope->thermal->t_ref_c);
+        path.c_str(), cal.gyroscope->thermal->bias.degree(), use,
+        cal.gyroscope->thermal->bias.t_ref_c);
   }
   if (!cal.drift) return;
   Warn(

@@ -262,12 +262,13 @@ void PrintFindings(const Diagnosis& diagnosis, const std::string& input_path,
 
 void PrintGyro(const UnitOutcome::Gyroscope& run, const char* force_unit) {
   const GyroCalibration& g = run.calibration;
-  const std::string& raw_unit = run.raw_unit;
+  const std::string& raw_unit = run.calibration.raw_unit;
   const auto& slots = GyroParameterSlots(g.model);
   const bool have_std = g.covariance.size() > 0;
   Say("\ngyroscope %s: %zu samples; model %s (%s), %s fit, w_raw = K w + b + G f\n",
-      Shown(run.path).c_str(), run.data.raw.samples.size(), std::string(ToString(g.model)).c_str(),
-      g.model_reason.c_str(), std::string(ToString(g.estimator)).c_str());
+      Shown(run.calibration.source).c_str(), run.data.raw.samples.size(),
+      std::string(ToString(g.model)).c_str(), g.model_reason.c_str(),
+      std::string(ToString(g.estimator)).c_str());
   Say("parameters (K in %s per rad/s, b in %s, G in %s per %s; +- 1 sigma)\n", raw_unit.c_str(),
       raw_unit.c_str(), raw_unit.c_str(), force_unit);
   const Eigen::VectorXd theta = Pack(g.params, g.model);
@@ -529,7 +530,7 @@ int WriteCalibration(const CalibrateArgs& args, const UnitOutcome& unit, const G
          o.excluded ? " It was left out of the fit." : " It was kept in the fit.");
   }
   PrintFindings(diagnosis, args.input.path,
-                unit.gyroscope ? unit.gyroscope->path : args.input.path);
+                unit.gyroscope ? unit.gyroscope->calibration.source : args.input.path);
   if (args.json) {
     WriteFileAtomically("-", json);
   } else {

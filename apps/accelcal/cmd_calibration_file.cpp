@@ -66,8 +66,8 @@ int RunApply(const ApplyArgs& args) {
   }
   // The gyroscope's offsets over temperature: each rate at the gyro log's temperature, else the
   // accelerometer's at the same sample.
-  const std::optional<GyroThermalBias>& gyro_bias =
-      gyro ? cal.gyroscope->thermal : std::optional<GyroThermalBias>();
+  const GyroThermalBias* gyro_bias =
+      gyro && cal.gyroscope->thermal ? &cal.gyroscope->thermal->bias : nullptr;
   const std::string gyro_t_source = gyro ? GyroTemperatureSource(rates.raw, log) : "";
   const bool gyro_thermal = gyro_bias && gyro_bias->degree() > 0 && !gyro_t_source.empty();
   if (gyro_thermal) WarnOtherTemperatureSensor(cal, args.calibration, gyro_t_source, "corrected");
@@ -109,8 +109,8 @@ int RunApply(const ApplyArgs& args) {
     }
     if (gyro_thermal) {
       const double t = gyro_t_at(i);
-      gyro_held += t < cal.gyroscope->thermal_range_c.first - 1 ||
-                   t > cal.gyroscope->thermal_range_c.second + 1;
+      gyro_held += t < cal.gyroscope->thermal->range_c.first - 1 ||
+                   t > cal.gyroscope->thermal->range_c.second + 1;
     }
   }
   OutputFile file(args.output.empty() ? "-" : args.output);  // buffers: one Write per row
@@ -128,15 +128,15 @@ int RunApply(const ApplyArgs& args) {
   if (gyro_thermal) {
     file.Write("# gyroscope temperature: each rate's offsets at its own (" +
                VisibleLine(gyro_t_source) + "), held to " +
-               FormatNumber(cal.gyroscope->thermal_range_c.first) + " .. " +
-               FormatNumber(cal.gyroscope->thermal_range_c.second) + " degC\n");
+               FormatNumber(cal.gyroscope->thermal->range_c.first) + " .. " +
+               FormatNumber(cal.gyroscope->thermal->range_c.second) + " degC\n");
   }
   if (gyro_held > 0) {
     Warn(
         "%s: %zu rates were recorded more than 1 K outside %g .. %g degC, the range the "
         "gyroscope's offsets were fitted over: corrected at the nearest end\n",
-        args.input.path.c_str(), gyro_held, cal.gyroscope->thermal_range_c.first,
-        cal.gyroscope->thermal_range_c.second);
+        args.input.path.c_str(), gyro_held, cal.gyroscope->thermal->range_c.first,
+        cal.gyroscope->thermal->range_c.second);
   }
   if (held > 0) {
     Warn(
@@ -160,8 +160,8 @@ int RunApply(const ApplyArgs& args) {
       const GyroParameters& g = cal.gyroscope->params;
       Vec3 b = g.bias;
       if (gyro_thermal) {
-        b += gyro_bias->OffsetChange(std::clamp(gyro_t_at(i), cal.gyroscope->thermal_range_c.first,
-                                                cal.gyroscope->thermal_range_c.second));
+        b += gyro_bias->OffsetChange(std::clamp(gyro_t_at(i), cal.gyroscope->thermal->range_c.first,
+                                                cal.gyroscope->thermal->range_c.second));
       }
       const Vec3 w = gyro_K_inverse * (rates.raw.samples[i] - b - g.G * f);
       for (int a = 0; a < 3; ++a) number(w(a), a < 2 ? ',' : '\n');

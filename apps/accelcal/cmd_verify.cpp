@@ -112,13 +112,15 @@ void CheckPredictable(const LoadedCalibration& cal, const std::string& path, boo
                      "its gyroscope holds no covariance: verify predicts the turns' error from "
                      "it; calibrate again");
   }
-  if (gyro && (!cal.gyroscope->rotation_scatter_ratio || !cal.gyroscope->still_scatter_ratio)) {
-    throw InputError(path, 0,
-                     std::string("its gyroscope holds no noise.") +
-                         (cal.gyroscope->rotation_scatter_ratio ? "still_scatter_ratio"
-                                                                : "rotation_scatter_ratio") +
-                         " (the scatter of its turns or still rates over their rate noise): "
-                         "verify predicts their error from it; calibrate again");
+  if (gyro && (std::isnan(cal.gyroscope->rotation_scatter_ratio) ||
+               std::isnan(cal.gyroscope->still_scatter_ratio))) {
+    throw InputError(
+        path, 0,
+        std::string("its gyroscope holds no noise.") +
+            (std::isnan(cal.gyroscope->rotation_scatter_ratio) ? "rotation_scatter_ratio"
+                                                               : "still_scatter_ratio") +
+            " (the scatter of its turns or still rates over their rate noise): "
+            "verify predicts their error from it; calibrate again");
   }
 }
 
@@ -168,21 +170,21 @@ GyroVerification VerifyRates(const VerifyArgs& args, const LoadedCalibration& ca
   InputData rates = ReadGyroLog(args.input, args.gyro, args.gyro_columns, false);
   CheckGyroClock(data.raw, rates.raw);
   // Offsets over temperature: taken out of each rate at its temperature, as calibrate did.
-  if (const std::optional<GyroThermalBias>& b = cal.gyroscope->thermal; b && b->degree() > 0) {
+  if (const std::optional<GyroThermal>& b = cal.gyroscope->thermal; b && b->bias.degree() > 0) {
     WarnOtherTemperatureSensor(cal, args.calibration, GyroTemperatureSource(rates.raw, data.raw),
                                "verified");
     const std::vector<double> t_c = GyroSampleTemperatures(rates.raw, data.raw);
-    const auto [lo, hi] = cal.gyroscope->thermal_range_c;
+    const auto [lo, hi] = cal.gyroscope->thermal->range_c;
     for (std::size_t k = 0; k < t_c.size(); ++k) {
-      rates.raw.samples[k] -= b->OffsetChange(std::clamp(t_c[k], lo, hi));
+      rates.raw.samples[k] -= b->bias.OffsetChange(std::clamp(t_c[k], lo, hi));
     }
   }
   VerifiedGyroscope g;
   g.model = cal.gyroscope->model;
   g.params = cal.gyroscope->params;
   g.covariance = cal.gyroscope->covariance;
-  g.rotation_scatter_ratio = *cal.gyroscope->rotation_scatter_ratio;
-  g.still_scatter_ratio = *cal.gyroscope->still_scatter_ratio;
+  g.rotation_scatter_ratio = cal.gyroscope->rotation_scatter_ratio;
+  g.still_scatter_ratio = cal.gyroscope->still_scatter_ratio;
   return VerifyGyroscope(under_test, g, data.raw, rates.raw, positions);
 }
 

@@ -123,13 +123,11 @@ struct UnitOutcome {
   std::optional<BiasModelSelection> bias_model_selection;
   std::optional<ThermalDegreeSelection> thermal_selection;
   std::optional<OrientationFile> orientations;
-  /// The gyroscope: its log's name (the first input when it was read again), as read, its
-  /// calibration and the label of its raw unit.
+  /// The gyroscope: its log as read, and its calibration with the log's name (the first input
+  /// when it was read again) and the label of its raw unit.
   struct Gyroscope {
-    std::string path;
     InputData data;
-    GyroCalibration calibration;
-    std::string raw_unit;
+    UnitGyroscope calibration;
   };
   std::optional<Gyroscope> gyroscope;
   ForceUnit unit = ForceUnit::kMetersPerSecond2;  ///< the calibration's specific-force unit

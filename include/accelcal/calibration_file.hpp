@@ -85,11 +85,8 @@ struct CalibrationFileInfo {
   /// and the model selection (without the log's findings).
   const Diagnosis* diagnosis = nullptr;
   Provenance provenance;  ///< accelcal_version is ignored: Version() is written
-  /// The gyroscope calibrated from the same recording, written as `sensors.gyroscope`; its log's
-  /// name and the label of its raw unit.
-  const GyroCalibration* gyroscope = nullptr;
-  std::string gyro_source;
-  std::string gyro_raw_unit = "raw";
+  /// The gyroscope calibrated from the same recording, written as `sensors.gyroscope`.
+  const UnitGyroscope* gyroscope = nullptr;
 };
 
 /// Serialises a calibration as a version-2 document (json_text.hpp's layout, trailing newline).
@@ -163,38 +160,17 @@ struct LoadedCalibration {
   /// `diagnostics`; none in a file written before diagnoses existed.
   std::optional<std::vector<Finding>> diagnostics;
   Provenance provenance;  ///< version 2; empty in version 1
-  /// `sensors.gyroscope` (version 2), when the file holds one.
-  struct Gyroscope {
-    GyroModelKind model = GyroModelKind::kLinear;
-    GyroParameters params;       ///< K [raw per rad/s], bias [raw], G [raw per specific-force unit]
-    std::string raw_unit;        ///< `units.raw`
-    std::string source;          ///< `source`: the gyroscope's input's name, when present
-    Eigen::MatrixXd covariance;  ///< in GyroParameterSlots(model) order; empty when null
-    std::optional<double> heldout_rms_deg;  ///< `validation.heldout_rms_deg`
-    std::optional<double> rms_deg;          ///< `validation.rms_deg`
-    std::string estimator;                  ///< `estimator`, when present
-    /// `noise.rotation_scatter_ratio` and `still_scatter_ratio`: its turns' and its still mean
-    /// rates' scatter over their rate noise, when present.
-    std::optional<double> rotation_scatter_ratio, still_scatter_ratio;
-    /// `rotations[]`, when present: the positions a turn joins (1-based), its residual and
-    /// held-out error, and the angle turned through [deg].
-    struct Rotation {
-      double from = 0, to = 0, residual_deg = 0;
-      std::optional<double> heldout_deg, turned_deg;
-    };
-    std::vector<Rotation> rotations;
-    /// `stills[].mean_raw`, when present; NaN for a position the gyro turned throughout
-    /// (`stills[].still` false).
-    std::vector<Vec3> still_mean_raw;
-    /// `thermal`: the offsets over temperature (degree 0: asked for, none found), and the
-    /// temperatures they were fitted over, to which they are held.
-    std::optional<GyroThermalBias> thermal;
-    std::pair<double, double> thermal_range_c{0, 0};
-    std::string thermal_source;  ///< `thermal.temperature_source`, when present
-  };
-  std::optional<Gyroscope> gyroscope;
+  /// `sensors.gyroscope` (version 2), when the file holds one: what calibrate made of it, as far
+  /// as the file holds it (UnitGyroscope).
+  std::optional<UnitGyroscope> gyroscope;
   bool has_gyroscope() const { return gyroscope.has_value(); }
 };
+
+/// The gyroscope's section (`sensors.gyroscope`; G in `force_unit`, the accelerometer's) and
+/// back, as CalibrationToJson writes and ParseCalibrationJson reads it: Python pickles a
+/// gyroscope so. InputError naming `source` for a section that is not one.
+nlohmann::ordered_json GyroscopeToJson(const UnitGyroscope& gyroscope, ForceUnit force_unit);
+UnitGyroscope GyroscopeFromJson(const nlohmann::ordered_json& section, const std::string& source);
 
 /// Parses a calibration file's text (version 1 or 2); throws InputError naming `source` for
 /// anything missing, mistyped or inconsistent (unknown format/version, a key twice in an object,

@@ -242,6 +242,16 @@ struct GyroCalibration {
   std::optional<GyroThermal> thermal;
 };
 
+/// The gyroscope of a unit, as its calibration file holds it (`sensors.gyroscope`): the
+/// calibration CalibrateGyro made, the name of the log its rates were read from, and the label of
+/// their raw unit. A file read back gives the same fields it was written from, except those the
+/// file does not hold (`accelerometer`, the solver's method and time, the time offset's step),
+/// and NaN for a record an older file lacks.
+struct UnitGyroscope : GyroCalibration {
+  std::string source;
+  std::string raw_unit = "raw";
+};
+
 /// Each rate sample's temperature [°C]: the gyro log's when it has any, else the accelerometer's
 /// (the same clock, one sample each; one source, as one die may run warmer than the other); a
 /// sample without one takes the line between its nearest neighbours that have one (held beyond

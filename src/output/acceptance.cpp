@@ -85,8 +85,7 @@ void AccelerometerQuantities(const LoadedCalibration& cal, std::vector<Calibrati
   }
 }
 
-void GyroscopeQuantities(const LoadedCalibration::Gyroscope& gyro,
-                         std::vector<CalibrationQuantity>* out) {
+void GyroscopeQuantities(const UnitGyroscope& gyro, std::vector<CalibrationQuantity>* out) {
   const auto add = [&](const std::string& name, double value, std::optional<double> sigma,
                        std::string unit) {
     out->push_back({"gyroscope." + name, value, sigma, std::move(unit)});
@@ -106,8 +105,8 @@ void GyroscopeQuantities(const LoadedCalibration::Gyroscope& gyro,
     add(std::string("scale_factor_") + kAxes[a], gyro.params.K.row(a).norm(), {},
         raw + " per rad/s");
   }
-  if (gyro.rms_deg) add("rms_deg", *gyro.rms_deg, {}, "deg");
-  if (gyro.heldout_rms_deg) add("heldout_rms_deg", *gyro.heldout_rms_deg, {}, "deg");
+  if (std::isfinite(gyro.rms_deg)) add("rms_deg", gyro.rms_deg, {}, "deg");
+  if (std::isfinite(gyro.heldout_rms_deg)) add("heldout_rms_deg", gyro.heldout_rms_deg, {}, "deg");
 }
 
 std::string Number(double v) { return internal::Format("%.6g", v); }
@@ -155,7 +154,7 @@ const std::vector<QuantityName>& KnownQuantityNames() {
           cal.covariance = Eigen::MatrixXd::Identity(n, n) * 1e-6;
           cal.gravity_norm_rms_after = cal.crossval_rms = cal.noise_sigma_raw = 0.0;
           cal.positions.resize(1);
-          LoadedCalibration::Gyroscope gyro;
+          UnitGyroscope gyro;
           gyro.model = gyro_model;
           const int m = NumGyroParameters(gyro_model);
           gyro.covariance = Eigen::MatrixXd::Identity(m, m);

@@ -10,6 +10,7 @@
 #include "accelcal/frame.hpp"
 #include "accelcal/json_text.hpp"
 #include "accelcal/version.hpp"
+#include "output/calibration_file_sections.hpp"
 
 namespace accelcal {
 
@@ -328,132 +329,6 @@ ordered_json AccelerometerSection(const CalibrationResult& result, const Calibra
   return doc;
 }
 
-// The gyroscope's section (issue 18): its model, parameters, their uncertainty, the rotations.
-ordered_json GyroscopeSection(const GyroCalibration& g, const CalibrationFileInfo& info) {
-  ordered_json doc;
-  doc["model"] = std::string(ToString(g.model));
-  doc["model_reason"] = g.model_reason;
-  doc["estimator"] = std::string(ToString(g.estimator));
-  doc["units"] = {{"raw", info.gyro_raw_unit},
-                  {"raw_declared", std::string(ToString(g.unit))},
-                  {"rate", "rad/s"},
-                  {"specific_force", std::string(ToString(info.unit))}};
-  doc["equation"] =
-      "w_raw = K w + b + G f; w_raw raw, w the body rate [rad/s] and f the specific force in the "
-      "accelerometer's body frame";
-  doc["K"] = ToJson(g.params.K);
-  doc["bias"] = ToJson(g.params.bias);
-  doc["g_sensitivity"] =
-      g.model == GyroModelKind::kGSensitive ? ToJson(g.params.G) : ordered_json(nullptr);
-  ordered_json order = ordered_json::array();
-  for (const GyroParameterSlot& s : GyroParameterSlots(g.model))
-    order.push_back(std::string(s.name));
-  doc["parameter_order"] = order;
-  if (g.covariance.size() > 0) {
-    const GyroParameters sd =
-        UnpackGyro(g.covariance.diagonal().cwiseMax(0.0).cwiseSqrt(), g.model);
-    doc["std"] = {{"K", ToJson(sd.K)},
-                  {"bias", ToJson(sd.bias)},
-                  {"g_sensitivity",
-                   g.model == GyroModelKind::kGSensitive ? ToJson(sd.G) : ordered_json(nullptr)}};
-    doc["covariance"] = ToJson(g.covariance);
-  } else {
-    doc["std"] = nullptr;
-    doc["covariance"] = nullptr;
-  }
-  ordered_json scale = ordered_json::array();
-  for (int i = 0; i < 3; ++i) scale.push_back(g.params.K.row(i).norm());
-  doc["engineering"] = {{"scale_factor_raw_per_rad_s", scale}};
-  doc["noise"] = {{"sigma_raw_per_sample", ToJson(g.noise_sigma_raw)},
-                  {"still_scatter_ratio", g.still_scatter_ratio},
-                  {"rotation_scatter_ratio", g.rotation_scatter_ratio},
-                  {"accelerometer_scatter_ratio", g.accel_scatter_ratio}};
-  ordered_json stills = ordered_json::array();
-  for (std::size_t i = 0; i < g.still_spans.size(); ++i) {
-    const GyroStillSpan& span = g.still_spans[i];
-    stills.push_back({{"position", i + 1},
-                      {"first_sample", span.first_sample},
-                      {"last_sample", span.last_sample},
-                      {"mean_raw", ToJson(span.mean_raw)},
-                      {"turned_outside_deg", span.turned_outside_deg},
-                      {"still", span.still}});
-  }
-  doc["stills"] = stills;
-  if (g.thermal) {
-    const GyroThermal& t = *g.thermal;
-    const int degree = t.bias.degree();
-    ordered_json coefficients = ordered_json::array(), sd = ordered_json::array();
-    for (int d = 0; d < degree; ++d) {
-      coefficients.push_back(ToJson(t.bias.coefficients[static_cast<std::size_t>(d)]));
-      Vec3 s;
-      for (int a = 0; a < 3; ++a)
-        s(a) = std::sqrt(std::max(0.0, t.bias.covariance(3 * d + a, 3 * d + a)));
-      sd.push_back(ToJson(s));
-    }
-    ordered_json temperatures = ordered_json::array();
-    for (double x : t.temperatures_c) temperatures.push_back(x);
-    doc["thermal"] = {
-        {"equation",
-         "b(T) = bias + sum_d coefficients[d-1] (T - t_ref)^d, T in degC: the offsets over "
-         "temperature, the rest of the model at t_ref; coefficients[d-1] in raw per K^d, T held "
-         "to temperature_range"},
-        {"t_ref", t.bias.t_ref_c},
-        {"temperature_source", t.temperature_source},
-        {"degree", degree},
-        {"degree_reason", t.reason},
-        {"temperature_range", {t.range_c.first, t.range_c.second}},
-        {"coefficients", coefficients},
-        {"std", sd},
-        {"covariance", degree > 0 ? ToJson(t.bias.covariance) : ordered_json(nullptr)},
-        {"scatter_ratio", t.scatter_ratio},
-        {"heldout_rms_raw", Nullable(t.heldout_rms_raw)},
-        {"temperatures", temperatures}};
-  }
-  if (g.time_offset) {
-    doc["time_offset"] = {{"lag_s", g.time_offset->lag_s},
-                          {"std_s", g.time_offset->std_s},
-                          {"turns", g.time_offset->turns},
-                          {"at_limit", g.time_offset->at_limit}};
-  } else {
-    doc["time_offset"] = nullptr;
-  }
-  ordered_json rotations = ordered_json::array();
-  for (const GyroRotation& r : g.rotations) {
-    rotations.push_back({{"from", r.from + 1},
-                         {"to", r.to + 1},
-                         {"first_sample", r.first_sample},
-                         {"last_sample", r.last_sample},
-                         {"duration_s", r.duration_s},
-                         {"angle_deg", r.angle_deg},
-                         {"turned_deg", r.turned_deg},
-                         {"turned_std_deg", r.turned_std_deg},
-                         {"residual_deg", r.residual_deg},
-                         {"heldout_deg", Nullable(r.heldout_deg)},
-                         {"statistic", Nullable(r.statistic)},
-                         {"threshold", Nullable(r.threshold)},
-                         {"flagged", r.flagged},
-                         {"excluded", false}});
-  }
-  doc["rotations"] = rotations;
-  if (g.latitude_deg) {
-    doc["earth_rate"] = {{"latitude_deg", *g.latitude_deg},
-                         {"vertical_rad_s", g.earth_rate_vertical_rad_s},
-                         {"horizontal_rad_s", g.earth_rate_horizontal_rad_s}};
-  } else {
-    doc["earth_rate"] = nullptr;
-  }
-  doc["validation"] = {{"rms_deg", g.rms_deg}, {"heldout_rms_deg", Nullable(g.heldout_rms_deg)}};
-  const Summary& s = g.summary;
-  doc["solver"] = {{"iterations", s.iterations},
-                   {"converged", s.converged()},
-                   {"termination", std::string(ToString(s.termination))},
-                   {"termination_message", s.termination_message},
-                   {"initial_cost", s.initial_cost},
-                   {"cost", s.final_cost}};
-  doc["source"] = info.gyro_source;
-  return doc;
-}
-
 ordered_json ProvenanceSection(const Provenance& provenance) {
   ordered_json doc;
   doc["accelcal_version"] = std::string(Version());
@@ -505,7 +380,7 @@ std::string CalibrationToJson(const CalibrationResult& result, const Calibration
   doc["verdict"] = std::string(ToString(diagnosis.verdict()));
   doc["sensors"] = {{"accelerometer", AccelerometerSection(result, info, diagnosis)}};
   if (info.gyroscope != nullptr)
-    doc["sensors"]["gyroscope"] = GyroscopeSection(*info.gyroscope, info);
+    doc["sensors"]["gyroscope"] = internal::GyroscopeSection(*info.gyroscope, info.unit);
   doc["provenance"] = ProvenanceSection(info.provenance);
   // Labels and paths are bytes from a command line: one that is no UTF-8 (a Latin-1 file name)
   // becomes U+FFFD (JsonText), which JSON can hold, rather than no file at all.

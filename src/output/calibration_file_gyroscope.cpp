@@ -1,5 +1,7 @@
-// Reading a calibration file's gyroscope (calibration_file_sections.hpp): its model, parameters,
-// offsets over temperature, noise and diagnostics, checked as the accelerometer's are.
+// The gyroscope's section of a calibration file (`sensors.gyroscope`), described once
+// (section_io.hpp): CalibrationToJson writes it, ParseCalibrationJson reads it back into the
+// UnitGyroscope calibrate made, and Python pickles it.
+#include <algorithm>
 #include <cmath>
 
 #include <Eigen/SVD>
@@ -7,167 +9,253 @@
 #include "accelcal/error.hpp"
 #include "core/text_format.hpp"
 #include "output/calibration_file_sections.hpp"
+#include "output/section_io.hpp"
 
 namespace accelcal::internal {
 
+// A struct that gains a field must have it in its description below (or a line in UnitGyroscope's
+// comment saying why the file does not hold it): these sizes (x86-64, libstdc++) are those of the
+// structs the descriptions were written for.
+#if defined(__x86_64__) && defined(__GLIBCXX__)
+static_assert(sizeof(UnitGyroscope) == 1560, "UnitGyroscope changed: update its description");
+static_assert(sizeof(GyroRotation) == 104, "GyroRotation changed: update its description");
+static_assert(sizeof(GyroStillSpan) == 56, "GyroStillSpan changed: update its description");
+static_assert(sizeof(GyroTimeOffset) == 40, "GyroTimeOffset changed: update its description");
+static_assert(sizeof(GyroThermal) == 176, "GyroThermal changed: update its description");
+static_assert(sizeof(GyroThermalBias) == 56, "GyroThermalBias changed: update its description");
+static_assert(sizeof(Summary) == 112, "Summary changed: update the gyroscope's solver record");
+#endif
+
 namespace {
 
-Mat33 Matrix3(const Reader& r, const ordered_json& doc, const char* key) {
-  if (!doc.contains(key) || !doc[key].is_array() || doc[key].size() != 3) {
-    r.Fail(r.Key(key) + " must be a 3x3 array");
-  }
-  Mat33 m;
-  for (int i = 0; i < 3; ++i) {
-    const auto& row = doc[key][i];
-    if (!row.is_array() || row.size() != 3) r.Fail(r.Key(key) + " must be a 3x3 array");
-    for (int j = 0; j < 3; ++j) {
-      m(i, j) = r.Number(row[j], r.Key(std::string(key) + "[" + std::to_string(i) + "][" +
-                                       std::to_string(j) + "]"));
-    }
-  }
-  return m;
+// Its solver's record: the termination and costs (converged follows from the termination).
+template <typename Io>
+void DescribeSolver(Io& io, Summary& s) {
+  io.Whole("iterations", s.iterations);
+  io.Derived("converged", [&] { return s.converged(); });
+  io.Choice("termination", s.termination);
+  io.Text("termination_message", s.termination_message);
+  io.Number("initial_cost", s.initial_cost);
+  io.Number("cost", s.final_cost);
 }
 
-// The gyroscope's `thermal`: its offsets over temperature (thermal.hpp's GyroThermalBias).
-void ReadGyroThermal(const Reader& r, const ordered_json& doc, LoadedCalibration::Gyroscope& g) {
-  const ordered_json& t = r.Object(doc, "thermal");
-  const Reader in = r.Inside("thermal");
-  GyroThermalBias bias;
-  if (!t.contains("t_ref")) in.Fail(in.Key("t_ref") + " is missing");
-  bias.t_ref_c = in.Number(t["t_ref"], in.Key("t_ref"));
-  if (!t.contains("degree") || !t["degree"].is_number_unsigned() ||
-      t["degree"].get<std::uint64_t>() > kMaxThermalDegree) {
-    in.Fail(in.Key("degree") + " must be a whole number from 0 to " +
-            std::to_string(kMaxThermalDegree));
-  }
-  const auto degree = t["degree"].get<std::size_t>();
-  const std::string shape =
-      " must be an array of " + std::to_string(degree) + " arrays of 3 numbers (its degree)";
-  for (const char* key : {"coefficients", "std"}) {
-    if (!t.contains(key) || !t[key].is_array() || t[key].size() != degree) {
-      in.Fail(in.Key(key) + shape);
-    }
+// `thermal`: the offsets over temperature (degree 0: asked for, none found) and the
+// temperatures they were fitted over, to which they are held.
+template <typename Io>
+void DescribeThermal(Io& io, GyroThermal& t) {
+  GyroThermalBias& b = t.bias;
+  io.Derived("equation", [] {
+    return "b(T) = bias + sum_d coefficients[d-1] (T - t_ref)^d, T in degC: the offsets over "
+           "temperature, the rest of the model at t_ref; coefficients[d-1] in raw per K^d, T held "
+           "to temperature_range";
+  });
+  io.Number("t_ref", b.t_ref_c, Need::kRequired);
+  io.Text("temperature_source", t.temperature_source);
+  std::size_t degree = b.coefficients.size();
+  io.Count("degree", degree, Need::kRequired);
+  io.Text("degree_reason", t.reason);
+  io.Interval("temperature_range", t.range_c, Need::kRequired);
+  io.Vectors("coefficients", b.coefficients, Need::kRequired);
+  io.Derived("std", [&] {
+    ordered_json sd = ordered_json::array();
     for (std::size_t d = 0; d < degree; ++d) {
-      if (!t[key][d].is_array() || t[key][d].size() != 3) in.Fail(in.Key(key) + shape);
+      Vec3 s;
       for (int a = 0; a < 3; ++a) {
-        const double v = in.Number(t[key][d][a], in.Key(key));
-        if (key[0] == 'c') {
-          if (a == 0) bias.coefficients.emplace_back(Vec3::Zero());
-          bias.coefficients.back()(a) = v;
-        } else if (!(v >= 0)) {
-          in.Fail(in.Key(key) + " must not be negative");
-        }
+        const auto i = static_cast<Eigen::Index>(3 * d + static_cast<std::size_t>(a));
+        s(a) = std::sqrt(std::max(0.0, b.covariance(i, i)));
+      }
+      sd.push_back(SectionWriter::Json(s));
+    }
+    return sd;
+  });
+  if constexpr (Io::kReading) {
+    if (degree > static_cast<std::size_t>(kMaxThermalDegree)) {
+      io.Fail(io.Key("degree") + " must be a whole number from 0 to " +
+              std::to_string(kMaxThermalDegree));
+    }
+    if (b.coefficients.size() != degree) {
+      io.Fail(io.Key("coefficients") + " must be an array of " + std::to_string(degree) +
+              " arrays of 3 numbers (its degree)");
+    }
+  }
+  if (degree > 0) {
+    io.Covariance(b.covariance, 3 * degree, "the offsets' coefficients");
+  } else {
+    io.Null("covariance", "for degree 0");
+  }
+  io.Number("scatter_ratio", t.scatter_ratio);
+  io.MaybeNumber("heldout_rms_raw", t.heldout_rms_raw);
+  io.Numbers("temperatures", t.temperatures_c);
+  if constexpr (Io::kReading) CheckTemperatureRange(io.reader(), t.range_c, b.t_ref_c);
+}
+
+// A turn between two still positions: the positions it joins, its samples, the angles, its
+// residual and its held-out error.
+template <typename Io>
+void DescribeRotation(Io& io, GyroRotation& r) {
+  io.PositionNumber("from", r.from, Need::kRequired);
+  io.PositionNumber("to", r.to, Need::kRequired);
+  io.Count("first_sample", r.first_sample);
+  io.Count("last_sample", r.last_sample);
+  io.Number("duration_s", r.duration_s);
+  io.Number("angle_deg", r.angle_deg);
+  io.MaybeNumber("turned_deg", r.turned_deg);
+  io.Number("turned_std_deg", r.turned_std_deg);
+  io.Number("residual_deg", r.residual_deg, Need::kRequired);
+  io.MaybeNumber("heldout_deg", r.heldout_deg);
+  io.MaybeNumber("statistic", r.statistic);
+  io.MaybeNumber("threshold", r.threshold);
+  io.Flag("flagged", r.flagged);
+  io.Derived("excluded", [] { return false; });
+  if constexpr (Io::kReading) {  // angles and their errors are not negative
+    for (const auto& [key, value] :
+         {std::pair("residual_deg", r.residual_deg), std::pair("heldout_deg", r.heldout_deg),
+          std::pair("turned_deg", r.turned_deg)}) {
+      if (value < 0) io.Fail(io.Key(key) + " must not be negative");
+    }
+  }
+}
+
+template <typename Io>
+void DescribeStill(Io& io, GyroStillSpan& s, std::size_t index) {
+  io.Derived("position", [&] { return index + 1; });
+  io.Count("first_sample", s.first_sample);
+  io.Count("last_sample", s.last_sample);
+  io.Vector("mean_raw", s.mean_raw, Need::kRequired);
+  io.Number("turned_outside_deg", s.turned_outside_deg);
+  io.Flag("still", s.still);
+}
+
+// The whole section, in the file's order. `force_unit`: the accelerometer's, in which G is.
+template <typename Io>
+void DescribeGyroscope(Io& io, UnitGyroscope& g, ForceUnit force_unit) {
+  io.Choice("model", g.model, Need::kRequired);
+  io.Text("model_reason", g.model_reason);
+  io.Choice("estimator", g.estimator);
+  io.Object("units", [&](auto& u) {
+    u.Text("raw", g.raw_unit);
+    u.Choice("raw_declared", g.unit);
+    u.Derived("rate", [] { return "rad/s"; });
+    u.Derived("specific_force", [&] { return std::string(ToString(force_unit)); });
+  });
+  io.Derived("equation", [] {
+    return "w_raw = K w + b + G f; w_raw raw, w the body rate [rad/s] and f the specific force in "
+           "the accelerometer's body frame";
+  });
+  io.Matrix("K", g.params.K, Need::kRequired);
+  io.Vector("bias", g.params.bias, Need::kRequired);
+  const bool g_sensitive = g.model == GyroModelKind::kGSensitive;
+  if (g_sensitive) {
+    io.Matrix("g_sensitivity", g.params.G, Need::kRequired);
+  } else {
+    io.Null("g_sensitivity", "for the linear model");
+  }
+  io.Derived("parameter_order", [&] {
+    ordered_json order = ordered_json::array();
+    for (const GyroParameterSlot& s : GyroParameterSlots(g.model))
+      order.push_back(std::string(s.name));
+    return order;
+  });
+  io.Derived("std", [&] {
+    if (g.covariance.size() == 0) return ordered_json(nullptr);
+    const GyroParameters sd =
+        UnpackGyro(g.covariance.diagonal().cwiseMax(0.0).cwiseSqrt(), g.model);
+    ordered_json out;
+    out["K"] = SectionWriter::Json(sd.K);
+    out["bias"] = SectionWriter::Json(sd.bias);
+    out["g_sensitivity"] = g_sensitive ? SectionWriter::Json(sd.G) : ordered_json(nullptr);
+    return out;
+  });
+  io.Covariance(g.covariance, static_cast<std::size_t>(NumGyroParameters(g.model)),
+                "the " + std::string(ToString(g.model)) + " gyroscope model");
+  io.Derived("engineering", [&] {
+    ordered_json scale = ordered_json::array();
+    for (int i = 0; i < 3; ++i) scale.push_back(g.params.K.row(i).norm());
+    return ordered_json{{"scale_factor_raw_per_rad_s", scale}};
+  });
+  io.Object("noise", [&](auto& n) {
+    n.Vector("sigma_raw_per_sample", g.noise_sigma_raw);
+    n.MaybeNumber("still_scatter_ratio", g.still_scatter_ratio);
+    n.MaybeNumber("rotation_scatter_ratio", g.rotation_scatter_ratio);
+    n.MaybeNumber("accelerometer_scatter_ratio", g.accel_scatter_ratio);
+    if constexpr (Io::kReading) {
+      for (const auto& [key, value] :
+           {std::pair("rotation_scatter_ratio", g.rotation_scatter_ratio),
+            std::pair("still_scatter_ratio", g.still_scatter_ratio)}) {
+        if (!std::isnan(value) && !(value > 0)) n.Fail(n.Key(key) + " must be positive");
       }
     }
+  });
+  io.List("stills", g.still_spans,
+          [](auto& s, GyroStillSpan& span, std::size_t i) { DescribeStill(s, span, i); });
+  bool thermal = g.thermal.has_value();
+  if constexpr (Io::kReading) g.thermal.emplace();
+  io.MaybeObject(
+      "thermal", thermal, [&](auto& t) { DescribeThermal(t, *g.thermal); },
+      /*null_when_absent=*/false);
+  if (!thermal) g.thermal.reset();
+  bool lagged = g.time_offset.has_value();
+  if constexpr (Io::kReading) g.time_offset.emplace();
+  io.MaybeObject("time_offset", lagged, [&](auto& t) {
+    t.Number("lag_s", g.time_offset->lag_s);
+    t.Number("std_s", g.time_offset->std_s);
+    t.Count("turns", g.time_offset->turns);
+    t.Flag("at_limit", g.time_offset->at_limit);
+  });
+  if (!lagged) g.time_offset.reset();
+  io.List("rotations", g.rotations,
+          [](auto& s, GyroRotation& r, std::size_t) { DescribeRotation(s, r); });
+  bool earth = g.latitude_deg.has_value();
+  double latitude = g.latitude_deg.value_or(0);
+  io.MaybeObject("earth_rate", earth, [&](auto& e) {
+    e.Number("latitude_deg", latitude);
+    e.Number("vertical_rad_s", g.earth_rate_vertical_rad_s);
+    e.Number("horizontal_rad_s", g.earth_rate_horizontal_rad_s);
+  });
+  g.latitude_deg = earth ? std::optional<double>(latitude) : std::nullopt;
+  io.Object("validation", [&](auto& v) {
+    v.MaybeNumber("rms_deg", g.rms_deg);
+    v.MaybeNumber("heldout_rms_deg", g.heldout_rms_deg);
+  });
+  io.Object("solver", [&](auto& s) { DescribeSolver(s, g.summary); });
+  io.Text("source", g.source);
+  if constexpr (Io::kReading) {
+    // Singular to the precision of a double: its rates cannot be corrected.
+    const Vec3 sv = Eigen::JacobiSVD<Mat33>(g.params.K).singularValues();
+    if (!(sv(2) > 1e-12 * sv(0))) io.Fail(io.Key("K") + " is singular (its rows dependent)");
   }
-  if (t.contains("covariance") && !t["covariance"].is_null()) {
-    if (degree == 0) in.Fail(in.Key("covariance") + " must be null for degree 0");
-    bias.covariance = ReadSquareCovariance(in, t, 3 * degree, "the offsets' coefficients");
-  }
-  g.thermal_range_c = ReadTemperatureRange(in, t, bias.t_ref_c);
-  if (t.contains("temperature_source")) g.thermal_source = in.Text(t, "temperature_source");
-  g.thermal = std::move(bias);
 }
 
 }  // namespace
 
-LoadedCalibration::Gyroscope ReadGyroscope(const Reader& r, const ordered_json& doc) {
-  LoadedCalibration::Gyroscope g;
-  const std::optional<GyroModelKind> model =
-      doc.contains("model") && doc["model"].is_string()
-          ? GyroModelKindFromString(doc["model"].get<std::string>())
-          : std::nullopt;
-  if (!model) r.Fail(r.Key("model") + " must be \"linear\" or \"g-sensitive\"");
-  g.model = *model;
-  g.params.K = Matrix3(r, doc, "K");
-  {  // singular to the precision of a double: its rates cannot be corrected
-    const Vec3 sv = Eigen::JacobiSVD<Mat33>(g.params.K).singularValues();
-    if (!(sv(2) > 1e-12 * sv(0))) r.Fail(r.Key("K") + " is singular (its rows dependent)");
-  }
-  g.params.bias = r.Vector3(doc, "bias");
-  if (g.model == GyroModelKind::kGSensitive) {
-    g.params.G = Matrix3(r, doc, "g_sensitivity");
-  } else if (doc.contains("g_sensitivity") && !doc["g_sensitivity"].is_null()) {
-    r.Fail(r.Key("g_sensitivity") + " must be null for the linear model");
-  }
-  if (doc.contains("units") && doc["units"].is_object() && doc["units"].contains("raw")) {
-    g.raw_unit = r.Inside("units").Text(doc["units"], "raw");
-  }
-  if (doc.contains("source") && doc["source"].is_string()) {
-    g.source = doc["source"].get<std::string>();
-  }
-  if (doc.contains("covariance") && !doc["covariance"].is_null()) {
-    g.covariance =
-        ReadSquareCovariance(r, doc, static_cast<std::size_t>(NumGyroParameters(g.model)),
-                             "the " + std::string(ToString(g.model)) + " gyroscope model");
-  }
-  if (doc.contains("validation") && doc["validation"].is_object()) {
-    g.heldout_rms_deg = r.Inside("validation").Nullable(doc["validation"], "heldout_rms_deg");
-    g.rms_deg = r.Inside("validation").Nullable(doc["validation"], "rms_deg");
-  }
-  if (doc.contains("estimator")) g.estimator = r.Text(doc, "estimator");
-  if (doc.contains("noise") && doc["noise"].is_object()) {
-    const Reader rn = r.Inside("noise");
-    g.rotation_scatter_ratio = rn.Nullable(doc["noise"], "rotation_scatter_ratio");
-    if (g.rotation_scatter_ratio && !(*g.rotation_scatter_ratio > 0)) {
-      rn.Fail(rn.Key("rotation_scatter_ratio") + " must be positive");
-    }
-    g.still_scatter_ratio = rn.Nullable(doc["noise"], "still_scatter_ratio");
-    if (g.still_scatter_ratio && !(*g.still_scatter_ratio > 0)) {
-      rn.Fail(rn.Key("still_scatter_ratio") + " must be positive");
-    }
-  }
-  // The records the report plots, when present.
-  const auto array = [&](const char* key) -> const ordered_json* {
-    if (!doc.contains(key)) return nullptr;
-    if (!doc[key].is_array()) r.Fail(r.Key(key) + " must be an array");
-    return &doc[key];
-  };
-  if (const ordered_json* rotations = array("rotations")) {
-    const Reader in = r.Inside("rotations[]");
-    for (const ordered_json& t : *rotations) {
-      if (!t.is_object()) r.Fail(r.Key("rotations") + " must hold objects");
-      LoadedCalibration::Gyroscope::Rotation rotation;
-      for (const auto& [key, value] :
-           {std::pair("from", &rotation.from), std::pair("to", &rotation.to),
-            std::pair("residual_deg", &rotation.residual_deg)}) {
-        if (!t.contains(key)) in.Fail(in.Key(key) + " is missing");
-        *value = in.Number(t[key], in.Key(key));
-      }
-      rotation.heldout_deg = in.Nullable(t, "heldout_deg");
-      rotation.turned_deg = in.Nullable(t, "turned_deg");
-      // Positions are counted from 1; angles and their errors are not negative.
-      for (const auto& [key, value] :
-           {std::pair("from", rotation.from), std::pair("to", rotation.to)}) {
-        if (!(value >= 1 && value == std::floor(value))) {
-          in.Fail(in.Key(key) + " must be a position's number (1, 2, ...)");
-        }
-      }
-      for (const auto& [key, value] :
-           {std::pair("residual_deg", std::optional<double>(rotation.residual_deg)),
-            std::pair("heldout_deg", rotation.heldout_deg),
-            std::pair("turned_deg", rotation.turned_deg)}) {
-        if (value && !(*value >= 0)) in.Fail(in.Key(key) + " must not be negative");
-      }
-      g.rotations.push_back(rotation);
-    }
-  }
-  if (const ordered_json* stills = array("stills")) {
-    const Reader in = r.Inside("stills[]");
-    for (const ordered_json& st : *stills) {
-      if (!st.is_object()) r.Fail(r.Key("stills") + " must hold objects");
-      const Vec3 mean = in.Vector3(st, "mean_raw");
-      // A position the gyro turned throughout (`still` false) has no still rate.
-      bool still = true;
-      if (st.contains("still")) {
-        if (!st["still"].is_boolean()) in.Fail(in.Key("still") + " must be true or false");
-        still = st["still"].get<bool>();
-      }
-      g.still_mean_raw.push_back(still ? mean : Vec3::Constant(std::nan("")));
-    }
-  }
-  if (doc.contains("thermal")) ReadGyroThermal(r, doc, g);
+ordered_json GyroscopeSection(const UnitGyroscope& g, ForceUnit force_unit) {
+  ordered_json doc = ordered_json::object();
+  SectionWriter io(&doc);
+  DescribeGyroscope(io, const_cast<UnitGyroscope&>(g), force_unit);  // the writer only reads it
+  return doc;
+}
+
+UnitGyroscope ReadGyroscope(const Reader& r, const ordered_json& doc) {
+  UnitGyroscope g;
+  g.raw_unit.clear();  // a file without `units.raw` names no raw unit
+  // What a file that lacks a record did not state: not known (NaN), not the defaults.
+  g.rms_deg = g.still_scatter_ratio = g.rotation_scatter_ratio = g.accel_scatter_ratio =
+      std::nan("");
+  SectionReader io(r, doc);
+  DescribeGyroscope(io, g, ForceUnit::kMetersPerSecond2);
   return g;
 }
 
 }  // namespace accelcal::internal
+
+namespace accelcal {
+
+nlohmann::ordered_json GyroscopeToJson(const UnitGyroscope& gyroscope, ForceUnit force_unit) {
+  return internal::GyroscopeSection(gyroscope, force_unit);
+}
+
+UnitGyroscope GyroscopeFromJson(const nlohmann::ordered_json& section, const std::string& source) {
+  return internal::ReadGyroscope(internal::Reader(source, ""), section);
+}
+
+}  // namespace accelcal

@@ -15,12 +15,14 @@
 #include "core/text_format.hpp"
 #include "output/calibration_file_sections.hpp"
 #include "output/json_reader.hpp"
+#include "output/section_io.hpp"
 
 namespace accelcal {
 
 namespace {
 
 using internal::ParseWithoutDuplicateKeys;
+using internal::QuotedChoices;
 using internal::ReadDiagnostics;
 using internal::Reader;
 using internal::ReadGyroscope;
@@ -32,22 +34,9 @@ int VerdictRank(const std::string& verdict) {
   return static_cast<int>(FromName<Verdict>(verdict).value_or(Verdict::kOk));
 }
 
-// "a, b, c" (NameList) as "\"a\", \"b\" or \"c\"", as the messages spell choices.
-std::string Quoted(const std::string& list) {
-  std::string out;
-  std::size_t at = 0;
-  while (at <= list.size()) {
-    const std::size_t end = std::min(list.find(", ", at), list.size());
-    if (!out.empty()) out += end == list.size() ? " or " : ", ";
-    out += "\"" + list.substr(at, end - at) + "\"";
-    at = end + 2;
-  }
-  return out;
-}
-
 std::string CheckedVerdict(const Reader& r, const ordered_json& doc) {
   if (!doc["verdict"].is_string() || !FromName<Verdict>(doc["verdict"].get<std::string>())) {
-    r.Fail(r.Key("verdict") + " must be " + Quoted(NameList<Verdict>()));
+    r.Fail(r.Key("verdict") + " must be " + QuotedChoices(NameList<Verdict>()));
   }
   return doc["verdict"].get<std::string>();
 }
@@ -142,6 +131,10 @@ Eigen::MatrixXd ReadSquareCovariance(const Reader& r, const ordered_json& doc, s
   }
   CheckCovariance(r, c);
   return c;
+}
+
+void SectionReader::Covariance(Eigen::MatrixXd& v, std::size_t n, const std::string& what) {
+  v = IsNull("covariance") ? Eigen::MatrixXd() : ReadSquareCovariance(r_, doc_, n, what);
 }
 
 }  // namespace internal
@@ -318,7 +311,7 @@ void ReadDiagnostics(const Reader& r, const ordered_json& doc, LoadedCalibration
             ? FromName<Severity>(f["severity"].get<std::string>())
             : std::nullopt;
     if (!severity) {
-      d.Fail(d.Key("severity") + " must be " + Quoted(NameList<Severity>()));
+      d.Fail(d.Key("severity") + " must be " + QuotedChoices(NameList<Severity>()));
     }
     finding.severity = *severity;
     if (f.contains("numbers")) {
@@ -339,6 +332,18 @@ namespace {}  // namespace
 
 namespace internal {
 
+void CheckTemperatureRange(const Reader& in, std::pair<double, double> range, double t_ref_c) {
+  const auto [lo, hi] = range;
+  if (!(lo <= hi && InTemperatureRange(lo) && InTemperatureRange(hi))) {
+    in.Fail(in.Key("temperature_range") + internal::Format(" must be from %g to %g degC, low first",
+                                                           kTemperatureRange_C[0],
+                                                           kTemperatureRange_C[1]));
+  }
+  if (!(t_ref_c >= lo && t_ref_c <= hi)) {
+    in.Fail(in.Key("t_ref") + " must be within " + in.Key("temperature_range"));
+  }
+}
+
 std::pair<double, double> ReadTemperatureRange(const Reader& in, const ordered_json& t,
                                                double t_ref_c) {
   if (!t.contains("temperature_range")) {
@@ -349,17 +354,10 @@ std::pair<double, double> ReadTemperatureRange(const Reader& in, const ordered_j
   if (!range.is_array() || range.size() != 2) {
     in.Fail(in.Key("temperature_range") + " must be 2 temperatures");
   }
-  const double lo = in.Number(range[0], in.Key("temperature_range")),
-               hi = in.Number(range[1], in.Key("temperature_range"));
-  if (!(lo <= hi && InTemperatureRange(lo) && InTemperatureRange(hi))) {
-    in.Fail(in.Key("temperature_range") + internal::Format(" must be from %g to %g degC, low first",
-                                                           kTemperatureRange_C[0],
-                                                           kTemperatureRange_C[1]));
-  }
-  if (!(t_ref_c >= lo && t_ref_c <= hi)) {
-    in.Fail(in.Key("t_ref") + " must be within " + in.Key("temperature_range"));
-  }
-  return {lo, hi};
+  const std::pair<double, double> lo_hi{in.Number(range[0], in.Key("temperature_range")),
+                                        in.Number(range[1], in.Key("temperature_range"))};
+  CheckTemperatureRange(in, lo_hi, t_ref_c);
+  return lo_hi;
 }
 
 }  // namespace internal

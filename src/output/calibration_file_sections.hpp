@@ -24,8 +24,11 @@ void ReadDiagnostics(const Reader& r, const ordered_json& doc, LoadedCalibration
 // polynomials are held; T_ref within them.
 std::pair<double, double> ReadTemperatureRange(const Reader& in, const ordered_json& t,
                                                double t_ref_c);
+// Its checks, for a range read otherwise.
+void CheckTemperatureRange(const Reader& in, std::pair<double, double> range, double t_ref_c);
 
-// `sensors.gyroscope`: the model and its parameters (the rest is a record for people).
-LoadedCalibration::Gyroscope ReadGyroscope(const Reader& r, const ordered_json& doc);
+// `sensors.gyroscope` (calibration_file_gyroscope.cpp), written and read by one description.
+ordered_json GyroscopeSection(const UnitGyroscope& g, ForceUnit force_unit);
+UnitGyroscope ReadGyroscope(const Reader& r, const ordered_json& doc);
 
 }  // namespace accelcal::internal

@@ -68,13 +68,13 @@ ExportResult ExportCalibration(const LoadedCalibration& cal, const std::string& 
   const bool holds = format == ExportFormat::kJson || format == ExportFormat::kYaml ||
                      format == ExportFormat::kPx4;
   if (out.gyroscope_included && !holds && cal.gyroscope->thermal &&
-      cal.gyroscope->thermal->degree() > 0) {
+      cal.gyroscope->thermal->bias.degree() > 0) {
     out.gyroscope_dropped = exports::Join(
         out.gyroscope_dropped,
         internal::Format(
             "the offsets' change with temperature (degree %d about T_ref = %.4g degC): the "
             "offsets are those at T_ref",
-            cal.gyroscope->thermal->degree(), cal.gyroscope->thermal->t_ref_c));
+            cal.gyroscope->thermal->bias.degree(), cal.gyroscope->thermal->bias.t_ref_c));
   }
   return out;
 }

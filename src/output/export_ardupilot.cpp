@@ -95,7 +95,7 @@ std::optional<double> GyroscopeTemperatureTerms(const LoadedCalibration& cal,
   if (!cal.gyroscope) return gyro_rad_s;
   out->gyroscope_omitted =
       "ArduPilot learns its gyroscope's offsets at each boot and holds no gyroscope scale";
-  if (cal.gyroscope->thermal && cal.gyroscope->thermal->degree() > 0) {
+  if (cal.gyroscope->thermal && cal.gyroscope->thermal->bias.degree() > 0) {
     std::string why;
     const std::optional<double> rad_s =
         RawToRadPerSecond(cal, options, "ArduPilot", "its drivers scale the rates", &why);
@@ -176,7 +176,7 @@ ExportResult ArduPilot(const LoadedCalibration& cal, const ExportOptions& option
   const std::optional<OffsetPolynomial> poly =
       accel_terms ? std::optional(OffsetsOverTemperature(cal)) : std::nullopt;
   const std::pair<double, double> range =
-      poly ? std::pair(poly->t_min_c, poly->t_max_c) : cal.gyroscope->thermal_range_c;
+      poly ? std::pair(poly->t_min_c, poly->t_max_c) : cal.gyroscope->thermal->range_c;
   out.text += Format("INS_TCAL%d_ENABLE,1\nINS_TCAL%d_TMIN,%.9g\nINS_TCAL%d_TMAX,%.9g\n", n, n,
                      Float32(range.first), n, Float32(range.second));
   if (poly) {
@@ -197,7 +197,7 @@ ExportResult ArduPilot(const LoadedCalibration& cal, const ExportOptions& option
         n, n);
   }
   if (gyro_rad_s) {
-    const GyroThermalBias& t = *cal.gyroscope->thermal;
+    const GyroThermalBias& t = cal.gyroscope->thermal->bias;
     std::array<Vec3, 4> b{Vec3::Zero(), Vec3::Zero(), Vec3::Zero(), Vec3::Zero()};
     for (int k = 1; k <= t.degree(); ++k) {
       b[static_cast<std::size_t>(k)] =

@@ -100,7 +100,7 @@ ExportResult CHeader(const LoadedCalibration& cal, const ExportOptions& options)
   }
   if (cal.gyroscope) {
     // The gyroscope: w = K_g^-1 (raw - b_g - G f), f the corrected specific force at the sample.
-    const LoadedCalibration::Gyroscope& g = *cal.gyroscope;
+    const UnitGyroscope& g = *cal.gyroscope;
     out.convention += "; " + p +
                       "_correct_gyro(raw, f, w) gives the body rate w = K_g^-1 (raw - b_g - G f) "
                       "in rad/s from a raw rate (in '" +

@@ -68,7 +68,7 @@ std::string SquaredTermsDropped(const LoadedCalibration& cal) {
 // The g-sensitivity an export without it drops: the largest rate error it leaves, |K_g⁻¹ G f| at
 // |f| = g over the directions (the largest singular value of K_g⁻¹ G times g), in °/h.
 std::string GSensitivityDropped(const LoadedCalibration& cal) {
-  const LoadedCalibration::Gyroscope& g = *cal.gyroscope;
+  const UnitGyroscope& g = *cal.gyroscope;
   if (g.model != GyroModelKind::kGSensitive || g.params.G.isZero(0)) return "";
   const Mat33 M = g.params.K.inverse() * g.params.G;
   const double largest = Eigen::JacobiSVD<Mat33>(M).singularValues()(0);

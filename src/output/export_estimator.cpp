@@ -19,7 +19,7 @@ namespace {
 // calibration's force unit): M_g C_gyro_i = s K_g Q (an LQ factorisation: from the QR of its
 // transpose), A = (s/u) G Q C_gyro_iᵀ. Exact: nothing is dropped.
 KalibrGyro KalibrGyroscope(const LoadedCalibration& cal, const Mat33& Q, double rad_s_per_raw) {
-  const LoadedCalibration::Gyroscope& g = *cal.gyroscope;
+  const UnitGyroscope& g = *cal.gyroscope;
   const Mat33 X = rad_s_per_raw * g.params.K * Q;
   const Eigen::HouseholderQR<Mat33> qr(Mat33(X.transpose()));
   const Mat33 R = qr.matrixQR().triangularView<Eigen::Upper>();

@@ -58,7 +58,7 @@ ExportResult ImuTkGyroscope(const LoadedCalibration& cal) {
   if (!cal.gyroscope) {
     throw DataError("imutk gyroscope: the calibration file holds no gyroscope calibration");
   }
-  const LoadedCalibration::Gyroscope& g = *cal.gyroscope;
+  const UnitGyroscope& g = *cal.gyroscope;
   ExportResult out;
   out.text = CalibratedTriad(g.params.K, g.params.bias).text;
   out.convention =

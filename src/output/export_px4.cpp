@@ -186,7 +186,7 @@ Px4TemperatureTerms Px4Temperature(char sensor, int instance, std::optional<std:
 std::optional<Px4Slot> Px4Gyroscope(const LoadedCalibration& cal, const ExportOptions& options,
                                     ExportResult* out) {
   if (!cal.gyroscope) return std::nullopt;
-  const LoadedCalibration::Gyroscope& g = *cal.gyroscope;
+  const UnitGyroscope& g = *cal.gyroscope;
   const SourceStream* stream = GyroscopeStream(cal);
   if (stream != nullptr && stream->corrected) {
     out->gyroscope_omitted = "its rates are " + internal::VisibleLine(stream->topic) +
@@ -235,18 +235,18 @@ std::optional<Px4Slot> Px4Gyroscope(const LoadedCalibration& cal, const ExportOp
   // any): the check every target makes.
   out->gyroscope_omitted = ImplausibleGyroscope(cal, options, *rad_s, "PX4");
   if (!out->gyroscope_omitted.empty()) return std::nullopt;
-  if (g.thermal && g.thermal->degree() > 0) {
+  if (g.thermal && g.thermal->bias.degree() > 0) {
     // TC_G<n>: the offsets' polynomial in T - TREF taken from the rate before CAL_GYRO's offset
     // (TemperatureCompensation.cpp, sensor_calibration/Gyroscope.hpp), as TC_A: X0 = 0 and TREF
     // = T_ref, so that CAL_GYRO holds the offset at T_ref; T held to TMIN..TMAX.
     std::array<Vec3, 3> per_K{Vec3::Zero(), Vec3::Zero(), Vec3::Zero()};
-    for (int k = 1; k <= g.thermal->degree(); ++k) {
+    for (int k = 1; k <= g.thermal->bias.degree(); ++k) {
       per_K[static_cast<std::size_t>(k - 1)] =
-          *rad_s * g.thermal->coefficients[static_cast<std::size_t>(k - 1)];
+          *rad_s * g.thermal->bias.coefficients[static_cast<std::size_t>(k - 1)];
     }
     const Px4TemperatureTerms tc =
-        Px4Temperature('G', instance, id, g.thermal->t_ref_c, g.thermal_range_c, per_K, "rad/s",
-                       "the rate before CAL_GYRO%d's offset", "CAL_GYRO");
+        Px4Temperature('G', instance, id, g.thermal->bias.t_ref_c, g.thermal->range_c, per_K,
+                       "rad/s", "the rate before CAL_GYRO%d's offset", "CAL_GYRO");
     slot.lines += tc.lines;
     slot.convention += tc.convention;
     slot.comment += tc.comment;

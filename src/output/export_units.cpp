@@ -110,7 +110,7 @@ void PlausibleAccelerometer(const LoadedCalibration& cal, const ExportOptions& o
 // (OpenVINS, Basalt), to refuse the export.
 std::string ImplausibleGyroscope(const LoadedCalibration& cal, const ExportOptions& options,
                                  double rad_s, std::string_view format) {
-  const LoadedCalibration::Gyroscope& g = *cal.gyroscope;
+  const UnitGyroscope& g = *cal.gyroscope;
   const std::string tool(format);
   const std::string label =
       options.gyro_raw_unit.empty() ? internal::VisibleLine(g.raw_unit) : options.gyro_raw_unit;

@@ -353,33 +353,33 @@ std::string ParameterTable(const Document& d) {
 // The gyroscope's section: its parameters ±1σ, each turn's direction error (fitted and held
 // out), and each still position's mean rate beside the fitted bias and g-sensitivity.
 std::string GyroSection(const Document& d) {
-  const LoadedCalibration::Gyroscope& g = *d.cal.gyroscope;
-  const auto deg = [](const std::optional<double>& v) {
-    return v ? Format("%.3g", *v) + " deg" : std::string("n/a");
+  const UnitGyroscope& g = *d.cal.gyroscope;
+  const auto deg = [](double v) {
+    return std::isfinite(v) ? Format("%.3g", v) + " deg" : std::string("n/a");
   };
   std::string html = "<section id=\"gyroscope\"><h2>Gyroscope</h2>\n<dl>\n";
-  html += Item("model", std::string(ToString(g.model)) + ", w_raw = K w + b + G f" +
-                            (g.estimator.empty() ? "" : ", " + g.estimator + " fit"));
+  html += Item("model", std::string(ToString(g.model)) + ", w_raw = K w + b + G f" + ", " +
+                            std::string(ToString(g.estimator)) + " fit");
   html += Item("rotations", std::to_string(g.rotations.size()) + " turns; direction error RMS " +
                                 deg(g.rms_deg) + ", held out " + deg(g.heldout_rms_deg));
   std::string scales;
   for (int i = 0; i < 3; ++i) scales += (i ? ", " : "") + Format("%.8g", g.params.K.row(i).norm());
   html += Item("scale factors", scales + " " + g.raw_unit + " per rad/s (row norms of K)");
   if (g.thermal) {
-    std::string text = Format("degree %d", g.thermal->degree());
-    if (g.thermal->degree() > 0) {
+    std::string text = Format("degree %d", g.thermal->bias.degree());
+    if (g.thermal->bias.degree() > 0) {
       text += Format(", b(T) = b + sum_d b_d (T - T_ref)^d, the bias below at T_ref = %.6g degC; ",
-                     g.thermal->t_ref_c);
-      for (int k = 1; k <= g.thermal->degree(); ++k) {
-        const Vec3& b = g.thermal->coefficients[static_cast<std::size_t>(k - 1)];
+                     g.thermal->bias.t_ref_c);
+      for (int k = 1; k <= g.thermal->bias.degree(); ++k) {
+        const Vec3& b = g.thermal->bias.coefficients[static_cast<std::size_t>(k - 1)];
         text += Format("%sb_%d = (%.4g, %.4g, %.4g) %s per K^%d", k > 1 ? "; " : "", k, b(0), b(1),
                        b(2), g.raw_unit.c_str(), k);
       }
     } else {
       text += " (the offsets constant over temperature)";
     }
-    text += Format("; still positions from %.4g to %.4g degC", g.thermal_range_c.first,
-                   g.thermal_range_c.second);
+    text += Format("; still positions from %.4g to %.4g degC", g.thermal->range_c.first,
+                   g.thermal->range_c.second);
     html += Item("offsets over temperature", text);
   }
   html += "</dl>\n";
@@ -410,8 +410,9 @@ std::string GyroSection(const Document& d) {
     const std::size_t n = g.rotations.size();
     double lo = 0, hi = 0;
     for (const auto& r : g.rotations) {
-      lo = std::min({lo, r.residual_deg, r.heldout_deg.value_or(0.0)});
-      hi = std::max({hi, r.residual_deg, r.heldout_deg.value_or(0.0)});
+      const double heldout = std::isfinite(r.heldout_deg) ? r.heldout_deg : 0.0;
+      lo = std::min({lo, r.residual_deg, heldout});
+      hi = std::max({hi, r.residual_deg, heldout});
     }
     if (!Plottable(0, static_cast<double>(n), lo, hi))
       return html + NotPlotted("turns") + "</section>\n";
@@ -420,35 +421,37 @@ std::string GyroSection(const Document& d) {
     for (std::size_t k = 0; k < n; ++k) {
       const auto& r = g.rotations[k];
       const double x = f.X(static_cast<double>(k + 1));
-      const std::string tip = Format("turn %zu (position %.0f to %.0f)", k + 1, r.from, r.to);
-      if (r.heldout_deg) {
-        body += "<circle class=\"held-out\" cx=\"" + Px(x) + "\" cy=\"" + Px(f.Y(*r.heldout_deg)) +
-                "\" r=\"4.5\"><title>" + tip + " held out: " + Short(*r.heldout_deg) +
+      const std::string tip = Format("turn %zu (position %zu to %zu)", k + 1, r.from + 1, r.to + 1);
+      if (std::isfinite(r.heldout_deg)) {
+        body += "<circle class=\"held-out\" cx=\"" + Px(x) + "\" cy=\"" + Px(f.Y(r.heldout_deg)) +
+                "\" r=\"4.5\"><title>" + tip + " held out: " + Short(r.heldout_deg) +
                 " deg</title></circle>\n";
       }
       body += "<circle class=\"after\" cx=\"" + Px(x) + "\" cy=\"" + Px(f.Y(r.residual_deg)) +
               "\" r=\"3\"><title>" + tip + ": " + Short(r.residual_deg) +
-              (r.turned_deg ? " deg, turned through " + Short(*r.turned_deg) : std::string()) +
+              (std::isfinite(r.turned_deg) ? " deg, turned through " + Short(r.turned_deg)
+                                           : std::string()) +
               " deg</title></circle>\n";
     }
     std::vector<std::pair<std::string, std::string>> legend = {{"#1f77b4", "fitted"}};
-    if (g.rotations[0].heldout_deg) legend.push_back({"#ff7f0e", "held out (fit without it)"});
+    if (std::isfinite(g.rotations[0].heldout_deg))
+      legend.push_back({"#ff7f0e", "held out (fit without it)"});
     body += Legend(f.left + 8, f.Bottom() + 50, legend);
     html += Svg("gyro-rotations", 300, "direction error of each turn", body);
   }
   // Each still position's mean rate less the bias, beside G f of its fitted direction.
-  bool directions = g.still_mean_raw.size() == d.cal.positions.size() && !g.still_mean_raw.empty();
+  bool directions = g.still_spans.size() == d.cal.positions.size() && !g.still_spans.empty();
   for (const FilePosition& p : d.cal.positions) directions = directions && p.direction.has_value();
   if (directions) {
-    const std::size_t m = g.still_mean_raw.size();
+    const std::size_t m = g.still_spans.size();
     std::vector<Vec3> measured, modelled;
     double lo = 0, hi = 0;
     // A position the gyro turned throughout (its still rate NaN) is not drawn.
     std::vector<bool> drawn(m, true);
     for (std::size_t k = 0; k < m; ++k) {
-      measured.push_back(g.still_mean_raw[k] - g.params.bias);
+      measured.push_back(g.still_spans[k].mean_raw - g.params.bias);
       modelled.push_back(g.params.G * (d.cal.gravity * *d.cal.positions[k].direction));
-      if (g.still_mean_raw[k].hasNaN() && modelled.back().allFinite()) {
+      if (!g.still_spans[k].still && modelled.back().allFinite()) {
         drawn[k] = false;
         continue;
       }

@@ -222,24 +222,27 @@ GyroCalibrationOptions GyroOptionsWithTReference(const UnitRequest& r,
 void CalibrateGyroscope(const UnitRequest& r, GyroLogAhead* ahead, UnitOutcome* out) {
   const RawLog& accel_log = TheRawLogForGyro(out->input);
   UnitOutcome::Gyroscope g;
-  g.path = r.gyro->log.empty() ? r.inputs.front() : r.gyro->log;
+  const std::string& path = r.gyro->log.empty() ? r.inputs.front() : r.gyro->log;
   g.data = ahead->Take();
   try {
-    g.calibration = CalibrateGyro(accel_log, g.data.raw, out->input.positions, out->accelerometer,
-                                  GyroOptionsWithTReference(r, out->accelerometer));
+    static_cast<GyroCalibration&>(g.calibration) =
+        CalibrateGyro(accel_log, g.data.raw, out->input.positions, out->accelerometer,
+                      GyroOptionsWithTReference(r, out->accelerometer));
   } catch (const NotConvergedError& e) {  // what is refused is the gyroscope's
-    throw NotConvergedError(e.what(), g.path);
+    throw NotConvergedError(e.what(), path);
   } catch (const DataError& e) {
-    throw DataError(e.what(), g.path);
+    throw DataError(e.what(), path);
   }
+  g.calibration.source = path;
   // The label of its raw unit: its declared unit, else its binary-log stream's by specification,
   // else the accelerometer's raw label unless that names a force unit.
   if (g.calibration.unit != GyroUnit::kRaw) {
-    g.raw_unit = std::string(NameOf(r.gyro_units));
+    g.calibration.raw_unit = std::string(NameOf(r.gyro_units));
   } else if (g.data.stream && !g.data.stream->unit.empty()) {
-    g.raw_unit = g.data.stream->unit;
+    g.calibration.raw_unit = g.data.stream->unit;
   } else {
-    g.raw_unit = ForceUnitFromString(out->raw_unit) ? std::string("raw") : out->raw_unit;
+    g.calibration.raw_unit =
+        ForceUnitFromString(out->raw_unit) ? std::string("raw") : out->raw_unit;
   }
   // The joint fit's accelerometer is the file's: the rotations refined it.
   if (g.calibration.accelerometer) out->accelerometer = *g.calibration.accelerometer;
@@ -281,7 +284,8 @@ void Conclude(const UnitRequest& r, UnitOutcome* out) {
   }
   if (out->gyroscope && !r.gyro->log.empty()) {
     const UnitOutcome::Gyroscope& g = *out->gyroscope;
-    out->provenance.inputs.push_back({g.path, g.data.bytes, g.data.sha256, g.data.stream});
+    out->provenance.inputs.push_back(
+        {g.calibration.source, g.data.bytes, g.data.sha256, g.data.stream});
   }
 }
 
@@ -518,8 +522,6 @@ CalibrationFileInfo UnitOutcome::FileInfo() const {
   info.provenance = provenance;
   if (gyroscope) {
     info.gyroscope = &gyroscope->calibration;
-    info.gyro_source = gyroscope->path;
-    info.gyro_raw_unit = gyroscope->raw_unit;
   }
   return info;
 }

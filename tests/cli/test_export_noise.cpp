@@ -296,7 +296,7 @@ struct Readings {
 };
 Readings XsensReadings(const LoadedCalibration& cal, bool with_g) {
   Readings r;
-  const LoadedCalibration::Gyroscope& g = *cal.gyroscope;
+  const UnitGyroscope& g = *cal.gyroscope;
   for (std::size_t k = 0; k < cal.position_means.size(); ++k) {
     const Vec3& p = cal.position_means[k];
     const double t = static_cast<double>(k);

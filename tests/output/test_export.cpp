@@ -360,8 +360,8 @@ TEST(Export, CHeaderCompiledAndRunGivesAccelcalsCorrectionBitForBit) {
 
 // A gyroscope beside the accelerometer of Fit (its numbers as the Xsens
 // recording's).
-LoadedCalibration::Gyroscope Gyroscope() {
-  LoadedCalibration::Gyroscope g;
+UnitGyroscope Gyroscope() {
+  UnitGyroscope g;
   g.model = GyroModelKind::kGSensitive;
   g.params.K << 4782.3, -42.2, -53.7, -25.7, 4765.3, 151.1, -75.1, 108.3, 4768.8;
   g.params.bias << 32770.3, 32451.1, 32509.4;
@@ -373,8 +373,8 @@ LoadedCalibration::Gyroscope Gyroscope() {
 // The same gyroscope behind a driver that scales its rates to `unit`
 // (`per_rad_s` of them a rad/s): the counts taken from their zero (32768) and
 // divided by the nominal 4780 per rad/s.
-LoadedCalibration::Gyroscope ScaledGyroscope(const std::string& unit, double per_rad_s) {
-  LoadedCalibration::Gyroscope g = Gyroscope();
+UnitGyroscope ScaledGyroscope(const std::string& unit, double per_rad_s) {
+  UnitGyroscope g = Gyroscope();
   const double s = per_rad_s / 4780;
   g.params.K *= s;
   g.params.bias = s * (g.params.bias - Vec3::Constant(32768));

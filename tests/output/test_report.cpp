@@ -131,7 +131,7 @@ TEST(Report, ShowsTheGyroscopeItsTurnsAndItsStillRates) {
   const LoadedCalibration cal = ParseCalibrationJson(doc.dump(), "imu.json");
   ASSERT_TRUE(cal.has_gyroscope());
   ASSERT_EQ(cal.gyroscope->rotations.size(), 17u);
-  ASSERT_EQ(cal.gyroscope->still_mean_raw.size(), 18u);
+  ASSERT_EQ(cal.gyroscope->still_spans.size(), 18u);
   ReportInput input{cal, "imu.json", &r.log, r.detection.rejected};
   const std::string html = RenderReport(input);
   for (const char* id : {"gyro-rotations", "gyro-stills"}) {

@@ -128,23 +128,17 @@ LoadedInput LoadInput(const InputArgs& in) {
   return LoadPositions(paths, options);
 }
 
-void CheckGyroColumns(const InputArgs& input, const std::string& gyro,
-                      const std::vector<std::string>& gyro_columns) {
-  if (auto why = GyroInputProblem(input.path, input.columns, {gyro, gyro_columns, ""})) {
+void CheckGyroColumns(const InputArgs& input, const SensorInput& gyro) {
+  if (auto why = GyroInputProblem(input.path, input.columns, gyro)) {
     throw UsageError(WithCliFlags(*why));
   }
 }
 
-InputData ReadGyroLog(const InputArgs& input, const std::string& gyro,
-                      const std::vector<std::string>& gyro_columns, bool fingerprint) {
-  CheckGyroColumns(input, gyro, gyro_columns);
+InputData ReadGyroLog(const InputArgs& input, const SensorInput& gyro, bool fingerprint) {
+  CheckGyroColumns(input, gyro);
   ReadOptions read = MakeReadOptions(input);
   read.fingerprint = fingerprint;
-  if (input.gyro_topic && input.gyro_topic->empty()) {
-    throw UsageError("--gyro-topic: an empty topic name");
-  }
-  return accelcal::ReadGyroLog(input.path, read,
-                               {gyro, gyro_columns, input.gyro_topic.value_or("")});
+  return accelcal::ReadGyroLog(input.path, read, gyro);
 }
 
 std::string CliFlag(const std::string& name) {

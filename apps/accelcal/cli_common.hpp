@@ -71,8 +71,7 @@ std::string& DataSubject();
 
 /// The usage errors of the gyroscope's log and columns (ReadGyroLog checks them too), for a
 /// command to raise before it reads anything.
-void CheckGyroColumns(const InputArgs& input, const std::string& gyro,
-                      const std::vector<std::string>& gyro_columns);
+void CheckGyroColumns(const InputArgs& input, const SensorInput& gyro);
 
 /// The reading of a calibration's input files reported as the tool does: a progress display,
 /// details, still periods not used, a log without a still one with the options that act on it.
@@ -80,13 +79,12 @@ void CheckGyroColumns(const InputArgs& input, const std::string& gyro,
 void ReportLoading(LoadOptions* options);
 // The input files of a calibration, read, detected and pooled.
 LoadedInput LoadInput(const InputArgs& in);
-/// The gyroscope's log beside the accelerometer's `input`: `gyro` (empty: `input` itself, read
-/// again for `gyro_columns`), read with `input`'s options and `gyro_columns` (x,y,z or
-/// time,x,y,z; with 3 in `input` itself, `input`'s time column in front when its columns name
-/// one). `fingerprint`: hash a separate file for the provenance. Usage errors for bad columns or
+/// The gyroscope's log beside the accelerometer's `input`: `gyro.log` (empty: `input` itself,
+/// read again for its columns), read with `input`'s options, its columns (x,y,z or time,x,y,z;
+/// with 3 in `input` itself, `input`'s time column in front when its columns name one) and its
+/// topic. `fingerprint`: hash a separate file for the provenance. Usage errors for bad columns or
 /// standard input read twice; InputError naming the file for what it holds.
-InputData ReadGyroLog(const InputArgs& input, const std::string& gyro,
-                      const std::vector<std::string>& gyro_columns, bool fingerprint);
+InputData ReadGyroLog(const InputArgs& input, const SensorInput& gyro, bool fingerprint);
 
 /// The tool's name of an option the library names (calibrate_unit.hpp: the Python keyword):
 /// its flag (--gyro-columns), or INPUT; and a library message with its marked names so named.

@@ -67,11 +67,67 @@ void AddInputOptions(CLI::App* cmd, InputArgs* in, bool with_kind) {
                   "temp, PX4's sensor_accel.temperature, ArduPilot's IMU.T; none: not read");
 }
 
-// The gyroscope's stream in a binary log, for the commands that read its rates (--gyro).
-void AddGyroTopic(CLI::App* cmd, InputArgs* in) {
-  cmd->add_option("--gyro-topic", in->gyro_topic,
-                  "the gyroscope's stream in a binary log (a ULog topic such as sensor_gyro; "
-                  "default: its only gyroscope stream, of --instance when given)");
+const BesideSensor kGyroscopeFlags{
+    "gyro",
+    "gyroscope",
+    "rates",
+    "sensor_gyro",
+    "the gyro's raw unit, for the start of its fit: rad/s, deg/s, or raw (counts: the scale "
+    "starts from the turned angles)",
+    "linear (K, b), g-sensitive (K, b and a rate bias in proportion to the specific force), or "
+    "auto (the one that predicts held-out rotations better)"};
+
+namespace {
+
+std::string Replaced(std::string text, const std::string& key, const std::string& by) {
+  for (std::size_t at = text.find(key); at != std::string::npos; at = text.find(key, at)) {
+    text.replace(at, key.size(), by);
+    at += by.size();
+  }
+  return text;
+}
+
+}  // namespace
+
+void AddSensorInput(CLI::App* cmd, const BesideSensor& sensor, SensorInput* in,
+                    const std::string& use, const std::string& where) {
+  const std::string noun = sensor.noun;
+  cmd->add_option(sensor.Flag(), in->log, "the " + noun + "'s log" + use);
+  cmd->add_option(sensor.Flag("-columns"), in->columns,
+                  "the " + noun + "'s x,y,z (or time,x,y,z) columns, " +
+                      Replaced(where, "{log}", sensor.Flag()))
+      ->delimiter(',');
+  cmd->add_option(sensor.Flag("-topic"), in->topic,
+                  "the " + noun + "'s stream in a binary log (a ULog topic such as " +
+                      sensor.ulog_topic + "; default: its only " + noun +
+                      " stream, of --instance when given)");
+}
+
+void AddSensorUnits(CLI::App* cmd, const BesideSensor& sensor, std::string* units) {
+  cmd->add_option(sensor.Flag("-units"), *units, sensor.units_help)->capture_default_str();
+}
+
+void AddSensorModel(CLI::App* cmd, const BesideSensor& sensor, std::string* model) {
+  cmd->add_option(sensor.Flag("-model"), *model, sensor.model_help)->capture_default_str();
+}
+
+void CheckSensorInput(const CLI::App& cmd, const BesideSensor& sensor, const SensorInput& in,
+                      std::initializer_list<const char*> only) {
+  if (cmd.count(sensor.Flag()) > 0 && in.log.empty()) {
+    throw UsageError(sensor.Flag() + ": the file name is empty");
+  }
+  if (cmd.count(sensor.Flag("-topic")) > 0 && in.topic.empty()) {
+    throw UsageError(sensor.Flag("-topic") + ": an empty topic name");
+  }
+  if (in.given()) return;
+  std::vector<std::string> acting{sensor.Flag("-topic")};
+  acting.insert(acting.end(), only.begin(), only.end());
+  for (const std::string& name : acting) {
+    if (cmd.count(name) > 0) {
+      throw UsageError(name + " applies to the " + sensor.noun + ": give its " + sensor.samples +
+                       " with " + sensor.Flag() + " LOG or " + sensor.Flag("-columns"));
+    }
+  }
 }
 
 void AddDetectionOptions(CLI::App* cmd, InputArgs* in) {
@@ -172,22 +228,12 @@ void AddCalibrationOptions(CLI::App* cmd, CalibrateArgs* cal) {
                   "known orientation of every position, in order (a file of directions or "
                   "attitudes, as for design): full misalignment in the platform frame, "
                   "paper 003");
-  cmd->add_option("--gyro", cal->gyro,
-                  "the gyroscope's log, recorded with the accelerometer on the same clock "
-                  "(a rate sample at each accelerometer sample's time): calibrates it too");
-  cmd->add_option("--gyro-columns", cal->gyro_columns,
-                  "the gyroscope's x,y,z (or time,x,y,z) columns, in INPUT itself or in the "
-                  "--gyro log: 1-based column numbers or header names")
-      ->delimiter(',');
-  AddGyroTopic(cmd, &cal->input);
-  cmd->add_option("--gyro-units", cal->gyro_units,
-                  "the gyro's raw unit, for the start of its fit: rad/s, deg/s, or raw "
-                  "(counts: the scale starts from the turned angles)")
-      ->capture_default_str();
-  cmd->add_option("--gyro-model", cal->gyro_model,
-                  "linear (K, b), g-sensitive (K, b and a rate bias in proportion to the "
-                  "specific force), or auto (the one that predicts held-out rotations better)")
-      ->capture_default_str();
+  AddSensorInput(cmd, kGyroscopeFlags, &cal->gyro,
+                 ", recorded with the accelerometer on the same clock (a rate sample at each "
+                 "accelerometer sample's time): calibrates it too",
+                 "in INPUT itself or in the {log} log: 1-based column numbers or header names");
+  AddSensorUnits(cmd, kGyroscopeFlags, &cal->gyro_units);
+  AddSensorModel(cmd, kGyroscopeFlags, &cal->gyro_model);
   cmd->add_option(
       "--gyro-estimator", cal->gyro_estimator,
       "joint (both sensors and every gravity direction in one fit: the rotations "
@@ -230,33 +276,11 @@ std::vector<std::pair<std::string, std::vector<std::string>>> GivenOptions(
   return given;
 }
 
-// What a command that reads a gyroscope's log checks of its flags: a --gyro given names a file,
-// and the options that only act on the gyro (`gyro_only`) come with its rates.
-void CheckGyroFlags(const CLI::App& cmd, const std::string& gyro,
-                    const std::vector<std::string>& gyro_columns,
-                    std::initializer_list<const char*> gyro_only) {
-  if (cmd.count("--gyro") > 0 && gyro.empty()) {
-    throw UsageError("--gyro: the file name is empty");
-  }
-  if (!gyro.empty() || !gyro_columns.empty()) return;
-  if (cmd.count("--gyro-topic") > 0) {
-    throw UsageError(
-        "--gyro-topic applies to the gyroscope: give its rates with --gyro LOG or --gyro-columns");
-  }
-  for (const char* name : gyro_only) {
-    if (cmd.count(name) > 0) {
-      throw UsageError(std::string(name) +
-                       " applies to the gyroscope: give its rates with --gyro LOG "
-                       "or --gyro-columns");
-    }
-  }
-}
-
 // What calibrate and batch check of calibrate's options before anything is read, and which of
 // them were given.
 void CheckCalibrationFlags(const CLI::App& cmd, CalibrateArgs* cal) {
-  CheckGyroFlags(cmd, cal->gyro, cal->gyro_columns,
-                 {"--gyro-units", "--gyro-model", "--gyro-estimator", "--gyro-thermal"});
+  CheckSensorInput(cmd, kGyroscopeFlags, cal->gyro,
+                   {"--gyro-units", "--gyro-model", "--gyro-estimator", "--gyro-thermal"});
   if (cmd.count("--gyro-thermal") > 0 && cal->gyro_thermal.empty()) {
     throw UsageError("--gyro-thermal: '' is neither auto nor a degree from 0 to 3");
   }

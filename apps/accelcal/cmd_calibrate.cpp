@@ -373,9 +373,7 @@ std::string ThermalText(const CalibrationResult& r, const ThermalDegreeSelection
   return out;
 }
 
-bool GyroWanted(const CalibrateArgs& args) {
-  return !args.gyro.empty() || !args.gyro_columns.empty();
-}
+bool GyroWanted(const CalibrateArgs& args) { return args.gyro.given(); }
 
 bool Given(const CalibrateArgs& args, const char* flag) {
   const auto& given = args.gravity_only_options;
@@ -404,10 +402,7 @@ std::optional<ThermalDegrees> ParseThermalDegrees(const std::string& text) {
 
 // The gyroscope's part of the request (calibrate --gyro / --gyro-columns).
 void GyroRequest(const CalibrateArgs& args, UnitRequest* r) {
-  if (args.input.gyro_topic && args.input.gyro_topic->empty()) {
-    throw UsageError("--gyro-topic: an empty topic name");
-  }
-  r->gyro = GyroInput{args.gyro, args.gyro_columns, args.input.gyro_topic.value_or("")};
+  r->gyro = args.gyro;
   r->gyro_units = ParseChoice<GyroUnit>(args.gyro_units, "--gyro-units");
   if (!args.gyro_estimator.empty()) {
     r->gyro_estimator = ParseChoice<GyroEstimator>(args.gyro_estimator, "--gyro-estimator");
@@ -574,7 +569,7 @@ int RunCalibrate(const CalibrateArgs& args) {
     std::vector<std::string> inputs = args.input.more_paths;
     inputs.push_back(args.input.path);
     inputs.push_back(args.orientations);
-    inputs.push_back(args.gyro);
+    inputs.push_back(args.gyro.log);
     inputs.push_back(args.noise);
     CheckOutputs({{"-o", args.output}, {"--report", args.report}}, inputs);
   }

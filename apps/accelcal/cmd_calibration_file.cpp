@@ -23,11 +23,11 @@
 
 namespace accelcal::cli {
 int RunApply(const ApplyArgs& args) {
-  CheckOutputs({{"-o", args.output}}, {args.calibration, args.input.path, args.gyro});
+  CheckOutputs({{"-o", args.output}}, {args.calibration, args.input.path, args.gyro.log});
   const LoadedCalibration cal = ParseCalibrationJson(
       ReadFileToString(args.calibration, kMaxSmallFileBytes), args.calibration);
   RefuseFailed(cal, args.calibration);
-  const bool gyro = !args.gyro.empty() || !args.gyro_columns.empty();
+  const bool gyro = args.gyro.given();
   if (gyro && !cal.has_gyroscope()) {
     throw UsageError(args.calibration +
                      " holds no gyroscope calibration: --gyro and --gyro-columns need one "
@@ -61,7 +61,7 @@ int RunApply(const ApplyArgs& args) {
   const bool thermal = cal.thermal && log.temperature_c.size() == log.samples.size();
   InputData rates;
   if (gyro) {
-    rates = ReadGyroLog(args.input, args.gyro, args.gyro_columns, false);
+    rates = ReadGyroLog(args.input, args.gyro, false);
     CheckGyroClock(log, rates.raw);
   }
   // The gyroscope's offsets over temperature: each rate at the gyro log's temperature, else the
@@ -306,14 +306,10 @@ CommandRun SetUpApply(CLI::App* cmd) {
   AddInputOptions(cmd, &a->input, false);
   cmd->add_option("-o,--output", a->output, "output file (default: stdout)")->check(kFileName);
   cmd->add_option("--units", a->units, "output unit m/s2 or g (default: the calibration's)");
-  cmd->add_option("--gyro", a->gyro,
-                  "the gyroscope's log on the same clock: its body rates [rad/s] too");
-  cmd->add_option("--gyro-columns", a->gyro_columns,
-                  "the gyroscope's x,y,z (or time,x,y,z) columns, in LOG or the --gyro log")
-      ->delimiter(',');
-  AddGyroTopic(cmd, &a->input);
+  AddSensorInput(cmd, kGyroscopeFlags, &a->gyro, " on the same clock: its body rates [rad/s] too",
+                 "in LOG or the {log} log");
   return [a](const CLI::App& parsed) {
-    CheckGyroFlags(parsed, a->gyro, a->gyro_columns, {});
+    CheckSensorInput(parsed, kGyroscopeFlags, a->gyro, {});
     DataSubject() = a->input.path;
     return RunApply(*a);
   };

@@ -48,9 +48,9 @@ std::vector<GyroRow> CompareGyro(const CompareArgs& args, GyroUnit unit, const L
     throw UsageError(
         "--gyro needs a maximum-likelihood method among --methods (its gravity directions)");
   }
-  const InputData gyro = ReadGyroLog(args.input, args.gyro, args.gyro_columns, false);
+  const InputData gyro = ReadGyroLog(args.input, args.gyro, false);
   const std::string subject = DataSubject();
-  DataSubject() = args.gyro.empty() ? args.input.path : args.gyro;
+  DataSubject() = args.gyro.log.empty() ? args.input.path : args.gyro.log;
   CheckGyroClock(accel_log, gyro.raw);  // refused once, not in every row
   std::vector<GyroRow> rows = {{GyroEstimator::kImuTk, GyroModelKind::kLinear, {}, {}},
                                {GyroEstimator::kTwoStage, GyroModelKind::kLinear, {}, {}},
@@ -76,9 +76,7 @@ std::vector<GyroRow> CompareGyro(const CompareArgs& args, GyroUnit unit, const L
 }
 
 // compare --gyro: the gyroscope's log, or its columns in the accelerometer's.
-bool GyroWanted(const CompareArgs& args) {
-  return !args.gyro.empty() || !args.gyro_columns.empty();
-}
+bool GyroWanted(const CompareArgs& args) { return args.gyro.given(); }
 
 // The options --model, --init, --methods, --outliers and the gravity (in `g`) give.
 CompareOptions CompareOptionsOf(const CompareArgs& args, Gravity* g) {
@@ -204,7 +202,7 @@ std::string CompareJson(const CompareArgs& args, const Gravity& g, const std::ve
 std::string GyroText(const CompareArgs& args, const std::vector<GyroRow>& gyro_rows) {
   std::string out;
   out += Format("\ngyroscope %s: direction error of the turns [deg]\n",
-                (args.gyro.empty() ? args.input.path : args.gyro).c_str());
+                (args.gyro.log.empty() ? args.input.path : args.gyro.log).c_str());
   out += Format("%-10s %-12s %10s %10s   %s\n", "estimator", "model", "held-out", "in fit",
                 "scale factors (row norms of K)");
   std::string errors;
@@ -305,7 +303,7 @@ int RunCompare(const CompareArgs& args) {
   GyroUnit gyro_unit = GyroUnit::kRaw;
   if (gyro_wanted) {
     gyro_unit = ParseChoice<GyroUnit>(args.gyro_units, "--gyro-units");
-    CheckGyroColumns(args.input, args.gyro, args.gyro_columns);
+    CheckGyroColumns(args.input, args.gyro);
   }
   const LoadedInput in = LoadInput(args.input);
   const std::vector<Vec3> means = Means(in.positions);
@@ -337,18 +335,13 @@ CommandRun SetUpCompare(CLI::App* cmd) {
   cmd->add_option("--reference", a->reference,
                   "a known calibration (JSON): adds paper 001's e_T and e_b per method");
   cmd->add_flag("--json", a->json, "machine-readable output");
-  cmd->add_option("--gyro", a->gyro,
-                  "the gyroscope's log on the same clock: compare its estimators too "
-                  "(imu_tk's method, two-stage and joint, linear and g-sensitive)");
-  cmd->add_option("--gyro-columns", a->gyro_columns,
-                  "the gyroscope's x,y,z (or time,x,y,z) columns, in INPUT or the --gyro log")
-      ->delimiter(',');
-  AddGyroTopic(cmd, &a->input);
-  cmd->add_option("--gyro-units", a->gyro_units,
-                  "the gyro's raw unit, for the start of its fits: rad/s, deg/s, or raw")
-      ->capture_default_str();
+  AddSensorInput(cmd, kGyroscopeFlags, &a->gyro,
+                 " on the same clock: compare its estimators too (imu_tk's method, two-stage and "
+                 "joint, linear and g-sensitive)",
+                 "in INPUT or the {log} log");
+  AddSensorUnits(cmd, kGyroscopeFlags, &a->gyro_units);
   return [a](const CLI::App& parsed) {
-    CheckGyroFlags(parsed, a->gyro, a->gyro_columns, {"--gyro-units"});
+    CheckSensorInput(parsed, kGyroscopeFlags, a->gyro, {"--gyro-units"});
     DataSubject() = a->input.path;
     return RunCompare(*a);
   };

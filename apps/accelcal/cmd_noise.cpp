@@ -529,10 +529,10 @@ int StreamNoise(const NoiseArgs& args, const ReadOptions& read,
 
 int RunNoise(const NoiseArgs& args) {
   CheckOutputs({{"-o", args.output}, {"--report", args.report}},
-               {args.input.path, args.calibration, args.gyro});
+               {args.input.path, args.calibration, args.gyro.log});
   if (auto why = args.input.detection.Validate()) throw UsageError(*why);
-  const bool gyro = !args.gyro.empty() || !args.gyro_columns.empty();
-  if (gyro) CheckGyroColumns(args.input, args.gyro, args.gyro_columns);
+  const bool gyro = args.gyro.given();
+  if (gyro) CheckGyroColumns(args.input, args.gyro);
   std::optional<LoadedCalibration> cal;
   if (!args.calibration.empty()) {
     cal = ParseCalibrationJson(ReadFileToString(args.calibration, kMaxSmallFileBytes),
@@ -616,18 +616,18 @@ int RunNoise(const NoiseArgs& args) {
     sensors.push_back(std::move(accel));
   }
   if (gyro) {
-    const InputData rates = ReadGyroLog(args.input, args.gyro, args.gyro_columns, false);
-    if (!args.gyro.empty()) WarnCutShort(args.gyro, rates.raw.read_warning);
+    const InputData rates = ReadGyroLog(args.input, args.gyro, false);
+    if (!args.gyro.log.empty()) WarnCutShort(args.gyro.log, rates.raw.read_warning);
     CheckGyroClock(log, rates.raw);
     if (rates.raw.samples.size() != log.samples.size()) {
-      throw InputError(args.gyro.empty() ? args.input.path : args.gyro, 0,
+      throw InputError(args.gyro.log.empty() ? args.input.path : args.gyro.log, 0,
                        Format("%zu gyroscope samples beside %zu of the accelerometer: the two "
                               "streams must have one row each per sample",
                               rates.raw.samples.size(), log.samples.size()));
     }
     Sensor g;
     g.name = "gyroscope";
-    g.source = args.gyro.empty() ? args.input.path : args.gyro;
+    g.source = args.gyro.log.empty() ? args.input.path : args.gyro.log;
     std::vector<Vec3> samples(rates.raw.samples.begin() + static_cast<std::ptrdiff_t>(begin),
                               rates.raw.samples.begin() + static_cast<std::ptrdiff_t>(end));
     if (cal && cal->has_gyroscope()) {
@@ -663,11 +663,8 @@ CommandRun SetUpNoise(CLI::App* cmd) {
   AddDetectionOptions(cmd, &a->input);
   cmd->add_option("--calibration", a->calibration,
                   "calibration file (JSON): the samples calibrated first (else the log's unit)");
-  cmd->add_option("--gyro", a->gyro, "the gyroscope's log on the same clock: its noise too");
-  cmd->add_option("--gyro-columns", a->gyro_columns,
-                  "the gyroscope's x,y,z (or time,x,y,z) columns, in LOG or the --gyro log")
-      ->delimiter(',');
-  AddGyroTopic(cmd, &a->input);
+  AddSensorInput(cmd, kGyroscopeFlags, &a->gyro, " on the same clock: its noise too",
+                 "in LOG or the {log} log");
   cmd->add_flag("--still", a->still,
                 "only the longest still interval of the log (a calibration log's rest)");
   cmd->add_flag("--json", a->json, "machine-readable output");
@@ -676,7 +673,7 @@ CommandRun SetUpNoise(CLI::App* cmd) {
       ->check(kFileName);
   cmd->add_option("-o,--output", a->output, "output file (default: stdout)")->check(kFileName);
   return [a](const CLI::App& parsed) {
-    CheckGyroFlags(parsed, a->gyro, a->gyro_columns, {});
+    CheckSensorInput(parsed, kGyroscopeFlags, a->gyro, {});
     DataSubject() = a->input.path;
     return RunNoise(*a);
   };

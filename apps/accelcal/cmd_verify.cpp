@@ -167,7 +167,7 @@ void WarnOutsideRange(const VerifyArgs& args, const VerifiedCalibration& under_t
 GyroVerification VerifyRates(const VerifyArgs& args, const LoadedCalibration& cal,
                              const VerifiedCalibration& under_test, const InputData& data,
                              const std::vector<Position>& positions) {
-  InputData rates = ReadGyroLog(args.input, args.gyro, args.gyro_columns, false);
+  InputData rates = ReadGyroLog(args.input, args.gyro, false);
   CheckGyroClock(data.raw, rates.raw);
   // Offsets over temperature: taken out of each rate at its temperature, as calibrate did.
   if (const std::optional<GyroThermal>& b = cal.gyroscope->thermal; b && b->bias.degree() > 0) {
@@ -366,10 +366,10 @@ std::string VerifyText(const VerifyArgs& args, const LoadedCalibration& cal, con
 }  // namespace
 
 int RunVerify(const VerifyArgs& args) {
-  CheckOutputs({{"-o", args.output}}, {args.calibration, args.input.path, args.gyro});
+  CheckOutputs({{"-o", args.output}}, {args.calibration, args.input.path, args.gyro.log});
   if (auto why = args.input.detection.Validate()) throw UsageError(*why);
-  const bool gyro = !args.gyro.empty() || !args.gyro_columns.empty();
-  if (gyro) CheckGyroColumns(args.input, args.gyro, args.gyro_columns);
+  const bool gyro = args.gyro.given();
+  if (gyro) CheckGyroColumns(args.input, args.gyro);
   const LoadedCalibration cal = ParseCalibrationJson(
       ReadFileToString(args.calibration, kMaxSmallFileBytes), args.calibration);
   RefuseFailed(cal, args.calibration);
@@ -438,16 +438,12 @@ CommandRun SetUpVerify(CLI::App* cmd) {
                   "the log's temperature [degC], for a calibration whose parameters follow "
                   "temperature and a log without its own (as calibrate's --temperatures)")
       ->check(kDecimal);
-  cmd->add_option("--gyro", a->gyro,
-                  "the gyroscope's log on the same clock: its turns verified too");
-  cmd->add_option("--gyro-columns", a->gyro_columns,
-                  "the gyroscope's x,y,z (or time,x,y,z) columns, in LOG or the --gyro log")
-      ->delimiter(',');
-  AddGyroTopic(cmd, &a->input);
+  AddSensorInput(cmd, kGyroscopeFlags, &a->gyro, " on the same clock: its turns verified too",
+                 "in LOG or the {log} log");
   cmd->add_flag("--json", a->json, "machine-readable output");
   cmd->add_option("-o,--output", a->output, "output file (default: stdout)")->check(kFileName);
   return [a](const CLI::App& parsed) {
-    CheckGyroFlags(parsed, a->gyro, a->gyro_columns, {});
+    CheckSensorInput(parsed, kGyroscopeFlags, a->gyro, {});
     DataSubject() = a->input.path;
     return RunVerify(*a);
   };

@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "accelcal/calibrate.hpp"
+#include "accelcal/calibrate_unit.hpp"
 #include "accelcal/log_reader.hpp"
 #include "accelcal/static_detection.hpp"
 
@@ -97,8 +98,6 @@ struct InputArgs {
   std::optional<std::string> topic;               // ReadOptions::topic
   std::optional<std::string> frame_id;            // ReadOptions::frame_id
   std::optional<std::string> temperature_column;  // ReadOptions::temperature
-  /// The gyroscope's topic in a binary log (ReadGyroInput), for the commands that read one.
-  std::optional<std::string> gyro_topic;
   StaticDetectionOptions detection;
 };
 
@@ -135,10 +134,9 @@ struct CalibrateArgs {
   std::vector<double> temperatures_c;
   OutlierArgs outliers;
   std::string orientations;  // known orientations (orientation_file.hpp): platform-frame fit
-  // The gyroscope (gyro_calibration.hpp): its log (empty: INPUT itself when gyro_columns are
-  // given), its columns, declared unit, model and estimator.
-  std::string gyro;
-  std::vector<std::string> gyro_columns;
+  // The gyroscope (gyro_calibration.hpp): its log (empty: INPUT itself when columns are given),
+  // columns and stream, declared unit, model and estimator.
+  SensorInput gyro;
   std::string gyro_units = "raw";
   std::string gyro_model = "auto";
   std::string gyro_estimator;  // empty: joint, or two-stage with known orientations or --thermal
@@ -169,8 +167,7 @@ struct CompareArgs {
   std::string reference;  // calibration file: adds paper 001's e_T, e_b
   OutlierArgs outliers;   // screened once, the same positions for every method
   bool json = false;
-  std::string gyro;  // the gyroscope's log (ReadGyroLog): its estimators compared too
-  std::vector<std::string> gyro_columns;
+  SensorInput gyro;  // the gyroscope's log (ReadGyroLog): its estimators compared too
   std::string gyro_units = "raw";
 };
 
@@ -188,9 +185,8 @@ struct NoiseArgs {
   InputArgs input;
   std::string report;       // HTML report path (noise_report.hpp); empty: none
   std::string calibration;  // empty: the log's own unit
-  std::string gyro;         // the gyroscope's log (ReadGyroLog)
-  std::vector<std::string> gyro_columns;
-  bool still = false;  // the longest still interval only
+  SensorInput gyro;         // the gyroscope's log (ReadGyroLog)
+  bool still = false;       // the longest still interval only
   bool json = false;
   std::string output;  // empty: stdout
 };
@@ -200,15 +196,13 @@ struct ApplyArgs {
   InputArgs input;
   std::string output;                // empty: stdout
   std::optional<std::string> units;  // convert to this unit
-  std::string gyro;                  // the gyroscope's log (ReadGyroLog)
-  std::vector<std::string> gyro_columns;
+  SensorInput gyro;                  // the gyroscope's log (ReadGyroLog)
 };
 
 struct VerifyArgs {
   std::string calibration;
-  InputArgs input;   // the new recording, and its detection options
-  std::string gyro;  // the gyroscope's log (ReadGyroLog)
-  std::vector<std::string> gyro_columns;
+  InputArgs input;      // the new recording, and its detection options
+  SensorInput gyro;     // the gyroscope's log (ReadGyroLog)
   GravityArgs gravity;  // the site's, when not the calibration's (units: the calibration's)
   // The log's one temperature [°C], for a calibration over temperature and a log without its own.
   std::optional<double> temperature_c;

@@ -32,11 +32,14 @@ namespace accelcal {
 /// calibration over temperature: a MEMS part's scale moves by 100-300 ppm/K, 0.1-0.3 % over 10 K.
 inline constexpr double kTemperatureSpanNote_K = 10;
 
-/// The gyroscope's rates beside the accelerometer's (ReadGyroInput).
-struct GyroInput {
-  std::string log;                   ///< `gyro`: its file; empty: the first input, read again
-  std::vector<std::string> columns;  ///< `gyro_columns`: x,y,z or time,x,y,z; empty: the default
-  std::string topic;                 ///< `gyro_topic`: its stream in a binary log; empty: found
+/// A sensor's samples beside the accelerometer's, on the same clock (the gyroscope's rates:
+/// ReadGyroInput); each field's name in messages is the sensor's prefix and the field's
+/// (`gyro`, `gyro_columns`, `gyro_topic`).
+struct SensorInput {
+  std::string log;                   ///< its file; empty: the first input, read again
+  std::vector<std::string> columns;  ///< x,y,z or time,x,y,z; empty: the default
+  std::string topic;                 ///< its stream in a binary log; empty: found
+  bool given() const { return !log.empty() || !columns.empty(); }
 };
 
 /// What a unit's calibration is asked for; each field's name in messages in `backquotes`.
@@ -49,7 +52,7 @@ struct UnitRequest {
   /// `topic`, `frame_id`, `temperature_column` and the detection's options); its callbacks report
   /// on each file (a progress display, details) and may throw a more specific error.
   LoadOptions load;
-  std::optional<GyroInput> gyro;  ///< none: the accelerometer alone
+  std::optional<SensorInput> gyro;  ///< none: the accelerometer alone
   /// `orientations`: a file of each position's known orientation (orientation_file.hpp): the
   /// platform-frame fit of known_orientation.hpp; empty: none (orientation-free).
   std::string orientations;
@@ -158,13 +161,13 @@ const RawLog& TheRawLogForGyro(const LoadedInput& in);
 /// `accel_path` read with `accel_columns` (options marked {{name}}), or nothing.
 std::optional<std::string> GyroInputProblem(const std::string& accel_path,
                                             const std::vector<std::string>& accel_columns,
-                                            const GyroInput& gyro);
+                                            const SensorInput& gyro);
 
 /// The gyroscope's log beside the accelerometer's `accel_path` (ReadGyroInput), with `read`'s
 /// options (`fingerprint`: its size and SHA-256, for the provenance). Throws OptionError for what
 /// GyroInputProblem refuses, InputError as ReadGyroInput with the reader's options named for the
 /// gyroscope ({{gyro_columns}}, {{gyro_topic}}).
 InputData ReadGyroLog(const std::string& accel_path, const ReadOptions& read,
-                      const GyroInput& gyro);
+                      const SensorInput& gyro);
 
 }  // namespace accelcal

@@ -472,7 +472,7 @@ UnitOutcome OrientationFree(const UnitRequest& r) {
 }  // namespace
 
 InputData ReadGyroLog(const std::string& accel_path, const ReadOptions& read,
-                      const GyroInput& gyro) {
+                      const SensorInput& gyro) {
   if (auto why = GyroInputProblem(accel_path, read.columns, gyro)) throw OptionError(*why);
   try {
     return ReadGyroInput(accel_path, read, gyro.log, gyro.columns, gyro.topic);

@@ -271,7 +271,7 @@ KnownOrientationOptions KnownOrientationOptionsOf(const UnitRequest& r) {
 
 std::optional<std::string> GyroInputProblem(const std::string& accel_path,
                                             const std::vector<std::string>& accel_columns,
-                                            const GyroInput& gyro) {
+                                            const SensorInput& gyro) {
   const std::vector<std::string>& columns = gyro.columns;
   if (!columns.empty() && columns.size() != 3 && columns.size() != 4) {
     return "{{gyro_columns}} takes x,y,z or time,x,y,z";

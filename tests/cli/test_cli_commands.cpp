@@ -538,5 +538,35 @@ TEST_F(Cli, ApplyWritesRatesThatIntegrateToTheFilesRotations) {
   }
 }
 
+// Every command that reads the gyroscope beside the accelerometer registers the same flags from
+// one entry per sensor (cli_options.hpp's BesideSensor), and checks them the same way: a --gyro
+// with an empty name, an empty --gyro-topic, and a --gyro-topic without the gyroscope's rates.
+TEST_F(Cli, EveryCommandReadingTheGyroscopeTakesItsFlagsFromOneTable) {
+  const std::string acc = kData + "/imutk-xsens-mti/xsens_acc.mat";
+  const std::string cal = Write("cal.json", "{}");
+  for (const std::string& command :
+       {"calibrate " + acc, "verify " + cal + " " + acc, "apply " + cal + " " + acc,
+        "noise " + acc, "compare " + acc}) {
+    const std::string help = Exec(command.substr(0, command.find(' ')) + " --help").out;
+    for (const char* flag : {"--gyro TEXT", "--gyro-columns TEXT", "--gyro-topic TEXT"}) {
+      EXPECT_NE(help.find(flag), std::string::npos) << command << ": " << flag;
+    }
+    const CliRun empty = Exec(command + " --gyro \"\"");
+    EXPECT_EQ(empty.status, 2) << command;
+    EXPECT_NE(empty.err.find("--gyro: the file name is empty"), std::string::npos)
+        << command << ": " << empty.err;
+    const CliRun no_topic = Exec(command + " --gyro " + acc + " --gyro-topic \"\"");
+    EXPECT_EQ(no_topic.status, 2) << command;
+    EXPECT_NE(no_topic.err.find("--gyro-topic: an empty topic name"), std::string::npos)
+        << command << ": " << no_topic.err;
+    const CliRun alone = Exec(command + " --gyro-topic sensor_gyro");
+    EXPECT_EQ(alone.status, 2) << command;
+    EXPECT_NE(alone.err.find("--gyro-topic applies to the gyroscope: give its rates with --gyro "
+                             "LOG or --gyro-columns"),
+              std::string::npos)
+        << command << ": " << alone.err;
+  }
+}
+
 }  // namespace
 }  // namespace accelcal

@@ -260,7 +260,7 @@ TEST(GyroscopeSection, ARealCalibrationReadsBackToTheSameBytes) {
   r.inputs = {dir + "xsens_acc.mat"};
   r.gravity_ms2 = 9.81744;
   r.raw_units = "counts";
-  r.gyro = GyroInput{dir + "xsens_gyro.mat", {}, ""};
+  r.gyro = SensorInput{dir + "xsens_gyro.mat", {}, ""};
   const UnitOutcome unit = CalibrateUnit(r);
   ASSERT_TRUE(unit.gyroscope);
   const std::string text = CalibrationToJson(unit.accelerometer, unit.FileInfo());

@@ -75,7 +75,7 @@ TEST(UnitRequest, StatesEachRuleBetweenOptionsOnce) {
   EXPECT_FALSE(Ctu24().Validate());
   UnitRequest r = Ctu24();
   r.orientations = "o.csv";
-  r.gyro = GyroInput{"gyro.csv", {}, ""};
+  r.gyro = SensorInput{"gyro.csv", {}, ""};
   r.gyro_estimator = GyroEstimator::kJoint;
   ASSERT_TRUE(r.Validate());
   EXPECT_EQ(r.Validate()->rfind("{{gyro_estimator}} joint fits every position's gravity", 0), 0u)

@@ -159,17 +159,23 @@ int RefuseEmptyValues(int argc, char** argv) {
 // A list option given twice would be merged by CLI11 ("--gyro-columns 5 --gyro-columns 6,7"
 // as 5,6,7): refused as every other option given twice. An empty item ("20,,30", "20,") would
 // be dropped by it, the list shortened silently: refused too.
-// --noise is a list in design only (elsewhere a file, whose name may hold commas).
+// The lists are the options of the commands set up that CLI11 splits at a delimiter (--noise is
+// a list in design only, elsewhere a file whose name may hold commas).
 // Returns the usage error's status, or 0.
-int RefuseMergedLists(int argc, char** argv) {
-  std::string_view command;
-  for (int i = 1; i < argc && command.empty(); ++i) {
-    if (argv[i][0] != '-') command = argv[i];
+int RefuseMergedLists(int argc, char** argv,
+                      const std::vector<std::pair<CLI::App*, CommandRun>>& commands) {
+  std::vector<std::string> lists;
+  for (const auto& [command, run] : commands) {
+    for (const CLI::Option* option : command->get_options()) {
+      const std::string name = option->get_lnames().empty() ? "" : "--" + option->get_lnames()[0];
+      if (option->get_delimiter() != '\0' && !name.empty() &&
+          std::find(lists.begin(), lists.end(), name) == lists.end()) {
+        lists.push_back(name);
+      }
+    }
   }
-  for (const char* list :
-       {"--columns", "--gyro-columns", "--methods", "--noise", "--bias-random-walk",
-        "--temperatures", "--thermal-degrees", "--thermal-target", "--bias-repeatability"}) {
-    const bool items = std::string_view(list) != "--noise" || command == "design";
+  for (const std::string& list_name : lists) {
+    const char* list = list_name.c_str();
     int given = 0;
     for (int i = 1; i < argc && std::string_view(argv[i]) != "--"; ++i) {
       const std::string_view arg = argv[i], name = list;
@@ -180,8 +186,8 @@ int RefuseMergedLists(int argc, char** argv) {
       const std::string_view value = joined         ? arg.substr(name.size() + 1)
                                      : i + 1 < argc ? std::string_view(argv[i + 1])
                                                     : std::string_view("x");
-      if (items && (value.empty() || value.front() == ',' || value.back() == ',' ||
-                    value.find(",,") != std::string_view::npos)) {
+      if ((value.empty() || value.front() == ',' || value.back() == ',' ||
+           value.find(",,") != std::string_view::npos)) {
         WriteErrLine(
             Format("accelcal: usage: %s '%s' has an empty item: give each value once, "
                    "comma-separated (see --help)\n",
@@ -253,7 +259,7 @@ int accelcal::cli::RunCommandLine(int argc, char** argv, const CalibrateRunner& 
   }
 
   if (const int status = RefuseEmptyValues(argc, argv)) return status;
-  if (const int status = RefuseMergedLists(argc, argv)) return status;
+  if (const int status = RefuseMergedLists(argc, argv, runs)) return status;
   try {
     app.parse(argc, argv);
   } catch (const CLI::CallForHelp& e) {

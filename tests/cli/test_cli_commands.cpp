@@ -545,8 +545,8 @@ TEST_F(Cli, EveryCommandReadingTheGyroscopeTakesItsFlagsFromOneTable) {
   const std::string acc = kData + "/imutk-xsens-mti/xsens_acc.mat";
   const std::string cal = Write("cal.json", "{}");
   for (const std::string& command :
-       {"calibrate " + acc, "verify " + cal + " " + acc, "apply " + cal + " " + acc,
-        "noise " + acc, "compare " + acc}) {
+       {"calibrate " + acc, "verify " + cal + " " + acc, "apply " + cal + " " + acc, "noise " + acc,
+        "compare " + acc}) {
     const std::string help = Exec(command.substr(0, command.find(' ')) + " --help").out;
     for (const char* flag : {"--gyro TEXT", "--gyro-columns TEXT", "--gyro-topic TEXT"}) {
       EXPECT_NE(help.find(flag), std::string::npos) << command << ": " << flag;

@@ -1,13 +1,14 @@
 // MAT-files through libmatio (mat_file.hpp).
 #include "io/mat_file.hpp"
 
+#include <dlfcn.h>
 #include <matio.h>
 
 #include <algorithm>
 #include <cstdint>
 #include <cstring>
 #include <memory>
-#include <mutex>
+#include <type_traits>
 
 #include "accelcal/error.hpp"
 #include "core/text_format.hpp"
@@ -17,15 +18,66 @@ namespace accelcal::internal {
 
 namespace {
 
+[[noreturn]] void Fail(const std::string& path, const std::string& why) {
+  throw InputError(path, 0, VisibleLine(why));
+}
+
+// libmatio, loaded when the first MAT-file is read. Linked, it and what it links (HDF5, and
+// through it curl, TLS, Kerberos: some 40 libraries) were loaded and relocated at the start of
+// every run, a MAT-file read or not: 17 M instructions, most of a short command's.
+struct MatioLibrary {
+  decltype(&Mat_LogInitFunc) log_init = nullptr;
+  decltype(&Mat_Open) open = nullptr;
+  decltype(&Mat_Close) close = nullptr;
+  decltype(&Mat_VarReadNextInfo) read_next_info = nullptr;
+  decltype(&Mat_VarRead) read = nullptr;
+  decltype(&Mat_VarFree) free = nullptr;
+  std::string error;  ///< why it could not be loaded; empty when it was
+};
+
 // libmatio logs its errors through a function it calls; the library never prints, so they are
 // kept here (the last one, per thread) for the error accelcal raises.
 thread_local std::string last_matio_message;
 void KeepMessage(int /*level*/, char* message) {
   last_matio_message = message != nullptr ? message : "";
 }
-void QuietMatio() {
-  static std::once_flag once;
-  std::call_once(once, [] { Mat_LogInitFunc("accelcal", KeepMessage); });
+
+const MatioLibrary& LoadedMatio() {
+  static const MatioLibrary matio = [] {
+    MatioLibrary m;
+    void* library = dlopen(ACCELCAL_MATIO_SONAME, RTLD_NOW | RTLD_LOCAL);
+    if (library == nullptr) {
+      const char* why = dlerror();
+      m.error = why != nullptr ? why : "not found";
+      return m;
+    }
+    const auto bind = [&](auto* function, const char* name) {
+      *function = reinterpret_cast<std::remove_pointer_t<decltype(function)>>(dlsym(library, name));
+      if (*function == nullptr && m.error.empty()) m.error = std::string("it has no ") + name;
+    };
+    bind(&m.log_init, "Mat_LogInitFunc");
+    bind(&m.open, "Mat_Open");
+    bind(&m.close, "Mat_Close");
+    bind(&m.read_next_info, "Mat_VarReadNextInfo");
+    bind(&m.read, "Mat_VarRead");
+    bind(&m.free, "Mat_VarFree");
+    if (m.error.empty()) m.log_init("accelcal", KeepMessage);
+    return m;
+  }();
+  return matio;
+}
+
+// libmatio for reading `path`; InputError when it cannot be loaded.
+const MatioLibrary& MatioFor(const std::string& path) {
+  const MatioLibrary& m = LoadedMatio();
+  if (!m.error.empty()) {
+    Fail(path, "reading a MAT-file needs libmatio (" ACCELCAL_MATIO_SONAME
+               ", Debian's package libmatio" ACCELCAL_MATIO_MAJOR
+               "), which could not be "
+               "loaded: " +
+                   m.error);
+  }
+  return m;
 }
 
 // A matrix with more columns than this and at most this many rows is stored turned.
@@ -133,27 +185,24 @@ std::size_t SizeOfClass(matio_classes c) {
   }
 }
 
+// Only ever made once libmatio is loaded (MatioFor).
 struct CloseMat {
-  void operator()(mat_t* m) const { Mat_Close(m); }
+  void operator()(mat_t* m) const { LoadedMatio().close(m); }
 };
 struct FreeVar {
-  void operator()(matvar_t* v) const { Mat_VarFree(v); }
+  void operator()(matvar_t* v) const { LoadedMatio().free(v); }
 };
 using MatFile = std::unique_ptr<mat_t, CloseMat>;
 using MatVar = std::unique_ptr<matvar_t, FreeVar>;
-
-[[noreturn]] void Fail(const std::string& path, const std::string& why) {
-  throw InputError(path, 0, VisibleLine(why));
-}
 
 std::string Matio() {
   return last_matio_message.empty() ? std::string() : " (libmatio: " + last_matio_message + ")";
 }
 
 MatFile Open(const std::string& path) {
-  QuietMatio();
+  const MatioLibrary& matio = MatioFor(path);
   last_matio_message.clear();
-  MatFile mat(Mat_Open(path.c_str(), MAT_ACC_RDONLY));
+  MatFile mat(matio.open(path.c_str(), MAT_ACC_RDONLY));
   if (!mat) Fail(path, "a MAT-file libmatio cannot open" + Matio());
   return mat;
 }
@@ -196,7 +245,7 @@ std::vector<MatVariable> ListMatVariables(const std::string& path) {
   std::vector<MatVariable> out;
   while (true) {
     last_matio_message.clear();
-    const MatVar v(Mat_VarReadNextInfo(mat.get()));
+    const MatVar v(LoadedMatio().read_next_info(mat.get()));
     if (!v) break;
     out.push_back(Describe(*v));
   }
@@ -249,7 +298,7 @@ MatTable ReadMatTable(const std::string& path, const std::string& name) {
   }
   const MatFile mat = Open(path);
   last_matio_message.clear();
-  std::shared_ptr<matvar_t> v(Mat_VarRead(mat.get(), chosen.c_str()), FreeVar());
+  std::shared_ptr<matvar_t> v(LoadedMatio().read(mat.get(), chosen.c_str()), FreeVar());
   if (!v || v->data == nullptr || !Numeric(*v) || v->dims[0] != rows || v->dims[1] != columns ||
       v->nbytes < rows * columns * SizeOfClass(v->class_type)) {
     Fail(path, "the variable " + chosen + " cannot be read" + Matio());

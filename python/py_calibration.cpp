@@ -25,6 +25,7 @@
 #include "accelcal/gyro_calibration.hpp"
 #include "accelcal/model_selection.hpp"
 #include "accelcal/report.hpp"
+#include "accelcal/sensor_parameters.hpp"
 #include "accelcal/static_detection.hpp"
 
 namespace accelcal::python {
@@ -176,7 +177,7 @@ py::dict GyroDict(const GyroCalibration& g) {
   d["bias"] = Vec3(g.params.bias);
   d["G"] = Mat33(g.params.G);
   std::vector<std::string> names;
-  for (const GyroParameterSlot& slot : GyroParameterSlots(g.model)) names.emplace_back(slot.name);
+  for (const SensorParameter& p : ListParameters(g.params, g.model)) names.emplace_back(p.name);
   d["parameter_names"] = names;
   if (g.covariance.size() > 0) {
     d["covariance"] = g.covariance;
@@ -271,8 +272,9 @@ void BindResultAttributes(py::class_<PyCalibration>& cls) {
           "parameter_names",
           [](const PyCalibration& c) {
             std::vector<std::string> names;
-            for (const ParameterSlot& s : ParameterSlots(c.result.model, c.result.frame))
-              names.emplace_back(s.name);
+            for (const SensorParameter& p :
+                 ListParameters(c.result.params, c.result.model, c.result.frame))
+              names.emplace_back(p.name);
             return names;
           },
           "The flat parameters' names in the covariance's order (K_xx, b_x, ...)")

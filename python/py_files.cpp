@@ -22,6 +22,7 @@
 #include "accelcal/log_reader.hpp"
 #include "accelcal/model_selection.hpp"
 #include "accelcal/report.hpp"
+#include "accelcal/sensor_parameters.hpp"
 #include "accelcal/static_detection.hpp"
 #include "accelcal/time_axis.hpp"
 
@@ -81,8 +82,8 @@ void BindCalibrationFiles(py::module_& m) {
           "parameter_names",
           [](const PyLoadedCalibration& c) {
             std::vector<std::string> names;
-            for (const ParameterSlot& s : ParameterSlots(c.model, c.frame))
-              names.emplace_back(s.name);
+            for (const SensorParameter& p : ListParameters(c.params, c.model, c.frame))
+              names.emplace_back(p.name);
             return names;
           },
           "The names of the covariance's rows (K_xx, b_x, ...)")

@@ -9,6 +9,7 @@
 #include "accelcal/frame.hpp"
 #include "accelcal/gyro_model.hpp"
 #include "accelcal/model.hpp"
+#include "accelcal/sensor_parameters.hpp"
 #include "core/text_format.hpp"
 
 namespace accelcal {
@@ -22,22 +23,28 @@ std::optional<double> SigmaOf(const Eigen::MatrixXd& covariance, int i, int n) {
   return std::sqrt(std::max(0.0, covariance(i, i)));
 }
 
+// A sensor's model parameters (sensor_parameters.hpp), each with its 1σ and unit.
+void ParameterQuantities(const std::string& sensor, const std::vector<SensorParameter>& list,
+                         const Eigen::MatrixXd& covariance, const std::string& raw,
+                         const std::string& quantity, const std::string& other,
+                         std::vector<CalibrationQuantity>* out) {
+  const int n = static_cast<int>(list.size());
+  for (int i = 0; i < n; ++i) {
+    const SensorParameter& p = list[static_cast<std::size_t>(i)];
+    out->push_back({sensor + "." + std::string(p.name), p.value, SigmaOf(covariance, i, n),
+                    ParameterUnit(p.role, raw, quantity, other)});
+  }
+}
+
 void AccelerometerQuantities(const LoadedCalibration& cal, std::vector<CalibrationQuantity>* out) {
   const auto add = [&](const std::string& name, double value, std::optional<double> sigma,
                        std::string unit) {
     out->push_back({"accelerometer." + name, value, sigma, std::move(unit)});
   };
   const std::string raw(cal.raw_unit), force(ToString(cal.unit));
-  const auto& slots = ParameterSlots(cal.model, cal.frame);
-  const int n = static_cast<int>(slots.size());
-  const Eigen::VectorXd values = Pack(cal.params, slots);
-  for (int i = 0; i < n; ++i) {
-    const ParameterSlot& s = slots[i];
-    const std::string unit = s.group == ParameterGroup::kK      ? raw + " per " + force
-                             : s.group == ParameterGroup::kBias ? raw
-                                                                : raw + " per (" + force + ")^2";
-    add(std::string(s.name), values(i), SigmaOf(cal.covariance, i, n), unit);
-  }
+  const int n = static_cast<int>(ParameterSlots(cal.model, cal.frame).size());
+  ParameterQuantities("accelerometer", ListParameters(cal.params, cal.model, cal.frame),
+                      cal.covariance, raw, force, "", out);
   if (cal.model == ModelKind::kLinear) {  // k2 = 0 by the model: a value, not an estimate
     for (int a = 0; a < 3; ++a) {
       add(std::string("k2_") + kAxes[a], 0.0, std::nullopt, raw + " per (" + force + ")^2");
@@ -91,16 +98,8 @@ void GyroscopeQuantities(const UnitGyroscope& gyro, std::vector<CalibrationQuant
     out->push_back({"gyroscope." + name, value, sigma, std::move(unit)});
   };
   const std::string& raw = gyro.raw_unit;
-  const auto& slots = GyroParameterSlots(gyro.model);
-  const int n = static_cast<int>(slots.size());
-  const Eigen::VectorXd values = Pack(gyro.params, gyro.model);
-  for (int i = 0; i < n; ++i) {
-    const GyroParameterSlot& s = slots[i];
-    const std::string unit = s.group == GyroParameterGroup::kK      ? raw + " per rad/s"
-                             : s.group == GyroParameterGroup::kBias ? raw
-                                                                    : raw + " per specific force";
-    add(std::string(s.name), values(i), SigmaOf(gyro.covariance, i, n), unit);
-  }
+  ParameterQuantities("gyroscope", ListParameters(gyro.params, gyro.model), gyro.covariance, raw,
+                      "rad/s", "specific force", out);
   for (int a = 0; a < 3; ++a) {
     add(std::string("scale_factor_") + kAxes[a], gyro.params.K.row(a).norm(), {},
         raw + " per rad/s");

@@ -10,6 +10,7 @@
 #include "accelcal/engineering.hpp"
 #include "accelcal/frame.hpp"
 #include "accelcal/gyro_model.hpp"
+#include "accelcal/sensor_parameters.hpp"
 #include "core/text_format.hpp"
 #include "output/html_svg.hpp"
 
@@ -384,21 +385,17 @@ std::string GyroSection(const Document& d) {
   }
   html += "</dl>\n";
   // The parameters in their file order, ±1σ.
-  const auto& slots = GyroParameterSlots(g.model);
-  const Eigen::VectorXd value = Pack(g.params, g.model);
+  const std::vector<SensorParameter> parameters = ListParameters(g.params, g.model);
   std::string rows;
-  for (std::size_t p = 0; p < slots.size(); ++p) {
+  for (std::size_t p = 0; p < parameters.size(); ++p) {
     const auto i = static_cast<Eigen::Index>(p);
-    const std::string unit = slots[p].group == GyroParameterGroup::kK ? g.raw_unit + " per rad/s"
-                             : slots[p].group == GyroParameterGroup::kBias
-                                 ? g.raw_unit
-                                 : g.raw_unit + " per " + d.unit;
-    const std::string name(slots[p].name);
+    const std::string unit = ParameterUnit(parameters[p].role, g.raw_unit, "rad/s", d.unit);
+    const std::string name(parameters[p].name);
     if (g.covariance.rows() > i) {
       const double sigma = std::sqrt(std::max(0.0, g.covariance(i, i)));
-      rows += Row(name, value(i), sigma, unit, "%.8g");
+      rows += Row(name, parameters[p].value, sigma, unit, "%.8g");
     } else {
-      rows += Row(name, value(i), std::nullopt, unit, "%.8g");
+      rows += Row(name, parameters[p].value, std::nullopt, unit, "%.8g");
     }
   }
   html +=

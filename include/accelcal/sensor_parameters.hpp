@@ -28,8 +28,13 @@ enum class ParameterRole {
 struct SensorParameter {
   std::string_view name;  ///< as in the file's `parameter_order` ("K_yx", "Kg_xy", "G_zx")
   ParameterRole role;
+  int axis = 0;  ///< the output axis it belongs to (its row: 0 x, 1 y, 2 z)
   double value = 0;
 };
+
+/// The names and the values of a list, in its order.
+std::vector<std::string> ParameterNames(const std::vector<SensorParameter>& list);
+Eigen::VectorXd ParameterValues(const std::vector<SensorParameter>& list);
 
 /// The accelerometer's parameters in the order of ParameterSlots(model, frame).
 std::vector<SensorParameter> ListParameters(const ModelParameters& params, ModelKind model,

@@ -14,7 +14,7 @@ std::vector<SensorParameter> ListParameters(const ModelParameters& params, Model
                    g == ParameterGroup::kK      ? ParameterRole::kScale
                    : g == ParameterGroup::kBias ? ParameterRole::kOffset
                                                 : ParameterRole::kSquare,
-                   values(static_cast<Eigen::Index>(i))});
+                   slots[i].row, values(static_cast<Eigen::Index>(i))});
   }
   return out;
 }
@@ -29,9 +29,22 @@ std::vector<SensorParameter> ListParameters(const GyroParameters& params, GyroMo
                    g == GyroParameterGroup::kK      ? ParameterRole::kScale
                    : g == GyroParameterGroup::kBias ? ParameterRole::kOffset
                                                     : ParameterRole::kCrossSensitivity,
-                   values(static_cast<Eigen::Index>(i))});
+                   slots[i].row, values(static_cast<Eigen::Index>(i))});
   }
   return out;
+}
+
+std::vector<std::string> ParameterNames(const std::vector<SensorParameter>& list) {
+  std::vector<std::string> names;
+  for (const SensorParameter& p : list) names.emplace_back(p.name);
+  return names;
+}
+
+Eigen::VectorXd ParameterValues(const std::vector<SensorParameter>& list) {
+  Eigen::VectorXd values(static_cast<Eigen::Index>(list.size()));
+  for (std::size_t i = 0; i < list.size(); ++i)
+    values(static_cast<Eigen::Index>(i)) = list[i].value;
+  return values;
 }
 
 std::string ParameterUnit(ParameterRole role, const std::string& raw, const std::string& quantity,

@@ -10,6 +10,7 @@
 #include "accelcal/frame.hpp"
 #include "accelcal/gyro_model.hpp"
 #include "accelcal/model.hpp"
+#include "accelcal/sensor_parameters.hpp"
 #include "core/text_format.hpp"
 #include "statistics/student_t.hpp"
 
@@ -100,9 +101,10 @@ CalibrationChange CompareCalibrations(const LoadedCalibration& earlier,
         "%.1f degC), and so do the parameters they give",
         earlier.thermal->params.t_ref_c, later.thermal->params.t_ref_c));
   }
-  std::vector<std::string> names;
-  for (const ParameterSlot& s : ParameterSlots(later.model, later.frame))
-    names.emplace_back(s.name);
+  const std::vector<SensorParameter> earlier_list =
+      ListParameters(earlier.params, earlier.model, earlier.frame);
+  const std::vector<SensorParameter> list = ListParameters(later.params, later.model, later.frame);
+  const std::vector<std::string> names = ParameterNames(list);
   CalibrationChange change;
   if (later.thermal) {
     change.notes.push_back(
@@ -115,23 +117,24 @@ CalibrationChange CompareCalibrations(const LoadedCalibration& earlier,
     noise_dof = earlier.covariance_dof.value_or(0) + later.covariance_dof.value_or(0);
   }
   Eigen::MatrixXd c = earlier.covariance + later.covariance;
-  const auto& slots = ParameterSlots(later.model, later.frame);
   if (options.bias_repeatability) {
     // The bias's turn-on repeatability q in raw units: q times the axis' scale factor.
     for (int i = 0; i < n; ++i) {
-      if (slots[i].group != ParameterGroup::kBias) continue;
-      const double q =
-          (*options.bias_repeatability)(slots[i].row) * later.params.K.row(slots[i].row).norm();
+      const SensorParameter& p = list[static_cast<std::size_t>(i)];
+      if (p.role != ParameterRole::kOffset) continue;
+      const double q = (*options.bias_repeatability)(p.axis) * later.params.K.row(p.axis).norm();
       c(i, i) += 2 * q * q;
     }
   }
-  const Eigen::VectorXd before = Pack(earlier.params, slots), after = Pack(later.params, slots);
+  const Eigen::VectorXd before = ParameterValues(earlier_list), after = ParameterValues(list);
   change.accelerometer = Change(before, after, c, names, noise_dof);
   // The same over the scale-and-misalignment slots, and over the bias's.
   for (const bool bias : {false, true}) {
     std::vector<int> idx;
     for (int i = 0; i < n; ++i) {
-      if ((slots[i].group == ParameterGroup::kBias) == bias) idx.push_back(i);
+      if ((list[static_cast<std::size_t>(i)].role == ParameterRole::kOffset) == bias) {
+        idx.push_back(i);
+      }
     }
     const int m = static_cast<int>(idx.size());
     Eigen::VectorXd ai(m), bi(m);
@@ -140,7 +143,7 @@ CalibrationChange CompareCalibrations(const LoadedCalibration& earlier,
     for (int r = 0; r < m; ++r) {
       ai(r) = before(idx[r]);
       bi(r) = after(idx[r]);
-      ni.push_back(names[idx[r]]);
+      ni.push_back(names[static_cast<std::size_t>(idx[r])]);
       for (int s = 0; s < m; ++s) ci(r, s) = c(idx[r], idx[s]);
     }
     (bias ? change.accelerometer_bias : change.accelerometer_scale) =
@@ -159,12 +162,12 @@ CalibrationChange CompareCalibrations(const LoadedCalibration& earlier,
     } else if (a.covariance.rows() != m || b.covariance.rows() != m) {
       change.notes.push_back("a gyroscope has no covariance: not compared");
     } else {
-      std::vector<std::string> gyro_names;
-      for (const GyroParameterSlot& s : GyroParameterSlots(b.model))
-        gyro_names.emplace_back(s.name);
-      change.gyroscope = Change(
-          Pack(a.params, a.model), Pack(b.params, b.model), a.covariance + b.covariance, gyro_names,
-          std::nullopt);  // the gyroscope's noise from its turns' scatter: as known
+      const std::vector<SensorParameter> a_list = ListParameters(a.params, a.model),
+                                         b_list = ListParameters(b.params, b.model);
+      change.gyroscope =
+          Change(ParameterValues(a_list), ParameterValues(b_list), a.covariance + b.covariance,
+                 ParameterNames(b_list),
+                 std::nullopt);  // the gyroscope's noise from its turns' scatter: as known
       change.compatible = change.compatible && change.gyroscope->p >= kChangeP;
     }
   } else if (earlier.gyroscope || later.gyroscope) {

@@ -287,6 +287,8 @@ struct Loader {
         value = GyroscopeFromJson(nlohmann::ordered_json::parse(j.get<std::string>()), "pickle");
       } catch (const InputError& e) {
         throw py::value_error(std::string("a pickled gyroscope that is not one: ") + e.what());
+      } catch (const nlohmann::json::exception&) {  // its message may quote broken UTF-8
+        throw py::value_error("a pickled gyroscope that is not one: its section is not JSON");
       }
     } else if constexpr (IsEigen<T>::value) {
       const auto rows = j.at("rows").get<Eigen::Index>();

@@ -1,12 +1,15 @@
 """The package as Python users meet it: its version, its type stubs, pickling, repr, file names
 as os.PathLike, docstrings, and the GIL released while it computes."""
 import ast
+import hashlib
 import inspect
+import json
 import math
 import os
 import pathlib
 import pickle
 import re
+import struct
 import subprocess
 import threading
 import warnings
@@ -102,6 +105,78 @@ def test_a_damaged_pickle_is_an_error(with_gyro):
         restore(state[: len(state) // 2])
     with pytest.raises(ValueError, match="damaged"):
         restore(state.replace(b"gravity", b"gravitx"))
+
+
+# The pickled state's CBOR (RFC 8949: the major types it uses), to damage it as an attacker
+# would and seal it again with its digest.
+def _cbor_load(data, at=0):
+    major, info = data[at] >> 5, data[at] & 31
+    at += 1
+    if major == 7:
+        simple = {20: False, 21: True, 22: None}
+        if info in simple:
+            return simple[info], at
+        return struct.unpack(">d", data[at:at + 8])[0], at + 8  # float64: the only float written
+    if info >= 24:
+        size = 1 << (info - 24)
+        info, at = int.from_bytes(data[at:at + size], "big"), at + size
+    if major in (0, 1):
+        return info if major == 0 else -1 - info, at
+    if major in (2, 3):
+        chunk = data[at:at + info]
+        return (bytes(chunk) if major == 2 else chunk.decode()), at + info
+    items = []
+    for _ in range(info * (2 if major == 5 else 1)):
+        item, at = _cbor_load(data, at)
+        items.append(item)
+    return (dict(zip(items[::2], items[1::2])) if major == 5 else items), at
+
+
+def _cbor_dump(value):
+    def head(major, n):
+        if n < 24:
+            return bytes([major << 5 | n])
+        size = next(s for s in (1, 2, 4, 8) if n < 1 << (8 * s))
+        return bytes([major << 5 | (24 + size.bit_length() - 1)]) + n.to_bytes(size, "big")
+    if value is None or isinstance(value, bool):
+        return {None: b"\xf6", True: b"\xf5", False: b"\xf4"}[value]
+    if isinstance(value, int):
+        return head(0, value) if value >= 0 else head(1, -1 - value)
+    if isinstance(value, float):
+        return b"\xfb" + struct.pack(">d", value)
+    if isinstance(value, (str, bytes)):
+        raw = value.encode() if isinstance(value, str) else value
+        return head(3 if isinstance(value, str) else 2, len(raw)) + raw
+    if isinstance(value, list):
+        return head(4, len(value)) + b"".join(map(_cbor_dump, value))
+    return head(5, len(value)) + b"".join(_cbor_dump(k) + _cbor_dump(v) for k, v in value.items())
+
+
+def test_a_pickled_gyroscope_tampered_with_is_an_error_never_a_crash(with_gyro):
+    # The gyroscope is pickled as its section of the calibration file, read back by the file's
+    # reader: what it refuses in a file, it refuses here, with a message (a hostile round found
+    # a section that crashed to_json, and a message lost to broken UTF-8).
+    result, _ = with_gyro
+    restore, (state,) = result.__reduce__()
+    magic = b"accelcal-state-1:"
+    body = state[len(magic) + 64:]
+    fields, end = _cbor_load(body)
+    assert end == len(body) and _cbor_dump(fields) == body
+
+    def sealed(text):
+        damaged = dict(fields, result=dict(fields["result"], gyroscope=text))
+        cbor = _cbor_dump(damaged)
+        return magic + hashlib.sha256(cbor).hexdigest().encode() + cbor
+
+    assert restore(sealed(fields["result"]["gyroscope"])).to_json() == result.to_json()
+    section = json.loads(fields["result"]["gyroscope"])
+    section["thermal"] = {"t_ref": 25, "degree": 3, "temperature_range": [20, 30],
+                          "coefficients": [[1, 1, 1]] * 3, "std": [[0, 0, 0]] * 3,
+                          "covariance": None}
+    for text, says in [("x", "not JSON"), ("\u00e9", "not JSON"), ("", "not JSON"),
+                       ('"text"', "must be an object"), (json.dumps(section), "covariance")]:
+        with pytest.raises(ValueError, match=says):
+            restore(sealed(text))
 
 
 def test_a_calibration_file_pickles_as_its_text(with_gyro, tmp_path):

@@ -32,6 +32,9 @@ namespace {
 template <typename Io>
 void DescribeSolver(Io& io, Summary& s) {
   io.Whole("iterations", s.iterations);
+  if constexpr (Io::kReading) {
+    if (s.iterations < 0) io.Fail(io.Key("iterations") + " must not be negative");
+  }
   io.Derived("converged", [&] { return s.converged(); });
   io.Choice("termination", s.termination);
   io.Text("termination_message", s.termination_message);
@@ -58,6 +61,7 @@ void DescribeThermal(Io& io, GyroThermal& t) {
   io.Vectors("coefficients", b.coefficients, Need::kRequired);
   io.Derived("std", [&] {
     ordered_json sd = ordered_json::array();
+    if (b.covariance.rows() < static_cast<Eigen::Index>(3 * degree)) return ordered_json(nullptr);
     for (std::size_t d = 0; d < degree; ++d) {
       Vec3 s;
       for (int a = 0; a < 3; ++a) {
@@ -78,8 +82,25 @@ void DescribeThermal(Io& io, GyroThermal& t) {
               " arrays of 3 numbers (its degree)");
     }
   }
+  if constexpr (Io::kReading) {  // the coefficients' 1σ: recomputed, but checked as written
+    std::vector<Vec3> sd;
+    io.Vectors("std", sd, Need::kRequired);
+    for (const Vec3& v : sd) {
+      if (!(v.minCoeff() >= 0)) io.Fail(io.Key("std") + " must not be negative");
+    }
+    if (sd.size() != degree) {
+      io.Fail(io.Key("std") + " must be an array of " + std::to_string(degree) +
+              " arrays of 3 numbers (its degree)");
+    }
+  }
   if (degree > 0) {
     io.Covariance(b.covariance, 3 * degree, "the offsets' coefficients");
+    if constexpr (Io::kReading) {
+      if (b.covariance.size() == 0) {
+        io.Fail(io.Key("covariance") + " must be a " + std::to_string(3 * degree) + "x" +
+                std::to_string(3 * degree) + " array (the offsets' coefficients)");
+      }
+    }
   } else {
     io.Null("covariance", "for degree 0");
   }
@@ -107,20 +128,34 @@ void DescribeRotation(Io& io, GyroRotation& r) {
   io.MaybeNumber("threshold", r.threshold);
   io.Flag("flagged", r.flagged);
   io.Derived("excluded", [] { return false; });
-  if constexpr (Io::kReading) {  // angles and their errors are not negative
+  if constexpr (Io::kReading) {  // angles, durations and their errors are not negative
     for (const auto& [key, value] :
          {std::pair("residual_deg", r.residual_deg), std::pair("heldout_deg", r.heldout_deg),
-          std::pair("turned_deg", r.turned_deg)}) {
+          std::pair("turned_deg", r.turned_deg), std::pair("turned_std_deg", r.turned_std_deg),
+          std::pair("duration_s", r.duration_s), std::pair("angle_deg", r.angle_deg)}) {
       if (value < 0) io.Fail(io.Key(key) + " must not be negative");
+    }
+    if (r.first_sample > r.last_sample) {
+      io.Fail(io.Key("first_sample") + " must not be after " + io.Key("last_sample"));
     }
   }
 }
 
 template <typename Io>
 void DescribeStill(Io& io, GyroStillSpan& s, std::size_t index) {
-  io.Derived("position", [&] { return index + 1; });
+  std::size_t number = index + 1;
+  io.Count("position", number);
   io.Count("first_sample", s.first_sample);
   io.Count("last_sample", s.last_sample);
+  if constexpr (Io::kReading) {
+    if (number != index + 1) {
+      io.Fail(io.Key("position") + " must be its place in the list (" + std::to_string(index + 1) +
+              ")");
+    }
+    if (s.first_sample > s.last_sample) {
+      io.Fail(io.Key("first_sample") + " must not be after " + io.Key("last_sample"));
+    }
+  }
   io.Vector("mean_raw", s.mean_raw, Need::kRequired);
   io.Number("turned_outside_deg", s.turned_outside_deg);
   io.Flag("still", s.still);
@@ -131,7 +166,7 @@ template <typename Io>
 void DescribeGyroscope(Io& io, UnitGyroscope& g, ForceUnit force_unit) {
   io.Choice("model", g.model, Need::kRequired);
   io.Text("model_reason", g.model_reason);
-  io.Choice("estimator", g.estimator);
+  io.Choice("estimator", g.estimator, Need::kRequired);
   io.Object("units", [&](auto& u) {
     u.Text("raw", g.raw_unit);
     u.Choice("raw_declared", g.unit);
@@ -197,10 +232,13 @@ void DescribeGyroscope(Io& io, UnitGyroscope& g, ForceUnit force_unit) {
   bool lagged = g.time_offset.has_value();
   if constexpr (Io::kReading) g.time_offset.emplace();
   io.MaybeObject("time_offset", lagged, [&](auto& t) {
-    t.Number("lag_s", g.time_offset->lag_s);
-    t.Number("std_s", g.time_offset->std_s);
-    t.Count("turns", g.time_offset->turns);
-    t.Flag("at_limit", g.time_offset->at_limit);
+    t.Number("lag_s", g.time_offset->lag_s, Need::kRequired);
+    t.Number("std_s", g.time_offset->std_s, Need::kRequired);
+    t.Count("turns", g.time_offset->turns, Need::kRequired);
+    t.Flag("at_limit", g.time_offset->at_limit, Need::kRequired);
+    if constexpr (Io::kReading) {
+      if (g.time_offset->std_s < 0) t.Fail(t.Key("std_s") + " must not be negative");
+    }
   });
   if (!lagged) g.time_offset.reset();
   io.List("rotations", g.rotations,
@@ -208,9 +246,12 @@ void DescribeGyroscope(Io& io, UnitGyroscope& g, ForceUnit force_unit) {
   bool earth = g.latitude_deg.has_value();
   double latitude = g.latitude_deg.value_or(0);
   io.MaybeObject("earth_rate", earth, [&](auto& e) {
-    e.Number("latitude_deg", latitude);
-    e.Number("vertical_rad_s", g.earth_rate_vertical_rad_s);
-    e.Number("horizontal_rad_s", g.earth_rate_horizontal_rad_s);
+    e.Number("latitude_deg", latitude, Need::kRequired);
+    e.Number("vertical_rad_s", g.earth_rate_vertical_rad_s, Need::kRequired);
+    e.Number("horizontal_rad_s", g.earth_rate_horizontal_rad_s, Need::kRequired);
+    if constexpr (Io::kReading) {
+      if (!(std::abs(latitude) <= 90)) e.Fail(e.Key("latitude_deg") + " must be from -90 to 90");
+    }
   });
   g.latitude_deg = earth ? std::optional<double>(latitude) : std::nullopt;
   io.Object("validation", [&](auto& v) {
@@ -220,9 +261,19 @@ void DescribeGyroscope(Io& io, UnitGyroscope& g, ForceUnit force_unit) {
   io.Object("solver", [&](auto& s) { DescribeSolver(s, g.summary); });
   io.Text("source", g.source);
   if constexpr (Io::kReading) {
-    // Singular to the precision of a double: its rates cannot be corrected.
+    // Singular to the precision of a double, or so small that its inverse overflows what a
+    // reading times it can hold (any sensor's K is far above 1e-12 raw per rad/s): its rates
+    // cannot be corrected.
     const Vec3 sv = Eigen::JacobiSVD<Mat33>(g.params.K).singularValues();
-    if (!(sv(2) > 1e-12 * sv(0))) io.Fail(io.Key("K") + " is singular (its rows dependent)");
+    if (!(sv(2) > 1e-12 * sv(0)) || !(sv(2) >= 1e-12)) {
+      io.Fail(io.Key("K") + Format(" is singular (its smallest singular value %.3g, its largest "
+                                   "%.3g)",
+                                   sv(2), sv(0)));
+    }
+    if (g.estimator == GyroEstimator::kImuTk && g.model != GyroModelKind::kLinear) {
+      io.Fail(io.Key("estimator") + " imutk fits the linear model only, not " + io.Key("model") +
+              " " + std::string(ToString(g.model)));
+    }
   }
 }
 

@@ -183,8 +183,11 @@ class SectionReader {
   }
   void Whole(const char* key, int& v) {
     if (!Has(key, Need::kOptional)) return;
-    if (!doc_[key].is_number_integer() || doc_[key].get<std::int64_t>() < INT32_MIN ||
-        doc_[key].get<std::int64_t>() > INT32_MAX) {
+    const ordered_json& n = doc_[key];
+    if (!n.is_number_integer() ||
+        (n.is_number_unsigned()
+             ? n.get<std::uint64_t>() > INT32_MAX
+             : n.get<std::int64_t>() < INT32_MIN || n.get<std::int64_t>() > INT32_MAX)) {
       r_.Fail(r_.Key(key) + " must be a whole number");
     }
     v = doc_[key].get<int>();

@@ -252,6 +252,29 @@ TEST(GyroscopeSection, EachKeyIsCheckedWithItsPlaceNamed) {
   refused([](J& s) { s["covariance"][0][0] = -1; }, "covariance");
   refused([](J& s) { s["time_offset"] = 5; }, "'time_offset' must be an object");
   refused([](J& s) { s["solver"]["termination"] = "bored"; }, "'solver.termination' must be");
+  // Records that say nothing, or what no calibration is (found by a hostile round).
+  refused([](J& s) { s["time_offset"] = J::object(); }, "'time_offset.lag_s' is missing");
+  refused([](J& s) { s["time_offset"]["std_s"] = -1; }, "'time_offset.std_s' must not be negative");
+  refused([](J& s) { s["earth_rate"] = J::object(); }, "'earth_rate.latitude_deg' is missing");
+  refused([](J& s) { s["earth_rate"]["latitude_deg"] = 1000; }, "must be from -90 to 90");
+  refused([](J& s) { s["rotations"][0]["duration_s"] = -1; }, "'rotations[].duration_s' must not");
+  refused([](J& s) { s["rotations"][0]["first_sample"] = 1000; }, "must not be after");
+  refused([](J& s) { s["stills"][1]["position"] = 99; }, "'stills[].position' must be its place");
+  refused([](J& s) { s["stills"][0]["first_sample"] = 1000; }, "must not be after");
+  refused([](J& s) { s["solver"]["iterations"] = 18446744073709551615ull; },
+          "'solver.iterations' must be a whole number");
+  refused([](J& s) { s["solver"]["iterations"] = -3; }, "'solver.iterations' must not be negative");
+  refused([](J& s) { s.erase("estimator"); }, "'estimator' is missing");
+  refused([](J& s) { s["estimator"] = "imutk"; }, "imutk fits the linear model only");
+  refused([](J& s) { s["thermal"]["covariance"] = nullptr; },
+          "'thermal.covariance' must be a 6x6 array");
+  refused([](J& s) { s["thermal"]["std"][0][1] = -1; }, "'thermal.std' must not be negative");
+  refused(
+      [](J& s) {
+        s["K"] = J::array(
+            {J::array({1e-300, 0, 0}), J::array({0, 1e-300, 0}), J::array({0, 0, 1e-300})});
+      },
+      "'K' is singular");
 }
 
 TEST(GyroscopeSection, ARealCalibrationReadsBackToTheSameBytes) {

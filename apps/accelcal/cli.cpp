@@ -6,6 +6,7 @@
 #include <cstdio>
 #include <exception>
 #include <functional>
+#include <optional>
 #include <sstream>
 #include <string_view>
 #include <vector>
@@ -206,6 +207,58 @@ int RefuseMergedLists(int argc, char** argv,
   return 0;
 }
 
+// Edits (insertions, deletions, substitutions) that turn `a` into `b`.
+std::size_t EditDistance(std::string_view a, std::string_view b) {
+  std::vector<std::size_t> row(b.size() + 1);
+  for (std::size_t j = 0; j <= b.size(); ++j) row[j] = j;
+  for (std::size_t i = 1; i <= a.size(); ++i) {
+    std::size_t diagonal = row[0];
+    row[0] = i;
+    for (std::size_t j = 1; j <= b.size(); ++j) {
+      const std::size_t above = row[j];
+      row[j] = std::min({row[j] + 1, row[j - 1] + 1, diagonal + (a[i - 1] != b[j - 1] ? 1 : 0)});
+      diagonal = above;
+    }
+  }
+  return row[b.size()];
+}
+
+// The first long option on the command line that neither the tool nor the command run has, as
+// "calibrate has no option --gyro-unit; did you mean --gyro-units?"; nothing when every one is
+// known (the extra arguments are then values).
+std::optional<std::string> UnknownOption(
+    int argc, char** argv, const CLI::App& app,
+    const std::vector<std::pair<CLI::App*, CommandRun>>& commands) {
+  const CLI::App* command = nullptr;
+  for (const auto& [sub, run] : commands) {
+    if (sub->parsed()) command = sub;
+  }
+  std::vector<std::string> known;
+  for (const CLI::App* owner : {&app, command}) {
+    if (owner == nullptr) continue;
+    for (const CLI::Option* option : owner->get_options()) {
+      for (const std::string& name : option->get_lnames()) known.push_back("--" + name);
+    }
+  }
+  for (int i = 1; i < argc && std::string_view(argv[i]) != "--"; ++i) {
+    std::string_view arg = argv[i];
+    if (arg.size() < 3 || arg.substr(0, 2) != "--") continue;
+    const std::string name(arg.substr(0, arg.find('=')));
+    if (std::find(known.begin(), known.end(), name) != known.end()) continue;
+    std::string said = (command != nullptr ? command->get_name() : std::string("accelcal")) +
+                       " has no option " + name;
+    std::size_t best = 3;  // a near miss: at most two edits
+    std::string nearest;
+    for (const std::string& k : known) {
+      const std::size_t d = EditDistance(name, k);
+      if (d < best) best = d, nearest = k;
+    }
+    if (!nearest.empty()) said += "; did you mean " + nearest + "?";
+    return said;
+  }
+  return std::nullopt;
+}
+
 }  // namespace
 
 int accelcal::cli::RunCommandLineCaptured(const std::vector<std::string>& args, std::string* out,
@@ -268,6 +321,11 @@ int accelcal::cli::RunCommandLine(int argc, char** argv, const CalibrateRunner& 
     return ExitWith(app, e);
   } catch (const CLI::CallForVersion& e) {
     return ExitWith(app, e);
+  } catch (const CLI::ExtrasError& e) {
+    // An option the command does not have is named as one, with the nearest it has.
+    WriteErrLine("accelcal: usage: " + UnknownOption(argc, argv, app, runs).value_or(e.what()) +
+                 " (see --help)\n");
+    return kExitUsage;
   } catch (const CLI::ParseError& e) {
     // Said as every other usage error is; an option given twice by what it is.
     std::string what = e.what();

@@ -568,5 +568,24 @@ TEST_F(Cli, EveryCommandReadingTheGyroscopeTakesItsFlagsFromOneTable) {
   }
 }
 
+// An option the command does not have is named as such, with the nearest it has (a new user's
+// typo, or a flag of another command), never CLI11's list of "arguments not expected".
+TEST_F(Cli, AnUnknownOptionIsNamedWithTheNearestKnownOne) {
+  const std::string acc = kData + "/imutk-xsens-mti/xsens_acc.mat";
+  const CliRun typo = Exec("calibrate " + acc + " --gyro-unit=rad/s");
+  EXPECT_EQ(typo.status, 2);
+  EXPECT_NE(typo.err.find("calibrate has no option --gyro-unit; did you mean --gyro-units?"),
+            std::string::npos)
+      << typo.err;
+  const CliRun other =
+      Exec("verify " + Write("cal.json", "{}") + " " + acc + " --gyro-units rad/s");
+  EXPECT_EQ(other.status, 2);
+  EXPECT_NE(other.err.find("verify has no option --gyro-units (see --help)"), std::string::npos)
+      << other.err;
+  const CliRun far = Exec("detect " + acc + " --frobnicate");
+  EXPECT_NE(far.err.find("detect has no option --frobnicate (see --help)"), std::string::npos)
+      << far.err;
+}
+
 }  // namespace
 }  // namespace accelcal

@@ -125,13 +125,13 @@ class InflateSource : public Source {
     while (have_ == 0) {
       if (z_.avail_in == 0) {
         if (left_ == 0) {
-          error_ = "its zlib stream is cut short";
+          error_ = "zlib stream is cut short";
           return false;
         }
         const std::size_t step =
             static_cast<std::size_t>(std::min<std::uint64_t>(left_, sizeof in_));
         if (!file_->Read(in_, step)) {
-          error_ = "the file ends inside it";
+          error_ = "zlib stream runs past the end of the file";
           return false;
         }
         left_ -= step;
@@ -148,7 +148,7 @@ class InflateSource : public Source {
       }
       if (r != Z_OK && !(r == Z_BUF_ERROR && have_ > 0)) {
         error_ =
-            std::string("its zlib stream is corrupt (") + (z_.msg != nullptr ? z_.msg : "") + ")";
+            std::string("zlib stream is corrupt (") + (z_.msg != nullptr ? z_.msg : "") + ")";
         return false;
       }
       if (z_.total_out > kMaxMatInflatedBytes) {

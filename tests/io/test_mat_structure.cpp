@@ -119,6 +119,12 @@ TEST(MatStructure, ClaimsBeyondTheFileAreRefusedWhereTheyAre) {
   why = CheckMatStructure(Write("damaged.mat", damaged));
   ASSERT_TRUE(why);
   EXPECT_NE(why->find("compressed variable"), std::string::npos) << *why;
+  // A compressed variable the file ends inside, said as a sentence.
+  why = CheckMatStructure(Write("ends.mat", Compressed().substr(0, 200)));
+  ASSERT_TRUE(why);
+  EXPECT_NE(why->find("a compressed variable whose zlib stream runs past the end of the file"),
+            std::string::npos)
+      << *why;
   // Through the reader: an InputError naming the file.
   try {
     ListMatVariables(Write("name.mat", name));

@@ -147,8 +147,7 @@ class InflateSource : public Source {
         return have_ > 0;
       }
       if (r != Z_OK && !(r == Z_BUF_ERROR && have_ > 0)) {
-        error_ =
-            std::string("zlib stream is corrupt (") + (z_.msg != nullptr ? z_.msg : "") + ")";
+        error_ = std::string("zlib stream is corrupt (") + (z_.msg != nullptr ? z_.msg : "") + ")";
         return false;
       }
       if (z_.total_out > kMaxMatInflatedBytes) {

@@ -173,6 +173,11 @@ TEST(CalibrationFile, RefusesMalformedFiles) {
   acc["K"][0][2] = 1.0;
   EXPECT_EQ(LoadError(a.dump()),
             "cal.json: 'sensors.accelerometer.K' must be lower-triangular (frame x-first)");
+  // So small that a reading times its inverse is no specific force (apply wrote 1e301 m/s2).
+  nlohmann::json tiny = good;
+  tiny["sensors"]["accelerometer"]["K"] = {{1e-300, 0, 0}, {0, 1e-300, 0}, {0, 0, 1e-300}};
+  EXPECT_EQ(LoadError(tiny.dump()).rfind("cal.json: 'sensors.accelerometer.K' is singular", 0), 0u)
+      << LoadError(tiny.dump());
   acc = good["sensors"]["accelerometer"];
   acc["frame"] = "z-first";  // with the x-first (lower-triangular) K of `good`
   EXPECT_EQ(LoadError(a.dump()),

@@ -187,8 +187,8 @@ int RefuseMergedLists(int argc, char** argv,
       const std::string_view value = joined         ? arg.substr(name.size() + 1)
                                      : i + 1 < argc ? std::string_view(argv[i + 1])
                                                     : std::string_view("x");
-      if ((value.empty() || value.front() == ',' || value.back() == ',' ||
-           value.find(",,") != std::string_view::npos)) {
+      if (value.empty() || value.front() == ',' || value.back() == ',' ||
+          value.find(",,") != std::string_view::npos) {
         WriteErrLine(
             Format("accelcal: usage: %s '%s' has an empty item: give each value once, "
                    "comma-separated (see --help)\n",

@@ -5,6 +5,7 @@
 #include <string>
 
 #include "cli_common.hpp"
+#include "core/text_format.hpp"
 
 namespace accelcal::cli {
 
@@ -77,25 +78,13 @@ const BesideSensor kGyroscopeFlags{
     "linear (K, b), g-sensitive (K, b and a rate bias in proportion to the specific force), or "
     "auto (the one that predicts held-out rotations better)"};
 
-namespace {
-
-std::string Replaced(std::string text, const std::string& key, const std::string& by) {
-  for (std::size_t at = text.find(key); at != std::string::npos; at = text.find(key, at)) {
-    text.replace(at, key.size(), by);
-    at += by.size();
-  }
-  return text;
-}
-
-}  // namespace
-
 void AddSensorInput(CLI::App* cmd, const BesideSensor& sensor, SensorInput* in,
                     const std::string& use, const std::string& where) {
   const std::string noun = sensor.noun;
   cmd->add_option(sensor.Flag(), in->log, "the " + noun + "'s log" + use);
   cmd->add_option(sensor.Flag("-columns"), in->columns,
                   "the " + noun + "'s x,y,z (or time,x,y,z) columns, " +
-                      Replaced(where, "{log}", sensor.Flag()))
+                      internal::ReplaceWords(where, {{"{log}", sensor.Flag().c_str()}}))
       ->delimiter(',');
   cmd->add_option(sensor.Flag("-topic"), in->topic,
                   "the " + noun + "'s stream in a binary log (a ULog topic such as " +

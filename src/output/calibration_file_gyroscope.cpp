@@ -4,8 +4,6 @@
 #include <algorithm>
 #include <cmath>
 
-#include <Eigen/SVD>
-
 #include "accelcal/error.hpp"
 #include "core/text_format.hpp"
 #include "output/calibration_file_sections.hpp"
@@ -77,21 +75,16 @@ void DescribeThermal(Io& io, GyroThermal& t) {
       io.Fail(io.Key("degree") + " must be a whole number from 0 to " +
               std::to_string(kMaxThermalDegree));
     }
-    if (b.coefficients.size() != degree) {
-      io.Fail(io.Key("coefficients") + " must be an array of " + std::to_string(degree) +
-              " arrays of 3 numbers (its degree)");
-    }
-  }
-  if constexpr (Io::kReading) {  // the coefficients' 1σ: recomputed, but checked as written
+    const std::string shape =
+        " must be an array of " + std::to_string(degree) + " arrays of 3 numbers (its degree)";
+    if (b.coefficients.size() != degree) io.Fail(io.Key("coefficients") + shape);
+    // The coefficients' 1σ: recomputed when written, but checked as read.
     std::vector<Vec3> sd;
     io.Vectors("std", sd, Need::kRequired);
     for (const Vec3& v : sd) {
       if (!(v.minCoeff() >= 0)) io.Fail(io.Key("std") + " must not be negative");
     }
-    if (sd.size() != degree) {
-      io.Fail(io.Key("std") + " must be an array of " + std::to_string(degree) +
-              " arrays of 3 numbers (its degree)");
-    }
+    if (sd.size() != degree) io.Fail(io.Key("std") + shape);
   }
   if (degree > 0) {
     io.Covariance(b.covariance, 3 * degree, "the offsets' coefficients");
@@ -228,7 +221,9 @@ void DescribeGyroscope(Io& io, UnitGyroscope& g, ForceUnit force_unit) {
   io.MaybeObject(
       "thermal", thermal, [&](auto& t) { DescribeThermal(t, *g.thermal); },
       /*null_when_absent=*/false);
-  if (!thermal) g.thermal.reset();
+  if constexpr (Io::kReading) {
+    if (!thermal) g.thermal.reset();
+  }
   bool lagged = g.time_offset.has_value();
   if constexpr (Io::kReading) g.time_offset.emplace();
   io.MaybeObject("time_offset", lagged, [&](auto& t) {
@@ -240,7 +235,9 @@ void DescribeGyroscope(Io& io, UnitGyroscope& g, ForceUnit force_unit) {
       if (g.time_offset->std_s < 0) t.Fail(t.Key("std_s") + " must not be negative");
     }
   });
-  if (!lagged) g.time_offset.reset();
+  if constexpr (Io::kReading) {
+    if (!lagged) g.time_offset.reset();
+  }
   io.List("rotations", g.rotations,
           [](auto& s, GyroRotation& r, std::size_t) { DescribeRotation(s, r); });
   bool earth = g.latitude_deg.has_value();
@@ -253,7 +250,8 @@ void DescribeGyroscope(Io& io, UnitGyroscope& g, ForceUnit force_unit) {
       if (!(std::abs(latitude) <= 90)) e.Fail(e.Key("latitude_deg") + " must be from -90 to 90");
     }
   });
-  g.latitude_deg = earth ? std::optional<double>(latitude) : std::nullopt;
+  if constexpr (Io::kReading)
+    g.latitude_deg = earth ? std::optional<double>(latitude) : std::nullopt;
   io.Object("validation", [&](auto& v) {
     v.MaybeNumber("rms_deg", g.rms_deg);
     v.MaybeNumber("heldout_rms_deg", g.heldout_rms_deg);
@@ -261,15 +259,7 @@ void DescribeGyroscope(Io& io, UnitGyroscope& g, ForceUnit force_unit) {
   io.Object("solver", [&](auto& s) { DescribeSolver(s, g.summary); });
   io.Text("source", g.source);
   if constexpr (Io::kReading) {
-    // Singular to the precision of a double, or so small that its inverse overflows what a
-    // reading times it can hold (any sensor's K is far above 1e-12 raw per rad/s): its rates
-    // cannot be corrected.
-    const Vec3 sv = Eigen::JacobiSVD<Mat33>(g.params.K).singularValues();
-    if (!(sv(2) > 1e-12 * sv(0)) || !(sv(2) >= 1e-12)) {
-      io.Fail(io.Key("K") + Format(" is singular (its smallest singular value %.3g, its largest "
-                                   "%.3g)",
-                                   sv(2), sv(0)));
-    }
+    CheckInvertible(io.reader(), g.params.K, "K");
     if (g.estimator == GyroEstimator::kImuTk && g.model != GyroModelKind::kLinear) {
       io.Fail(io.Key("estimator") + " imutk fits the linear model only, not " + io.Key("model") +
               " " + std::string(ToString(g.model)));

@@ -86,14 +86,8 @@ void ReadModel(const Reader& r, const ordered_json& doc, LoadedCalibration& cal)
   }
   if (K(0, 0) == 0 || K(1, 1) == 0 || K(2, 2) == 0)
     r.Fail(r.Key("K") + " has a zero diagonal entry");
-  {  // so small, or so near singular, that a reading times its inverse is no specific force
-    const Vec3 sv = Eigen::JacobiSVD<Mat33>(K).singularValues();
-    if (!(sv(2) > 1e-12 * sv(0)) || !(sv(2) >= 1e-12)) {
-      r.Fail(r.Key("K") + internal::Format(" is singular (its smallest singular value %.3g, its "
-                                           "largest %.3g)",
-                                           sv(2), sv(0)));
-    }
-  }
+  CheckInvertible(r, K, "K");
+
   cal.params.bias = r.Vector3(doc, "bias");
   cal.params.k2 = r.Vector3(doc, "k2");
   if (cal.model == ModelKind::kLinear && !cal.params.k2.isZero(0)) {
@@ -349,6 +343,15 @@ void CheckTemperatureRange(const Reader& in, std::pair<double, double> range, do
   }
   if (!(t_ref_c >= lo && t_ref_c <= hi)) {
     in.Fail(in.Key("t_ref") + " must be within " + in.Key("temperature_range"));
+  }
+}
+
+void CheckInvertible(const Reader& r, const Mat33& K, const char* key) {
+  const Vec3 sv = Eigen::JacobiSVD<Mat33>(K).singularValues();
+  if (!(sv(2) > 1e-12 * sv(0)) || !(sv(2) >= 1e-12)) {
+    r.Fail(r.Key(key) + internal::Format(" is singular (its smallest singular value %.3g, its "
+                                         "largest %.3g)",
+                                         sv(2), sv(0)));
   }
 }
 

@@ -27,6 +27,11 @@ std::pair<double, double> ReadTemperatureRange(const Reader& in, const ordered_j
 // Its checks, for a range read otherwise.
 void CheckTemperatureRange(const Reader& in, std::pair<double, double> range, double t_ref_c);
 
+// A sensor's `K` that can be inverted: not singular to a double's precision, and not so small
+// that a reading times its inverse is no physical quantity (its smallest singular value at least
+// 1e-12 raw per unit: any sensor's is far above it). Fails naming `key` otherwise.
+void CheckInvertible(const Reader& r, const Mat33& K, const char* key);
+
 // `sensors.gyroscope` (calibration_file_gyroscope.cpp), written and read by one description.
 ordered_json GyroscopeSection(const UnitGyroscope& g, ForceUnit force_unit);
 UnitGyroscope ReadGyroscope(const Reader& r, const ordered_json& doc);
